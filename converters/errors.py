@@ -1,0 +1,21 @@
+"""Exception types of pcsuite.
+
+Every error subclasses a built-in (``ValueError`` or ``RuntimeError``) so callers can catch
+them naturally, and every message names the parameter, its valid range and the value received.
+"""
+
+
+class PcsuiteError(Exception):
+    """Base class of every pcsuite error."""
+
+
+class ParameterError(PcsuiteError, ValueError):
+    """A parameter is missing, of the wrong shape, non-finite or outside its valid range."""
+
+
+class LCPError(PcsuiteError, ValueError):
+    """A linear complementarity problem is malformed or could not be solved."""
+
+
+class SimulationError(PcsuiteError, RuntimeError):
+    """A run failed part-way (the message says where and what to try)."""

@@ -1,0 +1,95 @@
+"""Input checks shared by every public entry point.
+
+Each check raises :class:`ParameterError` with one line naming the parameter, the valid range
+and the value received, e.g. ``h must be positive and below the switching period (1e-05 s); got 0.002``.
+"""
+from __future__ import annotations
+
+import math
+import re
+
+import numpy as np
+
+from .errors import ParameterError
+
+#: SPICE-style magnitude suffixes (case-insensitive; ``meg`` before ``m``).
+SI_SUFFIXES = {"t": 1e12, "g": 1e9, "meg": 1e6, "k": 1e3, "m": 1e-3, "u": 1e-6, "µ": 1e-6,
+               "n": 1e-9, "p": 1e-12, "f": 1e-15}
+_NUMBER = re.compile(r"^\s*([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)\s*(meg|[tgkmuµnpf])?\s*$",
+                     re.IGNORECASE)
+
+
+def parse_value(name: str, text) -> float:
+    """Parse a number that may carry a SPICE suffix (``10u``, ``100k``, ``2.2n``, ``1meg``).
+
+    Anything else (units spelled out, trailing text, several numbers) is refused: values
+    end up in netlists, so only a plain finite number may pass.
+    """
+    if isinstance(text, (int, float, np.floating, np.integer)) and not isinstance(text, bool):
+        value = float(text)
+    else:
+        match = _NUMBER.match(str(text))
+        if match is None:
+            raise ParameterError(f"{name} must be a number, optionally with a SPICE suffix "
+                                 f"(T G meg k m u n p f); got {str(text)!r}")
+        value = float(match.group(1)) * SI_SUFFIXES.get((match.group(2) or "").lower(), 1.0)
+    if not math.isfinite(value):
+        raise ParameterError(f"{name} must be a finite number; got {value!r}")
+    return value
+
+
+def check_positive(name: str, value, unit: str = "") -> float:
+    value = parse_value(name, value)
+    if value <= 0.0:
+        raise ParameterError(f"{name} must be positive (> 0{(' ' + unit) if unit else ''}); got {value!r}")
+    return value
+
+
+def check_range(name: str, value, low: float, high: float, *, low_open=False, high_open=False) -> float:
+    value = parse_value(name, value)
+    below = value <= low if low_open else value < low
+    above = value >= high if high_open else value > high
+    if below or above:
+        lb = "(" if low_open else "["
+        rb = ")" if high_open else "]"
+        raise ParameterError(f"{name} must be in {lb}{low:g}, {high:g}{rb}; got {value!r}")
+    return value
+
+
+def as_matrix(name: str, value, shape: tuple[int | None, int | None]) -> np.ndarray:
+    """A finite float matrix of the given shape (``None`` leaves a dimension free)."""
+    try:
+        arr = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ParameterError(f"{name} must be a numeric matrix; got {value!r}") from None
+    if arr.ndim == 1 and shape[1] == 1:
+        arr = arr.reshape(-1, 1)
+    if arr.ndim != 2 or any(s is not None and s != a for s, a in zip(shape, arr.shape)):
+        want = "x".join("any" if s is None else str(s) for s in shape)
+        raise ParameterError(f"{name} must have shape {want}; got shape {'x'.join(map(str, arr.shape))}")
+    if not np.all(np.isfinite(arr)):
+        raise ParameterError(f"{name} must contain only finite numbers; got {_first_bad(arr)}")
+    return arr
+
+
+def as_vector(name: str, value, size: int | None) -> np.ndarray:
+    """A finite float vector of the given size (``None`` leaves it free)."""
+    try:
+        arr = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ParameterError(f"{name} must be a numeric vector; got {value!r}") from None
+    if arr.ndim == 0:
+        arr = arr.reshape(1)
+    if arr.ndim == 2 and 1 in arr.shape:
+        arr = arr.ravel()
+    if arr.ndim != 1 or (size is not None and arr.shape[0] != size):
+        raise ParameterError(f"{name} must be a vector of length {size if size is not None else 'n'}; "
+                             f"got shape {'x'.join(map(str, arr.shape))}")
+    if not np.all(np.isfinite(arr)):
+        raise ParameterError(f"{name} must contain only finite numbers; got {_first_bad(arr)}")
+    return arr
+
+
+def _first_bad(arr: np.ndarray) -> str:
+    idx = np.argwhere(~np.isfinite(arr))[0]
+    return f"{arr[tuple(idx)]!r} at index {tuple(int(i) for i in idx)}"
