@@ -1,0 +1,172 @@
+"""Linear complementarity systems with a finite set of switch configurations.
+
+    x' = A x + B u + E,   y = C x + D u + F,   0 <= u _|_ y >= 0,
+
+with one (A, B, C, D, E, F) per switch configuration and a :class:`Schedule` saying which
+configuration holds when. Problems are immutable; variants come from ``dataclasses.replace``.
+Shapes: x has n entries, u and y have k (the same n and k in every configuration).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .errors import ParameterError
+from .validate import as_matrix, as_vector, check_positive, parse_value
+
+
+@dataclass(frozen=True)
+class Configuration:
+    """One switch configuration: the matrices of x' = A x + B u + E, y = C x + D u + F.
+
+    Shapes: A (n, n), B (n, k), C (k, n), D (k, k), E (n,), F (k,). E and F default to zero.
+    """
+
+    A: np.ndarray
+    B: np.ndarray
+    C: np.ndarray
+    D: np.ndarray
+    E: np.ndarray | None = None
+    F: np.ndarray | None = None
+    name: str = ""
+
+    def __post_init__(self):
+        label = f"configuration {self.name!r}: " if self.name else ""
+        A = as_matrix(label + "A", self.A, (None, None))
+        n = A.shape[0]
+        if A.shape[1] != n:
+            raise ParameterError(f"{label}A must be square (n x n); got shape {A.shape[0]}x{A.shape[1]}")
+        B = as_matrix(label + "B", self.B, (n, None))
+        k = B.shape[1]
+        if k < 1:
+            raise ParameterError(f"{label}B must have at least one column (k >= 1); got shape {n}x0")
+        C = as_matrix(label + "C", self.C, (k, n))
+        D = as_matrix(label + "D", self.D, (k, k))
+        E = np.zeros(n) if self.E is None else as_vector(label + "E", self.E, n)
+        F = np.zeros(k) if self.F is None else as_vector(label + "F", self.F, k)
+        for key, value in zip("ABCDEF", (A, B, C, D, E, F)):
+            value.setflags(write=False)
+            object.__setattr__(self, key, value)
+
+    @property
+    def n(self) -> int:
+        return self.A.shape[0]
+
+    @property
+    def k(self) -> int:
+        return self.B.shape[1]
+
+
+@dataclass(frozen=True)
+class Schedule:
+    """Which configuration holds when: periodic and piecewise constant.
+
+    Over every period [m T, (m + 1) T) configuration ``configs[i]`` holds from ``m T + starts[i]``
+    to the next start. ``starts[0]`` must be 0. A constant schedule has period = inf.
+    """
+
+    period: float
+    starts: tuple[float, ...]
+    configs: tuple[int, ...]
+
+    def __post_init__(self):
+        starts = tuple(float(s) for s in self.starts)
+        configs = tuple(int(c) for c in self.configs)
+        if len(starts) != len(configs) or not starts:
+            raise ParameterError(f"schedule starts and configs must have the same non-zero length; "
+                                 f"got {len(starts)} and {len(configs)}")
+        if starts[0] != 0.0 or any(b <= a for a, b in zip(starts, starts[1:])):
+            raise ParameterError(f"schedule starts must begin at 0 and increase strictly; got {starts}")
+        if np.isfinite(self.period):
+            check_positive("schedule period", self.period, "s")
+            if starts[-1] >= self.period:
+                raise ParameterError(f"schedule starts must lie in [0, period = {self.period:g}); got {starts}")
+        elif len(starts) != 1:
+            raise ParameterError("a schedule with period = inf holds one configuration")
+        object.__setattr__(self, "starts", starts)
+        object.__setattr__(self, "configs", configs)
+
+    @classmethod
+    def constant(cls, config: int = 0) -> "Schedule":
+        return cls(period=np.inf, starts=(0.0,), configs=(config,))
+
+    @classmethod
+    def pwm(cls, period: float, duty: float, on: int = 0, off: int = 1) -> "Schedule":
+        """``on`` for duty * period, then ``off``; duty 0 and 1 give a single configuration."""
+        duty = parse_value("D", duty)
+        if not 0.0 <= duty <= 1.0:
+            raise ParameterError(f"D (duty ratio) must be in [0, 1]; got {duty!r}")
+        if duty == 0.0:
+            return cls(period=period, starts=(0.0,), configs=(off,))
+        if duty == 1.0:
+            return cls(period=period, starts=(0.0,), configs=(on,))
+        return cls(period=period, starts=(0.0, duty * period), configs=(on, off))
+
+    def breakpoints(self, t0: float, t1: float) -> np.ndarray:
+        """Times in the open interval (t0, t1) at which the configuration may change."""
+        if not np.isfinite(self.period):
+            return np.empty(0)
+        first, last = int(np.floor(t0 / self.period)), int(np.ceil(t1 / self.period))
+        periods = np.arange(first, last + 1) * self.period
+        times = (periods[:, None] + np.array(self.starts)[None, :]).ravel()
+        return times[(times > t0) & (times < t1)]
+
+    def config_at(self, t: np.ndarray) -> np.ndarray:
+        """Configuration index holding at each time in t (right-continuous)."""
+        t = np.asarray(t, dtype=float)
+        phase = t if not np.isfinite(self.period) else np.mod(t, self.period)
+        slot = np.searchsorted(np.array(self.starts), phase, side="right") - 1
+        return np.array(self.configs, dtype=np.int64)[np.clip(slot, 0, None)]
+
+
+@dataclass(frozen=True)
+class LCSProblem:
+    """An LCS initial-value problem: configurations, schedule, x0 and the time span (s).
+
+    Only the mathematics: no step size, no solver.
+    """
+
+    configurations: tuple[Configuration, ...]
+    schedule: Schedule
+    x0: np.ndarray
+    t_span: tuple[float, float]
+    state_names: tuple[str, ...] = ()
+    pair_names: tuple[str, ...] = ()
+    metadata: dict = field(default_factory=dict, compare=False)
+
+    def __post_init__(self):
+        configs = tuple(self.configurations)
+        if not configs:
+            raise ParameterError("configurations must hold at least one Configuration; got none")
+        n, k = configs[0].n, configs[0].k
+        for c in configs[1:]:
+            if (c.n, c.k) != (n, k):
+                raise ParameterError(f"every configuration must have the same n and k; configuration "
+                                     f"{c.name!r} has n = {c.n}, k = {c.k}, the first n = {n}, k = {k}")
+        bad = [c for c in self.schedule.configs if not 0 <= c < len(configs)]
+        if bad:
+            raise ParameterError(f"schedule configs must be indices in [0, {len(configs) - 1}]; got {bad[0]}")
+        x0 = as_vector("x0", self.x0, n)
+        x0.setflags(write=False)
+        t0, t1 = (parse_value("t_span[0]", self.t_span[0]), parse_value("t_span[1]", self.t_span[1]))
+        if not t1 > t0:
+            raise ParameterError(f"t_span must satisfy t_end > t_start = {t0:g} s; got t_end = {t1:g}")
+        states = tuple(self.state_names) or tuple(f"x{i}" for i in range(n))
+        pairs = tuple(self.pair_names) or tuple(f"pair{i}" for i in range(k))
+        if len(states) != n or len(pairs) != k:
+            raise ParameterError(f"state_names must have n = {n} and pair_names k = {k} entries; "
+                                 f"got {len(states)} and {len(pairs)}")
+        object.__setattr__(self, "configurations", configs)
+        object.__setattr__(self, "x0", x0)
+        object.__setattr__(self, "t_span", (t0, t1))
+        object.__setattr__(self, "state_names", states)
+        object.__setattr__(self, "pair_names", pairs)
+
+    @property
+    def n(self) -> int:
+        return self.configurations[0].n
+
+    @property
+    def k(self) -> int:
+        return self.configurations[0].k

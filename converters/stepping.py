@@ -1,0 +1,163 @@
+"""``simulate(problem, method)``: the LCP time-stepper.
+
+Data flow: the schedule's switching instants are merged into the uniform grid so that every step
+lies inside one configuration; the one-step matrices are computed once per (configuration, step
+size) pair (the uniform step plus the split steps at switching instants); the compiled loop
+(:func:`converters.kernels.run_steps`) advances the state, solving each step's small LCP inline;
+any step it cannot solve inline is solved here by Lemke and the loop resumes.
+"""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pandas as pd
+
+from .discretize import step_matrices
+from .errors import ParameterError, SimulationError
+from .kernels import MAX_INLINE_K, NEEDS_GENERAL_SOLVER, NO_SOLUTION, OK, run_steps
+from .lcp import solve_lcp
+from .lcs import LCSProblem
+from .methods import Theta
+from .trajectory import Trajectory
+
+MAX_STEPS = 200_000_000
+
+
+def time_grid(problem: LCSProblem, h: float) -> np.ndarray:
+    """Uniform grid of step h over t_span, with every switching instant inserted.
+
+    Grid points closer than h/1000 to a switching instant are dropped (the instant replaces them).
+    """
+    t0, t1 = problem.t_span
+    n_steps = int(np.ceil((t1 - t0) / h * (1.0 - 1e-12)))
+    if n_steps > MAX_STEPS:
+        raise ParameterError(f"h gives {n_steps} steps over t_span; h must be >= {(t1 - t0) / MAX_STEPS:.3g} s "
+                             f"(at most {MAX_STEPS} steps); got h = {h:g}")
+    uniform = t0 + h * np.arange(n_steps + 1)
+    uniform[-1] = t1
+    breaks = problem.schedule.breakpoints(t0, t1)
+    if breaks.size == 0:
+        return uniform
+    nearest = np.searchsorted(breaks, uniform)
+    gap = np.full(uniform.shape, np.inf)
+    inside = nearest < breaks.size
+    gap[inside] = np.abs(breaks[nearest[inside]] - uniform[inside])
+    before = nearest > 0
+    gap[before] = np.minimum(gap[before], np.abs(uniform[before] - breaks[nearest[before] - 1]))
+    keep = (gap > 1e-3 * h)
+    keep[0] = keep[-1] = True
+    return np.union1d(uniform[keep], breaks)
+
+
+def simulate(problem: LCSProblem, method: Theta, *, x0=None) -> Trajectory:
+    """Simulate an LCS with the theta time-stepper.
+
+    Parameters
+    ----------
+    problem : LCSProblem
+    method : Theta
+        ``Theta(h, theta)`` or ``BackwardEuler(h)``.
+    x0 : array_like, shape (n,), optional
+        Overrides ``problem.x0`` (cheap restarts for shooting and steady-state searches).
+
+    Returns
+    -------
+    Trajectory
+    """
+    if not isinstance(method, Theta):
+        raise ParameterError(f"method must be Theta(h, theta) or BackwardEuler(h); got {method!r}")
+    start_clock = time.perf_counter()
+    x_init = problem.x0 if x0 is None else np.asarray(x0, dtype=float)
+    if x_init.shape != (problem.n,) or not np.all(np.isfinite(x_init)):
+        raise ParameterError(f"x0 must be {problem.n} finite numbers; got {x0!r}")
+    t = time_grid(problem, method.h)
+    dt = np.diff(t)
+    step_config = problem.schedule.config_at(0.5 * (t[:-1] + t[1:]))
+    # One matrix set per distinct (configuration, step size); uniform steps share one per configuration.
+    dt_key = np.where(np.abs(dt - method.h) <= 1e-9 * method.h, method.h, dt)
+    pairs, which = np.unique(np.column_stack([step_config, dt_key]), axis=0, return_inverse=True)
+    configs = [problem.configurations[int(c)] for c in pairs[:, 0]]
+    mats = step_matrices(configs, pairs[:, 1], method.theta)
+    which = which.ravel().astype(np.int64)
+
+    N, n, k = t.shape[0], problem.n, problem.k
+    x = np.empty((N, n))
+    u = np.zeros((N, k))
+    y = np.empty((N, k))
+    x[0] = x_init
+    u[0], y[0] = _initial_pair(problem, int(step_config[0]), x_init)
+    inline = k <= MAX_INLINE_K
+    general_solves = 0
+    j = 0
+    while True:
+        status, j = run_steps(which, mats.Phi, mats.Gamma, mats.H, mats.C, mats.F, mats.M, x, u, y, j, inline)
+        if status == OK:
+            break
+        s = which[j]
+        x_free = mats.Phi[s] @ x[j] + mats.Gamma[s]
+        q = mats.C[s] @ x_free + mats.F[s]
+        if status == NO_SOLUTION:
+            raise SimulationError(_no_solution_message(t[j], mats.M[s], q))
+        result = solve_lcp(mats.M[s], q, method="lemke")
+        if not result.solved:
+            result = solve_lcp(mats.M[s], q, method="enum") if k <= 12 else result
+        if not result.solved:
+            raise SimulationError(f"the step LCP at t = {t[j]:.6g} s could not be solved ({result.status}: "
+                                  f"{result.message}); try a smaller h")
+        u[j + 1] = result.z
+        y[j + 1] = result.w
+        x[j + 1] = x_free + mats.H[s] @ result.z
+        general_solves += 1
+        j += 1
+    wall = time.perf_counter() - start_clock
+    config = np.concatenate([step_config[:1], step_config])
+    events = _events(t, u, y, config, mats.M, which)
+    return Trajectory(t=t, x=x, u=u, y=y, config=config, state_names=problem.state_names,
+                      pair_names=problem.pair_names,
+                      config_names=tuple(c.name or f"config{i}" for i, c in enumerate(problem.configurations)),
+                      events=events, method=method.name, steps=N - 1, wall_s=wall, general_solves=general_solves,
+                      metadata=dict(problem.metadata, h=method.h, theta=method.theta))
+
+
+def _initial_pair(problem: LCSProblem, config: int, x0: np.ndarray):
+    """The consistent pair at t0: LCP(C x0 + F, D); when D is singular and no solution exists, u = 0."""
+    c = problem.configurations[config]
+    q = c.C @ x0 + c.F
+    result = solve_lcp(c.D, q, method="lemke") if np.any(c.D) else None
+    if result is not None and result.solved:
+        return result.z, result.w
+    return np.zeros(problem.k), q
+
+
+def _no_solution_message(t, M, q) -> str:
+    return (f"the step LCP at t = {t:.6g} s has no solution (M = {M[0, 0]:.4g} <= 0 with q = {q[0]:.4g} < 0): "
+            "the circuit forces a current into a blocking diode or an inductor into an open switch; "
+            "check the model or add the missing parasitic path")
+
+
+def _events(t, u, y, config, M_stack, which) -> pd.DataFrame:
+    """Sub-step estimate of each complementarity switch from the step's own LCP data.
+
+    Activation (y falls through 0): with u_i held at 0 the step would end at y_i = -M_ii u_{j+1,i};
+    linear interpolation of y_i from y_{j,i} to that value gives the crossing.
+    Release (u falls through 0): the unconstrained multiplier at the step end is -y_{j+1} / M_ii.
+    Steps across a configuration change are left out (the change itself is the event there).
+    """
+    active = u > y
+    flips = np.argwhere(active[1:] != active[:-1])
+    rows = []
+    for j, i in flips:
+        if config[j] != config[j + 1] and j > 0:
+            continue
+        m_ii = M_stack[which[j], i, i]
+        dt = t[j + 1] - t[j]
+        if active[j + 1, i]:
+            a, b = y[j, i], m_ii * u[j + 1, i]
+            kind = "activate"
+        else:
+            a, b = u[j, i], y[j + 1, i] / m_ii if m_ii > 0 else np.nan
+            kind = "release"
+        frac = a / (a + b) if np.isfinite(b) and a + b > 0 else 0.5
+        rows.append((t[j] + np.clip(frac, 0.0, 1.0) * dt, int(j), int(i), kind))
+    return pd.DataFrame(rows, columns=["time", "step", "pair", "kind"])
