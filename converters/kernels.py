@@ -114,11 +114,15 @@ def run_steps(which, Phi, Gamma, H, C, F, M, x, u, y, start, inline):
     """
     n = x.shape[1]
     k = u.shape[1]
+    if not inline:
+        return NEEDS_GENERAL_SOLVER, start
+    if k == 1:
+        return _run_scalar(which, Phi, Gamma, H, C, F, M, x, u, y, start)
     xf = np.empty(n)
     q = np.empty(k)
     z = np.empty(k)
     work = np.empty((k, k + 1))
-    order = _masks_by_size(k if inline else 0)
+    order = _masks_by_size(k)
     mask = 0
     for j in range(start, which.shape[0]):
         s = which[j]
@@ -132,12 +136,8 @@ def run_steps(which, Phi, Gamma, H, C, F, M, x, u, y, start, inline):
             for l in range(n):
                 acc += C[s, i, l] * xf[l]
             q[i] = acc
-        if not inline:
-            return NEEDS_GENERAL_SOLVER, j
         mask = solve_small_lcp(M[s], q, k, z, mask, order, work)
         if mask < 0:
-            if k == 1:
-                return NO_SOLUTION, j
             return NEEDS_GENERAL_SOLVER, j
         for i in range(n):
             acc = xf[i]
@@ -150,6 +150,34 @@ def run_steps(which, Phi, Gamma, H, C, F, M, x, u, y, start, inline):
                 acc += M[s, i, l] * z[l]
             y[j + 1, i] = acc
             u[j + 1, i] = z[i]
+    return OK, which.shape[0]
+
+
+@njit(cache=True)
+def _run_scalar(which, Phi, Gamma, H, C, F, M, x, u, y, start):
+    """k = 1: the step LCP is z = max(0, -q/M) inline (the common case of one diode)."""
+    n = x.shape[1]
+    xf = np.empty(n)
+    for j in range(start, which.shape[0]):
+        s = which[j]
+        q = F[s, 0]
+        for i in range(n):
+            acc = Gamma[s, i]
+            for l in range(n):
+                acc += Phi[s, i, l] * x[j, l]
+            xf[i] = acc
+            q += C[s, 0, i] * acc
+        m = M[s, 0, 0]
+        if q >= 0.0:
+            z = 0.0
+        elif m > 0.0:
+            z = -q / m
+        else:
+            return NO_SOLUTION, j
+        for i in range(n):
+            x[j + 1, i] = xf[i] + H[s, i, 0] * z
+        u[j + 1, 0] = z
+        y[j + 1, 0] = q + m * z
     return OK, which.shape[0]
 
 

@@ -75,11 +75,14 @@ def simulate(problem: LCSProblem, method: Theta, *, x0=None) -> Trajectory:
     dt = np.diff(t)
     step_config = problem.schedule.config_at(0.5 * (t[:-1] + t[1:]))
     # One matrix set per distinct (configuration, step size); uniform steps share one per configuration.
-    dt_key = np.where(np.abs(dt - method.h) <= 1e-9 * method.h, method.h, dt)
-    pairs, which = np.unique(np.column_stack([step_config, dt_key]), axis=0, return_inverse=True)
-    configs = [problem.configurations[int(c)] for c in pairs[:, 0]]
-    mats = step_matrices(configs, pairs[:, 1], method.theta)
-    which = which.ravel().astype(np.int64)
+    # Matrix sets 0..m-1 are the uniform step in each configuration, then one per split step.
+    n_configs = len(problem.configurations)
+    which = step_config.astype(np.int64)
+    split = np.flatnonzero(np.abs(dt - method.h) > 1e-9 * method.h)
+    which[split] = n_configs + np.arange(split.size)
+    set_configs = list(range(n_configs)) + [int(c) for c in step_config[split]]
+    set_dts = np.concatenate([np.full(n_configs, method.h), dt[split]])
+    mats = step_matrices([problem.configurations[c] for c in set_configs], set_dts, method.theta)
 
     N, n, k = t.shape[0], problem.n, problem.k
     x = np.empty((N, n))

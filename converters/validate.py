@@ -92,4 +92,4 @@ def as_vector(name: str, value, size: int | None) -> np.ndarray:
 
 def _first_bad(arr: np.ndarray) -> str:
     idx = np.argwhere(~np.isfinite(arr))[0]
-    return f"{arr[tuple(idx)]!r} at index {tuple(int(i) for i in idx)}"
+    return f"{float(arr[tuple(idx)])!r} at index {tuple(int(i) for i in idx)}"

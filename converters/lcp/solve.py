@@ -14,7 +14,7 @@ from .pgs import pgs
 from .result import SOLVED, LCPResult, finish
 
 SOLVERS = {"lemke": lemke, "murty": murty, "enum": enumerate_bases, "pgs": pgs, "newton": newton_fb}
-DEFAULT_MAX_ITER = {"lemke": 10_000, "murty": 100_000, "enum": None, "pgs": 10_000, "newton": 200}
+DEFAULT_MAX_ITER = {"lemke": 10_000, "murty": 100_000, "enum": None, "pgs": 10_000, "newton": 1000}
 
 
 def solve_lcp(M, q, method: str = "lemke", tol: float = 1e-10, max_iter: int | None = None,

@@ -1,0 +1,111 @@
+"""LCP solvers against exact answers, each other, and their own failure modes."""
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+
+from converters.errors import LCPError
+from converters.lcp import lcp_error, solve_lcp
+from converters.lcp.problems import murty_exponential, problem_set, random_p_matrix
+
+P_SOLVERS = ["lemke", "murty", "newton"]  # guaranteed on every P-matrix
+ALL = ["lemke", "murty", "enum", "pgs", "newton"]
+
+
+@settings(max_examples=60, deadline=None)
+@given(k=st.integers(1, 30), seed=st.integers(0, 2**32 - 1), kind=st.sampled_from(["pd", "spd", "triangular"]))
+def test_p_matrix_lcps_are_solved_by_every_applicable_solver(k, seed, kind):
+    rng = np.random.default_rng(seed)
+    M, q = random_p_matrix(rng, k, kind), rng.standard_normal(k)
+    solvers = P_SOLVERS + (["pgs"] if kind == "spd" else []) + (["enum"] if k <= 10 else [])
+    results = {m: solve_lcp(M, q, method=m, tol=1e-10, fast_paths=False) for m in solvers}
+    for method, result in results.items():
+        assert result.status == "solved", (method, result.message)
+        assert result.err <= 1e-9, (method, result.err)
+    if k <= 10:
+        reference = results["enum"]
+        assert len(reference.solutions) == 1  # P-matrix: exactly one solution
+        for method, result in results.items():
+            np.testing.assert_allclose(result.z, reference.z, atol=1e-7 * (1 + np.abs(reference.z).max()))
+
+
+def test_lemke_reports_no_solution_for_minus_identity():
+    result = solve_lcp(-np.eye(3), -np.ones(3), method="lemke")
+    assert result.status == "no_solution"
+    assert "ray termination" in result.message
+
+
+def test_enumeration_lists_both_vertices_of_the_seed_psd_example():
+    result = solve_lcp([[1, 1], [1, 1]], [-1, -1], method="enum")
+    assert result.status == "solved"
+    found = sorted(tuple(np.round(s, 12)) for s in result.solutions)
+    assert found == [(0.0, 1.0), (1.0, 0.0)]
+
+
+@pytest.mark.parametrize("k", [4, 6, 8])
+def test_murty_takes_two_to_the_k_minus_one_pivots_on_its_exponential_example(k):
+    M, q = murty_exponential(k)
+    result = solve_lcp(M, q, method="murty", fast_paths=False)
+    assert result.solved and result.iterations == 2**k - 1
+    np.testing.assert_allclose(result.z, np.eye(k)[-1])  # z = (0, ..., 0, 1)
+
+
+@pytest.mark.parametrize("method", ALL)
+def test_every_solver_on_a_known_2x2_solution(method):
+    M = np.array([[2.0, 1.0], [1.0, 2.0]])
+    z_star, w_star = np.array([1.0, 0.0]), np.array([0.0, 3.0])
+    q = w_star - M @ z_star
+    result = solve_lcp(M, q, method=method, fast_paths=False)
+    assert result.solved
+    np.testing.assert_allclose(result.z, z_star, atol=1e-9)
+    np.testing.assert_allclose(result.w, w_star, atol=1e-9)
+
+
+def test_error_measure_matches_the_siconos_definition():
+    M, q, z = np.eye(2), np.array([3.0, -4.0]), np.array([1.0, 1.0])
+    w = q + M @ z  # (4, -3)
+    expected = np.linalg.norm(z - np.maximum(0, z - w)) / 5.0  # (1 - 0, 1 - 4) -> (1, -3)
+    assert lcp_error(M, q, z) == pytest.approx(expected)
+    assert expected == pytest.approx(np.sqrt(10) / 5)
+    assert lcp_error(M, np.zeros(2), np.zeros(2)) == 0.0  # q = 0 guard
+
+
+@pytest.mark.parametrize("M,q,z", [
+    ([[2.0]], [-4.0], [2.0]),          # k = 1: z = -q/M
+    ([[2.0]], [4.0], [0.0]),           # q >= 0
+    ([[2.0, 1.0], [1.0, 2.0]], [-3.0, -3.0], [1.0, 1.0]),  # k = 2, both active
+])
+def test_fast_paths_give_the_exact_solution_without_pivoting(M, q, z):
+    result = solve_lcp(M, q)
+    assert result.solved and result.iterations == 0 and "closed form" in result.message
+    np.testing.assert_allclose(result.z, z)
+
+
+def test_project_problem_set_outcomes():
+    for case in problem_set():
+        result = solve_lcp(case.M, case.q, method="lemke", fast_paths=False)
+        assert result.status == ("solved" if case.solvable else "no_solution"), case.name
+        if case.solvable:
+            assert result.err <= 1e-10, case.name
+
+
+def test_pgs_divergence_is_reported_not_returned_as_nan():
+    case = next(c for c in problem_set() if c.name == "p_pd_20")  # non-symmetric: PGS diverges
+    result = solve_lcp(case.M, case.q, method="pgs", fast_paths=False)
+    assert result.status == "failed" and "diverged" in result.message
+    assert np.all(np.isfinite(result.z))
+
+
+@pytest.mark.parametrize("kwargs,match", [
+    (dict(M=[[1.0, 2.0]], q=[1.0]), r"M must be square \(k x k\); got shape 1x2"),
+    (dict(M=np.eye(2), q=[1.0, 2.0, 3.0]), r"q must be a vector of length 2; got shape 3"),
+    (dict(M=[[np.nan]], q=[1.0]), r"M must contain only finite numbers; got nan"),
+    (dict(M=[[1.0]], q=[np.inf]), r"q must contain only finite numbers; got inf"),
+    (dict(M=np.eye(2), q=[1, 1], method="simplex"), r"method must be one of lemke, murty, enum, pgs, newton; got 'simplex'"),
+    (dict(M=np.eye(2), q=[1, 1], tol=0.0), r"tol must be a positive finite number; got 0.0"),
+    (dict(M=np.eye(2), q=[1, 1], max_iter=0), r"max_iter must be an integer >= 1; got 0"),
+    (dict(M=np.eye(13), q=-np.ones(13), method="enum"), r"k must be <= 12; got k = 13"),
+])
+def test_bad_input_names_the_parameter_range_and_value(kwargs, match):
+    with pytest.raises(LCPError, match=match):
+        solve_lcp(**kwargs)
+    assert issubclass(LCPError, ValueError)
