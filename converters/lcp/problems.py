@@ -36,7 +36,7 @@ def random_p_matrix(rng: np.random.Generator, k: int, kind: str = "pd") -> np.nd
         S = rng.standard_normal((k, k))
         return G @ G.T / k + (S - S.T) + 0.5 * np.eye(k)
     if kind == "triangular":
-        U = np.triu(rng.uniform(-3.0, 3.0, (k, k)), 1)
+        U = np.triu(rng.uniform(-2.0, 2.0, (k, k)), 1)
         return U + np.diag(rng.uniform(0.5, 2.0, k))
     raise ValueError(f"kind must be one of pd, spd, triangular; got {kind!r}")
 
