@@ -1,0 +1,138 @@
+"""The theta time-stepper on circuits with closed-form answers: accuracy, order, complementarity."""
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+
+from converters.circuits import diode_bridge, half_wave_rectifier, parallel_rlc_exact
+from converters.errors import ParameterError, SimulationError
+from converters.lcs import Configuration, LCSProblem, Schedule
+from converters.methods import BackwardEuler, Theta
+from converters.stepping import simulate
+
+L, C, R = 1e-2, 1e-6, 1e3
+W0 = 1.0 / np.sqrt(L * C)
+
+
+def observed_order(hs, errors):
+    return np.polyfit(np.log(hs), np.log(errors), 1)[0]
+
+
+@pytest.mark.parametrize("theta,order", [(1.0, 1.0), (0.5, 2.0)])
+def test_order_on_a_stretch_without_switching(theta, order):
+    # vC(0) = -10 V: the diode blocks until vC crosses 0 at t = pi / (2 w0) = 157 us; the LC tank
+    # rings freely, vC = -10 cos(w0 t). Stop at 150 us.
+    problem = half_wave_rectifier(V0=-10.0, t_end=1.5e-4)
+    hs = 1.5e-4 / 2.0 ** np.arange(7, 12)
+    errors = []
+    for h in hs:
+        tr = simulate(problem, Theta(h, theta))
+        assert not tr.active.any()
+        errors.append(abs(tr.x[-1, 0] - (-10.0 * np.cos(W0 * tr.t[-1]))))
+    tolerance = 0.15 if theta == 1.0 else 0.2
+    assert observed_order(hs, errors) == pytest.approx(order, abs=tolerance)
+
+
+def test_backward_euler_order_one_with_the_diode_conducting():
+    # vC > 0 throughout [0, 100 us]: u = vC / R is active at every step (D = R > 0): parallel RLC.
+    problem = half_wave_rectifier(V0=10.0, t_end=1e-4)
+    hs = 1e-4 / 2.0 ** np.arange(5, 10)
+    errors = []
+    for h in hs:
+        tr = simulate(problem, BackwardEuler(h))
+        assert tr.active[1:].all()
+        errors.append(abs(tr.x[-1, 0] - parallel_rlc_exact([tr.t[-1]], L, C, R, 10.0)[0, 0]))
+    assert observed_order(hs, errors) == pytest.approx(1.0, abs=0.15)
+
+
+def test_diode_bridge_converges_to_a_fine_step_solution():
+    problem = diode_bridge(t_end=2e-3)
+    fine = simulate(problem, BackwardEuler(2e-8))
+    hs = np.array([8e-6, 4e-6, 2e-6, 1e-6])
+    errors = []
+    for h in hs:
+        tr = simulate(problem, BackwardEuler(h))
+        reference = np.interp(tr.t, fine.t, fine.x[:, 0])
+        errors.append(np.abs(tr.x[:, 0] - reference).max())
+    assert observed_order(hs, errors) >= 0.8
+    # With ideal diodes the tank always sees R: the bridge is a parallel RLC in closed form.
+    exact = parallel_rlc_exact(fine.t, L, C, R, 10.0)
+    vc_error, il_error = np.abs(fine.x - exact).max(axis=0)
+    assert vc_error < 1e-2 and il_error < 1e-4  # measured 7.3e-3 V and 7.3e-5 A at h = 20 ns
+
+
+def test_diode_bridge_rectifies_and_keeps_complementarity():
+    tr = simulate(diode_bridge(t_end=5e-3), BackwardEuler(1e-6))
+    assert tr.general_solves == 0  # k = 4 solved inline
+    load_voltage = tr.u[1:, 0] + tr.u[1:, 1]
+    np.testing.assert_allclose(load_voltage, np.abs(tr.x[1:, 0]), atol=1e-9)
+    assert tr.u.min() >= 0.0 and tr.y.min() >= -1e-9
+    assert np.abs(tr.u * tr.y).max() <= 1e-9
+
+
+def _exact_half_wave_events(t_end, V0=10.0):
+    """Zero crossings of vC: the diode releases going down, activates going up (piecewise closed form)."""
+    t, state, conducting, events = 0.0, np.array([V0, 0.0]), True, []
+    while True:
+        resistance = R if conducting else np.inf
+        vc = lambda s: parallel_rlc_exact([s], L, C, resistance, *state)[0, 0]
+        lo = 1e-9
+        while np.sign(vc(lo + 1e-5)) == np.sign(vc(lo)):
+            lo += 1e-5
+        s = brentq(vc, lo, lo + 1e-5, xtol=1e-16)
+        t += s
+        if t > t_end:
+            return np.array(events)
+        state = parallel_rlc_exact([s], L, C, resistance, *state)[0]
+        state[0] = 0.0
+        events.append(t)
+        conducting = not conducting
+
+
+def test_sub_step_event_estimates_converge_and_beat_the_grid():
+    exact = _exact_half_wave_events(5e-3)
+    hs = np.array([4e-6, 2e-6, 1e-6, 5e-7])
+    errors = []
+    for h in hs:
+        tr = simulate(half_wave_rectifier(), BackwardEuler(h))
+        estimate = tr.events["time"].to_numpy()
+        grid = tr.t[tr.events["step"].to_numpy() + 1]
+        assert len(estimate) == len(exact) == 16
+        assert tr.events["kind"].tolist()[:2] == ["release", "activate"]
+        errors.append(np.abs(estimate - exact).max())
+        assert errors[-1] < np.abs(grid - exact).max()
+    assert observed_order(hs, errors) >= 0.8
+
+
+def test_trajectory_to_pandas_has_named_columns():
+    tr = simulate(half_wave_rectifier(t_end=1e-4), BackwardEuler(1e-6))
+    frame = tr.to_pandas()
+    assert list(frame.columns) == ["time", "vC", "iL", "u_diode", "y_diode", "active_diode", "config"]
+    assert len(frame) == tr.steps + 1 == 101
+    assert frame["config"].iloc[0] == "rlcd"
+
+
+def test_switched_configurations_follow_the_schedule():
+    # An RC charged through a switch: ON connects Vin = 1 V through R = 1, OFF lets it discharge.
+    on = Configuration(A=[[-1.0]], B=[[0.0]], C=[[0.0]], D=[[1.0]], E=[1.0], name="on")
+    off = Configuration(A=[[-1.0]], B=[[0.0]], C=[[0.0]], D=[[1.0]], name="off")
+    problem = LCSProblem((on, off), Schedule.pwm(1.0, 0.5), x0=[0.0], t_span=(0.0, 1.0))
+    tr = simulate(problem, Theta(1e-3, 0.5))
+    v_half = 1 - np.exp(-0.5)
+    assert tr.x[tr.t == 0.5][0, 0] == pytest.approx(v_half, rel=1e-6)
+    assert tr.x[-1, 0] == pytest.approx(v_half * np.exp(-0.5), rel=1e-6)
+
+
+def test_a_step_lcp_without_solution_is_a_clear_error():
+    # An inductor current source driven into a diode that can only block: M = -h/L < 0, q < 0.
+    bad = Configuration(A=[[0.0]], B=[[-1.0]], C=[[1.0]], D=[[0.0]], E=[-1.0], name="bad")
+    problem = LCSProblem((bad,), Schedule.constant(), x0=[0.0], t_span=(0.0, 1e-3))
+    with pytest.raises(SimulationError, match=r"step LCP at t = 0 s has no solution"):
+        simulate(problem, BackwardEuler(1e-4))
+
+
+def test_simulate_rejects_a_foreign_method_and_bad_x0():
+    problem = half_wave_rectifier(t_end=1e-4)
+    with pytest.raises(ParameterError, match=r"method must be Theta\(h, theta\) or BackwardEuler\(h\)"):
+        simulate(problem, "euler")
+    with pytest.raises(ParameterError, match=r"x0 must be 2 finite numbers"):
+        simulate(problem, BackwardEuler(1e-6), x0=[np.nan, 0.0])
