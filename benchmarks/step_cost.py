@@ -1,0 +1,90 @@
+"""Per-step cost of the compiled LCP time-stepper, and the compilation cost a second process pays.
+
+Run: .venv/bin/python benchmarks/step_cost.py   (or `make bench`). Prints measured numbers only;
+targets: <= 20 ns per step for n <= 4, k <= 2 over 10^6 steps of the half-wave rectifier; a second
+process pays < 0.5 s to get the compiled loop (numba's on-disk cache).
+"""
+from __future__ import annotations
+
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+from converters.circuits import diode_bridge, half_wave_rectifier
+from converters.discretize import step_matrices
+from converters.kernels import run_steps
+from converters.methods import BackwardEuler
+from converters.stepping import simulate
+
+REPEATS = 5
+
+
+def kernel_cost(problem, h, steps):
+    """Best-of-REPEATS ns per step of the compiled loop alone (matrices and arrays prepared outside)."""
+    mats = step_matrices([problem.configurations[0]], np.array([h]), 1.0)
+    which = np.zeros(steps, dtype=np.int64)
+    x = np.empty((steps + 1, problem.n))
+    u = np.zeros((steps + 1, problem.k))
+    y = np.empty((steps + 1, problem.k))
+    x[0] = problem.x0
+    args = (which, mats.Phi, mats.Gamma, mats.H, mats.C, mats.F, mats.M, x, u, y, 0, True)
+    run_steps(*args)
+    best = np.inf
+    for _ in range(REPEATS):
+        start = time.perf_counter()
+        status, _ = run_steps(*args)
+        best = min(best, time.perf_counter() - start)
+        assert status == 0
+    return best / steps * 1e9
+
+
+def simulate_cost(problem, h):
+    best = np.inf
+    for _ in range(REPEATS):
+        tr = simulate(problem, BackwardEuler(h))
+        best = min(best, tr.wall_s)
+    return best / tr.steps * 1e9, tr.steps
+
+
+SECOND_PROCESS = """
+import time
+t0 = time.perf_counter()
+from converters.circuits import half_wave_rectifier, diode_bridge
+from converters.methods import BackwardEuler
+from converters.stepping import simulate
+t1 = time.perf_counter()
+simulate(half_wave_rectifier(t_end=1e-4), BackwardEuler(1e-6))
+simulate(diode_bridge(t_end=1e-4), BackwardEuler(1e-6))
+t2 = time.perf_counter()
+simulate(half_wave_rectifier(t_end=1e-4), BackwardEuler(1e-6))
+simulate(diode_bridge(t_end=1e-4), BackwardEuler(1e-6))
+t3 = time.perf_counter()
+print(f"{t1 - t0:.4f} {t2 - t1:.4f} {t3 - t2:.4f}")
+"""
+
+
+def main():
+    print("pcsuite step-cost benchmark (best of %d)" % REPEATS)
+    rect = half_wave_rectifier(t_end=5e-3)
+    ns = kernel_cost(rect, 5e-9, 1_000_000)
+    print(f"half-wave rectifier (n = 2, k = 1), 10^6 steps, compiled loop: {ns:6.1f} ns/step  "
+          f"(target <= 20 ns: {'PASS' if ns <= 20 else 'FAIL'})")
+    ns_sim, steps = simulate_cost(rect, 5e-9)
+    print(f"half-wave rectifier, simulate() end to end ({steps} steps):     {ns_sim:6.1f} ns/step "
+          "(grid, matrices, allocation, events included)")
+    bridge = diode_bridge(t_end=5e-3)
+    ns_b = kernel_cost(bridge, 5e-9, 1_000_000)
+    print(f"diode bridge (n = 2, k = 4), 10^6 steps, compiled loop:        {ns_b:6.1f} ns/step")
+    ns_bs, steps = simulate_cost(bridge, 5e-9)
+    print(f"diode bridge, simulate() end to end ({steps} steps):           {ns_bs:6.1f} ns/step")
+    out = subprocess.run([sys.executable, "-c", SECOND_PROCESS], capture_output=True, text=True, check=True)
+    imports, first, second = (float(v) for v in out.stdout.split())
+    compile_cost = first - second
+    print(f"second process: imports {imports:.3f} s, first calls {first:.3f} s, same calls again {second:.3f} s "
+          f"-> compilation paid {compile_cost:.3f} s (target < 0.5 s: {'PASS' if compile_cost < 0.5 else 'FAIL'})")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,127 @@
+"""The HTML validation report: sections built from result tables, written atomically.
+
+Each section builder returns a :class:`Section` (HTML fragment plus the files it refers to). A
+section that raises is shown as failed with its reason; it never aborts the report.
+"""
+from __future__ import annotations
+
+import html
+import io
+import json
+import time
+import traceback
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from .environment import environment
+from .io import atomic_directory
+
+CSS = """
+body{font-family:system-ui,sans-serif;margin:2em auto;max-width:1100px;color:#222}
+table{border-collapse:collapse;margin:1em 0;font-size:0.85em}
+th,td{border:1px solid #ccc;padding:3px 7px;text-align:right}
+th{background:#eee} td.text{text-align:left}
+.pass{background:#d9f2d9}.fail{background:#f8d0d0}.note{background:#fff3c4}
+img{max-width:100%;border:1px solid #ddd;margin:0.5em 0}
+.failed-section{border:2px solid #c33;padding:0.5em 1em}
+code{background:#f4f4f4;padding:0 3px}
+"""
+
+
+@dataclass
+class Section:
+    title: str
+    html: str
+    files: dict = field(default_factory=dict)   # relative name -> bytes
+    ok: bool = True
+    metrics: dict = field(default_factory=dict)
+
+
+def table_html(frame: pd.DataFrame, status_column: str | None = None, good=("solved", "pass", True)) -> str:
+    """A pandas table as HTML, with pass/fail colouring on ``status_column``."""
+    head = "".join(f"<th>{html.escape(str(c))}</th>" for c in frame.columns)
+    rows = []
+    for _, row in frame.iterrows():
+        cells = []
+        for col in frame.columns:
+            value = row[col]
+            cls = ""
+            if isinstance(value, (float, np.floating)):
+                text = "" if np.isnan(value) else f"{value:.3g}"
+            else:
+                text = str(value)
+                cls = "text"
+            if col == status_column:
+                cls += " pass" if value in good else " fail"
+            cells.append(f'<td class="{cls.strip()}">{html.escape(text)}</td>')
+        rows.append("<tr>" + "".join(cells) + "</tr>")
+    return f"<table><tr>{head}</tr>{''.join(rows)}</table>"
+
+
+def figure_png(fig) -> bytes:
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=110, bbox_inches="tight")
+    import matplotlib.pyplot as plt
+    plt.close(fig)
+    return buffer.getvalue()
+
+
+def run_section(builder, title: str) -> Section:
+    start = time.perf_counter()
+    try:
+        section = builder()
+    except Exception as exc:  # a failing section is reported, never fatal
+        detail = "".join(traceback.format_exception_only(type(exc), exc)).strip()
+        return Section(title=title, ok=False,
+                       html=f'<div class="failed-section"><p><b>Failed:</b> {html.escape(detail)}</p></div>',
+                       metrics={"error": detail})
+    section.metrics.setdefault("section_wall_s", time.perf_counter() - start)
+    return section
+
+
+def write_report(sections: list[Section], out_dir, suite: str, options: dict | None = None) -> Path:
+    """Write index.html, metrics.json and every section's files into ``out_dir`` atomically."""
+    env = environment()
+    header = "".join(f"<tr><td class='text'>{html.escape(k)}</td><td class='text'>{html.escape(str(v))}</td></tr>"
+                     for k, v in env.items())
+    summary = pd.DataFrame([{"section": s.title, "result": "pass" if s.ok else "fail"} for s in sections])
+    body = [f"<h1>pcsuite validation report: {html.escape(suite)}</h1>",
+            f"<table>{header}</table>",
+            f"<p>Options: <code>{html.escape(json.dumps(options or {}))}</code></p>",
+            "<h2>Summary</h2>", table_html(summary, "result", good=("pass",))]
+    for section in sections:
+        body.append(f"<h2 id='{_anchor(section.title)}'>{html.escape(section.title)}</h2>{section.html}")
+    page = (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>pcsuite report: {html.escape(suite)}"
+            f"</title><style>{CSS}</style></head><body>{''.join(body)}</body></html>")
+    out_dir = Path(out_dir)
+    with atomic_directory(out_dir) as staging:
+        for section in sections:
+            for name, data in section.files.items():
+                path = staging / name
+                path.parent.mkdir(parents=True, exist_ok=True)
+                path.write_bytes(data)
+        metrics = {"suite": suite, "environment": env, "options": options or {},
+                   "sections": {s.title: {"ok": s.ok, **s.metrics} for s in sections}}
+        (staging / "metrics.json").write_text(json.dumps(metrics, indent=2, default=_json_default))
+        summary.to_csv(staging / "summary.csv", index=False)
+        (staging / "index.html").write_text(page)
+    return out_dir / "index.html"
+
+
+def csv_bytes(frame: pd.DataFrame) -> bytes:
+    return frame.to_csv(index=False).encode()
+
+
+def _anchor(title: str) -> str:
+    return "".join(ch if ch.isalnum() else "-" for ch in title.lower())
+
+
+def _json_default(value):
+    if isinstance(value, (np.floating, np.integer)):
+        return value.item()
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    return str(value)

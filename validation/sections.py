@@ -1,0 +1,108 @@
+"""Report sections: each runs one study and returns its HTML, data files and metrics."""
+from __future__ import annotations
+
+import html
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import pandas as pd  # noqa: E402
+
+from converters.lcp.problems import problem_set  # noqa: E402
+
+from .core_checks import convergence_table, core_waveforms, observed_orders  # noqa: E402
+from .peer import METHODS, PEER_TOL, peer_directory, peer_table, solver_table  # noqa: E402
+from .report import Section, csv_bytes, figure_png, table_html  # noqa: E402
+
+
+def _pivot(rows: pd.DataFrame) -> pd.DataFrame:
+    """problem x method grid of 'status / err / iterations / time'."""
+    rows = rows.copy()
+    rows["cell"] = [f"{r.status} | {r.err:.1e} | {r.iterations} | {r.time_s * 1e3:.2f} ms"
+                    for r in rows.itertuples()]
+    return rows.pivot(index=["problem", "k"], columns="method", values="cell")[list(METHODS)].reset_index()
+
+
+def lcp_project_section() -> Section:
+    cases = problem_set()
+    rows = pd.DataFrame(solver_table([(c.name, c.M, c.q) for c in cases], tol=1e-10))
+    expected = {c.name: ("solved" if c.solvable else "no_solution") for c in cases}
+    families = {c.name: c.family for c in cases}
+    lemke_ok = all(r.status == expected[r.problem] for r in rows.itertuples() if r.method == "lemke")
+    grid = _pivot(rows)
+    grid.insert(1, "family", grid["problem"].map(families))
+    text = (f"<p>{len(cases)} problems generated in code (seeded): random P-matrices (symmetric PD, "
+            "non-symmetric PD, triangular non-PD), PSD with many solutions, degenerate, Murty's exponential "
+            "family, and two with no solution. Each cell: status | err = ||z - max(0, z - w)|| / ||q|| | "
+            "iterations | time; tol = 1e-10; closed-form fast paths off so every algorithm runs.</p>"
+            + table_html(grid) +
+            "<p>PGS converges only for symmetric positive definite M (its failures on the non-symmetric "
+            "rows are expected); enumeration refuses k &gt; 12; Murty is finite on P-matrices only.</p>")
+    return Section("LCP solvers: project problem set", text, {"lcp_project.csv": csv_bytes(rows)},
+                   ok=lemke_ok, metrics={"problems": len(cases)})
+
+
+def lcp_peer_section() -> Section:
+    directory = peer_directory()
+    if directory is None:
+        return Section("LCP solvers: Siconos peer collection",
+                       "<p>Peer collection not found (../shared/peer/siconos-lcp or $PCSUITE_PEER_DIR).</p>",
+                       ok=False, metrics={"error": "peer collection not found"})
+    rows = pd.DataFrame(peer_table(directory))
+    grid = _pivot(rows)
+    unexplained = rows[rows["differs"] & (rows["explanation"] == "")]
+    enum_refused = (rows["method"] == "enum") & (rows["k"] > 12)
+    must_solve = rows[rows["method"].isin(["lemke", "enum"]) & (rows["siconos"] == "solves") & ~enum_refused]
+    solved_where_siconos_solves = bool((must_solve["status"] == "solved").all())
+    diffs = rows[rows["differs"]][["problem", "method", "siconos", "status", "err", "explanation"]]
+    text = (f"<p>The 20 problems of Siconos' LCP test collection, read from <code>{html.escape(str(directory))}"
+            f"</code>; tol = {PEER_TOL:g} as in Siconos. Each cell: status | err | iterations | time.</p>"
+            + table_html(grid) +
+            "<h3>Differences from Siconos' expected-failure list, explained</h3>"
+            + table_html(diffs, "status"))
+    return Section("LCP solvers: Siconos peer collection", text, {"lcp_peer.csv": csv_bytes(rows)},
+                   ok=solved_where_siconos_solves and unexplained.empty,
+                   metrics={"differences": len(diffs), "unexplained": len(unexplained)})
+
+
+def core_section() -> Section:
+    table = convergence_table()
+    orders = observed_orders(table)
+    fig, ax = plt.subplots(figsize=(6.5, 4))
+    for (case, theta), group in table.groupby(["case", "theta"], sort=False):
+        ax.loglog(group["h"], group["error"], "o-", label=f"{case}, theta = {theta:g}")
+    ax.set_xlabel("step h (s)")
+    ax.set_ylabel("max |vC error| (V)")
+    ax.legend(fontsize=7)
+    ax.grid(True, which="both", alpha=0.3)
+    conv_png = figure_png(fig)
+    waves = core_waveforms()
+    fig, axes = plt.subplots(len(waves), 1, figsize=(7, 5), sharex=True)
+    for ax, (title, tr) in zip(axes, waves.items()):
+        ax.plot(tr.t * 1e3, tr.x[:, 0], label="vC (V)")
+        ax.plot(tr.t * 1e3, tr.x[:, 1] * 1e3, label="iL (mA)")
+        ax.set_title(title, fontsize=9)
+        ax.legend(fontsize=7)
+    axes[-1].set_xlabel("time (ms)")
+    wave_png = figure_png(fig)
+    lc_be, lc_tr = orders["observed_order"].iloc[0], orders["observed_order"].iloc[1]
+    bridge_be = orders["observed_order"].iloc[2]
+    ok = abs(lc_be - 1.0) <= 0.15 and abs(lc_tr - 2.0) <= 0.2 and bridge_be >= 0.8
+    text = ("<p>Error against closed forms (the free LC tank; the diode bridge, which with ideal diodes is a "
+            "parallel RLC) as h shrinks. Targets: order 1.0 +- 0.15 (theta = 1) and 2.0 +- 0.2 "
+            "(theta = 0.5) without switching; order >= 0.8 on the bridge.</p>"
+            + table_html(orders) + '<img src="core_convergence.png" alt="convergence">'
+            + '<img src="core_waveforms.png" alt="waveforms">' + table_html(table))
+    return Section("LCS time-stepping: convergence on the Siconos circuits", text,
+                   {"core_convergence.png": conv_png, "core_waveforms.png": wave_png,
+                    "core_convergence.csv": csv_bytes(table)}, ok=ok,
+                   metrics={"orders": orders.to_dict(orient="records")})
+
+
+SUITES = {
+    "default": [("LCP solvers: project problem set", lcp_project_section),
+                ("LCP solvers: Siconos peer collection", lcp_peer_section),
+                ("LCS time-stepping: convergence on the Siconos circuits", core_section)],
+}
+SUITES["lcp"] = SUITES["default"][:2]
