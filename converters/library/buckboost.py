@@ -1,0 +1,11 @@
+"""Inverting buck-boost converter: Vin -> switch -> L to ground, diode from the (negative) output.
+
+The state holds |vo|; ``vout`` is negative.
+"""
+from .pwm2 import PWMTwoState
+
+
+class BuckBoost(PWMTwoState):
+    name = "buck-boost"
+    title = "buck-boost (inverting)"
+    topology = "buck-boost"

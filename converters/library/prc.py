@@ -1,0 +1,60 @@
+"""Parallel resonant converter with a diode-bridge rectifier (Siconos tutorial PowerConverter/PRC).
+
+x = (ir, vr, iLf, vo): resonant-tank current and voltage, output-filter inductor current and output
+voltage. u = (i_D1, i_D3, v_D2, v_D4), y = (v_D1, v_D3, i_D2, i_D4) (reverse voltages); the drive is a
+square wave +-Vin at f_sw (configuration 0 positive half, 1 negative half). D is skew, so every step
+is a monotone LCP of size 4 (REFERENCE section 6).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..lcs import Configuration, Schedule
+from ..params import positive
+from .base import Converter
+
+
+class PRC(Converter):
+    name = "prc"
+    title = "parallel resonant converter with diode bridge"
+    parameters = (
+        positive("Vin", 1.0, "V", "square-wave drive amplitude"),
+        positive("Lr", 150e-6, "H", "resonant inductance"),
+        positive("Cr", 68e-9, "F", "resonant capacitance"),
+        positive("Lf", 0.4e-3, "H", "output-filter inductance"),
+        positive("Cf", 2.2e-6, "F", "output-filter capacitance"),
+        positive("R", 33.0, "ohm", "load resistance"),
+        positive("f_sw", 55e3, "Hz", "drive frequency"),
+        positive("n", 1.0, "", "transformer ratio"),
+    )
+    state_names = ("ir", "vr", "iLf", "vo")
+    pair_names = ("D1", "D3", "D2", "D4")
+    default_theta = 0.5
+
+    def default_h(self, p):
+        return min(5e-8, self.period(p) / 200.0)
+
+    def configurations(self, p):
+        Lr, Cr, Lf, Cf, R, n, Vin = (p[k] for k in ("Lr", "Cr", "Lf", "Cf", "R", "n", "Vin"))
+        A = [[0, -1 / Lr, 0, 0], [1 / Cr, 0, 0, 0], [0, 0, 0, -1 / Lf], [0, 0, 1 / Cf, -1 / (R * Cf)]]
+        B = [[0, 0, 0, 0], [-1 / (n * Cr), 1 / (n * Cr), 0, 0], [0, 0, 1 / Lf, 1 / Lf], [0, 0, 0, 0]]
+        C = [[0, -1 / n, 0, 0], [0, 1 / n, 0, 0], [0, 0, 1, 0], [0, 0, 1, 0]]
+        D = [[0, 0, 1, 0], [0, 0, 0, 1], [-1, 0, 0, 0], [0, -1, 0, 0]]
+        return tuple(Configuration(A=A, B=B, C=C, D=D, E=[sign * Vin / Lr, 0, 0, 0], name=name)
+                     for sign, name in ((1.0, "drive+"), (-1.0, "drive-")))
+
+    def schedule(self, p):
+        return Schedule.pwm(self.period(p), 0.5, on=0, off=1)
+
+    def output_node_current(self, x, u, config):
+        return x[:, 2]
+
+    def vout(self, x, u, config, p):
+        return x[:, 3]
+
+    def modes(self, active, config, x):
+        """Bridge conducting (iLf > 0) is CCM-ON / CCM-OFF by drive half; all four diodes off is DCM."""
+        conducting = x[:, 2] > 1e-12 * max(1.0, np.abs(x[:, 2]).max())
+        labels = np.where(np.asarray(config) == 0, "CCM-ON", "CCM-OFF").astype(object)
+        labels[~conducting] = "DCM"
+        return labels

@@ -1,0 +1,72 @@
+"""Named parameter sets: data with units and ranges, validated in one place.
+
+An unknown name gets an error listing the valid ones; a value outside its range gets an error
+naming the parameter, the range and the value. Values accept SPICE suffixes (``10u``, ``100k``).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from .errors import ParameterError
+from .validate import parse_value
+
+
+@dataclass(frozen=True)
+class Param:
+    """One parameter: default (None = optional, only modelled when given), unit, meaning, valid range."""
+
+    name: str
+    default: float | None
+    unit: str
+    doc: str
+    low: float = 0.0
+    high: float = math.inf
+    low_open: bool = True      # (low, ...] by default: strictly positive
+    high_open: bool = True
+
+    def check(self, value) -> float:
+        value = parse_value(self.name, value)
+        below = value <= self.low if self.low_open else value < self.low
+        above = value >= self.high if self.high_open else value > self.high
+        if below or above:
+            raise ParameterError(f"{self.name} ({self.doc}) must be in {self.range_text()} {self.unit}".rstrip()
+                                 + f"; got {value!r}")
+        return value
+
+    def range_text(self) -> str:
+        lb = "(" if self.low_open else "["
+        rb = ")" if self.high_open else "]"
+        high = "inf" if math.isinf(self.high) else f"{self.high:g}"
+        return f"{lb}{self.low:g}, {high}{rb}"
+
+
+def positive(name, default, unit, doc) -> Param:
+    return Param(name, default, unit, doc)
+
+
+def nonnegative(name, default, unit, doc) -> Param:
+    return Param(name, default, unit, doc, low=0.0, low_open=False)
+
+
+def resolve(params: tuple[Param, ...], given: dict, owner: str) -> dict:
+    """Defaults overlaid with ``given``; optional parameters appear only when given."""
+    known = {p.name: p for p in params}
+    unknown = [name for name in given if name not in known]
+    if unknown:
+        raise ParameterError(f"unknown parameter {unknown[0]!r} for {owner}; valid names: {', '.join(known)}")
+    values = {p.name: p.default for p in params if p.default is not None}
+    for name, value in given.items():
+        values[name] = known[name].check(value)
+    return values
+
+
+def parse_assignments(items: list[str]) -> dict:
+    """``["L=10u", "R=5"]`` -> {"L": "10u", "R": "5"} (values are checked later, against the spec)."""
+    out = {}
+    for item in items or []:
+        name, sep, value = item.partition("=")
+        if not sep or not name.strip():
+            raise ParameterError(f"-p takes NAME=VALUE (e.g. -p L=10u); got {item!r}")
+        out[name.strip()] = value.strip()
+    return out
