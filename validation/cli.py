@@ -21,15 +21,46 @@ def main(argv=None) -> int:
         return EXIT_BAD_INPUT
     try:
         return args.run(args) or 0
+    except BrokenPipeError:  # e.g. `pcsuite list | head`
+        sys.stderr.close()
+        return 0
     except (PcsuiteError, ValueError) as exc:
         print(f"pcsuite: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with the project's one-line errors (no usage dump)."""
+
+    def error(self, message):
+        self.exit(EXIT_BAD_INPUT, f"pcsuite: error: {message}\n")
+
+
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="pcsuite", description="Power-converter study suite: LCP "
+    parser = _Parser(prog="pcsuite", description="Power-converter study suite: LCP "
                                      "time-stepping of DC-DC converters cross-checked against ngspice.")
-    sub = parser.add_subparsers(title="commands")
+    sub = parser.add_subparsers(title="commands", parser_class=_Parser)
+
+    listing = sub.add_parser("list", help="converters with their parameters, methods, scenes")
+    listing.add_argument("--json", action="store_true")
+    listing.set_defaults(run=_list)
+
+    sim = sub.add_parser("simulate", help="simulate a converter and write its waveforms")
+    sim.add_argument("converter")
+    sim.add_argument("-p", dest="params", action="append", default=[], metavar="NAME=VALUE",
+                     help="parameter value, SPICE suffixes allowed (repeatable)")
+    sim.add_argument("--method", default="lcp", choices=["lcp"],
+                     help="lcp: the LCP time-stepper (event, smooth and spice arrive with their issues)")
+    sim.add_argument("--h", default=None, help="step in s (default T/1000; PRC 50 ns)")
+    sim.add_argument("--theta", default=None, help="theta in [0.5, 1] (default 1, PRC 0.5)")
+    span = sim.add_mutually_exclusive_group()
+    span.add_argument("--t-end", default=None, help="duration in s")
+    span.add_argument("--periods", type=int, default=None, help="duration in switching periods (default 500)")
+    sim.add_argument("--steady", action="store_true", help="run until the periodic steady state")
+    sim.add_argument("--steady-tol", type=float, default=1e-6)
+    sim.add_argument("--out", type=Path, default=None, help="waveform file, .csv or .parquet")
+    sim.add_argument("--json", action="store_true", help="print one JSON summary object")
+    sim.set_defaults(run=_simulate)
 
     lcp = sub.add_parser("lcp", help="linear complementarity problems").add_subparsers(title="lcp commands")
     solve = lcp.add_parser("solve", help="solve an LCP stored in the Siconos .dat format")
@@ -64,6 +95,63 @@ def _lcp_solve(args) -> int:
             for s in result.solutions:
                 print("  ", np.array2string(s, precision=6))
     return 0 if result.solved else 1
+
+
+def _list(args) -> int:
+    from converters.library import CONVERTERS
+    from .sections import SUITES
+    info = {"converters": {name: {"title": c.title, "states": list(c.state_names), "parameters": [
+        {"name": p.name, "default": p.default, "unit": p.unit, "doc": p.doc, "range": p.range_text(),
+         "optional": p.default is None} for p in c.parameters]} for name, c in CONVERTERS.items()},
+        "methods": {"lcp": "LCP time-stepper: theta method (--theta, default 1 = backward Euler), one LCP per step"},
+        "suites": sorted(SUITES)}
+    if args.json:
+        print(json.dumps(info, indent=2))
+        return 0
+    for name, conv in info["converters"].items():
+        print(f"{name}: {conv['title']}  (states: {', '.join(conv['states'])})")
+        for p in conv["parameters"]:
+            default = "only when given" if p["optional"] else f"{p['default']:g}"
+            print(f"    {p['name']:<6} {default:>16} {p['unit']:<4} {p['doc']}  range {p['range']}")
+    print("methods:")
+    for name, doc in info["methods"].items():
+        print(f"    {name}: {doc}")
+    print("report suites: " + ", ".join(info["suites"]))
+    return 0
+
+
+def _simulate(args) -> int:
+    from converters.params import parse_assignments
+    from converters.simulation import run_converter
+    from .io import atomic_write_bytes
+    if args.out is not None and args.out.suffix.lower() not in (".csv", ".parquet"):
+        raise ParameterError(f"--out must end in .csv or .parquet; got {str(args.out)!r}")
+    run = run_converter(args.converter, parse_assignments(args.params), h=args.h, theta=args.theta,
+                        t_end=args.t_end, periods=args.periods, steady=args.steady, steady_tol=args.steady_tol)
+    if args.out is not None:
+        frame = run.waveforms()
+        frame["mode"] = frame["mode"].astype(str)
+        if args.out.suffix.lower() == ".csv":
+            data = frame.to_csv(index=False).encode()
+        else:
+            import io as _io
+            buffer = _io.BytesIO()
+            frame.to_parquet(buffer, index=False)
+            data = buffer.getvalue()
+        atomic_write_bytes(args.out, data)
+    summary = run.summary()
+    if args.json:
+        print(json.dumps(summary, default=float))
+    else:
+        print(f"{summary['converter']}: {summary['steps']} steps (h = {run.method.h:.3g} s, theta = "
+              f"{run.method.theta:g}) in {summary['wall_s']:.3f} s; vout mean (last 10 periods) = "
+              f"{summary['vout_mean']:.6g} V")
+        if run.steady_periods is not None:
+            print(f"periodic steady state after {run.steady_periods} periods")
+        print("modes (last period): " + ", ".join(f"{k} {v:.3f}" for k, v in summary["mode_fractions"].items()))
+        if args.out is not None:
+            print(f"wrote {args.out}")
+    return 0
 
 
 def _report(args) -> int:

@@ -1,0 +1,140 @@
+"""The converter library against the closed-form CCM/DCM relations (REFERENCE sections 3, 4, 6)."""
+import numpy as np
+import pytest
+
+from converters import analytic
+from converters.errors import ParameterError
+from converters.library import get_converter
+from converters.simulation import run_converter
+
+# (converter, parameters, expected mode). C is raised where ripple would bias the CCM mean.
+OPERATING_POINTS = [
+    ("buck", {"L": "100u"}, "CCM"),
+    ("buck", {"D": 0.7, "L": "50u", "R": 5}, "CCM"),
+    ("buck", {}, "DCM"),
+    ("buck", {"D": 0.2, "L": "5u", "R": 20}, "DCM"),
+    ("boost", {"L": "100u", "R": 20, "C": "470u"}, "CCM"),
+    ("boost", {"D": 0.6, "L": "200u", "C": "470u"}, "CCM"),
+    ("boost", {"D": 0.3, "R": 50}, "DCM"),
+    ("buck-boost", {"L": "100u", "C": "470u"}, "CCM"),
+    ("buck-boost", {"D": 0.6, "L": "200u", "C": "470u"}, "CCM"),
+    ("buck-boost", {}, "DCM"),
+    ("buck-boost", {"D": 0.25, "L": "5u", "R": 20}, "DCM"),
+    ("cuk", {"C2": "470u"}, "CCM"),
+    ("cuk", {"D": 0.6, "L1": "200u", "L2": "200u", "C2": "470u"}, "CCM"),
+    ("cuk", {"L1": "10u", "L2": "10u"}, "DCM"),
+    ("cuk", {"D": 0.3, "L1": "20u", "L2": "5u"}, "DCM"),
+]
+
+
+@pytest.mark.parametrize("name,params,mode", OPERATING_POINTS)
+def test_steady_state_mean_output_matches_the_conversion_ratio(name, params, mode):
+    run = run_converter(name, params, steady=True)
+    p = run.params
+    assert analytic.predicted_mode(p, name) == mode
+    expected = analytic.conversion_ratio(p, name) * p["Vin"]
+    vout = run.mean(run.vout())
+    tolerance = 5e-4 if mode == "CCM" else 1e-2
+    assert vout == pytest.approx(expected, rel=tolerance)
+    # Charge balance of the output capacitor: mean current delivered equals |vout| / R.
+    tr = run.trajectory
+    delivered = run.mean(run.converter.output_node_current(tr.x, tr.u, tr.config))
+    assert delivered == pytest.approx(abs(vout) / p["R"], rel=3e-4)
+    fractions = run.mode_fractions()
+    held = {"CCM": 0.0, "DCM": 0.05}[mode]
+    held_fraction = fractions.get("DCM", 0.0) + fractions.get("GDCM-OFF", 0.0)
+    assert (held_fraction > held) if mode == "DCM" else held_fraction == 0.0
+
+
+def test_buck_dcm_idle_fraction_and_first_order_convergence():
+    p = get_converter("buck").resolve({})
+    _, _, idle = analytic.dcm_fractions(p, "buck")
+    run = run_converter("buck", {}, steady=True)  # h = T/1000
+    assert run.mode_fractions()["DCM"] == pytest.approx(idle, abs=0.01)
+    # The exact ideal periodic mean (REFERENCE section 4) is 6.962476 V; its 7 digits resolve
+    # errors down to ~1e-6 V, so h stops at T/800 (error 1.9e-5 V there).
+    errors = []
+    hs = np.array([1e-7, 5e-8, 2.5e-8, 1.25e-8])
+    for h in hs:
+        run = run_converter("buck", {}, h=h, steady=True, steady_tol=1e-10)
+        errors.append(abs(run.mean(run.vout()) - 6.962476))
+    order = np.polyfit(np.log(hs), np.log(errors), 1)[0]
+    assert 0.8 <= order <= 1.2
+
+
+def test_cuk_gdcm_appears_exactly_below_the_boundary():
+    base = {"D": 0.4, "L2": "100u"}
+    # Ke = L1 L2 / (L1 + L2); K = 2 Ke f / R against (1 - D)^2 = 0.36: 0.18, 0.33, 0.57, 1.0.
+    for L1, expect_gdcm in (("10u", True), ("20u", True), ("40u", False), ("100u", False)):
+        run = run_converter("cuk", {**base, "L1": L1}, steady=True)
+        p = run.params
+        below = analytic.k_factor(p, "cuk") < analytic.k_crit(p["D"], "cuk")
+        assert below == expect_gdcm
+        modes = run.modes()
+        in_gdcm = modes == "GDCM-OFF"
+        assert in_gdcm.any() == expect_gdcm
+        if expect_gdcm:
+            i1, i2 = run.trajectory.state("i1")[in_gdcm], run.trajectory.state("i2")[in_gdcm]
+            assert np.abs(i1 + i2).max() <= 1e-9
+            assert np.abs(i1).min() > 1e-3  # both currents non-zero: generalised DCM, not plain DCM
+
+
+def test_boost_off_phase_holds_only_with_vc_at_least_vin():
+    # GDCM in the boost OFF phase (iL held at 0) needs C (A x + E) <= 0 at iL = 0: (Vin - vC)/L <= 0.
+    run = run_converter("boost", {"D": 0.3, "R": 50}, steady=True)
+    held = run.modes() == "DCM"
+    assert held.any()
+    vin = run.params["Vin"]
+    assert run.trajectory.state("vC")[held].min() >= vin
+    # From rest with vC < Vin the inductor charges through the diode even with the switch off:
+    start = run_converter("boost", {"D": 0.0, "R": 50}, periods=2)
+    assert (start.modes()[1:] != "DCM").all()
+    assert start.trajectory.state("iL")[1:].min() > 0.0
+
+
+def test_prc_mean_output_over_the_last_millisecond():
+    # theta = 0.5, h = 50 ns (the Siconos settings): 0.6130 V; converged (h -> 0): 0.6135 V.
+    run = run_converter("prc", {}, t_end=2e-3)
+    assert run.mean(run.vout(), periods=55) == pytest.approx(0.6135, rel=2e-3)
+    # REFERENCE's 0.605 V is backward Euler at h = 50 ns, damped by its O(h) error:
+    damped = run_converter("prc", {}, t_end=2e-3, theta=1.0)
+    assert damped.mean(damped.vout(), periods=55) == pytest.approx(0.605, rel=1e-2)
+
+
+@pytest.mark.parametrize("name,params,match", [
+    ("buck", {"L": 0}, r"L \(inductance\) must be in \(0, inf\) H; got 0.0"),
+    ("buck", {"C": "-1u"}, r"C \(output capacitance\) must be in \(0, inf\) F; got -1e-06"),
+    ("boost", {"R": -5}, r"R \(load resistance\) must be in \(0, inf\) ohm; got -5.0"),
+    ("buck", {"D": 1.2}, r"D \(duty ratio\) must be in \[0, 1\]; got 1.2"),
+    ("cuk", {"f_sw": 0}, r"f_sw \(switching frequency\) must be in \(0, inf\) Hz; got 0.0"),
+    ("buck", {"Lx": 1}, r"unknown parameter 'Lx' for buck; valid names: Vin, L, C, R, f_sw, D"),
+    ("buck", {"L": "10uH"}, r"L must be a number, optionally with a SPICE suffix"),
+    ("prc", {"Lr": float("nan")}, r"Lr must be a finite number; got nan"),
+])
+def test_bad_parameters_are_refused(name, params, match):
+    with pytest.raises(ParameterError, match=match):
+        run_converter(name, params, periods=1)
+
+
+def test_step_must_be_below_the_period_and_the_converter_must_exist():
+    with pytest.raises(ParameterError, match=r"h must be positive and below the switching period \(1e-05 s\); got 2e-05"):
+        run_converter("buck", {}, h=2e-5, periods=1)
+    with pytest.raises(ParameterError, match=r"CONVERTER must be one of buck, boost, buck-boost, cuk, prc; got 'sepic'"):
+        run_converter("sepic", {})
+
+
+@pytest.mark.parametrize("duty", [0.0, 1.0])
+def test_duty_zero_and_one_are_single_configurations(duty):
+    run = run_converter("buck", {"D": duty, "L": "100u"}, steady=True)
+    expected = 12.0 * duty  # D = 0: decays to 0 V; D = 1: settles at Vin
+    assert run.vout()[-1] == pytest.approx(expected, abs=0.02)
+    assert set(run.trajectory.config.tolist()) == {0 if duty == 1.0 else 1}
+
+
+def test_parasitics_enter_only_when_given_and_lower_the_output():
+    ideal = run_converter("buck", {"L": "100u"}, steady=True)
+    assert "rL" not in ideal.params
+    lossy = run_converter("buck", {"L": "100u", "rL": 0.1, "Vf": 0.5}, steady=True)
+    # CCM buck with DCR and diode drop: Vout = (D Vin - (1 - D) Vf) R / (R + rL) (volt-second balance)
+    expected = (0.4 * 12 - 0.6 * 0.5) * 10 / 10.1
+    assert lossy.mean(lossy.vout()) == pytest.approx(expected, rel=5e-4)
