@@ -1,0 +1,101 @@
+"""The pcsuite command line: outputs as in CONTRACT, one-line errors, no partial files."""
+import json
+import subprocess
+import sys
+
+import pandas as pd
+import pytest
+
+from validation.cli import main
+
+
+def run_cli(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_lcp_solve_json_lists_all_basic_solutions(capsys, peer):
+    code, out, _ = run_cli(capsys, "lcp", "solve", str(peer / "lcp_CPS_1.dat"), "--method", "enum", "--json")
+    data = json.loads(out)
+    assert code == 0 and data["status"] == "solved" and data["err"] == 0.0
+    assert sorted(map(tuple, data["solutions"])) == [(0.0, 1.0), (1.0, 0.0)]
+    assert set(data) >= {"status", "z", "w", "err", "iterations", "solutions"}
+
+
+def test_lcp_solve_reports_no_solution_with_exit_code_one(capsys, tmp_path):
+    path = tmp_path / "lcp_neg.dat"
+    path.write_text("2\n0\n2\n2\n2 2\n-1 0\n0 -1\n-1 -1\n")
+    code, out, _ = run_cli(capsys, "lcp", "solve", str(path), "--json")
+    assert code == 1 and json.loads(out)["status"] == "no_solution"
+
+
+def test_simulate_json_summary_and_csv_columns(capsys, tmp_path):
+    target = tmp_path / "buck.csv"
+    code, out, _ = run_cli(capsys, "simulate", "buck", "-p", "L=100u", "--periods", "50", "--out", str(target), "--json")
+    assert code == 0
+    summary = json.loads(out)
+    assert set(summary) >= {"converter", "method", "options", "steps", "wall_s", "vout_mean", "mode_fractions"}
+    assert summary["converter"] == "buck" and summary["steps"] == 50_000
+    assert sum(summary["mode_fractions"].values()) == pytest.approx(1.0)
+    frame = pd.read_csv(target)
+    assert list(frame.columns) == ["time", "iL", "vC", "vout", "switch", "mode"]
+    assert set(frame["mode"]) <= {"CCM-ON", "CCM-OFF", "DCM"}
+    assert set(frame["switch"]) == {0, 1}
+
+
+def test_simulate_steady_reports_periods_and_cuk_columns(capsys, tmp_path):
+    target = tmp_path / "cuk.parquet"
+    code, out, _ = run_cli(capsys, "simulate", "cuk", "--steady", "--out", str(target), "--json")
+    summary = json.loads(out)
+    assert code == 0 and summary["steady_periods"] >= 40
+    assert summary["vout_mean"] == pytest.approx(-8.0, rel=1e-3)
+    assert list(pd.read_parquet(target).columns) == ["time", "i1", "v1", "i2", "v2", "vout", "switch", "mode"]
+
+
+@pytest.mark.parametrize("argv,match", [
+    (["simulate", "buck", "-p", "L=-1"], "L (inductance) must be in (0, inf) H; got -1.0"),
+    (["simulate", "buck", "-p", "C=0"], "C (output capacitance) must be in (0, inf) F; got 0.0"),
+    (["simulate", "buck", "-p", "R=0"], "R (load resistance) must be in (0, inf) ohm; got 0.0"),
+    (["simulate", "buck", "-p", "D=1.5"], "D (duty ratio) must be in [0, 1]; got 1.5"),
+    (["simulate", "buck", "-p", "f_sw=-1k"], "f_sw (switching frequency) must be in (0, inf) Hz; got -1000.0"),
+    (["simulate", "buck", "--h", "1e-4"], "h must be positive and below the switching period (1e-05 s); got 0.0001"),
+    (["simulate", "flyback"], "CONVERTER must be one of buck, boost, buck-boost, cuk, prc; got 'flyback'"),
+    (["simulate", "buck", "-p", "Q=1"], "unknown parameter 'Q' for buck; valid names: Vin, L, C, R, f_sw, D, rL"),
+    (["simulate", "buck", "-p", "L"], "-p takes NAME=VALUE (e.g. -p L=10u); got 'L'"),
+    (["simulate", "buck", "--method", "magic"], "argument --method: invalid choice: 'magic'"),
+])
+def test_bad_input_is_one_line_nonzero_exit_and_no_file(capsys, tmp_path, argv, match):
+    target = tmp_path / "out.csv"
+    try:
+        code = main(argv + ["--out", str(target)])
+    except SystemExit as exc:  # argparse's own errors (same one-line format)
+        code = exc.code
+    _, err = capsys.readouterr()
+    assert code != 0
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and match in lines[0]
+    assert not target.exists()
+
+
+def test_a_failed_run_leaves_an_existing_file_untouched(capsys, tmp_path):
+    target = tmp_path / "keep.csv"
+    target.write_text("good data\n")
+    code = main(["simulate", "buck", "-p", "L=0", "--out", str(target)])
+    assert code != 0 and target.read_text() == "good data\n"
+    assert [p.name for p in tmp_path.iterdir()] == ["keep.csv"]  # no temporary left behind
+
+
+def test_list_shows_every_converter_with_units(capsys):
+    code, out, _ = run_cli(capsys, "list", "--json")
+    info = json.loads(out)
+    assert code == 0 and list(info["converters"]) == ["buck", "boost", "buck-boost", "cuk", "prc"]
+    buck = {p["name"]: p for p in info["converters"]["buck"]["parameters"]}
+    assert buck["L"]["unit"] == "H" and buck["L"]["default"] == 1e-5 and buck["rL"]["optional"]
+
+
+def test_console_script_runs_as_a_program():
+    out = subprocess.run([sys.executable, "-m", "validation.cli", "simulate", "buck", "-p", "D=2"],
+                         capture_output=True, text=True)
+    assert out.returncode == 2
+    assert out.stderr.strip() == "pcsuite: error: D (duty ratio) must be in [0, 1]; got 2.0"
