@@ -148,19 +148,16 @@ def _events(t, u, y, config, M_stack, which) -> pd.DataFrame:
     Steps across a configuration change are left out (the change itself is the event there).
     """
     active = u > y
-    flips = np.argwhere(active[1:] != active[:-1])
-    rows = []
-    for j, i in flips:
-        if config[j] != config[j + 1] and j > 0:
-            continue
-        m_ii = M_stack[which[j], i, i]
-        dt = t[j + 1] - t[j]
-        if active[j + 1, i]:
-            a, b = y[j, i], m_ii * u[j + 1, i]
-            kind = "activate"
-        else:
-            a, b = u[j, i], y[j + 1, i] / m_ii if m_ii > 0 else np.nan
-            kind = "release"
-        frac = a / (a + b) if np.isfinite(b) and a + b > 0 else 0.5
-        rows.append((t[j] + np.clip(frac, 0.0, 1.0) * dt, int(j), int(i), kind))
-    return pd.DataFrame(rows, columns=["time", "step", "pair", "kind"])
+    steps, pairs = np.nonzero(active[1:] != active[:-1])
+    keep = (config[steps] == config[steps + 1]) | (steps == 0)
+    steps, pairs = steps[keep], pairs[keep]
+    m_ii = M_stack[which[steps], pairs, pairs]
+    activating = active[steps + 1, pairs]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        a = np.where(activating, y[steps, pairs], u[steps, pairs])
+        b = np.where(activating, m_ii * u[steps + 1, pairs],
+                     np.where(m_ii > 0, y[steps + 1, pairs] / m_ii, np.nan))
+        frac = np.where(np.isfinite(b) & (a + b > 0), a / (a + b), 0.5)
+    dt = t[steps + 1] - t[steps]
+    return pd.DataFrame({"time": t[steps] + np.clip(frac, 0.0, 1.0) * dt, "step": steps, "pair": pairs,
+                         "kind": np.where(activating, "activate", "release")})
