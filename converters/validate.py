@@ -7,14 +7,14 @@ from __future__ import annotations
 
 import math
 import re
+from decimal import Decimal
 
 import numpy as np
 
 from .errors import ParameterError
 
 #: SPICE-style magnitude suffixes (case-insensitive; ``meg`` before ``m``).
-SI_SUFFIXES = {"t": 1e12, "g": 1e9, "meg": 1e6, "k": 1e3, "m": 1e-3, "u": 1e-6, "µ": 1e-6,
-               "n": 1e-9, "p": 1e-12, "f": 1e-15}
+SI_EXPONENTS = {"t": 12, "g": 9, "meg": 6, "k": 3, "m": -3, "u": -6, "µ": -6, "n": -9, "p": -12, "f": -15}
 _NUMBER = re.compile(r"^\s*([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)\s*(meg|[tgkmuµnpf])?\s*$",
                      re.IGNORECASE)
 
@@ -32,7 +32,8 @@ def parse_value(name: str, text) -> float:
         if match is None:
             raise ParameterError(f"{name} must be a number, optionally with a SPICE suffix "
                                  f"(T G meg k m u n p f); got {str(text)!r}")
-        value = float(match.group(1)) * SI_SUFFIXES.get((match.group(2) or "").lower(), 1.0)
+        # Decimal scaling keeps "100u" exactly 1e-4 (not 9.999999999999999e-05).
+        value = float(Decimal(match.group(1)).scaleb(SI_EXPONENTS.get((match.group(2) or "").lower(), 0)))
     if not math.isfinite(value):
         raise ParameterError(f"{name} must be a finite number; got {value!r}")
     return value
