@@ -1,0 +1,4 @@
+"""ngspice netlists of the converters, generated from the same parameter sets the LCS uses."""
+from .build import Netlist, SpiceOptions, build_netlist
+
+__all__ = ["Netlist", "SpiceOptions", "build_netlist"]

@@ -1,0 +1,177 @@
+"""Netlist generation. Nothing typed by a user reaches the text: node and element names are constants
+here, and every value passes :func:`_num` (a finite float, printed by us) before it is written. A
+parameter carrying netlist text (``R=1\\n.control\\nshell ...``) is refused while it is parsed.
+
+Near-ideal parts (REFERENCE section 7): an ``SW`` switch (Ron 1 mOhm, Roff 1 MOhm) driven by a gate
+pulse with edges of 1e-4 T, a diode ``D(IS=1e-14 N=0.001)``, zero-volt sense sources for the
+inductor and diode currents. The diode model sets the accuracy floor (about 1 mV of forward drop).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from converters.errors import ParameterError
+from converters.library import get_converter
+from converters.validate import parse_value
+
+
+@dataclass(frozen=True)
+class SpiceOptions:
+    """Transient settings. ``tmax`` defaults to T/200; ``method`` is 'trap' or 'gear'."""
+
+    tmax_fraction: float = 1.0 / 200.0
+    reltol: float = 1e-3
+    method: str = "gear"
+    diode_n: float = 0.001
+    diode_is: float = 1e-14
+    switch_ron: float = 1e-3
+    switch_roff: float = 1e6
+    edge_fraction: float = 1e-4
+
+    def __post_init__(self):
+        for name in ("tmax_fraction", "reltol", "diode_n", "diode_is", "switch_ron", "switch_roff", "edge_fraction"):
+            value = parse_value(name, getattr(self, name))
+            if value <= 0:
+                raise ParameterError(f"{name} must be positive; got {value!r}")
+            object.__setattr__(self, name, value)
+        if self.method not in ("trap", "gear"):
+            raise ParameterError(f"method must be one of trap, gear; got {self.method!r}")
+
+
+@dataclass(frozen=True)
+class Netlist:
+    text: str
+    converter: str
+    params: dict
+    t_end: float
+    options: SpiceOptions
+    # state name -> (vector, sign) or (vector_a, vector_b) difference, see validation.spice
+    probes: dict = field(default_factory=dict)
+
+
+def _num(name: str, value) -> str:
+    """The only way a value enters a netlist: a finite float, formatted here."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        value = parse_value(name, value)
+    value = float(value)
+    if not math.isfinite(value):
+        raise ParameterError(f"{name} must be a finite number for the netlist; got {value!r}")
+    return f"{value:.12g}"
+
+
+def _gate(T: float, D: float, options: SpiceOptions) -> str:
+    if D <= 0.0:
+        return "Vg gate 0 DC 0"
+    if D >= 1.0:
+        return "Vg gate 0 DC 1"
+    edge = options.edge_fraction * T
+    width = max(D * T - edge, edge)
+    return f"Vg gate 0 PULSE(0 1 0 {_num('edge', edge)} {_num('edge', edge)} {_num('width', width)} {_num('T', T)})"
+
+
+def _models(options: SpiceOptions) -> list[str]:
+    return [f".model SWMOD SW(VT=0.5 VH=0 RON={_num('switch_ron', options.switch_ron)} "
+            f"ROFF={_num('switch_roff', options.switch_roff)})",
+            f".model DMOD D(IS={_num('diode_is', options.diode_is)} N={_num('diode_n', options.diode_n)})"]
+
+
+def _diode(anode: str, cathode: str, p: dict) -> list[str]:
+    """Sense source, the diode, then the optional forward drop Vf and resistance Rd in series."""
+    lines = [f"Vsd {anode} da DC 0"]
+    node = "da"
+    if p.get("Vf"):
+        lines.append(f"Vfwd {node} db DC {_num('Vf', p['Vf'])}")   # potential falls by Vf along the diode
+        node = "db"
+    if p.get("Rd"):
+        lines.append(f"Rd {node} dc {_num('Rd', p['Rd'])}")
+        node = "dc"
+    lines.append(f"D1 {node} {cathode} DMOD")
+    return lines
+
+
+def _inductor(a: str, b: str, p: dict, name="L1", value_key="L", sense="Vsl", dcr_key="rL") -> list[str]:
+    lines = [f"{sense} {a} {a}_s DC 0"]
+    node = f"{a}_s"
+    if p.get(dcr_key):
+        lines.append(f"R{name} {node} {a}_r {_num(dcr_key, p[dcr_key])}")
+        node = f"{a}_r"
+    lines.append(f"{name} {node} {b} {_num(value_key, p[value_key])} IC=0")
+    return lines
+
+
+def _capacitor(a: str, b: str, p: dict, name="C1", value_key="C", esr_key="rC") -> list[str]:
+    if p.get(esr_key):
+        return [f"R{name} {a} {a}_esr {_num(esr_key, p[esr_key])}",
+                f"{name} {a}_esr {b} {_num(value_key, p[value_key])} IC=0"]
+    return [f"{name} {a} {b} {_num(value_key, p[value_key])} IC=0"]
+
+
+def build_netlist(converter: str, params: dict | None, t_end, options: SpiceOptions | None = None) -> Netlist:
+    """The ngspice netlist of ``converter`` with validated ``params`` over [0, t_end] (from rest)."""
+    conv = get_converter(converter)
+    p = conv.resolve(params)
+    options = options or SpiceOptions()
+    t_end = parse_value("t_end", t_end)
+    if t_end <= 0:
+        raise ParameterError(f"t_end must be positive (> 0 s); got {t_end!r}")
+    T = conv.period(p)
+    if p.get("Ron"):
+        options = SpiceOptions(**{**options.__dict__, "switch_ron": p["Ron"]})
+    body, probes = _BODIES[conv.name](p, T, options)
+    tmax = options.tmax_fraction * T
+    lines = [f"* pcsuite {conv.name}", *body, *_models(options),
+             f".options RELTOL={_num('reltol', options.reltol)} METHOD={options.method} ITL4=100",
+             f".tran {_num('tstep', tmax)} {_num('t_end', t_end)} 0 {_num('tmax', tmax)} UIC", ".end"]
+    return Netlist("\n".join(lines) + "\n", conv.name, p, t_end, options, probes)
+
+
+def _buck(p, T, o):
+    body = [f"Vin in 0 DC {_num('Vin', p['Vin'])}", _gate(T, p["D"], o), "S1 in sw gate 0 SWMOD",
+            *_diode("0", "sw", p), *_inductor("sw", "out", p), *_capacitor("out", "0", p),
+            f"R1 out 0 {_num('R', p['R'])}"]
+    return body, {"iL": ("vsl#branch", 1.0), "vC": ("out", 1.0), "vout": ("out", 1.0), "i_D": ("vsd#branch", 1.0)}
+
+
+def _boost(p, T, o):
+    body = [f"Vin in 0 DC {_num('Vin', p['Vin'])}", _gate(T, p["D"], o), *_inductor("in", "sw", p),
+            "S1 sw 0 gate 0 SWMOD", *_diode("sw", "out", p), *_capacitor("out", "0", p),
+            f"R1 out 0 {_num('R', p['R'])}"]
+    return body, {"iL": ("vsl#branch", 1.0), "vC": ("out", 1.0), "vout": ("out", 1.0), "i_D": ("vsd#branch", 1.0)}
+
+
+def _buck_boost(p, T, o):
+    body = [f"Vin in 0 DC {_num('Vin', p['Vin'])}", _gate(T, p["D"], o), "S1 in sw gate 0 SWMOD",
+            *_inductor("sw", "0", p), *_diode("out", "sw", p), *_capacitor("0", "out", p),
+            f"R1 out 0 {_num('R', p['R'])}"]
+    return body, {"iL": ("vsl#branch", 1.0), "vC": ("out", -1.0), "vout": ("out", 1.0), "i_D": ("vsd#branch", 1.0)}
+
+
+def _cuk(p, T, o):
+    body = [f"Vin in 0 DC {_num('Vin', p['Vin'])}", _gate(T, p["D"], o),
+            *_inductor("in", "n1", p, name="L1", value_key="L1", sense="Vsl1"),
+            "S1 n1 0 gate 0 SWMOD", f"C1 n1 n2 {_num('C1', p['C1'])} IC=0", *_diode("n2", "0", p),
+            *_inductor("out", "n2", p, name="L2", value_key="L2", sense="Vsl2"),
+            f"C2 0 out {_num('C2', p['C2'])} IC=0", f"R1 out 0 {_num('R', p['R'])}"]
+    return body, {"i1": ("vsl1#branch", 1.0), "v1": (("n1", "n2"), 1.0), "i2": ("vsl2#branch", 1.0),
+                  "v2": ("out", -1.0), "vout": ("out", 1.0), "i_D": ("vsd#branch", 1.0)}
+
+
+def _prc(p, T, o):
+    if p["n"] != 1.0:
+        raise ParameterError(f"n (transformer ratio) must be 1 for the ngspice netlist; got {p['n']!r}")
+    edge = o.edge_fraction * T
+    vin = _num("Vin", p["Vin"])
+    drive = (f"Vdr drv 0 PULSE({vin} -{vin} {_num('half', T / 2 - edge / 2)} {_num('edge', edge)} "
+             f"{_num('edge', edge)} {_num('width', T / 2 - edge)} {_num('T', T)})")
+    # Bridge: top tank node a, bottom 0; D1 a->p, D3 0->p, D2 n->a, D4 n->0 (p, n: rectifier output).
+    body = [drive, *_inductor("drv", "a", p, name="Lr", value_key="Lr", sense="Vslr"),
+            f"Cr a 0 {_num('Cr', p['Cr'])} IC=0",
+            "D1 a p DMOD", "D3 0 p DMOD", "D2 nn a DMOD", "D4 nn 0 DMOD",
+            *_inductor("p", "out", p, name="Lf", value_key="Lf", sense="Vslf"),
+            f"Cf out nn {_num('Cf', p['Cf'])} IC=0", f"R1 out nn {_num('R', p['R'])}", "Rgnd nn 0 1e9"]
+    return body, {"ir": ("vslr#branch", 1.0), "vr": ("a", 1.0), "iLf": ("vslf#branch", 1.0),
+                  "vo": (("out", "nn"), 1.0), "vout": (("out", "nn"), 1.0)}
+
+
+_BODIES = {"buck": _buck, "boost": _boost, "buck-boost": _buck_boost, "cuk": _cuk, "prc": _prc}

@@ -1,0 +1,138 @@
+"""Run ngspice (through PySpice and the system libngspice) in a worker process.
+
+PySpice keeps memory between runs and an ngspice crash would take its process down, so every run
+goes to a worker process (spawned, recycled every few runs). Failures come back as
+:class:`SpiceError` with ngspice's own message; the calling process keeps working.
+"""
+from __future__ import annotations
+
+import concurrent.futures as futures
+import multiprocessing
+import re
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from converters.errors import SimulationError
+from netlists import Netlist
+
+RUNS_PER_WORKER = 10
+TIMEOUT_S = 600.0
+_FATAL = re.compile(r"(timestep too small|singular matrix|no convergence|too many iterations|"
+                    r"simulation\(s\) aborted|error)", re.IGNORECASE)
+
+
+class SpiceError(SimulationError):
+    """An ngspice run failed (the message carries ngspice's reason)."""
+
+
+@dataclass(frozen=True)
+class SpiceResult:
+    time: np.ndarray
+    vectors: dict            # ngspice vector name -> array
+    ngspice_version: str
+    wall_s: float
+    accepted_steps: int
+    options: dict = field(default_factory=dict)
+    log: str = ""
+
+    def signal(self, probe) -> np.ndarray:
+        """A probe of :class:`netlists.Netlist`: (vector, sign) or ((node_a, node_b), sign)."""
+        source, sign = probe
+        if isinstance(source, tuple):
+            return sign * (self.vectors[source[0]] - self.vectors[source[1]])
+        return sign * self.vectors[source]
+
+
+def _worker(text: str) -> dict:
+    """Runs inside the worker: load, run, collect. Returns plain data (picklable)."""
+    import logging
+    logging.getLogger("PySpice").setLevel(logging.CRITICAL)
+    from PySpice.Spice.NgSpice.Shared import NgSpiceShared
+    ng = NgSpiceShared.new_instance()
+    ng.remove_circuit() if ng.plot_names and ng.last_plot not in ("const",) else None
+    ng.destroy()
+    ng._stdout.clear()
+    ng._stderr.clear()
+    start = time.perf_counter()
+    try:
+        ng.load_circuit(text)
+        ng.run()
+    except Exception as exc:  # PySpice raises on any stderr line it does not like
+        return {"error": f"{type(exc).__name__}: {exc}", "log": "\n".join(ng._stdout + ng._stderr)}
+    wall = time.perf_counter() - start
+    log = "\n".join(ng._stdout + ng._stderr)
+    plot_name = ng.last_plot
+    if not plot_name.startswith("tran"):
+        return {"error": "no transient result", "log": log}
+    plot = ng.plot(None, plot_name)
+    vectors = {name.lower(): np.array(vec._data, dtype=float) for name, vec in plot.items()}
+    stats = ng.exec_command("rusage accept")
+    accepted = re.search(r"(\d+)", stats or "")
+    version = re.search(r"ngspice-(\S+)", "\n".join(ng.exec_command("version -s", join_lines=False) or []))
+    ng.remove_circuit()
+    ng.destroy()
+    return {"vectors": vectors, "wall": wall, "log": log,
+            "accepted": int(accepted.group(1)) if accepted else -1,
+            "version": ("ngspice-" + version.group(1)) if version else "ngspice"}
+
+
+class SpiceRunner:
+    """A recycled worker process for ngspice runs."""
+
+    def __init__(self):
+        self._pool = None
+        self._runs = 0
+
+    def _executor(self):
+        if self._pool is None:
+            self._pool = futures.ProcessPoolExecutor(max_workers=1, mp_context=multiprocessing.get_context("spawn"),
+                                                     max_tasks_per_child=RUNS_PER_WORKER)
+        return self._pool
+
+    def run(self, netlist: Netlist) -> SpiceResult:
+        if not isinstance(netlist, Netlist):
+            raise TypeError("run() takes a netlists.Netlist (built from validated parameters)")
+        try:
+            out = self._executor().submit(_worker, netlist.text).result(timeout=TIMEOUT_S)
+        except futures.process.BrokenProcessPool:
+            self._pool = None
+            raise SpiceError(f"ngspice worker crashed while simulating {netlist.converter}; the run is lost, "
+                             "the caller is unaffected (try a larger TMAX or METHOD=gear)") from None
+        except futures.TimeoutError:
+            self.close()
+            raise SpiceError(f"ngspice did not finish {netlist.converter} within {TIMEOUT_S:g} s") from None
+        if "error" in out:
+            reason = _reason(out["log"]) or out["error"]
+            raise SpiceError(f"ngspice failed on {netlist.converter}: {reason}")
+        vectors = out["vectors"]
+        if "time" not in vectors or vectors["time"].size < 2 or vectors["time"][-1] < 0.999 * netlist.t_end:
+            reason = _reason(out["log"]) or "the transient stopped early"
+            raise SpiceError(f"ngspice failed on {netlist.converter}: {reason}")
+        return SpiceResult(time=vectors["time"], vectors=vectors, ngspice_version=out["version"], wall_s=out["wall"],
+                           accepted_steps=out["accepted"], log=out["log"],
+                           options={**netlist.options.__dict__, "t_end": netlist.t_end})
+
+    def close(self):
+        if self._pool is not None:
+            self._pool.shutdown(wait=False, cancel_futures=True)
+            self._pool = None
+
+
+def _reason(log: str) -> str:
+    for line in log.splitlines():
+        if _FATAL.search(line) and "warning" not in line.lower():
+            return line.strip()
+    return ""
+
+
+_default = None
+
+
+def run_spice(netlist: Netlist) -> SpiceResult:
+    """Run one netlist in the shared worker (created on first use)."""
+    global _default
+    if _default is None:
+        _default = SpiceRunner()
+    return _default.run(netlist)
