@@ -90,25 +90,31 @@ def _diode(anode: str, cathode: str, p: dict) -> list[str]:
     return lines
 
 
-def _inductor(a: str, b: str, p: dict, name="L1", value_key="L", sense="Vsl", dcr_key="rL") -> list[str]:
+def _inductor(a: str, b: str, p: dict, name="L1", value_key="L", sense="Vsl", dcr_key="rL", ic=0.0) -> list[str]:
     lines = [f"{sense} {a} {a}_s DC 0"]
     node = f"{a}_s"
     if p.get(dcr_key):
         lines.append(f"R{name} {node} {a}_r {_num(dcr_key, p[dcr_key])}")
         node = f"{a}_r"
-    lines.append(f"{name} {node} {b} {_num(value_key, p[value_key])} IC=0")
+    lines.append(f"{name} {node} {b} {_num(value_key, p[value_key])} IC={_num(name + ' initial current', ic)}")
     return lines
 
 
-def _capacitor(a: str, b: str, p: dict, name="C1", value_key="C", esr_key="rC") -> list[str]:
+def _capacitor(a: str, b: str, p: dict, name="C1", value_key="C", esr_key="rC", ic=0.0) -> list[str]:
+    ic_text = _num(name + " initial voltage", ic)
     if p.get(esr_key):
         return [f"R{name} {a} {a}_esr {_num(esr_key, p[esr_key])}",
-                f"{name} {a}_esr {b} {_num(value_key, p[value_key])} IC=0"]
-    return [f"{name} {a} {b} {_num(value_key, p[value_key])} IC=0"]
+                f"{name} {a}_esr {b} {_num(value_key, p[value_key])} IC={ic_text}"]
+    return [f"{name} {a} {b} {_num(value_key, p[value_key])} IC={ic_text}"]
 
 
-def build_netlist(converter: str, params: dict | None, t_end, options: SpiceOptions | None = None) -> Netlist:
-    """The ngspice netlist of ``converter`` with validated ``params`` over [0, t_end] (from rest)."""
+def build_netlist(converter: str, params: dict | None, t_end, options: SpiceOptions | None = None,
+                  x0=None) -> Netlist:
+    """The ngspice netlist of ``converter`` with validated ``params`` over [0, t_end].
+
+    ``x0`` (the converter's state vector, default 0: from rest) becomes the inductor and capacitor
+    initial conditions, so both simulators can start on the same periodic orbit.
+    """
     conv = get_converter(converter)
     p = conv.resolve(params)
     options = options or SpiceOptions()
@@ -118,7 +124,12 @@ def build_netlist(converter: str, params: dict | None, t_end, options: SpiceOpti
     T = conv.period(p)
     if p.get("Ron"):
         options = SpiceOptions(**{**options.__dict__, "switch_ron": p["Ron"]})
-    body, probes = _BODIES[conv.name](p, T, options)
+    x0 = [0.0] * len(conv.state_names) if x0 is None else list(x0)
+    if len(x0) != len(conv.state_names):
+        raise ParameterError(f"x0 must have {len(conv.state_names)} entries ({', '.join(conv.state_names)}); "
+                             f"got {len(x0)}")
+    ic = {name: parse_value(f"x0[{name}]", value) for name, value in zip(conv.state_names, x0)}
+    body, probes = _BODIES[conv.name](p, T, options, ic)
     tmax = options.tmax_fraction * T
     lines = [f"* pcsuite {conv.name}", *body, *_models(options),
              f".options RELTOL={_num('reltol', options.reltol)} METHOD={options.method} ITL4=100",
@@ -126,38 +137,39 @@ def build_netlist(converter: str, params: dict | None, t_end, options: SpiceOpti
     return Netlist("\n".join(lines) + "\n", conv.name, p, t_end, options, probes)
 
 
-def _buck(p, T, o):
+def _buck(p, T, o, ic):
     body = [f"Vin in 0 DC {_num('Vin', p['Vin'])}", _gate(T, p["D"], o), "S1 in sw gate 0 SWMOD",
-            *_diode("0", "sw", p), *_inductor("sw", "out", p), *_capacitor("out", "0", p),
+            *_diode("0", "sw", p), *_inductor("sw", "out", p, ic=ic["iL"]), *_capacitor("out", "0", p, ic=ic["vC"]),
             f"R1 out 0 {_num('R', p['R'])}"]
     return body, {"iL": ("vsl#branch", 1.0), "vC": ("out", 1.0), "vout": ("out", 1.0), "i_D": ("vsd#branch", 1.0)}
 
 
-def _boost(p, T, o):
-    body = [f"Vin in 0 DC {_num('Vin', p['Vin'])}", _gate(T, p["D"], o), *_inductor("in", "sw", p),
-            "S1 sw 0 gate 0 SWMOD", *_diode("sw", "out", p), *_capacitor("out", "0", p),
+def _boost(p, T, o, ic):
+    body = [f"Vin in 0 DC {_num('Vin', p['Vin'])}", _gate(T, p["D"], o), *_inductor("in", "sw", p, ic=ic["iL"]),
+            "S1 sw 0 gate 0 SWMOD", *_diode("sw", "out", p), *_capacitor("out", "0", p, ic=ic["vC"]),
             f"R1 out 0 {_num('R', p['R'])}"]
     return body, {"iL": ("vsl#branch", 1.0), "vC": ("out", 1.0), "vout": ("out", 1.0), "i_D": ("vsd#branch", 1.0)}
 
 
-def _buck_boost(p, T, o):
+def _buck_boost(p, T, o, ic):
     body = [f"Vin in 0 DC {_num('Vin', p['Vin'])}", _gate(T, p["D"], o), "S1 in sw gate 0 SWMOD",
-            *_inductor("sw", "0", p), *_diode("out", "sw", p), *_capacitor("0", "out", p),
+            *_inductor("sw", "0", p, ic=ic["iL"]), *_diode("out", "sw", p), *_capacitor("0", "out", p, ic=ic["vC"]),
             f"R1 out 0 {_num('R', p['R'])}"]
     return body, {"iL": ("vsl#branch", 1.0), "vC": ("out", -1.0), "vout": ("out", 1.0), "i_D": ("vsd#branch", 1.0)}
 
 
-def _cuk(p, T, o):
+def _cuk(p, T, o, ic):
     body = [f"Vin in 0 DC {_num('Vin', p['Vin'])}", _gate(T, p["D"], o),
-            *_inductor("in", "n1", p, name="L1", value_key="L1", sense="Vsl1"),
-            "S1 n1 0 gate 0 SWMOD", f"C1 n1 n2 {_num('C1', p['C1'])} IC=0", *_diode("n2", "0", p),
-            *_inductor("out", "n2", p, name="L2", value_key="L2", sense="Vsl2"),
-            f"C2 0 out {_num('C2', p['C2'])} IC=0", f"R1 out 0 {_num('R', p['R'])}"]
+            *_inductor("in", "n1", p, name="L1", value_key="L1", sense="Vsl1", ic=ic["i1"]),
+            "S1 n1 0 gate 0 SWMOD", *_capacitor("n1", "n2", p, name="C1", value_key="C1", ic=ic["v1"]),
+            *_diode("n2", "0", p),
+            *_inductor("out", "n2", p, name="L2", value_key="L2", sense="Vsl2", ic=ic["i2"]),
+            *_capacitor("0", "out", p, name="C2", value_key="C2", ic=ic["v2"]), f"R1 out 0 {_num('R', p['R'])}"]
     return body, {"i1": ("vsl1#branch", 1.0), "v1": (("n1", "n2"), 1.0), "i2": ("vsl2#branch", 1.0),
                   "v2": ("out", -1.0), "vout": ("out", 1.0), "i_D": ("vsd#branch", 1.0)}
 
 
-def _prc(p, T, o):
+def _prc(p, T, o, ic):
     if p["n"] != 1.0:
         raise ParameterError(f"n (transformer ratio) must be 1 for the ngspice netlist; got {p['n']!r}")
     edge = o.edge_fraction * T
@@ -165,11 +177,12 @@ def _prc(p, T, o):
     drive = (f"Vdr drv 0 PULSE({vin} -{vin} {_num('half', T / 2 - edge / 2)} {_num('edge', edge)} "
              f"{_num('edge', edge)} {_num('width', T / 2 - edge)} {_num('T', T)})")
     # Bridge: top tank node a, bottom 0; D1 a->p, D3 0->p, D2 n->a, D4 n->0 (p, n: rectifier output).
-    body = [drive, *_inductor("drv", "a", p, name="Lr", value_key="Lr", sense="Vslr"),
-            f"Cr a 0 {_num('Cr', p['Cr'])} IC=0",
+    body = [drive, *_inductor("drv", "a", p, name="Lr", value_key="Lr", sense="Vslr", ic=ic["ir"]),
+            *_capacitor("a", "0", p, name="Cr", value_key="Cr", ic=ic["vr"]),
             "D1 a p DMOD", "D3 0 p DMOD", "D2 nn a DMOD", "D4 nn 0 DMOD",
-            *_inductor("p", "out", p, name="Lf", value_key="Lf", sense="Vslf"),
-            f"Cf out nn {_num('Cf', p['Cf'])} IC=0", f"R1 out nn {_num('R', p['R'])}", "Rgnd nn 0 1e9"]
+            *_inductor("p", "out", p, name="Lf", value_key="Lf", sense="Vslf", ic=ic["iLf"]),
+            *_capacitor("out", "nn", p, name="Cf", value_key="Cf", ic=ic["vo"]), f"R1 out nn {_num('R', p['R'])}",
+            "Rgnd nn 0 1e9"]
     return body, {"ir": ("vslr#branch", 1.0), "vr": ("a", 1.0), "iLf": ("vslf#branch", 1.0),
                   "vo": (("out", "nn"), 1.0), "vout": (("out", "nn"), 1.0)}
 

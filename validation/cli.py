@@ -49,8 +49,8 @@ def _parser() -> argparse.ArgumentParser:
     sim.add_argument("converter")
     sim.add_argument("-p", dest="params", action="append", default=[], metavar="NAME=VALUE",
                      help="parameter value, SPICE suffixes allowed (repeatable)")
-    sim.add_argument("--method", default="lcp", choices=["lcp"],
-                     help="lcp: the LCP time-stepper (event, smooth and spice arrive with their issues)")
+    sim.add_argument("--method", default="lcp", choices=["lcp", "spice"],
+                     help="lcp: the LCP time-stepper; spice: the same circuit in ngspice")
     sim.add_argument("--h", default=None, help="step in s (default T/1000; PRC 50 ns)")
     sim.add_argument("--theta", default=None, help="theta in [0.5, 1] (default 1, PRC 0.5)")
     span = sim.add_mutually_exclusive_group()
@@ -70,6 +70,22 @@ def _parser() -> argparse.ArgumentParser:
     solve.add_argument("--max-iter", type=int, default=None)
     solve.add_argument("--json", action="store_true", help="print one JSON object")
     solve.set_defaults(run=_lcp_solve)
+
+    cmp = sub.add_parser("compare", help="the LCP time-stepper against ngspice on the same circuit")
+    cmp.add_argument("converter")
+    cmp.add_argument("-p", dest="params", action="append", default=[], metavar="NAME=VALUE")
+    cmp.add_argument("--h", default=None, help="LCP step in s (default T/1000)")
+    cmp.add_argument("--start", choices=["steady", "rest"], default=None,
+                     help="start both on the periodic orbit (default) or from rest (default for prc)")
+    cmp.add_argument("--plot", type=Path, default=None, help="write the overlay/residual plot (.png)")
+    cmp.add_argument("--json", action="store_true")
+    cmp.set_defaults(run=_compare)
+
+    net = sub.add_parser("netlist", help="print the ngspice netlist of a converter")
+    net.add_argument("converter")
+    net.add_argument("-p", dest="params", action="append", default=[], metavar="NAME=VALUE")
+    net.add_argument("--t-end", default=None, help="duration in s (default 500 periods)")
+    net.set_defaults(run=_netlist)
 
     report = sub.add_parser("report", help="run a suite of scenes and write the validation report")
     report.add_argument("suite", nargs="?", default="default")
@@ -123,22 +139,14 @@ def _list(args) -> int:
 def _simulate(args) -> int:
     from converters.params import parse_assignments
     from converters.simulation import run_converter
-    from .io import atomic_write_bytes
     if args.out is not None and args.out.suffix.lower() not in (".csv", ".parquet"):
         raise ParameterError(f"--out must end in .csv or .parquet; got {str(args.out)!r}")
+    if args.method == "spice":
+        return _simulate_spice(args)
     run = run_converter(args.converter, parse_assignments(args.params), h=args.h, theta=args.theta,
                         t_end=args.t_end, periods=args.periods, steady=args.steady, steady_tol=args.steady_tol)
     if args.out is not None:
-        frame = run.waveforms()
-        frame["mode"] = frame["mode"].astype(str)
-        if args.out.suffix.lower() == ".csv":
-            data = frame.to_csv(index=False).encode()
-        else:
-            import io as _io
-            buffer = _io.BytesIO()
-            frame.to_parquet(buffer, index=False)
-            data = buffer.getvalue()
-        atomic_write_bytes(args.out, data)
+        _write_frame(run.waveforms(), args.out)
     summary = run.summary()
     if args.json:
         print(json.dumps(summary, default=float))
@@ -151,6 +159,95 @@ def _simulate(args) -> int:
         print("modes (last period): " + ", ".join(f"{k} {v:.3f}" for k, v in summary["mode_fractions"].items()))
         if args.out is not None:
             print(f"wrote {args.out}")
+    return 0
+
+
+def _write_frame(frame, path: Path):
+    from .io import atomic_write_bytes
+    frame = frame.copy()
+    frame["mode"] = frame["mode"].astype(str)
+    if path.suffix.lower() == ".csv":
+        data = frame.to_csv(index=False).encode()
+    else:
+        import io as _io
+        buffer = _io.BytesIO()
+        frame.to_parquet(buffer, index=False)
+        data = buffer.getvalue()
+    atomic_write_bytes(path, data)
+
+
+def _simulate_spice(args) -> int:
+    import time as _time
+
+    from converters.library import get_converter
+    from converters.params import parse_assignments
+    from netlists import build_netlist
+
+    from .spice import run_spice, spice_waveforms
+    if args.steady:
+        raise ParameterError("--steady is available with --method lcp only; got --method spice")
+    start = _time.perf_counter()
+    conv = get_converter(args.converter)
+    p = conv.resolve(parse_assignments(args.params))
+    T = conv.period(p)
+    t_end = args.t_end if args.t_end is not None else (args.periods or 500) * T
+    netlist = build_netlist(conv.name, p, t_end)
+    result = run_spice(netlist)
+    window_start = result.time[-1] - 10 * T
+    frame = spice_waveforms(conv, netlist, result, window_start)
+    wall = _time.perf_counter() - start
+    if args.out is not None:
+        _write_frame(frame, args.out)
+    t, v = frame["time"].to_numpy(), frame["vout"].to_numpy()
+    w = t >= window_start
+    last = t >= result.time[-1] - T
+    dt = np.diff(t[last])
+    labels = frame["mode"].to_numpy()[last][1:]
+    summary = {"converter": conv.name, "method": "spice",
+               "options": {**result.options, "params": p, "ngspice": result.ngspice_version},
+               "steps": result.accepted_steps, "wall_s": wall,
+               "vout_mean": float(np.trapezoid(v[w], t[w]) / (t[w][-1] - t[w][0])),
+               "mode_fractions": {str(k): float(dt[labels == k].sum() / dt.sum()) for k in sorted(set(labels))}}
+    if args.json:
+        print(json.dumps(summary, default=float))
+    else:
+        print(f"{conv.name} (ngspice {result.ngspice_version}): {result.accepted_steps} steps in {wall:.3f} s; "
+              f"vout mean (last 10 periods) = {summary['vout_mean']:.6g} V")
+    return 0
+
+
+def _compare(args) -> int:
+    from converters.params import parse_assignments
+
+    from .compare import THRESHOLDS, compare
+    from .io import atomic_write_bytes
+    from .plots import comparison_plot
+    if args.plot is not None and args.plot.suffix.lower() != ".png":
+        raise ParameterError(f"--plot must end in .png; got {str(args.plot)!r}")
+    result = compare(args.converter, parse_assignments(args.params), h=args.h, start=args.start)
+    if args.plot is not None:
+        atomic_write_bytes(args.plot, comparison_plot(result))
+    if args.json:
+        print(json.dumps(result.to_dict(), default=float))
+    else:
+        print(f"{result.converter}: LCP against {result.spice.ngspice_version}")
+        for key, value in result.metrics.items():
+            text = f"{value:.4g}" if isinstance(value, float) else str(value)
+            print(f"  {key:<36} {text}")
+        for key, ok in result.checks.items():
+            print(f"  check {key:<30} {'pass' if ok else 'FAIL'} (threshold {THRESHOLDS[key]:g})")
+        print("PASS" if result.passed else "FAIL")
+    return 0 if result.passed else 1
+
+
+def _netlist(args) -> int:
+    from converters.library import get_converter
+    from converters.params import parse_assignments
+    from netlists import build_netlist
+    conv = get_converter(args.converter)
+    p = conv.resolve(parse_assignments(args.params))
+    t_end = args.t_end if args.t_end is not None else 500 * conv.period(p)
+    print(build_netlist(conv.name, p, t_end).text, end="")
     return 0
 
 

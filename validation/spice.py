@@ -1,7 +1,7 @@
 """Run ngspice (through PySpice and the system libngspice) in a worker process.
 
 PySpice keeps memory between runs and an ngspice crash would take its process down, so every run
-goes to a worker process (spawned, recycled every few runs). Failures come back as
+goes to a worker process (forked, replaced every ``RUNS_PER_WORKER`` runs). Failures come back as
 :class:`SpiceError` with ngspice's own message; the calling process keeps working.
 """
 from __future__ import annotations
@@ -87,15 +87,21 @@ class SpiceRunner:
 
     def _executor(self):
         if self._pool is None:
-            self._pool = futures.ProcessPoolExecutor(max_workers=1, mp_context=multiprocessing.get_context("spawn"),
-                                                     max_tasks_per_child=RUNS_PER_WORKER)
+            # fork: the worker needs nothing re-imported (works from scripts, stdin and notebooks alike);
+            # it never touches the parent's state, and only the worker ever loads libngspice.
+            method = "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
+            self._pool = futures.ProcessPoolExecutor(max_workers=1, mp_context=multiprocessing.get_context(method))
+            self._runs = 0
         return self._pool
 
     def run(self, netlist: Netlist) -> SpiceResult:
         if not isinstance(netlist, Netlist):
             raise TypeError("run() takes a netlists.Netlist (built from validated parameters)")
+        if self._runs >= RUNS_PER_WORKER:
+            self.close()  # a fresh worker returns PySpice's accumulated memory to the system
         try:
             out = self._executor().submit(_worker, netlist.text).result(timeout=TIMEOUT_S)
+            self._runs += 1
         except futures.process.BrokenProcessPool:
             self._pool = None
             raise SpiceError(f"ngspice worker crashed while simulating {netlist.converter}; the run is lost, "
@@ -136,3 +142,18 @@ def run_spice(netlist: Netlist) -> SpiceResult:
     if _default is None:
         _default = SpiceRunner()
     return _default.run(netlist)
+
+
+def spice_waveforms(converter, netlist: Netlist, result: SpiceResult, window_start: float = 0.0):
+    """ngspice waveforms with the same columns as the LCP method: time, states, vout, switch, mode."""
+    import pandas as pd
+
+    from .modes import spice_modes
+    data = {"time": result.time}
+    for name in converter.state_names:
+        data[name] = result.signal(netlist.probes[name])
+    data["vout"] = result.signal(netlist.probes["vout"])
+    gate = result.vectors["drv"] > 0.0 if converter.name == "prc" else result.vectors["gate"] >= 0.5
+    data["switch"] = gate.astype(np.int8)
+    data["mode"] = spice_modes(converter, result, netlist, window_start).astype(str)
+    return pd.DataFrame(data)

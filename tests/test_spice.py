@@ -1,0 +1,95 @@
+"""ngspice cross-check: netlists, the worker-process runner and the LCP-versus-SPICE comparison."""
+import dataclasses
+import os
+import resource
+
+import numpy as np
+import pytest
+
+from converters.errors import ParameterError
+from netlists import build_netlist
+from validation.compare import THRESHOLDS, compare
+from validation.spice import SpiceError, run_spice
+
+pytestmark = pytest.mark.usefixtures("ngspice")
+
+POINTS = [("buck", {"L": "100u"}, "CCM"), ("buck", {}, "DCM"),
+          ("boost", {"L": "100u", "R": 20}, "CCM"), ("boost", {"D": 0.3, "R": 50}, "DCM"),
+          ("buck-boost", {"L": "100u"}, "CCM"), ("buck-boost", {}, "DCM"),
+          ("cuk", {}, "CCM"), ("cuk", {"L1": "10u", "L2": "10u"}, "DCM"),
+          ("prc", {}, "CCM")]
+
+
+@pytest.mark.parametrize("name,params,mode", POINTS)
+def test_lcp_and_ngspice_agree(name, params, mode):
+    c = compare(name, params)
+    m = c.metrics
+    assert m["vout_mean_rel_error"] <= THRESHOLDS["vout_mean_rel"]
+    assert m["mode_agreement"] == 1.0  # every one of the last 10 periods (55 for the PRC)
+    expected_modes = {"CCM": {"CCM-ON > CCM-OFF"}, "DCM": {"CCM-ON > CCM-OFF > DCM", "CCM-ON > CCM-OFF > GDCM-OFF"}}
+    assert m["mode_sequence_lcp"] in expected_modes[mode]
+    if name != "prc":
+        assert m["turn_off_error_T"] <= THRESHOLDS["turn_off_error_T"]
+        # The difference is a few times the near-ideal diode's forward drop (~0.85 mV), the floor.
+        assert m["vout_mean_abs_error_V"] <= 12 * m["diode_drop_floor_V"]
+    assert c.passed
+
+
+def test_netlist_text_in_a_parameter_never_reaches_ngspice(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    payload = "1\n.control\nshell touch pwned\n.endc"
+    with pytest.raises(ParameterError, match=r"R must be a number"):
+        build_netlist("buck", {"R": payload}, 1e-4)
+    with pytest.raises(ParameterError, match=r"x0\[vC\] must be a number"):
+        build_netlist("buck", {}, 1e-4, x0=[0.0, "0\n.control\nshell touch pwned\n.endc"])
+    with pytest.raises(ParameterError, match=r"t_end must be a number"):
+        build_netlist("buck", {}, "1m\n.control\nshell touch pwned\n.endc")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_every_netlist_value_is_a_formatted_number():
+    text = build_netlist("cuk", {"L1": "22u", "C1": "4.7u"}, 1e-3, x0=[1, 2, 3, 4]).text
+    assert ".control" not in text and "shell" not in text
+    assert "L1 in_s n1 2.2e-05 IC=1" in text and "C1 n1 n2 4.7e-06 IC=2" in text
+
+
+def test_a_failed_ngspice_run_is_a_clear_error_and_the_caller_keeps_working():
+    good = build_netlist("buck", {}, 1e-4)
+    broken = dataclasses.replace(good, text=good.text.replace("D1 da sw DMOD", "D1 da sw NOSUCHMODEL"))
+    with pytest.raises(SpiceError, match=r"ngspice failed on buck: .*circuit not parsed"):
+        run_spice(broken)
+    stiff = dataclasses.replace(good, text=good.text.replace("N=0.001", "N=0.00001")
+                                .replace("ITL4=100", "ITL4=1 TRTOL=1e-30"))
+    with pytest.raises(SpiceError, match=r"(?i)timestep too small"):
+        run_spice(stiff)
+    result = run_spice(good)  # the same process (and a new worker) carries on
+    assert result.time[-1] == pytest.approx(1e-4) and result.accepted_steps > 0
+
+
+def _rss_mb() -> float:
+    with open(f"/proc/{os.getpid()}/status") as status:
+        for line in status:
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1]) / 1024.0
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
+def test_fifty_spice_runs_grow_the_caller_by_less_than_50_mb():
+    netlist = build_netlist("buck", {}, 2e-4)
+    run_spice(netlist)
+    before = _rss_mb()
+    for _ in range(50):
+        result = run_spice(netlist)
+    growth = _rss_mb() - before
+    assert result.vectors["out"].size > 100
+    assert growth < 50.0, f"RSS grew by {growth:.1f} MB"
+
+
+def test_spice_waveforms_have_the_lcp_columns(tmp_path, capsys):
+    from validation.cli import main
+    target = tmp_path / "w.csv"
+    assert main(["simulate", "cuk", "--method", "spice", "--periods", "20", "--out", str(target), "--json"]) == 0
+    import pandas as pd
+    frame = pd.read_csv(target)
+    assert list(frame.columns) == ["time", "i1", "v1", "i2", "v2", "vout", "switch", "mode"]
+    assert np.isfinite(frame.drop(columns="mode").to_numpy()).all()
