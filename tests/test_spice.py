@@ -9,16 +9,10 @@ import pytest
 from converters.errors import ParameterError
 from netlists import build_netlist
 from validation.compare import THRESHOLDS, compare
+from validation.operating_points import SPICE_POINTS as POINTS
 from validation.spice import SpiceError, run_spice
 
 pytestmark = pytest.mark.usefixtures("ngspice")
-
-POINTS = [("buck", {"L": "100u"}, "CCM"), ("buck", {}, "DCM"),
-          ("boost", {"L": "100u", "R": 20}, "CCM"), ("boost", {"D": 0.3, "R": 50}, "DCM"),
-          ("buck-boost", {"L": "100u"}, "CCM"), ("buck-boost", {}, "DCM"),
-          ("cuk", {}, "CCM"), ("cuk", {"L1": "10u", "L2": "10u"}, "DCM"),
-          ("prc", {}, "CCM")]
-
 
 @pytest.mark.parametrize("name,params,mode", POINTS)
 def test_lcp_and_ngspice_agree(name, params, mode):
