@@ -6,6 +6,7 @@ goes to a worker process (forked, replaced every ``RUNS_PER_WORKER`` runs). Fail
 """
 from __future__ import annotations
 
+import atexit
 import concurrent.futures as futures
 import multiprocessing
 import re
@@ -122,7 +123,7 @@ class SpiceRunner:
 
     def close(self):
         if self._pool is not None:
-            self._pool.shutdown(wait=False, cancel_futures=True)
+            self._pool.shutdown(wait=True, cancel_futures=True)
             self._pool = None
 
 
@@ -141,6 +142,7 @@ def run_spice(netlist: Netlist) -> SpiceResult:
     global _default
     if _default is None:
         _default = SpiceRunner()
+        atexit.register(_default.close)  # shut the worker down before the interpreter tears down
     return _default.run(netlist)
 
 
