@@ -108,7 +108,7 @@ class SpiceRunner:
             raise SpiceError(f"ngspice worker crashed while simulating {netlist.converter}; the run is lost, "
                              "the caller is unaffected (try a larger TMAX or METHOD=gear)") from None
         except futures.TimeoutError:
-            self.close()
+            self._kill()
             raise SpiceError(f"ngspice did not finish {netlist.converter} within {TIMEOUT_S:g} s") from None
         if "error" in out:
             reason = _reason(out["log"]) or out["error"]
@@ -120,6 +120,14 @@ class SpiceRunner:
         return SpiceResult(time=vectors["time"], vectors=vectors, ngspice_version=out["version"], wall_s=out["wall"],
                            accepted_steps=out["accepted"], log=out["log"],
                            options={**netlist.options.__dict__, "t_end": netlist.t_end})
+
+    def _kill(self):
+        """Terminate a hung worker (close() would wait for it)."""
+        if self._pool is not None:
+            for process in list(getattr(self._pool, "_processes", {}).values()):
+                process.terminate()
+            self._pool.shutdown(wait=False, cancel_futures=True)
+            self._pool = None
 
     def close(self):
         if self._pool is not None:
