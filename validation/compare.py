@@ -49,7 +49,7 @@ class Comparison:
 
 
 def compare(converter: str, params: dict | None = None, *, periods: int | None = None, window: int | None = None,
-            h=None, spice_options: SpiceOptions | None = None, start: str | None = None) -> Comparison:
+            h=None, theta=None, spice_options: SpiceOptions | None = None, start: str | None = None) -> Comparison:
     """Run both simulators on the same circuit and measure their agreement.
 
     ``start``: 'steady' (default for PWM converters: both start on the LCP's periodic orbit, 30
@@ -67,9 +67,9 @@ def compare(converter: str, params: dict | None = None, *, periods: int | None =
     periods, window = periods or 30, window or 10
     if not 1 <= window <= periods:
         raise ParameterError(f"window must be in [1, periods = {periods}]; got {window}")
-    x_star = (run_converter(conv, p, h=h, steady=True).trajectory.x[0] if start == "steady"
+    x_star = (run_converter(conv, p, h=h, theta=theta, steady=True).trajectory.x[0] if start == "steady"
               else np.zeros(len(conv.state_names)))
-    lcp = run_converter(conv, p, h=h, periods=periods, x0=x_star)
+    lcp = run_converter(conv, p, h=h, theta=theta, periods=periods, x0=x_star)
     netlist = build_netlist(conv.name, p, periods * T, spice_options, x0=x_star)
     spice = run_spice(netlist)
     result = Comparison(conv.name, p, lcp, spice, netlist, window_start=(periods - window) * T)

@@ -22,10 +22,3 @@ OPERATING_POINTS = [
 ]
 #: Relative tolerance of the steady-state mean output against the closed form, per mode.
 TOLERANCE = {"CCM": 5e-4, "DCM": 1e-2}
-
-#: One CCM and one DCM point per PWM converter, and the PRC, for the LCP-versus-ngspice comparison.
-SPICE_POINTS = [("buck", {"L": "100u"}, "CCM"), ("buck", {}, "DCM"),
-                ("boost", {"L": "100u", "R": 20}, "CCM"), ("boost", {"D": 0.3, "R": 50}, "DCM"),
-                ("buck-boost", {"L": "100u"}, "CCM"), ("buck-boost", {}, "DCM"),
-                ("cuk", {}, "CCM"), ("cuk", {"L1": "10u", "L2": "10u"}, "DCM"),
-                ("prc", {}, "CCM")]

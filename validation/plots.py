@@ -47,3 +47,31 @@ def comparison_plot(c, periods: int = 3) -> bytes:
         ax.grid(alpha=0.3)
     fig.suptitle(f"{c.converter}: LCP time-stepper against ngspice", fontsize=10)
     return png(fig)
+
+
+MODE_COLOURS = {"CCM-ON": "#4c72b0", "CCM-OFF": "#55a868", "DCM": "#c44e52", "GDCM-OFF": "#8172b2",
+                "GDCM-ON": "#ccb974"}
+
+
+def mode_timeline_plot(t_lcp, modes_lcp, t_spice, modes_spice, period: float, title: str, periods: int = 3) -> bytes:
+    """Mode of each simulator over the last periods, as coloured bars."""
+    end = min(t_lcp[-1], t_spice[-1])
+    start = end - periods * period
+    fig, ax = plt.subplots(figsize=(8, 1.8))
+    for row, (t, labels, name) in enumerate(((t_lcp, modes_lcp, "LCP"), (t_spice, modes_spice, "ngspice"))):
+        sel = np.flatnonzero(t >= start)
+        times, labs = t[sel], np.asarray(labels)[sel].astype(str)
+        # Each point carries the label of the step that ended there: a run spans from the point
+        # before its first label to its last point.
+        change = np.flatnonzero(labs[1:] != labs[:-1]) + 1
+        bounds = np.concatenate([[0], change, [labs.size - 1]])
+        for a, b in zip(bounds[:-1], bounds[1:]):
+            left = times[max(a - 1, 0)]
+            ax.barh(row, (times[b] - left) * 1e6 if b > a else 0.0, left=(left - start) * 1e6, height=0.6,
+                    color=MODE_COLOURS.get(labs[a], "#999999"), linewidth=0)
+    ax.set_yticks([0, 1], ["LCP", "ngspice"])
+    ax.set_xlabel(f"time in the last {periods} periods (us)")
+    handles = [plt.Rectangle((0, 0), 1, 1, color=c) for c in MODE_COLOURS.values()]
+    ax.legend(handles, MODE_COLOURS.keys(), fontsize=7, ncol=5, loc="upper center", bbox_to_anchor=(0.5, -0.55))
+    ax.set_title(f"{title}: conduction modes", fontsize=9)
+    return png(fig)

@@ -127,46 +127,11 @@ def converter_section() -> Section:
                    {"converters_steady_state.csv": csv_bytes(table)}, ok=bool((table["result"] == "pass").all()))
 
 
-def spice_section() -> Section:
-    from .compare import THRESHOLDS, compare
-    from .operating_points import SPICE_POINTS
-    from .plots import comparison_plot
-    rows, files, blocks = [], {}, []
-    for name, params, mode in SPICE_POINTS:
-        label = f"{name}-{mode.lower()}"
-        try:
-            c = compare(name, params)
-        except Exception as exc:  # one failed comparison is reported, the others go on
-            rows.append({"scene": label, "result": "fail", "reason": str(exc)})
-            continue
-        m = c.metrics
-        rows.append({"scene": label, "parameters": " ".join(f"{k}={v}" for k, v in params.items()) or "defaults",
-                     "vout_lcp_V": m["vout_mean_lcp_V"], "vout_spice_V": m["vout_mean_spice_V"],
-                     "rel_error": m["vout_mean_rel_error"], "diode_floor_V": m["diode_drop_floor_V"],
-                     "ripple_error_V": m["vout_ripple_error_V"], "iL_rms_err/ripple": m["current_rms_error_over_ripple"],
-                     "modes_agree": m["mode_agreement"], "modes": m["mode_sequence_lcp"],
-                     "turn_off_err_T": m["turn_off_error_T"], "lcp_s": m["lcp_wall_s"], "spice_s": m["spice_wall_s"],
-                     "spice/lcp time": m["runtime_ratio_spice_over_lcp"],
-                     "result": "pass" if c.passed else "fail",
-                     "reason": "" if c.passed else ", ".join(k for k, ok in c.checks.items() if not ok)})
-        files[f"compare_{label}.png"] = comparison_plot(c)
-        blocks.append(f"<h3>{html.escape(label)}</h3><img src='compare_{label}.png' alt='{html.escape(label)}'>")
-    table = pd.DataFrame(rows)
-    thresholds = ", ".join(f"{k} {v:g}" for k, v in THRESHOLDS.items())
-    text = ("<p>Both simulators start on the LCP periodic orbit and run 30 periods (PRC: 2 ms from rest); "
-            "metrics over the last 10 periods (PRC: last 1 ms). ngspice uses Ron = 1 mOhm switches and a "
-            "D(IS=1e-14, N=0.001) diode; its forward drop (diode_floor_V) is the accuracy floor of the "
-            f"comparison. Thresholds: {html.escape(thresholds)}.</p>"
-            + table_html(table, "result", good=("pass",)) + "".join(blocks))
-    files["spice_comparison.csv"] = csv_bytes(table)
-    return Section("LCP against ngspice", text, files, ok=bool((table["result"] == "pass").all()))
-
-
-SUITES = {
+#: Report sections that are not scenes, per suite (the scenes come from validation/scenes/*.toml).
+EXTRA_SECTIONS = {
     "default": [("LCP solvers: project problem set", lcp_project_section),
                 ("LCP solvers: Siconos peer collection", lcp_peer_section),
                 ("LCS time-stepping: convergence on the Siconos circuits", core_section),
-                ("Converter library: steady state against closed forms", converter_section),
-                ("LCP against ngspice", spice_section)],
+                ("Converter library: steady state against closed forms", converter_section)],
 }
-SUITES["lcp"] = SUITES["default"][:2]
+EXTRA_SECTIONS["lcp"] = EXTRA_SECTIONS["default"][:2]

@@ -145,6 +145,13 @@ def _reason(log: str) -> str:
 _default = None
 
 
+def close_spice_worker():
+    """Shut the shared ngspice worker down (a pool worker must do this before it exits, or the
+    multiprocessing exit handler would wait for the idle ngspice worker forever)."""
+    if _default is not None:
+        _default.close()
+
+
 def run_spice(netlist: Netlist) -> SpiceResult:
     """Run one netlist in the shared worker (created on first use)."""
     global _default

@@ -1,0 +1,129 @@
+"""The report: scenes load strictly, the page refers only to files that exist, and it works in a real
+browser (headless Chromium: every image loads)."""
+import os
+import re
+import shutil
+from html.parser import HTMLParser
+from pathlib import Path
+
+import pytest
+
+from converters.errors import ParameterError
+from validation.scenes import load_scene, scenes_of
+
+
+@pytest.fixture(scope="session")
+def report(tmp_path_factory, ngspice):
+    from validation.cli import main
+    out = tmp_path_factory.mktemp("report") / "default"
+    assert main(["report", "default", "--out", str(out)]) == 0
+    return out / "index.html"
+
+
+class _Refs(HTMLParser):
+    def __init__(self):
+        super().__init__()
+        self.refs = []
+
+    def handle_starttag(self, tag, attrs):
+        for name, value in attrs:
+            if name in ("src", "href") and value and not value.startswith(("#", "http", "mailto:")):
+                self.refs.append(value)
+
+
+def test_every_file_the_page_refers_to_exists(report):
+    parser = _Refs()
+    parser.feed(report.read_text())
+    assert len(parser.refs) >= 3 * len(scenes_of("default"))
+    missing = [ref for ref in parser.refs if not (report.parent / ref).is_file()]
+    assert missing == []
+    for name in ("summary.csv", "metrics.json"):
+        assert (report.parent / name).stat().st_size > 0
+    assert sorted(p.name for p in (report.parent / "scenes" / "buck-dcm").iterdir()) == [
+        "lcp.parquet", "modes.png", "overlay.png", "spice.parquet"]
+
+
+def test_every_default_scene_passes_and_the_header_names_the_versions(report):
+    text = report.read_text()
+    for key in ("pcsuite", "numpy", "scipy", "PySpice", "ngspice-39", "machine", "date"):
+        assert key in text
+    summary = (report.parent / "summary.csv").read_text()
+    assert ",fail" not in summary and summary.count(",pass") >= len(scenes_of("default")) + 1
+
+
+def _chromium():
+    binary, driver = shutil.which("chromium"), shutil.which("chromedriver")
+    if not (binary and driver):
+        if os.environ.get("CI"):
+            pytest.fail("chromium and chromedriver must be installed in CI (make test installs them)")
+        pytest.skip("chromium not installed (make test installs it)")
+    from selenium import webdriver
+    options = webdriver.ChromeOptions()
+    options.binary_location = binary
+    for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
+                "--disable-background-networking", "--disable-component-update", "--disable-sync",
+                "--no-first-run", "--allow-file-access-from-files"):
+        options.add_argument(arg)
+    return webdriver.Chrome(options=options, service=webdriver.ChromeService(executable_path=driver))
+
+
+def test_the_page_loads_every_image_in_headless_chromium(report):
+    browser = _chromium()
+    try:
+        browser.get(report.as_uri())
+        browser.execute_script("return document.readyState")
+        images = browser.execute_script(
+            "return Array.from(document.images).map(i => [i.getAttribute('src'), i.complete, i.naturalWidth]);")
+        title = browser.title
+    finally:
+        browser.quit()
+    assert title == "pcsuite report: default"
+    assert len(images) >= 2 * len(scenes_of("default"))
+    broken = [src for src, complete, width in images if not (complete and width > 0)]
+    assert broken == []
+
+
+def test_a_scene_with_an_unknown_key_or_a_bad_value_is_refused(tmp_path):
+    bad_key = tmp_path / "bad.toml"
+    bad_key.write_text('converter = "buck"\nduty = 0.5\n')
+    with pytest.raises(ParameterError, match=r"unknown key 'duty' in scene bad.toml; valid keys: name, converter"):
+        load_scene(bad_key)
+    bad_param = tmp_path / "range.toml"
+    bad_param.write_text('converter = "buck"\n[params]\nD = 1.5\n')
+    with pytest.raises(ParameterError, match=r"D \(duty ratio\) must be in \[0, 1\]; got 1.5"):
+        load_scene(bad_param)
+    nested = tmp_path / "nested.toml"
+    nested.write_text('converter = "boost"\n[methods.lcp]\nstep = 1e-8\n')
+    with pytest.raises(ParameterError, match=r"unknown key 'step' in scene nested.toml \[methods.lcp\]; valid keys: h, theta"):
+        load_scene(nested)
+    unknown_param = tmp_path / "param.toml"
+    unknown_param.write_text('converter = "cuk"\n[params]\nL = "10u"\n')
+    with pytest.raises(ParameterError, match=r"unknown key 'L' in scene param.toml \[params\]; valid keys: Vin, L1"):
+        load_scene(unknown_param)
+
+
+def test_a_failing_scene_is_reported_with_its_reason_not_fatal(tmp_path, monkeypatch):
+    from validation import suite
+    from validation.report import write_report
+    scene = load_scene(Path(suite.__file__).with_name("scenes") / "buck-dcm.toml")
+
+    def explode(*args, **kwargs):
+        raise RuntimeError("ngspice exploded on purpose")
+    monkeypatch.setattr(suite, "compare", explode)
+    result = suite.run_scene(scene)
+    assert not result.ok and "ngspice exploded on purpose" in result.reason
+    index = write_report([suite.scenes_summary([result]), suite.scene_section(result)], tmp_path / "r", "t")
+    text = index.read_text()
+    assert "Failed:" in text and "ngspice exploded on purpose" in text
+    assert re.search(r"<td[^>]*fail[^>]*>fail</td>", text)
+
+
+def test_a_report_that_fails_while_writing_leaves_the_previous_one_whole(tmp_path):
+    from validation.report import Section, write_report
+    target = tmp_path / "r"
+    write_report([Section("good", "<p>first</p>", files={"a.txt": b"first"})], target, "t")
+    broken = Section("bad", "<p>second</p>", files={"a.txt": b"second", "b.txt": None})
+    with pytest.raises(TypeError):
+        write_report([broken], target, "t")
+    assert (target / "a.txt").read_bytes() == b"first" and "first" in (target / "index.html").read_text()
+    assert [p.name for p in tmp_path.iterdir()] == ["r"]  # no staging directory left behind

@@ -1,0 +1,102 @@
+"""Scenes: TOML files naming a converter, its parameters, the run, the methods and the checks.
+
+Strict: an unknown key anywhere is refused with the list of valid keys; parameters are validated by
+the converter (range errors name the parameter); thresholds must be positive numbers.
+
+    name = "buck-dcm"                       # defaults to the file name
+    converter = "buck"
+    description = "..."
+    suites = ["default"]
+    [params]            # converter parameters, SPICE suffixes allowed
+    [run]               # start = "steady" | "rest", periods, window
+    [methods.lcp]       # h, theta
+    [methods.spice]     # tmax_fraction, reltol, method, diode_n, diode_is, switch_ron, switch_roff
+    [checks]            # vout_mean_rel, mode_agreement, turn_off_error_T, closed_form_rel
+"""
+from __future__ import annotations
+
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from converters.errors import ParameterError
+from converters.library import get_converter
+from converters.validate import parse_value
+from netlists import SpiceOptions
+
+SCENE_DIR = Path(__file__).with_name("scenes")
+TOP_KEYS = ("name", "converter", "description", "suites", "params", "run", "methods", "checks")
+RUN_KEYS = ("start", "periods", "window")
+METHOD_KEYS = {"lcp": ("h", "theta"), "spice": tuple(SpiceOptions.__dataclass_fields__)}
+CHECK_KEYS = ("vout_mean_rel", "mode_agreement", "turn_off_error_T", "closed_form_rel")
+DEFAULT_CHECKS = {"vout_mean_rel": 1e-2, "mode_agreement": 1.0, "turn_off_error_T": 2e-2}
+
+
+@dataclass(frozen=True)
+class Scene:
+    name: str
+    converter: str
+    description: str = ""
+    suites: tuple = ("default",)
+    params: dict = field(default_factory=dict)
+    run: dict = field(default_factory=dict)
+    lcp: dict = field(default_factory=dict)
+    spice: dict = field(default_factory=dict)
+    checks: dict = field(default_factory=lambda: dict(DEFAULT_CHECKS))
+    path: str = ""
+
+
+def _strict(table: dict, valid, where: str):
+    if not isinstance(table, dict):
+        raise ParameterError(f"{where} must be a table; got {type(table).__name__}")
+    for key in table:
+        if key not in valid:
+            raise ParameterError(f"unknown key {key!r} in {where}; valid keys: {', '.join(valid)}")
+
+
+def load_scene(path) -> Scene:
+    path = Path(path)
+    try:
+        data = tomllib.loads(path.read_text())
+    except (OSError, tomllib.TOMLDecodeError) as exc:
+        raise ParameterError(f"scene {path.name}: not a readable TOML file ({exc})") from None
+    where = f"scene {path.name}"
+    _strict(data, TOP_KEYS, where)
+    if "converter" not in data:
+        raise ParameterError(f"{where}: 'converter' is required; valid: buck, boost, buck-boost, cuk, prc")
+    converter = get_converter(data["converter"])
+    params = data.get("params", {})
+    _strict(params, tuple(p.name for p in converter.parameters), f"{where} [params]")
+    converter.resolve(params)  # range errors name the parameter
+    run = data.get("run", {})
+    _strict(run, RUN_KEYS, f"{where} [run]")
+    if run.get("start", "steady") not in ("steady", "rest"):
+        raise ParameterError(f"{where} [run] start must be 'steady' or 'rest'; got {run['start']!r}")
+    for key in ("periods", "window"):
+        if key in run and not (isinstance(run[key], int) and run[key] >= 1):
+            raise ParameterError(f"{where} [run] {key} must be an integer >= 1; got {run[key]!r}")
+    methods = data.get("methods", {})
+    _strict(methods, tuple(METHOD_KEYS), f"{where} [methods]")
+    for method, table in methods.items():
+        _strict(table, METHOD_KEYS[method], f"{where} [methods.{method}]")
+    SpiceOptions(**methods.get("spice", {}))  # validates values
+    checks = data.get("checks", {})
+    _strict(checks, CHECK_KEYS, f"{where} [checks]")
+    for key, value in checks.items():
+        if parse_value(f"{where} [checks] {key}", value) <= 0:
+            raise ParameterError(f"{where} [checks] {key} must be positive; got {value!r}")
+    suites = data.get("suites", ["default"])
+    if not (isinstance(suites, list) and all(isinstance(s, str) for s in suites)):
+        raise ParameterError(f"{where}: suites must be a list of names; got {suites!r}")
+    return Scene(name=data.get("name", path.stem), converter=converter.name, description=data.get("description", ""),
+                 suites=tuple(suites), params=dict(params), run=dict(run), lcp=dict(methods.get("lcp", {})),
+                 spice=dict(methods.get("spice", {})), checks={**DEFAULT_CHECKS, **checks}, path=str(path))
+
+
+def scenes_of(suite: str, directory=SCENE_DIR) -> list[Scene]:
+    scenes = [load_scene(p) for p in sorted(Path(directory).glob("*.toml"))]
+    return [s for s in scenes if suite in s.suites]
+
+
+def suite_names(directory=SCENE_DIR) -> list[str]:
+    return sorted({name for p in Path(directory).glob("*.toml") for name in load_scene(p).suites})

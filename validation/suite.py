@@ -1,0 +1,186 @@
+"""Run the scenes of a suite (in parallel across processes, with a progress bar) and turn each into
+a report section. A failing scene becomes a failed section with its reason; it never aborts the run.
+"""
+from __future__ import annotations
+
+import concurrent.futures as futures
+import html
+import io
+import multiprocessing
+import sys
+import time
+import traceback
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from converters import analytic
+from converters.library import get_converter
+from converters.simulation import run_converter
+from netlists import SpiceOptions
+
+from .compare import compare
+from .modes import spice_modes
+from .plots import comparison_plot, mode_timeline_plot
+from .report import Section, run_section, table_html
+from .scenes import Scene, scenes_of
+from .spice import close_spice_worker, spice_waveforms
+
+HELD = ("DCM", "GDCM-OFF", "GDCM-ON")
+
+
+@dataclass
+class SceneResult:
+    scene: Scene
+    ok: bool
+    reason: str = ""
+    checks: list = field(default_factory=list)       # (check, value, threshold, pass)
+    metrics: dict = field(default_factory=dict)
+    gdcm: dict = field(default_factory=dict)
+    files: dict = field(default_factory=dict)
+    wall_s: float = 0.0
+
+
+def run_scene(scene: Scene) -> SceneResult:
+    start = time.perf_counter()
+    try:
+        result = _run_scene(scene)
+    except Exception as exc:  # reported as the scene's failure, never fatal to the suite
+        reason = "".join(traceback.format_exception_only(type(exc), exc)).strip()
+        return SceneResult(scene, ok=False, reason=reason, wall_s=time.perf_counter() - start)
+    result.wall_s = time.perf_counter() - start
+    return result
+
+
+def _run_scene(scene: Scene) -> SceneResult:
+    conv = get_converter(scene.converter)
+    c = compare(scene.converter, scene.params, periods=scene.run.get("periods"), window=scene.run.get("window"),
+                h=scene.lcp.get("h"), theta=scene.lcp.get("theta"), spice_options=SpiceOptions(**scene.spice),
+                start=scene.run.get("start"))
+    m = c.metrics
+    checks = [("vout_mean_rel", m["vout_mean_rel_error"], scene.checks["vout_mean_rel"],
+               m["vout_mean_rel_error"] <= scene.checks["vout_mean_rel"]),
+              ("mode_agreement", m["mode_agreement"], scene.checks["mode_agreement"],
+               m["mode_agreement"] >= scene.checks["mode_agreement"]),
+              ("turn_off_error_T", m["turn_off_error_T"], scene.checks["turn_off_error_T"],
+               bool(np.isnan(m["turn_off_error_T"]) or m["turn_off_error_T"] <= scene.checks["turn_off_error_T"]))]
+    gdcm = {}
+    if conv.name in analytic.TOPOLOGIES:
+        p = c.params
+        predicted = analytic.predicted_mode(p, conv.name)
+        lcp_held = any(label in m["mode_sequence_lcp"] for label in HELD)
+        spice_held = any(label in m["mode_sequence_spice"] for label in HELD)
+        gdcm = {"K": analytic.k_factor(p, conv.name), "Kcrit": analytic.k_crit(p["D"], conv.name),
+                "predicted": predicted, "lcp": "DCM" if lcp_held else "CCM", "spice": "DCM" if spice_held else "CCM"}
+        gdcm["agree"] = gdcm["predicted"] == gdcm["lcp"] == gdcm["spice"]
+        checks.append(("gdcm_verdict", float(gdcm["agree"]), 1.0, gdcm["agree"]))
+        if "closed_form_rel" in scene.checks:
+            expected = analytic.conversion_ratio(p, conv.name) * p["Vin"]
+            rel = abs(m["vout_mean_lcp_V"] / expected - 1.0)
+            m["closed_form_V"] = expected
+            checks.append(("closed_form_rel", rel, scene.checks["closed_form_rel"], rel <= scene.checks["closed_form_rel"]))
+    window_start = c.window_start
+    lcp_frame = c.lcp.waveforms()
+    spice_frame = spice_waveforms(conv, c.netlist, c.spice, window_start)
+    files = {f"scenes/{scene.name}/lcp.parquet": _parquet(lcp_frame),
+             f"scenes/{scene.name}/spice.parquet": _parquet(spice_frame),
+             f"scenes/{scene.name}/overlay.png": comparison_plot(c),
+             f"scenes/{scene.name}/modes.png": mode_timeline_plot(
+                 c.lcp.trajectory.t, c.lcp.modes(), c.spice.time,
+                 spice_modes(conv, c.spice, c.netlist, window_start), conv.period(c.params), scene.name)}
+    ok = all(check[3] for check in checks)
+    failed = [name for name, _, _, passed in checks if not passed]
+    return SceneResult(scene, ok=ok, reason=("failed checks: " + ", ".join(failed)) if failed else "",
+                       checks=checks, metrics=m, gdcm=gdcm, files=files)
+
+
+def _parquet(frame: pd.DataFrame) -> bytes:
+    frame = frame.copy()
+    frame["mode"] = frame["mode"].astype(str)
+    buffer = io.BytesIO()
+    frame.to_parquet(buffer, index=False)
+    return buffer.getvalue()
+
+
+def scene_section(result: SceneResult) -> Section:
+    s = result.scene
+    title = f"Scene {s.name}"
+    head = (f"<p>{html.escape(s.description)} Converter <code>{s.converter}</code>, parameters "
+            f"<code>{html.escape(str(s.params or 'defaults'))}</code>, scene file <code>"
+            f"{html.escape(s.path.split('/')[-1])}</code>; run time {result.wall_s:.2f} s.</p>")
+    if not result.ok and not result.checks:
+        return Section(title, head + f"<div class='failed-section'><b>Failed:</b> {html.escape(result.reason)}</div>",
+                       ok=False, metrics={"error": result.reason})
+    checks = pd.DataFrame(result.checks, columns=["check", "value", "threshold", "pass"])
+    checks["result"] = np.where(checks["pass"], "pass", "fail")
+    verdict = ""
+    if result.gdcm:
+        g = result.gdcm
+        verdict = (f"<p>Mode verdict: K = {g['K']:.4g}, Kcrit(D) = {g['Kcrit']:.4g}: predicted <b>{g['predicted']}</b>; "
+                   f"detected LCP <b>{g['lcp']}</b>, ngspice <b>{g['spice']}</b> -> "
+                   f"{'agree' if g['agree'] else 'DISAGREE'}.</p>")
+    metrics = pd.DataFrame([(k, v) for k, v in result.metrics.items()], columns=["metric", "value"])
+    base = f"scenes/{s.name}/"
+    body = (head + verdict + table_html(checks.drop(columns="pass"), "result", good=("pass",))
+            + f"<img src='{base}overlay.png' alt='overlay {s.name}'><img src='{base}modes.png' alt='modes {s.name}'>"
+            + "<details><summary>All metrics</summary>" + table_html(metrics) + "</details>"
+            + f"<p>Waveforms: <a href='{base}lcp.parquet'>LCP (Parquet)</a>, "
+              f"<a href='{base}spice.parquet'>ngspice (Parquet)</a>.</p>")
+    if not result.ok:
+        body = f"<div class='failed-section'><b>Failed:</b> {html.escape(result.reason)}</div>" + body
+    return Section(title, body, files=result.files, ok=result.ok,
+                   metrics={"checks": {c[0]: {"value": c[1], "threshold": c[2], "pass": c[3]} for c in result.checks},
+                            "gdcm": result.gdcm, "wall_s": result.wall_s})
+
+
+def scenes_summary(results: list[SceneResult]) -> Section:
+    rows = [{"scene": r.scene.name, "converter": r.scene.converter, "result": "pass" if r.ok else "fail",
+             "vout_lcp_V": r.metrics.get("vout_mean_lcp_V", float("nan")),
+             "vout_spice_V": r.metrics.get("vout_mean_spice_V", float("nan")),
+             "rel_error": r.metrics.get("vout_mean_rel_error", float("nan")),
+             "modes": r.metrics.get("mode_sequence_lcp", ""), "predicted": r.gdcm.get("predicted", ""),
+             "spice/lcp time": r.metrics.get("runtime_ratio_spice_over_lcp", float("nan")),
+             "wall_s": r.wall_s, "reason": r.reason} for r in results]
+    table = pd.DataFrame(rows)
+    from .report import csv_bytes
+    return Section("Scenes: LCP against ngspice", table_html(table, "result", good=("pass",)),
+                   files={"scenes.csv": csv_bytes(table)}, ok=all(r.ok for r in results))
+
+
+def _job(item):
+    kind, payload = item
+    try:
+        if kind == "scene":
+            return run_scene(payload)
+        title, builder = payload
+        return run_section(builder, title)
+    finally:
+        close_spice_worker()
+
+
+def run_suite(suite: str, sections=(), workers: int = 2, progress: bool = True):
+    """Run the suite's scenes and extra report sections in a process pool; results in input order."""
+    jobs = [("scene", s) for s in scenes_of(suite)] + [("section", sec) for sec in sections]
+    context = multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
+    results = [None] * len(jobs)
+    from tqdm import tqdm
+    with futures.ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
+        pending = {pool.submit(_job, job): i for i, job in enumerate(jobs)}
+        with tqdm(total=len(jobs), desc=f"suite {suite}", unit="job", file=sys.stderr, disable=not progress) as bar:
+            for done in futures.as_completed(pending):
+                i = pending[done]
+                try:
+                    results[i] = done.result()
+                except Exception as exc:  # a crashed worker: report the job as failed
+                    kind, payload = jobs[i]
+                    reason = f"worker failed: {type(exc).__name__}: {exc}"
+                    results[i] = (SceneResult(payload, ok=False, reason=reason) if kind == "scene"
+                                  else Section(payload[0], f"<p>{html.escape(reason)}</p>", ok=False))
+                bar.update(1)
+    scene_results = [r for (kind, _), r in zip(jobs, results) if kind == "scene"]
+    section_results = [r for (kind, _), r in zip(jobs, results) if kind == "section"]
+    return scene_results, section_results
+
+
+__all__ = ["run_suite", "run_scene", "scene_section", "scenes_summary", "SceneResult", "run_converter"]
