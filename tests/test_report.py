@@ -90,7 +90,7 @@ def test_a_scene_with_an_unknown_key_or_a_bad_value_is_refused(tmp_path):
         load_scene(bad_key)
     bad_param = tmp_path / "range.toml"
     bad_param.write_text('converter = "buck"\n[params]\nD = 1.5\n')
-    with pytest.raises(ParameterError, match=r"D \(duty ratio\) must be in \[0, 1\]; got 1.5"):
+    with pytest.raises(ParameterError, match=r"scene range.toml \[params\]: D \(duty ratio\) must be in \[0, 1\]; got 1.5"):
         load_scene(bad_param)
     nested = tmp_path / "nested.toml"
     nested.write_text('converter = "boost"\n[methods.lcp]\nstep = 1e-8\n')

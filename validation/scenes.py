@@ -67,7 +67,10 @@ def load_scene(path) -> Scene:
     converter = get_converter(data["converter"])
     params = data.get("params", {})
     _strict(params, tuple(p.name for p in converter.parameters), f"{where} [params]")
-    converter.resolve(params)  # range errors name the parameter
+    try:
+        converter.resolve(params)  # range errors name the parameter
+    except ParameterError as exc:
+        raise ParameterError(f"{where} [params]: {exc}") from None
     run = data.get("run", {})
     _strict(run, RUN_KEYS, f"{where} [run]")
     if run.get("start", "steady") not in ("steady", "rest"):
