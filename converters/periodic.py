@@ -14,7 +14,7 @@ import numpy as np
 
 from .lcs import LCSProblem
 from .methods import Theta
-from .stepping import simulate
+from .stepping import StepPlan
 
 
 @dataclass(frozen=True)
@@ -26,16 +26,20 @@ class ShootingResult:
     converged: bool
 
 
-def shoot(problem: LCSProblem, method: Theta, x_guess, tol: float = 1e-9, max_iter: int = 30) -> ShootingResult:
-    """Newton's method on P(x) - x = 0, P being one period of ``problem`` (its t_span is one period)."""
+def shoot(problem: LCSProblem, method: Theta, x_guess, tol: float = 1e-9, max_iter: int = 30,
+          plan: StepPlan | None = None) -> ShootingResult:
+    """Newton's method on P(x) - x = 0, P being one period of ``problem`` (its t_span is one period).
+
+    ``plan``: a prebuilt :class:`StepPlan` of that problem and method (saves rebuilding it)."""
     x = np.array(x_guess, dtype=float)
     n = x.size
     evaluations = 0
+    plan = plan or StepPlan.build(problem, method)  # grid and matrices once; each evaluation is one compiled loop
 
     def period_map(x0):
         nonlocal evaluations
         evaluations += 1
-        return simulate(problem, method, x0=x0).x[-1]
+        return plan.advance(x0)[0][-1]
 
     px = period_map(x)
     residual = np.inf

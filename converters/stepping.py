@@ -9,6 +9,7 @@ any step it cannot solve inline is solved here by Lemke and the loop resumes.
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
@@ -50,6 +51,87 @@ def time_grid(problem: LCSProblem, h: float) -> np.ndarray:
     return np.union1d(uniform[keep], breaks)
 
 
+@dataclass(frozen=True)
+class StepPlan:
+    """Everything about a run that does not depend on the initial state: the time grid, the
+    configuration of each step and the one-step matrix set each step uses. Reused by shooting
+    (one period map, many initial states) without rebuilding anything."""
+
+    problem: LCSProblem
+    method: Theta
+    t: np.ndarray
+    step_config: np.ndarray
+    which: np.ndarray
+    mats: object
+
+    @classmethod
+    def build(cls, problem: LCSProblem, method: Theta) -> "StepPlan":
+        if not isinstance(method, Theta):
+            raise ParameterError(f"method must be Theta(h, theta) or BackwardEuler(h); got {method!r}")
+        t = time_grid(problem, method.h)
+        dt = np.diff(t)
+        step_config = problem.schedule.config_at(0.5 * (t[:-1] + t[1:]))
+        # One matrix set per distinct (configuration, step size): sets 0..m-1 are the uniform step in
+        # each configuration, then one per split step at a switching instant.
+        n_configs = len(problem.configurations)
+        which = step_config.astype(np.int64)
+        split = np.flatnonzero(np.abs(dt - method.h) > 1e-9 * method.h)
+        which[split] = n_configs + np.arange(split.size)
+        set_configs = list(range(n_configs)) + [int(c) for c in step_config[split]]
+        set_dts = np.concatenate([np.full(n_configs, method.h), dt[split]])
+        mats = step_matrices([problem.configurations[c] for c in set_configs], set_dts, method.theta)
+        return cls(problem, method, t, step_config, which, mats)
+
+    def advance(self, x0):
+        """Run every step from x0: (x, u, y, general_solves), arrays of shape (N, n), (N, k), (N, k)."""
+        problem, mats, which, t = self.problem, self.mats, self.which, self.t
+        x_init = np.asarray(x0, dtype=float)
+        if x_init.shape != (problem.n,) or not np.all(np.isfinite(x_init)):
+            raise ParameterError(f"x0 must be {problem.n} finite numbers; got {x0!r}")
+        N, n, k = t.shape[0], problem.n, problem.k
+        x = np.empty((N, n))
+        u = np.zeros((N, k))
+        y = np.empty((N, k))
+        x[0] = x_init
+        u[0], y[0] = _initial_pair(problem, int(self.step_config[0]), x_init)
+        inline = k <= MAX_INLINE_K
+        general_solves = 0
+        j = 0
+        while True:
+            status, j = run_steps(which, mats.Phi, mats.Gamma, mats.H, mats.C, mats.F, mats.M, x, u, y, j, inline)
+            if status == OK:
+                return x, u, y, general_solves
+            s = which[j]
+            x_free = mats.Phi[s] @ x[j] + mats.Gamma[s]
+            q = mats.C[s] @ x_free + mats.F[s]
+            if status == NO_SOLUTION:
+                raise SimulationError(_no_solution_message(t[j], mats.M[s], q))
+            result = solve_lcp(mats.M[s], q, method="lemke")
+            if not result.solved:
+                result = solve_lcp(mats.M[s], q, method="enum") if k <= 12 else result
+            if not result.solved:
+                raise SimulationError(f"the step LCP at t = {t[j]:.6g} s could not be solved ({result.status}: "
+                                      f"{result.message}); try a smaller h")
+            u[j + 1] = result.z
+            y[j + 1] = result.w
+            x[j + 1] = x_free + mats.H[s] @ result.z
+            general_solves += 1
+            j += 1
+
+    def trajectory(self, x0, wall_s: float = 0.0) -> Trajectory:
+        start_clock = time.perf_counter()
+        x, u, y, general_solves = self.advance(x0)
+        problem, t = self.problem, self.t
+        config = np.concatenate([self.step_config[:1], self.step_config])
+        events = _events(t, u, y, config, self.mats.M, self.which)
+        return Trajectory(t=t, x=x, u=u, y=y, config=config, state_names=problem.state_names,
+                          pair_names=problem.pair_names,
+                          config_names=tuple(c.name or f"config{i}" for i, c in enumerate(problem.configurations)),
+                          events=events, method=self.method.name, steps=t.shape[0] - 1,
+                          wall_s=wall_s + time.perf_counter() - start_clock, general_solves=general_solves,
+                          metadata=dict(problem.metadata, h=self.method.h, theta=self.method.theta))
+
+
 def simulate(problem: LCSProblem, method: Theta, *, x0=None) -> Trajectory:
     """Simulate an LCS with the theta time-stepper.
 
@@ -65,62 +147,9 @@ def simulate(problem: LCSProblem, method: Theta, *, x0=None) -> Trajectory:
     -------
     Trajectory
     """
-    if not isinstance(method, Theta):
-        raise ParameterError(f"method must be Theta(h, theta) or BackwardEuler(h); got {method!r}")
     start_clock = time.perf_counter()
-    x_init = problem.x0 if x0 is None else np.asarray(x0, dtype=float)
-    if x_init.shape != (problem.n,) or not np.all(np.isfinite(x_init)):
-        raise ParameterError(f"x0 must be {problem.n} finite numbers; got {x0!r}")
-    t = time_grid(problem, method.h)
-    dt = np.diff(t)
-    step_config = problem.schedule.config_at(0.5 * (t[:-1] + t[1:]))
-    # One matrix set per distinct (configuration, step size); uniform steps share one per configuration.
-    # Matrix sets 0..m-1 are the uniform step in each configuration, then one per split step.
-    n_configs = len(problem.configurations)
-    which = step_config.astype(np.int64)
-    split = np.flatnonzero(np.abs(dt - method.h) > 1e-9 * method.h)
-    which[split] = n_configs + np.arange(split.size)
-    set_configs = list(range(n_configs)) + [int(c) for c in step_config[split]]
-    set_dts = np.concatenate([np.full(n_configs, method.h), dt[split]])
-    mats = step_matrices([problem.configurations[c] for c in set_configs], set_dts, method.theta)
-
-    N, n, k = t.shape[0], problem.n, problem.k
-    x = np.empty((N, n))
-    u = np.zeros((N, k))
-    y = np.empty((N, k))
-    x[0] = x_init
-    u[0], y[0] = _initial_pair(problem, int(step_config[0]), x_init)
-    inline = k <= MAX_INLINE_K
-    general_solves = 0
-    j = 0
-    while True:
-        status, j = run_steps(which, mats.Phi, mats.Gamma, mats.H, mats.C, mats.F, mats.M, x, u, y, j, inline)
-        if status == OK:
-            break
-        s = which[j]
-        x_free = mats.Phi[s] @ x[j] + mats.Gamma[s]
-        q = mats.C[s] @ x_free + mats.F[s]
-        if status == NO_SOLUTION:
-            raise SimulationError(_no_solution_message(t[j], mats.M[s], q))
-        result = solve_lcp(mats.M[s], q, method="lemke")
-        if not result.solved:
-            result = solve_lcp(mats.M[s], q, method="enum") if k <= 12 else result
-        if not result.solved:
-            raise SimulationError(f"the step LCP at t = {t[j]:.6g} s could not be solved ({result.status}: "
-                                  f"{result.message}); try a smaller h")
-        u[j + 1] = result.z
-        y[j + 1] = result.w
-        x[j + 1] = x_free + mats.H[s] @ result.z
-        general_solves += 1
-        j += 1
-    wall = time.perf_counter() - start_clock
-    config = np.concatenate([step_config[:1], step_config])
-    events = _events(t, u, y, config, mats.M, which)
-    return Trajectory(t=t, x=x, u=u, y=y, config=config, state_names=problem.state_names,
-                      pair_names=problem.pair_names,
-                      config_names=tuple(c.name or f"config{i}" for i, c in enumerate(problem.configurations)),
-                      events=events, method=method.name, steps=N - 1, wall_s=wall, general_solves=general_solves,
-                      metadata=dict(problem.metadata, h=method.h, theta=method.theta))
+    plan = StepPlan.build(problem, method)
+    return plan.trajectory(problem.x0 if x0 is None else x0, wall_s=time.perf_counter() - start_clock)
 
 
 def _initial_pair(problem: LCSProblem, config: int, x0: np.ndarray):

@@ -179,12 +179,15 @@ def _prc(p, T, o, ic):
     # Bridge: top tank node a, bottom 0; D1 a->p, D3 0->p, D2 n->a, D4 n->0 (p, n: rectifier output).
     body = [drive, *_inductor("drv", "a", p, name="Lr", value_key="Lr", sense="Vslr", ic=ic["ir"]),
             *_capacitor("a", "0", p, name="Cr", value_key="Cr", ic=ic["vr"]),
-            "D1 a p DMOD", "D3 0 p DMOD", "D2 nn a DMOD", "D4 nn 0 DMOD",
+            # Each diode behind a zero-volt sense source (its current is a probe).
+            "Vsd1 a d1 DC 0", "D1 d1 p DMOD", "Vsd3 0 d3 DC 0", "D3 d3 p DMOD",
+            "Vsd2 nn d2 DC 0", "D2 d2 a DMOD", "Vsd4 nn d4 DC 0", "D4 d4 0 DMOD",
             *_inductor("p", "out", p, name="Lf", value_key="Lf", sense="Vslf", ic=ic["iLf"]),
             *_capacitor("out", "nn", p, name="Cf", value_key="Cf", ic=ic["vo"]), f"R1 out nn {_num('R', p['R'])}",
             "Rgnd nn 0 1e9"]
     return body, {"ir": ("vslr#branch", 1.0), "vr": ("a", 1.0), "iLf": ("vslf#branch", 1.0),
-                  "vo": (("out", "nn"), 1.0), "vout": (("out", "nn"), 1.0)}
+                  "vo": (("out", "nn"), 1.0), "vout": (("out", "nn"), 1.0),
+                  **{f"i_D{i}": (f"vsd{i}#branch", 1.0) for i in range(1, 5)}}
 
 
 _BODIES = {"buck": _buck, "boost": _boost, "buck-boost": _buck_boost, "cuk": _cuk, "prc": _prc}

@@ -81,6 +81,22 @@ def _parser() -> argparse.ArgumentParser:
     cmp.add_argument("--json", action="store_true")
     cmp.set_defaults(run=_compare)
 
+    gd = sub.add_parser("gdcm", help="predicted CCM/DCM/GDCM against the modes detected in LCP and ngspice")
+    gd.add_argument("converter")
+    gd.add_argument("-p", dest="params", action="append", default=[], metavar="NAME=VALUE")
+    gd.add_argument("--h", default=None, help="LCP step in s (default T/1000)")
+    gd.add_argument("--json", action="store_true", help="print one JSON object (predicted, lcp, spice, agree, ...)")
+    gd.set_defaults(run=_gdcm)
+
+    gmap = sub.add_parser("gdcm-map", help="D-K map of the conduction mode: prediction, LCP and ngspice")
+    gmap.add_argument("converter", choices=["buck", "boost", "buck-boost", "cuk"])
+    gmap.add_argument("--size", type=int, nargs=2, default=[30, 30], metavar=("N_D", "N_K"))
+    gmap.add_argument("--no-spice", action="store_true", help="LCP and prediction only")
+    gmap.add_argument("--workers", type=int, default=2, help="parallel ngspice processes (default 2)")
+    gmap.add_argument("--out", type=Path, default=None, help="directory for map.csv and map.png")
+    gmap.add_argument("--json", action="store_true", help="print the summary as JSON")
+    gmap.set_defaults(run=_gdcm_map)
+
     net = sub.add_parser("netlist", help="print the ngspice netlist of a converter")
     net.add_argument("converter")
     net.add_argument("-p", dest="params", action="append", default=[], metavar="NAME=VALUE")
@@ -243,6 +259,51 @@ def _compare(args) -> int:
             print(f"  check {key:<30} {'pass' if ok else 'FAIL'} (threshold {THRESHOLDS[key]:g})")
         print("PASS" if result.passed else "FAIL")
     return 0 if result.passed else 1
+
+
+def _gdcm(args) -> int:
+    from converters.params import parse_assignments
+
+    from .gdcm import gdcm_check
+    result = gdcm_check(args.converter, parse_assignments(args.params), h=args.h)
+    if args.json:
+        print(json.dumps(result, default=float))
+        return 0 if result["agree"] else 1
+    print(f"{result['converter']}: predicted {result['predicted']}")
+    pred = result.get("prediction")
+    if pred:
+        print(f"  closed form: K = {pred['K']:.4g}, Kcrit(D) = {pred['Kcrit']:.4g} -> {pred['closed_form']}; "
+              f"exact (CCM orbit from the matrices): {pred['exact_matrix']}")
+        for row in pred["conditions"]:
+            print(f"  GDCM condition, {row['configuration']}: {'possible' if row['possible'] else 'impossible'} "
+                  f"({row['condition']})")
+        T = result["period_s"]
+        for side in ("lcp", "spice"):
+            print(f"  {side}: {result[side]}, held {result['held_fraction'][side]:.4f} of T")
+            for iv in result["intervals"][side]:
+                print(f"      {iv['mode']:<9} {iv['start'] / T:7.4f} T .. {iv['end'] / T:7.4f} T  ({iv['fraction']:.4f} T)")
+    else:
+        for side in ("lcp", "spice"):
+            print(f"  {side}: " + ", ".join(f"{k} {v:.4f}" for k, v in result[side].items()))
+    print("agree" if result["agree"] else "DISAGREE")
+    return 0 if result["agree"] else 1
+
+
+def _gdcm_map(args) -> int:
+    from .gdcm import dk_map, map_plot, map_summary
+    from .io import atomic_write_bytes
+    n_d, n_k = args.size
+    frame = dk_map(args.converter, n_d, n_k, spice=not args.no_spice, spice_workers=args.workers)
+    summary = map_summary(frame)
+    if args.out is not None:
+        atomic_write_bytes(args.out / "map.csv", frame.drop(columns=["x0"], errors="ignore").to_csv(index=False).encode())
+        atomic_write_bytes(args.out / "map.png", map_plot(frame))
+    if args.json:
+        print(json.dumps(summary, default=float))
+    else:
+        for key, value in summary.items():
+            print(f"  {key:<28} {value:.4g}" if isinstance(value, float) else f"  {key:<28} {value}")
+    return 0
 
 
 def _netlist(args) -> int:

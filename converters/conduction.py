@@ -1,0 +1,103 @@
+"""Conduction modes of LCP trajectories: the periodic orbit over one period (fast: one step plan,
+Newton shooting, no DataFrames), mode intervals and the detected mode class.
+
+Mode labels come from the complementarity state (``Converter.modes``): a pair held active (u > y)
+in the switch-off configuration is DCM (Cuk: GDCM-OFF), in the switch-on one GDCM-ON. The class of
+a period is 'CCM' when no held label occurs, else the held labels joined by '+'.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .library import check_h
+from .methods import Theta
+from .periodic import shoot
+from .stepping import StepPlan
+
+HELD = ("DCM", "GDCM-OFF", "GDCM-ON")
+WARM_UP_PERIODS = 5
+
+
+@dataclass(frozen=True)
+class PeriodicOrbit:
+    """One period of the time-stepper's periodic orbit (t from 0 to T)."""
+
+    t: np.ndarray
+    x: np.ndarray
+    u: np.ndarray
+    y: np.ndarray
+    config: np.ndarray
+    labels: np.ndarray
+    converged: bool
+    residual: float
+    period: float
+
+
+def periodic_orbit(converter, params: dict, h=None, theta=None, tol: float = 1e-10) -> PeriodicOrbit:
+    """The LCP stepper's periodic orbit: warm-up periods from rest, then Newton shooting, one plan."""
+    p = converter.resolve(params)
+    T = converter.period(p)
+    h = check_h(converter.default_h(p) if h is None else h, T)
+    method = Theta(h, converter.default_theta if theta is None else theta)
+    problem = converter.problem(p, T)
+    plan = StepPlan.build(problem, method)
+    x = np.zeros(problem.n)
+    for _ in range(WARM_UP_PERIODS):
+        x = plan.advance(x)[0][-1]
+    shot = shoot(problem, method, x, tol=tol, plan=plan)
+    xs, u, y, _ = plan.advance(shot.x)
+    config = np.concatenate([plan.step_config[:1], plan.step_config])
+    labels = converter.modes(u > y, config, xs)
+    return PeriodicOrbit(plan.t, xs, u, y, config, labels, shot.converged, shot.residual, T)
+
+
+def mode_intervals(t: np.ndarray, labels: np.ndarray, t0: float, t1: float, period: float,
+                   min_run_fraction: float = 0.0) -> list[dict]:
+    """Runs of equal labels within [t0, t1]: mode, start and end (s, from t0) and fraction of T.
+
+    ``labels[j]`` holds on [t[j], t[j+1]); ``labels`` may have one entry fewer than ``t`` (for LCP
+    trajectories pass ``labels[1:]``: each point carries the label of the step that ends there). Runs shorter than ``min_run_fraction`` T are
+    merged into their neighbours (edge glitches of a continuous simulator).
+    """
+    t, labels = np.asarray(t, dtype=float), np.asarray(labels).astype(str)
+    ends = np.append(t[1:], t[-1]) if labels.size == t.size else t[1:]
+    starts = t[:labels.size]
+    keep = (ends > t0) & (starts < t1)
+    starts, ends, labels = np.clip(starts[keep], t0, t1), np.clip(ends[keep], t0, t1), labels[keep]
+    if labels.size == 0:
+        return []
+    first = np.concatenate([[0], np.flatnonzero(labels[1:] != labels[:-1]) + 1])
+    last = np.append(first[1:] - 1, labels.size - 1)
+    runs = [[labels[a], starts[a], ends[b]] for a, b in zip(first, last)]
+    if min_run_fraction > 0.0:
+        merged: list[list] = []
+        for lab, a, b in runs:
+            if b - a < min_run_fraction * period and merged:
+                merged[-1][2] = b
+            elif merged and merged[-1][0] == lab:
+                merged[-1][2] = b
+            else:
+                merged.append([lab, a, b])
+        if len(merged) > 1 and merged[0][2] - merged[0][1] < min_run_fraction * period:
+            merged[1][1] = merged[0][1]  # a glitch at the window start belongs to the run after it
+            merged.pop(0)
+        runs = merged
+    return [{"mode": str(lab), "start": float(a - t0), "end": float(b - t0), "fraction": float((b - a) / period)}
+            for lab, a, b in runs if b > a]
+
+
+def mode_class(intervals: list[dict]) -> str:
+    """'CCM' when no held mode occurs in the intervals, else the held modes present joined by '+'."""
+    held = sorted({iv["mode"] for iv in intervals if iv["mode"] in HELD}, key=HELD.index)
+    return "+".join(held) if held else "CCM"
+
+
+def held_fraction(intervals: list[dict], periods: float) -> float:
+    return float(sum(iv["fraction"] for iv in intervals if iv["mode"] in HELD) / periods)
+
+
+def orbit_intervals(orbit: PeriodicOrbit) -> list[dict]:
+    """Mode intervals over the orbit's period (LCP labels: each point carries the step that ends there)."""
+    return mode_intervals(orbit.t, orbit.labels[1:], 0.0, orbit.period, orbit.period)

@@ -1,0 +1,281 @@
+"""Conduction-mode cross-check: closed-form and exact prediction, LCP and ngspice detection.
+
+``gdcm_check`` is one operating point (``pcsuite gdcm``); ``dk_map`` is a D-K grid per converter
+(load R sets K = 2 L / (R T) at the converter's default inductances).
+
+Detection: LCP modes come from the complementarity state of the stepper's periodic orbit (exact up
+to the step h). ngspice modes come from the diode current: conducting above 0.1 % of its peak in the
+window (``validation.modes.CURRENT_FRACTION``); runs shorter than 0.05 % of T are edge glitches
+(the gate edges, 0.01 % of T, leave glitches of 0.005 % of T) and are merged into their neighbours. Both simulators start on the LCP
+orbit; ngspice runs ``SPICE_PERIODS`` periods and the last ``WINDOW_PERIODS`` are read, with RELTOL
+1e-4 (``SPICE_OPTIONS``): at the default 1e-3 its step control places the diode turn-off up to 0.4 % of
+T late, which hides held intervals shorter than that (seen at Cuk points within 2 % of the boundary).
+"""
+from __future__ import annotations
+
+import concurrent.futures as futures
+import multiprocessing
+import sys
+import time
+
+import numpy as np
+import pandas as pd
+
+from converters import analytic, gdcm
+from converters.conduction import HELD, held_fraction, mode_class, mode_intervals, orbit_intervals, periodic_orbit
+from converters.errors import ParameterError
+from converters.library import get_converter
+from netlists import SpiceOptions, build_netlist
+
+from .modes import spice_modes
+from .spice import SpiceError, close_spice_worker, run_spice
+
+SPICE_PERIODS = 8
+WINDOW_PERIODS = 2
+SPICE_MIN_RUN = 5e-4
+SPICE_OPTIONS = SpiceOptions(reltol=1e-4)
+#: K range of each map (log-spaced), chosen to hold the whole boundary Kcrit(D) for D in [0.05, 0.95].
+K_RANGES = {"buck": (1e-2, 3.0), "boost": (5e-4, 0.5), "buck-boost": (5e-4, 3.0), "cuk": (5e-4, 3.0)}
+D_RANGE = (0.05, 0.95)
+#: Points closer than this to the closed-form boundary (relative, in K) may disagree through ripple.
+BOUNDARY_BAND = 0.02
+
+
+def predicted_label(converter, p: dict) -> str:
+    """The closed-form prediction in the detection vocabulary: 'CCM' or the converter's held-OFF label."""
+    return converter.off_held_label if analytic.predicted_mode(p, converter.name) == "DCM" else "CCM"
+
+
+def spice_intervals(converter, netlist, result, periods_window: int = WINDOW_PERIODS) -> list[dict]:
+    T = converter.period(netlist.params)
+    start = netlist.t_end - periods_window * T
+    labels = spice_modes(converter, result, netlist, start)
+    return mode_intervals(result.time, labels, start, netlist.t_end, T, SPICE_MIN_RUN)
+
+
+def gdcm_check(name: str, params: dict | None = None, *, h=None) -> dict:
+    """Predicted mode against the modes detected in both simulators at one operating point."""
+    conv = get_converter(name)
+    p = conv.resolve(params)
+    T = conv.period(p)
+    orbit = periodic_orbit(conv, p, h=h)
+    out = {"converter": conv.name, "params": p, "period_s": T}
+    if conv.name == "prc":
+        return {**out, **_prc_combinations(conv, p, orbit)}
+    exact = gdcm.exact_mode(conv, p)
+    out["predicted"] = predicted_label(conv, p)
+    out["prediction"] = {"K": analytic.k_factor(p, conv.name), "Kcrit": analytic.k_crit(p["D"], conv.name),
+                         "closed_form": out["predicted"], "exact_matrix": exact["mode"],
+                         "exact_min_y": exact["min_y"], "conditions": gdcm.describe(conv, p)}
+    lcp_iv = orbit_intervals(orbit)
+    spice_iv, note = _spice_run(conv, p, orbit.x[0])
+    if note:
+        out["spice_note"] = note
+    out["lcp"] = mode_class(lcp_iv)
+    out["spice"] = mode_class(spice_iv)
+    out["intervals"] = {"lcp": lcp_iv, "spice": spice_iv, "lcp_periods": 1, "spice_periods": WINDOW_PERIODS}
+    out["held_fraction"] = {"lcp": held_fraction(lcp_iv, 1), "spice": held_fraction(spice_iv, WINDOW_PERIODS)}
+    out["agree"] = out["predicted"] == out["lcp"] == out["spice"]
+    if "GDCM" in out["lcp"]:
+        out["gdcm_constraint"] = _constraint_residual(conv, p, orbit)
+    return out
+
+
+def _constraint_residual(conv, p, orbit) -> dict:
+    """During held OFF intervals: max |C x + F| (A / V) and the sign of the exit drift."""
+    off = conv.configurations(p)[1]
+    cond = gdcm.gdcm_condition(off)
+    held = np.asarray(orbit.labels).astype(str) == conv.off_held_label
+    xs = orbit.x[held]
+    return {"max_abs_Cx_plus_F": float(np.abs(cond.on_set(xs)).max()),
+            "max_drift": float(cond.drift(xs).max()), "min_multiplier": float(cond.multiplier(xs).min())}
+
+
+PRC_DIODES = ("D1", "D3", "D2", "D4")
+
+
+def _prc_combinations(conv, p, orbit) -> dict:
+    """PRC: which bridge diodes conduct, as fractions of the period, in both simulators."""
+    T = conv.period(p)
+    # Diode currents: u for D1, D3 (u = i_D), y for D2, D4 (y = i_D).
+    currents = np.column_stack([orbit.u[:, 0], orbit.u[:, 1], orbit.y[:, 2], orbit.y[:, 3]])
+    lcp = _combination_fractions(orbit.t, currents[1:], T, 1)
+    netlist = build_netlist(conv.name, p, SPICE_PERIODS * T, SPICE_OPTIONS, x0=orbit.x[0])
+    result = run_spice(netlist)
+    start = netlist.t_end - WINDOW_PERIODS * T
+    spice_currents = np.column_stack([result.signal(netlist.probes[f"i_{d}"]) for d in PRC_DIODES])
+    sel = result.time >= start
+    spice = _combination_fractions(result.time[sel], spice_currents[sel][:-1], T, WINDOW_PERIODS)
+    keys = sorted(set(lcp) | set(spice))
+    diff = max(abs(lcp.get(k, 0.0) - spice.get(k, 0.0)) for k in keys)
+    return {"predicted": "n/a (4 diodes: mode combinations)", "lcp": lcp, "spice": spice,
+            "max_fraction_difference": diff, "agree": set(k for k, v in lcp.items() if v > 0.01) ==
+            set(k for k, v in spice.items() if v > 0.01)}
+
+
+def _combination_fractions(t, currents, T, periods) -> dict:
+    threshold = 1e-3 * np.abs(currents).max()
+    on = currents > threshold
+    names = np.array(["+".join(d for d, c in zip(PRC_DIODES, row) if c) or "none" for row in on])
+    dt = np.diff(t)
+    return {str(k): float(dt[names == k].sum() / (periods * T)) for k in sorted(set(names))}
+
+
+# --- D-K maps -----------------------------------------------------------------------------------------
+
+def dk_grid(name: str, n_d: int = 30, n_k: int = 30) -> pd.DataFrame:
+    """Operating points: D linear over D_RANGE, K log-spaced over K_RANGES; K set by the load R."""
+    conv = get_converter(name)
+    if conv.name not in K_RANGES:
+        raise ParameterError(f"converter must be one of {', '.join(K_RANGES)} for a D-K map; got {name!r}")
+    if n_d < 2 or n_k < 2:
+        raise ParameterError(f"the grid needs at least 2 x 2 points; got {n_d} x {n_k}")
+    base = conv.resolve({})
+    inductance = conv.effective_inductance(base) if conv.name == "cuk" else base["L"]
+    rows = []
+    for D in np.linspace(*D_RANGE, n_d):
+        for K in np.geomspace(*K_RANGES[conv.name], n_k):
+            R = 2.0 * inductance * base["f_sw"] / K
+            kc = analytic.k_crit(D, conv.name)
+            rows.append({"converter": conv.name, "D": float(D), "K": float(K), "R": float(R), "Kcrit": kc,
+                         "distance": float(K / kc - 1.0)})
+    return pd.DataFrame(rows)
+
+
+def _lcp_point(row: dict) -> dict:
+    conv = get_converter(row["converter"])
+    p = conv.resolve({"D": row["D"], "R": row["R"]})
+    out = {"predicted": predicted_label(conv, p)}
+    try:
+        out["exact"] = gdcm.exact_mode(conv, p)["mode"]
+        orbit = periodic_orbit(conv, p)
+        iv = orbit_intervals(orbit)
+        out.update(lcp=mode_class(iv), lcp_held=held_fraction(iv, 1), converged=orbit.converged,
+                   x0=orbit.x[0].tolist())
+    except Exception as exc:  # one failed point is recorded, the map goes on
+        out.update(lcp="error", lcp_error=str(exc))
+    return out
+
+
+def _spice_point(row: dict) -> dict:
+    conv = get_converter(row["converter"])
+    p = conv.resolve({"D": row["D"], "R": row["R"]})
+    try:
+        iv, note = _spice_run(conv, p, row["x0"])
+        return {"spice": mode_class(iv), "spice_held": held_fraction(iv, WINDOW_PERIODS), "spice_note": note}
+    except Exception as exc:  # ngspice failures are counted and shown, never fatal
+        return {"spice": "error", "spice_error": str(exc).splitlines()[0][:200]}
+
+
+def _spice_run(conv, p, x0):
+    """ngspice at RELTOL 1e-4; when it stops ("timestep too small"), once more at its default 1e-3."""
+    T = conv.period(p)
+    try:
+        netlist = build_netlist(conv.name, p, SPICE_PERIODS * T, SPICE_OPTIONS, x0=x0)
+        return spice_intervals(conv, netlist, run_spice(netlist)), ""
+    except SpiceError as exc:
+        netlist = build_netlist(conv.name, p, SPICE_PERIODS * T, x0=x0)
+        note = f"RELTOL 1e-4 failed ({str(exc).splitlines()[0][:120]}); RELTOL 1e-3 used"
+        return spice_intervals(conv, netlist, run_spice(netlist)), note
+
+
+def _chunk(args):
+    kind, rows = args
+    try:
+        return [(_lcp_point if kind == "lcp" else _spice_point)(r) for r in rows]
+    finally:
+        if kind == "spice":
+            close_spice_worker()
+
+
+def _pool_map(kind: str, rows: list[dict], workers: int, progress: bool, label: str) -> list[dict]:
+    chunks = [rows[i:i + 30] for i in range(0, len(rows), 30)]
+    if workers <= 1:
+        return [r for c in chunks for r in _chunk((kind, c))]
+    from tqdm import tqdm
+    context = multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
+    with futures.ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
+        out = []
+        with tqdm(total=len(rows), desc=label, unit="pt", file=sys.stderr, disable=not progress) as bar:
+            for result in pool.map(_chunk, [(kind, c) for c in chunks]):
+                out.extend(result)
+                bar.update(len(result))
+    return out
+
+
+def dk_map(name: str, n_d: int = 30, n_k: int = 30, *, spice: bool = True, workers: int = 1,
+           spice_workers: int = 2, progress: bool = True) -> pd.DataFrame:
+    """The D-K map: closed-form and exact predictions, LCP-detected and (optionally) ngspice-detected modes."""
+    grid = dk_grid(name, n_d, n_k)
+    rows = grid.to_dict("records")
+    start = time.perf_counter()
+    _lcp_point(rows[0])  # load the compiled kernels once, before the workers fork
+    lcp = _pool_map("lcp", rows, workers, progress, f"{name} LCP map")
+    frame = pd.concat([grid, pd.DataFrame(lcp)], axis=1)
+    lcp_wall = time.perf_counter() - start
+    spice_wall = float("nan")
+    if spice:
+        start = time.perf_counter()
+        spice_rows = frame.to_dict("records")
+        frame = pd.concat([frame, pd.DataFrame(_pool_map("spice", spice_rows, spice_workers, progress,
+                                                         f"{name} ngspice map"))], axis=1)
+        spice_wall = time.perf_counter() - start
+    frame.attrs.update(lcp_wall_s=lcp_wall, spice_wall_s=spice_wall)
+    return frame
+
+
+def map_summary(frame: pd.DataFrame) -> dict:
+    """Agreement counts of one map (the acceptance numbers)."""
+    far = frame["distance"].abs() > BOUNDARY_BAND
+    lcp_vs_pred = frame["lcp"] == frame["predicted"]
+    out = {"converter": frame["converter"].iloc[0], "points": int(len(frame)),
+           "far_points": int(far.sum()), "far_disagreements": int((far & ~lcp_vs_pred).sum()),
+           "near_disagreements": int((~far & ~lcp_vs_pred).sum()),
+           "lcp_vs_exact_disagreements": int((frame["lcp"] != frame["exact"]).sum()),
+           "lcp_errors": int((frame["lcp"] == "error").sum()),
+           "not_converged": int((~frame["converged"].fillna(False).astype(bool)).sum()),
+           "lcp_wall_s": frame.attrs.get("lcp_wall_s", float("nan"))}
+    if "spice_note" in frame:
+        out["spice_retried"] = int(frame["spice_note"].fillna("").astype(bool).sum())
+    if "spice" in frame:
+        agree = frame["spice"] == frame["lcp"]
+        out.update(spice_agreement=float(agree.mean()), spice_disagreements=int((~agree).sum()),
+                   spice_errors=int((frame["spice"] == "error").sum()),
+                   spice_wall_s=frame.attrs.get("spice_wall_s", float("nan")))
+    return out
+
+
+def disagreements(frame: pd.DataFrame) -> pd.DataFrame:
+    """Rows where the LCP differs from the closed form, or ngspice from the LCP."""
+    bad = frame["lcp"] != frame["predicted"]
+    if "spice" in frame:
+        bad |= frame["spice"] != frame["lcp"]
+    cols = [c for c in ("D", "K", "Kcrit", "distance", "R", "predicted", "exact", "lcp", "lcp_held", "spice",
+                        "spice_held", "spice_note", "spice_error") if c in frame]
+    return frame.loc[bad, cols]
+
+
+def map_plot(frame: pd.DataFrame) -> bytes:
+    from .plots import png, plt
+    name = frame["converter"].iloc[0]
+    fig, ax = plt.subplots(figsize=(6.5, 4.5))
+    held = frame["lcp"].isin(HELD)
+    ax.scatter(frame.loc[~held, "D"], frame.loc[~held, "K"], s=9, c="#4c72b0", label="LCP: CCM")
+    ax.scatter(frame.loc[held, "D"], frame.loc[held, "K"], s=9, c="#c44e52",
+               label=f"LCP: {get_converter(name).off_held_label}")
+    if "spice" in frame:
+        off = frame["spice"] != frame["lcp"]
+        ax.scatter(frame.loc[off, "D"], frame.loc[off, "K"], s=60, facecolors="none", edgecolors="k",
+                   label="ngspice differs")
+    off_pred = frame["lcp"] != frame["predicted"]
+    ax.scatter(frame.loc[off_pred, "D"], frame.loc[off_pred, "K"], s=40, marker="x", c="#dd8452",
+               label="LCP differs from closed form")
+    d = np.linspace(frame["D"].min(), frame["D"].max(), 200)
+    ax.plot(d, [analytic.k_crit(v, name) for v in d], "k-", lw=1, label="Kcrit(D) (closed form)")
+    ax.set_yscale("log")
+    ax.set_xlabel("D")
+    ax.set_ylabel("K = 2 L / (R T)")
+    ax.set_title(f"{name}: conduction mode over D and K", fontsize=10)
+    ax.legend(fontsize=7, loc="lower left")
+    ax.grid(alpha=0.3, which="both")
+    return png(fig)
