@@ -93,6 +93,9 @@ def test_ngspice_modes_agree_with_the_lcp_on_a_map(name):
     # A disagreement is only possible where the held interval is a fraction of a percent of T.
     off = frame[frame["spice"] != frame["lcp"]]
     assert (off[["lcp_held", "spice_held"]].fillna(0).max(axis=1) < 0.01).all()
+    # Away from the boundary both simulators find the predicted mode (Cuk: GDCM wherever predicted).
+    far = frame[frame["distance"].abs() > BOUNDARY_BAND]
+    assert (far["spice"] == far["predicted"]).all() and (far["lcp"] == far["predicted"]).all()
 
 
 @pytest.mark.usefixtures("ngspice")
