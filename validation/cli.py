@@ -56,6 +56,9 @@ def _parser() -> argparse.ArgumentParser:
     span = sim.add_mutually_exclusive_group()
     span.add_argument("--t-end", default=None, help="duration in s")
     span.add_argument("--periods", type=int, default=None, help="duration in switching periods (default 500)")
+    sim.add_argument("--control", default="pwm", choices=["pwm", "smc", "smc-implicit"],
+                     help="boost only: sliding-mode current control (hysteresis, or the implicit relay) "
+                          "with -p Vref=.. -p band=.. [-p Kp=.. -p Ki=.. -p t_step=.. -p R_step=..]")
     sim.add_argument("--steady", action="store_true", help="run until the periodic steady state")
     sim.add_argument("--steady-tol", type=float, default=1e-6)
     sim.add_argument("--out", type=Path, default=None, help="waveform file, .csv or .parquet")
@@ -77,6 +80,9 @@ def _parser() -> argparse.ArgumentParser:
     cmp.add_argument("--h", default=None, help="LCP step in s (default T/1000)")
     cmp.add_argument("--start", choices=["steady", "rest"], default=None,
                      help="start both on the periodic orbit (default) or from rest (default for prc)")
+    cmp.add_argument("--control", default="pwm", choices=["pwm", "smc"],
+                     help="boost only: sliding-mode current control (see simulate)")
+    cmp.add_argument("--t-end", default=None, help="duration in s (sliding mode; default 30 ms)")
     cmp.add_argument("--plot", type=Path, default=None, help="write the overlay/residual plot (.png)")
     cmp.add_argument("--json", action="store_true")
     cmp.set_defaults(run=_compare)
@@ -133,12 +139,18 @@ def _lcp_solve(args) -> int:
 def _list(args) -> int:
     from converters.library import CONVERTERS
 
+    from converters.sliding import PARAMETERS as SMC_PARAMETERS
+
     from .scenes import SCENE_DIR, load_scene, suite_names
     from .sections import EXTRA_SECTIONS
     info = {"converters": {name: {"title": c.title, "states": list(c.state_names), "parameters": [
         {"name": p.name, "default": p.default, "unit": p.unit, "doc": p.doc, "range": p.range_text(),
          "optional": p.default is None} for p in c.parameters]} for name, c in CONVERTERS.items()},
-        "methods": {"lcp": "LCP time-stepper: theta method (--theta, default 1 = backward Euler), one LCP per step"},
+        "methods": {"lcp": "LCP time-stepper: theta method (--theta, default 1 = backward Euler), one LCP per step",
+                    "spice": "the same circuit in ngspice (PySpice)"},
+        "controls": {"smc": {"converter": "boost", "parameters": [
+            {"name": p.name, "default": p.default, "unit": p.unit, "doc": p.doc, "range": p.range_text(),
+             "optional": p.default is None} for p in SMC_PARAMETERS]}, "smc-implicit": {"converter": "boost"}},
         "scenes": {p.stem: load_scene(p).converter for p in sorted(SCENE_DIR.glob("*.toml"))},
         "suites": sorted(set(suite_names()) | set(EXTRA_SECTIONS))}
     if args.json:
@@ -152,6 +164,10 @@ def _list(args) -> int:
     print("methods:")
     for name, doc in info["methods"].items():
         print(f"    {name}: {doc}")
+    print("boost --control smc | smc-implicit (sliding mode) parameters:")
+    for p in info["controls"]["smc"]["parameters"]:
+        default = "only when given" if p["optional"] else f"{p['default']:g}"
+        print(f"    {p['name']:<6} {default:>16} {p['unit']:<7} {p['doc']}  range {p['range']}")
     print("scenes: " + ", ".join(f"{k} ({v})" for k, v in info["scenes"].items()))
     print("report suites: " + ", ".join(info["suites"]))
     return 0
@@ -162,6 +178,8 @@ def _simulate(args) -> int:
     from converters.simulation import run_converter
     if args.out is not None and args.out.suffix.lower() not in (".csv", ".parquet"):
         raise ParameterError(f"--out must end in .csv or .parquet; got {str(args.out)!r}")
+    if args.control != "pwm":
+        return _simulate_smc(args)
     if args.method == "spice":
         return _simulate_spice(args)
     run = run_converter(args.converter, parse_assignments(args.params), h=args.h, theta=args.theta,
@@ -181,6 +199,96 @@ def _simulate(args) -> int:
         if args.out is not None:
             print(f"wrote {args.out}")
     return 0
+
+
+def _check_smc_args(args):
+    if args.converter != "boost":
+        raise ParameterError(f"--control {args.control} is available for the boost only; got {args.converter!r}")
+    if getattr(args, "steady", False) or getattr(args, "periods", None) is not None:
+        raise ParameterError("--steady and --periods do not apply to sliding-mode control (no fixed period); "
+                             "use --t-end")
+
+
+def _simulate_smc(args) -> int:
+    import time as _time
+
+    from converters.params import parse_assignments
+    from converters.sliding import predicted_frequency, resolve_smc, simulate_smc
+    from converters.validate import parse_value
+    _check_smc_args(args)
+    p = resolve_smc(parse_assignments(args.params))
+    t_end = parse_value("t_end", args.t_end) if args.t_end is not None else 30e-3
+    if args.method == "spice":
+        if args.control != "smc":
+            raise ParameterError("--method spice simulates --control smc (the hysteresis comparator); "
+                                 "the implicit relay exists in the LCP stepper only")
+        from netlists import build_smc_netlist
+
+        from .smc import WINDOW_S, _closings, _frequency, _mean
+        from .spice import run_spice
+        start = _time.perf_counter()
+        netlist = build_smc_netlist(p, t_end)
+        result = run_spice(netlist)
+        t = result.time
+        v, iL = result.signal(netlist.probes["vout"]), result.signal(netlist.probes["iL"])
+        on = result.signal(netlist.probes["sw"]) < 0.5 * v
+        t0 = t_end - min(WINDOW_S, 0.25 * t_end)
+        summary = {"converter": "boost", "control": "smc", "method": "spice",
+                   "options": {**result.options, "params": p, "ngspice": result.ngspice_version},
+                   "steps": result.accepted_steps, "wall_s": _time.perf_counter() - start,
+                   "vout_mean": _mean(t, v, t0), "vref": p["Vref"], "switching_frequency_Hz": _frequency(_closings(t, on), t0)}
+        summary["predicted_frequency_Hz"] = predicted_frequency(p, summary["vout_mean"])
+        import pandas as pd
+        frame = pd.DataFrame({"time": t, "iL": iL, "vC": v, "vout": v, "switch": on.astype(int),
+                              "mode": np.where(on, "CCM-ON", "CCM-OFF")})
+    else:
+        run = simulate_smc(p, scheme="hysteresis" if args.control == "smc" else "implicit", h=args.h, t_end=t_end)
+        summary, frame = run.summary(), run.waveforms()
+    if args.out is not None:
+        _write_frame(frame, args.out)
+    if args.json:
+        print(json.dumps(summary, default=float))
+    else:
+        line = (f"boost ({args.control}, {summary['method']}): {summary['steps']} steps in {summary['wall_s']:.3f} s; "
+                f"vout mean = {summary['vout_mean']:.6g} V (Vref {p['Vref']:g} V)")
+        if "switching_frequency_Hz" in summary:
+            line += (f"; switching {summary['switching_frequency_Hz'] / 1e3:.4g} kHz (predicted "
+                     f"{summary['predicted_frequency_Hz'] / 1e3:.4g} kHz)")
+        if "lambda_mean" in summary:
+            line += f"; lambda = 1 - s = {summary['lambda_mean']:.8f} (Vin/v = {summary['vin_over_v']:.8f})"
+        print(line)
+    return 0
+
+
+def _compare_smc(args) -> int:
+    from converters.params import parse_assignments
+    from converters.validate import parse_value
+
+    from .io import atomic_write_bytes
+    from .smc import compare_smc, smc_plot
+    _check_smc_args(args)
+    t_end = parse_value("t_end", args.t_end) if args.t_end is not None else 30e-3
+    c = compare_smc(parse_assignments(args.params), t_end=t_end, h=args.h)
+    if args.plot is not None:
+        atomic_write_bytes(args.plot, smc_plot(c))
+    m = c.metrics
+    checks = {"vout_ref_rel_lcp": m["vout_ref_rel_lcp"] <= 5e-3, "vout_ref_rel_spice": m["vout_ref_rel_spice"] <= 5e-3,
+              "frequency_rel_lcp": m["frequency_rel_lcp"] <= 0.05, "frequency_rel_spice": m["frequency_rel_spice"] <= 0.05,
+              "frequency_lcp_vs_spice": m["frequency_lcp_vs_spice"] <= 0.05}
+    if "recovery_lcp_vs_spice" in m:
+        checks["recovery_lcp_vs_spice"] = m["recovery_lcp_vs_spice"] <= 0.1
+    passed = all(checks.values())
+    if args.json:
+        print(json.dumps({"converter": "boost", "control": "smc", "params": c.params, "metrics": m,
+                          "checks": checks, "passed": passed}, default=float))
+    else:
+        print(f"boost (sliding mode): LCP against {c.spice.ngspice_version}")
+        for key, value in m.items():
+            print(f"  {key:<32} {value:.6g}" if isinstance(value, float) else f"  {key:<32} {value}")
+        for key, ok in checks.items():
+            print(f"  check {key:<26} {'pass' if ok else 'FAIL'}")
+        print("PASS" if passed else "FAIL")
+    return 0 if passed else 1
 
 
 def _write_frame(frame, path: Path):
@@ -245,6 +353,8 @@ def _compare(args) -> int:
     from .plots import comparison_plot
     if args.plot is not None and args.plot.suffix.lower() != ".png":
         raise ParameterError(f"--plot must end in .png; got {str(args.plot)!r}")
+    if args.control == "smc":
+        return _compare_smc(args)
     result = compare(args.converter, parse_assignments(args.params), h=args.h, start=args.start)
     if args.plot is not None:
         atomic_write_bytes(args.plot, comparison_plot(result))

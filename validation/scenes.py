@@ -7,11 +7,15 @@ the converter (range errors name the parameter); thresholds must be positive num
     converter = "buck"
     description = "..."
     suites = ["default"]
+    control = "smc"                         # optional: boost under sliding-mode control ("smc",
+                                            # "smc-implicit"); params are then those of converters.sliding
     [params]            # converter parameters, SPICE suffixes allowed
-    [run]               # start = "steady" | "rest", periods, window
+    [run]               # start = "steady" | "rest", periods, window; control scenes: t_end
     [methods.lcp]       # h, theta
     [methods.spice]     # tmax_fraction, reltol, method, diode_n, diode_is, switch_ron, switch_roff
-    [checks]            # vout_mean_rel, mode_agreement, turn_off_error_T, closed_form_rel
+    [checks]            # vout_mean_rel, mode_agreement, turn_off_error_T, closed_form_rel;
+                        # control scenes: vout_ref_rel, frequency_rel, frequency_agreement,
+                        # recovery_agreement, lambda_settle
 """
 from __future__ import annotations
 
@@ -25,11 +29,16 @@ from converters.validate import parse_value
 from netlists import SpiceOptions
 
 SCENE_DIR = Path(__file__).with_name("scenes")
-TOP_KEYS = ("name", "converter", "description", "suites", "params", "run", "methods", "checks")
-RUN_KEYS = ("start", "periods", "window")
+TOP_KEYS = ("name", "converter", "description", "suites", "control", "params", "run", "methods", "checks")
+RUN_KEYS = ("start", "periods", "window", "t_end")
+CONTROLS = ("pwm", "smc", "smc-implicit")
 METHOD_KEYS = {"lcp": ("h", "theta"), "spice": tuple(SpiceOptions.__dataclass_fields__)}
-CHECK_KEYS = ("vout_mean_rel", "mode_agreement", "turn_off_error_T", "closed_form_rel")
+CHECK_KEYS = ("vout_mean_rel", "mode_agreement", "turn_off_error_T", "closed_form_rel", "vout_ref_rel",
+              "frequency_rel", "frequency_agreement", "recovery_agreement", "lambda_settle")
 DEFAULT_CHECKS = {"vout_mean_rel": 1e-2, "mode_agreement": 1.0, "turn_off_error_T": 2e-2}
+DEFAULT_CONTROL_CHECKS = {"smc": {"vout_ref_rel": 5e-3, "frequency_rel": 5e-2, "frequency_agreement": 5e-2,
+                                  "recovery_agreement": 0.1},
+                          "smc-implicit": {"vout_ref_rel": 5e-3, "lambda_settle": 1e-6}}
 
 
 @dataclass(frozen=True)
@@ -44,6 +53,7 @@ class Scene:
     spice: dict = field(default_factory=dict)
     checks: dict = field(default_factory=lambda: dict(DEFAULT_CHECKS))
     path: str = ""
+    control: str = "pwm"
 
 
 def _strict(table: dict, valid, where: str):
@@ -65,16 +75,25 @@ def load_scene(path) -> Scene:
     if "converter" not in data:
         raise ParameterError(f"{where}: 'converter' is required; valid: buck, boost, buck-boost, cuk, prc")
     converter = get_converter(data["converter"])
+    control = data.get("control", "pwm")
+    if control not in CONTROLS:
+        raise ParameterError(f"{where}: control must be one of {', '.join(CONTROLS)}; got {control!r}")
+    if control != "pwm" and converter.name != "boost":
+        raise ParameterError(f"{where}: control {control!r} is available for the boost only; got {converter.name!r}")
     params = data.get("params", {})
-    _strict(params, tuple(p.name for p in converter.parameters), f"{where} [params]")
+    from converters import sliding
+    names = tuple(p.name for p in (converter.parameters if control == "pwm" else sliding.PARAMETERS))
+    _strict(params, names, f"{where} [params]")
     try:
-        converter.resolve(params)  # range errors name the parameter
+        converter.resolve(params) if control == "pwm" else sliding.resolve_smc(params)  # errors name the parameter
     except ParameterError as exc:
         raise ParameterError(f"{where} [params]: {exc}") from None
     run = data.get("run", {})
     _strict(run, RUN_KEYS, f"{where} [run]")
     if run.get("start", "steady") not in ("steady", "rest"):
         raise ParameterError(f"{where} [run] start must be 'steady' or 'rest'; got {run['start']!r}")
+    if "t_end" in run and parse_value(f"{where} [run] t_end", run["t_end"]) <= 0:
+        raise ParameterError(f"{where} [run] t_end must be positive; got {run['t_end']!r}")
     for key in ("periods", "window"):
         if key in run and not (isinstance(run[key], int) and run[key] >= 1):
             raise ParameterError(f"{where} [run] {key} must be an integer >= 1; got {run[key]!r}")
@@ -93,7 +112,8 @@ def load_scene(path) -> Scene:
         raise ParameterError(f"{where}: suites must be a list of names; got {suites!r}")
     return Scene(name=data.get("name", path.stem), converter=converter.name, description=data.get("description", ""),
                  suites=tuple(suites), params=dict(params), run=dict(run), lcp=dict(methods.get("lcp", {})),
-                 spice=dict(methods.get("spice", {})), checks={**DEFAULT_CHECKS, **checks}, path=str(path))
+                 spice=dict(methods.get("spice", {})), path=str(path), control=control,
+                 checks={**(DEFAULT_CHECKS if control == "pwm" else DEFAULT_CONTROL_CHECKS[control]), **checks})
 
 
 def scenes_of(suite: str, directory=SCENE_DIR) -> list[Scene]:

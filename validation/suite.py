@@ -54,6 +54,10 @@ def run_scene(scene: Scene) -> SceneResult:
 
 
 def _run_scene(scene: Scene) -> SceneResult:
+    if scene.control == "smc":
+        return _run_smc_scene(scene)
+    if scene.control == "smc-implicit":
+        return _run_smc_implicit_scene(scene)
     conv = get_converter(scene.converter)
     c = compare(scene.converter, scene.params, periods=scene.run.get("periods"), window=scene.run.get("window"),
                 h=scene.lcp.get("h"), theta=scene.lcp.get("theta"), spice_options=SpiceOptions(**scene.spice),
@@ -95,6 +99,46 @@ def _run_scene(scene: Scene) -> SceneResult:
                        checks=checks, metrics=m, gdcm=gdcm, files=files)
 
 
+def _check(name, value, threshold, scene):
+    return (name, value, threshold, bool(value <= threshold))
+
+
+def _run_smc_scene(scene: Scene) -> SceneResult:
+    from .smc import compare_smc, smc_plot
+    t_end = scene.run.get("t_end", 30e-3)
+    c = compare_smc(scene.params, t_end=t_end, h=scene.lcp.get("h"), spice_options=SpiceOptions(**scene.spice) if scene.spice else None)
+    m, th = c.metrics, scene.checks
+    checks = [_check("vout_ref_rel (LCP)", m["vout_ref_rel_lcp"], th["vout_ref_rel"], scene),
+              _check("vout_ref_rel (ngspice)", m["vout_ref_rel_spice"], th["vout_ref_rel"], scene),
+              _check("frequency_rel (LCP)", m["frequency_rel_lcp"], th["frequency_rel"], scene),
+              _check("frequency_rel (ngspice)", m["frequency_rel_spice"], th["frequency_rel"], scene),
+              _check("frequency_agreement", m["frequency_lcp_vs_spice"], th["frequency_agreement"], scene)]
+    if "recovery_lcp_s" in m:
+        checks += [("recovered within 1 % (LCP)", m["recovery_lcp_s"], t_end - c.params["t_step"],
+                    bool(np.isfinite(m["recovery_lcp_s"]))),
+                   ("recovered within 1 % (ngspice)", m["recovery_spice_s"], t_end - c.params["t_step"],
+                    bool(np.isfinite(m["recovery_spice_s"]))),
+                   _check("recovery_agreement", m["recovery_lcp_vs_spice"], th["recovery_agreement"], scene)]
+    frame = c.lcp.waveforms()
+    files = {f"scenes/{scene.name}/lcp.parquet": _parquet(frame.iloc[::max(1, len(frame) // 200_000)]),
+             f"scenes/{scene.name}/overlay.png": smc_plot(c)}
+    failed = [name for name, _, _, ok in checks if not ok]
+    return SceneResult(scene, ok=not failed, reason=("failed checks: " + ", ".join(failed)) if failed else "",
+                       checks=checks, metrics=m, files=files)
+
+
+def _run_smc_implicit_scene(scene: Scene) -> SceneResult:
+    from .smc import implicit_metrics
+    m, run = implicit_metrics(scene.params, t_end=scene.run.get("t_end", 30e-3), h=scene.lcp.get("h"))
+    th = scene.checks
+    checks = [_check("vout_ref_rel", m["vout_ref_rel"], th["vout_ref_rel"], scene),
+              _check("|lambda - Vin/v|", m["lambda_minus_vin_over_v"], th["lambda_settle"], scene),
+              _check("lambda spread (no chatter)", m["lambda_spread"], th["lambda_settle"], scene)]
+    failed = [name for name, _, _, ok in checks if not ok]
+    return SceneResult(scene, ok=not failed, reason=("failed checks: " + ", ".join(failed)) if failed else "",
+                       checks=checks, metrics=m, files={f"scenes/{scene.name}/lcp.parquet": _parquet(run.waveforms())})
+
+
 def _parquet(frame: pd.DataFrame) -> bytes:
     frame = frame.copy()
     frame["mode"] = frame["mode"].astype(str)
@@ -122,11 +166,13 @@ def scene_section(result: SceneResult) -> Section:
                    f"{'agree' if g['agree'] else 'DISAGREE'}.</p>")
     metrics = pd.DataFrame([(k, v) for k, v in result.metrics.items()], columns=["metric", "value"])
     base = f"scenes/{s.name}/"
-    body = (head + verdict + table_html(checks.drop(columns="pass"), "result", good=("pass",))
-            + f"<img src='{base}overlay.png' alt='overlay {s.name}'><img src='{base}modes.png' alt='modes {s.name}'>"
+    images = "".join(f"<img src='{base}{name}' alt='{name[:-4]} {s.name}'>" for name in ("overlay.png", "modes.png")
+                     if f"{base}{name}" in result.files)
+    links = ", ".join(f"<a href='{base}{name}'>{label} (Parquet)</a>" for name, label in
+                      (("lcp.parquet", "LCP"), ("spice.parquet", "ngspice")) if f"{base}{name}" in result.files)
+    body = (head + verdict + table_html(checks.drop(columns="pass"), "result", good=("pass",)) + images
             + "<details><summary>All metrics</summary>" + table_html(metrics) + "</details>"
-            + f"<p>Waveforms: <a href='{base}lcp.parquet'>LCP (Parquet)</a>, "
-              f"<a href='{base}spice.parquet'>ngspice (Parquet)</a>.</p>")
+            + f"<p>Waveforms: {links}.</p>")
     if not result.ok:
         body = f"<div class='failed-section'><b>Failed:</b> {html.escape(result.reason)}</div>" + body
     return Section(title, body, files=result.files, ok=result.ok,
