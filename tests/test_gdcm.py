@@ -93,9 +93,13 @@ def test_ngspice_modes_agree_with_the_lcp_on_a_map(name):
     # A disagreement is only possible where the held interval is a fraction of a percent of T.
     off = frame[frame["spice"] != frame["lcp"]]
     assert (off[["lcp_held", "spice_held"]].fillna(0).max(axis=1) < 0.01).all()
-    # Away from the boundary both simulators find the predicted mode (Cuk: GDCM wherever predicted).
-    far = frame[frame["distance"].abs() > BOUNDARY_BAND]
-    assert (far["spice"] == far["predicted"]).all() and (far["lcp"] == far["predicted"]).all()
+    # Away from the boundary both simulators find the predicted mode (Cuk: GDCM wherever predicted),
+    # where the held interval is at least 0.5 % of T (at D = 0.95 it is below 1 - D = 5 % of T and
+    # shrinks to ~0.1 % within 3 % of the boundary, under ngspice's turn-off resolution).
+    far = frame[(frame["distance"].abs() > BOUNDARY_BAND)]
+    assert (far["lcp"] == far["predicted"]).all()
+    resolvable = far[(far["lcp"] == "CCM") | (far["lcp_held"] >= 5e-3)]
+    assert (resolvable["spice"] == resolvable["predicted"]).all()
 
 
 @pytest.mark.usefixtures("ngspice")

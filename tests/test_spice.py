@@ -90,3 +90,21 @@ def test_spice_waveforms_have_the_lcp_columns(tmp_path, capsys):
     frame = pd.read_csv(target)
     assert list(frame.columns) == ["time", "i1", "v1", "i2", "v2", "vout", "switch", "mode"]
     assert np.isfinite(frame.drop(columns="mode").to_numpy()).all()
+
+
+def _child_closes_the_inherited_worker(_):
+    from validation.spice import close_spice_worker
+    close_spice_worker()
+    return True
+
+
+def test_a_forked_child_closing_its_copy_does_not_kill_the_parents_worker():
+    """Report workers are forked and close the ngspice worker they inherit; that must not reach the
+    parent's worker (it did: the parent's next run failed with 'worker crashed')."""
+    import concurrent.futures as futures
+    import multiprocessing
+    netlist = build_netlist("buck", {}, 20e-6)
+    run_spice(netlist)
+    with futures.ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("fork")) as pool:
+        assert list(pool.map(_child_closes_the_inherited_worker, [0])) == [True]
+    assert run_spice(netlist).time[-1] >= 20e-6 * 0.999

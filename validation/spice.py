@@ -9,6 +9,7 @@ from __future__ import annotations
 import atexit
 import concurrent.futures as futures
 import multiprocessing
+import os
 import re
 import time
 from dataclasses import dataclass, field
@@ -85,8 +86,17 @@ class SpiceRunner:
     def __init__(self):
         self._pool = None
         self._runs = 0
+        self._owner = os.getpid()
+
+    def _forget_inherited(self):
+        """In a forked child the parent's pool object is a copy whose worker belongs to the parent:
+        shutting it down here would send the parent's worker its exit sentinel. Forget it instead."""
+        if self._owner != os.getpid():
+            self._pool = None
+            self._owner = os.getpid()
 
     def _executor(self):
+        self._forget_inherited()
         if self._pool is None:
             # fork: the worker needs nothing re-imported (works from scripts, stdin and notebooks alike);
             # it never touches the parent's state, and only the worker ever loads libngspice.
@@ -123,6 +133,7 @@ class SpiceRunner:
 
     def _kill(self):
         """Terminate a hung worker (close() would wait for it)."""
+        self._forget_inherited()
         if self._pool is not None:
             for process in list(getattr(self._pool, "_processes", {}).values()):
                 process.terminate()
@@ -130,6 +141,7 @@ class SpiceRunner:
             self._pool = None
 
     def close(self):
+        self._forget_inherited()
         if self._pool is not None:
             self._pool.shutdown(wait=True, cancel_futures=True)
             self._pool = None
