@@ -31,17 +31,25 @@ def shoot(problem: LCSProblem, method: Theta, x_guess, tol: float = 1e-9, max_it
     """Newton's method on P(x) - x = 0, P being one period of ``problem`` (its t_span is one period).
 
     ``plan``: a prebuilt :class:`StepPlan` of that problem and method (saves rebuilding it)."""
+    plan = plan or StepPlan.build(problem, method)  # grid and matrices once; each evaluation is one compiled loop
+    return newton_fixed_point(lambda x0: plan.advance(x0)[0][-1], x_guess, tol=tol, max_iter=max_iter)
+
+
+def newton_fixed_point(period_map, x_guess, tol: float = 1e-9, max_iter: int = 30) -> ShootingResult:
+    """Newton's method with a finite-difference Jacobian on P(x) - x = 0 for any one-period map P.
+
+    The residual is max |P(x) - x| / (1 + max |x|). Steps are halved (up to 12 times) when the
+    affine model overshoots because the sequence of modes changed."""
     x = np.array(x_guess, dtype=float)
     n = x.size
     evaluations = 0
-    plan = plan or StepPlan.build(problem, method)  # grid and matrices once; each evaluation is one compiled loop
 
-    def period_map(x0):
+    def evaluate(x0):
         nonlocal evaluations
         evaluations += 1
-        return plan.advance(x0)[0][-1]
+        return period_map(x0)
 
-    px = period_map(x)
+    px = evaluate(x)
     residual = np.inf
     for iteration in range(1, max_iter + 1):
         r = px - x
@@ -54,15 +62,14 @@ def shoot(problem: LCSProblem, method: Theta, x_guess, tol: float = 1e-9, max_it
             dx = 1e-7 * (1.0 + abs(x[j]))
             probe = x.copy()
             probe[j] += dx
-            jac[:, j] = (period_map(probe) - px) / dx
+            jac[:, j] = (evaluate(probe) - px) / dx
         try:
             step = np.linalg.solve(jac - np.eye(n), -r)
         except np.linalg.LinAlgError:
             break
-        # Backtrack when the mode sequence changes and the affine model overshoots.
         for _ in range(12):
             trial = x + step
-            p_trial = period_map(trial)
+            p_trial = evaluate(trial)
             if np.all(np.isfinite(p_trial)) and np.abs(p_trial - trial).max() < np.abs(r).max():
                 break
             step *= 0.5

@@ -15,8 +15,8 @@ import pandas as pd
 
 from .errors import ParameterError, SimulationError
 from .library import Converter, check_h, get_converter
-from .methods import Theta
-from .periodic import one_period, shoot
+from .methods import EventDriven, Smoothing, Theta
+from .periodic import newton_fixed_point, one_period, shoot
 from .stepping import simulate
 from .trajectory import Trajectory
 from .validate import parse_value
@@ -63,6 +63,29 @@ class ConverterRun:
         t = self.trajectory.t
         return t >= t[-1] - periods * self.period * (1.0 + 1e-12)
 
+    @property
+    def method_name(self) -> str:
+        return {EventDriven: "event", Smoothing: "smooth"}.get(type(self.method), "lcp")
+
+    def method_options(self) -> dict:
+        if isinstance(self.method, Theta):
+            return {"h": self.method.h, "theta": self.method.theta}
+        return dict(self.method.__dict__)
+
+    def vout_mean(self, periods: int = 10) -> float:
+        """Mean output voltage over the last ``periods`` periods: exact (Gauss-Legendre on the exact
+        solution) for the event-driven method, trapezoidal for smoothing, the stepper's own rule for LCP."""
+        solution = self.extra.get("event_solution")
+        t = self.trajectory.t
+        t0 = max(t[0], t[-1] - periods * self.period)
+        if solution is not None:
+            tq, w, x, u, config = solution.quadrature(t0, t[-1])
+            return float(w @ self.converter.vout(x, u, config, self.params) / (t[-1] - t0))
+        if isinstance(self.method, Smoothing):
+            mask = self.window(periods)
+            return float(np.trapezoid(self.vout()[mask], t[mask]) / (t[mask][-1] - t[mask][0]))
+        return self.mean(self.vout(), periods)
+
     def mean(self, signal: np.ndarray, periods: int = 10) -> float:
         """Time average over the last ``periods`` periods.
 
@@ -83,10 +106,10 @@ class ConverterRun:
         return {str(label): float(dt[labels == label].sum() / total) for label in sorted(set(labels))}
 
     def summary(self) -> dict:
-        out = {"converter": self.converter.name, "method": "lcp",
-               "options": {"h": self.method.h, "theta": self.method.theta, "params": self.params},
+        out = {"converter": self.converter.name, "method": self.method_name,
+               "options": {**self.method_options(), "params": self.params},
                "steps": int(self.trajectory.steps), "wall_s": self.wall_s,
-               "vout_mean": self.mean(self.vout(), 10), "mode_fractions": self.mode_fractions(1),
+               "vout_mean": self.vout_mean(10), "mode_fractions": self.mode_fractions(1),
                "periods": self.periods_simulated}
         if self.steady_periods is not None:
             out["steady_periods"] = self.steady_periods
@@ -94,8 +117,9 @@ class ConverterRun:
 
 
 def run_converter(name_or_converter, params: dict | None = None, *, h=None, theta=None, t_end=None,
-                  periods=None, steady=False, steady_tol=1e-6, max_periods=200_000, x0=None) -> ConverterRun:
-    """Simulate a converter with the LCP time-stepper.
+                  periods=None, steady=False, steady_tol=1e-6, max_periods=200_000, x0=None,
+                  method: str = "lcp", eps=None, rtol=None) -> ConverterRun:
+    """Simulate a converter with the LCP time-stepper (or the event-driven or smoothing method).
 
     Parameters
     ----------
@@ -119,7 +143,19 @@ def run_converter(name_or_converter, params: dict | None = None, *, h=None, thet
     p = converter.resolve(params)
     T = converter.period(p)
     h = check_h(converter.default_h(p) if h is None else parse_value("h", h), T)
-    method = Theta(h, converter.default_theta if theta is None else theta)
+    if method not in ("lcp", "event", "smooth"):
+        raise ParameterError(f"method must be one of lcp, event, smooth; got {method!r}")
+    if method != "smooth" and (eps is not None or rtol is not None):
+        raise ParameterError("eps and rtol apply to method='smooth' only")
+    if method != "lcp" and theta is not None:
+        raise ParameterError("theta applies to method='lcp' only")
+    kind = method
+    if kind == "event":
+        method = EventDriven(output_step=h)
+    elif kind == "smooth":
+        method = Smoothing(eps=1e-4 if eps is None else eps, rtol=1e-6 if rtol is None else rtol, output_step=h)
+    else:
+        method = Theta(h, converter.default_theta if theta is None else theta)
     if t_end is not None and periods is not None:
         raise ParameterError("give either t_end or periods, not both")
     if t_end is not None:
@@ -134,10 +170,47 @@ def run_converter(name_or_converter, params: dict | None = None, *, h=None, thet
     else:
         n_periods = max_periods if steady else DEFAULT_PERIODS
     start = time.perf_counter()
+    if kind != "lcp":
+        return _run_exact_or_smooth(converter, p, method, x0, n_periods, steady, steady_tol, start)
     if steady:
         return _run_to_steady_state(converter, p, method, x0, steady_tol, int(np.ceil(n_periods)), start)
     tr = simulate(converter.problem(p, n_periods * T, x0), method)
     return ConverterRun(converter, p, method, tr, time.perf_counter() - start, int(round(n_periods)))
+
+
+def _run_exact_or_smooth(converter, p, method, x0, n_periods, steady, tol, start) -> ConverterRun:
+    """Event-driven or smoothing run; ``steady``: Newton shooting on the method's own period map (from
+    the LCP stepper's periodic orbit), then the last STEADY_CHUNK_PERIODS periods from the fixed point."""
+    from .conduction import periodic_orbit
+    from .event import _Machine, simulate_event
+    from .smoothing import simulate_smooth
+    T = converter.period(p)
+    extra = {}
+    if steady:
+        guess = periodic_orbit(converter, p).x[0]
+        one = converter.problem(p, T)
+        if isinstance(method, EventDriven):
+            machine = _Machine(one, method)
+            period_map = lambda x: machine.run(x, record=False).x_end  # noqa: E731
+        else:
+            period_map = lambda x: simulate_smooth(one, method, x0=x).x[-1]  # noqa: E731
+        shot = newton_fixed_point(period_map, guess, tol=min(1e-12, 0.1 * tol))
+        if not shot.converged:
+            raise SimulationError(f"Newton shooting found no periodic orbit (residual {shot.residual:.3g} after "
+                                  f"{shot.iterations} iterations); try --periods without --steady")
+        x0, n_periods = shot.x, STEADY_CHUNK_PERIODS
+        extra = {"shooting_iterations": shot.iterations, "shooting_residual": shot.residual}
+    problem = converter.problem(p, n_periods * T, x0)
+    if isinstance(method, EventDriven):
+        solution = simulate_event(problem, method)
+        tr = solution.trajectory(method.output_step)
+        extra["event_solution"] = solution
+    else:
+        tr = simulate_smooth(problem, method)
+        extra["solver_stats"] = tr.metadata["stats"]
+    periods = int(round(n_periods))
+    return ConverterRun(converter, p, method, tr, time.perf_counter() - start, periods,
+                        periods if steady else None, extra=extra)
 
 
 def _run_to_steady_state(converter, p, method, x0, tol, budget, start) -> ConverterRun:

@@ -19,7 +19,7 @@ from .errors import ParameterError, SimulationError
 from .kernels import MAX_INLINE_K, NEEDS_GENERAL_SOLVER, NO_SOLUTION, OK, run_steps
 from .lcp import solve_lcp
 from .lcs import LCSProblem
-from .methods import Theta
+from .methods import EventDriven, Smoothing, Theta
 from .trajectory import Trajectory
 
 MAX_STEPS = 200_000_000
@@ -138,8 +138,10 @@ def simulate(problem: LCSProblem, method: Theta, *, x0=None) -> Trajectory:
     Parameters
     ----------
     problem : LCSProblem
-    method : Theta
-        ``Theta(h, theta)`` or ``BackwardEuler(h)``.
+    method : Theta, EventDriven or Smoothing
+        ``Theta(h, theta)`` or ``BackwardEuler(h)``: the LCP time-stepper (here);
+        ``EventDriven(...)``: the exact event-driven method (:mod:`converters.event`);
+        ``Smoothing(eps, rtol)``: the smoothed diode and a stiff solver (:mod:`converters.smoothing`).
     x0 : array_like, shape (n,), optional
         Overrides ``problem.x0`` (cheap restarts for shooting and steady-state searches).
 
@@ -147,6 +149,15 @@ def simulate(problem: LCSProblem, method: Theta, *, x0=None) -> Trajectory:
     -------
     Trajectory
     """
+    if isinstance(method, EventDriven):
+        from .event import simulate_event
+        solution = simulate_event(problem, method, x0=x0)
+        period = problem.schedule.period
+        scale = period if np.isfinite(period) else problem.t_span[1] - problem.t_span[0]
+        return solution.trajectory(method.output_step or scale / 1000.0)
+    if isinstance(method, Smoothing):
+        from .smoothing import simulate_smooth
+        return simulate_smooth(problem, method, x0=x0)
     start_clock = time.perf_counter()
     plan = StepPlan.build(problem, method)
     return plan.trajectory(problem.x0 if x0 is None else x0, wall_s=time.perf_counter() - start_clock)

@@ -49,9 +49,13 @@ def _parser() -> argparse.ArgumentParser:
     sim.add_argument("converter")
     sim.add_argument("-p", dest="params", action="append", default=[], metavar="NAME=VALUE",
                      help="parameter value, SPICE suffixes allowed (repeatable)")
-    sim.add_argument("--method", default="lcp", choices=["lcp", "spice"],
-                     help="lcp: the LCP time-stepper; spice: the same circuit in ngspice")
-    sim.add_argument("--h", default=None, help="step in s (default T/1000; PRC 50 ns)")
+    sim.add_argument("--method", default="lcp", choices=["lcp", "event", "smooth", "spice"],
+                     help="lcp: the LCP time-stepper; event: exact event-driven (one diode); smooth: "
+                          "softplus-smoothed diode with a stiff solver; spice: the same circuit in ngspice")
+    sim.add_argument("--h", default=None, help="step in s (default T/1000; PRC 50 ns); event and smooth: "
+                                              "output sample spacing")
+    sim.add_argument("--eps", default=None, help="smooth: smoothing width eps (default 1e-4, units of y)")
+    sim.add_argument("--rtol", default=None, help="smooth: solver relative tolerance (default 1e-6)")
     sim.add_argument("--theta", default=None, help="theta in [0.5, 1] (default 1, PRC 0.5)")
     span = sim.add_mutually_exclusive_group()
     span.add_argument("--t-end", default=None, help="duration in s")
@@ -147,6 +151,8 @@ def _list(args) -> int:
         {"name": p.name, "default": p.default, "unit": p.unit, "doc": p.doc, "range": p.range_text(),
          "optional": p.default is None} for p in c.parameters]} for name, c in CONVERTERS.items()},
         "methods": {"lcp": "LCP time-stepper: theta method (--theta, default 1 = backward Euler), one LCP per step",
+                    "event": "exact event-driven: matrix exponentials per mode, events by root finding (one diode)",
+                    "smooth": "diode smoothed by u = log(1 + exp(-y/eps)) (--eps), scipy Radau (--rtol)",
                     "spice": "the same circuit in ngspice (PySpice)"},
         "controls": {"smc": {"converter": "boost", "parameters": [
             {"name": p.name, "default": p.default, "unit": p.unit, "doc": p.doc, "range": p.range_text(),
@@ -183,16 +189,19 @@ def _simulate(args) -> int:
     if args.method == "spice":
         return _simulate_spice(args)
     run = run_converter(args.converter, parse_assignments(args.params), h=args.h, theta=args.theta,
-                        t_end=args.t_end, periods=args.periods, steady=args.steady, steady_tol=args.steady_tol)
+                        t_end=args.t_end, periods=args.periods, steady=args.steady, steady_tol=args.steady_tol,
+                        method=args.method, eps=args.eps, rtol=args.rtol)
     if args.out is not None:
         _write_frame(run.waveforms(), args.out)
     summary = run.summary()
     if args.json:
         print(json.dumps(summary, default=float))
     else:
-        print(f"{summary['converter']}: {summary['steps']} steps (h = {run.method.h:.3g} s, theta = "
-              f"{run.method.theta:g}) in {summary['wall_s']:.3f} s; vout mean (last 10 periods) = "
-              f"{summary['vout_mean']:.6g} V")
+        options = ", ".join(f"{k} = {v:.3g}" if isinstance(v, float) else f"{k} = {v}"
+                            for k, v in run.method_options().items() if v is not None and k != "max_events")
+        unit = {"lcp": "steps", "event": "segments", "smooth": "solver steps"}[run.method_name]
+        print(f"{summary['converter']} ({run.method_name}): {summary['steps']} {unit} ({options}) in "
+              f"{summary['wall_s']:.3f} s; vout mean (last 10 periods) = {summary['vout_mean']:.9g} V")
         if run.steady_periods is not None:
             print(f"periodic steady state after {run.steady_periods} periods")
         print("modes (last period): " + ", ".join(f"{k} {v:.3f}" for k, v in summary["mode_fractions"].items()))
