@@ -38,6 +38,9 @@ from .methods import EventDriven
 from .trajectory import Trajectory
 
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(8)
+_TAYLOR_TERMS = 26     # (0.25)^26 / 26! < 1e-30: the series is exact to rounding on a sampling step
+_EXPONENTS = np.arange(_TAYLOR_TERMS)
+_POWERS = 64           # sampling steps per batched product
 _ZERO_RTOL = 1e-10      # a derivative counts as zero below this fraction of its own scale
 _CROSS_RTOL = 1e-13     # a watched value counts as negative below -this fraction of its scale
 
@@ -59,20 +62,36 @@ class Flow:
     watch_row: np.ndarray
     delta: float
     step: np.ndarray
+    taylor: np.ndarray      # Z^j / j!, j = 0.._TAYLOR_TERMS - 1: x~(s) = sum_j s^j (Z^j / j!) x~ for s <= delta
+    powers: np.ndarray      # step^j, j = 0.._POWERS: the samples of a segment in one batched product
+    node_weights: np.ndarray  # s_k^j at the Gauss-Legendre nodes s_k of [0, delta], shape (8, terms)
+    watch_derivatives: np.ndarray  # rows watch Z^j, j = 0..n+1: the watched quantity's derivatives
+    derivative_scales: np.ndarray  # rows |watch| |Z|^j 1
+
+    def taylor_vectors(self, xt: np.ndarray) -> np.ndarray:
+        """V with x~(s) = (s^0, s^1, ...) @ V for 0 <= s <= delta (the series converges: delta ||Z|| <= 0.25)."""
+        return self.taylor @ xt
+
+    def propagate(self, xt: np.ndarray, s: float) -> np.ndarray:
+        """x~ after s in [0, delta]."""
+        return s ** _EXPONENTS @ (self.taylor @ xt)
+
+    def advance(self, xt: np.ndarray, tau: float) -> np.ndarray:
+        """x~ after any tau >= 0: whole sampling steps by powers of expm(delta Z), the rest by the series."""
+        q = int(np.floor(tau / self.delta * (1.0 - 1e-12)))
+        while q > 0:
+            m = min(q, _POWERS)
+            xt = self.powers[m] @ xt
+            q -= m
+        rest = tau - np.floor(tau / self.delta * (1.0 - 1e-12)) * self.delta
+        return self.propagate(xt, max(rest, 0.0))
 
     def derivatives(self, xt: np.ndarray, order: int) -> tuple[np.ndarray, np.ndarray]:
         """(values, scales) of the watched quantity and its first ``order`` time derivatives at x~.
 
         The scale of each derivative uses max |x~| for every entry: a variable near zero (the
         inductor current at a DCM event) must not be its own yardstick."""
-        values, scales = np.empty(order + 1), np.empty(order + 1)
-        v, s = xt.copy(), np.full(xt.size, np.abs(xt).max())
-        absZ = np.abs(self.Z)
-        for j in range(order + 1):
-            values[j] = self.watch_row @ v
-            scales[j] = np.abs(self.watch_row) @ s
-            v, s = self.Z @ v, absZ @ s
-        return values, scales
+        return self.watch_derivatives[:order + 1] @ xt, self.derivative_scales[:order + 1] * np.abs(xt).max()
 
     def lexicographic_sign(self, xt: np.ndarray) -> int:
         """Sign of the first non-zero entry of (g, g', g'', ...) along this flow; 0 if all vanish."""
@@ -105,11 +124,24 @@ def _flow(config: Configuration, index: int, held: bool, period_scale: float, sa
         watch, y_out = u_row, y_row
     Z = np.zeros((n + 1, n + 1))
     Z[:n, :n], Z[:n, n] = Ab, eb
-    norm = float(np.abs(Ab).sum(axis=1).max()) if n else 0.0
+    norm = float(np.abs(Z).sum(axis=1).max())
     delta = sample_fraction * period_scale
     if norm > 0.0:
         delta = min(delta, 0.25 / norm)
-    return Flow(index, held, Z, u_row, y_out, watch, delta, expm(delta * Z))
+    taylor = np.empty((_TAYLOR_TERMS, n + 1, n + 1))
+    taylor[0] = np.eye(n + 1)
+    for j in range(1, _TAYLOR_TERMS):
+        taylor[j] = taylor[j - 1] @ Z / j
+    step = expm(delta * Z)
+    node_weights = (0.5 * (_GL_X + 1.0) * delta)[:, None] ** _EXPONENTS[None, :]
+    rows, scales = [watch], [np.abs(watch).sum()]
+    absZ, abs_row = np.abs(Z), np.abs(watch)
+    for _ in range(n + 1):
+        rows.append(rows[-1] @ Z)
+        abs_row = abs_row @ absZ
+        scales.append(abs_row.sum())
+    return Flow(index, held, Z, u_row, y_out, watch, delta, step, taylor, _power_stack(step, _POWERS),
+                node_weights, np.array(rows), np.array(scales))
 
 
 @dataclass
@@ -157,20 +189,35 @@ class EventSolution:
             flow, length = seg.flow, b - a
             if length <= 0.0:
                 continue
-            pieces = max(1, math.ceil(length / flow.delta * (1 - 1e-12)))
-            width = length / pieces
-            offsets = 0.5 * (_GL_X + 1.0) * width
-            node_maps = np.stack([expm(o * flow.Z) for o in offsets])          # (8, n+1, n+1)
-            piece_map = expm(width * flow.Z)
-            xt = expm((a - seg.t0) * flow.Z) @ seg.xt0
-            for p in range(pieces):
-                nodes = node_maps @ xt                                          # (8, n+1)
-                ts.append(a + p * width + offsets)
-                ws.append(0.5 * width * _GL_W)
-                xs.append(nodes[:, :-1])
-                us.append(nodes @ flow.u_row)
-                cs.append(np.full(offsets.size, flow.config))
-                xt = piece_map @ xt
+            # Whole pieces of the sampling step delta (their starts in one batched product), then the rest.
+            full = int(np.floor(length / flow.delta * (1.0 - 1e-12)))
+            xt = flow.advance(seg.xt0, a - seg.t0)
+            starts = [xt[None, :]]
+            state = xt
+            left = full
+            while left > 0:
+                m = min(left, _POWERS)
+                block = flow.powers[1:m + 1] @ state
+                starts.append(block)
+                state, left = block[-1], left - m
+            starts = np.vstack(starts)                                       # (full + 1, n+1)
+            widths = np.full(full + 1, flow.delta)
+            widths[-1] = length - full * flow.delta
+            if widths[-1] <= 1e-15 * length:
+                starts, widths = starts[:-1], widths[:-1]
+            V = np.einsum("jab,qb->qja", flow.taylor, starts)                 # (pieces, terms, n+1)
+            offsets = 0.5 * (_GL_X[None, :] + 1.0) * widths[:, None]           # (pieces, 8)
+            nodes = np.empty((widths.size, _GL_X.size, V.shape[2]))
+            nodes[:full] = np.einsum("kj,qja->qka", flow.node_weights, V[:full])   # pieces of width delta
+            if widths.size > full:
+                nodes[full] = (offsets[full][:, None] ** _EXPONENTS[None, :]) @ V[full]
+            nodes = nodes.reshape(-1, V.shape[2])
+            piece_starts = a + np.concatenate([[0.0], np.cumsum(widths)[:-1]])
+            ts.append((piece_starts[:, None] + offsets).ravel())
+            ws.append((0.5 * widths[:, None] * _GL_W[None, :]).ravel())
+            xs.append(nodes[:, :-1])
+            us.append(nodes @ flow.u_row)
+            cs.append(np.full(nodes.shape[0], flow.config))
         if not ts:
             raise ParameterError(f"quadrature interval [{t0:g}, {t1:g}] s lies outside the run")
         return (np.concatenate(ts), np.concatenate(ws), np.vstack(xs), np.concatenate(us)[:, None],
@@ -330,51 +377,59 @@ class _Machine:
                               "(the pair can be neither free nor held); the LCS is not well posed there")
 
     def cross(self, flow: Flow, xt: np.ndarray, tau_max: float):
-        """First downward zero crossing of the watched quantity in (0, tau_max]: (tau or None, x~ at tau)."""
+        """First downward zero crossing of the watched quantity in (0, tau_max]: (tau or None, x~ at tau_max).
+
+        The samples of whole sampling steps come from one batched product with the powers of
+        expm(delta Z); the last, partial step from the series."""
         w = flow.watch_row
         g_scale = np.abs(w).sum() * np.abs(xt).max()
         threshold = -_CROSS_RTOL * g_scale
-        tau, state = 0.0, xt
         full = int(np.floor(tau_max / flow.delta * (1.0 - 1e-12)))
-        for i in range(full + 1):
-            if i < full:
-                width, nxt = flow.delta, flow.step @ state
-            else:
-                width = tau_max - tau
-                if width <= 0.0:
-                    break
-                nxt = expm(width * flow.Z) @ state
-            g = w @ nxt
-            if g < threshold:
-                return self._locate(flow, state, tau, width, g_scale)
-            tau, state = tau + width, nxt
-        return None, state
+        tau, state = 0.0, xt
+        while full > 0:
+            m = min(full, _POWERS)
+            states = flow.powers[1:m + 1] @ state
+            below = np.flatnonzero(states @ w < threshold)
+            if below.size:
+                i = below[0]
+                start = state if i == 0 else states[i - 1]
+                return self._locate(flow, start, tau + i * flow.delta, flow.delta, g_scale), None
+            tau, state, full = tau + m * flow.delta, states[m - 1], full - m
+        rest = tau_max - tau
+        if rest > 0.0:
+            end = flow.propagate(state, rest)
+            if w @ end < threshold:
+                return self._locate(flow, state, tau, rest, g_scale), None
+            state = end
+        return (None, None), state
 
     def _locate(self, flow: Flow, xt_a: np.ndarray, tau_a: float, width: float, g_scale: float):
-        w, Z = flow.watch_row, flow.Z
+        """The crossing inside [tau_a, tau_a + width] (width <= delta): Brent's method on the watched
+        quantity's Taylor polynomial, exact to rounding there. Returns (tau, x~ at tau)."""
+        V = flow.taylor @ xt_a
+        coefficients = (V @ flow.watch_row)[::-1].tolist()    # highest power first
 
         def g(s):
-            return w @ (expm(s * Z) @ xt_a)
+            value = 0.0
+            for c in coefficients:   # Horner on Python floats: cheaper than any numpy call here
+                value = value * s + c
+            return value
 
         # The bracket's left end may sit on a zero of g (the mode just began); move it to a point where g > 0.
-        left, g_left = 0.0, w @ xt_a
+        left, g_left = 0.0, coefficients[-1]
         if g_left <= _CROSS_RTOL * g_scale:
-            probe = width
+            probe, left = width, None
             for _ in range(60):
                 probe *= 0.5
                 value = g(probe)
                 if value > 0.0:
                     left, g_left = probe, value
                     break
-                if value < -_CROSS_RTOL * g_scale:
-                    continue
-            else:
-                left = None
-            if left is None or g_left <= 0.0:  # leaves at once: an event at tau_a
+            if left is None:  # leaves at once: an event at tau_a
                 return tau_a, xt_a
         xtol = max(self.options.event_tol * self.scale, 1e-300)
         s = brentq(g, left, width, xtol=xtol, rtol=4 * np.finfo(float).eps, maxiter=200)
-        return tau_a + s, expm(s * Z) @ xt_a
+        return tau_a + s, s ** _EXPONENTS @ V
 
     def run(self, x0, record: bool = True) -> EventSolution:
         start_clock = time.perf_counter()
@@ -388,10 +443,12 @@ class _Machine:
         same_time_events, events = 0, 0
         for edge_t, edge_config in self.edges(t, t_end):
             while True:
-                tau, xt_end = self.cross(flow, xt, edge_t - t)
+                (tau, xt_event), xt_end = self.cross(flow, xt, edge_t - t)
                 if tau is not None and t + tau >= edge_t - options.event_tol * self.scale:
                     tau = None   # a crossing on the edge itself: the edge handles it
-                    xt_end = expm((edge_t - t) * flow.Z) @ xt
+                    xt_end = flow.advance(xt, edge_t - t)
+                elif tau is not None:
+                    xt_end = xt_event
                 t_next = edge_t if tau is None else t + tau
                 if record and t_next > t:
                     segments.append(Segment(t, t_next, flow, xt))
