@@ -254,7 +254,7 @@ class EventSolution:
         return Trajectory(t=t, x=x, u=u, y=y, config=config, state_names=problem.state_names,
                           pair_names=problem.pair_names,
                           config_names=tuple(c.name or f"config{i}" for i, c in enumerate(problem.configurations)),
-                          events=events[["time", "step", "pair", "kind"]].reset_index(drop=True),
+                          event_columns=events[["time", "step", "pair", "kind"]].reset_index(drop=True),
                           method="event", steps=len(self.segments), wall_s=self.wall_s,
                           metadata=dict(problem.metadata, event_tol=self.options.event_tol))
 

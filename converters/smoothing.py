@@ -96,7 +96,7 @@ def simulate_smooth(problem: LCSProblem, method: Smoothing | None = None, *, x0=
     return Trajectory(t=t, x=xx, u=u, y=y, config=config, state_names=problem.state_names,
                       pair_names=problem.pair_names,
                       config_names=tuple(c.name or f"config{i}" for i, c in enumerate(problem.configurations)),
-                      events=_events(t, u, y, config), method=method.name, steps=stats["steps"],
+                      event_columns=_events(t, u, y, config), method=method.name, steps=stats["steps"],
                       wall_s=stats["wall_s"], metadata=dict(problem.metadata, eps=eps, rtol=method.rtol,
                                                             solver=method.solver, stats=stats))
 

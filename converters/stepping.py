@@ -12,7 +12,6 @@ import time
 from dataclasses import dataclass, replace
 
 import numpy as np
-import pandas as pd
 
 from .discretize import step_matrices
 from .errors import ParameterError, SimulationError
@@ -160,7 +159,7 @@ class StepPlan:
         return Trajectory(t=t, x=x, u=u, y=y, config=config, state_names=problem.state_names,
                           pair_names=problem.pair_names,
                           config_names=tuple(c.name or f"config{i}" for i, c in enumerate(problem.configurations)),
-                          events=events, method=self.method.name, steps=t.shape[0] - 1,
+                          event_columns=events, method=self.method.name, steps=t.shape[0] - 1,
                           wall_s=wall_s + time.perf_counter() - start_clock, general_solves=general_solves,
                           metadata=dict(problem.metadata, h=self.method.h, theta=self.method.theta))
 
@@ -212,7 +211,7 @@ def _no_solution_message(t, M, q) -> str:
             "check the model or add the missing parasitic path")
 
 
-def _events(t, u, y, config, M_stack, which) -> pd.DataFrame:
+def _events(t, u, y, config, M_stack, which) -> dict:
     """Sub-step estimate of each complementarity switch from the step's own LCP data.
 
     Activation (y falls through 0): with u_i held at 0 the step would end at y_i = -M_ii u_{j+1,i};
@@ -232,6 +231,5 @@ def _events(t, u, y, config, M_stack, which) -> pd.DataFrame:
                      np.where(m_ii > 0, y[steps + 1, pairs] / m_ii, np.nan))
         frac = np.where(np.isfinite(b) & (a + b > 0), a / (a + b), 0.5)
     dt = t[steps + 1] - t[steps]
-    kind = pd.Categorical.from_codes(np.where(activating, 0, 1), categories=["activate", "release"])
-    return pd.DataFrame({"time": t[steps] + np.clip(frac, 0.0, 1.0) * dt, "step": steps, "pair": pairs,
-                         "kind": kind})
+    return {"time": t[steps] + np.clip(frac, 0.0, 1.0) * dt, "step": steps, "pair": pairs,
+            "kind": np.where(activating, "activate", "release")}

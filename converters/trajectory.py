@@ -21,9 +21,11 @@ class Trajectory:
         Complementarity pairs (0 <= u _|_ y >= 0); row 0 holds the consistent initial pair.
     config : ndarray of int, shape (N,)
         Configuration of the step that arrived at each point (row 0: of the first step).
-    events : pandas.DataFrame
+    events : pandas.DataFrame (property)
         Columns ``time`` (sub-step estimate from the step's own LCP data), ``step``, ``pair`` and
-        ``kind`` (``activate``: u becomes positive; ``release``: u returns to zero).
+        ``kind`` (``activate``: u becomes positive; ``release``: u returns to zero). Built on first
+        access from ``event_columns`` (a dict of equal-length arrays, or a DataFrame): a pandas table
+        costs more than a short run itself.
     wall_s : float
         Seconds spent building the step matrices and stepping.
     """
@@ -36,12 +38,21 @@ class Trajectory:
     state_names: tuple[str, ...]
     pair_names: tuple[str, ...]
     config_names: tuple[str, ...]
-    events: pd.DataFrame
+    event_columns: object
     method: str
     steps: int
     wall_s: float
     general_solves: int = 0
     metadata: dict = field(default_factory=dict, compare=False)
+
+    @property
+    def events(self) -> pd.DataFrame:
+        frame = self.__dict__.get("_events_frame")
+        if frame is None:
+            columns = self.event_columns
+            frame = columns if isinstance(columns, pd.DataFrame) else pd.DataFrame(columns)
+            object.__setattr__(self, "_events_frame", frame)
+        return frame
 
     @property
     def active(self) -> np.ndarray:

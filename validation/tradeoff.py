@@ -1,0 +1,325 @@
+"""The speed-accuracy trade, measured: every method against the exact event-driven solution.
+
+For each case (a converter at an operating point, CCM and DCM) every run starts on the exact periodic
+orbit x* and covers the same ``PERIODS`` periods. Errors are relative, against the exact solution over
+the same span:
+
+    mean_vout   |mean vout - exact| / |exact mean vout|
+    rms_iL      |RMS of the (first) inductor current - exact| / exact RMS
+    event_T     max over the exact diode events of the last period of |t - t_exact| / T (DCM cases;
+                the nearest detected event of the same kind; inf when a method misses it)
+    error       max(mean_vout, rms_iL): the accuracy axis of the Pareto plot
+
+Each method integrates with its own natural rule: backward Euler the end-point rule (its discrete
+volt-second balance), theta = 0.5, smoothing and ngspice the trapezoidal rule on their points, the
+event method Gauss-Legendre on its exact pieces. Wall time is the method's own run: LCP
+``simulate()`` including its matrices; event ``simulate_event`` plus the quadrature; smoothing its
+solve; ngspice loading and running the netlist, timed inside the worker. Runs under 50 ms take the
+best of three (the machine is shared and noisy).
+"""
+from __future__ import annotations
+
+import io
+import time
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from converters.event import event_orbit, simulate_event
+from converters.library import get_converter
+from converters.methods import EventDriven, Smoothing, Theta
+from converters.stepping import simulate
+from converters.conduction import periodic_orbit
+
+PERIODS = 100
+REFERENCE = EventDriven(event_tol=1e-15, sample_fraction=1.0 / 128.0)
+SPICE_DEFAULT = (100, 1e-3, "trap")       # .tran TMAX = T/100, RELTOL = 1e-3, METHOD = trap (ngspice's own)
+
+
+@dataclass(frozen=True)
+class Case:
+    name: str
+    converter: str
+    params: dict
+
+
+CASES = (Case("buck-ccm", "buck", {"L": "100u"}), Case("buck-dcm", "buck", {}),
+         Case("boost-ccm", "boost", {"L": "100u", "R": 20, "C": "470u"}), Case("boost-dcm", "boost", {"D": 0.3, "R": 50}),
+         Case("cuk-ccm", "cuk", {"C2": "470u"}), Case("cuk-gdcm", "cuk", {"L1": "10u", "L2": "10u"}))
+
+FULL = {"lcp_steps": (10, 30, 100, 300, 1000, 3000, 10000), "thetas": (1.0, 0.5),
+        "event_tols": (1e-4, 1e-7, 1e-10, 1e-13),
+        "smooth": tuple((eps, rtol) for eps in (1e-2, 1e-4, 1e-6) for rtol in (1e-3, 1e-6)),
+        "spice": tuple((d, r, m) for d in (20, 100, 1000) for r in (1e-2, 1e-3, 1e-5) for m in ("trap", "gear"))}
+QUICK = {"lcp_steps": (10, 100, 1000), "thetas": (1.0, 0.5), "event_tols": (1e-7, 1e-13),
+         "smooth": ((1e-3, 1e-4),), "spice": ((100, 1e-3, "trap"), (1000, 1e-5, "gear"))}
+
+
+@dataclass
+class Reference:
+    case: Case
+    params: dict
+    period: float
+    x_star: np.ndarray
+    mean_vout: float
+    rms_iL: float
+    events: np.ndarray      # exact activation times in the last period
+    wall_s: float
+
+
+def reference(case: Case, periods: int = PERIODS) -> Reference:
+    """The exact orbit x* (Newton on the exact period map) and the exact measures over ``periods``."""
+    start = time.perf_counter()
+    conv = get_converter(case.converter)
+    p = conv.resolve(case.params)
+    T = conv.period(p)
+    one = conv.problem(p, T)
+    orbit = event_orbit(one, periodic_orbit(conv, p).x[0], REFERENCE)   # the LCP orbit as the first guess
+    if not orbit.converged:
+        raise RuntimeError(f"{case.name}: no exact periodic orbit (residual {orbit.residual:.3g})")
+    solution = simulate_event(conv.problem(p, periods * T, orbit.x0), REFERENCE)
+    mean, rms = _exact_measures(conv, p, solution, periods * T)
+    times = np.array(solution.event_times)
+    kinds = np.array(solution.event_kinds, dtype=object)
+    last = (times >= (periods - 1) * T) & (kinds == "activate")
+    return Reference(case, p, T, orbit.x0, mean, rms, times[last], time.perf_counter() - start)
+
+
+def _exact_measures(conv, p, solution, span):
+    t, w, x, u, config = solution.quadrature()
+    mean = float(w @ conv.vout(x, u, config, p)) / span
+    rms = float(np.sqrt(w @ x[:, 0] ** 2 / span))
+    return mean, rms
+
+
+def _sampled_measures(conv, p, t, x, u, config, rule):
+    v = conv.vout(x, u, config, p)
+    span = t[-1] - t[0]
+    if rule == "end":
+        dt = np.diff(t)
+        return float(dt @ v[1:] / span), float(np.sqrt(dt @ x[1:, 0] ** 2 / span))
+    return float(np.trapezoid(v, t) / span), float(np.sqrt(np.trapezoid(x[:, 0] ** 2, t) / span))
+
+
+def _timing_error(ref: Reference, times) -> float:
+    if ref.events.size == 0:
+        return float("nan")
+    times = np.asarray(times, dtype=float)
+    if times.size == 0:
+        return float("inf")
+    return float(max(np.abs(times - e).min() for e in ref.events) / ref.period)
+
+
+def _best_of(run, repeats=3, threshold=0.05):
+    best, out = np.inf, None
+    for i in range(repeats):
+        start = time.perf_counter()
+        out = run()
+        best = min(best, time.perf_counter() - start)
+        if best > threshold:
+            break
+    return best, out
+
+
+def _row(ref, family, setting, wall, mean, rms, timing, **extra):
+    e_mean = abs(mean - ref.mean_vout) / abs(ref.mean_vout)
+    e_rms = abs(rms - ref.rms_iL) / abs(ref.rms_iL)
+    return {"case": ref.case.name, "family": family, "setting": setting, "wall_s": wall,
+            "mean_vout_V": mean, "err_mean_vout": e_mean, "err_rms_iL": e_rms, "err_event_T": timing,
+            "error": max(e_mean, e_rms), **extra}
+
+
+def measure_lcp(ref: Reference, steps: int, theta: float, periods: int = PERIODS) -> dict:
+    conv = get_converter(ref.case.converter)
+    problem = conv.problem(ref.params, periods * ref.period, ref.x_star)
+    method = Theta(ref.period / steps, theta)
+    wall, tr = _best_of(lambda: simulate(problem, method))
+    mean, rms = _sampled_measures(conv, ref.params, tr.t, tr.x, tr.u, tr.config, "end" if theta == 1.0 else "trap")
+    events = tr.events
+    timing = _timing_error(ref, events.loc[events["kind"] == "activate", "time"])
+    return _row(ref, f"LCP theta={theta:g}", f"h=T/{steps}", wall, mean, rms, timing, steps=int(tr.steps))
+
+
+def measure_event(ref: Reference, event_tol: float, periods: int = PERIODS) -> dict:
+    conv = get_converter(ref.case.converter)
+    problem = conv.problem(ref.params, periods * ref.period, ref.x_star)
+    options = EventDriven(event_tol=event_tol)
+
+    def run():
+        solution = simulate_event(problem, options)
+        return solution, _exact_measures(conv, ref.params, solution, periods * ref.period)
+
+    wall, (solution, (mean, rms)) = _best_of(run)
+    times = np.array(solution.event_times)
+    kinds = np.array(solution.event_kinds, dtype=object)
+    timing = _timing_error(ref, times[kinds == "activate"])
+    return _row(ref, "event", f"tol={event_tol:g}T", wall, mean, rms, timing, steps=len(solution.segments))
+
+
+def measure_smooth(ref: Reference, eps: float, rtol: float, periods: int = PERIODS) -> dict:
+    from converters.smoothing import simulate_smooth
+    conv = get_converter(ref.case.converter)
+    problem = conv.problem(ref.params, periods * ref.period, ref.x_star)
+    method = Smoothing(eps=eps, rtol=rtol, output_step=ref.period / 1000.0)
+    start = time.perf_counter()
+    tr = simulate_smooth(problem, method)
+    wall = time.perf_counter() - start
+    mean, rms = _sampled_measures(conv, ref.params, tr.t, tr.x, tr.u, tr.config, "trap")
+    timing = _timing_error(ref, tr.events.loc[tr.events["kind"] == "activate", "time"])
+    stats = tr.metadata["stats"]
+    return _row(ref, "smooth", f"eps={eps:g} rtol={rtol:g}", wall, mean, rms, timing, steps=stats["steps"],
+                stiffness_rho_T=stats["max_rho_T"])
+
+
+def measure_spice(ref: Reference, tmax_div: int, reltol: float, method: str, periods: int = PERIODS) -> dict:
+    from netlists import SpiceOptions, build_netlist
+
+    from .modes import spice_modes
+    from .spice import SpiceError, run_spice
+    conv = get_converter(ref.case.converter)
+    netlist = build_netlist(conv.name, ref.params, periods * ref.period,
+                            SpiceOptions(tmax_fraction=1.0 / tmax_div, reltol=reltol, method=method), x0=ref.x_star)
+    setting = f"TMAX=T/{tmax_div} RELTOL={reltol:g} {method}"
+    family = f"ngspice {method}"
+    try:
+        result = run_spice(netlist)
+    except SpiceError as exc:
+        return {"case": ref.case.name, "family": family, "setting": setting, "wall_s": float("nan"),
+                "error": float("nan"), "failure": str(exc)}
+    t = result.time
+    x = np.column_stack([result.signal(netlist.probes[name]) for name in conv.state_names])
+    v = result.signal(netlist.probes["vout"])
+    span = t[-1] - t[0]
+    mean = float(np.trapezoid(v, t) / span)
+    rms = float(np.sqrt(np.trapezoid(x[:, 0] ** 2, t) / span))
+    last = (periods - 1) * ref.period
+    labels = spice_modes(conv, result, netlist, last)
+    held = np.isin(labels.astype(str), ("DCM", "GDCM-OFF"))
+    starts = np.flatnonzero(held[1:] & ~held[:-1]) + 1
+    timing = _timing_error(ref, t[starts][t[starts] >= last])
+    return _row(ref, family, setting, result.wall_s, mean, rms, timing, steps=int(result.accepted_steps))
+
+
+def tradeoff_table(cases=CASES, sweep: dict = FULL, spice: bool = True, periods: int = PERIODS,
+                   progress: bool = True) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """(runs, references): one row per (case, method, setting); one per case with the exact values."""
+    from tqdm import tqdm
+    jobs = []
+    for case in cases:
+        jobs += [(case, "lcp", (s, th)) for th in sweep["thetas"] for s in sweep["lcp_steps"]]
+        jobs += [(case, "event", (tol,)) for tol in sweep["event_tols"]]
+        jobs += [(case, "smooth", es) for es in sweep["smooth"]]
+        if spice:
+            jobs += [(case, "spice", s) for s in sweep["spice"]]
+    refs, rows = {}, []
+    measure = {"lcp": measure_lcp, "event": measure_event, "smooth": measure_smooth, "spice": measure_spice}
+    for case, kind, args in tqdm(jobs, desc="trade-off", unit="run", disable=not progress):
+        if case.name not in refs:
+            refs[case.name] = reference(case, periods)
+        try:
+            rows.append(measure[kind](refs[case.name], *args, periods=periods))
+        except Exception as exc:  # a failed run is a result (shown and counted), not the end of the benchmark
+            rows.append({"case": case.name, "family": kind, "setting": str(args), "wall_s": float("nan"),
+                         "error": float("nan"), "failure": f"{type(exc).__name__}: {exc}"})
+    runs = pd.DataFrame(rows)
+    if "failure" not in runs:
+        runs["failure"] = ""
+    runs["failure"] = runs["failure"].fillna("")
+    references = pd.DataFrame([{"case": r.case.name, "converter": r.case.converter,
+                                "params": " ".join(f"{k}={v}" for k, v in r.case.params.items()) or "defaults",
+                                "exact_mean_vout_V": r.mean_vout, "exact_rms_iL_A": r.rms_iL,
+                                "diode_events_per_period": int(r.events.size), "orbit_wall_s": r.wall_s}
+                               for r in refs.values()])
+    return runs, references
+
+
+def acceptance(runs: pd.DataFrame) -> pd.DataFrame:
+    """Per case: the ngspice default run, the fastest LCP run at least as accurate and its speed-up,
+    the fastest event run with error < 1e-8 against the ngspice default's time."""
+    default = f"TMAX=T/{SPICE_DEFAULT[0]} RELTOL={SPICE_DEFAULT[1]:g} {SPICE_DEFAULT[2]}"
+    out = []
+    for case, group in runs.groupby("case", sort=False):
+        spice = group[group["setting"] == default]
+        row = {"case": case}
+        if spice.empty or not np.isfinite(spice["error"].iloc[0]):
+            row.update(result="no ngspice default run")
+            out.append(row)
+            continue
+        err_d, wall_d = float(spice["error"].iloc[0]), float(spice["wall_s"].iloc[0])
+        lcp = group[group["family"].str.startswith("LCP") & (group["error"] <= err_d)]
+        event = group[(group["family"] == "event") & (group["error"] < 1e-8)]
+        row.update(spice_default_error=err_d, spice_default_wall_s=wall_d)
+        if not lcp.empty:
+            best = lcp.loc[lcp["wall_s"].idxmin()]
+            row.update(lcp_setting=f"{best['family']} {best['setting']}", lcp_error=best["error"],
+                       lcp_wall_s=best["wall_s"], lcp_speedup=wall_d / best["wall_s"])
+        if not event.empty:
+            best = event.loc[event["wall_s"].idxmin()]
+            row.update(event_setting=best["setting"], event_error=best["error"], event_wall_s=best["wall_s"],
+                       event_vs_spice=wall_d / best["wall_s"])
+        ok = row.get("lcp_speedup", 0.0) >= 100.0 and row.get("event_wall_s", np.inf) < wall_d
+        row["result"] = "pass" if ok else "fail"
+        out.append(row)
+    return pd.DataFrame(out)
+
+
+def pareto_front(group: pd.DataFrame) -> pd.DataFrame:
+    """Runs no other run beats in both wall time and error."""
+    ok = group[np.isfinite(group["error"]) & np.isfinite(group["wall_s"])].sort_values(["wall_s", "error"])
+    keep, best = [], np.inf
+    for index, row in ok.iterrows():
+        if row["error"] < best:
+            keep.append(index)
+            best = row["error"]
+    return ok.loc[keep]
+
+
+MARKERS = {"LCP theta=1": "o", "LCP theta=0.5": "s", "event": "*", "smooth": "^", "ngspice trap": "v",
+           "ngspice gear": "D"}
+
+
+def pareto_plot(runs: pd.DataFrame) -> bytes:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    cases = list(dict.fromkeys(runs["case"]))
+    cols = 3 if len(cases) > 2 else len(cases)
+    rows_n = int(np.ceil(len(cases) / cols))
+    fig, axes = plt.subplots(rows_n, cols, figsize=(4.2 * cols, 3.6 * rows_n), squeeze=False)
+    default = f"TMAX=T/{SPICE_DEFAULT[0]} RELTOL={SPICE_DEFAULT[1]:g} {SPICE_DEFAULT[2]}"
+    for ax, case in zip(axes.ravel(), cases):
+        group = runs[runs["case"] == case]
+        for family, part in group.groupby("family", sort=False):
+            part = part[np.isfinite(part["error"])]
+            ax.loglog(part["wall_s"], np.maximum(part["error"], 1e-16), MARKERS.get(family, "x"), label=family,
+                      alpha=0.8, markersize=6)
+        front = pareto_front(group)
+        ax.step(front["wall_s"], np.maximum(front["error"], 1e-16), where="post", color="0.5", lw=1, label="Pareto front")
+        spice = group[group["setting"] == default]
+        if not spice.empty:
+            ax.loglog(spice["wall_s"], spice["error"], "o", mfc="none", mec="red", markersize=14, label="ngspice default")
+        ax.set_title(case, fontsize=10)
+        ax.set_xlabel("wall time (s)")
+        ax.set_ylabel("error (relative)")
+        ax.grid(True, which="both", alpha=0.3)
+    for ax in axes.ravel()[len(cases):]:
+        ax.axis("off")
+    axes.ravel()[0].legend(fontsize=6, loc="lower left")
+    fig.tight_layout()
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=90)
+    plt.close(fig)
+    return buffer.getvalue()
+
+
+def stiffness_table(eps_values=(1e-2, 1e-3, 1e-4, 1e-5, 1e-6), case: Case = CASES[1], periods: int = 5) -> pd.DataFrame:
+    """How the smoothed system's stiffness grows as eps shrinks: max |lambda| T of the Jacobian along the
+    run, solver steps and wall time (Radau, rtol 1e-6), and the error against the exact solution."""
+    ref = reference(case, periods)
+    rows = []
+    for eps in eps_values:
+        row = measure_smooth(ref, eps, 1e-6, periods=periods)
+        rows.append({"eps": eps, "stiffness_rho_T": row["stiffness_rho_T"], "solver_steps": row["steps"],
+                     "wall_s": row["wall_s"], "error": row["error"]})
+    return pd.DataFrame(rows)
