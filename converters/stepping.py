@@ -50,29 +50,51 @@ def time_grid(problem: LCSProblem, h: float) -> np.ndarray:
     return np.union1d(uniform[keep], breaks)
 
 
-def _tiled_grid(problem: LCSProblem, h: float):
-    """The grid of :func:`time_grid` built from one period and repeated, when the period is a whole
-    number of steps and the run starts on a period boundary (the common case: no sorting of
-    10^5..10^7 points). Returns (t, step_config) or None when the fast path does not apply."""
+def _step_sets(dt: np.ndarray, step_config: np.ndarray, h: float, n_configs: int):
+    """Matrix set of each step: sets 0..m-1 are the uniform step h in each configuration, then one per
+    distinct (configuration, shorter step) at the switching instants. Returns (which, set_configs, set_dts)."""
+    which = step_config.astype(np.int64)
+    split = np.flatnonzero(np.abs(dt - h) > 1e-9 * h)
+    # key = configuration * 2 + fraction of h (in (0, 1.001]): one float per split step, unique by value
+    keys = step_config[split] * 2.0 + np.round(dt[split] / h, 10)
+    _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
+    which[split] = n_configs + inverse
+    set_configs = list(range(n_configs)) + [int(c) for c in step_config[split][first]]
+    set_dts = np.concatenate([np.full(n_configs, h), dt[split][first]])
+    return which, set_configs, set_dts
+
+
+def _plan_arrays(problem: LCSProblem, h: float):
+    """(t, step_config, which, set_configs, set_dts) of a run.
+
+    When the period is a whole number of steps and the run starts at 0, one period is built and
+    repeated (the split steps at the switching instants are then the same in every period: one
+    matrix set each); otherwise the whole grid is built and sorted by :func:`time_grid`."""
     schedule = problem.schedule
     t0, t1 = problem.t_span
-    T = schedule.period
-    if not np.isfinite(T):
-        return None
-    per_period = T / h
+    T, n_configs = schedule.period, len(problem.configurations)
+    per_period = T / h if np.isfinite(T) else 0.0
     steps = int(round(per_period))
-    if steps < 1 or abs(per_period - steps) > 1e-9 * per_period or t0 != 0.0:
-        return None
-    local = time_grid(replace(problem, t_span=(0.0, T)), h)[:-1]        # [0, T): one period, breakpoints in
-    configs = schedule.config_at(0.5 * (local + np.append(local[1:], T)))
-    periods = int(np.ceil(t1 / T * (1.0 - 1e-12)))
-    if periods * local.size > MAX_STEPS:
-        return None
-    t = (np.arange(periods)[:, None] * T + local[None, :]).ravel()
-    config = np.tile(configs, periods)
-    keep = t < t1 - 1e-3 * h
-    t, config = t[keep], config[keep]
-    return np.append(t, t1), config
+    periods = int(np.ceil(t1 / T * (1.0 - 1e-12))) if np.isfinite(T) else 0
+    if (not np.isfinite(T) or steps < 1 or abs(per_period - steps) > 1e-9 * per_period or t0 != 0.0
+            or periods * (steps + len(schedule.starts)) > MAX_STEPS):
+        t = time_grid(problem, h)
+        step_config = schedule.config_at(0.5 * (t[:-1] + t[1:]))
+        return (t, step_config, *_step_sets(np.diff(t), step_config, h, n_configs))
+    local = time_grid(replace(problem, t_span=(0.0, T)), h)              # [0, T] with the breakpoints
+    local_config = schedule.config_at(0.5 * (local[:-1] + local[1:]))
+    local_which, set_configs, set_dts = _step_sets(np.diff(local), local_config, h, n_configs)
+    t = (np.arange(periods)[:, None] * T + local[None, :-1]).ravel()
+    t = np.append(t[t < t1 - 1e-3 * h], t1)
+    count = t.size - 1
+    which = np.tile(local_which, periods)[:count]
+    step_config = np.tile(local_config, periods)[:count]
+    last_dt, nominal = t[-1] - t[-2], set_dts[which[-1]]
+    if abs(last_dt - nominal) > 1e-9 * h:    # the run ends inside a step: its own matrix set
+        which[-1] = len(set_configs)
+        set_configs = set_configs + [int(step_config[-1])]
+        set_dts = np.append(set_dts, last_dt)
+    return t, step_config, which, set_configs, set_dts
 
 
 @dataclass(frozen=True)
@@ -92,25 +114,7 @@ class StepPlan:
     def build(cls, problem: LCSProblem, method: Theta) -> "StepPlan":
         if not isinstance(method, Theta):
             raise ParameterError(f"method must be Theta(h, theta) or BackwardEuler(h); got {method!r}")
-        tiled = _tiled_grid(problem, method.h)
-        if tiled is None:
-            t = time_grid(problem, method.h)
-            step_config = problem.schedule.config_at(0.5 * (t[:-1] + t[1:]))
-        else:
-            t, step_config = tiled
-        dt = np.diff(t)
-        # One matrix set per distinct (configuration, step size): sets 0..m-1 are the uniform step in
-        # each configuration, then one per split step at a switching instant.
-        # Split steps repeat every period (same configuration, same length to rounding): one set each.
-        n_configs = len(problem.configurations)
-        which = step_config.astype(np.int64)
-        split = np.flatnonzero(np.abs(dt - method.h) > 1e-9 * method.h)
-        # key = configuration + fraction of h (in [0, 1.001)): one float per split step, unique by value
-        keys = step_config[split] * 2.0 + np.round(dt[split] / method.h, 10)
-        unique_keys, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
-        which[split] = n_configs + inverse
-        set_configs = list(range(n_configs)) + [int(c) for c in step_config[split][first]]
-        set_dts = np.concatenate([np.full(n_configs, method.h), dt[split][first]])
+        t, step_config, which, set_configs, set_dts = _plan_arrays(problem, method.h)
         mats = step_matrices([problem.configurations[c] for c in set_configs], set_dts, method.theta)
         return cls(problem, method, t, step_config, which, mats)
 
