@@ -64,13 +64,25 @@ class Flow:
     step: np.ndarray
     taylor: np.ndarray      # Z^j / j!, j = 0.._TAYLOR_TERMS - 1: x~(s) = sum_j s^j (Z^j / j!) x~ for s <= delta
     powers: np.ndarray      # step^j, j = 0.._POWERS: the samples of a segment in one batched product
-    node_weights: np.ndarray  # s_k^j at the Gauss-Legendre nodes s_k of [0, delta], shape (8, terms)
+    node_maps: np.ndarray     # expm(s_k Z) at the Gauss-Legendre nodes s_k of [0, delta], shape (8, n+1, n+1)
     watch_derivatives: np.ndarray  # rows watch Z^j, j = 0..n+1: the watched quantity's derivatives
     derivative_scales: np.ndarray  # rows |watch| |Z|^j 1
 
     def taylor_vectors(self, xt: np.ndarray) -> np.ndarray:
         """V with x~(s) = (s^0, s^1, ...) @ V for 0 <= s <= delta (the series converges: delta ||Z|| <= 0.25)."""
         return self.taylor @ xt
+
+    def sample_states(self, xt: np.ndarray, count: int) -> np.ndarray:
+        """x~ at 0, delta, ..., count delta: shape (count + 1, n+1)."""
+        if count <= _POWERS:
+            return self.powers[:count + 1] @ xt
+        blocks, state = [], xt
+        while count >= 0:
+            m = min(count, _POWERS)
+            block = self.powers[:m + 1] @ state
+            blocks.append(block[:-1] if count > m else block)
+            state, count = block[-1], count - m if count > m else -1
+        return np.vstack(blocks)
 
     def propagate(self, xt: np.ndarray, s: float) -> np.ndarray:
         """x~ after s in [0, delta]."""
@@ -134,6 +146,7 @@ def _flow(config: Configuration, index: int, held: bool, period_scale: float, sa
         taylor[j] = taylor[j - 1] @ Z / j
     step = expm(delta * Z)
     node_weights = (0.5 * (_GL_X + 1.0) * delta)[:, None] ** _EXPONENTS[None, :]
+    node_maps = np.tensordot(node_weights, taylor, axes=([1], [0]))
     rows, scales = [watch], [np.abs(watch).sum()]
     absZ, abs_row = np.abs(Z), np.abs(watch)
     for _ in range(n + 1):
@@ -141,7 +154,7 @@ def _flow(config: Configuration, index: int, held: bool, period_scale: float, sa
         abs_row = abs_row @ absZ
         scales.append(abs_row.sum())
     return Flow(index, held, Z, u_row, y_out, watch, delta, step, taylor, _power_stack(step, _POWERS),
-                node_weights, np.array(rows), np.array(scales))
+                node_maps, np.array(rows), np.array(scales))
 
 
 @dataclass
@@ -185,36 +198,30 @@ class EventSolution:
         t0 = self.problem.t_span[0] if t0 is None else t0
         t1 = self.problem.t_span[1] if t1 is None else t1
         ts, ws, xs, us, cs = [], [], [], [], []
+        half = 0.5 * (_GL_X + 1.0)
         for seg, a, b in self._segments_in(t0, t1):
             flow, length = seg.flow, b - a
             if length <= 0.0:
                 continue
-            # Whole pieces of the sampling step delta (their starts in one batched product), then the rest.
+            # Whole pieces of the sampling step delta: their starts S^q x~ in batched products, their
+            # nodes by the precomputed node maps; then the rest of the segment by the series.
             full = int(np.floor(length / flow.delta * (1.0 - 1e-12)))
-            xt = flow.advance(seg.xt0, a - seg.t0)
-            starts = [xt[None, :]]
-            state = xt
-            left = full
-            while left > 0:
-                m = min(left, _POWERS)
-                block = flow.powers[1:m + 1] @ state
-                starts.append(block)
-                state, left = block[-1], left - m
-            starts = np.vstack(starts)                                       # (full + 1, n+1)
-            widths = np.full(full + 1, flow.delta)
-            widths[-1] = length - full * flow.delta
-            if widths[-1] <= 1e-15 * length:
-                starts, widths = starts[:-1], widths[:-1]
-            V = np.einsum("jab,qb->qja", flow.taylor, starts)                 # (pieces, terms, n+1)
-            offsets = 0.5 * (_GL_X[None, :] + 1.0) * widths[:, None]           # (pieces, 8)
-            nodes = np.empty((widths.size, _GL_X.size, V.shape[2]))
-            nodes[:full] = np.einsum("kj,qja->qka", flow.node_weights, V[:full])   # pieces of width delta
-            if widths.size > full:
-                nodes[full] = (offsets[full][:, None] ** _EXPONENTS[None, :]) @ V[full]
-            nodes = nodes.reshape(-1, V.shape[2])
-            piece_starts = a + np.concatenate([[0.0], np.cumsum(widths)[:-1]])
-            ts.append((piece_starts[:, None] + offsets).ravel())
-            ws.append((0.5 * widths[:, None] * _GL_W[None, :]).ravel())
+            xt = seg.xt0 if a == seg.t0 else flow.advance(seg.xt0, a - seg.t0)
+            starts = flow.sample_states(xt, full)                              # (full + 1, n+1)
+            rest = length - full * flow.delta
+            parts_t, parts_w, parts_x = [], [], []
+            if full:
+                parts_x.append(np.tensordot(starts[:full], flow.node_maps, axes=([1], [2])).reshape(-1, starts.shape[1]))
+                parts_t.append((a + flow.delta * np.arange(full)[:, None] + flow.delta * half[None, :]).ravel())
+                parts_w.append(np.tile(0.5 * flow.delta * _GL_W, full))
+            if rest > 1e-15 * length:
+                offsets = rest * half
+                parts_x.append((offsets[:, None] ** _EXPONENTS[None, :]) @ (flow.taylor @ starts[full]))
+                parts_t.append(a + full * flow.delta + offsets)
+                parts_w.append(0.5 * rest * _GL_W)
+            nodes = parts_x[0] if len(parts_x) == 1 else np.vstack(parts_x)
+            ts.extend(parts_t)
+            ws.extend(parts_w)
             xs.append(nodes[:, :-1])
             us.append(nodes @ flow.u_row)
             cs.append(np.full(nodes.shape[0], flow.config))

@@ -91,9 +91,9 @@ class EventDriven:
 class Smoothing:
     """The ideal diode replaced by a smooth law (:mod:`converters.smoothing`), integrated by a stiff solver.
 
-    The complementarity pair 0 <= u _|_ y >= 0 becomes u = log(1 + exp(-y / eps)) (SI units, V or A),
-    a softplus penalty like a real diode's exponential law: the corner of the complementarity graph
-    is rounded over |y| ~ eps; a held pair sits at y ~ -eps u, a free one carries u ~ exp(-y / eps).
+    The complementarity pair 0 <= u _|_ y >= 0 becomes u = eps log(1 + exp(-y / eps^2)) (SI units,
+    V or A): the penalty max(0, -y) / eps with its corner rounded over |y| ~ eps^2, exponential like
+    a real diode's law. A held pair sits at y ~ -eps u, a free one carries u ~ eps exp(-y / eps^2).
 
     Parameters
     ----------

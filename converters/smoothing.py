@@ -3,14 +3,16 @@
 Each complementarity pair 0 <= u _|_ y >= 0 (with D = 0, so y = C x + F is a function of the state)
 becomes the softplus penalty
 
-    u = log(1 + exp(-y / eps))          (SI units: V or A, whatever the pair carries)
+    u = eps log(1 + exp(-y / eps^2))    (SI units: V or A, whatever the pair carries)
 
-so the LCS turns into the smooth ODE x' = A x + E + B u(C x + F). A held pair (u > 0) sits at
-y ~ -eps u, a free one carries u ~ exp(-y / eps): the error is O(eps). The price is stiffness: the
-Jacobian A - B diag(sigma(-y / eps) / eps) C has an eigenvalue near -(C B) / eps while the pair is held, so
+a penalty max(0, -y) / eps with its corner rounded over |y| ~ eps^2. The LCS turns into the smooth
+ODE x' = A x + E + B u(C x + F). A held pair (u > 0) sits at y ~ -eps u, a free one carries
+u ~ eps exp(-y / eps^2), and u(0) = eps log 2: every error is O(eps). The price is stiffness: the
+Jacobian A - B diag(sigma(-y / eps^2) / eps) C has an eigenvalue near -(C B) / eps while the pair is held, so
 the stiffness ratio grows like 1/eps; scipy's implicit solvers (Radau, BDF, LSODA) with a tolerance
-integrate it, restarted at every schedule instant. ``SmoothRun.stats`` reports steps, function and
-Jacobian evaluations, LU factorisations and max |lambda| T, the measure of stiffness.
+integrate it, restarted at every schedule instant. ``metadata['stats']`` of the returned Trajectory
+reports output points, function and Jacobian evaluations, LU factorisations (``Trajectory.steps``)
+and max |lambda| T along the run, the measure of stiffness.
 """
 from __future__ import annotations
 
@@ -28,9 +30,9 @@ from .trajectory import Trajectory
 
 
 def _pair_law(y, eps):
-    """u(y) and du/dy of the softplus law."""
-    z = -y / eps
-    return np.logaddexp(0.0, z), -expit(z) / eps
+    """u(y) and du/dy of the softplus law u = eps log(1 + exp(-y / eps^2))."""
+    z = -y / (eps * eps)
+    return eps * np.logaddexp(0.0, z), -expit(z) / eps
 
 
 def simulate_smooth(problem: LCSProblem, method: Smoothing | None = None, *, x0=None) -> Trajectory:
@@ -49,7 +51,7 @@ def simulate_smooth(problem: LCSProblem, method: Smoothing | None = None, *, x0=
     edges = np.concatenate([[t0], problem.schedule.breakpoints(t0, t1), [t1]])
     eps, atol = method.eps, method.atol if method.atol is not None else 1e-3 * method.rtol
     ts, xs, cs = [np.array([t0])], [x[None, :]], []
-    stats = {"steps": 0, "nfev": 0, "njev": 0, "nlu": 0, "max_rho_T": 0.0}
+    stats = {"points": 0, "nfev": 0, "njev": 0, "nlu": 0, "max_rho_T": 0.0}
     scale_T = problem.schedule.period if np.isfinite(problem.schedule.period) else (t1 - t0)
     first_config = int(problem.schedule.config_at(np.array([0.5 * (edges[0] + edges[1])]))[0])
     cs.append(np.array([first_config]))
@@ -75,7 +77,7 @@ def simulate_smooth(problem: LCSProblem, method: Smoothing | None = None, *, x0=
         if sol.status != 0 or not np.all(np.isfinite(sol.y)):
             raise SimulationError(f"the smoothed system could not be integrated over [{a:.6g}, {b:.6g}] s "
                                   f"({method.solver}, eps = {eps:g}, rtol = {method.rtol:g}): {sol.message}")
-        stats["steps"] += sol.t.size - 1
+        stats["points"] += sol.t.size - 1
         stats["nfev"] += int(sol.nfev)
         stats["njev"] += int(sol.njev)
         stats["nlu"] += int(sol.nlu)
@@ -96,7 +98,7 @@ def simulate_smooth(problem: LCSProblem, method: Smoothing | None = None, *, x0=
     return Trajectory(t=t, x=xx, u=u, y=y, config=config, state_names=problem.state_names,
                       pair_names=problem.pair_names,
                       config_names=tuple(c.name or f"config{i}" for i, c in enumerate(problem.configurations)),
-                      event_columns=_events(t, u, y, config), method=method.name, steps=stats["steps"],
+                      event_columns=_events(t, u, y, config), method=method.name, steps=stats["nlu"],
                       wall_s=stats["wall_s"], metadata=dict(problem.metadata, eps=eps, rtol=method.rtol,
                                                             solver=method.solver, stats=stats))
 

@@ -199,7 +199,7 @@ def _simulate(args) -> int:
     else:
         options = ", ".join(f"{k} = {v:.3g}" if isinstance(v, float) else f"{k} = {v}"
                             for k, v in run.method_options().items() if v is not None and k != "max_events")
-        unit = {"lcp": "steps", "event": "segments", "smooth": "solver steps"}[run.method_name]
+        unit = {"lcp": "steps", "event": "segments", "smooth": "LU factorisations"}[run.method_name]
         print(f"{summary['converter']} ({run.method_name}): {summary['steps']} {unit} ({options}) in "
               f"{summary['wall_s']:.3f} s; vout mean (last 10 periods) = {summary['vout_mean']:.9g} V")
         if run.steady_periods is not None:

@@ -8,7 +8,7 @@ generalised DCM (GDCM-OFF); the ON pair held at v1 = 0 is GDCM-ON.
 from __future__ import annotations
 
 from ..lcs import Configuration
-from ..params import Param, positive
+from ..params import Param, nonnegative, positive
 from .base import Converter
 
 
@@ -16,7 +16,7 @@ class Cuk(Converter):
     name = "cuk"
     title = "Cuk (inverting)"
     parameters = (
-        positive("Vin", 12.0, "V", "input voltage"),
+        nonnegative("Vin", 12.0, "V", "input voltage"),
         positive("L1", 100e-6, "H", "input inductance"),
         positive("C1", 10e-6, "F", "coupling capacitance"),
         positive("L2", 100e-6, "H", "output inductance"),

@@ -18,7 +18,7 @@ from ..params import Param, nonnegative, positive
 from .base import ON, Converter
 
 COMMON = (
-    positive("Vin", 12.0, "V", "input voltage"),
+    nonnegative("Vin", 12.0, "V", "input voltage"),
     positive("L", 10e-6, "H", "inductance"),
     positive("C", 100e-6, "F", "output capacitance"),
     positive("R", 10.0, "ohm", "load resistance"),

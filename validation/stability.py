@@ -1,0 +1,195 @@
+"""Numerical stability at the extremes: the buck converter pushed one parameter at a time to the edge of
+its range, every method run from rest, and each run checked.
+
+Extremes (one at a time around the default DCM buck, Vin 12 V, L 10 uH, C 100 uF, R 10 ohm, 100 kHz,
+D 0.4): the LCP step h from 1e-6 T to T/2; D in {0, 1e-4, 0.5, 1 - 1e-4, 1}; R from 1e-3 to 1e9 ohm;
+L and C from 1e-9 to 1e-1; Vin = 0. Ill-posed requests (L = 0, C < 0, D > 1, R = NaN, h >= T, netlist
+text in a value) must be refused with one clear line before any run.
+
+Checks per run (``PERIODS`` periods from rest; 2 periods for h = 1e-6 T):
+    finite        no NaN or inf anywhere in the states
+    diverged      stored energy above 10 x (energy supplied + 1 nJ) at some point
+    energy        energy created: (E_end - E_0) - (E_in - E_load) above 1e-3 of the energy scale
+                  (ideal switches and diodes are lossless; a scheme may dissipate, never create)
+    finished      the run ended (a ``TIMEOUT_S`` limit per run, in a separate process)
+    error         the message of a refused or failed run (ngspice failures are counted here)
+"""
+from __future__ import annotations
+
+import concurrent.futures as futures
+import multiprocessing
+import time
+
+import numpy as np
+import pandas as pd
+
+from converters.library import get_converter
+
+PERIODS = 10
+TIMEOUT_S = 60.0
+BASE = {"Vin": 12.0, "L": 10e-6, "C": 100e-6, "R": 10.0, "f_sw": 100e3, "D": 0.4}
+METHODS = ("LCP theta=1", "LCP theta=0.5", "event", "smooth", "ngspice")
+
+
+def extreme_cases() -> list[dict]:
+    cases = [{"vary": "h", "value": f, "params": {}, "h_fraction": f, "periods": 2 if f < 1e-5 else PERIODS}
+             for f in (1e-6, 1e-4, 1e-2, 0.5)]
+    for name, values in (("D", (0.0, 1e-4, 0.5, 1 - 1e-4, 1.0)), ("R", (1e-3, 1.0, 1e3, 1e9)),
+                         ("L", (1e-9, 1e-6, 1e-3, 1e-1)), ("C", (1e-9, 1e-6, 1e-3, 1e-1)), ("Vin", (0.0,))):
+        cases += [{"vary": name, "value": v, "params": {name: v}, "h_fraction": 1e-3, "periods": PERIODS}
+                  for v in values]
+    return cases
+
+
+ILL_POSED = (("L", {"L": 0.0}), ("C", {"C": -1e-6}), ("D", {"D": 1.5}), ("R", {"R": float("nan")}),
+             ("Vin", {"Vin": "12; shell rm -rf /"}), ("h", {"h": 2e-5}))
+
+
+ENERGY_FLOOR_J = 1e-12
+
+
+def _energy_checks(conv, p, t, x, i_in, rule):
+    """(finite, diverged, energy residual relative) from sampled states of the buck.
+
+    ``rule`` is each scheme's own discrete power balance: 'end' (backward Euler: power at the step
+    end), 'mid' (trapezoidal scheme: power at the mid-step state), 'trap' (dense outputs)."""
+    L, C, R, Vin = p["L"], p["C"], p["R"], p["Vin"]
+    if not np.all(np.isfinite(x)):
+        return False, True, float("nan")
+    iL, vC = x[:, 0], x[:, 1]
+    stored = 0.5 * L * iL ** 2 + 0.5 * C * vC ** 2
+    dt = np.diff(t)
+    if rule == "end":
+        p_in, p_load = Vin * i_in[1:], vC[1:] ** 2 / R
+    elif rule == "mid":
+        p_in, p_load = Vin * i_in[1:], (0.5 * (vC[1:] + vC[:-1])) ** 2 / R
+    else:
+        p_in, p_load = Vin * 0.5 * (i_in[1:] + i_in[:-1]), 0.5 * (vC[1:] ** 2 + vC[:-1] ** 2) / R
+    e_in, e_load = np.concatenate([[0.0], np.cumsum(dt * p_in)]), np.concatenate([[0.0], np.cumsum(dt * p_load)])
+    diverged = bool(np.any(stored > 10.0 * (stored[0] + np.abs(e_in) + 1e-9)))
+    residual = (stored[-1] - stored[0]) - (e_in[-1] - e_load[-1])
+    scale = max(abs(e_in[-1]), abs(e_load[-1]), stored.max(), ENERGY_FLOOR_J)
+    return True, diverged, float(residual / scale)
+
+
+def _run_one(case: dict, method: str) -> dict:
+    """One run in the worker process: returns the checks (never raises)."""
+    from converters.methods import EventDriven, Smoothing, Theta
+    from converters.stepping import simulate
+    conv = get_converter("buck")
+    start = time.perf_counter()
+    try:
+        p = conv.resolve({**BASE, **case["params"]})
+        T = conv.period(p)
+        t_end = case["periods"] * T
+        problem = conv.problem(p, t_end)
+        if method.startswith("LCP"):
+            theta = 1.0 if method.endswith("=1") else 0.5
+            tr = simulate(problem, Theta(case["h_fraction"] * T, theta))
+            t, x, i_in, rule = tr.t, tr.x, tr.x[:, 0] * (tr.config == 0), "end" if theta == 1.0 else "mid"
+            if theta == 0.5:   # the input current of a step is the mid-step one, in its configuration
+                i_in = np.concatenate([[0.0], 0.5 * (tr.x[1:, 0] + tr.x[:-1, 0]) * (tr.config[1:] == 0)])
+        elif method == "event":
+            from converters.event import simulate_event
+            solution = simulate_event(problem, EventDriven())
+            t, w, x, u, config = solution.quadrature()
+            order = np.argsort(t)
+            t = np.concatenate([[0.0], t[order], [t_end]])
+            x = np.vstack([problem.x0, x[order], solution.x_end])
+            on = np.concatenate([[config[order][0] == 0], config[order] == 0, [config[order][-1] == 0]])
+            i_in, rule = x[:, 0] * on, "trap"
+        elif method == "smooth":
+            tr = simulate(problem, Smoothing(eps=1e-4, rtol=1e-6))
+            t, x, i_in, rule = tr.t, tr.x, tr.x[:, 0] * (tr.config == 0), "trap"
+        else:
+            from netlists import SpiceOptions, build_netlist
+
+            from .spice import run_spice
+            netlist = build_netlist("buck", p, t_end, SpiceOptions(tmax_fraction=1e-2, reltol=1e-3, method="trap"))
+            result = run_spice(netlist)
+            t = result.time
+            x = np.column_stack([result.signal(netlist.probes[n]) for n in conv.state_names])
+            i_in, rule = -result.vectors["vin#branch"], "trap"    # the source's own current (switch leakage too)
+        finite, diverged, residual = _energy_checks(conv, p, t, x, i_in, rule)
+        return {"status": "ok", "finite": finite, "diverged": diverged, "energy_residual": residual,
+                "energy_created": bool(np.isfinite(residual) and residual > 1e-3), "points": int(t.size),
+                "wall_s": time.perf_counter() - start, "error": ""}
+    except Exception as exc:  # refused or failed: the message is the result
+        return {"status": "error", "finite": None, "diverged": None, "energy_residual": float("nan"),
+                "energy_created": None, "points": 0, "wall_s": time.perf_counter() - start,
+                "error": f"{type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''}"}
+
+
+def _in_worker(args):
+    case, method = args
+    try:
+        return _run_one(case, method)
+    finally:
+        from .spice import close_spice_worker
+        close_spice_worker()
+
+
+def stability_table(methods=METHODS, cases=None, progress: bool = True) -> pd.DataFrame:
+    """Every (extreme case, method) run in its own process with a time limit; one row each."""
+    from tqdm import tqdm
+    cases = extreme_cases() if cases is None else cases
+    jobs = [(c, m) for c in cases for m in methods if m.startswith("LCP") or c["vary"] != "h"]
+    context = multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
+    rows = []
+    for case, method in tqdm(jobs, desc="stability", unit="run", disable=not progress):
+        pool = futures.ProcessPoolExecutor(max_workers=1, mp_context=context)
+        try:
+            out = pool.submit(_in_worker, (case, method)).result(timeout=TIMEOUT_S)
+        except futures.TimeoutError:
+            for process in list(getattr(pool, "_processes", {}).values()):
+                process.terminate()
+            out = {"status": "timeout", "error": f"did not finish within {TIMEOUT_S:g} s"}
+        except futures.process.BrokenProcessPool:
+            out = {"status": "crashed", "error": "the worker process died"}
+        finally:
+            pool.shutdown(wait=False, cancel_futures=True)
+        rows.append({"vary": case["vary"], "value": case["value"],
+                     "h": f"{case['h_fraction']:g} T" if method.startswith("LCP") else "", "method": method, **out})
+    table = pd.DataFrame(rows)
+    table["verdict"] = [_verdict(r) for r in table.itertuples()]
+    return table
+
+
+def _verdict(row) -> str:
+    if row.status != "ok":
+        return row.status
+    if not row.finite:
+        return "NaN/inf"
+    if row.diverged:
+        return "diverged"
+    if row.energy_created:
+        return "energy created"
+    return "ok"
+
+
+def ill_posed_table() -> pd.DataFrame:
+    """Each ill-posed request and the one line it is refused with."""
+    from converters.errors import PcsuiteError
+    from converters.simulation import run_converter
+    rows = []
+    for name, given in ILL_POSED:
+        params = {k: v for k, v in given.items() if k != "h"}
+        try:
+            run_converter("buck", params, h=given.get("h"), periods=1)
+            rows.append({"parameter": name, "given": str(given), "refused": False, "message": "accepted"})
+        except PcsuiteError as exc:
+            rows.append({"parameter": name, "given": str(given), "refused": True, "message": str(exc)})
+    return pd.DataFrame(rows)
+
+
+def stability_summary(table: pd.DataFrame) -> pd.DataFrame:
+    """Per method: runs, ok, NaN/inf, diverged, energy created, errors (ngspice failures), timeouts."""
+    out = []
+    for method, group in table.groupby("method", sort=False):
+        verdicts = group["verdict"]
+        out.append({"method": method, "runs": len(group), "ok": int((verdicts == "ok").sum()),
+                    "NaN/inf": int((verdicts == "NaN/inf").sum()), "diverged": int((verdicts == "diverged").sum()),
+                    "energy created": int((verdicts == "energy created").sum()),
+                    "errors": int((verdicts == "error").sum()), "timeouts": int((verdicts == "timeout").sum()),
+                    "crashed": int((verdicts == "crashed").sum())})
+    return pd.DataFrame(out)
