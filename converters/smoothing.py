@@ -71,7 +71,7 @@ def simulate_smooth(problem: LCSProblem, method: Smoothing | None = None, *, x0=
         t_eval = None
         if method.output_step is not None:
             inner = a + method.output_step * np.arange(1, int(np.ceil((b - a) / method.output_step)) + 1)
-            t_eval = np.append(inner[inner < b - 1e-9 * method.output_step], b)
+            t_eval = np.concatenate([[a], inner[inner < b - 1e-9 * method.output_step], [b]])   # sol.t[0] = a
         sol = solve_ivp(rhs, (a, b), x, method=method.solver, rtol=method.rtol, atol=atol, jac=jac,
                         t_eval=t_eval)
         if sol.status != 0 or not np.all(np.isfinite(sol.y)):

@@ -9,7 +9,8 @@ text in a value) must be refused with one clear line before any run.
 Checks per run (``PERIODS`` periods from rest; 2 periods for h = 1e-6 T):
     finite        no NaN or inf anywhere in the states
     diverged      stored energy above 10 x (energy supplied + 1 nJ) at some point
-    energy        energy created: (E_end - E_0) - (E_in - E_load) above 1e-3 of the energy scale
+    energy        energy created: (E_end - E_0) - (E_in - E_load) above ENERGY_TOL = 1e-3 of the energy
+                  scale (the largest of E_in, E_load, stored energy and ENERGY_FLOOR_J = 1 pJ)
                   (ideal switches and diodes are lossless; a scheme may dissipate, never create)
     finished      the run ended (a ``TIMEOUT_S`` limit per run, in a separate process)
     error         the message of a refused or failed run (ngspice failures are counted here)
@@ -46,29 +47,35 @@ ILL_POSED = (("L", {"L": 0.0}), ("C", {"C": -1e-6}), ("D", {"D": 1.5}), ("R", {"
 
 
 ENERGY_FLOOR_J = 1e-12
+ENERGY_TOL = 1e-3
 
 
-def _energy_checks(conv, p, t, x, i_in, rule):
+def _energy_checks(p, t, x, on, rule, totals=None, i_in=None):
     """(finite, diverged, energy residual relative) from sampled states of the buck.
 
+    ``on[k]`` says whether the switch conducts over [t_k, t_k+1] (the source current is iL there).
     ``rule`` is each scheme's own discrete power balance: 'end' (backward Euler: power at the step
-    end), 'mid' (trapezoidal scheme: power at the mid-step state), 'trap' (dense outputs)."""
+    end), 'mid' (trapezoidal scheme: power at the mid-step state), 'trap' (dense samples of an accurate
+    solution). ``totals`` = (E_in, E_load) computed exactly elsewhere (the event method's quadrature)
+    replaces the sums; ``i_in`` (samples of the source current) replaces iL where ``on``."""
     L, C, R, Vin = p["L"], p["C"], p["R"], p["Vin"]
     if not np.all(np.isfinite(x)):
         return False, True, float("nan")
     iL, vC = x[:, 0], x[:, 1]
     stored = 0.5 * L * iL ** 2 + 0.5 * C * vC ** 2
     dt = np.diff(t)
+    source = iL if i_in is None else i_in
     if rule == "end":
-        p_in, p_load = Vin * i_in[1:], vC[1:] ** 2 / R
+        p_in, p_load = Vin * source[1:] * on, vC[1:] ** 2 / R
     elif rule == "mid":
-        p_in, p_load = Vin * i_in[1:], (0.5 * (vC[1:] + vC[:-1])) ** 2 / R
+        p_in, p_load = Vin * 0.5 * (source[1:] + source[:-1]) * on, (0.5 * (vC[1:] + vC[:-1])) ** 2 / R
     else:
-        p_in, p_load = Vin * 0.5 * (i_in[1:] + i_in[:-1]), 0.5 * (vC[1:] ** 2 + vC[:-1] ** 2) / R
+        p_in, p_load = Vin * 0.5 * (source[1:] + source[:-1]) * on, 0.5 * (vC[1:] ** 2 + vC[:-1] ** 2) / R
     e_in, e_load = np.concatenate([[0.0], np.cumsum(dt * p_in)]), np.concatenate([[0.0], np.cumsum(dt * p_load)])
     diverged = bool(np.any(stored > 10.0 * (stored[0] + np.abs(e_in) + 1e-9)))
-    residual = (stored[-1] - stored[0]) - (e_in[-1] - e_load[-1])
-    scale = max(abs(e_in[-1]), abs(e_load[-1]), stored.max(), ENERGY_FLOOR_J)
+    total_in, total_load = totals if totals is not None else (e_in[-1], e_load[-1])
+    residual = (stored[-1] - stored[0]) - (total_in - total_load)
+    scale = max(abs(total_in), abs(total_load), stored.max(), ENERGY_FLOOR_J)
     return True, diverged, float(residual / scale)
 
 
@@ -83,24 +90,24 @@ def _run_one(case: dict, method: str) -> dict:
         T = conv.period(p)
         t_end = case["periods"] * T
         problem = conv.problem(p, t_end)
+        totals = None
         if method.startswith("LCP"):
             theta = 1.0 if method.endswith("=1") else 0.5
             tr = simulate(problem, Theta(case["h_fraction"] * T, theta))
-            t, x, i_in, rule = tr.t, tr.x, tr.x[:, 0] * (tr.config == 0), "end" if theta == 1.0 else "mid"
-            if theta == 0.5:   # the input current of a step is the mid-step one, in its configuration
-                i_in = np.concatenate([[0.0], 0.5 * (tr.x[1:, 0] + tr.x[:-1, 0]) * (tr.config[1:] == 0)])
+            t, x, on, rule = tr.t, tr.x, tr.config[1:] == 0, "end" if theta == 1.0 else "mid"
         elif method == "event":
             from converters.event import simulate_event
             solution = simulate_event(problem, EventDriven())
-            t, w, x, u, config = solution.quadrature()
-            order = np.argsort(t)
-            t = np.concatenate([[0.0], t[order], [t_end]])
-            x = np.vstack([problem.x0, x[order], solution.x_end])
-            on = np.concatenate([[config[order][0] == 0], config[order] == 0, [config[order][-1] == 0]])
-            i_in, rule = x[:, 0] * on, "trap"
+            tq, w, xq, _, cq = solution.quadrature()
+            totals = (float(np.sum(w * p["Vin"] * xq[:, 0] * (cq == 0))), float(np.sum(w * xq[:, 1] ** 2)) / p["R"])
+            order = np.argsort(tq)
+            t = np.concatenate([[0.0], tq[order], [t_end]])
+            x = np.vstack([problem.x0, xq[order], solution.x_end])
+            node_on = cq[order] == 0
+            on, rule = np.append(node_on, node_on[-1]), "trap"    # for the divergence check; totals are exact
         elif method == "smooth":
-            tr = simulate(problem, Smoothing(eps=1e-4, rtol=1e-6))
-            t, x, i_in, rule = tr.t, tr.x, tr.x[:, 0] * (tr.config == 0), "trap"
+            tr = simulate(problem, Smoothing(eps=1e-4, rtol=1e-6, output_step=T / 1000))
+            t, x, on, rule = tr.t, tr.x, tr.config[1:] == 0, "trap"
         else:
             from netlists import SpiceOptions, build_netlist
 
@@ -109,10 +116,12 @@ def _run_one(case: dict, method: str) -> dict:
             result = run_spice(netlist)
             t = result.time
             x = np.column_stack([result.signal(netlist.probes[n]) for n in conv.state_names])
-            i_in, rule = -result.vectors["vin#branch"], "trap"    # the source's own current (switch leakage too)
-        finite, diverged, residual = _energy_checks(conv, p, t, x, i_in, rule)
+            # The source's own current (the switch's leakage included) replaces iL over every interval.
+            i_source, on, rule = -result.vectors["vin#branch"], np.ones(t.size - 1, bool), "trap"
+        finite, diverged, residual = _energy_checks(p, t, x, on, rule, totals,
+                                                    i_source if method == "ngspice" else None)
         return {"status": "ok", "finite": finite, "diverged": diverged, "energy_residual": residual,
-                "energy_created": bool(np.isfinite(residual) and residual > 1e-3), "points": int(t.size),
+                "energy_created": bool(np.isfinite(residual) and residual > ENERGY_TOL), "points": int(t.size),
                 "wall_s": time.perf_counter() - start, "error": ""}
     except Exception as exc:  # refused or failed: the message is the result
         return {"status": "error", "finite": None, "diverged": None, "energy_residual": float("nan"),
