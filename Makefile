@@ -42,6 +42,7 @@ report: setup
 
 bench: setup
 	$(PY) benchmarks/step_cost.py
+	$(PY) benchmarks/tradeoff.py
 
 clean:
 	rm -rf $(VENV) reports/*/ build *.egg-info

@@ -436,6 +436,10 @@ class _Machine:
                 return tau_a, xt_a
         xtol = max(self.options.event_tol * self.scale, 1e-300)
         s = brentq(g, left, width, xtol=xtol, rtol=4 * np.finfo(float).eps, maxiter=200)
+        if g(s) > _CROSS_RTOL * g_scale:
+            # A loose tolerance may stop short of the zero; the mode selection must see the crossing
+            # happen, so take the point past it (within 2 xtol, brentq's bound).
+            s = min(s + 2.0 * xtol, width)
         return tau_a + s, s ** _EXPONENTS @ V
 
     def run(self, x0, record: bool = True) -> EventSolution:

@@ -108,6 +108,18 @@ def test_cuk_gdcm_holds_i1_plus_i2_at_zero_exactly():
     assert np.all((lags > 0) & (lags < 1.5))
 
 
+@pytest.mark.parametrize("tol", [1e-2, 1e-4])
+def test_a_loose_event_tolerance_places_the_event_just_past_the_crossing(tol):
+    # Brent's method stops within tol T of the zero on either side; the event is taken past it (within
+    # 2 tol T) so the mode selection sees the crossing, never a repeated event at one instant.
+    conv, p, T, orbit = exact_orbit("cuk", {"L1": "10u", "L2": "10u"})
+    entry = orbit.solution.event_times[0]
+    sol = simulate_event(conv.problem(p, 20 * T, orbit.x0), EventDriven(event_tol=tol))
+    kinds = np.array(sol.event_kinds)
+    late = (np.array(sol.event_times)[kinds == "activate"] - entry) % T / T
+    assert late.size == 20 and np.all((late >= 0) & (late <= 2 * tol + 1e-12))
+
+
 def test_configuration_entered_with_negative_y_jumps_by_the_moreau_impulse():
     # Buck OFF with iL = -1 A: the diode cannot carry it; the impulse sets iL to 0 at once.
     buck = get_converter("buck")

@@ -170,3 +170,126 @@ GDCM_MAPS = [(f"Conduction modes: {name} D-K map", _map_builder(name)) for name 
 EXTRA_SECTIONS["default"] += GDCM_MAPS
 EXTRA_SECTIONS["lcp"] = EXTRA_SECTIONS["default"][:2]
 EXTRA_SECTIONS["gdcm"] = GDCM_MAPS
+
+
+# --- the speed-accuracy trade-off and the stability map (pcsuite bench) ---------------------------------
+
+TRADEOFF_TEXT = (
+    "<p>Every method against the exact event-driven solution (exact flows per mode, root-found events, "
+    "Newton on the exact period map), each run starting on the exact periodic orbit and covering the same "
+    "{periods} periods. Errors are relative: mean vout, RMS of the (first) inductor current, and the "
+    "timing of the diode events of the last period in units of T; the accuracy axis is the larger of the "
+    "first two. Wall time is each method's own run (LCP: <code>simulate()</code> with its matrices; event: "
+    "run plus exact quadrature; smoothing: the solve; ngspice: load plus <code>.tran</code>, timed in its "
+    "worker). Acceptance per case: at the accuracy of ngspice's default (<code>.tran</code> TMAX = T/100, "
+    "RELTOL 1e-3, trap) the fastest LCP run at least as accurate is 100 times faster or more, and the "
+    "fastest event run below 1e-8 takes less time than that ngspice run.</p>")
+
+
+def _saved_note(kind: str, command: str) -> Section:
+    text = (f"<p>No saved {kind} results: run <code>{command}</code> (writes <code>reports/bench/</code>), "
+            "then <code>make report</code> shows them here, or <code>pcsuite report bench</code> runs them live "
+            "(quick sweep).</p>")
+    return Section(f"{kind[0].upper()}{kind[1:]}: not measured yet", text, ok=True, metrics={"measured": False})
+
+
+def tradeoff_section(files: dict, meta: dict, source: str) -> Section:
+    """The trade-off tables and Pareto plot from the files of :func:`validation.bench.collect_tradeoff`."""
+    from .bench import read_csv
+    from .tradeoff import pareto_front
+    runs = read_csv(files["tradeoff.csv"])
+    accept = read_csv(files["tradeoff_acceptance.csv"])
+    refs = read_csv(files["tradeoff_references.csv"])
+    stiffness = read_csv(files["stiffness.csv"])
+    front = pd.concat([pareto_front(g) for _, g in runs.groupby("case", sort=False)])
+    columns = ["case", "family", "setting", "wall_s", "error", "err_mean_vout", "err_rms_iL", "err_event_T"]
+    failed = runs[runs["failure"].astype(str) != ""]
+    ok = bool(len(accept)) and bool((accept["result"] == "pass").all())
+    text = (f"<p>{html.escape(source)}</p>" + TRADEOFF_TEXT.format(periods=meta.get("periods", "the same"))
+            + table_html(accept, "result", good=("pass",))
+            + "<img src='tradeoff.png' alt='Pareto plot: error against wall time per case and method'>"
+            + "<p>The exact references:</p>" + table_html(refs)
+            + "<p>Pareto front per case (runs no other run beats in both time and error):</p>"
+            + table_html(front[[c for c in columns if c in front]])
+            + f"<p>Failed runs: {len(failed)} of {len(runs)}" + (":" if len(failed) else ".") + "</p>"
+            + (table_html(failed[["case", "family", "setting", "failure"]]) if len(failed) else "")
+            + "<p>Smoothing (DCM buck, Radau, rtol 1e-6): the largest Jacobian eigenvalue times T grows as "
+              "1/eps, and with it the solver's work.</p>" + table_html(stiffness)
+            + "<p>Every run: <a href='tradeoff.csv'>tradeoff.csv</a>; per case: "
+              "<a href='tradeoff_acceptance.csv'>tradeoff_acceptance.csv</a>.</p>")
+    metrics = {"runs": len(runs), "failed_runs": len(failed), "acceptance": accept.to_dict(orient="records"),
+               "date": meta.get("date", "")}
+    return Section("Speed-accuracy trade-off", text, dict(files), ok=ok, metrics=metrics)
+
+
+STABILITY_TEXT = (
+    "<p>The buck converter (Vin 12 V, L 10 uH, C 100 uF, R 10 ohm, 100 kHz, D 0.4) pushed one parameter "
+    "at a time to an extreme, every method run from rest for 10 periods (2 for h = 1e-6 T) in its own "
+    "process with a 60 s limit. Checks: NaN or inf; divergence (stored energy above 10 times what was "
+    "supplied); energy created (the scheme's own discrete energy balance, (E_end - E_0) - (E_in - E_load), "
+    "above 1e-3 of the energy scale: ideal switches and diodes are lossless, a scheme may dissipate but "
+    "must not create); failure to finish; errors (ngspice failures are counted here). Ill-posed requests "
+    "are refused before any run with one line naming the parameter.</p>")
+
+STABILITY_NOTE = (
+    "<p>LCP theta = 0.5 imposes complementarity at the step end while its energy identity is taken at "
+    "the mid-step state: a diode that switches inside a step does the work h x_mid' Q B lambda_k+1 "
+    "(checked step by step to 1e-18 J). At h = T/2 this creates energy above the threshold; it falls as "
+    "h^2 (see the residuals of the smaller steps in stability.csv). Backward Euler only dissipates.</p>")
+
+
+def stability_section(files: dict, meta: dict, source: str) -> Section:
+    """The stability map from the files of :func:`validation.bench.collect_stability`."""
+    from .bench import read_csv
+    table = read_csv(files["stability.csv"])
+    counts = read_csv(files["stability_summary.csv"])
+    refused = read_csv(files["ill_posed.csv"])
+    lcp = table[table["method"].str.startswith("LCP")]
+    lcp_finite = int((lcp["verdict"] == "NaN/inf").sum()) == 0 and int((lcp["status"] != "ok").sum()) == 0
+    all_refused = bool(refused["refused"].astype(str).eq("True").all())
+    ok = lcp_finite and all_refused
+    flagged = table[table["verdict"] != "ok"]
+    columns = ["vary", "value", "h", "method", "verdict", "energy_residual", "points", "wall_s", "error"]
+    text = (f"<p>{html.escape(source)}</p>" + STABILITY_TEXT + table_html(counts)
+            + f"<p>Runs not ok: {len(flagged)} of {len(table)}" + (":" if len(flagged) else ".") + "</p>"
+            + (table_html(flagged[columns]) if len(flagged) else "") + STABILITY_NOTE
+            + "<p>Ill-posed requests:</p>" + table_html(refused)
+            + "<p>Every run: <a href='stability.csv'>stability.csv</a>.</p>")
+    metrics = {"runs": len(table), "lcp_nan_inf": int((lcp["verdict"] == "NaN/inf").sum()),
+               "ill_posed_refused": int(refused["refused"].astype(str).eq("True").sum()),
+               "errors": int((table["verdict"] == "error").sum()), "date": meta.get("date", "")}
+    return Section("Numerical stability at the extremes", text, dict(files), ok=ok, metrics=metrics)
+
+
+def saved_bench_section(part: str) -> Section:
+    """The newest saved ``pcsuite bench`` results of one part, or a note saying how to make them."""
+    from .bench import DEFAULT_OUT, read_bench
+    saved = read_bench(DEFAULT_OUT, part)
+    if saved is None:
+        return _saved_note("speed-accuracy trade-off" if part == "tradeoff" else "stability map",
+                           "make bench" if part == "tradeoff" else "pcsuite bench --only stability")
+    files, meta = saved
+    source = f"Saved by pcsuite bench on {meta.get('date', 'an unknown date')} ({DEFAULT_OUT})."
+    build = tradeoff_section if part == "tradeoff" else stability_section
+    return build(files, meta, source)
+
+
+def live_bench_section(part: str) -> Section:
+    """The part measured now (trade-off: the quick sweep)."""
+    from .bench import collect_stability, collect_tradeoff
+    if part == "tradeoff":
+        files, meta = collect_tradeoff(quick=True, progress=False)
+    else:
+        files, meta = collect_stability(progress=False)
+    return (tradeoff_section if part == "tradeoff" else stability_section)(files, meta, "Measured for this report.")
+
+
+def _part(builder, part):
+    from functools import partial
+    return partial(builder, part)
+
+
+EXTRA_SECTIONS["default"] += [("Speed-accuracy trade-off", _part(saved_bench_section, "tradeoff")),
+                              ("Numerical stability at the extremes", _part(saved_bench_section, "stability"))]
+EXTRA_SECTIONS["bench"] = [("Speed-accuracy trade-off", _part(live_bench_section, "tradeoff")),
+                           ("Numerical stability at the extremes", _part(live_bench_section, "stability"))]

@@ -10,12 +10,13 @@ the same span:
                 the nearest detected event of the same kind; inf when a method misses it)
     error       max(mean_vout, rms_iL): the accuracy axis of the Pareto plot
 
-Each method integrates with its own natural rule: backward Euler the end-point rule (its discrete
-volt-second balance), theta = 0.5, smoothing and ngspice the trapezoidal rule on their points, the
-event method Gauss-Legendre on its exact pieces. Wall time is the method's own run: LCP
+Each method is measured by its own natural rule: backward Euler the end-point rule (its discrete
+volt-second balance); theta = 0.5, smoothing and ngspice the exact mean and RMS of the piecewise-linear
+waveform through their points (what a plot of their samples shows); the event method Gauss-Legendre on
+its exact pieces. Wall time is the method's own run: LCP
 ``simulate()`` including its matrices; event ``simulate_event`` plus the quadrature; smoothing its
 solve; ngspice loading and running the netlist, timed inside the worker. Runs under 50 ms take the
-best of three (the machine is shared and noisy).
+best of five, ngspice runs under 0.5 s the best of three (the machine is shared and noisy).
 """
 from __future__ import annotations
 
@@ -94,12 +95,22 @@ def _exact_measures(conv, p, solution, span):
 
 
 def _sampled_measures(conv, p, t, x, u, config, rule):
+    """Mean vout and RMS of the first state from samples: backward Euler's end-point rule, or ('linear')
+    the exact mean and RMS of the piecewise-linear waveform through the samples."""
     v = conv.vout(x, u, config, p)
     span = t[-1] - t[0]
+    dt = np.diff(t)
     if rule == "end":
-        dt = np.diff(t)
         return float(dt @ v[1:] / span), float(np.sqrt(dt @ x[1:, 0] ** 2 / span))
-    return float(np.trapezoid(v, t) / span), float(np.sqrt(np.trapezoid(x[:, 0] ** 2, t) / span))
+    return float(np.trapezoid(v, t) / span), linear_rms(t, x[:, 0])
+
+
+def linear_rms(t, y) -> float:
+    """RMS of the piecewise-linear interpolant of (t, y), exactly: each piece gives dt (a^2 + a b + b^2) / 3.
+    (The trapezoidal rule on y^2 would add its own error, h^2 / (2 a^2) relative on a ramp of length a:
+    3e-4 at T/100 on a DCM buck's current, more than the methods' own.)"""
+    a, b = y[:-1], y[1:]
+    return float(np.sqrt(np.sum(np.diff(t) * (a * a + a * b + b * b)) / 3.0 / (t[-1] - t[0])))
 
 
 def _timing_error(ref: Reference, times) -> float:
@@ -111,7 +122,7 @@ def _timing_error(ref: Reference, times) -> float:
     return float(max(np.abs(times - e).min() for e in ref.events) / ref.period)
 
 
-def _best_of(run, repeats=3, threshold=0.05):
+def _best_of(run, repeats=5, threshold=0.05):
     best, out = np.inf, None
     for i in range(repeats):
         start = time.perf_counter()
@@ -135,7 +146,7 @@ def measure_lcp(ref: Reference, steps: int, theta: float, periods: int = PERIODS
     problem = conv.problem(ref.params, periods * ref.period, ref.x_star)
     method = Theta(ref.period / steps, theta)
     wall, tr = _best_of(lambda: simulate(problem, method))
-    mean, rms = _sampled_measures(conv, ref.params, tr.t, tr.x, tr.u, tr.config, "end" if theta == 1.0 else "trap")
+    mean, rms = _sampled_measures(conv, ref.params, tr.t, tr.x, tr.u, tr.config, "end" if theta == 1.0 else "linear")
     events = tr.events
     timing = _timing_error(ref, events.loc[events["kind"] == "activate", "time"])
     return _row(ref, f"LCP theta={theta:g}", f"h=T/{steps}", wall, mean, rms, timing, steps=int(tr.steps))
@@ -165,7 +176,7 @@ def measure_smooth(ref: Reference, eps: float, rtol: float, periods: int = PERIO
     start = time.perf_counter()
     tr = simulate_smooth(problem, method)
     wall = time.perf_counter() - start
-    mean, rms = _sampled_measures(conv, ref.params, tr.t, tr.x, tr.u, tr.config, "trap")
+    mean, rms = _sampled_measures(conv, ref.params, tr.t, tr.x, tr.u, tr.config, "linear")
     timing = _timing_error(ref, tr.events.loc[tr.events["kind"] == "activate", "time"])
     stats = tr.metadata["stats"]
     return _row(ref, "smooth", f"eps={eps:g} rtol={rtol:g}", wall, mean, rms, timing, steps=stats["nfev"],
@@ -184,6 +195,9 @@ def measure_spice(ref: Reference, tmax_div: int, reltol: float, method: str, per
     family = f"ngspice {method}"
     try:
         result = run_spice(netlist)
+        wall = result.wall_s
+        for _ in range(2 if wall < 0.5 else 0):      # like the others: best of three when short
+            wall = min(wall, run_spice(netlist).wall_s)
     except SpiceError as exc:
         return {"case": ref.case.name, "family": family, "setting": setting, "wall_s": float("nan"),
                 "error": float("nan"), "failure": str(exc)}
@@ -191,14 +205,13 @@ def measure_spice(ref: Reference, tmax_div: int, reltol: float, method: str, per
     x = np.column_stack([result.signal(netlist.probes[name]) for name in conv.state_names])
     v = result.signal(netlist.probes["vout"])
     span = t[-1] - t[0]
-    mean = float(np.trapezoid(v, t) / span)
-    rms = float(np.sqrt(np.trapezoid(x[:, 0] ** 2, t) / span))
+    mean, rms = float(np.trapezoid(v, t) / span), linear_rms(t, x[:, 0])
     last = (periods - 1) * ref.period
     labels = spice_modes(conv, result, netlist, last)
     held = np.isin(labels.astype(str), ("DCM", "GDCM-OFF"))
     starts = np.flatnonzero(held[1:] & ~held[:-1]) + 1
     timing = _timing_error(ref, t[starts][t[starts] >= last])
-    return _row(ref, family, setting, result.wall_s, mean, rms, timing, steps=int(result.accepted_steps))
+    return _row(ref, family, setting, wall, mean, rms, timing, steps=int(result.accepted_steps))
 
 
 def tradeoff_table(cases=CASES, sweep: dict = FULL, spice: bool = True, periods: int = PERIODS,

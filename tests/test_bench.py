@@ -1,0 +1,119 @@
+"""The speed-accuracy trade-off and the stability map: the measurements, their acceptance logic, the
+``pcsuite bench`` files and the report sections built from them."""
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from validation import stability, tradeoff
+from validation.cli import main
+
+
+@pytest.fixture(scope="module")
+def lcp_map():
+    """Every extreme case with both LCP schemes (44 runs, each in its own process)."""
+    return stability.stability_table(("LCP theta=1", "LCP theta=0.5"), progress=False)
+
+
+def test_no_well_posed_extreme_case_gives_nan_or_inf_with_the_lcp_stepper(lcp_map):
+    assert len(lcp_map) == 2 * len(stability.extreme_cases())
+    assert (lcp_map["status"] == "ok").all(), lcp_map.loc[lcp_map["status"] != "ok", "error"].tolist()
+    assert lcp_map["finite"].all() and not lcp_map["diverged"].any()
+    # Backward Euler only dissipates (its discrete energy balance is exact at the step end).
+    euler = lcp_map[lcp_map["method"] == "LCP theta=1"]
+    assert (euler["energy_residual"] <= 1e-12).all()
+    assert euler.loc[euler["vary"] == "h", "energy_residual"].min() < -0.1          # h = T/2 damps hard
+    # theta = 0.5 creates energy when a diode switches inside a step (complementarity at the step end):
+    # above the threshold at h = T/2 only, and it vanishes as the step shrinks.
+    trap = lcp_map[(lcp_map["method"] == "LCP theta=0.5") & (lcp_map["vary"] == "h")].set_index("value")
+    assert trap.loc[0.5, "verdict"] == "energy created" and trap.loc[0.5, "energy_residual"] > 1e-3
+    assert 0 < trap.loc[1e-2, "energy_residual"] < 1e-5 and abs(trap.loc[1e-4, "energy_residual"]) < 1e-9
+    flagged = lcp_map[lcp_map["verdict"] != "ok"]
+    assert list(zip(flagged["method"], flagged["vary"], flagged["value"])) == [("LCP theta=0.5", "h", 0.5)]
+
+
+def test_ill_posed_requests_are_refused_with_one_line_naming_the_parameter():
+    table = stability.ill_posed_table()
+    assert table["refused"].all() and len(table) == len(stability.ILL_POSED)
+    for row in table.itertuples():
+        assert "\n" not in row.message and "got" in row.message
+        assert row.message.split()[0] == row.parameter
+    assert "must be in (0, inf) H; got 0.0" in table.set_index("parameter").loc["L", "message"]
+
+
+def test_event_method_balances_energy_exactly_and_an_ngspice_failure_is_counted(monkeypatch):
+    from validation import spice
+    cases = [c for c in stability.extreme_cases() if (c["vary"], c["value"]) in (("D", 1e-4), ("L", 1e-6), ("R", 1e9))]
+    table = stability.stability_table(("event", "smooth"), cases, progress=False)
+    event = table[table["method"] == "event"]
+    assert (event["verdict"] == "ok").all() and (event["energy_residual"].abs() < 1e-10).all()
+    assert (table.loc[table["method"] == "smooth", "energy_residual"].abs() < 1e-3).all()
+
+    def fail(netlist, *args, **kwargs):
+        raise spice.SpiceError("ngspice: timestep too small; time = 1e-07, timestep = 1.25e-22")
+    monkeypatch.setattr(spice, "run_spice", fail)       # the forked worker inherits the patch
+    failed = stability.stability_table(("ngspice",), cases[:1], progress=False)
+    assert failed["verdict"].tolist() == ["error"] and "timestep too small" in failed["error"].iloc[0]
+    assert stability.stability_summary(failed)[["runs", "ok", "errors"]].values.tolist() == [[1, 0, 1]]
+
+
+def test_acceptance_takes_the_fastest_run_at_least_as_accurate_as_the_ngspice_default():
+    default = "TMAX=T/100 RELTOL=0.001 trap"
+    rows = [("a", "ngspice trap", default, 0.2, 1e-4), ("a", "LCP theta=1", "h=T/100", 0.001, 1e-3),
+            ("a", "LCP theta=1", "h=T/1000", 0.0015, 9e-5), ("a", "LCP theta=0.5", "h=T/300", 0.0019, 1e-6),
+            ("a", "event", "tol=1e-07T", 0.05, 5e-9), ("a", "event", "tol=1e-13T", 0.1, 1e-14),
+            ("b", "ngspice trap", default, 0.2, 1e-4), ("b", "LCP theta=1", "h=T/1000", 0.0021, 1e-5),
+            ("b", "event", "tol=1e-13T", 0.3, 1e-14)]
+    runs = pd.DataFrame(rows, columns=["case", "family", "setting", "wall_s", "error"])
+    table = tradeoff.acceptance(runs).set_index("case")
+    assert table.loc["a", "lcp_setting"] == "LCP theta=1 h=T/1000"
+    assert table.loc["a", "lcp_speedup"] == pytest.approx(0.2 / 0.0015)
+    assert table.loc["a", "event_setting"] == "tol=1e-07T" and table.loc["a", "result"] == "pass"
+    assert table.loc["b", "lcp_speedup"] == pytest.approx(0.2 / 0.0021) and table.loc["b", "result"] == "fail"
+
+
+def test_tradeoff_measures_every_method_against_the_exact_solution(ngspice):
+    sweep = {"lcp_steps": (100, 1000), "thetas": (1.0, 0.5), "event_tols": (1e-13,), "smooth": ((1e-3, 1e-6),),
+             "spice": (tradeoff.SPICE_DEFAULT,)}
+    runs, refs = tradeoff.tradeoff_table((tradeoff.CASES[1],), sweep, periods=20, progress=False)
+    assert (runs["failure"] == "").all() and len(runs) == 7
+    ref = refs.iloc[0]
+    assert ref["diode_events_per_period"] == 1 and ref["exact_mean_vout_V"] == pytest.approx(6.962476, rel=1e-6)
+    runs = runs.set_index(["family", "setting"])
+    event = runs.loc[("event", "tol=1e-13T")]
+    assert event["error"] < 1e-8 and event["err_event_T"] < 1e-9
+    # Backward Euler: first order in h; theta = 0.5 at least ten times better at each h.
+    e100, e1000 = runs.loc[("LCP theta=1", "h=T/100"), "error"], runs.loc[("LCP theta=1", "h=T/1000"), "error"]
+    assert 5 < e100 / e1000 < 20
+    assert runs.loc[("LCP theta=0.5", "h=T/1000"), "error"] < e1000 / 10
+    # The diode's turn-off instant: within a step for the stepper.
+    assert runs.loc[("LCP theta=1", "h=T/1000"), "err_event_T"] <= 1e-3 + 1e-12
+    spice_default = runs.loc[("ngspice trap", "TMAX=T/100 RELTOL=0.001 trap")]
+    assert 1e-7 < spice_default["error"] < 1e-2 and spice_default["wall_s"] > 0
+    smooth = runs.loc[("smooth", "eps=0.001 rtol=1e-06")]
+    assert 1e-5 < smooth["error"] < 1e-2                                       # O(eps)
+
+
+def test_bench_cli_writes_its_files_and_the_report_shows_them(tmp_path, monkeypatch, capsys):
+    from validation import bench, sections
+    from validation.report import write_report
+    out = tmp_path / "bench"
+    assert main(["bench", "--quick", "--no-spice", "--only", "tradeoff", "--periods", "5", "--out", str(out),
+                 "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert set(summary) == {"tradeoff"} and summary["tradeoff"]["failed_runs"] == 0
+    assert sorted(p.name for p in out.iterdir()) == sorted([*bench.TRADEOFF_FILES, "bench.json"])  # no temporaries
+    assert json.loads((out / "bench.json").read_text())["tradeoff"]["periods"] == 5
+    stiffness = pd.read_csv(out / "stiffness.csv")
+    growth = stiffness["stiffness_rho_T"].to_numpy()
+    np.testing.assert_allclose(growth[1:] / growth[:-1], 10.0, rtol=0.1)        # stiffness ~ 1/eps
+    monkeypatch.setattr(bench, "DEFAULT_OUT", out)
+    section = sections.saved_bench_section("tradeoff")
+    assert section.title == "Speed-accuracy trade-off" and "tradeoff.png" in section.html
+    assert sections.saved_bench_section("stability").metrics == {"measured": False}
+    index = write_report([section], tmp_path / "report", "t")
+    for name in ("tradeoff.png", "tradeoff.csv", "tradeoff_acceptance.csv"):
+        assert (index.parent / name).stat().st_size > 0
+    assert main(["bench", "--periods", "1", "--out", str(out)]) == 2
+    assert "periods must be an integer in [2, 100000]; got 1" in capsys.readouterr().err
