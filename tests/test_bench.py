@@ -111,6 +111,7 @@ def test_bench_cli_writes_its_files_and_the_report_shows_them(tmp_path, monkeypa
     monkeypatch.setattr(bench, "DEFAULT_OUT", out)
     section = sections.saved_bench_section("tradeoff")
     assert section.title == "Speed-accuracy trade-off" and "tradeoff.png" in section.html
+    assert section.metrics["runs"] == summary["tradeoff"]["runs"] and section.metrics["failed_runs"] == 0
     assert sections.saved_bench_section("stability").metrics == {"measured": False}
     index = write_report([section], tmp_path / "report", "t")
     for name in ("tradeoff.png", "tradeoff.csv", "tradeoff_acceptance.csv"):
