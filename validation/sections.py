@@ -203,7 +203,7 @@ def tradeoff_section(files: dict, meta: dict, source: str) -> Section:
     stiffness = read_csv(files["stiffness.csv"])
     front = pd.concat([pareto_front(g) for _, g in runs.groupby("case", sort=False)])
     columns = ["case", "family", "setting", "wall_s", "error", "err_mean_vout", "err_rms_iL", "err_event_T"]
-    failed = runs[runs["failure"].fillna("").astype(str) != ""]
+    failed = runs[runs["failure"].astype(object).fillna("").astype(str) != ""]
     ok = bool(len(accept)) and bool((accept["result"] == "pass").all())
     text = (f"<p>{html.escape(source)}</p>" + TRADEOFF_TEXT.format(periods=meta.get("periods", "the same"))
             + table_html(accept, "result", good=("pass",))
