@@ -18,6 +18,7 @@ import pandas as pd
 from converters.errors import ParameterError
 
 from .io import atomic_write_bytes, atomic_write_text
+from .report import csv_bytes as _csv
 
 DEFAULT_OUT = Path("reports/bench")
 PARTS = ("tradeoff", "stability")
@@ -25,10 +26,6 @@ TRADEOFF_FILES = ("tradeoff.csv", "tradeoff_references.csv", "tradeoff_acceptanc
                   "stiffness.csv")
 STABILITY_FILES = ("stability.csv", "stability_summary.csv", "ill_posed.csv")
 STIFFNESS_EPS = (1e-2, 1e-3, 1e-4, 1e-5, 1e-6)
-
-
-def _csv(frame: pd.DataFrame) -> bytes:
-    return frame.to_csv(index=False).encode()
 
 
 def read_csv(data: bytes) -> pd.DataFrame:

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import html
+from functools import partial
 
 import matplotlib
 
@@ -154,9 +155,6 @@ def gdcm_map_section(name: str) -> Section:
     return Section(f"Conduction modes: {name} D-K map", text, files, ok=ok, metrics=summary)
 
 
-def _map_builder(name):
-    from functools import partial
-    return partial(gdcm_map_section, name)
 
 
 #: Report sections that are not scenes, per suite (the scenes come from validation/scenes/*.toml).
@@ -166,7 +164,7 @@ EXTRA_SECTIONS = {
                 ("LCS time-stepping: convergence on the Siconos circuits", core_section),
                 ("Converter library: steady state against closed forms", converter_section)],
 }
-GDCM_MAPS = [(f"Conduction modes: {name} D-K map", _map_builder(name)) for name in ("buck", "boost", "buck-boost", "cuk")]
+GDCM_MAPS = [(f"Conduction modes: {name} D-K map", partial(gdcm_map_section, name)) for name in ("buck", "boost", "buck-boost", "cuk")]
 EXTRA_SECTIONS["default"] += GDCM_MAPS
 EXTRA_SECTIONS["lcp"] = EXTRA_SECTIONS["default"][:2]
 EXTRA_SECTIONS["gdcm"] = GDCM_MAPS
@@ -284,12 +282,7 @@ def live_bench_section(part: str) -> Section:
     return (tradeoff_section if part == "tradeoff" else stability_section)(files, meta, "Measured for this report.")
 
 
-def _part(builder, part):
-    from functools import partial
-    return partial(builder, part)
-
-
-EXTRA_SECTIONS["default"] += [("Speed-accuracy trade-off", _part(saved_bench_section, "tradeoff")),
-                              ("Numerical stability at the extremes", _part(saved_bench_section, "stability"))]
-EXTRA_SECTIONS["bench"] = [("Speed-accuracy trade-off", _part(live_bench_section, "tradeoff")),
-                           ("Numerical stability at the extremes", _part(live_bench_section, "stability"))]
+EXTRA_SECTIONS["default"] += [("Speed-accuracy trade-off", partial(saved_bench_section, "tradeoff")),
+                              ("Numerical stability at the extremes", partial(saved_bench_section, "stability"))]
+EXTRA_SECTIONS["bench"] = [("Speed-accuracy trade-off", partial(live_bench_section, "tradeoff")),
+                           ("Numerical stability at the extremes", partial(live_bench_section, "stability"))]
