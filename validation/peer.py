@@ -76,14 +76,19 @@ def ours_differs(name: str, method: str) -> str:
     return DIFFERENCES.get((name, method), "")
 
 
-def peer_directory() -> Path | None:
-    """$PCSUITE_PEER_DIR, else ../shared/peer/siconos-lcp next to the checkout, else None."""
+#: The collection as shipped with pcsuite (Apache-2.0 data, see its README and LICENSE).
+PEER_DIR = Path(__file__).with_name("data") / "siconos-lcp"
+
+
+def peer_directory() -> Path:
+    """$PCSUITE_PEER_DIR when set (another copy of the collection), else the copy shipped in
+    ``validation/data/siconos-lcp``."""
     env = os.environ.get("PCSUITE_PEER_DIR")
-    here = Path(__file__).resolve().parents[1]
-    for path in ([Path(env)] if env else []) + [here.parent / "shared" / "peer" / "siconos-lcp"]:
-        if path.is_dir() and any(path.glob("lcp_*.dat")):
-            return path
-    return None
+    path = Path(env) if env else PEER_DIR
+    if not (path.is_dir() and any(path.glob("lcp_*.dat"))):
+        from converters.errors import ParameterError
+        raise ParameterError(f"PCSUITE_PEER_DIR must name a directory holding lcp_*.dat files; got {str(path)!r}")
+    return path
 
 
 def solver_table(problems, methods=METHODS, tol=PEER_TOL):
