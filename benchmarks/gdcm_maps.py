@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import time
 
-from converters.simulation import run_converter
+from converters.run import run_converter
 from validation.gdcm import _lcp_point, dk_grid, dk_map, map_summary
 
 

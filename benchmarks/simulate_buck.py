@@ -10,7 +10,7 @@ import contextlib
 import io
 import time
 
-from converters.simulation import run_converter
+from converters.run import run_converter
 from validation.cli import main as cli
 
 REPEATS = 5

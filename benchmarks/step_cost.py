@@ -12,11 +12,11 @@ import time
 
 import numpy as np
 
-from converters.circuits import diode_bridge, half_wave_rectifier
-from converters.discretize import step_matrices
-from converters.kernels import run_steps
+from converters.models.circuits import diode_bridge, half_wave_rectifier
+from converters.methods.discretize import step_matrices
+from converters.methods.theta_kernels import run_steps
 from converters.methods import BackwardEuler
-from converters.stepping import simulate
+from converters.simulate import simulate
 
 REPEATS = 5
 
@@ -51,10 +51,10 @@ def simulate_cost(problem, h):
 SECOND_PROCESS = """
 import time
 t0 = time.perf_counter()
-from converters.circuits import half_wave_rectifier, diode_bridge
-from converters.kernels import _masks_by_size
+from converters.models.circuits import half_wave_rectifier, diode_bridge
+from converters.methods.theta_kernels import _masks_by_size
 from converters.methods import BackwardEuler
-from converters.stepping import simulate
+from converters.simulate import simulate
 t1 = time.perf_counter()
 _masks_by_size(1)  # numba's own first-call set-up (type registries, its BLAS check imports scipy.linalg)
 t2 = time.perf_counter()

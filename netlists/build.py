@@ -12,7 +12,7 @@ import math
 from dataclasses import dataclass, field
 
 from converters.errors import ParameterError
-from converters.library import get_converter
+from converters.models import get_converter
 from converters.validate import parse_value
 
 
@@ -195,7 +195,7 @@ _BODIES = {"buck": _buck, "boost": _boost, "buck-boost": _buck_boost, "cuk": _cu
 
 def build_smc_netlist(params: dict | None, t_end, options: SpiceOptions | None = None, x0=None,
                       rectifier: str = "switch") -> Netlist:
-    """The boost under sliding-mode current control (``converters.sliding``) as an ngspice netlist.
+    """The boost under sliding-mode current control (``converters.models.sliding``) as an ngspice netlist.
 
     The controller is a behavioural source ctrl = Iref - iL driving an SW switch with VT = 0 and
     VH = band: ngspice's switch closes above VT + VH and opens below VT - VH, which is the hysteresis
@@ -211,7 +211,7 @@ def build_smc_netlist(params: dict | None, t_end, options: SpiceOptions | None =
     """
     if rectifier not in ("switch", "diode"):
         raise ParameterError(f"rectifier must be 'switch' or 'diode'; got {rectifier!r}")
-    from converters.sliding import iref0, resolve_smc
+    from converters.models.sliding import iref0, resolve_smc
     p = resolve_smc(params)
     options = options or SpiceOptions(tmax_fraction=1.0 / 200.0)
     t_end = parse_value("t_end", t_end)
@@ -219,7 +219,7 @@ def build_smc_netlist(params: dict | None, t_end, options: SpiceOptions | None =
         raise ParameterError(f"t_end must be positive (> 0 s); got {t_end!r}")
     iL0, v0 = (0.0, p["Vin"]) if x0 is None else (parse_value("x0[iL]", x0[0]), parse_value("x0[vC]", x0[1]))
     # TMAX: a fraction of the predicted switching period (tmax_fraction of 1/f).
-    from converters.sliding import predicted_frequency
+    from converters.models.sliding import predicted_frequency
     tmax = options.tmax_fraction / predicted_frequency(p)
     vref, i0 = _num("Vref", p["Vref"]), _num("Iref0", iref0(p))
     conductance = f"{_num('1/R', 1.0 / p['R'])}"

@@ -150,9 +150,9 @@ def _lcp_solve(args) -> int:
 
 
 def _list(args) -> int:
-    from converters.library import CONVERTERS
+    from converters.models import CONVERTERS
 
-    from converters.sliding import PARAMETERS as SMC_PARAMETERS
+    from converters.models.sliding import PARAMETERS as SMC_PARAMETERS
 
     from .scenes import SCENE_DIR, load_scene, suite_names
     from .sections import EXTRA_SECTIONS
@@ -190,7 +190,7 @@ def _list(args) -> int:
 
 def _simulate(args) -> int:
     from converters.params import parse_assignments
-    from converters.simulation import run_converter
+    from converters.run import run_converter
     if args.out is not None and args.out.suffix.lower() not in (".csv", ".parquet"):
         raise ParameterError(f"--out must end in .csv or .parquet; got {str(args.out)!r}")
     if args.control != "pwm":
@@ -231,7 +231,7 @@ def _simulate_smc(args) -> int:
     import time as _time
 
     from converters.params import parse_assignments
-    from converters.sliding import predicted_frequency, resolve_smc, simulate_smc
+    from converters.models.sliding import predicted_frequency, resolve_smc, simulate_smc
     from converters.validate import parse_value
     _check_smc_args(args)
     p = resolve_smc(parse_assignments(args.params))
@@ -326,7 +326,7 @@ def _write_frame(frame, path: Path):
 def _simulate_spice(args) -> int:
     import time as _time
 
-    from converters.library import get_converter
+    from converters.models import get_converter
     from converters.params import parse_assignments
     from netlists import build_netlist
 
@@ -435,7 +435,7 @@ def _gdcm_map(args) -> int:
 
 
 def _netlist(args) -> int:
-    from converters.library import get_converter
+    from converters.models import get_converter
     from converters.params import parse_assignments
     from netlists import build_netlist
     conv = get_converter(args.converter)

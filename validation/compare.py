@@ -15,8 +15,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from converters.errors import ParameterError
-from converters.library import get_converter
-from converters.simulation import ConverterRun, run_converter
+from converters.models import get_converter
+from converters.run import ConverterRun, run_converter
 from netlists import SpiceOptions, build_netlist
 
 from .modes import period_sequences, spice_modes

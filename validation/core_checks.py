@@ -7,9 +7,9 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from converters.circuits import diode_bridge, half_wave_rectifier, parallel_rlc_exact
+from converters.models.circuits import diode_bridge, half_wave_rectifier, parallel_rlc_exact
 from converters.methods import Theta
-from converters.stepping import simulate
+from converters.simulate import simulate
 
 
 def convergence_table() -> pd.DataFrame:

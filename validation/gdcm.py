@@ -21,10 +21,11 @@ import time
 import numpy as np
 import pandas as pd
 
-from converters import analytic, gdcm
-from converters.conduction import HELD, held_fraction, mode_class, mode_intervals, orbit_intervals, periodic_orbit
+from converters.analysis import gdcm
+from converters.models import analytic
+from converters.analysis.modes import HELD, held_fraction, mode_class, mode_intervals, orbit_intervals, periodic_orbit
 from converters.errors import ParameterError
-from converters.library import get_converter
+from converters.models import get_converter
 from netlists import SpiceOptions, build_netlist
 
 from .modes import spice_modes

@@ -8,7 +8,7 @@ the converter (range errors name the parameter); thresholds must be positive num
     description = "..."
     suites = ["default"]
     control = "smc"                         # optional: boost under sliding-mode control ("smc",
-                                            # "smc-implicit"); params are then those of converters.sliding
+                                            # "smc-implicit"); params are then those of converters.models.sliding
     [params]            # converter parameters, SPICE suffixes allowed
     [run]               # start = "steady" | "rest", periods, window; control scenes: t_end
     [methods.lcp]       # h, theta
@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from converters.errors import ParameterError
-from converters.library import get_converter
+from converters.models import get_converter
 from converters.validate import parse_value
 from netlists import SpiceOptions
 
@@ -81,7 +81,7 @@ def load_scene(path) -> Scene:
     if control != "pwm" and converter.name != "boost":
         raise ParameterError(f"{where}: control {control!r} is available for the boost only; got {converter.name!r}")
     params = data.get("params", {})
-    from converters import sliding
+    from converters.models import sliding
     names = tuple(p.name for p in (converter.parameters if control == "pwm" else sliding.PARAMETERS))
     _strict(params, names, f"{where} [params]")
     try:

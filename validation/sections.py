@@ -98,8 +98,8 @@ def core_section() -> Section:
 
 
 def converter_section() -> Section:
-    from converters import analytic
-    from converters.simulation import run_converter
+    from converters.models import analytic
+    from converters.run import run_converter
 
     from .operating_points import OPERATING_POINTS, TOLERANCE
     rows = []

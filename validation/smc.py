@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from converters.sliding import predicted_frequency, recovery_time, resolve_smc, simulate_smc
+from converters.models.sliding import predicted_frequency, recovery_time, resolve_smc, simulate_smc
 from netlists import SpiceOptions, build_smc_netlist
 
 from .spice import run_spice
@@ -24,7 +24,7 @@ RECOVERY_TOL = 0.01
 @dataclass
 class SMCComparison:
     params: dict
-    lcp: object                 # converters.sliding.SMCRun
+    lcp: object                 # converters.models.sliding.SMCRun
     spice: object               # SpiceResult
     netlist: object
     metrics: dict

@@ -24,7 +24,7 @@ import time
 import numpy as np
 import pandas as pd
 
-from converters.library import get_converter
+from converters.models import get_converter
 
 PERIODS = 10
 TIMEOUT_S = 60.0
@@ -82,7 +82,7 @@ def _energy_checks(p, t, x, on, rule, totals=None, i_in=None):
 def _run_one(case: dict, method: str) -> dict:
     """One run in the worker process: returns the checks (never raises)."""
     from converters.methods import EventDriven, Smoothing, Theta
-    from converters.stepping import simulate
+    from converters.simulate import simulate
     conv = get_converter("buck")
     start = time.perf_counter()
     try:
@@ -96,7 +96,7 @@ def _run_one(case: dict, method: str) -> dict:
             tr = simulate(problem, Theta(case["h_fraction"] * T, theta))
             t, x, on, rule = tr.t, tr.x, tr.config[1:] == 0, "end" if theta == 1.0 else "mid"
         elif method == "event":
-            from converters.event import simulate_event
+            from converters.methods.event import simulate_event
             solution = simulate_event(problem, EventDriven())
             tq, w, xq, _, cq = solution.quadrature()
             totals = (float(np.sum(w * p["Vin"] * xq[:, 0] * (cq == 0))), float(np.sum(w * xq[:, 1] ** 2)) / p["R"])
@@ -179,7 +179,7 @@ def _verdict(row) -> str:
 def ill_posed_table() -> pd.DataFrame:
     """Each ill-posed request and the one line it is refused with."""
     from converters.errors import PcsuiteError
-    from converters.simulation import run_converter
+    from converters.run import run_converter
     rows = []
     for name, given in ILL_POSED:
         params = {k: v for k, v in given.items() if k != "h"}

@@ -15,9 +15,9 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from converters import analytic
-from converters.library import get_converter
-from converters.simulation import run_converter
+from converters.models import analytic
+from converters.models import get_converter
+from converters.run import run_converter
 from netlists import SpiceOptions
 
 from .compare import compare

@@ -27,11 +27,11 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from converters.event import event_orbit, simulate_event
-from converters.library import get_converter
+from converters.methods.event import event_orbit, simulate_event
+from converters.models import get_converter
 from converters.methods import EventDriven, Smoothing, Theta
-from converters.stepping import simulate
-from converters.conduction import periodic_orbit
+from converters.simulate import simulate
+from converters.analysis.modes import periodic_orbit
 
 PERIODS = 200
 REFERENCE = EventDriven(event_tol=1e-15, sample_fraction=1.0 / 128.0)
@@ -169,7 +169,7 @@ def measure_event(ref: Reference, event_tol: float, periods: int = PERIODS) -> d
 
 
 def measure_smooth(ref: Reference, eps: float, rtol: float, periods: int = PERIODS) -> dict:
-    from converters.smoothing import simulate_smooth
+    from converters.methods.smoothing import simulate_smooth
     conv = get_converter(ref.case.converter)
     problem = conv.problem(ref.params, periods * ref.period, ref.x_star)
     method = Smoothing(eps=eps, rtol=rtol, output_step=ref.period / 1000.0)

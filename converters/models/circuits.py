@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .lcs import Configuration, LCSProblem, Schedule
-from .validate import check_positive, parse_value
+from ..problems import Configuration, LCSProblem, Schedule
+from ..validate import check_positive, parse_value
 
 
 def _tank(L, C):

@@ -11,10 +11,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .library import check_h
-from .methods import Theta
+from ..models import check_h
+from ..methods import Theta
 from .periodic import shoot
-from .stepping import StepPlan
+from ..methods.theta import StepPlan
 
 HELD = ("DCM", "GDCM-OFF", "GDCM-ON")
 WARM_UP_PERIODS = 5

@@ -2,10 +2,10 @@
 import numpy as np
 import pytest
 
-from converters import analytic
+from converters.models import analytic
 from converters.errors import ParameterError
-from converters.library import get_converter
-from converters.simulation import run_converter
+from converters.models import get_converter
+from converters.run import run_converter
 from validation.operating_points import OPERATING_POINTS, TOLERANCE
 
 @pytest.mark.parametrize("name,params,mode", OPERATING_POINTS)

@@ -12,9 +12,9 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .lcs import LCSProblem
-from .methods import Theta
-from .stepping import StepPlan
+from ..problems import LCSProblem
+from ..methods import Theta
+from ..methods.theta import StepPlan
 
 
 @dataclass(frozen=True)

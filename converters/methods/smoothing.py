@@ -17,16 +17,62 @@ and max |lambda| T along the run, the measure of stiffness.
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
 from scipy.integrate import solve_ivp
 from scipy.special import expit
 
-from .errors import ParameterError, SimulationError
-from .lcs import LCSProblem
-from .methods import Smoothing
-from .trajectory import Trajectory
+from ..errors import ParameterError, SimulationError
+from ..validate import check_positive, parse_value
+from ..problems import LCSProblem
+from ..trajectory import Trajectory
+
+
+@dataclass(frozen=True)
+class Smoothing:
+    """The ideal diode replaced by a smooth law (:mod:`converters.methods.smoothing`), integrated by a stiff solver.
+
+    The complementarity pair 0 <= u _|_ y >= 0 becomes u = eps log(1 + exp(-y / eps^2)) (SI units,
+    V or A): the penalty max(0, -y) / eps with its corner rounded over |y| ~ eps^2, exponential like
+    a real diode's law. A held pair sits at y ~ -eps u, a free one carries u ~ eps exp(-y / eps^2).
+
+    Parameters
+    ----------
+    eps : float
+        Smoothing width in the units of y (> 0; smaller is closer to the ideal diode and stiffer).
+    rtol, atol : float
+        Tolerances of scipy's solve_ivp (atol default 1e-3 rtol).
+    solver : str
+        A stiff solve_ivp method: 'Radau', 'BDF' or 'LSODA'.
+    output_step : float or None
+        Spacing of the output samples (s); None: the solver's own steps.
+    """
+
+    eps: float = 1e-4
+    rtol: float = 1e-6
+    atol: float | None = None
+    solver: str = "Radau"
+    output_step: float | None = None
+
+    def __post_init__(self):
+        object.__setattr__(self, "eps", check_positive("eps", self.eps))
+        rtol = parse_value("rtol", self.rtol)
+        if not 1e-13 <= rtol <= 0.1:
+            raise ParameterError(f"rtol must be in [1e-13, 0.1]; got {rtol!r}")
+        object.__setattr__(self, "rtol", rtol)
+        if self.atol is not None:
+            object.__setattr__(self, "atol", check_positive("atol", self.atol))
+        if self.solver not in ("Radau", "BDF", "LSODA"):
+            raise ParameterError(f"solver must be one of Radau, BDF, LSODA; got {self.solver!r}")
+        if self.output_step is not None:
+            object.__setattr__(self, "output_step", check_positive("output_step", self.output_step, "s"))
+
+    @property
+    def name(self) -> str:
+        return f"smooth({self.eps:g})"
+
 
 
 def _pair_law(y, eps):

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .lcs import Configuration
+from ..problems import Configuration
 
 
 @dataclass(frozen=True)

@@ -3,11 +3,11 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from converters.circuits import diode_bridge, half_wave_rectifier, parallel_rlc_exact
+from converters.models.circuits import diode_bridge, half_wave_rectifier, parallel_rlc_exact
 from converters.errors import ParameterError, SimulationError
-from converters.lcs import Configuration, LCSProblem, Schedule
+from converters.problems import Configuration, LCSProblem, Schedule
 from converters.methods import BackwardEuler, Theta
-from converters.stepping import simulate
+from converters.simulate import simulate
 
 L, C, R = 1e-2, 1e-6, 1e3
 W0 = 1.0 / np.sqrt(L * C)

@@ -7,7 +7,7 @@ generalised DCM (GDCM-OFF); the ON pair held at v1 = 0 is GDCM-ON.
 """
 from __future__ import annotations
 
-from ..lcs import Configuration
+from ..problems import Configuration
 from ..params import Param, nonnegative, positive
 from .base import Converter
 

@@ -8,7 +8,7 @@ For one complementarity pair (k = 1) with D = 0 and C B > 0 in a configuration (
     reduced flow    x' = P (A x + E),  P = I - B C / (C B)   (C P = 0: C x + F stays 0; dimension n - 1)
     exit            C (A x + E) > 0
 
-The closed-form boundaries Kcrit(D) (:mod:`converters.analytic`) assume small ripple. The exact
+The closed-form boundaries Kcrit(D) (:mod:`converters.models.analytic`) assume small ripple. The exact
 prediction here needs no such assumption: the CCM orbit (every pair at u = 0) is computed exactly
 with matrix exponentials, and the converter is in CCM if and only if that orbit keeps y = C x + F >= 0
 in every configuration; where y would go negative, the pair must hold instead (DCM, or GDCM-ON in the
@@ -21,8 +21,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.linalg import expm
 
-from .errors import ParameterError
-from .lcs import Configuration, LCSProblem
+from ..errors import ParameterError
+from ..problems import Configuration, LCSProblem
 
 
 @dataclass(frozen=True)

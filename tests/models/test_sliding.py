@@ -5,7 +5,7 @@ import pytest
 
 from converters.errors import ParameterError
 from converters.lcp import solve_lcp
-from converters.sliding import iref0, predicted_frequency, resolve_smc, simulate_smc
+from converters.models.sliding import iref0, predicted_frequency, resolve_smc, simulate_smc
 from netlists import build_smc_netlist
 from validation.scenes import SCENE_DIR, load_scene
 

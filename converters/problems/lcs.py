@@ -2,8 +2,8 @@
 
     x' = A x + B u + E,   y = C x + D u + F,   0 <= u _|_ y >= 0,
 
-with one (A, B, C, D, E, F) per switch configuration and a :class:`Schedule` saying which
-configuration holds when. Problems are immutable; variants come from ``dataclasses.replace``.
+with one (A, B, C, D, E, F) per switch configuration and a switching law saying which
+configuration holds when (:mod:`converters.problems.schedule`, :mod:`converters.problems.switching`). Problems are immutable; variants come from ``dataclasses.replace``.
 Shapes: x has n entries, u and y have k (the same n and k in every configuration).
 """
 from __future__ import annotations
@@ -12,8 +12,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .errors import ParameterError
-from .validate import as_matrix, as_vector, check_positive, parse_value
+from ..errors import ParameterError
+from ..validate import as_matrix, as_vector, parse_value
+from .schedule import Schedule
 
 
 @dataclass(frozen=True)
@@ -56,68 +57,6 @@ class Configuration:
     @property
     def k(self) -> int:
         return self.B.shape[1]
-
-
-@dataclass(frozen=True)
-class Schedule:
-    """Which configuration holds when: periodic and piecewise constant.
-
-    Over every period [m T, (m + 1) T) configuration ``configs[i]`` holds from ``m T + starts[i]``
-    to the next start. ``starts[0]`` must be 0. A constant schedule has period = inf.
-    """
-
-    period: float
-    starts: tuple[float, ...]
-    configs: tuple[int, ...]
-
-    def __post_init__(self):
-        starts = tuple(float(s) for s in self.starts)
-        configs = tuple(int(c) for c in self.configs)
-        if len(starts) != len(configs) or not starts:
-            raise ParameterError(f"schedule starts and configs must have the same non-zero length; "
-                                 f"got {len(starts)} and {len(configs)}")
-        if starts[0] != 0.0 or any(b <= a for a, b in zip(starts, starts[1:])):
-            raise ParameterError(f"schedule starts must begin at 0 and increase strictly; got {starts}")
-        if np.isfinite(self.period):
-            check_positive("schedule period", self.period, "s")
-            if starts[-1] >= self.period:
-                raise ParameterError(f"schedule starts must lie in [0, period = {self.period:g}); got {starts}")
-        elif len(starts) != 1:
-            raise ParameterError("a schedule with period = inf holds one configuration")
-        object.__setattr__(self, "starts", starts)
-        object.__setattr__(self, "configs", configs)
-
-    @classmethod
-    def constant(cls, config: int = 0) -> "Schedule":
-        return cls(period=np.inf, starts=(0.0,), configs=(config,))
-
-    @classmethod
-    def pwm(cls, period: float, duty: float, on: int = 0, off: int = 1) -> "Schedule":
-        """``on`` for duty * period, then ``off``; duty 0 and 1 give a single configuration."""
-        duty = parse_value("D", duty)
-        if not 0.0 <= duty <= 1.0:
-            raise ParameterError(f"D (duty ratio) must be in [0, 1]; got {duty!r}")
-        if duty == 0.0:
-            return cls(period=period, starts=(0.0,), configs=(off,))
-        if duty == 1.0:
-            return cls(period=period, starts=(0.0,), configs=(on,))
-        return cls(period=period, starts=(0.0, duty * period), configs=(on, off))
-
-    def breakpoints(self, t0: float, t1: float) -> np.ndarray:
-        """Times in the open interval (t0, t1) at which the configuration may change."""
-        if not np.isfinite(self.period):
-            return np.empty(0)
-        first, last = int(np.floor(t0 / self.period)), int(np.ceil(t1 / self.period))
-        periods = np.arange(first, last + 1) * self.period
-        times = (periods[:, None] + np.array(self.starts)[None, :]).ravel()
-        return times[(times > t0) & (times < t1)]
-
-    def config_at(self, t: np.ndarray) -> np.ndarray:
-        """Configuration index holding at each time in t (right-continuous)."""
-        t = np.asarray(t, dtype=float)
-        phase = t if not np.isfinite(self.period) else np.mod(t, self.period)
-        slot = np.searchsorted(np.array(self.starts), phase, side="right") - 1
-        return np.array(self.configs, dtype=np.int64)[np.clip(slot, 0, None)]
 
 
 @dataclass(frozen=True)

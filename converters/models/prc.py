@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..lcs import Configuration, Schedule
+from ..problems import Configuration, Schedule
 from ..params import positive
 from .base import Converter
 

@@ -32,10 +32,53 @@ import pandas as pd
 from scipy.linalg import expm
 from scipy.optimize import brentq
 
-from .errors import ParameterError, SimulationError
-from .lcs import Configuration, LCSProblem
-from .methods import EventDriven
-from .trajectory import Trajectory
+from ..errors import ParameterError, SimulationError
+from ..validate import check_positive, parse_value
+from ..problems import Configuration, LCSProblem
+from ..trajectory import Trajectory
+
+
+@dataclass(frozen=True)
+class EventDriven:
+    """The exact event-driven method (:mod:`converters.methods.event`) for LCS with one complementarity pair.
+
+    Parameters
+    ----------
+    event_tol : float
+        Events (zero crossings of the watched complementarity variable) are located to
+        ``event_tol`` times the switching period (Brent's method on the exact flow). Default 1e-13.
+    sample_fraction : float
+        The watched variable is sampled at most ``sample_fraction`` T apart when looking for sign
+        changes (two crossings closer than that could be missed). Default 1/32.
+    output_step : float or None
+        Spacing of the output samples in s (events are always added); None: T/1000.
+    max_events : int
+        Refuse runs with more events than this (Zeno behaviour). Default 10^7.
+    """
+
+    event_tol: float = 1e-13
+    sample_fraction: float = 1.0 / 32.0
+    output_step: float | None = None
+    max_events: int = 10_000_000
+
+    def __post_init__(self):
+        tol = parse_value("event_tol", self.event_tol)
+        if not 0.0 < tol <= 1e-2:
+            raise ParameterError(f"event_tol must be in (0, 1e-2] (fraction of the period); got {tol!r}")
+        object.__setattr__(self, "event_tol", tol)
+        frac = parse_value("sample_fraction", self.sample_fraction)
+        if not 0.0 < frac <= 1.0:
+            raise ParameterError(f"sample_fraction must be in (0, 1]; got {frac!r}")
+        object.__setattr__(self, "sample_fraction", frac)
+        if self.output_step is not None:
+            object.__setattr__(self, "output_step", check_positive("output_step", self.output_step, "s"))
+        if not (isinstance(self.max_events, (int, np.integer)) and self.max_events >= 1):
+            raise ParameterError(f"max_events must be an integer >= 1; got {self.max_events!r}")
+
+    @property
+    def name(self) -> str:
+        return "event"
+
 
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(8)
 _TAYLOR_TERMS = 26     # (0.25)^26 / 26! < 1e-30: the series is exact to rounding on a sampling step
@@ -526,7 +569,7 @@ class EventOrbit:
 def event_orbit(problem: LCSProblem, x_guess, options: EventDriven | None = None, tol: float = 1e-13,
                 max_iter: int = 30) -> EventOrbit:
     """Newton shooting on the exact one-period map (``problem.t_span`` must be one period)."""
-    from .periodic import newton_fixed_point
+    from ..analysis.periodic import newton_fixed_point
     start = time.perf_counter()
     options = options or EventDriven()
     machine = _Machine(problem, options)

@@ -1,9 +1,9 @@
-"""``simulate(problem, method)``: the LCP time-stepper.
+"""The theta method: the LCP time-stepper.
 
 Data flow: the schedule's switching instants are merged into the uniform grid so that every step
 lies inside one configuration; the one-step matrices are computed once per (configuration, step
 size) pair (the uniform step plus the split steps at switching instants); the compiled loop
-(:func:`converters.kernels.run_steps`) advances the state, solving each step's small LCP inline;
+(:func:`converters.methods.theta_kernels.run_steps`) advances the state, solving each step's small LCP inline;
 any step it cannot solve inline is solved here by Lemke and the loop resumes.
 """
 from __future__ import annotations
@@ -14,12 +14,49 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .discretize import step_matrices
-from .errors import ParameterError, SimulationError
-from .kernels import MAX_INLINE_K, NEEDS_GENERAL_SOLVER, NO_SOLUTION, OK, run_steps
-from .lcp import solve_lcp
-from .lcs import LCSProblem
-from .methods import EventDriven, Smoothing, Theta
-from .trajectory import Trajectory
+from ..errors import ParameterError, SimulationError
+from ..validate import check_positive, parse_value
+from .theta_kernels import MAX_INLINE_K, NEEDS_GENERAL_SOLVER, NO_SOLUTION, OK, run_steps
+from ..lcp import solve_lcp
+from ..problems import LCSProblem
+from ..trajectory import Trajectory
+
+
+@dataclass(frozen=True)
+class Theta:
+    """The theta-method (Moreau): x_{k+1} = x_k + h [theta f(x_{k+1}) + (1 - theta) f(x_k)] + h B u_{k+1}.
+
+    The complementarity multiplier u is taken fully implicitly (an impulse over the step), so
+    each step is one LCP(q, M) with M = D + h C W B, W = (I - h theta A)^-1.
+
+    Parameters
+    ----------
+    h : float
+        Step size in s (> 0). Steps are split at the schedule's switching instants.
+    theta : float
+        In [0.5, 1]: 1 is backward Euler (order 1, L-stable), 0.5 the trapezoidal rule (order 2
+        on smooth stretches).
+    """
+
+    h: float
+    theta: float = 0.5
+
+    def __post_init__(self):
+        object.__setattr__(self, "h", check_positive("h", self.h, "s"))
+        theta = parse_value("theta", self.theta)
+        if not 0.5 <= theta <= 1.0:
+            raise ParameterError(f"theta must be in [0.5, 1]; got {theta!r}")
+        object.__setattr__(self, "theta", theta)
+
+    @property
+    def name(self) -> str:
+        return "backward-euler" if self.theta == 1.0 else f"theta({self.theta:g})"
+
+
+def BackwardEuler(h: float) -> Theta:
+    """Backward Euler, the seed's Algorithm 1: ``Theta(h, theta=1)``."""
+    return Theta(h=h, theta=1.0)
+
 
 MAX_STEPS = 200_000_000
 
@@ -166,37 +203,6 @@ class StepPlan:
                           event_columns=events, method=self.method.name, steps=t.shape[0] - 1,
                           wall_s=wall_s + time.perf_counter() - start_clock, general_solves=general_solves,
                           metadata=dict(problem.metadata, h=self.method.h, theta=self.method.theta))
-
-
-def simulate(problem: LCSProblem, method: Theta, *, x0=None) -> Trajectory:
-    """Simulate an LCS with the theta time-stepper.
-
-    Parameters
-    ----------
-    problem : LCSProblem
-    method : Theta, EventDriven or Smoothing
-        ``Theta(h, theta)`` or ``BackwardEuler(h)``: the LCP time-stepper (here);
-        ``EventDriven(...)``: the exact event-driven method (:mod:`converters.event`);
-        ``Smoothing(eps, rtol)``: the smoothed diode and a stiff solver (:mod:`converters.smoothing`).
-    x0 : array_like, shape (n,), optional
-        Overrides ``problem.x0`` (cheap restarts for shooting and steady-state searches).
-
-    Returns
-    -------
-    Trajectory
-    """
-    if isinstance(method, EventDriven):
-        from .event import simulate_event
-        solution = simulate_event(problem, method, x0=x0)
-        period = problem.schedule.period
-        scale = period if np.isfinite(period) else problem.t_span[1] - problem.t_span[0]
-        return solution.trajectory(method.output_step or scale / 1000.0)
-    if isinstance(method, Smoothing):
-        from .smoothing import simulate_smooth
-        return simulate_smooth(problem, method, x0=x0)
-    start_clock = time.perf_counter()
-    plan = StepPlan.build(problem, method)
-    return plan.trajectory(problem.x0 if x0 is None else x0, wall_s=time.perf_counter() - start_clock)
 
 
 def _initial_pair(problem: LCSProblem, config: int, x0: np.ndarray):

@@ -1,7 +1,7 @@
 """What every converter provides: parameters, per-configuration LCS, schedule, output and mode labels.
 
 A converter is a stateless description; ``problem(params, t_end)`` builds the immutable
-:class:`~converters.lcs.LCSProblem`. Configuration 0 is switch ON, 1 is switch OFF (PWM converters).
+:class:`~converters.problems.LCSProblem`. Configuration 0 is switch ON, 1 is switch OFF (PWM converters).
 """
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from abc import ABC, abstractmethod
 import numpy as np
 
 from ..errors import ParameterError
-from ..lcs import Configuration, LCSProblem, Schedule
+from ..problems import Configuration, LCSProblem, Schedule
 from ..params import Param, resolve
 
 ON, OFF = 0, 1

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import math
 
-from .errors import ParameterError
+from ..errors import ParameterError
 
 TOPOLOGIES = ("buck", "boost", "buck-boost", "cuk")
 

@@ -27,10 +27,10 @@ import numpy as np
 import pandas as pd
 from numba import njit
 
-from .errors import ParameterError, SimulationError
-from .kernels import _masks_by_size, solve_small_lcp
-from .library import get_converter
-from .params import Param, nonnegative, positive, resolve
+from ..errors import ParameterError, SimulationError
+from ..lcp.kernels import _masks_by_size, solve_small_lcp
+from . import get_converter
+from ..params import Param, nonnegative, positive, resolve
 
 PARAMETERS = (
     positive("Vin", 10.0, "V", "input voltage"),
@@ -178,7 +178,7 @@ def simulate_smc(params: dict | None = None, *, scheme: str = "hysteresis", h=No
     if scheme not in SCHEMES:
         raise ParameterError(f"scheme must be one of {', '.join(SCHEMES)}; got {scheme!r}")
     p = resolve_smc(params)
-    from .validate import parse_value
+    from ..validate import parse_value
     t_end = parse_value("t_end", t_end)
     if t_end <= 0:
         raise ParameterError(f"t_end must be positive (> 0 s); got {t_end!r}")
@@ -205,7 +205,7 @@ def simulate_smc(params: dict | None = None, *, scheme: str = "hysteresis", h=No
     start = time.perf_counter()
     if scheme == "hysteresis":
         A, B, C, D, E, F = _stacks(p)
-        from .discretize import step_matrices
+        from ..methods.discretize import step_matrices
         configs = list(_load_configurations(p, p["R"])) + list(_load_configurations(p, p.get("R_step", p["R"])))
         mats = step_matrices(configs, np.full(4, h), 1.0)
         max_events = 2 * int(t_end * predicted_frequency(p) * 4 + 100)

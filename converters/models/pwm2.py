@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..lcs import Configuration
+from ..problems import Configuration
 from ..params import Param, nonnegative, positive
 from .base import ON, Converter
 

@@ -6,10 +6,11 @@ import numpy as np
 import pytest
 from scipy.linalg import expm
 
-from converters import analytic, gdcm
-from converters.conduction import mode_intervals, periodic_orbit
+from converters.analysis import gdcm
+from converters.models import analytic
+from converters.analysis.modes import mode_intervals, periodic_orbit
 from converters.errors import ParameterError
-from converters.library import get_converter
+from converters.models import get_converter
 from validation.gdcm import BOUNDARY_BAND, dk_map, gdcm_check, map_summary
 
 

@@ -3,9 +3,9 @@ import numpy as np
 import pytest
 
 from converters.errors import ParameterError
-from converters.lcs import Configuration, LCSProblem, Schedule
+from converters.problems import Configuration, LCSProblem, Schedule
 from converters.methods import BackwardEuler, Theta
-from converters.stepping import time_grid
+from converters.methods.theta import time_grid
 
 A2 = np.zeros((2, 2))
 

@@ -7,16 +7,16 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from converters.circuits import half_wave_rectifier, parallel_rlc_exact
-from converters.conduction import periodic_orbit
+from converters.models.circuits import half_wave_rectifier, parallel_rlc_exact
+from converters.analysis.modes import periodic_orbit
 from converters.errors import ParameterError, SimulationError
-from converters.event import event_orbit, simulate_event
-from converters.gdcm import ccm_orbit
-from converters.library import get_converter
-from converters.lcs import Configuration, LCSProblem, Schedule
+from converters.methods.event import event_orbit, simulate_event
+from converters.analysis.gdcm import ccm_orbit
+from converters.models import get_converter
+from converters.problems import Configuration, LCSProblem, Schedule
 from converters.methods import BackwardEuler, EventDriven, Smoothing
-from converters.simulation import run_converter
-from converters.stepping import simulate
+from converters.run import run_converter
+from converters.simulate import simulate
 from validation.cli import main
 
 

@@ -14,10 +14,10 @@ import numpy as np
 import pandas as pd
 
 from .errors import ParameterError, SimulationError
-from .library import Converter, check_h, get_converter
+from .models import Converter, check_h, get_converter
 from .methods import EventDriven, Smoothing, Theta
-from .periodic import newton_fixed_point, one_period, shoot
-from .stepping import simulate
+from .analysis.periodic import newton_fixed_point, one_period, shoot
+from .simulate import simulate
 from .trajectory import Trajectory
 from .validate import parse_value
 
@@ -135,7 +135,7 @@ def run_converter(name_or_converter, params: dict | None = None, *, h=None, thet
         budget (default 200000 periods): the run stops earlier once the cycle-to-cycle change is below ``steady_tol``.
     steady : bool
         Run until the periodic steady state: 20 warm-up periods, Newton shooting on the one-period
-        map (:mod:`converters.periodic`), then 20 periods simulated on until the estimated distance to the periodic orbit (from
+        map (:mod:`converters.analysis.periodic`), then 20 periods simulated on until the estimated distance to the periodic orbit (from
         the geometric decay of the cycle-to-cycle change max |x((m+1)T) - x(mT)|) below
         ``steady_tol`` times (1 + max |x|). The last 20 periods are returned.
     """
@@ -181,9 +181,9 @@ def run_converter(name_or_converter, params: dict | None = None, *, h=None, thet
 def _run_exact_or_smooth(converter, p, method, x0, n_periods, steady, tol, start) -> ConverterRun:
     """Event-driven or smoothing run; ``steady``: Newton shooting on the method's own period map (from
     the LCP stepper's periodic orbit), then the last STEADY_CHUNK_PERIODS periods from the fixed point."""
-    from .conduction import periodic_orbit
-    from .event import _Machine, simulate_event
-    from .smoothing import simulate_smooth
+    from .analysis.modes import periodic_orbit
+    from .methods.event import _Machine, simulate_event
+    from .methods.smoothing import simulate_smooth
     T = converter.period(p)
     extra = {}
     if steady:

@@ -1,0 +1,1 @@
+"""Analysis of any problem and method: periodic orbits, conduction modes, GDCM."""
