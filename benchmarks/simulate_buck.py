@@ -28,7 +28,7 @@ def best_of(fn):
 
 def main():
     wall, run = best_of(lambda: run_converter("buck", {}, h=50e-9, t_end=5e-3))
-    steps = run.trajectory.steps
+    steps = run.steps
     print(f"buck DCM, 5 ms, h = 50 ns: {steps} steps")
     print(f"  run_converter (API):        {wall * 1e3:7.2f} ms  = {wall / steps * 1e9:6.1f} ns/step "
           f"(its own wall_s {run.wall_s / steps * 1e9:.1f} ns/step)")
@@ -40,7 +40,7 @@ def main():
     wall_cli, _ = best_of(command)
     print(f"  pcsuite simulate buck (CLI): {wall_cli * 1e3:7.2f} ms  = {wall_cli / steps * 1e9:6.1f} ns/step "
           "(argument parsing and JSON summary included)")
-    print(f"  vout mean, last 10 periods: {run.mean(run.vout()):.6f} V")
+    print(f"  vout mean, last 10 periods: {run.mean('vout', periods=10):.6f} V")
 
 
 if __name__ == "__main__":

@@ -1,261 +1,176 @@
-"""Run a converter: parameters in, labelled waveforms and a summary out.
+"""Run a model: parameters in, a labelled Trajectory out (what ``pcsuite simulate`` and scenes call).
 
-``run_converter`` builds the problem, picks h and the duration, optionally runs to the periodic
-steady state (chunk by chunk, keeping only the last chunk in memory), and returns a
-:class:`ConverterRun` whose ``waveforms()`` has the CONTRACT columns: time, one per state, vout,
-switch, mode.
+``run_converter`` resolves the model and its parameters, builds the method from command-line style
+options (:meth:`~converters.methods.base.Method.from_options`), picks h and the duration, and either
+simulates (split at the model's load steps) or, with ``steady``, finds the method's own periodic orbit
+by Newton shooting (:mod:`converters.analysis.periodic`) and simulates the last periods from it. The
+Trajectory carries the model's labels (signals ``vout``, ``switch``, ..., and modes) and the run's
+metadata: model, control, params, method options, periods, and the orbit's statistics.
 """
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 
 import numpy as np
-import pandas as pd
 
-from .errors import ParameterError, SimulationError
-from .models import Converter, check_h, get_converter
-from .methods import EventDriven, Smoothing, Theta
-from .analysis.periodic import newton_fixed_point, one_period, shoot
+from .analysis.periodic import PeriodicOrbit, require, shoot
+from .errors import ParameterError
+from .methods.base import Method, get_method
+from .models import Model, check_h, get_model
 from .simulate import simulate
-from .trajectory import Trajectory
+from .trajectory import Trajectory, concatenate
 from .validate import parse_value
 
-STEADY_CHUNK_PERIODS = 20
+#: Periods simulated from rest before Newton shooting starts (its first guess), and from the orbit after.
+WARM_UP_PERIODS = 20
+STEADY_PERIODS = 20
 DEFAULT_PERIODS = 500
+#: Duration of a run of a model without a fixed period (s), when none is given.
+DEFAULT_AUTONOMOUS_T_END = 30e-3
 
 
-@dataclass
-class ConverterRun:
-    converter: Converter
-    params: dict
-    method: Theta
-    trajectory: Trajectory
-    wall_s: float
-    periods_simulated: int
-    steady_periods: int | None = None
-    extra: dict = field(default_factory=dict)
-
-    @property
-    def period(self) -> float:
-        return self.converter.period(self.params)
-
-    def vout(self) -> np.ndarray:
-        tr = self.trajectory
-        return self.converter.vout(tr.x, tr.u, tr.config, self.params)
-
-    def modes(self) -> np.ndarray:
-        tr = self.trajectory
-        return self.converter.modes(tr.active, tr.config, tr.x)
-
-    def waveforms(self) -> pd.DataFrame:
-        tr = self.trajectory
-        data = {"time": tr.t}
-        for i, name in enumerate(tr.state_names):
-            data[name] = tr.x[:, i]
-        data["vout"] = self.vout()
-        data["switch"] = self.converter.switch(tr.config)
-        data["mode"] = self.modes()
-        return pd.DataFrame(data)
-
-    def window(self, periods: int) -> np.ndarray:
-        """Boolean mask of the points in the last ``periods`` switching periods."""
-        t = self.trajectory.t
-        return t >= t[-1] - periods * self.period * (1.0 + 1e-12)
-
-    @property
-    def method_name(self) -> str:
-        return {EventDriven: "event", Smoothing: "smooth"}.get(type(self.method), "lcp")
-
-    def method_options(self) -> dict:
-        if isinstance(self.method, Theta):
-            return {"h": self.method.h, "theta": self.method.theta}
-        return dict(self.method.__dict__)
-
-    def vout_mean(self, periods: int = 10) -> float:
-        """Mean output voltage over the last ``periods`` periods: exact (Gauss-Legendre on the exact
-        solution) for the event-driven method, trapezoidal for smoothing, the stepper's own rule for LCP."""
-        solution = self.extra.get("event_solution")
-        t = self.trajectory.t
-        t0 = max(t[0], t[-1] - periods * self.period)
-        if solution is not None:
-            tq, w, x, u, config = solution.quadrature(t0, t[-1])
-            return float(w @ self.converter.vout(x, u, config, self.params) / (t[-1] - t0))
-        if isinstance(self.method, Smoothing):
-            mask = self.window(periods)
-            return float(np.trapezoid(self.vout()[mask], t[mask]) / (t[mask][-1] - t[mask][0]))
-        return self.mean(self.vout(), periods)
-
-    def mean(self, signal: np.ndarray, periods: int = 10) -> float:
-        """Time average over the last ``periods`` periods.
-
-        Each step counts with its end-point value (as in backward Euler, and as the mode labels are
-        assigned), so switched quantities are weighted by the configuration that held in the step.
-        """
-        mask = self.window(periods)
-        t = self.trajectory.t[mask]
-        return float(np.sum(np.diff(t) * signal[mask][1:]) / (t[-1] - t[0]))
-
-    def mode_fractions(self, periods: int = 1) -> dict:
-        """Fraction of the last period(s) spent in each mode (each step counted by its end-point label)."""
-        mask = self.window(periods)
-        t = self.trajectory.t[mask]
-        labels = self.modes()[mask][1:]
-        dt = np.diff(t)
-        total = dt.sum()
-        return {str(label): float(dt[labels == label].sum() / total) for label in sorted(set(labels))}
-
-    def summary(self) -> dict:
-        out = {"converter": self.converter.name, "method": self.method_name,
-               "options": {**self.method_options(), "params": self.params},
-               "steps": int(self.trajectory.steps), "wall_s": self.wall_s,
-               "vout_mean": self.vout_mean(10), "mode_fractions": self.mode_fractions(1),
-               "periods": self.periods_simulated}
-        if self.steady_periods is not None:
-            out["steady_periods"] = self.steady_periods
-        return out
+def resolve_model(name_or_model, control: str = "pwm") -> Model:
+    return get_model(name_or_model, control) if isinstance(name_or_model, str) else name_or_model
 
 
-def run_converter(name_or_converter, params: dict | None = None, *, h=None, theta=None, t_end=None,
-                  periods=None, steady=False, steady_tol=1e-6, max_periods=200_000, x0=None,
-                  method: str = "lcp", eps=None, rtol=None) -> ConverterRun:
-    """Simulate a converter with the LCP time-stepper (or the event-driven or smoothing method).
+def make_method(model: Model, p: dict, method: str | Method = "lcp", h=None, **options) -> Method:
+    """The method for a run of ``model``: h defaults to the model's (T/1000; PRC 50 ns), the stepper's theta
+    to the model's. ``h`` is the stepper's step or the output spacing of the other methods."""
+    if isinstance(method, Method):
+        if h is not None or any(v is not None for v in options.values()):
+            raise ParameterError("give either a Method object or h and method options, not both")
+        return method
+    cls = get_method(method)
+    h = model.default_h(p) if h is None else parse_value("h", h)
+    if model.periodic(p):
+        check_h(h, model.period(p))
+    elif not 0.0 < h <= model.max_h(p):
+        raise ParameterError(f"h must be in (0, {model.max_h(p):.3g}] s for {model.key} (at most 1/20 of the "
+                             f"shorter switching interval); got {h:g}")
+    if cls.key == "lcp" and options.get("theta") is None:
+        options["theta"] = model.default_theta
+    return cls.from_options(step=h, **options)
 
-    Parameters
-    ----------
-    name_or_converter : str or Converter
-    params : dict
-        Parameter values (numbers or SPICE-style strings); unknown names are refused.
-    h : float, optional
-        Step in s; default T/1000 (PRC: 50 ns). Must be below the switching period T.
-    theta : float, optional
-        0.5..1; the converter's default when omitted.
-    t_end, periods : optional
-        Duration in s or in switching periods (default 500 periods). With ``steady`` it is the
-        budget (default 200000 periods): the run stops earlier once the cycle-to-cycle change is below ``steady_tol``.
-    steady : bool
-        Run until the periodic steady state: 20 warm-up periods, Newton shooting on the one-period
-        map (:mod:`converters.analysis.periodic`), then 20 periods simulated on until the estimated distance to the periodic orbit (from
-        the geometric decay of the cycle-to-cycle change max |x((m+1)T) - x(mT)|) below
-        ``steady_tol`` times (1 + max |x|). The last 20 periods are returned.
-    """
-    converter = get_converter(name_or_converter) if isinstance(name_or_converter, str) else name_or_converter
-    p = converter.resolve(params)
-    T = converter.period(p)
-    h = check_h(converter.default_h(p) if h is None else parse_value("h", h), T)
-    if method not in ("lcp", "event", "smooth"):
-        raise ParameterError(f"method must be one of lcp, event, smooth; got {method!r}")
-    if method != "smooth" and (eps is not None or rtol is not None):
-        raise ParameterError("eps and rtol apply to method='smooth' only")
-    if method != "lcp" and theta is not None:
-        raise ParameterError("theta applies to method='lcp' only")
-    kind = method
-    if kind == "event":
-        method = EventDriven(output_step=h)
-    elif kind == "smooth":
-        method = Smoothing(eps=1e-4 if eps is None else eps, rtol=1e-6 if rtol is None else rtol, output_step=h)
-    else:
-        method = Theta(h, converter.default_theta if theta is None else theta)
+
+def duration(model: Model, p: dict, t_end=None, periods=None) -> float:
+    """The run's length in s from t_end or a number of switching periods (default 500 periods, or 30 ms
+    for a model without a fixed period)."""
     if t_end is not None and periods is not None:
         raise ParameterError("give either t_end or periods, not both")
     if t_end is not None:
         t_end = parse_value("t_end", t_end)
         if t_end <= 0:
             raise ParameterError(f"t_end must be positive (> 0 s); got {t_end!r}")
-        n_periods = t_end / T
-    elif periods is not None:
+        return t_end
+    if periods is not None:
         if not (isinstance(periods, (int, np.integer)) and periods >= 1):
             raise ParameterError(f"periods must be an integer >= 1; got {periods!r}")
-        n_periods = periods
-    else:
-        n_periods = max_periods if steady else DEFAULT_PERIODS
-    start = time.perf_counter()
-    if kind != "lcp":
-        return _run_exact_or_smooth(converter, p, method, x0, n_periods, steady, steady_tol, start)
-    if steady:
-        return _run_to_steady_state(converter, p, method, x0, steady_tol, int(np.ceil(n_periods)), start)
-    tr = simulate(converter.problem(p, n_periods * T, x0), method)
-    return ConverterRun(converter, p, method, tr, time.perf_counter() - start, int(round(n_periods)))
+        if not model.periodic(p):
+            raise ParameterError(f"--periods does not apply to {model.key} (no fixed period); use --t-end")
+        return periods * model.period(p)
+    return DEFAULT_PERIODS * model.period(p) if model.periodic(p) else DEFAULT_AUTONOMOUS_T_END
 
 
-def _run_exact_or_smooth(converter, p, method, x0, n_periods, steady, tol, start) -> ConverterRun:
-    """Event-driven or smoothing run; ``steady``: Newton shooting on the method's own period map (from
-    the LCP stepper's periodic orbit), then the last STEADY_CHUNK_PERIODS periods from the fixed point."""
-    from .analysis.modes import periodic_orbit
-    from .methods.event import _Machine, simulate_event
-    from .methods.smoothing import simulate_smooth
-    T = converter.period(p)
-    extra = {}
-    if steady:
-        guess = periodic_orbit(converter, p).x[0]
-        one = converter.problem(p, T)
-        if isinstance(method, EventDriven):
-            machine = _Machine(one, method)
-            period_map = lambda x: machine.run(x, record=False).x_end  # noqa: E731
-        else:
-            period_map = lambda x: simulate_smooth(one, method, x0=x).x[-1]  # noqa: E731
-        shot = newton_fixed_point(period_map, guess, tol=min(1e-12, 0.1 * tol))
-        if not shot.converged:
-            raise SimulationError(f"Newton shooting found no periodic orbit (residual {shot.residual:.3g} after "
-                                  f"{shot.iterations} iterations); try --periods without --steady")
-        x0, n_periods = shot.x, STEADY_CHUNK_PERIODS
-        extra = {"shooting_iterations": shot.iterations, "shooting_residual": shot.residual}
-    problem = converter.problem(p, n_periods * T, x0)
-    if isinstance(method, EventDriven):
-        solution = simulate_event(problem, method)
-        tr = solution.trajectory(method.output_step)
-        extra["event_solution"] = solution
-    else:
-        tr = simulate_smooth(problem, method)
-        extra["solver_stats"] = tr.metadata["stats"]
-    periods = int(round(n_periods))
-    return ConverterRun(converter, p, method, tr, time.perf_counter() - start, periods,
-                        periods if steady else None, extra=extra)
+def run_converter(name_or_model, params: dict | None = None, *, control: str = "pwm", method: str | Method = "lcp",
+                  h=None, t_end=None, periods=None, steady: bool = False, steady_tol: float = 1e-6, x0=None,
+                  **options) -> Trajectory:
+    """Simulate a model (a converter under ``control``) with any method; returns a labelled Trajectory.
 
-
-def _run_to_steady_state(converter, p, method, x0, tol, budget, start) -> ConverterRun:
-    """Warm up, shoot for the periodic orbit, then confirm by simulating on; brute force as fallback."""
-    T = converter.period(p)
-    chunk_t = STEADY_CHUNK_PERIODS * T
-    warm = simulate(converter.problem(p, chunk_t, x0), method)
-    state = warm.x[-1].copy()
-    done = STEADY_CHUNK_PERIODS
-    shot = shoot(one_period(converter.problem(p, T), T), method, state, tol=0.1 * tol)
-    done += shot.periods_simulated
-    if shot.converged:
-        state = shot.x
-    remaining = np.inf
-    while done < budget + STEADY_CHUNK_PERIODS:
-        tr = simulate(converter.problem(p, chunk_t, state), method)
-        done += STEADY_CHUNK_PERIODS
-        boundaries = np.searchsorted(tr.t, np.arange(STEADY_CHUNK_PERIODS + 1) * T - 1e-12 * T)
-        x_at = tr.x[np.minimum(boundaries, len(tr.t) - 1)]
-        change = np.abs(np.diff(x_at, axis=0)).max(axis=1) / (1.0 + np.abs(x_at).max())
-        remaining = _distance_to_steady_state(change)
-        if remaining < tol:
-            tr = replace(tr, t=tr.t + (done - STEADY_CHUNK_PERIODS) * T)
-            return ConverterRun(converter, p, method, tr, time.perf_counter() - start, done, done,
-                                extra={"cycle_change": float(change[-1]), "distance_estimate": remaining,
-                                       "shooting_iterations": shot.iterations, "shooting_converged": shot.converged})
-        state = tr.x[-1].copy()
-    raise SimulationError(f"no periodic steady state within {budget} periods (estimated distance "
-                          f"{remaining:.3g} > tol = {tol:g}); raise --periods or the tolerance")
-
-
-def _distance_to_steady_state(change: np.ndarray) -> float:
-    """Estimated remaining distance to the periodic orbit from the last cycle-to-cycle changes.
-
-    The changes of a converging orbit shrink geometrically, c_m ~ rho^m; the distance left is
-    about c_m rho / (1 - rho) + c_m. rho is fitted over the last half of the chunk (robust to
-    the oscillation of lightly damped converters); rho >= 1 means not converging yet.
+    Parameters
+    ----------
+    name_or_model : str or Model
+        ``buck``, ``boost``, ``buck-boost``, ``cuk``, ``prc`` (with ``control``), or a Model.
+    params : dict
+        Parameter values (numbers or SPICE-style strings); unknown names are refused.
+    method : str or Method
+        ``lcp``, ``event``, ``smooth`` (built from ``h`` and ``options``: ``theta``, ``eps``, ``rtol``,
+        ``event_tol``, ...), or a Method object.
+    h : float, optional
+        The stepper's step, or the output spacing of the other methods (default: the model's, T/1000).
+    t_end, periods : optional
+        Duration in s or in switching periods (default 500 periods).
+    steady : bool
+        Run to the method's own periodic orbit: ``WARM_UP_PERIODS`` from x0, then Newton shooting on the
+        method's period map with its exact Jacobian until the estimated distance to the orbit is below
+        ``steady_tol`` / 10 (relative); ``STEADY_PERIODS`` periods are then simulated from the orbit and
+        returned (their time starts at 0; ``metadata['steady_periods']`` counts every period simulated).
+        A run that cannot reach the orbit raises SimulationError with the reason.
+    x0 : array_like, optional
+        Initial state (default: the model's, at rest).
     """
-    half = change.size // 2
-    first, last = change[-half - 1], change[-1]
-    if last == 0.0:
-        return 0.0
-    if first <= 0.0:
-        return float("inf")
-    rho = (last / first) ** (1.0 / half)
-    if rho >= 0.999:
-        return float("inf") if rho >= 1.0 else last * 1000.0
-    return float(last * (1.0 + rho / (1.0 - rho)))
+    model = resolve_model(name_or_model, control)
+    p = model.resolve(params)
+    start = time.perf_counter()
+    method = make_method(model, p, method, h, **options)
+    T = model.period(p)
+    span = duration(model, p, t_end, None if steady else periods)
+    steady_tol = parse_value("steady_tol", steady_tol)
+    if not 0.0 < steady_tol < 1.0:
+        raise ParameterError(f"steady_tol must be in (0, 1); got {steady_tol!r}")
+    meta = {"model": model.name, "control": model.control, "params": p, "method_options": method.options()}
+    if steady:
+        if not model.periodic(p):
+            raise ParameterError(f"--steady needs a fixed switching period; {model.key} has none (run --t-end, "
+                                 "or find its cycle with converters.analysis.periodic.autonomous_orbit)")
+        orbit = steady_state(model, p, method, x0=x0, tol=0.1 * steady_tol)
+        tr = simulate(model.problem(p, STEADY_PERIODS * T, orbit.x0), method)
+        done = WARM_UP_PERIODS + orbit.evaluations
+        meta.update(periods=done + STEADY_PERIODS, steady_periods=done + STEADY_PERIODS, orbit=orbit.summary())
+    else:
+        tr = _simulate_phases(model, p, method, span, x0)
+        meta.update(periods=int(round(span / T)) if model.periodic(p) else None)
+    return replace(tr, labels=model.labels(p), wall_s=time.perf_counter() - start,
+                   metadata={**tr.metadata, **meta})
+
+
+def _simulate_phases(model: Model, p: dict, method: Method, t_end: float, x0) -> Trajectory:
+    """One simulation per phase between the model's step times (a load step), the state and the switching
+    law's memory carried across."""
+    bounds = [0.0] + [t for t in model.step_times(p) if 0.0 < t < t_end] + [t_end]
+    parts, state, initial = [], x0, None
+    for a, b in zip(bounds[:-1], bounds[1:]):
+        problem = model.problem(p, b, state, t_start=a, initial=initial, **model.phase_options(p, a))
+        part = simulate(problem, method)
+        parts.append(part)
+        state, initial = part.x[-1], int(part.config[-1])
+    return concatenate(parts)
+
+
+def steady_state(model: Model, p: dict, method: Method, *, x0=None, warm_up: int = WARM_UP_PERIODS,
+                 tol: float = 1e-10, periods: int = 1) -> PeriodicOrbit:
+    """The method's own periodic orbit of ``model`` at ``p`` (raises SimulationError when Newton fails)."""
+    problem = model.problem(p, periods * model.period(p), x0)
+    return require(shoot(problem, method, problem.x0, periods=periods, warm_up=warm_up, tol=tol),
+                   f"the periodic orbit of {model.key}")
+
+
+def steady_orbit(name_or_model, params: dict | None = None, *, method: str | Method = "lcp", h=None,
+                 tol: float = 1e-8, warm_up: int = 5, **options) -> Trajectory:
+    """One period of the method's periodic orbit, labelled (conduction modes, maps, GDCM): a few warm-up
+    periods from rest, Newton shooting, one reused step plan. ``metadata['orbit']`` holds the orbit's
+    statistics (residual, distance, multipliers)."""
+    model = resolve_model(name_or_model)
+    p = model.resolve(params)
+    method = make_method(model, p, method, h, **options)
+    orbit = steady_state(model, p, method, warm_up=warm_up, tol=tol)
+    tr = simulate(model.problem(p, model.period(p), orbit.x0), method)
+    return replace(tr, labels=model.labels(p),
+                   metadata={**tr.metadata, "model": model.name, "params": p, "orbit": orbit.summary()})
+
+
+def run_summary(tr: Trajectory) -> dict:
+    """The JSON summary of a run: converter, method, its options, steps, wall_s, and the model's measures
+    (PWM converters: vout_mean over the last 10 periods, mode fractions of the last period)."""
+    meta = tr.metadata
+    out = {"converter": meta["model"], "method": tr.method, "options": {**meta["method_options"], "params": meta["params"]},
+           "steps": int(tr.steps), "wall_s": tr.wall_s}
+    if meta.get("control", "pwm") != "pwm":
+        out["control"] = meta["control"]
+    out.update(tr.labels.model.summary(tr, meta["params"]))
+    for key in ("periods", "steady_periods"):
+        if meta.get(key) is not None:
+            out[key] = meta[key]
+    if "orbit" in meta:
+        out["orbit"] = meta["orbit"]
+    return out

@@ -1,26 +1,24 @@
 """``simulate(problem, method)``: the one entry point from a problem to a Trajectory."""
 from __future__ import annotations
 
-import time
-
 import numpy as np
 
-from .methods import EventDriven, Smoothing, Theta
-from .methods.theta import StepPlan
+from .errors import ParameterError
+from .methods.base import METHODS, Method
 from .problems import LCSProblem
 from .trajectory import Trajectory
 
 
-def simulate(problem: LCSProblem, method: Theta, *, x0=None) -> Trajectory:
-    """Simulate an LCS with the theta time-stepper.
+def simulate(problem: LCSProblem, method: Method, *, x0=None) -> Trajectory:
+    """Solve ``problem`` over its t_span with ``method``.
 
     Parameters
     ----------
     problem : LCSProblem
-    method : Theta, EventDriven or Smoothing
-        ``Theta(h, theta)`` or ``BackwardEuler(h)``: the LCP time-stepper (here);
-        ``EventDriven(...)``: the exact event-driven method (:mod:`converters.methods.event`);
-        ``Smoothing(eps, rtol)``: the smoothed diode and a stiff solver (:mod:`converters.methods.smoothing`).
+    method : Method
+        ``Theta(h, theta)`` / ``BackwardEuler(h)`` (the LCP time-stepper), ``EventDriven(...)``
+        (exact, event-driven) or ``Smoothing(eps, rtol)`` (smoothed pairs, a stiff solver); any
+        :class:`~converters.methods.base.Method`.
     x0 : array_like, shape (n,), optional
         Overrides ``problem.x0`` (cheap restarts for shooting and steady-state searches).
 
@@ -28,15 +26,21 @@ def simulate(problem: LCSProblem, method: Theta, *, x0=None) -> Trajectory:
     -------
     Trajectory
     """
-    if isinstance(method, EventDriven):
-        from .methods.event import simulate_event
-        solution = simulate_event(problem, method, x0=x0)
-        period = problem.schedule.period
-        scale = period if np.isfinite(period) else problem.t_span[1] - problem.t_span[0]
-        return solution.trajectory(method.output_step or scale / 1000.0)
-    if isinstance(method, Smoothing):
-        from .methods.smoothing import simulate_smooth
-        return simulate_smooth(problem, method, x0=x0)
-    start_clock = time.perf_counter()
-    plan = StepPlan.build(problem, method)
-    return plan.trajectory(problem.x0 if x0 is None else x0, wall_s=time.perf_counter() - start_clock)
+    if not isinstance(method, Method):
+        raise ParameterError(f"method must be a pcsuite method ({', '.join(f'{k}: {c.__name__}' for k, c in METHODS.items())}"
+                             f"); got {method!r}")
+    method.supports(problem)
+    return method.solve(problem, check_x0(problem, x0))
+
+
+def check_x0(problem: LCSProblem, x0=None) -> np.ndarray:
+    """``problem.x0`` when x0 is None, else x0 checked to be n finite numbers."""
+    if x0 is None:
+        return np.array(problem.x0, dtype=float)
+    try:
+        x = np.asarray(x0, dtype=float)
+    except (TypeError, ValueError):
+        raise ParameterError(f"x0 must be {problem.n} finite numbers; got {x0!r}") from None
+    if x.shape != (problem.n,) or not np.all(np.isfinite(x)):
+        raise ParameterError(f"x0 must be {problem.n} finite numbers; got {x0!r}")
+    return x

@@ -1,55 +1,116 @@
-"""The typed result of a simulation, convertible to pandas."""
+"""The one result type of every method (and of ngspice): a labelled trajectory, convertible to pandas.
+
+SI units throughout (s, A, V). A trajectory holds what a method computed (times, states, the
+complementarity pairs, the configuration of each step) and, when a model labelled it, the model's
+named signals (``vout``, ``switch``, ...) and its conduction-mode labels. Measures over a window
+(mean, RMS, ripple, mode fractions) are taken here, once, by the rule that suits how the samples
+were produced (``rule``):
+
+    ``end``     each step counts with its end-point value (backward Euler's own rule: its discrete
+                volt-second and charge balances hold exactly with it)
+    ``linear``  the exact integral of the piecewise-linear interpolant through the samples
+                (trapezoidal rule for means; exact RMS of the interpolant)
+    ``exact``   Gauss-Legendre quadrature on the exact pieces of the event-driven solution
+"""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 
 import numpy as np
-import pandas as pd
+
+RULES = ("end", "linear", "exact")
+
+
+@dataclass(frozen=True)
+class Samples:
+    """Rows of a trajectory (or quadrature nodes): what a model's signal and mode laws read."""
+
+    t: np.ndarray
+    x: np.ndarray
+    u: np.ndarray | None
+    y: np.ndarray | None
+    config: np.ndarray | None
+    relay: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
 class Trajectory:
-    """Time series of an LCS simulation. SI units throughout (s, A, V).
+    """Time series of one run.
 
     Attributes
     ----------
     t : ndarray, shape (N,)
-        Time points (the uniform grid plus every schedule switching instant).
+        Time points (s).
     x : ndarray, shape (N, n)
-        States; columns named by ``state_names``.
-    u, y : ndarray, shape (N, k)
+        States, columns named by ``state_names``.
+    u, y : ndarray, shape (N, k), or None
         Complementarity pairs (0 <= u _|_ y >= 0); row 0 holds the consistent initial pair.
-    config : ndarray of int, shape (N,)
+        None for a trajectory measured by another simulator.
+    config : ndarray of int, shape (N,), or None
         Configuration of the step that arrived at each point (row 0: of the first step).
-    events : pandas.DataFrame (property)
-        Columns ``time`` (sub-step estimate from the step's own LCP data), ``step``, ``pair`` and
-        ``kind`` (``activate``: u becomes positive; ``release``: u returns to zero). Built on first
-        access from ``event_columns`` (a dict of equal-length arrays, or a DataFrame): a pandas table
-        costs more than a short run itself.
+    relay : ndarray, shape (N,), or None
+        The relay law's blend z in [0, 1] per point (problems switched by a Relay).
+    method : str
+        Registry name of the method (``lcp``, ``event``, ``smooth``, ``spice``).
+    steps : int
+        Steps, segments or solver factorisations (method-dependent; see ``metadata``).
     wall_s : float
-        Seconds spent building the step matrices and stepping.
+        Seconds spent building and running the simulation.
+    rule : str
+        How integrals over the samples are taken (module docstring).
+    exact : object or None
+        The exact piecewise solution (event method): ``quadrature(t0, t1) -> (Samples, weights)``.
+    events : pandas.DataFrame (property)
+        Columns ``time``, ``step``, ``pair`` (-1 for switching-law events) and ``kind`` (``activate``,
+        ``release``, ``impulse``, ``switch``); switching-law events also give ``config`` (the
+        configuration entered).
+        Built on first access from ``event_columns``.
+    labels : object or None
+        The model's laws bound to its parameters (``signal_names``, ``signal(name, samples)``,
+        ``conducting(samples)``, ``modes(conducting, switch, x)``); None for a bare LCS run.
+    measured : dict
+        Signals measured by another simulator (name -> array; ``switch`` among them), and optionally
+        ``conducting`` (N, k) bool: they take the place of the model's laws.
+    period : float
+        The switching period T (s) when there is one (windows of "the last m periods"); inf otherwise.
     """
 
     t: np.ndarray
     x: np.ndarray
-    u: np.ndarray
-    y: np.ndarray
-    config: np.ndarray
     state_names: tuple[str, ...]
-    pair_names: tuple[str, ...]
-    config_names: tuple[str, ...]
-    event_columns: object
-    method: str
-    steps: int
-    wall_s: float
+    u: np.ndarray | None = None
+    y: np.ndarray | None = None
+    config: np.ndarray | None = None
+    pair_names: tuple[str, ...] = ()
+    config_names: tuple[str, ...] = ()
+    relay: np.ndarray | None = None
+    method: str = ""
+    steps: int = 0
+    wall_s: float = 0.0
+    rule: str = "linear"
+    exact: object = None
+    event_columns: object = None
+    labels: object = None
+    measured: dict = field(default_factory=dict)
+    period: float = float("inf")
     general_solves: int = 0
     metadata: dict = field(default_factory=dict, compare=False)
 
+    # --- raw views -----------------------------------------------------------------------------------
+
+    def samples(self, rows=slice(None)) -> Samples:
+        pick = (lambda a: None if a is None else a[rows])
+        return Samples(self.t[rows], self.x[rows], pick(self.u), pick(self.y), pick(self.config), pick(self.relay))
+
     @property
-    def events(self) -> pd.DataFrame:
+    def events(self):
+        import pandas as pd
         frame = self.__dict__.get("_events_frame")
         if frame is None:
             columns = self.event_columns
+            if columns is None:
+                columns = {"time": np.empty(0), "step": np.empty(0, dtype=np.int64),
+                           "pair": np.empty(0, dtype=np.int64), "kind": np.empty(0, dtype=object)}
             frame = columns if isinstance(columns, pd.DataFrame) else pd.DataFrame(columns)
             object.__setattr__(self, "_events_frame", frame)
         return frame
@@ -65,15 +126,167 @@ class Trajectory:
         except ValueError:
             raise KeyError(f"state must be one of {', '.join(self.state_names)}; got {name!r}") from None
 
-    def to_pandas(self) -> pd.DataFrame:
-        """Columns: time, one per state, u_<pair>, y_<pair>, config (name), one per pair ``active_<pair>``."""
+    # --- labelled signals and modes ------------------------------------------------------------------
+
+    @property
+    def signal_names(self) -> tuple[str, ...]:
+        """States, then the model's signals (``vout``, ``switch``, ...), then measured ones."""
+        names = list(self.state_names)
+        if self.labels is not None:
+            names += [s for s in self.labels.signal_names if s not in names]
+        names += [s for s in self.measured if s not in names and s not in ("conducting", "mode")]
+        return tuple(names)
+
+    def signal(self, name: str, rows=slice(None)) -> np.ndarray:
+        """A named signal (a state, a model signal such as ``vout`` or ``switch``, or a measured one)."""
+        if name in self.measured:
+            return np.asarray(self.measured[name])[rows]
+        if name in self.state_names:
+            return self.x[rows, self.state_names.index(name)]
+        if self.labels is None or name not in self.labels.signal_names:
+            raise KeyError(f"signal must be one of {', '.join(self.signal_names)}; got {name!r}")
+        whole = isinstance(rows, slice) and rows == slice(None)
+        cache = self.__dict__.setdefault("_signal_cache", {})
+        if whole and name in cache:
+            return cache[name]
+        value = np.asarray(self.labels.signal(name, self.samples(rows)))
+        if whole:
+            cache[name] = value
+        return value
+
+    def conducting(self, rows=slice(None)) -> np.ndarray:
+        """Per point and pair: True where the pair's device conducts (shape (N, k))."""
+        if "conducting" in self.measured:
+            return np.asarray(self.measured["conducting"])[rows]
+        return np.asarray(self.labels.conducting(self.samples(rows)))
+
+    def modes(self, rows=slice(None)) -> np.ndarray:
+        """Conduction-mode label per point (e.g. CCM-ON, CCM-OFF, DCM, GDCM-OFF), from the model's rule."""
+        if "mode" in self.measured:
+            return np.asarray(self.measured["mode"])[rows]
+        if self.labels is None:
+            raise KeyError("modes need a model's labels (this trajectory has none)")
+        return self.labels.modes(self.conducting(rows), self.signal("switch", rows), self.x[rows])
+
+    # --- windows and measures ------------------------------------------------------------------------
+
+    def window(self, periods: float | None = None, t0: float | None = None, t1: float | None = None) -> tuple:
+        """(t0, t1) of the last ``periods`` switching periods, or of the given times (default: the run)."""
+        end = self.t[-1] if t1 is None else float(t1)
+        if periods is not None:
+            if not np.isfinite(self.period):
+                raise ValueError("a window in periods needs a switching period; give t0 instead")
+            start = max(self.t[0], end - periods * self.period)
+        else:
+            start = self.t[0] if t0 is None else max(self.t[0], float(t0))
+        return start, end
+
+    def _rows(self, t0: float, t1: float) -> np.ndarray:
+        span = max(t1 - t0, 1e-300)
+        return np.flatnonzero((self.t >= t0 - 1e-12 * span) & (self.t <= t1 + 1e-12 * span))
+
+    def _integrate(self, name: str, power: int, t0: float, t1: float) -> float:
+        """Integral of signal**power over [t0, t1] by the trajectory's rule."""
+        if self.rule == "exact" and self.exact is not None and name not in self.measured:
+            nodes, weights = self.exact.quadrature(t0, t1)
+            if name in self.state_names:
+                values = nodes.x[:, self.state_names.index(name)]
+            else:
+                values = np.asarray(self.labels.signal(name, nodes))
+            return float(weights @ values ** power)
+        rows = self._rows(t0, t1)
+        t, v = self.t[rows], self.signal(name, rows)
+        dt = np.diff(t)
+        if self.rule == "end":
+            return float(dt @ v[1:] ** power)
+        a, b = v[:-1], v[1:]
+        if power == 1:
+            return float(dt @ (0.5 * (a + b)))
+        return float(dt @ ((a * a + a * b + b * b) / 3.0))
+
+    def _span(self, t0: float, t1: float) -> float:
+        if self.rule == "exact" and self.exact is not None:
+            return t1 - t0
+        rows = self._rows(t0, t1)
+        return float(self.t[rows[-1]] - self.t[rows[0]])
+
+    def mean(self, name: str, periods: float | None = None, t0: float | None = None, t1: float | None = None) -> float:
+        """Time average of a signal over the window (the last ``periods`` periods, or [t0, t1])."""
+        a, b = self.window(periods, t0, t1)
+        return self._integrate(name, 1, a, b) / self._span(a, b)
+
+    def rms(self, name: str, periods: float | None = None, t0: float | None = None, t1: float | None = None) -> float:
+        a, b = self.window(periods, t0, t1)
+        return float(np.sqrt(self._integrate(name, 2, a, b) / self._span(a, b)))
+
+    def ripple(self, name: str, periods: float | None = None, t0: float | None = None, t1: float | None = None) -> float:
+        """Peak-to-peak value over the window (on the samples)."""
+        a, b = self.window(periods, t0, t1)
+        return float(np.ptp(self.signal(name, self._rows(a, b))))
+
+    def mode_fractions(self, periods: float | None = 1, t0: float | None = None, t1: float | None = None) -> dict:
+        """Fraction of the window spent in each mode (each step counted by the label of its end point)."""
+        a, b = self.window(periods, t0, t1)
+        rows = self._rows(a, b)
+        labels = np.asarray(self.modes(rows)).astype(str)[1:]
+        dt = np.diff(self.t[rows])
+        total = dt.sum()
+        return {str(label): float(dt[labels == label].sum() / total) for label in sorted(set(labels))}
+
+    # --- tables --------------------------------------------------------------------------------------
+
+    def to_pandas(self, columns=None):
+        """Columns: time, one per state, the model's signals, ``switch`` and ``mode`` (labelled runs),
+        then u_<pair>, y_<pair>, active_<pair> and ``config`` (LCS runs). ``columns`` picks a subset."""
+        import pandas as pd
         data = {"time": self.t}
         for i, name in enumerate(self.state_names):
             data[name] = self.x[:, i]
-        active = self.active
-        for i, name in enumerate(self.pair_names):
-            data[f"u_{name}"] = self.u[:, i]
-            data[f"y_{name}"] = self.y[:, i]
-            data[f"active_{name}"] = active[:, i]
-        data["config"] = pd.Categorical.from_codes(self.config, categories=list(self.config_names))
-        return pd.DataFrame(data)
+        if self.labels is not None or self.measured:
+            for name in self.signal_names:
+                if name not in data:
+                    data[name] = self.signal(name)
+            data["mode"] = np.asarray(self.modes()).astype(str)
+        if self.u is not None:
+            active = self.active
+            for i, name in enumerate(self.pair_names):
+                data[f"u_{name}"] = self.u[:, i]
+                data[f"y_{name}"] = self.y[:, i]
+                data[f"active_{name}"] = active[:, i]
+        if self.config is not None:
+            names = list(self.config_names) or [str(c) for c in range(int(self.config.max()) + 1)]
+            data["config"] = pd.Categorical.from_codes(self.config, categories=names)
+        frame = pd.DataFrame(data)
+        return frame if columns is None else frame[list(columns)]
+
+    def waveforms(self):
+        """The waveform table of the command line: time, states, the model's signals, mode."""
+        declared = self.labels.signal_names if self.labels is not None else ()
+        names = list(self.state_names) + [s for s in declared if s not in self.state_names]
+        return self.to_pandas(["time", *names, "mode"])
+
+
+def concatenate(parts: list[Trajectory]) -> Trajectory:
+    """One trajectory from consecutive runs (the end point of each part is the start of the next)."""
+    from dataclasses import replace
+    import pandas as pd
+    first = parts[0]
+    if len(parts) == 1:
+        return first
+
+    def stack(name):
+        arrays = [getattr(p, name) for p in parts]
+        if any(a is None for a in arrays):
+            return None
+        return np.concatenate([arrays[0]] + [a[1:] for a in arrays[1:]])
+    offsets = np.cumsum([0] + [p.t.size - 1 for p in parts[:-1]])
+    events = []
+    for part, offset in zip(parts, offsets):
+        frame = part.events.copy()
+        frame["step"] = frame["step"] + offset
+        events.append(frame)
+    return replace(first, t=stack("t"), x=stack("x"), u=stack("u"), y=stack("y"), config=stack("config"),
+                   relay=stack("relay"), steps=sum(p.steps for p in parts), wall_s=sum(p.wall_s for p in parts),
+                   event_columns=pd.concat(events, ignore_index=True), exact=None,
+                   rule="linear" if first.rule == "exact" else first.rule, general_solves=sum(p.general_solves
+                                                                                            for p in parts))

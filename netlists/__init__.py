@@ -1,4 +1,4 @@
 """ngspice netlists of the converters, generated from the same parameter sets the LCS uses."""
-from .build import Netlist, SpiceOptions, build_netlist, build_smc_netlist
+from .build import Netlist, SpiceOptions, build_netlist, build_smc_netlist, model_netlist
 
-__all__ = ["Netlist", "SpiceOptions", "build_netlist", "build_smc_netlist"]
+__all__ = ["Netlist", "SpiceOptions", "build_netlist", "build_smc_netlist", "model_netlist"]

@@ -46,8 +46,11 @@ class Netlist:
     params: dict
     t_end: float
     options: SpiceOptions
-    # state name -> (vector, sign) or (vector_a, vector_b) difference, see validation.spice
+    # state name -> (vector, sign) or ((vector_a, vector_b), sign) difference, see validation.spice;
+    # "switch" -> ({vector: coefficient}, threshold): the switch is on where the combination >= threshold
     probes: dict = field(default_factory=dict)
+    #: Probe names of each complementarity pair's device current, in the model's pair order.
+    pairs: tuple = ("i_D",)
 
 
 def _num(name: str, value) -> str:
@@ -130,11 +133,13 @@ def build_netlist(converter: str, params: dict | None, t_end, options: SpiceOpti
                              f"got {len(x0)}")
     ic = {name: parse_value(f"x0[{name}]", value) for name, value in zip(conv.state_names, x0)}
     body, probes = _BODIES[conv.name](p, T, options, ic)
+    probes.setdefault("switch", ({"gate": 1.0}, 0.5))
     tmax = options.tmax_fraction * T
     lines = [f"* pcsuite {conv.name}", *body, *_models(options),
              f".options RELTOL={_num('reltol', options.reltol)} METHOD={options.method} ITL4=100",
              f".tran {_num('tstep', tmax)} {_num('t_end', t_end)} 0 {_num('tmax', tmax)} UIC", ".end"]
-    return Netlist("\n".join(lines) + "\n", conv.name, p, t_end, options, probes)
+    pairs = tuple(f"i_{name}" if f"i_{name}" in probes else "i_D" for name in conv.pair_names)
+    return Netlist("\n".join(lines) + "\n", conv.name, p, t_end, options, probes, pairs)
 
 
 def _buck(p, T, o, ic):
@@ -185,7 +190,7 @@ def _prc(p, T, o, ic):
             *_inductor("p", "out", p, name="Lf", value_key="Lf", sense="Vslf", ic=ic["iLf"]),
             *_capacitor("out", "nn", p, name="Cf", value_key="Cf", ic=ic["vo"]), f"R1 out nn {_num('R', p['R'])}",
             "Rgnd nn 0 1e9"]
-    return body, {"ir": ("vslr#branch", 1.0), "vr": ("a", 1.0), "iLf": ("vslf#branch", 1.0),
+    return body, {"switch": ({"drv": 1.0}, 0.0), "ir": ("vslr#branch", 1.0), "vr": ("a", 1.0), "iLf": ("vslf#branch", 1.0),
                   "vo": (("out", "nn"), 1.0), "vout": (("out", "nn"), 1.0),
                   **{f"i_D{i}": (f"vsd{i}#branch", 1.0) for i in range(1, 5)}}
 
@@ -211,15 +216,15 @@ def build_smc_netlist(params: dict | None, t_end, options: SpiceOptions | None =
     """
     if rectifier not in ("switch", "diode"):
         raise ParameterError(f"rectifier must be 'switch' or 'diode'; got {rectifier!r}")
-    from converters.models.sliding import iref0, resolve_smc
-    p = resolve_smc(params)
+    from converters.models import get_model
+    from converters.models.sliding import iref0, predicted_frequency
+    p = get_model("boost", "smc").resolve(params)
     options = options or SpiceOptions(tmax_fraction=1.0 / 200.0)
     t_end = parse_value("t_end", t_end)
     if t_end <= 0:
         raise ParameterError(f"t_end must be positive (> 0 s); got {t_end!r}")
     iL0, v0 = (0.0, p["Vin"]) if x0 is None else (parse_value("x0[iL]", x0[0]), parse_value("x0[vC]", x0[1]))
     # TMAX: a fraction of the predicted switching period (tmax_fraction of 1/f).
-    from converters.models.sliding import predicted_frequency
     tmax = options.tmax_fraction / predicted_frequency(p)
     vref, i0 = _num("Vref", p["Vref"]), _num("Iref0", iref0(p))
     conductance = f"{_num('1/R', 1.0 / p['R'])}"
@@ -241,6 +246,18 @@ def build_smc_netlist(params: dict | None, t_end, options: SpiceOptions | None =
     lines = ["* pcsuite boost-smc", *body,
              f".options RELTOL={_num('reltol', options.reltol)} METHOD={options.method} ITL4=100",
              f".tran {_num('tstep', tmax)} {_num('t_end', t_end)} 0 {_num('tmax', tmax)} UIC", ".end"]
-    probes = {"iL": ("vsl#branch", 1.0), "vC": ("out", 1.0), "vout": ("out", 1.0), "i_D": ("vsd#branch", 1.0),
+    # The comparator's switch is closed where the switch node is pulled below half the output.
+    probes = {"switch": ({"out": 0.5, "sw": -1.0}, 0.0), "iL": ("vsl#branch", 1.0), "vC": ("out", 1.0),
+              "vout": ("out", 1.0), "i_D": ("vsd#branch", 1.0),
               "sw": ("sw", 1.0), "ctrl": ("ctrl", 1.0)}
     return Netlist("\n".join(lines) + "\n", "boost-smc", p, t_end, options, probes)
+
+
+def model_netlist(model, params: dict, t_end, options: SpiceOptions | None = None, x0=None) -> Netlist:
+    """The netlist of a model (a converter under its control) with validated ``params``."""
+    if model.control == "pwm":
+        return build_netlist(model.name, params, t_end, options, x0=x0)
+    if model.control == "smc":
+        return build_smc_netlist(params, t_end, options, x0=x0)
+    raise ParameterError(f"no ngspice netlist for {model.key}: the implicit relay is a time-stepping scheme of "
+                         "the LCP stepper only; use --control smc (the hysteresis comparator)")

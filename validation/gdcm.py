@@ -22,14 +22,13 @@ import numpy as np
 import pandas as pd
 
 from converters.analysis import gdcm
-from converters.models import analytic
-from converters.analysis.modes import HELD, held_fraction, mode_class, mode_intervals, orbit_intervals, periodic_orbit
+from converters.analysis.modes import HELD, held_fraction, mode_class, mode_intervals, orbit_intervals
 from converters.errors import ParameterError
-from converters.models import get_converter
+from converters.models import analytic, get_converter
+from converters.run import steady_orbit
 from netlists import SpiceOptions, build_netlist
 
-from .modes import spice_modes
-from .spice import SpiceError, close_spice_worker, run_spice
+from .spice import SpiceError, close_spice_worker, run_spice, spice_trajectory
 
 SPICE_PERIODS = 8
 WINDOW_PERIODS = 2
@@ -50,8 +49,8 @@ def predicted_label(converter, p: dict) -> str:
 def spice_intervals(converter, netlist, result, periods_window: int = WINDOW_PERIODS) -> list[dict]:
     T = converter.period(netlist.params)
     start = netlist.t_end - periods_window * T
-    labels = spice_modes(converter, result, netlist, start)
-    return mode_intervals(result.time, labels, start, netlist.t_end, T, SPICE_MIN_RUN)
+    run = spice_trajectory(converter, netlist.params, netlist, result, start)
+    return mode_intervals(run.t, run.modes(), start, netlist.t_end, T, SPICE_MIN_RUN)
 
 
 def gdcm_check(name: str, params: dict | None = None, *, h=None) -> dict:
@@ -59,10 +58,10 @@ def gdcm_check(name: str, params: dict | None = None, *, h=None) -> dict:
     conv = get_converter(name)
     p = conv.resolve(params)
     T = conv.period(p)
-    orbit = periodic_orbit(conv, p, h=h)
+    orbit = steady_orbit(conv, p, h=h)
     out = {"converter": conv.name, "params": p, "period_s": T}
-    if conv.name == "prc":
-        return {**out, **_prc_combinations(conv, p, orbit)}
+    if not analytic.has_closed_form(conv.name):
+        return {**out, **_combinations(conv, p, orbit)}
     exact = gdcm.exact_mode(conv, p)
     out["predicted"] = predicted_label(conv, p)
     out["prediction"] = {"K": analytic.k_factor(p, conv.name), "Kcrit": analytic.k_crit(p["D"], conv.name),
@@ -86,40 +85,33 @@ def _constraint_residual(conv, p, orbit) -> dict:
     """During held OFF intervals: max |C x + F| (A / V) and the sign of the exit drift."""
     off = conv.configurations(p)[1]
     cond = gdcm.gdcm_condition(off)
-    held = np.asarray(orbit.labels).astype(str) == conv.off_held_label
+    held = np.asarray(orbit.modes()).astype(str) == conv.off_held_label
     xs = orbit.x[held]
     return {"max_abs_Cx_plus_F": float(np.abs(cond.on_set(xs)).max()),
             "max_drift": float(cond.drift(xs).max()), "min_multiplier": float(cond.multiplier(xs).min())}
 
 
-PRC_DIODES = ("D1", "D3", "D2", "D4")
-
-
-def _prc_combinations(conv, p, orbit) -> dict:
-    """PRC: which bridge diodes conduct, as fractions of the period, in both simulators."""
+def _combinations(conv, p, orbit) -> dict:
+    """Several pairs (the PRC's bridge): which devices conduct, as fractions of the period, in both
+    simulators; no closed-form prediction."""
     T = conv.period(p)
-    # Diode currents: u for D1, D3 (u = i_D), y for D2, D4 (y = i_D).
-    currents = np.column_stack([orbit.u[:, 0], orbit.u[:, 1], orbit.y[:, 2], orbit.y[:, 3]])
-    lcp = _combination_fractions(orbit.t, currents[1:], T, 1)
+    lcp = _combination_fractions(orbit.t, orbit.conducting()[1:], conv.pair_names, T, 1)
     netlist = build_netlist(conv.name, p, SPICE_PERIODS * T, SPICE_OPTIONS, x0=orbit.x[0])
-    result = run_spice(netlist)
     start = netlist.t_end - WINDOW_PERIODS * T
-    spice_currents = np.column_stack([result.signal(netlist.probes[f"i_{d}"]) for d in PRC_DIODES])
-    sel = result.time >= start
-    spice = _combination_fractions(result.time[sel], spice_currents[sel][:-1], T, WINDOW_PERIODS)
+    run = spice_trajectory(conv, p, netlist, run_spice(netlist), start)
+    sel = run.t >= start
+    spice = _combination_fractions(run.t[sel], run.conducting()[sel][:-1], conv.pair_names, T, WINDOW_PERIODS)
     keys = sorted(set(lcp) | set(spice))
     diff = max(abs(lcp.get(k, 0.0) - spice.get(k, 0.0)) for k in keys)
-    return {"predicted": "n/a (4 diodes: mode combinations)", "lcp": lcp, "spice": spice,
+    return {"predicted": f"n/a ({len(conv.pair_names)} pairs: combinations of conducting devices)", "lcp": lcp, "spice": spice,
             "max_fraction_difference": diff, "agree": set(k for k, v in lcp.items() if v > 0.01) ==
             set(k for k, v in spice.items() if v > 0.01)}
 
 
-def _combination_fractions(t, currents, T, periods) -> dict:
-    threshold = 1e-3 * np.abs(currents).max()
-    on = currents > threshold
-    names = np.array(["+".join(d for d, c in zip(PRC_DIODES, row) if c) or "none" for row in on])
+def _combination_fractions(t, conducting, names, T, periods) -> dict:
+    labels = np.array(["+".join(d for d, c in zip(names, row) if c) or "none" for row in conducting])
     dt = np.diff(t)
-    return {str(k): float(dt[names == k].sum() / (periods * T)) for k in sorted(set(names))}
+    return {str(k): float(dt[labels == k].sum() / (periods * T)) for k in sorted(set(labels))}
 
 
 # --- D-K maps -----------------------------------------------------------------------------------------
@@ -132,7 +124,7 @@ def dk_grid(name: str, n_d: int = 30, n_k: int = 30) -> pd.DataFrame:
     if n_d < 2 or n_k < 2:
         raise ParameterError(f"the grid needs at least 2 x 2 points; got {n_d} x {n_k}")
     base = conv.resolve({})
-    inductance = conv.effective_inductance(base) if conv.name == "cuk" else base["L"]
+    inductance = analytic.k_factor(base, conv.name) * base["R"] / (2.0 * base["f_sw"])   # L (Cuk: L1 L2 / (L1 + L2))
     rows = []
     for D in np.linspace(*D_RANGE, n_d):
         for K in np.geomspace(*K_RANGES[conv.name], n_k):
@@ -149,9 +141,9 @@ def _lcp_point(row: dict) -> dict:
     out = {"predicted": predicted_label(conv, p)}
     try:
         out["exact"] = gdcm.exact_mode(conv, p)["mode"]
-        orbit = periodic_orbit(conv, p)
+        orbit = steady_orbit(conv, p)
         iv = orbit_intervals(orbit)
-        out.update(lcp=mode_class(iv), lcp_held=held_fraction(iv, 1), converged=orbit.converged,
+        out.update(lcp=mode_class(iv), lcp_held=held_fraction(iv, 1), converged=orbit.metadata["orbit"]["converged"],
                    x0=orbit.x[0].tolist())
     except Exception as exc:  # one failed point is recorded, the map goes on
         out.update(lcp="error", lcp_error=str(exc))

@@ -19,25 +19,22 @@ def png(fig) -> bytes:
 
 def comparison_plot(c, periods: int = 3) -> bytes:
     """vout and the primary current of both simulators over the last periods, and their difference."""
-    T = 1.0 / c.params["f_sw"]
-    t_end = c.spice.time[-1]
+    T = c.lcp.period
+    t_end = c.spice.t[-1]
     start = t_end - periods * T
     primary = c.metrics["current_signal"]
-    t_l, t_s = c.lcp.trajectory.t, c.spice.time
+    t_l, t_s = c.lcp.t, c.spice.t
     sel_l, sel_s = t_l >= start, t_s >= start
     fig, axes = plt.subplots(3, 1, figsize=(8, 7), sharex=True)
     scale = 1e6
-    axes[0].plot((t_s[sel_s] - start) * scale, c.spice.signal(c.netlist.probes["vout"])[sel_s], label="ngspice", lw=2,
-                 alpha=0.6)
-    axes[0].plot((t_l[sel_l] - start) * scale, c.lcp.vout()[sel_l], "--", label="LCP", lw=1)
+    axes[0].plot((t_s[sel_s] - start) * scale, c.spice.signal("vout")[sel_s], label="ngspice", lw=2, alpha=0.6)
+    axes[0].plot((t_l[sel_l] - start) * scale, c.lcp.signal("vout")[sel_l], "--", label="LCP", lw=1)
     axes[0].set_ylabel("vout (V)")
-    axes[1].plot((t_s[sel_s] - start) * scale, c.spice.signal(c.netlist.probes[primary])[sel_s], label="ngspice",
-                 lw=2, alpha=0.6)
-    axes[1].plot((t_l[sel_l] - start) * scale, c.lcp.trajectory.state(primary)[sel_l], "--", label="LCP", lw=1)
+    axes[1].plot((t_s[sel_s] - start) * scale, c.spice.state(primary)[sel_s], label="ngspice", lw=2, alpha=0.6)
+    axes[1].plot((t_l[sel_l] - start) * scale, c.lcp.state(primary)[sel_l], "--", label="LCP", lw=1)
     axes[1].set_ylabel(f"{primary} (A)")
     grid = np.linspace(start, t_end, periods * 2000 + 1)
-    residual = (np.interp(grid, t_s, c.spice.signal(c.netlist.probes[primary]))
-                - np.interp(grid, t_l, c.lcp.trajectory.state(primary)))
+    residual = np.interp(grid, t_s, c.spice.state(primary)) - np.interp(grid, t_l, c.lcp.state(primary))
     axes[2].plot((grid - start) * scale, residual, lw=0.8)
     axes[2].set_ylabel(f"{primary}: ngspice - LCP (A)")
     axes[2].set_xlabel(f"time in the last {periods} periods (us)")

@@ -24,9 +24,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from converters.errors import ParameterError
-from converters.models import get_converter
+from converters.models import get_converter, get_model
 from converters.validate import parse_value
 from netlists import SpiceOptions
+
+from .defaults import THRESHOLDS
 
 SCENE_DIR = Path(__file__).with_name("scenes")
 TOP_KEYS = ("name", "converter", "description", "suites", "control", "params", "run", "methods", "checks")
@@ -35,10 +37,8 @@ CONTROLS = ("pwm", "smc", "smc-implicit")
 METHOD_KEYS = {"lcp": ("h", "theta"), "spice": tuple(SpiceOptions.__dataclass_fields__)}
 CHECK_KEYS = ("vout_mean_rel", "mode_agreement", "turn_off_error_T", "closed_form_rel", "vout_ref_rel",
               "frequency_rel", "frequency_agreement", "recovery_agreement", "lambda_settle")
-DEFAULT_CHECKS = {"vout_mean_rel": 1e-2, "mode_agreement": 1.0, "turn_off_error_T": 2e-2}
-DEFAULT_CONTROL_CHECKS = {"smc": {"vout_ref_rel": 5e-3, "frequency_rel": 5e-2, "frequency_agreement": 5e-2,
-                                  "recovery_agreement": 0.1},
-                          "smc-implicit": {"vout_ref_rel": 5e-3, "lambda_settle": 1e-6}}
+#: The study each control runs, whose thresholds (data/defaults.toml) are the scene's default checks.
+STUDY = {"pwm": "compare", "smc": "smc", "smc-implicit": "smc-implicit"}
 
 
 @dataclass(frozen=True)
@@ -51,7 +51,7 @@ class Scene:
     run: dict = field(default_factory=dict)
     lcp: dict = field(default_factory=dict)
     spice: dict = field(default_factory=dict)
-    checks: dict = field(default_factory=lambda: dict(DEFAULT_CHECKS))
+    checks: dict = field(default_factory=lambda: dict(THRESHOLDS["compare"]))
     path: str = ""
     control: str = "pwm"
 
@@ -81,11 +81,10 @@ def load_scene(path) -> Scene:
     if control != "pwm" and converter.name != "boost":
         raise ParameterError(f"{where}: control {control!r} is available for the boost only; got {converter.name!r}")
     params = data.get("params", {})
-    from converters.models import sliding
-    names = tuple(p.name for p in (converter.parameters if control == "pwm" else sliding.PARAMETERS))
-    _strict(params, names, f"{where} [params]")
+    model = get_model(converter.name, control)
+    _strict(params, tuple(p.name for p in model.parameters), f"{where} [params]")
     try:
-        converter.resolve(params) if control == "pwm" else sliding.resolve_smc(params)  # errors name the parameter
+        model.resolve(params)  # errors name the parameter
     except ParameterError as exc:
         raise ParameterError(f"{where} [params]: {exc}") from None
     run = data.get("run", {})
@@ -113,7 +112,7 @@ def load_scene(path) -> Scene:
     return Scene(name=data.get("name", path.stem), converter=converter.name, description=data.get("description", ""),
                  suites=tuple(suites), params=dict(params), run=dict(run), lcp=dict(methods.get("lcp", {})),
                  spice=dict(methods.get("spice", {})), path=str(path), control=control,
-                 checks={**(DEFAULT_CHECKS if control == "pwm" else DEFAULT_CONTROL_CHECKS[control]), **checks})
+                 checks={**THRESHOLDS[STUDY[control]], **checks})
 
 
 def scenes_of(suite: str, directory=SCENE_DIR) -> list[Scene]:

@@ -3,7 +3,7 @@
 Metrics over a window at the end of the run (after the load step when there is one): mean vout
 against Vref, switching frequency (switch closings per second) against Vin (v - Vin)/(2 band L v) at
 the measured mean v, the two frequencies against each other, and the recovery time after a load
-step (from the step until |v - Vref| <= 1 % Vref holds to the end).
+step (from the step until |v - Vref| <= 1 % Vref holds to the end). Thresholds: data/defaults.toml.
 """
 from __future__ import annotations
 
@@ -12,10 +12,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from converters.models.sliding import predicted_frequency, recovery_time, resolve_smc, simulate_smc
+from converters.errors import ParameterError
+from converters.models import get_model
+from converters.models.sliding import predicted_frequency, recovery_time, switching_frequency
+from converters.run import run_converter
 from netlists import SpiceOptions, build_smc_netlist
 
-from .spice import run_spice
+from .defaults import passes
+from .spice import run_spice, spice_trajectory
 
 WINDOW_S = 2e-3
 RECOVERY_TOL = 0.01
@@ -24,98 +28,109 @@ RECOVERY_TOL = 0.01
 @dataclass
 class SMCComparison:
     params: dict
-    lcp: object                 # converters.models.sliding.SMCRun
-    spice: object               # SpiceResult
+    lcp: object                 # Trajectory (LCP stepper)
+    spice: object               # Trajectory (ngspice)
     netlist: object
     metrics: dict
-
-    def spice_arrays(self):
-        r, nl = self.spice, self.netlist
-        t = r.time
-        v = r.signal(nl.probes["vout"])
-        on = r.signal(nl.probes["sw"]) < 0.5 * v
-        return t, r.signal(nl.probes["iL"]), v, on
-
-
-def _closings(t, on):
-    return t[np.flatnonzero(on[1:] & ~on[:-1]) + 1]
-
-
-def _frequency(times, t0):
-    times = times[times >= t0]
-    return float((times.size - 1) / (times[-1] - times[0])) if times.size >= 2 else 0.0
-
-
-def _mean(t, v, t0):
-    sel = t >= t0
-    return float(np.trapezoid(v[sel], t[sel]) / (t[sel][-1] - t[sel][0]))
 
 
 def compare_smc(params: dict | None = None, t_end: float = 30e-3, h=None,
                 spice_options: SpiceOptions | None = None) -> SMCComparison:
     """Run the hysteresis controller in both simulators from the same start and measure them."""
-    p = resolve_smc(params)
+    model = get_model("boost", "smc")
+    p = model.resolve(params)
     if "t_step" in p and p["t_step"] >= t_end - WINDOW_S:
-        from converters.errors import ParameterError
         raise ParameterError(f"t_step must be before t_end - {WINDOW_S:g} s = {t_end - WINDOW_S:g} s so the "
                              f"recovery can be measured; got {p['t_step']:g}")
-    lcp = simulate_smc(p, scheme="hysteresis", h=h, t_end=t_end)
+    lcp = run_converter(model, p, h=h, t_end=t_end)
     netlist = build_smc_netlist(p, t_end, spice_options)
-    spice = run_spice(netlist)
-    out = SMCComparison(p, lcp, spice, netlist, {})
+    spice = spice_trajectory(model, p, netlist, run_spice(netlist))
     t0 = t_end - WINDOW_S
-    ts, iL_s, v_s, on_s = out.spice_arrays()
     m = {"window_s": [t0, t_end], "vref_V": p["Vref"],
-         "vout_mean_lcp_V": lcp.mean_vout(t0), "vout_mean_spice_V": _mean(ts, v_s, t0)}
+         "vout_mean_lcp_V": lcp.mean("vout", t0=t0), "vout_mean_spice_V": spice.mean("vout", t0=t0)}
     m["vout_ref_rel_lcp"] = abs(m["vout_mean_lcp_V"] / p["Vref"] - 1.0)
     m["vout_ref_rel_spice"] = abs(m["vout_mean_spice_V"] / p["Vref"] - 1.0)
-    m["frequency_lcp_Hz"] = lcp.switching_frequency(t0)
-    m["frequency_spice_Hz"] = _frequency(_closings(ts, on_s), t0)
+    m["frequency_lcp_Hz"] = switching_frequency(lcp, t0)
+    m["frequency_spice_Hz"] = switching_frequency(spice, t0)
     m["frequency_predicted_lcp_Hz"] = predicted_frequency(p, m["vout_mean_lcp_V"])
     m["frequency_predicted_spice_Hz"] = predicted_frequency(p, m["vout_mean_spice_V"])
     m["frequency_rel_lcp"] = abs(m["frequency_lcp_Hz"] / m["frequency_predicted_lcp_Hz"] - 1.0)
     m["frequency_rel_spice"] = abs(m["frequency_spice_Hz"] / m["frequency_predicted_spice_Hz"] - 1.0)
     m["frequency_lcp_vs_spice"] = abs(m["frequency_lcp_Hz"] / m["frequency_spice_Hz"] - 1.0)
-    m["min_iL_lcp_A"] = float(lcp.x[lcp.t >= 0.5 * t_end, 0].min())
+    m["min_iL_lcp_A"] = float(lcp.state("iL")[lcp.t >= 0.5 * t_end].min())
     m["held_steps_lcp"] = int(lcp.active[:, 0].sum())   # DCM never occurs under this control
     if "t_step" in p:
+        v_l, v_s = lcp.signal("vout"), spice.signal("vout")
         m["t_step_s"] = p["t_step"]
-        m["recovery_lcp_s"] = lcp.recovery_time(p["t_step"], RECOVERY_TOL)
-        m["recovery_spice_s"] = recovery_time(ts, v_s, p["Vref"], p["t_step"], RECOVERY_TOL)
+        m["recovery_lcp_s"] = recovery_time(lcp.t, v_l, p["Vref"], p["t_step"], RECOVERY_TOL)
+        m["recovery_spice_s"] = recovery_time(spice.t, v_s, p["Vref"], p["t_step"], RECOVERY_TOL)
         m["recovery_lcp_vs_spice"] = abs(m["recovery_lcp_s"] / m["recovery_spice_s"] - 1.0)
-        m["dip_lcp_V"] = float(p["Vref"] - lcp.vout[lcp.t >= p["t_step"]].min())
-        m["dip_spice_V"] = float(p["Vref"] - v_s[ts >= p["t_step"]].min())
+        m["dip_lcp_V"] = float(p["Vref"] - v_l[lcp.t >= p["t_step"]].min())
+        m["dip_spice_V"] = float(p["Vref"] - v_s[spice.t >= p["t_step"]].min())
     m["lcp_wall_s"] = lcp.wall_s
     m["spice_wall_s"] = spice.wall_s
-    m["lcp_steps"] = int(lcp.t.size - 1)
-    m["spice_steps"] = spice.accepted_steps
-    out.metrics = m
-    return out
+    m["lcp_steps"] = int(lcp.steps)
+    m["spice_steps"] = int(spice.steps)
+    return SMCComparison(p, lcp, spice, netlist, m)
 
 
-def implicit_metrics(params: dict | None = None, t_end: float = 30e-3, h=None) -> dict:
+def smc_checks(metrics: dict, thresholds: dict, params: dict, t_end: float) -> list[tuple]:
+    """(check, value, threshold, pass) of a sliding-mode comparison."""
+    m, th = metrics, thresholds
+
+    def row(name, value, label=None):
+        return (label or name, value, th[name], passes(name, value, th[name]))
+
+    rows = [row("vout_ref_rel", m["vout_ref_rel_lcp"], "vout_ref_rel (LCP)"),
+            row("vout_ref_rel", m["vout_ref_rel_spice"], "vout_ref_rel (ngspice)"),
+            row("frequency_rel", m["frequency_rel_lcp"], "frequency_rel (LCP)"),
+            row("frequency_rel", m["frequency_rel_spice"], "frequency_rel (ngspice)"),
+            row("frequency_agreement", m["frequency_lcp_vs_spice"])]
+    if "recovery_lcp_s" in m:
+        rows += [("recovered within 1 % (LCP)", m["recovery_lcp_s"], t_end - params["t_step"],
+                  bool(np.isfinite(m["recovery_lcp_s"]))),
+                 ("recovered within 1 % (ngspice)", m["recovery_spice_s"], t_end - params["t_step"],
+                  bool(np.isfinite(m["recovery_spice_s"]))),
+                 row("recovery_agreement", m["recovery_lcp_vs_spice"])]
+    return rows
+
+
+def implicit_checks(metrics: dict, thresholds: dict) -> list[tuple]:
+    """(check, value, threshold, pass) of the implicit relay's run."""
+    th = thresholds
+    return [("vout_ref_rel", metrics["vout_ref_rel"], th["vout_ref_rel"],
+             passes("vout_ref_rel", metrics["vout_ref_rel"], th["vout_ref_rel"])),
+            ("|lambda - Vin/v|", metrics["lambda_minus_vin_over_v"], th["lambda_settle"],
+             passes("lambda_settle", metrics["lambda_minus_vin_over_v"], th["lambda_settle"])),
+            ("lambda spread (no chatter)", metrics["lambda_spread"], th["lambda_settle"],
+             passes("lambda_settle", metrics["lambda_spread"], th["lambda_settle"]))]
+
+
+def implicit_metrics(params: dict | None = None, t_end: float = 30e-3, h=None) -> tuple[dict, object]:
     """The chattering-free relay: lambda against Vin/v, its spread, and vout against Vref."""
     start = time.perf_counter()
-    run = simulate_smc(params, scheme="implicit", h=h, t_end=t_end)
-    s = run.summary(WINDOW_S)
-    lam = 1.0 - run.switch[run.window(t_end - WINDOW_S)]
+    model = get_model("boost", "smc-implicit")
+    run = run_converter(model, params, h=h, t_end=t_end)
+    p = run.metadata["params"]
+    s = model.summary(run, p, WINDOW_S)
+    lam = 1.0 - run.signal("switch")[run.t >= t_end - WINDOW_S]
     reversals = int(np.sum(np.abs(np.diff(np.sign(np.diff(lam)))) > 0)) if lam.size > 2 else 0
-    return {"vout_mean_V": s["vout_mean"], "vout_ref_rel": abs(s["vout_mean"] / run.params["Vref"] - 1.0),
+    return {"vout_mean_V": s["vout_mean"], "vout_ref_rel": abs(s["vout_mean"] / p["Vref"] - 1.0),
             "lambda_mean": s["lambda_mean"], "vin_over_v": s["vin_over_v"],
             "lambda_minus_vin_over_v": abs(s["lambda_mean"] - s["vin_over_v"]),
             "lambda_spread": s["lambda_spread"], "lambda_saturated_steps": int(np.sum((lam <= 0) | (lam >= 1))),
-            "lambda_direction_changes": reversals, "h_s": run.h, "steps": int(run.t.size - 1),
-            "wall_s": time.perf_counter() - start, "recovery_s": s.get("recovery_time_s")}, run
+            "lambda_direction_changes": reversals, "h_s": run.metadata["method_options"]["h"],
+            "steps": int(run.steps), "wall_s": time.perf_counter() - start,
+            "recovery_s": s.get("recovery_time_s")}, run
 
 
 def smc_plot(c: SMCComparison) -> bytes:
     from .plots import png, plt
-    ts, iL_s, v_s, on_s = c.spice_arrays()
-    lcp = c.lcp
+    lcp, spice = c.lcp, c.spice
     fig, axes = plt.subplots(3, 1, figsize=(8, 7))
     ax = axes[0]
-    ax.plot(lcp.t * 1e3, lcp.vout, lw=1, label="LCP")
-    ax.plot(ts * 1e3, v_s, lw=1, ls="--", label="ngspice")
+    ax.plot(lcp.t * 1e3, lcp.signal("vout"), lw=1, label="LCP")
+    ax.plot(spice.t * 1e3, spice.signal("vout"), lw=1, ls="--", label="ngspice")
     ax.axhline(c.params["Vref"], color="k", lw=0.5)
     ax.set_ylabel("vout (V)")
     ax.set_xlabel("t (ms)")
@@ -123,10 +138,10 @@ def smc_plot(c: SMCComparison) -> bytes:
     ax.set_title("boost under sliding-mode control: whole run", fontsize=9)
     t1 = lcp.t[-1]
     t0 = t1 - 5.0 / predicted_frequency(c.params)
-    for ax, (y_l, y_s, label) in zip(axes[1:], ((lcp.x[:, 0], iL_s, "iL (A)"), (lcp.vout, v_s, "vout (V)"))):
-        sl, ss = lcp.t >= t0, ts >= t0
-        ax.plot(lcp.t[sl] * 1e6, y_l[sl], lw=1, label="LCP")
-        ax.plot(ts[ss] * 1e6, y_s[ss], lw=1, ls="--", label="ngspice")
+    for ax, name, label in zip(axes[1:], ("iL", "vout"), ("iL (A)", "vout (V)")):
+        sl, ss = lcp.t >= t0, spice.t >= t0
+        ax.plot(lcp.t[sl] * 1e6, lcp.signal(name)[sl], lw=1, label="LCP")
+        ax.plot(spice.t[ss] * 1e6, spice.signal(name)[ss], lw=1, ls="--", label="ngspice")
         ax.set_ylabel(label)
         ax.set_xlabel("t (us), last 5 switching periods")
         ax.grid(alpha=0.3)

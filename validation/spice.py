@@ -46,6 +46,12 @@ class SpiceResult:
             return sign * (self.vectors[source[0]] - self.vectors[source[1]])
         return sign * self.vectors[source]
 
+    def switch(self, netlist: Netlist) -> np.ndarray:
+        """The commanded switch state (0/1) per point, from the netlist's switch probe."""
+        combination, threshold = netlist.probes["switch"]
+        value = sum(coefficient * self.vectors[name] for name, coefficient in combination.items())
+        return (value >= threshold).astype(np.int8)
+
 
 def _worker(text: str) -> dict:
     """Runs inside the worker: load, run, collect. Returns plain data (picklable)."""
@@ -173,16 +179,25 @@ def run_spice(netlist: Netlist) -> SpiceResult:
     return _default.run(netlist)
 
 
-def spice_waveforms(converter, netlist: Netlist, result: SpiceResult, window_start: float = 0.0):
-    """ngspice waveforms with the same columns as the LCP method: time, states, vout, switch, mode."""
-    import pandas as pd
+#: A device conducts when its current exceeds this fraction of the peak device current in the window
+#: (0.1 %: far above the diode's 1e-14 A saturation current, far below any real conduction current).
+CURRENT_FRACTION = 1e-3
 
-    from .modes import spice_modes
-    data = {"time": result.time}
-    for name in converter.state_names:
-        data[name] = result.signal(netlist.probes[name])
-    data["vout"] = result.signal(netlist.probes["vout"])
-    gate = result.vectors["drv"] > 0.0 if converter.name == "prc" else result.vectors["gate"] >= 0.5
-    data["switch"] = gate.astype(np.int8)
-    data["mode"] = spice_modes(converter, result, netlist, window_start).astype(str)
-    return pd.DataFrame(data)
+
+def spice_trajectory(model, params: dict, netlist: Netlist, result: SpiceResult, window_start: float = 0.0):
+    """An ngspice run as a Trajectory labelled by the model: states, ``vout`` and ``switch`` from the
+    netlist's probes, and each pair's device conducting where its current exceeds CURRENT_FRACTION of the
+    peak device current after ``window_start``; the modes then follow from the model's own rule."""
+    from converters.trajectory import Trajectory
+    t = result.time
+    x = np.column_stack([result.signal(netlist.probes[name]) for name in model.state_names])
+    currents = np.column_stack([result.signal(netlist.probes[name]) for name in netlist.pairs])
+    in_window = t >= window_start
+    conducting = currents > CURRENT_FRACTION * np.abs(currents[in_window]).max()
+    measured = {"vout": result.signal(netlist.probes["vout"]), "switch": result.switch(netlist),
+                **{name: currents[:, i] for i, name in enumerate(netlist.pairs)}, "conducting": conducting}
+    return Trajectory(t=t, x=x, state_names=tuple(model.state_names), method="spice", steps=result.accepted_steps,
+                      wall_s=result.wall_s, rule="linear", labels=model.labels(params), measured=measured,
+                      period=model.period(params),
+                      metadata={"spice_options": result.options, "ngspice": result.ngspice_version,
+                                "model": model.name, "params": params})

@@ -26,9 +26,11 @@ import pandas as pd
 
 from converters.models import get_converter
 
+from .defaults import STABILITY_BASE
+
 PERIODS = 10
 TIMEOUT_S = 60.0
-BASE = {"Vin": 12.0, "L": 10e-6, "C": 100e-6, "R": 10.0, "f_sw": 100e3, "D": 0.4}
+BASE = STABILITY_BASE["params"]
 METHODS = ("LCP theta=1", "LCP theta=0.5", "event", "smooth", "ngspice")
 
 
@@ -83,7 +85,7 @@ def _run_one(case: dict, method: str) -> dict:
     """One run in the worker process: returns the checks (never raises)."""
     from converters.methods import EventDriven, Smoothing, Theta
     from converters.simulate import simulate
-    conv = get_converter("buck")
+    conv = get_converter(STABILITY_BASE["converter"])
     start = time.perf_counter()
     try:
         p = conv.resolve({**BASE, **case["params"]})
@@ -96,13 +98,13 @@ def _run_one(case: dict, method: str) -> dict:
             tr = simulate(problem, Theta(case["h_fraction"] * T, theta))
             t, x, on, rule = tr.t, tr.x, tr.config[1:] == 0, "end" if theta == 1.0 else "mid"
         elif method == "event":
-            from converters.methods.event import simulate_event
-            solution = simulate_event(problem, EventDriven())
-            tq, w, xq, _, cq = solution.quadrature()
+            run = simulate(problem, EventDriven())
+            nodes, w = run.exact.quadrature()
+            tq, xq, cq = nodes.t, nodes.x, nodes.config
             totals = (float(np.sum(w * p["Vin"] * xq[:, 0] * (cq == 0))), float(np.sum(w * xq[:, 1] ** 2)) / p["R"])
             order = np.argsort(tq)
             t = np.concatenate([[0.0], tq[order], [t_end]])
-            x = np.vstack([problem.x0, xq[order], solution.x_end])
+            x = np.vstack([problem.x0, xq[order], run.x[-1]])
             node_on = cq[order] == 0
             on, rule = np.append(node_on, node_on[-1]), "trap"    # for the divergence check; totals are exact
         elif method == "smooth":
@@ -112,7 +114,7 @@ def _run_one(case: dict, method: str) -> dict:
             from netlists import SpiceOptions, build_netlist
 
             from .spice import run_spice
-            netlist = build_netlist("buck", p, t_end, SpiceOptions(tmax_fraction=1e-2, reltol=1e-3, method="trap"))
+            netlist = build_netlist(conv.name, p, t_end, SpiceOptions(tmax_fraction=1e-2, reltol=1e-3, method="trap"))
             result = run_spice(netlist)
             t = result.time
             x = np.column_stack([result.signal(netlist.probes[n]) for n in conv.state_names])
@@ -184,7 +186,7 @@ def ill_posed_table() -> pd.DataFrame:
     for name, given in ILL_POSED:
         params = {k: v for k, v in given.items() if k != "h"}
         try:
-            run_converter("buck", params, h=given.get("h"), periods=1)
+            run_converter(STABILITY_BASE["converter"], params, h=given.get("h"), periods=1)
             rows.append({"parameter": name, "given": str(given), "refused": False, "message": "accepted"})
         except PcsuiteError as exc:
             rows.append({"parameter": name, "given": str(given), "refused": True, "message": str(exc)})

@@ -15,19 +15,16 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from converters.models import analytic
-from converters.models import get_converter
-from converters.run import run_converter
+from converters.analysis.modes import HELD
+from converters.models import analytic, get_converter
 from netlists import SpiceOptions
 
 from .compare import compare
-from .modes import spice_modes
+from .defaults import passes
 from .plots import comparison_plot, mode_timeline_plot
 from .report import Section, run_section, table_html
 from .scenes import Scene, scenes_of
-from .spice import close_spice_worker, spice_waveforms
-
-HELD = ("DCM", "GDCM-OFF", "GDCM-ON")
+from .spice import close_spice_worker
 
 
 @dataclass
@@ -61,16 +58,11 @@ def _run_scene(scene: Scene) -> SceneResult:
     conv = get_converter(scene.converter)
     c = compare(scene.converter, scene.params, periods=scene.run.get("periods"), window=scene.run.get("window"),
                 h=scene.lcp.get("h"), theta=scene.lcp.get("theta"), spice_options=SpiceOptions(**scene.spice),
-                start=scene.run.get("start"))
+                start=scene.run.get("start"), thresholds=scene.checks)
     m = c.metrics
-    checks = [("vout_mean_rel", m["vout_mean_rel_error"], scene.checks["vout_mean_rel"],
-               m["vout_mean_rel_error"] <= scene.checks["vout_mean_rel"]),
-              ("mode_agreement", m["mode_agreement"], scene.checks["mode_agreement"],
-               m["mode_agreement"] >= scene.checks["mode_agreement"]),
-              ("turn_off_error_T", m["turn_off_error_T"], scene.checks["turn_off_error_T"],
-               bool(np.isnan(m["turn_off_error_T"]) or m["turn_off_error_T"] <= scene.checks["turn_off_error_T"]))]
+    checks = list(c.rows)
     gdcm = {}
-    if conv.name in analytic.TOPOLOGIES:
+    if conv.closed_form:
         p = c.params
         predicted = analytic.predicted_mode(p, conv.name)
         lcp_held = any(label in m["mode_sequence_lcp"] for label in HELD)
@@ -83,42 +75,30 @@ def _run_scene(scene: Scene) -> SceneResult:
             expected = analytic.conversion_ratio(p, conv.name) * p["Vin"]
             rel = abs(m["vout_mean_lcp_V"] / expected - 1.0)
             m["closed_form_V"] = expected
-            checks.append(("closed_form_rel", rel, scene.checks["closed_form_rel"], rel <= scene.checks["closed_form_rel"]))
-    window_start = c.window_start
-    lcp_frame = c.lcp.waveforms()
-    spice_frame = spice_waveforms(conv, c.netlist, c.spice, window_start)
-    files = {f"scenes/{scene.name}/lcp.parquet": _parquet(lcp_frame),
-             f"scenes/{scene.name}/spice.parquet": _parquet(spice_frame),
+            checks.append(_check("closed_form_rel", rel, scene))
+    files = {f"scenes/{scene.name}/lcp.parquet": _parquet(c.lcp.waveforms()),
+             f"scenes/{scene.name}/spice.parquet": _parquet(c.spice.waveforms()),
              f"scenes/{scene.name}/overlay.png": comparison_plot(c),
-             f"scenes/{scene.name}/modes.png": mode_timeline_plot(
-                 c.lcp.trajectory.t, c.lcp.modes(), c.spice.time,
-                 spice_modes(conv, c.spice, c.netlist, window_start), conv.period(c.params), scene.name)}
+             f"scenes/{scene.name}/modes.png": mode_timeline_plot(c.lcp.t, c.lcp.modes(), c.spice.t, c.spice.modes(),
+                                                                  conv.period(c.params), scene.name)}
     ok = all(check[3] for check in checks)
     failed = [name for name, _, _, passed in checks if not passed]
     return SceneResult(scene, ok=ok, reason=("failed checks: " + ", ".join(failed)) if failed else "",
                        checks=checks, metrics=m, gdcm=gdcm, files=files)
 
 
-def _check(name, value, threshold, scene):
-    return (name, value, threshold, bool(value <= threshold))
+def _check(name, value, scene, label=None):
+    """(label, value, threshold, pass) of the scene's threshold ``name``."""
+    threshold = scene.checks[name]
+    return (label or name, value, threshold, passes(name, value, threshold))
 
 
 def _run_smc_scene(scene: Scene) -> SceneResult:
-    from .smc import compare_smc, smc_plot
+    from .smc import compare_smc, smc_checks, smc_plot
     t_end = scene.run.get("t_end", 30e-3)
     c = compare_smc(scene.params, t_end=t_end, h=scene.lcp.get("h"), spice_options=SpiceOptions(**scene.spice) if scene.spice else None)
-    m, th = c.metrics, scene.checks
-    checks = [_check("vout_ref_rel (LCP)", m["vout_ref_rel_lcp"], th["vout_ref_rel"], scene),
-              _check("vout_ref_rel (ngspice)", m["vout_ref_rel_spice"], th["vout_ref_rel"], scene),
-              _check("frequency_rel (LCP)", m["frequency_rel_lcp"], th["frequency_rel"], scene),
-              _check("frequency_rel (ngspice)", m["frequency_rel_spice"], th["frequency_rel"], scene),
-              _check("frequency_agreement", m["frequency_lcp_vs_spice"], th["frequency_agreement"], scene)]
-    if "recovery_lcp_s" in m:
-        checks += [("recovered within 1 % (LCP)", m["recovery_lcp_s"], t_end - c.params["t_step"],
-                    bool(np.isfinite(m["recovery_lcp_s"]))),
-                   ("recovered within 1 % (ngspice)", m["recovery_spice_s"], t_end - c.params["t_step"],
-                    bool(np.isfinite(m["recovery_spice_s"]))),
-                   _check("recovery_agreement", m["recovery_lcp_vs_spice"], th["recovery_agreement"], scene)]
+    m = c.metrics
+    checks = smc_checks(m, scene.checks, c.params, t_end)
     frame = c.lcp.waveforms()
     files = {f"scenes/{scene.name}/lcp.parquet": _parquet(frame.iloc[::max(1, len(frame) // 200_000)]),
              f"scenes/{scene.name}/overlay.png": smc_plot(c)}
@@ -128,12 +108,9 @@ def _run_smc_scene(scene: Scene) -> SceneResult:
 
 
 def _run_smc_implicit_scene(scene: Scene) -> SceneResult:
-    from .smc import implicit_metrics
+    from .smc import implicit_checks, implicit_metrics
     m, run = implicit_metrics(scene.params, t_end=scene.run.get("t_end", 30e-3), h=scene.lcp.get("h"))
-    th = scene.checks
-    checks = [_check("vout_ref_rel", m["vout_ref_rel"], th["vout_ref_rel"], scene),
-              _check("|lambda - Vin/v|", m["lambda_minus_vin_over_v"], th["lambda_settle"], scene),
-              _check("lambda spread (no chatter)", m["lambda_spread"], th["lambda_settle"], scene)]
+    checks = implicit_checks(m, scene.checks)
     failed = [name for name, _, _, ok in checks if not ok]
     return SceneResult(scene, ok=not failed, reason=("failed checks: " + ", ".join(failed)) if failed else "",
                        checks=checks, metrics=m, files={f"scenes/{scene.name}/lcp.parquet": _parquet(run.waveforms())})
@@ -229,4 +206,4 @@ def run_suite(suite: str, sections=(), workers: int = 2, progress: bool = True):
     return scene_results, section_results
 
 
-__all__ = ["run_suite", "run_scene", "scene_section", "scenes_summary", "SceneResult", "run_converter"]
+__all__ = ["run_suite", "run_scene", "scene_section", "scenes_summary", "SceneResult"]

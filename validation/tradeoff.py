@@ -22,16 +22,18 @@ from __future__ import annotations
 
 import io
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pandas as pd
 
-from converters.methods.event import event_orbit, simulate_event
+from converters.analysis.periodic import require, shoot
 from converters.models import get_converter
 from converters.methods import EventDriven, Smoothing, Theta
+from converters.run import steady_orbit
 from converters.simulate import simulate
-from converters.analysis.modes import periodic_orbit
+
+from .defaults import TRADEOFF_CASES
 
 PERIODS = 200
 REFERENCE = EventDriven(event_tol=1e-15, sample_fraction=1.0 / 128.0)
@@ -45,9 +47,7 @@ class Case:
     params: dict
 
 
-CASES = (Case("buck-ccm", "buck", {"L": "100u"}), Case("buck-dcm", "buck", {}),
-         Case("boost-ccm", "boost", {"L": "100u", "R": 20, "C": "470u"}), Case("boost-dcm", "boost", {"D": 0.3, "R": 50}),
-         Case("cuk-ccm", "cuk", {"C2": "470u"}), Case("cuk-gdcm", "cuk", {"L1": "10u", "L2": "10u"}))
+CASES = tuple(Case(c["name"], c["converter"], dict(c["params"])) for c in TRADEOFF_CASES)
 
 FULL = {"lcp_steps": (10, 30, 100, 300, 1000, 3000, 10000), "thetas": (1.0, 0.5),
         "event_tols": (1e-4, 1e-7, 1e-10, 1e-13),
@@ -69,46 +69,31 @@ class Reference:
     wall_s: float
 
 
+def _labelled(conv, p, tr):
+    return replace(tr, labels=conv.labels(p))
+
+
 def reference(case: Case, periods: int = PERIODS) -> Reference:
     """The exact orbit x* (Newton on the exact period map) and the exact measures over ``periods``."""
     start = time.perf_counter()
     conv = get_converter(case.converter)
     p = conv.resolve(case.params)
     T = conv.period(p)
-    one = conv.problem(p, T)
-    orbit = event_orbit(one, periodic_orbit(conv, p).x[0], REFERENCE)   # the LCP orbit as the first guess
-    if not orbit.converged:
-        raise RuntimeError(f"{case.name}: no exact periodic orbit (residual {orbit.residual:.3g})")
-    solution = simulate_event(conv.problem(p, periods * T, orbit.x0), REFERENCE)
-    mean, rms = _exact_measures(conv, p, solution, periods * T)
-    times = np.array(solution.event_times)
-    kinds = np.array(solution.event_kinds, dtype=object)
-    last = (times >= (periods - 1) * T) & (kinds == "activate")
-    return Reference(case, p, T, orbit.x0, mean, rms, times[last], time.perf_counter() - start)
-
-
-def _exact_measures(conv, p, solution, span):
-    t, w, x, u, config = solution.quadrature()
-    mean = float(w @ conv.vout(x, u, config, p)) / span
-    rms = float(np.sqrt(w @ x[:, 0] ** 2 / span))
-    return mean, rms
-
-
-def _sampled_measures(conv, p, t, x, u, config, rule):
-    """Mean vout and RMS of the first state from samples: backward Euler's end-point rule, or ('linear')
-    the exact mean and RMS of the piecewise-linear waveform through the samples."""
-    v = conv.vout(x, u, config, p)
-    span = t[-1] - t[0]
-    dt = np.diff(t)
-    if rule == "end":
-        return float(dt @ v[1:] / span), float(np.sqrt(dt @ x[1:, 0] ** 2 / span))
-    return float(np.trapezoid(v, t) / span), linear_rms(t, x[:, 0])
+    guess = steady_orbit(conv, p).x[0]                          # the LCP orbit as the first guess
+    orbit = require(shoot(conv.problem(p, T), REFERENCE, guess, tol=1e-13), f"the exact orbit of {case.name}")
+    tr = _labelled(conv, p, simulate(conv.problem(p, periods * T, orbit.x0), REFERENCE))
+    first = conv.state_names[0]
+    events = tr.events
+    last = (events["time"] >= (periods - 1) * T) & (events["kind"] == "activate")
+    return Reference(case, p, T, orbit.x0, tr.mean("vout"), tr.rms(first), events.loc[last, "time"].to_numpy(),
+                     time.perf_counter() - start)
 
 
 def linear_rms(t, y) -> float:
     """RMS of the piecewise-linear interpolant of (t, y), exactly: each piece gives dt (a^2 + a b + b^2) / 3.
     (The trapezoidal rule on y^2 would add its own error, h^2 / (2 a^2) relative on a ramp of length a:
-    3e-4 at T/100 on a DCM buck's current, more than the methods' own.)"""
+    3e-4 at T/100 on a DCM buck's current, more than the methods' own.) Trajectory.rms with the
+    ``linear`` rule is this."""
     a, b = y[:-1], y[1:]
     return float(np.sqrt(np.sum(np.diff(t) * (a * a + a * b + b * b)) / 3.0 / (t[-1] - t[0])))
 
@@ -141,12 +126,17 @@ def _row(ref, family, setting, wall, mean, rms, timing, **extra):
             "error": max(e_mean, e_rms), **extra}
 
 
+def _measures(tr, first_state: str) -> tuple[float, float]:
+    """Mean vout and RMS of the first state, each method by its own rule (Trajectory.rule)."""
+    return tr.mean("vout"), tr.rms(first_state)
+
+
 def measure_lcp(ref: Reference, steps: int, theta: float, periods: int = PERIODS) -> dict:
     conv = get_converter(ref.case.converter)
     problem = conv.problem(ref.params, periods * ref.period, ref.x_star)
     method = Theta(ref.period / steps, theta)
     wall, tr = _best_of(lambda: simulate(problem, method))
-    mean, rms = _sampled_measures(conv, ref.params, tr.t, tr.x, tr.u, tr.config, "end" if theta == 1.0 else "linear")
+    mean, rms = _measures(_labelled(conv, ref.params, tr), conv.state_names[0])
     events = tr.events
     timing = _timing_error(ref, events.loc[events["kind"] == "activate", "time"])
     return _row(ref, f"LCP theta={theta:g}", f"h=T/{steps}", wall, mean, rms, timing, steps=int(tr.steps))
@@ -158,25 +148,23 @@ def measure_event(ref: Reference, event_tol: float, periods: int = PERIODS) -> d
     options = EventDriven(event_tol=event_tol)
 
     def run():
-        solution = simulate_event(problem, options)
-        return solution, _exact_measures(conv, ref.params, solution, periods * ref.period)
+        tr = _labelled(conv, ref.params, simulate(problem, options))
+        return tr, _measures(tr, conv.state_names[0])
 
-    wall, (solution, (mean, rms)) = _best_of(run)
-    times = np.array(solution.event_times)
-    kinds = np.array(solution.event_kinds, dtype=object)
-    timing = _timing_error(ref, times[kinds == "activate"])
-    return _row(ref, "event", f"tol={event_tol:g}T", wall, mean, rms, timing, steps=len(solution.segments))
+    wall, (tr, (mean, rms)) = _best_of(run)
+    events = tr.events
+    timing = _timing_error(ref, events.loc[events["kind"] == "activate", "time"])
+    return _row(ref, "event", f"tol={event_tol:g}T", wall, mean, rms, timing, steps=int(tr.steps))
 
 
 def measure_smooth(ref: Reference, eps: float, rtol: float, periods: int = PERIODS) -> dict:
-    from converters.methods.smoothing import simulate_smooth
     conv = get_converter(ref.case.converter)
     problem = conv.problem(ref.params, periods * ref.period, ref.x_star)
     method = Smoothing(eps=eps, rtol=rtol, output_step=ref.period / 1000.0)
     start = time.perf_counter()
-    tr = simulate_smooth(problem, method)
+    tr = simulate(problem, method)
     wall = time.perf_counter() - start
-    mean, rms = _sampled_measures(conv, ref.params, tr.t, tr.x, tr.u, tr.config, "linear")
+    mean, rms = _measures(_labelled(conv, ref.params, tr), conv.state_names[0])
     timing = _timing_error(ref, tr.events.loc[tr.events["kind"] == "activate", "time"])
     stats = tr.metadata["stats"]
     return _row(ref, "smooth", f"eps={eps:g} rtol={rtol:g}", wall, mean, rms, timing, steps=stats["nfev"],
@@ -186,8 +174,7 @@ def measure_smooth(ref: Reference, eps: float, rtol: float, periods: int = PERIO
 def measure_spice(ref: Reference, tmax_div: int, reltol: float, method: str, periods: int = PERIODS) -> dict:
     from netlists import SpiceOptions, build_netlist
 
-    from .modes import spice_modes
-    from .spice import SpiceError, run_spice
+    from .spice import SpiceError, run_spice, spice_trajectory
     conv = get_converter(ref.case.converter)
     netlist = build_netlist(conv.name, ref.params, periods * ref.period,
                             SpiceOptions(tmax_fraction=1.0 / tmax_div, reltol=reltol, method=method), x0=ref.x_star)
@@ -201,14 +188,11 @@ def measure_spice(ref: Reference, tmax_div: int, reltol: float, method: str, per
     except SpiceError as exc:
         return {"case": ref.case.name, "family": family, "setting": setting, "wall_s": float("nan"),
                 "error": float("nan"), "failure": str(exc)}
-    t = result.time
-    x = np.column_stack([result.signal(netlist.probes[name]) for name in conv.state_names])
-    v = result.signal(netlist.probes["vout"])
-    span = t[-1] - t[0]
-    mean, rms = float(np.trapezoid(v, t) / span), linear_rms(t, x[:, 0])
     last = (periods - 1) * ref.period
-    labels = spice_modes(conv, result, netlist, last)
-    held = np.isin(labels.astype(str), ("DCM", "GDCM-OFF"))
+    tr = spice_trajectory(conv, ref.params, netlist, result, last)
+    mean, rms = _measures(tr, conv.state_names[0])
+    t = tr.t
+    held = np.isin(np.asarray(tr.modes()).astype(str), ("DCM", "GDCM-OFF"))
     starts = np.flatnonzero(held[1:] & ~held[:-1]) + 1
     timing = _timing_error(ref, t[starts][t[starts] >= last])
     return _row(ref, family, setting, wall, mean, rms, timing, steps=int(result.accepted_steps))

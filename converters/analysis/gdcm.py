@@ -106,7 +106,7 @@ def _augmented(config: Configuration, tau: float) -> np.ndarray:
 
 def ccm_orbit(problem: LCSProblem, samples_per_phase: int = 100) -> CCMOrbit:
     """Exact periodic orbit with every pair at u = 0 (matrix exponentials; no small-ripple assumption)."""
-    schedule = problem.schedule
+    schedule = problem.switching
     if not np.isfinite(schedule.period):
         raise ParameterError("ccm_orbit needs a periodic schedule; got a constant one")
     T, n = schedule.period, problem.n

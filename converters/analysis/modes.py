@@ -1,56 +1,15 @@
-"""Conduction modes of LCP trajectories: the periodic orbit over one period (fast: one step plan,
-Newton shooting, no DataFrames), mode intervals and the detected mode class.
+"""Conduction modes of a labelled trajectory: mode intervals and the detected mode class.
 
-Mode labels come from the complementarity state (``Converter.modes``): a pair held active (u > y)
-in the switch-off configuration is DCM (Cuk: GDCM-OFF), in the switch-on one GDCM-ON. The class of
-a period is 'CCM' when no held label occurs, else the held labels joined by '+'.
+Mode labels come from the model's rule (``Trajectory.modes``): a pair held in the switch-off
+configuration is DCM (Cuk: GDCM-OFF), in the switch-on one GDCM-ON. The class of a period is 'CCM'
+when no held label occurs, else the held labels joined by '+'.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
-from ..models import check_h
-from ..methods import Theta
-from .periodic import shoot
-from ..methods.theta import StepPlan
-
+#: Mode labels in which a held pair constrains the state.
 HELD = ("DCM", "GDCM-OFF", "GDCM-ON")
-WARM_UP_PERIODS = 5
-
-
-@dataclass(frozen=True)
-class PeriodicOrbit:
-    """One period of the time-stepper's periodic orbit (t from 0 to T)."""
-
-    t: np.ndarray
-    x: np.ndarray
-    u: np.ndarray
-    y: np.ndarray
-    config: np.ndarray
-    labels: np.ndarray
-    converged: bool
-    residual: float
-    period: float
-
-
-def periodic_orbit(converter, params: dict, h=None, theta=None, tol: float = 1e-10) -> PeriodicOrbit:
-    """The LCP stepper's periodic orbit: warm-up periods from rest, then Newton shooting, one plan."""
-    p = converter.resolve(params)
-    T = converter.period(p)
-    h = check_h(converter.default_h(p) if h is None else h, T)
-    method = Theta(h, converter.default_theta if theta is None else theta)
-    problem = converter.problem(p, T)
-    plan = StepPlan.build(problem, method)
-    x = np.zeros(problem.n)
-    for _ in range(WARM_UP_PERIODS):
-        x = plan.advance(x)[0][-1]
-    shot = shoot(problem, method, x, tol=tol, plan=plan)
-    xs, u, y, _ = plan.advance(shot.x)
-    config = np.concatenate([plan.step_config[:1], plan.step_config])
-    labels = converter.modes(u > y, config, xs)
-    return PeriodicOrbit(plan.t, xs, u, y, config, labels, shot.converged, shot.residual, T)
 
 
 def mode_intervals(t: np.ndarray, labels: np.ndarray, t0: float, t1: float, period: float,
@@ -98,6 +57,8 @@ def held_fraction(intervals: list[dict], periods: float) -> float:
     return float(sum(iv["fraction"] for iv in intervals if iv["mode"] in HELD) / periods)
 
 
-def orbit_intervals(orbit: PeriodicOrbit) -> list[dict]:
-    """Mode intervals over the orbit's period (LCP labels: each point carries the step that ends there)."""
-    return mode_intervals(orbit.t, orbit.labels[1:], 0.0, orbit.period, orbit.period)
+def orbit_intervals(orbit) -> list[dict]:
+    """Mode intervals over one period of a labelled orbit Trajectory (each point carries the label of the
+    step that ends there)."""
+    t = orbit.t
+    return mode_intervals(t, np.asarray(orbit.modes())[1:], t[0], t[-1], t[-1] - t[0])

@@ -1,10 +1,18 @@
-"""Periodic steady states of a periodically switched LCS by shooting.
+"""Periodic orbits of any problem under any method: Newton shooting on the method's period map.
 
-The time-stepper over one period is a map P: x(0) -> x(T). It is piecewise affine (affine while the
-sequence of complementarity modes stays the same), so Newton's method on P(x) - x = 0 with a
-finite-difference Jacobian usually lands on the fixed point in two or three iterations, where
-brute-force simulation of a lightly damped ideal converter can need 10^4 periods or more. The fixed
-point is the periodic orbit of the discrete scheme itself, so it is checked by simulating on.
+A method's period map P: x(t0) -> x(t0 + span) over the problem's t_span (one period, or m periods for
+a period-m orbit) comes with its Jacobian: exact for the LCP stepper (the product of the one-step
+derivatives) and the event-driven method (state-transition and saltation matrices), by finite
+differences otherwise (the result says which). For autonomous state-switched systems the map is the
+return map to the switching surface (a Poincare map; the period is then an unknown it returns).
+
+Newton's method on P(x) - x = 0, with the step halved while the residual does not fall (the map is
+piecewise affine: a change of the mode sequence can make a full step overshoot); where no fraction of
+the step helps (far from the orbit, in a start-up transient), one period of the map itself is taken. The orbit's
+Floquet multipliers are the eigenvalues of the Jacobian at the fixed point; their spectral radius rho
+gives the distance to the orbit from a residual r, |x - x*| <= |r| / (1 - rho) for rho < 1, and the
+Newton step itself estimates it for any rho. The run stops when that distance is below the
+tolerance; a run that cannot get there is reported as not converged, never replaced by a guess.
 """
 from __future__ import annotations
 
@@ -12,71 +20,173 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..errors import SimulationError
 from ..problems import LCSProblem
-from ..methods import Theta
-from ..methods.theta import StepPlan
 
 
 @dataclass(frozen=True)
-class ShootingResult:
-    x: np.ndarray            # state at the start of the periodic orbit
-    residual: float          # max |P(x) - x| / (1 + max |x|)
+class PeriodicOrbit:
+    """A fixed point of a period map and what is known about it.
+
+    Attributes
+    ----------
+    x0 : ndarray, shape (n,)
+        State at the start of the orbit.
+    period : float
+        The span of the map (s): the problem's t_span length, or the return time of a return map.
+    jacobian : ndarray, shape (n, n)
+        d P / d x at x0 (the monodromy matrix of the discrete or exact map).
+    multipliers : ndarray, shape (n,)
+        Floquet multipliers (eigenvalues of ``jacobian``), largest modulus first.
+    residual : float
+        max |P(x0) - x0| / (1 + max |x0|).
+    distance : float
+        Estimated max |x0 - x*| / (1 + max |x0|): the larger of the Newton step and residual / (1 - rho).
+    iterations, evaluations : int
+        Newton iterations; spans simulated (period-map calls, finite-difference columns included).
+    converged : bool
+        ``distance`` <= the tolerance asked for.
+    jacobian_kind : str
+        ``exact`` or ``finite differences``.
+    message : str
+        Why it did not converge (with a remedy), or empty.
+    """
+
+    x0: np.ndarray
+    period: float
+    jacobian: np.ndarray
+    multipliers: np.ndarray
+    residual: float
+    distance: float
     iterations: int
-    periods_simulated: int   # one-period map evaluations, Jacobian columns included
+    evaluations: int
     converged: bool
+    jacobian_kind: str
+    message: str = ""
+
+    @property
+    def spectral_radius(self) -> float:
+        return float(np.abs(self.multipliers).max()) if self.multipliers.size else 0.0
+
+    @property
+    def stable(self) -> bool:
+        return self.spectral_radius < 1.0
+
+    def summary(self) -> dict:
+        return {"period_s": self.period, "residual": self.residual, "distance": self.distance,
+                "iterations": self.iterations, "evaluations": self.evaluations, "converged": self.converged,
+                "spectral_radius": self.spectral_radius, "jacobian": self.jacobian_kind,
+                "multipliers": [[float(m.real), float(m.imag)] for m in self.multipliers]}   # [re, im] pairs
 
 
-def shoot(problem: LCSProblem, method: Theta, x_guess, tol: float = 1e-9, max_iter: int = 30,
-          plan: StepPlan | None = None) -> ShootingResult:
-    """Newton's method on P(x) - x = 0, P being one period of ``problem`` (its t_span is one period).
-
-    ``plan``: a prebuilt :class:`StepPlan` of that problem and method (saves rebuilding it)."""
-    plan = plan or StepPlan.build(problem, method)  # grid and matrices once; each evaluation is one compiled loop
-    return newton_fixed_point(lambda x0: plan.advance(x0)[0][-1], x_guess, tol=tol, max_iter=max_iter)
+#: A residual below ROUNDING machine epsilons (relative) is rounding noise: iterating further cannot help.
+ROUNDING = 64
 
 
-def newton_fixed_point(period_map, x_guess, tol: float = 1e-9, max_iter: int = 30) -> ShootingResult:
-    """Newton's method with a finite-difference Jacobian on P(x) - x = 0 for any one-period map P.
+def multipliers_of(jacobian: np.ndarray) -> np.ndarray:
+    """Eigenvalues sorted by decreasing modulus."""
+    values = np.linalg.eigvals(jacobian)
+    return values[np.argsort(-np.abs(values), kind="stable")]
 
-    The residual is max |P(x) - x| / (1 + max |x|). Steps are halved (up to 12 times) when the
-    affine model overshoots because the sequence of modes changed."""
+
+def _distance(step: np.ndarray, residual_vector: np.ndarray, rho: float, scale: float) -> float:
+    newton = float(np.abs(step).max()) / scale
+    if rho < 1.0:
+        return float(max(newton, float(np.abs(residual_vector).max()) / (1.0 - rho) / scale))
+    return newton
+
+
+def newton_orbit(period_map, x_guess, *, tol: float = 1e-10, max_iter: int = 50, period: float = np.nan) -> PeriodicOrbit:
+    """Newton's method on P(x) - x = 0 for a :class:`~converters.methods.base.PeriodMap` ``period_map``."""
     x = np.array(x_guess, dtype=float)
     n = x.size
-    evaluations = 0
-
-    def evaluate(x0):
-        nonlocal evaluations
-        evaluations += 1
-        return period_map(x0)
-
-    px = evaluate(x)
-    residual = np.inf
-    for iteration in range(1, max_iter + 1):
+    eye = np.eye(n)
+    px, jac = period_map(x)
+    distance, residual, message, relaxations = np.inf, np.inf, "", 0
+    for iteration in range(max_iter + 1):
         r = px - x
         scale = 1.0 + np.abs(x).max()
         residual = float(np.abs(r).max() / scale)
-        if residual < tol:
-            return ShootingResult(x, residual, iteration - 1, evaluations, True)
-        jac = np.empty((n, n))
-        for j in range(n):
-            dx = 1e-7 * (1.0 + abs(x[j]))
-            probe = x.copy()
-            probe[j] += dx
-            jac[:, j] = (evaluate(probe) - px) / dx
+        multipliers = multipliers_of(jac)
+        rho = float(np.abs(multipliers).max())
         try:
-            step = np.linalg.solve(jac - np.eye(n), -r)
+            step = np.linalg.solve(jac - eye, -r)
         except np.linalg.LinAlgError:
+            message = ("the period map's Jacobian has a multiplier at 1 (the orbit is not isolated: an undamped "
+                       "or marginal circuit)")
             break
-        for _ in range(12):
+        distance = _distance(step, r, rho, scale)
+        if distance <= tol:
+            return PeriodicOrbit(x, getattr(period_map, "period", period), jac, multipliers, residual, distance,
+                                 iteration, period_map.evaluations, True, period_map.jacobian_kind)
+        if residual <= ROUNDING * np.finfo(float).eps:
+            message = (f"the residual is at the rounding level of the map and 1 - rho = {1.0 - rho:.3g} amplifies it: "
+                       f"the orbit is resolved to ~{distance:.3g} in double precision, not to the tolerance asked for")
+            break
+        if iteration == max_iter:
+            message = (f"no convergence in {max_iter} Newton iterations ({relaxations} of them plain periods where "
+                       "no Newton step reduced the residual)")
+            break
+        # Halve the step while the residual does not fall (the Jacobian of one piece of a piecewise-affine
+        # map can point past a change of mode sequence). If no fraction of it helps, the state is still far
+        # from the orbit (a start-up transient): take one period of the map itself and try Newton again.
+        accepted = False
+        for _ in range(8):
             trial = x + step
-            p_trial = evaluate(trial)
+            p_trial, jac_trial = period_map(trial)
             if np.all(np.isfinite(p_trial)) and np.abs(p_trial - trial).max() < np.abs(r).max():
+                accepted = True
                 break
-            step *= 0.5
-        x, px = trial, p_trial
-    return ShootingResult(x, residual, max_iter, evaluations, False)
+            step = 0.5 * step
+        if not accepted:
+            relaxations += 1
+            trial = px
+            p_trial, jac_trial = period_map(trial)
+            if not np.all(np.isfinite(p_trial)):
+                message = "the period map left the finite numbers"
+                break
+        x, px, jac = trial, p_trial, jac_trial
+    multipliers = multipliers_of(jac)
+    return PeriodicOrbit(x, getattr(period_map, "period", period), jac, multipliers, residual, distance,
+                         iteration, period_map.evaluations, False, period_map.jacobian_kind,
+                         f"{message}; residual {residual:.3g}, estimated distance {distance:.3g} > tol {tol:.3g}")
 
 
-def one_period(problem: LCSProblem, period: float) -> LCSProblem:
+def shoot(problem: LCSProblem, method, x_guess=None, *, periods: int = 1, warm_up: int = 0, tol: float = 1e-10,
+          max_iter: int = 50) -> PeriodicOrbit:
+    """The method's periodic orbit of a periodically switched problem (period T of its switching law).
+
+    ``periods``: the orbit's period in switching periods (a period-m orbit); ``warm_up``: periods simulated
+    from ``x_guess`` (default problem.x0) before Newton starts, so that it begins on the right sequence of
+    modes. The problem's own t_span is ignored (only its start)."""
+    T = problem.switching.period
+    if not np.isfinite(T):
+        raise SimulationError("shoot() needs a periodic switching law (a schedule or a ramp); for an autonomous "
+                              "state-switched problem use autonomous_orbit()")
     t0 = problem.t_span[0]
-    return replace(problem, t_span=(t0, t0 + period))
+    one = replace(problem, t_span=(t0, t0 + periods * T))
+    period_map = method.period_map(one)
+    x = np.array(problem.x0 if x_guess is None else x_guess, dtype=float)
+    for _ in range(warm_up):
+        x = period_map.end(x)
+    return newton_orbit(period_map, x, tol=tol, max_iter=max_iter, period=periods * T)
+
+
+def autonomous_orbit(problem: LCSProblem, method, x_guess, *, config: int, crossings: int = 1,
+                     warm_up: int = 0, tol: float = 1e-10, max_iter: int = 50) -> PeriodicOrbit:
+    """The periodic orbit of an autonomous state-switched problem through its return map to the switching
+    into ``config`` (``crossings`` switchings per orbit); the period is the return time. The problem's
+    t_span must hold the return (a few periods)."""
+    period_map = method.return_map(problem, config, crossings)
+    x = np.array(x_guess, dtype=float)
+    for _ in range(warm_up + 1):             # the first return puts x on the section
+        x = period_map.end(x)
+    return newton_orbit(period_map, x, tol=tol, max_iter=max_iter)
+
+
+def require(orbit: PeriodicOrbit, what: str = "the periodic orbit") -> PeriodicOrbit:
+    """The orbit when converged; otherwise a SimulationError with the reason and a remedy."""
+    if not orbit.converged:
+        raise SimulationError(f"Newton shooting did not find {what}: {orbit.message}; try a looser --steady-tol, "
+                              "or --periods N without --steady to see the transient")
+    return orbit

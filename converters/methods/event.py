@@ -1,22 +1,35 @@
-"""Exact event-driven simulation of single-pair piecewise-linear LCS: the accuracy reference.
+"""Exact event-driven simulation of piecewise-linear LCS with any number of complementarity pairs.
 
-Between events the LCS is linear with constant inputs, x' = Ab x + eb, where (Ab, eb) depend on the
-switch configuration (A, B, C, D, E, F) and on the mode of the complementarity pair (k = 1):
+Between events the LCS is linear with constant inputs. A *mode* is a configuration and a held set J
+of pairs (y_J = 0, u_J free to be positive; every other pair has u = 0 and y free to be positive).
+On J the multipliers follow from keeping y_J at zero: with R, N orthonormal bases of the range and
+the left null space of D_JJ,
 
-    free            u = 0                     Ab = A,            eb = E             watched: y = C x + F
-    held, D > 0     u = -(C x + F) / D        Ab = A - B C / D,  eb = E - B F / D   watched: u
-    held, D = 0     u = -C (A x + E) / (C B)  Ab = P A,          eb = P E           watched: u
-                    (C B > 0; P = I - B C / (C B) keeps y = C x + F at 0: the GDCM flow)
+    R^T (D_JJ u_J + C_J x + F_J) = 0        (pairs whose y depends on u: algebraic)
+    N^T C_J (A x + B_J u_J + E) = 0         (pairs whose y is a function of the state: y' = 0)
 
-so x(t0 + tau) = expm(tau Z) [x0; 1] with Z = [[Ab, eb], [0, 0]], exact up to rounding. A mode ends
-when its watched quantity crosses zero downwards: sign changes are looked for on samples at most
-``sample_fraction`` T apart (and 0.25 / ||Z|| apart), then the crossing is located by Brent's method
-on the exact flow to ``event_tol`` T. Configuration changes happen at the schedule's known instants.
+solved for u_J = U x + u0 (least norm), so the flow is x' = (A + B_J U) x + E + B_J u0; the state
+stays on N^T (C_J x + F_J) = 0 (the GDCM flow of one pair is the case J = {i}, D_ii = 0). In
+augmented form x~ = [x; 1], x(t0 + tau) = expm(tau Z) x~, exact up to rounding.
+
+A mode ends when a watched quantity crosses zero downwards: y_i of a free pair, u_i of a held pair,
+and under a state-driven law (:class:`~converters.problems.switching.StateSwitching`) the distance
+of the switching function to the level that ends the configuration (band - s, or s + band; a ramp
+adds a term linear in time). Sign changes are looked for on samples at most ``sample_fraction`` T
+apart (and 0.25 / ||Z|| apart); the crossing is located by Brent's method on the watched quantity's
+Taylor polynomial (exact to rounding) to ``event_tol`` T. Time-driven configuration changes happen at
+the schedule's instants; ramp resets are such instants too.
+
 At every event the new mode is the solution of the mode-selection LCP, resolved lexicographically:
-free if the first non-zero entry of (y, y', y'', ...) along the free flow is positive (or all vanish),
-else held if that of (u, u', ...) along the held flow is. A configuration entered with y < 0 and D = 0
-makes the state jump, x+ = x + B lambda with lambda = -(C x + F) / (C B) (Moreau's impulse: the LCP
-0 <= lambda _|_ C (x + B lambda) + F >= 0).
+the held sets J are tried nearest to the pair that triggered the event first, and J is taken when,
+along its flow, every watched quantity's first non-vanishing derivative (value, first, second, ...)
+is positive. A state entering a configuration with y_K < 0 on pairs whose y is a function of the
+state takes Moreau's impulse x+ = x + B_K lambda, 0 <= lambda _|_ C_K (x + B_K lambda) + F_K >= 0.
+
+Jacobians (period maps, Floquet multipliers): the state-transition matrix of each segment is
+expm(tau Z) restricted to x; at an event triggered by g(x, t) = 0 the saltation matrix
+S = I + (f+ - f-) n^T / (n^T f- + dg/dt) (n the gradient of g) carries the change of vector field;
+an impulse contributes I - B_K (C_K B_K)^-1 C_K.
 
 Integrals over a run (means, RMS) use 8-point Gauss-Legendre quadrature on pieces no longer than the
 sampling distance: exact to rounding for these exponential-polynomial pieces.
@@ -25,30 +38,35 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
-import pandas as pd
 from scipy.linalg import expm
 from scipy.optimize import brentq
 
 from ..errors import ParameterError, SimulationError
+from ..lcp import solve_lcp
+from ..problems import LCSProblem, Relay, Schedule, StateSwitching
+from ..trajectory import Samples, Trajectory
 from ..validate import check_positive, parse_value
-from ..problems import Configuration, LCSProblem
-from ..trajectory import Trajectory
+from .base import Method, PeriodMap
+
+#: Largest number of complementarity pairs (the mode selection visits up to 2^k held sets).
+MAX_PAIRS = 12
 
 
 @dataclass(frozen=True)
-class EventDriven:
-    """The exact event-driven method (:mod:`converters.methods.event`) for LCS with one complementarity pair.
+class EventDriven(Method, key="event"):
+    """The exact event-driven method for piecewise-linear LCS (module docstring).
 
     Parameters
     ----------
     event_tol : float
-        Events (zero crossings of the watched complementarity variable) are located to
-        ``event_tol`` times the switching period (Brent's method on the exact flow). Default 1e-13.
+        Events are located to ``event_tol`` times the switching period (Brent's method on the exact
+        flow). Default 1e-13.
     sample_fraction : float
-        The watched variable is sampled at most ``sample_fraction`` T apart when looking for sign
+        Watched quantities are sampled at most ``sample_fraction`` T apart when looking for sign
         changes (two crossings closer than that could be missed). Default 1/32.
     output_step : float or None
         Spacing of the output samples in s (events are always added); None: T/1000.
@@ -60,6 +78,8 @@ class EventDriven:
     sample_fraction: float = 1.0 / 32.0
     output_step: float | None = None
     max_events: int = 10_000_000
+    step_option = "output_step"
+    description = "exact event-driven: matrix exponentials per mode, events by root finding, any number of pairs"
 
     def __post_init__(self):
         tol = parse_value("event_tol", self.event_tol)
@@ -76,44 +96,156 @@ class EventDriven:
             raise ParameterError(f"max_events must be an integer >= 1; got {self.max_events!r}")
 
     @property
-    def name(self) -> str:
-        return "event"
+    def order(self) -> float:
+        return math.inf
+
+    def supports(self, problem: LCSProblem) -> None:
+        if isinstance(problem.switching, Relay):
+            raise ParameterError("the event-driven method follows a hysteresis or latched law (StateSwitching) "
+                                 "exactly; the implicit relay is a time-stepping scheme: use --method lcp")
+        if problem.k > MAX_PAIRS:
+            raise ParameterError(f"the event-driven method selects modes among 2^k held sets: k must be <= "
+                                 f"{MAX_PAIRS}; this problem has k = {problem.k}: use --method lcp")
+
+    def solve(self, problem: LCSProblem, x0: np.ndarray) -> Trajectory:
+        solution = _Machine(problem, self).run(x0)[0]
+        scale = _time_scale(problem)
+        return solution.trajectory(self.output_step or scale / 1000.0)
+
+    def period_map(self, problem: LCSProblem) -> PeriodMap:
+        """The exact map over ``problem.t_span`` with its exact Jacobian (state-transition matrices and
+        saltation matrices)."""
+        self.supports(problem)
+        return EventPeriodMap(_Machine(problem, self))
+
+    def return_map(self, problem: LCSProblem, config: int, crossings: int = 1) -> PeriodMap:
+        """For autonomous state-switched problems: x (at a switching into ``config``) -> x at the
+        ``crossings``-th next switching into ``config``, with its exact Jacobian; ``period`` of the map is
+        the return time of its last call (a Poincare map: the section is the switching surface)."""
+        self.supports(problem)
+        if not isinstance(problem.switching, StateSwitching):
+            raise ParameterError("a return map needs a state-driven switching law (StateSwitching)")
+        return EventReturnMap(_Machine(problem, self), config, crossings)
+
+
+def _time_scale(problem: LCSProblem) -> float:
+    period = problem.switching.period
+    return period if np.isfinite(period) else problem.t_span[1] - problem.t_span[0]
 
 
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(8)
 _TAYLOR_TERMS = 26     # (0.25)^26 / 26! < 1e-30: the series is exact to rounding on a sampling step
 _EXPONENTS = np.arange(_TAYLOR_TERMS)
 _POWERS = 64           # sampling steps per batched product
-_ZERO_RTOL = 1e-10      # a derivative counts as zero below this fraction of its own scale
-_CROSS_RTOL = 1e-13     # a watched value counts as negative below -this fraction of its scale
+_ZERO_RTOL = 1e-10     # a derivative counts as zero below this fraction of its own scale
+_CROSS_RTOL = 1e-13    # a watched value counts as negative below -this fraction of its scale
+_ON_SET_RTOL = 1e-9    # a held pair's constraint N^T (C x + F) counts as met up to this (relative)
 
 
-@dataclass(frozen=True)
+def _power_stack(S: np.ndarray, count: int) -> np.ndarray:
+    """S^0 .. S^count, shape (count + 1, m, m), by doubling (log2(count) batched products)."""
+    stack = np.eye(S.shape[0])[None].copy()
+    top = S
+    while stack.shape[0] <= count:
+        stack = np.concatenate([stack, stack @ top])
+        top = top @ top
+    return stack[: count + 1]
+
+
 class Flow:
-    """The affine flow of one (configuration, pair mode), in augmented form x~ = [x; 1].
+    """The affine flow of one mode (configuration, held set J) in augmented form x~ = [x; 1].
 
-    Z (n+1, n+1): x~' = Z x~. ``u_row``, ``y_row``, ``watch_row`` (n+1,): u = u_row . x~, y = y_row . x~,
-    and the mode ends when watch_row . x~ crosses zero downwards. ``delta``: sampling distance (s);
-    ``step`` = expm(delta Z).
+    ``Z`` (n+1, n+1): x~' = Z x~. ``u_rows``, ``y_rows`` (k, n+1): u = u_rows x~, y = y_rows x~.
+    ``watch_rows`` (k, n+1): y_i for free pairs, u_i for held ones (the mode ends when one falls
+    through zero). ``constraint_rows``: N^T [C_J, F_J] (zero on the mode's state manifold);
+    ``project``: the matrix taking a state onto that manifold along B_J. The sampling data (series,
+    powers, quadrature maps) is built on first use.
     """
 
-    config: int
-    held: bool
-    Z: np.ndarray
-    u_row: np.ndarray
-    y_row: np.ndarray
-    watch_row: np.ndarray
-    delta: float
-    step: np.ndarray
-    taylor: np.ndarray      # Z^j / j!, j = 0.._TAYLOR_TERMS - 1: x~(s) = sum_j s^j (Z^j / j!) x~ for s <= delta
-    powers: np.ndarray      # step^j, j = 0.._POWERS: the samples of a segment in one batched product
-    node_maps: np.ndarray     # expm(s_k Z) at the Gauss-Legendre nodes s_k of [0, delta], shape (8, n+1, n+1)
-    watch_derivatives: np.ndarray  # rows watch Z^j, j = 0..n+1: the watched quantity's derivatives
-    derivative_scales: np.ndarray  # rows |watch| |Z|^j 1
+    def __init__(self, config_index: int, held: int, Z, u_rows, y_rows, constraint_rows, project, delta):
+        self.config, self.held = config_index, held
+        self.Z, self.u_rows, self.y_rows = Z, u_rows, y_rows
+        k = u_rows.shape[0]
+        held_pairs = np.array([(held >> i) & 1 for i in range(k)], dtype=bool)
+        self.watch_rows = np.where(held_pairs[:, None], u_rows, y_rows)
+        self.constraint_rows, self.project = constraint_rows, project
+        n1 = Z.shape[0]
+        norm = float(np.abs(Z).sum(axis=1).max())
+        self.delta = min(delta, 0.25 / norm) if norm > 0.0 else delta
 
-    def taylor_vectors(self, xt: np.ndarray) -> np.ndarray:
-        """V with x~(s) = (s^0, s^1, ...) @ V for 0 <= s <= delta (the series converges: delta ||Z|| <= 0.25)."""
-        return self.taylor @ xt
+    @property
+    def n(self) -> int:
+        return self.Z.shape[0] - 1
+
+    def field(self, xt: np.ndarray) -> np.ndarray:
+        """x' at x~."""
+        return self.Z[:-1] @ xt
+
+    def derivative_rows(self, rows: np.ndarray, order: int) -> tuple[np.ndarray, np.ndarray]:
+        """Rows r Z^j (j = 0..order) of watched rows r, shape (order + 1, m, n+1), and their scales."""
+        out, scales = [rows], [np.abs(rows).sum(axis=1)]
+        absZ, abs_rows = np.abs(self.Z), np.abs(rows)
+        for _ in range(order):
+            out.append(out[-1] @ self.Z)
+            abs_rows = abs_rows @ absZ
+            scales.append(abs_rows.sum(axis=1))
+        return np.array(out), np.array(scales)
+
+    @cached_property
+    def lexicographic_data(self):
+        return self.derivative_rows(self.watch_rows, self.n + 1)
+
+    def lexicographic_ok(self, xt: np.ndarray) -> bool:
+        """Every watched quantity's first non-vanishing entry of (g, g', g'', ...) along the flow is
+        positive (or all vanish)."""
+        rows, scales = self.lexicographic_data
+        values = rows @ xt                                     # (order + 1, k)
+        size = np.abs(xt).max()
+        significant = np.abs(values) > _ZERO_RTOL * scales * size + 1e-300
+        for i in range(values.shape[1]):
+            hit = np.flatnonzero(significant[:, i])
+            if hit.size and values[hit[0], i] < 0.0:
+                return False
+        return True
+
+    @cached_property
+    def taylor(self) -> np.ndarray:
+        """Z^j / j!, j = 0.._TAYLOR_TERMS - 1: x~(s) = sum_j s^j (Z^j / j!) x~ for s <= delta."""
+        n1 = self.Z.shape[0]
+        taylor = np.empty((_TAYLOR_TERMS, n1, n1))
+        taylor[0] = np.eye(n1)
+        for j in range(1, _TAYLOR_TERMS):
+            taylor[j] = taylor[j - 1] @ self.Z / j
+        return taylor
+
+    @cached_property
+    def powers(self) -> np.ndarray:
+        """expm(delta Z)^j, j = 0.._POWERS: the samples of a segment in one batched product."""
+        return _power_stack(expm(self.delta * self.Z), _POWERS)
+
+    @cached_property
+    def node_maps(self) -> np.ndarray:
+        """expm(s_k Z) at the Gauss-Legendre nodes s_k of [0, delta], shape (8, n+1, n+1)."""
+        weights = (0.5 * (_GL_X + 1.0) * self.delta)[:, None] ** _EXPONENTS[None, :]
+        return np.tensordot(weights, self.taylor, axes=([1], [0]))
+
+    def propagate(self, xt: np.ndarray, s: float) -> np.ndarray:
+        """x~ after s in [0, delta] (also for a stack of columns)."""
+        return np.tensordot(s ** _EXPONENTS, self.taylor, axes=(0, 0)) @ xt
+
+    def advance(self, xt: np.ndarray, tau: float) -> np.ndarray:
+        """x~ after any tau >= 0: whole sampling steps by powers of expm(delta Z), the rest by the series."""
+        whole = int(np.floor(tau / self.delta * (1.0 - 1e-12)))
+        q = whole
+        while q > 0:
+            m = min(q, _POWERS)
+            xt = self.powers[m] @ xt
+            q -= m
+        return self.propagate(xt, max(tau - whole * self.delta, 0.0))
+
+    def transition(self, tau: float) -> np.ndarray:
+        """The state-transition matrix over tau: d x(tau) / d x(0), shape (n, n)."""
+        return expm(tau * self.Z)[:-1, :-1]
 
     def sample_states(self, xt: np.ndarray, count: int) -> np.ndarray:
         """x~ at 0, delta, ..., count delta: shape (count + 1, n+1)."""
@@ -127,77 +259,21 @@ class Flow:
             state, count = block[-1], count - m if count > m else -1
         return np.vstack(blocks)
 
-    def propagate(self, xt: np.ndarray, s: float) -> np.ndarray:
-        """x~ after s in [0, delta]."""
-        return s ** _EXPONENTS @ (self.taylor @ xt)
 
-    def advance(self, xt: np.ndarray, tau: float) -> np.ndarray:
-        """x~ after any tau >= 0: whole sampling steps by powers of expm(delta Z), the rest by the series."""
-        q = int(np.floor(tau / self.delta * (1.0 - 1e-12)))
-        while q > 0:
-            m = min(q, _POWERS)
-            xt = self.powers[m] @ xt
-            q -= m
-        rest = tau - np.floor(tau / self.delta * (1.0 - 1e-12)) * self.delta
-        return self.propagate(xt, max(rest, 0.0))
+class _Watch:
+    """What ends a segment: rows g = rows x~ + slopes (phase0 + tau), with the pair (or -1: the
+    switching law) each row belongs to."""
 
-    def derivatives(self, xt: np.ndarray, order: int) -> tuple[np.ndarray, np.ndarray]:
-        """(values, scales) of the watched quantity and its first ``order`` time derivatives at x~.
-
-        The scale of each derivative uses max |x~| for every entry: a variable near zero (the
-        inductor current at a DCM event) must not be its own yardstick."""
-        return self.watch_derivatives[:order + 1] @ xt, self.derivative_scales[:order + 1] * np.abs(xt).max()
-
-    def lexicographic_sign(self, xt: np.ndarray) -> int:
-        """Sign of the first non-zero entry of (g, g', g'', ...) along this flow; 0 if all vanish."""
-        values, scales = self.derivatives(xt, xt.size)
-        for v, s in zip(values, scales):
-            if abs(v) > _ZERO_RTOL * s + 1e-300:
-                return 1 if v > 0 else -1
-        return 0
-
-
-def _flow(config: Configuration, index: int, held: bool, period_scale: float, sample_fraction: float) -> Flow | None:
-    """The flow of ``config`` with the pair free or held; None when the pair cannot be held (C B <= 0, D = 0)."""
-    n = config.n
-    A, b, c, d, E, f = config.A, config.B[:, 0], config.C[0], float(config.D[0, 0]), config.E, float(config.F[0])
-    y_row = np.append(c, f)
-    if not held:
-        u_row = np.zeros(n + 1)
-        Ab, eb, watch = A, E, y_row
-        y_out = y_row
-    elif d > 0.0:
-        u_row = -np.append(c, f) / d
-        Ab, eb = A + np.outer(b, u_row[:n]), E + b * u_row[n]
-        watch, y_out = u_row, np.zeros(n + 1)
-    else:
-        cb = float(c @ b)
-        if d < 0.0 or cb <= 0.0:
-            return None
-        u_row = -np.append(c @ A, c @ E) / cb
-        Ab, eb = A + np.outer(b, u_row[:n]), E + b * u_row[n]
-        watch, y_out = u_row, y_row
-    Z = np.zeros((n + 1, n + 1))
-    Z[:n, :n], Z[:n, n] = Ab, eb
-    norm = float(np.abs(Z).sum(axis=1).max())
-    delta = sample_fraction * period_scale
-    if norm > 0.0:
-        delta = min(delta, 0.25 / norm)
-    taylor = np.empty((_TAYLOR_TERMS, n + 1, n + 1))
-    taylor[0] = np.eye(n + 1)
-    for j in range(1, _TAYLOR_TERMS):
-        taylor[j] = taylor[j - 1] @ Z / j
-    step = expm(delta * Z)
-    node_weights = (0.5 * (_GL_X + 1.0) * delta)[:, None] ** _EXPONENTS[None, :]
-    node_maps = np.tensordot(node_weights, taylor, axes=([1], [0]))
-    rows, scales = [watch], [np.abs(watch).sum()]
-    absZ, abs_row = np.abs(Z), np.abs(watch)
-    for _ in range(n + 1):
-        rows.append(rows[-1] @ Z)
-        abs_row = abs_row @ absZ
-        scales.append(abs_row.sum())
-    return Flow(index, held, Z, u_row, y_out, watch, delta, step, taylor, _power_stack(step, _POWERS),
-                node_maps, np.array(rows), np.array(scales))
+    def __init__(self, flow: Flow, switch_row=None, switch_slope=0.0):
+        rows, slopes, pairs = [flow.watch_rows], [np.zeros(flow.watch_rows.shape[0])], [np.arange(flow.watch_rows.shape[0])]
+        if switch_row is not None:
+            rows.append(switch_row[None, :])
+            slopes.append(np.array([switch_slope]))
+            pairs.append(np.array([-1]))
+        self.rows = np.vstack(rows)
+        self.slopes = np.concatenate(slopes)
+        self.pairs = np.concatenate(pairs)
+        self.row_scales = np.abs(self.rows).sum(axis=1)
 
 
 @dataclass
@@ -208,39 +284,31 @@ class Segment:
     xt0: np.ndarray     # augmented state [x; 1] at t0
 
 
-@dataclass
 class EventSolution:
     """The exact piecewise solution: segments (t0, t1, flow, start state) and the events between them.
 
-    ``events``: time, kind ('activate', 'release', 'impulse'), configuration. ``wall_s``: seconds spent.
+    ``event_times``, ``event_kinds`` ('activate', 'release', 'impulse', 'switch'), ``event_pairs``
+    (-1 for switching-law events), ``event_configs`` (the configuration in force after the event).
     """
 
-    problem: LCSProblem
-    segments: list
-    event_times: list
-    event_kinds: list
-    x_end: np.ndarray
-    wall_s: float
-    options: EventDriven
-
-    @property
-    def events(self) -> pd.DataFrame:
-        return pd.DataFrame({"time": np.array(self.event_times, dtype=float), "pair": 0,
-                             "kind": np.array(self.event_kinds, dtype=object)})
+    def __init__(self, problem, segments, times, kinds, pairs, configs, x_end, wall_s, options, end_config):
+        self.problem, self.segments, self.options = problem, segments, options
+        self.event_times, self.event_kinds, self.event_pairs, self.event_configs = times, kinds, pairs, configs
+        self.x_end, self.wall_s, self.end_config = x_end, wall_s, end_config
 
     def _segments_in(self, t0: float, t1: float):
         for seg in self.segments:
             if seg.t1 > t0 and seg.t0 < t1:
                 yield seg, max(seg.t0, t0), min(seg.t1, t1)
 
-    def quadrature(self, t0: float | None = None, t1: float | None = None):
-        """Gauss-Legendre nodes over [t0, t1] (default: the whole run): (t, weights, x, u, config).
+    def quadrature(self, t0: float | None = None, t1: float | None = None) -> tuple[Samples, np.ndarray]:
+        """Gauss-Legendre nodes over [t0, t1] (default: the whole run) as Samples, and their weights.
 
         Pieces follow the segments (no node straddles an event), each at most the flow's sampling
         distance long, 8 nodes per piece."""
         t0 = self.problem.t_span[0] if t0 is None else t0
         t1 = self.problem.t_span[1] if t1 is None else t1
-        ts, ws, xs, us, cs = [], [], [], [], []
+        ts, ws, xs, us, ys, cs = [], [], [], [], [], []
         half = 0.5 * (_GL_X + 1.0)
         for seg, a, b in self._segments_in(t0, t1):
             flow, length = seg.flow, b - a
@@ -262,33 +330,40 @@ class EventSolution:
                 parts_x.append((offsets[:, None] ** _EXPONENTS[None, :]) @ (flow.taylor @ starts[full]))
                 parts_t.append(a + full * flow.delta + offsets)
                 parts_w.append(0.5 * rest * _GL_W)
+            if not parts_x:
+                continue
             nodes = parts_x[0] if len(parts_x) == 1 else np.vstack(parts_x)
             ts.extend(parts_t)
             ws.extend(parts_w)
             xs.append(nodes[:, :-1])
-            us.append(nodes @ flow.u_row)
+            us.append(nodes @ flow.u_rows.T)
+            ys.append(nodes @ flow.y_rows.T)
             cs.append(np.full(nodes.shape[0], flow.config))
         if not ts:
             raise ParameterError(f"quadrature interval [{t0:g}, {t1:g}] s lies outside the run")
-        return (np.concatenate(ts), np.concatenate(ws), np.vstack(xs), np.concatenate(us)[:, None],
-                np.concatenate(cs))
+        samples = Samples(np.concatenate(ts), np.vstack(xs), np.vstack(us), np.vstack(ys), np.concatenate(cs))
+        return samples, np.concatenate(ws)
 
-    def sample(self, times) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """Exact (x, u, y, config) at the given times (a point on an event takes the segment arriving there)."""
+    def sample(self, times) -> Samples:
+        """Exact states, pairs and configuration at the given times (a point on an event takes the
+        segment arriving there)."""
         times = np.asarray(times, dtype=float)
         starts = np.array([s.t0 for s in self.segments])
         which = np.clip(np.searchsorted(starts, times, side="left") - 1, 0, len(self.segments) - 1)
-        n = self.problem.n
-        x, u, y = np.empty((times.size, n)), np.empty((times.size, 1)), np.empty((times.size, 1))
+        n, k = self.problem.n, self.problem.k
+        x, u, y = np.empty((times.size, n)), np.empty((times.size, k)), np.empty((times.size, k))
         config = np.empty(times.size, dtype=np.int64)
-        for s in np.unique(which):
+        for i, s in enumerate(which):
             seg = self.segments[s]
-            idx = np.flatnonzero(which == s)
-            for i in idx:
-                xt = expm((times[i] - seg.t0) * seg.flow.Z) @ seg.xt0
-                x[i], u[i, 0], y[i, 0] = xt[:n], seg.flow.u_row @ xt, seg.flow.y_row @ xt
-            config[idx] = seg.flow.config
-        return x, u, y, config
+            xt = expm((times[i] - seg.t0) * seg.flow.Z) @ seg.xt0
+            x[i], u[i], y[i] = xt[:n], seg.flow.u_rows @ xt, seg.flow.y_rows @ xt
+            config[i] = seg.flow.config
+        return Samples(times, x, u, y, config)
+
+    def events_table(self, t: np.ndarray) -> dict:
+        times = np.array(self.event_times, dtype=float)
+        return {"time": times, "step": np.searchsorted(t, times) - 1, "pair": np.array(self.event_pairs, dtype=np.int64),
+                "kind": np.array(self.event_kinds, dtype=object), "config": np.array(self.event_configs, dtype=np.int64)}
 
     def trajectory(self, output_step: float) -> Trajectory:
         """Samples on a uniform grid of ``output_step`` plus every segment boundary, as a Trajectory."""
@@ -299,20 +374,18 @@ class EventSolution:
         t = t[np.concatenate([[True], np.diff(t) > 1e-12 * output_step])]
         x, u, y, config = self._sample_sorted(t, output_step)
         problem = self.problem
-        events = self.events
-        events = events[events["kind"] != "impulse"].assign(step=np.searchsorted(t, events["time"]) - 1)
         return Trajectory(t=t, x=x, u=u, y=y, config=config, state_names=problem.state_names,
                           pair_names=problem.pair_names,
                           config_names=tuple(c.name or f"config{i}" for i, c in enumerate(problem.configurations)),
-                          event_columns=events[["time", "step", "pair", "kind"]].reset_index(drop=True),
-                          method="event", steps=len(self.segments), wall_s=self.wall_s,
-                          metadata=dict(problem.metadata, event_tol=self.options.event_tol))
+                          event_columns=self.events_table(t), method="event", steps=len(self.segments),
+                          wall_s=self.wall_s, rule="exact", exact=self, period=problem.switching.period,
+                          metadata=dict(problem.metadata, event_tol=self.options.event_tol, label="event"))
 
     def _sample_sorted(self, t: np.ndarray, step: float):
         """Sorted times on a grid of spacing ``step`` plus segment ends: per segment, offsets q step + r share a
         few remainders r; x = S^q expm(r Z) x0 with the powers S^q of S = expm(step Z) stacked once per flow."""
-        n = self.problem.n
-        x, u, y = np.empty((t.size, n)), np.empty((t.size, 1)), np.empty((t.size, 1))
+        n, k = self.problem.n, self.problem.k
+        x, u, y = np.empty((t.size, n)), np.empty((t.size, k)), np.empty((t.size, k))
         config = np.empty(t.size, dtype=np.int64)
         starts = np.array([seg.t0 for seg in self.segments])
         which = np.clip(np.searchsorted(starts, t, side="left") - 1, 0, len(self.segments) - 1)
@@ -333,8 +406,7 @@ class EventSolution:
             states = np.empty((hi - lo, n + 1))
             for key in np.unique(r_key):
                 sel = np.flatnonzero(r_key == key)
-                base = expm(r[sel[0]] * flow.Z) @ seg.xt0
-                block_start, block = base, 0
+                block_start = expm(r[sel[0]] * flow.Z) @ seg.xt0
                 qs = q[sel]
                 for b in range(int(qs.max()) // _BLOCK + 1):
                     in_block = sel[(qs // _BLOCK) == b]
@@ -342,8 +414,8 @@ class EventSolution:
                         states[in_block] = stack[q[in_block] - b * _BLOCK] @ block_start
                     block_start = stack[_BLOCK] @ block_start
             x[lo:hi] = states[:, :n]
-            u[lo:hi, 0] = states @ flow.u_row
-            y[lo:hi, 0] = states @ flow.y_row
+            u[lo:hi] = states @ flow.u_rows.T
+            y[lo:hi] = states @ flow.y_rows.T
             config[lo:hi] = flow.config
         return x, u, y, config
 
@@ -351,161 +423,288 @@ class EventSolution:
 _BLOCK = 1024
 
 
-def _power_stack(S: np.ndarray, count: int) -> np.ndarray:
-    """S^0 .. S^count, shape (count + 1, m, m), by doubling (log2(count) batched products)."""
-    stack = np.eye(S.shape[0])[None].copy()
-    top = S
-    while stack.shape[0] <= count:
-        stack = np.concatenate([stack, stack @ top])
-        top = top @ top
-    return stack[: count + 1]
+def _held_sets_by_distance(k: int, reference: int) -> list[int]:
+    """Every held set (bit mask) ordered by its distance from ``reference``, then by size."""
+    masks = range(1 << k)
+    return sorted(masks, key=lambda m: (bin(m ^ reference).count("1"), bin(m).count("1"), m))
 
 
 class _Machine:
-    """The flows of one problem (built once; reused for every run from a new initial state)."""
+    """The flows of one problem (built on demand, reused for every run from a new initial state)."""
 
     def __init__(self, problem: LCSProblem, options: EventDriven):
-        if problem.k != 1:
-            raise ParameterError(f"the event-driven method handles one complementarity pair (k = 1); this problem has "
-                                 f"k = {problem.k}: use the LCP time-stepper (--method lcp)")
+        options.supports(problem)
         self.problem, self.options = problem, options
-        schedule = problem.schedule
-        t0, t1 = problem.t_span
-        self.scale = schedule.period if np.isfinite(schedule.period) else (t1 - t0)
-        self.flows = {}
-        for i, config in enumerate(problem.configurations):
-            for held in (False, True):
-                self.flows[(i, held)] = _flow(config, i, held, self.scale, options.sample_fraction)
+        self.scale = _time_scale(problem)
+        self.flows: dict = {}
+        self.orders: dict = {}
+        law = problem.switching
+        self.law = law if isinstance(law, StateSwitching) else None
+        self.index2 = [i for i in range(problem.k)
+                       if all(not np.any(c.D[i, :]) and not np.any(c.D[:, i]) for c in problem.configurations)]
 
-    def edges(self, t0: float, t1: float):
-        """(time, configuration) of every schedule instant in (t0, t1), then (t1, None)."""
-        schedule = self.problem.schedule
-        if not np.isfinite(schedule.period):
-            return [(t1, None)]
-        T = schedule.period
-        first, last = int(np.floor(t0 / T)), int(np.ceil(t1 / T))
-        out = []
-        for m in range(first, last + 1):
-            for start, config in zip(schedule.starts, schedule.configs):
-                t = m * T + start
-                if t0 < t < t1 and not (out and out[-1][1] == config):
-                    out.append((t, config))
-        out.append((t1, None))
-        return out
+    # --- modes --------------------------------------------------------------------------------------
 
-    def config_at(self, t: float) -> int:
-        return int(self.problem.schedule.config_at(np.array([t]))[0])
+    def flow(self, config: int, held: int) -> Flow:
+        key = (config, held)
+        flow = self.flows.get(key)
+        if flow is None:
+            flow = self.flows[key] = self._build_flow(config, held)
+        return flow
 
-    def enter(self, config: int, xt: np.ndarray, t: float, kinds: list, times: list) -> np.ndarray:
-        """Apply Moreau's impulse when the configuration is entered with y < 0 and D = 0."""
-        c = self.problem.configurations[config]
-        y = c.C[0] @ xt[:-1] + c.F[0]
-        scale = (np.abs(c.C[0]).sum() + abs(c.F[0])) * np.abs(xt).max()
-        if c.D[0, 0] > 0.0 or y >= -_CROSS_RTOL * scale:
-            return xt
-        cb = float(c.C[0] @ c.B[:, 0])
-        if cb <= 0.0:
-            raise SimulationError(f"at t = {t:.9g} s configuration {c.name!r} starts with y = {y:.4g} < 0 and C B = "
-                                  f"{cb:.3g} <= 0: no impulse restores complementarity (the circuit forces a current "
-                                  "into a blocking diode); check the model")
-        xt = xt.copy()
-        xt[:-1] += c.B[:, 0] * (-y / cb)
-        times.append(t)
-        kinds.append("impulse")
-        return xt
+    def _build_flow(self, index: int, held: int) -> Flow:
+        c = self.problem.configurations[index]
+        n, k = c.n, c.k
+        J = [i for i in range(k) if (held >> i) & 1]
+        xt_cols = n + 1
+        u_rows = np.zeros((k, xt_cols))
+        constraint_rows = np.zeros((0, xt_cols))
+        project = None
+        if J:
+            DJJ, CJ, FJ, BJ = c.D[np.ix_(J, J)], c.C[J], c.F[J], c.B[:, J]
+            U, S, _ = np.linalg.svd(DJJ)
+            rank = int(np.sum(S > 1e-12 * max(S.max(initial=0.0), 1e-300))) if S.size else 0
+            R, N = U[:, :rank], U[:, rank:]
+            G = np.vstack([R.T @ DJJ, N.T @ CJ @ BJ])
+            P = np.vstack([np.hstack([R.T @ CJ, (R.T @ FJ)[:, None]]),
+                           np.hstack([N.T @ CJ @ c.A, (N.T @ CJ @ c.E)[:, None]])])
+            u_rows[J] = -np.linalg.pinv(G) @ P
+            if N.shape[1]:
+                constraint_rows = np.hstack([N.T @ CJ, (N.T @ FJ)[:, None]])
+                NCB = N.T @ CJ @ BJ
+                project = (BJ, np.linalg.pinv(NCB))
+        Z = np.zeros((xt_cols, xt_cols))
+        Z[:n, :n], Z[:n, n] = c.A, c.E
+        Z[:n] += c.B @ u_rows
+        y_rows = np.hstack([c.C, c.F[:, None]]) + c.D @ u_rows
+        delta = self.options.sample_fraction * self.scale
+        return Flow(index, held, Z, u_rows, y_rows, constraint_rows, project, delta)
 
-    def select(self, config: int, xt: np.ndarray, t: float) -> Flow:
-        """The mode-selection LCP at (t, x), resolved lexicographically (module docstring)."""
-        free = self.flows[(config, False)]
-        if free.lexicographic_sign(xt) >= 0:
-            return free
-        held = self.flows[(config, True)]
-        if held is not None and held.lexicographic_sign(xt) >= 0:
-            return held
+    def _on_set(self, flow: Flow, xt: np.ndarray, rate_field, slack: float) -> tuple[bool, np.ndarray]:
+        """Is x~ on the flow's state manifold N^T (C_J x + F_J) = 0? Up to rounding, and at an event up to
+        what the located time's error (``slack`` s, along the field before the event) allows. Returns
+        (ok, x~ projected onto the manifold along B_J)."""
+        rows = flow.constraint_rows
+        if rows.shape[0] == 0:
+            return True, xt
+        r = rows @ xt
+        tol = _ON_SET_RTOL * (np.abs(rows).sum(axis=1) * np.abs(xt).max() + 1e-300)
+        if rate_field is not None:
+            tol = tol + slack * np.abs(rows[:, :-1] @ rate_field)
+        if np.any(np.abs(r) > tol):
+            return False, xt
+        BJ, pinv = flow.project
+        out = xt.copy()
+        out[:-1] -= BJ @ (pinv @ r)
+        return True, out
+
+    def select(self, config: int, xt: np.ndarray, t: float, reference: int, rate_field=None) -> tuple[Flow, np.ndarray]:
+        """The mode-selection LCP at (t, x): the held set nearest to ``reference`` whose flow keeps every
+        watched quantity lexicographically non-negative; x~ projected onto its manifold. ``rate_field``:
+        the vector field before an event (its location error may leave a held pair's y slightly off zero)."""
+        k = self.problem.k
+        order = self.orders.get(reference)
+        if order is None:
+            order = self.orders[reference] = _held_sets_by_distance(k, reference)
+        slack = 4.0 * self.options.event_tol * self.scale
+        for held in order:
+            flow = self.flow(config, held)
+            ok, projected = self._on_set(flow, xt, rate_field, slack)
+            if ok and flow.lexicographic_ok(projected):
+                return flow, projected
         name = self.problem.configurations[config].name
         raise SimulationError(f"the mode-selection LCP at t = {t:.9g} s in configuration {name!r} has no solution "
-                              "(the pair can be neither free nor held); the LCS is not well posed there")
+                              "(no set of held pairs keeps every pair complementary); the LCS is not well posed there")
 
-    def cross(self, flow: Flow, xt: np.ndarray, tau_max: float):
-        """First downward zero crossing of the watched quantity in (0, tau_max]: (tau or None, x~ at tau_max).
+    def enter(self, config: int, xt: np.ndarray, t: float, log, jac) -> np.ndarray:
+        """Moreau's impulse when configuration ``config`` is entered with y_K < 0 on the pairs K whose y is
+        a function of the state: x+ = x + B_K lambda, 0 <= lambda _|_ C_K x+ + F_K >= 0."""
+        K = self.index2
+        if not K:
+            return xt
+        c = self.problem.configurations[config]
+        CK, FK, BK = c.C[K], c.F[K], c.B[:, K]
+        y = CK @ xt[:-1] + FK
+        scale = (np.abs(CK).sum(axis=1) + np.abs(FK)) * np.abs(xt).max()
+        if np.all(y >= -_CROSS_RTOL * scale):
+            return xt
+        M = CK @ BK
+        result = solve_lcp(M, y, method="lemke")
+        if not result.solved:
+            raise SimulationError(f"at t = {t:.9g} s configuration {c.name!r} starts with y = {y.tolist()} and no "
+                                  f"impulse restores complementarity (C B = {M.tolist()}; the circuit forces a current "
+                                  "into a blocking diode); check the model")
+        lam = result.z
+        xt = xt.copy()
+        xt[:-1] += BK @ lam
+        jumped = np.flatnonzero(lam > 0.0)
+        for i in jumped:
+            log(t, "impulse", K[i], config)
+        if jac is not None and jumped.size:
+            idx = [K[i] for i in jumped]
+            Bs, Cs = c.B[:, idx], c.C[idx]
+            jac[:] = (np.eye(c.n) - Bs @ np.linalg.solve(Cs @ Bs, Cs)) @ jac
+        return xt
 
-        The samples of whole sampling steps come from one batched product with the powers of
-        expm(delta Z); the last, partial step from the series."""
-        w = flow.watch_row
-        g_scale = np.abs(w).sum() * np.abs(xt).max()
+    # --- switching law ------------------------------------------------------------------------------
+
+    def switch_row(self, config: int, latched: bool):
+        """(row, slope) of the switching law's watched quantity in ``config`` (None when it cannot switch)."""
+        law = self.law
+        if law is None or latched:
+            return None, 0.0
+        f = law.function
+        low, slope = (f.ramp.low, f.ramp.slope) if f.ramp is not None else (0.0, 0.0)
+        if config == law.below:      # ends when s = c x + d - ramp rises above +band: watch band - s
+            return np.append(-f.c, law.band - f.d + low), slope
+        return np.append(f.c, f.d - low + law.band), -slope       # ends when s falls below -band: s + band
+
+    def law_config(self, xt: np.ndarray, config: int) -> int:
+        """At a ramp reset (or the start): the configuration set by the sign of s (hysteresis kept inside the band)."""
+        law = self.law
+        f = law.function
+        s = float(f.c @ xt[:-1] + f.d - (f.ramp.low if f.ramp is not None else 0.0))
+        if s < -law.band:
+            return law.below
+        if s > law.band:
+            return law.above
+        return config
+
+    def edges(self, t0: float, t1: float):
+        """(time, kind) of every time-driven instant in (t0, t1), then (t1, 'end'). kind: a configuration
+        index (schedule), 'reset' (ramp reset)."""
+        law = self.problem.switching
+        out = []
+        if isinstance(law, Schedule) and np.isfinite(law.period):
+            T = law.period
+            for m in range(int(np.floor(t0 / T)), int(np.ceil(t1 / T)) + 1):
+                for start, config in zip(law.starts, law.configs):
+                    t = m * T + start
+                    if t0 < t < t1 and not (out and out[-1][1] == config):
+                        out.append((t, config))
+        elif isinstance(law, StateSwitching):
+            out = [(t, "reset") for t in law.breakpoints(t0, t1)]
+        out.append((t1, "end"))
+        return out
+
+    # --- crossings ----------------------------------------------------------------------------------
+
+    def cross(self, flow: Flow, watch: _Watch, xt: np.ndarray, tau_max: float, phase0: float):
+        """First downward zero crossing of a watched quantity in (0, tau_max]: (tau, row) or (None, None),
+        and x~ at tau_max when there is none."""
+        g_scale = watch.row_scales * np.abs(xt).max() + np.abs(watch.slopes) * self.scale
         threshold = -_CROSS_RTOL * g_scale
         full = int(np.floor(tau_max / flow.delta * (1.0 - 1e-12)))
         tau, state = 0.0, xt
         while full > 0:
             m = min(full, _POWERS)
             states = flow.powers[1:m + 1] @ state
-            below = np.flatnonzero(states @ w < threshold)
+            taus = tau + flow.delta * np.arange(1, m + 1)
+            values = states @ watch.rows.T + (phase0 + taus)[:, None] * watch.slopes[None, :]
+            below = np.flatnonzero((values < threshold[None, :]).any(axis=1))
             if below.size:
                 i = below[0]
                 start = state if i == 0 else states[i - 1]
-                return self._locate(flow, start, tau + i * flow.delta, flow.delta, g_scale), None
-            tau, state, full = tau + m * flow.delta, states[m - 1], full - m
+                return self._locate(flow, watch, start, tau + i * flow.delta, flow.delta, g_scale, phase0), None
+            tau, state, full = taus[-1], states[m - 1], full - m
         rest = tau_max - tau
         if rest > 0.0:
             end = flow.propagate(state, rest)
-            if w @ end < threshold:
-                return self._locate(flow, state, tau, rest, g_scale), None
+            values = watch.rows @ end + (phase0 + tau_max) * watch.slopes
+            if np.any(values < threshold):
+                return self._locate(flow, watch, state, tau, rest, g_scale, phase0), None
             state = end
         return (None, None), state
 
-    def _locate(self, flow: Flow, xt_a: np.ndarray, tau_a: float, width: float, g_scale: float):
-        """The crossing inside [tau_a, tau_a + width] (width <= delta): Brent's method on the watched
-        quantity's Taylor polynomial, exact to rounding there. Returns (tau, x~ at tau)."""
-        V = flow.taylor @ xt_a
-        coefficients = (V @ flow.watch_row)[::-1].tolist()    # highest power first
-
-        def g(s):
-            value = 0.0
-            for c in coefficients:   # Horner on Python floats: cheaper than any numpy call here
-                value = value * s + c
-            return value
-
-        # The bracket's left end may sit on a zero of g (the mode just began); move it to a point where g > 0.
-        left, g_left = 0.0, coefficients[-1]
-        if g_left <= _CROSS_RTOL * g_scale:
-            probe, left = width, None
-            for _ in range(60):
-                probe *= 0.5
-                value = g(probe)
-                if value > 0.0:
-                    left, g_left = probe, value
-                    break
-            if left is None:  # leaves at once: an event at tau_a
-                return tau_a, xt_a
+    def _locate(self, flow: Flow, watch: _Watch, xt_a, tau_a, width, g_scale, phase0):
+        """The earliest crossing inside [tau_a, tau_a + width] (width <= delta): Brent's method on each
+        watched quantity's Taylor polynomial, exact to rounding there. Returns (tau, row)."""
+        V = flow.taylor @ xt_a                                   # x~(s) = sum_j s^j V_j
+        coefficients = V @ watch.rows.T                          # (terms, rows)
+        coefficients[0] += (phase0 + tau_a) * watch.slopes
+        coefficients[1] += watch.slopes
         xtol = max(self.options.event_tol * self.scale, 1e-300)
-        s = brentq(g, left, width, xtol=xtol, rtol=4 * np.finfo(float).eps, maxiter=200)
-        if g(s) > _CROSS_RTOL * g_scale:
-            # A loose tolerance may stop short of the zero; the mode selection must see the crossing
-            # happen, so take the point past it (within 2 xtol, brentq's bound).
-            s = min(s + 2.0 * xtol, width)
-        return tau_a + s, s ** _EXPONENTS @ V
+        best, best_row = None, None
+        for r in range(watch.rows.shape[0]):
+            poly = coefficients[::-1, r].tolist()                # highest power first
 
-    def run(self, x0, record: bool = True) -> EventSolution:
+            def g(s, poly=poly):
+                value = 0.0
+                for c in poly:   # Horner on Python floats: cheaper than any numpy call here
+                    value = value * s + c
+                return value
+
+            threshold = _CROSS_RTOL * g_scale[r]
+            if g(width) >= -threshold:
+                continue
+            # The bracket's left end may sit on a zero of g (the mode just began); move it to where g > 0.
+            left, g_left = 0.0, poly[-1]
+            if g_left <= threshold:
+                probe, left = width, None
+                for _ in range(60):
+                    probe *= 0.5
+                    if g(probe) > 0.0:
+                        left = probe
+                        break
+                if left is None:                                 # leaves at once: an event at tau_a
+                    return tau_a, r
+            s = brentq(g, left, width, xtol=xtol, rtol=4 * np.finfo(float).eps, maxiter=200)
+            if g(s) > threshold:
+                # A loose tolerance may stop short of the zero; the mode selection must see the crossing
+                # happen, so take the point past it (within 2 xtol, brentq's bound).
+                s = min(s + 2.0 * xtol, width)
+            if best is None or s < best:
+                best, best_row = s, r
+        if best is None:                                         # rounding: the sample said below, no root
+            return tau_a + width, int(np.argmin(watch.rows @ flow.propagate(xt_a, width)))
+        return tau_a + best, best_row
+
+    # --- runs ---------------------------------------------------------------------------------------
+
+    def run(self, x0, record: bool = True, jacobian: bool = False, stop_config: int | None = None,
+            stop_count: int = 0):
+        """Run over t_span from x0. ``jacobian``: also d x_end / d x0. ``stop_config``/``stop_count``: stop
+        at the ``stop_count``-th switching into ``stop_config`` (a return map; the run may then end before
+        t_span[1], which must be long enough). Returns (EventSolution, jacobian or None, stop time or None)."""
         start_clock = time.perf_counter()
         problem, options = self.problem, self.options
+        n = problem.n
         t, t_end = problem.t_span
         xt = np.append(np.asarray(x0, dtype=float), 1.0)
-        times, kinds, segments = [], [], []
-        config = self.config_at(t)
-        xt = self.enter(config, xt, t, kinds, times)
-        flow = self.select(config, xt, t)
-        same_time_events, events = 0, 0
-        for edge_t, edge_config in self.edges(t, t_end):
+        times, kinds, pairs, configs, segments = [], [], [], [], []
+        jac = np.eye(n) if jacobian else None
+
+        def log(time_, kind, pair, config_):
+            times.append(time_), kinds.append(kind), pairs.append(pair), configs.append(config_)
+
+        law = self.law
+        config = problem.switching.initial_config(xt[:-1], t)
+        latched = False
+        phase_start = t                                          # where the current ramp period began
+        xt = self.enter(config, xt, t, log, jac)
+        flow, xt = self.select(config, xt, t, 0)
+        watch_cache: dict = {}
+        same_time_events, events, crossings = 0, 0, 0
+        stop_time = None
+        for edge_t, edge_kind in self.edges(t, t_end):
             while True:
-                (tau, xt_event), xt_end = self.cross(flow, xt, edge_t - t)
+                row, slope = self.switch_row(config, latched)
+                key = (id(flow), row is not None and tuple(row), slope)
+                watch = watch_cache.get(key)
+                if watch is None:
+                    watch = watch_cache[key] = _Watch(flow, row, slope)
+                phase0 = t - phase_start
+                (tau, which), xt_end = self.cross(flow, watch, xt, edge_t - t, phase0)
                 if tau is not None and t + tau >= edge_t - options.event_tol * self.scale:
-                    tau = None   # a crossing on the edge itself: the edge handles it
+                    tau = None                                   # a crossing on the edge itself: the edge handles it
                     xt_end = flow.advance(xt, edge_t - t)
-                elif tau is not None:
-                    xt_end = xt_event
+                if tau is not None:
+                    xt_end = flow.advance(xt, tau)
                 t_next = edge_t if tau is None else t + tau
                 if record and t_next > t:
                     segments.append(Segment(t, t_next, flow, xt))
+                if jac is not None:
+                    jac[:] = flow.transition(t_next - t) @ jac
                 if tau is None:
                     t, xt = edge_t, xt_end
                     break
@@ -516,65 +715,97 @@ class _Machine:
                                           f" near t = {t + tau:.9g} s (Zeno behaviour or a degenerate LCS); "
                                           f"max_events = {options.max_events}")
                 t, xt = t + tau, xt_end
-                new = self.select(config, xt, t)
-                if new.held and not flow.held:
-                    xt = self._project(config, xt)
-                if new is not flow:
-                    times.append(t)
-                    kinds.append("activate" if new.held else "release")
-                flow = new
-            if edge_config is None:
+                pair = int(watch.pairs[which])
+                grad = watch.rows[which, :n]
+                dgdt = watch.slopes[which]
+                f_before = flow.field(xt)
+                if pair < 0:                                     # the switching law fires
+                    config = law.above if config == law.below else law.below
+                    latched = law.latch
+                    log(t, "switch", -1, config)
+                    if stop_config is not None and config == stop_config:
+                        crossings += 1
+                        if crossings >= stop_count:
+                            if jac is not None:
+                                denominator = grad @ f_before + dgdt
+                                jac[:] = (np.eye(n) - np.outer(f_before, grad) / denominator) @ jac
+                            stop_time = t
+                            break
+                    reference = flow.held
+                    xt_in = self.enter(config, xt, t, log, None)
+                    new, xt_new = self.select(config, xt_in, t, reference, f_before)
+                else:
+                    new, xt_new = self.select(config, xt, t, flow.held ^ (1 << pair), f_before)
+                if jac is not None:
+                    f_after = new.field(xt_new)
+                    denominator = grad @ f_before + dgdt
+                    if denominator != 0.0:
+                        jac[:] = (np.eye(n) + np.outer(f_after - f_before, grad) / denominator) @ jac
+                for i in range(problem.k):
+                    was, now = (flow.held >> i) & 1, (new.held >> i) & 1
+                    if was != now:
+                        log(t, "activate" if now else "release", i, config)
+                flow, xt = new, xt_new
+            if stop_time is not None or edge_kind == "end":
                 break
-            config = edge_config
-            xt = self.enter(config, xt, t, kinds, times)
-            flow = self.select(config, xt, t)
-        return EventSolution(problem, segments, times, kinds, xt[:-1].copy(), time.perf_counter() - start_clock, options)
-
-    def _project(self, config: int, xt: np.ndarray) -> np.ndarray:
-        """Put the state exactly on y = 0 when a D = 0 pair becomes held (removes the root finder's residue)."""
-        c = self.problem.configurations[config]
-        if c.D[0, 0] != 0.0:
-            return xt
-        cb = float(c.C[0] @ c.B[:, 0])
-        xt = xt.copy()
-        xt[:-1] -= c.B[:, 0] * ((c.C[0] @ xt[:-1] + c.F[0]) / cb)
-        return xt
-
-
-def simulate_event(problem: LCSProblem, options: EventDriven | None = None, *, x0=None) -> EventSolution:
-    """Run the event-driven method over ``problem.t_span`` from ``x0`` (default ``problem.x0``)."""
-    options = options or EventDriven()
-    return _Machine(problem, options).run(problem.x0 if x0 is None else _check_x0(x0, problem.n))
-
-
-def _check_x0(x0, n):
-    x = np.asarray(x0, dtype=float)
-    if x.shape != (n,) or not np.all(np.isfinite(x)):
-        raise ParameterError(f"x0 must be {n} finite numbers; got {x0!r}")
-    return x
+            if edge_kind == "reset":
+                phase_start, latched = t, False
+                new_config = self.law_config(xt, config)
+                if new_config != config:
+                    config = new_config
+                    log(t, "switch", -1, config)
+            else:
+                config = edge_kind
+            xt = self.enter(config, xt, t, log, jac)
+            new, xt = self.select(config, xt, t, flow.held)
+            for i in range(problem.k):
+                was, now = (flow.held >> i) & 1, (new.held >> i) & 1
+                if was != now:
+                    log(t, "activate" if now else "release", i, config)
+            flow = new
+        if stop_config is not None and stop_time is None:
+            raise SimulationError(f"the return map found {crossings} of {stop_count} switchings into configuration "
+                                  f"{stop_config} before t = {t_end:g} s; lengthen the problem's t_span")
+        solution = EventSolution(problem, segments, times, kinds, pairs, configs, xt[:-1].copy(),
+                                 time.perf_counter() - start_clock, options, config)
+        return solution, jac, stop_time
 
 
-@dataclass(frozen=True)
-class EventOrbit:
-    """The exact periodic orbit: its initial state, one period of the solution, shooting statistics."""
+class EventPeriodMap(PeriodMap):
+    """The exact map over a problem's span, with its exact Jacobian."""
 
-    x0: np.ndarray
-    solution: EventSolution
-    residual: float
-    iterations: int
-    converged: bool
-    wall_s: float = field(default=0.0)
+    def __init__(self, machine: _Machine):
+        super().__init__()
+        self.machine = machine
+
+    def end(self, x0):
+        self.evaluations += 1
+        return self.machine.run(x0, record=False)[0].x_end
+
+    def __call__(self, x0):
+        self.evaluations += 1
+        solution, jac, _ = self.machine.run(x0, record=False, jacobian=True)
+        return solution.x_end, jac
 
 
-def event_orbit(problem: LCSProblem, x_guess, options: EventDriven | None = None, tol: float = 1e-13,
-                max_iter: int = 30) -> EventOrbit:
-    """Newton shooting on the exact one-period map (``problem.t_span`` must be one period)."""
-    from ..analysis.periodic import newton_fixed_point
-    start = time.perf_counter()
-    options = options or EventDriven()
-    machine = _Machine(problem, options)
-    result = newton_fixed_point(lambda x: machine.run(x, record=False).x_end, _check_x0(x_guess, problem.n),
-                                tol=tol, max_iter=max_iter)
-    solution = machine.run(result.x)
-    return EventOrbit(result.x, solution, result.residual, result.iterations, result.converged,
-                      time.perf_counter() - start)
+class EventReturnMap(PeriodMap):
+    """x -> x at the ``crossings``-th next switching into ``config`` (exact, with the exact Jacobian of
+    the Poincare map). ``period`` holds the return time of the last evaluation."""
+
+    def __init__(self, machine: _Machine, config: int, crossings: int):
+        super().__init__()
+        self.machine, self.config, self.crossings = machine, config, crossings
+        self.period = math.nan
+
+    def _run(self, x0, jacobian):
+        self.evaluations += 1
+        solution, jac, stop = self.machine.run(x0, record=False, jacobian=jacobian, stop_config=self.config,
+                                               stop_count=self.crossings)
+        self.period = stop - self.machine.problem.t_span[0]
+        return solution.x_end, jac
+
+    def end(self, x0):
+        return self._run(x0, False)[0]
+
+    def __call__(self, x0):
+        return self._run(x0, True)

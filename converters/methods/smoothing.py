@@ -20,19 +20,19 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
-import pandas as pd
 from scipy.integrate import solve_ivp
 from scipy.special import expit
 
 from ..errors import ParameterError, SimulationError
 from ..validate import check_positive, parse_value
-from ..problems import LCSProblem
+from ..problems import LCSProblem, Schedule
 from ..trajectory import Trajectory
+from .base import Method
 
 
 @dataclass(frozen=True)
-class Smoothing:
-    """The ideal diode replaced by a smooth law (:mod:`converters.methods.smoothing`), integrated by a stiff solver.
+class Smoothing(Method, key="smooth"):
+    """The ideal diode replaced by a smooth law (module docstring), integrated by a stiff solver.
 
     The complementarity pair 0 <= u _|_ y >= 0 becomes u = eps log(1 + exp(-y / eps^2)) (SI units,
     V or A): the penalty max(0, -y) / eps with its corner rounded over |y| ~ eps^2, exponential like
@@ -55,6 +55,8 @@ class Smoothing:
     atol: float | None = None
     solver: str = "Radau"
     output_step: float | None = None
+    step_option = "output_step"
+    description = "pairs smoothed by u = eps log(1 + exp(-y / eps^2)) (--eps), scipy Radau (--rtol)"
 
     def __post_init__(self):
         object.__setattr__(self, "eps", check_positive("eps", self.eps))
@@ -70,9 +72,27 @@ class Smoothing:
             object.__setattr__(self, "output_step", check_positive("output_step", self.output_step, "s"))
 
     @property
-    def name(self) -> str:
+    def order(self) -> float:
+        """The model error is O(eps): order 1 in eps (the solver's own error is set by rtol)."""
+        return 1.0
+
+    @property
+    def label(self) -> str:
         return f"smooth({self.eps:g})"
 
+    def supports(self, problem: LCSProblem) -> None:
+        if not isinstance(problem.switching, Schedule):
+            raise ParameterError(f"the smoothing method integrates time schedules only; this problem is switched by "
+                                 f"{type(problem.switching).__name__}: use --method lcp or event")
+        for c in problem.configurations:
+            if np.any(c.D):
+                raise ParameterError(f"the smoothing method needs D = 0 in every configuration (y a function of the "
+                                     f"state); configuration {c.name!r} has D = {c.D.tolist()}: use the LCP "
+                                     "time-stepper")
+
+    def solve(self, problem: LCSProblem, x0: np.ndarray) -> Trajectory:
+        """Integrate the smoothed LCS over ``problem.t_span``; solver statistics in ``metadata['stats']``."""
+        return _integrate(problem, self, np.array(x0, dtype=float))
 
 
 def _pair_law(y, eps):
@@ -81,28 +101,18 @@ def _pair_law(y, eps):
     return eps * np.logaddexp(0.0, z), -expit(z) / eps
 
 
-def simulate_smooth(problem: LCSProblem, method: Smoothing | None = None, *, x0=None) -> Trajectory:
-    """Integrate the smoothed LCS over ``problem.t_span``; returns a Trajectory with solver statistics
-    in ``metadata['stats']``."""
-    method = method or Smoothing()
-    for c in problem.configurations:
-        if np.any(c.D):
-            raise ParameterError(f"the smoothing method needs D = 0 in every configuration (y a function of the "
-                                 f"state); configuration {c.name!r} has D = {c.D.tolist()}: use the LCP time-stepper")
+def _integrate(problem: LCSProblem, method: Smoothing, x: np.ndarray) -> Trajectory:
     start_clock = time.perf_counter()
-    x = np.asarray(problem.x0 if x0 is None else x0, dtype=float)
-    if x.shape != (problem.n,) or not np.all(np.isfinite(x)):
-        raise ParameterError(f"x0 must be {problem.n} finite numbers; got {x0!r}")
     t0, t1 = problem.t_span
-    edges = np.concatenate([[t0], problem.schedule.breakpoints(t0, t1), [t1]])
+    edges = np.concatenate([[t0], problem.switching.breakpoints(t0, t1), [t1]])
     eps, atol = method.eps, method.atol if method.atol is not None else 1e-3 * method.rtol
     ts, xs, cs = [np.array([t0])], [x[None, :]], []
     stats = {"points": 0, "nfev": 0, "njev": 0, "nlu": 0, "max_rho_T": 0.0}
-    scale_T = problem.schedule.period if np.isfinite(problem.schedule.period) else (t1 - t0)
-    first_config = int(problem.schedule.config_at(np.array([0.5 * (edges[0] + edges[1])]))[0])
+    scale_T = problem.switching.period if np.isfinite(problem.switching.period) else (t1 - t0)
+    first_config = int(problem.switching.config_at(np.array([0.5 * (edges[0] + edges[1])]))[0])
     cs.append(np.array([first_config]))
     for a, b in zip(edges[:-1], edges[1:]):
-        config_index = int(problem.schedule.config_at(np.array([0.5 * (a + b)]))[0])
+        config_index = int(problem.switching.config_at(np.array([0.5 * (a + b)]))[0])
         c = problem.configurations[config_index]
         A, B, C, E, F = c.A, c.B, c.C, c.E, c.F
 
@@ -144,12 +154,13 @@ def simulate_smooth(problem: LCSProblem, method: Smoothing | None = None, *, x0=
     return Trajectory(t=t, x=xx, u=u, y=y, config=config, state_names=problem.state_names,
                       pair_names=problem.pair_names,
                       config_names=tuple(c.name or f"config{i}" for i, c in enumerate(problem.configurations)),
-                      event_columns=_events(t, u, y, config), method=method.name, steps=stats["nlu"],
-                      wall_s=stats["wall_s"], metadata=dict(problem.metadata, eps=eps, rtol=method.rtol,
-                                                            solver=method.solver, stats=stats))
+                      event_columns=_events(t, u, y, config), method=method.key, steps=stats["nlu"],
+                      wall_s=stats["wall_s"], rule="linear", period=problem.switching.period,
+                      metadata=dict(problem.metadata, eps=eps, rtol=method.rtol, solver=method.solver, stats=stats,
+                                    label=method.label))
 
 
-def _events(t, u, y, config) -> pd.DataFrame:
+def _events(t, u, y, config) -> dict:
     """Pair switches where sign(u - y) changes inside a configuration, placed by linear interpolation."""
     d = u - y
     steps, pairs = np.nonzero(np.sign(d[1:]) != np.sign(d[:-1]))
@@ -157,5 +168,5 @@ def _events(t, u, y, config) -> pd.DataFrame:
     steps, pairs = steps[keep], pairs[keep]
     a, b = d[steps, pairs], d[steps + 1, pairs]
     frac = np.where(a != b, a / (a - b), 0.5)
-    return pd.DataFrame({"time": t[steps] + frac * (t[steps + 1] - t[steps]), "step": steps, "pair": pairs,
-                         "kind": np.where(b > 0, "activate", "release")})
+    return {"time": t[steps] + frac * (t[steps + 1] - t[steps]), "step": steps, "pair": pairs,
+            "kind": np.where(b > 0, "activate", "release")}

@@ -1,10 +1,18 @@
 """The theta method: the LCP time-stepper.
 
-Data flow: the schedule's switching instants are merged into the uniform grid so that every step
-lies inside one configuration; the one-step matrices are computed once per (configuration, step
-size) pair (the uniform step plus the split steps at switching instants); the compiled loop
-(:func:`converters.methods.theta_kernels.run_steps`) advances the state, solving each step's small LCP inline;
-any step it cannot solve inline is solved here by Lemke and the loop resumes.
+Data flow, time schedules: the schedule's switching instants are merged into the uniform grid so
+that every step lies inside one configuration; the one-step matrices are computed once per
+(configuration, step size) pair (the uniform step plus the split steps at switching instants); the
+compiled loop (:func:`.theta_kernels.run_steps`) advances the state, solving each step's small LCP
+inline; any step it cannot solve inline is solved here by Lemke and the loop resumes.
+
+State-driven laws: a hysteresis or latched :class:`StateSwitching` runs in
+:func:`.theta_kernels.run_state_switched` (the crossing located inside the step, the step redone as
+two sub-steps); the implicit :class:`Relay` in :func:`.theta_kernels.run_relay` (one LCP of size
+k + 2 per step).
+
+The period map of a scheduled run has an exact Jacobian: the product of the one-step derivatives
+Phi - H_J M_JJ^-1 C_J Phi over the run (:func:`.theta_kernels.step_jacobian`).
 """
 from __future__ import annotations
 
@@ -13,17 +21,20 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .discretize import step_matrices
 from ..errors import ParameterError, SimulationError
-from ..validate import check_positive, parse_value
-from .theta_kernels import MAX_INLINE_K, NEEDS_GENERAL_SOLVER, NO_SOLUTION, OK, run_steps
 from ..lcp import solve_lcp
-from ..problems import LCSProblem
+from ..lcp.kernels import MAX_INLINE_K
+from ..problems import LCSProblem, Relay, Schedule, StateSwitching
 from ..trajectory import Trajectory
+from ..validate import check_positive, parse_value
+from .base import Method, PeriodMap
+from .discretize import step_matrices
+from .theta_kernels import (EVENTS_FULL, NO_SOLUTION, OK, run_relay, run_state_switched, run_steps,
+                            step_jacobian)
 
 
 @dataclass(frozen=True)
-class Theta:
+class Theta(Method, key="lcp"):
     """The theta-method (Moreau): x_{k+1} = x_k + h [theta f(x_{k+1}) + (1 - theta) f(x_k)] + h B u_{k+1}.
 
     The complementarity multiplier u is taken fully implicitly (an impulse over the step), so
@@ -35,11 +46,13 @@ class Theta:
         Step size in s (> 0). Steps are split at the schedule's switching instants.
     theta : float
         In [0.5, 1]: 1 is backward Euler (order 1, L-stable), 0.5 the trapezoidal rule (order 2
-        on smooth stretches).
+        on smooth stretches; about 1 through the diode switchings, with a smaller constant).
     """
 
     h: float
     theta: float = 0.5
+    step_option = "h"
+    description = "LCP time-stepper: theta method (--theta, default 1 = backward Euler), one LCP per step"
 
     def __post_init__(self):
         object.__setattr__(self, "h", check_positive("h", self.h, "s"))
@@ -49,8 +62,37 @@ class Theta:
         object.__setattr__(self, "theta", theta)
 
     @property
-    def name(self) -> str:
+    def order(self) -> float:
+        """1 for backward Euler, 2 for theta = 0.5 (on smooth stretches); 1 otherwise."""
+        return 2.0 if self.theta == 0.5 else 1.0
+
+    @property
+    def label(self) -> str:
         return "backward-euler" if self.theta == 1.0 else f"theta({self.theta:g})"
+
+    name = label
+
+    def supports(self, problem: LCSProblem) -> None:
+        if not isinstance(problem.switching, Schedule) and problem.k > MAX_INLINE_K:
+            raise ParameterError(f"the state-driven laws need k <= {MAX_INLINE_K} complementarity pairs in the "
+                                 f"stepper; this problem has k = {problem.k}")
+
+    def solve(self, problem: LCSProblem, x0: np.ndarray) -> Trajectory:
+        start = time.perf_counter()
+        law = problem.switching
+        if isinstance(law, Schedule):
+            plan = StepPlan.build(problem, self)
+            return plan.trajectory(x0, wall_s=time.perf_counter() - start)
+        if isinstance(law, StateSwitching):
+            return _solve_state_switched(problem, self, x0, start)
+        return _solve_relay(problem, self, x0, start)
+
+    def period_map(self, problem: LCSProblem) -> PeriodMap:
+        """Scheduled problems: the exact Jacobian of the discrete map; otherwise finite differences."""
+        self.supports(problem)
+        if isinstance(problem.switching, Schedule):
+            return StepPlanMap(StepPlan.build(problem, self))
+        return super().period_map(problem)
 
 
 def BackwardEuler(h: float) -> Theta:
@@ -73,7 +115,7 @@ def time_grid(problem: LCSProblem, h: float) -> np.ndarray:
                              f"(at most {MAX_STEPS} steps); got h = {h:g}")
     uniform = t0 + h * np.arange(n_steps + 1)
     uniform[-1] = t1
-    breaks = problem.schedule.breakpoints(t0, t1)
+    breaks = problem.switching.breakpoints(t0, t1)
     if breaks.size == 0:
         return uniform
     nearest = np.searchsorted(breaks, uniform)
@@ -107,7 +149,7 @@ def _plan_arrays(problem: LCSProblem, h: float):
     When the period is a whole number of steps and the run starts at 0, one period is built and
     repeated (the split steps at the switching instants are then the same in every period: one
     matrix set each); otherwise the whole grid is built and sorted by :func:`time_grid`."""
-    schedule = problem.schedule
+    schedule = problem.switching
     t0, t1 = problem.t_span
     T, n_configs = schedule.period, len(problem.configurations)
     per_period = T / h if np.isfinite(T) else 0.0
@@ -149,8 +191,6 @@ class StepPlan:
 
     @classmethod
     def build(cls, problem: LCSProblem, method: Theta) -> "StepPlan":
-        if not isinstance(method, Theta):
-            raise ParameterError(f"method must be Theta(h, theta) or BackwardEuler(h); got {method!r}")
         t, step_config, which, set_configs, set_dts = _plan_arrays(problem, method.h)
         mats = step_matrices([problem.configurations[c] for c in set_configs], set_dts, method.theta)
         return cls(problem, method, t, step_config, which, mats)
@@ -191,18 +231,125 @@ class StepPlan:
             general_solves += 1
             j += 1
 
+    def jacobian(self, u: np.ndarray) -> np.ndarray:
+        """d x_end / d x0 of the run that produced the multipliers ``u`` (exact; see the module docstring)."""
+        jac = np.eye(self.problem.n)
+        step_jacobian(self.which, u, self.mats.Phi, self.mats.H, self.mats.C, self.mats.M, jac)
+        return jac
+
     def trajectory(self, x0, wall_s: float = 0.0) -> Trajectory:
         start_clock = time.perf_counter()
         x, u, y, general_solves = self.advance(x0)
-        problem, t = self.problem, self.t
         config = np.concatenate([self.step_config[:1], self.step_config])
-        events = _events(t, u, y, config, self.mats.M, self.which)
-        return Trajectory(t=t, x=x, u=u, y=y, config=config, state_names=problem.state_names,
-                          pair_names=problem.pair_names,
-                          config_names=tuple(c.name or f"config{i}" for i, c in enumerate(problem.configurations)),
-                          event_columns=events, method=self.method.name, steps=t.shape[0] - 1,
-                          wall_s=wall_s + time.perf_counter() - start_clock, general_solves=general_solves,
-                          metadata=dict(problem.metadata, h=self.method.h, theta=self.method.theta))
+        events = _events(self.t, u, y, config, self.mats.M, self.which)
+        return _trajectory(self.problem, self.method, self.t, x, u, y, config, events,
+                           wall_s + time.perf_counter() - start_clock, general_solves=general_solves)
+
+
+class StepPlanMap(PeriodMap):
+    """The stepper's map over a scheduled problem's span, with the exact Jacobian of the discrete map."""
+
+    def __init__(self, plan: StepPlan):
+        super().__init__()
+        self.plan = plan
+
+    def end(self, x0):
+        self.evaluations += 1
+        return self.plan.advance(x0)[0][-1]
+
+    def __call__(self, x0):
+        self.evaluations += 1
+        x, u, _, _ = self.plan.advance(x0)
+        return x[-1], self.plan.jacobian(u)
+
+
+def _trajectory(problem: LCSProblem, method: Theta, t, x, u, y, config, events, wall_s, relay=None,
+                general_solves=0) -> Trajectory:
+    """The stepper's Trajectory: backward Euler's samples are integrated by its own end-point rule,
+    theta < 1 by the trapezoidal rule (the scheme's own quadrature)."""
+    return Trajectory(t=t, x=x, u=u, y=y, config=config, state_names=problem.state_names,
+                      pair_names=problem.pair_names,
+                      config_names=tuple(c.name or f"config{i}" for i, c in enumerate(problem.configurations)),
+                      relay=relay, event_columns=events, method=method.key, steps=t.shape[0] - 1, wall_s=wall_s,
+                      rule="end" if method.theta == 1.0 else "linear", period=problem.switching.period,
+                      general_solves=general_solves,
+                      metadata=dict(problem.metadata, h=method.h, theta=method.theta, label=method.label))
+
+
+def _config_stacks(problem: LCSProblem):
+    return tuple(np.ascontiguousarray(np.stack([getattr(c, key) for c in problem.configurations]))
+                 for key in "ABCDEF")
+
+
+def _solve_state_switched(problem: LCSProblem, method: Theta, x0: np.ndarray, start: float) -> Trajectory:
+    law: StateSwitching = problem.switching
+    A, B, C, D, E, F = _config_stacks(problem)
+    n_configs = len(problem.configurations)
+    mats = step_matrices(list(problem.configurations), np.full(n_configs, method.h), method.theta)
+    t = time_grid(problem, method.h)   # step h, with the ramp resets inserted
+    N, n, k = t.size, problem.n, problem.k
+    x, u, y = np.empty((N, n)), np.zeros((N, k)), np.empty((N, k))
+    config = np.empty(N, dtype=np.int64)
+    current = law.initial_config(x0, problem.t_span[0])
+    x[0] = x0
+    u[0], y[0] = _initial_pair(problem, current, x0)
+    config[0] = current
+    f = law.function
+    ramp = f.ramp
+    low, slope, ramp_period = (ramp.low, ramp.slope, ramp.period) if ramp is not None else (0.0, 0.0, np.inf)
+    state = np.array([current, 0, 0], dtype=np.int64)
+    capacity = 1024
+    ev_time, ev_config, ev_step = np.empty(capacity), np.empty(capacity, dtype=np.int64), np.empty(capacity, dtype=np.int64)
+    j = 0
+    while True:
+        status, j = run_state_switched(A, B, C, D, E, F, mats.Phi, mats.Gamma, mats.H, mats.M, t, method.h,
+                                       method.theta, f.c, f.d, low, slope, ramp_period, law.band, law.below,
+                                       law.above, law.latch, x, u, y, config, j, state, ev_time, ev_config, ev_step)
+        if status == OK:
+            break
+        if status == EVENTS_FULL:
+            capacity *= 4
+            ev_time, ev_config, ev_step = (np.resize(a, capacity) for a in (ev_time, ev_config, ev_step))
+            continue
+        raise SimulationError(f"the step LCP at t = {t[j]:.6g} s could not be solved inline (k = {k}); the "
+                              "state-driven laws need LCPs the inline solver takes: try a smaller h")
+    count = int(state[2])
+    pair_events = _events(t, u, y, config, mats.M, config[1:])
+    events = _merge_events(pair_events, ev_time[:count], ev_step[:count], ev_config[:count])
+    return _trajectory(problem, method, t, x, u, y, config, events, time.perf_counter() - start)
+
+
+def _solve_relay(problem: LCSProblem, method: Theta, x0: np.ndarray, start: float) -> Trajectory:
+    law: Relay = problem.switching
+    A, B, C, D, E, F = _config_stacks(problem)
+    t = time_grid(problem, method.h)   # step h, with the ramp resets inserted
+    N, n, k = t.size, problem.n, problem.k
+    x, u, y = np.empty((N, n)), np.zeros((N, k)), np.empty((N, k))
+    blend = np.zeros(N)
+    x[0] = x0
+    u[0], y[0] = _initial_pair(problem, law.low, x0)
+    status, j = run_relay(A, B, C, D, E, F, law.low, law.high, t, method.h, method.theta, law.function.c,
+                          law.function.d, x, u, y, blend, 0)
+    if status != OK:
+        raise SimulationError(f"the relay step LCP at t = {t[j]:.6g} s (size k + 2 = {k + 2}) has no solution "
+                              "the inline solver finds; try a smaller h")
+    blend[0] = blend[1] if N > 1 else 0.0
+    config = np.full(N, law.low, dtype=np.int64)
+    mats = step_matrices([problem.configurations[law.low]], np.array([method.h]), method.theta)
+    events = _events(t, u, y, config, mats.M, np.zeros(N - 1, dtype=np.int64))
+    return _trajectory(problem, method, t, x, u, y, config, events, time.perf_counter() - start, relay=blend)
+
+
+def _merge_events(pair_events: dict, times, steps, configs) -> dict:
+    """Pair events and switching-law events in one table, sorted by time."""
+    n_pairs = len(pair_events["time"])
+    out = {"time": np.concatenate([pair_events["time"], times]),
+           "step": np.concatenate([pair_events["step"], steps]),
+           "pair": np.concatenate([pair_events["pair"], np.full(len(times), -1)]),
+           "kind": np.concatenate([pair_events["kind"].astype(object), np.full(len(times), "switch", dtype=object)]),
+           "config": np.concatenate([np.full(n_pairs, -1), configs])}
+    order = np.argsort(out["time"], kind="stable")
+    return {key: value[order] for key, value in out.items()}
 
 
 def _initial_pair(problem: LCSProblem, config: int, x0: np.ndarray):
@@ -228,6 +375,7 @@ def _events(t, u, y, config, M_stack, which) -> dict:
     linear interpolation of y_i from y_{j,i} to that value gives the crossing.
     Release (u falls through 0): the unconstrained multiplier at the step end is -y_{j+1} / M_ii.
     Steps across a configuration change are left out (the change itself is the event there).
+    Step j used the matrix set ``which[j]`` of ``M_stack``.
     """
     active = u > y
     steps, pairs = np.nonzero(active[1:] != active[:-1])

@@ -90,3 +90,346 @@ def _run_scalar(which, Phi, Gamma, H, C, F, M, x, u, y, start):
     return OK, which.shape[0]
 
 
+
+#: Extra status of the state-switched loop: the event buffers are full (the caller grows them, resumes).
+EVENTS_FULL = 3
+
+
+@njit(cache=True)
+def _solve_rows(a, m, cols):
+    """Gaussian elimination with partial pivoting on the m x (m + cols) augmented matrix ``a`` in place;
+    the solution is left in a[:, m:]. Returns False when the left block is (numerically) singular."""
+    for col in range(m):
+        piv = col
+        best = abs(a[col, col])
+        for r in range(col + 1, m):
+            if abs(a[r, col]) > best:
+                best = abs(a[r, col])
+                piv = r
+        if best <= 1e-300:
+            return False
+        if piv != col:
+            for c in range(m + cols):
+                tmp = a[col, c]
+                a[col, c] = a[piv, c]
+                a[piv, c] = tmp
+        for r in range(col + 1, m):
+            f = a[r, col] / a[col, col]
+            if f != 0.0:
+                for c in range(col, m + cols):
+                    a[r, c] -= f * a[col, c]
+    for r in range(m - 1, -1, -1):
+        for c in range(m, m + cols):
+            s = a[r, c]
+            for l in range(r + 1, m):
+                s -= a[r, l] * a[l, c]
+            a[r, c] = s / a[r, r]
+    return True
+
+
+@njit(cache=True)
+def theta_matrices(A, B, C, D, E, F, dt, theta, Phi, Gamma, H, M, W):
+    """One-step matrices of one configuration over dt (the formulas of :mod:`.discretize`), in place:
+    W = (I - dt theta A)^-1, Phi = W (I + dt (1 - theta) A), Gamma = dt W E, H = dt W B, M = D + C H."""
+    n, k = A.shape[0], B.shape[1]
+    cols = 2 * n + 1 + k
+    a = np.empty((n, n + cols))
+    for i in range(n):
+        for j in range(n):
+            a[i, j] = -dt * theta * A[i, j]
+            a[i, n + j] = dt * (1.0 - theta) * A[i, j]            # I + dt (1 - theta) A
+            a[i, 2 * n + 1 + k + j] = 0.0                          # I (for W)
+        a[i, i] += 1.0
+        a[i, n + i] += 1.0
+        a[i, 2 * n + 1 + k + i] = 1.0
+        a[i, 2 * n] = dt * E[i]
+        for l in range(k):
+            a[i, 2 * n + 1 + l] = dt * B[i, l]
+    if not _solve_rows(a, n, cols):
+        return False
+    for i in range(n):
+        for j in range(n):
+            Phi[i, j] = a[i, n + j]
+            W[i, j] = a[i, 2 * n + 1 + k + j]
+        Gamma[i] = a[i, 2 * n]
+        for l in range(k):
+            H[i, l] = a[i, 2 * n + 1 + l]
+    for i in range(k):
+        for l in range(k):
+            acc = D[i, l]
+            for j in range(n):
+                acc += C[i, j] * H[j, l]
+            M[i, l] = acc
+    return True
+
+
+@njit(cache=True)
+def _lcp_step(Phi, Gamma, H, C, F, M, x_from, x_to, u_to, y_to, mask, order, work, xf, q, z):
+    """One theta step from x_from with given matrices: x_free, the step LCP, x_to, u_to, y_to.
+    Returns the new active-set mask (or -1 when the inline solver finds no basis)."""
+    n, k = H.shape[0], H.shape[1]
+    for i in range(n):
+        acc = Gamma[i]
+        for l in range(n):
+            acc += Phi[i, l] * x_from[l]
+        xf[i] = acc
+    for i in range(k):
+        acc = F[i]
+        for l in range(n):
+            acc += C[i, l] * xf[l]
+        q[i] = acc
+    mask = solve_small_lcp(M, q, k, z, mask, order, work)
+    if mask < 0:
+        return -1
+    for i in range(n):
+        acc = xf[i]
+        for l in range(k):
+            acc += H[i, l] * z[l]
+        x_to[i] = acc
+    for i in range(k):
+        acc = q[i]
+        for l in range(k):
+            acc += M[i, l] * z[l]
+        y_to[i] = acc
+        u_to[i] = z[i]
+    return mask
+
+
+@njit(cache=True)
+def _surface(c, d, x, phase, low, slope):
+    """s = c . x + d - ramp at the given phase of the ramp period (no ramp: slope = low = 0)."""
+    acc = d - low - slope * phase
+    for i in range(c.shape[0]):
+        acc += c[i] * x[i]
+    return acc
+
+
+@njit(cache=True)
+def run_state_switched(A, B, C, D, E, F, Phi, Gamma, H, M, t, h, theta, c, d, low, slope, ramp_period, band,
+                       below, above, latch, x, u, y, config, start, state, ev_time, ev_config, ev_step):
+    """The theta stepper under a hysteresis or latched switching law (:class:`StateSwitching`).
+
+    Step j runs in the configuration in force; when its end point carries s through the level that
+    ends that configuration (+band for ``below``, -band for ``above``), the crossing is placed by
+    linear interpolation of s over the step and the step is redone as two sub-steps (before the
+    crossing in the old configuration, after it in the new one). Ramp resets are grid points: there
+    the latch opens and the configuration is set by the sign of s. ``state`` = [config, latched,
+    event count] carries the law's memory across calls. Stacks A..F and the uniform-step matrices
+    Phi..M are indexed by configuration.
+
+    Returns (status, j): OK, NEEDS_GENERAL_SOLVER (an LCP the inline solver cannot take), or
+    EVENTS_FULL (the event buffers are full at step j: grow them and resume at j).
+    """
+    n, k = x.shape[1], u.shape[1]
+    order = _masks_by_size(k)
+    work = np.empty((k, k + 1))
+    xf, q, z = np.empty(n), np.empty(k), np.empty(k)
+    Phi_s, Gamma_s, H_s, M_s, W_s = np.empty((n, n)), np.empty(n), np.empty((n, k)), np.empty((k, k)), np.empty((n, n))
+    xm, um, ym = np.empty(n), np.empty(k), np.empty(k)
+    current, latched, count = state[0], state[1], state[2]
+    mask = 0
+    has_ramp = ramp_period < np.inf
+    for j in range(start, t.shape[0] - 1):
+        t0, t1 = t[j], t[j + 1]
+        dt = t1 - t0
+        phase0, phase1 = 0.0, 0.0
+        if has_ramp:
+            phase0 = t0 - np.floor(t0 / ramp_period + 1e-9) * ramp_period
+            if phase0 < 1e-9 * ramp_period:      # a ramp reset: the latch opens, s decides
+                phase0 = 0.0
+                latched = 0
+                s_reset = _surface(c, d, x[j], 0.0, low, slope)
+                if s_reset < -band:
+                    current = below
+                elif s_reset > band:
+                    current = above
+            phase1 = phase0 + dt
+        if count >= ev_time.shape[0]:
+            state[0], state[1], state[2] = current, latched, count
+            return EVENTS_FULL, j
+        uniform = abs(dt - h) <= 1e-9 * h
+        if uniform:
+            mask = _lcp_step(Phi[current], Gamma[current], H[current], C[current], F[current], M[current],
+                             x[j], x[j + 1], u[j + 1], y[j + 1], mask, order, work, xf, q, z)
+        else:
+            theta_matrices(A[current], B[current], C[current], D[current], E[current], F[current], dt, theta,
+                           Phi_s, Gamma_s, H_s, M_s, W_s)
+            mask = _lcp_step(Phi_s, Gamma_s, H_s, C[current], F[current], M_s, x[j], x[j + 1], u[j + 1], y[j + 1],
+                             mask, order, work, xf, q, z)
+        if mask < 0:
+            state[0], state[1], state[2] = current, latched, count
+            return NEEDS_GENERAL_SOLVER, j
+        if latched == 0:
+            s0 = _surface(c, d, x[j], phase0, low, slope)
+            s1 = _surface(c, d, x[j + 1], phase1, low, slope)
+            level = band if current == below else -band
+            crossed = s1 > level if current == below else s1 < level
+            if crossed:
+                frac = 0.0
+                if (s0 - level) * (s1 - level) < 0.0:
+                    frac = (level - s0) / (s1 - s0)
+                frac = min(max(frac, 0.0), 1.0)
+                dt1 = frac * dt
+                for i in range(n):
+                    xm[i] = x[j, i]
+                if dt1 > 1e-12 * dt:
+                    theta_matrices(A[current], B[current], C[current], D[current], E[current], F[current], dt1,
+                                   theta, Phi_s, Gamma_s, H_s, M_s, W_s)
+                    mask = _lcp_step(Phi_s, Gamma_s, H_s, C[current], F[current], M_s, x[j], xm, um, ym, mask,
+                                     order, work, xf, q, z)
+                    if mask < 0:
+                        state[0], state[1], state[2] = current, latched, count
+                        return NEEDS_GENERAL_SOLVER, j
+                current = above if current == below else below
+                latched = 1 if latch else 0
+                ev_time[count] = t0 + dt1
+                ev_config[count] = current
+                ev_step[count] = j
+                count += 1
+                dt2 = dt - dt1
+                if dt2 > 1e-12 * dt:
+                    theta_matrices(A[current], B[current], C[current], D[current], E[current], F[current], dt2,
+                                   theta, Phi_s, Gamma_s, H_s, M_s, W_s)
+                    mask = _lcp_step(Phi_s, Gamma_s, H_s, C[current], F[current], M_s, xm, x[j + 1], u[j + 1],
+                                     y[j + 1], mask, order, work, xf, q, z)
+                    if mask < 0:
+                        state[0], state[1], state[2] = current, latched, count
+                        return NEEDS_GENERAL_SOLVER, j
+                else:
+                    for i in range(n):
+                        x[j + 1, i] = xm[i]
+        config[j + 1] = current
+    state[0], state[1], state[2] = current, latched, count
+    return OK, t.shape[0] - 1
+
+
+@njit(cache=True)
+def run_relay(A, B, C, D, E, F, low, high, t, h, theta, c, d, x, u, y, blend, start):
+    """The theta stepper under the implicit relay (:class:`Relay`): configuration ``low`` blended
+    towards ``high`` by z in [0, 1], with f_high - f_low frozen at the step start and -s(x_end) in
+    N_[0,1](z). Each step is one LCP of size k + 2: the pairs of ``low`` and the relay written as
+    0 <= z _|_ s + mu >= 0, 0 <= mu _|_ 1 - z >= 0 (REFERENCE section 5).
+
+    Returns (status, j) like :func:`run_steps`."""
+    n, k = x.shape[1], u.shape[1]
+    K = k + 2
+    order = _masks_by_size(K)
+    work = np.empty((K, K + 1))
+    Phi, Gamma, H, M, W = np.empty((n, n)), np.empty(n), np.empty((n, k)), np.empty((k, k)), np.empty((n, n))
+    Mb, qb, zb = np.zeros((K, K)), np.empty(K), np.empty(K)
+    xf, g, b = np.empty(n), np.empty(n), np.empty(n)
+    dt_built = -1.0
+    mask = 0
+    for j in range(start, t.shape[0] - 1):
+        dt = t[j + 1] - t[j]
+        if dt != dt_built:
+            theta_matrices(A[low], B[low], C[low], D[low], E[low], F[low], dt, theta, Phi, Gamma, H, M, W)
+            dt_built = dt
+        for i in range(n):
+            acc = E[high, i] - E[low, i]
+            for l in range(n):
+                acc += (A[high, i, l] - A[low, i, l]) * x[j, l]
+            b[i] = acc
+        for i in range(n):
+            acc = 0.0
+            for l in range(n):
+                acc += W[i, l] * b[l]
+            g[i] = dt * acc                                   # dt W (f_high - f_low)(x_j)
+            acc = Gamma[i]
+            for l in range(n):
+                acc += Phi[i, l] * x[j, l]
+            xf[i] = acc
+        for i in range(K):
+            for l in range(K):
+                Mb[i, l] = 0.0
+        for i in range(k):
+            acc = F[low, i]
+            cg = 0.0
+            for l in range(n):
+                acc += C[low, i, l] * xf[l]
+                cg += C[low, i, l] * g[l]
+            qb[i] = acc
+            Mb[i, k] = cg
+            for l in range(k):
+                Mb[i, l] = M[i, l]
+        acc, cg = d, 0.0
+        for l in range(n):
+            acc += c[l] * xf[l]
+            cg += c[l] * g[l]
+        qb[k] = acc
+        Mb[k, k] = cg
+        Mb[k, k + 1] = 1.0
+        for l in range(k):
+            ch = 0.0
+            for i in range(n):
+                ch += c[i] * H[i, l]
+            Mb[k, l] = ch
+        qb[k + 1] = 1.0
+        Mb[k + 1, k] = -1.0
+        mask = solve_small_lcp(Mb, qb, K, zb, mask, order, work)
+        if mask < 0:
+            return NEEDS_GENERAL_SOLVER, j
+        zr = min(max(zb[k], 0.0), 1.0)
+        for i in range(n):
+            acc = xf[i] + g[i] * zr
+            for l in range(k):
+                acc += H[i, l] * zb[l]
+            x[j + 1, i] = acc
+        for i in range(k):
+            acc = qb[i] + Mb[i, k] * zr
+            for l in range(k):
+                acc += M[i, l] * zb[l]
+            y[j + 1, i] = acc
+            u[j + 1, i] = zb[i]
+        blend[j + 1] = zr
+    return OK, t.shape[0] - 1
+
+
+@njit(cache=True)
+def step_jacobian(which, u, Phi, H, C, M, jac):
+    """d x_N / d x_0 of a run of the scheduled stepper, in place of ``jac`` (n x n, identity on entry).
+
+    Each step is x_{j+1} = x_free + H z with x_free = Phi x_j + Gamma and, on the step's active set
+    J = {i: z_i > 0}, z_J = -M_JJ^-1 (C_J x_free + F_J): so d x_{j+1} / d x_j = Phi - H_J M_JJ^-1 C_J Phi
+    (exact wherever the active sets stay the same under a small change of x_0)."""
+    n, k = jac.shape[0], u.shape[1]
+    S = np.empty((n, n))
+    CPhi = np.empty((k, n))
+    a = np.empty((k, k + n))
+    act = np.empty(k, dtype=np.int64)
+    new = np.empty((n, n))
+    for j in range(which.shape[0]):
+        s = which[j]
+        m = 0
+        for i in range(k):
+            if u[j + 1, i] > 0.0:
+                act[m] = i
+                m += 1
+        for r in range(n):
+            for col in range(n):
+                S[r, col] = Phi[s, r, col]
+        if m > 0:
+            for r in range(m):
+                for col in range(m):
+                    a[r, col] = M[s, act[r], act[col]]
+                for col in range(n):
+                    acc = 0.0
+                    for l in range(n):
+                        acc += C[s, act[r], l] * Phi[s, l, col]
+                    a[r, m + col] = acc
+            if _solve_rows(a, m, n):
+                for r in range(n):
+                    for col in range(n):
+                        acc = 0.0
+                        for l in range(m):
+                            acc += H[s, r, act[l]] * a[l, m + col]
+                        S[r, col] -= acc
+        for r in range(n):
+            for col in range(n):
+                acc = 0.0
+                for l in range(n):
+                    acc += S[r, l] * jac[l, col]
+                new[r, col] = acc
+        for r in range(n):
+            for col in range(n):
+                jac[r, col] = new[r, col]

@@ -1,15 +1,22 @@
-"""The converter library: one module per converter, looked up by name."""
+"""The model library: power converters (one module each, closed forms beside them), their control
+laws, and the Siconos circuits; looked up by name and control."""
 from __future__ import annotations
 
 from ..errors import ParameterError
-from .base import OFF, ON, Converter, check_h
+from .base import OFF, ON, Converter, Model, check_h
 from .boost import Boost
 from .buck import Buck
 from .buckboost import BuckBoost
 from .cuk import Cuk
 from .prc import PRC
+from .sliding import BoostSMC
 
 CONVERTERS: dict[str, Converter] = {c.name: c for c in (Buck(), Boost(), BuckBoost(), Cuk(), PRC())}
+#: Every model by (converter name, control): ``pwm`` is the open-loop PWM converter.
+MODELS: dict[tuple[str, str], Model] = {**{(name, "pwm"): c for name, c in CONVERTERS.items()},
+                                        ("boost", "smc"): BoostSMC(implicit=False),
+                                        ("boost", "smc-implicit"): BoostSMC(implicit=True)}
+CONTROLS = tuple(dict.fromkeys(control for _, control in MODELS))
 
 
 def get_converter(name: str) -> Converter:
@@ -19,4 +26,17 @@ def get_converter(name: str) -> Converter:
         raise ParameterError(f"CONVERTER must be one of {', '.join(CONVERTERS)}; got {name!r}") from None
 
 
-__all__ = ["CONVERTERS", "get_converter", "Converter", "ON", "OFF", "check_h"]
+def get_model(name: str, control: str = "pwm") -> Model:
+    """The model of converter ``name`` under ``control``; errors name the valid choices."""
+    get_converter(name)
+    if control not in CONTROLS:
+        raise ParameterError(f"control must be one of {', '.join(CONTROLS)}; got {control!r}")
+    try:
+        return MODELS[(name, control)]
+    except KeyError:
+        available = sorted(n for n, c in MODELS if c == control)
+        raise ParameterError(f"--control {control} is available for {', '.join(available)} only; got {name!r}") from None
+
+
+__all__ = ["CONVERTERS", "MODELS", "CONTROLS", "get_converter", "get_model", "Converter", "Model", "ON", "OFF",
+           "check_h"]

@@ -13,6 +13,11 @@ from ..errors import ParameterError
 TOPOLOGIES = ("buck", "boost", "buck-boost", "cuk")
 
 
+def has_closed_form(topology: str) -> bool:
+    """True for the converters with CCM/DCM closed forms (buck, boost, buck-boost, Cuk)."""
+    return topology in TOPOLOGIES
+
+
 def _check(topology):
     if topology not in TOPOLOGIES:
         raise ParameterError(f"converter must be one of {', '.join(TOPOLOGIES)} for the CCM/DCM formulas; "

@@ -1,80 +1,178 @@
-"""What every converter provides: parameters, per-configuration LCS, schedule, output and mode labels.
+"""What every model provides: parameters, the problem it builds, and its own laws for reading a run.
 
-A converter is a stateless description; ``problem(params, t_end)`` builds the immutable
-:class:`~converters.problems.LCSProblem`. Configuration 0 is switch ON, 1 is switch OFF (PWM converters).
+A model is a stateless description; ``problem(params, t_end)`` builds the immutable
+:class:`~converters.problems.LCSProblem`, ``labels(params)`` binds its laws to the parameters for a
+:class:`~converters.trajectory.Trajectory`: the named signals it adds (``vout``, ``switch``, ...), which
+device of each complementarity pair conducts, and the conduction-mode rule. Analysis and validation
+read runs only through these; nothing outside a model branches on its name.
+
+Power converters (:class:`Converter`): configuration 0 is switch ON, 1 switch OFF (PWM). For each
+configuration the model says whether u of each pair is its device's current (a diode carrying
+u = i_D, y = -v_D) or its voltage (u = -v_D, y = i_D): ``pair_currents``. A device conducts where its
+current carries the pair.
 """
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from dataclasses import dataclass
 
 import numpy as np
 
 from ..errors import ParameterError
 from ..problems import Configuration, LCSProblem, Schedule
 from ..params import Param, resolve
+from ..trajectory import Samples
 
 ON, OFF = 0, 1
 
 
-class Converter(ABC):
+@dataclass(frozen=True)
+class Labels:
+    """A model's laws bound to one parameter set (what a Trajectory reads its signals and modes with)."""
+
+    model: "Model"
+    params: dict
+
+    @property
+    def signal_names(self) -> tuple[str, ...]:
+        return self.model.signal_names
+
+    def signal(self, name: str, samples: Samples) -> np.ndarray:
+        return self.model.signal(name, samples, self.params)
+
+    def conducting(self, samples: Samples) -> np.ndarray:
+        return self.model.conducting(samples)
+
+    def modes(self, conducting: np.ndarray, switch: np.ndarray, x: np.ndarray) -> np.ndarray:
+        return self.model.modes(conducting, switch, x)
+
+
+class Model(ABC):
+    """A parametrised family of problems with its own signals and mode rules."""
+
     name: str
     title: str
     parameters: tuple[Param, ...]
     state_names: tuple[str, ...]
     pair_names: tuple[str, ...]
+    #: The command line's --control for this model (``pwm``: open-loop PWM).
+    control: str = "pwm"
+    #: Signals the model adds to a run, beside its states.
+    signal_names: tuple[str, ...] = ("vout", "switch")
+    #: Every mode label the model's rule can produce.
+    mode_labels: tuple[str, ...] = ("CCM-ON", "CCM-OFF", "DCM", "GDCM-ON")
     default_theta: float = 1.0
+    #: True when :mod:`.analytic` has the model's CCM/DCM closed forms (keyed by its name).
+    closed_form: bool = False
 
     def resolve(self, given: dict | None = None) -> dict:
         """Validated parameter values (defaults overlaid with ``given``)."""
-        return resolve(self.parameters, dict(given or {}), self.name)
+        return resolve(self.parameters, dict(given or {}), self.key)
 
+    @property
+    def key(self) -> str:
+        return self.name if self.control == "pwm" else f"{self.name} --control {self.control}"
+
+    @abstractmethod
+    def problem(self, p: dict, t_end: float, x0=None, t_start: float = 0.0, initial: int | None = None) -> LCSProblem:
+        """The problem over [t_start, t_end] from x0 (default: the model's start, e.g. at rest);
+        ``initial``: the configuration in force at t_start where the switching law keeps a memory."""
+
+    def labels(self, p: dict) -> Labels:
+        return Labels(self, p)
+
+    @abstractmethod
     def period(self, p: dict) -> float:
-        return 1.0 / p["f_sw"]
+        """The switching period T (s): the schedule's, or the predicted one of a state-driven law."""
 
     def default_h(self, p: dict) -> float:
         return self.period(p) / 1000.0
+
+    def periodic(self, p: dict) -> bool:
+        """True when the problem's switching law has a fixed period (stroboscopic steady states)."""
+        return True
+
+    def step_times(self, p: dict) -> list[float]:
+        """Instants where the model's circuit changes (load or input steps): a run is split there."""
+        return []
+
+    def phase_options(self, p: dict, t: float) -> dict:
+        """Keyword arguments of ``problem`` for the phase that starts at time t."""
+        return {}
+
+    def signal(self, name: str, samples: Samples, p: dict) -> np.ndarray:
+        if name == "vout":
+            return self.vout(samples, p)
+        if name == "switch":
+            return self.switch(samples)
+        raise KeyError(f"signal must be one of {', '.join(self.signal_names)}; got {name!r}")
+
+    @abstractmethod
+    def vout(self, samples: Samples, p: dict) -> np.ndarray:
+        """Output voltage with its physical sign, shape (N,)."""
+
+    def switch(self, samples: Samples) -> np.ndarray:
+        """Commanded switch state (1 = on) at each point; under a relay its blend z in [0, 1]."""
+        if samples.relay is not None:
+            return samples.relay
+        return (np.asarray(samples.config) == ON).astype(np.int8)
+
+    #: Per configuration, per pair: True where u is the device's current (u = i_D), False where u is
+    #: its voltage (u = -v_D, y = i_D).
+    pair_currents: tuple[tuple[bool, ...], ...] = ((True,), (False,))
+
+    def conducting(self, samples: Samples) -> np.ndarray:
+        """Per point and pair: the pair's device conducts (its current carries the pair)."""
+        currents = np.asarray(self.pair_currents, dtype=bool)[np.asarray(samples.config)]
+        return np.where(currents, samples.u > samples.y, samples.y >= samples.u)
+
+    def modes(self, conducting: np.ndarray, switch: np.ndarray, x: np.ndarray) -> np.ndarray:
+        """One diode: ON with the diode blocking is CCM-ON, OFF with it conducting CCM-OFF; the pair held
+        where the state is constrained: DCM (or the model's ``off_held_label``) in the OFF phase (the
+        inductor current held at zero), GDCM-ON in the ON phase (the diode conducting with the switch)."""
+        on = np.asarray(switch) >= 0.5
+        conducts = conducting[:, 0]
+        labels = np.where(on, "CCM-ON", "CCM-OFF").astype(object)
+        labels[~on & ~conducts] = self.off_held_label
+        labels[on & conducts] = "GDCM-ON"
+        return labels
+
+    def summary(self, tr, p: dict) -> dict:
+        """The model's measures of a run for its JSON summary: the mean output over the last 10 periods
+        and the mode fractions of the last period."""
+        return {"vout_mean": tr.mean("vout", periods=10), "mode_fractions": tr.mode_fractions(1)}
+
+    off_held_label = "DCM"
+    #: The mode whose end is the diode's turn-off in a period (None: not compared).
+    turn_off_label: str | None = "CCM-OFF"
+    #: Defaults of ``pcsuite compare``: start on the periodic orbit or from rest, periods run, window read.
+    compare_defaults = {"start": "steady", "periods": 30, "window": 10}
+
+
+class Converter(Model):
+    """A PWM power converter: one Configuration per switch state and a PWM schedule."""
 
     @abstractmethod
     def configurations(self, p: dict) -> tuple[Configuration, ...]:
         """One Configuration per switch state, from validated parameters."""
 
+    def period(self, p: dict) -> float:
+        return 1.0 / p["f_sw"]
+
     def schedule(self, p: dict) -> Schedule:
         return Schedule.pwm(self.period(p), p["D"], on=ON, off=OFF)
 
-    def problem(self, p: dict, t_end: float, x0=None) -> LCSProblem:
+    def problem(self, p: dict, t_end: float, x0=None, t_start: float = 0.0, initial: int | None = None) -> LCSProblem:
+        """From x0 (default: at rest) over [t_start, t_end]; ``initial`` is the schedule's business."""
         x0 = np.zeros(len(self.state_names)) if x0 is None else x0
-        return LCSProblem(self.configurations(p), self.schedule(p), x0=x0, t_span=(0.0, t_end),
+        return LCSProblem(self.configurations(p), self.schedule(p), x0=x0, t_span=(t_start, t_end),
                           state_names=self.state_names, pair_names=self.pair_names,
                           metadata={"converter": self.name, **p})
 
     @abstractmethod
-    def vout(self, x: np.ndarray, u: np.ndarray, config: np.ndarray, p: dict) -> np.ndarray:
-        """Output voltage with its physical sign, shape (N,)."""
-
-    @abstractmethod
-    def output_node_current(self, x: np.ndarray, u: np.ndarray, config: np.ndarray) -> np.ndarray:
+    def output_node_current(self, samples: Samples) -> np.ndarray:
         """Current delivered to the output capacitor and load (A, magnitude); in steady state its
         mean equals |vout| / R (charge balance of the output capacitor)."""
-
-    def switch(self, config: np.ndarray) -> np.ndarray:
-        """Commanded switch state (1 = on) at each point."""
-        return (np.asarray(config) == ON).astype(np.int8)
-
-    def modes(self, active: np.ndarray, config: np.ndarray, x: np.ndarray) -> np.ndarray:
-        """Conduction-mode label per point from the switch command and the complementarity state.
-
-        One diode: ON with the diode blocking is CCM-ON, OFF with it conducting CCM-OFF; an active
-        pair (u > 0, y = 0) marks the mode where the state is constrained: DCM in the OFF phase
-        (inductor current held at zero), GDCM-ON in the ON phase.
-        """
-        on = self.switch(config).astype(bool)
-        held = active[:, 0]
-        labels = np.where(on, "CCM-ON", "CCM-OFF").astype(object)
-        labels[~on & held] = self.off_held_label
-        labels[on & held] = "GDCM-ON"
-        return labels
-
-    off_held_label = "DCM"
 
 
 def check_h(h: float, period: float) -> float:

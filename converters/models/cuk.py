@@ -27,6 +27,7 @@ class Cuk(Converter):
     )
     state_names = ("i1", "v1", "i2", "v2")
     pair_names = ("diode",)
+    closed_form = True
     off_held_label = "GDCM-OFF"
 
     def configurations(self, p):
@@ -39,11 +40,11 @@ class Cuk(Converter):
             B=[[1 / L1], [0], [1 / L2], [0]], C=[[1, 0, 1, 0]], D=[[0]], E=[Vin / L1, 0, 0, 0], name="OFF")
         return on, off
 
-    def output_node_current(self, x, u, config):
-        return x[:, 2]
+    def output_node_current(self, samples):
+        return samples.x[:, 2]
 
-    def vout(self, x, u, config, p):
-        return -x[:, 3]
+    def vout(self, samples, p):
+        return -samples.x[:, 3]
 
     @staticmethod
     def effective_inductance(p) -> float:

@@ -41,6 +41,7 @@ class PWMTwoState(Converter):
     parameters = COMMON + PARASITICS
     state_names = ("iL", "vC")
     pair_names = ("diode",)
+    closed_form = True
 
     def configurations(self, p):
         Vin, L, C, R = p["Vin"], p["L"], p["C"], p["R"]
@@ -62,15 +63,17 @@ class PWMTwoState(Converter):
                                C=[[-Ron, a]], D=[[Ron + Rd + b]], E=[Vin / L, 0.0], F=[F_on], name="ON")
         return on, off
 
-    def output_node_current(self, x, u, config):
+    def output_node_current(self, samples):
         """Current delivered to the output node (A): iL for the buck, the diode current otherwise."""
         if self.topology == "buck":
-            return x[:, 0]
-        on = np.asarray(config) == ON
-        return np.where(on, u[:, 0], x[:, 0])
+            return samples.x[:, 0]
+        on = np.asarray(samples.config) == ON
+        return np.where(on, samples.u[:, 0], samples.x[:, 0])
 
-    def vout(self, x, u, config, p):
+    def vout(self, samples, p):
         R, rC = p["R"], p.get("rC", 0.0)
         a, b = R / (R + rC), R * rC / (R + rC)
-        magnitude = a * x[:, 1] + b * self.output_node_current(x, u, config)
+        magnitude = a * samples.x[:, 1]
+        if rC:
+            magnitude = magnitude + b * self.output_node_current(samples)
         return -magnitude if self.topology == "buck-boost" else magnitude

@@ -3,7 +3,8 @@
     x' = A x + B u + E,   y = C x + D u + F,   0 <= u _|_ y >= 0,
 
 with one (A, B, C, D, E, F) per switch configuration and a switching law saying which
-configuration holds when (:mod:`converters.problems.schedule`, :mod:`converters.problems.switching`). Problems are immutable; variants come from ``dataclasses.replace``.
+configuration holds when (:mod:`converters.problems.schedule`, :mod:`converters.problems.switching`).
+Problems are immutable; variants come from ``dataclasses.replace``.
 Shapes: x has n entries, u and y have k (the same n and k in every configuration).
 """
 from __future__ import annotations
@@ -15,6 +16,7 @@ import numpy as np
 from ..errors import ParameterError
 from ..validate import as_matrix, as_vector, parse_value
 from .schedule import Schedule
+from .switching import Relay, StateSwitching
 
 
 @dataclass(frozen=True)
@@ -61,13 +63,15 @@ class Configuration:
 
 @dataclass(frozen=True)
 class LCSProblem:
-    """An LCS initial-value problem: configurations, schedule, x0 and the time span (s).
+    """An LCS initial-value problem: configurations, the switching law, x0 and the time span (s).
 
-    Only the mathematics: no step size, no solver.
+    Only the mathematics: no step size, no solver. ``switching`` is a :class:`Schedule` (time-driven),
+    a :class:`~converters.problems.switching.StateSwitching` (hysteresis or latch on a switching
+    function of the state) or a :class:`~converters.problems.switching.Relay` (the implicit relay).
     """
 
     configurations: tuple[Configuration, ...]
-    schedule: Schedule
+    switching: Schedule | StateSwitching | Relay
     x0: np.ndarray
     t_span: tuple[float, float]
     state_names: tuple[str, ...] = ()
@@ -83,9 +87,15 @@ class LCSProblem:
             if (c.n, c.k) != (n, k):
                 raise ParameterError(f"every configuration must have the same n and k; configuration "
                                      f"{c.name!r} has n = {c.n}, k = {c.k}, the first n = {n}, k = {k}")
-        bad = [c for c in self.schedule.configs if not 0 <= c < len(configs)]
+        if not isinstance(self.switching, (Schedule, StateSwitching, Relay)):
+            raise ParameterError(f"switching must be a Schedule, StateSwitching or Relay; got {self.switching!r}")
+        bad = [c for c in self.switching.configs if not 0 <= c < len(configs)]
         if bad:
-            raise ParameterError(f"schedule configs must be indices in [0, {len(configs) - 1}]; got {bad[0]}")
+            raise ParameterError(f"switching configs must be indices in [0, {len(configs) - 1}]; got {bad[0]}")
+        function = getattr(self.switching, "function", None)
+        if function is not None and function.n != n:
+            raise ParameterError(f"the switching function must have one coefficient per state (n = {n}); "
+                                 f"got {function.n}")
         x0 = as_vector("x0", self.x0, n)
         x0.setflags(write=False)
         t0, t1 = (parse_value("t_span[0]", self.t_span[0]), parse_value("t_span[1]", self.t_span[1]))

@@ -63,6 +63,9 @@ class Schedule:
         times = (periods[:, None] + np.array(self.starts)[None, :]).ravel()
         return times[(times > t0) & (times < t1)]
 
+    def initial_config(self, x0, t0: float) -> int:
+        return int(self.config_at(np.array([t0]))[0])
+
     def config_at(self, t: np.ndarray) -> np.ndarray:
         """Configuration index holding at each time in t (right-continuous)."""
         t = np.asarray(t, dtype=float)

@@ -56,7 +56,7 @@ def test_problem_rejects_mismatched_configurations_and_bad_x0():
         LCSProblem((config(),), Schedule.constant(), x0=[0, 0, 0], t_span=(0, 1e-4))
     with pytest.raises(ParameterError, match=r"t_end > t_start = 0 s; got t_end = -1"):
         LCSProblem((config(),), Schedule.constant(), x0=[0, 0], t_span=(0, -1))
-    with pytest.raises(ParameterError, match=r"schedule configs must be indices in \[0, 0\]; got 1"):
+    with pytest.raises(ParameterError, match=r"switching configs must be indices in \[0, 0\]; got 1"):
         LCSProblem((config(),), Schedule.pwm(1e-5, 0.5), x0=[0, 0], t_span=(0, 1e-4))
 
 

@@ -8,10 +8,12 @@ import pytest
 
 from converters.errors import ParameterError
 from netlists import build_netlist
-from validation.compare import THRESHOLDS
+from validation.defaults import THRESHOLDS as ALL_THRESHOLDS
 from validation.scenes import scenes_of
-from validation.suite import run_scene
 from validation.spice import SpiceError, run_spice
+from validation.suite import run_scene
+
+THRESHOLDS = ALL_THRESHOLDS["compare"]
 
 pytestmark = pytest.mark.usefixtures("ngspice")
 

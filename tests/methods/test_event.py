@@ -1,67 +1,64 @@
-"""The exact event-driven method and the smoothing method: closed forms, the LCP stepper's h -> 0
-limit, impulses, GDCM, and how smoothing's error and stiffness scale with eps."""
+"""The exact event-driven method: closed forms, the LCP stepper's h -> 0 limit, impulses, GDCM, any number of
+complementarity pairs (the PRC's and the diode bridge's four diodes), and the command line."""
 import json
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from converters.models.circuits import half_wave_rectifier, parallel_rlc_exact
-from converters.analysis.modes import periodic_orbit
-from converters.errors import ParameterError, SimulationError
-from converters.methods.event import event_orbit, simulate_event
 from converters.analysis.gdcm import ccm_orbit
-from converters.models import get_converter
-from converters.problems import Configuration, LCSProblem, Schedule
+from converters.analysis.periodic import shoot
+from converters.errors import ParameterError, SimulationError
 from converters.methods import BackwardEuler, EventDriven, Smoothing
-from converters.run import run_converter
+from converters.models import get_converter, get_model
+from converters.models.circuits import half_wave_rectifier, parallel_rlc_exact
+from converters.problems import Configuration, LCSProblem, Schedule
+from converters.run import run_converter, run_summary, steady_orbit
 from converters.simulate import simulate
 from validation.cli import main
 
 
 def exact_orbit(name, params):
+    """The exact periodic orbit (Newton on the exact period map) and one period of it, labelled."""
     conv = get_converter(name)
     p = conv.resolve(params)
     T = conv.period(p)
     problem = conv.problem(p, T)
-    orbit = event_orbit(problem, ccm_orbit(problem).x0)
+    orbit = shoot(problem, EventDriven(), ccm_orbit(problem).x0, tol=1e-11)
     assert orbit.converged and orbit.residual < 1e-13
-    return conv, p, T, orbit
-
-
-def exact_mean_vout(conv, p, T, orbit):
-    t, w, x, u, config = orbit.solution.quadrature()
-    return float(w @ conv.vout(x, u, config, p)) / T
+    tr = replace(simulate(conv.problem(p, T, orbit.x0), EventDriven()), labels=conv.labels(p))
+    return conv, p, T, orbit, tr
 
 
 @pytest.mark.parametrize("D", [0.2, 0.4, 0.75])
 def test_ccm_buck_mean_output_is_d_vin(D):
     # Ideal CCM buck: the inductor's volt-second balance makes the mean output exactly D * Vin.
-    conv, p, T, orbit = exact_orbit("buck", {"L": "100u", "D": D})
-    assert orbit.solution.event_kinds == []          # CCM: no diode event inside the period
-    assert exact_mean_vout(conv, p, T, orbit) == pytest.approx(D * 12.0, rel=1e-9)
+    conv, p, T, orbit, tr = exact_orbit("buck", {"L": "100u", "D": D})
+    assert tr.exact.event_kinds == []                 # CCM: no diode event inside the period
+    assert tr.mean("vout") == pytest.approx(D * 12.0, rel=1e-9)
     run = run_converter("buck", {"L": "100u", "D": D}, method="event", steady=True)
-    assert run.summary()["vout_mean"] == pytest.approx(D * 12.0, rel=1e-9)
+    assert run_summary(run)["vout_mean"] == pytest.approx(D * 12.0, rel=1e-9)
 
 
 def test_dcm_buck_mean_is_the_reference_value():
     # REFERENCE 4: exact periodic mean 6.962476 V for the default DCM buck.
-    conv, p, T, orbit = exact_orbit("buck", {})
-    assert exact_mean_vout(conv, p, T, orbit) == pytest.approx(6.962476, abs=5e-7)
-    assert orbit.solution.event_kinds == ["activate"]
+    conv, p, T, orbit, tr = exact_orbit("buck", {})
+    assert tr.mean("vout") == pytest.approx(6.962476, abs=5e-7)
+    assert tr.exact.event_kinds == ["activate"]
 
 
 @pytest.mark.parametrize("name, params", [("buck", {}), ("boost", {}), ("boost", {"L": "1u"}),
                                           ("cuk", {"L1": "10u", "L2": "10u"})])
 def test_event_agrees_with_the_lcp_stepper_extrapolated_to_h_zero(name, params):
-    conv, p, T, orbit = exact_orbit(name, params)
-    exact = exact_mean_vout(conv, p, T, orbit)
+    conv, p, T, orbit, tr = exact_orbit(name, params)
+    exact = tr.mean("vout")
     means = []
     for steps in (4000, 8000):
-        o = periodic_orbit(conv, p, h=T / steps, theta=1.0, tol=1e-13)
-        v = conv.vout(o.x, o.u, o.config, p)
-        means.append(np.sum(np.diff(o.t) * v[1:]) / T)   # backward Euler's own (end-point) rule
+        o = steady_orbit(conv, p, h=T / steps, theta=1.0, tol=1e-11)
+        assert o.rule == "end"
+        means.append(o.mean("vout"))                      # backward Euler's own (end-point) rule
     first_order = abs(means[1] - exact) / abs(exact)
     richardson = 2 * means[1] - means[0]                  # observed order 1
     assert abs(richardson - exact) / abs(exact) < 1e-6
@@ -70,7 +67,7 @@ def test_event_agrees_with_the_lcp_stepper_extrapolated_to_h_zero(name, params):
 
 def test_half_wave_rectifier_events_follow_the_closed_form():
     L, C, R, V0 = 1e-2, 1e-6, 1e3, 10.0
-    solution = simulate_event(half_wave_rectifier(t_end=5e-3), EventDriven())
+    solution = simulate(half_wave_rectifier(t_end=5e-3), EventDriven()).exact
     # Conducting (held pair, D = R > 0): the parallel RLC; the diode current vC / R reaches 0 with vC.
     grid = np.linspace(0.0, 1e-3, 2001)
     first_negative = grid[np.argmax(parallel_rlc_exact(grid, L, C, R, V0)[:, 0] < 0)]
@@ -84,26 +81,26 @@ def test_half_wave_rectifier_events_follow_the_closed_form():
     tau = brentq(lambda s: v1 * math.cos(w * s) - i1 / (C * w) * math.sin(w * s), 1e-9, math.pi / w * 1.01)
     assert solution.event_kinds[1] == "activate"
     assert solution.event_times[1] == pytest.approx(t_release + tau, rel=1e-11)
-    x, u, y, _ = solution.sample([t_release + 0.5 * tau])
+    sample = solution.sample([t_release + 0.5 * tau])
     s = 0.5 * tau
-    assert x[0, 0] == pytest.approx(v1 * math.cos(w * s) - i1 / (C * w) * math.sin(w * s), rel=1e-10)
-    assert u[0, 0] == 0.0 and y[0, 0] > 0.0
+    assert sample.x[0, 0] == pytest.approx(v1 * math.cos(w * s) - i1 / (C * w) * math.sin(w * s), rel=1e-10)
+    assert sample.u[0, 0] == 0.0 and sample.y[0, 0] > 0.0
 
 
 def test_cuk_gdcm_holds_i1_plus_i2_at_zero_exactly():
-    conv, p, T, orbit = exact_orbit("cuk", {"L1": "10u", "L2": "10u"})
-    sol = orbit.solution
+    conv, p, T, orbit, tr = exact_orbit("cuk", {"L1": "10u", "L2": "10u"})
+    sol = tr.exact
     held = [seg for seg in sol.segments if seg.flow.held]
     assert len(held) == 1 and held[0].t1 == pytest.approx(T, rel=1e-14)
     t = np.linspace(held[0].t0, held[0].t1, 50)[1:]
-    x, u, y, _ = sol.sample(t)
-    assert np.abs(x[:, 0] + x[:, 2]).max() < 1e-12      # i1 + i2 = 0 (to rounding)
-    assert u.min() > 0.0
+    sample = sol.sample(t)
+    assert np.abs(sample.x[:, 0] + sample.x[:, 2]).max() < 1e-12      # i1 + i2 = 0 (to rounding)
+    assert sample.u.min() > 0.0
     # The LCP stepper's first GDCM label comes less than 1.5 steps after the exact entry, at every h.
     lags = []
     for steps in (4000, 8000, 16000):
-        lcp = periodic_orbit(conv, p, h=T / steps, theta=1.0, tol=1e-13)
-        lags.append(lcp.t[np.flatnonzero(lcp.labels == "GDCM-OFF")[0]] - held[0].t0)
+        lcp = steady_orbit(conv, p, h=T / steps, theta=1.0, tol=1e-11)
+        lags.append(lcp.t[np.flatnonzero(lcp.modes() == "GDCM-OFF")[0]] - held[0].t0)
     lags = np.array(lags) / (T / np.array([4000, 8000, 16000]))      # in steps: labels sit on grid points
     assert np.all((lags > 0) & (lags < 1.5))
 
@@ -112,9 +109,9 @@ def test_cuk_gdcm_holds_i1_plus_i2_at_zero_exactly():
 def test_a_loose_event_tolerance_places_the_event_just_past_the_crossing(tol):
     # Brent's method stops within tol T of the zero on either side; the event is taken past it (within
     # 2 tol T) so the mode selection sees the crossing, never a repeated event at one instant.
-    conv, p, T, orbit = exact_orbit("cuk", {"L1": "10u", "L2": "10u"})
-    entry = orbit.solution.event_times[0]
-    sol = simulate_event(conv.problem(p, 20 * T, orbit.x0), EventDriven(event_tol=tol))
+    conv, p, T, orbit, tr = exact_orbit("cuk", {"L1": "10u", "L2": "10u"})
+    entry = tr.exact.event_times[0]
+    sol = simulate(conv.problem(p, 20 * T, orbit.x0), EventDriven(event_tol=tol)).exact
     kinds = np.array(sol.event_kinds)
     late = (np.array(sol.event_times)[kinds == "activate"] - entry) % T / T
     assert late.size == 20 and np.all((late >= 0) & (late <= 2 * tol + 1e-12))
@@ -125,7 +122,7 @@ def test_configuration_entered_with_negative_y_jumps_by_the_moreau_impulse():
     buck = get_converter("buck")
     off = buck.configurations(buck.resolve({}))[1]
     problem = LCSProblem((off,), Schedule.constant(), x0=[-1.0, 5.0], t_span=(0.0, 1e-6))
-    sol = simulate_event(problem)
+    sol = simulate(problem, EventDriven()).exact
     assert sol.event_kinds[0] == "impulse" and sol.event_times[0] == 0.0
     np.testing.assert_allclose(sol.segments[0].xt0[:2], [0.0, 5.0], atol=1e-15)
     # Backward Euler takes the same jump in its first step (the impulse is u h).
@@ -135,50 +132,17 @@ def test_configuration_entered_with_negative_y_jumps_by_the_moreau_impulse():
 
 def test_ill_posed_and_unsupported_problems_are_refused():
     bad = Configuration(A=[[0.0]], B=[[-1.0]], C=[[1.0]], D=[[0.0]], name="bad")   # C B < 0
-    with pytest.raises(SimulationError, match="C B = -1 <= 0"):
-        simulate_event(LCSProblem((bad,), Schedule.constant(), x0=[-1.0], t_span=(0.0, 1.0)))
-    with pytest.raises(ParameterError, match=r"one complementarity pair \(k = 1\).*k = 4"):
-        run_converter("prc", {}, method="event", periods=1)
+    with pytest.raises(SimulationError, match=r"no impulse restores complementarity \(C B = \[\[-1.0\]\]"):
+        simulate(LCSProblem((bad,), Schedule.constant(), x0=[-1.0], t_span=(0.0, 1.0)), EventDriven())
+    smc = get_model("boost", "smc-implicit")
+    with pytest.raises(ParameterError, match=r"the implicit relay is a time-stepping scheme: use --method lcp"):
+        simulate(smc.problem(smc.resolve({}), 1e-4), EventDriven())
     with pytest.raises(ParameterError, match=r"event_tol must be in \(0, 1e-2\]"):
         EventDriven(event_tol=0.5)
     with pytest.raises(ParameterError, match="eps must be positive"):
         Smoothing(eps=0)
-    with pytest.raises(ParameterError, match="eps and rtol apply to method='smooth' only"):
+    with pytest.raises(ParameterError, match=r"unknown option 'eps' for method 'event'; valid options: event_tol"):
         run_converter("buck", {}, method="event", eps=1e-3)
-
-
-def test_smoothing_error_is_first_order_in_eps_and_stiffness_grows_like_one_over_eps():
-    conv, p, T, orbit = exact_orbit("buck", {})
-    exact = exact_mean_vout(conv, p, T, orbit)
-    problem = conv.problem(p, 4 * T, x0=orbit.x0)
-    errors, stiffness = [], []
-    for eps in (1e-2, 1e-3, 1e-4):
-        tr = simulate(problem, Smoothing(eps=eps, rtol=1e-8, output_step=T / 2000))
-        v = conv.vout(tr.x, tr.u, tr.config, p)
-        errors.append(abs(np.trapezoid(v, tr.t) / (4 * T) - exact) / exact)
-        stiffness.append(tr.metadata["stats"]["max_rho_T"])
-    assert errors[0] > 5e-4 and errors[2] < 1e-4
-    ratios = np.array(errors[:-1]) / np.array(errors[1:])
-    assert np.all((ratios > 5.0) & (ratios < 20.0))         # O(eps)
-    np.testing.assert_allclose(np.array(stiffness[1:]) / np.array(stiffness[:-1]), 10.0, rtol=0.05)
-
-
-def test_smoothing_output_grid_keeps_every_schedule_interval():
-    # An interval shorter than output_step (D = 1e-4: the switch conducts 1 ns) keeps both its edges,
-    # and samples are never farther apart than output_step; the energy drawn matches the exact method's.
-    conv = get_converter("buck")
-    p = conv.resolve({"D": 1e-4})
-    T = conv.period(p)
-    problem = conv.problem(p, 5 * T)
-    tr = simulate(problem, Smoothing(eps=1e-4, rtol=1e-8, output_step=T / 1000))
-    edges = np.concatenate([np.arange(6) * T, np.arange(5) * T + 1e-4 * T])
-    assert np.abs(tr.t[None, :] - edges[:, None]).min(axis=1).max() < 1e-12 * T
-    assert np.diff(tr.t).max() <= T / 1000 * (1 + 1e-9)
-    on = tr.config[1:] == 0
-    drawn = float(np.sum(np.diff(tr.t) * 0.5 * (tr.x[1:, 0] + tr.x[:-1, 0]) * on)) * p["Vin"]
-    t, w, x, u, config = simulate_event(problem).quadrature()
-    exact = float(np.sum(w * x[:, 0] * (config == 0))) * p["Vin"]
-    assert exact > 0 and drawn == pytest.approx(exact, rel=1e-3)
 
 
 def test_simulate_cli_event_and_smooth_methods(capsys, tmp_path):
@@ -192,5 +156,5 @@ def test_simulate_cli_event_and_smooth_methods(capsys, tmp_path):
     assert main(["simulate", "buck", "--method", "smooth", "--eps", "1e-5", "--periods", "3", "--json"]) == 0
     summary = json.loads(capsys.readouterr().out)
     assert summary["method"] == "smooth" and summary["options"]["eps"] == 1e-5
-    assert main(["simulate", "prc", "--method", "event"]) == 2
-    assert "k = 4" in capsys.readouterr().err
+    assert main(["simulate", "prc", "--method", "smooth"]) == 2
+    assert "the smoothing method needs D = 0 in every configuration" in capsys.readouterr().err

@@ -1,0 +1,136 @@
+"""The method contract: every way of solving a problem is a small, validated, immutable object.
+
+A method (DifferentialEquations.jl's algorithm, diffrax's ``AbstractSolver``, scipy's ``OdeSolver``)
+holds only its options, validated when it is made, and declares
+
+* ``key``: its name in :data:`METHODS` (``lcp``, ``event``, ``smooth``; the command line's ``--method``);
+* ``order``: its declared order of convergence in its step (``inf`` for an exact method); the tests
+  check the measured order against it;
+* ``supports(problem)``: the problems it can solve (a clear error otherwise, before any step);
+* ``solve(problem, x0) -> Trajectory``;
+* ``period_map(problem)``: the map x(t0) -> x(t0 + span) over ``problem.t_span`` with its Jacobian,
+  for the periodic-orbit engine (:mod:`converters.analysis.periodic`). The base class gives the
+  finite-difference map (labelled as such); methods with an exact Jacobian override it.
+
+:func:`converters.simulate.simulate` is the one entry point; nothing dispatches on a method's type.
+"""
+from __future__ import annotations
+
+import dataclasses
+from abc import ABC, abstractmethod
+from typing import ClassVar
+
+import numpy as np
+
+from ..errors import ParameterError
+
+#: Method classes by their command-line name, filled as each method module is imported.
+METHODS: dict[str, type["Method"]] = {}
+
+
+class Method(ABC):
+    """Base class of every method (subclasses are frozen dataclasses)."""
+
+    key: ClassVar[str] = ""
+    #: One line for ``pcsuite list``.
+    description: ClassVar[str] = ""
+    #: Name of the option that receives a run's step (``h``, or an output spacing), or "" for none.
+    step_option: ClassVar[str] = ""
+
+    def __init_subclass__(cls, key: str = "", **kwargs):
+        super().__init_subclass__(**kwargs)
+        if key:
+            cls.key = key
+            METHODS[key] = cls
+
+    @property
+    @abstractmethod
+    def order(self) -> float:
+        """Declared order of convergence of the method's error in its step (inf: exact)."""
+
+    @abstractmethod
+    def solve(self, problem, x0: np.ndarray):
+        """Solve ``problem`` over its t_span from ``x0`` (already validated) into a Trajectory."""
+
+    def supports(self, problem) -> None:
+        """Raise ParameterError (naming the method and the remedy) if the problem is out of reach."""
+
+    @property
+    def label(self) -> str:
+        """A short human-readable name with the main option (e.g. ``theta(0.5)``)."""
+        return self.key
+
+    def options(self) -> dict:
+        """The method's options as plain data (for JSON summaries and reports)."""
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+
+    def period_map(self, problem) -> "PeriodMap":
+        """x(t0) -> x(t1) over ``problem.t_span`` by repeated solves, Jacobian by finite differences."""
+        self.supports(problem)
+        return FiniteDifferenceMap(lambda x0: self.solve(problem, x0).x[-1])
+
+    @classmethod
+    def from_options(cls, step: float | None = None, **options) -> "Method":
+        """Build from command-line style options; ``step`` goes to the method's ``step_option``.
+
+        Unknown options are refused with the list of valid ones; None values take the defaults."""
+        names = [f.name for f in dataclasses.fields(cls)]
+        unknown = [k for k, v in options.items() if v is not None and k not in names]
+        if unknown:
+            raise ParameterError(f"unknown option {unknown[0]!r} for method {cls.key!r}; valid options: "
+                                 f"{', '.join(names)}")
+        values = {k: v for k, v in options.items() if v is not None}
+        if step is not None and cls.step_option:
+            values.setdefault(cls.step_option, step)
+        return cls(**values)
+
+
+def get_method(key: str) -> type[Method]:
+    try:
+        return METHODS[key]
+    except KeyError:
+        raise ParameterError(f"method must be one of {', '.join(METHODS)}; got {key!r}") from None
+
+
+class PeriodMap:
+    """x0 -> (x at the end of the span, d x_end / d x0), counting the spans it simulates.
+
+    ``jacobian_kind`` says how the Jacobian is computed: ``exact`` (product of the one-step
+    matrices, or state-transition and saltation matrices) or ``finite differences``."""
+
+    jacobian_kind = "exact"
+
+    def __init__(self):
+        self.evaluations = 0
+
+    def __call__(self, x0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        raise NotImplementedError
+
+    def end(self, x0: np.ndarray) -> np.ndarray:
+        """The end state only (no Jacobian)."""
+        return self(x0)[0]
+
+
+class FiniteDifferenceMap(PeriodMap):
+    """Forward differences with steps 1e-7 (1 + |x_j|): n + 1 spans per Jacobian."""
+
+    jacobian_kind = "finite differences"
+
+    def __init__(self, end):
+        super().__init__()
+        self._end = end
+
+    def end(self, x0):
+        self.evaluations += 1
+        return np.asarray(self._end(np.asarray(x0, dtype=float)), dtype=float)
+
+    def __call__(self, x0):
+        x0 = np.asarray(x0, dtype=float)
+        base = self.end(x0)
+        jac = np.empty((x0.size, x0.size))
+        for j in range(x0.size):
+            dx = 1e-7 * (1.0 + abs(x0[j]))
+            probe = x0.copy()
+            probe[j] += dx
+            jac[:, j] = (self.end(probe) - base) / dx
+        return base, jac

@@ -1,0 +1,183 @@
+"""State-driven switching laws: which configuration holds is decided by the state, not the clock.
+
+A switching function is affine in the state, with an optional periodic sawtooth ramp:
+
+    s(x, t) = c . x + d - ramp(t),      ramp(t) = low + (high - low) frac((t - t0) / period)
+
+(sliding-mode current control: s = iL - Iref; voltage-mode PWM: s = A (vC - Vref) - ramp(t)).
+Two laws use it:
+
+* :class:`StateSwitching` (hysteresis or latch): configuration ``below`` is entered when s falls
+  below -band, ``above`` when s rises above +band. With ``latch`` at most one switching happens per
+  ramp period; at every period start (the ramp's reset) the configuration is set again by the sign of s.
+* :class:`Relay` (the implicit, chattering-free law): the configuration is a convex blend
+  x' = f_low(x) + z (f_high(x) - f_low(x)) with z in [0, 1] and -s in N_[0,1](z) (s < 0 gives z = 1,
+  s > 0 gives z = 0, s = 0 lets z take the value that keeps it there: the equivalent control).
+  A time-stepper imposes it at the step end (REFERENCE section 5: an LCP of size 2 per step).
+
+Every law exposes ``period`` (its clock period, inf when it has none) and ``configs`` (the
+configurations it selects), so methods treat all laws alike where they can.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import ParameterError
+from ..validate import as_vector, check_positive, parse_value
+
+
+@dataclass(frozen=True)
+class Ramp:
+    """A periodic sawtooth: ``low`` at every period start, rising linearly to ``high`` at its end."""
+
+    low: float
+    high: float
+    period: float
+
+    def __post_init__(self):
+        object.__setattr__(self, "low", parse_value("ramp low", self.low))
+        object.__setattr__(self, "high", parse_value("ramp high", self.high))
+        object.__setattr__(self, "period", check_positive("ramp period", self.period, "s"))
+
+    @property
+    def slope(self) -> float:
+        """d ramp / dt inside a period (V/s or the unit of s per second)."""
+        return (self.high - self.low) / self.period
+
+    def __call__(self, t) -> np.ndarray:
+        phase = np.mod(np.asarray(t, dtype=float), self.period)
+        return self.low + self.slope * phase
+
+
+@dataclass(frozen=True)
+class SwitchingFunction:
+    """s(x, t) = c . x + d - ramp(t); ``c`` has one entry per state."""
+
+    c: np.ndarray
+    d: float = 0.0
+    ramp: Ramp | None = None
+
+    def __post_init__(self):
+        c = as_vector("switching function c", self.c, None)
+        c.setflags(write=False)
+        object.__setattr__(self, "c", c)
+        object.__setattr__(self, "d", parse_value("switching function d", self.d))
+
+    @property
+    def n(self) -> int:
+        return self.c.shape[0]
+
+    def __call__(self, x, t) -> np.ndarray:
+        """s at states ``x`` (shape (n,) or (N, n)) and times ``t``."""
+        value = np.asarray(x, dtype=float) @ self.c + self.d
+        return value - self.ramp(t) if self.ramp is not None else value
+
+
+def _check_config(name: str, value) -> int:
+    if not (isinstance(value, (int, np.integer)) and value >= 0):
+        raise ParameterError(f"{name} must be a configuration index (an integer >= 0); got {value!r}")
+    return int(value)
+
+
+@dataclass(frozen=True)
+class StateSwitching:
+    """Hysteresis (or latched) switching between two configurations on a switching function.
+
+    Parameters
+    ----------
+    function : SwitchingFunction
+    below : int
+        Configuration entered when s falls below -band (e.g. switch ON for s = iL - Iref).
+    above : int
+        Configuration entered when s rises above +band.
+    band : float
+        Hysteresis half-width, >= 0, in the unit of s.
+    latch : bool
+        At most one switching per ramp period (needs a ramp); at every period start the
+        configuration is set by the sign of s.
+    initial : int or None
+        Configuration at the start of a run; None: ``below`` if s(x0, t0) < 0, else ``above``.
+    """
+
+    function: SwitchingFunction
+    below: int
+    above: int
+    band: float = 0.0
+    latch: bool = False
+    initial: int | None = None
+
+    def __post_init__(self):
+        object.__setattr__(self, "below", _check_config("below", self.below))
+        object.__setattr__(self, "above", _check_config("above", self.above))
+        if self.below == self.above:
+            raise ParameterError(f"below and above must be different configurations; got {self.below} for both")
+        band = parse_value("band", self.band)
+        if band < 0.0:
+            raise ParameterError(f"band (hysteresis half-width) must be >= 0; got {band!r}")
+        object.__setattr__(self, "band", band)
+        if self.latch and self.function.ramp is None:
+            raise ParameterError("latch needs a ramp (one switching per ramp period); got a switching function "
+                                 "without a ramp")
+        if self.initial is not None:
+            initial = _check_config("initial", self.initial)
+            if initial not in (self.below, self.above):
+                raise ParameterError(f"initial must be below ({self.below}) or above ({self.above}); got {initial}")
+            object.__setattr__(self, "initial", initial)
+
+    @property
+    def period(self) -> float:
+        return self.function.ramp.period if self.function.ramp is not None else np.inf
+
+    @property
+    def configs(self) -> tuple[int, ...]:
+        return (self.below, self.above)
+
+    def initial_config(self, x0, t0: float) -> int:
+        if self.initial is not None:
+            return self.initial
+        return self.below if float(self.function(x0, t0)) < 0.0 else self.above
+
+    def breakpoints(self, t0: float, t1: float) -> np.ndarray:
+        """Ramp resets in the open interval (t0, t1) (where s jumps and a latch opens again)."""
+        if not np.isfinite(self.period):
+            return np.empty(0)
+        T = self.period
+        times = np.arange(np.floor(t0 / T), np.ceil(t1 / T) + 1) * T
+        return times[(times > t0) & (times < t1)]
+
+
+@dataclass(frozen=True)
+class Relay:
+    """The implicit relay: a convex blend of configurations ``low`` (z = 0) and ``high`` (z = 1).
+
+    x' = f_low(x) + z (f_high(x) - f_low(x)), z in [0, 1], with -s in N_[0,1](z) on the switching
+    function s (z = 1 where s < 0). The complementarity pairs of configuration ``low`` stay in force.
+    """
+
+    function: SwitchingFunction
+    low: int
+    high: int
+
+    def __post_init__(self):
+        object.__setattr__(self, "low", _check_config("low", self.low))
+        object.__setattr__(self, "high", _check_config("high", self.high))
+        if self.low == self.high:
+            raise ParameterError(f"low and high must be different configurations; got {self.low} for both")
+        if self.function.ramp is not None:
+            raise ParameterError("the relay law takes a switching function without a ramp")
+
+    @property
+    def period(self) -> float:
+        return np.inf
+
+    @property
+    def configs(self) -> tuple[int, ...]:
+        return (self.low, self.high)
+
+    def initial_config(self, x0, t0: float) -> int:
+        return self.low
+
+    def breakpoints(self, t0: float, t1: float) -> np.ndarray:
+        return np.empty(0)

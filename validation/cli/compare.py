@@ -1,0 +1,74 @@
+"""``pcsuite compare CONVERTER``: the LCP time-stepper against ngspice on the same circuit."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from converters.errors import ParameterError
+
+from .common import add_params
+
+
+def add(sub) -> None:
+    cmp = sub.add_parser("compare", help="the LCP time-stepper against ngspice on the same circuit")
+    cmp.add_argument("converter")
+    add_params(cmp)
+    cmp.add_argument("--h", default=None, help="LCP step in s (default T/1000)")
+    cmp.add_argument("--start", choices=["steady", "rest"], default=None,
+                     help="start both on the periodic orbit (default) or from rest (default for prc)")
+    cmp.add_argument("--control", default="pwm", choices=["pwm", "smc"],
+                     help="boost only: sliding-mode current control (see simulate)")
+    cmp.add_argument("--t-end", default=None, help="duration in s (sliding mode; default 30 ms)")
+    cmp.add_argument("--plot", type=Path, default=None, help="write the overlay/residual plot (.png)")
+    cmp.add_argument("--json", action="store_true")
+    cmp.set_defaults(run=run)
+
+
+def run(args) -> int:
+    from converters.params import parse_assignments
+
+    from ..io import atomic_write_bytes
+    if args.plot is not None and args.plot.suffix.lower() != ".png":
+        raise ParameterError(f"--plot must end in .png; got {str(args.plot)!r}")
+    params = parse_assignments(args.params)
+    if args.control == "smc":
+        rows, metrics, header, plot, extra = _smc(args, params)
+    else:
+        from ..compare import compare
+        from ..plots import comparison_plot
+        if args.t_end is not None:
+            raise ParameterError("--t-end applies to --control smc; a PWM comparison runs the model's periods")
+        result = compare(args.converter, params, h=args.h, start=args.start)
+        rows, metrics, plot = result.rows, result.metrics, (lambda: comparison_plot(result))
+        header = f"{result.converter}: LCP against {result.spice.metadata['ngspice']}"
+        extra = result.to_dict()
+    passed = all(ok for _, _, _, ok in rows)
+    if args.plot is not None:
+        atomic_write_bytes(args.plot, plot())
+    if args.json:
+        print(json.dumps({**extra, "metrics": metrics, "checks": {name: ok for name, _, _, ok in rows},
+                          "thresholds": {name: threshold for name, _, threshold, _ in rows}, "passed": passed},
+                         default=float))
+    else:
+        print(header)
+        for key, value in metrics.items():
+            text = f"{value:.6g}" if isinstance(value, float) else str(value)
+            print(f"  {key:<36} {text}")
+        for name, value, threshold, ok in rows:
+            print(f"  check {name:<30} {'pass' if ok else 'FAIL'} (threshold {threshold:g})")
+        print("PASS" if passed else "FAIL")
+    return 0 if passed else 1
+
+
+def _smc(args, params):
+    from converters.models import get_model
+    from converters.validate import parse_value
+
+    from ..defaults import THRESHOLDS
+    from ..smc import compare_smc, smc_checks, smc_plot
+    get_model(args.converter, "smc")
+    t_end = parse_value("t_end", args.t_end) if args.t_end is not None else 30e-3
+    c = compare_smc(params, t_end=t_end, h=args.h)
+    rows = smc_checks(c.metrics, THRESHOLDS["smc"], c.params, t_end)
+    header = f"boost (sliding mode): LCP against {c.spice.metadata['ngspice']}"
+    return rows, c.metrics, header, (lambda: smc_plot(c)), {"converter": "boost", "control": "smc", "params": c.params}

@@ -1,0 +1,43 @@
+"""``pcsuite gdcm CONVERTER``: predicted CCM/DCM/GDCM against the modes detected in LCP and ngspice."""
+from __future__ import annotations
+
+import json
+
+from .common import add_params
+
+
+def add(sub) -> None:
+    gd = sub.add_parser("gdcm", help="predicted CCM/DCM/GDCM against the modes detected in LCP and ngspice")
+    gd.add_argument("converter")
+    add_params(gd)
+    gd.add_argument("--h", default=None, help="LCP step in s (default T/1000)")
+    gd.add_argument("--json", action="store_true", help="print one JSON object (predicted, lcp, spice, agree, ...)")
+    gd.set_defaults(run=run)
+
+
+def run(args) -> int:
+    from converters.params import parse_assignments
+
+    from ..gdcm import gdcm_check
+    result = gdcm_check(args.converter, parse_assignments(args.params), h=args.h)
+    if args.json:
+        print(json.dumps(result, default=float))
+        return 0 if result["agree"] else 1
+    print(f"{result['converter']}: predicted {result['predicted']}")
+    pred = result.get("prediction")
+    if pred:
+        print(f"  closed form: K = {pred['K']:.4g}, Kcrit(D) = {pred['Kcrit']:.4g} -> {pred['closed_form']}; "
+              f"exact (CCM orbit from the matrices): {pred['exact_matrix']}")
+        for row in pred["conditions"]:
+            print(f"  GDCM condition, {row['configuration']}: {'possible' if row['possible'] else 'impossible'} "
+                  f"({row['condition']})")
+        T = result["period_s"]
+        for side in ("lcp", "spice"):
+            print(f"  {side}: {result[side]}, held {result['held_fraction'][side]:.4f} of T")
+            for iv in result["intervals"][side]:
+                print(f"      {iv['mode']:<9} {iv['start'] / T:7.4f} T .. {iv['end'] / T:7.4f} T  ({iv['fraction']:.4f} T)")
+    else:
+        for side in ("lcp", "spice"):
+            print(f"  {side}: " + ", ".join(f"{k} {v:.4f}" for k, v in result[side].items()))
+    print("agree" if result["agree"] else "DISAGREE")
+    return 0 if result["agree"] else 1

@@ -1,0 +1,119 @@
+"""``pcsuite simulate CONVERTER``: one run, its waveform file and its JSON summary."""
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+
+from converters.errors import ParameterError
+
+from .common import add_params, check_out, write_frame
+
+
+def add(sub) -> None:
+    from converters.methods.base import METHODS
+    from converters.models import CONTROLS
+    sim = sub.add_parser("simulate", help="simulate a converter and write its waveforms")
+    sim.add_argument("converter")
+    add_params(sim)
+    sim.add_argument("--method", default="lcp", choices=[*METHODS, "spice"],
+                     help="; ".join(f"{key}: {cls.description}" for key, cls in METHODS.items())
+                     + "; spice: the same circuit in ngspice")
+    sim.add_argument("--h", default=None, help="step in s (default T/1000; PRC 50 ns); event and smooth: "
+                                              "output sample spacing")
+    sim.add_argument("--eps", default=None, help="smooth: smoothing width eps (default 1e-4, units of y)")
+    sim.add_argument("--rtol", default=None, help="smooth: solver relative tolerance (default 1e-6)")
+    sim.add_argument("--theta", default=None, help="theta in [0.5, 1] (default 1, PRC 0.5)")
+    span = sim.add_mutually_exclusive_group()
+    span.add_argument("--t-end", default=None, help="duration in s")
+    span.add_argument("--periods", type=int, default=None, help="duration in switching periods (default 500)")
+    sim.add_argument("--control", default="pwm", choices=list(CONTROLS),
+                     help="boost only: sliding-mode current control (smc: hysteresis; smc-implicit: the implicit "
+                          "relay) with -p Vref=.. -p band=.. [-p Kp=.. -p Ki=.. -p t_step=.. -p R_step=..]")
+    sim.add_argument("--steady", action="store_true", help="run to the method's periodic orbit (Newton shooting)")
+    sim.add_argument("--steady-tol", type=float, default=1e-6,
+                     help="relative distance to the orbit at which the steady state counts as reached")
+    sim.add_argument("--out", type=Path, default=None, help="waveform file, .csv or .parquet")
+    sim.add_argument("--json", action="store_true", help="print one JSON summary object")
+    sim.set_defaults(run=run)
+
+
+def run(args) -> int:
+    from converters.params import parse_assignments
+    from converters.run import run_converter, run_summary
+    check_out(args.out)
+    params = parse_assignments(args.params)
+    if args.method == "spice":
+        tr, summary = _spice(args, params)
+    else:
+        options = {"theta": args.theta} if args.method == "lcp" else {}
+        if args.method == "smooth":
+            options.update(eps=args.eps, rtol=args.rtol)
+        elif args.eps is not None or args.rtol is not None:
+            raise ParameterError(f"--eps and --rtol apply to --method smooth only; got --method {args.method}")
+        if args.theta is not None and args.method != "lcp":
+            raise ParameterError(f"--theta applies to --method lcp only; got --method {args.method}")
+        tr = run_converter(args.converter, params, control=args.control, method=args.method, h=args.h,
+                           t_end=args.t_end, periods=args.periods, steady=args.steady, steady_tol=args.steady_tol,
+                           **options)
+        summary = run_summary(tr)
+    if args.out is not None:
+        write_frame(tr.waveforms(), args.out)
+    if args.json:
+        print(json.dumps(summary, default=float))
+    else:
+        _print(summary, tr, args)
+    return 0
+
+
+def _spice(args, params):
+    """The same circuit in ngspice: a Trajectory labelled by the same model, and its summary."""
+    from converters.models import get_model
+    from converters.run import duration
+    from netlists import model_netlist
+
+    from ..spice import run_spice, spice_trajectory
+    if args.steady:
+        raise ParameterError("--steady is available with --method lcp, event or smooth; got --method spice")
+    start = time.perf_counter()
+    model = get_model(args.converter, args.control)
+    p = model.resolve(params)
+    t_end = duration(model, p, args.t_end, args.periods)
+    netlist = model_netlist(model, p, t_end)
+    result = run_spice(netlist)
+    window_start = result.time[-1] - 10 * model.period(p)
+    tr = spice_trajectory(model, p, netlist, result, window_start)
+    summary = {"converter": model.name, "method": "spice",
+               "options": {**result.options, "params": p, "ngspice": result.ngspice_version},
+               "steps": result.accepted_steps, "wall_s": time.perf_counter() - start}
+    if args.control != "pwm":
+        summary["control"] = args.control
+    summary.update(model.summary(tr, p))
+    return tr, summary
+
+
+def _print(summary: dict, tr, args) -> None:
+    unit = {"lcp": "steps", "event": "segments", "smooth": "LU factorisations", "spice": "accepted steps"}[tr.method]
+    options = ", ".join(f"{k} = {v:.3g}" if isinstance(v, float) else f"{k} = {v}"
+                        for k, v in summary["options"].items() if k != "params" and v is not None
+                        and not isinstance(v, dict) and k != "max_events")
+    title = summary["converter"] + (f" --control {summary['control']}" if "control" in summary else "")
+    line = f"{title} ({tr.method}): {summary['steps']} {unit} ({options}) in {summary['wall_s']:.3f} s; "
+    line += f"vout mean = {summary['vout_mean']:.9g} V"
+    if "vref" in summary:
+        line += f" (Vref {summary['vref']:g} V)"
+    print(line)
+    if "switching_frequency_Hz" in summary:
+        print(f"switching {summary['switching_frequency_Hz'] / 1e3:.6g} kHz (predicted "
+              f"{summary['predicted_frequency_Hz'] / 1e3:.6g} kHz at the measured mean vout)")
+    if "lambda_mean" in summary:
+        print(f"lambda = 1 - s = {summary['lambda_mean']:.8f} (Vin/v = {summary['vin_over_v']:.8f})")
+    if "steady_periods" in summary:
+        orbit = summary["orbit"]
+        print(f"periodic steady state after {summary['steady_periods']} periods (Newton: {orbit['iterations']} "
+              f"iterations, distance to the orbit {orbit['distance']:.2g}, Floquet spectral radius "
+              f"{orbit['spectral_radius']:.6g})")
+    if "mode_fractions" in summary:
+        print("modes (last period): " + ", ".join(f"{k} {v:.3f}" for k, v in summary["mode_fractions"].items()))
+    if args.out is not None:
+        print(f"wrote {args.out}")

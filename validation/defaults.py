@@ -1,0 +1,29 @@
+"""Operating points, scene defaults and pass/fail thresholds, read once from ``data/defaults.toml``.
+
+Everything that decides pass or fail, or names a standard operating point, lives in that one file;
+scenes, the report, the tests and the benchmarks read it from here.
+"""
+from __future__ import annotations
+
+import tomllib
+from pathlib import Path
+
+DEFAULTS_FILE = Path(__file__).with_name("data") / "defaults.toml"
+_DATA = tomllib.loads(DEFAULTS_FILE.read_text())
+
+#: Thresholds per study (``compare``, ``smc``, ``smc-implicit``, ``closed_form``).
+THRESHOLDS: dict[str, dict[str, float]] = {study: dict(values) for study, values in _DATA["thresholds"].items()}
+#: Checks whose threshold is a minimum (every other threshold is a maximum).
+AT_LEAST = frozenset({"mode_agreement"})
+#: (converter, parameters, expected mode) checked against the closed forms.
+OPERATING_POINTS: list[tuple[str, dict, str]] = [(p["converter"], dict(p["params"]), p["mode"])
+                                                 for p in _DATA["operating_points"]]
+#: The trade-off cases: name, converter, parameters.
+TRADEOFF_CASES: list[dict] = [dict(case) for case in _DATA["tradeoff_cases"]]
+#: The stability map's base point.
+STABILITY_BASE: dict = dict(_DATA["stability_base"])
+
+
+def passes(check: str, value: float, threshold: float) -> bool:
+    """A check's verdict: value >= threshold for the AT_LEAST checks, value <= threshold otherwise."""
+    return bool(value >= threshold) if check in AT_LEAST else bool(value <= threshold)
