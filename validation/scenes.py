@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from converters.errors import ParameterError
-from converters.models import get_converter, get_model
+from converters.models import CONTROLS, get_converter, get_model
 from converters.validate import parse_value
 from netlists import SpiceOptions
 
@@ -33,7 +33,6 @@ from .defaults import THRESHOLDS
 SCENE_DIR = Path(__file__).with_name("scenes")
 TOP_KEYS = ("name", "converter", "description", "suites", "control", "params", "run", "methods", "checks")
 RUN_KEYS = ("start", "periods", "window", "t_end")
-CONTROLS = ("pwm", "smc", "smc-implicit")
 METHOD_KEYS = {"lcp": ("h", "theta"), "spice": tuple(SpiceOptions.__dataclass_fields__)}
 CHECK_KEYS = ("vout_mean_rel", "mode_agreement", "turn_off_error_T", "closed_form_rel", "vout_ref_rel",
               "frequency_rel", "frequency_agreement", "recovery_agreement", "lambda_settle")
@@ -78,10 +77,11 @@ def load_scene(path) -> Scene:
     control = data.get("control", "pwm")
     if control not in CONTROLS:
         raise ParameterError(f"{where}: control must be one of {', '.join(CONTROLS)}; got {control!r}")
-    if control != "pwm" and converter.name != "boost":
-        raise ParameterError(f"{where}: control {control!r} is available for the boost only; got {converter.name!r}")
+    try:
+        model = get_model(converter.name, control)
+    except ParameterError as exc:
+        raise ParameterError(f"{where}: {exc}") from None
     params = data.get("params", {})
-    model = get_model(converter.name, control)
     _strict(params, tuple(p.name for p in model.parameters), f"{where} [params]")
     try:
         model.resolve(params)  # errors name the parameter

@@ -12,6 +12,7 @@ import pandas as pd  # noqa: E402
 
 from converters.lcp.problems import problem_set  # noqa: E402
 
+from .gdcm import K_RANGES  # noqa: E402
 from .core_checks import convergence_table, core_waveforms, observed_orders  # noqa: E402
 from .peer import METHODS, PEER_TOL, peer_directory, peer_table, solver_table  # noqa: E402
 from .report import Section, csv_bytes, figure_png, table_html  # noqa: E402
@@ -161,7 +162,7 @@ EXTRA_SECTIONS = {
                 ("LCS time-stepping: convergence on the Siconos circuits", core_section),
                 ("Converter library: steady state against closed forms", converter_section)],
 }
-GDCM_MAPS = [(f"Conduction modes: {name} D-K map", partial(gdcm_map_section, name)) for name in ("buck", "boost", "buck-boost", "cuk")]
+GDCM_MAPS = [(f"Conduction modes: {name} D-K map", partial(gdcm_map_section, name)) for name in K_RANGES]
 EXTRA_SECTIONS["default"] += GDCM_MAPS
 EXTRA_SECTIONS["lcp"] = EXTRA_SECTIONS["default"][:2]
 EXTRA_SECTIONS["gdcm"] = GDCM_MAPS

@@ -108,8 +108,9 @@ def test_ngspice_modes_agree_with_the_lcp_on_a_map(name):
 def test_cuk_gdcm_in_both_simulators_with_the_constraint_exact():
     result = gdcm_check("cuk", {"L1": "10u", "L2": "10u"})
     assert result["predicted"] == result["lcp"] == result["spice"] == "GDCM-OFF" and result["agree"]
-    assert result["gdcm_constraint"]["max_abs_Cx_plus_F"] <= 1e-9
-    assert result["gdcm_constraint"]["max_drift"] <= 0.0 and result["gdcm_constraint"]["min_multiplier"] >= 0.0
+    held = result["gdcm_constraint"]["GDCM-OFF"]
+    assert held["configuration"] == "OFF" and held["max_abs_Cx_plus_F"] <= 1e-9
+    assert held["max_drift"] <= 0.0 and held["min_multiplier"] >= 0.0
     # Held fraction: both simulators within 0.5 % of T of each other.
     assert abs(result["held_fraction"]["lcp"] - result["held_fraction"]["spice"]) < 5e-3
 

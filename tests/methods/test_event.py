@@ -11,7 +11,7 @@ from scipy.optimize import brentq
 from converters.analysis.gdcm import ccm_orbit
 from converters.analysis.periodic import shoot
 from converters.errors import ParameterError, SimulationError
-from converters.methods import BackwardEuler, EventDriven, Smoothing
+from converters.methods import BackwardEuler, EventDriven, Smoothing, Theta
 from converters.models import get_converter, get_model
 from converters.models.circuits import half_wave_rectifier, parallel_rlc_exact
 from converters.problems import Configuration, LCSProblem, Schedule
@@ -158,3 +158,31 @@ def test_simulate_cli_event_and_smooth_methods(capsys, tmp_path):
     assert summary["method"] == "smooth" and summary["options"]["eps"] == 1e-5
     assert main(["simulate", "prc", "--method", "smooth"]) == 2
     assert "the smoothing method needs D = 0 in every configuration" in capsys.readouterr().err
+
+
+def test_event_method_on_the_prc_agrees_with_the_steppers_extrapolation_to_h_zero():
+    """Four diodes (k = 4): the mode-selection LCP at every event with held sets of any size. The Siconos
+    PRC (2 ms from rest): mean v_o over the last ms is 0.6135396 V (measured independently)."""
+    prc = get_converter("prc")
+    p = prc.resolve({})
+    problem = prc.problem(p, 2e-3)
+    exact = replace(simulate(problem, EventDriven()), labels=prc.labels(p))
+    assert exact.mean("vout", t0=1e-3) == pytest.approx(0.6135396, abs=5e-8)
+    kinds = set(zip(exact.exact.event_kinds, exact.exact.event_pairs))
+    assert {("activate", i) for i in range(4)} <= kinds and {("release", i) for i in range(4)} <= kinds
+    means = {h: replace(simulate(problem, Theta(h, 0.5)), labels=prc.labels(p)).mean("vout", t0=1e-3)
+             for h in (3.125e-9, 1.5625e-9)}
+    richardson = 2 * means[1.5625e-9] - means[3.125e-9]             # observed order 1 through the events
+    assert abs(richardson / exact.mean("vout", t0=1e-3) - 1.0) < 1e-6     # measured 1.1e-7
+    assert abs(means[1.5625e-9] / richardson - 1.0) > 1e-5          # the stepper alone is not that close
+
+
+def test_event_method_on_the_diode_bridge_is_its_closed_form_and_the_steppers_limit():
+    from converters.models.circuits import diode_bridge
+    problem = diode_bridge(t_end=5e-3)
+    exact = simulate(problem, EventDriven())
+    np.testing.assert_allclose(exact.x, parallel_rlc_exact(exact.t), atol=1e-11)
+    assert len(exact.exact.event_times) > 0                          # the bridge commutates at every zero of vC
+    ends = {h: simulate(problem, Theta(h, 0.5)).x[-1, 0] for h in (5e-8, 2.5e-8)}
+    richardson = 2 * ends[2.5e-8] - ends[5e-8]
+    assert abs(richardson - exact.x[-1, 0]) / abs(exact.x[-1, 0]) < 1e-6    # measured 1.7e-7

@@ -23,7 +23,7 @@ def run(args) -> int:
     if args.json:
         print(json.dumps(result, default=float))
         return 0 if result["agree"] else 1
-    print(f"{result['converter']}: predicted {result['predicted']}")
+    print(f"{result['converter']}: predicted {result['predicted']} (exact, from the matrices)")
     pred = result.get("prediction")
     if pred:
         print(f"  closed form: K = {pred['K']:.4g}, Kcrit(D) = {pred['Kcrit']:.4g} -> {pred['closed_form']}; "

@@ -1,0 +1,104 @@
+"""The method contract: every registered method validates its options, declares its order, solves the
+closed-form reference problems into Trajectories, and converges at the order it declares."""
+import math
+
+import numpy as np
+import pytest
+
+from converters.errors import ParameterError
+from converters.methods import METHODS, EventDriven, Method, Smoothing, Theta
+from converters.problems import Configuration, LCSProblem, Schedule
+from converters.simulate import simulate
+from converters.trajectory import Trajectory
+
+L, R, V, I0 = 1e-3, 1.0, 1.0, 1.0
+T_STAR = L / R * math.log(1 + R * I0 / V)        # the freewheeling current reaches zero here (0.693 ms)
+
+
+def freewheel(t_end):
+    """An inductor current i0 decaying through R against V, freewheeling through a diode that blocks when it
+    reaches zero: L i' = -R i - V + u, 0 <= u _|_ i >= 0 (u: the diode's reverse voltage; D = 0)."""
+    config = Configuration(A=[[-R / L]], B=[[1 / L]], C=[[1.0]], D=[[0.0]], E=[-V / L], name="freewheel")
+    return LCSProblem((config,), Schedule.constant(), x0=[I0], t_span=(0.0, t_end), state_names=("i",),
+                      pair_names=("diode",))
+
+
+def freewheel_exact(t):
+    t = np.asarray(t, dtype=float)
+    return np.where(t < T_STAR, (I0 + V / R) * np.exp(-R * t / L) - V / R, 0.0)
+
+
+def switched_rc(t_end=1.0):
+    """An RC charged through a switch for half of each 1 s period (a pair that never acts: y = 1)."""
+    idle = dict(B=[[0.0]], C=[[0.0]], D=[[0.0]], F=[1.0])
+    on = Configuration(A=[[-1.0]], E=[1.0], name="on", **idle)
+    off = Configuration(A=[[-1.0]], name="off", **idle)
+    return LCSProblem((on, off), Schedule.pwm(1.0, 0.5), x0=[0.0], t_span=(0.0, t_end))
+
+
+RC_EXACT = (1 - math.exp(-0.5)) * math.exp(-0.5)
+
+
+def test_the_registry_holds_every_method_by_its_command_line_name():
+    assert list(METHODS) == ["lcp", "event", "smooth"]
+    assert [cls.key for cls in METHODS.values()] == list(METHODS)
+    assert all(issubclass(cls, Method) and cls.description for cls in METHODS.values())
+    assert Theta(1e-6, 1.0).order == 1 and Theta(1e-6, 0.5).order == 2
+    assert EventDriven().order == math.inf and Smoothing().order == 1
+
+
+@pytest.mark.parametrize("key,options,match", [
+    ("lcp", {"eps": 1e-3}, r"unknown option 'eps' for method 'lcp'; valid options: h, theta"),
+    ("event", {"h": 1e-6}, r"unknown option 'h' for method 'event'; valid options: event_tol, sample_fraction"),
+    ("smooth", {"theta": 0.5}, r"unknown option 'theta' for method 'smooth'; valid options: eps, rtol, atol"),
+])
+def test_no_method_swallows_an_unknown_option(key, options, match):
+    with pytest.raises(ParameterError, match=match):
+        METHODS[key].from_options(step=1e-6, **options)
+
+
+@pytest.mark.parametrize("make", [lambda: Theta(1e-5, 1.0), lambda: Theta(1e-5, 0.5), lambda: EventDriven(),
+                                  lambda: Smoothing(eps=1e-4, rtol=1e-10)], ids=["backward-euler", "theta-0.5",
+                                                                                 "event", "smooth"])
+def test_every_method_solves_the_freewheeling_diode_into_a_trajectory(make):
+    method = make()
+    tr = simulate(freewheel(1.5e-3), method)
+    assert isinstance(tr, Trajectory) and tr.method == method.key and tr.state_names == ("i",)
+    assert tr.t[0] == 0.0 and tr.t[-1] == pytest.approx(1.5e-3)
+    # The diode blocks at T_STAR: every method holds the current at zero after it (smoothing: at -eps V).
+    after = tr.t > T_STAR + 2e-5
+    assert np.abs(tr.x[after, 0]).max() <= (2e-4 if method.key == "smooth" else 1e-12)
+    activate = tr.events[tr.events["kind"] == "activate"]
+    assert len(activate) == 1 and activate["time"].iloc[0] == pytest.approx(T_STAR, abs=1e-5)
+
+
+@pytest.mark.parametrize("theta", [1.0, 0.5])
+@pytest.mark.parametrize("problem,exact", [(lambda: freewheel(0.5e-3), float(freewheel_exact(0.5e-3))),
+                                           (switched_rc, RC_EXACT)], ids=["freewheel", "switched-rc"])
+def test_the_stepper_converges_at_its_declared_order(theta, problem, exact):
+    method_of = (lambda h: Theta(h, theta))
+    span = problem().t_span[1]
+    hs = span / 2.0 ** np.arange(6, 11)
+    errors = [abs(simulate(problem(), method_of(h)).x[-1, 0] - exact) for h in hs]
+    order = np.polyfit(np.log(hs), np.log(errors), 1)[0]
+    assert order == pytest.approx(method_of(hs[0]).order, abs=0.15)
+
+
+def test_smoothing_converges_at_its_declared_order_in_eps():
+    eps = np.array([1e-2, 1e-3, 1e-4])
+    errors = [abs(simulate(freewheel(1.5e-3), Smoothing(eps=e, rtol=1e-10)).x[-1, 0]) for e in eps]
+    order = np.polyfit(np.log(eps), np.log(errors), 1)[0]
+    assert order == pytest.approx(Smoothing().order, abs=0.1)              # held at i = -eps V: O(eps)
+    assert errors[1] == pytest.approx(1e-3 * V, rel=0.05)
+
+
+@pytest.mark.parametrize("problem,exact", [(lambda: freewheel(0.5e-3), float(freewheel_exact(0.5e-3))),
+                                           (lambda: freewheel(1.5e-3), 0.0), (switched_rc, RC_EXACT)],
+                         ids=["freewheel", "freewheel-blocked", "switched-rc"])
+@pytest.mark.parametrize("event_tol", [1e-13, 1e-7])
+def test_the_event_method_is_exact_whatever_its_tolerance(problem, exact, event_tol):
+    """Declared order inf: the error is rounding, and the tolerance sets only where the event is placed."""
+    tr = simulate(problem(), EventDriven(event_tol=event_tol))
+    assert abs(tr.x[-1, 0] - exact) <= 1e-12
+    if tr.exact.event_times:
+        assert tr.exact.event_times[0] == pytest.approx(T_STAR, abs=2 * event_tol * 1.5e-3 + 1e-16)

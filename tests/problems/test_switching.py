@@ -1,0 +1,97 @@
+"""State-driven switching laws as problem data: hysteresis, ramp with latch, the implicit relay; their
+validation, and the stepper and the event method against closed forms."""
+import numpy as np
+import pytest
+
+from converters.errors import ParameterError
+from converters.methods import EventDriven, Smoothing, Theta
+from converters.problems import Configuration, LCSProblem, Ramp, Relay, StateSwitching, SwitchingFunction
+from converters.simulate import simulate
+
+#: A complementarity pair that never acts (y = 1 > 0, so u = 0): these problems are switched, not complementary.
+IDLE = dict(B=[[0.0], [0.0]], C=[[0.0, 0.0]], D=[[0.0]], F=[1.0])
+
+
+def relaxation_oscillator(band=0.25, t_end=5.0, method_latch=False):
+    """x' = +1 in 'up' (entered when x falls below -band), -1 in 'down' (above +band); z counts time in 'up'.
+    Closed form: a triangle wave between -band and +band of period 4 band."""
+    up = Configuration(A=np.zeros((2, 2)), E=[1.0, 1.0], name="up", **IDLE)
+    down = Configuration(A=np.zeros((2, 2)), E=[-1.0, 0.0], name="down", **IDLE)
+    law = StateSwitching(SwitchingFunction(c=[1.0, 0.0]), below=0, above=1, band=band)
+    return LCSProblem((up, down), law, x0=[0.0, 0.0], t_span=(0.0, t_end), state_names=("x", "z"))
+
+
+@pytest.mark.parametrize("method", [Theta(0.01, 1.0), Theta(0.01, 0.5), EventDriven()], ids=["BE", "theta", "event"])
+def test_hysteresis_switches_exactly_at_the_band(method):
+    """The dynamics are piecewise linear in time, so the stepper's interpolated crossing is exact too."""
+    tr = simulate(relaxation_oscillator(), method)
+    switches = tr.events[tr.events["kind"] == "switch"]
+    # x0 = 0: s = 0 is not negative, so 'down' first; -band is reached at 0.25, then a switch every 2 band.
+    times = switches["time"].to_numpy()
+    expected = 0.25 + 0.5 * np.arange(times.size)
+    np.testing.assert_allclose(times, expected, atol=1e-12)
+    assert switches["config"].tolist()[:3] == [0, 1, 0]
+    assert np.abs(tr.state("x")).max() <= 0.25 + 1e-12
+    assert times.size == 10
+    assert tr.state("z")[-1] == pytest.approx(2.5, abs=1e-9)          # up on [0.25 + m, 0.75 + m], m = 0..4
+
+
+def ramp_latch(level=0.3, latch=True, periods=4):
+    """A constant level c compared with a unit sawtooth: 'below' (z' = 1) once the ramp passes c, until the
+    period ends; closed form: z grows by 1 - c per period."""
+    hold = Configuration(A=np.zeros((2, 2)), E=[0.0, 1.0], name="below", **IDLE)
+    idle = Configuration(A=np.zeros((2, 2)), E=[0.0, 0.0], name="above", **IDLE)
+    law = StateSwitching(SwitchingFunction(c=[1.0, 0.0], ramp=Ramp(0.0, 1.0, 1.0)), below=0, above=1, latch=latch)
+    return LCSProblem((hold, idle), law, x0=[level, 0.0], t_span=(0.0, float(periods)), state_names=("c", "z"))
+
+
+@pytest.mark.parametrize("latch", [True, False])
+@pytest.mark.parametrize("method", [Theta(1e-3, 1.0), EventDriven()], ids=["BE", "event"])
+def test_a_ramp_resets_every_period_and_a_latch_holds_one_switching(method, latch):
+    tr = simulate(ramp_latch(0.3, latch), method)
+    assert tr.state("z")[-1] == pytest.approx(4 * 0.7, abs=1e-9)
+    switches = tr.events[tr.events["kind"] == "switch"]
+    into_below = switches.loc[switches["config"] == 0, "time"].to_numpy()
+    np.testing.assert_allclose(into_below, 0.3 + np.arange(4), atol=1e-9)
+
+
+def test_the_relay_holds_the_sliding_surface_without_chatter():
+    """x' = -1 + 2 z, z in [0, 1], -(x - 1/2) in N_[0,1](z): x rises at +1 to 1/2 and stays there with the
+    equivalent control z = 1/2 (no switching)."""
+    low = Configuration(A=np.zeros((2, 2)), E=[-1.0, 0.0], name="low", **IDLE)
+    high = Configuration(A=np.zeros((2, 2)), E=[1.0, 0.0], name="high", **IDLE)
+    problem = LCSProblem((low, high), Relay(SwitchingFunction(c=[1.0, 0.0], d=-0.5), low=0, high=1), x0=[0.0, 0.0],
+                         t_span=(0.0, 1.0), state_names=("x", "z"))
+    tr = simulate(problem, Theta(1e-3, 1.0))
+    settled = tr.t > 0.502
+    assert np.abs(tr.state("x")[settled] - 0.5).max() < 1e-12
+    assert np.abs(tr.relay[settled] - 0.5).max() < 1e-12
+    assert tr.relay[tr.t < 0.499].min() == 1.0                       # full on until the surface is reached
+    for method, match in ((EventDriven(), "the implicit relay is a time-stepping scheme"),
+                          (Smoothing(), "the smoothing method integrates time schedules only")):
+        with pytest.raises(ParameterError, match=match):
+            simulate(problem, method)
+
+
+@pytest.mark.parametrize("build,match", [
+    (lambda: StateSwitching(SwitchingFunction([1.0]), below=0, above=0), "below and above must be different"),
+    (lambda: StateSwitching(SwitchingFunction([1.0]), below=0, above=1, band=-1), r"band \(hysteresis half-width\) must be >= 0"),
+    (lambda: StateSwitching(SwitchingFunction([1.0]), below=0, above=1, latch=True), "latch needs a ramp"),
+    (lambda: StateSwitching(SwitchingFunction([1.0]), below=0, above=1, initial=2), r"initial must be below \(0\) or above \(1\)"),
+    (lambda: Relay(SwitchingFunction([1.0], ramp=Ramp(0, 1, 1)), low=0, high=1), "without a ramp"),
+    (lambda: Ramp(0.0, 1.0, 0.0), r"ramp period must be positive"),
+    (lambda: SwitchingFunction([np.nan]), "must contain only finite numbers"),
+    (lambda: StateSwitching(SwitchingFunction([1.0]), below=-1, above=1), r"below must be a configuration index"),
+])
+def test_switching_laws_refuse_bad_definitions(build, match):
+    with pytest.raises(ParameterError, match=match):
+        build()
+
+
+def test_a_problem_checks_its_law_against_its_configurations():
+    one = Configuration(A=np.zeros((2, 2)), name="one", **IDLE)
+    with pytest.raises(ParameterError, match=r"switching configs must be indices in \[0, 0\]; got 1"):
+        LCSProblem((one,), StateSwitching(SwitchingFunction([1.0, 0.0]), below=0, above=1), x0=[0, 0], t_span=(0, 1))
+    with pytest.raises(ParameterError, match=r"one coefficient per state \(n = 2\); got 3"):
+        LCSProblem((one, one), StateSwitching(SwitchingFunction([1.0, 0.0, 0.0]), below=0, above=1), x0=[0, 0],
+                   t_span=(0, 1))

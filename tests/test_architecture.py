@@ -1,0 +1,171 @@
+"""The architecture holds: no import cycle (modules or packages, function-local imports included),
+validation never branches on a model's name, and one periodic-orbit engine serves every caller."""
+import ast
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGES = ("converters", "netlists", "validation")
+MODEL_NAMES = ("buck", "boost", "buck-boost", "cuk", "prc")
+
+
+def _module_name(path: Path) -> str:
+    parts = path.relative_to(ROOT).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def _modules() -> dict[str, Path]:
+    return {_module_name(p): p for pkg in PACKAGES for p in (ROOT / pkg).rglob("*.py")}
+
+
+def _imports(name: str, path: Path, modules: dict) -> set[str]:
+    """Every project module ``name`` imports, anywhere in the file (function-local imports too)."""
+    is_package = path.name == "__init__.py"
+    package = name if is_package else name.rpartition(".")[0]
+    out = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            targets = [alias.name for alias in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                parts = package.split(".")
+                parts = parts[:len(parts) - (node.level - 1)]
+                base = ".".join(parts + ([base] if base else []))
+            # `from pkg import mod` imports the module pkg.mod when there is one, else names from pkg
+            targets = [f"{base}.{a.name}" if f"{base}.{a.name}" in modules else base for a in node.names]
+        else:
+            continue
+        for target in targets:
+            while target and target not in modules:
+                target = target.rpartition(".")[0]
+            if target and target != name:
+                out.add(target)
+    return out
+
+
+def _cycle(graph: dict) -> list | None:
+    """A cycle of the directed graph, or None (iterative depth-first search)."""
+    colour = {node: 0 for node in graph}
+    for root in graph:
+        if colour[root]:
+            continue
+        stack = [(root, iter(sorted(graph[root])))]
+        path = [root]
+        colour[root] = 1
+        while stack:
+            node, children = stack[-1]
+            child = next(children, None)
+            if child is None:
+                colour[node] = 2
+                stack.pop()
+                path.pop()
+            elif colour.get(child, 2) == 1:
+                return path[path.index(child):] + [child]
+            elif colour.get(child) == 0:
+                colour[child] = 1
+                stack.append((child, iter(sorted(graph[child]))))
+                path.append(child)
+    return None
+
+
+def test_no_import_cycle_between_modules():
+    modules = _modules()
+    graph = {name: _imports(name, path, modules) for name, path in modules.items()}
+    # A package's __init__ importing its own modules is how packages work, not a cycle.
+    for name in graph:
+        graph[name] = {t for t in graph[name] if not (name + ".").startswith(t + ".") or modules[t].name != "__init__.py"}
+    assert _cycle(graph) is None, f"import cycle: {' -> '.join(_cycle(graph))}"
+
+
+def test_the_cycle_finder_finds_a_function_local_cycle(tmp_path):
+    """The old event -> periodic -> stepping -> event cycle, through a function-local import, is caught."""
+    assert _cycle({"a": {"b"}, "b": {"c"}, "c": {"a"}}) == ["a", "b", "c", "a"]
+    assert _cycle({"a": {"b"}, "b": set(), "c": {"a"}}) is None
+    package = tmp_path / "converters"
+    package.mkdir()
+    (package / "__init__.py").write_text("")
+    (package / "event.py").write_text("from .periodic import shoot\n")
+    (package / "periodic.py").write_text("def shoot():\n    from .event import run\n")
+    modules = {"converters": package / "__init__.py", "converters.event": package / "event.py",
+               "converters.periodic": package / "periodic.py"}
+    graph = {name: _imports(name, path, modules) for name, path in modules.items()}
+    assert _cycle(graph) == ["converters.event", "converters.periodic", "converters.event"]
+
+
+def test_no_import_cycle_between_packages():
+    """converters.{lcp, problems, methods, analysis, models, ...}, netlists, validation: a strict layering."""
+    modules = _modules()
+
+    def package(name):
+        parts = name.split(".")
+        return ".".join(parts[:2]) if parts[0] == "converters" and len(parts) > 2 else (
+            name if parts[0] == "converters" else parts[0])
+    graph: dict[str, set] = {}
+    for name, path in modules.items():
+        source = package(name)
+        graph.setdefault(source, set())
+        for target in _imports(name, path, modules):
+            if package(target) != source:
+                graph[source].add(package(target))
+                graph.setdefault(package(target), set())
+    assert _cycle(graph) is None, f"package cycle: {' -> '.join(_cycle(graph))}"
+    assert "converters.analysis" not in graph["converters.methods"]      # methods know nothing of orbits
+    assert not any(p.startswith("converters.models") for p in graph["converters.methods"])
+    below_validation = [p for p in graph if p.startswith("converters") or p == "netlists"]
+    assert not [p for p in below_validation if "validation" in graph[p]]
+    assert not [p for p in graph if p.startswith("converters") and "netlists" in graph[p]]
+
+
+_NAMES = "|".join(re.escape(n) for n in MODEL_NAMES)
+_BRANCH = re.compile(rf"""(==|!=)\s*["']({_NAMES})["']|["']({_NAMES})["']\s*(==|!=)|"""
+                     rf"""\bin\s*[(\[{{]\s*["']({_NAMES})["']|\.name\s*(==|!=|in\b)""")
+
+
+def test_validation_never_branches_on_a_model_name():
+    hits = []
+    for path in (ROOT / "validation").rglob("*.py"):
+        for number, line in enumerate(path.read_text().splitlines(), 1):
+            if _BRANCH.search(line.split("#")[0]):
+                hits.append(f"{path.relative_to(ROOT)}:{number}: {line.strip()}")
+    assert hits == []
+
+
+def test_the_branch_pattern_does_catch_a_branch():
+    assert _BRANCH.search('if conv.name == "prc":') and _BRANCH.search("fraction = 0.5 if name == 'prc' else D")
+    assert not _BRANCH.search('get_model("boost", "smc")')
+
+
+def test_one_periodic_orbit_engine_serves_the_stepper_the_event_method_gdcm_and_the_report(monkeypatch):
+    from converters.analysis import periodic
+    calls = []
+    original = periodic.newton_orbit
+
+    def counting(period_map, *args, **kwargs):
+        calls.append(type(period_map).__name__)
+        return original(period_map, *args, **kwargs)
+    monkeypatch.setattr(periodic, "newton_orbit", counting)
+    from converters.run import run_converter
+    from validation import gdcm, tradeoff
+    run_converter("buck", {}, steady=True)                                   # the stepper (simulate --steady)
+    run_converter("buck", {}, method="event", steady=True)                  # the event method
+    gdcm._lcp_point({"converter": "cuk", "D": 0.4, "R": 10.0})            # GDCM maps and pcsuite gdcm
+    tradeoff.reference(tradeoff.CASES[1], periods=2)                         # the report's exact references
+    assert calls == ["StepPlanMap", "EventPeriodMap", "StepPlanMap", "StepPlanMap", "EventPeriodMap"]
+    # ... and no other module solves (J - I) dx = -r for a fixed point of its own.
+    others = [p for p in ROOT.joinpath("converters").rglob("*.py")
+              if p.name != "periodic.py" and "lcp" not in p.parts]          # lcp/newton.py is an LCP solver
+    assert not [p for p in others if re.search(r"def \w*(newton|shoot|fixed_point)\w*\(", p.read_text())]
+
+
+@pytest.mark.parametrize("name", MODEL_NAMES)
+def test_every_model_declares_its_signals_and_modes(name):
+    from converters.models import get_converter
+    model = get_converter(name)
+    assert set(model.signal_names) >= {"vout", "switch"}
+    assert model.off_held_label in model.mode_labels or model.off_held_label == "GDCM-OFF"
+    p = model.resolve({})
+    assert np.asarray(model.pair_currents).shape == (len(model.configurations(p)), len(model.pair_names))

@@ -1,0 +1,71 @@
+"""The one Trajectory type: its measures by rule (end point, linear, exact), windows, measured signals,
+mode fractions and concatenation."""
+import numpy as np
+import pytest
+
+from converters.trajectory import Samples, Trajectory, concatenate
+
+
+class _Labels:
+    """A model's laws in miniature: vout = 2 x, switch = x > 0.5, every point 'A' or 'B' by the switch."""
+
+    signal_names = ("vout", "switch")
+
+    def signal(self, name, samples: Samples):
+        return 2.0 * samples.x[:, 0] if name == "vout" else (samples.x[:, 0] > 0.5).astype(np.int8)
+
+    def conducting(self, samples):
+        return np.ones((samples.t.size, 1), dtype=bool)
+
+    def modes(self, conducting, switch, x):
+        return np.where(np.asarray(switch) >= 0.5, "B", "A").astype(object)
+
+
+def ramp(rule, n=11, period=0.5):
+    t = np.linspace(0.0, 1.0, n)
+    return Trajectory(t=t, x=t[:, None], state_names=("x",), rule=rule, labels=_Labels(), period=period)
+
+
+def test_means_and_rms_follow_the_rule_of_the_samples():
+    linear = ramp("linear")
+    assert linear.mean("x") == pytest.approx(0.5, abs=1e-15)              # exact for a linear signal
+    assert linear.rms("x") == pytest.approx(np.sqrt(1 / 3), abs=1e-15)
+    assert linear.mean("vout") == pytest.approx(1.0, abs=1e-15)
+    end = ramp("end")
+    assert end.mean("x") == pytest.approx(0.55, abs=1e-15)                # each step by its end point
+    assert end.rms("x") == pytest.approx(np.sqrt(np.mean(np.linspace(0.1, 1.0, 10) ** 2)), abs=1e-15)
+    assert linear.ripple("vout") == pytest.approx(2.0)
+
+
+def test_windows_in_periods_or_times():
+    tr = ramp("linear")
+    assert tr.window(periods=1) == (0.5, 1.0)
+    assert tr.mean("x", periods=1) == pytest.approx(0.75, abs=1e-15)
+    assert tr.mean("x", t0=0.2, t1=0.4) == pytest.approx(0.3, abs=1e-15)
+    with pytest.raises(ValueError, match="needs a switching period"):
+        ramp("linear", period=float("inf")).window(periods=1)
+
+
+def test_mode_fractions_count_each_step_by_its_end_point_label():
+    tr = ramp("end")
+    assert tr.mode_fractions(periods=2) == {"A": pytest.approx(0.5), "B": pytest.approx(0.5)}
+    assert list(tr.waveforms().columns) == ["time", "x", "vout", "switch", "mode"]
+
+
+def test_measured_signals_take_the_place_of_the_models_laws():
+    t = np.linspace(0.0, 1.0, 5)
+    tr = Trajectory(t=t, x=t[:, None], state_names=("x",), labels=_Labels(),
+                    measured={"vout": np.full(5, 3.0), "switch": np.ones(5), "conducting": np.zeros((5, 1), bool)})
+    assert tr.mean("vout") == pytest.approx(3.0)
+    assert set(tr.modes()) == {"B"}
+    assert not tr.conducting().any()
+    with pytest.raises(KeyError, match="signal must be one of x, vout, switch; got 'iL'"):
+        tr.signal("iL")
+
+
+def test_concatenated_runs_share_the_joint_point():
+    a, b = ramp("end"), ramp("end")
+    b = Trajectory(t=b.t + 1.0, x=b.x + 1.0, state_names=("x",), rule="end", labels=_Labels(), period=0.5)
+    joined = concatenate([a, b])
+    assert joined.t.size == 21 and joined.t[-1] == 2.0 and np.all(np.diff(joined.t) > 0)
+    assert joined.mean("x") == pytest.approx((0.55 + 1.55) / 2)
