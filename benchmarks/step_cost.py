@@ -52,7 +52,7 @@ SECOND_PROCESS = """
 import time
 t0 = time.perf_counter()
 from converters.models.circuits import half_wave_rectifier, diode_bridge
-from converters.methods.theta_kernels import _masks_by_size
+from converters.lcp.kernels import _masks_by_size
 from converters.methods import BackwardEuler
 from converters.simulate import simulate
 t1 = time.perf_counter()

@@ -13,11 +13,40 @@ MAX_INLINE_K = 8
 
 
 @njit(cache=True)
-def _solve_subset(M, q, mask, k, z, work):
-    """Solve M_JJ z_J = -q_J for J = bits of mask by Gaussian elimination with partial pivoting.
+def solve_augmented(a, m, cols):
+    """Gaussian elimination with partial pivoting on the m x (m + cols) augmented matrix ``a`` in place;
+    the solution is left in a[:m, m:m + cols]. Returns False when the left block is (numerically) singular."""
+    for col in range(m):
+        piv = col
+        best = abs(a[col, col])
+        for r in range(col + 1, m):
+            if abs(a[r, col]) > best:
+                best = abs(a[r, col])
+                piv = r
+        if best <= 1e-300:
+            return False
+        if piv != col:
+            for c in range(col, m + cols):
+                tmp = a[col, c]
+                a[col, c] = a[piv, c]
+                a[piv, c] = tmp
+        for r in range(col + 1, m):
+            f = a[r, col] / a[col, col]
+            if f != 0.0:
+                for c in range(col, m + cols):
+                    a[r, c] -= f * a[col, c]
+    for r in range(m - 1, -1, -1):
+        for c in range(m, m + cols):
+            s = a[r, c]
+            for l in range(r + 1, m):
+                s -= a[r, l] * a[l, c]
+            a[r, c] = s / a[r, r]
+    return True
 
-    Writes z (zeros outside J); returns False when M_JJ is (numerically) singular.
-    """
+
+@njit(cache=True)
+def _solve_subset(M, q, mask, k, z, work):
+    """Solve M_JJ z_J = -q_J for J = bits of mask; writes z (zeros outside J); False when M_JJ is singular."""
     idx = np.empty(k, dtype=np.int64)
     m = 0
     for i in range(k):
@@ -29,29 +58,10 @@ def _solve_subset(M, q, mask, k, z, work):
         for c in range(m):
             work[r, c] = M[idx[r], idx[c]]
         work[r, m] = -q[idx[r]]
-    for col in range(m):
-        piv = col
-        best = abs(work[col, col])
-        for r in range(col + 1, m):
-            if abs(work[r, col]) > best:
-                best = abs(work[r, col])
-                piv = r
-        if best <= 1e-300:
-            return False
-        if piv != col:
-            for c in range(col, m + 1):
-                tmp = work[col, c]
-                work[col, c] = work[piv, c]
-                work[piv, c] = tmp
-        for r in range(col + 1, m):
-            f = work[r, col] / work[col, col]
-            for c in range(col, m + 1):
-                work[r, c] -= f * work[col, c]
-    for r in range(m - 1, -1, -1):
-        s = work[r, m]
-        for c in range(r + 1, m):
-            s -= work[r, c] * z[idx[c]]
-        z[idx[r]] = s / work[r, r]
+    if not solve_augmented(work, m, 1):
+        return False
+    for r in range(m):
+        z[idx[r]] = work[r, m]
     return True
 
 

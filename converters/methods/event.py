@@ -169,7 +169,6 @@ class Flow:
         held_pairs = np.array([(held >> i) & 1 for i in range(k)], dtype=bool)
         self.watch_rows = np.where(held_pairs[:, None], u_rows, y_rows)
         self.constraint_rows, self.project = constraint_rows, project
-        n1 = Z.shape[0]
         norm = float(np.abs(Z).sum(axis=1).max())
         self.delta = min(delta, 0.25 / norm) if norm > 0.0 else delta
 

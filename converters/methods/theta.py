@@ -70,8 +70,6 @@ class Theta(Method, key="lcp"):
     def label(self) -> str:
         return "backward-euler" if self.theta == 1.0 else f"theta({self.theta:g})"
 
-    name = label
-
     def supports(self, problem: LCSProblem) -> None:
         if not isinstance(problem.switching, Schedule) and problem.k > MAX_INLINE_K:
             raise ParameterError(f"the state-driven laws need k <= {MAX_INLINE_K} complementarity pairs in the "

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..lcp.kernels import MAX_INLINE_K, _masks_by_size, solve_small_lcp
+from ..lcp.kernels import _masks_by_size, solve_augmented, solve_small_lcp
 
 #: Status codes returned by :func:`run_steps`.
 OK, NEEDS_GENERAL_SOLVER, NO_SOLUTION = 0, 1, 2
@@ -96,38 +96,6 @@ EVENTS_FULL = 3
 
 
 @njit(cache=True)
-def _solve_rows(a, m, cols):
-    """Gaussian elimination with partial pivoting on the m x (m + cols) augmented matrix ``a`` in place;
-    the solution is left in a[:, m:]. Returns False when the left block is (numerically) singular."""
-    for col in range(m):
-        piv = col
-        best = abs(a[col, col])
-        for r in range(col + 1, m):
-            if abs(a[r, col]) > best:
-                best = abs(a[r, col])
-                piv = r
-        if best <= 1e-300:
-            return False
-        if piv != col:
-            for c in range(m + cols):
-                tmp = a[col, c]
-                a[col, c] = a[piv, c]
-                a[piv, c] = tmp
-        for r in range(col + 1, m):
-            f = a[r, col] / a[col, col]
-            if f != 0.0:
-                for c in range(col, m + cols):
-                    a[r, c] -= f * a[col, c]
-    for r in range(m - 1, -1, -1):
-        for c in range(m, m + cols):
-            s = a[r, c]
-            for l in range(r + 1, m):
-                s -= a[r, l] * a[l, c]
-            a[r, c] = s / a[r, r]
-    return True
-
-
-@njit(cache=True)
 def theta_matrices(A, B, C, D, E, F, dt, theta, Phi, Gamma, H, M, W):
     """One-step matrices of one configuration over dt (the formulas of :mod:`.discretize`), in place:
     W = (I - dt theta A)^-1, Phi = W (I + dt (1 - theta) A), Gamma = dt W E, H = dt W B, M = D + C H."""
@@ -145,7 +113,7 @@ def theta_matrices(A, B, C, D, E, F, dt, theta, Phi, Gamma, H, M, W):
         a[i, 2 * n] = dt * E[i]
         for l in range(k):
             a[i, 2 * n + 1 + l] = dt * B[i, l]
-    if not _solve_rows(a, n, cols):
+    if not solve_augmented(a, n, cols):
         return False
     for i in range(n):
         for j in range(n):
@@ -394,7 +362,6 @@ def step_jacobian(which, u, Phi, H, C, M, jac):
     (exact wherever the active sets stay the same under a small change of x_0)."""
     n, k = jac.shape[0], u.shape[1]
     S = np.empty((n, n))
-    CPhi = np.empty((k, n))
     a = np.empty((k, k + n))
     act = np.empty(k, dtype=np.int64)
     new = np.empty((n, n))
@@ -417,7 +384,7 @@ def step_jacobian(which, u, Phi, H, C, M, jac):
                     for l in range(n):
                         acc += C[s, act[r], l] * Phi[s, l, col]
                     a[r, m + col] = acc
-            if _solve_rows(a, m, n):
+            if solve_augmented(a, m, n):
                 for r in range(n):
                     for col in range(n):
                         acc = 0.0
