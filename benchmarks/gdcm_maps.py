@@ -1,9 +1,9 @@
 """The four LCP-only D-K maps (buck, boost, buck-boost, Cuk; 30 x 30 points each), one process.
 
 Per point: closed-form and exact (matrix-exponential CCM orbit) prediction, the stepper's periodic
-orbit (h = T/1000: 5 warm-up periods, Newton shooting on one reused step plan) and its mode class.
-Side by side on 30 points of the buck map: the same orbit through ``run_converter(steady=True)``
-(shooting plus 20 confirming periods and a Trajectory with its event table), for the ratio.
+orbit (h = T/1000: 5 warm-up periods, Newton shooting with the exact Jacobian on one reused step plan)
+and its mode class. Side by side on 30 points of the buck map: ``run_converter(steady=True)`` (20 warm-up
+periods, the same shooting, then 20 periods simulated from the orbit), for the ratio.
 Target (issue 6): the four maps in under 20 s.
 """
 from __future__ import annotations

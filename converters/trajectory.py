@@ -188,7 +188,11 @@ class Trajectory:
     def _integrate(self, name: str, power: int, t0: float, t1: float) -> float:
         """Integral of signal**power over [t0, t1] by the trajectory's rule."""
         if self.rule == "exact" and self.exact is not None and name not in self.measured:
-            nodes, weights = self.exact.quadrature(t0, t1)
+            cache = self.__dict__.setdefault("_quadrature_cache", {})
+            if (t0, t1) not in cache:
+                cache.clear()                    # one window at a time: the nodes of a long run are large
+                cache[(t0, t1)] = self.exact.quadrature(t0, t1)
+            nodes, weights = cache[(t0, t1)]
             if name in self.state_names:
                 values = nodes.x[:, self.state_names.index(name)]
             else:

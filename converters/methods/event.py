@@ -169,6 +169,8 @@ class Flow:
         held_pairs = np.array([(held >> i) & 1 for i in range(k)], dtype=bool)
         self.watch_rows = np.where(held_pairs[:, None], u_rows, y_rows)
         self.constraint_rows, self.project = constraint_rows, project
+        self.constraint_scales = np.abs(constraint_rows).sum(axis=1)
+        self.watches: dict = {}                  # _Watch per latch state (built by the machine that owns the flow)
         norm = float(np.abs(Z).sum(axis=1).max())
         self.delta = min(delta, 0.25 / norm) if norm > 0.0 else delta
 
@@ -198,13 +200,14 @@ class Flow:
         """Every watched quantity's first non-vanishing entry of (g, g', g'', ...) along the flow is
         positive (or all vanish)."""
         rows, scales = self.lexicographic_data
-        values = rows @ xt                                     # (order + 1, k)
-        size = np.abs(xt).max()
-        significant = np.abs(values) > _ZERO_RTOL * scales * size + 1e-300
-        for i in range(values.shape[1]):
-            hit = np.flatnonzero(significant[:, i])
-            if hit.size and values[hit[0], i] < 0.0:
-                return False
+        values = (rows @ xt).T.tolist()                        # per quantity: g, g', g'', ...
+        limits = ((_ZERO_RTOL * np.abs(xt).max()) * scales + 1e-300).T.tolist()
+        for quantity, limit in zip(values, limits):            # plain floats: the first entry decides mostly
+            for value, bound in zip(quantity, limit):
+                if abs(value) > bound:
+                    if value < 0.0:
+                        return False
+                    break
         return True
 
     @cached_property
@@ -229,11 +232,13 @@ class Flow:
         return np.tensordot(weights, self.taylor, axes=([1], [0]))
 
     def propagate(self, xt: np.ndarray, s: float) -> np.ndarray:
-        """x~ after s in [0, delta] (also for a stack of columns)."""
-        return np.tensordot(s ** _EXPONENTS, self.taylor, axes=(0, 0)) @ xt
+        """x~ after s in [0, delta]."""
+        return s ** _EXPONENTS @ (self.taylor @ xt)
 
     def advance(self, xt: np.ndarray, tau: float) -> np.ndarray:
-        """x~ after any tau >= 0: whole sampling steps by powers of expm(delta Z), the rest by the series."""
+        """x~ after any tau >= 0 (a rounding-negative tau counts as 0): whole sampling steps by powers of
+        expm(delta Z), the rest by the series."""
+        tau = max(tau, 0.0)
         whole = int(np.floor(tau / self.delta * (1.0 - 1e-12)))
         q = whole
         while q > 0:
@@ -270,7 +275,9 @@ class _Watch:
             slopes.append(np.array([switch_slope]))
             pairs.append(np.array([-1]))
         self.rows = np.vstack(rows)
+        self.rows_T = np.ascontiguousarray(self.rows.T)
         self.slopes = np.concatenate(slopes)
+        self.timed = bool(np.any(self.slopes))
         self.pairs = np.concatenate(pairs)
         self.row_scales = np.abs(self.rows).sum(axis=1)
 
@@ -281,6 +288,7 @@ class Segment:
     t1: float
     flow: Flow
     xt0: np.ndarray     # augmented state [x; 1] at t0
+    xt1: np.ndarray     # ... and at t1, before whatever happens there
 
 
 class EventSolution:
@@ -354,7 +362,7 @@ class EventSolution:
         config = np.empty(times.size, dtype=np.int64)
         for i, s in enumerate(which):
             seg = self.segments[s]
-            xt = expm((times[i] - seg.t0) * seg.flow.Z) @ seg.xt0
+            xt = seg.flow.advance(seg.xt0, times[i] - seg.t0)
             x[i], u[i], y[i] = xt[:n], seg.flow.u_rows @ xt, seg.flow.y_rows @ xt
             config[i] = seg.flow.config
         return Samples(times, x, u, y, config)
@@ -371,7 +379,20 @@ class EventSolution:
         bounds = np.array([s.t1 for s in self.segments])
         t = np.unique(np.concatenate([grid[grid <= t1], bounds]))
         t = t[np.concatenate([[True], np.diff(t) > 1e-12 * output_step])]
-        x, u, y, config = self._sample_sorted(t, output_step)
+        # A point at a segment's end takes the state the run recorded there; the others are propagated.
+        n, k = self.problem.n, self.problem.k
+        x, u, y = np.empty((t.size, n)), np.empty((t.size, k)), np.empty((t.size, k))
+        config = np.empty(t.size, dtype=np.int64)
+        which = np.minimum(np.searchsorted(bounds, t), bounds.size - 1)
+        at_end = bounds[which] == t
+        segs = [self.segments[i] for i in which[at_end]]
+        ends = np.array([seg.xt1 for seg in segs]).reshape(-1, n + 1)
+        x[at_end] = ends[:, :n]
+        u[at_end] = np.einsum("skn,sn->sk", np.array([seg.flow.u_rows for seg in segs]).reshape(-1, k, n + 1), ends)
+        y[at_end] = np.einsum("skn,sn->sk", np.array([seg.flow.y_rows for seg in segs]).reshape(-1, k, n + 1), ends)
+        config[at_end] = [seg.flow.config for seg in segs]
+        inside = ~at_end
+        x[inside], u[inside], y[inside], config[inside] = self._sample_sorted(t[inside], output_step)
         problem = self.problem
         return Trajectory(t=t, x=x, u=u, y=y, config=config, state_names=problem.state_names,
                           pair_names=problem.pair_names,
@@ -389,6 +410,9 @@ class EventSolution:
         starts = np.array([seg.t0 for seg in self.segments])
         which = np.clip(np.searchsorted(starts, t, side="left") - 1, 0, len(self.segments) - 1)
         powers: dict = {}
+        longest: dict = {}                       # per flow, its longest segment: how many powers it needs
+        for seg in self.segments:
+            longest[id(seg.flow)] = max(longest.get(id(seg.flow), 0.0), seg.t1 - seg.t0)
         bounds = np.searchsorted(which, np.arange(len(self.segments) + 1))
         for s_index, seg in enumerate(self.segments):
             lo, hi = bounds[s_index], bounds[s_index + 1]
@@ -397,7 +421,8 @@ class EventSolution:
             flow = seg.flow
             stack = powers.get(id(flow))
             if stack is None:
-                stack = powers[id(flow)] = _power_stack(expm(step * flow.Z), _BLOCK)
+                count = min(_BLOCK, int(longest[id(flow)] / step) + 2)
+                stack = powers[id(flow)] = _power_stack(expm(step * flow.Z), count)
             offsets = t[lo:hi] - seg.t0
             q = np.floor(offsets / step * (1 + 1e-12)).astype(np.int64)
             r = offsets - q * step
@@ -405,13 +430,15 @@ class EventSolution:
             states = np.empty((hi - lo, n + 1))
             for key in np.unique(r_key):
                 sel = np.flatnonzero(r_key == key)
-                block_start = expm(r[sel[0]] * flow.Z) @ seg.xt0
+                block_start = flow.advance(seg.xt0, r[sel[0]])
                 qs = q[sel]
-                for b in range(int(qs.max()) // _BLOCK + 1):
+                blocks = int(qs.max()) // _BLOCK + 1
+                for b in range(blocks):
                     in_block = sel[(qs // _BLOCK) == b]
                     if in_block.size:
                         states[in_block] = stack[q[in_block] - b * _BLOCK] @ block_start
-                    block_start = stack[_BLOCK] @ block_start
+                    if b + 1 < blocks:
+                        block_start = stack[_BLOCK] @ block_start
             x[lo:hi] = states[:, :n]
             u[lo:hi] = states @ flow.u_rows.T
             y[lo:hi] = states @ flow.y_rows.T
@@ -441,6 +468,10 @@ class _Machine:
         self.law = law if isinstance(law, StateSwitching) else None
         self.index2 = [i for i in range(problem.k)
                        if all(not np.any(c.D[i, :]) and not np.any(c.D[:, i]) for c in problem.configurations)]
+        K = self.index2
+        #: Per configuration: (C_K, F_K, B_K, row scales) of the pairs whose y is a function of the state.
+        self.impulse_data = [(c.C[K], c.F[K], c.B[:, K], np.abs(c.C[K]).sum(axis=1) + np.abs(c.F[K]))
+                             for c in problem.configurations]
 
     # --- modes --------------------------------------------------------------------------------------
 
@@ -479,18 +510,18 @@ class _Machine:
         delta = self.options.sample_fraction * self.scale
         return Flow(index, held, Z, u_rows, y_rows, constraint_rows, project, delta)
 
-    def _on_set(self, flow: Flow, xt: np.ndarray, rate_field, slack: float) -> tuple[bool, np.ndarray]:
+    def _on_set(self, flow: Flow, xt: np.ndarray, size: float, rate_field, slack: float) -> tuple[bool, np.ndarray]:
         """Is x~ on the flow's state manifold N^T (C_J x + F_J) = 0? Up to rounding, and at an event up to
         what the located time's error (``slack`` s, along the field before the event) allows. Returns
-        (ok, x~ projected onto the manifold along B_J)."""
+        (ok, x~ projected onto the manifold along B_J). ``size``: max |x~|."""
         rows = flow.constraint_rows
         if rows.shape[0] == 0:
             return True, xt
         r = rows @ xt
-        tol = _ON_SET_RTOL * (np.abs(rows).sum(axis=1) * np.abs(xt).max() + 1e-300)
+        tol = _ON_SET_RTOL * (flow.constraint_scales * size + 1e-300)
         if rate_field is not None:
             tol = tol + slack * np.abs(rows[:, :-1] @ rate_field)
-        if np.any(np.abs(r) > tol):
+        if (np.abs(r) > tol).any():
             return False, xt
         BJ, pinv = flow.project
         out = xt.copy()
@@ -506,9 +537,10 @@ class _Machine:
         if order is None:
             order = self.orders[reference] = _held_sets_by_distance(k, reference)
         slack = 4.0 * self.options.event_tol * self.scale
+        size = np.abs(xt).max()
         for held in order:
             flow = self.flow(config, held)
-            ok, projected = self._on_set(flow, xt, rate_field, slack)
+            ok, projected = self._on_set(flow, xt, size, rate_field, slack)
             if ok and flow.lexicographic_ok(projected):
                 return flow, projected
         name = self.problem.configurations[config].name
@@ -522,10 +554,9 @@ class _Machine:
         if not K:
             return xt
         c = self.problem.configurations[config]
-        CK, FK, BK = c.C[K], c.F[K], c.B[:, K]
+        CK, FK, BK, row_scale = self.impulse_data[config]
         y = CK @ xt[:-1] + FK
-        scale = (np.abs(CK).sum(axis=1) + np.abs(FK)) * np.abs(xt).max()
-        if np.all(y >= -_CROSS_RTOL * scale):
+        if np.all(y >= -_CROSS_RTOL * np.abs(xt).max() * row_scale):
             return xt
         M = CK @ BK
         result = solve_lcp(M, y, method="lemke")
@@ -591,21 +622,25 @@ class _Machine:
     def cross(self, flow: Flow, watch: _Watch, xt: np.ndarray, tau_max: float, phase0: float):
         """First downward zero crossing of a watched quantity in (0, tau_max]: (tau, row) or (None, None),
         and x~ at tau_max when there is none."""
-        g_scale = watch.row_scales * np.abs(xt).max() + np.abs(watch.slopes) * self.scale
+        g_scale = watch.row_scales * np.abs(xt).max()
+        if watch.timed:
+            g_scale = g_scale + np.abs(watch.slopes) * self.scale
         threshold = -_CROSS_RTOL * g_scale
         full = int(np.floor(tau_max / flow.delta * (1.0 - 1e-12)))
         tau, state = 0.0, xt
         while full > 0:
             m = min(full, _POWERS)
             states = flow.powers[1:m + 1] @ state
-            taus = tau + flow.delta * np.arange(1, m + 1)
-            values = states @ watch.rows.T + (phase0 + taus)[:, None] * watch.slopes[None, :]
-            below = np.flatnonzero((values < threshold[None, :]).any(axis=1))
+            values = states @ watch.rows_T
+            if watch.timed:
+                values += (phase0 + tau + flow.delta * np.arange(1, m + 1))[:, None] * watch.slopes[None, :]
+            below = np.flatnonzero(values[:, 0] < threshold[0] if values.shape[1] == 1
+                                   else (values < threshold).any(axis=1))
             if below.size:
                 i = below[0]
                 start = state if i == 0 else states[i - 1]
                 return self._locate(flow, watch, start, tau + i * flow.delta, flow.delta, g_scale, phase0), None
-            tau, state, full = taus[-1], states[m - 1], full - m
+            tau, state, full = tau + m * flow.delta, states[m - 1], full - m
         rest = tau_max - tau
         if rest > 0.0:
             end = flow.propagate(state, rest)
@@ -682,16 +717,13 @@ class _Machine:
         phase_start = t                                          # where the current ramp period began
         xt = self.enter(config, xt, t, log, jac)
         flow, xt = self.select(config, xt, t, 0)
-        watch_cache: dict = {}
         same_time_events, events, crossings = 0, 0, 0
         stop_time = None
         for edge_t, edge_kind in self.edges(t, t_end):
             while True:
-                row, slope = self.switch_row(config, latched)
-                key = (id(flow), row is not None and tuple(row), slope)
-                watch = watch_cache.get(key)
-                if watch is None:
-                    watch = watch_cache[key] = _Watch(flow, row, slope)
+                watch = flow.watches.get(latched)
+                if watch is None:                        # the law's row depends on the configuration and the latch
+                    watch = flow.watches[latched] = _Watch(flow, *self.switch_row(config, latched))
                 phase0 = t - phase_start
                 (tau, which), xt_end = self.cross(flow, watch, xt, edge_t - t, phase0)
                 if tau is not None and t + tau >= edge_t - options.event_tol * self.scale:
@@ -701,7 +733,7 @@ class _Machine:
                     xt_end = flow.advance(xt, tau)
                 t_next = edge_t if tau is None else t + tau
                 if record and t_next > t:
-                    segments.append(Segment(t, t_next, flow, xt))
+                    segments.append(Segment(t, t_next, flow, xt, xt_end))
                 if jac is not None:
                     jac[:] = flow.transition(t_next - t) @ jac
                 if tau is None:

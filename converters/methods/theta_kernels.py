@@ -163,7 +163,54 @@ def _lcp_step(Phi, Gamma, H, C, F, M, x_from, x_to, u_to, y_to, mask, order, wor
     return mask
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
+def _uniform_step(Phi, Gamma, H, C, F, M, s, x, u, y, j, mask, order, work, xf, q, z):
+    """Step j -> j + 1 with the stacked uniform-step matrices of set s (no slicing: indices only); k = 1 in
+    closed form. Returns the active-set mask, or -1 (no solution the inline solver finds)."""
+    n, k = x.shape[1], u.shape[1]
+    for i in range(n):
+        acc = Gamma[s, i]
+        for l in range(n):
+            acc += Phi[s, i, l] * x[j, l]
+        xf[i] = acc
+    if k == 1:
+        qq = F[s, 0]
+        for l in range(n):
+            qq += C[s, 0, l] * xf[l]
+        m = M[s, 0, 0]
+        zz = 0.0
+        if qq < 0.0:
+            if m <= 0.0:
+                return -1
+            zz = -qq / m
+        for i in range(n):
+            x[j + 1, i] = xf[i] + H[s, i, 0] * zz
+        u[j + 1, 0] = zz
+        y[j + 1, 0] = qq + m * zz
+        return 1 if zz > 0.0 else 0
+    for i in range(k):
+        acc = F[s, i]
+        for l in range(n):
+            acc += C[s, i, l] * xf[l]
+        q[i] = acc
+    mask = solve_small_lcp(M[s], q, k, z, mask, order, work)
+    if mask < 0:
+        return -1
+    for i in range(n):
+        acc = xf[i]
+        for l in range(k):
+            acc += H[s, i, l] * z[l]
+        x[j + 1, i] = acc
+    for i in range(k):
+        acc = q[i]
+        for l in range(k):
+            acc += M[s, i, l] * z[l]
+        y[j + 1, i] = acc
+        u[j + 1, i] = z[i]
+    return mask
+
+
+@njit(cache=True, inline="always")
 def _surface(c, d, x, phase, low, slope):
     """s = c . x + d - ramp at the given phase of the ramp period (no ramp: slope = low = 0)."""
     acc = d - low - slope * phase
@@ -217,8 +264,7 @@ def run_state_switched(A, B, C, D, E, F, Phi, Gamma, H, M, t, h, theta, c, d, lo
             return EVENTS_FULL, j
         uniform = abs(dt - h) <= 1e-9 * h
         if uniform:
-            mask = _lcp_step(Phi[current], Gamma[current], H[current], C[current], F[current], M[current],
-                             x[j], x[j + 1], u[j + 1], y[j + 1], mask, order, work, xf, q, z)
+            mask = _uniform_step(Phi, Gamma, H, C, F, M, current, x, u, y, j, mask, order, work, xf, q, z)
         else:
             theta_matrices(A[current], B[current], C[current], D[current], E[current], F[current], dt, theta,
                            Phi_s, Gamma_s, H_s, M_s, W_s)
