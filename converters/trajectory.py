@@ -272,11 +272,12 @@ class Trajectory:
 
 def concatenate(parts: list[Trajectory]) -> Trajectory:
     """One trajectory from consecutive runs (the end point of each part is the start of the next)."""
-    from dataclasses import replace
-    import pandas as pd
     first = parts[0]
     if len(parts) == 1:
         return first
+    from dataclasses import replace
+
+    import pandas as pd
 
     def stack(name):
         arrays = [getattr(p, name) for p in parts]

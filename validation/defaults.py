@@ -22,6 +22,10 @@ OPERATING_POINTS: list[tuple[str, dict, str]] = [(p["converter"], dict(p["params
 TRADEOFF_CASES: list[dict] = [dict(case) for case in _DATA["tradeoff_cases"]]
 #: The stability map's base point.
 STABILITY_BASE: dict = dict(_DATA["stability_base"])
+#: D-K maps: K range per converter, the D range, the band around the closed-form boundary.
+K_RANGES: dict[str, tuple] = {name: tuple(r) for name, r in _DATA["dk_maps"]["k_range"].items()}
+D_RANGE: tuple = tuple(_DATA["dk_maps"]["d_range"])
+BOUNDARY_BAND: float = _DATA["dk_maps"]["boundary_band"]
 
 
 def passes(check: str, value: float, threshold: float) -> bool:

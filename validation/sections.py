@@ -12,7 +12,7 @@ import pandas as pd  # noqa: E402
 
 from converters.lcp.problems import problem_set  # noqa: E402
 
-from .gdcm import K_RANGES  # noqa: E402
+from .defaults import K_RANGES  # noqa: E402
 from .core_checks import convergence_table, core_waveforms, observed_orders  # noqa: E402
 from .peer import METHODS, PEER_TOL, peer_directory, peer_table, solver_table  # noqa: E402
 from .report import Section, csv_bytes, figure_png, table_html  # noqa: E402

@@ -42,8 +42,6 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
-from scipy.linalg import expm
-from scipy.optimize import brentq
 
 from ..errors import ParameterError, SimulationError
 from ..lcp import solve_lcp
@@ -140,6 +138,12 @@ _POWERS = 64           # sampling steps per batched product
 _ZERO_RTOL = 1e-10     # a derivative counts as zero below this fraction of its own scale
 _CROSS_RTOL = 1e-13    # a watched value counts as negative below -this fraction of its scale
 _ON_SET_RTOL = 1e-9    # a held pair's constraint N^T (C x + F) counts as met up to this (relative)
+
+
+def expm(A: np.ndarray) -> np.ndarray:
+    """scipy's matrix exponential (imported on first use: a run that needs no event method never pays it)."""
+    from scipy.linalg import expm as scipy_expm
+    return scipy_expm(A)
 
 
 def _power_stack(S: np.ndarray, count: int) -> np.ndarray:
@@ -682,6 +686,7 @@ class _Machine:
                         break
                 if left is None:                                 # leaves at once: an event at tau_a
                     return tau_a, r
+            from scipy.optimize import brentq
             s = brentq(g, left, width, xtol=xtol, rtol=4 * np.finfo(float).eps, maxiter=200)
             if g(s) > threshold:
                 # A loose tolerance may stop short of the zero; the mode selection must see the crossing

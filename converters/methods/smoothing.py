@@ -20,8 +20,6 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.integrate import solve_ivp
-from scipy.special import expit
 
 from ..errors import ParameterError, SimulationError
 from ..validate import check_positive, parse_value
@@ -98,10 +96,12 @@ class Smoothing(Method, key="smooth"):
 def _pair_law(y, eps):
     """u(y) and du/dy of the softplus law u = eps log(1 + exp(-y / eps^2))."""
     z = -y / (eps * eps)
+    from scipy.special import expit
     return eps * np.logaddexp(0.0, z), -expit(z) / eps
 
 
 def _integrate(problem: LCSProblem, method: Smoothing, x: np.ndarray) -> Trajectory:
+    from scipy.integrate import solve_ivp
     start_clock = time.perf_counter()
     t0, t1 = problem.t_span
     edges = np.concatenate([[t0], problem.switching.breakpoints(t0, t1), [t1]])

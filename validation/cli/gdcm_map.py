@@ -6,7 +6,7 @@ from pathlib import Path
 
 
 def add(sub) -> None:
-    from ..gdcm import K_RANGES
+    from ..defaults import K_RANGES
     gmap = sub.add_parser("gdcm-map", help="D-K map of the conduction mode: prediction, LCP and ngspice")
     gmap.add_argument("converter", choices=list(K_RANGES))
     gmap.add_argument("--size", type=int, nargs=2, default=[30, 30], metavar=("N_D", "N_K"))
