@@ -91,15 +91,6 @@ def reference(case: Case, periods: int = PERIODS) -> Reference:
                      time.perf_counter() - start)
 
 
-def linear_rms(t, y) -> float:
-    """RMS of the piecewise-linear interpolant of (t, y), exactly: each piece gives dt (a^2 + a b + b^2) / 3.
-    (The trapezoidal rule on y^2 would add its own error, h^2 / (2 a^2) relative on a ramp of length a:
-    3e-4 at T/100 on a DCM buck's current, more than the methods' own.) Trajectory.rms with the
-    ``linear`` rule is this."""
-    a, b = y[:-1], y[1:]
-    return float(np.sqrt(np.sum(np.diff(t) * (a * a + a * b + b * b)) / 3.0 / (t[-1] - t[0])))
-
-
 def _timing_error(ref: Reference, times) -> float:
     if ref.events.size == 0:
         return float("nan")
