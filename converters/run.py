@@ -89,12 +89,14 @@ def run_converter(name_or_model, params: dict | None = None, *, control: str = "
     h : float, optional
         The stepper's step, or the output spacing of the other methods (default: the model's, T/1000).
     t_end, periods : optional
-        Duration in s or in switching periods (default 500 periods).
+        Duration in s or in switching periods (default 500 periods; with ``steady``, the span returned on the
+        orbit, default 20 periods).
     steady : bool
         Run to the method's own periodic orbit: ``WARM_UP_PERIODS`` from x0, then Newton shooting on the
         method's period map with its exact Jacobian until the estimated distance to the orbit is below
-        ``steady_tol`` / 10 (relative); ``STEADY_PERIODS`` periods are then simulated from the orbit and
-        returned (their time starts at 0; ``metadata['steady_periods']`` counts every period simulated).
+        ``steady_tol`` / 10 (relative); the span asked for (default ``STEADY_PERIODS`` periods) is then
+        simulated from the orbit and returned (its time starts at 0; ``metadata['steady_periods']`` counts
+        every period simulated: warm-up, Newton's and the span returned).
         A run that cannot reach the orbit raises SimulationError with the reason.
     x0 : array_like, optional
         Initial state (default: the model's, at rest).
@@ -104,19 +106,21 @@ def run_converter(name_or_model, params: dict | None = None, *, control: str = "
     start = time.perf_counter()
     method = make_method(model, p, method, h, **options)
     T = model.period(p)
-    span = duration(model, p, t_end, None if steady else periods)
+    if steady and t_end is None and periods is None:
+        periods = STEADY_PERIODS                 # what --steady returns: periods on the orbit
+    span = duration(model, p, t_end, periods)
     steady_tol = parse_value("steady_tol", steady_tol)
     if not 0.0 < steady_tol < 1.0:
         raise ParameterError(f"steady_tol must be in (0, 1); got {steady_tol!r}")
     meta = {"model": model.name, "control": model.control, "params": p, "method_options": method.options()}
     if steady:
         if not model.periodic(p):
-            raise ParameterError(f"--steady needs a fixed switching period; {model.key} has none (run --t-end, "
-                                 "or find its cycle with converters.analysis.periodic.autonomous_orbit)")
+            raise ParameterError(f"--steady needs a fixed switching period; {model.key} has none (run --t-end, or find "
+                                 "its cycle with converters.analysis.periodic.autonomous_orbit and the event method)")
         orbit = steady_state(model, p, method, x0=x0, tol=0.1 * steady_tol)
-        tr = simulate(model.problem(p, STEADY_PERIODS * T, orbit.x0), method)
-        done = WARM_UP_PERIODS + orbit.evaluations
-        meta.update(periods=done + STEADY_PERIODS, steady_periods=done + STEADY_PERIODS, orbit=orbit.summary())
+        tr = simulate(model.problem(p, span, orbit.x0), method)
+        simulated = orbit.evaluations + span / T        # the warm-up and Newton's spans, then the output
+        meta.update(periods=int(round(simulated)), steady_periods=int(round(simulated)), orbit=orbit.summary())
     else:
         tr = _simulate_phases(model, p, method, span, x0)
         meta.update(periods=int(round(span / T)) if model.periodic(p) else None)

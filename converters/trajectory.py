@@ -33,6 +33,7 @@ class Samples:
     y: np.ndarray | None
     config: np.ndarray | None
     relay: np.ndarray | None = None
+    held: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -52,6 +53,9 @@ class Trajectory:
         Configuration of the step that arrived at each point (row 0: of the first step).
     relay : ndarray, shape (N,), or None
         The relay law's blend z in [0, 1] per point (problems switched by a Relay).
+    held : ndarray of bool, shape (N, k), or None
+        The held pairs of the mode each point belongs to, where the method knows them exactly (the event
+        method: its segments' modes, free of the rounding of u and y at an event); None: u > y.
     method : str
         Registry name of the method (``lcp``, ``event``, ``smooth``, ``spice``).
     steps : int
@@ -86,6 +90,7 @@ class Trajectory:
     pair_names: tuple[str, ...] = ()
     config_names: tuple[str, ...] = ()
     relay: np.ndarray | None = None
+    held: np.ndarray | None = None
     method: str = ""
     steps: int = 0
     wall_s: float = 0.0
@@ -102,7 +107,8 @@ class Trajectory:
 
     def samples(self, rows=slice(None)) -> Samples:
         pick = (lambda a: None if a is None else a[rows])
-        return Samples(self.t[rows], self.x[rows], pick(self.u), pick(self.y), pick(self.config), pick(self.relay))
+        return Samples(self.t[rows], self.x[rows], pick(self.u), pick(self.y), pick(self.config), pick(self.relay),
+                       pick(self.held))
 
     @property
     def events(self):
@@ -119,8 +125,8 @@ class Trajectory:
 
     @property
     def active(self) -> np.ndarray:
-        """Complementarity mode flags, shape (N, k): True where u > y (u carries the pair)."""
-        return self.u > self.y
+        """Complementarity mode flags, shape (N, k): the held pairs (u carries the pair; u > y)."""
+        return self.held if self.held is not None else self.u > self.y
 
     def state(self, name: str) -> np.ndarray:
         try:
@@ -174,22 +180,31 @@ class Trajectory:
 
     def window(self, periods: float | None = None, t0: float | None = None, t1: float | None = None) -> tuple:
         """(t0, t1) of the last ``periods`` switching periods, or of the given times (default: the run)."""
-        end = self.t[-1] if t1 is None else float(t1)
+        end = self.t[-1] if t1 is None else min(float(t1), self.t[-1])
         if periods is not None:
             if not np.isfinite(self.period):
                 raise ValueError("a window in periods needs a switching period; give t0 instead")
             start = max(self.t[0], end - periods * self.period)
         else:
             start = self.t[0] if t0 is None else max(self.t[0], float(t0))
+        if not end > start:
+            raise ValueError(f"the window [{start:g}, {end:g}] s holds no time of the run [{self.t[0]:g}, {self.t[-1]:g}] s")
         return start, end
 
     def _rows(self, t0: float, t1: float) -> np.ndarray:
+        """Indices of the samples in [t0, t1]; at least the two around a window shorter than a step."""
         span = max(t1 - t0, 1e-300)
-        return np.flatnonzero((self.t >= t0 - 1e-12 * span) & (self.t <= t1 + 1e-12 * span))
+        rows = np.flatnonzero((self.t >= t0 - 1e-12 * span) & (self.t <= t1 + 1e-12 * span))
+        if rows.size < 2:
+            last = min(max(int(np.searchsorted(self.t, t1)), 1), self.t.size - 1)
+            rows = np.array([last - 1, last])
+        return rows
 
     def _integrate(self, name: str, power: int, t0: float, t1: float) -> float:
         """Integral of signal**power over [t0, t1] by the trajectory's rule."""
         if self.rule == "exact" and self.exact is not None and name not in self.measured:
+            if name not in self.state_names and (self.labels is None or name not in self.labels.signal_names):
+                raise KeyError(f"signal must be one of {', '.join(self.signal_names)}; got {name!r}")
             cache = self.__dict__.setdefault("_quadrature_cache", {})
             if (t0, t1) not in cache:
                 cache.clear()                    # one window at a time: the nodes of a long run are large
@@ -293,7 +308,7 @@ def concatenate(parts: list[Trajectory]) -> Trajectory:
         frame["step"] = frame["step"] + offset
         events.append(frame)
     return replace(first, t=stack("t"), x=stack("x"), u=stack("u"), y=stack("y"), config=stack("config"),
-                   relay=stack("relay"), steps=sum(p.steps for p in parts), wall_s=sum(p.wall_s for p in parts),
+                   relay=stack("relay"), held=stack("held"), steps=sum(p.steps for p in parts), wall_s=sum(p.wall_s for p in parts),
                    event_columns=pd.concat(events, ignore_index=True), exact=None,
                    rule="linear" if first.rule == "exact" else first.rule, general_solves=sum(p.general_solves
                                                                                             for p in parts))

@@ -69,3 +69,35 @@ def test_concatenated_runs_share_the_joint_point():
     joined = concatenate([a, b])
     assert joined.t.size == 21 and joined.t[-1] == 2.0 and np.all(np.diff(joined.t) > 0)
     assert joined.mean("x") == pytest.approx((0.55 + 1.55) / 2)
+
+
+def test_exact_and_sampled_windows_cover_the_same_span():
+    """A window reaching past the run is cut to the run for every rule; one shorter than a step still
+    takes the step around it."""
+    from dataclasses import replace
+
+    from converters.methods import EventDriven
+    from converters.models import get_converter
+    from converters.simulate import simulate
+    conv = get_converter("buck")
+    p = conv.resolve({})
+    T = conv.period(p)
+    tr = replace(simulate(conv.problem(p, 20 * T), EventDriven()), labels=conv.labels(p))
+    end = tr.t[-1]
+    assert tr.mean("vout", t0=end - 5 * T, t1=end + 5 * T) == pytest.approx(tr.mean("vout", t0=end - 5 * T), rel=1e-15)
+    lcp = ramp("end")
+    assert lcp.mean("x", t0=0.52, t1=0.53) == pytest.approx(0.6)           # the step [0.5, 0.6] by its end point
+    with pytest.raises(ValueError, match="holds no time of the run"):
+        lcp.mean("x", t0=2.0)
+
+
+def test_exact_mode_fractions_put_an_event_where_it_is():
+    """The event method's samples carry their segment's mode: the DCM buck's diode stops at 0.62279 T of
+    the period exactly, and the fractions say so (not an output step off through the rounding of y)."""
+    from converters.run import run_converter
+    run = run_converter("buck", {}, method="event", periods=50)
+    events = run.events
+    last = run.t[-1] - run.period
+    stop = events.loc[(events["kind"] == "activate") & (events["time"] > last), "time"].iloc[0]
+    fractions = run.mode_fractions(1)
+    assert fractions["CCM-OFF"] == pytest.approx((stop - last) / run.period - 0.4, abs=1e-12)

@@ -1,4 +1,4 @@
-"""Periodic orbits of any problem under any method: Newton shooting on the method's period map.
+"""Periodic orbits of any problem and method: Newton shooting on the method's period map.
 
 A method's period map P: x(t0) -> x(t0 + span) over the problem's t_span (one period, or m periods for
 a period-m orbit) comes with its Jacobian: exact for the LCP stepper (the product of the one-step
@@ -20,7 +20,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..errors import SimulationError
+from ..errors import ParameterError, SimulationError
 from ..problems import LCSProblem
 
 
@@ -176,7 +176,11 @@ def autonomous_orbit(problem: LCSProblem, method, x_guess, *, config: int, cross
                      warm_up: int = 0, tol: float = 1e-10, max_iter: int = 50) -> PeriodicOrbit:
     """The periodic orbit of an autonomous state-switched problem through its return map to the switching
     into ``config`` (``crossings`` switchings per orbit); the period is the return time. The problem's
-    t_span must hold the return (a few periods)."""
+    t_span must hold the return (a few periods). Methods with a return map: the event method (the
+    stepper's switchings fall between its grid points, so its map to a surface is not a fixed-step map)."""
+    if not hasattr(method, "return_map"):
+        raise ParameterError(f"autonomous orbits need a method with a return map to the switching surface (the "
+                             f"event method, EventDriven); got {type(method).__name__}")
     period_map = method.return_map(problem, config, crossings)
     x = np.array(x_guess, dtype=float)
     for _ in range(warm_up + 1):             # the first return puts x on the section

@@ -172,6 +172,7 @@ class Flow:
         k = u_rows.shape[0]
         held_pairs = np.array([(held >> i) & 1 for i in range(k)], dtype=bool)
         self.watch_rows = np.where(held_pairs[:, None], u_rows, y_rows)
+        self.held_flags = held_pairs
         self.constraint_rows, self.project = constraint_rows, project
         self.constraint_scales = np.abs(constraint_rows).sum(axis=1)
         self.watches: dict = {}                  # _Watch per latch state (built by the machine that owns the flow)
@@ -319,7 +320,7 @@ class EventSolution:
         distance long, 8 nodes per piece."""
         t0 = self.problem.t_span[0] if t0 is None else t0
         t1 = self.problem.t_span[1] if t1 is None else t1
-        ts, ws, xs, us, ys, cs = [], [], [], [], [], []
+        ts, ws, xs, us, ys, cs, hs = [], [], [], [], [], [], []
         half = 0.5 * (_GL_X + 1.0)
         for seg, a, b in self._segments_in(t0, t1):
             flow, length = seg.flow, b - a
@@ -350,9 +351,11 @@ class EventSolution:
             us.append(nodes @ flow.u_rows.T)
             ys.append(nodes @ flow.y_rows.T)
             cs.append(np.full(nodes.shape[0], flow.config))
+            hs.append(np.broadcast_to(flow.held_flags, (nodes.shape[0], flow.held_flags.size)))
         if not ts:
             raise ParameterError(f"quadrature interval [{t0:g}, {t1:g}] s lies outside the run")
-        samples = Samples(np.concatenate(ts), np.vstack(xs), np.vstack(us), np.vstack(ys), np.concatenate(cs))
+        samples = Samples(np.concatenate(ts), np.vstack(xs), np.vstack(us), np.vstack(ys), np.concatenate(cs),
+                          held=np.vstack(hs))
         return samples, np.concatenate(ws)
 
     def sample(self, times) -> Samples:
@@ -364,12 +367,13 @@ class EventSolution:
         n, k = self.problem.n, self.problem.k
         x, u, y = np.empty((times.size, n)), np.empty((times.size, k)), np.empty((times.size, k))
         config = np.empty(times.size, dtype=np.int64)
+        held = np.empty((times.size, k), dtype=bool)
         for i, s in enumerate(which):
             seg = self.segments[s]
             xt = seg.flow.advance(seg.xt0, times[i] - seg.t0)
             x[i], u[i], y[i] = xt[:n], seg.flow.u_rows @ xt, seg.flow.y_rows @ xt
-            config[i] = seg.flow.config
-        return Samples(times, x, u, y, config)
+            config[i], held[i] = seg.flow.config, seg.flow.held_flags
+        return Samples(times, x, u, y, config, held=held)
 
     def events_table(self, t: np.ndarray) -> dict:
         times = np.array(self.event_times, dtype=float)
@@ -395,10 +399,12 @@ class EventSolution:
         u[at_end] = np.einsum("skn,sn->sk", np.array([seg.flow.u_rows for seg in segs]).reshape(-1, k, n + 1), ends)
         y[at_end] = np.einsum("skn,sn->sk", np.array([seg.flow.y_rows for seg in segs]).reshape(-1, k, n + 1), ends)
         config[at_end] = [seg.flow.config for seg in segs]
+        held = np.empty((t.size, k), dtype=bool)
+        held[at_end] = np.array([seg.flow.held_flags for seg in segs]).reshape(-1, k)
         inside = ~at_end
-        x[inside], u[inside], y[inside], config[inside] = self._sample_sorted(t[inside], output_step)
+        x[inside], u[inside], y[inside], config[inside], held[inside] = self._sample_sorted(t[inside], output_step)
         problem = self.problem
-        return Trajectory(t=t, x=x, u=u, y=y, config=config, state_names=problem.state_names,
+        return Trajectory(t=t, x=x, u=u, y=y, config=config, held=held, state_names=problem.state_names,
                           pair_names=problem.pair_names,
                           config_names=tuple(c.name or f"config{i}" for i, c in enumerate(problem.configurations)),
                           event_columns=self.events_table(t), method="event", steps=len(self.segments),
@@ -411,6 +417,7 @@ class EventSolution:
         n, k = self.problem.n, self.problem.k
         x, u, y = np.empty((t.size, n)), np.empty((t.size, k)), np.empty((t.size, k))
         config = np.empty(t.size, dtype=np.int64)
+        held = np.empty((t.size, k), dtype=bool)
         starts = np.array([seg.t0 for seg in self.segments])
         which = np.clip(np.searchsorted(starts, t, side="left") - 1, 0, len(self.segments) - 1)
         powers: dict = {}
@@ -447,7 +454,8 @@ class EventSolution:
             u[lo:hi] = states @ flow.u_rows.T
             y[lo:hi] = states @ flow.y_rows.T
             config[lo:hi] = flow.config
-        return x, u, y, config
+            held[lo:hi] = flow.held_flags
+        return x, u, y, config, held
 
 
 _BLOCK = 1024
@@ -551,17 +559,18 @@ class _Machine:
         raise SimulationError(f"the mode-selection LCP at t = {t:.9g} s in configuration {name!r} has no solution "
                               "(no set of held pairs keeps every pair complementary); the LCS is not well posed there")
 
-    def enter(self, config: int, xt: np.ndarray, t: float, log, jac) -> np.ndarray:
+    def enter(self, config: int, xt: np.ndarray, t: float, log) -> tuple[np.ndarray, np.ndarray | None]:
         """Moreau's impulse when configuration ``config`` is entered with y_K < 0 on the pairs K whose y is
-        a function of the state: x+ = x + B_K lambda, 0 <= lambda _|_ C_K x+ + F_K >= 0."""
+        a function of the state: x+ = x + B_K lambda, 0 <= lambda _|_ C_K x+ + F_K >= 0. Returns x~+ and
+        the jump's Jacobian d x+ / d x = I - B_J (C_J B_J)^-1 C_J on the pairs J that jumped (None: no jump)."""
         K = self.index2
         if not K:
-            return xt
+            return xt, None
         c = self.problem.configurations[config]
         CK, FK, BK, row_scale = self.impulse_data[config]
         y = CK @ xt[:-1] + FK
         if np.all(y >= -_CROSS_RTOL * np.abs(xt).max() * row_scale):
-            return xt
+            return xt, None
         M = CK @ BK
         result = solve_lcp(M, y, method="lemke")
         if not result.solved:
@@ -574,11 +583,11 @@ class _Machine:
         jumped = np.flatnonzero(lam > 0.0)
         for i in jumped:
             log(t, "impulse", K[i], config)
-        if jac is not None and jumped.size:
-            idx = [K[i] for i in jumped]
-            Bs, Cs = c.B[:, idx], c.C[idx]
-            jac[:] = (np.eye(c.n) - Bs @ np.linalg.solve(Cs @ Bs, Cs)) @ jac
-        return xt
+        if not jumped.size:
+            return xt, None
+        idx = [K[i] for i in jumped]
+        Bs, Cs = c.B[:, idx], c.C[idx]
+        return xt, np.eye(c.n) - Bs @ np.linalg.solve(Cs @ Bs, Cs)
 
     # --- switching law ------------------------------------------------------------------------------
 
@@ -594,7 +603,7 @@ class _Machine:
         return np.append(f.c, f.d - low + law.band), -slope       # ends when s falls below -band: s + band
 
     def law_config(self, xt: np.ndarray, config: int) -> int:
-        """At a ramp reset (or the start): the configuration set by the sign of s (hysteresis kept inside the band)."""
+        """At a ramp reset: the configuration set by s against the band (inside the band it holds)."""
         law = self.law
         f = law.function
         s = float(f.c @ xt[:-1] + f.d - (f.ramp.low if f.ramp is not None else 0.0))
@@ -719,8 +728,12 @@ class _Machine:
         law = self.law
         config = problem.switching.initial_config(xt[:-1], t)
         latched = False
-        phase_start = t                                          # where the current ramp period began
-        xt = self.enter(config, xt, t, log, jac)
+        ramp_period = law.period if law is not None else np.inf
+        # The ramp's phase counts from t = 0 (ramp(t) = low + slope * (t mod T)), as in the stepper.
+        phase_start = np.floor(t / ramp_period) * ramp_period if np.isfinite(ramp_period) else t
+        xt, jump = self.enter(config, xt, t, log)
+        if jac is not None and jump is not None:
+            jac[:] = jump @ jac
         flow, xt = self.select(config, xt, t, 0)
         same_time_events, events, crossings = 0, 0, 0
         stop_time = None
@@ -767,16 +780,20 @@ class _Machine:
                                 jac[:] = (np.eye(n) - np.outer(f_before, grad) / denominator) @ jac
                             stop_time = t
                             break
-                    reference = flow.held
-                    xt_in = self.enter(config, xt, t, log, None)
-                    new, xt_new = self.select(config, xt_in, t, reference, f_before)
+                    xt_in, jump = self.enter(config, xt, t, log)
+                    new, xt_new = self.select(config, xt_in, t, flow.held, f_before)
                 else:
+                    jump = None
                     new, xt_new = self.select(config, xt, t, flow.held ^ (1 << pair), f_before)
                 if jac is not None:
+                    # Saltation through a jump x+ = Pi(x): S = DPi + (f+ - DPi f-) n^T / (n^T f- + dg/dt).
                     f_after = new.field(xt_new)
+                    jump_jac = np.eye(n) if jump is None else jump
                     denominator = grad @ f_before + dgdt
                     if denominator != 0.0:
-                        jac[:] = (np.eye(n) + np.outer(f_after - f_before, grad) / denominator) @ jac
+                        jac[:] = (jump_jac + np.outer(f_after - jump_jac @ f_before, grad) / denominator) @ jac
+                    else:
+                        jac[:] = jump_jac @ jac
                 for i in range(problem.k):
                     was, now = (flow.held >> i) & 1, (new.held >> i) & 1
                     if was != now:
@@ -792,7 +809,9 @@ class _Machine:
                     log(t, "switch", -1, config)
             else:
                 config = edge_kind
-            xt = self.enter(config, xt, t, log, jac)
+            xt, jump = self.enter(config, xt, t, log)
+            if jac is not None and jump is not None:
+                jac[:] = jump @ jac
             new, xt = self.select(config, xt, t, flow.held)
             for i in range(problem.k):
                 was, now = (flow.held >> i) & 1, (new.held >> i) & 1

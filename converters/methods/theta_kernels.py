@@ -231,7 +231,8 @@ def run_state_switched(A, B, C, D, E, F, Phi, Gamma, H, M, t, h, theta, c, d, lo
     ends that configuration (+band for ``below``, -band for ``above``), the crossing is placed by
     linear interpolation of s over the step and the step is redone as two sub-steps (before the
     crossing in the old configuration, after it in the new one). Ramp resets are grid points: there
-    the latch opens and the configuration is set by the sign of s. ``state`` = [config, latched,
+    the latch opens and the configuration is set by s against the band (a switch event when it changes;
+    not at the run's start, where the law's initial configuration holds). ``state`` = [config, latched,
     event count] carries the law's memory across calls. Stacks A..F and the uniform-step matrices
     Phi..M are indexed by configuration.
 
@@ -251,20 +252,27 @@ def run_state_switched(A, B, C, D, E, F, Phi, Gamma, H, M, t, h, theta, c, d, lo
         t0, t1 = t[j], t[j + 1]
         dt = t1 - t0
         phase0, phase1 = 0.0, 0.0
-        if has_ramp:
-            phase0 = t0 - np.floor(t0 / ramp_period + 1e-9) * ramp_period
-            if phase0 < 1e-9 * ramp_period:      # a ramp reset: the latch opens, s decides
-                phase0 = 0.0
-                latched = 0
-                s_reset = _surface(c, d, x[j], 0.0, low, slope)
-                if s_reset < -band:
-                    current = below
-                elif s_reset > band:
-                    current = above
-            phase1 = phase0 + dt
-        if count >= ev_time.shape[0]:
+        if count + 2 > ev_time.shape[0]:         # room for a reset and a crossing in this step
             state[0], state[1], state[2] = current, latched, count
             return EVENTS_FULL, j
+        if has_ramp:
+            phase0 = t0 - np.floor(t0 / ramp_period + 1e-9) * ramp_period
+            if phase0 < 1e-9 * ramp_period:      # a ramp reset (s jumps): the latch opens, s decides
+                phase0 = 0.0
+                if j > 0:                        # at the run's start the law's initial configuration holds
+                    latched = 0
+                    s_reset = _surface(c, d, x[j], 0.0, low, slope)
+                    previous = current
+                    if s_reset < -band:
+                        current = below
+                    elif s_reset > band:
+                        current = above
+                    if current != previous:
+                        ev_time[count] = t0
+                        ev_config[count] = current
+                        ev_step[count] = j
+                        count += 1
+            phase1 = phase0 + dt
         uniform = abs(dt - h) <= 1e-9 * h
         if uniform:
             mask = _uniform_step(Phi, Gamma, H, C, F, M, current, x, u, y, j, mask, order, work, xf, q, z)

@@ -122,9 +122,11 @@ class Model(ABC):
     pair_currents: tuple[tuple[bool, ...], ...] = ((True,), (False,))
 
     def conducting(self, samples: Samples) -> np.ndarray:
-        """Per point and pair: the pair's device conducts (its current carries the pair)."""
+        """Per point and pair: the pair's device conducts: held where u is its current, free where u is its
+        voltage (held: the method's own mode where it knows it, else u > y)."""
         currents = np.asarray(self.pair_currents, dtype=bool)[np.asarray(samples.config)]
-        return np.where(currents, samples.u > samples.y, samples.y >= samples.u)
+        held = samples.held if samples.held is not None else samples.u > samples.y
+        return held == currents
 
     def modes(self, conducting: np.ndarray, switch: np.ndarray, x: np.ndarray) -> np.ndarray:
         """One diode: ON with the diode blocking is CCM-ON, OFF with it conducting CCM-OFF; the pair held

@@ -2,14 +2,15 @@
 
 A switching function is affine in the state, with an optional periodic sawtooth ramp:
 
-    s(x, t) = c . x + d - ramp(t),      ramp(t) = low + (high - low) frac((t - t0) / period)
+    s(x, t) = c . x + d - ramp(t),      ramp(t) = low + (high - low) frac(t / period)
 
 (sliding-mode current control: s = iL - Iref; voltage-mode PWM: s = A (vC - Vref) - ramp(t)).
 Two laws use it:
 
 * :class:`StateSwitching` (hysteresis or latch): configuration ``below`` is entered when s falls
   below -band, ``above`` when s rises above +band. With ``latch`` at most one switching happens per
-  ramp period; at every period start (the ramp's reset) the configuration is set again by the sign of s.
+  ramp period; at every period start (the ramp's reset, where s jumps) the configuration is set again by
+  s against the band (below -band: ``below``; above +band: ``above``; inside it holds).
 * :class:`Relay` (the implicit, chattering-free law): the configuration is a convex blend
   x' = f_low(x) + z (f_high(x) - f_low(x)) with z in [0, 1] and -s in N_[0,1](z) (s < 0 gives z = 1,
   s > 0 gives z = 0, s = 0 lets z take the value that keeps it there: the equivalent control).
@@ -30,7 +31,7 @@ from ..validate import as_vector, check_positive, parse_value
 
 @dataclass(frozen=True)
 class Ramp:
-    """A periodic sawtooth: ``low`` at every period start, rising linearly to ``high`` at its end."""
+    """A periodic sawtooth: ``low`` at t = m period, rising linearly to ``high`` at the period's end."""
 
     low: float
     high: float
@@ -95,8 +96,8 @@ class StateSwitching:
     band : float
         Hysteresis half-width, >= 0, in the unit of s.
     latch : bool
-        At most one switching per ramp period (needs a ramp); at every period start the
-        configuration is set by the sign of s.
+        At most one switching per ramp period (needs a ramp); at every period start the configuration
+        is set again by s against the band.
     initial : int or None
         Configuration at the start of a run; None: ``below`` if s(x0, t0) < 0, else ``above``.
     """

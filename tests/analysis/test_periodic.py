@@ -92,6 +92,15 @@ def _method(key, run):
     return Theta(options["h"], options["theta"]) if key == "lcp" else EventDriven(**options)
 
 
+def test_steady_counts_every_period_it_simulates_and_returns_the_span_asked_for():
+    run = run_converter("buck", {}, steady=True)
+    orbit = run.metadata["orbit"]
+    assert run.t[-1] == pytest.approx(20 * run.period)                     # 20 periods on the orbit by default
+    assert run.metadata["steady_periods"] == orbit["evaluations"] + 20    # warm-up and Newton's spans included
+    short = run_converter("buck", {}, steady=True, periods=3)
+    assert short.t[-1] == pytest.approx(3 * short.period) and short.metadata["steady_periods"] == orbit["evaluations"] + 3
+
+
 def test_a_tolerance_beyond_double_precision_is_a_clear_failure():
     with pytest.raises(SimulationError, match=r"Newton shooting did not find the periodic orbit of boost: the residual "
                                               r"is at the rounding level"):

@@ -53,6 +53,18 @@ def test_a_ramp_resets_every_period_and_a_latch_holds_one_switching(method, latc
     switches = tr.events[tr.events["kind"] == "switch"]
     into_below = switches.loc[switches["config"] == 0, "time"].to_numpy()
     np.testing.assert_allclose(into_below, 0.3 + np.arange(4), atol=1e-9)
+    # Every reset back to 'above' is a switching event too, in both methods.
+    np.testing.assert_allclose(switches.loc[switches["config"] == 1, "time"], np.arange(1, 4), atol=1e-12)
+
+
+@pytest.mark.parametrize("method", [Theta(1e-3, 1.0), EventDriven()], ids=["BE", "event"])
+def test_the_ramp_phase_counts_from_t_zero_whatever_the_start(method):
+    """ramp(t) = low + slope (t mod T): a run from t = 0.5 is in the middle of a ramp period."""
+    from dataclasses import replace
+    tr = simulate(replace(ramp_latch(0.3, True), t_span=(0.5, 4.0)), method)
+    assert tr.state("z")[-1] == pytest.approx(0.5 + 3 * 0.7, abs=1e-9)
+    switches = tr.events[tr.events["kind"] == "switch"]
+    np.testing.assert_allclose(switches["time"].to_numpy()[:4], [1.0, 1.3, 2.0, 2.3], atol=1e-9)
 
 
 def test_the_relay_holds_the_sliding_surface_without_chatter():
@@ -95,3 +107,20 @@ def test_a_problem_checks_its_law_against_its_configurations():
     with pytest.raises(ParameterError, match=r"one coefficient per state \(n = 2\); got 3"):
         LCSProblem((one, one), StateSwitching(SwitchingFunction([1.0, 0.0, 0.0]), below=0, above=1), x0=[0, 0],
                    t_span=(0, 1))
+
+
+def test_a_jump_at_a_state_driven_switching_enters_the_exact_jacobian():
+    """Switching into a configuration whose diode is violated (y = b - 1 < 0) makes the state jump; the
+    period map's Jacobian carries the jump's projection with the saltation (checked against differences)."""
+    from converters.methods.base import FiniteDifferenceMap
+    A = np.array([[0.0, 0.0], [0.0, -1.0]])
+    below = Configuration(A=A, B=[[0.0], [1.0]], C=[[0.0, 1.0]], D=[[0.0]], E=[1.0, 0.0], F=[0.0], name="below")
+    above = Configuration(A=A, B=[[0.0], [1.0]], C=[[0.0, 1.0]], D=[[0.0]], E=[-1.0, 2.0], F=[-1.0], name="above")
+    law = StateSwitching(SwitchingFunction(c=[1.0, 0.0]), below=0, above=1, band=0.25)
+    problem = LCSProblem((below, above), law, x0=[0.1, 0.2], t_span=(0.0, 0.9), state_names=("a", "b"))
+    assert "impulse" in set(simulate(problem, EventDriven()).events["kind"])
+    period_map = EventDriven().period_map(problem)
+    _, jac = period_map(np.array([0.1, 0.2]))
+    _, fd = FiniteDifferenceMap(period_map.end)(np.array([0.1, 0.2]))
+    np.testing.assert_allclose(jac, fd, atol=1e-6)
+    assert jac[1, 0] == pytest.approx(-0.951229, abs=1e-6)

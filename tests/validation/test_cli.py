@@ -99,3 +99,8 @@ def test_console_script_runs_as_a_program():
                          capture_output=True, text=True)
     assert out.returncode == 2
     assert out.stderr.strip() == "pcsuite: error: D (duty ratio) must be in [0, 1]; got 2.0"
+
+
+def test_a_window_shorter_than_a_step_is_still_measured(capsys):
+    code, out, _ = run_cli(capsys, "simulate", "boost", "--control", "smc-implicit", "--t-end", "3u", "--json")
+    assert code == 0 and json.loads(out)["steps"] == 3

@@ -25,8 +25,10 @@ def add(sub) -> None:
     sim.add_argument("--rtol", default=None, help="smooth: solver relative tolerance (default 1e-6)")
     sim.add_argument("--theta", default=None, help="theta in [0.5, 1] (default 1, PRC 0.5)")
     span = sim.add_mutually_exclusive_group()
-    span.add_argument("--t-end", default=None, help="duration in s")
-    span.add_argument("--periods", type=int, default=None, help="duration in switching periods (default 500)")
+    span.add_argument("--t-end", default=None, help="duration in s (with --steady: the span returned on the orbit)")
+    span.add_argument("--periods", type=int, default=None,
+                      help="duration in switching periods (default 500; with --steady: the periods returned on the "
+                           "orbit, default 20)")
     sim.add_argument("--control", default="pwm", choices=list(CONTROLS),
                      help="boost only: sliding-mode current control (smc: hysteresis; smc-implicit: the implicit "
                           "relay) with -p Vref=.. -p band=.. [-p Kp=.. -p Ki=.. -p t_step=.. -p R_step=..]")
