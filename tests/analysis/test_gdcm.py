@@ -168,3 +168,17 @@ def test_cli_gdcm_json_and_prc_combinations(capsys):
     assert prc["lcp"]["D1+D4"] == pytest.approx(prc["spice"]["D1+D4"], abs=0.01) and prc["agree"]
     assert main(["gdcm", "boost", "-p", "D=1.5"]) == 2
     assert "D (duty ratio) must be in [0, 1]; got 1.5" in capsys.readouterr().err
+
+
+@pytest.mark.usefixtures("ngspice")
+@pytest.mark.parametrize("params", [{"D": 0.5, "C1": "130n"}, {"D": 0.6, "C1": "100n"}])
+def test_cuk_gdcm_on_is_predicted_found_and_constrained(params):
+    """A small coupling capacitor lets v1 reach zero while the switch is on: the diode conducts with the
+    switch (GDCM-ON). The exact prediction sees it (the small-ripple closed form cannot); both simulators
+    find it; on the held interval v1 = 0 exactly and the multiplier is positive. (This used to crash.)"""
+    result = gdcm_check("cuk", params)
+    assert result["prediction"]["closed_form"] == "CCM"
+    assert result["predicted"] == result["lcp"] == result["spice"] == "GDCM-ON" and result["agree"]
+    held = result["gdcm_constraint"]["GDCM-ON"]
+    assert held["configuration"] == "ON" and held["max_abs_Cx_plus_F"] <= 1e-9 and held["min_multiplier"] > 0.0
+    assert abs(result["held_fraction"]["lcp"] - result["held_fraction"]["spice"]) < 5e-3
