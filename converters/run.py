@@ -10,7 +10,7 @@ metadata: model, control, params, method options, periods, and the orbit's stati
 from __future__ import annotations
 
 import time
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -161,6 +161,30 @@ def steady_orbit(name_or_model, params: dict | None = None, *, method: str | Met
     tr = simulate(model.problem(p, model.period(p), orbit.x0), method)
     return replace(tr, labels=model.labels(p),
                    metadata={**tr.metadata, "model": model.name, "params": p, "orbit": orbit.summary()})
+
+
+@dataclass(frozen=True)
+class ParameterPath:
+    """A model's problems along one of its parameters (picklable: workers rebuild each problem).
+
+    ``path(value)`` is the problem over one switching period from the model's start state, with every
+    other parameter as in ``params``; each value is validated against the parameter's range."""
+
+    model: Model
+    params: dict
+    name: str
+
+    def __post_init__(self):
+        known = [p.name for p in self.model.parameters]
+        if self.name not in known:
+            raise ParameterError(f"unknown parameter {self.name!r} for {self.model.key}; valid names: {', '.join(known)}")
+
+    def resolve(self, value) -> dict:
+        return self.model.resolve({**self.params, self.name: value})
+
+    def __call__(self, value):
+        p = self.resolve(value)
+        return self.model.problem(p, self.model.period(p))
 
 
 def run_summary(tr: Trajectory) -> dict:

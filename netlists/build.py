@@ -253,11 +253,57 @@ def build_smc_netlist(params: dict | None, t_end, options: SpiceOptions | None =
     return Netlist("\n".join(lines) + "\n", "boost-smc", p, t_end, options, probes)
 
 
+def build_voltage_mode_netlist(params: dict | None, t_end, options: SpiceOptions | None = None,
+                               x0=None) -> Netlist:
+    """The buck under voltage-mode control (``converters.models.voltage_mode``) as an ngspice netlist.
+
+    The sawtooth is a PULSE source rising from VL to VU over T - edge and falling back over the edge
+    (edge = ``edge_fraction`` T); a behavioural source ctrl = ramp - A (v_out - Vref), saturated at +-1 V
+    like a comparator's output, drives an SW switch with VT = 0 and no hysteresis, so the switch is
+    closed while vcon = A (v_out - Vref) is below the ramp: the comparator of the LCS model. Without the
+    saturation ngspice stops with "timestep too small" in the first period where the loop takes over
+    (the control voltage swings by tens of volts across the switch's threshold; measured). The diode is
+    the D(N = 0.001) model (it may block: DCM). The comparator's switchings are not breakpoints of
+    ngspice's step control: TMAX = T/1000 keeps their timing error small (``pcsuite bifurcation`` uses it).
+    There is no latch in the netlist: ``latch = 1`` is refused. Every value is a validated number (``_num``).
+    """
+    from converters.models import get_model
+    p = get_model("buck", "voltage-mode").resolve(params)
+    if p["latch"]:
+        raise ParameterError("latch must be 0 for the ngspice netlist (its comparator drives the switch directly); "
+                             f"got latch = {p['latch']:g}")
+    options = options or SpiceOptions()
+    t_end = parse_value("t_end", t_end)
+    if t_end <= 0:
+        raise ParameterError(f"t_end must be positive (> 0 s); got {t_end!r}")
+    iL0, v0 = (0.0, 0.0) if x0 is None else (parse_value("x0[iL]", x0[0]), parse_value("x0[vC]", x0[1]))
+    T = 1.0 / p["f_sw"]
+    edge = options.edge_fraction * T
+    tmax = options.tmax_fraction * T
+    body = [f"Vin in 0 DC {_num('Vin', p['Vin'])}",
+            f"Vramp ramp 0 PULSE({_num('VL', p['VL'])} {_num('VU', p['VU'])} 0 {_num('rise', T - edge)} "
+            f"{_num('edge', edge)} 0 {_num('T', T)})",
+            f"Bctrl ctrl 0 V=max(min(V(ramp)-{_num('A', p['A'])}*(V(out)-{_num('Vref', p['Vref'])}),1),-1)",
+            "S1 in sw ctrl 0 SWVM", *_diode("0", "sw", p), *_inductor("sw", "out", p, ic=iL0),
+            *_capacitor("out", "0", p, ic=v0), f"R1 out 0 {_num('R', p['R'])}",
+            f".model SWVM SW(VT=0 VH=0 RON={_num('switch_ron', options.switch_ron)} "
+            f"ROFF={_num('switch_roff', options.switch_roff)})",
+            f".model DMOD D(IS={_num('diode_is', options.diode_is)} N={_num('diode_n', options.diode_n)})"]
+    lines = ["* pcsuite buck voltage-mode", *body,
+             f".options RELTOL={_num('reltol', options.reltol)} METHOD={options.method} ITL4=100",
+             f".tran {_num('tstep', tmax)} {_num('t_end', t_end)} 0 {_num('tmax', tmax)} UIC", ".end"]
+    probes = {"switch": ({"ctrl": 1.0}, 0.0), "iL": ("vsl#branch", 1.0), "vC": ("out", 1.0), "vout": ("out", 1.0),
+              "i_D": ("vsd#branch", 1.0), "ramp": ("ramp", 1.0)}
+    return Netlist("\n".join(lines) + "\n", "buck-voltage-mode", p, t_end, options, probes)
+
+
 def model_netlist(model, params: dict, t_end, options: SpiceOptions | None = None, x0=None) -> Netlist:
     """The netlist of a model (a converter under its control) with validated ``params``."""
     if model.control == "pwm":
         return build_netlist(model.name, params, t_end, options, x0=x0)
     if model.control == "smc":
         return build_smc_netlist(params, t_end, options, x0=x0)
+    if model.control == "voltage-mode":
+        return build_voltage_mode_netlist(params, t_end, options, x0=x0)
     raise ParameterError(f"no ngspice netlist for {model.key}: the implicit relay is a time-stepping scheme of "
                          "the LCP stepper only; use --control smc (the hysteresis comparator)")

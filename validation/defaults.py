@@ -26,6 +26,9 @@ STABILITY_BASE: dict = dict(_DATA["stability_base"])
 K_RANGES: dict[str, tuple] = {name: tuple(r) for name, r in _DATA["dk_maps"]["k_range"].items()}
 D_RANGE: tuple = tuple(_DATA["dk_maps"]["d_range"])
 BOUNDARY_BAND: float = _DATA["dk_maps"]["boundary_band"]
+#: The bifurcation study: model, path, diagram and ngspice settings, and the published values it is checked against.
+BIFURCATION: dict = {key: value for key, value in _DATA["bifurcation"].items() if key != "published"}
+PUBLISHED_BIFURCATIONS: dict = dict(_DATA["bifurcation"]["published"])
 
 
 def passes(check: str, value: float, threshold: float) -> bool:

@@ -13,9 +13,6 @@ T late, which hides held intervals shorter than that (seen at Cuk points within 
 """
 from __future__ import annotations
 
-import concurrent.futures as futures
-import multiprocessing
-import sys
 import time
 
 import numpy as np
@@ -26,6 +23,7 @@ from converters.analysis.modes import HELD, held_fraction, mode_class, mode_inte
 from converters.errors import ParameterError
 from converters.models import analytic, get_converter
 from converters.run import steady_orbit
+from converters.sweeps import parallel_map
 from netlists import SpiceOptions, build_netlist
 
 from .defaults import BOUNDARY_BAND, D_RANGE, K_RANGES  # noqa: F401 (re-exported for the report and tests)
@@ -178,28 +176,11 @@ def _spice_run(conv, p, x0):
         return spice_intervals(conv, netlist, run_spice(netlist)), note
 
 
-def _chunk(args):
-    kind, rows = args
-    try:
-        return [(_lcp_point if kind == "lcp" else _spice_point)(r) for r in rows]
-    finally:
-        if kind == "spice":
-            close_spice_worker()
-
-
 def _pool_map(kind: str, rows: list[dict], workers: int, progress: bool, label: str) -> list[dict]:
-    chunks = [rows[i:i + 30] for i in range(0, len(rows), 30)]
-    if workers <= 1:
-        return [r for c in chunks for r in _chunk((kind, c))]
-    from tqdm import tqdm
-    context = multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
-    with futures.ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
-        out = []
-        with tqdm(total=len(rows), desc=label, unit="pt", file=sys.stderr, disable=not progress) as bar:
-            for result in pool.map(_chunk, [(kind, c) for c in chunks]):
-                out.extend(result)
-                bar.update(len(result))
-    return out
+    if kind == "lcp":
+        return parallel_map(_lcp_point, rows, workers=workers, chunk=30, progress=progress, label=label)
+    return parallel_map(_spice_point, rows, workers=workers, chunk=30, progress=progress, label=label,
+                        finalize=close_spice_worker)
 
 
 def dk_map(name: str, n_d: int = 30, n_k: int = 30, *, spice: bool = True, workers: int = 1,

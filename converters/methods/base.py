@@ -110,6 +110,12 @@ class PeriodMap:
         """The end state only (no Jacobian)."""
         return self(x0)[0]
 
+    def events(self, x0: np.ndarray) -> list | None:
+        """The events of the span from x0 as (time, kind, pair, config) tuples in time order (``kind`` as in
+        a Trajectory's events; ``pair`` -1 and ``config`` the configuration entered for a switching-law
+        event), or None where the map does not record them (callers then simulate)."""
+        return None
+
 
 class FiniteDifferenceMap(PeriodMap):
     """Forward differences with steps 1e-7 (1 + |x_j|): n + 1 spans per Jacobian."""

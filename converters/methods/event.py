@@ -827,20 +827,32 @@ class _Machine:
 
 
 class EventPeriodMap(PeriodMap):
-    """The exact map over a problem's span, with its exact Jacobian."""
+    """The exact map over a problem's span, with its exact Jacobian; it keeps the events of its last run."""
 
     def __init__(self, machine: _Machine):
         super().__init__()
         self.machine = machine
+        self._last = (None, None)
+
+    def _run(self, x0, jacobian):
+        self.evaluations += 1
+        x0 = np.array(x0, dtype=float)
+        solution, jac, _ = self.machine.run(x0, record=False, jacobian=jacobian)
+        self._last = (x0, solution)
+        return solution, jac
 
     def end(self, x0):
-        self.evaluations += 1
-        return self.machine.run(x0, record=False)[0].x_end
+        return self._run(x0, False)[0].x_end
 
     def __call__(self, x0):
-        self.evaluations += 1
-        solution, jac, _ = self.machine.run(x0, record=False, jacobian=True)
+        solution, jac = self._run(x0, True)
         return solution.x_end, jac
+
+    def events(self, x0):
+        last_x0, solution = self._last
+        if last_x0 is None or not np.array_equal(last_x0, np.asarray(x0, dtype=float)):
+            solution = self._run(x0, False)[0]
+        return list(zip(solution.event_times, solution.event_kinds, solution.event_pairs, solution.event_configs))
 
 
 class EventReturnMap(PeriodMap):

@@ -10,12 +10,14 @@ from .buckboost import BuckBoost
 from .cuk import Cuk
 from .prc import PRC
 from .sliding import BoostSMC
+from .voltage_mode import BuckVoltageMode
 
 CONVERTERS: dict[str, Converter] = {c.name: c for c in (Buck(), Boost(), BuckBoost(), Cuk(), PRC())}
 #: Every model by (converter name, control): ``pwm`` is the open-loop PWM converter.
 MODELS: dict[tuple[str, str], Model] = {**{(name, "pwm"): c for name, c in CONVERTERS.items()},
                                         ("boost", "smc"): BoostSMC(implicit=False),
-                                        ("boost", "smc-implicit"): BoostSMC(implicit=True)}
+                                        ("boost", "smc-implicit"): BoostSMC(implicit=True),
+                                        ("buck", "voltage-mode"): BuckVoltageMode()}
 CONTROLS = tuple(dict.fromkeys(control for _, control in MODELS))
 
 

@@ -64,6 +64,8 @@ class Model(ABC):
     default_theta: float = 1.0
     #: True when :mod:`.analytic` has the model's CCM/DCM closed forms (keyed by its name).
     closed_form: bool = False
+    #: The state that carries the output voltage (what a bifurcation diagram shows by default).
+    output_state: str = "vC"
 
     def resolve(self, given: dict | None = None) -> dict:
         """Validated parameter values (defaults overlaid with ``given``)."""

@@ -26,6 +26,7 @@ class Cuk(Converter):
         Param("D", 0.4, "", "duty ratio", low=0.0, high=1.0, low_open=False, high_open=False),
     )
     state_names = ("i1", "v1", "i2", "v2")
+    output_state = "v2"
     pair_names = ("diode",)
     closed_form = True
     off_held_label = "GDCM-OFF"

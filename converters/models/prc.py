@@ -28,6 +28,7 @@ class PRC(Converter):
         positive("n", 1.0, "", "transformer ratio"),
     )
     state_names = ("ir", "vr", "iLf", "vo")
+    output_state = "vo"
     pair_names = ("D1", "D3", "D2", "D4")
     default_theta = 0.5
 

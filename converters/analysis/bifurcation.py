@@ -1,0 +1,204 @@
+"""Brute-force bifurcation diagrams: the attractor's stroboscopic samples against a parameter.
+
+For each parameter value the problem is simulated from a start state for ``transient`` + ``record``
+switching periods (one run of the method: the compiled stepper's loop, or the event method) and the
+states at the last ``record`` period starts x(t0 + m T) are kept; the method's output must hold the
+period starts (the stepper's grid does: ramp resets are grid points; give the event method
+``output_step = T``). Each attractor gets its period: the smallest p <= record / 2 with
+|x_{m+p} - x_m| below ``period_rtol`` (relative) for every kept m, or 0 (no period found: chaotic,
+quasi-periodic, or not settled yet, as next to a bifurcation where the multipliers approach the unit
+circle). Optionally the largest Lyapunov exponent of the map, lambda = lim (1/N) sum log |J_m w_m| (w_m
+the unit vector carried along by the Jacobians J_m of the method's period map), says what the samples
+cannot: lambda < 0 on a periodic attractor, > 0 on a chaotic one (nepers per switching period).
+
+Values are taken in contiguous chunks of ``chunk``; inside a chunk each value starts from the previous
+value's final state (the attractor followed along the path, so short transients suffice), the first one
+of a chunk from ``x0`` with twice the transient. Chunks run in parallel (:mod:`converters.sweeps`); the
+result does not depend on the number of workers.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ..errors import ParameterError
+from ..sweeps import parallel_map
+
+
+@dataclass(frozen=True)
+class Attractor:
+    """What iterating the period map showed at one parameter value.
+
+    Attributes
+    ----------
+    value : float
+    samples : ndarray, shape (record, n)
+        x(t0 + m T) after the transient.
+    period : int
+        Smallest period (in switching periods) of the samples, 0 when none was found.
+    lyapunov : float
+        Largest Lyapunov exponent per switching period over the recorded periods (nan when not computed).
+    error : str
+        Why the run stopped (the samples are then empty), or empty.
+    """
+
+    value: float
+    samples: np.ndarray
+    period: int
+    lyapunov: float
+    error: str = ""
+
+
+def detect_period(samples: np.ndarray, rtol: float = 1e-6) -> int:
+    """The smallest p <= len(samples) / 2 with |x_{m+p} - x_m| <= rtol (1 + max |x|) for every m, else 0."""
+    samples = np.asarray(samples, dtype=float)
+    if samples.shape[0] < 2:
+        return 0
+    limit = rtol * (1.0 + np.abs(samples).max())
+    for p in range(1, samples.shape[0] // 2 + 1):
+        if np.abs(samples[p:] - samples[:-p]).max() <= limit:
+            return p
+    return 0
+
+
+def iterate(period_map, x0, transient: int, record: int, lyapunov: bool = True) -> tuple[np.ndarray, float]:
+    """Samples x(t0 + m T), m = transient .. transient + record - 1, of the one-period map, and the largest
+    Lyapunov exponent over the recorded periods (nan without ``lyapunov``)."""
+    x = np.array(x0, dtype=float)
+    for _ in range(transient):
+        x = period_map.end(x)
+    samples = np.empty((record, x.size))
+    w = np.ones(x.size) / np.sqrt(x.size)
+    total = 0.0
+    for m in range(record):
+        samples[m] = x
+        if lyapunov:
+            x, jac = period_map(x)
+            w = jac @ w
+            size = float(np.linalg.norm(w))
+            if size == 0.0 or not np.isfinite(size):        # a multiplier at zero (a held pair): restart
+                w, size = np.ones(x.size) / np.sqrt(x.size), 1e-300
+            total += np.log(size)
+            w = w / size
+        else:
+            x = period_map.end(x)
+        if not np.all(np.isfinite(x)):
+            raise FloatingPointError("the state left the finite numbers")
+    return samples, (total / record if lyapunov else float("nan"))
+
+
+@dataclass(frozen=True)
+class _Chunk:
+    """One worker task: a run of consecutive values (picklable)."""
+
+    problem_of: object
+    method: object
+    x0: np.ndarray
+    transient: int
+    record: int
+    lyapunov: bool
+    period_rtol: float
+
+    def __call__(self, values) -> list[Attractor]:
+        out, x = [], np.array(self.x0, dtype=float)
+        for i, value in enumerate(values):
+            try:
+                samples, x_end, lyap = self.one(float(value), x, self.transient * (2 if i == 0 else 1))
+            except (ValueError, RuntimeError, ArithmeticError) as exc:
+                out.append(Attractor(float(value), np.empty((0, x.size)), 0, float("nan"), f"{type(exc).__name__}: {exc}"))
+                x = np.array(self.x0, dtype=float)
+                continue
+            out.append(Attractor(float(value), samples, detect_period(samples, self.period_rtol), lyap))
+            x = x_end
+        return out
+
+    def one(self, value: float, x, transient: int):
+        """(samples at the period starts, the state at the end, Lyapunov exponent or nan) of one value."""
+        from ..simulate import simulate
+        problem = self.problem_of(value)
+        T = problem.switching.period
+        if not np.isfinite(T):
+            raise ParameterError("a brute-force diagram needs a periodic switching law (a schedule or a ramp)")
+        t0 = problem.t_span[0]
+        periods = transient + self.record
+        run = simulate(replace(problem, t_span=(t0, t0 + periods * T)), self.method, x0=x)
+        targets = t0 + T * np.arange(transient, periods + 1)
+        rows = np.minimum(np.searchsorted(run.t, targets - 1e-9 * T), run.t.size - 1)
+        if np.abs(run.t[rows] - targets).max() > 1e-6 * T:
+            raise ParameterError(f"the method's output must hold every period start t0 + m T (the stepper's grid "
+                                 f"does; give the event method output_step = T = {T:g} s); got {self.method.label}")
+        samples, x_end = run.x[rows[:-1]], run.x[rows[-1]]
+        lyap = float("nan")
+        if self.lyapunov:
+            period_map = self.method.period_map(replace(problem, t_span=(t0, t0 + T)))
+            lyap = iterate(period_map, samples[0], 0, self.record, True)[1]
+        return samples, x_end, lyap
+
+
+def brute_force(problem_of, method, values, x0, *, transient: int = 200, record: int = 64, lyapunov: bool = False,
+                period_rtol: float = 1e-6, chunk: int = 20, workers: int | None = None,
+                progress: bool = False) -> list[Attractor]:
+    """The brute-force diagram over ``values`` (module docstring).
+
+    Parameters
+    ----------
+    problem_of : picklable callable
+        Parameter value -> problem (its switching law must have a period T; only its start time is used).
+    method : Method
+        Any method whose output holds the period starts (module docstring).
+    values : array_like
+        Parameter values, in path order.
+    x0 : array_like, shape (n,)
+        Start state of each chunk.
+    transient, record : int
+        Periods dropped, then kept, at each value.
+    lyapunov : bool
+        Also estimate the largest Lyapunov exponent over the recorded periods from the Jacobians of the
+        method's period map (exact for the event method; finite differences for the stepper under a
+        state-driven law: n + 1 runs a period).
+    chunk, workers, progress
+        Values per task, processes (default: every core this process may use), a progress bar.
+
+    Returns
+    -------
+    list of Attractor, one per value.
+    """
+    values = np.asarray(values, dtype=float).ravel()
+    if values.size == 0 or not np.all(np.isfinite(values)):
+        raise ParameterError(f"values must be finite numbers, at least one; got {values!r}")
+    for name, count, low in (("transient", transient, 0), ("record", record, 1)):
+        if not (isinstance(count, (int, np.integer)) and count >= low):
+            raise ParameterError(f"{name} must be an integer >= {low} (periods); got {count!r}")
+    task = _Chunk(problem_of, method, np.array(x0, dtype=float), int(transient), int(record), lyapunov, period_rtol)
+    chunks = [values[i:i + chunk] for i in range(0, values.size, chunk)]
+    results = parallel_map(task, chunks, workers=workers, chunk=1, progress=progress, label="brute-force diagram",
+                           unit="chunk")
+    return [attractor for part in results for attractor in part]
+
+
+def aperiodic_onset(attractors: list[Attractor], run: int = 3) -> float | None:
+    """The first value (in path order) that starts ``run`` consecutive attractors without a period (and
+    without errors), or None. Isolated aperiodic values next to a bifurcation (slow convergence where a
+    multiplier nears the unit circle) do not count."""
+    streak = 0
+    for i, a in enumerate(attractors):
+        streak = streak + 1 if (not a.error and a.period == 0) else 0
+        if streak == run:
+            return attractors[i - run + 1].value
+    return None
+
+
+def period_windows(attractors: list[Attractor]) -> list[dict]:
+    """Consecutive values with the same detected period: [{period, first, last, count}] in path order."""
+    windows: list[dict] = []
+    for a in attractors:
+        period = -1 if a.error else a.period
+        if windows and windows[-1]["period"] == period:
+            windows[-1].update(last=a.value, count=windows[-1]["count"] + 1)
+        else:
+            windows.append({"period": period, "first": a.value, "last": a.value, "count": 1})
+    return windows
+
+
+__all__ = ["Attractor", "brute_force", "iterate", "detect_period", "aperiodic_onset", "period_windows"]

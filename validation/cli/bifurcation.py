@@ -1,0 +1,90 @@
+"""``pcsuite bifurcation CONVERTER --control voltage-mode --param NAME=START:STOP``: periodic orbits followed
+along a parameter, their bifurcations, and the brute-force diagram."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from converters.errors import ParameterError
+
+from .common import add_params
+
+
+def add(sub) -> None:
+    from converters.models import CONTROLS
+    bif = sub.add_parser("bifurcation", help="periodic orbits along a parameter: continuation, bifurcations, "
+                                             "brute-force diagram")
+    bif.add_argument("converter")
+    add_params(bif)
+    bif.add_argument("--control", default="voltage-mode", choices=list(CONTROLS),
+                     help="the control law (default voltage-mode: the ramp comparator, -p A=.. -p Vref=.. -p VL=.. "
+                          "-p VU=.. [-p latch=1])")
+    bif.add_argument("--param", required=True, metavar="NAME=START:STOP",
+                     help="the parameter path, e.g. Vin=20:36 (SPICE suffixes allowed)")
+    bif.add_argument("--max-period", type=int, default=8,
+                     help="follow period doublings up to orbits of this many switching periods (default 8)")
+    bif.add_argument("--points", type=int, default=800,
+                     help="values of the brute-force diagram (default 800; 0: continuation only)")
+    bif.add_argument("--transient", type=int, default=200, help="periods dropped at each diagram value (default 200)")
+    bif.add_argument("--record", type=int, default=64, help="periods kept at each diagram value (default 64)")
+    bif.add_argument("--diagram-method", default="lcp", choices=["lcp", "event"],
+                     help="lcp: the compiled stepper, theta 0.5, h = T/500 (default, fast); event: exact, ~5x slower")
+    bif.add_argument("--state", default=None, help="the state drawn (default: the model's output, e.g. vC)")
+    bif.add_argument("--workers", type=int, default=None, help="processes for the diagram (default: every core)")
+    bif.add_argument("--diagram", type=Path, default=None, help="write the diagram to FILE.png or FILE.svg")
+    bif.add_argument("--json", action="store_true", help="print one JSON object (bifurcations, branches, diagram)")
+    bif.set_defaults(run=run)
+
+
+def run(args) -> int:
+    from converters.params import parse_assignments
+
+    from ..bifurcation import diagram_figure, parse_path, run_study
+    from ..io import atomic_write_bytes
+    if args.diagram is not None and args.diagram.suffix.lower() not in (".png", ".svg"):
+        raise ParameterError(f"--diagram must end in .png or .svg; got {str(args.diagram)!r}")
+    if args.diagram is not None and args.points == 0:
+        raise ParameterError("--diagram needs the brute-force diagram: --points must be >= 1; got 0")
+    name, start, stop = parse_path(args.param)
+    study = run_study(args.converter, args.control, parse_assignments(args.params), name, start, stop,
+                      max_period=args.max_period, points=args.points, transient=args.transient, record=args.record,
+                      diagram=args.diagram_method, state=args.state, workers=args.workers,
+                      progress=not args.json)
+    if args.diagram is not None:
+        atomic_write_bytes(args.diagram, diagram_figure(study, args.diagram.suffix.lower().lstrip(".")))
+    summary = study.to_dict()
+    if args.diagram is not None:
+        summary["diagram"]["file"] = str(args.diagram)
+    if args.json:
+        print(json.dumps(summary, default=float))
+    else:
+        _print(study, summary, args)
+    return 0
+
+
+def _print(study, summary: dict, args) -> None:
+    print(f"{study.model.key} along {study.name} = {study.start:g} .. {study.stop:g}: continuation (event method, "
+          f"exact Jacobians) in {study.continuation_s:.2f} s")
+    for branch in summary["branches"]:
+        stable = ", ".join(f"{a:.6g}..{b:.6g}" for a, b in branch["stable"]) or "nowhere"
+        born = f", born at {branch['born_at']:.7g}" if branch["born_at"] is not None else ""
+        print(f"  period-{branch['period']} orbit: {branch['orbits']} orbits{born}; stable on {stable}"
+              + (f" ({branch['message']})" if branch["message"] else ""))
+    print("bifurcations:")
+    for b in study.bifurcations:
+        mults = ", ".join(f"{m.real:.4f}{m.imag:+.4f}j" if abs(m.imag) > 1e-9 else f"{m.real:.4f}" for m in b.multipliers)
+        change = (f"{'stable' if b.stable_before else 'unstable'} -> {'stable' if b.stable_after else 'unstable'}")
+        print(f"  {b.kind:<17} {study.name} = {b.value:.7g} (+- {b.width:.1g})  period {b.period}  multipliers "
+              f"[{mults}]  {change}" + (f"  {b.detail}" if b.detail else ""))
+    feigenbaum = summary["feigenbaum"]
+    if feigenbaum.get("ratios"):
+        print(f"  doubling intervals shrink by {', '.join(f'{r:.3f}' for r in feigenbaum['ratios'])}; the cascade "
+              f"accumulates near {feigenbaum['accumulation']:.5g} (Feigenbaum extrapolation)")
+    diagram = summary.get("diagram")
+    if diagram:
+        onset = diagram["aperiodic_onset"]
+        print(f"brute-force diagram: {diagram['points']} values ({diagram['method']}) in {diagram['wall_s']:.1f} s; "
+              + (f"aperiodic from {onset:.5g}" if onset is not None else "periodic everywhere")
+              + (f"; {diagram['errors']} values failed" if diagram["errors"] else ""))
+        if args.diagram is not None:
+            print(f"wrote {args.diagram}")
