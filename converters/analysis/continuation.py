@@ -400,12 +400,13 @@ def _trace(family, branch, scaling, current: OrbitPoint, tangent, bounds, max_st
             if landed is None:
                 branch.message = f"no orbit of period {family.periods} at the path's end {end:.9g} (Newton's corrector failed)"
                 return branch
-            solved, nxt = landed, None
+            nxt = family.point(end, landed.x, landed.jacobian)
+            branch.bifurcations += _detect(family, scaling, current, nxt, tol, locate_tol)
+            branch.points.append(nxt)
+            return branch
         nxt = nxt or family.point(solved.value, solved.x, solved.jacobian)
         branch.bifurcations += _detect(family, scaling, current, nxt, tol, locate_tol)
         branch.points.append(nxt)
-        if solved.value in (lo, hi) and len(branch.points) > 1:
-            return branch
         tangent = solved.tangent if solved.tangent @ tangent > 0 else -solved.tangent
         current = nxt
         ds = min(ds * (1.6 if solved.iterations <= 3 else 0.8 if solved.iterations >= 6 else 1.0), ds_max)
@@ -508,7 +509,9 @@ def _event_label(event, pairs, configs) -> str:
         return f"switching to {configs[config] if 0 <= config < len(configs) else config}"
     name = pairs[pair] if 0 <= pair < len(pairs) else f"pair {pair}"
     where = f" in {configs[config]}" if 0 <= config < len(configs) else ""
-    return f"{name} {'conducting' if kind == 'activate' else 'blocking' if kind == 'release' else kind}{where}"
+    # In the LCS's own terms: which of the pair's u and y is held at zero is the model's business.
+    state = {"activate": "held (y = 0)", "release": "freed (u = 0)"}.get(kind, kind)
+    return f"{name} {state}{where}"
 
 
 def _describe_change(before: tuple, after: tuple, pairs, configs) -> str:
