@@ -15,7 +15,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .analysis.periodic import PeriodicOrbit, require, shoot
-from .errors import ParameterError
+from .errors import ParameterError, SimulationError
 from .methods.base import Method, get_method
 from .models import Model, check_h, get_model
 from .simulate import simulate
@@ -97,7 +97,8 @@ def run_converter(name_or_model, params: dict | None = None, *, control: str = "
         ``steady_tol`` / 10 (relative); the span asked for (default ``STEADY_PERIODS`` periods) is then
         simulated from the orbit and returned (its time starts at 0; ``metadata['steady_periods']`` counts
         every period simulated: warm-up, Newton's and the span returned).
-        A run that cannot reach the orbit raises SimulationError with the reason.
+        A run that cannot reach the orbit, or whose orbit is unstable (the circuit would not settle on it), raises
+        SimulationError with the reason.
     x0 : array_like, optional
         Initial state (default: the model's, at rest).
     """
@@ -118,6 +119,14 @@ def run_converter(name_or_model, params: dict | None = None, *, control: str = "
             raise ParameterError(f"--steady needs a fixed switching period; {model.key} has none (run --t-end, or find "
                                  "its cycle with converters.analysis.periodic.autonomous_orbit and the event method)")
         orbit = steady_state(model, p, method, x0=x0, tol=0.1 * steady_tol)
+        if not orbit.stable:
+            # A fixed point of the period map the circuit does not settle on is no steady state.
+            mu = orbit.multipliers[0]
+            raise SimulationError(
+                f"the periodic orbit of {model.key} is unstable (Floquet spectral radius {orbit.spectral_radius:.6g}, "
+                f"a multiplier at {mu.real:.6g}{f'{mu.imag:+.3g}j' if abs(mu.imag) > 1e-12 else ''}): the circuit "
+                "settles elsewhere (a period-doubled orbit, or chaos); run --periods N without --steady, or follow "
+                "its orbits with pcsuite bifurcation")
         tr = simulate(model.problem(p, span, orbit.x0), method)
         simulated = orbit.evaluations + span / T        # the warm-up and Newton's spans, then the output
         meta.update(periods=int(round(simulated)), steady_periods=int(round(simulated)), orbit=orbit.summary())

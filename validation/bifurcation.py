@@ -371,7 +371,7 @@ def diagram_figure(study: Study, fmt: str = "png") -> bytes:
 def bifurcation_table(study: Study) -> pd.DataFrame:
     rows = []
     for b in study.bifurcations:
-        rows.append({"type": b.kind, "value": round(b.value, 6), "period": b.period,
+        rows.append({"type": b.kind, "value": f"{b.value:.6f}", "period": b.period,
                      "multipliers": ", ".join(f"{m.real:.4f}{m.imag:+.4f}j" if abs(m.imag) > 1e-9 else f"{m.real:.4f}"
                                               for m in b.multipliers),
                      "stability below -> above": f"{'stable' if b.stable_before else 'unstable'} -> "
@@ -396,40 +396,59 @@ def published_checks(study: Study) -> list[tuple]:
     return rows
 
 
-def bifurcation_section() -> "Section":
+SECTION_TITLE = (f"Bifurcations: {BIFURCATION['converter']} --control {BIFURCATION['control']} along "
+                 f"{BIFURCATION['param']}")
+
+
+def bifurcation_section(workers: int | None = 1) -> "Section":
     """The default study (defaults.toml [bifurcation]) with its checks: published values, the diagram on the exact
-    branches, ngspice's period-2 orbit."""
+    branches, ngspice's period-2 orbit. ``workers``: processes for the diagram (1 inside a suite whose own pool
+    keeps the cores busy)."""
     from .report import Section, csv_bytes, table_html
     cfg = BIFURCATION
     study = run_study(cfg["converter"], cfg["control"], dict(cfg["params"]), cfg["param"], cfg["start"], cfg["stop"],
                       max_period=cfg["max_period"], points=cfg["points"], transient=cfg["transient"],
-                      record=cfg["record"], workers=None)
+                      record=cfg["record"], workers=workers)
     checks = published_checks(study)
     agreement = branch_agreement(study)
     spice = spice_orbit(study.params, cfg["converter"], cfg["control"], cfg["param"], cfg["spice_value"],
                         cfg["spice_periods"], cfg["spice_window"], cfg["spice_tmax_fraction"])
     th = THRESHOLDS["bifurcation"]
-    check_rows = [{"check": label, "value": value, "reference": published, "|difference|": diff,
-                   "limit": th["published_abs"], "result": "pass" if ok else "fail"}
+    check_rows = [{"check": label, "value": "none" if value is None else f"{value:.4f}", "reference": f"{published:g}",
+                   "|difference|": diff, "limit": th["published_abs"], "result": "pass" if ok else "fail"}
                   for label, value, published, diff, ok in checks]
-    check_rows.append({"check": "diagram on the exact stable orbits (rel.)", "value": agreement.get("max_rel_distance"),
-                       "reference": 0.0, "|difference|": agreement.get("max_rel_distance"),
+    check_rows.append({"check": "diagram on the exact stable orbits (rel.)",
+                       "value": f"{agreement.get('max_rel_distance', float('nan')):.2e}", "reference": "0", "|difference|": agreement.get("max_rel_distance"),
                        "limit": th["diagram_branch_rel"],
                        "result": "pass" if agreement.get("values_compared") and agreement["max_rel_distance"]
                        <= th["diagram_branch_rel"] else "fail"})
     spice_ok = spice["spice_period"] == 2 and spice["max_rel_difference"] <= th["spice_orbit_rel"]
     check_rows.append({"check": f"ngspice period-2 orbit at {cfg['param']} = {cfg['spice_value']:g} (rel.)",
-                       "value": spice["max_rel_difference"], "reference": 0.0,
+                       "value": f"{spice['max_rel_difference']:.2e}", "reference": "0",
                        "|difference|": spice["max_rel_difference"], "limit": th["spice_orbit_rel"],
                        "result": "pass" if spice_ok else "fail"})
     table = pd.DataFrame(check_rows)
     feigenbaum = study.feigenbaum()
     summary = study.diagram_summary()
-    windows = pd.DataFrame([w for w in summary["windows"] if w["count"] >= 3])
-    branches = pd.DataFrame([{**s, "stable": "; ".join(f"{a:.4f}-{b:.4f}" for a, b in s["stable"])}
+    windows = []
+    for w in summary["windows"]:                  # stretches of 3 values or more, neighbours of one period merged
+        if w["count"] < 3:
+            continue
+        if windows and windows[-1]["period"] == w["period"]:
+            windows[-1].update(last=w["last"], count=windows[-1]["count"] + w["count"])
+        else:
+            windows.append(dict(w))
+    windows = pd.DataFrame([{"period": w["period"], "from": f"{w['first']:.3f}", "to": f"{w['last']:.3f}",
+                             "values": w["count"]} for w in windows])
+    branches = pd.DataFrame([{"period": s["period"], "orbits": s["orbits"], "from": f"{s['from']:.4f}",
+                              "to": f"{s['to']:.4f}", "stable": "; ".join(f"{a:.4f} to {b:.4f}" for a, b in s["stable"]),
+                              "born at": "" if s["born_at"] is None else f"{s['born_at']:.6f}",
+                              "complete": s["complete"], "message": s["message"]}
                              for s in (branch_summary(b) for b in study.branches)])
+    spec = {p.name: p for p in study.model.parameters}
+    fixed = ", ".join(f"{k} = {_engineering(v, spec[k].unit)}" for k, v in study.params.items() if k != study.name)
     text = (f"<p>{html.escape(study.model.title)} along {study.name} from {study.start:g} to {study.stop:g} "
-            f"(parameters: {html.escape(', '.join(f'{k} = {v:g}' for k, v in study.params.items()))}). "
+            f"(parameters: {html.escape(fixed)}). "
             "Continuation: pseudo-arclength on the event method's exact stroboscopic map (state-transition and "
             "saltation matrices), every period doubling where an orbit loses stability followed onto the "
             f"period-doubled branch up to period {cfg['max_period']}, in {study.continuation_s:.1f} s. "
@@ -442,7 +461,8 @@ def bifurcation_section() -> "Section":
                f"(the universal limit is {FEIGENBAUM_DELTA:.4f}); the cascade accumulates near "
                f"{feigenbaum['accumulation']:.4f} (extrapolated from the last two doublings).</p>" if feigenbaum.get("ratios") else "")
             + "<h3>Branches</h3>" + table_html(branches)
-            + "<h3>Periods seen by the brute-force diagram</h3><p>Stretches of at least 3 values; period 0: no period "
+            + "<h3>Periods seen by the brute-force diagram</h3><p>Stretches of at least 3 values (a value next to a "
+              "bifurcation converges slowly and may show no period); period 0: no period "
               f"up to {cfg['record'] // 2} (chaotic, or not settled next to a bifurcation).</p>" + table_html(windows)
             + f"<h3>ngspice at {cfg['param']} = {cfg['spice_value']:g}</h3><p>From rest, {cfg['spice_periods']} periods, "
               f"TMAX = T/{round(1 / cfg['spice_tmax_fraction'])}: {study.state}(nT) over the last {cfg['spice_window']} "
@@ -455,4 +475,4 @@ def bifurcation_section() -> "Section":
                                                  ignore_index=True))}
     ok = bool((table["result"] == "pass").all())
     metrics = {**study.to_dict(), "branch_agreement": agreement, "spice": spice}
-    return Section(f"Bifurcations: {study.model.key} along {study.name}", text, files, ok=ok, metrics=metrics)
+    return Section(SECTION_TITLE, text, files, ok=ok, metrics=metrics)

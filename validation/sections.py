@@ -280,6 +280,12 @@ def live_bench_section(part: str) -> Section:
     return (tradeoff_section if part == "tradeoff" else stability_section)(files, meta, "Measured for this report.")
 
 
+# The bifurcation study: alone in its suite it may use every core for its diagram; in the default suite the
+# suite's own pool keeps them busy.
+from .bifurcation import SECTION_TITLE as _BIFURCATION_TITLE, bifurcation_section  # noqa: E402
+
+EXTRA_SECTIONS["bifurcation"] = [(_BIFURCATION_TITLE, partial(bifurcation_section, workers=None))]
+EXTRA_SECTIONS["default"] += [(_BIFURCATION_TITLE, partial(bifurcation_section, workers=1))]
 EXTRA_SECTIONS["default"] += [("Speed-accuracy trade-off", partial(saved_bench_section, "tradeoff")),
                               ("Numerical stability at the extremes", partial(saved_bench_section, "stability"))]
 EXTRA_SECTIONS["bench"] = [("Speed-accuracy trade-off", partial(live_bench_section, "tradeoff")),

@@ -75,7 +75,7 @@ class PeriodicOrbit:
     def summary(self) -> dict:
         return {"period_s": self.period, "residual": self.residual, "distance": self.distance,
                 "iterations": self.iterations, "evaluations": self.evaluations, "converged": self.converged,
-                "spectral_radius": self.spectral_radius, "jacobian": self.jacobian_kind,
+                "spectral_radius": self.spectral_radius, "stable": self.stable, "jacobian": self.jacobian_kind,
                 "multipliers": [[float(m.real), float(m.imag)] for m in self.multipliers]}   # [re, im] pairs
 
 

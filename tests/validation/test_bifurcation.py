@@ -123,3 +123,14 @@ def test_the_report_section_passes_its_checks(ngspice):
     assert m["branch_agreement"]["values_compared"] >= 40
     assert m["diagram"]["aperiodic_onset"] == pytest.approx(PUBLISHED_BIFURCATIONS["chaos"], abs=0.1)
     assert m["feigenbaum"]["accumulation"] == pytest.approx(32.28, abs=0.01)
+
+
+def test_steady_refuses_an_unstable_orbit_and_reports_stability(capsys):
+    """At 28 V the period-1 orbit exists but is unstable (multiplier -1.486): it is not the circuit's steady state."""
+    code, out, err = run_cli(capsys, "simulate", "buck", "--control", "voltage-mode", "-p", "Vin=28", "--steady")
+    assert code == 2 and out == ""
+    assert "the periodic orbit of buck --control voltage-mode is unstable (Floquet spectral radius 1.486" in err
+    code, out, _ = run_cli(capsys, "simulate", "buck", "--control", "voltage-mode", "-p", "Vin=22", "--steady",
+                           "--method", "event", "--json")
+    orbit = json.loads(out)["orbit"]
+    assert code == 0 and orbit["stable"] and orbit["spectral_radius"] == pytest.approx(0.824133, abs=1e-6)   # |-0.7528 +- 0.3354j|

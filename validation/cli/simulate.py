@@ -30,8 +30,9 @@ def add(sub) -> None:
                       help="duration in switching periods (default 500; with --steady: the periods returned on the "
                            "orbit, default 20)")
     sim.add_argument("--control", default="pwm", choices=list(CONTROLS),
-                     help="boost only: sliding-mode current control (smc: hysteresis; smc-implicit: the implicit "
-                          "relay) with -p Vref=.. -p band=.. [-p Kp=.. -p Ki=.. -p t_step=.. -p R_step=..]")
+                     help="boost: sliding-mode current control (smc: hysteresis; smc-implicit: the implicit "
+                          "relay) with -p Vref=.. -p band=.. [-p Kp=.. -p Ki=.. -p t_step=.. -p R_step=..]; buck: "
+                          "voltage-mode: the ramp comparator, -p A=.. -p Vref=.. -p VL=.. -p VU=.. [-p latch=1]")
     sim.add_argument("--steady", action="store_true", help="run to the method's periodic orbit (Newton shooting)")
     sim.add_argument("--steady-tol", type=float, default=1e-6,
                      help="relative distance to the orbit at which the steady state counts as reached")
