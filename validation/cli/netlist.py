@@ -8,7 +8,8 @@ def add(sub) -> None:
     net = sub.add_parser("netlist", help="print the ngspice netlist of a converter")
     net.add_argument("converter")
     add_params(net)
-    net.add_argument("--control", default="pwm", choices=["pwm", "smc"], help="boost only: sliding-mode control")
+    net.add_argument("--control", default="pwm", choices=["pwm", "smc", "voltage-mode"],
+                     help="boost: smc (sliding-mode control); buck: voltage-mode (the ramp comparator)")
     net.add_argument("--t-end", default=None, help="duration in s (default 500 periods)")
     net.set_defaults(run=run)
 
