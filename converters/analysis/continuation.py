@@ -174,6 +174,8 @@ class OrbitFamily:
             raise ParameterError(f"periods (of the orbit, in switching periods) must be an integer >= 1; got {periods!r}")
         self.problem_of, self.method, self.periods = problem_of, method, int(periods)
         self._maps: dict = {}
+        #: The last refusal of a parameter value or state by the model or the method (why a correction failed).
+        self.refusal = ""
 
     def doubled(self) -> "OrbitFamily":
         return OrbitFamily(self.problem_of, self.method, 2 * self.periods)
@@ -291,7 +293,8 @@ def _correct(family, scaling: _Scaling, z_start, normal, anchor, tol: float, max
             if not np.all(np.isfinite(fx)):
                 return None
             A[:n], fp = _extended_rows(family, scaling, x, value, fx, jac, fp)
-        except (ValueError, RuntimeError):               # a parameter or state the model or method refuses
+        except (ValueError, RuntimeError) as exc:        # a parameter or state the model or method refuses
+            family.refusal = str(exc)
             return None
         A[n] = normal
         rhs = -np.append(fx / scaling.x_scale, normal @ (z - anchor))
@@ -371,6 +374,7 @@ def _trace(family, branch, scaling, current: OrbitPoint, tangent, bounds, max_st
     while len(branch.points) < max_points:
         z = scaling.z(current.x0, current.value)
         predicted = z + ds * tangent
+        family.refusal = ""
         solved = _correct(family, scaling, predicted, tangent, predicted, tol)
         nxt = None
         if solved is not None:
@@ -384,9 +388,11 @@ def _trace(family, branch, scaling, current: OrbitPoint, tangent, bounds, max_st
                     solved = nxt = None
         if solved is None:
             if ds <= ds_min:
+                why = (f"the model or method refused the next orbit ({family.refusal})" if family.refusal else
+                       "the branch ends, or turns at a border collision")
                 branch.message = (f"continuation of the period-{family.periods} orbit stopped at {current.value:.9g}: "
                                   f"Newton's corrector does not converge even with a step of {ds * scaling.p_scale:.3g} "
-                                  "in the parameter (the branch ends, or turns at a border collision)")
+                                  f"in the parameter; {why}")
                 return branch
             ds = max(0.5 * ds, ds_min)
             continue

@@ -114,3 +114,19 @@ def test_the_test_functions():
     assert t["neimark-sacker"] is None
     R = 1.1 * np.array([[np.cos(1.0), -np.sin(1.0)], [np.sin(1.0), np.cos(1.0)]])
     assert continuation.test_functions(R, np.linalg.eigvals(R))["neimark-sacker"] == pytest.approx(0.1)
+
+
+def test_a_branch_that_fails_part_way_says_where_and_keeps_its_orbits():
+    """A model that refuses values above 3.2 (as a parameter's range would): the branch stops just below with
+    the reason, and every orbit found up to there is kept."""
+    class Refusing(MapFamily):
+        def __call__(self, value):
+            if value > 3.2:
+                raise ParameterError(f"p must be <= 3.2; got {value}")
+            return super().__call__(value)
+    branch = follow(OrbitFamily(Refusing("logistic"), MapMethod(), 1), 2.5, 3.5, [0.5])
+    assert not branch.complete
+    assert branch.message.startswith("continuation of the period-1 orbit stopped at 3.1999")
+    assert "the model or method refused the next orbit (p must be <= 3.2; got 3.2" in branch.message
+    assert branch.values().max() == pytest.approx(3.2, abs=1e-3) and len(branch.points) > 10
+    assert [b.kind for b in branch.bifurcations] == ["period-doubling"]      # found before it stopped
