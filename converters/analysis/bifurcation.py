@@ -117,7 +117,7 @@ class _Chunk:
         """(samples at the period starts, the state at the end, Lyapunov exponent or nan) of one value."""
         from ..simulate import simulate
         problem = self.problem_of(value)
-        T = problem.switching.period
+        T = problem.period
         if not np.isfinite(T):
             raise ParameterError("a brute-force diagram needs a periodic switching law (a schedule or a ramp)")
         t0 = problem.t_span[0]

@@ -40,7 +40,8 @@ import numpy as np
 from ..errors import ParameterError
 from .periodic import multipliers_of, newton_orbit
 
-KINDS = ("period-doubling", "fold", "neimark-sacker", "border-collision")
+KINDS = ("period-doubling", "fold", "neimark-sacker", "border-collision", "grazing-sliding", "crossing-sliding",
+         "switching-sliding", "adding-sliding")
 TEST_NAMES = {"period-doubling": "det(J + I)", "fold": "det(J - I)",
               "neimark-sacker": "max |mu| - 1 over the complex pairs"}
 
@@ -71,7 +72,7 @@ class OrbitPoint:
     multipliers : ndarray, shape (n,)
         Floquet multipliers, largest modulus first.
     signature : tuple
-        The orbit's events over its k periods: (kind, pair, config) in time order.
+        The orbit's events over one of its periods: (kind, pair, config), as a cyclic sequence.
     """
 
     value: float
@@ -80,6 +81,9 @@ class OrbitPoint:
     jacobian: np.ndarray
     multipliers: np.ndarray
     signature: tuple
+    #: The same events with their times, as (fraction of the orbit's period from the window's start, kind,
+    #: pair, config): what a classifier of border collisions reads (which new segment is short).
+    timed_events: tuple = ()
 
     @property
     def spectral_radius(self) -> float:
@@ -169,20 +173,24 @@ class OrbitFamily:
     ``problem_of`` returns the problem at a parameter value (only its start time is used); its switching
     law must have a period T (a schedule, or a state-driven law with a ramp)."""
 
-    def __init__(self, problem_of, method, periods: int = 1):
+    def __init__(self, problem_of, method, periods: int = 1, classify=None):
         if not (isinstance(periods, (int, np.integer)) and periods >= 1):
             raise ParameterError(f"periods (of the orbit, in switching periods) must be an integer >= 1; got {periods!r}")
         self.problem_of, self.method, self.periods = problem_of, method, int(periods)
+        #: classify(below, above) -> (kind, detail) or None: names a change of signature between the orbits just
+        #: below and just above a border collision (e.g. the sliding bifurcations of :mod:`.sliding`); None
+        #: keeps it a plain border collision.
+        self.classify = classify
         self._maps: dict = {}
         #: The last refusal of a parameter value or state by the model or the method (why a correction failed).
         self.refusal = ""
 
     def doubled(self) -> "OrbitFamily":
-        return OrbitFamily(self.problem_of, self.method, 2 * self.periods)
+        return OrbitFamily(self.problem_of, self.method, 2 * self.periods, self.classify)
 
     def problem(self, value: float, periods: int | None = None):
         problem = self.problem_of(value)
-        T = problem.switching.period
+        T = problem.period
         if not np.isfinite(T):
             raise ParameterError("continuation needs a periodic switching law (a schedule or a ramp); this problem's "
                                  "law has no period")
@@ -211,15 +219,37 @@ class OrbitFamily:
         """The orbit at a fixed parameter value (Newton shooting, :func:`.periodic.newton_orbit`)."""
         return newton_orbit(self.period_map(value), x_guess, tol=tol, max_iter=max_iter)
 
-    def signature(self, value: float, x0) -> tuple:
-        """(kind, pair, config) of every event over the orbit's k periods, in time order."""
+    def _events(self, value: float, x0) -> list:
         events = self.period_map(value).events(x0)
         if events is None:                              # a method whose map does not record events
             from ..simulate import simulate
             table = simulate(self.problem(value), self.method, x0=x0).events
             config = table["config"] if "config" in table else np.full(len(table), -1)
             events = list(zip(table["time"], table["kind"], table["pair"], config))
-        return tuple((str(kind), int(pair), int(config)) for _, kind, pair, config in events)
+        return events
+
+    def signature(self, value: float, x0) -> tuple:
+        """(kind, pair, config) of every event over one orbit, as a cyclic sequence (its smallest rotation)."""
+        return self.timed_signature(value, x0)[0]
+
+    def timed_signature(self, value: float, x0) -> tuple[tuple, tuple]:
+        """(signature, timed events). The orbit's events are read over two of its periods, in a window of one
+        period that starts in the middle of the largest gap between them: an event at the orbit's start t0
+        (a held state that begins right there, say) is then counted once, whichever side of t0 it falls on."""
+        first = self._events(value, x0)
+        if not first:
+            return (), ()
+        span = self.periods * self.problem_of(value).period
+        x1 = self.period_map(value).end(x0)
+        shifted = [(t + span, kind, pair, config) for t, kind, pair, config in self._events(value, x1)]
+        times = sorted(float(e[0]) for e in first)
+        gaps = np.diff(times + [times[0] + span])
+        widest = int(np.argmax(gaps))
+        cut = times[widest] + 0.5 * gaps[widest]
+        window = sorted((e for e in list(first) + shifted if cut <= e[0] < cut + span), key=lambda e: e[0])
+        timed = tuple(((float(t) - cut) / span, str(kind), int(pair), int(config)) for t, kind, pair, config in window)
+        sequence = tuple(e[1:] for e in timed)
+        return min((sequence[i:] + sequence[:i] for i in range(len(sequence))), default=()), timed
 
     def point(self, value: float, x0, jacobian) -> OrbitPoint:
         x0 = np.array(x0, dtype=float)
@@ -228,12 +258,15 @@ class OrbitFamily:
             one = self.period_map(value, 1)
             for _ in range(self.periods - 1):
                 samples.append(one.end(samples[-1]))
+        signature, timed = self.timed_signature(value, x0)
         return OrbitPoint(float(value), x0, np.array(samples), np.array(jacobian), multipliers_of(jacobian),
-                          self.signature(value, x0))
+                          signature, timed)
 
     def event_names(self, value: float) -> tuple[tuple[str, ...], tuple[str, ...]]:
         problem = self.problem_of(value)
-        return problem.pair_names, tuple(c.name or f"config{i}" for i, c in enumerate(problem.configurations))
+        configs = getattr(problem, "config_names", None) or tuple(c.name or f"config{i}"
+                                                                  for i, c in enumerate(problem.configurations))
+        return problem.pair_names, tuple(configs)
 
 
 # --- the corrector ------------------------------------------------------------------------------------
@@ -242,6 +275,9 @@ class OrbitFamily:
 class _Scaling:
     x_scale: float
     p_scale: float
+    #: Relative step of the forward difference for F_p: 1e-7 suits exact maps; a map accurate to eps wants
+    #: about sqrt(eps).
+    fd_step: float = 1e-7
 
     def z(self, x, p) -> np.ndarray:
         return np.append(np.asarray(x, dtype=float) / self.x_scale, p / self.p_scale)
@@ -265,7 +301,7 @@ def _extended_rows(family, scaling, x, value, fx, jacobian, fp=None):
     difference unless given)."""
     n = x.size
     if fp is None:
-        step = 1e-7 * max(abs(value), scaling.p_scale)
+        step = scaling.fd_step * max(abs(value), scaling.p_scale)
         fp = (family.period_map(value + step).end(x) - x - fx) / step
     rows = np.empty((n, n + 1))
     rows[:, :n] = jacobian - np.eye(n)
@@ -317,7 +353,8 @@ def _correct(family, scaling: _Scaling, z_start, normal, anchor, tol: float, max
 # --- following a branch -----------------------------------------------------------------------------
 
 def follow(family: OrbitFamily, start: float, stop: float, x_guess, *, max_step: float | None = None,
-           tol: float = 1e-10, locate_tol: float = 1e-8, max_points: int = 2000, warm_up: int = 100) -> Branch:
+           tol: float = 1e-10, locate_tol: float = 1e-8, max_points: int = 2000, warm_up: int = 100,
+           fd_step: float = 1e-7) -> Branch:
     """Follow the family's orbit from ``start`` to ``stop`` by pseudo-arclength continuation, locating every
     bifurcation on the way (module docstring).
 
@@ -334,6 +371,9 @@ def follow(family: OrbitFamily, start: float, stop: float, x_guess, *, max_step:
         Newton tolerance on the scaled variables (relative).
     locate_tol : float
         Bifurcations are bracketed to this chord length in scaled variables (relative to |stop - start|).
+    fd_step : float
+        Relative step of the difference quotient for d F / d p (1e-7 for exact maps; about the square root
+        of the map's accuracy otherwise, with ``tol`` above that accuracy).
     """
     span = float(stop) - float(start)
     if span == 0.0:
@@ -344,14 +384,20 @@ def follow(family: OrbitFamily, start: float, stop: float, x_guess, *, max_step:
         one = family.period_map(start, 1)
         for _ in range(warm_up):
             x = one.end(x)
-        first = family.orbit(start, x, tol)
-    except Exception as exc:  # noqa: BLE001 - the model or method refused: a message, not a crash
+        # Newton from each of the orbit's k phases in turn: a phase where the map is degenerate (a state held
+        # on a constraint for a whole period, say) is no start.
+        for _ in range(family.periods):
+            first = family.orbit(start, x, tol)
+            if first.converged:
+                break
+            x = one.end(x)
+    except (ValueError, RuntimeError) as exc:           # the model or method refused: a message, not a crash
         branch.message = f"no orbit of period {family.periods} at {start:.9g}: {exc}"
         return branch
     if not first.converged:
         branch.message = f"no orbit of period {family.periods} at {start:.9g}: {first.message}"
         return branch
-    scaling = _Scaling(1.0 + float(np.abs(first.x0).max()), abs(span))
+    scaling = _Scaling(1.0 + float(np.abs(first.x0).max()), abs(span), fd_step)
     current = family.point(start, first.x0, first.jacobian)
     branch.points.append(current)
     fx, jac = family.residual(start, first.x0)
@@ -388,6 +434,15 @@ def _trace(family, branch, scaling, current: OrbitPoint, tangent, bounds, max_st
                     solved = nxt = None
         if solved is None:
             if ds <= ds_min:
+                previous = branch.points[-2] if len(branch.points) > 1 else None
+                turned_branch = _turn_at_corner(family, scaling, current, previous, tangent, 10.0 * ds_max * 1e-3, tol)
+                if turned_branch is not None:
+                    solved, new_tangent = turned_branch
+                    nxt = family.point(solved.value, solved.x, solved.jacobian)
+                    branch.bifurcations += _detect(family, scaling, current, nxt, tol, locate_tol)
+                    branch.points.append(nxt)
+                    current, tangent, ds = nxt, new_tangent, 10.0 * ds_min
+                    continue
                 why = (f"the model or method refused the next orbit ({family.refusal})" if family.refusal else
                        "the branch ends, or turns at a border collision")
                 branch.message = (f"continuation of the period-{family.periods} orbit stopped at {current.value:.9g}: "
@@ -418,6 +473,45 @@ def _trace(family, branch, scaling, current: OrbitPoint, tangent, bounds, max_st
         ds = min(ds * (1.6 if solved.iterations <= 3 else 0.8 if solved.iterations >= 6 else 1.0), ds_max)
     branch.message = f"stopped after {max_points} orbits at {current.value:.9g} (max_points)"
     return branch
+
+
+def _turn_at_corner(family, scaling, current: OrbitPoint, previous: OrbitPoint | None, tangent, ds, tol):
+    """The branch has a corner at ``current`` (a border collision where it turns back: a non-smooth fold), and
+    no step along ``tangent`` finds an orbit. Candidates: the tangent of the map's piece at ``current`` itself
+    (the last steps may already have crossed the corner), and that of the piece on the far side, found by
+    probing where the event signature changes; each in both orientations. The first that lands on an orbit
+    in a direction that does not reverse the arrival ``tangent`` wins. Returns (solved, tangent) or None.
+    (``previous``: the orbit before ``current``, kept for the caller's bookkeeping.)"""
+    z = scaling.z(current.x0, current.value)
+    n = current.x0.size
+    fx, jac = family.residual(current.value, current.x0)
+    candidates = [_null_vector(_extended_rows(family, scaling, current.x0, current.value, fx, jac)[0])]
+    probes = [tangent[:-1] / (np.linalg.norm(tangent[:-1]) or 1.0)] + list(np.eye(n))
+    for direction in probes:
+        for sign in (1.0, -1.0):
+            for size in (1e-6, 1e-4):
+                x_other = current.x0 + sign * size * scaling.x_scale * direction
+                try:
+                    if family.signature(current.value, x_other) == current.signature:
+                        continue
+                    fx, jac = family.residual(current.value, x_other)
+                    candidates.append(_null_vector(_extended_rows(family, scaling, x_other, current.value, fx, jac)[0]))
+                except (ValueError, RuntimeError):
+                    continue
+                break
+    for other in candidates:
+        for orientation in (other, -other):
+            predicted = z + ds * orientation
+            solved = _correct(family, scaling, predicted, orientation, predicted, tol)
+            if solved is None or np.abs(solved.z - z).max() <= 0.1 * ds:
+                continue
+            # Not back the way the branch came: the step's direction must not reverse the arrival ``tangent``.
+            step = (solved.z - z) / np.linalg.norm(solved.z - z)
+            if step @ tangent < -0.9:
+                continue
+            new_tangent = solved.tangent if solved.tangent @ orientation > 0 else -solved.tangent
+            return solved, new_tangent
+    return None
 
 
 # --- detection and location ---------------------------------------------------------------------------
@@ -504,7 +598,12 @@ def _border_collision(family, lo: OrbitPoint, hi: OrbitPoint, note: str) -> Bifu
     detail = (f"events per orbit {len(below.signature)} -> {len(above.signature)}: "
               + _describe_change(below.signature, above.signature, pairs, configs))
     how = "bisection on the orbit's event signature along the branch" + (f" ({note})" if note else "")
-    return Bifurcation("border-collision", 0.5 * (lo.value + hi.value), family.periods, below.multipliers,
+    kind = "border-collision"
+    named = family.classify(below, above) if family.classify is not None else None
+    if named is not None:
+        kind, explanation = named
+        detail = f"{explanation}; {detail}"
+    return Bifurcation(kind, 0.5 * (lo.value + hi.value), family.periods, below.multipliers,
                        below.x0, how, abs(hi.value - lo.value), below.stable, above.stable,
                        multipliers_after=above.multipliers, detail=detail)
 
@@ -517,6 +616,8 @@ def _event_label(event, pairs, configs) -> str:
     where = f" in {configs[config]}" if 0 <= config < len(configs) else ""
     # In the LCS's own terms: which of the pair's u and y is held at zero is the model's business.
     state = {"activate": "held (y = 0)", "release": "freed (u = 0)"}.get(kind, kind)
+    if kind in ("stick", "slip", "cross", "touch", "impact", "chatter", "detach"):     # mechanical contacts
+        where = f" ({configs[config]})" if 0 <= config < len(configs) else ""
     return f"{name} {state}{where}"
 
 
@@ -535,7 +636,7 @@ def _describe_change(before: tuple, after: tuple, pairs, configs) -> str:
 
 def switch_branch(family: OrbitFamily, bifurcation: Bifurcation, start: float, stop: float, *,
                   max_step: float | None = None, tol: float = 1e-10, locate_tol: float = 1e-8,
-                  max_points: int = 2000) -> Branch:
+                  max_points: int = 2000, fd_step: float = 1e-7) -> Branch:
     """The period-2k branch born at a period doubling of the period-k branch, followed while the parameter
     stays in [min, max] of (start, stop) (module docstring). The bifurcation orbit, counted twice, is its
     first point."""
@@ -547,7 +648,7 @@ def switch_branch(family: OrbitFamily, bifurcation: Bifurcation, start: float, s
     _, jac = family.period_map(bifurcation.value)(bifurcation.x0)
     values, vectors = np.linalg.eig(jac)
     v = np.real(vectors[:, np.argmin(np.abs(values + 1.0))])
-    scaling = _Scaling(1.0 + float(np.abs(bifurcation.x0).max()), span)
+    scaling = _Scaling(1.0 + float(np.abs(bifurcation.x0).max()), span, fd_step)
     z_star = scaling.z(bifurcation.x0, bifurcation.value)
     direction = np.append(v / scaling.x_scale, 0.0)
     direction /= np.linalg.norm(direction)
@@ -579,7 +680,7 @@ def cascade(family: OrbitFamily, start: float, stop: float, x_guess, *, max_peri
     the period-2k orbit born there, up to orbits of ``max_period`` switching periods. Returns every branch,
     the first one first, each child after its parent."""
     branches = [follow(family, start, stop, x_guess, **options)]
-    switch_options = {k: v for k, v in options.items() if k in ("max_step", "tol", "locate_tol", "max_points")}
+    switch_options = {k: v for k, v in options.items() if k in ("max_step", "tol", "locate_tol", "max_points", "fd_step")}
     queue = [(branches[0], family)]
     while queue:
         branch, fam = queue.pop(0)

@@ -159,7 +159,7 @@ def shoot(problem: LCSProblem, method, x_guess=None, *, periods: int = 1, warm_u
     ``periods``: the orbit's period in switching periods (a period-m orbit); ``warm_up``: periods simulated
     from ``x_guess`` (default problem.x0) before Newton starts, so that it begins on the right sequence of
     modes. The problem's own t_span is ignored (only its start)."""
-    T = problem.switching.period
+    T = problem.period
     if not np.isfinite(T):
         raise SimulationError("shoot() needs a periodic switching law (a schedule or a ramp); for an autonomous "
                               "state-switched problem use autonomous_orbit()")

@@ -119,3 +119,8 @@ class LCSProblem:
     @property
     def k(self) -> int:
         return self.configurations[0].k
+
+    @property
+    def period(self) -> float:
+        """The switching law's clock period T (s), inf when it has none: what stroboscopic maps step by."""
+        return self.switching.period
