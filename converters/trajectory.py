@@ -174,6 +174,8 @@ class Trajectory:
             return np.asarray(self.measured["mode"])[rows]
         if self.labels is None:
             raise KeyError("modes need a model's labels (this trajectory has none)")
+        if hasattr(self.labels, "mode_labels_of"):             # mechanical models read the mode from the run's state
+            return self.labels.mode_labels_of(self.samples(rows))
         return self.labels.modes(self.conducting(rows), self.signal("switch", rows), self.x[rows])
 
     # --- windows and measures ------------------------------------------------------------------------

@@ -177,6 +177,73 @@ def brute_force(problem_of, method, values, x0, *, transient: int = 200, record:
     return [attractor for part in results for attractor in part]
 
 
+@dataclass(frozen=True)
+class SectionRow:
+    """The events of one kind (a Poincare section: block 1 starting to stick, an impact) seen at one value after
+    the transient: their times, their phases in the time unit, and the states there."""
+
+    value: float
+    times: np.ndarray
+    phases: np.ndarray
+    states: np.ndarray
+    error: str = ""
+
+
+@dataclass(frozen=True)
+class _SectionChunk:
+    problem_of: object
+    method: object
+    x0: np.ndarray
+    transient: float
+    record: float
+    unit: float
+    kind: str
+    pair: int
+
+    def __call__(self, values) -> list[SectionRow]:
+        from ..simulate import simulate
+        out, x = [], np.array(self.x0, dtype=float)
+        for i, value in enumerate(values):
+            transient = self.transient * (2 if i == 0 else 1)
+            try:
+                problem = self.problem_of(float(value))
+                t0 = problem.t_span[0]
+                unit = problem.period if np.isfinite(problem.period) else self.unit
+                end = t0 + (transient + self.record) * unit
+                run = simulate(replace(problem, t_span=(t0, end)), self.method, x0=x)
+            except (ValueError, RuntimeError, ArithmeticError) as exc:
+                out.append(SectionRow(float(value), np.empty(0), np.empty(0), np.empty((0, x.size)),
+                                      f"{type(exc).__name__}: {exc}"))
+                x = np.array(self.x0, dtype=float)
+                continue
+            events = run.events
+            chosen = events[(events["kind"] == self.kind) & (events["pair"] == self.pair)
+                            & (events["time"] >= t0 + transient * unit)]
+            times = chosen["time"].to_numpy(dtype=float)
+            states = np.column_stack([np.interp(times, run.t, run.x[:, k]) for k in range(run.x.shape[1])]) \
+                if times.size else np.empty((0, run.x.shape[1]))
+            out.append(SectionRow(float(value), times, np.mod(times - t0, unit) / unit, states))
+            x = run.x[-1]
+        return out
+
+
+def section_diagram(problem_of, method, values, x0, *, kind: str, pair: int, transient: float = 50.0,
+                    record: float = 50.0, unit: float | None = None, chunk: int = 10, workers: int | None = None,
+                    progress: bool = False) -> list[SectionRow]:
+    """A brute-force diagram on a Poincare section: at each value, the events of ``kind`` on ``pair`` after
+    ``transient`` time units, over ``record`` more (the unit: the forcing period, or ``unit`` for an
+    autonomous problem); chunks seeded along the path and run in parallel as in :func:`brute_force`."""
+    values = np.asarray(values, dtype=float).ravel()
+    if values.size == 0 or not np.all(np.isfinite(values)):
+        raise ParameterError(f"values must be finite numbers, at least one; got {values!r}")
+    task = _SectionChunk(problem_of, method, np.array(x0, dtype=float), float(transient), float(record),
+                         float(unit or 1.0), kind, int(pair))
+    chunks = [values[i:i + chunk] for i in range(0, values.size, chunk)]
+    results = parallel_map(task, chunks, workers=workers, chunk=1, progress=progress, label="section diagram",
+                           unit="chunk")
+    return [row for part in results for row in part]
+
+
 def aperiodic_onset(attractors: list[Attractor], run: int = 3) -> float | None:
     """The first value (in path order) that starts ``run`` consecutive attractors without a period (and
     without errors), or None. Isolated aperiodic values next to a bifurcation (slow convergence where a
@@ -201,4 +268,5 @@ def period_windows(attractors: list[Attractor]) -> list[dict]:
     return windows
 
 
-__all__ = ["Attractor", "brute_force", "iterate", "detect_period", "aperiodic_onset", "period_windows"]
+__all__ = ["Attractor", "brute_force", "iterate", "detect_period", "aperiodic_onset", "period_windows", "SectionRow",
+           "section_diagram"]

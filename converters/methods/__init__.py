@@ -1,10 +1,12 @@
 """Methods: each validates its options, declares its order and solves a problem into a Trajectory.
 
 Importing this package registers them in :data:`converters.methods.base.METHODS` (``lcp``, ``event``,
-``smooth``), the names the command line offers."""
+``smooth``, ``moreau``), the names the command line offers (each method's ``domains`` says which problems
+it takes: the converters' LCS, mechanical problems, or both)."""
 from .base import METHODS, Method, get_method
 from .theta import BackwardEuler, Theta
 from .event import EventDriven
 from .smoothing import Smoothing
+from .moreau import MoreauJean
 
-__all__ = ["Method", "METHODS", "get_method", "Theta", "BackwardEuler", "EventDriven", "Smoothing"]
+__all__ = ["Method", "METHODS", "get_method", "Theta", "BackwardEuler", "EventDriven", "Smoothing", "MoreauJean"]

@@ -36,6 +36,8 @@ class Method(ABC):
     description: ClassVar[str] = ""
     #: Name of the option that receives a run's step (``h``, or an output spacing), or "" for none.
     step_option: ClassVar[str] = ""
+    #: The problems it takes: ``lcs`` (converters), ``mechanical`` (friction and impacts).
+    domains: ClassVar[tuple] = ("lcs",)
 
     def __init_subclass__(cls, key: str = "", **kwargs):
         super().__init_subclass__(**kwargs)

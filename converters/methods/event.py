@@ -90,6 +90,7 @@ class EventDriven(Method, key="event"):
     chatter_fraction: float = 1e-9
     step_option = "output_step"
     description = "exact event-driven: matrix exponentials per mode, events by root finding, any number of pairs"
+    domains = ("lcs", "mechanical")
 
     def __post_init__(self):
         tol = parse_value("event_tol", self.event_tol)

@@ -83,7 +83,7 @@ class _Dynamics:
 
     def __init__(self, problem: MechanicalProblem):
         self.problem = problem
-        self.n, self.m, self.c = problem.n, len(problem.frictions), len(problem.contacts)
+        self.n, self.m, self.c = problem.dof, len(problem.frictions), len(problem.contacts)
         self.Minv = np.linalg.inv(problem.mass)
         self.K, self.C = problem.stiffness, problem.damping
         self.WT = np.array([f.direction for f in problem.frictions]).reshape(self.m, self.n)
@@ -198,7 +198,7 @@ class MechanicalSolution:
         times = np.asarray(times, dtype=float)
         starts = np.array([s.t0 for s in self.segments])
         which = np.clip(np.searchsorted(starts, times, side="right") - 1, 0, len(self.segments) - 1)
-        n2, k = 2 * self.problem.n, dyn.m + dyn.c
+        n2, k = self.problem.n, dyn.m + dyn.c
         x, u, y = np.empty((times.size, n2)), np.empty((times.size, k)), np.empty((times.size, k))
         config, held = np.empty(times.size, dtype=np.int64), np.empty((times.size, k), dtype=bool)
         for i, s_index in enumerate(which):
@@ -351,6 +351,8 @@ class MechanicalMachine:
         else:                                       # a tangential start: the second derivative decides
             dt = 1e-6 * self.scale
             power, limit = 2, 0.5 * (rate(t0 + dt, x0 + dt * start_field) - first) / dt
+            if limit <= scale:                      # a contact released as its force reached zero: third order
+                power, limit = 3, 1e-300
         tiny = 1e-300
 
         def watched(t, y):
@@ -493,6 +495,9 @@ class MechanicalMachine:
             return t, x, new, phi, False
         if kind == "break":                                 # a stick force reached the static limit
             i = index
+            w = dyn.WT[i]
+            x = x.copy()
+            x[n:] -= dyn.Minv @ w * ((w @ x[n:] - dyn.V[i]) / (w @ dyn.Minv @ w))   # leave from exactly s_i = 0
             lam = dyn.contact_forces(mode, t, x)[0][i]
             states[i] = SLIP_NEG if lam > 0 else SLIP_POS
             new = tuple(states)
@@ -504,6 +509,7 @@ class MechanicalMachine:
             return t, x, new, phi, False
         if kind == "detach":
             j = index - m
+            x = self._onto_contact(j, t, x)           # the held gap drifts by rounding: start the flight on it
             states[m + j] = OPEN
             new = tuple(states)
             events.append((t, "detach", index, OPEN))
@@ -538,9 +544,7 @@ class MechanicalMachine:
                 t = t + remaining
                 x_after = x_after.copy()
                 x_after[:n] += x_after[n:] * remaining                # the other coordinates drift on (first order)
-                c0, c1, _ = dyn.offset(j, t)
-                x_after[:n] -= dyn.Minv @ w * ((w @ x_after[:n] + c0) / mass)   # on the contact at the accumulation time
-                x_after[n:] -= dyn.Minv @ w * ((w @ x_after[n:] + c1) / mass)   # moving with it
+                x_after = self._onto_contact(j, t, x_after)      # on the contact at the accumulation time, moving with it
                 states[m + j] = CLOSED
                 new = tuple(states)
                 if not self._consistent(new, t, x_after, [], [j]):
@@ -559,6 +563,17 @@ class MechanicalMachine:
             extra[n:] = -(1.0 + e) * dyn.Minv @ w * c2 / mass        # d(jump)/dt through c'(t)
             phi = (R + np.outer(f_after - R @ f_before - extra, grad) / denominator) @ phi
         return t, x_after, tuple(states), phi, chattered
+
+    def _onto_contact(self, j, t, x):
+        """x moved along M^-1 n_j onto g_j = 0 and g_j' = 0 (a closed contact's state, its rounding drift removed)."""
+        dyn = self.dyn
+        n, w = dyn.n, dyn.WN[j]
+        c0, c1, _ = dyn.offset(j, t)
+        mass = w @ dyn.Minv @ w
+        x = x.copy()
+        x[:n] -= dyn.Minv @ w * ((w @ x[:n] + c0) / mass)
+        x[n:] -= dyn.Minv @ w * ((w @ x[n:] + c1) / mass)
+        return x
 
     def _back_to_zero(self, result, function, t_ext, segments, record, phi):
         """The zero of ``function(t, y)`` (positive at the segment's start, negative at t_ext) on the dense output:

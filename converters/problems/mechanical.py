@@ -134,6 +134,11 @@ class HarmonicForce:
         out = self.amplitude * math.cos(self.omega * t + self.phase)
         return out if self.constant is None else out + self.constant
 
+    def on_grid(self, t: np.ndarray) -> np.ndarray:
+        """f at every time of ``t``, shape (len(t), n)."""
+        out = np.multiply.outer(np.cos(self.omega * np.asarray(t, dtype=float) + self.phase), self.amplitude)
+        return out if self.constant is None else out + self.constant
+
 
 @dataclass(frozen=True)
 class MechanicalProblem:
@@ -195,9 +200,14 @@ class MechanicalProblem:
         object.__setattr__(self, "state_names", names)
 
     @property
-    def n(self) -> int:
-        """Degrees of freedom (the state has 2 n entries)."""
+    def dof(self) -> int:
+        """Degrees of freedom."""
         return self.mass.shape[0]
+
+    @property
+    def n(self) -> int:
+        """State dimension, 2 dof: (q, v)."""
+        return 2 * self.mass.shape[0]
 
     @property
     def pair_names(self) -> tuple[str, ...]:
@@ -208,7 +218,7 @@ class MechanicalProblem:
     config_names = ("stick", "slip+", "slip-", "closed", "open")
 
     def external(self, t: float) -> np.ndarray:
-        return np.zeros(self.n) if self.force is None else np.array(self.force(t), dtype=float)
+        return np.zeros(self.dof) if self.force is None else np.array(self.force(t), dtype=float)
 
 
 __all__ = ["MechanicalProblem", "FrictionContact", "UnilateralContact", "PoppFriction", "HarmonicForce", "ZeroOffset"]

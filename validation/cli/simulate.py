@@ -16,8 +16,9 @@ def add(sub) -> None:
     sim = sub.add_parser("simulate", help="simulate a converter and write its waveforms")
     sim.add_argument("converter")
     add_params(sim)
-    sim.add_argument("--method", default="lcp", choices=[*METHODS, "spice"],
-                     help="; ".join(f"{key}: {cls.description}" for key, cls in METHODS.items())
+    lcs = {key: cls for key, cls in METHODS.items() if "lcs" in cls.domains}
+    sim.add_argument("--method", default="lcp", choices=[*lcs, "spice"],
+                     help="; ".join(f"{key}: {cls.description}" for key, cls in lcs.items())
                      + "; spice: the same circuit in ngspice")
     sim.add_argument("--h", default=None, help="step in s (default T/1000; PRC 50 ns); event and smooth: "
                                               "output sample spacing")

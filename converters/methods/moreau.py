@@ -1,0 +1,303 @@
+"""Moreau-Jean time-stepping of mechanical problems: one small LCP per step (Siconos' MoreauJeanOSI).
+
+With the theta-method on the smooth part and impulses P over the step,
+
+    (M + h theta C + h^2 theta^2 K) v+ = M v - h K q - h^2 theta (1 - theta) K v - h (1 - theta) C v
+                                         + h (theta f(t+) + (1 - theta) f(t)) + H^T P
+    q+ = q + h (theta v+ + (1 - theta) v)
+
+so v+ = v_free + W H^T P. The impulses obey the set-valued laws at velocity level:
+
+* friction i, a relay: P_i in [-h F_i, h F_i] with -s_i(+) in the normal cone there (s_i(+) = w_i . v+ - V_i);
+  F_i is the law's magnitude at the step's starting velocity (the static value while stuck);
+* unilateral contact j, active when its gap predicted half a step ahead is <= 0: Newton's impact law
+  0 <= U_j(+) + e_j U_j <= ... _|_ P_j >= 0, U = n_j . v + c_j'(t).
+
+Both at once are one LCP of size c + 2 m (a relay is an LCP of twice its size, REFERENCE section 5:
+[[D, I], [-I, 0]], [q + D lb; ub - lb]), solved by the compiled small-LCP kernel of :mod:`converters.lcp`
+inside a compiled step loop. The declared order is 1 (impulsive events inside a step); sticking is exact
+(the relay holds s = 0 to rounding), impacts happen at the step ends (penetration O(h)).
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from ..errors import ParameterError, SimulationError
+from ..lcp.kernels import MAX_INLINE_K, _masks_by_size, solve_small_lcp
+from ..problems.mechanical import MechanicalProblem
+from ..trajectory import Trajectory
+from ..validate import check_positive, parse_value
+from .base import Method
+from .event_mechanical import CLOSED, OPEN, SLIP_NEG, SLIP_POS, STICK
+
+MAX_STEPS = 50_000_000
+
+
+@njit(cache=True)
+def _popp(p, a):
+    """Popp's magnitude N (alpha / (1 + gamma a) + beta + eta a^2) at a = |s|; p = (N, alpha, gamma, beta, eta)."""
+    return p[0] * (p[1] / (1.0 + p[2] * a) + p[3] + p[4] * a * a)
+
+
+@njit(cache=True)
+def run_moreau(q, v, impulse, status, h, theta, M, W, K, C, f, WT, V, popp, WN, c0, c1, e, start):
+    """Steps start .. N-1 of the Moreau-Jean scheme (module docstring), in place. Per step: ``impulse`` (m + c)
+    and ``status`` (m + c: 0 stick / 1 slip+ / 2 slip- for friction, 3 closed / 4 open for contacts).
+    Returns the step that failed (an LCP with no solution) or -1."""
+    N, n = q.shape[0] - 1, q.shape[1]
+    m, c = WT.shape[0], WN.shape[0]
+    k = c + 2 * m
+    H = np.zeros((m + c, n))
+    for i in range(m):
+        H[i] = WT[i]
+    for j in range(c):
+        H[m + j] = WN[j]
+    WH = W @ H.T                                  # n x (m + c)
+    D = H @ WH                                    # Delassus matrix
+    order = _masks_by_size(k) if k > 0 else np.zeros(1, dtype=np.int64)
+    A = np.zeros((k, k))
+    b = np.zeros(k)
+    z = np.zeros(k)
+    work = np.empty((k, k + 1))
+    lb, ub = np.zeros(m), np.zeros(m)
+    active = np.zeros(c, dtype=np.bool_)
+    mask = -1
+    rhs = np.empty(n)
+    for s in range(start, N):
+        for r in range(n):
+            acc = 0.0
+            for l in range(n):
+                acc += M[r, l] * v[s, l] - h * K[r, l] * q[s, l] - h * h * theta * (1.0 - theta) * K[r, l] * v[s, l] \
+                    - h * (1.0 - theta) * C[r, l] * v[s, l]
+            rhs[r] = acc + h * (theta * f[s + 1, r] + (1.0 - theta) * f[s, r])
+        vfree = W @ rhs
+        if k == 0:
+            for r in range(n):
+                v[s + 1, r] = vfree[r]
+                q[s + 1, r] = q[s, r] + h * (theta * v[s + 1, r] + (1.0 - theta) * v[s, r])
+            continue
+        for i in range(m):
+            slip_now = 0.0
+            for l in range(n):
+                slip_now += WT[i, l] * v[s, l]
+            bound = h * _popp(popp[i], abs(slip_now - V[i]))
+            lb[i], ub[i] = -bound, bound
+        for j in range(c):
+            gap, rate = c0[s, j], c1[s, j]
+            for l in range(n):
+                gap += WN[j, l] * q[s, l]
+                rate += WN[j, l] * v[s, l]
+            active[j] = gap + 0.5 * h * rate <= 0.0
+        # The LCP: rows 0..c-1 normal impulses, then the relays' two blocks (zeta = P - lb, mu).
+        A[:, :] = 0.0
+        for j in range(c):
+            rate = c1[s, j]
+            for l in range(n):
+                rate += WN[j, l] * v[s, l]
+            if not active[j]:
+                A[j, j] = 1.0
+                b[j] = 1.0
+                continue
+            free = c1[s + 1, j]
+            for l in range(n):
+                free += WN[j, l] * vfree[l]
+            b[j] = free + e[j] * rate
+            for jj in range(c):
+                if active[jj]:
+                    A[j, jj] = D[m + j, m + jj]
+            for i in range(m):
+                A[j, c + i] = D[m + j, i]
+                b[j] += D[m + j, i] * lb[i]
+        for i in range(m):
+            free = -V[i]
+            for l in range(n):
+                free += WT[i, l] * vfree[l]
+            b[c + i] = free
+            for jj in range(c):
+                if active[jj]:
+                    A[c + i, jj] = D[i, m + jj]
+            for ii in range(m):
+                A[c + i, c + ii] = D[i, ii]
+                b[c + i] += D[i, ii] * lb[ii]
+            A[c + i, c + m + i] = 1.0
+            A[c + m + i, c + i] = -1.0
+            b[c + m + i] = ub[i] - lb[i]
+        if c == 0 and m == 1:                          # one relay: the clipped stick impulse
+            stick = -(b[0] - D[0, 0] * lb[0]) / D[0, 0]
+            z[0] = min(max(stick, lb[0]), ub[0]) - lb[0]
+            mask = 0
+        else:
+            mask = solve_small_lcp(A, b, k, z, mask, order, work)
+            if mask < 0:
+                return s
+        for j in range(c):
+            impulse[s + 1, m + j] = z[j] if active[j] else 0.0
+        for i in range(m):
+            impulse[s + 1, i] = lb[i] + z[c + i]
+        for r in range(n):
+            acc = vfree[r]
+            for a in range(m + c):
+                acc += WH[r, a] * impulse[s + 1, a]
+            v[s + 1, r] = acc
+            q[s + 1, r] = q[s, r] + h * (theta * v[s + 1, r] + (1.0 - theta) * v[s, r])
+        for i in range(m):
+            p = impulse[s + 1, i]
+            if p > lb[i] * (1.0 - 1e-9) and p < ub[i] * (1.0 - 1e-9):
+                status[s + 1, i] = 0
+            else:
+                status[s + 1, i] = 2 if p > 0.0 else 1        # friction at its bound opposes the slip
+        for j in range(c):
+            status[s + 1, m + j] = 3 if impulse[s + 1, m + j] > 0.0 else 4
+    return -1
+
+
+@dataclass(frozen=True)
+class MoreauJean(Method, key="moreau"):
+    """Moreau-Jean time-stepping of mechanical problems (module docstring).
+
+    Parameters
+    ----------
+    h : float
+        Step (s); each span is cut into whole steps of at most h (a whole number per forcing period).
+    theta : float
+        In [0.5, 1] (0.5: Siconos' example; 1: backward Euler on the smooth part).
+    """
+
+    h: float
+    theta: float = 0.5
+    step_option = "h"
+    description = "Moreau-Jean time-stepper for mechanical problems: one LCP per step (friction relays, impacts)"
+    domains = ("mechanical",)
+
+    def __post_init__(self):
+        object.__setattr__(self, "h", check_positive("h", self.h, "s"))
+        theta = parse_value("theta", self.theta)
+        if not 0.5 <= theta <= 1.0:
+            raise ParameterError(f"theta must be in [0.5, 1]; got {theta!r}")
+        object.__setattr__(self, "theta", theta)
+
+    @property
+    def order(self) -> float:
+        return 1.0
+
+    def supports(self, problem) -> None:
+        if not isinstance(problem, MechanicalProblem):
+            raise ParameterError("the Moreau-Jean method takes mechanical problems (MechanicalProblem); for a linear "
+                                 "complementarity system use the LCP stepper (--method lcp)")
+        k = len(problem.contacts) + 2 * len(problem.frictions)
+        if k > MAX_INLINE_K:
+            raise ParameterError(f"the Moreau-Jean step LCP has size c + 2 m = {k}; at most {MAX_INLINE_K} are solved "
+                                 "inline")
+
+    def grid(self, problem: MechanicalProblem) -> np.ndarray:
+        t0, t1 = problem.t_span
+        span = t1 - t0
+        T = problem.period
+        periods = span / T if np.isfinite(T) else 0.0
+        if np.isfinite(T) and periods >= 1.0 and abs(periods - round(periods)) <= 1e-9 * periods:
+            count = int(round(periods)) * int(np.ceil(T / self.h * (1.0 - 1e-12)))
+        else:
+            count = int(np.ceil(span / self.h * (1.0 - 1e-12)))
+        if count > MAX_STEPS:
+            raise ParameterError(f"h gives {count} steps over t_span; h must be >= {span / MAX_STEPS:.3g} s; got {self.h:g}")
+        return t0 + span * np.arange(count + 1) / count
+
+    def solve(self, problem: MechanicalProblem, x0: np.ndarray) -> Trajectory:
+        clock = time.perf_counter()
+        t = self.grid(problem)
+        n, m, c = problem.dof, len(problem.frictions), len(problem.contacts)
+        N = t.size - 1
+        h = t[1] - t[0]
+        q, v = np.empty((N + 1, n)), np.empty((N + 1, n))
+        q[0], v[0] = x0[:n], x0[n:]
+        impulse = np.zeros((N + 1, m + c))
+        status = np.zeros((N + 1, m + c), dtype=np.int64)
+        f = (np.array([problem.external(tt) for tt in t]) if not hasattr(problem.force, "on_grid")
+             else problem.force.on_grid(t)) if problem.force is not None else np.zeros((N + 1, n))
+        f = np.ascontiguousarray(f.reshape(N + 1, n))
+        c0, c1 = np.zeros((N + 1, c)), np.zeros((N + 1, c))
+        for j, contact in enumerate(problem.contacts):
+            values = contact.offset(t)
+            c0[:, j], c1[:, j] = values[0], values[1]
+        WT = np.array([fr.direction for fr in problem.frictions]).reshape(m, n)
+        V = np.array([fr.belt for fr in problem.frictions], dtype=float)
+        popp = np.array([[fr.law.normal, fr.law.alpha, fr.law.gamma, fr.law.beta, fr.law.eta]
+                         for fr in problem.frictions]).reshape(m, 5)
+        WN = np.array([ct.direction for ct in problem.contacts]).reshape(c, n)
+        e = np.array([ct.restitution for ct in problem.contacts], dtype=float)
+        M = np.ascontiguousarray(problem.mass)
+        W = np.linalg.inv(M + h * self.theta * problem.damping + h * h * self.theta ** 2 * problem.stiffness)
+        s0 = WT @ v[0] - V
+        status[0, :m] = np.where(np.abs(s0) <= 1e-12, STICK, np.where(s0 > 0, SLIP_POS, SLIP_NEG))
+        gap0 = WN @ q[0] + c0[0] if c else np.zeros(0)
+        status[0, m:] = np.where(np.abs(gap0) <= 1e-12 * (1.0 + np.abs(q[0]).max()), CLOSED, OPEN)
+        failed = run_moreau(q, v, impulse, status, h, self.theta, M, W, np.ascontiguousarray(problem.stiffness),
+                            np.ascontiguousarray(problem.damping), f, WT, V, popp, WN, c0, c1, e, 0)
+        if failed >= 0:
+            raise SimulationError(f"the Moreau-Jean step LCP at t = {t[failed]:.6g} s has no solution the inline "
+                                  "solver finds; try a smaller h")
+        x = np.hstack([q, v])
+        gaps = q @ WN.T + c0
+        slips = v @ WT.T - V
+        rates = v @ WN.T + c1
+        events = _events(t, status, slips, rates, m, c)
+        code = (status * (5 ** np.arange(m + c))[None, :]).sum(axis=1)
+        held = (status == STICK) | (status == CLOSED)
+        return Trajectory(t=t, x=x, u=impulse / h, y=np.hstack([slips, gaps]), config=code, held=held,
+                          state_names=problem.state_names, pair_names=problem.pair_names, event_columns=events,
+                          method=self.key, steps=N, wall_s=time.perf_counter() - clock, rule="linear",
+                          period=problem.period, metadata=dict(problem.metadata, h=h, theta=self.theta, label=self.label))
+
+    @property
+    def label(self) -> str:
+        return f"moreau-jean(theta {self.theta:g})"
+
+
+def _events(t, status, slips, rates, m, c) -> dict:
+    """Events from the step statuses: a friction contact entering stick (``stick``), leaving it (``slip``), or
+    changing slip direction without sticking (``cross``, at the interpolated zero of s); a contact closing while
+    it approaches (``impact``: its gap's rate before the step below -1e-3 of the largest rate) or opening
+    (``detach``). Times are step ends, crossings interpolated."""
+    times, kinds, pairs, configs, steps = [], [], [], [], []
+    for i in range(m):
+        st = status[:, i].copy()
+        # A crossing inside a step shows as one step held at s = 0 between opposite slips (the relay clips the
+        # velocity to zero for that step): at this step's resolution it is a crossing.
+        single = np.flatnonzero((st[1:-1] == STICK) & (st[:-2] != STICK) & (st[2:] != STICK) & (st[:-2] != st[2:])) + 1
+        st[single] = st[single + 1]
+        change = np.flatnonzero(st[1:] != st[:-1]) + 1
+        for k in change:
+            before, after = st[k - 1], st[k]
+            if after == STICK:
+                kind, time_ = "stick", t[k]
+            elif before == STICK:
+                kind, time_ = "slip", t[k - 1]
+            else:
+                a, b = slips[k - 1, i], slips[k + 1 if k + 1 < len(t) else k, i]
+                span = t[min(k + 1, len(t) - 1)] - t[k - 1]
+                time_ = t[k - 1] + span * (a / (a - b) if a != b else 0.5)
+                kind = "cross"
+            times.append(time_), kinds.append(kind), pairs.append(i), configs.append(int(after)), steps.append(k - 1)
+    for j in range(c):
+        st = status[:, m + j]
+        # Moreau-Jean with e > 0 bounces a contact pressed by an accelerating surface in micro-steps (active, then
+        # inactive for a step): closures slower than 1e-3 of the largest gap rate are those, not impacts.
+        threshold = 1e-3 * np.abs(rates[:, j]).max()
+        change = np.flatnonzero(st[1:] != st[:-1]) + 1
+        for k in change:
+            closing = st[k] == CLOSED
+            if closing and rates[k - 1, j] >= -threshold:
+                continue                                  # a resting contact's flicker, not an impact
+            times.append(t[k]), kinds.append("impact" if closing else "detach"), pairs.append(m + j)
+            configs.append(int(st[k])), steps.append(k - 1)
+    order = np.argsort(times, kind="stable")
+    return {"time": np.array(times)[order], "step": np.array(steps, dtype=np.int64)[order],
+            "pair": np.array(pairs, dtype=np.int64)[order], "kind": np.array(kinds, dtype=object)[order],
+            "config": np.array(configs, dtype=np.int64)[order]}
+
+
+__all__ = ["MoreauJean", "run_moreau"]

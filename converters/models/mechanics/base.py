@@ -1,0 +1,122 @@
+"""What a mechanical model provides: named parameters, the problem it builds, and how its runs read.
+
+A mechanical model builds a :class:`~converters.problems.mechanical.MechanicalProblem` from validated
+parameters; every method that takes mechanical problems (the event method, Moreau-Jean) solves it, and the
+analysis (periodic orbits, continuation, brute-force diagrams) works on it unchanged. Its labels name the
+signals a run adds (relative velocities, friction and contact forces, gaps) and the mode of each point
+(``stick``, ``slip+``, ``slip-`` per friction contact; ``contact``, ``flight`` per unilateral contact).
+"""
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass
+
+import numpy as np
+
+from ...errors import ParameterError
+from ...params import Param, resolve
+from ...problems.mechanical import MechanicalProblem
+from ...trajectory import Samples
+
+_STATE_LABELS = {0: "stick", 1: "slip+", 2: "slip-", 3: "contact", 4: "flight"}
+
+
+@dataclass(frozen=True)
+class MechanicalLabels:
+    """A mechanical model's reading of a run: signals from the pairs (u: forces, y: velocities and gaps)."""
+
+    model: "MechanicalModel"
+    params: dict
+
+    @property
+    def signal_names(self) -> tuple[str, ...]:
+        return self.model.signal_names
+
+    def signal(self, name: str, samples: Samples) -> np.ndarray:
+        return self.model.signal(name, samples, self.params)
+
+    def mode_labels_of(self, samples: Samples) -> np.ndarray:
+        """Per point: each set-valued law's state, joined with '+' when there are several (``stick+slip-``)."""
+        m = len(self.model.friction_names)
+        k = m + len(self.model.contact_names)
+        codes = np.asarray(samples.config, dtype=np.int64)
+        states = (codes[:, None] // (5 ** np.arange(k))[None, :]) % 5
+        names = np.vectorize(_STATE_LABELS.get, otypes=[object])(states)
+        return names[:, 0] if k == 1 else np.array(["+".join(row) for row in names], dtype=object)
+
+
+class MechanicalModel(ABC):
+    """A parametrised family of mechanical problems."""
+
+    name: str
+    title: str
+    parameters: tuple[Param, ...]
+    state_names: tuple[str, ...]
+    friction_names: tuple[str, ...] = ()
+    contact_names: tuple[str, ...] = ()
+    #: The bifurcation parameter a diagram sweeps by default, and the state it draws.
+    sweep: str = ""
+    output_state: str = ""
+
+    def resolve(self, given: dict | None = None) -> dict:
+        return resolve(self.parameters, dict(given or {}), self.name)
+
+    @property
+    def key(self) -> str:
+        return self.name
+
+    @abstractmethod
+    def problem(self, p: dict, t_end: float, x0=None, t_start: float = 0.0) -> MechanicalProblem:
+        """The problem over [t_start, t_end] from x0 (default: the model's start state)."""
+
+    @abstractmethod
+    def period(self, p: dict) -> float:
+        """The forcing period (s), inf for an autonomous system."""
+
+    def periodic(self, p: dict) -> bool:
+        return bool(np.isfinite(self.period(p)))
+
+    def time_scale(self, p: dict) -> float:
+        """A natural time unit: the forcing period, or the model's own for an autonomous system."""
+        return self.period(p)
+
+    def default_h(self, p: dict) -> float:
+        """The Moreau-Jean step: 1/2000 of the time scale."""
+        return self.time_scale(p) / 2000.0
+
+    @property
+    def signal_names(self) -> tuple[str, ...]:
+        return tuple(f"v_rel_{n}" for n in self.friction_names) + tuple(f"friction_{n}" for n in self.friction_names) \
+            + tuple(f"gap_{n}" for n in self.contact_names) + tuple(f"force_{n}" for n in self.contact_names)
+
+    def signal(self, name: str, samples: Samples, p: dict) -> np.ndarray:
+        m = len(self.friction_names)
+        for i, pair in enumerate(self.friction_names):
+            if name == f"v_rel_{pair}":
+                return samples.y[:, i]
+            if name == f"friction_{pair}":
+                return samples.u[:, i]
+        for j, pair in enumerate(self.contact_names):
+            if name == f"gap_{pair}":
+                return samples.y[:, m + j]
+            if name == f"force_{pair}":
+                return samples.u[:, m + j]
+        raise KeyError(f"signal must be one of {', '.join(self.signal_names)}; got {name!r}")
+
+    def labels(self, p: dict) -> MechanicalLabels:
+        return MechanicalLabels(self, p)
+
+    def summary(self, tr, p: dict) -> dict:
+        """Counts of the run's events by kind, and the time spent in each mode over the last time scale."""
+        events = tr.events
+        counts = events["kind"].value_counts().to_dict() if len(events) else {}
+        t1 = tr.t[-1]
+        t0 = max(tr.t[0], t1 - self.time_scale(p))
+        return {"events": {str(k): int(v) for k, v in counts.items()},
+                "mode_fractions": tr.mode_fractions(None, t0=t0, t1=t1)}
+
+
+def check_choice(name: str, value: float, choices: tuple) -> float:
+    if value not in choices:
+        raise ParameterError(f"{name} must be one of {', '.join(f'{c:g}' for c in choices)}; got {value!r}")
+    return value
