@@ -176,8 +176,9 @@ def steady_orbit(name_or_model, params: dict | None = None, *, method: str | Met
 class ParameterPath:
     """A model's problems along one of its parameters (picklable: workers rebuild each problem).
 
-    ``path(value)`` is the problem over one switching period from the model's start state, with every
-    other parameter as in ``params``; each value is validated against the parameter's range."""
+    ``path(value)`` is the problem over one switching (or forcing) period from the model's start state (an
+    autonomous model: over its time unit), with every other parameter as in ``params``; each value is
+    validated against the parameter's range."""
 
     model: Model
     params: dict
@@ -193,7 +194,10 @@ class ParameterPath:
 
     def __call__(self, value):
         p = self.resolve(value)
-        return self.model.problem(p, self.model.period(p))
+        span = self.model.period(p)
+        if not np.isfinite(span):                     # an autonomous model: one of its own time units
+            span = self.model.time_scale(p)
+        return self.model.problem(p, span)
 
 
 def run_summary(tr: Trajectory) -> dict:

@@ -169,3 +169,17 @@ def test_every_model_declares_its_signals_and_modes(name):
     assert model.off_held_label in model.mode_labels or model.off_held_label == "GDCM-OFF"
     p = model.resolve({})
     assert np.asarray(model.pair_currents).shape == (len(model.configurations(p)), len(model.pair_names))
+
+
+def test_the_mechanical_module_reuses_the_core():
+    """No second integrator and no second shooting code: the models build problems, validation reads runs;
+    only the methods integrate (solve_ivp in the smoothing and the mechanical event machine), and only the one
+    orbit engine solves for fixed points."""
+    mechanical = [*ROOT.joinpath("converters", "models", "mechanics").rglob("*.py"),
+                  ROOT / "validation" / "mechanics.py", ROOT / "validation" / "mechanics_plots.py",
+                  ROOT / "validation" / "cli" / "mech.py"]
+    pattern = re.compile(r"solve_ivp|odeint|def \w*(newton|shoot|fixed_point|integrate|step)\w*\(|linalg\.solve\(")
+    assert not [p.name for p in mechanical if pattern.search(p.read_text())]
+    integrators = [p.relative_to(ROOT).as_posix() for p in ROOT.joinpath("converters").rglob("*.py")
+                   if "solve_ivp(" in p.read_text()]
+    assert sorted(integrators) == ["converters/methods/event_mechanical.py", "converters/methods/smoothing.py"]

@@ -29,6 +29,9 @@ BOUNDARY_BAND: float = _DATA["dk_maps"]["boundary_band"]
 #: The bifurcation study: model, path, diagram and ngspice settings, and the published values it is checked against.
 BIFURCATION: dict = {key: value for key, value in _DATA["bifurcation"].items() if key != "published"}
 PUBLISHED_BIFURCATIONS: dict = dict(_DATA["bifurcation"]["published"])
+#: The mechanical module: the seed's sliding bifurcations and the report's ranges and thresholds.
+MECHANICS: dict = {key: value for key, value in _DATA["mechanics"].items() if key != "sliding"}
+SEED_SLIDING: list[dict] = [dict(row) for row in _DATA["mechanics"]["sliding"]]
 
 
 def passes(check: str, value: float, threshold: float) -> bool:

@@ -285,6 +285,19 @@ def live_bench_section(part: str) -> Section:
 from .bifurcation import SECTION_TITLE as _BIFURCATION_TITLE, bifurcation_section  # noqa: E402
 
 EXTRA_SECTIONS["bifurcation"] = [(_BIFURCATION_TITLE, partial(bifurcation_section, workers=None))]
+
+
+def _mechanics(name: str):
+    """A section of the mechanical module (imported when the section runs)."""
+    from . import mechanics
+    return getattr(mechanics, name)()
+
+
+EXTRA_SECTIONS["mechanics"] = [
+    ("Mechanics: the dry-friction oscillator's sliding bifurcations", partial(_mechanics, "sliding_section")),
+    ("Mechanics: event-driven against Moreau-Jean and the closed forms", partial(_mechanics, "agreement_section")),
+    ("Mechanics: the cam-follower's impact phases", partial(_mechanics, "cam_section")),
+    ("Mechanics: two blocks on a belt", partial(_mechanics, "two_block_section"))]
 EXTRA_SECTIONS["default"] += [(_BIFURCATION_TITLE, partial(bifurcation_section, workers=1))]
 EXTRA_SECTIONS["default"] += [("Speed-accuracy trade-off", partial(saved_bench_section, "tradeoff")),
                               ("Numerical stability at the extremes", partial(saved_bench_section, "stability"))]

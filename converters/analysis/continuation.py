@@ -354,7 +354,7 @@ def _correct(family, scaling: _Scaling, z_start, normal, anchor, tol: float, max
 
 def follow(family: OrbitFamily, start: float, stop: float, x_guess, *, max_step: float | None = None,
            tol: float = 1e-10, locate_tol: float = 1e-8, max_points: int = 2000, warm_up: int = 100,
-           fd_step: float = 1e-7) -> Branch:
+           fd_step: float = 1e-7, on_point=None) -> Branch:
     """Follow the family's orbit from ``start`` to ``stop`` by pseudo-arclength continuation, locating every
     bifurcation on the way (module docstring).
 
@@ -374,6 +374,8 @@ def follow(family: OrbitFamily, start: float, stop: float, x_guess, *, max_step:
     fd_step : float
         Relative step of the difference quotient for d F / d p (1e-7 for exact maps; about the square root
         of the map's accuracy otherwise, with ``tol`` above that accuracy).
+    on_point : callable, optional
+        Called with each new orbit's parameter value (a progress bar).
     """
     span = float(stop) - float(start)
     if span == 0.0:
@@ -407,11 +409,11 @@ def follow(family: OrbitFamily, start: float, stop: float, x_guess, *, max_step:
         tangent[-1] = 1.0
     tangent *= np.sign(span) * np.sign(tangent[-1])
     return _trace(family, branch, scaling, current, tangent, (min(start, stop), max(start, stop)), max_step or abs(span) / 60.0,
-                  tol, locate_tol, max_points)
+                  tol, locate_tol, max_points, on_point=on_point)
 
 
 def _trace(family, branch, scaling, current: OrbitPoint, tangent, bounds, max_step, tol, locate_tol, max_points,
-           first_step: float | None = None) -> Branch:
+           first_step: float | None = None, on_point=None) -> Branch:
     """Pseudo-arclength steps from ``current`` along ``tangent`` until the parameter leaves ``bounds``."""
     ds_max = max_step / scaling.p_scale
     ds = first_step if first_step is not None else ds_max
@@ -468,6 +470,8 @@ def _trace(family, branch, scaling, current: OrbitPoint, tangent, bounds, max_st
         nxt = nxt or family.point(solved.value, solved.x, solved.jacobian)
         branch.bifurcations += _detect(family, scaling, current, nxt, tol, locate_tol)
         branch.points.append(nxt)
+        if on_point is not None:
+            on_point(nxt.value)
         tangent = solved.tangent if solved.tangent @ tangent > 0 else -solved.tangent
         current = nxt
         ds = min(ds * (1.6 if solved.iterations <= 3 else 0.8 if solved.iterations >= 6 else 1.0), ds_max)

@@ -381,15 +381,27 @@ class MechanicalMachine:
             function.direction = direction
             functions.append(function)
         scale = 1.0 + np.abs(x0).max()
-        # No step cap is needed to catch two crossings inside a step (the extremum events do); a quarter of the
-        # time scale keeps the dense output's samples of slow stretches close enough for the report's plots.
+        # The integrator sees the state's dynamics only: a friction contact's watched quantities follow them (and
+        # the extremum events catch two crossings inside a step), so a quarter of the time scale is step enough.
+        # An open contact's gap also holds c(t), which it never sees (a cam's profile): there the steps are capped
+        # at the sampling fraction, and at an eighth of the predicted flight after an impact.
+        max_step = 0.25 * self.scale
+        if mode.open:
+            max_step = opts.sample_fraction * self.scale
+            for j in mode.open:
+                g0, rate0 = dyn.WN[j] @ x0[:dyn.n] + dyn.offset(j, t0)[0], dyn.WN[j] @ x0[dyn.n:2 * dyn.n] + dyn.offset(j, t0)[1]
+                acc0 = dyn.WN[j] @ dyn.field(mode, t0, x0[:2 * dyn.n])[dyn.n:] + dyn.offset(j, t0)[2]
+                if abs(g0) <= 1e-9 * scale and rate0 > 0.0 and acc0 < 0.0:
+                    max_step = min(max_step, 0.25 * rate0 / -acc0)          # flight 2 u / |a|: eight steps
         result = solve_ivp(fun, (t0, t1), y0, method="DOP853", rtol=opts.ode_rtol, atol=opts.ode_rtol * 1e-2 * scale,
-                           max_step=0.25 * self.scale, events=functions, dense_output=True)
+                           max_step=max_step, events=functions, dense_output=True)
         if result.status == -1:
             raise SimulationError(f"the integration failed at t = {result.t[-1]:.9g} s: {result.message}")
         # The first terminal event, or an earlier extremum where the watched value is found below zero (two
         # crossings inside one step: the first one is then traced back on the dense output).
         fired = None
+        if mode.open:
+            fired = self._scan_gaps(mode, watched, result, t0)
         for k, times in enumerate(result.t_events):
             kind = watched[k][1]
             for t_event in times:
@@ -399,6 +411,34 @@ class MechanicalMachine:
                 if fired is None or t_event < fired[0]:
                     fired = (float(t_event), k)
         return result, watched, fired
+
+    def _scan_gaps(self, mode, watched, result, t0):
+        """An open gap sampled on each step's dense output (8 points a step): the first sample below zero is
+        an impact the step ends did not see. Returns (time, watched index) of the first such crossing, or None."""
+        from scipy.optimize import brentq
+        indices = [k for k, entry in enumerate(watched) if entry[1] == "impact"]
+        steps = result.t
+        if len(steps) < 2 or not indices:
+            return None
+        grid = np.unique(np.concatenate([np.linspace(a, b, 9) for a, b in zip(steps[:-1], steps[1:])]))
+        grid = grid[grid > t0 + 1e-14 * self.scale]
+        states = result.sol(grid)
+        first = None
+        for k in indices:
+            function = watched[k][0]
+            values = np.array([function(tt, states[:, i]) for i, tt in enumerate(grid)])
+            negative = np.flatnonzero(values < 0.0)
+            if not negative.size:
+                continue
+            right = negative[0]
+            left_t = grid[right - 1] if right > 0 else t0
+            if function(left_t, result.sol(left_t)) < 0.0:
+                continue
+            t_zero = brentq(lambda tt: function(tt, result.sol(tt)), left_t, grid[right], xtol=1e-15 * self.scale,
+                            rtol=4 * np.finfo(float).eps)
+            if first is None or t_zero < first[0]:
+                first = (float(t_zero), k)
+        return first
 
     def _below(self, kind, watched_entry, mode, t, result) -> bool:
         """Is the watched quantity of an extremum event below zero there (a crossing missed inside a step)?"""

@@ -40,11 +40,13 @@ RC_EXACT = (1 - math.exp(-0.5)) * math.exp(-0.5)
 
 
 def test_the_registry_holds_every_method_by_its_command_line_name():
-    assert list(METHODS) == ["lcp", "event", "smooth"]
+    assert list(METHODS) == ["lcp", "event", "smooth", "moreau"]
     assert [cls.key for cls in METHODS.values()] == list(METHODS)
     assert all(issubclass(cls, Method) and cls.description for cls in METHODS.values())
     assert Theta(1e-6, 1.0).order == 1 and Theta(1e-6, 0.5).order == 2
-    assert EventDriven().order == math.inf and Smoothing().order == 1
+    assert EventDriven().order == math.inf and Smoothing().order == 1 and METHODS["moreau"](h=1e-3).order == 1
+    assert {key: cls.domains for key, cls in METHODS.items()} == {
+        "lcp": ("lcs",), "event": ("lcs", "mechanical"), "smooth": ("lcs",), "moreau": ("mechanical",)}
 
 
 @pytest.mark.parametrize("key,options,match", [

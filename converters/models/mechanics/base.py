@@ -57,6 +57,11 @@ class MechanicalModel(ABC):
     #: The bifurcation parameter a diagram sweeps by default, and the state it draws.
     sweep: str = ""
     output_state: str = ""
+    #: What its brute-force diagram shows: ``stroboscopic`` (the state at each forcing period), ``section`` (a
+    #: state where friction pair 0 starts to stick), ``impacts`` (the phase of each impact), or "" (none).
+    diagram: str = ""
+    #: True where periodic orbits and their sliding bifurcations can be followed (a forced Filippov system).
+    sliding: bool = False
 
     def resolve(self, given: dict | None = None) -> dict:
         return resolve(self.parameters, dict(given or {}), self.name)

@@ -87,6 +87,7 @@ class CamFollower(MechanicalModel):
     contact_names = ("cam",)
     sweep = "rpm"
     output_state = "x"
+    diagram = "impacts"
 
     def period(self, p: dict) -> float:
         return 60.0 / p["rpm"]

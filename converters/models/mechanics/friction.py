@@ -42,6 +42,8 @@ class FrictionOscillator(MechanicalModel):
     friction_names = ("belt",)
     sweep = "omega"
     output_state = "x"
+    diagram = "stroboscopic"
+    sliding = True
 
     def period(self, p: dict) -> float:
         return 2.0 * np.pi / p["omega"]

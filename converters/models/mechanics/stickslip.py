@@ -39,6 +39,7 @@ class TwoBlock(MechanicalModel):
     friction_names = ("block1", "block2")
     sweep = "V"
     output_state = "x2"
+    diagram = "section"
 
     def period(self, p: dict) -> float:
         return np.inf

@@ -1,0 +1,54 @@
+"""Moreau-Jean time-stepping: penetration O(h) and rest at the closed-form time (bouncing ball), stick
+intervals converging to the event method's at first order (friction), impact times within 1 % (cam), and what
+it refuses."""
+import numpy as np
+import pytest
+
+from converters.errors import ParameterError
+from converters.methods import MoreauJean
+from converters.models import get_model
+from converters.models.mechanics import accumulation_time, get_mechanical
+from converters.simulate import simulate
+from validation.mechanics import cam_checks, friction_agreement
+
+
+def test_the_bouncing_ball_penetrates_by_o_h_and_comes_to_rest_at_the_closed_form_time():
+    model = get_mechanical("bouncing-ball")
+    p = model.resolve({})
+    exact = accumulation_time(p["H"], p["g"], p["e"])
+    out = []
+    for h in (1e-4, 1e-5):
+        run = simulate(model.problem(p, 1.5 * exact), MoreauJean(h=h))
+        moving = np.flatnonzero(np.abs(run.x[:, 1]) > 1e-9)
+        out.append((-run.x[:, 0].min(), run.t[moving[-1] + 1]))
+    (pen1, rest1), (pen2, rest2) = out
+    assert pen1 < 5e-4 and pen1 / pen2 == pytest.approx(10.0, rel=0.2)          # O(h)
+    assert abs(rest2 - exact) < abs(rest1 - exact) and abs(rest2 / exact - 1.0) < 1e-3
+
+
+def test_stick_intervals_converge_to_the_exact_ones_at_first_order():
+    result = friction_agreement(steps=(500, 2000, 8000, 32000))
+    rows = result["rows"]
+    errors = np.array([r["max_error_T"] for r in rows])
+    steps = np.array([r["steps_per_period"] for r in rows])
+    assert all(r["sticks"] == len(result["exact"]) == 1 for r in rows)
+    assert errors[1] < 1e-2                                   # within 1 % of the period from T/2000 on
+    assert np.polyfit(np.log(1.0 / steps), np.log(errors), 1)[0] == pytest.approx(1.0, abs=0.15)
+
+
+def test_impact_times_agree_with_the_event_method_within_one_percent():
+    result = cam_checks()
+    assert result["detachment_error_s"] < 1e-9
+    assert all(r["max_error_T"] < 1e-2 for r in result["moreau"])
+    assert result["moreau"][-1]["max_error_T"] < 1e-3
+
+
+def test_moreau_jean_takes_mechanical_problems_only():
+    buck = get_model("buck")
+    p = buck.resolve({})
+    with pytest.raises(ParameterError, match="the Moreau-Jean method takes mechanical problems"):
+        simulate(buck.problem(p, 1e-4), MoreauJean(h=1e-7))
+    with pytest.raises(ParameterError, match=r"theta must be in \[0.5, 1\]; got 0.2"):
+        MoreauJean(h=1e-3, theta=0.2)
+    with pytest.raises(ParameterError, match="h must be positive"):
+        MoreauJean(h=0)

@@ -1,0 +1,82 @@
+"""pcsuite mech: list, simulate (files and JSON), bifurcations (types and values), one-line errors; the
+report's cheaper sections; the two-block system's chaotic and periodic regimes."""
+import json
+
+import pandas as pd
+import pytest
+
+from validation.cli import main
+
+
+def run_cli(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_mech_list_names_every_model(capsys):
+    code, out, _ = run_cli(capsys, "mech", "list", "--json")
+    models = json.loads(out)
+    assert code == 0 and set(models) == {"friction", "stick-slip", "cam-follower", "bouncing-ball"}
+    assert models["cam-follower"]["parameters"]["rpm"]["default"] == 358.0
+
+
+def test_mech_simulate_writes_the_trajectory(capsys, tmp_path):
+    target = tmp_path / "f.parquet"
+    code, out, _ = run_cli(capsys, "mech", "simulate", "cam-follower", "-p", "rpm=358", "--out", str(target))
+    assert code == 0 and "wrote" in out
+    frame = pd.read_parquet(target)
+    assert list(frame.columns) == ["time", "x", "v", "gap_cam", "force_cam", "mode"]
+    assert frame["gap_cam"].min() > -1e-9 and set(frame["mode"]) <= {"contact", "flight"}
+    code, out, _ = run_cli(capsys, "mech", "simulate", "friction", "-p", "A=5", "-p", "omega=2.5", "--method", "moreau",
+                           "--json")
+    summary = json.loads(out)
+    assert code == 0 and summary["method"] == "moreau" and summary["events"]["stick"] >= 19
+
+
+def test_mech_bifurcations_lists_the_sliding_bifurcations_with_type_and_value(capsys):
+    code, out, _ = run_cli(capsys, "mech", "bifurcations", "friction", "-p", "A=5", "--param", "omega=2.75:2.85",
+                           "--json")
+    result = json.loads(out)
+    assert code == 0
+    kinds = [(b["type"], b["value"]) for b in result["bifurcations"]]
+    assert [k for k, _ in kinds] == ["switching-sliding"]
+    assert kinds[0][1] == pytest.approx(2.7992, rel=5e-3)
+    assert result["bifurcations"][0]["sliding"] and result["branches"][0]["complete"]
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["simulate", "pendulum"], "MODEL must be one of friction, stick-slip, cam-follower, bouncing-ball; got 'pendulum'"),
+    (["simulate", "friction", "-p", "A=-1"], "A (forcing amplitude) must be in [0, inf) N; got -1"),
+    (["simulate", "friction", "--h", "1"], "h must be in (0,"),
+    (["simulate", "friction", "--out", "x.txt"], "--out must end in .csv or .parquet"),
+    (["bifurcations", "bouncing-ball", "--param", "e=0.1:0.5"], "the bouncing ball on a fixed floor has no bifurcations to follow"),
+    (["bifurcations", "friction", "--param", "omega=-1:3"], "the path of omega must lie in (0, inf)"),
+    (["bifurcations", "friction", "--param", "zeta=1:2"], "--param must name a parameter of friction"),
+    (["bifurcations", "cam-follower", "--param", "k=100:200"], "the cam-follower's diagram is against rpm"),
+    (["bifurcations", "friction", "--param", "omega=2:3", "--diagram", "d.txt"], "--diagram must end in .png or .svg"),
+])
+def test_bad_input_gets_one_clear_line(capsys, argv, message):
+    code, out, err = run_cli(capsys, "mech", *argv)
+    assert code == 2 and out == "" and err.count("\n") == 1 and message in err
+
+
+@pytest.mark.slow
+def test_two_blocks_on_a_belt_chaos_at_low_speed_periodic_above():
+    from validation.mechanics import lyapunov_of_flow, two_block_diagram
+    assert lyapunov_of_flow("stick-slip", {"V": 0.1}) > 0.05
+    assert abs(lyapunov_of_flow("stick-slip", {"V": 0.8})) < 0.03          # a periodic orbit: the flow's zero
+    rows = two_block_diagram({}, "V", [0.1, 0.8], workers=1)
+    distinct = [len({round(v, 4) for v in r.states[:, 1]}) for r in rows]
+    assert distinct[0] > 8 and distinct[1] == 1
+
+
+@pytest.mark.slow
+def test_the_agreement_and_cam_sections_pass():
+    from validation.mechanics import agreement_section, cam_section
+    section = agreement_section()
+    assert section.ok, section.metrics
+    cam = cam_section()
+    assert cam.ok and "cam_impacts.png" in cam.files
+    impacts = cam.metrics["impacts_per_rpm"]
+    assert impacts["100"] == 0 and impacts["175"] > 0 and impacts["355"] + impacts["360"] > 0

@@ -1,0 +1,198 @@
+"""``pcsuite mech list|simulate|bifurcations MODEL``: the mechanical models (friction, impacts)."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from converters.errors import ParameterError
+
+from .common import add_params, check_out, write_frame
+
+
+def add(sub) -> None:
+    mech = sub.add_parser("mech", help="mechanical models: dry friction (sliding bifurcations), two blocks on a belt, "
+                                       "the cam-follower with impacts, the bouncing ball")
+    mech_sub = mech.add_subparsers(title="mech commands", parser_class=type(mech))
+
+    listing = mech_sub.add_parser("list", help="the mechanical models and their parameters")
+    listing.add_argument("--json", action="store_true")
+    listing.set_defaults(run=run_list)
+
+    sim = mech_sub.add_parser("simulate", help="simulate a mechanical model and write its trajectory")
+    sim.add_argument("model")
+    add_params(sim)
+    sim.add_argument("--method", default="event", choices=["event", "moreau"],
+                     help="event: exact event-driven (DOP853 between events); moreau: Moreau-Jean time-stepping")
+    sim.add_argument("--h", default=None, help="moreau: step in s (default 1/2000 of the period); event: output spacing")
+    span = sim.add_mutually_exclusive_group()
+    span.add_argument("--t-end", default=None, help="duration in s")
+    span.add_argument("--periods", type=int, default=None,
+                      help="duration in forcing periods (autonomous models: in their time unit; default 20)")
+    sim.add_argument("--out", type=Path, default=None, help="trajectory file, .csv or .parquet")
+    sim.add_argument("--json", action="store_true", help="print one JSON summary object")
+    sim.set_defaults(run=run_simulate)
+
+    bif = mech_sub.add_parser("bifurcations", help="sliding bifurcations (friction), or the diagram of a model along "
+                                                   "a parameter (stick-slip: the section, cam-follower: impact phases)")
+    bif.add_argument("model")
+    add_params(bif)
+    bif.add_argument("--param", required=True, metavar="NAME=START:STOP", help="the parameter path, e.g. omega=2.85:2.95")
+    bif.add_argument("--points", type=int, default=None,
+                     help="values of the brute-force diagram (default: 0 for friction, 60 otherwise)")
+    bif.add_argument("--workers", type=int, default=None, help="processes for the diagram (default: every core)")
+    bif.add_argument("--diagram", type=Path, default=None, help="write the diagram to FILE.png or FILE.svg")
+    bif.add_argument("--json", action="store_true", help="print one JSON object")
+    bif.set_defaults(run=run_bifurcations)
+
+
+def run_list(args) -> int:
+    from converters.models.mechanics import MECHANICAL_MODELS
+    data = {name: {"title": m.title, "states": list(m.state_names),
+                   "parameters": {p.name: {"default": p.default, "unit": p.unit, "doc": p.doc, "range": p.range_text()}
+                                  for p in m.parameters}} for name, m in MECHANICAL_MODELS.items()}
+    if args.json:
+        print(json.dumps(data, default=float))
+        return 0
+    for name, m in MECHANICAL_MODELS.items():
+        print(f"{name}: {m.title}  (states: {', '.join(m.state_names)})")
+        for p in m.parameters:
+            print(f"    {p.name:<8} {p.default:>10g} {p.unit:<8} {p.doc}  range {p.range_text()}")
+    print("methods: event (exact, event-driven), moreau (Moreau-Jean time-stepping)")
+    return 0
+
+
+def _duration(model, p, t_end, periods) -> float:
+    from converters.validate import parse_value
+    if t_end is not None:
+        value = parse_value("t_end", t_end)
+        if not value > 0.0:
+            raise ParameterError(f"t_end must be positive (> 0 s); got {value!r}")
+        return value
+    if periods is not None and not periods >= 1:
+        raise ParameterError(f"periods must be an integer >= 1; got {periods!r}")
+    return (periods or 20) * model.time_scale(p)
+
+
+def run_simulate(args) -> int:
+    import time
+    from dataclasses import replace
+
+    from converters.methods import EventDriven, MoreauJean
+    from converters.models.mechanics import get_mechanical
+    from converters.params import parse_assignments
+    from converters.simulate import simulate
+    from converters.validate import parse_value
+    check_out(args.out)
+    clock = time.perf_counter()
+    model = get_mechanical(args.model)
+    p = model.resolve(parse_assignments(args.params))
+    t_end = _duration(model, p, args.t_end, args.periods)
+    scale = model.time_scale(p)
+    h = None if args.h is None else parse_value("h", args.h)
+    if h is not None and not 0.0 < h <= 0.05 * scale:
+        raise ParameterError(f"h must be in (0, {0.05 * scale:.3g}] s (at most 1/20 of the model's time scale); got {h:g}")
+    method = MoreauJean(h=h or model.default_h(p)) if args.method == "moreau" else EventDriven(output_step=h)
+    run = simulate(model.problem(p, t_end), method)
+    run = replace(run, labels=model.labels(p))
+    summary = {"model": model.name, "method": args.method, "options": {**method.options(), "params": p},
+               "steps": int(run.steps), "wall_s": time.perf_counter() - clock, **model.summary(run, p)}
+    if args.out is not None:
+        write_frame(run.to_pandas(["time", *model.state_names, *model.signal_names, "mode"]), args.out)
+    if args.json:
+        print(json.dumps(summary, default=float))
+    else:
+        print(f"{model.name} ({args.method}): {summary['steps']} {'segments' if args.method == 'event' else 'steps'} in "
+              f"{summary['wall_s']:.3f} s; events: " + ", ".join(f"{k} {v}" for k, v in summary["events"].items()))
+        print("modes (last time unit): " + ", ".join(f"{k} {v:.3f}" for k, v in summary["mode_fractions"].items()))
+        if args.out is not None:
+            print(f"wrote {args.out}")
+    return 0
+
+
+def run_bifurcations(args) -> int:
+    import numpy as np
+
+    from converters.models.mechanics import get_mechanical
+    from converters.params import parse_assignments
+
+    from ..bifurcation import parse_path
+    from ..io import atomic_write_bytes
+    from ..mechanics import impact_phase_diagram, sliding_study, two_block_diagram
+    from ..mechanics_plots import diagram_figure
+    name, start, stop = parse_path(args.param)
+    model = get_mechanical(args.model)
+    params = parse_assignments(args.params)
+    if args.diagram is not None and args.diagram.suffix.lower() not in (".png", ".svg"):
+        raise ParameterError(f"--diagram must end in .png or .svg; got {str(args.diagram)!r}")
+    points = args.points if args.points is not None else (0 if model.sliding and args.diagram is None else 60)
+    if not (isinstance(points, int) and points >= 0) or (args.diagram is not None and points < 2):
+        raise ParameterError(f"--points must be an integer >= {2 if args.diagram else 0}; got {points!r}")
+    if not model.diagram:
+        from converters.models.mechanics import MECHANICAL_MODELS
+        raise ParameterError(f"the {model.title} has no bifurcations to follow; MODEL must be one of "
+                             f"{', '.join(n for n, m in MECHANICAL_MODELS.items() if m.diagram)}")
+    from converters.analysis.continuation import check_path
+    spec = {p.name: p for p in model.parameters}
+    if name not in spec:
+        raise ParameterError(f"--param must name a parameter of {model.key} ({', '.join(spec)}); got {name!r}")
+    check_path(name, start, stop, spec[name].low, spec[name].high, spec[name].low_open, spec[name].high_open)
+    if model.diagram == "impacts" and name != model.sweep:
+        raise ParameterError(f"the {model.name}'s diagram is against {model.sweep}; got --param {name}")
+    for value in (start, stop):
+        model.resolve({**params, name: value})
+    out, study, rows = {}, None, None
+    if model.sliding:
+        study = sliding_study(model.name, params, name, start, stop, progress=not args.json)
+        out = study.to_dict()
+    values = np.linspace(start, stop, points) if points else np.empty(0)
+    if points:
+        if model.diagram == "stroboscopic":
+            from ..mechanics import friction_diagram
+            rows = friction_diagram(params, name, values, workers=args.workers, progress=not args.json)
+        elif model.diagram == "section":
+            rows = two_block_diagram(params, name, values, workers=args.workers, progress=not args.json)
+        else:
+            rows = impact_phase_diagram(params, values, h_fraction=2.5e-4, workers=args.workers,
+                                        progress=not args.json)
+        out.setdefault("model", model.name)
+        out.setdefault("param", name)
+        out["diagram"] = _diagram_summary(model, rows)
+    if args.diagram is not None:
+        atomic_write_bytes(args.diagram, diagram_figure(model, name, rows, study, args.diagram.suffix.lower().lstrip(".")))
+        out["diagram"]["file"] = str(args.diagram)
+    if args.json:
+        print(json.dumps(out, default=float))
+        return 0
+    if study is not None:
+        print(f"{model.name} along {name} = {start:g} .. {stop:g} (continuation on the event method's exact map, "
+              f"{study.wall_s:.1f} s); " + "; ".join(study.notes))
+        for b in study.bifurcations:
+            print(f"  {b.kind:<18} {name} = {b.value:.7g} (+- {b.width:.1g}, orbit of period {b.period})  {b.detail}")
+        for branch in out["branches"]:
+            if branch["message"]:
+                print(f"  period-{branch['period']} branch: {branch['message']}")
+    if rows is not None:
+        print(f"diagram: {len(rows)} values; " + out["diagram"]["text"])
+    if args.diagram is not None:
+        print(f"wrote {args.diagram}")
+    return 0
+
+
+def _diagram_summary(model, rows) -> dict:
+    import numpy as np
+    if rows and hasattr(rows[0], "samples"):                      # stroboscopic attractors
+        from converters.analysis.bifurcation import aperiodic_onset, period_windows
+        windows = period_windows(rows)
+        return {"kind": "stroboscopic", "windows": windows, "aperiodic_onset": aperiodic_onset(rows),
+                "errors": sum(bool(r.error) for r in rows),
+                "text": ", ".join(f"period {w['period']} on {w['first']:.4g}..{w['last']:.4g}" for w in windows
+                                  if w["count"] >= 3)}
+    counts = [int(r.times.size) for r in rows]
+    distinct = [int(np.unique(np.round(r.states[:, 1 if r.states.shape[1] > 2 else 0], 5)).size) if r.times.size else 0
+                for r in rows]
+    chattering = [bool(np.any(np.diff(np.sort(r.times)) < 1e-3 * (r.times.max() - r.times.min() + 1e-300)))
+                  if r.times.size > 2 else False for r in rows]
+    return {"kind": "section", "values": [r.value for r in rows], "events": counts, "distinct_points": distinct,
+            "clustered": chattering, "errors": sum(bool(r.error) for r in rows),
+            "text": f"{sum(counts)} section points; periodic (<= 8 distinct points) at "
+                    f"{sum(1 for d in distinct if 0 < d <= 8)} of {len(rows)} values"}
