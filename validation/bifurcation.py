@@ -400,7 +400,7 @@ SECTION_TITLE = (f"Bifurcations: {BIFURCATION['converter']} --control {BIFURCATI
                  f"{BIFURCATION['param']}")
 
 
-def bifurcation_section(workers: int | None = 1) -> "Section":
+def bifurcation_section(workers: int | None = 1):
     """The default study (defaults.toml [bifurcation]) with its checks: published values, the diagram on the exact
     branches, ngspice's period-2 orbit. ``workers``: processes for the diagram (1 inside a suite whose own pool
     keeps the cores busy)."""

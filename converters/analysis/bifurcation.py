@@ -88,6 +88,23 @@ def iterate(period_map, x0, transient: int, record: int, lyapunov: bool = True) 
     return samples, (total / record if lyapunov else float("nan"))
 
 
+def _chained(values, x0, one, failed) -> list:
+    """``one(value, x, first) -> (row, final state)`` along ``values``, each value from the previous one's final
+    state (the first from x0); a value the model or method refuses becomes ``failed(value, message)`` and the
+    chain starts again from x0."""
+    out, x = [], np.array(x0, dtype=float)
+    for i, value in enumerate(values):
+        try:
+            row, x_end = one(float(value), x, i == 0)
+        except (ValueError, RuntimeError, ArithmeticError) as exc:
+            out.append(failed(float(value), f"{type(exc).__name__}: {exc}"))
+            x = np.array(x0, dtype=float)
+            continue
+        out.append(row)
+        x = x_end
+    return out
+
+
 @dataclass(frozen=True)
 class _Chunk:
     """One worker task: a run of consecutive values (picklable)."""
@@ -101,17 +118,13 @@ class _Chunk:
     period_rtol: float
 
     def __call__(self, values) -> list[Attractor]:
-        out, x = [], np.array(self.x0, dtype=float)
-        for i, value in enumerate(values):
-            try:
-                samples, x_end, lyap = self.one(float(value), x, self.transient * (2 if i == 0 else 1))
-            except (ValueError, RuntimeError, ArithmeticError) as exc:
-                out.append(Attractor(float(value), np.empty((0, x.size)), 0, float("nan"), f"{type(exc).__name__}: {exc}"))
-                x = np.array(self.x0, dtype=float)
-                continue
-            out.append(Attractor(float(value), samples, detect_period(samples, self.period_rtol), lyap))
-            x = x_end
-        return out
+        def one(value, x, first):
+            samples, x_end, lyap = self.one(value, x, self.transient * (2 if first else 1))
+            return Attractor(value, samples, detect_period(samples, self.period_rtol), lyap), x_end
+
+        def failed(value, message):
+            return Attractor(value, np.empty((0, self.x0.size)), 0, float("nan"), message)
+        return _chained(values, self.x0, one, failed)
 
     def one(self, value: float, x, transient: int):
         """(samples at the period starts, the state at the end, Lyapunov exponent or nan) of one value."""
@@ -202,29 +215,24 @@ class _SectionChunk:
 
     def __call__(self, values) -> list[SectionRow]:
         from ..simulate import simulate
-        out, x = [], np.array(self.x0, dtype=float)
-        for i, value in enumerate(values):
-            transient = self.transient * (2 if i == 0 else 1)
-            try:
-                problem = self.problem_of(float(value))
-                t0 = problem.t_span[0]
-                unit = problem.period if np.isfinite(problem.period) else self.unit
-                end = t0 + (transient + self.record) * unit
-                run = simulate(replace(problem, t_span=(t0, end)), self.method, x0=x)
-            except (ValueError, RuntimeError, ArithmeticError) as exc:
-                out.append(SectionRow(float(value), np.empty(0), np.empty(0), np.empty((0, x.size)),
-                                      f"{type(exc).__name__}: {exc}"))
-                x = np.array(self.x0, dtype=float)
-                continue
+
+        def one(value, x, first):
+            transient = self.transient * (2 if first else 1)
+            problem = self.problem_of(value)
+            t0 = problem.t_span[0]
+            unit = problem.period if np.isfinite(problem.period) else self.unit
+            run = simulate(replace(problem, t_span=(t0, t0 + (transient + self.record) * unit)), self.method, x0=x)
             events = run.events
             chosen = events[(events["kind"] == self.kind) & (events["pair"] == self.pair)
                             & (events["time"] >= t0 + transient * unit)]
             times = chosen["time"].to_numpy(dtype=float)
             states = np.column_stack([np.interp(times, run.t, run.x[:, k]) for k in range(run.x.shape[1])]) \
                 if times.size else np.empty((0, run.x.shape[1]))
-            out.append(SectionRow(float(value), times, np.mod(times - t0, unit) / unit, states))
-            x = run.x[-1]
-        return out
+            return SectionRow(value, times, np.mod(times - t0, unit) / unit, states), run.x[-1]
+
+        def failed(value, message):
+            return SectionRow(value, np.empty(0), np.empty(0), np.empty((0, self.x0.size)), message)
+        return _chained(values, self.x0, one, failed)
 
 
 def section_diagram(problem_of, method, values, x0, *, kind: str, pair: int, transient: float = 50.0,

@@ -119,6 +119,49 @@ class PeriodMap:
         return None
 
 
+class RecordingPeriodMap(PeriodMap):
+    """A period map that keeps its last run: ``events(x0)`` reuses it when x0 is the state it started from.
+    Subclasses give ``_solve(x0, jacobian) -> (solution, jacobian or None)``, the solution with ``x_end`` and
+    ``event_list()``."""
+
+    def __init__(self):
+        super().__init__()
+        self._last = (None, None)
+
+    def _solve(self, x0, jacobian):
+        raise NotImplementedError
+
+    def _run(self, x0, jacobian):
+        self.evaluations += 1
+        x0 = np.array(x0, dtype=float)
+        solution, jac = self._solve(x0, jacobian)
+        self._last = (x0, solution)
+        return solution, jac
+
+    def end(self, x0):
+        return self._run(x0, False)[0].x_end
+
+    def __call__(self, x0):
+        solution, jac = self._run(x0, True)
+        return solution.x_end, jac
+
+    def events(self, x0):
+        last_x0, solution = self._last
+        if last_x0 is None or not np.array_equal(last_x0, np.asarray(x0, dtype=float)):
+            solution = self._run(x0, False)[0]
+        return solution.event_list()
+
+
+def check_step_and_theta(method) -> None:
+    """Validate a stepper's ``h`` (positive) and ``theta`` (in [0.5, 1]) in place (frozen dataclasses)."""
+    from ..validate import check_positive, parse_value
+    object.__setattr__(method, "h", check_positive("h", method.h, "s"))
+    theta = parse_value("theta", method.theta)
+    if not 0.5 <= theta <= 1.0:
+        raise ParameterError(f"theta must be in [0.5, 1]; got {theta!r}")
+    object.__setattr__(method, "theta", theta)
+
+
 class FiniteDifferenceMap(PeriodMap):
     """Forward differences with steps 1e-7 (1 + |x_j|): n + 1 spans per Jacobian."""
 

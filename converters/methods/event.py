@@ -51,7 +51,7 @@ from ..problems.mechanical import MechanicalProblem
 from . import event_mechanical
 from ..trajectory import Samples, Trajectory
 from ..validate import check_positive, parse_value
-from .base import Method, PeriodMap
+from .base import Method, PeriodMap, RecordingPeriodMap
 
 #: Largest number of complementarity pairs (the mode selection visits up to 2^k held sets).
 MAX_PAIRS = 12
@@ -398,6 +398,10 @@ class EventSolution:
             x[i], u[i], y[i] = xt[:n], seg.flow.u_rows @ xt, seg.flow.y_rows @ xt
             config[i], held[i] = seg.flow.config, seg.flow.held_flags
         return Samples(times, x, u, y, config, held=held)
+
+    def event_list(self) -> list:
+        """(time, kind, pair, config) of every event, in time order."""
+        return list(zip(self.event_times, self.event_kinds, self.event_pairs, self.event_configs))
 
     def events_table(self, t: np.ndarray) -> dict:
         times = np.array(self.event_times, dtype=float)
@@ -850,33 +854,16 @@ class _Machine:
         return solution, jac, stop_time
 
 
-class EventPeriodMap(PeriodMap):
+class EventPeriodMap(RecordingPeriodMap):
     """The exact map over a problem's span, with its exact Jacobian; it keeps the events of its last run."""
 
     def __init__(self, machine: _Machine):
         super().__init__()
         self.machine = machine
-        self._last = (None, None)
 
-    def _run(self, x0, jacobian):
-        self.evaluations += 1
-        x0 = np.array(x0, dtype=float)
+    def _solve(self, x0, jacobian):
         solution, jac, _ = self.machine.run(x0, record=False, jacobian=jacobian)
-        self._last = (x0, solution)
         return solution, jac
-
-    def end(self, x0):
-        return self._run(x0, False)[0].x_end
-
-    def __call__(self, x0):
-        solution, jac = self._run(x0, True)
-        return solution.x_end, jac
-
-    def events(self, x0):
-        last_x0, solution = self._last
-        if last_x0 is None or not np.array_equal(last_x0, np.asarray(x0, dtype=float)):
-            solution = self._run(x0, False)[0]
-        return list(zip(solution.event_times, solution.event_kinds, solution.event_pairs, solution.event_configs))
 
 
 class EventReturnMap(PeriodMap):

@@ -39,7 +39,7 @@ import numpy as np
 from ..errors import ParameterError, SimulationError
 from ..problems.mechanical import MechanicalProblem
 from ..trajectory import Samples, Trajectory
-from .base import FiniteDifferenceMap, PeriodMap
+from .base import FiniteDifferenceMap, PeriodMap, RecordingPeriodMap
 
 STICK, SLIP_POS, SLIP_NEG, CLOSED, OPEN = 0, 1, 2, 3, 4
 _SIGN = {SLIP_POS: 1.0, SLIP_NEG: -1.0}
@@ -218,6 +218,10 @@ class MechanicalSolution:
             config[i] = seg.mode.code
             held[i] = [s in (STICK, CLOSED) for s in seg.mode.states]
         return Samples(times, x, u, y, config, held=held)
+
+    def event_list(self) -> list:
+        """(time, kind, pair, config) of every event, in time order."""
+        return list(self.events)
 
     def events_table(self, t: np.ndarray) -> dict:
         times = np.array([e[0] for e in self.events], dtype=float)
@@ -656,37 +660,20 @@ class MechanicalMachine:
         return (np.eye(x.size) + np.outer(f_after - f_before, grad) / denominator) @ phi
 
 
-class MechanicalPeriodMap(PeriodMap):
+class MechanicalPeriodMap(RecordingPeriodMap):
     """x(t0) -> x(t1) over the problem's span with the Jacobian of the variational equations and saltation
     matrices; it keeps the events of its last run."""
 
     def __init__(self, machine: MechanicalMachine):
         super().__init__()
         self.machine = machine
-        self._last = (None, None)
 
-    def _run(self, x0, jacobian):
-        self.evaluations += 1
-        x0 = np.array(x0, dtype=float)
+    def _solve(self, x0, jacobian):
         solution, phi = self.machine.run(x0, record=False, jacobian=jacobian)
-        self._last = (x0, solution)
-        return solution, phi
-
-    def end(self, x0):
-        return self._run(x0, False)[0].x_end
-
-    def __call__(self, x0):
-        solution, phi = self._run(x0, True)
-        if solution.chattered or phi is None:
+        if jacobian and (solution.chattered or phi is None):
             raise SimulationError("this run went through a completed chattering sequence, which has no exact Jacobian; "
                                   "use the finite-difference period map")
-        return solution.x_end, phi
-
-    def events(self, x0):
-        last_x0, solution = self._last
-        if last_x0 is None or not np.array_equal(last_x0, np.asarray(x0, dtype=float)):
-            solution = self._run(x0, False)[0]
-        return [(t, kind, pair, config) for t, kind, pair, config in solution.events]
+        return solution, phi
 
 
 def period_map(problem: MechanicalProblem, options) -> PeriodMap:

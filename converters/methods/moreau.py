@@ -30,8 +30,7 @@ from ..errors import ParameterError, SimulationError
 from ..lcp.kernels import MAX_INLINE_K, _masks_by_size, solve_small_lcp
 from ..problems.mechanical import MechanicalProblem
 from ..trajectory import Trajectory
-from ..validate import check_positive, parse_value
-from .base import Method
+from .base import Method, check_step_and_theta
 from .event_mechanical import CLOSED, OPEN, SLIP_NEG, SLIP_POS, STICK
 
 MAX_STEPS = 50_000_000
@@ -174,11 +173,7 @@ class MoreauJean(Method, key="moreau"):
     domains = ("mechanical",)
 
     def __post_init__(self):
-        object.__setattr__(self, "h", check_positive("h", self.h, "s"))
-        theta = parse_value("theta", self.theta)
-        if not 0.5 <= theta <= 1.0:
-            raise ParameterError(f"theta must be in [0.5, 1]; got {theta!r}")
-        object.__setattr__(self, "theta", theta)
+        check_step_and_theta(self)
 
     @property
     def order(self) -> float:

@@ -26,8 +26,7 @@ from ..lcp import solve_lcp
 from ..lcp.kernels import MAX_INLINE_K
 from ..problems import LCSProblem, Relay, Schedule, StateSwitching
 from ..trajectory import Trajectory
-from ..validate import check_positive, parse_value
-from .base import Method, PeriodMap
+from .base import Method, PeriodMap, check_step_and_theta
 from .discretize import step_matrices
 from .theta_kernels import (EVENTS_FULL, NO_SOLUTION, OK, run_relay, run_state_switched, run_steps,
                             step_jacobian)
@@ -55,11 +54,7 @@ class Theta(Method, key="lcp"):
     description = "LCP time-stepper: theta method (--theta, default 1 = backward Euler), one LCP per step"
 
     def __post_init__(self):
-        object.__setattr__(self, "h", check_positive("h", self.h, "s"))
-        theta = parse_value("theta", self.theta)
-        if not 0.5 <= theta <= 1.0:
-            raise ParameterError(f"theta must be in [0.5, 1]; got {theta!r}")
-        object.__setattr__(self, "theta", theta)
+        check_step_and_theta(self)
 
     @property
     def order(self) -> float:

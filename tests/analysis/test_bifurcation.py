@@ -3,7 +3,7 @@ rows for any number of workers."""
 import numpy as np
 import pytest
 
-from converters.analysis.bifurcation import aperiodic_onset, brute_force, detect_period, iterate, period_windows
+from converters.analysis.bifurcation import aperiodic_onset, brute_force, detect_period, period_windows
 from converters.errors import ParameterError
 
 from .maps import MapFamily, MapMethod
