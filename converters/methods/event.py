@@ -79,7 +79,8 @@ class EventDriven(Method, key="event"):
         those at 1e-10 on the friction oscillator, measured).
     chatter_fraction : float
         Mechanical problems with impacts: a chattering sequence whose remaining accumulation time is below this
-        fraction of the time scale is completed in closed form. Default 1e-9.
+        fraction of the time scale (or whose bounces rise less than 1e-12 of the state) is completed in closed
+        form, exactly for a constant relative acceleration. Default 1e-6.
     """
 
     event_tol: float = 1e-13
@@ -87,7 +88,7 @@ class EventDriven(Method, key="event"):
     output_step: float | None = None
     max_events: int = 10_000_000
     ode_rtol: float = 1e-9
-    chatter_fraction: float = 1e-9
+    chatter_fraction: float = 1e-6
     step_option = "output_step"
     description = "exact event-driven: matrix exponentials per mode, events by root finding, any number of pairs"
     domains = ("lcs", "mechanical")

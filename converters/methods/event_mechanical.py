@@ -269,7 +269,9 @@ class MechanicalMachine:
                 return False
         for j in zero_contacts:
             if states[dyn.m + j] == CLOSED:
-                if lam_n[j] < -1e-9 * (1.0 + abs(lam_n[j])):
+                # A contact force is rounding next to the forces it balances (a spring's, say): judge it on their scale.
+                forces = np.abs(dyn.base(mode, t, x[:dyn.n], x[dyn.n:])).max()
+                if lam_n[j] < -1e-9 * (1.0 + abs(lam_n[j]) + forces):
                     return False
             else:
                 _, c1, c2 = dyn.offset(j, t)
@@ -278,17 +280,18 @@ class MechanicalMachine:
                     return False
         return True
 
-    def select(self, t, x, previous: tuple, zero_friction, zero_contacts, friction_order=(STICK, SLIP_POS, SLIP_NEG)) -> tuple:
+    def select(self, t, x, previous: tuple, zero_friction, zero_contacts, friction_order=(STICK, SLIP_POS, SLIP_NEG),
+               contact_order=None) -> tuple:
         """The first consistent mode: contacts not at zero keep their state; a friction contact at zero tries
         ``friction_order`` (stick first where a velocity has just reached zero), a unilateral contact at zero
-        its previous state first."""
+        ``contact_order`` (default: its previous state first)."""
         dyn = self.dyn
         options = []
         for i in range(dyn.m):
             options.append(list(friction_order) if i in zero_friction else [previous[i]])
         for j in range(dyn.c):
             if j in zero_contacts:
-                options.append(list(dict.fromkeys([previous[dyn.m + j], CLOSED, OPEN])))
+                options.append(list(dict.fromkeys(contact_order or [previous[dyn.m + j], CLOSED, OPEN])))
             else:
                 options.append([previous[dyn.m + j]])
         for states in itertools.product(*options):
@@ -300,10 +303,10 @@ class MechanicalMachine:
     # --- one segment -----------------------------------------------------------------------------------
 
     def _events(self, mode: _Mode, t0, x0):
-        """Event functions of the mode: (function, kind, index, direction). A slipping velocity or an open gap
-        that starts the segment at zero is watched as value / (t - t0)^p (p the order of its first non-zero
-        derivative there, its limit at t0): continuous, positive at the start, with the same later zeros, so
-        the start is never mistaken for a crossing."""
+        """Event functions of the mode: (function, kind, index, direction). A watched quantity that starts the
+        segment at zero is never mistaken for a crossing there: leaving at a speed it is watched as
+        value / (t - t0) (positive at the start, the same later zeros); leaving tangentially as value - eps, armed
+        once it has left zero by more than rounding (:meth:`_fresh`)."""
         dyn, out = self.dyn, []
         n = dyn.n
         start_field = dyn.field(mode, t0, x0)
@@ -328,7 +331,7 @@ class MechanicalMachine:
             position = len(mode.stick) + mode.closed.index(j)
             force = (lambda t, y, p=position, mode=mode:                                                    # noqa: E731
                      dyn.held_forces(mode, t, dyn.base(mode, t, y[:n], y[n:2 * n]))[p])
-            out.append((force, "detach", dyn.m + j, -1))
+            out.append((self._fresh(force, self._rate(force, mode), t0, x0, start_field, mode), "detach", dyn.m + j, -1))
             out.append((self._rate(force, mode), "detach-extremum", dyn.m + j, 1))
         return out
 
@@ -351,19 +354,21 @@ class MechanicalMachine:
             return value
         first = rate(t0, x0)
         if first > scale:
-            power, limit = 1, first
-        else:                                       # a tangential start: the second derivative decides
-            dt = 1e-6 * self.scale
-            power, limit = 2, 0.5 * (rate(t0 + dt, x0 + dt * start_field) - first) / dt
-            if limit <= scale:                      # a contact released as its force reached zero: third order
-                power, limit = 3, 1e-300
-        tiny = 1e-300
+            tiny = 1e-300
 
-        def watched(t, y):
-            if t <= t0:
-                return limit
-            return value(t, y) / max(t - t0, tiny) ** power
-        return watched
+            def watched(t, y):                      # leaving at a speed: value / (t - t0) starts at that speed
+                if t <= t0:
+                    return first
+                return value(t, y) / max(t - t0, tiny)
+            return watched
+        # A tangential start (a stick that breaks, a contact whose force reached zero): the value grows as a
+        # power of (t - t0) that stays below its own rounding for a while, so its sign is noise there. Watch
+        # value - eps: armed once the value has genuinely left zero, it fires at most eps early on the way back.
+        eps = 64.0 * scale
+
+        def armed(t, y):
+            return value(t, y) - eps
+        return armed
 
     def _integrate(self, mode: _Mode, t0, t1, x0, phi):
         from scipy.integrate import solve_ivp
@@ -426,6 +431,8 @@ class MechanicalMachine:
             return None
         grid = np.unique(np.concatenate([np.linspace(a, b, 9) for a, b in zip(steps[:-1], steps[1:])]))
         grid = grid[grid > t0 + 1e-14 * self.scale]
+        if not grid.size:
+            return None
         states = result.sol(grid)
         first = None
         for k in indices:
@@ -511,6 +518,7 @@ class MechanicalMachine:
             _, kind, index, _ = watched[fired[1]]
             t, x, states, phi, chattered_now = self._handle(kind, index, t, x, mode, phi, result, events, segments, record)
             chattered = chattered or chattered_now
+
         solution = MechanicalSolution(problem, segments, events, x, time.perf_counter() - clock, opts, chattered)
         return solution, phi
 
@@ -573,6 +581,13 @@ class MechanicalMachine:
         rate = w @ x[n:] + c1
         mass = w @ dyn.Minv @ w
         e = dyn.e[j]
+        if rate >= -1e-9 * (1.0 + np.abs(x[n:]).max()):
+            # Reached at a speed of rounding size (a contact whose force touched zero and returns): no impact, the
+            # contact closes if it can push, with its state put on the constraint.
+            x_on = self._onto_contact(j, t, x)
+            new = self.select(t, x_on, mode.states, [], [j], contact_order=(CLOSED, OPEN))
+            events.append((t, "contact", m + j, new[m + j]))
+            return t, x_on, new, (None if phi is None else phi), False
         x_after = x.copy()
         x_after[n:] -= dyn.Minv @ w * ((1.0 + e) * rate / mass)
         events.append((t, "impact", m + j, OPEN))
@@ -584,7 +599,10 @@ class MechanicalMachine:
         chattered = False
         if acc < 0.0 and e < 1.0:
             remaining = 2.0 * separating / (-acc * (1.0 - e))
-            if remaining <= opts.chatter_fraction * self.scale:
+            # Complete it once what remains is short, or once a bounce rises less than the state's resolution (the
+            # gap's rounding: below it the next impacts cannot be located).
+            height = separating * separating / (-2.0 * acc)
+            if remaining <= opts.chatter_fraction * self.scale or height <= 1e-12 * (1.0 + np.abs(x[:n]).max()):
                 t = t + remaining
                 x_after = x_after.copy()
                 x_after[:n] += x_after[n:] * remaining                # the other coordinates drift on (first order)

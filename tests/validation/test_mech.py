@@ -80,3 +80,14 @@ def test_the_agreement_and_cam_sections_pass():
     assert cam.ok and "cam_impacts.png" in cam.files
     impacts = cam.metrics["impacts_per_rpm"]
     assert impacts["100"] == 0 and impacts["175"] > 0 and impacts["355"] + impacts["360"] > 0
+
+
+@pytest.mark.slow
+def test_complete_chattering_at_175_rpm_and_incomplete_at_358():
+    """The seed's 175 rpm: each revolution's impacts accumulate (completed in closed form), the follower then
+    riding the cam; Siconos' 358 rpm: impacts that never accumulate before the next lift."""
+    from validation.mechanics import chattering_table
+    table = chattering_table({}, [100.0, 175.0, 358.0], workers=1).set_index("rpm")
+    assert table.loc[100.0, "regime"] == "no impacts"
+    assert table.loc[175.0, "regime"] == "complete chattering" and table.loc[175.0, "accumulations_per_revolution"] == 1
+    assert table.loc[358.0, "regime"] == "incomplete chattering" and table.loc[358.0, "impacts_per_revolution"] > 1
