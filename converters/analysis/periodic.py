@@ -96,8 +96,10 @@ def _distance(step: np.ndarray, residual_vector: np.ndarray, rho: float, scale: 
     return newton
 
 
-def newton_orbit(period_map, x_guess, *, tol: float = 1e-10, max_iter: int = 50, period: float = np.nan) -> PeriodicOrbit:
-    """Newton's method on P(x) - x = 0 for a :class:`~converters.methods.base.PeriodMap` ``period_map``."""
+def newton_orbit(period_map, x_guess, *, tol: float = 1e-10, max_iter: int = 50, period: float = np.nan,
+                 polish: bool = False) -> PeriodicOrbit:
+    """Newton's method on P(x) - x = 0 for a :class:`~converters.methods.base.PeriodMap` ``period_map``.
+    ``polish``: return x + the last Newton step (within about its square of the orbit) instead of x."""
     x = np.array(x_guess, dtype=float)
     n = x.size
     eye = np.eye(n)
@@ -117,8 +119,8 @@ def newton_orbit(period_map, x_guess, *, tol: float = 1e-10, max_iter: int = 50,
             break
         distance = _distance(step, r, rho, scale)
         if distance <= tol:
-            return PeriodicOrbit(x, getattr(period_map, "period", period), jac, multipliers, residual, distance,
-                                 iteration, period_map.evaluations, True, period_map.jacobian_kind)
+            return PeriodicOrbit(x + step if polish else x, getattr(period_map, "period", period), jac, multipliers,
+                                 residual, distance, iteration, period_map.evaluations, True, period_map.jacobian_kind)
         if residual <= ROUNDING * np.finfo(float).eps:
             message = (f"the residual is at the rounding level of the map and 1 - rho = {1.0 - rho:.3g} amplifies it: "
                        f"the orbit is resolved to ~{distance:.3g} in double precision, not to the tolerance asked for")
@@ -153,7 +155,7 @@ def newton_orbit(period_map, x_guess, *, tol: float = 1e-10, max_iter: int = 50,
 
 
 def shoot(problem: LCSProblem, method, x_guess=None, *, periods: int = 1, warm_up: int = 0, tol: float = 1e-10,
-          max_iter: int = 50) -> PeriodicOrbit:
+          max_iter: int = 50, polish: bool = False) -> PeriodicOrbit:
     """The method's periodic orbit of a periodically switched problem (period T of its switching law).
 
     ``periods``: the orbit's period in switching periods (a period-m orbit); ``warm_up``: periods simulated
@@ -169,7 +171,7 @@ def shoot(problem: LCSProblem, method, x_guess=None, *, periods: int = 1, warm_u
     x = np.array(problem.x0 if x_guess is None else x_guess, dtype=float)
     for _ in range(warm_up):
         x = period_map.end(x)
-    return newton_orbit(period_map, x, tol=tol, max_iter=max_iter, period=periods * T)
+    return newton_orbit(period_map, x, tol=tol, max_iter=max_iter, period=periods * T, polish=polish)
 
 
 def autonomous_orbit(problem: LCSProblem, method, x_guess, *, config: int, crossings: int = 1,

@@ -1,0 +1,198 @@
+"""An ensemble of runs of one model over parameter points (DifferentialEquations.jl's EnsembleProblem): a
+point -> the model's problem, a method, and the row of measures each run gives.
+
+:class:`ModelSweep` is the whole description, plain and picklable: it travels to any backend (this process,
+local processes, a Dask cluster) and gives the same rows everywhere. A row holds the point's index and
+parameters, its status (``ok`` or ``failed``) and message, and the steady state's measures: the mean and
+ripple of vout and the RMS of the first state over one period on the orbit, the conduction mode (its label
+with the largest share of the period, and whether the pair is ever held), the Floquet spectral radius and
+the Newton iterations. A point that fails is a row with its message, never an exception.
+
+``rows_batched`` runs the points of a PWM converter on the LCP stepper (one complementarity pair) through
+one compiled call (:mod:`converters.methods.theta_batch`); any other model or method, and a point the batch
+cannot take, goes through the per-point path :meth:`ModelSweep.row`. Both read their measures with
+:func:`orbit_row` from the same one-period trajectory, so their rows agree to rounding.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import ParameterError
+
+#: Newton's tolerance on the orbit (relative): with the last step taken too (polished), every backend lands on
+#: the same fixed point to rounding.
+STEADY_TOL = 1e-12
+MEASURES = ("vout_mean", "vout_ripple", "rms_state0", "mode", "held", "spectral_radius", "iterations")
+
+
+@dataclass(frozen=True)
+class ModelSweep:
+    """Rows of ``model`` (under ``control``) at parameter points: ``base`` parameters overlaid with each point's.
+
+    ``method``: ``lcp`` (the stepper, h = T * ``h_fraction``, ``theta``) or ``event``; ``steady``: the method's
+    periodic orbit (``warm_up`` periods from rest, then Newton) or, without it, ``periods`` periods from rest
+    (the measures over the last one)."""
+
+    model: str
+    control: str = "pwm"
+    base: dict = field(default_factory=dict)
+    method: str = "lcp"
+    h_fraction: float = 1.0 / 200.0
+    theta: float = 1.0
+    steady: bool = True
+    warm_up: int = 20
+    periods: int = 50
+
+    def __post_init__(self):
+        from ..models import get_model
+        get_model(self.model, self.control).resolve(self.base)
+        if self.method not in ("lcp", "event"):
+            raise ParameterError(f"method must be lcp or event for a sweep; got {self.method!r}")
+        if not 0.0 < self.h_fraction < 1.0:
+            raise ParameterError(f"h_fraction (h / T) must be in (0, 1); got {self.h_fraction!r}")
+
+    # --- one point ----------------------------------------------------------------------------------------
+
+    def _model(self):
+        from ..models import get_model
+        return get_model(self.model, self.control)
+
+    def _method(self, model, p):
+        from ..methods import EventDriven, Theta
+        T = model.period(p)
+        return Theta(h=T * self.h_fraction, theta=self.theta) if self.method == "lcp" else EventDriven(output_step=T / 1000)
+
+    def row(self, index: int, point: dict) -> dict:
+        """The row of one point, by the per-point path (failures as rows)."""
+        from ..analysis.periodic import shoot
+        from ..simulate import simulate
+        clock = time.perf_counter()
+        out = {"index": int(index), **{k: _number(v) for k, v in point.items()}}
+        try:
+            model = self._model()
+            p = model.resolve({**self.base, **point})
+            method = self._method(model, p)
+            T = model.period(p)
+            if self.steady:
+                problem = model.problem(p, T)
+                orbit = shoot(problem, method, problem.x0, warm_up=self.warm_up, tol=STEADY_TOL, polish=True)
+                if not orbit.converged:
+                    return {**out, "status": "failed", "message": f"no steady state: {orbit.message}",
+                            "wall_s": time.perf_counter() - clock}
+                run = simulate(model.problem(p, T, orbit.x0), method)
+                extra = {"spectral_radius": orbit.spectral_radius, "iterations": orbit.iterations}
+            else:
+                long = simulate(model.problem(p, self.periods * T), method)
+                run = simulate(model.problem(p, T, long.x[-1]), method)
+                extra = {"spectral_radius": float("nan"), "iterations": 0}
+            return {**out, "status": "ok", "message": "", **orbit_row(model, p, run), **extra,
+                    "wall_s": time.perf_counter() - clock}
+        except (ValueError, RuntimeError, ArithmeticError) as exc:
+            return {**out, "status": "failed", "message": f"{type(exc).__name__}: {exc}",
+                    "wall_s": time.perf_counter() - clock}
+
+    # --- many points at once ----------------------------------------------------------------------------------
+
+    def batchable(self) -> bool:
+        from ..models import Converter
+        model = self._model()
+        return (self.method == "lcp" and self.steady and isinstance(model, Converter)
+                and len(model.pair_names) == 1)
+
+    def rows_batched(self, items: list[tuple[int, dict]]) -> list[dict]:
+        """Rows of (index, point) items: one compiled call for every point the batch can take (module docstring),
+        the per-point path for the rest. Rows in the order of ``items``."""
+        if not self.batchable():
+            return [self.row(i, point) for i, point in items]
+        from ..methods.theta import _plan_arrays
+        from ..methods.theta_batch import CONVERGED, batch_steady
+        model = self._model()
+        prepared, rows = [], {}
+        for index, point in items:
+            clock = time.perf_counter()
+            try:
+                p = model.resolve({**self.base, **point})
+                method = self._method(model, p)
+                problem = model.problem(p, model.period(p))
+                plan = _plan_arrays(problem, method.h)
+                prepared.append((index, point, p, method, problem, plan, clock))
+            except (ValueError, RuntimeError, ArithmeticError) as exc:
+                rows[index] = {"index": int(index), **{k: _number(v) for k, v in point.items()}, "status": "failed",
+                               "message": f"{type(exc).__name__}: {exc}", "wall_s": time.perf_counter() - clock}
+        if prepared:
+            P = len(prepared)
+            n = prepared[0][4].n
+            configs = len(prepared[0][4].configurations)
+            S = max(len(item[5][2]) for item in prepared)
+            sets = max(len(item[5][3]) for item in prepared)
+            A, B = np.zeros((P, configs, n, n)), np.zeros((P, configs, n, 1))
+            C, D = np.zeros((P, configs, 1, n)), np.zeros((P, configs, 1, 1))
+            E, F = np.zeros((P, configs, n)), np.zeros((P, configs, 1))
+            set_configs, set_dts = np.zeros((P, sets), dtype=np.int64), np.ones((P, sets))
+            counts, which, steps = np.zeros(P, dtype=np.int64), np.zeros((P, S), dtype=np.int64), np.zeros(P, dtype=np.int64)
+            x0 = np.zeros((P, n))
+            for k, (_, _, _, _, problem, plan, _) in enumerate(prepared):
+                for c, cfg in enumerate(problem.configurations):
+                    A[k, c], B[k, c], C[k, c], D[k, c], E[k, c], F[k, c] = cfg.A, cfg.B, cfg.C, cfg.D, cfg.E, cfg.F
+                _, _, plan_which, plan_configs, plan_dts = plan
+                counts[k] = len(plan_configs)
+                set_configs[k, :counts[k]], set_dts[k, :counts[k]] = plan_configs, plan_dts
+                steps[k] = len(plan_which)
+                which[k, :steps[k]] = plan_which
+                x0[k] = problem.x0
+            xs, us, ys = np.zeros((P, S + 1, n)), np.zeros((P, S + 1)), np.zeros((P, S + 1))
+            x_star, jac = np.zeros((P, n)), np.zeros((P, n, n))
+            status, iterations, residuals = np.zeros(P, dtype=np.int64), np.zeros(P, dtype=np.int64), np.zeros(P)
+            batch_steady(A, B, C, D, E, F, set_configs, set_dts, counts, which, steps, prepared[0][3].theta, x0,
+                         self.warm_up, STEADY_TOL, 50, xs, us, ys, x_star, jac, status, iterations, residuals)
+            for k, (index, point, p, method, problem, plan, clock) in enumerate(prepared):
+                base = {"index": int(index), **{key: _number(v) for key, v in point.items()}}
+                if status[k] != CONVERGED:
+                    why = ("a step LCP has no solution" if status[k] == 2 else
+                           f"no convergence in 50 Newton iterations (residual {residuals[k]:.3g})")
+                    rows[index] = {**base, "status": "failed", "message": f"no steady state: {why}",
+                                   "wall_s": time.perf_counter() - clock}
+                    continue
+                t, step_config = plan[0], plan[1]
+                count = steps[k] + 1
+                config = np.concatenate([step_config[:1], step_config])
+                run = _stepper_trajectory(problem, method, t, xs[k, :count], us[k, :count, None], ys[k, :count, None],
+                                          config)
+                multipliers = np.linalg.eigvals(jac[k])
+                rows[index] = {**base, "status": "ok", "message": "", **orbit_row(model, p, run),
+                               "spectral_radius": float(np.abs(multipliers).max()), "iterations": int(iterations[k]),
+                               "wall_s": (time.perf_counter() - clock) / 1.0}
+        return [rows[index] for index, _ in items]
+
+
+def _stepper_trajectory(problem, method, t, x, u, y, config):
+    from ..trajectory import Trajectory
+    return Trajectory(t=t, x=x, u=u, y=y, config=config, state_names=problem.state_names, pair_names=problem.pair_names,
+                      method="lcp", steps=t.size - 1, rule="end" if method.theta == 1.0 else "linear",
+                      period=problem.period)
+
+
+def orbit_row(model, p: dict, run) -> dict:
+    """The measures of a one-period run on the orbit (the module docstring), through the model's labels."""
+    from dataclasses import replace
+    run = replace(run, labels=model.labels(p))
+    T = model.period(p)
+    t0, t1 = run.t[0], run.t[0] + T
+    fractions = run.mode_fractions(None, t0=t0, t1=t1)
+    mode = max(fractions, key=fractions.get) if fractions else ""
+    held = bool(np.any(run.active[1:])) if run.u is not None else False
+    return {"vout_mean": run.mean("vout", t0=t0, t1=t1), "vout_ripple": run.ripple("vout", t0=t0, t1=t1),
+            "rms_state0": run.rms(run.state_names[0], t0=t0, t1=t1), "mode": mode, "held": held}
+
+
+def _number(value):
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        return value
+
+
+__all__ = ["ModelSweep", "orbit_row", "MEASURES", "STEADY_TOL"]
