@@ -3,9 +3,8 @@ pair, the PWM converters) advanced together in one compiled call.
 
 Per point: the one-step matrices of its plan's sets (:func:`.theta_kernels.theta_matrices`), ``warm_up``
 periods from x0, then Newton on the one-period map with its exact Jacobian (the product of the one-step
-derivatives Phi - H (C Phi) / M on the steps where the pair is held), until the step is below ``tol``
-(relative) or the residual reaches rounding; finally one period on the orbit, recorded for the row's
-measures. The plan (grid, step configurations, matrix sets) comes from the serial stepper's own planner, so
+derivatives Phi - H (C Phi) / M on the steps where the pair is held), exactly as the serial engine
+(:func:`batch_steady`); finally one period on the orbit, recorded for the row's measures. The plan (grid, step configurations, matrix sets) comes from the serial stepper's own planner, so
 a batched point and a serial one solve the same discrete map.
 """
 from __future__ import annotations
@@ -16,7 +15,7 @@ from numba import njit
 from .theta_kernels import theta_matrices
 
 #: Status per point.
-CONVERGED, NOT_CONVERGED, NO_SOLUTION = 0, 1, 2
+CONVERGED, NOT_CONVERGED, NO_SOLUTION, ROUNDING, SINGULAR, NONFINITE = 0, 1, 2, 3, 4, 5
 
 
 @njit(cache=True, inline="always")
@@ -75,16 +74,53 @@ def _period(x0, which, steps, Phi, Gamma, H, C, F, M, xs, us, ys, jac, with_jaco
     return True
 
 
+@njit(cache=True, inline="always")
+def _solve_shifted(jac, r, a, dx):
+    """dx with (jac - I) dx = -r, by elimination with partial pivoting (n is small); False when singular."""
+    n = r.shape[0]
+    for i in range(n):
+        for l in range(n):
+            a[i, l] = jac[i, l] - (1.0 if i == l else 0.0)
+        a[i, n] = -r[i]
+    for col in range(n):
+        piv = col
+        for row in range(col + 1, n):
+            if abs(a[row, col]) > abs(a[piv, col]):
+                piv = row
+        for cc in range(n + 1):
+            tmp = a[col, cc]
+            a[col, cc] = a[piv, cc]
+            a[piv, cc] = tmp
+        if a[col, col] == 0.0:
+            return False
+        for row in range(col + 1, n):
+            f = a[row, col] / a[col, col]
+            for cc in range(col, n + 1):
+                a[row, cc] -= f * a[col, cc]
+    for row in range(n - 1, -1, -1):
+        acc = a[row, n]
+        for l in range(row + 1, n):
+            acc -= a[row, l] * dx[l]
+        dx[row] = acc / a[row, row]
+    return True
+
+
 @njit(cache=True)
 def batch_steady(A, B, C, D, E, F, set_configs, set_dts, counts, which, steps, theta, x0, warm_up, tol, max_iter,
-                 xs, us, ys, x_star, jac_out, status, iterations, residuals):
+                 xs, us, ys, x_star, jac_out, status, iterations, residuals, distances):
     """Steady states of P points (module docstring), in place.
 
     A..F: (P, configs, ...) matrices; set_configs, set_dts: (P, sets) the plan's matrix sets (``counts`` used
     per point); which: (P, S) each step's set; steps: (P,) steps per period; x0: (P, n) starts. Outputs: xs
     (P, S + 1, n), us, ys (P, S + 1) the final period on the orbit; x_star (P, n); jac_out (P, n, n); status,
-    iterations (P,); residuals (P,) relative."""
+    iterations (P,); residuals, distances (P,) relative.
+
+    Newton is :func:`converters.analysis.periodic.newton_orbit` step for step (the same distance estimate
+    max(|dx|, |r| / (1 - rho)), the same halving of a step that does not lower the residual, the same plain
+    period when no fraction does, the same refusal at the rounding level), so a batched point and a serial one
+    take the same iterations to the same orbit."""
     P, n = x0.shape[0], x0.shape[1]
+    eps = 2.220446049250313e-16
     for p in range(P):
         sets = counts[p]
         Phi = np.empty((sets, n, n))
@@ -108,8 +144,8 @@ def batch_steady(A, B, C, D, E, F, set_configs, set_dts, counts, which, steps, t
         jac = np.empty((n, n))
         S = steps[p]
         xp, up, yp = xs[p], us[p], ys[p]
+        status[p] = NO_SOLUTION
         if not ok:
-            status[p] = NO_SOLUTION
             continue
         for _ in range(warm_up):
             if not _period(x, which[p], S, Phi, Gamma, Hm, Cs, Fs, Mm, xp, up, yp, jac, False):
@@ -117,66 +153,81 @@ def batch_steady(A, B, C, D, E, F, set_configs, set_dts, counts, which, steps, t
                 break
             for i in range(n):
                 x[i] = xp[S, i]
-        if not ok:
-            status[p] = NO_SOLUTION
+        if not ok or not _period(x, which[p], S, Phi, Gamma, Hm, Cs, Fs, Mm, xp, up, yp, jac, True):
             continue
-        status[p] = NOT_CONVERGED
+        px = xp[S].copy()
+        r = np.empty(n)
+        dx = np.empty(n)
+        trial = np.empty(n)
+        jac_trial = np.empty((n, n))
         a = np.empty((n, n + 1))
+        status[p] = NOT_CONVERGED
         for it in range(max_iter + 1):
-            if not _period(x, which[p], S, Phi, Gamma, Hm, Cs, Fs, Mm, xp, up, yp, jac, True):
-                status[p] = NO_SOLUTION
-                break
             scale = 1.0
-            for i in range(n):
-                scale = max(scale, 1.0 + abs(x[i]))
             worst = 0.0
             for i in range(n):
-                r = xp[S, i] - x[i]
-                worst = max(worst, abs(r))
-                for l in range(n):
-                    a[i, l] = jac[i, l] - (1.0 if i == l else 0.0)
-                a[i, n] = -r
+                scale = max(scale, 1.0 + abs(x[i]))
+                r[i] = px[i] - x[i]
+                worst = max(worst, abs(r[i]))
             residuals[p] = worst / scale
             iterations[p] = it
-            from_rounding = worst <= 64.0 * 2.220446049250313e-16 * scale
-            # (J - I) dx = -r by elimination (n small)
-            for col in range(n):
-                piv = col
-                for r in range(col + 1, n):
-                    if abs(a[r, col]) > abs(a[piv, col]):
-                        piv = r
-                for cc in range(n + 1):
-                    tmp = a[col, cc]
-                    a[col, cc] = a[piv, cc]
-                    a[piv, cc] = tmp
-                if a[col, col] == 0.0:
-                    break
-                for r in range(col + 1, n):
-                    f = a[r, col] / a[col, col]
-                    for cc in range(col, n + 1):
-                        a[r, cc] -= f * a[col, cc]
-            dx = np.zeros(n)
-            for r in range(n - 1, -1, -1):
-                acc = a[r, n]
-                for l in range(r + 1, n):
-                    acc -= a[r, l] * dx[l]
-                dx[r] = acc / a[r, r] if a[r, r] != 0.0 else 0.0
+            rho = np.abs(np.linalg.eigvals(jac.astype(np.complex128))).max()   # complex: a real matrix may have complex roots
+            if not _solve_shifted(jac, r, a, dx):
+                status[p] = SINGULAR
+                break
             step = 0.0
             for i in range(n):
                 step = max(step, abs(dx[i]))
-            if step / scale <= tol or from_rounding:
+            distance = step / scale
+            if rho < 1.0:
+                distance = max(distance, worst / (1.0 - rho) / scale)
+            distances[p] = distance
+            if distance <= tol:
                 status[p] = CONVERGED
                 for i in range(n):
                     x_star[p, i] = x[i] + dx[i]                   # the last (tiny) step taken too
                     for l in range(n):
                         jac_out[p, i, l] = jac[i, l]
                 break
+            if worst / scale <= 64.0 * eps:
+                status[p] = ROUNDING
+                break
             if it == max_iter:
                 break
+            accepted = False
+            for _ in range(8):
+                for i in range(n):
+                    trial[i] = x[i] + dx[i]
+                if _period(trial, which[p], S, Phi, Gamma, Hm, Cs, Fs, Mm, xp, up, yp, jac_trial, True):
+                    finite = True
+                    gap = 0.0
+                    for i in range(n):
+                        finite = finite and np.isfinite(xp[S, i])
+                        gap = max(gap, abs(xp[S, i] - trial[i]))
+                    if finite and gap < worst:
+                        accepted = True
+                        break
+                for i in range(n):
+                    dx[i] *= 0.5
+            if not accepted:
+                for i in range(n):
+                    trial[i] = px[i]
+                if not _period(trial, which[p], S, Phi, Gamma, Hm, Cs, Fs, Mm, xp, up, yp, jac_trial, True):
+                    status[p] = NO_SOLUTION
+                    break
+                finite = True
+                for i in range(n):
+                    finite = finite and np.isfinite(xp[S, i])
+                if not finite:
+                    status[p] = NONFINITE
+                    break
             for i in range(n):
-                x[i] += dx[i]
+                x[i] = trial[i]
+                px[i] = xp[S, i]
+                for l in range(n):
+                    jac[i, l] = jac_trial[i, l]
         if status[p] == CONVERGED:                           # the recorded period: the one on the orbit
             _period(x_star[p], which[p], S, Phi, Gamma, Hm, Cs, Fs, Mm, xp, up, yp, jac, False)
 
 
-__all__ = ["batch_steady", "CONVERGED", "NOT_CONVERGED", "NO_SOLUTION"]
+__all__ = ["batch_steady", "CONVERGED", "NOT_CONVERGED", "NO_SOLUTION", "ROUNDING", "SINGULAR", "NONFINITE"]

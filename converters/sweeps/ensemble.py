@@ -4,11 +4,11 @@ point -> the model's problem, a method, and the row of measures each run gives.
 :class:`ModelSweep` is the whole description, plain and picklable: it travels to any backend (this process,
 local processes, a Dask cluster) and gives the same rows everywhere. A row holds the point's index and
 parameters, its status (``ok`` or ``failed``) and message, and the steady state's measures: the mean and
-ripple of vout and the RMS of the first state over one period on the orbit, the conduction mode (its label
-with the largest share of the period, and whether the pair is ever held), the Floquet spectral radius and
-the Newton iterations. A point that fails is a row with its message, never an exception.
+ripple of vout and the RMS of the first state over one period on the orbit, the conduction mode class
+(CCM, DCM, GDCM-ON, ... from :mod:`converters.analysis.modes`) and the fraction of the period a pair is
+held, the Floquet spectral radius and the Newton iterations. A point that fails is a row with its message, never an exception.
 
-``rows_batched`` runs the points of a PWM converter on the LCP stepper (one complementarity pair) through
+``rows`` runs the points of a PWM converter on the LCP stepper (one complementarity pair) through
 one compiled call (:mod:`converters.methods.theta_batch`); any other model or method, and a point the batch
 cannot take, goes through the per-point path :meth:`ModelSweep.row`. Both read their measures with
 :func:`orbit_row` from the same one-period trajectory, so their rows agree to rounding.
@@ -22,10 +22,20 @@ import numpy as np
 
 from ..errors import ParameterError
 
-#: Newton's tolerance on the orbit (relative): with the last step taken too (polished), every backend lands on
-#: the same fixed point to rounding.
-STEADY_TOL = 1e-12
-MEASURES = ("vout_mean", "vout_ripple", "rms_state0", "mode", "held", "spectral_radius", "iterations")
+#: Newton's tolerance on the orbit (relative, the engine's default). The last Newton step is taken too
+#: (polished): on a fixed mode sequence the period map is affine and that step lands on the fixed point to
+#: rounding, so every backend gives the same orbit to ~1e-14 whatever the tolerance.
+STEADY_TOL = 1e-10
+MAX_ITER = 50
+#: The measures of a row and their types (a failed row leaves them empty).
+MEASURES = {"vout_mean": float, "vout_ripple": float, "rms_state0": float, "mode": str, "held_fraction": float,
+            "spectral_radius": float, "iterations": int}
+
+
+def failed_row(index: int, point: dict, message: str, wall_s: float = 0.0) -> dict:
+    """The row of a point that gave no result: its parameters, status ``failed`` and the reason."""
+    return {"index": int(index), **{k: _number(v) for k, v in point.items()}, "status": "failed",
+            "message": message, "wall_s": wall_s}
 
 
 @dataclass(frozen=True)
@@ -46,6 +56,8 @@ class ModelSweep:
     warm_up: int = 20
     periods: int = 50
 
+    measures = MEASURES
+
     def __post_init__(self):
         from ..models import get_model
         get_model(self.model, self.control).resolve(self.base)
@@ -55,6 +67,10 @@ class ModelSweep:
             raise ParameterError(f"h_fraction (h / T) must be in (0, 1); got {self.h_fraction!r}")
 
     # --- one point ----------------------------------------------------------------------------------------
+
+    def validate(self, point: dict) -> None:
+        """Refuse a point outside the model's parameter ranges (ParameterError naming the parameter)."""
+        self._model().resolve({**self.base, **point})
 
     def _model(self):
         from ..models import get_model
@@ -78,23 +94,30 @@ class ModelSweep:
             T = model.period(p)
             if self.steady:
                 problem = model.problem(p, T)
-                orbit = shoot(problem, method, problem.x0, warm_up=self.warm_up, tol=STEADY_TOL, polish=True)
+                orbit = shoot(problem, method, problem.x0, warm_up=self.warm_up, tol=STEADY_TOL, max_iter=MAX_ITER,
+                              polish=True)
                 if not orbit.converged:
-                    return {**out, "status": "failed", "message": f"no steady state: {orbit.message}",
-                            "wall_s": time.perf_counter() - clock}
+                    return failed_row(index, point, f"no steady state: {orbit.message}", time.perf_counter() - clock)
                 run = simulate(model.problem(p, T, orbit.x0), method)
                 extra = {"spectral_radius": orbit.spectral_radius, "iterations": orbit.iterations}
             else:
                 long = simulate(model.problem(p, self.periods * T), method)
                 run = simulate(model.problem(p, T, long.x[-1]), method)
-                extra = {"spectral_radius": float("nan"), "iterations": 0}
+                extra = {}
             return {**out, "status": "ok", "message": "", **orbit_row(model, p, run), **extra,
                     "wall_s": time.perf_counter() - clock}
         except (ValueError, RuntimeError, ArithmeticError) as exc:
-            return {**out, "status": "failed", "message": f"{type(exc).__name__}: {exc}",
-                    "wall_s": time.perf_counter() - clock}
+            return failed_row(index, point, f"{type(exc).__name__}: {exc}", time.perf_counter() - clock)
 
     # --- many points at once ----------------------------------------------------------------------------------
+
+    @property
+    def chunk_hint(self) -> int:
+        """Points per chunk: enough that a chunk of cheap points outweighs its round trip to a worker."""
+        return 500 if self.batchable() else (100 if self.method == "lcp" else 10)
+
+    def failed(self, index: int, point: dict, message: str) -> dict:
+        return failed_row(index, point, message)
 
     def batchable(self) -> bool:
         from ..models import Converter
@@ -102,7 +125,7 @@ class ModelSweep:
         return (self.method == "lcp" and self.steady and isinstance(model, Converter)
                 and len(model.pair_names) == 1)
 
-    def rows_batched(self, items: list[tuple[int, dict]]) -> list[dict]:
+    def rows(self, items: list[tuple[int, dict]]) -> list[dict]:
         """Rows of (index, point) items: one compiled call for every point the batch can take (module docstring),
         the per-point path for the rest. Rows in the order of ``items``."""
         if not self.batchable():
@@ -118,10 +141,9 @@ class ModelSweep:
                 method = self._method(model, p)
                 problem = model.problem(p, model.period(p))
                 plan = _plan_arrays(problem, method.h)
-                prepared.append((index, point, p, method, problem, plan, clock))
+                prepared.append((index, point, p, method, problem, plan, time.perf_counter() - clock))
             except (ValueError, RuntimeError, ArithmeticError) as exc:
-                rows[index] = {"index": int(index), **{k: _number(v) for k, v in point.items()}, "status": "failed",
-                               "message": f"{type(exc).__name__}: {exc}", "wall_s": time.perf_counter() - clock}
+                rows[index] = failed_row(index, point, f"{type(exc).__name__}: {exc}", time.perf_counter() - clock)
         if prepared:
             P = len(prepared)
             n = prepared[0][4].n
@@ -145,16 +167,18 @@ class ModelSweep:
                 x0[k] = problem.x0
             xs, us, ys = np.zeros((P, S + 1, n)), np.zeros((P, S + 1)), np.zeros((P, S + 1))
             x_star, jac = np.zeros((P, n)), np.zeros((P, n, n))
-            status, iterations, residuals = np.zeros(P, dtype=np.int64), np.zeros(P, dtype=np.int64), np.zeros(P)
+            status, iterations = np.zeros(P, dtype=np.int64), np.zeros(P, dtype=np.int64)
+            residuals, distances = np.full(P, np.inf), np.full(P, np.inf)
+            clock = time.perf_counter()
             batch_steady(A, B, C, D, E, F, set_configs, set_dts, counts, which, steps, prepared[0][3].theta, x0,
-                         self.warm_up, STEADY_TOL, 50, xs, us, ys, x_star, jac, status, iterations, residuals)
-            for k, (index, point, p, method, problem, plan, clock) in enumerate(prepared):
-                base = {"index": int(index), **{key: _number(v) for key, v in point.items()}}
+                         self.warm_up, STEADY_TOL, MAX_ITER, xs, us, ys, x_star, jac, status, iterations, residuals,
+                         distances)
+            share = (time.perf_counter() - clock) / P                # the compiled call's time, per point
+            for k, (index, point, p, method, problem, plan, prep) in enumerate(prepared):
+                clock = time.perf_counter() - prep - share
                 if status[k] != CONVERGED:
-                    why = ("a step LCP has no solution" if status[k] == 2 else
-                           f"no convergence in 50 Newton iterations (residual {residuals[k]:.3g})")
-                    rows[index] = {**base, "status": "failed", "message": f"no steady state: {why}",
-                                   "wall_s": time.perf_counter() - clock}
+                    rows[index] = failed_row(index, point, _batch_failure(status[k], residuals[k], distances[k]),
+                                             time.perf_counter() - clock)
                     continue
                 t, step_config = plan[0], plan[1]
                 count = steps[k] + 1
@@ -162,10 +186,21 @@ class ModelSweep:
                 run = _stepper_trajectory(problem, method, t, xs[k, :count], us[k, :count, None], ys[k, :count, None],
                                           config)
                 multipliers = np.linalg.eigvals(jac[k])
-                rows[index] = {**base, "status": "ok", "message": "", **orbit_row(model, p, run),
+                rows[index] = {"index": int(index), **{key: _number(v) for key, v in point.items()}, "status": "ok", "message": "", **orbit_row(model, p, run),
                                "spectral_radius": float(np.abs(multipliers).max()), "iterations": int(iterations[k]),
-                               "wall_s": (time.perf_counter() - clock) / 1.0}
+                               "wall_s": time.perf_counter() - clock}
         return [rows[index] for index, _ in items]
+
+
+def _batch_failure(code: int, residual: float, distance: float) -> str:
+    from ..methods import theta_batch as tb
+    why = {tb.NO_SOLUTION: "a step LCP has no solution (a held pair with M <= 0)",
+           tb.SINGULAR: "the period map's Jacobian has a multiplier at 1 (the orbit is not isolated)",
+           tb.NONFINITE: "the period map left the finite numbers",
+           tb.ROUNDING: "the residual is at the rounding level of the map and 1 - rho amplifies it",
+           tb.NOT_CONVERGED: f"no convergence in {MAX_ITER} Newton iterations"}[int(code)]
+    return (f"no steady state: {why}; residual {residual:.3g}, estimated distance {distance:.3g} > tol "
+            f"{STEADY_TOL:.3g}")
 
 
 def _stepper_trajectory(problem, method, t, x, u, y, config):
@@ -178,14 +213,14 @@ def _stepper_trajectory(problem, method, t, x, u, y, config):
 def orbit_row(model, p: dict, run) -> dict:
     """The measures of a one-period run on the orbit (the module docstring), through the model's labels."""
     from dataclasses import replace
+
+    from ..analysis.modes import held_fraction, mode_class, orbit_intervals
     run = replace(run, labels=model.labels(p))
-    T = model.period(p)
-    t0, t1 = run.t[0], run.t[0] + T
-    fractions = run.mode_fractions(None, t0=t0, t1=t1)
-    mode = max(fractions, key=fractions.get) if fractions else ""
-    held = bool(np.any(run.active[1:])) if run.u is not None else False
+    t0, t1 = run.t[0], run.t[-1]
+    intervals = orbit_intervals(run)
     return {"vout_mean": run.mean("vout", t0=t0, t1=t1), "vout_ripple": run.ripple("vout", t0=t0, t1=t1),
-            "rms_state0": run.rms(run.state_names[0], t0=t0, t1=t1), "mode": mode, "held": held}
+            "rms_state0": run.rms(run.state_names[0], t0=t0, t1=t1), "mode": mode_class(intervals),
+            "held_fraction": held_fraction(intervals, 1.0)}
 
 
 def _number(value):
@@ -195,4 +230,4 @@ def _number(value):
         return value
 
 
-__all__ = ["ModelSweep", "orbit_row", "MEASURES", "STEADY_TOL"]
+__all__ = ["ModelSweep", "orbit_row", "failed_row", "MEASURES", "STEADY_TOL"]

@@ -1,8 +1,13 @@
-"""The local backend: a function mapped over items in this machine's processes, results in input order.
+"""The local backend: chunks of work in this machine's processes, surviving a lost worker.
 
-Workers are forked (nothing is re-imported; compiled kernels loaded before the fork are shared) and get
-whole chunks of items, so a cheap item does not pay a round trip of its own. ``workers=1`` runs in this
-process, and gives the same results: chunks are fixed by ``chunk``, not by the number of workers.
+Each worker is a :class:`ProcessSlot`, one forked process that runs one chunk at a time (nothing is
+re-imported; compiled kernels loaded before the fork are shared). One chunk per process at a time means
+the backend knows which chunk a dead or hung process was running: that chunk alone is retried (a crash) or
+given up (a time limit), the others go on. A chunk the backend cannot complete comes back as :class:`Lost`
+with the reason, for the caller to record (a sweep stores it as failed rows).
+
+``parallel_map`` is the ordered ``[function(item) ...]`` over this backend that the D-K maps, the brute-force
+diagrams, the report suites and the stability map use; the ngspice runner is one recycled ProcessSlot.
 """
 from __future__ import annotations
 
@@ -10,6 +15,8 @@ import concurrent.futures as futures
 import multiprocessing
 import os
 import sys
+import time
+from dataclasses import dataclass
 
 from ..errors import ParameterError
 
@@ -22,55 +29,226 @@ def default_workers() -> int:
         return max(1, os.cpu_count() or 1)
 
 
-def _run_chunk(args):
-    function, chunk, finalize = args
-    try:
-        return [function(item) for item in chunk]
-    finally:
-        if finalize is not None:
-            finalize()
+def _context():
+    # fork: the worker needs nothing re-imported (works from scripts, stdin and notebooks alike)
+    return multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
+
+
+@dataclass(frozen=True)
+class Lost:
+    """A chunk the backend could not complete, and why (``exception``: what the function raised, if it did)."""
+
+    message: str
+    exception: BaseException | None = None
+
+
+class ProcessSlot:
+    """One worker process, created on first use: submit a call, wait for it with a time limit, terminate it
+    when it hangs; recycled (a fresh process) after ``tasks_per_process`` calls, which returns what a
+    leaky library (PySpice) accumulated to the system. Safe across fork: a child never touches the
+    parent's process."""
+
+    def __init__(self, tasks_per_process: int | None = None):
+        self.tasks_per_process = tasks_per_process
+        self._pool = None
+        self._tasks = 0
+        self._owner = os.getpid()
+
+    def _forget_inherited(self):
+        # in a forked child the parent's pool object is a copy whose process belongs to the parent: shutting it
+        # down here would send the parent's worker its exit sentinel. Forget it instead.
+        if self._owner != os.getpid():
+            self._pool, self._tasks, self._owner = None, 0, os.getpid()
+
+    def submit(self, function, *args) -> futures.Future:
+        self._forget_inherited()
+        if self._pool is not None and self.tasks_per_process is not None and self._tasks >= self.tasks_per_process:
+            self.close()
+        if self._pool is None:
+            self._pool = futures.ProcessPoolExecutor(max_workers=1, mp_context=_context())
+            self._tasks = 0
+        self._tasks += 1
+        return self._pool.submit(function, *args)
+
+    def call(self, function, *args, timeout: float | None = None):
+        """``function(*args)`` in the process. Raises ``concurrent.futures.TimeoutError`` (the process is then
+        terminated) or ``concurrent.futures.process.BrokenProcessPool`` (it died; the next call gets a new one)."""
+        future = self.submit(function, *args)
+        try:
+            return future.result(timeout=timeout)
+        except futures.TimeoutError:
+            self.kill()
+            raise
+        except futures.process.BrokenProcessPool:
+            self.discard()
+            raise
+
+    def kill(self):
+        """Terminate the process (close() would wait for a hung one)."""
+        self._forget_inherited()
+        if self._pool is not None:
+            for process in list((getattr(self._pool, "_processes", None) or {}).values()):
+                process.terminate()
+            self.discard()
+
+    def discard(self):
+        if self._pool is not None:
+            self._pool.shutdown(wait=False, cancel_futures=True)
+            self._pool = None
+
+    def close(self):
+        self._forget_inherited()
+        if self._pool is not None:
+            self._pool.shutdown(wait=True, cancel_futures=True)
+            self._pool = None
+
+
+class _Call:
+    """``function(chunk)`` in a worker, then ``finalize()`` (e.g. shut the worker's own ngspice process down
+    before the slot's process ends)."""
+
+    def __init__(self, function, finalize=None):
+        self.function, self.finalize = function, finalize
+
+    def __call__(self, chunk):
+        try:
+            return self.function(chunk)
+        finally:
+            if self.finalize is not None:
+                self.finalize()
+
+
+class LocalBackend:
+    """Chunks in ``workers`` processes of this machine.
+
+    Parameters
+    ----------
+    workers : int, optional
+        Processes (default :func:`default_workers`); 1 still runs in a separate process.
+    timeout : float, optional
+        Seconds a chunk may run; past it its process is terminated and the chunk is lost (not retried).
+    attempts : int
+        Runs a chunk gets when its process dies under it (a crash, an out-of-memory kill) before it is lost.
+    tasks_per_process : int, optional
+        A fresh process after this many chunks (1: every chunk in its own process).
+    finalize : callable, optional
+        Called in the worker after each chunk.
+    """
+
+    name = "local"
+
+    def __init__(self, workers: int | None = None, *, timeout: float | None = None, attempts: int = 3,
+                 tasks_per_process: int | None = None, finalize=None):
+        workers = default_workers() if workers is None else workers
+        if not (isinstance(workers, int) and workers >= 1):
+            raise ParameterError(f"workers must be an integer >= 1; got {workers!r}")
+        if timeout is not None and not timeout > 0:
+            raise ParameterError(f"timeout must be > 0 seconds; got {timeout!r}")
+        if not (isinstance(attempts, int) and attempts >= 1):
+            raise ParameterError(f"attempts must be an integer >= 1; got {attempts!r}")
+        self.workers, self.timeout, self.attempts = workers, timeout, attempts
+        self.tasks_per_process, self.finalize = tasks_per_process, finalize
+
+    def map_chunks(self, function, chunks):
+        """Yield (position, result or :class:`Lost`) for each chunk, as they complete."""
+        chunks = list(chunks)
+        call = _Call(function, self.finalize)
+        queue = list(range(len(chunks)))[::-1]              # popped from the end: in order
+        tries = [0] * len(chunks)
+        slots = [ProcessSlot(self.tasks_per_process) for _ in range(min(self.workers, len(chunks)))]
+        running: dict = {}                                  # future -> (position, slot, started)
+        idle = list(slots)
+        try:
+            while queue or running:
+                while queue and idle:
+                    position, slot = queue.pop(), idle.pop()
+                    tries[position] += 1
+                    running[slot.submit(call, chunks[position])] = (position, slot, time.monotonic())
+                wait = None
+                if self.timeout is not None:
+                    wait = max(0.0, min(started + self.timeout for _, _, started in running.values()) - time.monotonic())
+                done, _ = futures.wait(running, timeout=wait, return_when=futures.FIRST_COMPLETED)
+                for future in done:
+                    position, slot, _ = running.pop(future)
+                    idle.append(slot)
+                    try:
+                        yield position, future.result()
+                    except futures.process.BrokenProcessPool:
+                        slot.discard()
+                        if tries[position] < self.attempts:
+                            queue.append(position)
+                        else:
+                            yield position, Lost(f"worker lost: its process died {tries[position]} times running this chunk")
+                    except Exception as exc:                # the function raised: the caller decides
+                        yield position, Lost(f"{type(exc).__name__}: {exc}", exc)
+                if self.timeout is not None:
+                    now = time.monotonic()
+                    for future, (position, slot, started) in list(running.items()):
+                        if not future.done() and now - started >= self.timeout:
+                            del running[future]
+                            slot.kill()
+                            idle.append(slot)
+                            yield position, Lost(f"timeout: did not finish within {self.timeout:g} s")
+        finally:
+            for slot in slots:                              # interrupted or done: no process outlives the map
+                if any(s is slot for _, s, _ in running.values()):
+                    slot.kill()
+                else:
+                    slot.close()
 
 
 def parallel_map(function, items, *, workers: int | None = None, chunk: int = 1, progress: bool = False,
-                 label: str = "", unit: str = "pt", finalize=None) -> list:
-    """[function(item) for item in items], in processes.
+                 label: str = "", unit: str = "pt", finalize=None, timeout: float | None = None,
+                 tasks_per_process: int | None = None, on_lost=None) -> list:
+    """[function(item) for item in items] on the local backend, in input order.
 
     Parameters
     ----------
     function : picklable callable
         Applied to each item (a module-level function or a picklable object).
     workers : int, optional
-        Processes to use (default: :func:`default_workers`); 1 runs here.
+        Processes (default :func:`default_workers`); 1 runs in this process (no time limit, no isolation),
+        with the same results: chunks are fixed by ``chunk``, not by the number of workers.
     chunk : int
         Items per task.
     progress : bool
         A tqdm progress bar on stderr, in items.
-    finalize : callable, optional
-        Called in a worker process after each of its chunks (e.g. to shut the worker's own sub-process
-        down before the pool ends it); not called when the map runs in this process.
+    finalize, timeout, tasks_per_process
+        As :class:`LocalBackend`.
+    on_lost : callable, optional
+        ``on_lost(item, message)`` stands in for each item of a chunk that was lost (a dead worker, a time
+        limit, an exception); without it a lost chunk raises.
     """
     items = list(items)
-    workers = default_workers() if workers is None else workers
-    if not (isinstance(workers, int) and workers >= 1):
-        raise ParameterError(f"workers must be an integer >= 1; got {workers!r}")
     if not (isinstance(chunk, int) and chunk >= 1):
         raise ParameterError(f"chunk must be an integer >= 1; got {chunk!r}")
     chunks = [items[i:i + chunk] for i in range(0, len(items), chunk)]
+    backend = LocalBackend(workers, timeout=timeout, tasks_per_process=tasks_per_process, finalize=finalize)
     from tqdm import tqdm
-    out: list = []
+    results: list = [None] * len(chunks)
     with tqdm(total=len(items), desc=label, unit=unit, file=sys.stderr, disable=not progress) as bar:
-        if workers == 1 or len(chunks) <= 1:
-            for c in chunks:
-                out.extend(_run_chunk((function, c, None)))
-                bar.update(len(c))
-            return out
-        method = "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
-        with futures.ProcessPoolExecutor(max_workers=min(workers, len(chunks)),
-                                         mp_context=multiprocessing.get_context(method)) as pool:
-            for result in pool.map(_run_chunk, [(function, c, finalize) for c in chunks]):
-                out.extend(result)
-                bar.update(len(result))
-    return out
+        if backend.workers == 1 and timeout is None and tasks_per_process is None:
+            stream = ((i, [function(item) for item in c]) for i, c in enumerate(chunks))
+        else:
+            stream = backend.map_chunks(_Apply(function), chunks)
+        for position, result in stream:
+            if isinstance(result, Lost):
+                if on_lost is None:
+                    if result.exception is not None:
+                        raise result.exception
+                    raise RuntimeError(f"{label or 'parallel_map'}: {result.message}")
+                result = [on_lost(item, result.message) for item in chunks[position]]
+            results[position] = result
+            bar.update(len(result))
+    return [r for chunk_results in results for r in chunk_results]
 
 
-__all__ = ["parallel_map", "default_workers"]
+class _Apply:
+    def __init__(self, function):
+        self.function = function
+
+    def __call__(self, chunk):
+        return [self.function(item) for item in chunk]
+
+
+__all__ = ["parallel_map", "default_workers", "LocalBackend", "ProcessSlot", "Lost"]

@@ -1,0 +1,90 @@
+"""The Dask backend: chunks on an existing Dask distributed cluster (``tcp://HOST:PORT`` or a
+``dask.distributed.Client``), for when one machine is not enough.
+
+Dask itself recovers a lost worker: the scheduler reruns the chunks that worker held on another one; a chunk
+that takes ``distributed.scheduler.allowed-failures`` workers down with it comes back as :class:`.Lost`.
+At most ``in_flight`` chunks per worker thread are submitted at a time, so a long sweep never queues all its
+work (nor its results) at once. The workers import this package themselves: it must be installed where
+they run.
+"""
+from __future__ import annotations
+
+from ..errors import ParameterError
+from .local import Lost
+
+
+class DaskBackend:
+    """Chunks on a Dask distributed cluster.
+
+    Parameters
+    ----------
+    scheduler : str or dask.distributed.Client
+        The scheduler's address (``tcp://HOST:PORT``) or a client already connected.
+    in_flight : int
+        Chunks submitted per worker thread ahead of their results.
+    """
+
+    name = "dask"
+
+    def __init__(self, scheduler, *, in_flight: int = 2):
+        if isinstance(scheduler, str) and not scheduler.startswith(("tcp://", "tls://", "inproc://", "ws://", "wss://")):
+            raise ParameterError(f"scheduler must be local or a Dask scheduler address like tcp://HOST:PORT; "
+                                 f"got {scheduler!r}")
+        if not (isinstance(in_flight, int) and in_flight >= 1):
+            raise ParameterError(f"in_flight must be an integer >= 1; got {in_flight!r}")
+        self.scheduler, self.in_flight = scheduler, in_flight
+        self._client = None
+
+    def client(self):
+        try:
+            from distributed import Client
+        except ImportError:
+            raise ParameterError("a Dask scheduler needs dask.distributed: pip install 'dask[distributed]'") from None
+        if isinstance(self.scheduler, Client):
+            return self.scheduler
+        if self._client is None:
+            try:
+                self._client = Client(self.scheduler, timeout="10s")
+            except OSError as exc:
+                raise ParameterError(f"scheduler: no Dask scheduler answers at {self.scheduler} ({exc})") from None
+        return self._client
+
+    def close(self):
+        if self._client is not None:
+            self._client.close()
+            self._client = None
+
+    def map_chunks(self, function, chunks):
+        """Yield (position, result or :class:`.Lost`) for each chunk, as they complete."""
+        from distributed import as_completed
+        client = self.client()
+        chunks = list(chunks)
+        threads = max(1, sum(client.nthreads().values()))
+        queue = list(range(len(chunks)))[::-1]
+        pending = {}
+        stream = as_completed()
+        try:
+            def top_up():
+                while queue and len(pending) < self.in_flight * threads:
+                    position = queue.pop()
+                    future = client.submit(function, chunks[position], pure=False)
+                    pending[future] = position
+                    stream.add(future)
+            top_up()
+            for future in stream:
+                position = pending.pop(future)
+                if future.status == "finished":
+                    yield position, future.result()
+                else:
+                    exc = future.exception()
+                    name = type(exc).__name__
+                    message = (f"worker lost: {exc}" if name == "KilledWorker" else f"{name}: {exc}")
+                    yield position, Lost(message, exc if name != "KilledWorker" else None)
+                future.release()
+                top_up()
+        finally:
+            for future in pending:                           # interrupted: nothing keeps running for us
+                future.cancel()
+
+
+__all__ = ["DaskBackend"]

@@ -1,0 +1,104 @@
+"""Run an ensemble over parameter points on a backend, streaming rows chunk by chunk.
+
+An *ensemble* is a picklable object with ``row(index, point) -> dict`` (one point, the serial path),
+``rows(items) -> list[dict]`` (a chunk of (index, point) items, batched where it can be),
+``failed(index, point, message) -> dict`` (the row of a point that gave no result) and ``chunk_hint``
+(points per chunk). :class:`~converters.sweeps.ensemble.ModelSweep` is the converters' ensemble.
+
+Backends: ``serial`` (``row`` per point, here), ``batched`` (``rows`` per chunk, here), ``local``
+(:class:`.local.LocalBackend`, the default) or a Dask cluster (:class:`.cluster.DaskBackend`: an address
+``tcp://HOST:PORT`` or a ``dask.distributed.Client``). A chunk travels as its point indices and is turned
+into points where it runs, so memory holds the chunks in flight, never the whole sweep; a chunk a backend
+loses (a dead worker, a time limit) comes back as failed rows. Every backend gives the same rows.
+"""
+from __future__ import annotations
+
+import sys
+
+import numpy as np
+
+from ..errors import ParameterError
+from .local import LocalBackend, Lost
+
+BACKENDS = ("serial", "batched", "local")
+
+
+def backend_for(spec="local", *, workers: int | None = None):
+    """A backend from its name (serial, batched, local), a Dask address (tcp://...), a Dask Client, or a
+    backend object (returned as is)."""
+    if hasattr(spec, "map_chunks") or spec in ("serial", "batched"):
+        return spec
+    if spec == "local":
+        return LocalBackend(workers)
+    if isinstance(spec, str) and "://" in spec:
+        from .cluster import DaskBackend
+        return DaskBackend(spec)
+    if type(spec).__name__ == "Client":
+        from .cluster import DaskBackend
+        return DaskBackend(spec)
+    raise ParameterError(f"scheduler must be one of {', '.join(BACKENDS)} or a Dask address tcp://HOST:PORT; "
+                         f"got {spec!r}")
+
+
+class _Chunk:
+    """The work of one chunk where it runs: its indices -> points -> rows."""
+
+    def __init__(self, ensemble, points, serial: bool = False):
+        self.ensemble, self.points, self.serial = ensemble, points, serial
+
+    def __call__(self, indices):
+        items = self.points.points(indices)
+        if self.serial:
+            return [self.ensemble.row(i, point) for i, point in items]
+        return self.ensemble.rows(items)
+
+
+def run_ensemble(ensemble, points, *, backend="local", indices=None, chunk: int | None = None, on_rows=None,
+                 progress: bool = False, label: str = "sweep", workers: int | None = None):
+    """The ensemble's rows at ``points`` (a :class:`.points.Grid` or :class:`.points.LatinHypercube`).
+
+    Parameters
+    ----------
+    backend : str, backend object or dask.distributed.Client
+        Where the chunks run (module docstring).
+    indices : array of int, optional
+        The points to compute (default: all); a resumed sweep passes the missing ones.
+    chunk : int, optional
+        Points per chunk (default: the ensemble's ``chunk_hint``).
+    on_rows : callable, optional
+        ``on_rows(rows)`` for each finished chunk, as chunks finish (a writer streaming to disk); then
+        nothing is kept here and the number of rows is returned. Without it: the rows, by index.
+    progress : bool
+        A tqdm progress bar on stderr, in points.
+    """
+    backend = backend_for(backend, workers=workers)
+    indices = np.arange(points.size, dtype=np.int64) if indices is None else np.asarray(indices, dtype=np.int64)
+    chunk = chunk or ensemble.chunk_hint
+    if not (isinstance(chunk, (int, np.integer)) and chunk >= 1):
+        raise ParameterError(f"chunk must be an integer >= 1; got {chunk!r}")
+    chunks = [indices[i:i + chunk] for i in range(0, indices.size, chunk)]
+    kept: list = []
+    count = 0
+    from tqdm import tqdm
+    with tqdm(total=int(indices.size), desc=label, unit="pt", file=sys.stderr, disable=not progress,
+              smoothing=0.1) as bar:
+        if backend in ("serial", "batched"):
+            work = _Chunk(ensemble, points, serial=backend == "serial")
+            stream = ((k, work(c)) for k, c in enumerate(chunks))
+        else:
+            stream = backend.map_chunks(_Chunk(ensemble, points), chunks)
+        for position, rows in stream:
+            if isinstance(rows, Lost):
+                rows = [ensemble.failed(i, point, rows.message) for i, point in points.points(chunks[position])]
+            count += len(rows)
+            if on_rows is None:
+                kept.extend(rows)
+            else:
+                on_rows(rows)
+            bar.update(len(rows))
+    if on_rows is not None:
+        return count
+    return sorted(kept, key=lambda row: row["index"])
+
+
+__all__ = ["run_ensemble", "backend_for", "BACKENDS"]
