@@ -19,7 +19,7 @@ from converters.analysis.continuation import OrbitFamily, cascade
 from converters.methods.event import EventDriven
 from converters.models import get_model
 from converters.run import ParameterPath
-from converters.sweeps import default_workers
+from converters.parallel import default_workers
 from validation.bifurcation import diagram_method
 from validation.defaults import BIFURCATION
 

@@ -23,7 +23,7 @@ from converters.analysis.modes import HELD, held_fraction, mode_class, mode_inte
 from converters.errors import ParameterError
 from converters.models import analytic, get_converter
 from converters.run import steady_orbit
-from converters.sweeps import parallel_map
+from converters.parallel import parallel_map
 from netlists import SpiceOptions, build_netlist
 
 from .defaults import BOUNDARY_BAND, D_RANGE, K_RANGES  # noqa: F401 (re-exported for the report and tests)

@@ -209,7 +209,7 @@ def chattering_table(params: dict | None, speeds, workers: int | None = None):
     form), incomplete (impacts that do not accumulate before the next lift), or none, at each cam speed."""
     import pandas as pd
 
-    from converters.sweeps import parallel_map
+    from converters.parallel import parallel_map
     return pd.DataFrame(parallel_map(_Chattering(dict(params or {})), list(speeds), workers=workers))
 
 

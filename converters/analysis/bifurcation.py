@@ -13,7 +13,7 @@ cannot: lambda < 0 on a periodic attractor, > 0 on a chaotic one (nepers per swi
 
 Values are taken in contiguous chunks of ``chunk``; inside a chunk each value starts from the previous
 value's final state (the attractor followed along the path, so short transients suffice), the first one
-of a chunk from ``x0`` with twice the transient. Chunks run in parallel (:mod:`converters.sweeps`); the
+of a chunk from ``x0`` with twice the transient. Chunks run in parallel (:mod:`converters.parallel`); the
 result does not depend on the number of workers.
 """
 from __future__ import annotations
@@ -23,7 +23,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..errors import ParameterError
-from ..sweeps import parallel_map
+from ..parallel import parallel_map
 
 
 @dataclass(frozen=True)

@@ -60,7 +60,11 @@ class ModelSweep:
 
     def __post_init__(self):
         from ..models import get_model
-        get_model(self.model, self.control).resolve(self.base)
+        model = get_model(self.model, self.control)
+        p = model.resolve(self.base)
+        if self.steady and not np.isfinite(model.problem(p, 1.0).period):
+            raise ParameterError(f"steady: {model.key} switches on its state, with no forcing period to shoot over; "
+                                 "sweep it without --steady (periods from rest, measured over the last one)")
         if self.method not in ("lcp", "event"):
             raise ParameterError(f"method must be lcp or event for a sweep; got {self.method!r}")
         if not 0.0 < self.h_fraction < 1.0:
@@ -218,8 +222,8 @@ def orbit_row(model, p: dict, run) -> dict:
     run = replace(run, labels=model.labels(p))
     t0, t1 = run.t[0], run.t[-1]
     intervals = orbit_intervals(run)
-    return {"vout_mean": run.mean("vout", t0=t0, t1=t1), "vout_ripple": run.ripple("vout", t0=t0, t1=t1),
-            "rms_state0": run.rms(run.state_names[0], t0=t0, t1=t1), "mode": mode_class(intervals),
+    return {"vout_mean": float(run.mean("vout", t0=t0, t1=t1)), "vout_ripple": float(run.ripple("vout", t0=t0, t1=t1)),
+            "rms_state0": float(run.rms(run.state_names[0], t0=t0, t1=t1)), "mode": mode_class(intervals),
             "held_fraction": held_fraction(intervals, 1.0)}
 
 

@@ -7,11 +7,11 @@ import sys
 
 from converters.errors import PcsuiteError
 
-from . import bench, bifurcation, compare, gdcm, gdcm_map, lcp, listing, mech, netlist, report, simulate
+from . import bench, bifurcation, compare, gdcm, gdcm_map, lcp, listing, mech, netlist, report, simulate, sweep
 
 EXIT_BAD_INPUT = 2
 #: The subcommands, in the order ``pcsuite --help`` lists them.
-SUBCOMMANDS = (listing, simulate, lcp, compare, gdcm, gdcm_map, bifurcation, mech, netlist, report, bench)
+SUBCOMMANDS = (listing, simulate, lcp, compare, gdcm, gdcm_map, sweep, bifurcation, mech, netlist, report, bench)
 
 
 def main(argv=None) -> int:

@@ -54,7 +54,7 @@ class _Chunk:
 
 
 def run_ensemble(ensemble, points, *, backend="local", indices=None, chunk: int | None = None, on_rows=None,
-                 progress: bool = False, label: str = "sweep", workers: int | None = None):
+                 progress: bool = False, label: str = "sweep", workers: int | None = None, done: int = 0):
     """The ensemble's rows at ``points`` (a :class:`.points.Grid` or :class:`.points.LatinHypercube`).
 
     Parameters
@@ -69,7 +69,7 @@ def run_ensemble(ensemble, points, *, backend="local", indices=None, chunk: int 
         ``on_rows(rows)`` for each finished chunk, as chunks finish (a writer streaming to disk); then
         nothing is kept here and the number of rows is returned. Without it: the rows, by index.
     progress : bool
-        A tqdm progress bar on stderr, in points.
+        A tqdm progress bar on stderr, in points (``done``: points already computed, a resumed sweep's).
     """
     backend = backend_for(backend, workers=workers)
     indices = np.arange(points.size, dtype=np.int64) if indices is None else np.asarray(indices, dtype=np.int64)
@@ -80,7 +80,7 @@ def run_ensemble(ensemble, points, *, backend="local", indices=None, chunk: int 
     kept: list = []
     count = 0
     from tqdm import tqdm
-    with tqdm(total=int(indices.size), desc=label, unit="pt", file=sys.stderr, disable=not progress,
+    with tqdm(total=int(indices.size) + done, initial=done, desc=label, unit="pt", file=sys.stderr, disable=not progress,
               smoothing=0.1) as bar:
         if backend in ("serial", "batched"):
             work = _Chunk(ensemble, points, serial=backend == "serial")

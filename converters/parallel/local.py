@@ -29,6 +29,14 @@ def default_workers() -> int:
         return max(1, os.cpu_count() or 1)
 
 
+def _worker_signals():
+    """A worker leaves SIGINT to its parent (a Ctrl-C reaches the whole process group: the parent stops the
+    workers itself, without a traceback from each) and dies at SIGTERM whatever handler it inherited."""
+    import signal
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
 def _context():
     # fork: the worker needs nothing re-imported (works from scripts, stdin and notebooks alike)
     return multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
@@ -65,7 +73,7 @@ class ProcessSlot:
         if self._pool is not None and self.tasks_per_process is not None and self._tasks >= self.tasks_per_process:
             self.close()
         if self._pool is None:
-            self._pool = futures.ProcessPoolExecutor(max_workers=1, mp_context=_context())
+            self._pool = futures.ProcessPoolExecutor(max_workers=1, mp_context=_context(), initializer=_worker_signals)
             self._tasks = 0
         self._tasks += 1
         return self._pool.submit(function, *args)

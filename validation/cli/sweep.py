@@ -1,0 +1,124 @@
+"""``pcsuite sweep MODEL --grid NAME=START:STOP:COUNT ...``: a model's steady state over a grid or a Latin
+hypercube of parameter points, one row per point, streamed to a Parquet dataset that an interrupted run
+resumes."""
+from __future__ import annotations
+
+import json
+import signal
+import sys
+from pathlib import Path
+
+from converters.errors import ParameterError
+
+from .common import add_params
+
+EXIT_INTERRUPTED = 130
+
+
+def add(sub) -> None:
+    from converters.models import CONTROLS
+    sw = sub.add_parser("sweep", help="a model over a grid of parameter points: one row per point (Parquet), "
+                                      "resumable, on this machine's cores or a Dask cluster")
+    sw.add_argument("model", help="the converter (buck, boost, buck-boost, cuk, prc)")
+    sw.add_argument("--grid", action="append", default=[], metavar="NAME=START:STOP:COUNT[:log]",
+                    help="a swept parameter (repeatable: the full grid of all of them; SPICE suffixes allowed)")
+    sw.add_argument("--lhs", type=int, default=None, metavar="N",
+                    help="N Latin-hypercube points over the --grid ranges instead of the full grid (COUNT optional)")
+    sw.add_argument("--seed", type=int, default=0, help="the Latin hypercube's seed (default 0)")
+    add_params(sw)
+    sw.add_argument("--control", default="pwm", choices=list(CONTROLS), help="the control law (default pwm)")
+    sw.add_argument("--method", default="lcp", choices=["lcp", "event", "spice"],
+                    help="lcp: the stepper, h = T/200 (default; batched); event: exact switching; spice: ngspice")
+    sw.add_argument("--steady", action="store_true",
+                    help="measure on the periodic orbit (lcp, event: Newton shooting; spice: started on the LCP's "
+                         "orbit); without it: --periods periods from rest, measured over the last one")
+    sw.add_argument("--periods", type=int, default=None,
+                    help="periods simulated (default 50 from rest; spice: 10, from the orbit with --steady)")
+    sw.add_argument("--h-fraction", type=float, default=1.0 / 200.0, help="lcp: step h / T (default 1/200)")
+    sw.add_argument("--scheduler", default="local",
+                    help="local (this machine's processes, default), serial, batched (one process), or a Dask "
+                         "scheduler tcp://HOST:PORT")
+    sw.add_argument("--workers", type=int, default=None, help="local: processes (default: every core)")
+    sw.add_argument("--chunk", type=int, default=None, help="points per task (default: 500 batched, 2 ngspice)")
+    sw.add_argument("--out", type=Path, default=None,
+                    help="the sweep directory (default sweep-MODEL); an interrupted sweep resumes from it")
+    sw.add_argument("--metric", default="vout_mean", help="the summary plot's metric (default vout_mean)")
+    sw.add_argument("--no-progress", action="store_true", help="no progress bar")
+    sw.add_argument("--json", action="store_true", help="print one JSON summary object")
+    sw.set_defaults(run=run)
+
+
+def build(args):
+    """The ensemble and the points the arguments ask for (every value checked before anything runs)."""
+    from converters.params import parse_assignments
+    from converters.sweeps import Axis, Grid, LatinHypercube, ModelSweep
+    from converters.validate import parse_value
+
+    from ..sweep import SpiceSweep
+    base = {k: parse_value(k, v) for k, v in parse_assignments(args.params).items()}
+    if args.lhs is not None:
+        points = LatinHypercube([Axis.parse(g, count_required=False) for g in args.grid], args.lhs, args.seed)
+    else:
+        points = Grid([Axis.parse(g) for g in args.grid])
+    clash = sorted(set(base) & set(points.names))
+    if clash:
+        raise ParameterError(f"{clash[0]} is both swept (--grid) and fixed (-p); give it once")
+    if args.periods is not None and args.periods < 1:
+        raise ParameterError(f"--periods must be an integer >= 1; got {args.periods}")
+    if args.method == "spice":
+        ensemble = SpiceSweep(args.model, args.control, base, steady=args.steady, periods=args.periods or 10)
+    else:
+        ensemble = ModelSweep(args.model, args.control, base, method=args.method, h_fraction=args.h_fraction,
+                              steady=args.steady, periods=args.periods or 50)
+    if args.metric not in ensemble.measures or ensemble.measures[args.metric] is str:
+        numeric = [k for k, t in ensemble.measures.items() if t is not str]
+        raise ParameterError(f"--metric must be one of {', '.join(numeric)}; got {args.metric!r}")
+    return ensemble, points
+
+
+def run(args) -> int:
+    from converters.parallel import backend_for
+
+    from ..sweep import run_sweep, write_summary
+    ensemble, points = build(args)
+    if args.workers is not None and args.workers < 1:
+        raise ParameterError(f"--workers must be an integer >= 1; got {args.workers}")
+    if args.chunk is not None and args.chunk < 1:
+        raise ParameterError(f"--chunk must be an integer >= 1; got {args.chunk}")
+    backend = backend_for(args.scheduler, workers=args.workers)
+    out = args.out or Path(f"sweep-{args.model}")
+    previous = signal.signal(signal.SIGTERM, _interrupt)          # a terminated sweep stops like an interrupted one
+    try:
+        result = run_sweep(ensemble, points, out, backend=backend, chunk=args.chunk, progress=not args.no_progress)
+    except KeyboardInterrupt:
+        from ..sweep import load_sweep
+        stored = len(load_sweep(out)) if (out / "sweep.json").exists() else 0
+        print(f"pcsuite: interrupted: {stored:,} of {points.size:,} points are stored in {out}; run the same command "
+              "to compute the rest", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+        if hasattr(backend, "close"):
+            backend.close()
+    title = f"{ensemble.model} ({args.method}{', steady' if args.steady else ''}): {args.metric}"
+    frame = write_summary(out, points, args.metric, title)
+    failed = frame[frame["status"] != "ok"]
+    summary = {"out": str(out), "points": points.size, "stored_before": result.on_disk_before,
+               "computed": result.computed, "ok": int(len(frame) - len(failed)), "failed": int(len(failed)),
+               "wall_s": result.wall_s, "points_per_s": result.rate,
+               "failures": failed["message"].value_counts().head(5).to_dict(),
+               "dataset": str(out / "parts"), "summary_plot": str(out / "summary.png")}
+    if args.json:
+        print(json.dumps(summary, default=float))
+        return 0
+    print(f"  {points.size:,} points: {summary['ok']:,} ok, {summary['failed']:,} failed "
+          f"({result.on_disk_before:,} already stored, {result.computed:,} computed in {result.wall_s:.2f} s, "
+          f"{result.rate:,.0f} points/s)")
+    for message, count in summary["failures"].items():
+        print(f"  failed x{count}: {message}")
+    print(f"  dataset: {summary['dataset']}  (pandas.read_parquet)\n  plot:    {summary['summary_plot']}")
+    return 0
+
+
+def _interrupt(signum, frame):
+    raise KeyboardInterrupt

@@ -1,0 +1,332 @@
+"""Sweeps on disk: an ensemble's rows streamed into a Parquet dataset that survives an interruption.
+
+Layout of a sweep directory::
+
+    DIR/sweep.json          what was asked (model, method, parameters, points): the sweep's identity
+    DIR/parts/*.parquet     one part per finished chunk, each written atomically (whole or absent)
+    DIR/summary.png         a metric over the grid (written when the sweep completes)
+    DIR/.lock               held while a process writes (a second writer is refused)
+
+Resuming is running the same sweep into the same directory: the indices already on disk are skipped, so an
+interrupted sweep (SIGINT, a killed process, a lost machine) computes only its missing points and ends with
+the dataset an uninterrupted run writes. A directory holding a different sweep, or anything else, is
+refused, never overwritten. Read a sweep back with :func:`load_sweep` (or ``pandas.read_parquet(DIR /
+"parts")``).
+
+:class:`SpiceSweep` is the ensemble of ngspice runs (the same circuits as netlists): per point, the LCP's
+periodic orbit as the initial condition (``steady``) or rest, ``periods`` periods in ngspice, the measures
+over the last one. A failed ngspice run ("timestep too small") is a row; every run goes through the
+recycled, time-limited ngspice worker of :mod:`.spice` inside whichever worker holds the chunk.
+"""
+from __future__ import annotations
+
+import io
+import json
+import time
+import uuid
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from converters.errors import ParameterError
+from converters.parallel import run_ensemble
+from converters.sweeps import failed_row
+
+from .io import atomic_write_bytes, atomic_write_text
+
+MANIFEST = "sweep.json"
+PARTS = "parts"
+FORMAT = 1
+
+
+# --- the ngspice ensemble -----------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class SpiceSweep:
+    """Rows of ``model`` (under ``control``) in ngspice: ``base`` parameters overlaid with each point's."""
+
+    model: str
+    control: str = "pwm"
+    base: dict = field(default_factory=dict)
+    steady: bool = True
+    periods: int = 10
+    reltol: float = 1e-3
+
+    measures = {"vout_mean": float, "vout_ripple": float, "rms_state0": float, "mode": str, "held_fraction": float,
+                "settle": float, "spice_steps": int}
+    chunk_hint = 2
+
+    def __post_init__(self):
+        from netlists import SpiceOptions, model_netlist
+        model = self._model()
+        p = model.resolve(self.base)
+        if not (isinstance(self.periods, int) and self.periods >= 2):
+            raise ParameterError(f"periods must be an integer >= 2 for an ngspice sweep; got {self.periods!r}")
+        model_netlist(model, p, 2 * model.period(p), SpiceOptions(reltol=self.reltol))   # refuses a model without one
+        if self.steady and not np.isfinite(model.problem(p, 1.0).period):
+            raise ParameterError(f"steady: {model.key} switches on its state, with no forcing period to shoot over; "
+                                 "sweep it without --steady")
+
+    def _model(self):
+        from converters.models import get_model
+        return get_model(self.model, self.control)
+
+    def validate(self, point: dict) -> None:
+        self._model().resolve({**self.base, **point})
+
+    def failed(self, index: int, point: dict, message: str) -> dict:
+        return failed_row(index, point, message)
+
+    def row(self, index: int, point: dict) -> dict:
+        from converters.analysis.modes import held_fraction, mode_class
+        from converters.run import make_method, steady_state
+        from netlists import SpiceOptions, model_netlist
+
+        from .gdcm import spice_intervals
+        from .spice import SpiceError, run_spice, spice_trajectory
+        clock = time.perf_counter()
+        try:
+            model = self._model()
+            p = model.resolve({**self.base, **point})
+            T = model.period(p)
+            x0 = steady_state(model, p, make_method(model, p, "lcp", None)).x0 if self.steady else None
+            netlist = model_netlist(model, p, self.periods * T, SpiceOptions(reltol=self.reltol), x0=x0)
+            result = run_spice(netlist)
+            start = netlist.t_end - T
+            run = spice_trajectory(model, p, netlist, result, start)
+            intervals = spice_intervals(model, netlist, result, 1)
+            previous = run.mean("vout", t0=start - T, t1=start)
+            mean = run.mean("vout", t0=start)
+            return {"index": int(index), **{k: float(v) for k, v in point.items()}, "status": "ok", "message": "",
+                    "vout_mean": float(mean), "vout_ripple": float(run.ripple("vout", t0=start)),
+                    "rms_state0": float(run.rms(model.state_names[0], t0=start)), "mode": mode_class(intervals),
+                    "held_fraction": held_fraction(intervals, 1.0),
+                    "settle": float(abs(mean - previous) / max(abs(mean), 1e-12)), "spice_steps": int(run.steps),
+                    "wall_s": time.perf_counter() - clock}
+        except (SpiceError, ValueError, RuntimeError, ArithmeticError) as exc:
+            first = str(exc).splitlines()[0] if str(exc) else ""
+            return failed_row(index, point, f"{type(exc).__name__}: {first[:300]}", time.perf_counter() - clock)
+
+    def rows(self, items) -> list[dict]:
+        from .spice import close_spice_worker
+        try:
+            return [self.row(i, point) for i, point in items]
+        finally:
+            close_spice_worker()          # the chunk's ngspice process ends with the chunk (no orphan)
+
+
+# --- the dataset --------------------------------------------------------------------------------------------
+
+def describe(ensemble, points) -> dict:
+    """The identity of a sweep: what is computed at which points (compared on resume)."""
+    return {"format": FORMAT, "ensemble": type(ensemble).__name__, **json.loads(json.dumps(asdict(ensemble))),
+            "points": points.describe(), "size": int(points.size)}
+
+
+def schema(ensemble, names):
+    import pyarrow as pa
+    kinds = {float: pa.float64(), int: pa.int64(), str: pa.string(), bool: pa.bool_()}
+    fields = [("index", pa.int64()), *[(n, pa.float64()) for n in names], ("status", pa.string()),
+              ("message", pa.string()), *[(k, kinds[t]) for k, t in ensemble.measures.items()],
+              ("wall_s", pa.float64())]
+    return pa.schema(fields)
+
+
+class SweepStore:
+    """A sweep directory (module docstring): claim it, find what is done, add parts, read it back."""
+
+    def __init__(self, out, identity: dict, arrow_schema):
+        self.out = Path(out)
+        self.identity, self.schema = identity, arrow_schema
+        self._lock = None
+
+    @property
+    def parts(self) -> Path:
+        return self.out / PARTS
+
+    def claim(self) -> np.ndarray:
+        """Take the directory (create it, or check it holds this very sweep) and return the indices on disk."""
+        out = self.out
+        if out.exists() and not out.is_dir():
+            raise ParameterError(f"--out must be a directory; {str(out)!r} is a file")
+        manifest = out / MANIFEST
+        if out.exists() and any(out.iterdir()) and not manifest.exists():
+            raise ParameterError(f"--out {str(out)!r} is a non-empty directory that holds no sweep; choose a new "
+                                 "or empty directory (nothing was written)")
+        if manifest.exists():
+            try:
+                held = json.loads(manifest.read_text())
+            except (OSError, ValueError) as exc:
+                raise ParameterError(f"--out {str(out)!r}: its {MANIFEST} is unreadable ({exc}); choose another "
+                                     "directory") from None
+            if held != self.identity:
+                keys = sorted(k for k in set(held) | set(self.identity) if held.get(k) != self.identity.get(k))
+                diff = "; ".join(f"{k}: {held.get(k)!r} on disk, {self.identity.get(k)!r} asked" for k in keys[:3])
+                raise ParameterError(f"--out {str(out)!r} holds a different sweep ({diff}); resume it with the same "
+                                     "arguments or choose another directory (nothing was changed)")
+        out.mkdir(parents=True, exist_ok=True)
+        self._take_lock()
+        if not manifest.exists():
+            atomic_write_text(manifest, json.dumps(self.identity, indent=1) + "\n")
+        return self.done()
+
+    def _take_lock(self):
+        import fcntl
+        handle = open(self.out / ".lock", "a+")
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            handle.close()
+            raise ParameterError(f"--out {str(self.out)!r}: another process is writing this sweep; wait for it or "
+                                 "choose another directory") from None
+        self._lock = handle
+
+    def release(self):
+        if self._lock is not None:
+            self._lock.close()
+            self._lock = None
+
+    def done(self) -> np.ndarray:
+        """The indices already stored (sorted)."""
+        if not self.parts.is_dir():
+            return np.empty(0, dtype=np.int64)
+        import pyarrow.parquet as pq
+        found = [pq.read_table(path, columns=["index"]).column(0).to_numpy() for path in sorted(self.parts.glob("*.parquet"))]
+        return np.sort(np.concatenate(found)).astype(np.int64) if found else np.empty(0, dtype=np.int64)
+
+    def write(self, rows: list[dict]) -> None:
+        """One part, atomically."""
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+        table = pa.Table.from_pylist(rows, schema=self.schema)
+        buffer = io.BytesIO()
+        pq.write_table(table, buffer)
+        first = min(row["index"] for row in rows)
+        atomic_write_bytes(self.parts / f"part-{first:09d}-{uuid.uuid4().hex[:8]}.parquet", buffer.getvalue())
+
+
+def load_sweep(out) -> pd.DataFrame:
+    """A sweep's rows by index (all parts on disk, complete or not)."""
+    parts = Path(out) / PARTS
+    if not (Path(out) / MANIFEST).exists():
+        raise ParameterError(f"{str(out)!r} holds no sweep ({MANIFEST} missing)")
+    files = sorted(parts.glob("*.parquet")) if parts.is_dir() else []
+    if not files:
+        return pd.DataFrame()
+    frame = pd.concat([pd.read_parquet(f) for f in files], ignore_index=True)
+    return frame.sort_values("index", kind="stable").reset_index(drop=True)
+
+
+@dataclass
+class SweepRun:
+    out: Path
+    size: int
+    on_disk_before: int
+    computed: int
+    wall_s: float
+    interrupted: bool = False
+
+    @property
+    def rate(self) -> float:
+        return self.computed / self.wall_s if self.wall_s > 0 else float("nan")
+
+
+def run_sweep(ensemble, points, out, *, backend="local", workers: int | None = None, chunk: int | None = None,
+              progress: bool = True) -> SweepRun:
+    """Compute the points of ``points`` not yet in ``out`` and stream their rows there (module docstring).
+
+    The axes' end values are checked against the model's ranges before anything is written. An interruption
+    (KeyboardInterrupt, SystemExit) stops the workers and leaves every finished chunk on disk; it propagates
+    after the store is released."""
+    for axis in points.axes:
+        for value in (axis.start, axis.stop):
+            ensemble.validate({axis.name: value})
+    store = SweepStore(out, describe(ensemble, points), schema(ensemble, points.names))
+    done = store.claim()
+    try:
+        missing = np.setdiff1d(np.arange(points.size, dtype=np.int64), done, assume_unique=False)
+        clock = time.perf_counter()
+        computed = run_ensemble(ensemble, points, backend=backend, workers=workers, indices=missing, chunk=chunk,
+                                on_rows=store.write, progress=progress, label=f"sweep {ensemble.model}",
+                                done=int(done.size))
+        return SweepRun(Path(out), int(points.size), int(done.size), int(computed), time.perf_counter() - clock)
+    finally:
+        store.release()
+
+
+# --- the summary plot ---------------------------------------------------------------------------------------
+
+def summary_plot(frame: pd.DataFrame, points, metric: str = "vout_mean", title: str = "") -> bytes:
+    """``metric`` over the sweep: a line over a 1-D grid, a map over a 2-D grid (failed points grey, the
+    conduction-mode boundaries drawn over it), a scatter over the first two parameters otherwise; failed
+    points marked."""
+    from .plots import plt, png
+    names = points.names
+    ok = frame["status"] == "ok"
+    values = pd.to_numeric(frame[metric], errors="coerce") if metric in frame else pd.Series(np.nan, index=frame.index)
+    if points.kind == "grid" and len(names) == 1:
+        axis = points.axes[0]
+        fig, ax = plt.subplots(figsize=(7, 4))
+        ax.plot(frame[names[0]][ok], values[ok], ".-", lw=1, ms=3, label=metric)
+        if (~ok).any():
+            low = np.nanmin(values[ok]) if ok.any() else 0.0
+            ax.plot(frame[names[0]][~ok], np.full((~ok).sum(), low), "x", color="#c44e52", label="failed")
+        for mode in sorted(set(frame["mode"][ok].dropna())) if "mode" in frame else []:
+            sel = ok & (frame["mode"] == mode)
+            ax.plot(frame[names[0]][sel], values[sel], "o", ms=4, alpha=0.5, label=f"mode {mode}")
+        ax.set_xscale("log" if axis.log else "linear")
+        ax.set_xlabel(names[0])
+        ax.set_ylabel(metric)
+        ax.legend(fontsize=8)
+    elif points.kind == "grid" and len(names) == 2:
+        shape = points.shape
+        full = np.full(points.size, np.nan)
+        full[frame["index"].to_numpy()[ok.to_numpy()]] = values[ok].to_numpy()
+        grid = full.reshape(shape)
+        xs, ys = points.axes[1].values(), points.axes[0].values()
+        fig, ax = plt.subplots(figsize=(7, 5))
+        ax.set_facecolor("#bbbbbb")                       # failed or missing points show through in grey
+        mesh = ax.pcolormesh(xs, ys, np.ma.masked_invalid(grid), shading="nearest", cmap="viridis")
+        fig.colorbar(mesh, ax=ax, label=metric)
+        if "mode" in frame and frame["mode"][ok].nunique() > 1:
+            codes = {m: k for k, m in enumerate(sorted(frame["mode"][ok].unique()))}
+            code = np.full(points.size, np.nan)
+            code[frame["index"].to_numpy()[ok.to_numpy()]] = [codes[m] for m in frame["mode"][ok]]
+            ax.contour(xs, ys, code.reshape(shape), levels=np.arange(len(codes) - 1) + 0.5, colors="white",
+                       linewidths=1.2)
+            where = np.unravel_index(np.arange(points.size), shape)
+            for mode, k in codes.items():                 # each mode named at the middle of its region
+                sel = code == k
+                ax.text(np.median(xs[where[1][sel]]), np.median(ys[where[0][sel]]), mode, color="white",
+                        ha="center", va="center", fontsize=9, weight="bold")
+            ax.set_title("white lines: conduction-mode boundaries", fontsize=9)
+        ax.set_xscale("log" if points.axes[1].log else "linear")
+        ax.set_yscale("log" if points.axes[0].log else "linear")
+        ax.set_xlabel(names[1])
+        ax.set_ylabel(names[0])
+    else:
+        fig, ax = plt.subplots(figsize=(7, 5))
+        second = names[1] if len(names) > 1 else names[0]
+        sc = ax.scatter(frame[names[0]][ok], frame[second][ok], c=values[ok], s=12, cmap="viridis")
+        fig.colorbar(sc, ax=ax, label=metric)
+        if (~ok).any():
+            ax.plot(frame[names[0]][~ok], frame[second][~ok], "x", color="#c44e52", label="failed")
+            ax.legend(fontsize=8)
+        ax.set_xlabel(names[0])
+        ax.set_ylabel(second)
+    failed = int((~ok).sum())
+    fig.suptitle(f"{title}  ({len(frame)} points, {failed} failed)", fontsize=10)
+    return png(fig)
+
+
+def write_summary(out, points, metric: str = "vout_mean", title: str = "") -> pd.DataFrame:
+    """The summary plot of a complete sweep, written atomically beside its parts."""
+    frame = load_sweep(out)
+    atomic_write_bytes(Path(out) / "summary.png", summary_plot(frame, points, metric, title))
+    return frame
+
+
+__all__ = ["SpiceSweep", "SweepStore", "SweepRun", "run_sweep", "load_sweep", "summary_plot", "write_summary",
+           "describe"]
