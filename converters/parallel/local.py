@@ -29,12 +29,26 @@ def default_workers() -> int:
         return max(1, os.cpu_count() or 1)
 
 
-def _worker_signals():
+def _worker_init(parent: int):
     """A worker leaves SIGINT to its parent (a Ctrl-C reaches the whole process group: the parent stops the
-    workers itself, without a traceback from each) and dies at SIGTERM whatever handler it inherited."""
+    workers itself, without a traceback from each), dies at SIGTERM whatever handler it inherited, and ends
+    itself when its parent is gone (killed with SIGKILL, nothing left to stop it): no orphan runs on.
+
+    The watch is a thread polling the parent's pid, not ``PR_SET_PDEATHSIG`` (which fires when the *thread*
+    that forked ends, and pools fork from whichever thread submits)."""
     import signal
+    import threading
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+    def watch():
+        while os.getppid() == parent:
+            time.sleep(_PARENT_POLL_S)
+        os._exit(1)
+    threading.Thread(target=watch, name="parent-watch", daemon=True).start()
+
+
+_PARENT_POLL_S = 0.2
 
 
 def _context():
@@ -73,7 +87,8 @@ class ProcessSlot:
         if self._pool is not None and self.tasks_per_process is not None and self._tasks >= self.tasks_per_process:
             self.close()
         if self._pool is None:
-            self._pool = futures.ProcessPoolExecutor(max_workers=1, mp_context=_context(), initializer=_worker_signals)
+            self._pool = futures.ProcessPoolExecutor(max_workers=1, mp_context=_context(),
+                                                     initializer=_worker_init, initargs=(os.getpid(),))
             self._tasks = 0
         self._tasks += 1
         return self._pool.submit(function, *args)
