@@ -8,8 +8,6 @@ from __future__ import annotations
 
 import atexit
 import concurrent.futures as futures
-import multiprocessing
-import os
 import re
 import time
 from dataclasses import dataclass, field
@@ -17,6 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from converters.errors import SimulationError
+from converters.parallel import ProcessSlot
 from netlists import Netlist
 
 RUNS_PER_WORKER = 10
@@ -87,44 +86,22 @@ def _worker(text: str) -> dict:
 
 
 class SpiceRunner:
-    """A recycled worker process for ngspice runs."""
+    """ngspice runs in one recycled worker process (:class:`converters.parallel.ProcessSlot`: a fresh
+    process every ``RUNS_PER_WORKER`` runs, terminated past ``TIMEOUT_S``, ending with its parent)."""
 
     def __init__(self):
-        self._pool = None
-        self._runs = 0
-        self._owner = os.getpid()
-
-    def _forget_inherited(self):
-        """In a forked child the parent's pool object is a copy whose worker belongs to the parent:
-        shutting it down here would send the parent's worker its exit sentinel. Forget it instead."""
-        if self._owner != os.getpid():
-            self._pool = None
-            self._owner = os.getpid()
-
-    def _executor(self):
-        self._forget_inherited()
-        if self._pool is None:
-            # fork: the worker needs nothing re-imported (works from scripts, stdin and notebooks alike);
-            # it never touches the parent's state, and only the worker ever loads libngspice.
-            method = "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
-            self._pool = futures.ProcessPoolExecutor(max_workers=1, mp_context=multiprocessing.get_context(method))
-            self._runs = 0
-        return self._pool
+        # fork: the worker needs nothing re-imported; only the worker ever loads libngspice.
+        self._slot = ProcessSlot(tasks_per_process=RUNS_PER_WORKER)
 
     def run(self, netlist: Netlist) -> SpiceResult:
         if not isinstance(netlist, Netlist):
             raise TypeError("run() takes a netlists.Netlist (built from validated parameters)")
-        if self._runs >= RUNS_PER_WORKER:
-            self.close()  # a fresh worker returns PySpice's accumulated memory to the system
         try:
-            out = self._executor().submit(_worker, netlist.text).result(timeout=TIMEOUT_S)
-            self._runs += 1
+            out = self._slot.call(_worker, netlist.text, timeout=TIMEOUT_S)
         except futures.process.BrokenProcessPool:
-            self._pool = None
             raise SpiceError(f"ngspice worker crashed while simulating {netlist.converter}; the run is lost, "
                              "the caller is unaffected (try a larger TMAX or METHOD=gear)") from None
         except futures.TimeoutError:
-            self._kill()
             raise SpiceError(f"ngspice did not finish {netlist.converter} within {TIMEOUT_S:g} s") from None
         if "error" in out:
             reason = _reason(out["log"]) or out["error"]
@@ -137,20 +114,8 @@ class SpiceRunner:
                            accepted_steps=out["accepted"], log=out["log"],
                            options={**netlist.options.__dict__, "t_end": netlist.t_end})
 
-    def _kill(self):
-        """Terminate a hung worker (close() would wait for it)."""
-        self._forget_inherited()
-        if self._pool is not None:
-            for process in list(getattr(self._pool, "_processes", {}).values()):
-                process.terminate()
-            self._pool.shutdown(wait=False, cancel_futures=True)
-            self._pool = None
-
     def close(self):
-        self._forget_inherited()
-        if self._pool is not None:
-            self._pool.shutdown(wait=True, cancel_futures=True)
-            self._pool = None
+        self._slot.close()
 
 
 def _reason(log: str) -> str:

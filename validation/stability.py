@@ -17,14 +17,13 @@ Checks per run (``PERIODS`` periods from rest; 2 periods for h = 1e-6 T):
 """
 from __future__ import annotations
 
-import concurrent.futures as futures
-import multiprocessing
 import time
 
 import numpy as np
 import pandas as pd
 
 from converters.models import get_converter
+from converters.parallel import parallel_map
 
 from .defaults import STABILITY_BASE
 
@@ -141,29 +140,25 @@ def _in_worker(args):
 
 
 def stability_table(methods=METHODS, cases=None, progress: bool = True) -> pd.DataFrame:
-    """Every (extreme case, method) run in its own process with a time limit; one row each."""
-    from tqdm import tqdm
+    """Every (extreme case, method) run in its own process with a time limit, one at a time (a run's
+    time is its own); one row each. A run past ``TIMEOUT_S`` is terminated (status ``timeout``), one whose
+    process dies is ``crashed`` (not retried: the crash is the verdict)."""
     cases = extreme_cases() if cases is None else cases
     jobs = [(c, m) for c in cases for m in methods if m.startswith("LCP") or c["vary"] != "h"]
-    context = multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
-    rows = []
-    for case, method in tqdm(jobs, desc="stability", unit="run", disable=not progress):
-        pool = futures.ProcessPoolExecutor(max_workers=1, mp_context=context)
-        try:
-            out = pool.submit(_in_worker, (case, method)).result(timeout=TIMEOUT_S)
-        except futures.TimeoutError:
-            for process in list(getattr(pool, "_processes", {}).values()):
-                process.terminate()
-            out = {"status": "timeout", "error": f"did not finish within {TIMEOUT_S:g} s"}
-        except futures.process.BrokenProcessPool:
-            out = {"status": "crashed", "error": "the worker process died"}
-        finally:
-            pool.shutdown(wait=False, cancel_futures=True)
-        rows.append({"vary": case["vary"], "value": case["value"],
-                     "h": f"{case['h_fraction']:g} T" if method.startswith("LCP") else "", "method": method, **out})
+    outs = parallel_map(_in_worker, jobs, workers=1, timeout=TIMEOUT_S, tasks_per_process=1, attempts=1,
+                        progress=progress, label="stability", unit="run", on_lost=_lost_run)
+    rows = [{"vary": case["vary"], "value": case["value"],
+             "h": f"{case['h_fraction']:g} T" if method.startswith("LCP") else "", "method": method, **out}
+            for (case, method), out in zip(jobs, outs)]
     table = pd.DataFrame(rows)
     table["verdict"] = [_verdict(r) for r in table.itertuples()]
     return table
+
+
+def _lost_run(job, message: str) -> dict:
+    if message.startswith("timeout"):
+        return {"status": "timeout", "error": f"did not finish within {TIMEOUT_S:g} s"}
+    return {"status": "crashed", "error": "the worker process died"}
 
 
 def _verdict(row) -> str:

@@ -3,11 +3,8 @@ a report section. A failing scene becomes a failed section with its reason; it n
 """
 from __future__ import annotations
 
-import concurrent.futures as futures
 import html
 import io
-import multiprocessing
-import sys
 import time
 import traceback
 from dataclasses import dataclass, field
@@ -17,6 +14,7 @@ import pandas as pd
 
 from converters.analysis.modes import HELD
 from converters.models import analytic, get_converter
+from converters.parallel import parallel_map
 from netlists import SpiceOptions
 
 from .compare import compare
@@ -173,34 +171,26 @@ def scenes_summary(results: list[SceneResult]) -> Section:
 
 def _job(item):
     kind, payload = item
-    try:
-        if kind == "scene":
-            return run_scene(payload)
-        title, builder = payload
-        return run_section(builder, title)
-    finally:
-        close_spice_worker()
+    if kind == "scene":
+        return run_scene(payload)
+    title, builder = payload
+    return run_section(builder, title)
+
+
+def _failed_job(item, message: str):
+    """A job whose worker died or raised: a failed scene or section with the reason, never an abort."""
+    kind, payload = item
+    reason = f"worker failed: {message}"
+    return (SceneResult(payload, ok=False, reason=reason) if kind == "scene"
+            else Section(payload[0], f"<p>{html.escape(reason)}</p>", ok=False))
 
 
 def run_suite(suite: str, sections=(), workers: int = 2, progress: bool = True):
-    """Run the suite's scenes and extra report sections in a process pool; results in input order."""
+    """Run the suite's scenes and extra report sections in parallel processes (each job's ngspice worker
+    shut down after it); results in input order."""
     jobs = [("scene", s) for s in scenes_of(suite)] + [("section", sec) for sec in sections]
-    context = multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
-    results = [None] * len(jobs)
-    from tqdm import tqdm
-    with futures.ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
-        pending = {pool.submit(_job, job): i for i, job in enumerate(jobs)}
-        with tqdm(total=len(jobs), desc=f"suite {suite}", unit="job", file=sys.stderr, disable=not progress) as bar:
-            for done in futures.as_completed(pending):
-                i = pending[done]
-                try:
-                    results[i] = done.result()
-                except Exception as exc:  # a crashed worker: report the job as failed
-                    kind, payload = jobs[i]
-                    reason = f"worker failed: {type(exc).__name__}: {exc}"
-                    results[i] = (SceneResult(payload, ok=False, reason=reason) if kind == "scene"
-                                  else Section(payload[0], f"<p>{html.escape(reason)}</p>", ok=False))
-                bar.update(1)
+    results = parallel_map(_job, jobs, workers=workers, progress=progress, label=f"suite {suite}",
+                           unit="job", finalize=close_spice_worker, on_lost=_failed_job)
     scene_results = [r for (kind, _), r in zip(jobs, results) if kind == "scene"]
     section_results = [r for (kind, _), r in zip(jobs, results) if kind == "section"]
     return scene_results, section_results

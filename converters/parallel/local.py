@@ -222,7 +222,7 @@ class LocalBackend:
 
 def parallel_map(function, items, *, workers: int | None = None, chunk: int = 1, progress: bool = False,
                  label: str = "", unit: str = "pt", finalize=None, timeout: float | None = None,
-                 tasks_per_process: int | None = None, on_lost=None) -> list:
+                 tasks_per_process: int | None = None, attempts: int = 3, on_lost=None) -> list:
     """[function(item) for item in items] on the local backend, in input order.
 
     Parameters
@@ -236,22 +236,24 @@ def parallel_map(function, items, *, workers: int | None = None, chunk: int = 1,
         Items per task.
     progress : bool
         A tqdm progress bar on stderr, in items.
-    finalize, timeout, tasks_per_process
+    finalize, timeout, tasks_per_process, attempts
         As :class:`LocalBackend`.
     on_lost : callable, optional
-        ``on_lost(item, message)`` stands in for each item of a chunk that was lost (a dead worker, a time
-        limit, an exception); without it a lost chunk raises.
+        ``on_lost(item, message)`` stands in for each item of a chunk that was lost (a dead worker: the
+        message starts ``worker lost``; a time limit: ``timeout``; an exception: its type and text);
+        without it a lost chunk raises.
     """
     items = list(items)
     if not (isinstance(chunk, int) and chunk >= 1):
         raise ParameterError(f"chunk must be an integer >= 1; got {chunk!r}")
     chunks = [items[i:i + chunk] for i in range(0, len(items), chunk)]
-    backend = LocalBackend(workers, timeout=timeout, tasks_per_process=tasks_per_process, finalize=finalize)
+    backend = LocalBackend(workers, timeout=timeout, attempts=attempts, tasks_per_process=tasks_per_process,
+                           finalize=finalize)
     from tqdm import tqdm
     results: list = [None] * len(chunks)
     with tqdm(total=len(items), desc=label, unit=unit, file=sys.stderr, disable=not progress) as bar:
         if backend.workers == 1 and timeout is None and tasks_per_process is None:
-            stream = ((i, [function(item) for item in c]) for i, c in enumerate(chunks))
+            stream = ((i, _in_process(_Apply(function), c)) for i, c in enumerate(chunks))
         else:
             stream = backend.map_chunks(_Apply(function), chunks)
         for position, result in stream:
@@ -264,6 +266,13 @@ def parallel_map(function, items, *, workers: int | None = None, chunk: int = 1,
             results[position] = result
             bar.update(len(result))
     return [r for chunk_results in results for r in chunk_results]
+
+
+def _in_process(function, chunk):
+    try:
+        return function(chunk)
+    except Exception as exc:                                # as a worker's exception comes back
+        return Lost(f"{type(exc).__name__}: {exc}", exc)
 
 
 class _Apply:

@@ -1,0 +1,171 @@
+"""Ensembles over parameter points: every backend gives the same rows, a lost worker costs no point and
+duplicates none, points are addressed by index (grid, Latin hypercube) and bad axes are refused."""
+import os
+import signal
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from converters.errors import ParameterError
+from converters.parallel import LocalBackend, parallel_map, run_ensemble
+from converters.sweeps import Axis, Grid, LatinHypercube, ModelSweep
+
+#: 200 buck points across CCM and DCM (R up to 40 ohm at D = 0.2 is deep DCM).
+GRID = Grid([Axis.parse("D=0.2:0.8:20"), Axis.parse("R=2:40:10")])
+NUMERIC = ["vout_mean", "vout_ripple", "rms_state0", "held_fraction", "spectral_radius"]
+
+
+@pytest.fixture(scope="module")
+def dask_client():
+    """A 2-worker Dask LocalCluster of processes (dask[distributed] is in the test extras: never skipped)."""
+    import sys
+
+    import cloudpickle
+    import distributed
+    cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None)
+    client = distributed.Client(cluster)
+    cloudpickle.register_pickle_by_value(sys.modules[__name__])     # the test's ensembles travel by value
+    yield client
+    client.close()
+    cluster.close()
+
+
+def _frame(rows) -> pd.DataFrame:
+    return pd.DataFrame(rows).set_index("index").sort_index()
+
+
+@pytest.fixture(scope="module")
+def serial_rows():
+    return _frame(run_ensemble(ModelSweep("buck"), GRID, backend="serial"))
+
+
+def _same_rows(a: pd.DataFrame, b: pd.DataFrame):
+    assert list(a.index) == list(b.index) == list(range(GRID.size))
+    for column in ("status", "message", "mode", "iterations", "D", "R"):
+        assert (a[column] == b[column]).all(), column
+    np.testing.assert_allclose(b[NUMERIC].to_numpy(float), a[NUMERIC].to_numpy(float), rtol=1e-12, atol=1e-12)
+
+
+def test_the_200_point_grid_spans_ccm_and_dcm_and_every_point_converges(serial_rows):
+    assert (serial_rows["status"] == "ok").all()
+    assert {"CCM", "DCM"} <= set(serial_rows["mode"])
+    assert (serial_rows["spectral_radius"] < 1).all()
+    # CCM points: the ideal buck's vout = D Vin (12 V) to the ripple's second order
+    ccm = serial_rows[serial_rows["mode"] == "CCM"]
+    np.testing.assert_allclose(ccm["vout_mean"], 12.0 * ccm["D"], rtol=2e-3)
+
+
+@pytest.mark.parametrize("backend", ["batched", "local", "dask"])
+def test_every_backend_gives_the_serial_rows(backend, serial_rows, request):
+    target = request.getfixturevalue("dask_client") if backend == "dask" else backend
+    rows = run_ensemble(ModelSweep("buck"), GRID, backend=target, workers=2, chunk=37)
+    _same_rows(serial_rows, _frame(rows))
+
+
+# --- a worker killed mid-sweep ------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class KillingSweep(ModelSweep):
+    """Kills its worker process with SIGKILL on the chunk holding ``kill_at``: once (``flag`` is created
+    first) or every time (``flag`` empty)."""
+
+    kill_at: int = 100
+    flag: str = ""
+
+    def rows(self, items):
+        if any(i == self.kill_at for i, _ in items):
+            if not self.flag:
+                os.kill(os.getpid(), signal.SIGKILL)
+            if not os.path.exists(self.flag):
+                Path(self.flag).touch()
+                os.kill(os.getpid(), signal.SIGKILL)
+        return super().rows(items)
+
+
+@pytest.mark.parametrize("backend", ["local", "dask"])
+def test_a_worker_killed_mid_sweep_costs_no_point_and_duplicates_none(backend, tmp_path, serial_rows, request):
+    target = request.getfixturevalue("dask_client") if backend == "dask" else LocalBackend(2)
+    flag = tmp_path / "killed"
+    rows = run_ensemble(KillingSweep("buck", flag=str(flag)), GRID, backend=target, chunk=20)
+    assert flag.exists()                                # the worker was killed
+    indices = [row["index"] for row in rows]
+    assert sorted(indices) == list(range(GRID.size))    # one row per point: none missing, none duplicated
+    _same_rows(serial_rows, _frame(rows))               # and the retried chunk's rows are the right ones
+
+
+def test_a_chunk_that_kills_every_worker_becomes_failed_rows_and_the_rest_completes(serial_rows):
+    rows = _frame(run_ensemble(KillingSweep("buck", kill_at=100), GRID, backend=LocalBackend(2), chunk=20))
+    assert list(rows.index) == list(range(GRID.size))
+    lost = rows.index[(rows.index >= 100) & (rows.index < 120)]
+    assert (rows.loc[lost, "status"] == "failed").all()
+    assert rows.loc[lost, "message"].str.startswith("worker lost: its process died 3 times").all()
+    others = rows.drop(lost)
+    assert (others["status"] == "ok").all()
+    np.testing.assert_allclose(others["vout_mean"], serial_rows.drop(lost)["vout_mean"], rtol=1e-12)
+
+
+def _sleep(seconds):
+    import time
+    time.sleep(seconds)
+    return seconds
+
+
+def test_a_chunk_past_its_time_limit_is_lost_with_timeout_and_its_process_ended():
+    out = parallel_map(_sleep, [0.0, 30.0, 0.0], workers=2, timeout=1.5, on_lost=lambda item, message: message)
+    assert out[0] == 0.0 and out[2] == 0.0
+    assert out[1].startswith("timeout: did not finish within 1.5 s")
+
+
+def _fails(x):
+    raise ValueError(f"bad {x}")
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_an_exception_is_lost_with_its_message_in_process_and_in_workers(workers):
+    assert parallel_map(_fails, [3], workers=workers, on_lost=lambda item, m: m) == ["ValueError: bad 3"]
+    with pytest.raises(ValueError, match="bad 4"):
+        parallel_map(_fails, [4], workers=workers)
+
+
+# --- points ---------------------------------------------------------------------------------------------------
+
+def test_a_grid_is_in_c_order_and_its_points_are_found_by_index():
+    grid = Grid([Axis.parse("D=0.1:0.5:5"), Axis.parse("R=1:1k:4:log")])
+    assert grid.size == 20 and grid.shape == (5, 4)
+    items = grid.points(np.array([0, 1, 4, 19]))
+    assert [i for i, _ in items] == [0, 1, 4, 19]
+    assert items[1][1] == {"D": 0.1, "R": pytest.approx(10.0)}
+    assert items[2][1] == {"D": pytest.approx(0.2), "R": 1.0}
+    assert items[3][1] == {"D": 0.5, "R": pytest.approx(1000.0)}
+
+
+def test_a_latin_hypercube_has_one_point_per_stratum_and_is_reproducible():
+    axes = [Axis.parse("D=0.2:0.8", count_required=False), Axis.parse("R=1:100:log", count_required=False)]
+    lhs = LatinHypercube(axes, 50, seed=3)
+    points = [p for _, p in lhs.points(np.arange(50))]
+    d = np.array([p["D"] for p in points])
+    r = np.log10([p["R"] for p in points])
+    assert sorted(np.floor((d - 0.2) / 0.6 * 50).astype(int)) == list(range(50))
+    assert sorted(np.floor(r / 2 * 50).astype(int)) == list(range(50))
+    assert points == [p for _, p in LatinHypercube(axes, 50, seed=3).points(np.arange(50))]
+
+
+@pytest.mark.parametrize("text, message", [
+    ("D0.1:0.5:5", "NAME=START:STOP:COUNT"),
+    ("D=0.1:0.5:0", "COUNT"),
+    ("D=0.1:0.5:2.5", "COUNT"),
+    ("D=0.1:abc:5", "abc"),
+    ("R=0:10:5:log", "log"),
+    ("D=0.1:0.5:5:cubic", "cubic"),
+])
+def test_a_bad_axis_is_refused_with_what_was_given(text, message):
+    with pytest.raises(ParameterError, match=message):
+        Axis.parse(text)
+
+
+def test_a_steady_sweep_of_a_model_without_a_forcing_period_is_refused():
+    with pytest.raises(ParameterError, match="no forcing period"):
+        ModelSweep("boost", "smc")

@@ -1,0 +1,172 @@
+"""``pcsuite sweep``: a Parquet dataset written in parts, resumed after an interruption with only the missing
+points computed, a directory never overwritten, failures stored as rows, bad input refused in one line."""
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from validation.cli import main
+from validation.sweep import load_sweep
+
+SWEEP = ["sweep", "buck", "--grid", "D=0.2:0.8:100", "--grid", "R=2:40:100", "--steady", "--no-progress"]
+CHILD = ("import signal, sys; signal.signal(signal.SIGINT, signal.default_int_handler); "
+         "from validation.cli import main; sys.exit(main(sys.argv[1:]))")
+
+
+def _summary(capsys) -> dict:
+    return json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+
+
+def _same(a: pd.DataFrame, b: pd.DataFrame):
+    assert list(a["index"]) == list(b["index"]) == list(range(len(a)))
+    for column in ("D", "R", "status", "message", "mode", "iterations"):
+        assert (a[column] == b[column]).all(), column
+    numeric = ["vout_mean", "vout_ripple", "rms_state0", "held_fraction", "spectral_radius"]
+    np.testing.assert_allclose(b[numeric].to_numpy(float), a[numeric].to_numpy(float), rtol=1e-12, atol=1e-12)
+
+
+def _running(pid: str) -> bool:
+    """Alive and not a zombie (a dead orphan waits for init to reap it)."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+@pytest.fixture(scope="module")
+def uninterrupted(tmp_path_factory):
+    out = tmp_path_factory.mktemp("whole") / "sweep"
+    assert main(SWEEP + ["--scheduler", "batched", "--out", str(out)]) == 0
+    return load_sweep(out)
+
+
+@pytest.mark.parametrize("stop", ["SIGINT", "SIGKILL"])
+def test_an_interrupted_sweep_resumes_computing_only_the_missing_points(stop, tmp_path, capsys, uninterrupted):
+    out = tmp_path / "sweep"
+    child = subprocess.Popen([sys.executable, "-c", CHILD, *SWEEP, "--workers", "1", "--chunk", "250",
+                              "--out", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 120
+    while len(list((out / "parts").glob("*.parquet"))) < 2:           # two chunks stored, 38 to go
+        assert child.poll() is None and time.monotonic() < deadline, child.communicate()
+        time.sleep(0.02)
+    workers = subprocess.run(["pgrep", "-P", str(child.pid)], capture_output=True, text=True).stdout.split()
+    child.send_signal(getattr(signal, stop))
+    _, err = child.communicate(timeout=60)
+    stored = len(load_sweep(out))
+    if stop == "SIGINT":
+        assert child.returncode == 130
+        assert f"interrupted: {stored:,} of 10,000 points are stored" in err and "Traceback" not in err
+    else:
+        assert child.returncode == -signal.SIGKILL
+        time.sleep(1.0)                                                  # workers notice within 0.2 s
+        assert workers and not [w for w in workers if _running(w)], "orphaned workers"
+    assert 500 <= stored < 10_000 and stored % 250 == 0                  # whole parts only
+
+    assert main(SWEEP + ["--out", str(out), "--json"]) == 0
+    summary = _summary(capsys)
+    assert summary["stored_before"] == stored
+    assert summary["computed"] == 10_000 - stored                       # only the missing points
+    assert summary["ok"] == 10_000 and summary["failed"] == 0
+    resumed = load_sweep(out)
+    _same(uninterrupted, resumed)                                        # as if never interrupted
+    assert (out / "summary.png").read_bytes()[:4] == b"\x89PNG"
+
+    assert main(SWEEP + ["--out", str(out), "--json"]) == 0             # complete: nothing to do
+    assert _summary(capsys)["computed"] == 0
+
+
+def test_a_directory_holding_another_sweep_or_other_files_is_refused_and_left_alone(tmp_path, capsys):
+    out = tmp_path / "s"
+    small = ["sweep", "buck", "--grid", "D=0.3:0.6:4", "--steady", "--no-progress", "--out", str(out)]
+    assert main(small) == 0
+    before = {p: p.read_bytes() for p in out.rglob("*") if p.is_file()}
+    capsys.readouterr()
+    assert main(small[:3] + ["D=0.3:0.6:5"] + small[4:]) == 2
+    err = capsys.readouterr().err
+    assert "holds a different sweep" in err and "D=0.3:0.6:4" in err and "nothing was changed" in err
+    assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file()} == before
+
+    other = tmp_path / "mine"
+    other.mkdir()
+    (other / "thesis.tex").write_text("precious")
+    assert main(small[:-1] + [str(other)]) == 2
+    assert "non-empty directory that holds no sweep" in capsys.readouterr().err
+    assert sorted(p.name for p in other.iterdir()) == ["thesis.tex"]
+
+
+def test_a_second_writer_is_refused_while_the_first_holds_the_sweep(tmp_path, capsys):
+    import fcntl
+    out = tmp_path / "s"
+    small = ["sweep", "buck", "--grid", "D=0.3:0.6:4", "--steady", "--no-progress", "--out", str(out)]
+    assert main(small) == 0
+    with open(out / ".lock", "a+") as held:
+        fcntl.flock(held, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        assert main(small) == 2
+    assert "another process is writing this sweep" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--grid", "D=0.2:1.5:5"], ["D", "1.5"]),
+    (["--grid", "D=0.2:0.5"], ["NAME=START:STOP:COUNT", "D=0.2:0.5"]),
+    (["--grid", "D=0.2:0.5:3", "-p", "D=0.4"], ["D is both swept"]),
+    (["--grid", "D=0.2:0.5:3", "--scheduler", "ftp://x"], ["scheduler", "ftp://x"]),
+    (["--grid", "D=0.2:0.5:3", "--metric", "mode"], ["--metric", "vout_mean"]),
+    (["--grid", "D=0.2:0.5:3", "--workers", "0"], ["--workers", "0"]),
+    (["--grid", "D=1e9:2e9:3:log"], ["D"]),
+])
+def test_bad_input_is_one_line_naming_the_parameter_and_nothing_is_written(args, words, tmp_path, capsys):
+    out = tmp_path / "never"
+    assert main(["sweep", "buck", *args, "--out", str(out), "--no-progress"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "Traceback" not in err
+    for word in words:
+        assert word in err
+    assert not out.exists()
+
+
+def test_a_lhs_sweep_stores_n_points_inside_the_ranges(tmp_path, capsys):
+    out = tmp_path / "lhs"
+    assert main(["sweep", "buck", "--grid", "D=0.2:0.8", "--grid", "R=2:40:log", "--lhs", "64", "--steady",
+                 "--no-progress", "--out", str(out), "--json"]) == 0
+    frame = load_sweep(out)
+    assert len(frame) == 64 and (frame["status"] == "ok").all()
+    assert frame["D"].between(0.2, 0.8).all() and frame["R"].between(2, 40).all()
+    assert _summary(capsys)["ok"] == 64
+
+
+def test_an_ngspice_sweep_runs_in_workers_and_a_failed_run_is_a_row(ngspice, tmp_path, monkeypatch):
+    """Two buck points in ngspice started on the LCP orbit: the same vout as the LCP sweep to 0.5 %; a
+    failing run (ngspice's own error, forced at one point) is a row with its message."""
+    from converters.parallel import run_ensemble
+    from converters.sweeps import Axis, Grid, ModelSweep
+    from validation import spice
+    from validation.sweep import SpiceSweep
+    grid = Grid([Axis.parse("D=0.3:0.8:2"), Axis.parse("R=3:3:1")])   # K = 2L/RT = 1/3: DCM, CCM
+    lcp = pd.DataFrame(run_ensemble(ModelSweep("buck"), grid, backend="serial")).set_index("index")
+    rows = pd.DataFrame(run_ensemble(SpiceSweep("buck", periods=4), grid, backend="local", workers=2, chunk=1))
+    rows = rows.set_index("index").sort_index()
+    assert (rows["status"] == "ok").all(), rows["message"].tolist()
+    np.testing.assert_allclose(rows["vout_mean"], lcp["vout_mean"], rtol=5e-3)
+    assert (rows["settle"] < 1e-3).all() and (rows["spice_steps"] > 0).all()
+    assert list(rows["mode"]) == list(lcp["mode"]) == ["DCM", "CCM"]
+
+    real, calls = spice.run_spice, []
+
+    def first_run_fails(netlist):                       # the first point's run fails as ngspice fails
+        calls.append(netlist.converter)
+        if len(calls) == 1:
+            raise spice.SpiceError(f"ngspice failed on {netlist.converter}: doAnalyses: TRAN:  Timestep too small")
+        return real(netlist)
+    monkeypatch.setattr(spice, "run_spice", first_run_fails)
+    mixed = run_ensemble(SpiceSweep("buck", periods=4), grid, backend="serial")
+    assert [r["status"] for r in mixed] == ["failed", "ok"]
+    assert mixed[0]["message"] == "SpiceError: ngspice failed on buck: doAnalyses: TRAN:  Timestep too small"
+    assert mixed[0]["D"] == 0.3 and np.isnan(mixed[0].get("vout_mean", np.nan))
+    assert mixed[1]["vout_mean"] == pytest.approx(rows.loc[1, "vout_mean"], rel=1e-9)
