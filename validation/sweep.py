@@ -259,15 +259,18 @@ def run_sweep(ensemble, points, out, *, backend="local", workers: int | None = N
 # --- the summary plot ---------------------------------------------------------------------------------------
 
 def summary_plot(frame: pd.DataFrame, points, metric: str = "vout_mean", title: str = "") -> bytes:
-    """``metric`` over the sweep: a line over a 1-D grid, a map over a 2-D grid (failed points grey, the
+    """``metric`` over the sweep: a line over one parameter, a map over a 2-D grid (failed points grey, the
     conduction-mode boundaries drawn over it), a scatter over the first two parameters otherwise; failed
     points marked."""
     from .plots import plt, png
     names = points.names
     ok = frame["status"] == "ok"
     values = pd.to_numeric(frame[metric], errors="coerce") if metric in frame else pd.Series(np.nan, index=frame.index)
-    if points.kind == "grid" and len(names) == 1:
+    if len(names) == 1:                                   # a grid or Latin-hypercube line, in order
         axis = points.axes[0]
+        frame = frame.sort_values(names[0], kind="stable").reset_index(drop=True)
+        ok = frame["status"] == "ok"
+        values = pd.to_numeric(frame[metric], errors="coerce")
         fig, ax = plt.subplots(figsize=(7, 4))
         ax.plot(frame[names[0]][ok], values[ok], ".-", lw=1, ms=3, label=metric)
         if (~ok).any():

@@ -29,6 +29,7 @@ import pandas as pd
 
 from converters.analysis.periodic import require, shoot
 from converters.models import get_converter
+from converters.parallel import default_workers, parallel_map
 from converters.methods import EventDriven, Smoothing, Theta
 from converters.run import steady_orbit
 from converters.simulate import simulate
@@ -192,10 +193,29 @@ def measure_spice(ref: Reference, tmax_div: int, reltol: float, method: str, per
     return _row(ref, family, setting, wall, mean, rms, timing, steps=int(result.accepted_steps))
 
 
+def _reference(job) -> Reference:
+    case, periods = job
+    return reference(case, periods)
+
+
+MEASURE = {"lcp": measure_lcp, "event": measure_event, "smooth": measure_smooth, "spice": measure_spice}
+
+
+def _measure(job) -> dict:
+    ref, kind, args, periods = job
+    return MEASURE[kind](ref, *args, periods=periods)
+
+
+def _failed_run(job, message: str) -> dict:
+    """A failed run is a result (shown and counted), not the end of the benchmark."""
+    ref, kind, args, _ = job
+    return {"case": ref.case.name, "family": kind, "setting": str(args), "wall_s": float("nan"),
+            "error": float("nan"), "failure": message}
+
+
 def tradeoff_table(cases=CASES, sweep: dict = FULL, spice: bool = True, periods: int = PERIODS,
                    progress: bool = True) -> tuple[pd.DataFrame, pd.DataFrame]:
     """(runs, references): one row per (case, method, setting); one per case with the exact values."""
-    from tqdm import tqdm
     jobs = []
     for case in cases:
         jobs += [(case, "lcp", (s, th)) for th in sweep["thetas"] for s in sweep["lcp_steps"]]
@@ -203,16 +223,13 @@ def tradeoff_table(cases=CASES, sweep: dict = FULL, spice: bool = True, periods:
         jobs += [(case, "smooth", es) for es in sweep["smooth"]]
         if spice:
             jobs += [(case, "spice", s) for s in sweep["spice"]]
-    refs, rows = {}, []
-    measure = {"lcp": measure_lcp, "event": measure_event, "smooth": measure_smooth, "spice": measure_spice}
-    for case, kind, args in tqdm(jobs, desc="trade-off", unit="run", disable=not progress):
-        if case.name not in refs:
-            refs[case.name] = reference(case, periods)
-        try:
-            rows.append(measure[kind](refs[case.name], *args, periods=periods))
-        except Exception as exc:  # a failed run is a result (shown and counted), not the end of the benchmark
-            rows.append({"case": case.name, "family": kind, "setting": str(args), "wall_s": float("nan"),
-                         "error": float("nan"), "failure": f"{type(exc).__name__}: {exc}"})
+    # the exact references (one periodic orbit per case) in parallel; the timed runs one at a time in this
+    # process (a run's wall time is the measurement: two at once on shared cores would distort it)
+    used = list({case.name: case for case, _, _ in jobs}.values())
+    refs = dict(zip([c.name for c in used], parallel_map(_reference, [(c, periods) for c in used],
+                                                         workers=min(len(used), default_workers()) or 1)))
+    rows = parallel_map(_measure, [(refs[case.name], kind, args, periods) for case, kind, args in jobs], workers=1,
+                        progress=progress, label="trade-off", unit="run", on_lost=_failed_run)
     runs = pd.DataFrame(rows)
     if "failure" not in runs:
         runs["failure"] = ""
