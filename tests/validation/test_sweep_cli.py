@@ -1,7 +1,6 @@
 """``pcsuite sweep``: a Parquet dataset written in parts, resumed after an interruption with only the missing
 points computed, a directory never overwritten, failures stored as rows, bad input refused in one line."""
 import json
-import os
 import signal
 import subprocess
 import sys
