@@ -183,3 +183,12 @@ def test_the_mechanical_module_reuses_the_core():
     integrators = [p.relative_to(ROOT).as_posix() for p in ROOT.joinpath("converters").rglob("*.py")
                    if "solve_ivp(" in p.read_text()]
     assert sorted(integrators) == ["converters/methods/event_mechanical.py", "converters/methods/smoothing.py"]
+
+
+def test_every_process_pool_is_the_parallel_backends():
+    """One way to run work in other processes: converters.parallel (the D-K maps, diagrams, suites, stability
+    map, ngspice runner and sweeps all go through it); nobody else builds a pool or forks."""
+    pattern = re.compile(r"ProcessPoolExecutor|multiprocessing\.(Pool|Process|get_context)|os\.fork\(")
+    users = sorted(path.relative_to(ROOT).as_posix() for path in _modules().values() if pattern.search(path.read_text()))
+    assert users == ["converters/parallel/local.py"]
+    assert pattern.search("pool = futures.ProcessPoolExecutor(max_workers=1)")
