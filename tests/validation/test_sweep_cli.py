@@ -169,3 +169,16 @@ def test_an_ngspice_sweep_runs_in_workers_and_a_failed_run_is_a_row(ngspice, tmp
     assert mixed[0]["message"] == "SpiceError: ngspice failed on buck: doAnalyses: TRAN:  Timestep too small"
     assert mixed[0]["D"] == 0.3 and np.isnan(mixed[0].get("vout_mean", np.nan))
     assert mixed[1]["vout_mean"] == pytest.approx(rows.loc[1, "vout_mean"], rel=1e-9)
+
+
+def test_a_sweep_on_a_dask_scheduler_address_stores_the_local_rows(tmp_path, capsys):
+    """--scheduler tcp://HOST:PORT: the same dataset as the local backend (a 2-worker LocalCluster here)."""
+    import distributed
+    small = ["sweep", "buck", "--grid", "D=0.2:0.8:10", "--grid", "R=2:40:10", "--steady", "--no-progress",
+             "--chunk", "17"]
+    assert main(small + ["--out", str(tmp_path / "local")]) == 0
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        assert main(small + ["--scheduler", cluster.scheduler_address, "--out", str(tmp_path / "dask"), "--json"]) == 0
+    summary = _summary(capsys)
+    assert summary["computed"] == 100 and summary["ok"] == 100
+    _same(load_sweep(tmp_path / "local"), load_sweep(tmp_path / "dask"))
