@@ -209,7 +209,7 @@ def tradeoff_section(files: dict, meta: dict, source: str) -> Section:
             + table_html(front[[c for c in columns if c in front]])
             + f"<p>Failed runs: {len(failed)} of {len(runs)}" + (":" if len(failed) else ".") + "</p>"
             + (table_html(failed[["case", "family", "setting", "failure"]]) if len(failed) else "")
-            + "<p>Smoothing (DCM buck, Radau, rtol 1e-6): the largest Jacobian eigenvalue times T grows as "
+            + "<p>Smoothing (DCM buck, Radau, solver_rtol 1e-6): the largest Jacobian eigenvalue times T grows as "
               "1/eps, and with it the solver's work.</p>" + table_html(stiffness)
             + "<p>Every run: <a href='tradeoff.csv'>tradeoff.csv</a>; per case: "
               "<a href='tradeoff_acceptance.csv'>tradeoff_acceptance.csv</a>.</p>")

@@ -107,7 +107,7 @@ def _run_one(case: dict, method: str) -> dict:
             node_on = cq[order] == 0
             on, rule = np.append(node_on, node_on[-1]), "trap"    # for the divergence check; totals are exact
         elif method == "smooth":
-            tr = simulate(problem, Smoothing(eps=1e-4, rtol=1e-6, output_step=T / 1000))
+            tr = simulate(problem, Smoothing(eps=1e-4, solver_rtol=1e-6, output_step=T / 1000))
             t, x, on, rule = tr.t, tr.x, tr.config[1:] == 0, "trap"
         else:
             from netlists import SpiceOptions, build_netlist

@@ -155,14 +155,14 @@ def measure_event(ref: Reference, event_tol: float, periods: int = PERIODS) -> d
 def measure_smooth(ref: Reference, eps: float, rtol: float, periods: int = PERIODS) -> dict:
     conv = get_converter(ref.case.converter)
     problem = conv.problem(ref.params, periods * ref.period, ref.x_star)
-    method = Smoothing(eps=eps, rtol=rtol, output_step=ref.period / 1000.0)
+    method = Smoothing(eps=eps, solver_rtol=rtol, output_step=ref.period / 1000.0)
     start = time.perf_counter()
     tr = simulate(problem, method)
     wall = time.perf_counter() - start
     mean, rms = _measures(_labelled(conv, ref.params, tr), conv.state_names[0])
     timing = _timing_error(ref, tr.events.loc[tr.events["kind"] == "activate", "time"])
     stats = tr.metadata["stats"]
-    return _row(ref, "smooth", f"eps={eps:g} rtol={rtol:g}", wall, mean, rms, timing, steps=stats["nfev"],
+    return _row(ref, "smooth", f"eps={eps:g} solver_rtol={rtol:g}", wall, mean, rms, timing, steps=stats["nfev"],
                 stiffness_rho_T=stats["max_rho_T"])
 
 
@@ -323,7 +323,7 @@ def pareto_plot(runs: pd.DataFrame) -> bytes:
 
 def stiffness_table(eps_values=(1e-2, 1e-3, 1e-4, 1e-5, 1e-6), case: Case = CASES[1], periods: int = 5) -> pd.DataFrame:
     """How the smoothed system's stiffness grows as eps shrinks: max |lambda| T of the Jacobian along the
-    run, right-hand-side evaluations and wall time (Radau, rtol 1e-6), and the error against the exact solution."""
+    run, right-hand-side evaluations and wall time (Radau, solver_rtol 1e-6), and the error against the exact solution."""
     ref = reference(case, periods)
     rows = []
     for eps in eps_values:

@@ -40,8 +40,10 @@ class Smoothing(Method, key="smooth"):
     ----------
     eps : float
         Smoothing width in the units of y (> 0; smaller is closer to the ideal diode and stiffer).
-    rtol, atol : float
-        Tolerances of scipy's solve_ivp (atol default 1e-3 rtol).
+    solver_rtol, atol : float
+        Tolerances of scipy's solve_ivp (atol default 1e-3 solver_rtol). Not an accuracy target: the result's
+        error is the smoothing's, O(eps), whatever the solver's tolerance (``--rtol`` is the accuracy target
+        of the other methods' steady states, :mod:`converters.analysis.accuracy`).
     solver : str
         A stiff solve_ivp method: 'Radau', 'BDF' or 'LSODA'.
     output_step : float or None
@@ -49,19 +51,19 @@ class Smoothing(Method, key="smooth"):
     """
 
     eps: float = 1e-4
-    rtol: float = 1e-6
+    solver_rtol: float = 1e-6
     atol: float | None = None
     solver: str = "Radau"
     output_step: float | None = None
     step_option = "output_step"
-    description = "pairs smoothed by u = eps log(1 + exp(-y / eps^2)) (--eps), scipy Radau (--rtol)"
+    description = "pairs smoothed by u = eps log(1 + exp(-y / eps^2)) (--eps), scipy Radau (--solver-rtol)"
 
     def __post_init__(self):
         object.__setattr__(self, "eps", check_positive("eps", self.eps))
-        rtol = parse_value("rtol", self.rtol)
+        rtol = parse_value("solver_rtol", self.solver_rtol)
         if not 1e-13 <= rtol <= 0.1:
-            raise ParameterError(f"rtol must be in [1e-13, 0.1]; got {rtol!r}")
-        object.__setattr__(self, "rtol", rtol)
+            raise ParameterError(f"solver_rtol must be in [1e-13, 0.1]; got {rtol!r}")
+        object.__setattr__(self, "solver_rtol", rtol)
         if self.atol is not None:
             object.__setattr__(self, "atol", check_positive("atol", self.atol))
         if self.solver not in ("Radau", "BDF", "LSODA"):
@@ -71,7 +73,7 @@ class Smoothing(Method, key="smooth"):
 
     @property
     def order(self) -> float:
-        """The model error is O(eps): order 1 in eps (the solver's own error is set by rtol)."""
+        """The model error is O(eps): order 1 in eps (the solver's own error is set by solver_rtol)."""
         return 1.0
 
     @property
@@ -105,7 +107,7 @@ def _integrate(problem: LCSProblem, method: Smoothing, x: np.ndarray) -> Traject
     start_clock = time.perf_counter()
     t0, t1 = problem.t_span
     edges = np.concatenate([[t0], problem.switching.breakpoints(t0, t1), [t1]])
-    eps, atol = method.eps, method.atol if method.atol is not None else 1e-3 * method.rtol
+    eps, atol = method.eps, method.atol if method.atol is not None else 1e-3 * method.solver_rtol
     ts, xs, cs = [np.array([t0])], [x[None, :]], []
     stats = {"points": 0, "nfev": 0, "njev": 0, "nlu": 0, "max_rho_T": 0.0}
     scale_T = problem.switching.period if np.isfinite(problem.switching.period) else (t1 - t0)
@@ -128,11 +130,11 @@ def _integrate(problem: LCSProblem, method: Smoothing, x: np.ndarray) -> Traject
         if method.output_step is not None:
             inner = a + method.output_step * np.arange(1, int(np.ceil((b - a) / method.output_step)) + 1)
             t_eval = np.concatenate([[a], inner[inner < b - 1e-9 * method.output_step], [b]])   # sol.t[0] = a
-        sol = solve_ivp(rhs, (a, b), x, method=method.solver, rtol=method.rtol, atol=atol, jac=jac,
+        sol = solve_ivp(rhs, (a, b), x, method=method.solver, rtol=method.solver_rtol, atol=atol, jac=jac,
                         t_eval=t_eval)
         if sol.status != 0 or not np.all(np.isfinite(sol.y)):
             raise SimulationError(f"the smoothed system could not be integrated over [{a:.6g}, {b:.6g}] s "
-                                  f"({method.solver}, eps = {eps:g}, rtol = {method.rtol:g}): {sol.message}")
+                                  f"({method.solver}, eps = {eps:g}, solver_rtol = {method.solver_rtol:g}): {sol.message}")
         stats["points"] += sol.t.size - 1
         stats["nfev"] += int(sol.nfev)
         stats["njev"] += int(sol.njev)
@@ -156,7 +158,7 @@ def _integrate(problem: LCSProblem, method: Smoothing, x: np.ndarray) -> Traject
                       config_names=tuple(c.name or f"config{i}" for i, c in enumerate(problem.configurations)),
                       event_columns=_events(t, u, y, config), method=method.key, steps=stats["nlu"],
                       wall_s=stats["wall_s"], rule="linear", period=problem.switching.period,
-                      metadata=dict(problem.metadata, eps=eps, rtol=method.rtol, solver=method.solver, stats=stats,
+                      metadata=dict(problem.metadata, eps=eps, solver_rtol=method.solver_rtol, solver=method.solver, stats=stats,
                                     label=method.label))
 
 

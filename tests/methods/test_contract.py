@@ -52,7 +52,7 @@ def test_the_registry_holds_every_method_by_its_command_line_name():
 @pytest.mark.parametrize("key,options,match", [
     ("lcp", {"eps": 1e-3}, r"unknown option 'eps' for method 'lcp'; valid options: h, theta"),
     ("event", {"h": 1e-6}, r"unknown option 'h' for method 'event'; valid options: event_tol, sample_fraction"),
-    ("smooth", {"theta": 0.5}, r"unknown option 'theta' for method 'smooth'; valid options: eps, rtol, atol"),
+    ("smooth", {"theta": 0.5}, r"unknown option 'theta' for method 'smooth'; valid options: eps, solver_rtol, atol"),
 ])
 def test_no_method_swallows_an_unknown_option(key, options, match):
     with pytest.raises(ParameterError, match=match):
@@ -60,7 +60,7 @@ def test_no_method_swallows_an_unknown_option(key, options, match):
 
 
 @pytest.mark.parametrize("make", [lambda: Theta(1e-5, 1.0), lambda: Theta(1e-5, 0.5), lambda: EventDriven(),
-                                  lambda: Smoothing(eps=1e-4, rtol=1e-10)], ids=["backward-euler", "theta-0.5",
+                                  lambda: Smoothing(eps=1e-4, solver_rtol=1e-10)], ids=["backward-euler", "theta-0.5",
                                                                                  "event", "smooth"])
 def test_every_method_solves_the_freewheeling_diode_into_a_trajectory(make):
     method = make()
@@ -88,7 +88,7 @@ def test_the_stepper_converges_at_its_declared_order(theta, problem, exact):
 
 def test_smoothing_converges_at_its_declared_order_in_eps():
     eps = np.array([1e-2, 1e-3, 1e-4])
-    errors = [abs(simulate(freewheel(1.5e-3), Smoothing(eps=e, rtol=1e-10)).x[-1, 0]) for e in eps]
+    errors = [abs(simulate(freewheel(1.5e-3), Smoothing(eps=e, solver_rtol=1e-10)).x[-1, 0]) for e in eps]
     order = np.polyfit(np.log(eps), np.log(errors), 1)[0]
     assert order == pytest.approx(Smoothing().order, abs=0.1)              # held at i = -eps V: O(eps)
     assert errors[1] == pytest.approx(1e-3 * V, rel=0.05)

@@ -21,7 +21,7 @@ def test_smoothing_error_is_first_order_in_eps_and_stiffness_grows_like_one_over
     problem = conv.problem(p, 4 * T, x0=orbit.x0)
     errors, stiffness = [], []
     for eps in (1e-2, 1e-3, 1e-4):
-        tr = replace(simulate(problem, Smoothing(eps=eps, rtol=1e-8, output_step=T / 2000)), labels=conv.labels(p))
+        tr = replace(simulate(problem, Smoothing(eps=eps, solver_rtol=1e-8, output_step=T / 2000)), labels=conv.labels(p))
         assert tr.rule == "linear"
         errors.append(abs(tr.mean("vout") - exact) / exact)
         stiffness.append(tr.metadata["stats"]["max_rho_T"])
@@ -38,7 +38,7 @@ def test_smoothing_output_grid_keeps_every_schedule_interval():
     p = conv.resolve({"D": 1e-4})
     T = conv.period(p)
     problem = conv.problem(p, 5 * T)
-    tr = simulate(problem, Smoothing(eps=1e-4, rtol=1e-8, output_step=T / 1000))
+    tr = simulate(problem, Smoothing(eps=1e-4, solver_rtol=1e-8, output_step=T / 1000))
     edges = np.concatenate([np.arange(6) * T, np.arange(5) * T + 1e-4 * T])
     assert np.abs(tr.t[None, :] - edges[:, None]).min(axis=1).max() < 1e-12 * T
     assert np.diff(tr.t).max() <= T / 1000 * (1 + 1e-9)

@@ -91,7 +91,7 @@ def test_tradeoff_measures_every_method_against_the_exact_solution(ngspice):
     assert runs.loc[("LCP theta=1", "h=T/1000"), "err_event_T"] <= 1e-3 + 1e-12
     spice_default = runs.loc[("ngspice trap", "TMAX=T/100 RELTOL=0.001 trap")]
     assert 1e-7 < spice_default["error"] < 1e-2 and spice_default["wall_s"] > 0
-    smooth = runs.loc[("smooth", "eps=0.001 rtol=1e-06")]
+    smooth = runs.loc[("smooth", "eps=0.001 solver_rtol=1e-06")]
     assert 1e-5 < smooth["error"] < 1e-2                                       # O(eps)
 
 

@@ -1,0 +1,135 @@
+"""Accuracy on request: at 15 operating points (buck, boost, buck-boost, Cuk; CCM, DCM with a conduction
+interval of 0.37 % of T, GDCM-ON, GDCM-OFF, loads to 10 kOhm, 10 kHz to 1 MHz, duty 0.05 to 0.95), every
+mean meets rtol against the exact event-driven orbit and every error estimate is within a factor 10 of the
+true error."""
+import math
+
+import numpy as np
+import pytest
+from dataclasses import replace
+
+from converters.analysis.accuracy import accurate_steady, extremum, measures
+from converters.errors import ParameterError
+from converters.methods import EventDriven
+from converters.models import get_model
+from converters.run import steady_state
+from converters.simulate import simulate
+
+POINTS = {
+    "buck-ccm": ("buck", {"D": 0.5, "L": "100u", "R": 5}),
+    "buck-dcm": ("buck", {}),
+    "buck-dcm-0.37%": ("buck", {"D": 0.05, "L": "10u", "R": "10k"}),        # conduction 0.0037 T
+    "buck-1MHz": ("buck", {"D": 0.3, "L": "2u", "R": 5, "f_sw": "1meg"}),
+    "buck-D0.95-10kHz": ("buck", {"D": 0.95, "L": "1m", "R": 10, "C": "470u", "f_sw": "10k"}),
+    "boost-ccm": ("boost", {"D": 0.5, "L": "100u", "R": 20, "C": "470u"}),
+    "boost-dcm-10k": ("boost", {"D": 0.3, "L": "10u", "R": "10k"}),
+    "boost-dcm": ("boost", {"D": 0.3, "R": 50}),
+    "buck-boost-dcm-5k": ("buck-boost", {"D": 0.7, "L": "22u", "R": "5k", "f_sw": "250k"}),
+    "buck-boost-ccm": ("buck-boost", {"D": 0.4, "L": "100u", "R": 10}),
+    "buck-boost-10kHz": ("buck-boost", {"D": 0.5, "L": "1m", "R": 20, "f_sw": "10k"}),
+    "cuk-ccm": ("cuk", {"C2": "470u"}),
+    "cuk-gdcm-off": ("cuk", {"L1": "10u", "L2": "10u"}),
+    "cuk-gdcm-on": ("cuk", {"D": 0.5, "C1": "130n"}),
+    "cuk-D0.95": ("cuk", {"D": 0.95, "L1": "1m", "L2": "1m", "R": 5}),
+}
+#: Ripple and peaks are compared at 1e-4 only: the reference reads them on 16384 samples a period (~1e-8).
+SAMPLED = ("vout_ripple", "_peak")
+
+
+def _reference(name, params):
+    model = get_model(name)
+    p = model.resolve(params)
+    T = model.period(p)
+    try:
+        orbit = steady_state(model, p, EventDriven(), tol=1e-10)
+    except Exception:                       # light load: the orbit resolves to ~3e-10 only
+        orbit = steady_state(model, p, EventDriven(), tol=1e-9)
+    tr = replace(simulate(model.problem(p, T, orbit.x0), EventDriven(output_step=T / 16384)), labels=model.labels(p))
+    values, events = measures(model, p, tr, T)
+    return model, p, values, events
+
+
+@pytest.fixture(scope="module")
+def references():
+    return {key: _reference(*point) for key, point in POINTS.items()}
+
+
+def test_the_points_cover_the_modes_and_ranges_asked_for(references):
+    fractions = {key: {k[9:] for k, (v, _) in ref[2].items() if k.startswith("fraction_") and v > 0}
+                 for key, ref in references.items()}
+    assert {"DCM"} <= fractions["buck-dcm-0.37%"] and {"GDCM-OFF"} <= fractions["cuk-gdcm-off"]
+    assert "GDCM-ON" in fractions["cuk-gdcm-on"] and fractions["cuk-ccm"] == {"CCM-ON", "CCM-OFF"}
+    assert references["buck-dcm-0.37%"][2]["fraction_CCM-OFF"][0] < 0.01       # conduction under 1 % of T
+
+
+@pytest.mark.parametrize("rtol", [1e-4, 1e-7])
+@pytest.mark.parametrize("key", list(POINTS))
+def test_every_mean_meets_rtol_and_every_estimate_is_within_10x_of_the_true_error(key, rtol, references):
+    model, p, exact, exact_events = references[key]
+    result = accurate_steady(model, p, rtol)
+    assert result.met, result.message
+    mean = result.quantities["vout_mean"]
+    truth = abs(mean.value - exact["vout_mean"][0]) / abs(exact["vout_mean"][0])
+    assert truth <= rtol, f"vout mean off by {truth:.2g} > rtol"
+    assert result.worst() <= rtol
+    checked = 0
+    for name, q in result.quantities.items():
+        if rtol < 1e-5 and any(s in name for s in SAMPLED):
+            continue
+        value, scale = exact[name]
+        true = abs(q.value - value) / scale
+        resolution = 1e-11                  # the reference's own (its orbit, its quadrature)
+        assert true <= 10 * max(q.relative, resolution), f"{name}: hides an error ({q.relative:.2g} < {true:.2g} / 10)"
+        # crying wolf: an estimate 10x above the truth where it matters. Richardson cannot see a true error
+        # that a sign change of the stepper's irregular error (diode events inside steps) brings near zero;
+        # an estimate still below rtol / 10 asks for nothing and is not counted (boost-dcm at 1e-7: 1.9e-9
+        # estimated, 7e-11 true).
+        assert q.relative <= 10 * max(true, resolution) or q.relative <= rtol / 10, \
+            f"{name}: cries wolf ({q.relative:.2g} > 10 x {true:.2g})"
+        checked += 1
+    assert checked >= 4                    # vout mean, an RMS, two mode fractions at least
+    assert [(pair, kind) for pair, kind, _ in result.events] == [(pair, kind) for pair, kind, _ in exact_events]
+    for (_, _, e), (_, _, t_exact) in zip(result.events, exact_events):
+        true = abs(e.value - t_exact)
+        assert true <= 10 * max(e.error_estimate, 1e-11) and true <= rtol
+
+
+def test_a_tight_target_at_light_load_goes_to_the_event_method_and_a_loose_one_stays_on_the_stepper(references):
+    model, p, _, _ = references["buck-boost-dcm-5k"]
+    loose, tight = accurate_steady(model, p, 1e-4), accurate_steady(model, p, 1e-7)
+    assert loose.method.key == "lcp" and loose.steps_per_period >= 1000
+    assert tight.method.key == "event"         # 34,928 steps would round to 1e-7 (rho = 1 - 1.6e-5)
+
+
+def test_event_instants_come_from_inside_the_step():
+    """The DCM buck-boost's diode is held at 0.7469041 T (exact); the stepper at h = T/1000 has its change
+    between the grid points 0.746 and 0.747: located inside that step, 9e-7 T from the exact instant."""
+    from converters.analysis.accuracy import substep_events
+    from converters.methods import Theta
+    model = get_model("buck-boost")
+    p = model.resolve({"D": 0.7, "L": "22u", "R": "5k", "f_sw": "250k"})
+    T = model.period(p)
+    method = Theta(h=T / 1000, theta=0.5)
+    orbit = steady_state(model, p, method, tol=1e-9)
+    tr = replace(simulate(model.problem(p, T, orbit.x0), method), labels=model.labels(p))
+    (pair, kind, instant), = substep_events(tr, T)
+    assert (pair, kind) == ("diode", "held")
+    assert abs(instant - 0.7469041) < 2e-6
+    assert not np.isclose(tr.t / T, instant, atol=2e-5).any()          # not a grid point
+
+
+def test_the_extremum_between_samples_is_the_parabola_vertex():
+    t = np.linspace(0.0, 1.0, 11)
+    v = 1.0 - (t - 0.537) ** 2
+    assert extremum(t, v, np.zeros(11, int), 1.0) == pytest.approx(1.0, abs=1e-15)
+    assert v.max() < 1.0 - 1e-4                              # the samples alone miss it
+    kink = np.minimum(t, 1 - t)                             # a switching edge: the sample itself
+    config = np.array([0] * 6 + [1] * 5)
+    assert extremum(t, kink, config, 1.0) == 0.5
+
+
+@pytest.mark.parametrize("rtol", [0.0, 1e-12, 0.5, math.nan])
+def test_an_rtol_outside_its_range_is_refused(rtol):
+    model = get_model("buck")
+    with pytest.raises(ParameterError, match=r"rtol must be in \[1e-10, 0.1\]"):
+        accurate_steady(model, model.resolve({}), rtol)
