@@ -74,7 +74,7 @@ def duration(model: Model, p: dict, t_end=None, periods=None) -> float:
 
 def run_converter(name_or_model, params: dict | None = None, *, control: str = "pwm", method: str | Method = "lcp",
                   h=None, t_end=None, periods=None, steady: bool = False, steady_tol: float = 1e-6, x0=None,
-                  **options) -> Trajectory:
+                  rtol=None, **options) -> Trajectory:
     """Simulate a model (a converter under ``control``) with any method; returns a labelled Trajectory.
 
     Parameters
@@ -101,10 +101,18 @@ def run_converter(name_or_model, params: dict | None = None, *, control: str = "
         SimulationError with the reason.
     x0 : array_like, optional
         Initial state (default: the model's, at rest).
+    rtol : float, optional
+        Accuracy on request (:func:`converters.analysis.accuracy.accurate_steady`): the periodic steady state
+        with every measure's error estimate below rtol; pcsuite picks the method and h (so neither ``method``
+        nor ``h`` nor method options may be given). ``metadata['accuracy']`` holds each value, its
+        ``error_estimate``, the method and h; the span returned (default ``STEADY_PERIODS``) starts on the orbit.
     """
     model = resolve_model(name_or_model, control)
     p = model.resolve(params)
     start = time.perf_counter()
+    if rtol is not None:
+        return _accurate(model, p, rtol, start, method=method, h=h, t_end=t_end, periods=periods, steady=steady,
+                         x0=x0, options=options)
     method = make_method(model, p, method, h, **options)
     T = model.period(p)
     if steady and t_end is None and periods is None:
@@ -113,7 +121,8 @@ def run_converter(name_or_model, params: dict | None = None, *, control: str = "
     steady_tol = parse_value("steady_tol", steady_tol)
     if not 0.0 < steady_tol < 1.0:
         raise ParameterError(f"steady_tol must be in (0, 1); got {steady_tol!r}")
-    meta = {"model": model.name, "control": model.control, "params": p, "method_options": method.options()}
+    meta = {"model": model.name, "control": model.control, "params": p, "method_options": method.options(),
+            "method_object": method}
     if steady:
         if not model.periodic(p):
             raise ParameterError(f"--steady needs a fixed switching period; {model.key} has none (run --t-end, or find "
@@ -135,6 +144,28 @@ def run_converter(name_or_model, params: dict | None = None, *, control: str = "
         meta.update(periods=int(round(span / T)) if model.periodic(p) else None)
     return replace(tr, labels=model.labels(p), wall_s=time.perf_counter() - start,
                    metadata={**tr.metadata, **meta})
+
+
+def _accurate(model: Model, p: dict, rtol, start: float, *, method, h, t_end, periods, steady, x0, options) -> Trajectory:
+    from .analysis.accuracy import accurate_steady
+    rtol = parse_value("rtol", rtol)
+    given = [name for name, value in (("method", None if method in ("lcp", None) else method), ("h", h),
+                                      *options.items()) if value is not None]
+    if given:
+        raise ParameterError(f"rtol chooses the method and its step; give either rtol or {', '.join(given)}, not "
+                             "both")
+    if not model.periodic(p):
+        raise ParameterError(f"rtol: accuracy on request needs a periodic steady state; {model.key} has no fixed "
+                             "switching period (run --t-end)")
+    result = accurate_steady(model, p, rtol, x0=x0)
+    span = duration(model, p, t_end, periods if (periods is not None or t_end is not None) else STEADY_PERIODS)
+    tr = simulate(model.problem(p, span, result.orbit.x0), result.method)
+    T = model.period(p)
+    simulated = sum(run["periods"] for run in result.runs) + span / T     # every orbit's periods, then the span
+    meta = {"model": model.name, "control": model.control, "params": p, "method_options": result.method.options(),
+            "method_object": result.method, "orbit": result.orbit.summary(), "accuracy": result.summary(),
+            "steady_periods": int(round(simulated)), "periods": int(round(span / T))}
+    return replace(tr, labels=model.labels(p), wall_s=time.perf_counter() - start, metadata={**tr.metadata, **meta})
 
 
 def _simulate_phases(model: Model, p: dict, method: Method, t_end: float, x0) -> Trajectory:
@@ -208,10 +239,28 @@ def run_summary(tr: Trajectory) -> dict:
            "steps": int(tr.steps), "wall_s": tr.wall_s}
     if meta.get("control", "pwm") != "pwm":
         out["control"] = meta["control"]
-    out.update(tr.labels.model.summary(tr, meta["params"]))
+    model, p = tr.labels.model, meta["params"]
+    out.update(model.summary(tr, p))
     for key in ("periods", "steady_periods"):
         if meta.get(key) is not None:
             out[key] = meta[key]
     if "orbit" in meta:
         out["orbit"] = meta["orbit"]
+    if "accuracy" in meta:                      # accuracy on request: the orbit's values and their estimates
+        accuracy = meta["accuracy"]
+        out["vout_mean"] = accuracy["quantities"]["vout_mean"]["value"]
+        out["mode_fractions"] = {k[len("fraction_"):]: q["value"] for k, q in accuracy["quantities"].items()
+                                 if k.startswith("fraction_")}
+        out["accuracy"] = accuracy
+        if not accuracy["met"]:
+            out["warnings"] = [f"rtol {accuracy['rtol']:g} not met: {accuracy['message']}"]
+    elif meta.get("control", "pwm") == "pwm" and model.periodic(p) and "method_object" in meta:
+        from .analysis.accuracy import default_check, last_period
+        period = last_period(model, p, tr)
+        out["mode_fractions"] = period["mode_fractions"]        # read inside the step, not on the grid
+        out["events"] = [{"pair": pair, "kind": kind, "time_T": t} for pair, kind, t in period["events"]]
+        check = default_check(model, p, meta["method_object"], tr, out["vout_mean"])
+        out["accuracy"] = check
+        if "warning" in check:
+            out["warnings"] = [check["warning"]]
     return out

@@ -111,16 +111,17 @@ def _inductor_currents(model) -> list[str]:
     return [name for name in model.state_names if name.startswith("i")]
 
 
-def substep_events(tr, T: float) -> list[tuple[str, str, float]]:
-    """(pair, kind, time / T) of each pair event in [0, T): exact for the event method; for the stepper
-    located inside its step from the quantity that vanishes there (module docstring)."""
+def substep_events(tr, T: float, t0: float = 0.0) -> list[tuple[str, str, float]]:
+    """(pair, kind, (time - t0) / T) of each pair event in [t0, t0 + T): exact for the event method; for the
+    stepper located inside its step from the quantity that vanishes there (module docstring)."""
     events = tr.events
     out = []
     if len(events) == 0:
         return out
     exact = tr.method == "event"
     t, u, y, config = tr.t, tr.u, tr.y, tr.config
-    for row in events.itertuples():
+    window = events[(events["time"] >= t0 - 2 * T / max(t.size, 1)) & (events["time"] <= t0 + T)]
+    for row in window.itertuples():
         pair = int(row.pair)
         kind = "held" if str(row.kind).startswith("act") else "released"
         name = tr.pair_names[pair]
@@ -128,9 +129,9 @@ def substep_events(tr, T: float) -> list[tuple[str, str, float]]:
             time_ = float(row.time)
         else:
             j = int(row.step)
-            time_ = _locate(t, u[:, pair], y[:, pair], config, j, kind)
-        if 0.0 <= time_ < T * (1 - 1e-12):
-            out.append((name, kind, time_ / T))
+            time_ = _locate(t, u[:, pair], y[:, pair], config, j, kind) if j + 1 < t.size else float(t[j])
+        if 0.0 <= time_ - t0 < T * (1 - 1e-12):
+            out.append((name, kind, (time_ - t0) / T))
     return out
 
 
@@ -152,19 +153,24 @@ def _locate(t, u, y, config, j, kind) -> float:
     return float(b)
 
 
-def mode_fractions(tr, T: float, events, edges) -> dict:
-    """Fraction of [0, T] in each mode, its boundaries the switching edges and the event instants."""
-    bounds = np.unique(np.concatenate([[0.0, T], np.asarray(edges, float), [e[2] * T for e in events]]))
-    bounds = bounds[(bounds >= 0.0) & (bounds <= T)]
-    labels = np.asarray(tr.modes()).astype(str)
+def mode_fractions(tr, T: float, events, edges, t0: float = 0.0) -> dict:
+    """Fraction of [t0, t0 + T] in each mode, its boundaries the switching edges (absolute times) and the
+    event instants (in units of T from t0)."""
+    bounds = np.unique(np.concatenate([[t0, t0 + T], np.asarray(edges, float), [t0 + e[2] * T for e in events]]))
+    bounds = bounds[(bounds >= t0) & (bounds <= t0 + T)]
+    first = max(int(np.searchsorted(tr.t, t0)) - 1, 0)
+    last = min(int(np.searchsorted(tr.t, t0 + T, side="right")) + 1, tr.t.size)
+    rows = np.arange(first, last)
+    t = tr.t[rows]
+    labels = np.asarray(tr.modes(rows)).astype(str)
     out: dict = {}
     for a, b in zip(bounds[:-1], bounds[1:]):
         if b - a <= 1e-12 * T:
             continue
-        j = int(np.searchsorted(tr.t, a + 1e-9 * T, side="right"))      # the first step ending inside (a, b]
+        j = int(np.searchsorted(t, a + 1e-9 * T, side="right"))         # the first step ending inside (a, b]
         if tr.method == "event":                                        # its samples sit on the events
-            j = int(np.searchsorted(tr.t, 0.5 * (a + b)))
-        j = min(max(j, 1), tr.t.size - 1)
+            j = int(np.searchsorted(t, 0.5 * (a + b)))
+        j = min(max(j, 1), t.size - 1)
         out[labels[j]] = out.get(labels[j], 0.0) + (b - a) / T
     return out
 
@@ -304,7 +310,8 @@ def accurate_steady(model, p: dict, rtol: float, *, x0=None, progress=None) -> A
         start = time.perf_counter()
         orbit, tr = _orbit(model, p, method, guess, warm_up, tol)
         runs.append({"method": method.key, "steps_per_period": int(round(T / method.h)) if method.key == "lcp" else None,
-                     "wall_s": time.perf_counter() - start, "orbit_distance": orbit.distance})
+                     "periods": int(warm_up + orbit.evaluations + 1), "wall_s": time.perf_counter() - start,
+                     "orbit_distance": orbit.distance})
         return orbit, tr
 
     n = FIRST_STEPS
@@ -358,4 +365,76 @@ def accurate_steady(model, p: dict, rtol: float, *, x0=None, progress=None) -> A
     return replace(result, met=met, message=message, wall_s=time.perf_counter() - clock)
 
 
-__all__ = ["accurate_steady", "AccurateSteady", "Estimate", "measures", "substep_events", "mode_fractions"]
+# --- what a run with the defaults can claim --------------------------------------------------------------
+
+#: The accuracy the defaults promise on every reported mean, or warn about.
+DEFAULT_RTOL = 1e-3
+#: A conduction interval spanning fewer steps than this is named in the warning.
+FEW_STEPS = 20
+
+
+def last_period(model, p: dict, tr) -> dict:
+    """The last period's mode fractions and event instants read inside the step (not on the output grid)."""
+    T = model.period(p)
+    t0 = float(tr.t[-1]) - T
+    edges = model.problem(p, float(tr.t[-1])).switching.breakpoints(t0, t0 + T)
+    boundaries = np.concatenate([np.asarray(edges, float), [t0, t0 + T]])
+    events = [e for e in substep_events(tr, T, t0)
+              if not np.any(np.abs(boundaries - (t0 + e[2] * T)) <= 1e-9 * T)]
+    fractions = mode_fractions(tr, T, events, edges, t0)
+    bounds = np.unique(np.concatenate([boundaries, [t0 + e[2] * T for e in events]]))
+    return {"mode_fractions": fractions, "events": events, "t0": t0,
+            "shortest_interval_T": float(np.diff(bounds)[np.diff(bounds) > 1e-12 * T].min() / T)}
+
+
+def default_check(model, p: dict, method, tr, reported: float) -> dict:
+    """How far the reported mean (vout over the run's last 10 periods) may be from the exact periodic one:
+    the run's distance to the method's own orbit (a transient not settled) plus the method's discretization
+    error, Richardson's from the orbit at h and 2h (the stepper's declared order; the event method: none).
+    Returns the estimate, its parts, the shortest interval between switchings in steps, and a warning when
+    the estimate exceeds ``DEFAULT_RTOL``."""
+    from .periodic import shoot
+    T = model.period(p)
+    out = {"target": DEFAULT_RTOL}
+    if method.key not in ("lcp", "event"):
+        return {**out, "checked": False, "reason": f"the {method.key} method's error is its model's (O(eps)), "
+                "not estimated here"}
+    problem = model.problem(p, T, tr.x[-1])
+    orbit = shoot(problem, method, tr.x[-1], tol=1e-8, polish=True)
+    if not orbit.converged:
+        return {**out, "checked": False, "reason": f"the method's periodic orbit was not found ({orbit.message})"}
+
+    def orbit_mean(m, x0):
+        from ..simulate import simulate
+        run = replace(simulate(model.problem(p, T, x0), m), labels=model.labels(p))
+        return run.mean("vout", t0=0.0, t1=T)
+    m_h = orbit_mean(method, orbit.x0)
+    exact = m_h
+    if method.key == "lcp":
+        coarse = replace(method, h=2 * method.h)
+        orbit_2h = shoot(model.problem(p, T, orbit.x0), coarse, orbit.x0, tol=1e-8, polish=True)
+        if not orbit_2h.converged:
+            return {**out, "checked": False, "reason": f"the orbit at 2h was not found ({orbit_2h.message})"}
+        exact = m_h + (m_h - orbit_mean(coarse, orbit_2h.x0)) / (2.0 ** method.order - 1.0)
+    scale = max(abs(exact), 1e-300)
+    transient, discretization = abs(reported - m_h) / scale, abs(m_h - exact) / scale
+    error = abs(reported - exact) / scale
+    period = last_period(model, p, tr)
+    step = getattr(method, "h", None)
+    out.update(checked=True, vout_mean_error_estimate=error, transient=transient, discretization=discretization,
+               shortest_interval_steps=period["shortest_interval_T"] * T / step if step else None)
+    if error > DEFAULT_RTOL:
+        reasons = []
+        if transient > 0.5 * error:
+            reasons.append(f"the run has not settled ({transient:.1e} from the periodic orbit): use --steady")
+        if discretization > 0.5 * error:
+            few = out["shortest_interval_steps"]
+            reasons.append("the step is too coarse" + (f" (the shortest interval spans {few:.0f} steps)"
+                                                       if few is not None and few < FEW_STEPS else "")
+                           + ": use --rtol 1e-4 (or a smaller --h)")
+        out["warning"] = (f"vout mean may be {error:.1e} off (more than {DEFAULT_RTOL:g}): " + "; ".join(reasons))
+    return out
+
+
+__all__ = ["accurate_steady", "AccurateSteady", "Estimate", "measures", "substep_events", "mode_fractions",
+           "default_check", "last_period", "DEFAULT_RTOL"]

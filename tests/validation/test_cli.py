@@ -104,3 +104,53 @@ def test_console_script_runs_as_a_program():
 def test_a_window_shorter_than_a_step_is_still_measured(capsys):
     code, out, _ = run_cli(capsys, "simulate", "boost", "--control", "smc-implicit", "--t-end", "3u", "--json")
     assert code == 0 and json.loads(out)["steps"] == 3
+
+
+LIGHT_DCM = ["buck-boost", "-p", "D=0.7", "-p", "L=22u", "-p", "R=5k", "-p", "f_sw=250k"]
+LIGHT_DCM_EXACT = -179.08860175                    # the exact (event-driven) orbit's mean of vout
+
+
+def test_simulate_rtol_reports_each_value_with_its_error_estimate_method_and_h(capsys):
+    code, out, err = run_cli(capsys, "simulate", *LIGHT_DCM, "--rtol", "1e-4", "--json")
+    assert code == 0 and "warning" not in err
+    summary = json.loads(out)
+    accuracy = summary["accuracy"]
+    assert accuracy["met"] and accuracy["rtol"] == 1e-4 and accuracy["method"] == "lcp"
+    assert accuracy["h"] == pytest.approx(4e-6 / accuracy["steps_per_period"]) and accuracy["theta"] == 0.5
+    mean = accuracy["quantities"]["vout_mean"]
+    assert summary["vout_mean"] == mean["value"]
+    assert abs(mean["value"] - LIGHT_DCM_EXACT) / 179.0886 <= 1e-4                   # measured 4.8e-6
+    assert mean["relative_error_estimate"] <= 1e-4 / 4
+    assert set(accuracy["quantities"]) >= {"vout_mean", "vout_ripple", "iL_rms", "iL_peak", "fraction_DCM"}
+    (event,) = accuracy["events"]
+    assert event["pair"] == "diode" and event["time_T"] == pytest.approx(0.7469041, abs=1e-5)
+    assert summary["mode_fractions"]["DCM"] == pytest.approx(1 - 0.7469041, abs=1e-5)
+
+
+def test_the_default_steady_run_warns_that_its_mean_is_1_percent_off(capsys):
+    code, out, err = run_cli(capsys, "simulate", *LIGHT_DCM, "--steady", "--json")
+    summary = json.loads(out)
+    assert code == 0 and abs(summary["vout_mean"] / LIGHT_DCM_EXACT - 1) == pytest.approx(1.05e-2, rel=0.01)
+    assert summary["accuracy"]["vout_mean_error_estimate"] == pytest.approx(1.05e-2, rel=0.01)
+    assert summary["warnings"] == ["vout mean may be 1.1e-02 off (more than 0.001): the step is too coarse: use "
+                                   "--rtol 1e-4 (or a smaller --h)"]
+    code, out, err = run_cli(capsys, "simulate", *LIGHT_DCM, "--steady")
+    assert "warning: vout mean may be 1.1e-02 off" in err
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--rtol", "1e-4", "--h", "1n"], "--rtol chooses the method and its step; give either --rtol or --h"),
+    (["--rtol", "1e-4", "--method", "event"], "give either --rtol or --method"),
+    (["--rtol", "0"], r"rtol must be in [1e-10, 0.1]; got 0"),
+    (["--rtol", "abc"], "rtol"),
+    (["--solver-rtol", "1e-8"], "--eps and --solver-rtol apply to --method smooth only"),
+])
+def test_accuracy_flags_are_never_ignored(capsys, argv, message):
+    code, out, err = run_cli(capsys, "simulate", "buck", *argv)
+    assert code == 2 and message in err and len(err.strip().splitlines()) == 1
+
+
+def test_the_smoothing_solver_tolerance_is_solver_rtol(capsys):
+    code, out, _ = run_cli(capsys, "simulate", "buck", "--method", "smooth", "--solver-rtol", "1e-8", "--periods", "2",
+                           "--json")
+    assert code == 0 and json.loads(out)["options"]["solver_rtol"] == 1e-8

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import json
+import sys
 import time
 from pathlib import Path
 
@@ -17,13 +18,18 @@ def add(sub) -> None:
     sim.add_argument("converter")
     add_params(sim)
     lcs = {key: cls for key, cls in METHODS.items() if "lcs" in cls.domains}
-    sim.add_argument("--method", default="lcp", choices=[*lcs, "spice"],
+    sim.add_argument("--method", default=None, choices=[*lcs, "spice"],
                      help="; ".join(f"{key}: {cls.description}" for key, cls in lcs.items())
-                     + "; spice: the same circuit in ngspice")
+                     + "; spice: the same circuit in ngspice (default lcp; with --rtol pcsuite chooses)")
     sim.add_argument("--h", default=None, help="step in s (default T/1000; PRC 50 ns); event and smooth: "
                                               "output sample spacing")
     sim.add_argument("--eps", default=None, help="smooth: smoothing width eps (default 1e-4, units of y)")
-    sim.add_argument("--rtol", default=None, help="smooth: solver relative tolerance (default 1e-6)")
+    sim.add_argument("--rtol", default=None,
+                     help="accuracy on request: the periodic steady state with every reported value's error "
+                          "estimate below RTOL (relative; mode fractions and event instants in units of T); "
+                          "pcsuite chooses the method and step and reports them")
+    sim.add_argument("--solver-rtol", default=None, help="smooth: scipy's relative tolerance (default 1e-6; the "
+                                                         "result's error is the smoothing's, O(eps))")
     sim.add_argument("--theta", default=None, help="theta in [0.5, 1] (default 1, PRC 0.5)")
     span = sim.add_mutually_exclusive_group()
     span.add_argument("--t-end", default=None, help="duration in s (with --steady: the span returned on the orbit)")
@@ -47,17 +53,26 @@ def run(args) -> int:
     from converters.run import run_converter, run_summary
     check_out(args.out)
     params = parse_assignments(args.params)
-    if args.method == "spice":
+    if args.rtol is not None:
+        given = [flag for flag, value in (("--method", args.method), ("--h", args.h), ("--theta", args.theta),
+                                          ("--eps", args.eps), ("--solver-rtol", args.solver_rtol)) if value is not None]
+        if given:
+            raise ParameterError(f"--rtol chooses the method and its step; give either --rtol or {', '.join(given)}")
+        tr = run_converter(args.converter, params, control=args.control, t_end=args.t_end, periods=args.periods,
+                           rtol=args.rtol)
+        summary = run_summary(tr)
+    elif args.method == "spice":
         tr, summary = _spice(args, params)
     else:
-        options = {"theta": args.theta} if args.method == "lcp" else {}
-        if args.method == "smooth":
-            options.update(eps=args.eps, rtol=args.rtol)
-        elif args.eps is not None or args.rtol is not None:
-            raise ParameterError(f"--eps and --rtol apply to --method smooth only; got --method {args.method}")
-        if args.theta is not None and args.method != "lcp":
-            raise ParameterError(f"--theta applies to --method lcp only; got --method {args.method}")
-        tr = run_converter(args.converter, params, control=args.control, method=args.method, h=args.h,
+        method = args.method or "lcp"
+        options = {"theta": args.theta} if method == "lcp" else {}
+        if method == "smooth":
+            options.update(eps=args.eps, solver_rtol=args.solver_rtol)
+        elif args.eps is not None or args.solver_rtol is not None:
+            raise ParameterError(f"--eps and --solver-rtol apply to --method smooth only; got --method {method}")
+        if args.theta is not None and method != "lcp":
+            raise ParameterError(f"--theta applies to --method lcp only; got --method {method}")
+        tr = run_converter(args.converter, params, control=args.control, method=method, h=args.h,
                            t_end=args.t_end, periods=args.periods, steady=args.steady, steady_tol=args.steady_tol,
                            **options)
         summary = run_summary(tr)
@@ -118,6 +133,21 @@ def _print(summary: dict, tr, args) -> None:
               f"iterations, distance to the orbit {orbit['distance']:.2g}, Floquet spectral radius "
               f"{orbit['spectral_radius']:.6g})")
     if "mode_fractions" in summary:
-        print("modes (last period): " + ", ".join(f"{k} {v:.3f}" for k, v in summary["mode_fractions"].items()))
+        print("modes (last period): " + ", ".join(f"{k} {v:.6f}" for k, v in summary["mode_fractions"].items()))
+    accuracy = summary.get("accuracy", {})
+    if "quantities" in accuracy:
+        how = (f"{accuracy['method']}" + (f", h = T/{accuracy['steps_per_period']}, theta {accuracy['theta']:g}"
+                                         if accuracy["steps_per_period"] else ", exact flows"))
+        print(f"accuracy on request: rtol {accuracy['rtol']:g} {'met' if accuracy['met'] else 'NOT met'} ({how}; "
+              f"{accuracy['wall_s']:.3f} s)")
+        for name, q in accuracy["quantities"].items():
+            print(f"  {name:18s} {q['value']:.10g}  +- {q['error_estimate']:.2g} ({q['relative_error_estimate']:.1g})")
+        for event in accuracy["events"]:
+            print(f"  {event['pair']} {event['kind']} at {event['time_T']:.9f} T  +- {event['error_estimate_T']:.2g} T")
+    elif accuracy.get("checked"):
+        print(f"vout mean within ~{accuracy['vout_mean_error_estimate']:.1g} (relative) of the exact periodic value "
+              f"(estimated: the run's distance to its orbit and Richardson at h and 2h)")
+    for warning in summary.get("warnings", []):
+        print(f"warning: {warning}", file=sys.stderr)
     if args.out is not None:
         print(f"wrote {args.out}")
