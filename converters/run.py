@@ -84,7 +84,7 @@ def run_converter(name_or_model, params: dict | None = None, *, control: str = "
     params : dict
         Parameter values (numbers or SPICE-style strings); unknown names are refused.
     method : str or Method
-        ``lcp``, ``event``, ``smooth`` (built from ``h`` and ``options``: ``theta``, ``eps``, ``rtol``,
+        ``lcp``, ``event``, ``smooth`` (built from ``h`` and ``options``: ``theta``, ``eps``, ``solver_rtol``,
         ``event_tol``, ...), or a Method object.
     h : float, optional
         The stepper's step, or the output spacing of the other methods (default: the model's, T/1000).

@@ -54,7 +54,7 @@ class Comparison:
 
 def compare(converter: str, params: dict | None = None, *, periods: int | None = None, window: int | None = None,
             h=None, theta=None, spice_options: SpiceOptions | None = None, start: str | None = None,
-            thresholds: dict | None = None) -> Comparison:
+            thresholds: dict | None = None, rtol=None) -> Comparison:
     """Run both simulators on the same circuit and measure their agreement.
 
     ``start``: 'steady' (both start on the LCP's periodic orbit) or 'rest'; the default, ``periods`` and
@@ -72,9 +72,15 @@ def compare(converter: str, params: dict | None = None, *, periods: int | None =
     if not 1 <= window <= periods:
         raise ParameterError(f"window must be in [1, periods = {periods}]; got {window}")
     x_star = None
-    if start == "steady":
-        x_star = steady_state(model, p, make_method(model, p, "lcp", h, theta=theta), tol=1e-7).x0
-    lcp = run_converter(model, p, h=h, theta=theta, periods=periods, x0=x_star)
+    if rtol is not None:                        # accuracy on request: the LCP side on its accurate orbit
+        if start != "steady":
+            raise ParameterError("rtol gives the periodic steady state; it needs start = 'steady'")
+        lcp = run_converter(model, p, periods=periods, rtol=rtol, h=h, theta=theta)
+        x_star = lcp.x[0]
+    else:
+        if start == "steady":
+            x_star = steady_state(model, p, make_method(model, p, "lcp", h, theta=theta), tol=1e-7).x0
+        lcp = run_converter(model, p, h=h, theta=theta, periods=periods, x0=x_star)
     netlist = build_netlist(model.name, p, periods * T, spice_options, x0=x_star)
     window_start = (periods - window) * T
     spice = spice_trajectory(model, p, netlist, run_spice(netlist), window_start)

@@ -11,7 +11,7 @@ the converter (range errors name the parameter); thresholds must be positive num
                                             # "smc-implicit"); params are then those of converters.models.sliding
     [params]            # converter parameters, SPICE suffixes allowed
     [run]               # start = "steady" | "rest", periods, window; control scenes: t_end
-    [methods.lcp]       # h, theta
+    [methods.lcp]       # h, theta; or rtol (accuracy on request: pcsuite picks the method and h)
     [methods.spice]     # tmax_fraction, reltol, method, diode_n, diode_is, switch_ron, switch_roff
     [checks]            # vout_mean_rel, mode_agreement, turn_off_error_T, closed_form_rel;
                         # control scenes: vout_ref_rel, frequency_rel, frequency_agreement,
@@ -33,7 +33,7 @@ from .defaults import THRESHOLDS
 SCENE_DIR = Path(__file__).with_name("scenes")
 TOP_KEYS = ("name", "converter", "description", "suites", "control", "params", "run", "methods", "checks")
 RUN_KEYS = ("start", "periods", "window", "t_end")
-METHOD_KEYS = {"lcp": ("h", "theta"), "spice": tuple(SpiceOptions.__dataclass_fields__)}
+METHOD_KEYS = {"lcp": ("h", "theta", "rtol"), "spice": tuple(SpiceOptions.__dataclass_fields__)}
 CHECK_KEYS = ("vout_mean_rel", "mode_agreement", "turn_off_error_T", "closed_form_rel", "vout_ref_rel",
               "frequency_rel", "frequency_agreement", "recovery_agreement", "lambda_settle")
 #: The study each control runs, whose thresholds (data/defaults.toml) are the scene's default checks.
@@ -101,6 +101,16 @@ def load_scene(path) -> Scene:
     for method, table in methods.items():
         _strict(table, METHOD_KEYS[method], f"{where} [methods.{method}]")
     SpiceOptions(**methods.get("spice", {}))  # validates values
+    lcp = methods.get("lcp", {})
+    if "rtol" in lcp:
+        if set(lcp) & {"h", "theta"}:
+            raise ParameterError(f"{where} [methods.lcp]: rtol chooses the method and its step; give either rtol or "
+                                 f"{' and '.join(sorted(set(lcp) & {'h', 'theta'}))}")
+        from converters.analysis.accuracy import RTOL_RANGE
+        rtol = parse_value(f"{where} [methods.lcp] rtol", lcp["rtol"])
+        if not RTOL_RANGE[0] <= rtol <= RTOL_RANGE[1]:
+            raise ParameterError(f"{where} [methods.lcp] rtol must be in [{RTOL_RANGE[0]:g}, {RTOL_RANGE[1]:g}]; "
+                                 f"got {lcp['rtol']!r}")
     checks = data.get("checks", {})
     _strict(checks, CHECK_KEYS, f"{where} [checks]")
     for key, value in checks.items():

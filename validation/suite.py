@@ -35,6 +35,7 @@ class SceneResult:
     gdcm: dict = field(default_factory=dict)
     files: dict = field(default_factory=dict)
     wall_s: float = 0.0
+    accuracy: dict = field(default_factory=dict)     # the LCP side's, when the scene asks for an rtol
 
 
 def run_scene(scene: Scene) -> SceneResult:
@@ -56,7 +57,7 @@ def _run_scene(scene: Scene) -> SceneResult:
     conv = get_converter(scene.converter)
     c = compare(scene.converter, scene.params, periods=scene.run.get("periods"), window=scene.run.get("window"),
                 h=scene.lcp.get("h"), theta=scene.lcp.get("theta"), spice_options=SpiceOptions(**scene.spice),
-                start=scene.run.get("start"), thresholds=scene.checks)
+                start=scene.run.get("start"), thresholds=scene.checks, rtol=scene.lcp.get("rtol"))
     m = c.metrics
     checks = list(c.rows)
     gdcm = {}
@@ -82,7 +83,8 @@ def _run_scene(scene: Scene) -> SceneResult:
     ok = all(check[3] for check in checks)
     failed = [name for name, _, _, passed in checks if not passed]
     return SceneResult(scene, ok=ok, reason=("failed checks: " + ", ".join(failed)) if failed else "",
-                       checks=checks, metrics=m, gdcm=gdcm, files=files)
+                       checks=checks, metrics=m, gdcm=gdcm, files=files,
+                       accuracy=c.lcp.metadata.get("accuracy", {}))
 
 
 def _check(name, value, scene, label=None):
@@ -145,7 +147,8 @@ def scene_section(result: SceneResult) -> Section:
                      if f"{base}{name}" in result.files)
     links = ", ".join(f"<a href='{base}{name}'>{label} (Parquet)</a>" for name, label in
                       (("lcp.parquet", "LCP"), ("spice.parquet", "ngspice")) if f"{base}{name}" in result.files)
-    body = (head + verdict + table_html(checks.drop(columns="pass"), "result", good=("pass",)) + images
+    body = (head + verdict + table_html(checks.drop(columns="pass"), "result", good=("pass",))
+            + accuracy_html(result.accuracy) + images
             + "<details><summary>All metrics</summary>" + table_html(metrics) + "</details>"
             + f"<p>Waveforms: {links}.</p>")
     if not result.ok:
@@ -153,6 +156,22 @@ def scene_section(result: SceneResult) -> Section:
     return Section(title, body, files=result.files, ok=result.ok,
                    metrics={"checks": {c[0]: {"value": c[1], "threshold": c[2], "pass": c[3]} for c in result.checks},
                             "gdcm": result.gdcm, "wall_s": result.wall_s})
+
+
+def accuracy_html(accuracy: dict) -> str:
+    """The LCP side's values with their error estimates, and the method and h chosen (accuracy on request)."""
+    if not accuracy:
+        return ""
+    rows = [{"quantity": name, "value": q["value"], "error_estimate": q["error_estimate"],
+             "relative": q["relative_error_estimate"]} for name, q in accuracy["quantities"].items()]
+    rows += [{"quantity": f"{e['pair']} {e['kind']} (t/T)", "value": e["time_T"], "error_estimate": e["error_estimate_T"],
+              "relative": e["error_estimate_T"]} for e in accuracy["events"]]
+    how = (f"the stepper, theta {accuracy['theta']:g}, h = T/{accuracy['steps_per_period']}"
+           if accuracy["steps_per_period"] else "the event method (exact flows)")
+    verdict = "met" if accuracy["met"] else f"NOT met ({html.escape(accuracy['message'])})"
+    return (f"<p>Accuracy on request: rtol {accuracy['rtol']:g} {verdict} by {how} in {accuracy['wall_s']:.3f} s "
+            "(Richardson estimates from two steps, module converters.analysis.accuracy):</p>"
+            + table_html(pd.DataFrame(rows)))
 
 
 def scenes_summary(results: list[SceneResult]) -> Section:

@@ -331,3 +331,88 @@ def stiffness_table(eps_values=(1e-2, 1e-3, 1e-4, 1e-5, 1e-6), case: Case = CASE
         rows.append({"eps": eps, "stiffness_rho_T": row["stiffness_rho_T"], "rhs_evaluations": row["steps"],
                      "wall_s": row["wall_s"], "error": row["error"]})
     return pd.DataFrame(rows)
+
+
+# --- accuracy on request against hand-picked settings and ngspice -------------------------------------------
+
+ACCURACY_TARGETS = (1e-3, 1e-5, 1e-7)
+HAND_STEPS = tuple(25 * 2 ** k for k in range(13))          # 25 .. 102,400 steps per period
+SPICE_SETTINGS = tuple((d, r) for d in (100, 1000, 10000) for r in (1e-3, 1e-5, 1e-7))
+
+
+def _steady_measures(model, p, method, tol: float):
+    """What ``--steady`` with this method reports: the orbit (Newton from rest), one period, its measures."""
+    from converters.analysis.accuracy import measures
+    from converters.run import steady_state
+    T = model.period(p)
+    orbit = steady_state(model, p, method, tol=tol)
+    return measures(model, p, _labelled(model, p, simulate(model.problem(p, T, orbit.x0), method)), T)
+
+
+def _worst(values: dict, exact: dict) -> float:
+    """The largest relative error of the reported values (mode fractions: absolute, in units of T)."""
+    worst = 0.0
+    for name, (value, scale) in exact.items():
+        got = values.get(name, (0.0, scale))[0]
+        worst = max(worst, abs(got - value) / scale)
+    return worst
+
+
+def _timed(run, repeats: int = 3):
+    """Best of ``repeats`` wall times and the last result; (inf, None) when the run raises."""
+    try:
+        return _best_of(run, repeats=repeats, threshold=1.0)
+    except Exception:                           # a setting that cannot find its orbit does not meet the target
+        return float("inf"), None
+
+
+def accuracy_on_request(cases=CASES, targets=ACCURACY_TARGETS, spice: bool = True, progress: bool = True) -> pd.DataFrame:
+    """Per case and target R: the time ``accurate_steady`` takes to give every reported value (vout's mean
+    and ripple, the inductor currents' RMS and peak, the mode fractions) within R of the exact orbit's; the
+    cheapest hand-picked setting doing the same, knowing the answer (the stepper at theta 1 and 0.5 over
+    25 .. 102,400 steps per period, or the event method; each ``--steady`` from rest and the same measures);
+    their ratio; and ngspice started on the exact orbit, 10 periods, the cheapest TMAX/RELTOL whose mean
+    vout reaches R, if any. Best of 3 wall times each."""
+    from tqdm import tqdm
+
+    from converters.analysis.accuracy import accurate_steady
+    rows = []
+    jobs = [(case, R) for case in cases for R in targets]
+    for case, R in tqdm(jobs, desc="accuracy on request", unit="run", disable=not progress):
+        model = get_converter(case.converter)
+        p = model.resolve(case.params)
+        T = model.period(p)
+        exact, _ = _steady_measures(model, p, EventDriven(output_step=T / 65536), 1e-9)
+        auto_wall, auto = _timed(lambda: accurate_steady(model, p, R))
+        values = {name: (q.value, q.scale) for name, q in auto.quantities.items()}
+        hand = []
+        for theta in (1.0, 0.5):
+            for steps in HAND_STEPS:
+                wall, out = _timed(lambda: _steady_measures(model, p, Theta(h=T / steps, theta=theta), R / 100))
+                if out is not None and _worst(out[0], exact) <= R:
+                    hand.append((wall, f"theta {theta:g}, h = T/{steps}"))
+                    break                       # a finer step only costs more
+        wall, out = _timed(lambda: _steady_measures(model, p, EventDriven(), R / 100))
+        if out is not None and _worst(out[0], exact) <= R:
+            hand.append((wall, "event"))
+        best_wall, best = min(hand) if hand else (float("nan"), "none")
+        mean_error = abs(auto.quantities["vout_mean"].value - exact["vout_mean"][0]) / exact["vout_mean"][1]
+        row = {"case": case.name, "rtol": R, "auto_s": auto_wall, "auto_error": _worst(values, exact),
+               "auto_mean_error": mean_error, "auto_estimate": auto.worst(), "auto_method": auto.method.key,
+               "auto_steps": auto.steps_per_period, "best_hand_s": best_wall, "best_hand": best,
+               "ratio": auto_wall / best_wall}
+        if spice:
+            ref = Reference(case, p, T, _exact_x0(model, p), exact["vout_mean"][0], float("nan"), np.empty(0), 0.0)
+            reached = []
+            for tmax_div, reltol in SPICE_SETTINGS:
+                r = measure_spice(ref, tmax_div, reltol, "trap", periods=10)
+                if np.isfinite(r.get("error", np.nan)) and r["err_mean_vout"] <= R:
+                    reached.append((r["wall_s"], f"TMAX=T/{tmax_div} RELTOL={reltol:g}"))
+            row["spice_s"], row["spice"] = min(reached) if reached else (float("nan"), "cannot reach it")
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def _exact_x0(model, p):
+    from converters.run import steady_state
+    return steady_state(model, p, EventDriven(), tol=1e-9).x0

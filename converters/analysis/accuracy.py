@@ -6,10 +6,12 @@ an ``error_estimate``, chosen so that every one meets a relative tolerance ``rto
 instants: absolute, in units of T):
 
 * **Stepper** (theta = 0.5, declared order p = 2): the method's own orbit at N and 2N steps per period;
-  the estimate of each 2N value is Richardson's |Q(2N) - Q(N)| / (2^p - 1). While an estimate is above
-  ``rtol`` / ``SAFETY`` (through a diode event the stepper's order falls below its declared 2, and the
-  estimate can then be up to ~3x short), N grows by the factor the estimates predict. The finer orbit starts
-  from the coarser one (no second warm-up). Event instants are read inside the step, by extrapolating the
+  the estimate of each value at N' = r N (first 200 from 100) is Richardson's |Q(N') - Q(N)| / (r^p - 1).
+  While an estimate is above ``rtol`` / ``SAFETY`` (through a diode event the stepper's order falls below
+  its declared 2), the next N' is the one the estimates and the order predict (x 1.2), compared with the
+  last run when r <= ``MAX_RATIO``, else with a new one at N' / 2. An estimate is never below what the
+  previous one predicts at N' by the order (two runs that agree by chance are not convergence). Every
+  orbit starts from the previous one (one warm-up). Event instants are read inside the step, by extrapolating the
   pair's vanishing quantity (y before it is held, u before it is released) from the two steps before it
   (or, after a switching edge, back from the two after it); the mode fractions come from those instants
   and the switching edges, not from the step grid.
@@ -36,13 +38,18 @@ from ..errors import ParameterError, SimulationError
 
 #: Estimates must fall below rtol / SAFETY (the stepper's effective order through a diode event is ~1.3-1.5,
 #: not its declared 2, so Richardson with p = 2 can underestimate by up to ~3x).
-SAFETY = 4.0
+SAFETY = 2.0
 #: Steps per period for the first (coarse) orbit, and the most the stepper is asked for before the event
 #: method takes over.
 FIRST_STEPS = 100
 MAX_STEPS = 1 << 17
-#: Largest growth of N between two refinements.
+#: Largest growth of N between two refinements, and the largest ratio of the steps of the two runs an
+#: estimate compares (from a jump of 10x the coarse value is not yet asymptotic: an extremum's estimate came
+#: out 16x short).
 MAX_GROWTH = 16
+MAX_RATIO = 2
+#: An estimate may fall at most 1/GUARD below what the previous one predicts by the order (:func:`_guarded`).
+GUARD = 0.1
 THETA = 0.5
 #: The event method's output samples per period (ripple and peaks are read on them; the estimate of that
 #: reading is Richardson's on every other sample, the sampling error being O(spacing^2) at a smooth extremum).
@@ -114,24 +121,24 @@ def _inductor_currents(model) -> list[str]:
 def substep_events(tr, T: float, t0: float = 0.0) -> list[tuple[str, str, float]]:
     """(pair, kind, (time - t0) / T) of each pair event in [t0, t0 + T): exact for the event method; for the
     stepper located inside its step from the quantity that vanishes there (module docstring)."""
-    events = tr.events
+    columns = tr.event_columns if tr.event_columns is not None else {}
+    times = np.asarray(columns.get("time", ()), dtype=float)
     out = []
-    if len(events) == 0:
+    if times.size == 0:
         return out
+    steps, pairs = np.asarray(columns["step"]), np.asarray(columns["pair"])
+    kinds = np.asarray(columns["kind"]).astype(str)
     exact = tr.method == "event"
     t, u, y, config = tr.t, tr.u, tr.y, tr.config
-    window = events[(events["time"] >= t0 - 2 * T / max(t.size, 1)) & (events["time"] <= t0 + T)]
-    for row in window.itertuples():
-        pair = int(row.pair)
-        kind = "held" if str(row.kind).startswith("act") else "released"
-        name = tr.pair_names[pair]
+    for k in np.flatnonzero((times >= t0 - 2 * T / max(t.size, 1)) & (times <= t0 + T)):
+        pair, j = int(pairs[k]), int(steps[k])
+        kind = "held" if kinds[k].startswith("act") else "released"
         if exact:
-            time_ = float(row.time)
+            time_ = float(times[k])
         else:
-            j = int(row.step)
             time_ = _locate(t, u[:, pair], y[:, pair], config, j, kind) if j + 1 < t.size else float(t[j])
         if 0.0 <= time_ - t0 < T * (1 - 1e-12):
-            out.append((name, kind, (time_ - t0) / T))
+            out.append((tr.pair_names[pair], kind, (time_ - t0) / T))
     return out
 
 
@@ -175,13 +182,14 @@ def mode_fractions(tr, T: float, events, edges, t0: float = 0.0) -> dict:
     return out
 
 
-def extremum(t, v, config, sign: float) -> float:
+def extremum(t, v, config, sign: float, at_events=()) -> float:
     """sign x the largest of sign * v between samples: at a smooth extremum inside one configuration the
     vertex of the parabola through the three samples around the largest (the sampled value is O(h^2) short of
-    it); at a switching edge (a kink) the sample itself."""
+    it); at a switching edge (a kink) the sample itself; at a pair event inside a step (a kink between
+    samples) the value there, ``at_events`` (:func:`event_values`)."""
     w = sign * np.asarray(v, dtype=float)
     j = int(np.argmax(w))
-    best = w[j]
+    best = max([w[j], *(sign * e for e in at_events)])
     if 0 < j < w.size - 1 and config is not None and config[j] == config[j + 1]:
         t0, t1, t2 = t[j - 1], t[j], t[j + 1]
         if t0 < t1 < t2:
@@ -196,26 +204,42 @@ def extremum(t, v, config, sign: float) -> float:
     return float(sign * best)
 
 
+def event_values(tr, v, instants) -> list[float]:
+    """v at each event instant inside a step, extrapolated from the two samples before it (same configuration:
+    O(h^2)); an instant on a sample takes the sample."""
+    out = []
+    t = tr.t
+    for instant in instants:
+        j = int(np.searchsorted(t, instant, side="right")) - 1
+        if 0 <= j < t.size and t[j] == instant:
+            out.append(float(v[j]))
+        elif j >= 1 and tr.config is not None and tr.config[j] == tr.config[j - 1] and t[j] > t[j - 1]:
+            out.append(float(v[j] + (v[j] - v[j - 1]) / (t[j] - t[j - 1]) * (instant - t[j])))
+    return out
+
+
 def measures(model, p: dict, tr, T: float) -> tuple[dict, list]:
     """({name: (value, scale)}, events) of one period of ``tr`` starting at 0."""
     values = {}
+    edges = np.asarray(model.problem(p, T).switching.breakpoints(0.0, T), dtype=float)
+    # a pair that changes at a switching edge changes with the configuration: an edge, not a state event
+    events = [e for e in substep_events(tr, T)
+              if not np.any(np.abs(np.concatenate([edges, [0.0, T]]) - e[2] * T) <= 1e-9 * T)]
+    instants = [e[2] * T for e in events] if tr.method != "event" else []
     mean = tr.mean("vout", t0=0.0, t1=T)
     values["vout_mean"] = (mean, abs(mean))
     rows = np.arange(tr.t.size)
     vout = np.asarray(tr.signal("vout", rows), dtype=float)
-    ripple = extremum(tr.t, vout, tr.config, 1.0) - extremum(tr.t, vout, tr.config, -1.0)
+    at = event_values(tr, vout, instants)
+    ripple = extremum(tr.t, vout, tr.config, 1.0, at) - extremum(tr.t, vout, tr.config, -1.0, at)
     values["vout_ripple"] = (ripple, max(abs(ripple), 1e-6 * abs(mean)))
     for name in _inductor_currents(model):
         rms = tr.rms(name, t0=0.0, t1=T)
         values[f"{name}_rms"] = (rms, abs(rms))
         current = tr.state(name)
         sign = 1.0 if current.max() >= -current.min() else -1.0
-        peak = extremum(tr.t, current, tr.config, sign)
+        peak = extremum(tr.t, current, tr.config, sign, event_values(tr, current, instants))
         values[f"{name}_peak"] = (peak, abs(peak))
-    edges = np.asarray(model.problem(p, T).switching.breakpoints(0.0, T), dtype=float)
-    # a pair that changes at a switching edge changes with the configuration: an edge, not a state event
-    events = [e for e in substep_events(tr, T)
-              if not np.any(np.abs(np.concatenate([edges, [0.0, T]]) - e[2] * T) <= 1e-9 * T)]
     for label, fraction in mode_fractions(tr, T, events, edges).items():
         values[f"fraction_{label}"] = (fraction, 1.0)
     return values, events
@@ -224,14 +248,23 @@ def measures(model, p: dict, tr, T: float) -> tuple[dict, list]:
 # --- the search ---------------------------------------------------------------------------------------------
 
 def _orbit(model, p, method, x_guess, warm_up, tol):
-    from .periodic import require, shoot
+    """The method's orbit (Newton on its period map, after ``warm_up`` periods) and one period on it, the
+    stepper's from the same step plan (built once)."""
+    from .periodic import newton_orbit, require
     T = model.period(p)
     problem = model.problem(p, T, x_guess)
-    orbit = require(shoot(problem, method, problem.x0, warm_up=warm_up, tol=tol, polish=True),
-                    f"the periodic orbit of {model.key}")
-    from ..simulate import simulate
-    tr = replace(simulate(model.problem(p, T, orbit.x0), method), labels=model.labels(p))
-    return orbit, tr
+    period_map = method.period_map(problem)
+    x = np.array(problem.x0, dtype=float)
+    for _ in range(warm_up):
+        x = period_map.end(x)
+    orbit = require(newton_orbit(period_map, x, tol=tol, period=T, polish=True), f"the periodic orbit of {model.key}")
+    plan = getattr(period_map, "plan", None)
+    if plan is not None and hasattr(plan, "trajectory"):
+        tr = plan.trajectory(orbit.x0)
+    else:
+        from ..simulate import simulate
+        tr = simulate(model.problem(p, T, orbit.x0), method)
+    return orbit, replace(tr, labels=model.labels(p))
 
 
 def _sampled(model, tr, T: float) -> dict:
@@ -263,18 +296,13 @@ def _rounding(orbit, operations: int) -> float:
     return max(orbit.distance, ROUNDING_PER_OPERATION * operations * amplification)
 
 
-def _is_extremum(name: str) -> bool:
-    return name == "vout_ripple" or name.endswith("_peak")
-
-
-def _estimates(fine: dict, coarse: dict, fine_events, coarse_events, order: float, floor: float):
-    factor = 2.0 ** order - 1.0
+def _estimates(fine: dict, coarse: dict, fine_events, coarse_events, order: float, floor: float, ratio: float = 2.0):
+    """Richardson's estimates of the fine values from a coarse run with ``ratio`` times the step."""
+    factor = ratio ** order - 1.0
     out = {}
     for name, (value, scale) in fine.items():
         other = coarse.get(name, (0.0 if name.startswith("fraction_") else math.nan, scale))[0]
-        # an extremum may sit at a kink between samples (a diode event inside a step): first order there
-        f = 1.0 if _is_extremum(name) else factor
-        error = abs(value - other) / f if math.isfinite(other) else math.inf
+        error = abs(value - other) / factor if math.isfinite(other) else math.inf
         # a period without pair events has its mode fractions on the switching edges: exact
         state_floor = floor * scale if (fine_events or not name.startswith("fraction_")) else 0.0
         out[name] = Estimate(float(value), max(error, state_floor), float(scale))
@@ -286,6 +314,27 @@ def _estimates(fine: dict, coarse: dict, fine_events, coarse_events, order: floa
                   for (pair, kind, tf), (_, _, tc) in zip(fine_events, coarse_events)]
     else:                                                                # the event sequence is not settled
         events = [(pair, kind, Estimate(tf, math.inf, 1.0)) for pair, kind, tf in fine_events]
+    return out, events
+
+
+def _guarded(quantities: dict, events: list, history, n: int, order: float):
+    """Each estimate at least ``GUARD`` x what the previous one predicts at n steps (its value x (n_prev /
+    n)^order): two runs whose values meet by chance (the stepper's error through diode events is irregular
+    in h) must not pass for converged (buck DCM at 1e-7: 3.4e-10 estimated against 1.9e-8 true without this
+    guard), while a previous estimate from before the asymptotic range (too large) must not inflate the next
+    one past 10x the truth (the guard at 1: ripple at 1e-4, 3.5e-5 estimated against 9e-7 true)."""
+    if history is None:
+        return quantities, events
+    n_prev, previous, previous_events = history
+    shrink = GUARD * (n_prev / n) ** order
+    out = {}
+    for name, q in quantities.items():
+        before = previous.get(name)
+        predicted = before.error_estimate * shrink if before is not None else 0.0
+        out[name] = Estimate(q.value, max(q.error_estimate, predicted), q.scale)
+    if len(previous_events) == len(events):
+        events = [(pair, kind, Estimate(e.value, max(e.error_estimate, old.error_estimate * shrink), 1.0))
+                  for (pair, kind, e), (_, _, old) in zip(events, previous_events)]
     return out, events
 
 
@@ -314,39 +363,43 @@ def accurate_steady(model, p: dict, rtol: float, *, x0=None, progress=None) -> A
                      "orbit_distance": orbit.distance})
         return orbit, tr
 
-    n = FIRST_STEPS
-    method = Theta(h=T / n, theta=THETA)
+    coarse_n = FIRST_STEPS
     try:
-        orbit, tr = run(method, x0, 20)
+        orbit, tr = run(Theta(h=T / coarse_n, theta=THETA), x0, 20)
+        previous = (measures(model, p, tr, T), orbit)
     except SimulationError:
-        orbit, tr = None, None
-    previous = (measures(model, p, tr, T), orbit) if tr is not None else None
-    while previous is not None and 2 * n <= MAX_STEPS:
-        fine_method = Theta(h=T / (2 * n), theta=THETA)
+        previous = None
+    fine_n = 2 * coarse_n
+    history = None
+    while previous is not None and fine_n <= MAX_STEPS:
+        fine_method = Theta(h=T / fine_n, theta=THETA)
         orbit, tr = run(fine_method, previous[1].x0, 0)
         fine, fine_events = measures(model, p, tr, T)
         (coarse, coarse_events), _ = previous
-        floor = _rounding(orbit, 2 * n)
-        quantities, events = _estimates(fine, coarse, fine_events, coarse_events, fine_method.order, floor)
-        result = AccurateSteady(quantities, events, rtol, fine_method, 2 * n, tr, orbit, True, runs=runs)
+        floor = _rounding(orbit, fine_n)
+        quantities, events = _estimates(fine, coarse, fine_events, coarse_events, fine_method.order, floor,
+                                        ratio=fine_n / coarse_n)
+        quantities, events = _guarded(quantities, events, history, fine_n, fine_method.order)
+        history = (fine_n, quantities, events)
+        result = AccurateSteady(quantities, events, rtol, fine_method, fine_n, tr, orbit, True, runs=runs)
         worst = result.worst()
         if worst <= target:
             return replace(result, wall_s=time.perf_counter() - clock)
         if floor > target:                       # rounding over the period's steps, amplified near rho = 1
             break
-        # the next pair (n', 2n'): 2n' = 2n (worst / target)^(1/p) by the declared order, n' at least the
-        # last fine N (then reused as the coarse one), at most MAX_GROWTH times n
-        growth = (worst / target) ** (1.0 / fine_method.order) if math.isfinite(worst) else 2.0
-        new_n = max(2 * n, int(math.ceil(n * min(growth, MAX_GROWTH))))
-        if 2 * new_n > MAX_STEPS:
+        # the next fine N from the estimates and the declared order (x 1.2, to land in one step); its coarse
+        # run is this one when the ratio stays within MAX_RATIO, else a new one at half the step count
+        growth = 1.2 * (worst / target) ** (1.0 / fine_method.order) if math.isfinite(worst) else 2.0
+        next_n = int(math.ceil(fine_n * min(max(growth, 2.0), MAX_GROWTH)))
+        if next_n > MAX_STEPS:
             break
-        if new_n == 2 * n:
-            previous = ((fine, fine_events), orbit)
+        if next_n <= MAX_RATIO * fine_n:
+            coarse_n, previous = fine_n, ((fine, fine_events), orbit)
         else:
-            coarse_method = Theta(h=T / new_n, theta=THETA)
-            orbit_c, tr_c = run(coarse_method, orbit.x0, 0)
+            coarse_n = next_n // 2
+            orbit_c, tr_c = run(Theta(h=T / coarse_n, theta=THETA), orbit.x0, 0)
             previous = (measures(model, p, tr_c, T), orbit_c)
-        n = new_n
+        fine_n = next_n
     # the stepper would need more than MAX_STEPS steps per period: the exact method
     method = EventDriven(output_step=T / EVENT_SAMPLES)
     orbit, tr = run(method, x0 if previous is None else previous[1].x0, 20 if previous is None else 0)

@@ -30,6 +30,10 @@ MAX_ITER = 50
 #: The measures of a row and their types (a failed row leaves them empty).
 MEASURES = {"vout_mean": float, "vout_ripple": float, "rms_state0": float, "mode": str, "held_fraction": float,
             "spectral_radius": float, "iterations": int}
+#: With an rtol: the largest relative error estimate of the point's measures, the mean's, the method and steps
+#: per period chosen (0: the event method), and whether rtol was met.
+ACCURACY_MEASURES = {"error_estimate": float, "vout_mean_error_estimate": float, "accuracy_method": str,
+                     "steps_per_period": int, "rtol_met": bool}
 
 
 def failed_row(index: int, point: dict, message: str, wall_s: float = 0.0) -> dict:
@@ -55,8 +59,13 @@ class ModelSweep:
     steady: bool = True
     warm_up: int = 20
     periods: int = 50
+    rtol: float | None = None
 
-    measures = MEASURES
+    @property
+    def measures(self) -> dict:
+        """The row's measures and their types; with ``rtol`` also each point's error estimates and the step
+        chosen (accuracy on request)."""
+        return {**MEASURES, **ACCURACY_MEASURES} if self.rtol is not None else MEASURES
 
     def __post_init__(self):
         from ..models import get_model
@@ -69,6 +78,12 @@ class ModelSweep:
             raise ParameterError(f"method must be lcp or event for a sweep; got {self.method!r}")
         if not 0.0 < self.h_fraction < 1.0:
             raise ParameterError(f"h_fraction (h / T) must be in (0, 1); got {self.h_fraction!r}")
+        if self.rtol is not None:
+            from ..analysis.accuracy import RTOL_RANGE
+            if not self.steady:
+                raise ParameterError("rtol: accuracy on request gives the periodic steady state; add steady (--steady)")
+            if not (isinstance(self.rtol, float) and RTOL_RANGE[0] <= self.rtol <= RTOL_RANGE[1]):
+                raise ParameterError(f"rtol must be in [{RTOL_RANGE[0]:g}, {RTOL_RANGE[1]:g}]; got {self.rtol!r}")
 
     # --- one point ----------------------------------------------------------------------------------------
 
@@ -94,6 +109,9 @@ class ModelSweep:
         try:
             model = self._model()
             p = model.resolve({**self.base, **point})
+            if self.rtol is not None:
+                return {**out, "status": "ok", "message": "", **self._accurate_row(model, p),
+                        "wall_s": time.perf_counter() - clock}
             method = self._method(model, p)
             T = model.period(p)
             if self.steady:
@@ -113,12 +131,27 @@ class ModelSweep:
         except (ValueError, RuntimeError, ArithmeticError) as exc:
             return failed_row(index, point, f"{type(exc).__name__}: {exc}", time.perf_counter() - clock)
 
+    def _accurate_row(self, model, p: dict) -> dict:
+        """The measures of :func:`converters.analysis.accuracy.accurate_steady` (values its, mode and held
+        fraction from its one-period orbit) with the worst and the mean's relative error estimates."""
+        from ..analysis.accuracy import accurate_steady
+        result = accurate_steady(model, p, self.rtol)
+        q = result.quantities
+        row = orbit_row(model, p, result.trajectory)
+        row.update(vout_mean=q["vout_mean"].value, vout_ripple=q["vout_ripple"].value,
+                   rms_state0=q[f"{model.state_names[0]}_rms"].value,
+                   spectral_radius=float(np.abs(result.orbit.multipliers).max()), iterations=int(result.orbit.iterations),
+                   error_estimate=result.worst(), vout_mean_error_estimate=q["vout_mean"].relative,
+                   accuracy_method=result.method.key, steps_per_period=int(result.steps_per_period or 0),
+                   rtol_met=bool(result.met))
+        return row
+
     # --- many points at once ----------------------------------------------------------------------------------
 
     @property
     def chunk_hint(self) -> int:
         """Points per chunk: enough that a chunk of cheap points outweighs its round trip to a worker."""
-        return 500 if self.batchable() else (100 if self.method == "lcp" else 10)
+        return 500 if self.batchable() else (100 if self.method == "lcp" and self.rtol is None else 10)
 
     def failed(self, index: int, point: dict, message: str) -> dict:
         return failed_row(index, point, message)
@@ -126,7 +159,7 @@ class ModelSweep:
     def batchable(self) -> bool:
         from ..models import Converter
         model = self._model()
-        return (self.method == "lcp" and self.steady and isinstance(model, Converter)
+        return (self.method == "lcp" and self.steady and self.rtol is None and isinstance(model, Converter)
                 and len(model.pair_names) == 1)
 
     def rows(self, items: list[tuple[int, dict]]) -> list[dict]:

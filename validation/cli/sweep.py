@@ -34,7 +34,11 @@ def add(sub) -> None:
                          "orbit); without it: --periods periods from rest, measured over the last one")
     sw.add_argument("--periods", type=int, default=None,
                     help="periods simulated (default 50 from rest; spice: 10, from the orbit with --steady)")
-    sw.add_argument("--h-fraction", type=float, default=1.0 / 200.0, help="lcp: step h / T (default 1/200)")
+    sw.add_argument("--h-fraction", type=float, default=None, help="lcp: step h / T (default 1/200)")
+    sw.add_argument("--rtol", type=float, default=None,
+                    help="accuracy on request (with --steady): each point's measures with error estimates below "
+                         "RTOL, the method and step chosen per point (columns error_estimate, "
+                         "vout_mean_error_estimate, accuracy_method, steps_per_period, rtol_met)")
     sw.add_argument("--scheduler", default="local",
                     help="local (this machine's processes, default), serial, batched (one process), or a Dask "
                          "scheduler tcp://HOST:PORT")
@@ -67,9 +71,14 @@ def build(args):
         raise ParameterError(f"--periods must be an integer >= 1; got {args.periods}")
     if args.method == "spice":
         ensemble = SpiceSweep(args.model, args.control, base, steady=args.steady, periods=args.periods or 10)
+    elif args.rtol is not None:
+        if args.h_fraction is not None or args.method != "lcp":
+            raise ParameterError("--rtol chooses the method and its step; give either --rtol or "
+                                 + ("--h-fraction" if args.h_fraction is not None else f"--method {args.method}"))
+        ensemble = ModelSweep(args.model, args.control, base, steady=args.steady, rtol=float(args.rtol))
     else:
-        ensemble = ModelSweep(args.model, args.control, base, method=args.method, h_fraction=args.h_fraction,
-                              steady=args.steady, periods=args.periods or 50)
+        ensemble = ModelSweep(args.model, args.control, base, method=args.method,
+                              h_fraction=args.h_fraction or 1.0 / 200.0, steady=args.steady, periods=args.periods or 50)
     if args.metric not in ensemble.measures or ensemble.measures[args.metric] is str:
         numeric = [k for k, t in ensemble.measures.items() if t is not str]
         raise ParameterError(f"--metric must be one of {', '.join(numeric)}; got {args.metric!r}")
