@@ -7,7 +7,9 @@ measured side by side in this one run on this machine:
     fastest LCP run at least as accurate and the ratio of times (target >= 100); the fastest event run
     with error < 1e-8 and the ratio of times (target > 1);
   * per case and method family, the cheapest run reaching each accuracy level (1e-2 ... 1e-10);
-  * the stability map's counts per method.
+  * the stability map's counts per method;
+  * accuracy on request (``benchmarks/accuracy.py``): per case and R in {1e-3, 1e-5, 1e-7}, the time to meet
+    R against the best hand-picked setting (target <= 3x) and against ngspice where it can reach R.
 
 Files go to reports/bench/ (or the directory given as the first argument); ``make report`` shows them.
 """
@@ -20,6 +22,9 @@ import numpy as np
 import pandas as pd
 
 from validation.bench import DEFAULT_OUT, read_csv, run_bench
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from accuracy import main as accuracy_main  # noqa: E402  (the sibling benchmark, run as part of this one)
 
 LEVELS = (1e-2, 1e-4, 1e-6, 1e-8, 1e-10)
 
@@ -57,6 +62,8 @@ def main(out: Path) -> int:
         print(pd.DataFrame(summary["stability"]["summary"]).to_string(index=False))
     passed = all(r == "pass" for r in accept["result"])
     print(f"\nacceptance (every case): {'PASS' if passed else 'FAIL'}; files in {out}/")
+    print("\naccuracy on request (benchmarks/accuracy.py): --rtol R against the best hand-picked setting and ngspice")
+    accuracy_main()
     return 0
 
 

@@ -80,11 +80,9 @@ def test_every_mean_meets_rtol_and_every_estimate_is_within_10x_of_the_true_erro
         true = abs(q.value - value) / scale
         resolution = 1e-11                  # the reference's own (its orbit, its quadrature)
         assert true <= 10 * max(q.relative, resolution), f"{name}: hides an error ({q.relative:.2g} < {true:.2g} / 10)"
-        # crying wolf: an estimate 10x above the truth where it matters. Richardson cannot see a true error
-        # that a sign change of the stepper's irregular error (diode events inside steps) brings near zero;
-        # an estimate still below rtol / 10 asks for nothing and is not counted (boost-dcm at 1e-7: 1.9e-9
-        # estimated, 7e-11 true).
-        assert q.relative <= 10 * max(true, resolution) or q.relative <= rtol / 10, \
+        # crying wolf: an estimate 10x above the truth where it matters (an estimate below rtol / 100 asks
+        # for nothing: a true error that the stepper's irregular error brings through zero is not seen)
+        assert q.relative <= 10 * max(true, resolution) or q.relative <= rtol / 100, \
             f"{name}: cries wolf ({q.relative:.2g} > 10 x {true:.2g})"
         checked += 1
     assert checked >= 4                    # vout mean, an RMS, two mode fractions at least
@@ -139,8 +137,8 @@ def test_an_rtol_outside_its_range_is_refused(rtol):
 @pytest.mark.parametrize("key", list(POINTS))
 def test_default_settings_warn_on_exactly_the_points_whose_mean_misses_1e_3(key, steady, references):
     """The defaults (h = T/1000, theta 1; 500 periods from rest, or --steady) at the 15 points: the summary
-    warns iff vout's mean is more than 1e-3 off the exact periodic value (measured: 7 of 15 steady runs and
-    11 of 15 from rest miss; each estimate within 10 % of the true error where the error is above 1e-6)."""
+    warns iff vout's mean is more than 1e-3 off the exact periodic value (measured: 6 of 15 steady runs and
+    12 of 15 from rest miss; each estimate within 43 % of the true error where the error is above 1e-6)."""
     from converters.run import run_converter, run_summary
     from converters.analysis.accuracy import DEFAULT_RTOL
     name, params = POINTS[key]
