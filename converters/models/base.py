@@ -27,10 +27,10 @@ ON, OFF = 0, 1
 
 
 @dataclass(frozen=True)
-class Labels:
-    """A model's laws bound to one parameter set (what a Trajectory reads its signals and modes with)."""
+class BoundLabels:
+    """Any model's signals bound to one parameter set (converters: :class:`Labels`; mechanics too)."""
 
-    model: "Model"
+    model: object
     params: dict
 
     @property
@@ -39,6 +39,11 @@ class Labels:
 
     def signal(self, name: str, samples: Samples) -> np.ndarray:
         return self.model.signal(name, samples, self.params)
+
+
+@dataclass(frozen=True)
+class Labels(BoundLabels):
+    """A model's laws bound to one parameter set (what a Trajectory reads its signals and modes with)."""
 
     def conducting(self, samples: Samples) -> np.ndarray:
         return self.model.conducting(samples)

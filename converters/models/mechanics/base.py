@@ -17,23 +17,14 @@ from ...errors import ParameterError
 from ...params import Param, resolve
 from ...problems.mechanical import MechanicalProblem
 from ...trajectory import Samples
+from ..base import BoundLabels
 
 _STATE_LABELS = {0: "stick", 1: "slip+", 2: "slip-", 3: "contact", 4: "flight"}
 
 
 @dataclass(frozen=True)
-class MechanicalLabels:
+class MechanicalLabels(BoundLabels):
     """A mechanical model's reading of a run: signals from the pairs (u: forces, y: velocities and gaps)."""
-
-    model: "MechanicalModel"
-    params: dict
-
-    @property
-    def signal_names(self) -> tuple[str, ...]:
-        return self.model.signal_names
-
-    def signal(self, name: str, samples: Samples) -> np.ndarray:
-        return self.model.signal(name, samples, self.params)
 
     def mode_labels_of(self, samples: Samples) -> np.ndarray:
         """Per point: each set-valued law's state, joined with '+' when there are several (``stick+slip-``)."""
