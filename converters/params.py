@@ -26,7 +26,7 @@ class Param:
     high_open: bool = True
 
     def check(self, value) -> float:
-        value = parse_value(self.name, value)
+        value = parse_value(self.name, value, self.unit)
         below = value <= self.low if self.low_open else value < self.low
         above = value >= self.high if self.high_open else value > self.high
         if below or above:

@@ -15,15 +15,22 @@ from .errors import ParameterError
 
 #: SPICE-style magnitude suffixes (case-insensitive; ``meg`` before ``m``).
 SI_EXPONENTS = {"t": 12, "g": 9, "meg": 6, "k": 3, "m": -3, "u": -6, "µ": -6, "n": -9, "p": -12, "f": -15}
-_NUMBER = re.compile(r"^\s*([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)\s*(meg|[tgkmuµnpf])?\s*$",
+_NUMBER = re.compile(r"^\s*([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)\s*(meg|[tgkmuµnpf])?\s*([a-zA-ZΩ]+)?\s*$",
                      re.IGNORECASE)
+#: How a unit may be typed after the value (case-insensitive), by the parameter's unit.
+UNIT_SPELLINGS = {"V": ("v",), "A": ("a",), "H": ("h",), "F": ("f",), "Hz": ("hz",), "ohm": ("ohm", "ohms", "Ω"),
+                  "s": ("s",)}
+#: Units where SPICE's "M" (milli) is the classic slip for mega: refused with a hint.
+_MEGA_SLIPS = ("Hz", "H")
 
 
-def parse_value(name: str, text) -> float:
-    """Parse a number that may carry a SPICE suffix (``10u``, ``100k``, ``2.2n``, ``1meg``).
+def parse_value(name: str, text, unit: str | None = None) -> float:
+    """Parse a number as SPICE users type it: a magnitude suffix (``10u``, ``100k``, ``2.2n``, ``1meg``) and,
+    when the parameter's ``unit`` is known, that unit after it (``10uH``, ``250kHz``, ``48V``, ``2.2nF``).
 
-    Anything else (units spelled out, trailing text, several numbers) is refused: values
-    end up in netlists, so only a plain finite number may pass.
+    A unit that contradicts the parameter's (``L=10uF``) is refused, and so is ``M`` on a frequency or an
+    inductance (``1M``, ``1MHz``: SPICE reads milli; "did you mean 1meg?"). Anything else (trailing text,
+    several numbers) is refused: values end up in netlists, so only a plain finite number may pass.
     """
     if isinstance(text, (int, float, np.floating, np.integer)) and not isinstance(text, bool):
         value = float(text)
@@ -31,9 +38,18 @@ def parse_value(name: str, text) -> float:
         match = _NUMBER.match(str(text))
         if match is None:
             raise ParameterError(f"{name} must be a number, optionally with a SPICE suffix "
-                                 f"(T G meg k m u n p f); got {str(text)!r}")
+                                 f"(T G meg k m u n p f){' and its unit ' + unit if unit else ''}; got {str(text)!r}")
+        number, suffix, typed = match.group(1), match.group(2) or "", match.group(3) or ""
+        if typed:
+            allowed = UNIT_SPELLINGS.get(unit or "", ())
+            if typed.lower() not in allowed and typed not in allowed:
+                expected = f"its unit is {unit}" if unit else "it takes no unit"
+                raise ParameterError(f"{name}: the unit {typed!r} in {str(text)!r} contradicts the parameter ({expected})")
+        if suffix == "M" and unit in _MEGA_SLIPS:
+            raise ParameterError(f"{name}: {str(text)!r} means milli in SPICE (M = m); did you mean "
+                                 f"{number}meg{typed}?")
         # Decimal scaling keeps "100u" exactly 1e-4 (not 9.999999999999999e-05).
-        value = float(Decimal(match.group(1)).scaleb(SI_EXPONENTS.get((match.group(2) or "").lower(), 0)))
+        value = float(Decimal(number).scaleb(SI_EXPONENTS.get(suffix.lower(), 0)))
     if not math.isfinite(value):
         raise ParameterError(f"{name} must be a finite number; got {value!r}")
     return value

@@ -12,8 +12,48 @@ def test_spice_suffixes(text, value):
     assert parse_value("x", text) == value
 
 
-@pytest.mark.parametrize("text", ["10uH", "1;shell", "R=1\n.control", "nan", "inf", "1e400", "", "1 2",
-                                  "0x10", "1,5"])
+@pytest.mark.parametrize("text", ["1;shell", "R=1\n.control", "nan", "inf", "1e400", "", "1 2", "0x10", "1,5"])
 def test_anything_but_a_plain_finite_number_is_refused(text):
     with pytest.raises(ParameterError, match=r"^x must be (a number|a finite number)"):
         parse_value("x", text)
+
+
+def test_a_unit_on_a_value_without_one_is_refused():
+    with pytest.raises(ParameterError, match=r"^x: the unit 'H' in '10uH' contradicts the parameter \(it takes no unit\)"):
+        parse_value("x", "10uH")
+
+
+@pytest.mark.parametrize("name, text, value", [
+    ("L", "10uH", 10e-6), ("f_sw", "250kHz", 250e3), ("Vin", "48V", 48.0), ("C", "2.2nF", 2.2e-9),
+    ("f_sw", "1meg", 1e6), ("f_sw", "1megHz", 1e6), ("R", "4.7kohm", 4700.0), ("R", "10 Ω", 10.0), ("L", "10u", 10e-6),
+])
+def test_values_as_spice_users_type_them(name, text, value):
+    from converters.models import get_model
+    assert get_model("buck").resolve({name: text})[name] == pytest.approx(value, rel=1e-15)
+
+
+@pytest.mark.parametrize("name, text, message", [
+    ("L", "10uF", "L: the unit 'F' in '10uF' contradicts the parameter (its unit is H)"),
+    ("C", "100uH", "C: the unit 'H' in '100uH' contradicts the parameter (its unit is F)"),
+    ("D", "0.5V", "D: the unit 'V' in '0.5V' contradicts the parameter (it takes no unit)"),
+    ("f_sw", "1M", "f_sw: '1M' means milli in SPICE (M = m); did you mean 1meg?"),
+    ("f_sw", "250MHz", "f_sw: '250MHz' means milli in SPICE (M = m); did you mean 250megHz?"),
+    ("L", "1M", "L: '1M' means milli in SPICE (M = m); did you mean 1meg?"),
+    ("L", "10u shell", "L: the unit 'shell' in '10u shell' contradicts the parameter"),
+    ("L", "10u; .control", "L must be a number"),
+])
+def test_a_unit_that_contradicts_the_parameter_or_spices_milli_m_is_refused(name, text, message):
+    from converters.models import get_model
+    with pytest.raises(ParameterError) as info:
+        get_model("buck").resolve({name: text})
+    assert str(info.value).startswith(message)
+
+
+def test_the_cli_takes_units_and_refuses_a_contradicting_one_in_one_line(capsys):
+    from validation.cli import main
+    assert main(["simulate", "buck", "-p", "Vin=48V", "-p", "f_sw=250kHz", "-p", "L=22uH", "-p", "D=0.25",
+                 "--periods", "5", "--json"]) == 0
+    capsys.readouterr()
+    assert main(["simulate", "buck", "-p", "L=10uF", "--periods", "5"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == "pcsuite: error: L: the unit 'F' in '10uF' contradicts the parameter (its unit is H)"
