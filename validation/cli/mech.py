@@ -97,7 +97,9 @@ def run_simulate(args) -> int:
     summary = {"model": model.name, "method": args.method, "options": {**method.options(), "params": p},
                "steps": int(run.steps), "wall_s": time.perf_counter() - clock, **model.summary(run, p)}
     if args.out is not None:
-        write_frame(run.to_pandas(["time", *model.state_names, *model.signal_names, "mode"]), args.out)
+        write_frame(run.to_pandas(["time", *model.state_names, *model.signal_names, "mode"]), args.out,
+                    meta={"model": model.name, "method": run.method, "params": p,
+                          "units": {"time": "s", "note": "SI units of each state and signal (m, m/s, N, rad)"}})
     if args.json:
         print(json.dumps(summary, default=float))
     else:

@@ -77,7 +77,8 @@ def run(args) -> int:
                            **options)
         summary = run_summary(tr)
     if args.out is not None:
-        write_frame(tr.waveforms(), args.out)
+        write_frame(tr.waveforms(), args.out, meta={k: summary.get(k) for k in ("converter", "control", "method",
+                                                                                   "options") if k in summary})
     if args.json:
         print(json.dumps(summary, default=float))
     else:
