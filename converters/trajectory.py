@@ -247,6 +247,29 @@ class Trajectory:
         a, b = self.window(periods, t0, t1)
         return float(np.ptp(self.signal(name, self._rows(a, b))))
 
+    def measurements(self, periods: float | None = None, t0: float | None = None, t1: float | None = None):
+        """Every state and signal over the window (default: the whole run): mean, RMS, min, max and
+        peak-to-peak ripple, with its unit (A, V, s; 1 for the switch command), as a DataFrame indexed by
+        signal. Means and RMS by the run's own rule (exact quadrature for the event method); min, max and
+        ripple on the samples."""
+        import pandas as pd
+        a, b = self.window(periods, t0, t1)
+        rows = self._rows(a, b)
+        units = dict(getattr(getattr(self.labels, "model", None), "signal_units", {}) or {})
+        out = []
+        for name in self.signal_names:
+            if name == "mode":
+                continue
+            values = np.asarray(self.signal(name, rows), dtype=float)
+            if not np.isfinite(values).any():                 # not measured in this run (ngspice: no pairs)
+                continue
+            unit = units.get(name, {"vout": "V", "switch": "1", "iref": "A"}.get(
+                name, "A" if name.startswith("i") else "V" if name.startswith("v") else ""))
+            out.append({"signal": name, "unit": unit, "mean": self.mean(name, t0=a, t1=b),
+                        "rms": self.rms(name, t0=a, t1=b), "min": float(values.min()), "max": float(values.max()),
+                        "ripple": float(np.ptp(values))})
+        return pd.DataFrame(out).set_index("signal")
+
     def mode_fractions(self, periods: float | None = 1, t0: float | None = None, t1: float | None = None) -> dict:
         """Fraction of the window spent in each mode (each step counted by the label of its end point)."""
         a, b = self.window(periods, t0, t1)

@@ -146,10 +146,26 @@ class Model(ABC):
         labels[on & conducts] = "GDCM-ON"
         return labels
 
+    #: Periods the summary measures over (at most; a shorter run: all of it).
+    SUMMARY_PERIODS = 10
+
     def summary(self, tr, p: dict) -> dict:
-        """The model's measures of a run for its JSON summary: the mean output over the last 10 periods
-        and the mode fractions of the last period."""
-        return {"vout_mean": tr.mean("vout", periods=10), "mode_fractions": tr.mode_fractions(1)}
+        """The model's measures of a run for its JSON summary, over its last min(10, all) periods
+        (``window_periods``): the mean output, every signal's mean, RMS, min, max and ripple
+        (``measurements``), the power balance where the model has one (``power``), and the mode fractions of
+        the last period."""
+        span = (tr.t[-1] - tr.t[0]) / self.period(p)
+        window = float(min(self.SUMMARY_PERIODS, max(1, int(np.floor(span + 1e-9)))))
+        t1 = tr.t[-1]
+        t0 = t1 - window * self.period(p)
+        out = {"vout_mean": tr.mean("vout", t0=t0, t1=t1), "window_periods": window,
+               "mode_fractions": tr.mode_fractions(1)}
+        table = tr.measurements(t0=t0, t1=t1)
+        out["measurements"] = {name: {k: (v if isinstance(v, str) else float(v)) for k, v in row.items()}
+                               for name, row in table.iterrows()}
+        if hasattr(self, "power") and "i_in" in out["measurements"]:
+            out["power"] = self.power(tr, p, t0, t1)
+        return out
 
     off_held_label = "DCM"
     #: The mode whose end is the diode's turn-off in a period (None: not compared).

@@ -34,6 +34,10 @@ PARASITICS = (
 )
 
 
+#: The element signals every two-state converter adds (A and V; device voltages anode-cathode and drain-source).
+ELEMENT_SIGNALS = ("i_in", "i_switch", "v_switch", "i_diode", "v_diode", "i_cap")
+
+
 class PWMTwoState(Converter):
     """Shared model; subclasses set ``topology`` to 'buck', 'boost' or 'buck-boost'."""
 
@@ -42,6 +46,63 @@ class PWMTwoState(Converter):
     state_names = ("iL", "vC")
     pair_names = ("diode",)
     closed_form = True
+    signal_names = ("vout", "switch") + ELEMENT_SIGNALS
+    signal_units = {"i_in": "A", "i_switch": "A", "v_switch": "V", "i_diode": "A", "v_diode": "V", "i_cap": "A"}
+
+    def signal(self, name, samples, p):
+        if name in ELEMENT_SIGNALS:
+            return self.elements(samples, p)[name]
+        return super().signal(name, samples, p)
+
+    def elements(self, samples, p) -> dict:
+        """Input, switch, diode and capacitor currents and the switch's and diode's voltages, from the state
+        and the pair (u = i_D in ON, u = -v_D in OFF; module docstring):
+
+        i_D = u (ON), iL (OFF); i_S = iL - i_D (ON), 0 (OFF); v_sw, the switch node:
+        buck       ON Vin - Ron i_S   OFF u - Vf - Rd iL
+        boost      ON Ron i_S         OFF Vf + (Rd + b) iL + a vC - u
+        buck-boost ON Vin - Ron i_S   OFF u - Vf - (Rd + b) iL - a vC
+        (the OFF forms are L iL' + rL iL rearranged: exact whether the diode conducts or blocks). An ngspice
+        run has no pair variables: its element signals are NaN (not measured), and summaries leave them out."""
+        Vin, R = p["Vin"], p["R"]
+        rL, Ron, Vf, Rd, rC = (p.get(k, 0.0) for k in ("rL", "Ron", "Vf", "Rd", "rC"))
+        a, b = R / (R + rC), R * rC / (R + rC)
+        iL, vC = samples.x[:, 0], samples.x[:, 1]
+        if samples.u is None:                      # an ngspice run: no complementarity variables to read
+            return {name: np.full(iL.shape, np.nan) for name in ELEMENT_SIGNALS}
+        u = samples.u[:, 0]
+        on = np.asarray(samples.config) == ON
+        i_d = np.where(on, u, iL)
+        i_s = np.where(on, iL - u, 0.0)
+        i_node = iL if self.topology == "buck" else i_d          # into the output node
+        v_node = a * vC + b * i_node                               # |vout|
+        if self.topology == "buck":
+            v_sw = np.where(on, Vin - Ron * i_s, u - Vf - Rd * iL)
+            v_s, v_d = Vin - v_sw, -v_sw
+        elif self.topology == "boost":
+            v_sw = np.where(on, Ron * i_s, Vf + (Rd + b) * iL + a * vC - u)
+            v_s, v_d = v_sw, v_sw - v_node
+        else:
+            v_sw = np.where(on, Vin - Ron * i_s, u - Vf - (Rd + b) * iL - a * vC)
+            v_s, v_d = Vin - v_sw, -v_node - v_sw
+        return {"i_in": iL if self.topology == "boost" else i_s, "i_switch": i_s, "v_switch": v_s,
+                "i_diode": i_d, "v_diode": v_d, "i_cap": i_node - v_node / R}
+
+    def power(self, tr, p, t0: float, t1: float) -> dict:
+        """Input and output power, each element's loss and the efficiency over [t0, t1] (W), by the run's own
+        quadrature (exact pieces for the event method). On a periodic orbit input = output + losses."""
+        rL, Ron, Vf, Rd, rC = (p.get(k, 0.0) for k in ("rL", "Ron", "Vf", "Rd", "rC"))
+        mean = lambda name: tr.mean(name, t0=t0, t1=t1)          # noqa: E731
+        square = lambda name: tr.rms(name, t0=t0, t1=t1) ** 2     # noqa: E731
+        losses = {"rL": rL * square("iL"), "Ron": Ron * square("i_switch"), "Vf": Vf * mean("i_diode"),
+                  "Rd": Rd * square("i_diode"), "rC": rC * square("i_cap")}
+        losses = {k: v for k, v in losses.items() if p.get(k) is not None}
+        p_in = p["Vin"] * mean("i_in")
+        p_out = square("vout") / p["R"]
+        total = sum(losses.values())
+        return {"input_W": p_in, "output_W": p_out, "losses_W": losses, "total_loss_W": total,
+                "efficiency": p_out / p_in if p_in > 0 else float("nan"),
+                "balance": (p_in - p_out - total) / p_in if p_in > 0 else float("nan")}
 
     def configurations(self, p):
         Vin, L, C, R = p["Vin"], p["L"], p["C"], p["R"]

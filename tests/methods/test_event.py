@@ -152,7 +152,8 @@ def test_simulate_cli_event_and_smooth_methods(capsys, tmp_path):
     assert summary["method"] == "event" and summary["vout_mean"] == pytest.approx(4.8, rel=1e-9)
     import pandas as pd
     frame = pd.read_csv(out)
-    assert list(frame.columns) == ["time", "iL", "vC", "vout", "switch", "mode"]
+    assert list(frame.columns) == ["time", "iL", "vC", "vout", "switch", "i_in", "i_switch", "v_switch", "i_diode",
+                                   "v_diode", "i_cap", "mode"]
     assert main(["simulate", "buck", "--method", "smooth", "--eps", "1e-5", "--periods", "3", "--json"]) == 0
     summary = json.loads(capsys.readouterr().out)
     assert summary["method"] == "smooth" and summary["options"]["eps"] == 1e-5

@@ -91,7 +91,7 @@ def test_prc_mean_output_over_the_last_millisecond():
     ("buck", {"D": 1.2}, r"D \(duty ratio\) must be in \[0, 1\]; got 1.2"),
     ("cuk", {"f_sw": 0}, r"f_sw \(switching frequency\) must be in \(0, inf\) Hz; got 0.0"),
     ("buck", {"Lx": 1}, r"unknown parameter 'Lx' for buck; valid names: Vin, L, C, R, f_sw, D"),
-    ("buck", {"L": "10uH"}, r"L must be a number, optionally with a SPICE suffix"),
+    ("buck", {"L": "10uF"}, r"L: the unit 'F' in '10uF' contradicts the parameter \(its unit is H\)"),
     ("prc", {"Lr": float("nan")}, r"Lr must be a finite number; got nan"),
 ])
 def test_bad_parameters_are_refused(name, params, match):

@@ -39,7 +39,8 @@ def test_simulate_json_summary_and_csv_columns(capsys, tmp_path):
     assert summary["converter"] == "buck" and summary["steps"] == 50_000
     assert sum(summary["mode_fractions"].values()) == pytest.approx(1.0)
     frame = pd.read_csv(target)
-    assert list(frame.columns) == ["time", "iL", "vC", "vout", "switch", "mode"]
+    assert list(frame.columns) == ["time", "iL", "vC", "vout", "switch", "i_in", "i_switch", "v_switch", "i_diode",
+                                   "v_diode", "i_cap", "mode"]
     assert set(frame["mode"]) <= {"CCM-ON", "CCM-OFF", "DCM"}
     assert set(frame["switch"]) == {0, 1}
 

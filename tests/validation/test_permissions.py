@@ -55,7 +55,8 @@ def test_waveform_files_carry_their_metadata_and_units(tmp_path, capsys):
     assert main(["simulate", "buck", "-p", "L=22uH", "--periods", "5", "--out", str(tmp_path / "w.parquet")]) == 0
     meta = json.loads(pq.read_schema(tmp_path / "w.parquet").metadata[b"pcsuite"])
     assert meta["converter"] == "buck" and meta["method"] == "lcp" and meta["options"]["params"]["L"] == 22e-6
-    assert meta["units"] == {"time": "s", "iL": "A", "vC": "V", "vout": "V", "switch": "1", "mode": ""}
+    assert meta["units"] == {"time": "s", "iL": "A", "vC": "V", "vout": "V", "switch": "1", "i_in": "A",
+                             "i_switch": "A", "v_switch": "V", "i_diode": "A", "v_diode": "V", "i_cap": "A", "mode": ""}
     assert main(["simulate", "buck", "--periods", "5", "--out", str(tmp_path / "w.csv")]) == 0
     sidecar = json.loads((tmp_path / "w.csv.json").read_text())
     assert sidecar["converter"] == "buck" and sidecar["units"]["iL"] == "A"

@@ -133,6 +133,11 @@ def _print(summary: dict, tr, args) -> None:
         print(f"periodic steady state after {summary['steady_periods']} periods (Newton: {orbit['iterations']} "
               f"iterations, distance to the orbit {orbit['distance']:.2g}, Floquet spectral radius "
               f"{orbit['spectral_radius']:.6g})")
+    power = summary.get("power")
+    if power and power["losses_W"]:
+        losses = ", ".join(f"{k} {v * 1e3:.4g} mW" for k, v in power["losses_W"].items())
+        print(f"power over the last {summary['window_periods']:g} periods: in {power['input_W']:.6g} W, out "
+              f"{power['output_W']:.6g} W, efficiency {100 * power['efficiency']:.3f} % (losses: {losses})")
     if "mode_fractions" in summary:
         print("modes (last period): " + ", ".join(f"{k} {v:.6f}" for k, v in summary["mode_fractions"].items()))
     accuracy = summary.get("accuracy", {})

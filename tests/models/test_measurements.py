@@ -1,0 +1,75 @@
+"""Measurements of a run: every signal's mean, RMS, min, max and ripple; the element currents and voltages;
+each parasitic's loss and the efficiency, against closed forms and the energy balance on the exact orbit."""
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from converters.methods import EventDriven
+from converters.models import get_model
+from converters.run import run_converter, steady_state
+from converters.simulate import simulate
+
+
+def _exact_period(name, params, samples=20000):
+    model = get_model(name)
+    p = model.resolve(params)
+    T = model.period(p)
+    orbit = steady_state(model, p, EventDriven(), tol=1e-11)
+    tr = replace(simulate(model.problem(p, T, orbit.x0), EventDriven(output_step=T / samples)), labels=model.labels(p))
+    return model, p, T, tr
+
+
+def test_the_ccm_bucks_ripple_and_inductor_rms_match_their_closed_forms():
+    """12 V -> 6 V, 100 uH, 100 uF, 5 ohm, 100 kHz: Delta_i = (Vin - Vout) D T / L = 0.3 A, the output
+    ripple Delta_i / (8 f C) = 3.75 mV (measured 2.6e-4 off), the inductor RMS sqrt(I^2 + Delta_i^2 / 12)
+    (measured 1.3e-6 off); the acceptance bounds are 1 % and 0.1 %."""
+    model, p, T, tr = _exact_period("buck", {"L": "100u", "C": "100u", "R": 5, "D": 0.5})
+    table = tr.measurements(t0=0.0, t1=T)
+    delta_i = (12.0 - 6.0) * 0.5 * T / 100e-6
+    assert table.loc["iL", "ripple"] == pytest.approx(delta_i, rel=1e-3)
+    assert table.loc["vout", "ripple"] == pytest.approx(delta_i / (8 * 100e3 * 100e-6), rel=1e-2)
+    current = table.loc["vout", "mean"] / 5.0
+    assert table.loc["iL", "rms"] == pytest.approx(math.sqrt(current ** 2 + delta_i ** 2 / 12), rel=1e-3)
+    assert table.loc["iL", "unit"] == "A" and table.loc["vout", "unit"] == "V"
+    assert list(table.columns) == ["unit", "mean", "rms", "min", "max", "ripple"]
+
+
+PARASITIC = {"rL": 0.05, "Ron": 0.02, "Vf": 0.4, "Rd": 0.01, "rC": 0.03}
+
+
+@pytest.mark.parametrize("name", ["buck", "boost", "buck-boost"])
+@pytest.mark.parametrize("load", [10, 200], ids=["ccm", "dcm"])
+def test_input_power_is_output_power_plus_the_element_losses_on_the_exact_orbit(name, load):
+    model, p, T, tr = _exact_period(name, {**PARASITIC, "R": load}, samples=1000)
+    power = model.power(tr, p, 0.0, T)
+    assert abs(power["balance"]) <= 1e-6, power          # measured <= 4e-12
+    assert set(power["losses_W"]) == set(PARASITIC) and all(v > 0 for v in power["losses_W"].values())
+    assert 0.8 < power["efficiency"] < 1.0
+    # the diode's conduction loss is its forward drop times its mean current
+    assert power["losses_W"]["Vf"] == pytest.approx(0.4 * tr.mean("i_diode", t0=0.0, t1=T), rel=1e-12)
+
+
+def test_element_signals_obey_kirchhoff_in_both_phases():
+    model, p, T, tr = _exact_period("boost", {"R": 200, **PARASITIC}, samples=1000)
+    s = tr.samples()
+    e = model.elements(s, p)
+    iL = s.x[:, 0]
+    assert np.allclose(e["i_switch"] + e["i_diode"], iL, atol=1e-12)        # boost: the node after L
+    assert np.allclose(e["i_in"], iL)
+    held = np.asarray(tr.modes()) == "DCM"
+    assert held.any() and np.allclose(e["v_switch"][held], p["Vin"], atol=1e-9)   # L voltage zero, iL = 0
+
+
+def test_the_summary_carries_measurements_and_power_over_the_periods_it_says(capsys):
+    import json
+
+    from validation.cli import main
+    assert main(["simulate", "buck", "-p", "rL=0.1", "--periods", "3", "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["window_periods"] == 3
+    assert {"iL", "vout", "i_in", "i_switch", "i_diode", "v_switch", "v_diode"} <= set(summary["measurements"])
+    assert summary["power"]["losses_W"]["rL"] > 0
+    run = run_converter("buck", {"rL": 0.1}, periods=3)
+    assert run.measurements(periods=3).loc["vout", "mean"] == pytest.approx(summary["measurements"]["vout"]["mean"])
