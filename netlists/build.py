@@ -307,3 +307,51 @@ def model_netlist(model, params: dict, t_end, options: SpiceOptions | None = Non
         return build_voltage_mode_netlist(params, t_end, options, x0=x0)
     raise ParameterError(f"no ngspice netlist for {model.key}: the implicit relay is a time-stepping scheme of "
                          "the LCP stepper only; use --control smc (the hysteresis comparator)")
+
+
+#: Periods the standalone netlists measure over (at the end of the run), and the run they make.
+MEASURE_PERIODS = 10
+STANDARD_PERIODS = 300
+
+
+def _vector(probe) -> str | None:
+    """An ngspice expression of a probe: a node voltage, a difference, or a source's branch current."""
+    target, _ = probe
+    if isinstance(target, tuple):                  # .meas takes a difference as an expression
+        return f"par('v({target[0]})-v({target[1]})')"
+    if target.endswith("#branch"):
+        return f"i({target[:-len('#branch')]})"
+    return f"v({target})"
+
+
+def standalone(netlist: Netlist, period: float, state_names=(), window_periods: int = MEASURE_PERIODS) -> str:
+    """The netlist as a file ngspice runs on its own (``ngspice -b FILE.cir``): ``.meas`` of vout's mean and
+    peak-to-peak ripple and of each state's mean over the last ``window_periods`` periods (states with a
+    negative probe sign are printed as the probe reads them: the comment says so)."""
+    t1 = netlist.t_end
+    t0 = max(0.0, t1 - window_periods * period)
+    window = f"FROM={_num('t0', t0)} TO={_num('t1', t1)}"
+    lines = [f"* ngspice -b this file: .meas over the last {window_periods} periods [{t0:.6g}, {t1:.6g}] s",
+             f"* parameters: {' '.join(f'{k}={v:g}' for k, v in netlist.params.items())}"]
+    measures = [f".meas tran vout_mean AVG {_vector(netlist.probes['vout'])} {window}",
+                f".meas tran vout_ripple PP {_vector(netlist.probes['vout'])} {window}"]
+    for name in state_names:
+        probe = netlist.probes.get(name)
+        if probe is None or isinstance(probe[0], tuple):
+            continue
+        sign = "" if probe[1] > 0 else f"  (pcsuite's {name} = -this)"
+        if sign:
+            lines.append(f"* {name}_mean is the probe {_vector(probe)}{sign}")
+        measures.append(f".meas tran {name}_mean AVG {_vector(probe)} {window}")
+    body = netlist.text.rstrip("\n").split("\n")
+    assert body[-1] == ".end"
+    return "\n".join([body[0], *lines, *body[1:-1], *measures, ".end"]) + "\n"
+
+
+def standard_netlist(converter: str) -> str:
+    """The standard netlist of a converter (defaults, ``STANDARD_PERIODS`` periods from rest), as shipped in
+    ``netlists/<converter>.cir``."""
+    conv = get_converter(converter)
+    p = conv.resolve({})
+    T = conv.period(p)
+    return standalone(build_netlist(conv.name, p, STANDARD_PERIODS * T), T, conv.state_names)

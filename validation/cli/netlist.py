@@ -1,25 +1,48 @@
-"""``pcsuite netlist CONVERTER``: print the generated ngspice netlist."""
+"""``pcsuite netlist CONVERTER``: the generated ngspice netlist, as a file ngspice runs on its own
+(``ngspice -b FILE.cir`` prints the ``.meas`` mean and ripple of vout over the last 10 periods)."""
 from __future__ import annotations
+
+from pathlib import Path
+
+from converters.errors import ParameterError
 
 from .common import add_params
 
 
 def add(sub) -> None:
-    net = sub.add_parser("netlist", help="print the ngspice netlist of a converter")
+    net = sub.add_parser("netlist", help="the ngspice netlist of a converter (runs alone: ngspice -b FILE.cir)")
     net.add_argument("converter")
     add_params(net)
     net.add_argument("--control", default="pwm", choices=["pwm", "smc", "voltage-mode"],
                      help="boost: smc (sliding-mode control); buck: voltage-mode (the ramp comparator)")
     net.add_argument("--t-end", default=None, help="duration in s (default 500 periods)")
+    net.add_argument("--steady", action="store_true",
+                     help="start on the periodic orbit (the LCP stepper's, by Newton shooting) instead of at rest")
+    net.add_argument("--out", type=Path, default=None, help="write FILE.cir (atomically) instead of printing")
     net.set_defaults(run=run)
 
 
 def run(args) -> int:
     from converters.models import get_model
     from converters.params import parse_assignments
-    from converters.run import duration
-    from netlists import model_netlist
+    from converters.run import duration, make_method, steady_state
+    from netlists import model_netlist, standalone
+
+    from ..io import atomic_write_text
+    if args.out is not None and args.out.suffix.lower() not in (".cir", ".sp", ".net"):
+        raise ParameterError(f"--out must end in .cir, .sp or .net; got {str(args.out)!r}")
     model = get_model(args.converter, args.control)
     p = model.resolve(parse_assignments(args.params))
-    print(model_netlist(model, p, duration(model, p, args.t_end)).text, end="")
+    x0 = None
+    if args.steady:
+        if not model.periodic(p):
+            raise ParameterError(f"--steady needs a fixed switching period; {model.key} has none")
+        x0 = steady_state(model, p, make_method(model, p, "lcp")).x0
+    netlist = model_netlist(model, p, duration(model, p, args.t_end), x0=x0)
+    text = standalone(netlist, model.period(p), model.state_names) if model.periodic(p) else netlist.text
+    if args.out is None:
+        print(text, end="")
+    else:
+        atomic_write_text(args.out, text)
+        print(f"wrote {args.out} (run it: ngspice -b {args.out})")
     return 0
