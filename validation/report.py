@@ -26,18 +26,40 @@ th,td{border:1px solid #ccc;padding:3px 7px;text-align:right}
 th{background:#eee} td.text{text-align:left}
 .pass{background:#d9f2d9}.fail{background:#f8d0d0}.note{background:#fff3c4}
 img{max-width:100%;border:1px solid #ddd;margin:0.5em 0}
-.failed-section{border:2px solid #c33;padding:0.5em 1em}
+.failed-section{border:2px solid #c33;padding:0.5em 1em}.skip{background:#e8e8e8}
+section.fail{border-left:6px solid #c33;padding-left:0.8em}section.skipped{border-left:6px solid #999;padding-left:0.8em;color:#555}
+.verdict{font-size:1.3em;padding:0.5em 1em;border-radius:4px}.verdict.pass{background:#d9f2d9}.verdict.fail{background:#f8d0d0}
+.wide{overflow-x:auto;max-width:100%}
 code{background:#f4f4f4;padding:0 3px}
 """
 
 
 @dataclass
 class Section:
+    """One report section. Its ``status`` is pass, fail or skipped (no data, not measured: never a pass);
+    ``reason`` says why a section failed or was skipped (a failing one without its own reason: "a check
+    failed", the checks in its table)."""
+
     title: str
     html: str
     files: dict = field(default_factory=dict)   # relative name -> bytes
     ok: bool = True
     metrics: dict = field(default_factory=dict)
+    skipped: bool = False
+    reason: str = ""
+
+    @property
+    def status(self) -> str:
+        return "skipped" if self.skipped else "pass" if self.ok else "fail"
+
+    @property
+    def why(self) -> str:
+        if self.reason or self.status == "pass":
+            return self.reason
+        return self.metrics.get("error", "a check failed (see the section's table)") if not self.skipped else ""
+
+
+STATUSES = ("pass", "fail", "skipped")
 
 
 def table_html(frame: pd.DataFrame, status_column: str | None = None, good=("solved", "pass", True)) -> str:
@@ -77,7 +99,7 @@ def run_section(builder, title: str) -> Section:
         detail = "".join(traceback.format_exception_only(type(exc), exc)).strip()
         return Section(title=title, ok=False,
                        html=f'<div class="failed-section"><p><b>Failed:</b> {html.escape(detail)}</p></div>',
-                       metrics={"error": detail})
+                       metrics={"error": detail}, reason=detail)
     section.metrics.setdefault("section_wall_s", time.perf_counter() - start)
     return section
 
@@ -87,13 +109,25 @@ def write_report(sections: list[Section], out_dir, suite: str, options: dict | N
     env = environment()
     header = "".join(f"<tr><td class='text'>{html.escape(k)}</td><td class='text'>{html.escape(str(v))}</td></tr>"
                      for k, v in env.items())
-    summary = pd.DataFrame([{"section": s.title, "result": "pass" if s.ok else "fail"} for s in sections])
+    summary = pd.DataFrame([{"section": s.title, "result": s.status, "reason": s.why} for s in sections])
+    counts = {status: sum(s.status == status for s in sections) for status in STATUSES}
+    failed = [s.title for s in sections if s.status == "fail"]
+    verdict = ("FAIL: " + f"{counts['fail']} of {len(sections)} sections fail ({', '.join(failed)})" if failed else
+               f"PASS: {counts['pass']} of {len(sections)} sections pass"
+               + (f", {counts['skipped']} skipped (not measured)" if counts["skipped"] else ""))
+    rows = "".join(
+        f"<tr><td class='text'><a href='#{_anchor(s.title)}'>{html.escape(s.title)}</a></td>"
+        f"<td class='text {'pass' if s.status == 'pass' else 'fail' if s.status == 'fail' else 'skip'}'>{s.status}</td>"
+        f"<td class='text'>{html.escape(s.why)}</td></tr>" for s in sections)
     body = [f"<h1>pcsuite validation report: {html.escape(suite)}</h1>",
+            f"<p class='verdict {'fail' if failed else 'pass'}' id='verdict'>{html.escape(verdict)}</p>",
             f"<table>{header}</table>",
             f"<p>Options: <code>{html.escape(json.dumps(options or {}))}</code></p>",
-            "<h2>Summary</h2>", table_html(summary, "result", good=("pass",))]
+            "<h2>Summary</h2>", f"<table id='summary'><tr><th>section</th><th>result</th><th>reason</th></tr>{rows}</table>"]
     for section in sections:
-        body.append(f"<h2 id='{_anchor(section.title)}'>{html.escape(section.title)}</h2>{section.html}")
+        badge = "" if section.status == "pass" else f" <small>({section.status}: {html.escape(section.why)})</small>"
+        body.append(f"<section class='{section.status}'><h2 id='{_anchor(section.title)}'>{html.escape(section.title)}"
+                    f"{badge}</h2><div class='wide'>{section.html}</div></section>")
     page = (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>pcsuite report: {html.escape(suite)}"
             f"</title><style>{CSS}</style></head><body>{''.join(body)}</body></html>")
     out_dir = Path(out_dir)
@@ -103,8 +137,9 @@ def write_report(sections: list[Section], out_dir, suite: str, options: dict | N
                 path = staging / name
                 path.parent.mkdir(parents=True, exist_ok=True)
                 path.write_bytes(data)
-        metrics = {"suite": suite, "environment": env, "options": options or {},
-                   "sections": {s.title: {"ok": s.ok, **s.metrics} for s in sections}}
+        metrics = {"suite": suite, "environment": env, "options": options or {}, "verdict": verdict,
+                   "sections": {s.title: {"ok": s.ok, "status": s.status, "reason": s.why, **s.metrics}
+                                for s in sections}}
         (staging / "metrics.json").write_text(json.dumps(metrics, indent=2, default=_json_default))
         summary.to_csv(staging / "summary.csv", index=False)
         (staging / "index.html").write_text(page)

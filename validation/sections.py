@@ -186,7 +186,8 @@ def _saved_note(kind: str, command: str) -> Section:
     text = (f"<p>No saved {kind} results: run <code>{command}</code> (writes <code>reports/bench/</code>), "
             "then <code>make report</code> shows them here, or <code>pcsuite report bench</code> runs them live "
             "(quick sweep).</p>")
-    return Section(f"{kind[0].upper()}{kind[1:]}: not measured yet", text, ok=True, metrics={"measured": False})
+    return Section(f"{kind[0].upper()}{kind[1:]}: not measured yet", text, ok=True, metrics={"measured": False},
+                   skipped=True, reason=f"no saved {kind} results: run {command}")
 
 
 def tradeoff_section(files: dict, meta: dict, source: str) -> Section:

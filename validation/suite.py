@@ -132,7 +132,7 @@ def scene_section(result: SceneResult) -> Section:
             f"{html.escape(s.path.split('/')[-1])}</code>; run time {result.wall_s:.2f} s.</p>")
     if not result.ok and not result.checks:
         return Section(title, head + f"<div class='failed-section'><b>Failed:</b> {html.escape(result.reason)}</div>",
-                       ok=False, metrics={"error": result.reason})
+                       ok=False, metrics={"error": result.reason}, reason=result.reason)
     checks = pd.DataFrame(result.checks, columns=["check", "value", "threshold", "pass"])
     checks["result"] = np.where(checks["pass"], "pass", "fail")
     verdict = ""
@@ -153,7 +153,7 @@ def scene_section(result: SceneResult) -> Section:
             + f"<p>Waveforms: {links}.</p>")
     if not result.ok:
         body = f"<div class='failed-section'><b>Failed:</b> {html.escape(result.reason)}</div>" + body
-    return Section(title, body, files=result.files, ok=result.ok,
+    return Section(title, body, files=result.files, ok=result.ok, reason=result.reason,
                    metrics={"checks": {c[0]: {"value": c[1], "threshold": c[2], "pass": c[3]} for c in result.checks},
                             "gdcm": result.gdcm, "wall_s": result.wall_s})
 

@@ -127,3 +127,38 @@ def test_a_report_that_fails_while_writing_leaves_the_previous_one_whole(tmp_pat
         write_report([broken], target, "t")
     assert (target / "a.txt").read_bytes() == b"first" and "first" in (target / "index.html").read_text()
     assert [p.name for p in tmp_path.iterdir()] == ["r"]  # no staging directory left behind
+
+
+def test_each_section_is_pass_fail_or_skipped_with_a_reason_and_a_failure_fails_the_command(tmp_path, monkeypatch,
+                                                                                           capsys):
+    import json
+
+    from validation import sections
+    from validation.cli import main
+    from validation.report import Section
+
+    def boom():
+        raise RuntimeError("a solver diverged on purpose")
+
+    def empty():
+        return Section("Nothing measured", "<p>no data</p>", skipped=True, reason="no saved results: run X")
+    monkeypatch.setitem(sections.EXTRA_SECTIONS, "lcp", [*sections.EXTRA_SECTIONS["lcp"], ("Boom", boom),
+                                                         ("Nothing measured", empty)])
+    out = tmp_path / "r"
+    assert main(["report", "lcp", "--out", str(out), "--workers", "1"]) == 1          # a failing section: exit 1
+    printed = capsys.readouterr().out
+    assert "FAIL" in printed and "failed: Boom: RuntimeError: a solver diverged on purpose" in printed
+    assert "skipped: Nothing measured: no saved results: run X" in printed
+    metrics = json.loads((out / "metrics.json").read_text())
+    statuses = {title: s["status"] for title, s in metrics["sections"].items()}
+    assert set(statuses.values()) == {"pass", "fail", "skipped"}
+    assert statuses["Boom"] == "fail" and statuses["Nothing measured"] == "skipped"
+    assert all(s["reason"] for s in metrics["sections"].values() if s["status"] != "pass")
+    assert metrics["verdict"].startswith("FAIL: 1 of ")
+    page = (out / "index.html").read_text()
+    assert "<p class='verdict fail' id='verdict'>FAIL: 1 of" in page
+    assert "<a href='#boom'>Boom</a>" in page and "<section class='fail'>" in page and "<section class='skipped'>" in page
+    import pandas as pd
+    summary = pd.read_csv(out / "summary.csv")
+    assert list(summary.columns) == ["section", "result", "reason"]
+    assert set(summary["result"]) == {"pass", "fail", "skipped"}

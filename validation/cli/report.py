@@ -26,8 +26,16 @@ def run(args) -> int:
     scenes, extras = run_suite(args.suite, EXTRA_SECTIONS.get(args.suite, ()), workers=args.workers)
     sections = ([scenes_summary(scenes)] if scenes else []) + [scene_section(r) for r in scenes] + list(extras)
     index = write_report(sections, out, args.suite, options={"suite": args.suite, "workers": args.workers})
-    failed = [s.title for s in sections if not s.ok]
-    print(f"wrote {index} ({len(sections) - len(failed)}/{len(sections)} sections pass)")
-    for title in failed:
-        print(f"  failed: {title}")
-    return 0
+    failed = [s for s in sections if s.status == "fail"]
+    skipped = [s for s in sections if s.status == "skipped"]
+    print(f"wrote {index} ({sum(s.status == 'pass' for s in sections)}/{len(sections)} sections pass"
+          + (f", {len(skipped)} skipped" if skipped else "") + (f", {len(failed)} FAIL" if failed else "") + ")")
+    for section in failed:
+        print(f"  failed: {section.title}: {section.why}")
+    for section in skipped:
+        print(f"  skipped: {section.title}: {section.why}")
+    return EXIT_FAILED if failed else 0
+
+
+#: The exit status of a report with a failing section (make report fails with it).
+EXIT_FAILED = 1
