@@ -247,6 +247,12 @@ class Trajectory:
         a, b = self.window(periods, t0, t1)
         return float(np.ptp(self.signal(name, self._rows(a, b))))
 
+    def plot(self, periods: float | None = None, signals=None, title: str | None = None):
+        """The run's waveforms over the last periods and its mode timeline: a matplotlib Figure
+        (:func:`converters.plotting.plot`)."""
+        from .plotting import plot
+        return plot(self, periods, signals, title)
+
     def measurements(self, periods: float | None = None, t0: float | None = None, t1: float | None = None):
         """Every state and signal over the window (default: the whole run): mean, RMS, min, max and
         peak-to-peak ripple, with its unit (A, V, s; 1 for the switch command), as a DataFrame indexed by

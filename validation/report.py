@@ -27,7 +27,8 @@ th{background:#eee} td.text{text-align:left}
 .pass{background:#d9f2d9}.fail{background:#f8d0d0}.note{background:#fff3c4}
 img{max-width:100%;border:1px solid #ddd;margin:0.5em 0}
 .failed-section{border:2px solid #c33;padding:0.5em 1em}.skip{background:#e8e8e8}
-section.fail{border-left:6px solid #c33;padding-left:0.8em}section.skipped{border-left:6px solid #999;padding-left:0.8em;color:#555}
+section.section-fail{border-left:6px solid #c33;padding-left:0.8em}
+section.section-skipped{border-left:6px solid #999;padding-left:0.8em;color:#555}
 .verdict{font-size:1.3em;padding:0.5em 1em;border-radius:4px}.verdict.pass{background:#d9f2d9}.verdict.fail{background:#f8d0d0}
 .wide{overflow-x:auto;max-width:100%}
 code{background:#f4f4f4;padding:0 3px}
@@ -126,7 +127,7 @@ def write_report(sections: list[Section], out_dir, suite: str, options: dict | N
             "<h2>Summary</h2>", f"<table id='summary'><tr><th>section</th><th>result</th><th>reason</th></tr>{rows}</table>"]
     for section in sections:
         badge = "" if section.status == "pass" else f" <small>({section.status}: {html.escape(section.why)})</small>"
-        body.append(f"<section class='{section.status}'><h2 id='{_anchor(section.title)}'>{html.escape(section.title)}"
+        body.append(f"<section class='section-{section.status}'><h2 id='{_anchor(section.title)}'>{html.escape(section.title)}"
                     f"{badge}</h2><div class='wide'>{section.html}</div></section>")
     page = (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>pcsuite report: {html.escape(suite)}"
             f"</title><style>{CSS}</style></head><body>{''.join(body)}</body></html>")

@@ -112,8 +112,10 @@ def _run_smc_implicit_scene(scene: Scene) -> SceneResult:
     m, run = implicit_metrics(scene.params, t_end=scene.run.get("t_end", 30e-3), h=scene.lcp.get("h"))
     checks = implicit_checks(m, scene.checks)
     failed = [name for name, _, _, ok in checks if not ok]
+    from .plots import png
     return SceneResult(scene, ok=not failed, reason=("failed checks: " + ", ".join(failed)) if failed else "",
-                       checks=checks, metrics=m, files={f"scenes/{scene.name}/lcp.parquet": _parquet(run.waveforms())})
+                       checks=checks, metrics=m, files={f"scenes/{scene.name}/lcp.parquet": _parquet(run.waveforms()),
+                                                        f"scenes/{scene.name}/waveforms.png": png(run.plot())})
 
 
 def _parquet(frame: pd.DataFrame) -> bytes:
@@ -143,8 +145,8 @@ def scene_section(result: SceneResult) -> Section:
                    f"{'agree' if g['agree'] else 'DISAGREE'}.</p>")
     metrics = pd.DataFrame([(k, v) for k, v in result.metrics.items()], columns=["metric", "value"])
     base = f"scenes/{s.name}/"
-    images = "".join(f"<img src='{base}{name}' alt='{name[:-4]} {s.name}'>" for name in ("overlay.png", "modes.png")
-                     if f"{base}{name}" in result.files)
+    images = "".join(f"<img src='{base}{name}' alt='{name[:-4]} {s.name}'>"
+                     for name in ("overlay.png", "modes.png", "waveforms.png") if f"{base}{name}" in result.files)
     links = ", ".join(f"<a href='{base}{name}'>{label} (Parquet)</a>" for name, label in
                       (("lcp.parquet", "LCP"), ("spice.parquet", "ngspice")) if f"{base}{name}" in result.files)
     body = (head + verdict + table_html(checks.drop(columns="pass"), "result", good=("pass",))
@@ -162,10 +164,10 @@ def accuracy_html(accuracy: dict) -> str:
     """The LCP side's values with their error estimates, and the method and h chosen (accuracy on request)."""
     if not accuracy:
         return ""
-    rows = [{"quantity": name, "value": q["value"], "error_estimate": q["error_estimate"],
+    rows = [{"quantity": name, "value": f"{q['value']:.10g}", "error_estimate": q["error_estimate"],
              "relative": q["relative_error_estimate"]} for name, q in accuracy["quantities"].items()]
-    rows += [{"quantity": f"{e['pair']} {e['kind']} (t/T)", "value": e["time_T"], "error_estimate": e["error_estimate_T"],
-              "relative": e["error_estimate_T"]} for e in accuracy["events"]]
+    rows += [{"quantity": f"{e['pair']} {e['kind']} (t/T)", "value": f"{e['time_T']:.10g}",
+              "error_estimate": e["error_estimate_T"], "relative": e["error_estimate_T"]} for e in accuracy["events"]]
     how = (f"the stepper, theta {accuracy['theta']:g}, h = T/{accuracy['steps_per_period']}"
            if accuracy["steps_per_period"] else "the event method (exact flows)")
     verdict = "met" if accuracy["met"] else f"NOT met ({html.escape(accuracy['message'])})"

@@ -73,3 +73,22 @@ def test_the_summary_carries_measurements_and_power_over_the_periods_it_says(cap
     assert summary["power"]["losses_W"]["rL"] > 0
     run = run_converter("buck", {"rL": 0.1}, periods=3)
     assert run.measurements(periods=3).loc["vout", "mean"] == pytest.approx(summary["measurements"]["vout"]["mean"])
+
+
+def test_a_run_plots_its_last_periods_with_units_the_operating_point_and_its_modes(tmp_path, capsys):
+    from validation.cli import main
+    run = run_converter("buck", {"Vin": "48V", "f_sw": "250kHz", "L": "22uH", "D": 0.25, "R": 2}, steady=True)
+    fig = run.plot()
+    axes = fig.axes
+    assert [ax.get_ylabel() for ax in axes] == ["iL (A)", "vC (V)", "vout (V)", "mode"]
+    assert axes[-1].get_xlabel().endswith("(us)")
+    assert "Vin = 48" in fig._suptitle.get_text() and "L = 22u" in fig._suptitle.get_text()
+    fig.canvas.draw()
+    assert all(ax.yaxis.get_offset_text().get_text() == "" for ax in axes)         # no offset notation
+    assert {t.get_text() for t in axes[-1].get_legend().get_texts()} == {"CCM-ON", "CCM-OFF"}
+    for suffix, magic in ((".png", b"\x89PNG"), (".svg", b"<?xml")):
+        target = tmp_path / f"w{suffix}"
+        assert main(["simulate", "buck", "--periods", "20", "--plot", str(target)]) == 0
+        assert target.read_bytes()[:5].startswith(magic)
+    assert main(["simulate", "buck", "--plot", str(tmp_path / "w.jpg")]) == 2
+    assert "--plot must end in .png or .svg" in capsys.readouterr().err

@@ -157,7 +157,7 @@ def test_each_section_is_pass_fail_or_skipped_with_a_reason_and_a_failure_fails_
     assert metrics["verdict"].startswith("FAIL: 1 of ")
     page = (out / "index.html").read_text()
     assert "<p class='verdict fail' id='verdict'>FAIL: 1 of" in page
-    assert "<a href='#boom'>Boom</a>" in page and "<section class='fail'>" in page and "<section class='skipped'>" in page
+    assert "<a href='#boom'>Boom</a>" in page and "<section class='section-fail'>" in page and "<section class='section-skipped'>" in page
     import pandas as pd
     summary = pd.read_csv(out / "summary.csv")
     assert list(summary.columns) == ["section", "result", "reason"]

@@ -44,6 +44,8 @@ def add(sub) -> None:
     sim.add_argument("--steady-tol", type=float, default=1e-6,
                      help="relative distance to the orbit at which the steady state counts as reached")
     sim.add_argument("--out", type=Path, default=None, help="waveform file, .csv or .parquet")
+    sim.add_argument("--plot", type=Path, default=None,
+                     help="FILE.png or FILE.svg: the last periods' waveforms and the mode timeline")
     sim.add_argument("--json", action="store_true", help="print one JSON summary object")
     sim.set_defaults(run=run)
 
@@ -52,6 +54,8 @@ def run(args) -> int:
     from converters.params import parse_assignments
     from converters.run import run_converter, run_summary
     check_out(args.out)
+    if args.plot is not None and args.plot.suffix.lower() not in (".png", ".svg"):
+        raise ParameterError(f"--plot must end in .png or .svg; got {str(args.plot)!r}")
     params = parse_assignments(args.params)
     if args.rtol is not None:
         given = [flag for flag, value in (("--method", args.method), ("--h", args.h), ("--theta", args.theta),
@@ -79,6 +83,16 @@ def run(args) -> int:
     if args.out is not None:
         write_frame(tr.waveforms(), args.out, meta={k: summary.get(k) for k in ("converter", "control", "method",
                                                                                    "options") if k in summary})
+    if args.plot is not None:
+        import io
+
+        from ..io import atomic_write_bytes
+        fig = tr.plot()
+        buffer = io.BytesIO()
+        fig.savefig(buffer, format=args.plot.suffix.lower()[1:], dpi=110, bbox_inches="tight")
+        import matplotlib.pyplot as plt
+        plt.close(fig)
+        atomic_write_bytes(args.plot, buffer.getvalue())
     if args.json:
         print(json.dumps(summary, default=float))
     else:
