@@ -165,10 +165,10 @@ def _buck_boost(p, T, o, ic):
 
 def _cuk(p, T, o, ic):
     body = [f"Vin in 0 DC {_num('Vin', p['Vin'])}", _gate(T, p["D"], o),
-            *_inductor("in", "n1", p, name="L1", value_key="L1", sense="Vsl1", ic=ic["i1"]),
+            *_inductor("in", "n1", p, name="L1", value_key="L1", sense="Vsl1", dcr_key="rL1", ic=ic["i1"]),
             "S1 n1 0 gate 0 SWMOD", *_capacitor("n1", "n2", p, name="C1", value_key="C1", ic=ic["v1"]),
             *_diode("n2", "0", p),
-            *_inductor("out", "n2", p, name="L2", value_key="L2", sense="Vsl2", ic=ic["i2"]),
+            *_inductor("out", "n2", p, name="L2", value_key="L2", sense="Vsl2", dcr_key="rL2", ic=ic["i2"]),
             *_capacitor("0", "out", p, name="C2", value_key="C2", ic=ic["v2"]), f"R1 out 0 {_num('R', p['R'])}"]
     return body, {"i1": ("vsl1#branch", 1.0), "v1": (("n1", "n2"), 1.0), "i2": ("vsl2#branch", 1.0),
                   "v2": ("out", -1.0), "vout": ("out", 1.0), "i_D": ("vsd#branch", 1.0)}

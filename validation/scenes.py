@@ -34,7 +34,7 @@ SCENE_DIR = Path(__file__).with_name("scenes")
 TOP_KEYS = ("name", "converter", "description", "suites", "control", "params", "run", "methods", "checks")
 RUN_KEYS = ("start", "periods", "window", "t_end")
 METHOD_KEYS = {"lcp": ("h", "theta", "rtol"), "spice": tuple(SpiceOptions.__dataclass_fields__)}
-CHECK_KEYS = ("vout_mean_rel", "mode_agreement", "turn_off_error_T", "closed_form_rel", "vout_ref_rel",
+CHECK_KEYS = ("vout_mean_rel", "mode_agreement", "vout_ripple_rel", "turn_off_error_T", "closed_form_rel", "vout_ref_rel",
               "frequency_rel", "frequency_agreement", "recovery_agreement", "lambda_settle")
 #: The study each control runs, whose thresholds (data/defaults.toml) are the scene's default checks.
 STUDY = {"pwm": "compare", "smc": "smc", "smc-implicit": "smc-implicit"}

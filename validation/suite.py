@@ -36,6 +36,7 @@ class SceneResult:
     files: dict = field(default_factory=dict)
     wall_s: float = 0.0
     accuracy: dict = field(default_factory=dict)     # the LCP side's, when the scene asks for an rtol
+    notes: list = field(default_factory=list)        # what a reader must know (ngspice not settled, ...)
 
 
 def run_scene(scene: Scene) -> SceneResult:
@@ -84,7 +85,7 @@ def _run_scene(scene: Scene) -> SceneResult:
     failed = [name for name, _, _, passed in checks if not passed]
     return SceneResult(scene, ok=ok, reason=("failed checks: " + ", ".join(failed)) if failed else "",
                        checks=checks, metrics=m, gdcm=gdcm, files=files,
-                       accuracy=c.lcp.metadata.get("accuracy", {}))
+                       accuracy=c.lcp.metadata.get("accuracy", {}), notes=list(c.notes))
 
 
 def _check(name, value, scene, label=None):
@@ -149,7 +150,8 @@ def scene_section(result: SceneResult) -> Section:
                      for name in ("overlay.png", "modes.png", "waveforms.png") if f"{base}{name}" in result.files)
     links = ", ".join(f"<a href='{base}{name}'>{label} (Parquet)</a>" for name, label in
                       (("lcp.parquet", "LCP"), ("spice.parquet", "ngspice")) if f"{base}{name}" in result.files)
-    body = (head + verdict + table_html(checks.drop(columns="pass"), "result", good=("pass",))
+    notes = "".join(f"<p class='note'>Note: {html.escape(note)}</p>" for note in result.notes)
+    body = (head + verdict + table_html(checks.drop(columns="pass"), "result", good=("pass",)) + notes
             + accuracy_html(result.accuracy) + images
             + "<details><summary>All metrics</summary>" + table_html(metrics) + "</details>"
             + f"<p>Waveforms: {links}.</p>")

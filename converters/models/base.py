@@ -163,8 +163,10 @@ class Model(ABC):
         table = tr.measurements(t0=t0, t1=t1)
         out["measurements"] = {name: {k: (v if isinstance(v, str) else float(v)) for k, v in row.items()}
                                for name, row in table.iterrows()}
-        if hasattr(self, "power") and "i_in" in out["measurements"]:
-            out["power"] = self.power(tr, p, t0, t1)
+        if hasattr(self, "power"):
+            power = self.power(tr, p, t0, t1)
+            if np.isfinite(power["input_W"]):          # an ngspice run of a two-state converter: not measured
+                out["power"] = power
         return out
 
     off_held_label = "DCM"

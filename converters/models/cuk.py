@@ -24,6 +24,8 @@ class Cuk(Converter):
         positive("R", 10.0, "ohm", "load resistance"),
         positive("f_sw", 100e3, "Hz", "switching frequency"),
         Param("D", 0.4, "", "duty ratio", low=0.0, high=1.0, low_open=False, high_open=False),
+        nonnegative("rL1", None, "ohm", "input inductor DCR"),
+        nonnegative("rL2", None, "ohm", "output inductor DCR"),
     )
     state_names = ("i1", "v1", "i2", "v2")
     output_state = "v2"
@@ -33,13 +35,25 @@ class Cuk(Converter):
 
     def configurations(self, p):
         Vin, L1, C1, L2, C2, R = (p[k] for k in ("Vin", "L1", "C1", "L2", "C2", "R"))
+        d1, d2 = -p.get("rL1", 0.0) / L1, -p.get("rL2", 0.0) / L2      # the inductors' DCR, when given
         on = Configuration(
-            A=[[0, 0, 0, 0], [0, 0, -1 / C1, 0], [0, 1 / L2, 0, -1 / L2], [0, 0, 1 / C2, -1 / (R * C2)]],
+            A=[[d1, 0, 0, 0], [0, 0, -1 / C1, 0], [0, 1 / L2, d2, -1 / L2], [0, 0, 1 / C2, -1 / (R * C2)]],
             B=[[0], [1 / C1], [0], [0]], C=[[0, 1, 0, 0]], D=[[0]], E=[Vin / L1, 0, 0, 0], name="ON")
         off = Configuration(
-            A=[[0, -1 / L1, 0, 0], [1 / C1, 0, 0, 0], [0, 0, 0, -1 / L2], [0, 0, 1 / C2, -1 / (R * C2)]],
+            A=[[d1, -1 / L1, 0, 0], [1 / C1, 0, 0, 0], [0, 0, d2, -1 / L2], [0, 0, 1 / C2, -1 / (R * C2)]],
             B=[[1 / L1], [0], [1 / L2], [0]], C=[[1, 0, 1, 0]], D=[[0]], E=[Vin / L1, 0, 0, 0], name="OFF")
         return on, off
+
+    def power(self, tr, p, t0: float, t1: float) -> dict:
+        """Input and output power, the inductors' DCR losses and the efficiency over [t0, t1] (W)."""
+        square = lambda name: tr.rms(name, t0=t0, t1=t1) ** 2     # noqa: E731
+        losses = {k: p[k] * square(state) for k, state in (("rL1", "i1"), ("rL2", "i2")) if p.get(k) is not None}
+        p_in = p["Vin"] * tr.mean("i1", t0=t0, t1=t1)
+        p_out = square("vout") / p["R"]
+        total = sum(losses.values())
+        return {"input_W": p_in, "output_W": p_out, "losses_W": losses, "total_loss_W": total,
+                "efficiency": p_out / p_in if p_in > 0 else float("nan"),
+                "balance": (p_in - p_out - total) / p_in if p_in > 0 else float("nan")}
 
     def output_node_current(self, samples):
         return samples.x[:, 2]

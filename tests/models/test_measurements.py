@@ -51,6 +51,17 @@ def test_input_power_is_output_power_plus_the_element_losses_on_the_exact_orbit(
     assert power["losses_W"]["Vf"] == pytest.approx(0.4 * tr.mean("i_diode", t0=0.0, t1=T), rel=1e-12)
 
 
+@pytest.mark.parametrize("load", [10, 50], ids=["ccm", "gdcm"])
+def test_the_cuks_inductor_losses_close_the_energy_balance(load):
+    """The Cuk takes its inductors' DCR (rL1, rL2; -p rL=... is refused with the valid names)."""
+    model, p, T, tr = _exact_period("cuk", {"rL1": 0.05, "rL2": 0.1, "R": load, "L1": "10u", "L2": "10u"}, samples=1000)
+    power = model.power(tr, p, 0.0, T)
+    assert abs(power["balance"]) <= 1e-6 and set(power["losses_W"]) == {"rL1", "rL2"}
+    from converters.errors import ParameterError
+    with pytest.raises(ParameterError, match="unknown parameter 'rL' for cuk; valid names: .*rL1, rL2"):
+        model.resolve({"rL": 0.1})
+
+
 def test_element_signals_obey_kirchhoff_in_both_phases():
     model, p, T, tr = _exact_period("boost", {"R": 200, **PARASITIC}, samples=1000)
     s = tr.samples()

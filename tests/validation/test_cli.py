@@ -155,3 +155,17 @@ def test_the_smoothing_solver_tolerance_is_solver_rtol(capsys):
     code, out, _ = run_cli(capsys, "simulate", "buck", "--method", "smooth", "--solver-rtol", "1e-8", "--periods", "2",
                            "--json")
     assert code == 0 and json.loads(out)["options"]["solver_rtol"] == 1e-8
+
+
+def test_ngspice_options_on_simulate_and_compare(capsys, ngspice):
+    code, out, _ = run_cli(capsys, "simulate", "buck", "--method", "spice", "--spice-tmax", "20n", "--spice-reltol",
+                           "1e-4", "--spice-method", "trap", "--periods", "20", "--json")
+    options = json.loads(out)["options"]
+    assert code == 0 and options["tmax_fraction"] == pytest.approx(2e-3) and options["reltol"] == 1e-4
+    assert options["method"] == "trap"
+    code, out, _ = run_cli(capsys, "compare", "buck", "--spice-method", "trap", "--json")
+    assert code == 0 and json.loads(out)["spice_options"]["method"] == "trap"
+    code, _, err = run_cli(capsys, "simulate", "buck", "--spice-tmax", "20n")
+    assert code == 2 and "ngspice options (--spice-tmax) need --method spice; got --method lcp" in err
+    code, _, err = run_cli(capsys, "simulate", "buck", "--method", "spice", "--spice-tmax", "20u")
+    assert code == 2 and "--spice-tmax must be in (0, 1e-05) s" in err

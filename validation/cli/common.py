@@ -11,6 +11,34 @@ def add_params(parser) -> None:
                         help="parameter value, SPICE suffixes allowed (repeatable)")
 
 
+def add_spice_options(parser) -> None:
+    """ngspice's transient settings on a command that runs it."""
+    parser.add_argument("--spice-tmax", default=None,
+                        help="ngspice .tran TMAX in s (default T/200; SPICE suffixes: 50n)")
+    parser.add_argument("--spice-reltol", default=None, help="ngspice RELTOL (default 1e-3)")
+    parser.add_argument("--spice-method", default=None, choices=["trap", "gear"], help="ngspice METHOD (default gear)")
+
+
+def spice_options(args, period: float):
+    """The SpiceOptions the --spice-* flags ask for (None: none given)."""
+    from converters.validate import parse_value
+    from netlists import SpiceOptions
+    given = {}
+    if args.spice_tmax is not None:
+        tmax = parse_value("--spice-tmax", args.spice_tmax, "s")
+        if not 0.0 < tmax < period:
+            raise ParameterError(f"--spice-tmax must be in (0, {period:g}) s (below the switching period); got {tmax:g}")
+        given["tmax_fraction"] = tmax / period
+    if args.spice_reltol is not None:
+        reltol = parse_value("--spice-reltol", args.spice_reltol)
+        if not 1e-9 <= reltol <= 0.1:
+            raise ParameterError(f"--spice-reltol must be in [1e-9, 0.1]; got {reltol:g}")
+        given["reltol"] = reltol
+    if args.spice_method is not None:
+        given["method"] = args.spice_method
+    return SpiceOptions(**given) if given else None
+
+
 def check_out(path: Path | None, suffixes=(".csv", ".parquet")) -> None:
     if path is not None and path.suffix.lower() not in suffixes:
         raise ParameterError(f"--out must end in {' or '.join(suffixes)}; got {str(path)!r}")

@@ -6,7 +6,7 @@ from pathlib import Path
 
 from converters.errors import ParameterError
 
-from .common import add_params
+from .common import add_params, add_spice_options, spice_options
 
 
 def add(sub) -> None:
@@ -19,6 +19,7 @@ def add(sub) -> None:
     cmp.add_argument("--control", default="pwm", choices=["pwm", "smc"],
                      help="boost only: sliding-mode current control (see simulate)")
     cmp.add_argument("--t-end", default=None, help="duration in s (sliding mode; default 30 ms)")
+    add_spice_options(cmp)
     cmp.add_argument("--plot", type=Path, default=None, help="write the overlay/residual plot (.png)")
     cmp.add_argument("--json", action="store_true")
     cmp.set_defaults(run=run)
@@ -38,7 +39,10 @@ def run(args) -> int:
         from ..plots import comparison_plot
         if args.t_end is not None:
             raise ParameterError("--t-end applies to --control smc; a PWM comparison runs the model's periods")
-        result = compare(args.converter, params, h=args.h, start=args.start)
+        from converters.models import get_converter
+        model = get_converter(args.converter)
+        options = spice_options(args, model.period(model.resolve(params)))
+        result = compare(args.converter, params, h=args.h, start=args.start, spice_options=options)
         rows, metrics, plot = result.rows, result.metrics, (lambda: comparison_plot(result))
         header = f"{result.converter}: LCP against {result.spice.metadata['ngspice']}"
         extra = result.to_dict()
@@ -56,6 +60,8 @@ def run(args) -> int:
             print(f"  {key:<36} {text}")
         for name, value, threshold, ok in rows:
             print(f"  check {name:<30} {'pass' if ok else 'FAIL'} (threshold {threshold:g})")
+        for note in extra.get("notes", []):
+            print(f"  note: {note}")
         print("PASS" if passed else "FAIL")
     return 0 if passed else 1
 
@@ -66,9 +72,10 @@ def _smc(args, params):
 
     from ..defaults import THRESHOLDS
     from ..smc import compare_smc, smc_checks, smc_plot
-    get_model(args.converter, "smc")
+    model = get_model(args.converter, "smc")
     t_end = parse_value("t_end", args.t_end) if args.t_end is not None else 30e-3
-    c = compare_smc(params, t_end=t_end, h=args.h)
+    c = compare_smc(params, t_end=t_end, h=args.h,
+                    spice_options=spice_options(args, model.period(model.resolve(params))))
     rows = smc_checks(c.metrics, THRESHOLDS["smc"], c.params, t_end)
     header = f"boost (sliding mode): LCP against {c.spice.metadata['ngspice']}"
     return rows, c.metrics, header, (lambda: smc_plot(c)), {"converter": "boost", "control": "smc", "params": c.params}

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from converters.errors import ParameterError
 
-from .common import add_params, check_out, write_frame
+from .common import add_params, add_spice_options, check_out, spice_options, write_frame
 
 
 def add(sub) -> None:
@@ -43,6 +43,7 @@ def add(sub) -> None:
     sim.add_argument("--steady", action="store_true", help="run to the method's periodic orbit (Newton shooting)")
     sim.add_argument("--steady-tol", type=float, default=1e-6,
                      help="relative distance to the orbit at which the steady state counts as reached")
+    add_spice_options(sim)
     sim.add_argument("--out", type=Path, default=None, help="waveform file, .csv or .parquet")
     sim.add_argument("--plot", type=Path, default=None,
                      help="FILE.png or FILE.svg: the last periods' waveforms and the mode timeline")
@@ -57,6 +58,11 @@ def run(args) -> int:
     if args.plot is not None and args.plot.suffix.lower() not in (".png", ".svg"):
         raise ParameterError(f"--plot must end in .png or .svg; got {str(args.plot)!r}")
     params = parse_assignments(args.params)
+    spice_flags = [f for f, v in (("--spice-tmax", args.spice_tmax), ("--spice-reltol", args.spice_reltol),
+                                  ("--spice-method", args.spice_method)) if v is not None]
+    if spice_flags and args.method != "spice":
+        raise ParameterError(f"ngspice options ({', '.join(spice_flags)}) need --method spice; got --method "
+                             f"{args.method or 'lcp'}")
     if args.rtol is not None:
         given = [flag for flag, value in (("--method", args.method), ("--h", args.h), ("--theta", args.theta),
                                           ("--eps", args.eps), ("--solver-rtol", args.solver_rtol)) if value is not None]
@@ -113,7 +119,7 @@ def _spice(args, params):
     model = get_model(args.converter, args.control)
     p = model.resolve(params)
     t_end = duration(model, p, args.t_end, args.periods)
-    netlist = model_netlist(model, p, t_end)
+    netlist = model_netlist(model, p, t_end, spice_options(args, model.period(p)))
     result = run_spice(netlist)
     window_start = result.time[-1] - 10 * model.period(p)
     tr = spice_trajectory(model, p, netlist, result, window_start)
