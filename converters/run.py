@@ -124,6 +124,9 @@ def run_converter(name_or_model, params: dict | None = None, *, control: str = "
     meta = {"model": model.name, "control": model.control, "params": p, "method_options": method.options(),
             "method_object": method}
     if steady:
+        if model.step_times(p):
+            raise ParameterError("--steady finds a periodic steady state; a run with a step (t_step) is not "
+                                 "periodic: run --periods N (or --t-end) from rest")
         if not model.periodic(p):
             raise ParameterError(f"--steady needs a fixed switching period; {model.key} has none (run --t-end, or find "
                                  "its cycle with converters.analysis.periodic.autonomous_orbit and the event method)")
@@ -254,7 +257,7 @@ def run_summary(tr: Trajectory) -> dict:
         out["accuracy"] = accuracy
         if not accuracy["met"]:
             out["warnings"] = [f"rtol {accuracy['rtol']:g} not met: {accuracy['message']}"]
-    elif meta.get("control", "pwm") == "pwm" and model.periodic(p) and "method_object" in meta:
+    elif meta.get("control", "pwm") == "pwm" and model.periodic(p) and "method_object" in meta and not model.step_times(p):
         from .analysis.accuracy import default_check, last_period
         period = last_period(model, p, tr)
         out["mode_fractions"] = period["mode_fractions"]        # read inside the step, not on the grid

@@ -196,7 +196,10 @@ class Trajectory:
     def _rows(self, t0: float, t1: float) -> np.ndarray:
         """Indices of the samples in [t0, t1]; at least the two around a window shorter than a step."""
         span = max(t1 - t0, 1e-300)
-        rows = np.flatnonzero((self.t >= t0 - 1e-12 * span) & (self.t <= t1 + 1e-12 * span))
+        # t is non-decreasing: the window's rows by bisection (a scan would cost O(N) per window)
+        first = int(np.searchsorted(self.t, t0 - 1e-12 * span, side="left"))
+        last = int(np.searchsorted(self.t, t1 + 1e-12 * span, side="right"))
+        rows = np.arange(first, last)
         if rows.size < 2:
             last = min(max(int(np.searchsorted(self.t, t1)), 1), self.t.size - 1)
             rows = np.array([last - 1, last])

@@ -189,17 +189,82 @@ class Converter(Model):
     def schedule(self, p: dict) -> Schedule:
         return Schedule.pwm(self.period(p), p["D"], on=ON, off=OFF)
 
-    def problem(self, p: dict, t_end: float, x0=None, t_start: float = 0.0, initial: int | None = None) -> LCSProblem:
-        """From x0 (default: at rest) over [t_start, t_end]; ``initial`` is the schedule's business."""
+    def problem(self, p: dict, t_end: float, x0=None, t_start: float = 0.0, initial: int | None = None,
+                after_step: bool = False) -> LCSProblem:
+        """From x0 (default: at rest) over [t_start, t_end]; ``initial`` is the schedule's business;
+        ``after_step``: the circuit after the load or input step (``R_step``, ``Vin_step``)."""
         x0 = np.zeros(len(self.state_names)) if x0 is None else x0
-        return LCSProblem(self.configurations(p), self.schedule(p), x0=x0, t_span=(t_start, t_end),
+        circuit = self.stepped(p) if after_step else p
+        return LCSProblem(self.configurations(circuit), self.schedule(p), x0=x0, t_span=(t_start, t_end),
                           state_names=self.state_names, pair_names=self.pair_names,
                           metadata={"converter": self.name, **p})
+
+    # --- load and input steps (open loop) -------------------------------------------------------------------
+
+    def resolve(self, given: dict | None = None) -> dict:
+        p = super().resolve(given)
+        if "t_step" in p and not ({"R_step", "Vin_step"} & set(p)):
+            raise ParameterError("t_step needs R_step (a load step) or Vin_step (an input step), or both")
+        if ({"R_step", "Vin_step"} & set(p)) and "t_step" not in p:
+            raise ParameterError("R_step and Vin_step need t_step (the instant of the step)")
+        return p
+
+    @staticmethod
+    def stepped(p: dict) -> dict:
+        """The parameters after the step."""
+        return {**p, "R": p.get("R_step", p["R"]), "Vin": p.get("Vin_step", p["Vin"])}
+
+    def step_times(self, p: dict) -> list[float]:
+        return [p["t_step"]] if "t_step" in p else []
+
+    def phase_options(self, p: dict, t: float) -> dict:
+        return {"after_step": bool(t >= p["t_step"])} if "t_step" in p else {}
+
+    def summary(self, tr, p: dict) -> dict:
+        out = super().summary(tr, p)
+        if "t_step" in p and tr.t[0] < p["t_step"] < tr.t[-1]:
+            out["step"] = step_response(tr, p["t_step"], self.period(p))
+        return out
 
     @abstractmethod
     def output_node_current(self, samples: Samples) -> np.ndarray:
         """Current delivered to the output capacitor and load (A, magnitude); in steady state its
         mean equals |vout| / R (charge balance of the output capacitor)."""
+
+
+#: The settling band of a step response: the final value +- this fraction of the step (an input step), or of
+#: the final value when the step barely moves it (a load step on an open-loop converter in CCM).
+SETTLING_BAND = 0.02
+LOAD_BAND = 1e-3
+
+
+def step_response(tr, t_step: float, T: float) -> dict:
+    """vout's response to a step at t_step, read on its per-period means (the switching ripple averaged out):
+    the values before (the 10 periods before the step) and at the end (the last 10 periods), the largest
+    deviation from the final value, the overshoot past it (a fraction of the step, when the step moves vout)
+    and the settling time (from the step until the per-period mean stays within the band around the final
+    value; ``settled`` False when it had not by 10 periods before the end)."""
+    first = int(np.ceil((t_step - tr.t[0]) / T - 1e-9))
+    count = int(np.floor((tr.t[-1] - tr.t[0]) / T + 1e-9))
+    starts = tr.t[0] + T * np.arange(count)
+    means = np.array([tr.mean("vout", t0=a, t1=a + T) for a in starts])
+    before = float(np.mean(means[max(0, first - 10):first])) if first > 0 else float("nan")
+    final = float(np.mean(means[-10:]))
+    change = final - before
+    after = means[first:]
+    # an input step moves vout: overshoot and band are fractions of that move; a load step on an open-loop
+    # converter barely does (CCM): the deviation is then read against LOAD_BAND of the final value
+    moved = abs(change) > LOAD_BAND * abs(final)
+    band = SETTLING_BAND * abs(change) if moved else LOAD_BAND * abs(final)
+    outside = np.flatnonzero(np.abs(after - final) > band)
+    settled = len(outside) == 0 or outside[-1] + 1 < len(after) - 10
+    out = {"t_step_s": t_step, "vout_before": before, "vout_final": final,
+           "deviation_V": float(np.abs(after - final).max()), "band_V": float(band),
+           "settling_time_s": float(starts[first + outside[-1] + 1] + T - t_step) if len(outside) else float(T),
+           "settled": bool(settled)}
+    if moved:
+        out["overshoot"] = float(max(((after - final) * np.sign(change)).max(), 0.0) / abs(change))
+    return out
 
 
 def check_h(h: float, period: float) -> float:

@@ -10,6 +10,7 @@ from __future__ import annotations
 from ..problems import Configuration
 from ..params import Param, nonnegative, positive
 from .base import Converter
+from .pwm2 import STEPS
 
 
 class Cuk(Converter):
@@ -26,6 +27,7 @@ class Cuk(Converter):
         Param("D", 0.4, "", "duty ratio", low=0.0, high=1.0, low_open=False, high_open=False),
         nonnegative("rL1", None, "ohm", "input inductor DCR"),
         nonnegative("rL2", None, "ohm", "output inductor DCR"),
+        *STEPS,
     )
     state_names = ("i1", "v1", "i2", "v2")
     output_state = "v2"

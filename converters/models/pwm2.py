@@ -32,6 +32,12 @@ PARASITICS = (
     nonnegative("Rd", None, "ohm", "diode on-resistance"),
     nonnegative("rC", None, "ohm", "capacitor ESR"),
 )
+#: An open-loop step: the load R -> R_step and/or the input Vin -> Vin_step at t_step.
+STEPS = (
+    positive("t_step", None, "s", "instant of a load or input step (with R_step and/or Vin_step)"),
+    positive("R_step", None, "ohm", "load resistance after t_step"),
+    nonnegative("Vin_step", None, "V", "input voltage after t_step"),
+)
 
 
 #: The element signals every two-state converter adds (A and V; device voltages anode-cathode and drain-source).
@@ -42,7 +48,7 @@ class PWMTwoState(Converter):
     """Shared model; subclasses set ``topology`` to 'buck', 'boost' or 'buck-boost'."""
 
     topology: str
-    parameters = COMMON + PARASITICS
+    parameters = COMMON + PARASITICS + STEPS
     state_names = ("iL", "vC")
     pair_names = ("diode",)
     closed_form = True

@@ -158,6 +158,12 @@ def _print(summary: dict, tr, args) -> None:
         losses = ", ".join(f"{k} {v * 1e3:.4g} mW" for k, v in power["losses_W"].items())
         print(f"power over the last {summary['window_periods']:g} periods: in {power['input_W']:.6g} W, out "
               f"{power['output_W']:.6g} W, efficiency {100 * power['efficiency']:.3f} % (losses: {losses})")
+    step = summary.get("step")
+    if step:
+        over = f", overshoot {100 * step['overshoot']:.3g} %" if "overshoot" in step else ""
+        print(f"step at {step['t_step_s'] * 1e3:.6g} ms: vout {step['vout_before']:.6g} -> {step['vout_final']:.6g} V{over}, "
+              f"largest deviation {step['deviation_V']:.3g} V, settling {step['settling_time_s'] * 1e3:.4g} ms "
+              f"(band +- {step['band_V']:.3g} V){'' if step['settled'] else ' NOT settled by the end of the run'}")
     if "mode_fractions" in summary:
         print("modes (last period): " + ", ".join(f"{k} {v:.6f}" for k, v in summary["mode_fractions"].items()))
     accuracy = summary.get("accuracy", {})
