@@ -29,9 +29,14 @@ def test_lcp_and_ngspice_agree_on_every_default_scene(scene):
     assert m["mode_sequence_lcp"] == m["mode_sequence_spice"] == expected
     if scene.converter != "prc":
         assert m["turn_off_error_T"] <= THRESHOLDS["turn_off_error_T"]
-        # The difference is a few times the near-ideal diode's forward drop (~0.85 mV), the floor,
-        # plus the slow transient ngspice makes from the LCP's orbit to its own (boost, C = 470 uF).
-        assert m["vout_mean_abs_error_V"] <= 40 * m["diode_drop_floor_V"]
+        if m["spice_settled"]:
+            # once ngspice has settled the difference is a few times the near-ideal diode's forward drop
+            # (~0.85 mV), the floor (measured: up to 28x, the DCM boost)
+            assert m["vout_mean_abs_error_V"] <= 40 * m["diode_drop_floor_V"]
+            assert m["vout_ripple_rel_error"] <= THRESHOLDS["vout_ripple_rel"]
+        else:
+            # the CCM boost with C = 470 uF: ngspice's mean still moves after 600 periods, and the scene says so
+            assert m["spice_periods"] == 600 and any("has not settled" in note for note in result.notes)
 
 
 def test_netlist_text_in_a_parameter_never_reaches_ngspice(tmp_path, monkeypatch):
