@@ -141,7 +141,8 @@ def run_converter(name_or_model, params: dict | None = None, *, control: str = "
                 "its orbits with pcsuite bifurcation")
         tr = simulate(model.problem(p, span, orbit.x0), method)
         simulated = orbit.evaluations + span / T        # the warm-up and Newton's spans, then the output
-        meta.update(periods=int(round(simulated)), steady_periods=int(round(simulated)), orbit=orbit.summary())
+        # periods: what the returned run spans; steady_periods: every period simulated to get there and it
+        meta.update(periods=int(round(span / T)), steady_periods=int(round(simulated)), orbit=orbit.summary())
     else:
         tr = _simulate_phases(model, p, method, span, x0)
         meta.update(periods=int(round(span / T)) if model.periodic(p) else None)

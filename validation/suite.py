@@ -64,11 +64,13 @@ def _run_scene(scene: Scene) -> SceneResult:
     gdcm = {}
     if conv.closed_form:
         p = c.params
-        predicted = analytic.predicted_mode(p, conv.name)
+        # the held class by the model's own label: DCM, or GDCM where the held pair keeps i1 = -i2 != 0 (Cuk)
+        held = "GDCM" if conv.off_held_label.startswith("GDCM") else "DCM"
+        predicted = held if analytic.predicted_mode(p, conv.name) == "DCM" else "CCM"
         lcp_held = any(label in m["mode_sequence_lcp"] for label in HELD)
         spice_held = any(label in m["mode_sequence_spice"] for label in HELD)
         gdcm = {"K": analytic.k_factor(p, conv.name), "Kcrit": analytic.k_crit(p["D"], conv.name),
-                "predicted": predicted, "lcp": "DCM" if lcp_held else "CCM", "spice": "DCM" if spice_held else "CCM"}
+                "predicted": predicted, "lcp": held if lcp_held else "CCM", "spice": held if spice_held else "CCM"}
         gdcm["agree"] = gdcm["predicted"] == gdcm["lcp"] == gdcm["spice"]
         checks.append(("gdcm_verdict", float(gdcm["agree"]), 1.0, gdcm["agree"]))
         if "closed_form_rel" in scene.checks:

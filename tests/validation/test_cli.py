@@ -2,6 +2,7 @@
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import pandas as pd
 import pytest
@@ -169,3 +170,19 @@ def test_ngspice_options_on_simulate_and_compare(capsys, ngspice):
     assert code == 2 and "ngspice options (--spice-tmax) need --method spice; got --method lcp" in err
     code, _, err = run_cli(capsys, "simulate", "buck", "--method", "spice", "--spice-tmax", "20u")
     assert code == 2 and "--spice-tmax must be in (0, 1e-05) s" in err
+
+
+def test_steps_and_periods_mean_what_they_say(capsys):
+    code, out, _ = run_cli(capsys, "simulate", "buck", "--steady", "--periods", "7", "--json")
+    summary = json.loads(out)
+    assert code == 0 and summary["periods"] == 7 and summary["steps"] == 7000       # the run returned
+    assert summary["steady_periods"] > 7                   # and every period simulated to reach the orbit
+    assert summary["window_periods"] == 7
+
+
+def test_a_gdcm_scene_is_labelled_gdcm(ngspice):
+    from validation.scenes import load_scene
+    from validation.suite import run_scene
+    scene = load_scene(Path(__file__).resolve().parents[2] / "validation" / "scenes" / "cuk-gdcm.toml")
+    result = run_scene(scene)
+    assert result.gdcm["predicted"] == result.gdcm["lcp"] == result.gdcm["spice"] == "GDCM" and result.ok
