@@ -18,31 +18,37 @@ def png(fig) -> bytes:
 
 
 def comparison_plot(c, periods: int = 3) -> bytes:
-    """vout and the primary current of both simulators over the last periods, and their difference."""
+    """vout and every inductor current of both simulators over the last periods, and the primary current's
+    difference; legends beside the panels, off the traces; the operating point in the title."""
+    from converters.plotting import _eng, _time_unit
     T = c.lcp.period
     t_end = c.spice.t[-1]
     start = t_end - periods * T
     primary = c.metrics["current_signal"]
+    currents = [name for name in c.lcp.state_names if name.startswith("i")]
     t_l, t_s = c.lcp.t, c.spice.t
     sel_l, sel_s = t_l >= start, t_s >= start
-    fig, axes = plt.subplots(3, 1, figsize=(8, 7), sharex=True)
-    scale = 1e6
-    axes[0].plot((t_s[sel_s] - start) * scale, c.spice.signal("vout")[sel_s], label="ngspice", lw=2, alpha=0.6)
-    axes[0].plot((t_l[sel_l] - start) * scale, c.lcp.signal("vout")[sel_l], "--", label="LCP", lw=1)
-    axes[0].set_ylabel("vout (V)")
-    axes[1].plot((t_s[sel_s] - start) * scale, c.spice.state(primary)[sel_s], label="ngspice", lw=2, alpha=0.6)
-    axes[1].plot((t_l[sel_l] - start) * scale, c.lcp.state(primary)[sel_l], "--", label="LCP", lw=1)
-    axes[1].set_ylabel(f"{primary} (A)")
+    panels = ["vout", *currents]
+    fig, axes = plt.subplots(len(panels) + 1, 1, figsize=(9, 2.0 * (len(panels) + 1) + 0.6), sharex=True)
+    scale, unit = _time_unit(periods * T)
+    for ax, name in zip(axes, panels):
+        spice = c.spice.signal(name) if name == "vout" else c.spice.state(name)
+        lcp = c.lcp.signal(name) if name == "vout" else c.lcp.state(name)
+        ax.plot((t_s[sel_s] - start) * scale, spice[sel_s], label="ngspice", lw=2, alpha=0.6)
+        ax.plot((t_l[sel_l] - start) * scale, lcp[sel_l], "--", label="LCP", lw=1)
+        ax.set_ylabel(f"{name} ({'V' if name.startswith('v') else 'A'})")
+        ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
     grid = np.linspace(start, t_end, periods * 2000 + 1)
     residual = np.interp(grid, t_s, c.spice.state(primary)) - np.interp(grid, t_l, c.lcp.state(primary))
-    axes[2].plot((grid - start) * scale, residual, lw=0.8)
-    axes[2].set_ylabel(f"{primary}: ngspice - LCP (A)")
-    axes[2].set_xlabel(f"time in the last {periods} periods (us)")
-    for ax in axes[:2]:
-        ax.legend(fontsize=8, loc="upper right")
+    axes[-1].plot((grid - start) * scale, residual, lw=0.8)
+    axes[-1].set_ylabel(f"{primary}: ngspice - LCP (A)")
+    axes[-1].set_xlabel(f"time in the last {periods} periods ({unit})")
     for ax in axes:
         ax.grid(alpha=0.3)
-    fig.suptitle(f"{c.converter}: LCP time-stepper against ngspice", fontsize=10)
+        ax.ticklabel_format(axis="y", useOffset=False)
+    point = ", ".join(f"{k} = {_eng(v)}" for k, v in c.params.items() if isinstance(v, (int, float)))
+    fig.suptitle(f"{c.converter}: LCP time-stepper against ngspice\n{point}", fontsize=9)
+    fig.tight_layout()
     return png(fig)
 
 

@@ -73,7 +73,7 @@ def table_html(frame: pd.DataFrame, status_column: str | None = None, good=("sol
             value = row[col]
             cls = ""
             if isinstance(value, (float, np.floating)):
-                text = "" if np.isnan(value) else f"{value:.3g}"
+                text = "" if np.isnan(value) else f"{value:.6g}"     # enough digits to show a 1e-5 difference
             else:
                 text = str(value)
                 cls = "text"

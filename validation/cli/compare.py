@@ -56,7 +56,7 @@ def run(args) -> int:
     else:
         print(header)
         for key, value in metrics.items():
-            text = f"{value:.6g}" if isinstance(value, float) else str(value)
+            text = f"{value:.9g}" if isinstance(value, float) else str(value)
             print(f"  {key:<36} {text}")
         for name, value, threshold, ok in rows:
             print(f"  check {name:<30} {'pass' if ok else 'FAIL'} (threshold {threshold:g})")
