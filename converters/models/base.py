@@ -238,6 +238,15 @@ SETTLING_BAND = 0.02
 LOAD_BAND = 1e-3
 
 
+def power_balance(p_in: float, p_out: float, losses: dict) -> dict:
+    """The power summary of a run: input, output, each loss, the efficiency and the balance
+    (p_in - p_out - losses) / p_in (zero on a periodic orbit)."""
+    total = sum(losses.values())
+    return {"input_W": p_in, "output_W": p_out, "losses_W": losses, "total_loss_W": total,
+            "efficiency": p_out / p_in if p_in > 0 else float("nan"),
+            "balance": (p_in - p_out - total) / p_in if p_in > 0 else float("nan")}
+
+
 def step_response(tr, t_step: float, T: float) -> dict:
     """vout's response to a step at t_step, read on its per-period means (the switching ripple averaged out):
     the values before (the 10 periods before the step) and at the end (the last 10 periods), the largest

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from ..problems import Configuration
 from ..params import Param, nonnegative, positive
-from .base import Converter
+from .base import Converter, power_balance
 from .pwm2 import STEPS
 
 
@@ -52,10 +52,7 @@ class Cuk(Converter):
         losses = {k: p[k] * square(state) for k, state in (("rL1", "i1"), ("rL2", "i2")) if p.get(k) is not None}
         p_in = p["Vin"] * tr.mean("i1", t0=t0, t1=t1)
         p_out = square("vout") / p["R"]
-        total = sum(losses.values())
-        return {"input_W": p_in, "output_W": p_out, "losses_W": losses, "total_loss_W": total,
-                "efficiency": p_out / p_in if p_in > 0 else float("nan"),
-                "balance": (p_in - p_out - total) / p_in if p_in > 0 else float("nan")}
+        return power_balance(p_in, p_out, losses)
 
     def output_node_current(self, samples):
         return samples.x[:, 2]

@@ -15,7 +15,7 @@ import numpy as np
 
 from ..problems import Configuration
 from ..params import Param, nonnegative, positive
-from .base import ON, Converter
+from .base import ON, Converter, power_balance
 
 COMMON = (
     nonnegative("Vin", 12.0, "V", "input voltage"),
@@ -105,10 +105,7 @@ class PWMTwoState(Converter):
         losses = {k: v for k, v in losses.items() if p.get(k) is not None}
         p_in = p["Vin"] * mean("i_in")
         p_out = square("vout") / p["R"]
-        total = sum(losses.values())
-        return {"input_W": p_in, "output_W": p_out, "losses_W": losses, "total_loss_W": total,
-                "efficiency": p_out / p_in if p_in > 0 else float("nan"),
-                "balance": (p_in - p_out - total) / p_in if p_in > 0 else float("nan")}
+        return power_balance(p_in, p_out, losses)
 
     def configurations(self, p):
         Vin, L, C, R = p["Vin"], p["L"], p["C"], p["R"]
