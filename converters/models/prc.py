@@ -7,6 +7,8 @@ is a monotone LCP of size 4 (REFERENCE section 6).
 """
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 
 from ..problems import Configuration, Schedule
@@ -49,7 +51,8 @@ class PRC(Converter):
 
     #: u = (i_D1, i_D3, v_D2, v_D4): D1 and D3 carry their currents in u, D2 and D4 their voltages.
     pair_currents = ((True, True, False, False), (True, True, False, False))
-    mode_labels = ("CCM-ON", "CCM-OFF", "DCM")
+    #: Every subset of the bridge's diodes that can conduct, by name ("D1+D4"), and DCM (none).
+    mode_labels = tuple("+".join(sorted(c)) for k in (1, 2, 3, 4) for c in itertools.combinations(("D1", "D2", "D3", "D4"), k)) + ("DCM",)
     #: The drive's half-periods are not diode turn-offs: no turn-off instants are compared.
     turn_off_label = None
     #: The ideal tank keeps a ~1e-4 V cycle-to-cycle jitter: compare the Siconos scene, 2 ms from rest.
@@ -62,7 +65,12 @@ class PRC(Converter):
         return samples.x[:, 3]
 
     def modes(self, conducting, switch, x):
-        """A conducting bridge is CCM-ON / CCM-OFF by drive half; all four diodes off is DCM."""
-        labels = np.where(np.asarray(switch) >= 0.5, "CCM-ON", "CCM-OFF").astype(object)
-        labels[~np.asarray(conducting).any(axis=1)] = "DCM"
+        """Named by the bridge's conducting diodes (``D1+D4``: the pair that carries the tank current one way,
+        ``D2+D3`` the other); all four off is DCM (the output capacitor alone feeds the load)."""
+        conducting = np.asarray(conducting, dtype=bool)
+        labels = np.full(conducting.shape[0], "DCM", dtype=object)
+        for pattern in np.unique(conducting, axis=0):
+            if pattern.any():
+                name = "+".join(sorted(n for n, on in zip(self.pair_names, pattern) if on))
+                labels[(conducting == pattern).all(axis=1)] = name
         return labels
