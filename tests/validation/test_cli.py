@@ -186,3 +186,13 @@ def test_a_gdcm_scene_is_labelled_gdcm(ngspice):
     scene = load_scene(Path(__file__).resolve().parents[2] / "validation" / "scenes" / "cuk-gdcm.toml")
     result = run_scene(scene)
     assert result.gdcm["predicted"] == result.gdcm["lcp"] == result.gdcm["spice"] == "GDCM" and result.ok
+
+
+def test_spice_steady_starts_on_the_lcp_orbit_and_runs_until_ngspice_settles(capsys, ngspice):
+    code, out, _ = run_cli(capsys, "simulate", "cuk", "--method", "spice", "--steady", "--json")
+    spice = json.loads(out)
+    code_lcp, out, _ = run_cli(capsys, "simulate", "cuk", "--steady", "--json")
+    lcp = json.loads(out)
+    assert code == code_lcp == 0 and spice["spice_settled"] and spice["spice_settle"] <= 1e-5
+    assert spice["steady_periods"] % 20 == 0 and spice["steady_periods"] >= 20
+    assert spice["vout_mean"] == pytest.approx(lcp["vout_mean"], rel=1e-3)      # the diode's drop apart

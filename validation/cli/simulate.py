@@ -112,20 +112,46 @@ def _spice(args, params):
     from converters.run import duration
     from netlists import model_netlist
 
+    from ..compare import MAX_SPICE_PERIODS, SPICE_SETTLE, _settle
     from ..spice import run_spice, spice_trajectory
-    if args.steady:
-        raise ParameterError("--steady is available with --method lcp, event or smooth; got --method spice")
     start = time.perf_counter()
     model = get_model(args.converter, args.control)
     p = model.resolve(params)
+    options = spice_options(args, model.period(p))
+    x0, steady = None, {}
+    if args.steady:
+        # ngspice has no period map to shoot on: it starts on the LCP's orbit and runs on (from where it ended)
+        # until its own 10-period mean moves less than SPICE_SETTLE, at most MAX_SPICE_PERIODS periods
+        from converters.run import STEADY_PERIODS, make_method, steady_state
+        if not model.periodic(p) or model.step_times(p):
+            raise ParameterError(f"--steady needs a fixed switching period and no step; {model.key} has none")
+        x0 = steady_state(model, p, make_method(model, p, "lcp")).x0
+        if args.t_end is None and args.periods is None:
+            args.periods = STEADY_PERIODS
     t_end = duration(model, p, args.t_end, args.periods)
-    netlist = model_netlist(model, p, t_end, spice_options(args, model.period(p)))
+    T = model.period(p)
+    netlist = model_netlist(model, p, t_end, options, x0=x0)
     result = run_spice(netlist)
-    window_start = result.time[-1] - 10 * model.period(p)
+    window_start = result.time[-1] - 10 * T
     tr = spice_trajectory(model, p, netlist, result, window_start)
+    if args.steady:
+        span = int(round(t_end / T))
+        if span < 20:
+            raise ParameterError(f"--steady with --method spice needs at least 20 periods (two 10-period windows); "
+                                 f"got {span}")
+        total, settle = span, _settle(tr, T, span, 10)
+        while settle > SPICE_SETTLE and total < MAX_SPICE_PERIODS:
+            netlist = model_netlist(model, p, t_end, options, x0=tr.x[-1])
+            result = run_spice(netlist)
+            tr = spice_trajectory(model, p, netlist, result, window_start)
+            total, settle = total + span, _settle(tr, T, span, 10)
+        steady = {"steady_periods": total, "spice_settle": settle, "spice_settled": bool(settle <= SPICE_SETTLE)}
     summary = {"converter": model.name, "method": "spice",
                "options": {**result.options, "params": p, "ngspice": result.ngspice_version},
-               "steps": result.accepted_steps, "wall_s": time.perf_counter() - start}
+               "steps": result.accepted_steps, "wall_s": time.perf_counter() - start, **steady}
+    if steady and not steady["spice_settled"]:
+        summary["warnings"] = [f"ngspice has not settled after {steady['steady_periods']} periods (its 10-period mean "
+                               f"still moves {steady['spice_settle']:.2g})"]
     if args.control != "pwm":
         summary["control"] = args.control
     summary.update(model.summary(tr, p))
@@ -148,7 +174,10 @@ def _print(summary: dict, tr, args) -> None:
               f"{summary['predicted_frequency_Hz'] / 1e3:.6g} kHz at the measured mean vout)")
     if "lambda_mean" in summary:
         print(f"lambda = 1 - s = {summary['lambda_mean']:.8f} (Vin/v = {summary['vin_over_v']:.8f})")
-    if "steady_periods" in summary:
+    if "spice_settle" in summary:
+        print(f"ngspice from the LCP's orbit, {summary['steady_periods']} periods: its 10-period mean moves "
+              f"{summary['spice_settle']:.2g} ({'settled' if summary['spice_settled'] else 'NOT settled'})")
+    elif "steady_periods" in summary:
         orbit = summary["orbit"]
         print(f"periodic steady state after {summary['steady_periods']} periods (Newton: {orbit['iterations']} "
               f"iterations, distance to the orbit {orbit['distance']:.2g}, Floquet spectral radius "
