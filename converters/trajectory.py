@@ -315,10 +315,15 @@ class Trajectory:
         return frame if columns is None else frame[list(columns)]
 
     def waveforms(self):
-        """The waveform table of the command line: time, states, the model's signals, mode."""
+        """The waveform table of the command line: time, states, the model's signals, mode (a signal the run
+        does not measure, all NaN, is left out: an ngspice run has no pair variables to read element signals
+        from)."""
         declared = self.labels.signal_names if self.labels is not None else ()
         names = list(self.state_names) + [s for s in declared if s not in self.state_names]
-        return self.to_pandas(["time", *names, "mode"])
+        frame = self.to_pandas(["time", *names, "mode"])
+        unmeasured = [c for c in names if c not in self.state_names and frame[c].dtype.kind == "f"
+                      and frame[c].isna().all()]
+        return frame.drop(columns=unmeasured)
 
 
 def concatenate(parts: list[Trajectory]) -> Trajectory:

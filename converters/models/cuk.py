@@ -7,9 +7,11 @@ generalised DCM (GDCM-OFF); the ON pair held at v1 = 0 is GDCM-ON.
 """
 from __future__ import annotations
 
+import numpy as np
+
 from ..problems import Configuration
 from ..params import Param, nonnegative, positive
-from .base import Converter, power_balance
+from .base import ON, Converter, power_balance
 from .pwm2 import STEPS
 
 
@@ -27,8 +29,13 @@ class Cuk(Converter):
         Param("D", 0.4, "", "duty ratio", low=0.0, high=1.0, low_open=False, high_open=False),
         nonnegative("rL1", None, "ohm", "input inductor DCR"),
         nonnegative("rL2", None, "ohm", "output inductor DCR"),
+        nonnegative("Ron", None, "ohm", "switch on-resistance"),
+        nonnegative("Vf", None, "V", "diode forward drop"),
+        nonnegative("Rd", None, "ohm", "diode on-resistance"),
         *STEPS,
     )
+    signal_names = ("vout", "switch", "i_in", "i_switch", "i_diode")
+    signal_units = {"i_in": "A", "i_switch": "A", "i_diode": "A"}
     state_names = ("i1", "v1", "i2", "v2")
     output_state = "v2"
     pair_names = ("diode",)
@@ -36,23 +43,44 @@ class Cuk(Converter):
     off_held_label = "GDCM-OFF"
 
     def configurations(self, p):
+        """Ideal: REFERENCE section 3. With parasitics (each only when given): the inductors' DCR rL1, rL2;
+        the switch's Ron, through which i_S = i1 + i2 - i_D flows in ON (so y = v1 - Ron i_S + Vf + Rd u); the
+        diode's Vf and Rd, across which v_n2 = -u + Vf + Rd (i1 + i2) in OFF."""
         Vin, L1, C1, L2, C2, R = (p[k] for k in ("Vin", "L1", "C1", "L2", "C2", "R"))
-        d1, d2 = -p.get("rL1", 0.0) / L1, -p.get("rL2", 0.0) / L2      # the inductors' DCR, when given
+        rL1, rL2, Ron, Vf, Rd = (p.get(k, 0.0) for k in ("rL1", "rL2", "Ron", "Vf", "Rd"))
         on = Configuration(
-            A=[[d1, 0, 0, 0], [0, 0, -1 / C1, 0], [0, 1 / L2, d2, -1 / L2], [0, 0, 1 / C2, -1 / (R * C2)]],
-            B=[[0], [1 / C1], [0], [0]], C=[[0, 1, 0, 0]], D=[[0]], E=[Vin / L1, 0, 0, 0], name="ON")
+            A=[[-(rL1 + Ron) / L1, 0, -Ron / L1, 0], [0, 0, -1 / C1, 0],
+               [-Ron / L2, 1 / L2, -(rL2 + Ron) / L2, -1 / L2], [0, 0, 1 / C2, -1 / (R * C2)]],
+            B=[[Ron / L1], [1 / C1], [Ron / L2], [0]], C=[[-Ron, 1, -Ron, 0]], D=[[Ron + Rd]],
+            E=[Vin / L1, 0, 0, 0], F=[Vf], name="ON")
         off = Configuration(
-            A=[[d1, -1 / L1, 0, 0], [1 / C1, 0, 0, 0], [0, 0, d2, -1 / L2], [0, 0, 1 / C2, -1 / (R * C2)]],
-            B=[[1 / L1], [0], [1 / L2], [0]], C=[[1, 0, 1, 0]], D=[[0]], E=[Vin / L1, 0, 0, 0], name="OFF")
+            A=[[-(rL1 + Rd) / L1, -1 / L1, -Rd / L1, 0], [1 / C1, 0, 0, 0],
+               [-Rd / L2, 0, -(rL2 + Rd) / L2, -1 / L2], [0, 0, 1 / C2, -1 / (R * C2)]],
+            B=[[1 / L1], [0], [1 / L2], [0]], C=[[1, 0, 1, 0]], D=[[0]],
+            E=[(Vin - Vf) / L1, 0, -Vf / L2, 0], name="OFF")
         return on, off
 
+    def signal(self, name, samples, p):
+        if name in ("i_in", "i_switch", "i_diode"):
+            i1, i2 = samples.x[:, 0], samples.x[:, 2]
+            if name == "i_in":
+                return i1
+            if samples.u is None:                  # an ngspice run: no pair variables
+                return np.full(i1.shape, np.nan)
+            on = np.asarray(samples.config) == ON
+            u = samples.u[:, 0]
+            return np.where(on, i1 + i2 - u, 0.0) if name == "i_switch" else np.where(on, u, i1 + i2)
+        return super().signal(name, samples, p)
+
     def power(self, tr, p, t0: float, t1: float) -> dict:
-        """Input and output power, the inductors' DCR losses and the efficiency over [t0, t1] (W)."""
+        """Input and output power, each parasitic's loss and the efficiency over [t0, t1] (W)."""
         square = lambda name: tr.rms(name, t0=t0, t1=t1) ** 2     # noqa: E731
-        losses = {k: p[k] * square(state) for k, state in (("rL1", "i1"), ("rL2", "i2")) if p.get(k) is not None}
+        losses = {"rL1": p.get("rL1", 0.0) * square("i1"), "rL2": p.get("rL2", 0.0) * square("i2"),
+                  "Ron": p.get("Ron", 0.0) * square("i_switch"),
+                  "Vf": p.get("Vf", 0.0) * tr.mean("i_diode", t0=t0, t1=t1), "Rd": p.get("Rd", 0.0) * square("i_diode")}
+        losses = {k: v for k, v in losses.items() if p.get(k) is not None}
         p_in = p["Vin"] * tr.mean("i1", t0=t0, t1=t1)
-        p_out = square("vout") / p["R"]
-        return power_balance(p_in, p_out, losses)
+        return power_balance(p_in, square("vout") / p["R"], losses)
 
     def output_node_current(self, samples):
         return samples.x[:, 2]

@@ -52,7 +52,8 @@ def test_simulate_steady_reports_periods_and_cuk_columns(capsys, tmp_path):
     summary = json.loads(out)
     assert code == 0 and summary["steady_periods"] >= 40
     assert summary["vout_mean"] == pytest.approx(-8.0, rel=1e-3)
-    assert list(pd.read_parquet(target).columns) == ["time", "i1", "v1", "i2", "v2", "vout", "switch", "mode"]
+    assert list(pd.read_parquet(target).columns) == ["time", "i1", "v1", "i2", "v2", "vout", "switch", "i_in", "i_switch",
+                                                     "i_diode", "mode"]
 
 
 @pytest.mark.parametrize("argv,match", [
