@@ -68,7 +68,8 @@ def plot(tr, periods: float | None = None, signals=None, title: str | None = Non
         ax.set_ylabel("mode")
         ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
     axes[-1].set_xlabel(f"time from {t0 * scale:.6g} {unit} ({unit})")
-    axes[-1].ticklabel_format(axis="x", useOffset=False) if not has_modes else None
+    if not has_modes:
+        axes[-1].ticklabel_format(axis="x", useOffset=False)
     if title is None:
         meta = tr.metadata or {}
         params = meta.get("params") or {}

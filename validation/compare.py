@@ -85,7 +85,7 @@ def compare(converter: str, params: dict | None = None, *, periods: int | None =
     netlist = build_netlist(model.name, p, periods * T, spice_options, x0=x_star)
     window_start = (periods - window) * T
     spice = spice_trajectory(model, p, netlist, run_spice(netlist), window_start)
-    spice_periods, settle = periods, _settle(spice, T, periods, window)
+    spice_periods, settle = periods, spice_drift(spice, T, periods, window)
     # ngspice's own steady state differs from the LCP's (its diode and switch are not ideal): from the LCP's
     # orbit it drifts towards it, slowly where the circuit is lightly damped. Measure it only once it is
     # there: run on from where it ended until the window's mean moves less than SPICE_SETTLE.
@@ -93,7 +93,7 @@ def compare(converter: str, params: dict | None = None, *, periods: int | None =
         netlist = build_netlist(model.name, p, periods * T, spice_options, x0=spice.x[-1])
         spice = spice_trajectory(model, p, netlist, run_spice(netlist), window_start)
         spice_periods += periods
-        settle = _settle(spice, T, periods, window)
+        settle = spice_drift(spice, T, periods, window)
     result = Comparison(model.name, p, lcp, spice, netlist, window_start,
                         thresholds={**THRESHOLDS["compare"], **(thresholds or {})})
     _metrics(result, model, T, periods, window)
@@ -130,7 +130,7 @@ def _period_ripple(tr, t0: float, T: float, window: int) -> float:
     return float(np.mean([np.ptp(v[(t >= t0 + k * T) & (t <= t0 + (k + 1) * T)]) for k in range(window)]))
 
 
-def _settle(spice, T: float, periods: int, window: int) -> float:
+def spice_drift(spice, T: float, periods: int, window: int) -> float:
     """|mean vout over the last window - over the window before| / |mean| (the run's drift)."""
     end = periods * T
     last = spice.mean("vout", t0=end - window * T, t1=end)

@@ -112,7 +112,7 @@ def _spice(args, params):
     from converters.run import duration
     from netlists import model_netlist
 
-    from ..compare import MAX_SPICE_PERIODS, SPICE_SETTLE, _settle
+    from ..compare import MAX_SPICE_PERIODS, SPICE_SETTLE, spice_drift
     from ..spice import run_spice, spice_trajectory
     start = time.perf_counter()
     model = get_model(args.converter, args.control)
@@ -139,12 +139,12 @@ def _spice(args, params):
         if span < 20:
             raise ParameterError(f"--steady with --method spice needs at least 20 periods (two 10-period windows); "
                                  f"got {span}")
-        total, settle = span, _settle(tr, T, span, 10)
+        total, settle = span, spice_drift(tr, T, span, 10)
         while settle > SPICE_SETTLE and total < MAX_SPICE_PERIODS:
             netlist = model_netlist(model, p, t_end, options, x0=tr.x[-1])
             result = run_spice(netlist)
             tr = spice_trajectory(model, p, netlist, result, window_start)
-            total, settle = total + span, _settle(tr, T, span, 10)
+            total, settle = total + span, spice_drift(tr, T, span, 10)
         steady = {"steady_periods": total, "spice_settle": settle, "spice_settled": bool(settle <= SPICE_SETTLE)}
     summary = {"converter": model.name, "method": "spice",
                "options": {**result.options, "params": p, "ngspice": result.ngspice_version},
