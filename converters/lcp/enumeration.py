@@ -2,7 +2,7 @@
 
 For each index set J (by increasing size) solve M_JJ z_J = -q_J and keep z if z >= 0 and
 w = q + M z >= 0. Singular principal submatrices are skipped (their solutions, if any, are not
-basic). Refuses k > 12 (4096 bases).
+basic). Refuses k > 12 (4096 bases); a wall-clock ``deadline`` is checked every 64 bases.
 """
 from __future__ import annotations
 
@@ -16,7 +16,7 @@ from .result import FAILED, NO_SOLUTION, SOLVED, finish, lcp_error
 MAX_K = 12
 
 
-def enumerate_bases(M: np.ndarray, q: np.ndarray, *, tol: float, max_iter: int | None = None):
+def enumerate_bases(M: np.ndarray, q: np.ndarray, *, tol: float, max_iter: int | None = None, deadline=None):
     k = q.shape[0]
     if k > MAX_K:
         raise LCPError(f"enumeration visits 2^k bases: k must be <= {MAX_K}; got k = {k}; "
@@ -27,6 +27,10 @@ def enumerate_bases(M: np.ndarray, q: np.ndarray, *, tol: float, max_iter: int |
     for size in range(k + 1):
         for subset in combinations(range(k), size):
             visited += 1
+            if deadline is not None and visited % 64 == 0 and deadline.expired():
+                return finish(M, q, solutions[0] if solutions else np.zeros(k), status=FAILED, iterations=visited,
+                              method="enum", tol=tol, solutions=solutions,
+                              message=deadline.message(f"enum (after {visited} of {2 ** k} bases)"))
             z = np.zeros(k)
             if size:
                 J = list(subset)

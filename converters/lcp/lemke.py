@@ -3,8 +3,9 @@
 Tableau form of  w - M z - d z0 = q  with covering vector d = 1. The columns of the initial
 identity (the w-columns) hold B^-1 at every pivot, so the lexicographic ratio test compares the
 rows (rhs, B^-1 row) / pivot-column entry; this makes every pivot sequence finite even on
-degenerate problems. Ray termination (no positive entry in the entering column) means no
-solution was found; for copositive-plus M it proves that none exists.
+degenerate problems (a wall-clock ``deadline``, checked at every pivot, bounds the run). Ray
+termination (no positive entry in the entering column) means no solution was found; for
+copositive-plus M it proves that none exists.
 """
 from __future__ import annotations
 
@@ -13,7 +14,7 @@ import numpy as np
 from .result import FAILED, MAX_ITERATIONS, NO_SOLUTION, SOLVED, finish
 
 
-def lemke(M: np.ndarray, q: np.ndarray, *, tol: float, max_iter: int, pivot_tol: float = 1e-13):
+def lemke(M: np.ndarray, q: np.ndarray, *, tol: float, max_iter: int, pivot_tol: float = 1e-13, deadline=None):
     k = q.shape[0]
     if np.all(q >= 0.0):
         return finish(M, q, np.zeros(k), status=SOLVED, iterations=0, method="lemke", tol=tol)
@@ -40,6 +41,9 @@ def lemke(M: np.ndarray, q: np.ndarray, *, tol: float, max_iter: int, pivot_tol:
         if iterations >= max_iter:
             return _result(M, q, tableau, basis, iterations, tol, MAX_ITERATIONS,
                            f"lemke reached max_iter ({max_iter}) pivots; raise max_iter")
+        if deadline is not None and deadline.expired():
+            return _result(M, q, tableau, basis, iterations, tol, FAILED,
+                           deadline.message(f"lemke (after {iterations} pivots)"))
         column = tableau[:, entering]
         scale = max(1.0, np.abs(column).max())
         candidates = np.flatnonzero(column > pivot_tol * scale)

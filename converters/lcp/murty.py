@@ -2,7 +2,8 @@
 
 The basis is the set J of indices with z basic. Each iteration solves M_JJ z_J = -q_J, forms
 w = q + M z and flips the least index whose basic variable is negative. On P-matrices this
-terminates in at most 2^k pivots (Murty's exponential examples reach that bound).
+terminates in at most 2^k pivots (Murty's exponential examples reach that bound), so a wall-clock
+``deadline`` (checked at every pivot) bounds the run.
 """
 from __future__ import annotations
 
@@ -11,12 +12,15 @@ import numpy as np
 from .result import FAILED, MAX_ITERATIONS, SOLVED, finish
 
 
-def murty(M: np.ndarray, q: np.ndarray, *, tol: float, max_iter: int):
+def murty(M: np.ndarray, q: np.ndarray, *, tol: float, max_iter: int, deadline=None):
     k = q.shape[0]
     in_basis = np.zeros(k, dtype=bool)
     z = np.zeros(k)
     scale = 1e-12 * (1.0 + np.abs(q).max())
     for iteration in range(max_iter + 1):
+        if deadline is not None and deadline.expired():
+            return finish(M, q, z, status=FAILED, iterations=iteration, method="murty", tol=tol,
+                          message=deadline.message(f"murty (after {iteration} pivots)"))
         z = np.zeros(k)
         if in_basis.any():
             sub = M[np.ix_(in_basis, in_basis)]

@@ -3,21 +3,25 @@
 Phi_i(z) = sqrt(z_i^2 + w_i^2) - z_i - w_i, w = q + M z; Phi(z) = 0 exactly at LCP solutions.
 The merit psi = ||Phi||^2 / 2 is continuously differentiable; when the Newton direction is not a
 good descent direction the method falls back to -grad psi (De Luca, Facchinei and Kanzow 1996).
-Converges globally for P-matrices (every stationary point of psi is then a solution).
+Converges globally for P-matrices (every stationary point of psi is then a solution). A wall-clock
+``deadline`` is checked at every step.
 """
 from __future__ import annotations
 
 import numpy as np
 
-from .result import FAILED, MAX_ITERATIONS, SOLVED, finish, lcp_error
+from .result import FAILED, MAX_ITERATIONS, SOLVED, accepts, finish
 
 
 def newton_fb(M: np.ndarray, q: np.ndarray, *, tol: float, max_iter: int,
-              rho: float = 1e-10, p: float = 2.1, beta: float = 0.5, sigma: float = 1e-4):
+              rho: float = 1e-10, p: float = 2.1, beta: float = 0.5, sigma: float = 1e-4, deadline=None):
     k = q.shape[0]
     z = np.zeros(k)
     eye = np.eye(k)
     for iteration in range(1, max_iter + 1):
+        if deadline is not None and deadline.expired():
+            return finish(M, q, np.maximum(z, 0.0), status=FAILED, iterations=iteration - 1, method="newton",
+                          tol=tol, message=deadline.message(f"newton (after {iteration - 1} steps)"))
         w = q + M @ z
         phi, jac = _fb_and_jacobian(z, w, M, eye)
         psi = 0.5 * phi @ phi
@@ -40,7 +44,7 @@ def newton_fb(M: np.ndarray, q: np.ndarray, *, tol: float, max_iter: int,
                           message="newton: line search failed (stationary point of the merit "
                                   "function; M is probably not a P-matrix); try method='lemke'")
         z = trial
-        if lcp_error(M, q, np.maximum(z, 0.0)) <= tol:
+        if accepts(M, q, np.maximum(z, 0.0), tol):
             return finish(M, q, np.maximum(z, 0.0), status=SOLVED, iterations=iteration,
                           method="newton", tol=tol)
     return finish(M, q, np.maximum(z, 0.0), status=MAX_ITERATIONS, iterations=max_iter, method="newton",

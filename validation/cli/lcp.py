@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import json
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -14,15 +15,17 @@ def add(sub) -> None:
     solve = lcp.add_parser("solve", help="solve an LCP stored in the Siconos .dat format")
     solve.add_argument("file", type=Path)
     solve.add_argument("--method", default="lemke", choices=list(SOLVERS))
-    solve.add_argument("--tol", type=float, default=1e-10)
-    solve.add_argument("--max-iter", type=int, default=None)
+    solve.add_argument("--tol", type=float, default=1e-10, help="accepted residual, in [1e-16, 1e-2] (default 1e-10)")
+    solve.add_argument("--max-iter", type=int, default=None,
+                       help="pivots, sweeps or Newton steps, in [1, 10^9] (default: per method); the solve also "
+                            "stops at --time-limit (default 20 s)")
     solve.add_argument("--json", action="store_true", help="print one JSON object")
     solve.set_defaults(run=run)
 
 
 def run(args) -> int:
     from converters.lcp import read_siconos_lcp, solve_lcp
-    problem = read_siconos_lcp(args.file)
+    problem = read_siconos_lcp(args.file, context="lcp solve")
     result = solve_lcp(problem.M, problem.q, method=args.method, tol=args.tol, max_iter=args.max_iter)
     if args.json:
         print(json.dumps({"file": str(args.file), "k": int(problem.q.shape[0]), **result.to_dict()}))
@@ -30,10 +33,12 @@ def run(args) -> int:
         print(f"{problem.name}: k = {problem.q.shape[0]}, method = {result.method}, status = {result.status}, "
               f"err = {result.err:.3g}, iterations = {result.iterations}")
         print("z =", np.array2string(result.z, precision=6))
-        if result.message:
+        if result.message and result.solved:
             print(result.message)
         if args.method == "enum":
             print(f"{len(result.solutions)} basic solution(s):")
             for s in result.solutions:
                 print("  ", np.array2string(s, precision=6))
+    if not result.solved:  # why, with the remedy: one line on stderr (also in the JSON object)
+        print(f"pcsuite: lcp solve {args.file}: {result.status}: {' '.join(result.message.split())}", file=sys.stderr)
     return 0 if result.solved else 1

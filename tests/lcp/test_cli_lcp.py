@@ -1,0 +1,97 @@
+"""`pcsuite lcp solve`: tiny and huge scales solved, out-of-range flags refused, and the time and memory limits."""
+import json
+import time
+
+import numpy as np
+import pytest
+
+from converters.lcp.problems import murty_exponential
+from validation.cli import main
+
+ALL = ["lemke", "murty", "enum", "pgs", "newton"]
+
+
+@pytest.fixture(autouse=True)
+def limits(monkeypatch):
+    # main() writes --time-limit / --max-memory into the environment: setting them here restores them afterwards
+    monkeypatch.setenv("PCSUITE_TIME_LIMIT", "20")
+    monkeypatch.setenv("PCSUITE_MAX_MEMORY", "1G")
+
+
+def write_dense(path, M, q):
+    n = len(q)
+    lines = [f"{n}", "0", f"{n} {n}", f"{n} {n}"]
+    lines += [" ".join(f"{v:.17g}" for v in M[:, j]) for j in range(n)]
+    lines.append(" ".join(f"{v:.17g}" for v in q))
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def run(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+@pytest.mark.parametrize("method", ALL)
+@pytest.mark.parametrize("scale", [1e-200, 1e-100, 1e100])
+def test_the_issue_file_is_solved_at_every_scale(capsys, tmp_path, method, scale):
+    path = write_dense(tmp_path / "t.dat", np.eye(3), np.full(3, -scale))
+    code, out, err = run(capsys, "lcp", "solve", str(path), "--method", method, "--json")
+    data = json.loads(out)
+    assert code == 0 and data["status"] == "solved" and err == ""
+    np.testing.assert_allclose(data["z"], scale, rtol=1e-9)
+    assert min(data["w"]) >= -1e-10 * scale
+
+
+@pytest.mark.parametrize("argv,message", [
+    (["--tol", "10"], "pcsuite: error: tol must be in [1e-16, 0.01]; got 10.0\n"),
+    (["--tol", "1e-20"], "pcsuite: error: tol must be in [1e-16, 0.01]; got 1e-20\n"),
+    (["--max-iter", "1000000000000"],
+     "pcsuite: error: max_iter must be an integer in [1, 1000000000]; got 1000000000000\n"),
+    (["--max-iter", "0"], "pcsuite: error: max_iter must be an integer in [1, 1000000000]; got 0\n"),
+])
+def test_out_of_range_flags_exit_2_with_one_line(capsys, tmp_path, argv, message):
+    path = write_dense(tmp_path / "t.dat", np.eye(3), -np.ones(3))
+    code, out, err = run(capsys, "lcp", "solve", str(path), *argv)
+    assert (code, out, err) == (2, "", message)
+
+
+def test_murty_with_a_huge_max_iter_stops_at_the_time_limit(capsys, tmp_path):
+    M, q = murty_exponential(300)
+    path = write_dense(tmp_path / "lcp_murty300.dat", M, q)
+    start = time.perf_counter()
+    code, out, err = run(capsys, "lcp", "solve", str(path), "--method", "murty", "--max-iter", "1000000000",
+                         "--time-limit", "1", "--json")
+    assert 1.0 <= time.perf_counter() - start < 2.5
+    assert code == 1 and json.loads(out)["status"] == "failed"
+    assert err.count("\n") == 1 and err.startswith(f"pcsuite: lcp solve {path}: failed: murty (after ")
+    assert "pivots) reached the time limit of 1 s; raise it with --time-limit S" in err
+
+
+def test_a_50000_header_is_refused_naming_the_limit_and_the_flag(capsys, tmp_path):
+    path = tmp_path / "big.dat"
+    path.write_text("50000\n0\n50000 50000\n50000 50000\n1 2 3\n")
+    start = time.perf_counter()
+    code, out, err = run(capsys, "lcp", "solve", str(path))
+    assert time.perf_counter() - start < 0.5
+    assert code == 2 and out == "" and err.count("\n") == 1
+    assert err.startswith(f"pcsuite: error: lcp solve {path}: n = 50000 (dense M of n^2 doubles) needs about 18.6 GiB, "
+                          "above the memory limit of 1 GiB; use a smaller LCP")
+    assert "--max-memory 32G" in err
+
+
+def test_the_max_memory_flag_applies_to_the_solver_working_memory(capsys, tmp_path):
+    path = write_dense(tmp_path / "eye600.dat", np.eye(600), -np.ones(600))   # M: 2.9 MB; Lemke's work: 20.2 MB
+    code, out, err = run(capsys, "lcp", "solve", str(path), "--max-memory", "16M")
+    assert code == 2 and out == ""
+    assert err.startswith("pcsuite: error: solve_lcp (method lemke): k = 600 (7 work arrays of k x k doubles) needs "
+                          "about 19.2 MiB, above the memory limit of 16 MiB")
+
+
+def test_dev_zero_is_refused_at_once(capsys):
+    start = time.perf_counter()
+    code, out, err = run(capsys, "lcp", "solve", "/dev/zero")
+    assert time.perf_counter() - start < 0.5
+    assert (code, out) == (2, "")
+    assert err == "pcsuite: error: FILE must be a regular file; got '/dev/zero', a character device\n"
