@@ -17,7 +17,7 @@ import pandas as pd
 
 from converters.errors import ParameterError
 
-from .io import atomic_write_bytes, atomic_write_text
+from .io import atomic_write_bytes, atomic_write_text, check_output_dir, locked_output_dir
 from .report import csv_bytes as _csv
 
 DEFAULT_OUT = Path("reports/bench")
@@ -89,11 +89,22 @@ def run_bench(out: Path = DEFAULT_OUT, quick: bool = False, spice: bool = True, 
         files.update(part_files)
     for part in summary.values():
         part.update(stamp)
-    for name, data in files.items():
-        atomic_write_bytes(out / name, data)
-    saved = _read_json(out / "bench.json")        # a part not run keeps its earlier summary
-    atomic_write_text(out / "bench.json", json.dumps({**saved, **summary}, indent=2, default=float))
+    with locked_output_dir(out, "bench", OUT_FILES):   # checked again; two writers take turns
+        for name, data in files.items():
+            atomic_write_bytes(out / name, data)
+        saved = _read_json(out / "bench.json")        # a part not run keeps its earlier summary
+        atomic_write_text(out / "bench.json", json.dumps({**saved, **summary}, indent=2, default=float))
     return summary
+
+
+#: Every file ``pcsuite bench`` writes into its directory: a directory holding anything else is not its output.
+OUT_FILES = (*TRADEOFF_FILES, *STABILITY_FILES, "bench.json")
+
+
+def check_out(out=None, flag: str = "--out") -> None:
+    """Refuse, before the runs, an output directory bench must not write into (validation.io.check_output_dir):
+    it must be new, empty, or hold only files of an earlier ``pcsuite bench``."""
+    check_output_dir(flag, DEFAULT_OUT if out is None else out, "bench", OUT_FILES)
 
 
 def _read_json(path: Path) -> dict:

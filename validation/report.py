@@ -10,14 +10,17 @@ import io
 import json
 import time
 import traceback
+import urllib.parse
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
+from converters.errors import ParameterError
+
 from .environment import environment
-from .io import atomic_directory
+from .io import MANIFEST, atomic_directory, safe_name
 
 CSS = """
 body{font-family:system-ui,sans-serif;margin:2em auto;max-width:1100px;color:#222}
@@ -84,6 +87,16 @@ def table_html(frame: pd.DataFrame, status_column: str | None = None, good=("sol
     return f"<table><tr>{head}</tr>{''.join(rows)}</table>"
 
 
+def esc(value) -> str:
+    """Any value as HTML text or an attribute's value (quotes escaped too)."""
+    return html.escape(str(value), quote=True)
+
+
+def url(path: str) -> str:
+    """A relative file name as the value of a quoted href or src attribute."""
+    return html.escape(urllib.parse.quote(path, safe="/"), quote=True)
+
+
 def figure_png(fig) -> bytes:
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=110, bbox_inches="tight")
@@ -108,7 +121,7 @@ def run_section(builder, title: str) -> Section:
 def write_report(sections: list[Section], out_dir, suite: str, options: dict | None = None) -> Path:
     """Write index.html, metrics.json and every section's files into ``out_dir`` atomically."""
     env = environment()
-    header = "".join(f"<tr><td class='text'>{html.escape(k)}</td><td class='text'>{html.escape(str(v))}</td></tr>"
+    header = "".join(f"<tr><td class='text'>{esc(k)}</td><td class='text'>{esc(v)}</td></tr>"
                      for k, v in env.items())
     summary = pd.DataFrame([{"section": s.title, "result": s.status, "reason": s.why} for s in sections])
     counts = {status: sum(s.status == status for s in sections) for status in STATUSES}
@@ -117,27 +130,27 @@ def write_report(sections: list[Section], out_dir, suite: str, options: dict | N
                f"PASS: {counts['pass']} of {len(sections)} sections pass"
                + (f", {counts['skipped']} skipped (not measured)" if counts["skipped"] else ""))
     rows = "".join(
-        f"<tr><td class='text'><a href='#{_anchor(s.title)}'>{html.escape(s.title)}</a></td>"
+        f"<tr><td class='text'><a href='#{_anchor(s.title)}'>{esc(s.title)}</a></td>"
         f"<td class='text {'pass' if s.status == 'pass' else 'fail' if s.status == 'fail' else 'skip'}'>{s.status}</td>"
-        f"<td class='text'>{html.escape(s.why)}</td></tr>" for s in sections)
-    body = [f"<h1>pcsuite validation report: {html.escape(suite)}</h1>",
-            f"<p class='verdict {'fail' if failed else 'pass'}' id='verdict'>{html.escape(verdict)}</p>",
+        f"<td class='text'>{esc(s.why)}</td></tr>" for s in sections)
+    body = [f"<h1>pcsuite validation report: {esc(suite)}</h1>",
+            f"<p class='verdict {'fail' if failed else 'pass'}' id='verdict'>{esc(verdict)}</p>",
             f"<table>{header}</table>",
-            f"<p>Options: <code>{html.escape(json.dumps(options or {}))}</code></p>",
+            f"<p>Options: <code>{esc(json.dumps(options or {}))}</code></p>",
             "<h2>Summary</h2>", f"<table id='summary'><tr><th>section</th><th>result</th><th>reason</th></tr>{rows}</table>"]
     for section in sections:
-        badge = "" if section.status == "pass" else f" <small>({section.status}: {html.escape(section.why)})</small>"
-        body.append(f"<section class='section-{section.status}'><h2 id='{_anchor(section.title)}'>{html.escape(section.title)}"
+        badge = "" if section.status == "pass" else f" <small>({section.status}: {esc(section.why)})</small>"
+        body.append(f"<section class='section-{section.status}'><h2 id='{_anchor(section.title)}'>{esc(section.title)}"
                     f"{badge}</h2><div class='wide'>{section.html}</div></section>")
-    page = (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>pcsuite report: {html.escape(suite)}"
+    page = (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>pcsuite report: {esc(suite)}"
             f"</title><style>{CSS}</style></head><body>{''.join(body)}</body></html>")
     out_dir = Path(out_dir)
-    with atomic_directory(out_dir) as staging:
-        for section in sections:
-            for name, data in section.files.items():
-                path = staging / name
-                path.parent.mkdir(parents=True, exist_ok=True)
-                path.write_bytes(data)
+    files = _section_files(sections)
+    with atomic_directory(out_dir, manifest={"suite": suite}) as staging:
+        for name, data in files.items():
+            path = staging / name
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_bytes(data)
         metrics = {"suite": suite, "environment": env, "options": options or {}, "verdict": verdict,
                    "sections": {s.title: {"ok": s.ok, "status": s.status, "reason": s.why, **s.metrics}
                                 for s in sections}}
@@ -147,12 +160,35 @@ def write_report(sections: list[Section], out_dir, suite: str, options: dict | N
     return out_dir / "index.html"
 
 
+#: Files the report itself writes: a section may not write them.
+RESERVED = ("index.html", "metrics.json", "summary.csv", MANIFEST)
+
+
+def _section_files(sections) -> dict:
+    """Every section's files by relative name; each part of a name must be a safe name, no name twice."""
+    files, owner = {}, {}
+    for section in sections:
+        for name, data in section.files.items():
+            parts = str(name).split("/")
+            for part in parts:
+                safe_name(f"section {section.title!r}: file {name!r}: the part", part)
+            if name in RESERVED or name in owner:
+                raise ParameterError(f"section {section.title!r}: file {name!r} is already written by "
+                                     f"{'the report' if name in RESERVED else repr(owner[name])}; names must be unique")
+            owner[name] = section.title
+            files[name] = data
+    clash = sorted(set(owner) & {str(parent) for n in owner for parent in Path(n).parents})
+    if clash:
+        raise ParameterError(f"file {clash[0]!r} of section {owner[clash[0]]!r} is also a directory of another file")
+    return files
+
+
 def csv_bytes(frame: pd.DataFrame) -> bytes:
     return frame.to_csv(index=False).encode()
 
 
 def _anchor(title: str) -> str:
-    return "".join(ch if ch.isalnum() else "-" for ch in title.lower())
+    return "".join(ch if ch.isascii() and ch.isalnum() else "-" for ch in title.lower())
 
 
 def _json_default(value):

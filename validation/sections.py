@@ -15,7 +15,7 @@ from converters.lcp.problems import problem_set  # noqa: E402
 from .defaults import K_RANGES  # noqa: E402
 from .core_checks import convergence_table, core_waveforms, observed_orders  # noqa: E402
 from .peer import METHODS, PEER_TOL, peer_directory, peer_table, solver_table  # noqa: E402
-from .report import Section, csv_bytes, figure_png, table_html  # noqa: E402
+from .report import Section, csv_bytes, esc, figure_png, table_html, url  # noqa: E402
 
 
 def _pivot(rows: pd.DataFrame) -> pd.DataFrame:
@@ -145,7 +145,7 @@ def gdcm_map_section(name: str) -> Section:
             f"LCP/closed-form disagreement farther than {BOUNDARY_BAND:.0%} (relative, in K) from the "
             "boundary; ngspice agrees with the LCP at 98 % of the points or more.</p>"
             + table_html(table, "result", good=("pass",))
-            + f"<img src='gdcm_map_{slug}.png' alt='D-K map {name}'>"
+            + f"<img src='{url(f'gdcm_map_{slug}.png')}' alt='D-K map {esc(name)}'>"
             + "<p>Disagreements (LCP against the closed form, or ngspice against the LCP):</p>"
             + table_html(disagreements(frame)))
     files = {f"gdcm_map_{slug}.png": map_plot(frame),

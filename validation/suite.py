@@ -3,11 +3,11 @@ a report section. A failing scene becomes a failed section with its reason; it n
 """
 from __future__ import annotations
 
-import html
 import io
 import time
 import traceback
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -20,7 +20,7 @@ from netlists import SpiceOptions
 from .compare import compare
 from .defaults import passes
 from .plots import comparison_plot, mode_timeline_plot
-from .report import Section, run_section, table_html
+from .report import Section, esc, run_section, table_html, url
 from .scenes import Scene, scenes_of
 from .spice import close_spice_worker
 
@@ -132,11 +132,11 @@ def _parquet(frame: pd.DataFrame) -> bytes:
 def scene_section(result: SceneResult) -> Section:
     s = result.scene
     title = f"Scene {s.name}"
-    head = (f"<p>{html.escape(s.description)} Converter <code>{s.converter}</code>, parameters "
-            f"<code>{html.escape(str(s.params or 'defaults'))}</code>, scene file <code>"
-            f"{html.escape(s.path.split('/')[-1])}</code>; run time {result.wall_s:.2f} s.</p>")
+    head = (f"<p>{esc(s.description)} Converter <code>{esc(s.converter)}</code>, parameters "
+            f"<code>{esc(s.params or 'defaults')}</code>, scene file <code>"
+            f"{esc(Path(s.path).name)}</code>; run time {result.wall_s:.2f} s.</p>")
     if not result.ok and not result.checks:
-        return Section(title, head + f"<div class='failed-section'><b>Failed:</b> {html.escape(result.reason)}</div>",
+        return Section(title, head + f"<div class='failed-section'><b>Failed:</b> {esc(result.reason)}</div>",
                        ok=False, metrics={"error": result.reason}, reason=result.reason)
     checks = pd.DataFrame(result.checks, columns=["check", "value", "threshold", "pass"])
     checks["result"] = np.where(checks["pass"], "pass", "fail")
@@ -148,17 +148,17 @@ def scene_section(result: SceneResult) -> Section:
                    f"{'agree' if g['agree'] else 'DISAGREE'}.</p>")
     metrics = pd.DataFrame([(k, v) for k, v in result.metrics.items()], columns=["metric", "value"])
     base = f"scenes/{s.name}/"
-    images = "".join(f"<img src='{base}{name}' alt='{name[:-4]} {s.name}'>"
+    images = "".join(f"<img src='{url(base + name)}' alt='{esc(name[:-4])} {esc(s.name)}'>"
                      for name in ("overlay.png", "modes.png", "waveforms.png") if f"{base}{name}" in result.files)
-    links = ", ".join(f"<a href='{base}{name}'>{label} (Parquet)</a>" for name, label in
+    links = ", ".join(f"<a href='{url(base + name)}'>{label} (Parquet)</a>" for name, label in
                       (("lcp.parquet", "LCP"), ("spice.parquet", "ngspice")) if f"{base}{name}" in result.files)
-    notes = "".join(f"<p class='note'>Note: {html.escape(note)}</p>" for note in result.notes)
+    notes = "".join(f"<p class='note'>Note: {esc(note)}</p>" for note in result.notes)
     body = (head + verdict + table_html(checks.drop(columns="pass"), "result", good=("pass",)) + notes
             + accuracy_html(result.accuracy) + images
             + "<details><summary>All metrics</summary>" + table_html(metrics) + "</details>"
             + f"<p>Waveforms: {links}.</p>")
     if not result.ok:
-        body = f"<div class='failed-section'><b>Failed:</b> {html.escape(result.reason)}</div>" + body
+        body = f"<div class='failed-section'><b>Failed:</b> {esc(result.reason)}</div>" + body
     return Section(title, body, files=result.files, ok=result.ok, reason=result.reason,
                    metrics={"checks": {c[0]: {"value": c[1], "threshold": c[2], "pass": c[3]} for c in result.checks},
                             "gdcm": result.gdcm, "wall_s": result.wall_s})
@@ -174,7 +174,7 @@ def accuracy_html(accuracy: dict) -> str:
               "error_estimate": e["error_estimate_T"], "relative": e["error_estimate_T"]} for e in accuracy["events"]]
     how = (f"the stepper, theta {accuracy['theta']:g}, h = T/{accuracy['steps_per_period']}"
            if accuracy["steps_per_period"] else "the event method (exact flows)")
-    verdict = "met" if accuracy["met"] else f"NOT met ({html.escape(accuracy['message'])})"
+    verdict = "met" if accuracy["met"] else f"NOT met ({esc(accuracy['message'])})"
     return (f"<p>Accuracy on request: rtol {accuracy['rtol']:g} {verdict} by {how} in {accuracy['wall_s']:.3f} s "
             "(Richardson estimates from two steps, module converters.analysis.accuracy):</p>"
             + table_html(pd.DataFrame(rows)))
@@ -207,13 +207,15 @@ def _failed_job(item, message: str):
     kind, payload = item
     reason = f"worker failed: {message}"
     return (SceneResult(payload, ok=False, reason=reason) if kind == "scene"
-            else Section(payload[0], f"<p>{html.escape(reason)}</p>", ok=False))
+            else Section(payload[0], f"<p>{esc(reason)}</p>", ok=False))
 
 
-def run_suite(suite: str, sections=(), workers: int = 2, progress: bool = True):
-    """Run the suite's scenes and extra report sections in parallel processes (each job's ngspice worker
-    shut down after it); results in input order."""
-    jobs = [("scene", s) for s in scenes_of(suite)] + [("section", sec) for sec in sections]
+def run_suite(suite: str, sections=(), workers: int = 2, progress: bool = True, scenes=None):
+    """Run the suite's scenes (or ``scenes``, loaded by :func:`validation.scenes.load_scenes`: a user's files)
+    and extra report sections in parallel processes (each job's ngspice worker shut down after it); results in
+    input order."""
+    scenes = scenes_of(suite) if scenes is None else list(scenes)
+    jobs = [("scene", s) for s in scenes] + [("section", sec) for sec in sections]
     results = parallel_map(_job, jobs, workers=workers, progress=progress, label=f"suite {suite}",
                            unit="job", finalize=close_spice_worker, on_lost=_failed_job)
     scene_results = [r for (kind, _), r in zip(jobs, results) if kind == "scene"]

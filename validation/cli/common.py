@@ -39,9 +39,17 @@ def spice_options(args, period: float):
     return SpiceOptions(**given) if given else None
 
 
-def check_out(path: Path | None, suffixes=(".csv", ".parquet")) -> None:
-    if path is not None and path.suffix.lower() not in suffixes:
-        raise ParameterError(f"--out must end in {' or '.join(suffixes)}; got {str(path)!r}")
+def check_out(path: Path | None, suffixes=(".csv", ".parquet"), flag: str = "--out") -> None:
+    """A waveform file option, before the run: its suffix, and a target pcsuite may write (a new or regular file in
+    a writable directory: :func:`validation.io.check_output_file`); a CSV's metadata sidecar FILE.csv.json too."""
+    if path is None:
+        return
+    if path.suffix.lower() not in suffixes:
+        raise ParameterError(f"{flag} must end in {' or '.join(suffixes)}; got {str(path)!r}")
+    from ..io import check_output_file
+    check_output_file(flag, path)
+    if path.suffix.lower() == ".csv":
+        check_output_file(flag, path.with_name(path.name + ".json"))
 
 
 #: Units of waveform columns by name (states by their first letter: i* currents, v* voltages).

@@ -112,6 +112,7 @@ def run_simulate(args) -> int:
 
 
 def run_bifurcations(args) -> int:
+    from ..io import check_output_file; check_output_file("--diagram", args.diagram)  # noqa: E702 (before the run)
     import numpy as np
 
     from converters.models.mechanics import get_mechanical
