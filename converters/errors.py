@@ -19,3 +19,8 @@ class LCPError(PcsuiteError, ValueError):
 
 class SimulationError(PcsuiteError, RuntimeError):
     """A run failed part-way (the message says where and what to try)."""
+
+
+class ResourceError(ParameterError):
+    """A run would exceed a resource limit (memory it would allocate, or time); the message names the limit and the
+    flag that raises it (``--max-memory``, ``--time-limit``)."""

@@ -12,6 +12,12 @@ from .errors import ParameterError
 from .validate import parse_value
 
 
+#: Physically plausible magnitudes by unit (beyond them a value is a slip: 1e300 H, 1e-300 Hz), on top of each
+#: parameter's own range; wide enough for the stability map's extremes (L, C 1e-9 .. 0.1, R 1e-3 .. 1e9).
+PLAUSIBLE = {"H": (1e-15, 1e4), "F": (1e-18, 1e4), "ohm": (1e-12, 1e15), "Hz": (1e-6, 1e12), "V": (1e-12, 1e7),
+             "A": (1e-12, 1e7), "s": (1e-15, 1e9)}
+
+
 @dataclass(frozen=True)
 class Param:
     """One parameter: default (None = optional, only modelled when given), unit, meaning, valid range."""
@@ -32,6 +38,10 @@ class Param:
         if below or above:
             raise ParameterError(f"{self.name} ({self.doc}) must be in {self.range_text()} {self.unit}".rstrip()
                                  + f"; got {value!r}")
+        low, high = PLAUSIBLE.get(self.unit, (-math.inf, math.inf))
+        if value != 0.0 and not low <= abs(value) <= high:
+            raise ParameterError(f"{self.name} ({self.doc}) must be within [{low:g}, {high:g}] {self.unit} in magnitude "
+                                 f"(a physically plausible range; 0 where the parameter allows it); got {value!r}")
         return value
 
     def range_text(self) -> str:

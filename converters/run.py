@@ -115,21 +115,20 @@ def run_converter(name_or_model, params: dict | None = None, *, control: str = "
                          x0=x0, options=options)
     method = make_method(model, p, method, h, **options)
     T = model.period(p)
+    if steady:
+        check_steady(model, p)
     if steady and t_end is None and periods is None:
         periods = STEADY_PERIODS                 # what --steady returns: periods on the orbit
     span = duration(model, p, t_end, periods)
+    step = getattr(method, method.step_option, None) if method.step_option else None
+    if step is not None and span < step:
+        raise ParameterError(f"t_end must be at least one step ({method.step_option} = {step:.3g} s); got {span:.3g} s")
     steady_tol = parse_value("steady_tol", steady_tol)
     if not 0.0 < steady_tol < 1.0:
         raise ParameterError(f"steady_tol must be in (0, 1); got {steady_tol!r}")
     meta = {"model": model.name, "control": model.control, "params": p, "method_options": method.options(),
             "method_object": method}
     if steady:
-        if model.step_times(p):
-            raise ParameterError("--steady finds a periodic steady state; a run with a step (t_step) is not "
-                                 "periodic: run --periods N (or --t-end) from rest")
-        if not model.periodic(p):
-            raise ParameterError(f"--steady needs a fixed switching period; {model.key} has none (run --t-end, or find "
-                                 "its cycle with converters.analysis.periodic.autonomous_orbit and the event method)")
         orbit = steady_state(model, p, method, x0=x0, tol=0.1 * steady_tol)
         if not orbit.stable:
             # A fixed point of the period map the circuit does not settle on is no steady state.
@@ -148,6 +147,16 @@ def run_converter(name_or_model, params: dict | None = None, *, control: str = "
         meta.update(periods=int(round(span / T)) if model.periodic(p) else None)
     return replace(tr, labels=model.labels(p), wall_s=time.perf_counter() - start,
                    metadata={**tr.metadata, **meta})
+
+
+def check_steady(model: Model, p: dict) -> None:
+    """The one refusal of --steady (every method, ngspice and netlists): a steady state needs a fixed period."""
+    if model.step_times(p):
+        raise ParameterError("--steady finds a periodic steady state; a run with a step (t_step) is not "
+                             "periodic: run --periods N (or --t-end) from rest")
+    if not model.periodic(p):
+        raise ParameterError(f"--steady needs a fixed switching period; {model.key} has none (run --t-end, or find "
+                             "its cycle with converters.analysis.periodic.autonomous_orbit and the event method)")
 
 
 def _accurate(model: Model, p: dict, rtol, start: float, *, method, h, t_end, periods, steady, x0, options) -> Trajectory:

@@ -30,6 +30,7 @@ def simulate(problem: LCSProblem, method: Method, *, x0=None) -> Trajectory:
         raise ParameterError(f"method must be a pcsuite method ({', '.join(f'{k}: {c.__name__}' for k, c in METHODS.items())}"
                              f"); got {method!r}")
     method.supports(problem)
+    method.check_memory(problem)
     return method.solve(problem, check_x0(problem, x0))
 
 

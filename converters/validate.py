@@ -15,7 +15,7 @@ from .errors import ParameterError
 
 #: SPICE-style magnitude suffixes (case-insensitive; ``meg`` before ``m``).
 SI_EXPONENTS = {"t": 12, "g": 9, "meg": 6, "k": 3, "m": -3, "u": -6, "µ": -6, "n": -9, "p": -12, "f": -15}
-_NUMBER = re.compile(r"^\s*([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)\s*(meg|[tgkmuµnpf])?\s*([a-zA-ZΩ]+)?\s*$",
+_NUMBER = re.compile(r"^([+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?)(meg|[tgkmuµnpf])?([a-zA-ZΩ]+)?$",
                      re.IGNORECASE)
 #: How a unit may be typed after the value (case-insensitive), by the parameter's unit.
 UNIT_SPELLINGS = {"V": ("v",), "A": ("a",), "H": ("h",), "F": ("f",), "Hz": ("hz",), "ohm": ("ohm", "ohms", "Ω"),
@@ -35,7 +35,19 @@ def parse_value(name: str, text, unit: str | None = None) -> float:
     if isinstance(text, (int, float, np.floating, np.integer)) and not isinstance(text, bool):
         value = float(text)
     else:
-        match = _NUMBER.match(str(text))
+        text = str(text).strip()
+        if not all(ch.isascii() or ch in "µΩ" for ch in text):
+            odd = next(ch for ch in text if not (ch.isascii() or ch in "µΩ"))
+            raise ParameterError(f"{name} must be a number typed in plain ASCII digits and letters (SPICE reads nothing "
+                                 "else); "
+                                 f"got {text!r} (the character {odd!r}, U+{ord(odd):04X})")
+        parts, compact = text.split(), text
+        if len(parts) == 2 and parts[1].isalpha() and not _starts_with_suffix(parts[1]):
+            compact = "".join(parts)           # "10 Ω", "48 V": a unit after a space (checked below like "48V")
+        elif len(parts) > 1:
+            raise ParameterError(f"{name} must be a number with no space inside (SPICE would read {parts[0]!r} "
+                                 f"and stop; write {''.join(parts)!r}); got {text!r}")
+        match = _NUMBER.match(compact)
         if match is None:
             raise ParameterError(f"{name} must be a number, optionally with a SPICE suffix "
                                  f"(T G meg k m u n p f){' and its unit ' + unit if unit else ''}; got {str(text)!r}")
@@ -53,6 +65,16 @@ def parse_value(name: str, text, unit: str | None = None) -> float:
     if not math.isfinite(value):
         raise ParameterError(f"{name} must be a finite number; got {value!r}")
     return value
+
+
+def _starts_with_suffix(word: str) -> bool:
+    """``u``, ``uH``, ``meg``, ``kHz``: a SPICE magnitude suffix (then perhaps a unit), which must touch its number."""
+    lower = word.lower()
+    for suffix in sorted(SI_EXPONENTS, key=len, reverse=True):
+        if lower.startswith(suffix):
+            rest = lower[len(suffix):]
+            return rest == "" or any(rest in spellings for spellings in UNIT_SPELLINGS.values())
+    return False
 
 
 def check_positive(name: str, value, unit: str = "") -> float:

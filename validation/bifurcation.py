@@ -165,6 +165,11 @@ def run_study(converter: str, control: str, params: dict | None, name: str, star
             raise ParameterError(f"{key} must be an integer >= {low}; got {count!r}")
     if diagram not in ("lcp", "event"):
         raise ParameterError(f"the diagram's method must be lcp or event; got {diagram!r}")
+    if points:
+        from converters.limits import check_memory
+        # each value keeps its recorded period starts (and the list of attractors its summaries): 4 copies
+        check_memory(f"the brute-force diagram: {points} values x {record} recorded periods",
+                     4.0 * points * (record * len(model.state_names) * 8 + 2000), remedy="fewer --points or --record")
     state = state or model.output_state
     if state not in model.state_names:
         raise ParameterError(f"state must be one of {', '.join(model.state_names)}; got {state!r}")
@@ -178,6 +183,10 @@ def run_study(converter: str, control: str, params: dict | None, name: str, star
     if points:
         T = model.period(base)
         method = diagram_method(model, base) if diagram == "lcp" else EventDriven(output_step=T)
+        from dataclasses import replace as _replace
+        one = path(start)          # each value is one run of transient + record periods: refuse it here, not per value
+        method.check_memory(_replace(one, t_span=(one.t_span[0], one.t_span[0] + (transient + record) * T)),
+                             remedy="fewer --transient or --record periods")
         label = (f"LCP stepper, theta = {method.theta:g}, h = T/{round(T / method.h)}" if diagram == "lcp"
                  else "event-driven (exact)")
         # Every chunk starts on the operating point: the first orbit of the continuation (from rest, a start-up

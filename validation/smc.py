@@ -16,6 +16,7 @@ from converters.errors import ParameterError
 from converters.models import get_model
 from converters.models.sliding import predicted_frequency, recovery_time, switching_frequency
 from converters.run import run_converter
+from converters.validate import parse_value
 from netlists import SpiceOptions, build_smc_netlist
 
 from .defaults import passes
@@ -39,6 +40,10 @@ def compare_smc(params: dict | None = None, t_end: float = 30e-3, h=None,
     """Run the hysteresis controller in both simulators from the same start and measure them."""
     model = get_model("boost", "smc")
     p = model.resolve(params)
+    t_end = parse_value("t_end", t_end, "s")
+    if not 2 * WINDOW_S <= t_end:
+        raise ParameterError(f"t_end must be at least {2 * WINDOW_S:g} s (twice the {WINDOW_S:g} s window measured at "
+                             f"the end of the run); got {t_end:g}")
     if "t_step" in p and p["t_step"] >= t_end - WINDOW_S:
         raise ParameterError(f"t_step must be before t_end - {WINDOW_S:g} s = {t_end - WINDOW_S:g} s so the "
                              f"recovery can be measured; got {p['t_step']:g}")

@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from converters.errors import SimulationError
+from converters.limits import check_memory, time_limit
 from converters.parallel import ProcessSlot
 from netlists import Netlist
 
@@ -96,13 +97,17 @@ class SpiceRunner:
     def run(self, netlist: Netlist) -> SpiceResult:
         if not isinstance(netlist, Netlist):
             raise TypeError("run() takes a netlists.Netlist (built from validated parameters)")
+        check_spice_memory(netlist)
+        limit = time_limit(TIMEOUT_S)
         try:
-            out = self._slot.call(_worker, netlist.text, timeout=TIMEOUT_S)
+            out = self._slot.call(_worker, netlist.text, timeout=limit)
         except futures.process.BrokenProcessPool:
             raise SpiceError(f"ngspice worker crashed while simulating {netlist.converter}; the run is lost, "
                              "the caller is unaffected (try a larger TMAX or METHOD=gear)") from None
         except futures.TimeoutError:
-            raise SpiceError(f"ngspice did not finish {netlist.converter} within {TIMEOUT_S:g} s") from None
+            raise SpiceError(f"ngspice did not finish {netlist.converter} within the time limit of {limit:g} s; "
+                             "raise it with --time-limit S (or PCSUITE_TIME_LIMIT), or run fewer periods or a "
+                             "larger --spice-tmax") from None
         if "error" in out:
             reason = _reason(out["log"]) or out["error"]
             raise SpiceError(f"ngspice failed on {netlist.converter}: {reason}")
@@ -116,6 +121,32 @@ class SpiceRunner:
 
     def close(self):
         self._slot.close()
+
+
+#: Measured bytes per ngspice point and vector, the vectors' copies in ngspice, PySpice, the pickle from the
+#: worker and the labelled Trajectory included (benchmarks/spice_memory.py).
+BYTES_PER_POINT_VECTOR = 32.0
+_TRAN = re.compile(r"^\.tran\s+(\S+)\s+(\S+)\s+\S+\s+(\S+)", re.IGNORECASE | re.MULTILINE)
+
+
+def spice_points(netlist: Netlist) -> float:
+    """Points ngspice will store: at least t_end / TMAX (its step never exceeds TMAX), and 1.5 times that for
+    the steps it adds at every edge (measured: 1.22 on the buck at T/200; 2.44 M points peaked at 750 MB)."""
+    match = _TRAN.search(netlist.text)
+    if not match:
+        return 0.0
+    t_end, tmax = float(match.group(2)), float(match.group(3))
+    return 1.3 * t_end / tmax + 1000.0
+
+
+def check_spice_memory(netlist: Netlist) -> None:
+    """Refuse, before ngspice starts, a run whose points exceed the memory limit (:mod:`converters.limits`)."""
+    points = spice_points(netlist)
+    vectors = sum(1 for line in netlist.text.splitlines() if line[:1].isalpha()) + 4
+    check_memory(f"ngspice on {netlist.converter}: {netlist.t_end:.3g} s at TMAX {1.3 * netlist.t_end / (points - 1000):.3g} s "
+                 f"(about {points:.3g} points x {vectors} vectors)" if points > 1000 else f"ngspice on {netlist.converter}",
+                 points * vectors * BYTES_PER_POINT_VECTOR,
+                 remedy="fewer periods, a shorter --t-end or a larger --spice-tmax")
 
 
 def _reason(log: str) -> str:

@@ -66,6 +66,37 @@ class Method(ABC):
         """The method's options as plain data (for JSON summaries and reports)."""
         return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
 
+    #: Measured peak bytes per stored sample and per value of it (states, pairs, time, labels), the run and its
+    #: labelled waveform table (what ``--out`` writes) included: ``benchmarks/memory.py`` calibrates them.
+    bytes_per_value: ClassVar[float] = 60.0
+
+    def samples(self, problem) -> float:
+        """How many samples a run of ``problem`` stores (before it starts): the span over the step or output
+        spacing, plus every switching instant of the law; inf where it cannot be bounded."""
+        t0, t1 = problem.t_span
+        step = getattr(self, self.step_option, None) if self.step_option else None
+        if step is None:
+            return 0.0
+        law = getattr(problem, "switching", None)
+        period = getattr(law, "period", np.inf)
+        breaks = (t1 - t0) / period * len(getattr(law, "starts", (0,))) if np.isfinite(period) and period > 0 else 0.0
+        return (t1 - t0) / float(step) + breaks + 1.0
+
+    def memory_estimate(self, problem) -> float:
+        """Bytes a run of ``problem`` will allocate at its peak (estimate from :meth:`samples`)."""
+        values = getattr(problem, "n", 2) + 2 * getattr(problem, "k", 0) + 8
+        return self.samples(problem) * values * self.bytes_per_value
+
+    def check_memory(self, problem, remedy: str = "a larger --h, or a shorter --t-end / fewer --periods") -> None:
+        """Refuse, before the first step, a run above the memory limit (:mod:`converters.limits`)."""
+        from ..limits import check_memory
+        t0, t1 = problem.t_span
+        step = getattr(self, self.step_option, None) if self.step_option else None
+        check_memory(f"--method {self.key}: {t1 - t0:.3g} s" + (f" at {self.step_option} = {step:.3g} s "
+                                                                f"({self.samples(problem):.3g} samples)" if step else ""),
+                     self.memory_estimate(problem),
+                     remedy=remedy)
+
     def period_map(self, problem) -> "PeriodMap":
         """x(t0) -> x(t1) over ``problem.t_span`` by repeated solves, Jacobian by finite differences."""
         self.supports(problem)

@@ -56,6 +56,7 @@ class Smoothing(Method, key="smooth"):
     solver: str = "Radau"
     output_step: float | None = None
     step_option = "output_step"
+    bytes_per_value = 200.0
     description = "pairs smoothed by u = eps log(1 + exp(-y / eps^2)) (--eps), scipy Radau (--solver-rtol)"
 
     def __post_init__(self):

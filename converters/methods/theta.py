@@ -51,6 +51,7 @@ class Theta(Method, key="lcp"):
     h: float
     theta: float = 0.5
     step_option = "h"
+    bytes_per_value = 50.0
     description = "LCP time-stepper: theta method (--theta, default 1 = backward Euler), one LCP per step"
 
     def __post_init__(self):
@@ -102,10 +103,8 @@ def time_grid(problem: LCSProblem, h: float) -> np.ndarray:
     Grid points closer than h/1000 to a switching instant are dropped (the instant replaces them).
     """
     t0, t1 = problem.t_span
+    Theta(h=h, theta=1.0).check_memory(problem)           # before anything of the run's size is allocated
     n_steps = int(np.ceil((t1 - t0) / h * (1.0 - 1e-12)))
-    if n_steps > MAX_STEPS:
-        raise ParameterError(f"h gives {n_steps} steps over t_span; h must be >= {(t1 - t0) / MAX_STEPS:.3g} s "
-                             f"(at most {MAX_STEPS} steps); got h = {h:g}")
     uniform = t0 + h * np.arange(n_steps + 1)
     uniform[-1] = t1
     breaks = problem.switching.breakpoints(t0, t1)

@@ -21,6 +21,7 @@ def main(argv=None) -> int:
         parser.print_help()
         return EXIT_BAD_INPUT
     try:
+        _apply_limits(args)
         return args.run(args) or 0
     except BrokenPipeError:  # e.g. `pcsuite list | head`
         sys.stderr.close()
@@ -43,4 +44,35 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(title="commands", parser_class=Parser)
     for command in SUBCOMMANDS:
         command.add(sub)
+    for command in _leaf_parsers(sub):
+        _add_limits(command)
     return parser
+
+
+def _leaf_parsers(sub):
+    """Every subcommand's parser (``mech simulate``, ``lcp solve``, ... included)."""
+    for parser in sub.choices.values():
+        nested = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+        if nested:
+            yield from _leaf_parsers(nested[0])
+        else:
+            yield parser
+
+
+def _add_limits(parser) -> None:
+    from converters.limits import DEFAULT_MAX_MEMORY, human_bytes
+    parser.add_argument("--max-memory", default=None, metavar="SIZE",
+                        help=f"refuse a run estimated to allocate more than SIZE (default {human_bytes(DEFAULT_MAX_MEMORY)}"
+                             "; 512M, 4G, ...; workers inherit it)")
+    parser.add_argument("--time-limit", default=None, metavar="S",
+                        help="seconds one ngspice run or one iterative LCP solve may take (defaults: ngspice 600 s, "
+                             "lcp solve 20 s)")
+
+
+def _apply_limits(args) -> None:
+    """--max-memory and --time-limit, set in the environment so that every worker process sees them."""
+    from converters.limits import set_max_memory, set_time_limit
+    if getattr(args, "max_memory", None) is not None:
+        set_max_memory(args.max_memory)
+    if getattr(args, "time_limit", None) is not None:
+        set_time_limit(args.time_limit)

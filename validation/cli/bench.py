@@ -17,7 +17,14 @@ def add(sub) -> None:
 
 
 def run(args) -> int:
+    from ..bench import check_out; check_out(args.out)  # noqa: E702 (refused before the run)
     from ..bench import DEFAULT_OUT, run_bench
+    from converters.errors import ParameterError
+    if args.only == "stability":
+        given = [flag for flag, value in (("--periods", args.periods), ("--quick", args.quick or None)) if value is not None]
+        if given:
+            raise ParameterError(f"{' and '.join(given)} set{'s' if len(given) == 1 else ''} the trade-off; it does not "
+                                 "apply with --only stability (the stability map runs its fixed cases)")
     out = args.out or DEFAULT_OUT
     summary = run_bench(out, quick=args.quick, spice=not args.no_spice, only=args.only, periods=args.periods,
                         progress=not args.json)

@@ -25,9 +25,9 @@ def add(sub) -> None:
                      help="follow period doublings up to orbits of this many switching periods (default 8)")
     bif.add_argument("--points", type=int, default=800,
                      help="values of the brute-force diagram (default 800; 0: continuation only)")
-    bif.add_argument("--transient", type=int, default=200, help="periods dropped at each diagram value (default 200)")
-    bif.add_argument("--record", type=int, default=64, help="periods kept at each diagram value (default 64)")
-    bif.add_argument("--diagram-method", default="lcp", choices=["lcp", "event"],
+    bif.add_argument("--transient", type=int, default=None, help="periods dropped at each diagram value (default 200)")
+    bif.add_argument("--record", type=int, default=None, help="periods kept at each diagram value (default 64)")
+    bif.add_argument("--diagram-method", default=None, choices=["lcp", "event"],
                      help="lcp: the compiled stepper, theta 0.5, h = T/500 (default, fast); event: exact, ~5x slower")
     bif.add_argument("--state", default=None, help="the state drawn (default: the model's output, e.g. vC)")
     bif.add_argument("--workers", type=int, default=None, help="processes for the diagram (default: every core)")
@@ -37,6 +37,7 @@ def add(sub) -> None:
 
 
 def run(args) -> int:
+    from ..io import check_output_file; check_output_file("--diagram", args.diagram)  # noqa: E702 (before the run)
     from converters.params import parse_assignments
 
     from ..bifurcation import diagram_figure, parse_path, run_study
@@ -45,10 +46,18 @@ def run(args) -> int:
         raise ParameterError(f"--diagram must end in .png or .svg; got {str(args.diagram)!r}")
     if args.diagram is not None and args.points == 0:
         raise ParameterError("--diagram needs the brute-force diagram: --points must be >= 1; got 0")
+    diagram_flags = [flag for flag, value in (("--transient", args.transient), ("--record", args.record),
+                                              ("--diagram-method", args.diagram_method), ("--workers", args.workers))
+                     if value is not None]
+    if args.points == 0 and diagram_flags:
+        raise ParameterError(f"{', '.join(diagram_flags)} set{'s' if len(diagram_flags) == 1 else ''} the brute-force "
+                             "diagram; --points 0 asks for continuation only")
     name, start, stop = parse_path(args.param)
     study = run_study(args.converter, args.control, parse_assignments(args.params), name, start, stop,
-                      max_period=args.max_period, points=args.points, transient=args.transient, record=args.record,
-                      diagram=args.diagram_method, state=args.state, workers=args.workers,
+                      max_period=args.max_period, points=args.points,
+                      transient=200 if args.transient is None else args.transient,
+                      record=64 if args.record is None else args.record,
+                      diagram=args.diagram_method or "lcp", state=args.state, workers=args.workers,
                       progress=not args.json)
     if args.diagram is not None:
         atomic_write_bytes(args.diagram, diagram_figure(study, args.diagram.suffix.lower().lstrip(".")))

@@ -26,6 +26,7 @@ def add(sub) -> None:
 
 
 def run(args) -> int:
+    from ..io import check_output_file; check_output_file("--plot", args.plot)  # noqa: E702 (before the run)
     from converters.params import parse_assignments
 
     from ..io import atomic_write_bytes
@@ -33,6 +34,9 @@ def run(args) -> int:
         raise ParameterError(f"--plot must end in .png; got {str(args.plot)!r}")
     params = parse_assignments(args.params)
     if args.control == "smc":
+        if args.start is not None:
+            raise ParameterError(f"--start applies to PWM comparisons; the sliding-mode comparison starts from rest "
+                                 f"(got --start {args.start})")
         rows, metrics, header, plot, extra = _smc(args, params)
     else:
         from ..compare import compare

@@ -23,9 +23,10 @@ def add(sub) -> None:
 
 
 def run(args) -> int:
+    from ..io import check_output_file; check_output_file("--out", args.out)  # noqa: E702 (before the run)
     from converters.models import get_model
     from converters.params import parse_assignments
-    from converters.run import duration, make_method, steady_state
+    from converters.run import check_steady, duration, make_method, steady_state
     from netlists import model_netlist, standalone
 
     from ..io import atomic_write_text
@@ -35,8 +36,7 @@ def run(args) -> int:
     p = model.resolve(parse_assignments(args.params))
     x0 = None
     if args.steady:
-        if not model.periodic(p):
-            raise ParameterError(f"--steady needs a fixed switching period; {model.key} has none")
+        check_steady(model, p)
         x0 = steady_state(model, p, make_method(model, p, "lcp")).x0
     netlist = model_netlist(model, p, duration(model, p, args.t_end), x0=x0)
     text = standalone(netlist, model.period(p), model.state_names) if model.periodic(p) else netlist.text

@@ -41,8 +41,9 @@ def add(sub) -> None:
                           "relay) with -p Vref=.. -p band=.. [-p Kp=.. -p Ki=.. -p t_step=.. -p R_step=..]; buck: "
                           "voltage-mode: the ramp comparator, -p A=.. -p Vref=.. -p VL=.. -p VU=.. [-p latch=1]")
     sim.add_argument("--steady", action="store_true", help="run to the method's periodic orbit (Newton shooting)")
-    sim.add_argument("--steady-tol", type=float, default=1e-6,
-                     help="relative distance to the orbit at which the steady state counts as reached")
+    sim.add_argument("--steady-tol", default=None,
+                     help="with --steady: relative distance to the orbit at which the steady state counts as reached "
+                          "(default 1e-6)")
     add_spice_options(sim)
     sim.add_argument("--out", type=Path, default=None, help="waveform file, .csv or .parquet")
     sim.add_argument("--plot", type=Path, default=None,
@@ -52,12 +53,15 @@ def add(sub) -> None:
 
 
 def run(args) -> int:
+    from ..io import check_output_file; check_output_file("--plot", args.plot)  # noqa: E702 (before the run)
     from converters.params import parse_assignments
     from converters.run import run_converter, run_summary
     check_out(args.out)
     if args.plot is not None and args.plot.suffix.lower() not in (".png", ".svg"):
         raise ParameterError(f"--plot must end in .png or .svg; got {str(args.plot)!r}")
     params = parse_assignments(args.params)
+    if args.steady_tol is not None and not args.steady and args.rtol is None:
+        raise ParameterError(f"--steady-tol applies with --steady only; got --steady-tol {args.steady_tol} without it")
     spice_flags = [f for f, v in (("--spice-tmax", args.spice_tmax), ("--spice-reltol", args.spice_reltol),
                                   ("--spice-method", args.spice_method)) if v is not None]
     if spice_flags and args.method != "spice":
@@ -65,13 +69,21 @@ def run(args) -> int:
                              f"{args.method or 'lcp'}")
     if args.rtol is not None:
         given = [flag for flag, value in (("--method", args.method), ("--h", args.h), ("--theta", args.theta),
-                                          ("--eps", args.eps), ("--solver-rtol", args.solver_rtol)) if value is not None]
+                                          ("--eps", args.eps), ("--solver-rtol", args.solver_rtol),
+                                          ("--steady-tol", args.steady_tol)) if value is not None]
         if given:
             raise ParameterError(f"--rtol chooses the method and its step; give either --rtol or {', '.join(given)}")
         tr = run_converter(args.converter, params, control=args.control, t_end=args.t_end, periods=args.periods,
                            rtol=args.rtol)
         summary = run_summary(tr)
     elif args.method == "spice":
+        given = [flag for flag, value in (("--h", args.h), ("--theta", args.theta), ("--eps", args.eps),
+                                          ("--solver-rtol", args.solver_rtol), ("--steady-tol", args.steady_tol))
+                 if value is not None]
+        if given:
+            raise ParameterError(f"{', '.join(given)} do{'es' if len(given) == 1 else ''} not apply to --method spice "
+                                 "(ngspice's transient: --spice-tmax, --spice-reltol, --spice-method; --steady runs it "
+                                 "on until its 10-period mean settles)")
         tr, summary = _spice(args, params)
     else:
         method = args.method or "lcp"
@@ -83,7 +95,8 @@ def run(args) -> int:
         if args.theta is not None and method != "lcp":
             raise ParameterError(f"--theta applies to --method lcp only; got --method {method}")
         tr = run_converter(args.converter, params, control=args.control, method=method, h=args.h,
-                           t_end=args.t_end, periods=args.periods, steady=args.steady, steady_tol=args.steady_tol,
+                           t_end=args.t_end, periods=args.periods, steady=args.steady,
+                           steady_tol=1e-6 if args.steady_tol is None else args.steady_tol,
                            **options)
         summary = run_summary(tr)
     if args.out is not None:
@@ -122,9 +135,8 @@ def _spice(args, params):
     if args.steady:
         # ngspice has no period map to shoot on: it starts on the LCP's orbit and runs on (from where it ended)
         # until its own 10-period mean moves less than SPICE_SETTLE, at most MAX_SPICE_PERIODS periods
-        from converters.run import STEADY_PERIODS, make_method, steady_state
-        if not model.periodic(p) or model.step_times(p):
-            raise ParameterError(f"--steady needs a fixed switching period and no step; {model.key} has none")
+        from converters.run import STEADY_PERIODS, check_steady, make_method, steady_state
+        check_steady(model, p)
         x0 = steady_state(model, p, make_method(model, p, "lcp")).x0
         if args.t_end is None and args.periods is None:
             args.periods = STEADY_PERIODS

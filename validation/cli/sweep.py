@@ -13,6 +13,8 @@ from converters.errors import ParameterError
 from .common import add_params
 
 EXIT_INTERRUPTED = 130
+#: A stored row as the summary loads it back (25 columns), generously.
+BYTES_PER_ROW = 400
 
 
 def add(sub) -> None:
@@ -60,15 +62,20 @@ def build(args):
 
     from ..sweep import SpiceSweep
     base = {k: parse_value(k, v) for k, v in parse_assignments(args.params).items()}
+    from converters.limits import check_memory
     if args.lhs is not None:
+        check_memory(f"sweep: --lhs {args.lhs} points", float(args.lhs) * (BYTES_PER_ROW + 8 * len(args.grid)),
+                     remedy="fewer --lhs points")
         points = LatinHypercube([Axis.parse(g, count_required=False) for g in args.grid], args.lhs, args.seed)
     else:
         points = Grid([Axis.parse(g) for g in args.grid])
+    check_memory(f"sweep: {points.size:,} points", float(points.size) * BYTES_PER_ROW, remedy="fewer points")
     clash = sorted(set(base) & set(points.names))
     if clash:
         raise ParameterError(f"{clash[0]} is both swept (--grid) and fixed (-p); give it once")
     if args.periods is not None and args.periods < 1:
         raise ParameterError(f"--periods must be an integer >= 1; got {args.periods}")
+    _refuse_ignored(args)
     if args.method == "spice":
         ensemble = SpiceSweep(args.model, args.control, base, steady=args.steady, periods=args.periods or 10)
     elif args.rtol is not None:
@@ -85,7 +92,31 @@ def build(args):
     return ensemble, points
 
 
+def _refuse_ignored(args) -> None:
+    """Every flag acts or is refused: the combinations in which one would be ignored."""
+    if args.lhs is None and args.seed != 0:
+        raise ParameterError(f"--seed sets the Latin hypercube; it does not apply without --lhs (got --seed {args.seed})")
+    if args.method == "spice":
+        given = [f for f, v in (("--h-fraction", args.h_fraction), ("--rtol", args.rtol)) if v is not None]
+        if given:
+            raise ParameterError(f"{', '.join(given)} do{'es' if len(given) == 1 else ''} not apply to --method spice "
+                                 "(ngspice's own transient)")
+    elif args.method == "event" and args.h_fraction is not None:
+        raise ParameterError("--h-fraction sets the lcp stepper's step; it does not apply to --method event (exact "
+                             f"switching; got --h-fraction {args.h_fraction})")
+    if args.rtol is not None and args.periods is not None:
+        raise ParameterError("--periods does not apply with --rtol (the periodic orbit is measured, whatever the "
+                             f"periods; got --periods {args.periods})")
+    if args.steady and args.method != "spice" and args.periods is not None:
+        raise ParameterError("--periods does not apply with --steady for lcp and event (each point is measured on its "
+                             f"periodic orbit found by Newton shooting; got --periods {args.periods})")
+    if args.workers is not None and args.scheduler != "local":
+        raise ParameterError(f"--workers sets the local processes; it does not apply to --scheduler {args.scheduler} "
+                             f"(got --workers {args.workers})")
+
+
 def run(args) -> int:
+    from ..io import check_output_parent; check_output_parent("--out", args.out)  # noqa: E702 (before the run)
     from converters.parallel import backend_for
 
     from ..sweep import run_sweep, write_summary

@@ -1,0 +1,122 @@
+"""Resource limits: the size of a run is known before it starts, and every long computation has a time limit.
+
+Every command estimates what a run will allocate (steps x state size, map size, LCP size, ngspice
+points) and calls :func:`check_memory` before allocating; iterative solvers and ngspice runs take their
+limit from :func:`time_limit`. Both limits travel in environment variables so that worker processes
+(forked or spawned, local or Dask) see what the command line set:
+
+- ``PCSUITE_MAX_MEMORY`` (``--max-memory`` on every command): bytes, with a binary suffix allowed
+  (``512MiB``, ``4G`` = 4 GiB); default 4 GiB.
+- ``PCSUITE_TIME_LIMIT`` (``--time-limit``): seconds for one ngspice run or one iterative LCP solve; default 600
+  s for ngspice and 20 s for ``pcsuite lcp solve`` (each caller states its own default).
+"""
+from __future__ import annotations
+
+import math
+import os
+import re
+import time
+
+from .errors import ResourceError
+
+MEMORY_ENV = "PCSUITE_MAX_MEMORY"
+TIME_ENV = "PCSUITE_TIME_LIMIT"
+DEFAULT_MAX_MEMORY = 4 << 30
+#: Bounds a user may set: 16 MiB .. 1 TiB of memory, 0.1 s .. 7 days of time.
+MEMORY_RANGE = (1 << 24, 1 << 40)
+TIME_RANGE = (0.1, 7 * 86400.0)
+
+_BYTES = re.compile(r"^\s*(\d+(?:\.\d*)?|\.\d+)(?:[eE]([+-]?\d+))?\s*([kKmMgGtT]i?[bB]?|[bB])?\s*$")
+_FACTOR = {"": 1, "b": 1, "k": 1 << 10, "m": 1 << 20, "g": 1 << 30, "t": 1 << 40}
+
+
+def parse_bytes(name: str, text) -> int:
+    """Bytes from ``4G``, ``512MiB``, ``1e9`` (binary multiples: K, M, G, T = 2^10 .. 2^40)."""
+    if isinstance(text, (int, float)) and not isinstance(text, bool):
+        value = float(text)
+    else:
+        match = _BYTES.match(str(text))
+        if not match:
+            raise ResourceError(f"{name} must be a size in bytes such as 512M, 4G or 2e9; got {text!r}")
+        mantissa, exponent, suffix = match.groups()
+        value = float(mantissa) * 10.0 ** int(exponent or 0) * _FACTOR[(suffix or "")[:1].lower()]
+    if not (math.isfinite(value) and MEMORY_RANGE[0] <= value <= MEMORY_RANGE[1]):
+        raise ResourceError(f"{name} must be in [{human_bytes(MEMORY_RANGE[0])}, {human_bytes(MEMORY_RANGE[1])}]; "
+                            f"got {text!r}")
+    return int(value)
+
+
+def human_bytes(nbytes: float) -> str:
+    for unit, size in (("TiB", 1 << 40), ("GiB", 1 << 30), ("MiB", 1 << 20), ("KiB", 1 << 10)):
+        if nbytes >= size:
+            return f"{nbytes / size:.3g} {unit}"
+    return f"{nbytes:.0f} B"
+
+
+def max_memory() -> int:
+    """The memory a run may plan to allocate (bytes)."""
+    text = os.environ.get(MEMORY_ENV)
+    return DEFAULT_MAX_MEMORY if not text else parse_bytes(MEMORY_ENV, text)
+
+
+def set_max_memory(text) -> int:
+    """Set the limit for this process and every worker it starts (``--max-memory``)."""
+    value = parse_bytes("--max-memory", text)
+    os.environ[MEMORY_ENV] = str(value)
+    return value
+
+
+def check_memory(what: str, nbytes: float, remedy: str = "") -> None:
+    """Refuse, before allocating, a run whose estimated size is above the limit.
+
+    ``what`` names the run and its size (``"simulate buck: 1e+09 steps x 6 values"``); ``remedy`` says what
+    to change (``"a larger --h or a shorter --t-end"``)."""
+    limit = max_memory()
+    if not nbytes <= limit:        # NaN and inf are refused too
+        needed = human_bytes(nbytes) if math.isfinite(nbytes) else "an unbounded amount"
+        if math.isfinite(nbytes) and nbytes <= MEMORY_RANGE[1]:
+            mib = 2 ** max(4, math.ceil(math.log2(nbytes / (1 << 20))))
+            size = f"{mib >> 10}G" if mib >= 1024 else f"{mib}M"
+            raise_it = f"raise the limit with --max-memory {size} (or {MEMORY_ENV})"
+        else:
+            raise_it = f"no --max-memory allows it (at most {human_bytes(MEMORY_RANGE[1])})"
+        raise ResourceError(f"{what} needs about {needed}, above the memory limit of {human_bytes(limit)}; "
+                            + (f"use {remedy}; " if remedy else "") + raise_it)
+
+
+def time_limit(default: float) -> float:
+    """Seconds one ngspice run or one iterative solve may take (``--time-limit``, else ``default``)."""
+    text = os.environ.get(TIME_ENV)
+    return default if not text else parse_seconds(TIME_ENV, text)
+
+
+def parse_seconds(name: str, text) -> float:
+    try:
+        value = float(text)
+    except (TypeError, ValueError):
+        raise ResourceError(f"{name} must be a number of seconds in [{TIME_RANGE[0]:g}, {TIME_RANGE[1]:g}]; "
+                            f"got {text!r}") from None
+    if not TIME_RANGE[0] <= value <= TIME_RANGE[1]:
+        raise ResourceError(f"{name} must be in [{TIME_RANGE[0]:g}, {TIME_RANGE[1]:g}] s; got {text!r}")
+    return value
+
+
+def set_time_limit(text) -> float:
+    value = parse_seconds("--time-limit", text)
+    os.environ[TIME_ENV] = repr(value)
+    return value
+
+
+class Deadline:
+    """A wall-clock limit checked inside long loops: ``deadline.expired()`` is cheap (one clock read)."""
+
+    def __init__(self, seconds: float):
+        self.seconds = float(seconds)
+        self.end = time.monotonic() + self.seconds
+
+    def expired(self) -> bool:
+        return time.monotonic() > self.end
+
+    def message(self, what: str) -> str:
+        return (f"{what} reached the time limit of {self.seconds:g} s; raise it with --time-limit S "
+                f"(or {TIME_ENV})")

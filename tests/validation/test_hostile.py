@@ -1,0 +1,305 @@
+"""Hostile and absurd input: one clear line and a non-zero exit, within a time and memory bound, nothing written
+outside the output directory; every flag acts or is refused; no worker outlives a killed command; a kill at any
+instant never leaves a partial output in place of a good one."""
+import json
+import os
+import random
+import signal
+import subprocess
+import sys
+import time
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import pytest
+
+from validation.cli import main
+
+PCSUITE = [sys.executable, "-m", "validation.cli"]
+ROOT = Path(__file__).resolve().parents[2]
+TIME_BOUND_S = 30.0
+MEMORY_BOUND_KB = 1 << 20          # 1 GiB, as ru_maxrss (KiB) of the command and every process it waited for
+
+#: Runs one command and reports its exit code, wall time and the largest resident set among it and its children
+#: (a fresh small process, so the bound measures the command, not this test's process).
+WRAPPER = """
+import json, resource, subprocess, sys, time
+start = time.monotonic()
+try:
+    proc = subprocess.run(sys.argv[2:], capture_output=True, text=True, timeout=float(sys.argv[1]))
+    code, out, err = proc.returncode, proc.stdout, proc.stderr
+except subprocess.TimeoutExpired as exc:
+    code, out, err = "timeout", "", str(exc)
+print(json.dumps({"code": code, "out": out, "err": err, "wall": time.monotonic() - start,
+                  "maxrss_kb": resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss}))
+"""
+
+
+def bounded(argv, cwd):
+    """(code, stdout, stderr, wall_s, max RSS in KiB) of ``pcsuite argv`` run in ``cwd``."""
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    done = subprocess.run([sys.executable, "-c", WRAPPER, str(TIME_BOUND_S + 15), *PCSUITE, *map(str, argv)],
+                          cwd=cwd, capture_output=True, text=True, env=env)
+    result = json.loads(done.stdout)
+    return result["code"], result["out"], result["err"], result["wall"], result["maxrss_kb"]
+
+
+def tree(directory: Path) -> dict:
+    return {str(p.relative_to(directory)): p.stat().st_size for p in directory.rglob("*") if p.is_file()}
+
+
+def scene(text: str) -> str:
+    return 'converter = "buck"\n' + text
+
+
+def dat_header(n: int) -> str:
+    return f"{n}\n0\n{n} {n}\n{n} {n}\n1 0 0 1\n"
+
+
+#: Every case of the hostile-input audit: (id, argv, files to create in the run's directory, what the one
+#: stderr line must contain). Each runs in a fresh directory ``work`` inside ``tmp_path``; ``OUT`` there is the
+#: only place a command may write.
+FUZZ = [
+    # tracebacks before
+    ("t-end-1e-300", ["simulate", "buck", "--t-end", "1e-300"], {}, "t_end must be at least one step"),
+    ("event-h-1e-18", ["simulate", "buck", "--method", "event", "--h", "1e-18"], {}, "--max-memory"),
+    ("out-proc", ["simulate", "buck", "--periods", "2", "--out", "/proc/x.csv"], {}, "--out /proc/x.csv"),
+    ("out-dev-full", ["simulate", "buck", "--periods", "2", "--out", "/dev/full/x.csv"], {}, "--out /dev/full/x.csv"),
+    ("compare-plot-proc", ["compare", "buck", "--plot", "/proc/x.png"], {}, "--plot /proc/x.png"),
+    ("gdcm-h-0", ["gdcm", "buck", "--h", "0"], {}, "h must be positive"),
+    ("gdcm-h-1e-18", ["gdcm", "buck", "--h", "1e-18"], {}, "--max-memory"),
+    ("gdcm-map-out-proc", ["gdcm-map", "buck", "--no-spice", "--out", "/proc/m"], {}, "--out /proc/m"),
+    ("scene-description-5", ["report", "s.toml", "--out", "OUT"], {"s.toml": scene("description = 5\n")},
+     "description"),
+    ("dat-n-1e6", ["lcp", "solve", "big.dat"], {"big.dat": dat_header(10 ** 6)}, "--max-memory"),
+    # memory without bounds before
+    ("h-1e-12", ["simulate", "buck", "--h", "1e-12"], {}, "--max-memory"),
+    ("h-1e-11", ["simulate", "buck", "--h", "1e-11"], {}, "--max-memory"),
+    ("compare-h-1e-12", ["compare", "buck", "--h", "1e-12"], {}, "--max-memory"),
+    ("event-h-1e-13", ["simulate", "buck", "--method", "event", "--h", "1e-13"], {}, "--max-memory"),
+    ("gdcm-map-size", ["gdcm-map", "buck", "--size", "1000000", "1000000"], {}, "--size N_D must be in [2, 1000]"),
+    ("dat-n-50000", ["lcp", "solve", "n.dat"], {"n.dat": dat_header(50_000)}, "--max-memory"),
+    ("dat-dev-zero", ["lcp", "solve", "/dev/zero"], {}, "regular file"),
+    ("smc-spice-1s", ["simulate", "boost", "--control", "smc", "--method", "spice", "--t-end", "1"], {},
+     "--max-memory"),
+    # hangs before
+    ("spice-t-end-1e9", ["simulate", "buck", "--method", "spice", "--t-end", "1e9"], {}, "--max-memory"),
+    ("spice-periods-1e5", ["simulate", "buck", "--method", "spice", "--periods", "100000"], {}, "--max-memory"),
+    ("smc-spice-band", ["simulate", "boost", "--control", "smc", "--method", "spice", "-p", "band=1e-12"], {},
+     "--max-memory"),
+    ("smc-spice-t-end-1e9", ["simulate", "boost", "--control", "smc", "--method", "spice", "--t-end", "1e9"], {},
+     "--max-memory"),
+    ("scene-tiny-tmax", ["report", "s.toml", "--out", "OUT"],
+     {"s.toml": scene("[methods.spice]\ntmax_fraction = 1e-12\n")}, "tmax_fraction"),
+    ("murty-max-iter-1e12", ["lcp", "solve", "murty.dat", "--method", "murty", "--max-iter", "1000000000000"],
+     {"murty.dat": None}, "max_iter"),
+    ("murty-time-limit", ["lcp", "solve", "murty.dat", "--method", "murty", "--max-iter", "1000000000"],
+     {"murty.dat": None}, "time limit of 20 s"),
+    # accepted but suspect before
+    ("space", ["simulate", "buck", "-p", "L=10 u"], {}, "L must be a number with no space inside"),
+    ("full-width", ["simulate", "buck", "-p", "L=１０u"], {}, "L must be a number typed in plain ASCII"),
+    ("f-sw-1e300", ["simulate", "buck", "-p", "f_sw=1e300"], {}, "f_sw (switching frequency) must be within"),
+    ("f-sw-1e-300", ["simulate", "buck", "-p", "f_sw=1e-300"], {}, "f_sw (switching frequency) must be within"),
+    ("L-1e300", ["simulate", "buck", "-p", "L=1e300"], {}, "L (inductance) must be within"),
+    # a path escape before
+    ("scene-name-escape", ["report", "s.toml", "--out", "OUT"], {"s.toml": scene('name = "../../../../escaped"\n')},
+     "name"),
+]
+
+
+def murty_file() -> str:
+    """A 300 x 300 problem on which Murty's least-index pivoting takes exponentially many pivots (M upper
+    triangular with 2 on the diagonal and 4 above it, q = -1: Murty's own example, 2^n - 1 pivots)."""
+    import numpy as np
+    n = 300
+    M = np.triu(np.full((n, n), 4.0), 1) + 2.0 * np.eye(n)
+    q = -np.ones(n)
+    return f"{n}\n0\n{n} {n}\n{n} {n}\n" + "\n".join(" ".join(f"{v:g}" for v in col) for col in M.T) + "\n" + \
+        " ".join(f"{v:g}" for v in q) + "\n"
+
+
+@pytest.fixture(scope="module")
+def fuzz_results(tmp_path_factory):
+    """Every FUZZ case, two at a time, each in its own directory (the table's evidence, collected once)."""
+    base = tmp_path_factory.mktemp("fuzz")
+    murty = murty_file()
+
+    def one(case):
+        name, argv, files, _ = case
+        outer = base / name
+        work = outer / "work"
+        work.mkdir(parents=True)
+        for file, text in files.items():
+            (work / file).write_text(murty if text is None else text)
+        before = tree(outer)
+        result = bounded(argv, work)
+        return name, (*result, before, tree(outer), outer)
+
+    with ThreadPoolExecutor(2) as pool:
+        return dict(pool.map(one, FUZZ))
+
+
+@pytest.mark.parametrize("name,argv,files,expected", FUZZ, ids=[case[0] for case in FUZZ])
+def test_each_hostile_case_gets_one_clear_line_quickly_and_in_bounded_memory(fuzz_results, name, argv, files, expected):
+    code, out, err, wall, maxrss_kb, before, after, outer = fuzz_results[name]
+    lines = [line for line in err.splitlines() if line.strip()]
+    assert code not in (0, "timeout"), (code, err)
+    assert "Traceback" not in err and "Traceback" not in out
+    assert len(lines) == 1 and lines[0].startswith("pcsuite:"), err
+    assert expected in lines[0], lines[0]
+    assert wall < TIME_BOUND_S, wall
+    assert maxrss_kb < MEMORY_BOUND_KB, maxrss_kb
+    assert after == before                                    # nothing written anywhere, OUT included
+    assert not (outer.parent / "escaped").exists() and not (outer / "escaped").exists()
+
+
+def test_no_file_is_written_outside_out_whatever_a_scene_contains(tmp_path):
+    """A valid user scene whose strings carry quotes, brackets and ../ runs; everything it writes is under --out."""
+    work = tmp_path / "a" / "b" / "work"
+    work.mkdir(parents=True)
+    (work / "nasty.toml").write_text('converter = "buck"\nname = "ok-name"\n'
+                                     'description = "../../x\' onerror=\'alert(1)\' <script>&"\n'
+                                     'suites = ["mine"]\n[params]\nD = "0.4"\n[run]\nperiods = 30\nwindow = 10\n')
+    before = tree(tmp_path)
+    code, out, err, wall, _ = bounded(["report", "nasty.toml", "--out", "OUT", "--workers", "1"], work)
+    assert code in (0, 1), err
+    new = {path for path in tree(tmp_path) if path not in before}
+    assert new and all(path.startswith("a/b/work/OUT/") for path in new), sorted(new)
+    page = (work / "OUT" / "index.html").read_text()
+    assert "<script>" not in page and "onerror='" not in page
+
+
+#: Flags that would be ignored in a combination: each is refused with one line naming the flag (issue 22's table).
+IGNORED = [
+    (["simulate", "buck", "--method", "spice", "--periods", "0"], "periods must be an integer >= 1; got 0"),
+    (["simulate", "buck", "--method", "spice", "--periods", "-1"], "periods must be an integer >= 1; got -1"),
+    (["simulate", "buck", "--method", "spice", "--h", "1e-8"], "--h does not apply to --method spice"),
+    (["simulate", "buck", "--method", "spice", "--theta", "7"], "--theta does not apply to --method spice"),
+    (["simulate", "buck", "--method", "spice", "--eps", "1e-3"], "--eps does not apply to --method spice"),
+    (["simulate", "buck", "--method", "spice", "--steady", "--steady-tol", "1e-3"],
+     "--steady-tol does not apply to --method spice"),
+    (["simulate", "buck", "--steady-tol", "1e-3"], "--steady-tol applies with --steady only"),
+    (["simulate", "buck", "--rtol", "1e-4", "--steady-tol", "1e-3"], "give either --rtol or --steady-tol"),
+    (["simulate", "boost", "--control", "smc", "--theta", "2"], "theta must be in [0.5, 1]; got 2.0"),
+    (["simulate", "boost", "--control", "smc-implicit", "--method", "event"], "use --method lcp"),
+    (["simulate", "boost", "--control", "smc", "--steady"], "--steady needs a fixed switching period"),
+    (["simulate", "boost", "--control", "smc", "--method", "spice", "--steady"],
+     "--steady needs a fixed switching period"),
+    (["simulate", "buck", "--steady-tol", "inf", "--steady"], "steady_tol must be a number"),
+    (["simulate", "buck", "--steady-tol", "nan", "--steady"], "steady_tol must be a number"),
+    (["simulate", "buck", "--steady-tol", "0", "--steady"], "steady_tol must be in (0, 1); got 0.0"),
+    (["simulate", "buck", "--t-end", "1e9"], "a shorter --t-end"),
+    (["compare", "buck", "--t-end", "nan"], "--t-end applies to --control smc"),
+    (["compare", "buck", "--t-end", "1e9"], "--t-end applies to --control smc"),
+    (["compare", "boost", "--control", "smc", "--t-end", "1m"], "t_end must be at least 0.004 s"),
+    (["compare", "boost", "--control", "smc", "--start", "rest"], "--start applies to PWM comparisons"),
+    (["gdcm-map", "buck", "--workers", "0"], "--workers must be in [1, 64]; got 0"),
+    (["gdcm-map", "buck", "--workers", "-5"], "--workers must be in [1, 64]; got -5"),
+    (["gdcm-map", "buck", "--no-spice", "--workers", "2"], "--workers sets the ngspice processes"),
+    (["bench", "--only", "stability", "--periods", "5"], "--periods sets the trade-off"),
+    (["bench", "--only", "stability", "--quick"], "--quick sets the trade-off"),
+    (["sweep", "buck", "--grid", "D=0.2:0.8:3", "--seed", "3"], "--seed sets the Latin hypercube"),
+    (["sweep", "buck", "--grid", "D=0.2:0.8:3", "--method", "spice", "--h-fraction", "0.01"],
+     "--h-fraction does not apply to --method spice"),
+    (["sweep", "buck", "--grid", "D=0.2:0.8:3", "--method", "event", "--h-fraction", "0.01"],
+     "--h-fraction sets the lcp stepper's step"),
+    (["sweep", "buck", "--grid", "D=0.2:0.8:3", "--steady", "--periods", "5"], "--periods does not apply with --steady"),
+    (["sweep", "buck", "--grid", "D=0.2:0.8:3", "--scheduler", "serial", "--workers", "2"],
+     "--workers sets the local processes"),
+    (["bifurcation", "buck", "--param", "Vin=20:36", "--points", "0", "--record", "5"],
+     "--record sets the brute-force diagram"),
+    (["lcp", "solve", "x.dat", "--tol", "10"], "tol must be in [1e-16, 0.01]"),
+]
+
+
+@pytest.mark.parametrize("argv,message", IGNORED, ids=[" ".join(a) for a, _ in IGNORED])
+def test_every_flag_acts_or_is_refused_with_one_line(capsys, tmp_path, monkeypatch, argv, message):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "x.dat").write_text("1\n0\n1 1\n1 1\n1\n-1\n")
+    start = time.monotonic()
+    code = main(argv)
+    out, err = capsys.readouterr()
+    assert code == 2 and message in err and len(err.strip().splitlines()) == 1, err
+    assert time.monotonic() - start < 10.0                  # refused before anything long runs
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["x.dat"]
+
+
+def test_gdcm_h_acts(ngspice):
+    """--h reaches the stepper (it used to arrive as a string and fail for every value)."""
+    from validation.gdcm import gdcm_check
+    coarse, fine = gdcm_check("buck", {}, h="1e-7"), gdcm_check("buck", {}, h="1e-8")
+    assert coarse["held_fraction"]["lcp"] != fine["held_fraction"]["lcp"]
+    assert fine["held_fraction"]["lcp"] == pytest.approx(0.3107, abs=2e-3)
+
+
+def _descendants(pid: int) -> list[int]:
+    import psutil
+    try:
+        return [child.pid for child in psutil.Process(pid).children(recursive=True)]
+    except psutil.NoSuchProcess:
+        return []
+
+
+def _alive(pids) -> list[int]:
+    import psutil
+    out = []
+    for pid in pids:
+        try:
+            if psutil.Process(pid).status() != psutil.STATUS_ZOMBIE:
+                out.append(pid)
+        except psutil.NoSuchProcess:
+            pass
+    return out
+
+
+@pytest.mark.parametrize("argv,workers", [(["report", "default", "--out", "OUT"], 3),
+                                          (["compare", "boost"], 1)], ids=["report", "compare"])
+def test_sigkill_leaves_no_pcsuite_or_ngspice_process_behind(ngspice, tmp_path, argv, workers):
+    """SIGKILL of a command with ngspice workers: 2 s later none of its processes is alive."""
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    proc = subprocess.Popen([*PCSUITE, *argv], cwd=tmp_path, env=env, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL, start_new_session=True)
+    seen: set[int] = set()
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and proc.poll() is None:     # until its workers (and theirs) are running
+        seen |= set(_descendants(proc.pid))
+        if len(seen) >= workers:
+            break
+        time.sleep(0.1)
+    time.sleep(1.0)
+    seen |= set(_descendants(proc.pid))
+    assert proc.poll() is None and len(seen) >= workers, (proc.poll(), seen)
+    os.kill(proc.pid, signal.SIGKILL)
+    proc.wait()
+    time.sleep(2.0)
+    assert _alive(seen) == []
+
+
+def test_kill_9_at_random_instants_never_leaves_a_partial_output(tmp_path):
+    """10 kills at random instants of `simulate --out`: the file is always the old one or a complete new one,
+    and the next run leaves no temporary behind."""
+    import pyarrow.parquet as pq
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    target = tmp_path / "w.parquet"
+    argv = [*PCSUITE, "simulate", "buck", "--out", str(target)]
+    subprocess.run([*argv, "--periods", "10"], check=True, env=env, capture_output=True)
+    old = target.read_bytes()
+    start = time.monotonic()
+    subprocess.run([*argv, "--periods", "3000"], check=True, env=env, capture_output=True)
+    full = time.monotonic() - start
+    new = target.read_bytes()
+    rng = random.Random(20261124)
+    outcomes = []
+    for _ in range(10):
+        target.write_bytes(old)
+        proc = subprocess.Popen([*argv, "--periods", "3000"], env=env, stdout=subprocess.DEVNULL,
+                                stderr=subprocess.DEVNULL)
+        time.sleep(rng.uniform(0.0, 1.2 * full))
+        proc.send_signal(signal.SIGKILL)
+        proc.wait()
+        data = target.read_bytes()
+        assert data in (old, new)
+        pq.read_table(target)                               # a whole Parquet file
+        outcomes.append("new" if data == new and proc.returncode == -9 else "old")
+    subprocess.run([*argv, "--periods", "10"], check=True, env=env, capture_output=True)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["w.parquet"]       # temporaries of the kills are gone
