@@ -75,6 +75,9 @@ def solve_lcp(M, q, method: str = "lemke", tol: float = 1e-10, max_iter: int | N
             and TOL_RANGE[0] <= tol <= TOL_RANGE[1]):
         raise LCPError(f"tol must be in [{TOL_RANGE[0]:g}, {TOL_RANGE[1]:g}]; got {tol!r}")
     tol = float(tol)
+    if max_iter is not None and DEFAULT_MAX_ITER[method] is None:
+        raise LCPError(f"max_iter does not apply to method {method!r} (it visits every complementary basis once; "
+                       f"k <= 12); got max_iter = {max_iter!r}")
     if max_iter is None:
         max_iter = DEFAULT_MAX_ITER[method]
     elif not (isinstance(max_iter, (int, np.integer)) and not isinstance(max_iter, bool)

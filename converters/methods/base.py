@@ -24,6 +24,10 @@ import numpy as np
 
 from ..errors import ParameterError
 
+#: Segments (events and integrator pieces) a run stores per forcing or switching period, generously: the
+#: size estimate of a run without an output grid (the converters have 2-6, the friction oscillator ~40).
+SEGMENTS_PER_PERIOD = 64
+
 #: Method classes by their command-line name, filled as each method module is imported.
 METHODS: dict[str, type["Method"]] = {}
 
@@ -75,10 +79,11 @@ class Method(ABC):
         spacing, plus every switching instant of the law; inf where it cannot be bounded."""
         t0, t1 = problem.t_span
         step = getattr(self, self.step_option, None) if self.step_option else None
-        if step is None:
-            return 0.0
         law = getattr(problem, "switching", None)
-        period = getattr(law, "period", np.inf)
+        period = getattr(law, "period", getattr(problem, "period", np.inf))
+        if step is None:            # segments only: a forced problem has a few per period, an autonomous one is
+            # bounded by the method's own event cap
+            return (t1 - t0) / period * SEGMENTS_PER_PERIOD if np.isfinite(period) and period > 0 else 0.0
         breaks = (t1 - t0) / period * len(getattr(law, "starts", (0,))) if np.isfinite(period) and period > 0 else 0.0
         return (t1 - t0) / float(step) + breaks + 1.0
 

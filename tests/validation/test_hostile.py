@@ -91,6 +91,8 @@ FUZZ = [
      "--max-memory"),
     ("scene-tiny-tmax", ["report", "s.toml", "--out", "OUT"],
      {"s.toml": scene("[methods.spice]\ntmax_fraction = 1e-12\n")}, "tmax_fraction"),
+    ("mech-t-end-1e9", ["mech", "simulate", "friction", "--t-end", "1e9"], {}, "--max-memory"),
+    ("mech-h-1e-12", ["mech", "simulate", "friction", "--method", "moreau", "--h", "1e-12"], {}, "--max-memory"),
     ("murty-max-iter-1e12", ["lcp", "solve", "murty.dat", "--method", "murty", "--max-iter", "1000000000000"],
      {"murty.dat": None}, "max_iter"),
     ("murty-time-limit", ["lcp", "solve", "murty.dat", "--method", "murty", "--max-iter", "1000000000"],
@@ -209,6 +211,11 @@ IGNORED = [
     (["bifurcation", "buck", "--param", "Vin=20:36", "--points", "0", "--record", "5"],
      "--record sets the brute-force diagram"),
     (["lcp", "solve", "x.dat", "--tol", "10"], "tol must be in [1e-16, 0.01]"),
+    (["lcp", "solve", "x.dat", "--method", "enum", "--max-iter", "5"], "max_iter does not apply to method 'enum'"),
+    (["mech", "bifurcations", "friction", "--param", "omega=2.85:2.95", "--points", "0", "--workers", "2"],
+     "--workers must be >= 1 and needs the diagram"),
+    (["mech", "bifurcations", "friction", "--param", "omega=2.85:2.95", "--points", "100000000"],
+     "--points must be an integer in [0, 100000]"),
 ]
 
 

@@ -111,6 +111,11 @@ def run_simulate(args) -> int:
     return 0
 
 
+#: The diagram's values, at most, and what one value's row keeps (its samples or impacts), generously.
+MAX_POINTS = 100_000
+BYTES_PER_VALUE = 50_000
+
+
 def run_bifurcations(args) -> int:
     from ..io import check_output_file; check_output_file("--diagram", args.diagram)  # noqa: E702 (before the run)
     import numpy as np
@@ -128,8 +133,13 @@ def run_bifurcations(args) -> int:
     if args.diagram is not None and args.diagram.suffix.lower() not in (".png", ".svg"):
         raise ParameterError(f"--diagram must end in .png or .svg; got {str(args.diagram)!r}")
     points = args.points if args.points is not None else (0 if model.sliding and args.diagram is None else 60)
-    if not (isinstance(points, int) and points >= 0) or (args.diagram is not None and points < 2):
-        raise ParameterError(f"--points must be an integer >= {2 if args.diagram else 0}; got {points!r}")
+    if not (isinstance(points, int) and 0 <= points <= MAX_POINTS) or (args.diagram is not None and points < 2):
+        raise ParameterError(f"--points must be an integer in [{2 if args.diagram else 0}, {MAX_POINTS}]; got {points!r}")
+    if args.workers is not None and (points == 0 or args.workers < 1):
+        raise ParameterError(f"--workers must be >= 1 and needs the diagram (--points >= 2); got --workers {args.workers}"
+                             f" with {points} points")
+    from converters.limits import check_memory
+    check_memory(f"the diagram: {points} values", points * BYTES_PER_VALUE, remedy="fewer --points")
     if not model.diagram:
         from converters.models.mechanics import MECHANICAL_MODELS
         raise ParameterError(f"the {model.title} has no bifurcations to follow; MODEL must be one of "
