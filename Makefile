@@ -7,7 +7,7 @@ STAMP := $(VENV)/.installed-stamp
 SUDO := $(shell [ "$$(id -u)" -eq 0 ] || echo sudo)
 SUITE ?= default
 
-.PHONY: all setup system-deps test report bench clean
+.PHONY: all setup system-deps siconos test report bench clean
 
 all: test
 
@@ -40,8 +40,15 @@ test: setup
 report: setup
 	$(VENV)/bin/pcsuite report $(SUITE)
 
-bench: setup
+# Siconos (the peer of benchmarks/peers.py) from the system package manager, for the system Python, when missing.
+siconos:
+	@/usr/bin/python3 -c "import siconos.kernel" 2>/dev/null || { echo "installing python3-siconos with apt-get"; \
+	  $(SUDO) apt-get update -qq && DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq python3-siconos >/dev/null \
+	  || echo "python3-siconos could not be installed: benchmarks/peers.py will skip Siconos"; }
+
+bench: setup siconos
 	$(PY) benchmarks/step_cost.py
+	$(PY) benchmarks/peers.py
 	$(PY) benchmarks/tradeoff.py
 
 clean:
