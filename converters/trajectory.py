@@ -262,10 +262,17 @@ class Trajectory:
         signal. Means and RMS by the run's own rule (exact quadrature for the event method); min, max and
         ripple on the samples."""
         import pandas as pd
+        rows = self.measurement_rows(periods, t0, t1)
+        return pd.DataFrame([{"signal": name, **row} for name, row in rows.items()]).set_index("signal")
+
+    def measurement_rows(self, periods: float | None = None, t0: float | None = None,
+                         t1: float | None = None) -> dict:
+        """:meth:`measurements` as plain data, {signal: {unit, mean, rms, min, max, ripple}} (no pandas: the JSON
+        summary of a fresh process does not pay for importing it)."""
         a, b = self.window(periods, t0, t1)
         rows = self._rows(a, b)
         units = dict(getattr(getattr(self.labels, "model", None), "signal_units", {}) or {})
-        out = []
+        out = {}
         for name in self.signal_names:
             if name == "mode":
                 continue
@@ -274,10 +281,9 @@ class Trajectory:
                 continue
             unit = units.get(name, {"vout": "V", "switch": "1", "iref": "A"}.get(
                 name, "A" if name.startswith("i") else "V" if name.startswith("v") else ""))
-            out.append({"signal": name, "unit": unit, "mean": self.mean(name, t0=a, t1=b),
-                        "rms": self.rms(name, t0=a, t1=b), "min": float(values.min()), "max": float(values.max()),
-                        "ripple": float(np.ptp(values))})
-        return pd.DataFrame(out).set_index("signal")
+            out[name] = {"unit": unit, "mean": self.mean(name, t0=a, t1=b), "rms": self.rms(name, t0=a, t1=b),
+                         "min": float(values.min()), "max": float(values.max()), "ripple": float(np.ptp(values))}
+        return out
 
     def mode_fractions(self, periods: float | None = 1, t0: float | None = None, t1: float | None = None) -> dict:
         """Fraction of the window spent in each mode (each step counted by the label of its end point)."""

@@ -160,9 +160,7 @@ class Model(ABC):
         t0 = t1 - window * self.period(p)
         out = {"vout_mean": tr.mean("vout", t0=t0, t1=t1), "window_periods": window,
                "mode_fractions": tr.mode_fractions(1)}
-        table = tr.measurements(t0=t0, t1=t1)
-        out["measurements"] = {name: {k: (v if isinstance(v, str) else float(v)) for k, v in row.items()}
-                               for name, row in table.iterrows()}
+        out["measurements"] = tr.measurement_rows(t0=t0, t1=t1)
         if hasattr(self, "power"):
             power = self.power(tr, p, t0, t1)
             if np.isfinite(power["input_W"]):          # an ngspice run of a two-state converter: not measured

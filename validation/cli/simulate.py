@@ -94,11 +94,13 @@ def run(args) -> int:
             raise ParameterError(f"--eps and --solver-rtol apply to --method smooth only; got --method {method}")
         if args.theta is not None and method != "lcp":
             raise ParameterError(f"--theta applies to --method lcp only; got --method {method}")
+        setup_s = _set_up(args.converter, params, args.control, method, args.steady, options)
         tr = run_converter(args.converter, params, control=args.control, method=method, h=args.h,
                            t_end=args.t_end, periods=args.periods, steady=args.steady,
                            steady_tol=1e-6 if args.steady_tol is None else args.steady_tol,
                            **options)
         summary = run_summary(tr)
+        summary["setup_s"] = setup_s
     if args.out is not None:
         write_frame(tr.waveforms(), args.out, meta={k: summary.get(k) for k in ("converter", "control", "method",
                                                                                    "options") if k in summary})
@@ -117,6 +119,23 @@ def run(args) -> int:
     else:
         _print(summary, tr, args)
     return 0
+
+
+def _set_up(converter, params, control, method, steady, options) -> float:
+    """The one-time set-up of a process (numba loading the compiled kernels from its disk cache, on their first
+    call), paid here on one coarse period of the same model and method so that the run's ``wall_s`` measures the
+    computation alone; returns its time (the JSON's ``setup_s``)."""
+    from converters.models import get_model
+    from converters.run import run_converter
+    start = time.perf_counter()
+    model = get_model(converter, control)
+    p = model.resolve(params)
+    if model.periodic(p) and not model.step_times(p):
+        try:
+            run_converter(model, p, method=method, h=model.period(p) / 20, periods=1, steady=steady, **options)
+        except (ValueError, RuntimeError):      # a set-up that fails says nothing: the run itself reports
+            pass
+    return time.perf_counter() - start
 
 
 def _spice(args, params):
