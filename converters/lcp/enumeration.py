@@ -1,56 +1,200 @@
-"""Enumeration of all 2^k complementary bases: every basic solution of the LCP.
+"""Enumeration of all 2^k complementary bases: every basic solution of the LCP (compiled).
 
-For each index set J (by increasing size) solve M_JJ z_J = -q_J and keep z if z >= 0 and
-w = q + M z >= 0. Singular principal submatrices are skipped (their solutions, if any, are not
-basic). Refuses k > 12 (4096 bases); a wall-clock ``deadline`` is checked every 64 bases.
+For each index set J (by increasing size, each size in lexicographic order) solve M_JJ z_J = -q_J and
+keep z if z >= 0 and w = q + M z >= 0. Ill-conditioned principal submatrices (2-norm condition number
+above 1e12) are skipped (their solutions, if any, are not basic; auto's first-solution search skips only
+singular ones and lets the check judge the rest). Refuses k > 12 (4096 bases); a
+wall-clock deadline is checked between slices of work, at multiples of 64 bases. :func:`run` is
+resumable (see :mod:`converters.lcp.lemke`); with ``first`` it stops at the first feasible basis whose
+solution passes the check, keeping none (``auto`` uses that), otherwise it lists every basic solution and
+answers with the least-norm one (the most accurate one when that fails the check).
 """
 from __future__ import annotations
 
-from itertools import combinations
-
 import numpy as np
+from numba import njit
 
-from ..errors import LCPError
-from .result import FAILED, NO_SOLUTION, SOLVED, finish, lcp_error
+from . import state as S
+from .kernels import solve_augmented
+from .result import accepts, residual
 
 MAX_K = 12
 
 
-def enumerate_bases(M: np.ndarray, q: np.ndarray, *, tol: float, max_iter: int | None = None, deadline=None):
+@njit(cache=True)
+def sizes(k, listing):
+    """Doubles and integers of workspace: the augmented M_JJ | -q_J, M_JJ, two vectors and, when ``listing``
+    (every basic solution is kept), up to 2^k solutions; the index set J."""
+    return _solutions_offset(k) + ((1 << k) * k if listing else 0), k
+
+
+@njit(cache=True)
+def _solutions_offset(k):
+    return k * (k + 1) + k * k + 2 * k
+
+
+def solutions(fw: np.ndarray, st: np.ndarray, k: int) -> list:
+    """The basic solutions found so far, as a list of arrays (copies)."""
+    o = _solutions_offset(k)
+    return [fw[o + s * k:o + (s + 1) * k].copy() for s in range(int(st[S.INFO]))]
+
+
+@njit(cache=True)
+def run(M, q, z, fw, iw, st, tol, budget, first):
+    """Advance the enumeration by at most ``budget`` multiply-adds; True when finished (see ``lemke.run``).
+    st[ITER] counts the visited bases, st[INFO] the solutions found."""
     k = q.shape[0]
-    if k > MAX_K:
-        raise LCPError(f"enumeration visits 2^k bases: k must be <= {MAX_K}; got k = {k}; "
-                       "use method='lemke' or 'murty'")
-    qscale = max(1.0, float(np.abs(q).max()))
-    solutions: list[np.ndarray] = []
-    visited = 0
-    for size in range(k + 1):
-        for subset in combinations(range(k), size):
-            visited += 1
-            if deadline is not None and visited % 64 == 0 and deadline.expired():
-                return finish(M, q, solutions[0] if solutions else np.zeros(k), status=FAILED, iterations=visited,
-                              method="enum", tol=tol, solutions=solutions,
-                              message=deadline.message(f"enum (after {visited} of {2 ** k} bases)"))
-            z = np.zeros(k)
-            if size:
-                J = list(subset)
-                sub = M[np.ix_(J, J)]
-                if np.linalg.cond(sub) > 1e12:
-                    continue
-                z[J] = np.linalg.solve(sub, -q[J])
-            w = q + M @ z
-            feasible_tol = 1e-9 * max(qscale, float(np.abs(z).max(initial=0.0)))
-            if np.all(z >= -feasible_tol) and np.all(w >= -feasible_tol):
-                z = np.maximum(z, 0.0)
-                if not any(np.allclose(z, s, rtol=1e-9, atol=1e-12 * qscale) for s in solutions):
-                    solutions.append(z)
-    if not solutions:
-        return finish(M, q, np.zeros(k), status=NO_SOLUTION, iterations=visited, method="enum", tol=tol,
-                      message="enum: no complementary basis is feasible (no basic solution exists)")
-    best = min(solutions, key=lambda s: float(s @ s))
-    result = finish(M, q, best, status=SOLVED, iterations=visited, method="enum", tol=tol, solutions=solutions)
-    if result.status == FAILED:  # the least-norm one may be ill-conditioned; take the most accurate
-        best = min(solutions, key=lambda s: lcp_error(M, q, s))
-        result = finish(M, q, best, status=SOLVED, iterations=visited, method="enum", tol=tol,
-                        solutions=solutions)
-    return result
+    o = 0
+    aug = fw[o:o + k * (k + 1)]
+    o += k * (k + 1)
+    sub_buf = fw[o:o + k * k]
+    o += k * k
+    zc, w = fw[o:o + k], fw[o + k:o + 2 * k]
+    o += 2 * k
+    sols = fw[o:o + (0 if first else (1 << k) * k)].reshape((0 if first else 1 << k, k))
+    J = iw[:k]
+    if st[S.PHASE] == S.START:
+        st[S.AUX] = 0          # the size of J
+        st[S.ITER] = 0         # bases visited
+        st[S.INFO] = 0         # solutions found
+        st[S.PHASE] = S.RUNNING
+    size = st[S.AUX]
+    visited = st[S.ITER]
+    nsol = st[S.INFO]
+    qscale = 1.0
+    for i in range(k):
+        qscale = max(qscale, abs(q[i]))
+    while size <= k:
+        visited += 1
+        if visited % 64 == 0 and budget <= 0:    # the caller checks its deadline here, then calls again
+            st[S.AUX] = size
+            st[S.ITER] = visited - 1
+            st[S.INFO] = nsol
+            if nsol > 0 and not first:
+                z[:] = sols[0]
+            else:
+                z[:] = 0.0
+            return False
+        budget -= 10 * size * size * size + k * k + 1
+        if _basic_solution(M, q, J, size, zc, w, aug, sub_buf, qscale, not first):
+            if first:     # auto: the first one that passes the check ends it; none is kept
+                nsol += 1
+                if accepts(M, q, zc, w, tol):
+                    z[:] = zc
+                    st[S.ITER] = visited
+                    st[S.INFO] = nsol
+                    return _done(st, S.SOLVED, S.OK)
+                size = _next_subset(J, size, k)
+                continue
+            duplicate = False
+            for s in range(nsol):
+                same = True
+                for i in range(k):
+                    if not abs(zc[i] - sols[s, i]) <= 1e-12 * qscale + 1e-9 * abs(sols[s, i]):
+                        same = False
+                        break
+                if same:
+                    duplicate = True
+                    break
+            if not duplicate:
+                sols[nsol, :] = zc
+                nsol += 1
+        size = _next_subset(J, size, k)
+    st[S.ITER] = visited
+    st[S.INFO] = nsol
+    if nsol == 0:
+        z[:] = 0.0
+        return _done(st, S.NO_SOLUTION, S.NOBASIS)
+    if first:     # feasible bases, none of which passed the check
+        z[:] = 0.0
+        return _done(st, S.FAILED, S.CHECK)
+    best, best_norm = 0, np.inf
+    for s in range(nsol):
+        norm = 0.0
+        for i in range(k):
+            norm += sols[s, i] * sols[s, i]
+        if norm < best_norm:
+            best, best_norm = s, norm
+    z[:] = sols[best]
+    if accepts(M, q, z, w, tol):
+        return _done(st, S.SOLVED, S.OK)
+    best, best_err = 0, np.inf     # the least-norm one may be ill-conditioned; take the most accurate
+    for s in range(nsol):
+        zc[:] = sols[s]
+        err = residual(M, q, zc, w)
+        if err < best_err:
+            best, best_err = s, err
+    z[:] = sols[best]
+    if accepts(M, q, z, w, tol):
+        return _done(st, S.SOLVED, S.OK)
+    return _done(st, S.FAILED, S.CHECK)
+
+
+@njit(cache=True)
+def _basic_solution(M, q, J, m, z, w, aug_buf, sub_buf, qscale, conditioned):
+    """z with z_J = -M_JJ^-1 q_J (zero elsewhere); True when it is feasible (z, w >= -1e-9 scale), then
+    clipped at 0. False too when M_JJ is singular, or, with ``conditioned``, ill-conditioned (2-norm
+    condition number above 1e12: an SVD per basis; auto's first-solution search goes without it, as the
+    check on the answer judges it anyway)."""
+    k = q.shape[0]
+    z[:] = 0.0
+    if m > 0:
+        if conditioned:
+            sub = sub_buf[:m * m].reshape((m, m))
+            for r in range(m):
+                for c in range(m):
+                    sub[r, c] = M[J[r], J[c]]
+            if np.linalg.cond(sub) > 1e12:
+                return False
+        aug = aug_buf[:m * (m + 1)].reshape((m, m + 1))
+        for r in range(m):
+            for c in range(m):
+                aug[r, c] = M[J[r], J[c]]
+            aug[r, m] = -q[J[r]]
+        if not solve_augmented(aug, m, 1):
+            return False
+        for r in range(m):
+            z[J[r]] = aug[r, m]
+    zbig = 0.0
+    for i in range(k):
+        zbig = max(zbig, abs(z[i]))
+    feasible_tol = 1e-9 * max(qscale, zbig)
+    for i in range(k):
+        s = 0.0
+        for j in range(k):
+            s += M[i, j] * z[j]
+        w[i] = q[i] + s
+        if not (z[i] >= -feasible_tol and w[i] >= -feasible_tol):
+            return False
+    for i in range(k):
+        z[i] = z[i] if z[i] > 0.0 else 0.0
+    return True
+
+
+@njit(cache=True)
+def _next_subset(J, m, k):
+    """Advance J (of size m) to the next index set: lexicographic within a size, then the next size.
+    Returns the new size (k + 1 when every set was visited)."""
+    i = m - 1
+    while i >= 0 and J[i] == k - m + i:
+        i -= 1
+    if i >= 0:
+        J[i] += 1
+        for j in range(i + 1, m):
+            J[j] = J[j - 1] + 1
+        return m
+    m += 1
+    for j in range(min(m, k)):
+        J[j] = j
+    return m
+
+
+@njit(cache=True)
+def _done(st, status, outcome):
+    st[S.PHASE] = S.DONE
+    st[S.STATUS] = status
+    st[S.OUTCOME] = outcome
+    return True
+
+
+__all__ = ["run", "sizes", "MAX_K"]

@@ -1,93 +1,212 @@
-"""Lemke's complementary pivoting algorithm with lexicographic degeneracy resolution.
+"""Lemke's complementary pivoting algorithm with lexicographic degeneracy resolution (compiled).
 
 Tableau form of  w - M z - d z0 = q  with covering vector d = 1. The columns of the initial
 identity (the w-columns) hold B^-1 at every pivot, so the lexicographic ratio test compares the
-rows (rhs, B^-1 row) / pivot-column entry; this makes every pivot sequence finite even on
-degenerate problems (a wall-clock ``deadline``, checked at every pivot, bounds the run). Ray
+rows (rhs, B^-1 row) / pivot-column entry (the tableau is stored condensed: see :func:`run`); this
+makes every pivot sequence finite even on degenerate problems (a wall-clock deadline, checked
+between slices of work, bounds the run). Ray
 termination (no positive entry in the entering column) means no solution was found; for
 copositive-plus M it proves that none exists.
+
+:func:`run` is resumable: it works in the caller's workspace and returns when its work budget is spent
+(see :mod:`converters.lcp.engine`), so one compiled loop serves both the one-call solve and a solve that
+checks a time limit between slices.
 """
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
-from .result import FAILED, MAX_ITERATIONS, NO_SOLUTION, SOLVED, finish
+from . import state as S
+from .result import accepts
+
+PIVOT_TOL = 1e-13
 
 
-def lemke(M: np.ndarray, q: np.ndarray, *, tol: float, max_iter: int, pivot_tol: float = 1e-13, deadline=None):
+@njit(cache=True)
+def sizes(k):
+    """Doubles and integers of workspace: the k x (k + 2) condensed tableau, w and the pivot row; the
+    basis, the nonbasic variables, every variable's place, candidate rows and lexicographic scratch."""
+    return k * (k + 2) + k + (k + 2), 6 * k + 2
+
+
+@njit(cache=True)
+def run(M, q, z, fw, iw, st, tol, max_iter, budget, pivot_tol):
+    """Advance Lemke on LCP(q, M) by at most ``budget`` multiply-adds; returns True when finished (status,
+    outcome and iterations in ``st``), False when the budget is spent (z then holds the current iterate).
+
+    The tableau is kept condensed: the k + 1 nonbasic columns and the rhs (half the work of the full
+    k x (2k + 2) tableau per pivot, with the same numbers: a basic variable's column is a unit vector,
+    which the lexicographic test reads without storing it). Variables: w_i = i, z_i = k + i, z0 = 2k."""
     k = q.shape[0]
-    if np.all(q >= 0.0):
-        return finish(M, q, np.zeros(k), status=SOLVED, iterations=0, method="lemke", tol=tol)
-    z0_col, rhs_col = 2 * k, 2 * k + 1
-    tableau = np.zeros((k, 2 * k + 2))
-    tableau[:, :k] = np.eye(k)
-    tableau[:, k:2 * k] = -M
-    tableau[:, z0_col] = -1.0
-    tableau[:, rhs_col] = q
-    basis = np.arange(k)  # variable index basic in each row: w_i = i, z_i = k + i, z0 = 2k
-
-    # First pivot: z0 enters, the lexicographically most negative row (rhs/1, e_i) leaves.
-    row = _lexmin_rows(tableau, np.arange(k), z0_col, k, sign=-1.0)
-    entering = z0_col
-    iterations = 0
+    n = k + 2
+    z0, rhs = 2 * k, k + 1
+    C = fw[:k * n].reshape((k, n))
+    w = fw[k * n:k * n + k]
+    prow = fw[k * n + k:k * n + k + n]
+    basis, nonbasic, place = iw[:k], iw[k:2 * k + 1], iw[2 * k + 1:4 * k + 2]
+    cand, rem = iw[4 * k + 2:5 * k + 2], iw[5 * k + 2:6 * k + 2]
+    have_row = False
+    row = 0
+    if st[S.PHASE] == S.START:
+        st[S.ITER] = 0
+        nonneg = True
+        for i in range(k):
+            if not q[i] >= 0.0:
+                nonneg = False
+        if nonneg:
+            z[:] = 0.0
+            return _done(M, q, z, w, st, tol, S.SOLVED, S.OK)
+        for i in range(k):
+            for j in range(k):
+                C[i, j] = -M[i, j]
+            C[i, k] = -1.0
+            C[i, rhs] = q[i]
+            basis[i] = i            # w_i basic in row i
+            place[i] = -1 - i       # basic: -1 - row; nonbasic: its column
+            nonbasic[i] = k + i     # z_i nonbasic in column i
+            place[k + i] = i
+            cand[i] = i
+        nonbasic[k] = z0
+        place[z0] = k
+        # First pivot: z0 enters, the lexicographically most negative row (rhs/1, e_i) leaves.
+        row = _lexmin_rows(C, place, cand, k, k, k, -1.0, rem)
+        st[S.AUX] = z0
+        st[S.PHASE] = S.RUNNING
+        have_row = True
+    entering = st[S.AUX]
+    iterations = st[S.ITER]
     while True:
+        col = place[entering]
+        if not have_row:
+            scale = 1.0
+            for i in range(k):
+                if abs(C[i, col]) > scale:
+                    scale = abs(C[i, col])
+            nc = 0
+            for i in range(k):
+                if C[i, col] > pivot_tol * scale:
+                    cand[nc] = i
+                    nc += 1
+            if nc == 0:
+                _z_from_basis(C, basis, k, z, False)
+                st[S.ITER] = iterations
+                return _done(M, q, z, w, st, tol, S.NO_SOLUTION, S.RAY)
+            best = np.inf
+            for t in range(nc):
+                ratio = C[cand[t], rhs] / C[cand[t], col]
+                if ratio < best:
+                    best = ratio
+            # z0 leaves as soon as it ties for the minimum ratio: that ends the algorithm.
+            bound = best + 1e-12 * max(1.0, abs(best))
+            row = -1
+            for t in range(nc):
+                c = cand[t]
+                if basis[c] == z0 and C[c, rhs] / C[c, col] <= bound:
+                    row = c
+                    break
+            if row < 0:
+                row = _lexmin_rows(C, place, cand, nc, col, k, 1.0, rem)
+        have_row = False
         leaving = basis[row]
-        _pivot(tableau, row, entering)
+        _pivot(C, row, col, prow)
         basis[row] = entering
+        place[entering] = -1 - row
+        nonbasic[col] = leaving
+        place[leaving] = col
         iterations += 1
-        if leaving == z0_col:
-            return _result(M, q, tableau, basis, iterations, tol, SOLVED)
+        if leaving == z0:
+            _z_from_basis(C, basis, k, z, True)
+            st[S.ITER] = iterations
+            return _done(M, q, z, w, st, tol, S.SOLVED, S.OK)
         entering = leaving + k if leaving < k else leaving - k  # the complement of what left
         if iterations >= max_iter:
-            return _result(M, q, tableau, basis, iterations, tol, MAX_ITERATIONS,
-                           f"lemke reached max_iter ({max_iter}) pivots; raise max_iter")
-        if deadline is not None and deadline.expired():
-            return _result(M, q, tableau, basis, iterations, tol, FAILED,
-                           deadline.message(f"lemke (after {iterations} pivots)"))
-        column = tableau[:, entering]
-        scale = max(1.0, np.abs(column).max())
-        candidates = np.flatnonzero(column > pivot_tol * scale)
-        if candidates.size == 0:
-            return _result(M, q, tableau, basis, iterations, tol, NO_SOLUTION,
-                           "lemke: ray termination (no solution found; for copositive-plus M none exists)")
-        # z0 leaves as soon as it ties for the minimum ratio: that ends the algorithm.
-        ratios = tableau[candidates, rhs_col] / column[candidates]
-        best = ratios.min()
-        z0_rows = candidates[(basis[candidates] == z0_col)
-                             & (ratios <= best + 1e-12 * max(1.0, abs(best)))]
-        row = z0_rows[0] if z0_rows.size else _lexmin_rows(tableau, candidates, entering, k)
+            _z_from_basis(C, basis, k, z, False)
+            st[S.ITER] = iterations
+            return _done(M, q, z, w, st, tol, S.MAX_ITERATIONS, S.MAXIT)
+        budget -= k * n
+        if budget <= 0:    # the caller checks its deadline here, then calls again
+            st[S.AUX] = entering
+            st[S.ITER] = iterations
+            _z_from_basis(C, basis, k, z, False)
+            return False
 
 
-def _lexmin_rows(tableau, rows, col, k, sign=1.0):
-    """Row of ``rows`` whose vector (rhs, B^-1 row) / (sign * entry) is lexicographically smallest."""
-    rhs_col = 2 * k + 1
-    keys = np.column_stack([tableau[rows, rhs_col], tableau[rows, :k]]) / (sign * tableau[rows, col])[:, None]
-    remaining = np.arange(rows.size)
-    for j in range(keys.shape[1]):
-        values = keys[remaining, j]
-        low = values.min()
-        remaining = remaining[values <= low + 1e-11 * max(1.0, abs(low))]
-        if remaining.size == 1:
+@njit(cache=True)
+def _done(M, q, z, w, st, tol, status, outcome):
+    """Record the end; a claimed solution must pass the check on this (normalised) problem."""
+    if status == S.SOLVED and not accepts(M, q, z, w, tol):
+        status, outcome = S.FAILED, S.CHECK
+    st[S.PHASE] = S.DONE
+    st[S.STATUS] = status
+    st[S.OUTCOME] = outcome
+    return True
+
+
+@njit(cache=True)
+def _inverse_entry(C, place, r, j):
+    """Entry (r, j) of B^-1: the column of w_j, a unit vector while w_j is basic."""
+    p = place[j]
+    if p >= 0:
+        return C[r, p]
+    return 1.0 if -1 - p == r else 0.0
+
+
+@njit(cache=True)
+def _lexmin_rows(C, place, rows, nrows, col, k, sign, rem):
+    """Row of rows[:nrows] whose vector (rhs, B^-1 row) / (sign * entry) is lexicographically smallest."""
+    rhs = k + 1
+    for t in range(nrows):
+        rem[t] = rows[t]
+    n = nrows
+    for j in range(k + 1):
+        low = np.inf
+        for t in range(n):
+            r = rem[t]
+            v = (C[r, rhs] if j == 0 else _inverse_entry(C, place, r, j - 1)) / (sign * C[r, col])
+            if v < low:
+                low = v
+        bound = low + 1e-11 * max(1.0, abs(low))
+        m = 0
+        for t in range(n):
+            r = rem[t]
+            v = (C[r, rhs] if j == 0 else _inverse_entry(C, place, r, j - 1)) / (sign * C[r, col])
+            if v <= bound:
+                rem[m] = r
+                m += 1
+        n = m
+        if n == 1:
             break
-    return rows[remaining[0]]
+    return rem[0]
 
 
-def _pivot(tableau, row, col):
-    tableau[row] /= tableau[row, col]
-    factors = tableau[:, col].copy()
-    factors[row] = 0.0
-    tableau -= np.outer(factors, tableau[row])
+@njit(cache=True)
+def _pivot(C, row, col, prow):
+    """Exchange the basic variable of ``row`` with the nonbasic one of ``col``: the leaving variable takes
+    the column, which becomes B^-1's new column (the full tableau's numbers, operation for operation)."""
+    n = C.shape[1]
+    p = C[row, col]
+    for j in range(n):
+        C[row, j] = C[row, j] / p
+    C[row, col] = 1.0 / p
+    for j in range(n):
+        prow[j] = C[row, j]
+    for i in range(C.shape[0]):
+        f = C[i, col]
+        if i != row and f != 0.0:
+            C[i, col] = 0.0
+            for j in range(n):
+                C[i, j] -= f * prow[j]
 
 
-def _result(M, q, tableau, basis, iterations, tol, status, message=""):
-    k = q.shape[0]
-    z = np.zeros(k)
-    values = tableau[:, 2 * k + 1]
-    for row, var in enumerate(basis):
+@njit(cache=True)
+def _z_from_basis(C, basis, k, z, clip):
+    z[:] = 0.0
+    for r in range(k):
+        var = basis[r]
         if k <= var < 2 * k:
-            z[var - k] = values[row]
-    z = np.maximum(z, 0.0) if status == SOLVED else z
-    return finish(M, q, z, status=status, iterations=iterations, method="lemke", tol=tol, message=message)
+            v = C[r, k + 1]
+            z[var - k] = (v if v > 0.0 else 0.0) if clip else v
 
 
-__all__ = ["lemke", "FAILED"]
+__all__ = ["run", "sizes"]

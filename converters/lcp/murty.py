@@ -1,44 +1,95 @@
-"""Murty's least-index principal pivoting method (Bard-type), finite for P-matrices.
+"""Murty's least-index principal pivoting method (Bard-type), finite for P-matrices (compiled).
 
 The basis is the set J of indices with z basic. Each iteration solves M_JJ z_J = -q_J, forms
 w = q + M z and flips the least index whose basic variable is negative. On P-matrices this
 terminates in at most 2^k pivots (Murty's exponential examples reach that bound), so a wall-clock
-``deadline`` (checked at every pivot) bounds the run.
+deadline (checked between slices of work) bounds the run. :func:`run` is resumable (see
+:mod:`converters.lcp.lemke`).
 """
 from __future__ import annotations
 
-import numpy as np
+from numba import njit
 
-from .result import FAILED, MAX_ITERATIONS, SOLVED, finish
+from . import state as S
+from .kernels import solve_augmented
+from .result import accepts
 
 
-def murty(M: np.ndarray, q: np.ndarray, *, tol: float, max_iter: int, deadline=None):
+@njit(cache=True)
+def sizes(k):
+    """Doubles and integers of workspace: the augmented M_JJ | -q_J and w; the basis flags and J."""
+    return k * (k + 1) + k, 2 * k
+
+
+@njit(cache=True)
+def run(M, q, z, fw, iw, st, tol, max_iter, budget):
+    """Advance Murty by at most ``budget`` multiply-adds; True when finished (see ``lemke.run``)."""
     k = q.shape[0]
-    in_basis = np.zeros(k, dtype=bool)
-    z = np.zeros(k)
-    scale = 1e-12 * (1.0 + np.abs(q).max())
-    for iteration in range(max_iter + 1):
-        if deadline is not None and deadline.expired():
-            return finish(M, q, z, status=FAILED, iterations=iteration, method="murty", tol=tol,
-                          message=deadline.message(f"murty (after {iteration} pivots)"))
-        z = np.zeros(k)
-        if in_basis.any():
-            sub = M[np.ix_(in_basis, in_basis)]
-            try:
-                z[in_basis] = np.linalg.solve(sub, -q[in_basis])
-            except np.linalg.LinAlgError:
-                return finish(M, q, z, status=FAILED, iterations=iteration, method="murty", tol=tol,
-                              message="murty: singular principal submatrix (M is not a P-matrix); "
-                                      "try method='lemke'")
-        w = q + M @ z
-        basic_values = np.where(in_basis, z, w)
-        negative = np.flatnonzero(basic_values < -scale)
-        if negative.size == 0:
-            return finish(M, q, np.maximum(z, 0.0), status=SOLVED, iterations=iteration,
-                          method="murty", tol=tol)
+    aug = fw[:k * (k + 1)].reshape((k, k + 1))
+    w = fw[k * (k + 1):k * (k + 1) + k]
+    in_basis, idx = iw[:k], iw[k:2 * k]
+    if st[S.PHASE] == S.START:
+        in_basis[:] = 0
+        z[:] = 0.0
+        st[S.ITER] = 0
+        st[S.PHASE] = S.RUNNING
+    qbig = 0.0
+    for i in range(k):
+        qbig = max(qbig, abs(q[i]))
+    scale = 1e-12 * (1.0 + qbig)
+    iteration = st[S.ITER]
+    while iteration <= max_iter:
+        z[:] = 0.0
+        m = 0
+        for i in range(k):
+            if in_basis[i]:
+                idx[m] = i
+                m += 1
+        if m > 0:
+            for r in range(m):
+                for c in range(m):
+                    aug[r, c] = M[idx[r], idx[c]]
+                aug[r, m] = -q[idx[r]]
+            if not solve_augmented(aug, m, 1):
+                z[:] = 0.0
+                st[S.ITER] = iteration
+                return _done(st, S.FAILED, S.SINGULAR)
+            for r in range(m):
+                z[idx[r]] = aug[r, m]
+        negative = -1
+        for i in range(k):
+            s = 0.0
+            for j in range(k):
+                s += M[i, j] * z[j]
+            w[i] = q[i] + s
+            basic = z[i] if in_basis[i] else w[i]
+            if negative < 0 and basic < -scale:
+                negative = i
+        if negative < 0:
+            for i in range(k):
+                z[i] = z[i] if z[i] > 0.0 else 0.0
+            st[S.ITER] = iteration
+            if not accepts(M, q, z, w, tol):
+                return _done(st, S.FAILED, S.CHECK)
+            return _done(st, S.SOLVED, S.OK)
         if iteration == max_iter:
             break
-        in_basis[negative[0]] = ~in_basis[negative[0]]
-    return finish(M, q, z, status=MAX_ITERATIONS, iterations=max_iter, method="murty", tol=tol,
-                  message=f"murty reached max_iter ({max_iter}) pivots (it may cycle if M is not a "
-                          "P-matrix); try method='lemke'")
+        in_basis[negative] = 1 - in_basis[negative]
+        iteration += 1
+        budget -= m * m * m // 3 + k * k + k
+        if budget <= 0:    # the caller checks its deadline here, then calls again
+            st[S.ITER] = iteration
+            return False
+    st[S.ITER] = max_iter
+    return _done(st, S.MAX_ITERATIONS, S.MAXIT)
+
+
+@njit(cache=True)
+def _done(st, status, outcome):
+    st[S.PHASE] = S.DONE
+    st[S.STATUS] = status
+    st[S.OUTCOME] = outcome
+    return True
+
+
+__all__ = ["run", "sizes"]

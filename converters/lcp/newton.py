@@ -1,68 +1,147 @@
-"""Semismooth Newton method on the Fischer-Burmeister reformulation, with an Armijo line search.
+"""Semismooth Newton method on the Fischer-Burmeister reformulation, with an Armijo line search (compiled).
 
 Phi_i(z) = sqrt(z_i^2 + w_i^2) - z_i - w_i, w = q + M z; Phi(z) = 0 exactly at LCP solutions.
 The merit psi = ||Phi||^2 / 2 is continuously differentiable; when the Newton direction is not a
 good descent direction the method falls back to -grad psi (De Luca, Facchinei and Kanzow 1996).
 Converges globally for P-matrices (every stationary point of psi is then a solution). A wall-clock
-``deadline`` is checked at every step.
+deadline is checked between slices of work. :func:`run` is resumable (see :mod:`converters.lcp.lemke`).
 """
 from __future__ import annotations
 
-import numpy as np
+import math
 
-from .result import FAILED, MAX_ITERATIONS, SOLVED, accepts, finish
+from numba import njit
+
+from . import state as S
+from .kernels import solve_augmented
+from .result import accepts_scaled, max_abs, max_abs_matrix
+
+#: Defaults of the options rho, p (descent test), beta (step reduction) and sigma (Armijo constant).
+RHO, P, BETA, SIGMA = 1e-10, 2.1, 0.5, 1e-4
 
 
-def newton_fb(M: np.ndarray, q: np.ndarray, *, tol: float, max_iter: int,
-              rho: float = 1e-10, p: float = 2.1, beta: float = 0.5, sigma: float = 1e-4, deadline=None):
+@njit(cache=True)
+def sizes(k):
+    """Doubles of workspace: the Jacobian, its augmented copy, and 7 vectors."""
+    return k * k + k * (k + 1) + 7 * k, 0
+
+
+@njit(cache=True)
+def run(M, q, z, fw, iw, st, tol, max_iter, budget, rho, p, beta, sigma):
+    """Advance Newton by at most ``budget`` multiply-adds; True when finished (see ``lemke.run``).
+    The iterate x lives in the workspace; z holds max(x, 0)."""
     k = q.shape[0]
-    z = np.zeros(k)
-    eye = np.eye(k)
-    for iteration in range(1, max_iter + 1):
-        if deadline is not None and deadline.expired():
-            return finish(M, q, np.maximum(z, 0.0), status=FAILED, iterations=iteration - 1, method="newton",
-                          tol=tol, message=deadline.message(f"newton (after {iteration - 1} steps)"))
-        w = q + M @ z
-        phi, jac = _fb_and_jacobian(z, w, M, eye)
-        psi = 0.5 * phi @ phi
-        grad = jac.T @ phi
-        try:
-            direction = np.linalg.solve(jac, -phi)
-            if grad @ direction > -rho * np.linalg.norm(direction) ** p:
-                direction = -grad
-        except np.linalg.LinAlgError:
-            direction = -grad
+    o = 0
+    jac = fw[o:o + k * k].reshape((k, k))
+    o += k * k
+    aug = fw[o:o + k * (k + 1)].reshape((k, k + 1))
+    o += k * (k + 1)
+    x, w, phi, grad, direction, trial, phi_t = (fw[o:o + k], fw[o + k:o + 2 * k], fw[o + 2 * k:o + 3 * k],
+                                                fw[o + 3 * k:o + 4 * k], fw[o + 4 * k:o + 5 * k],
+                                                fw[o + 5 * k:o + 6 * k], fw[o + 6 * k:o + 7 * k])
+    if st[S.PHASE] == S.START:
+        x[:] = 0.0
+        st[S.ITER] = 0
+        st[S.PHASE] = S.RUNNING
+    q_big, m_big = max_abs(q), max_abs_matrix(M)
+    iteration = st[S.ITER] + 1
+    while iteration <= max_iter:
+        _fb_and_jacobian(M, q, x, w, phi, jac)
+        psi = 0.5 * _dot(phi, phi)
+        for j in range(k):
+            s = 0.0
+            for i in range(k):
+                s += jac[i, j] * phi[i]
+            grad[j] = s
+        aug[:, :k] = jac
+        for i in range(k):
+            aug[i, k] = -phi[i]
+        if solve_augmented(aug, k, 1):
+            for i in range(k):
+                direction[i] = aug[i, k]
+            if _dot(grad, direction) > -rho * math.sqrt(_dot(direction, direction)) ** p:
+                for i in range(k):
+                    direction[i] = -grad[i]
+        else:
+            for i in range(k):
+                direction[i] = -grad[i]
+        slope = _dot(grad, direction)
         step = 1.0
+        accepted = False
         while step > 1e-14:
-            trial = z + step * direction
-            phi_t = _fb(trial, q + M @ trial)
-            if 0.5 * phi_t @ phi_t <= psi + sigma * step * (grad @ direction):
+            for i in range(k):
+                trial[i] = x[i] + step * direction[i]
+            _fb(M, q, trial, w, phi_t)
+            if 0.5 * _dot(phi_t, phi_t) <= psi + sigma * step * slope:
+                accepted = True
                 break
             step *= beta
+        if not accepted:
+            z[:] = x       # the last iterate as it is
+            st[S.ITER] = iteration
+            return _done(st, S.FAILED, S.LINESEARCH)
+        x[:] = trial
+        _clip(x, z)
+        if accepts_scaled(M, q, q_big, m_big, z, w, tol):
+            st[S.ITER] = iteration
+            return _done(st, S.SOLVED, S.OK)
+        budget -= k * k * k // 3 + 6 * k * k
+        if budget <= 0 and iteration < max_iter:    # the caller checks its deadline here, then calls again
+            st[S.ITER] = iteration
+            return False
+        iteration += 1
+    _clip(x, z)
+    st[S.ITER] = max_iter
+    return _done(st, S.MAX_ITERATIONS, S.MAXIT)
+
+
+@njit(cache=True)
+def _dot(a, b):
+    s = 0.0
+    for i in range(a.shape[0]):
+        s += a[i] * b[i]
+    return s
+
+
+@njit(cache=True)
+def _clip(x, z):
+    for i in range(x.shape[0]):
+        z[i] = x[i] if x[i] > 0.0 else 0.0
+
+
+@njit(cache=True)
+def _fb(M, q, x, w, phi):
+    k = q.shape[0]
+    for i in range(k):
+        s = 0.0
+        for j in range(k):
+            s += M[i, j] * x[j]
+        w[i] = q[i] + s
+        phi[i] = math.sqrt(x[i] * x[i] + w[i] * w[i]) - x[i] - w[i]
+
+
+@njit(cache=True)
+def _fb_and_jacobian(M, q, x, w, phi, jac):
+    """Phi and a generalized Jacobian element diag(da) + diag(db) M; at (0, 0) the limit along (1, 1)."""
+    k = q.shape[0]
+    _fb(M, q, x, w, phi)
+    for i in range(k):
+        norm = math.sqrt(x[i] * x[i] + w[i] * w[i])
+        if norm > 1e-300:
+            da, db = x[i] / norm - 1.0, w[i] / norm - 1.0
         else:
-            return finish(M, q, z, status=FAILED, iterations=iteration, method="newton", tol=tol,
-                          message="newton: line search failed (stationary point of the merit "
-                                  "function; M is probably not a P-matrix); try method='lemke'")
-        z = trial
-        if accepts(M, q, np.maximum(z, 0.0), tol):
-            return finish(M, q, np.maximum(z, 0.0), status=SOLVED, iterations=iteration,
-                          method="newton", tol=tol)
-    return finish(M, q, np.maximum(z, 0.0), status=MAX_ITERATIONS, iterations=max_iter, method="newton",
-                  tol=tol, message=f"newton reached max_iter ({max_iter}) steps; try method='lemke'")
+            da = db = 1.0 / math.sqrt(2.0) - 1.0
+        for j in range(k):
+            jac[i, j] = db * M[i, j]
+        jac[i, i] += da
 
 
-def _fb(z, w):
-    return np.sqrt(z * z + w * w) - z - w
+@njit(cache=True)
+def _done(st, status, outcome):
+    st[S.PHASE] = S.DONE
+    st[S.STATUS] = status
+    st[S.OUTCOME] = outcome
+    return True
 
 
-def _fb_and_jacobian(z, w, M, eye):
-    norm = np.sqrt(z * z + w * w)
-    phi = norm - z - w
-    # A generalized Jacobian element; at (0, 0) take the limit along direction (1, 1).
-    safe = norm > 1e-300
-    da = np.where(safe, z / np.where(safe, norm, 1.0), 1.0 / np.sqrt(2.0)) - 1.0
-    db = np.where(safe, w / np.where(safe, norm, 1.0), 1.0 / np.sqrt(2.0)) - 1.0
-    return phi, da[:, None] * eye + db[:, None] * M
-
-
-__all__ = ["newton_fb", "FAILED"]
+__all__ = ["run", "sizes"]

@@ -1,43 +1,88 @@
-"""Projected Gauss-Seidel (with optional over-relaxation omega in (0, 2)).
+"""Projected Gauss-Seidel (with optional over-relaxation omega in (0, 2)) (compiled).
 
 z_i <- max(0, z_i - omega * w_i / M_ii), sweeping i = 1..k. Converges for symmetric positive
-definite M; needs M_ii > 0. A wall-clock ``deadline`` is checked at every sweep.
+definite M; needs M_ii > 0. A wall-clock deadline is checked between slices of work;
+divergence (a non-finite z) is detected and reported. :func:`run` is resumable (see
+:mod:`converters.lcp.lemke`).
 """
 from __future__ import annotations
 
-import numpy as np
+import math
 
-from .result import FAILED, MAX_ITERATIONS, SOLVED, accepts, finish
+from numba import njit
+
+from . import state as S
+from .result import check_scaled, error, max_abs, max_abs_matrix, residual
 
 
-def pgs(M: np.ndarray, q: np.ndarray, *, tol: float, max_iter: int, omega: float = 1.0, deadline=None):
+@njit(cache=True)
+def sizes(k):
+    """Doubles and integers of workspace: w."""
+    return k, 0
+
+
+@njit(cache=True)
+def run(M, q, z, fw, iw, st, sf, tol, max_iter, budget, omega, probe):
+    """Advance PGS by at most ``budget`` multiply-adds; True when finished (see ``lemke.run``).
+
+    With ``probe`` (auto's use) it also stops, with outcome SLOW, as soon as the residual does not shrink or
+    its rate of decrease projects more than max_iter sweeps to reach tol."""
     k = q.shape[0]
-    diag = np.diag(M).copy()
-    if np.any(diag <= 0.0):
-        i = int(np.flatnonzero(diag <= 0.0)[0])
-        return finish(M, q, np.zeros(k), status=FAILED, iterations=0, method="pgs", tol=tol,
-                      message=f"pgs needs a positive diagonal; M[{i},{i}] = {diag[i]:g}; try method='lemke'")
-    with np.errstate(over="ignore", invalid="ignore"):  # divergence is detected and reported below
-        return _sweeps(M, q, diag, tol, max_iter, omega, deadline)
-
-
-def _sweeps(M, q, diag, tol, max_iter, omega, deadline):
-    k = q.shape[0]
-    z = np.zeros(k)
-    rows = [M[i] for i in range(k)]
-    for sweep in range(1, max_iter + 1):
-        if deadline is not None and deadline.expired():
-            return finish(M, q, z, status=FAILED, iterations=sweep - 1, method="pgs", tol=tol,
-                          message=deadline.message(f"pgs (after {sweep - 1} sweeps)"))
+    w = fw[:k]
+    if st[S.PHASE] == S.START:
+        z[:] = 0.0
+        st[S.ITER] = 0
         for i in range(k):
-            wi = q[i] + rows[i] @ z
-            z[i] = max(0.0, z[i] - omega * wi / diag[i])
-        if not np.all(np.isfinite(z)):
-            return finish(M, q, np.zeros(k), status=FAILED, iterations=sweep, method="pgs", tol=tol,
-                          message=f"pgs diverged at sweep {sweep} (M is not symmetric positive definite); "
-                                  "try method='lemke'")
-        if accepts(M, q, z, tol):
-            return finish(M, q, z, status=SOLVED, iterations=sweep, method="pgs", tol=tol)
-    return finish(M, q, z, status=MAX_ITERATIONS, iterations=max_iter, method="pgs", tol=tol,
-                  message=f"pgs reached max_iter ({max_iter}) sweeps (converges only for symmetric "
-                          "positive definite M); try method='lemke'")
+            if M[i, i] <= 0.0:
+                st[S.INFO] = i
+                sf[S.INFO_X] = M[i, i]
+                return _done(st, S.FAILED, S.DIAG)
+        sf[S.PREVIOUS_ERR] = error(q, z, q)     # err of z = 0 (w = q)
+        st[S.PHASE] = S.RUNNING
+    q_big, m_big = max_abs(q), max_abs_matrix(M)
+    sweep = st[S.ITER] + 1
+    while sweep <= max_iter:
+        finite = True
+        for i in range(k):
+            s = 0.0
+            for j in range(k):
+                s += M[i, j] * z[j]
+            v = z[i] - omega * (q[i] + s) / M[i, i]
+            z[i] = v if v > 0.0 else 0.0      # NaN -> 0, as Python's max(0.0, nan); inf stays
+            if math.isinf(z[i]):
+                finite = False
+        if not finite:
+            z[:] = 0.0
+            st[S.ITER] = sweep
+            st[S.INFO] = sweep
+            return _done(st, S.FAILED, S.DIVERGED)
+        err = residual(M, q, z, w)
+        if check_scaled(q_big, m_big, z, w, err, tol)[0] == 0:
+            st[S.ITER] = sweep
+            return _done(st, S.SOLVED, S.OK)
+        if probe:
+            previous = sf[S.PREVIOUS_ERR]
+            sf[S.PREVIOUS_ERR] = err
+            if err > tol:
+                rate = err / previous
+                if not rate < 1.0 or sweep + math.log(tol / err) / math.log(rate) > max_iter:
+                    st[S.ITER] = sweep
+                    return _done(st, S.MAX_ITERATIONS, S.SLOW)
+        budget -= 2 * k * k + k
+        if budget <= 0 and sweep < max_iter:    # the caller checks its deadline here, then calls again
+            st[S.ITER] = sweep
+            return False
+        sweep += 1
+    st[S.ITER] = max_iter
+    return _done(st, S.MAX_ITERATIONS, S.MAXIT)
+
+
+@njit(cache=True)
+def _done(st, status, outcome):
+    st[S.PHASE] = S.DONE
+    st[S.STATUS] = status
+    st[S.OUTCOME] = outcome
+    return True
+
+
+__all__ = ["run", "sizes"]

@@ -1,17 +1,26 @@
 """The result of an LCP solve, the accuracy measure every solver is judged by, and the check that no
-wrong answer is ever called solved."""
+wrong answer is ever called solved.
+
+The measure (:func:`error`) and the check (:func:`check`) are compiled (numba, cached on disk): every method,
+the compiled solve path of :func:`converters.lcp.solve_lcp` and :func:`finish` call these same two
+functions; :func:`check_message` turns the check's code into the sentence a user reads.
+"""
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from numba import njit
 
 SOLVED = "solved"
 NO_SOLUTION = "no_solution"
 MAX_ITERATIONS = "max_iterations"
 FAILED = "failed"
-STATUSES = (SOLVED, NO_SOLUTION, MAX_ITERATIONS, FAILED)
+STATUSES = (SOLVED, NO_SOLUTION, MAX_ITERATIONS, FAILED)   # the compiled code's status numbers index this tuple
+
+#: Codes returned by :func:`check` (0: the pair solves the LCP).
+CHECK_OK, CHECK_NOT_FINITE, CHECK_W_NEGATIVE, CHECK_Z_NEGATIVE, CHECK_NOT_COMPLEMENTARY, CHECK_RESIDUAL = range(6)
 
 
 def scaled_norm(v: np.ndarray) -> float:
@@ -24,34 +33,182 @@ def scaled_norm(v: np.ndarray) -> float:
     return big * math.sqrt(float(u @ u))
 
 
-def lcp_error(M: np.ndarray, q: np.ndarray, z: np.ndarray) -> float:
-    """Siconos' accuracy measure err = ||z - max(0, z - w)||_2 / ||q||_2, w = q + M z.
+@njit(cache=True)
+def residual(M, q, z, w):
+    """w = q + M z (each sum_j M_ij z_j accumulated in index order, then q_i added); returns err of (z, w)."""
+    k = q.shape[0]
+    for i in range(k):
+        s = 0.0
+        for j in range(k):
+            s += M[i, j] * z[j]
+        w[i] = q[i] + s
+    return error(q, z, w)
+
+
+@njit(cache=True)
+def error(q, z, w):
+    """Siconos' accuracy measure err = ||z - max(0, z - w)||_2 / ||q||_2 of the pair (z, w).
 
     z - max(0, z - w) is evaluated as min(z, w) (the same number, without the cancellation of z - (z - w)),
     and both norms on vectors divided by their largest magnitude first, so that q = 1e-200 or 1e200
-    neither underflows nor overflows. When q = 0 (then z = 0 is the answer) err is the absolute
-    ||min(z, w)||.
+    neither underflows nor overflows. When q = 0 (then z = 0 is the answer) err is the absolute ||min(z, w)||.
+    A NaN in z or w gives NaN.
     """
-    z = np.asarray(z, dtype=float)
-    with np.errstate(all="ignore"):
-        return _error(q, z, q + M @ z)
-
-
-def _error(q, z, w) -> float:
-    """err of (z, w) (inside an errstate that ignores floating-point warnings)."""
-    r = np.minimum(z, w)
-    rbig = float(np.abs(r).max())
-    if not rbig > 0.0:
-        return 0.0 if rbig == 0.0 else float("nan")
-    if rbig == math.inf:
-        return math.inf
-    qbig = float(np.abs(q).max())
-    r = r / rbig
-    rnorm = math.sqrt(float(r @ r))
+    k = q.shape[0]
+    rbig = 0.0
+    for i in range(k):
+        a, b = z[i], w[i]
+        if a != a or b != b:
+            return np.nan
+        r = abs(a if a < b else b)
+        if r > rbig:
+            rbig = r
+    if rbig == 0.0:
+        return 0.0
+    if rbig == np.inf:
+        return np.inf
+    rsum = 0.0
+    for i in range(k):
+        a, b = z[i], w[i]
+        r = (a if a < b else b) / rbig
+        rsum += r * r
+    qbig = 0.0
+    for i in range(k):
+        if abs(q[i]) > qbig:
+            qbig = abs(q[i])
     if qbig == 0.0:
-        return rbig * rnorm
-    u = q / qbig
-    return (rbig / qbig) * (rnorm / math.sqrt(float(u @ u)))
+        return rbig * math.sqrt(rsum)
+    usum = 0.0
+    for i in range(k):
+        u = q[i] / qbig
+        usum += u * u
+    return (rbig / qbig) * (math.sqrt(rsum) / math.sqrt(usum))
+
+
+@njit(cache=True)
+def check(M, q, z, w, err, tol):
+    """(code, i, a, b, c, d): code 0 when (z, w) solves LCP(q, M) to ``tol``, else which condition fails
+    (``CHECK_*``) with the index and the numbers :func:`check_message` prints.
+
+    Scale-relative: z is judged against max(max|z|, max|q| / max|M|) (z's own unit: rounding noise in an
+    all-but-zero z is not "the scale"), w against max(max|q|, max|M| max|z|); a huge M times a huge z may
+    overflow that scale to inf, and then w is negligible against it, which is what the division says."""
+    return check_scaled(max_abs(q), max_abs_matrix(M), z, w, err, tol)
+
+
+@njit(cache=True)
+def max_abs(v):
+    big = 0.0
+    for i in range(v.shape[0]):
+        if abs(v[i]) > big:
+            big = abs(v[i])
+    return big
+
+
+@njit(cache=True)
+def max_abs_matrix(M):
+    big = 0.0
+    for i in range(M.shape[0]):
+        for j in range(M.shape[1]):
+            if abs(M[i, j]) > big:
+                big = abs(M[i, j])
+    return big
+
+
+@njit(cache=True)
+def check_scaled(q_big, m_big, z, w, err, tol):
+    """:func:`check` with q_big = max|q| and m_big = max|M| known (the iterative methods check every sweep)."""
+    k = z.shape[0]
+    z_scale = 0.0
+    w_scale = 0.0
+    for i in range(k):
+        a, b = abs(z[i]), abs(w[i])
+        if not (a <= 1.7976931348623157e308 and b <= 1.7976931348623157e308):
+            return CHECK_NOT_FINITE, 0, 0.0, 0.0, 0.0, 0.0
+        if a > z_scale:
+            z_scale = a
+        if b > w_scale:
+            w_scale = b
+    w_scale = m_big * z_scale
+    if q_big >= w_scale:
+        w_scale = q_big
+    if m_big > 0.0 and q_big / m_big > z_scale:
+        z_scale = q_big / m_big
+    zdiv = z_scale if z_scale > 0.0 else 1.0    # z_scale = 0: z = 0 exactly
+    wdiv = w_scale if w_scale > 0.0 else 1.0    # w_scale = 0: w = q + M z = 0 exactly
+    i = 0
+    for j in range(1, k):
+        if w[j] / wdiv < w[i] / wdiv:
+            i = j
+    if not w[i] / wdiv >= -tol:
+        return CHECK_W_NEGATIVE, i, w[i], w[i] / wdiv, w_scale, 0.0
+    i = 0
+    for j in range(1, k):
+        if z[j] / zdiv < z[i] / zdiv:
+            i = j
+    if not z[i] / zdiv >= -tol:
+        return CHECK_Z_NEGATIVE, i, z[i], z[i] / zdiv, z_scale, 0.0
+    i = 0
+    gap_i = min(z[0] / zdiv, w[0] / wdiv)
+    for j in range(1, k):
+        gap = min(z[j] / zdiv, w[j] / wdiv)
+        if gap > gap_i:
+            i, gap_i = j, gap
+    if not gap_i <= tol:
+        return CHECK_NOT_COMPLEMENTARY, i, z[i], w[i], z[i] / zdiv, w[i] / wdiv
+    if not err <= tol:
+        return CHECK_RESIDUAL, 0, err, 0.0, 0.0, 0.0
+    return CHECK_OK, 0, 0.0, 0.0, 0.0, 0.0
+
+
+@njit(cache=True)
+def accepts(M, q, z, w, tol):
+    """True when (z, q + M z) passes :func:`check` (the stopping test of the iterative methods); fills w."""
+    err = residual(M, q, z, w)
+    return check(M, q, z, w, err, tol)[0] == CHECK_OK
+
+
+@njit(cache=True)
+def accepts_scaled(M, q, q_big, m_big, z, w, tol):
+    """:func:`accepts` with max|q| and max|M| known."""
+    err = residual(M, q, z, w)
+    return check_scaled(q_big, m_big, z, w, err, tol)[0] == CHECK_OK
+
+
+def check_message(code, i, a, b, c, d, tol) -> str:
+    """The sentence for a :func:`check` code ('' for CHECK_OK)."""
+    if code == CHECK_OK:
+        return ""
+    if code == CHECK_NOT_FINITE:
+        return "the claimed solution is not finite (z or w = q + M z overflows); the problem is too badly scaled"
+    if code == CHECK_W_NEGATIVE:
+        return (f"the claimed solution is infeasible: w[{i}] = {a:.3g} < 0 ({b:.3g} relative to the "
+                f"problem's scale max(|q|, |M| |z|) = {c:.3g}; allowed -tol = {-tol:.3g})")
+    if code == CHECK_Z_NEGATIVE:
+        return (f"the claimed solution is infeasible: z[{i}] = {a:.3g} < 0 ({b:.3g} relative to "
+                f"max(|z|, |q| / |M|) = {c:.3g}; allowed -tol = {-tol:.3g})")
+    if code == CHECK_NOT_COMPLEMENTARY:
+        return (f"the claimed solution is not complementary: z[{i}] = {a:.3g} and w[{i}] = {b:.3g} are "
+                f"both positive (relative {c:.3g} and {d:.3g}; allowed tol = {tol:.3g})")
+    return (f"final residual err = {a:.3g} exceeds tol = {tol:.3g} "
+            f"(ill-conditioned principal submatrix?); try method='lemke' or 'enum'")
+
+
+def _floats(M, q, z):
+    return (np.ascontiguousarray(M, dtype=float), np.ascontiguousarray(q, dtype=float),
+            np.ascontiguousarray(z, dtype=float))
+
+
+def lcp_error(M: np.ndarray, q: np.ndarray, z: np.ndarray) -> float:
+    """Siconos' accuracy measure err = ||z - max(0, z - w)||_2 / ||q||_2, w = q + M z (see :func:`error`)."""
+    M, q, z = _floats(M, q, z)
+    return float(residual(M, q, z, np.empty_like(q)))
+
+
+def check_solution(M, q, z, w, err, tol) -> str:
+    """'' when (z, w) solves LCP(q, M) to ``tol`` (scale-relative, see :func:`check`), else which condition fails."""
+    M, q, z = _floats(M, q, z)
+    return check_message(*check(M, q, z, np.ascontiguousarray(w, dtype=float), float(err), float(tol)), tol)
 
 
 @dataclass(frozen=True)
@@ -68,8 +225,10 @@ class LCPResult:
     err : float
         ||z - max(0, z - w)|| / ||q|| of the returned z.
     iterations : int
-        Pivots (pivoting methods), sweeps (PGS) or Newton steps.
+        Pivots (pivoting methods), sweeps (PGS), Newton steps or visited bases (enumeration); for
+        ``auto``, those of the method that produced the answer.
     method : str
+        The method that produced the answer; ``auto:<method>`` when ``auto`` chose it.
     message : str
         Why the solve did not succeed, with the remedy, or empty.
     solutions : list of ndarray
@@ -99,59 +258,35 @@ class LCPResult:
         return out
 
 
+_new = object.__new__
+
+
+def make_result(z, w, status, err, iterations, method, message="", solutions=None) -> LCPResult:
+    """An LCPResult built without the frozen dataclass's per-field ``object.__setattr__`` (a quarter of the
+    cost of a small solve); the same object as ``LCPResult(...)``."""
+    result = _new(LCPResult)
+    d = result.__dict__
+    d["z"] = z
+    d["w"] = w
+    d["status"] = status
+    d["err"] = err
+    d["iterations"] = iterations
+    d["method"] = method
+    d["message"] = message
+    d["solutions"] = [] if solutions is None else solutions
+    return result
+
+
 def finish(M, q, z, *, status, iterations, method, tol, message="", solutions=()):
     """Build the result, checking a claimed solution: it becomes ``failed`` (the message says which condition
     failed) unless z >= 0, w = q + M z >= 0 and min(z_i, w_i) = 0 hold to ``tol`` relative to the problem's
     own magnitudes (z against max(max|z|, max|q| / max|M|), w against max(max|q|, max|M| max|z|)) and
     err <= tol."""
-    z = np.asarray(z, dtype=float)
-    with np.errstate(all="ignore"):
-        w = q + M @ z
-        err = _error(q, z, w)
-        if status == SOLVED:
-            problem = check_solution(M, q, z, w, err, tol)
-            if problem:
-                status, message = FAILED, f"{method}: {problem}"
-    return LCPResult(z=z, w=w, status=status, err=err, iterations=iterations, method=method,
-                     message=message, solutions=list(solutions))
-
-
-def accepts(M, q, z, tol) -> bool:
-    """True when :func:`finish` would accept z as a solution (the stopping test of the iterative methods)."""
-    with np.errstate(all="ignore"):
-        w = q + M @ z
-        return not check_solution(M, q, z, w, _error(q, z, w), tol)
-
-
-def check_solution(M, q, z, w, err, tol) -> str:
-    """'' when (z, w) solves LCP(q, M) to ``tol`` (scale-relative, see :func:`finish`), else which condition fails.
-
-    Call it inside ``np.errstate(all="ignore")``: a huge M times a huge z may overflow the scale to inf, and then
-    w is negligible against it, which is what the division says."""
-    z_scale = float(np.abs(z).max())
-    w_scale = float(np.abs(w).max())
-    if not (math.isfinite(z_scale) and math.isfinite(w_scale)):
-        return "the claimed solution is not finite (z or w = q + M z overflows); the problem is too badly scaled"
-    q_big, m_big = float(np.abs(q).max()), float(np.abs(M).max())
-    w_scale = max(q_big, m_big * z_scale)
-    if m_big > 0.0:   # z's own unit is max|q| / max|M|: rounding noise in an all-but-zero z is not "the scale"
-        z_scale = max(z_scale, q_big / m_big)
-    zn = z / z_scale if z_scale > 0.0 else z    # z_scale = 0: z = 0 exactly
-    wn = w / w_scale if w_scale > 0.0 else w    # w_scale = 0: w = q + M z = 0 exactly
-    i = int(wn.argmin())
-    if not wn[i] >= -tol:
-        return (f"the claimed solution is infeasible: w[{i}] = {w[i]:.3g} < 0 ({wn[i]:.3g} relative to the "
-                f"problem's scale max(|q|, |M| |z|) = {w_scale:.3g}; allowed -tol = {-tol:.3g})")
-    i = int(zn.argmin())
-    if not zn[i] >= -tol:
-        return (f"the claimed solution is infeasible: z[{i}] = {z[i]:.3g} < 0 ({zn[i]:.3g} relative to "
-                f"max(|z|, |q| / |M|) = {z_scale:.3g}; allowed -tol = {-tol:.3g})")
-    gap = np.minimum(zn, wn)
-    i = int(gap.argmax())
-    if not gap[i] <= tol:
-        return (f"the claimed solution is not complementary: z[{i}] = {z[i]:.3g} and w[{i}] = {w[i]:.3g} are "
-                f"both positive (relative {zn[i]:.3g} and {wn[i]:.3g}; allowed tol = {tol:.3g})")
-    if not err <= tol:
-        return (f"final residual err = {err:.3g} exceeds tol = {tol:.3g} "
-                f"(ill-conditioned principal submatrix?); try method='lemke' or 'enum'")
-    return ""
+    M, q, z = _floats(M, q, z)
+    w = np.empty_like(q)
+    err = float(residual(M, q, z, w))
+    if status == SOLVED:
+        problem = check_message(*check(M, q, z, w, err, float(tol)), tol)
+        if problem:
+            status, message = FAILED, f"{method}: {problem}"
+    return make_result(z, w, status, err, int(iterations), method, message, list(solutions))

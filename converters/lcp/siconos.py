@@ -60,7 +60,7 @@ def read_siconos_lcp(path, *, context: str = "reading") -> LCPFile:
         again = reader.int("size0 (repeated)"), reader.int("size1 (repeated)")
         if again != (size0, size1):
             reader.fail(f"the dense header repeats size0 size1 = {size0} {size1}; got {again[0]} {again[1]}")
-        M = reader.numbers(n * n, "M").reshape((n, n), order="F")
+        M = np.ascontiguousarray(reader.numbers(n * n, "M").reshape((n, n), order="F"))   # stored by columns
     else:
         M = _read_sparse_block(reader, n)
     q = reader.numbers(n, "q")

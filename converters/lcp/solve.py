@@ -1,24 +1,25 @@
 """One entry point for every LCP solver: :func:`solve_lcp`."""
 from __future__ import annotations
 
-import math
-from dataclasses import replace
+import os
+import time
 
 import numpy as np
 
 from .. import limits
 from ..errors import LCPError
 from ..validate import as_matrix, as_vector
-from . import fastpaths
-from .enumeration import enumerate_bases
-from .lemke import lemke
-from .murty import murty
-from .newton import newton_fb
-from .pgs import pgs
-from .result import SOLVED, LCPResult, finish
+from . import engine
+from . import state as S
+from .engine import auto_plan, enumerate_bases, lemke, murty, newton_fb, pgs
+from .enumeration import MAX_K as ENUM_MAX_K
+from .fastpaths import RULES, closed_form
+from .result import SOLVED, LCPResult, finish, make_result
 
-SOLVERS = {"lemke": lemke, "murty": murty, "enum": enumerate_bases, "pgs": pgs, "newton": newton_fb}
-DEFAULT_MAX_ITER = {"lemke": 10_000, "murty": 100_000, "enum": None, "pgs": 10_000, "newton": 1000}
+#: Each method on a problem as given (no normalisation, no closed forms): what solve_lcp runs, after those.
+SOLVERS = {"auto": auto_plan, "lemke": lemke, "murty": murty, "enum": enumerate_bases, "pgs": pgs,
+           "newton": newton_fb}
+DEFAULT_MAX_ITER = {"auto": None, "lemke": 10_000, "murty": 100_000, "enum": None, "pgs": 10_000, "newton": 1000}
 #: Accepted range of ``tol`` (below 1e-16 double precision cannot resolve it; above 1e-2 it is no solution).
 TOL_RANGE = (1e-16, 1e-2)
 #: Accepted range of ``max_iter``: every iteration costs at least a microsecond, so 10^9 is already beyond any
@@ -26,13 +27,26 @@ TOL_RANGE = (1e-16, 1e-2)
 MAX_ITER_RANGE = (1, 10**9)
 #: Seconds one solve may take when neither ``time_limit`` nor --time-limit / PCSUITE_TIME_LIMIT is given.
 DEFAULT_TIME_LIMIT = 20.0
-#: Working memory of each method in k x k arrays of doubles, M and its normalised copy included:
-#: Lemke's k x (2k + 2) tableau (2), the rank-one update's temporary (2) and the lexicographic keys (1);
-#: Murty's M_JJ and its LU copy; Newton's identity, Jacobian, two temporaries and the LU copy.
-WORK_ARRAYS = {"lemke": 7, "murty": 4, "enum": 3, "pgs": 3, "newton": 7}
+#: Working memory of each method in k x k arrays of doubles, M and its normalised copy included (upper
+#: bounds): Lemke's k x (2k + 2) tableau (2) and its scratch; Murty's augmented M_JJ; Newton's Jacobian and
+#: its augmented copy; auto runs its methods one after another in the largest of their workspaces.
+WORK_ARRAYS = {"auto": 7, "lemke": 7, "murty": 4, "enum": 3, "pgs": 3, "newton": 7}
+
+_F64 = np.dtype(np.float64)
+_CODES = engine.CODES
+_CHUNK = engine.CHUNK
+_ONCE_SOLVED, _ONCE_CLOSED_FORM = engine.ONCE_SOLVED, engine.ONCE_CLOSED_FORM
+_ndarray = np.ndarray
+_empty = np.empty
+_monotonic = time.monotonic
+_TOL_LOW, _TOL_HIGH = TOL_RANGE
+_AUTO_LABELS = tuple(f"auto:{name}" for name in engine.METHODS)
+_CLOSED_FORM_MESSAGES = tuple(f"closed form ({rule})" for rule in RULES)
+#: auto's stages (packed as solve_once packs them) when PGS gave way and method m solved: nothing to report
+_PGS_GAVE_WAY = tuple((1 << (4 * m)) | ((S.SLOW + 1) << (4 * S.PGS)) for m in range(S.N_METHODS))
 
 
-def solve_lcp(M, q, method: str = "lemke", tol: float = 1e-10, max_iter: int | None = None,
+def solve_lcp(M, q, method: str = "auto", tol: float = 1e-10, max_iter: int | None = None,
               fast_paths: bool = True, time_limit: float | None = None, **options) -> LCPResult:
     """Solve LCP(q, M): find z >= 0 with w = q + M z >= 0 and z . w = 0.
 
@@ -41,26 +55,42 @@ def solve_lcp(M, q, method: str = "lemke", tol: float = 1e-10, max_iter: int | N
     answer is scaled back and checked on the original problem, so q or M of any magnitude (1e-200, 1e200)
     is solved as well as at magnitude 1, and a z that under- or overflows when scaled back is reported.
 
+    Every method is compiled (numba). A float64, C-ordered M and q with the defaults for max_iter,
+    time_limit and the options take a thin path: the type and shape checks in Python, the finiteness
+    check, the normalisation, the solve, the scaling back and the check on the original problem in one
+    compiled call (a few microseconds for small k). Anything else (lists, other dtypes, a problem not
+    solved within a millisecond of work, every answer that is not ``solved``) takes the full path, with
+    the same checks and the time limit looked at between slices of a millisecond of work.
+
     Parameters
     ----------
     M : array_like, shape (k, k)
     q : array_like, shape (k,)
-    method : {'lemke', 'murty', 'enum', 'pgs', 'newton'}
-        Lemke (complementary pivoting, lexicographic), Murty (least-index principal pivoting),
+    method : {'auto', 'lemke', 'murty', 'enum', 'pgs', 'newton'}
+        ``auto`` (default) chooses by size and structure and falls back on failure; ``result.method`` says
+        which method produced the answer (``auto:lemke``, ``auto:enum``, ...). Its plan: the closed forms
+        below; PGS first, as a probe of at most max(8, k/2) sweeps, when M is symmetric with a positive diagonal;
+        Lemke; when Lemke ends on a ray, ``no_solution`` if that is proven (a row of w = q + M z negative for
+        every z >= 0, or M positive semidefinite, hence copositive-plus), else enumeration (k <= 12) and
+        then Newton-FB; ``failed`` when none solves it (no non-existence is claimed without a proof). See
+        :mod:`converters.lcp.auto`.
+        The others: Lemke (complementary pivoting, lexicographic), Murty (least-index principal pivoting),
         enumeration of all complementary bases (k <= 12; returns every basic solution),
         projected Gauss-Seidel (symmetric PD M), semismooth Newton on Fischer-Burmeister.
     tol : float in [1e-16, 1e-2]
         Accepted residual err = ||z - max(0, z - w)|| / ||q||, and the relative tolerance of the checks
         z >= 0, w >= 0, min(z_i, w_i) = 0 (see :func:`converters.lcp.result.finish`).
     max_iter : int in [1, 10**9], optional
-        Pivots, sweeps or Newton steps; a method-specific default when omitted.
+        Pivots, sweeps or Newton steps; a method-specific default when omitted (for ``auto``: applies to
+        each method of its plan).
     fast_paths : bool
         Use the closed forms for q >= 0, k = 1 and k = 2 (not for ``enum``, which lists all solutions).
     time_limit : float, optional
         Seconds the solve may take (0.1 .. 7 days); when omitted, --time-limit / PCSUITE_TIME_LIMIT, else
         20 s. A solve that reaches it returns ``failed`` with a message saying so.
     **options
-        Method-specific: ``omega`` (pgs), ``pivot_tol`` (lemke).
+        Method-specific: ``pivot_tol`` (lemke), ``omega`` in (0, 2) (pgs), ``rho``, ``p``, ``beta``,
+        ``sigma`` (newton).
 
     Returns
     -------
@@ -68,14 +98,51 @@ def solve_lcp(M, q, method: str = "lemke", tol: float = 1e-10, max_iter: int | N
         Never a silent wrong answer: ``solved`` only when z >= 0, w >= 0, z . w = 0 (relative to the
         problem's scale) and err <= tol hold on the original problem.
     """
-    if method not in SOLVERS:
+    code = _CODES.get(method) if method.__class__ is str else None
+    if code is None:
         raise LCPError(f"method must be one of {', '.join(SOLVERS)}; got {method!r}")
+    started = _monotonic()
+    # The thin path: everything it needs checked here, the rest (finiteness included) in the compiled call.
+    if (M.__class__ is _ndarray and q.__class__ is _ndarray and M.dtype is _F64 and q.dtype is _F64
+            and tol.__class__ is float and _TOL_LOW <= tol <= _TOL_HIGH and max_iter is None
+            and time_limit is None and not options and fast_paths.__class__ is bool and code != S.ENUM
+            and M.ndim == 2 and q.ndim == 1):
+        k = q.shape[0]
+        if M.shape[0] == k and M.shape[1] == k and k > 0:
+            if not M.flags.c_contiguous:
+                M = np.ascontiguousarray(M)
+            if not q.flags.c_contiguous:
+                q = np.ascontiguousarray(q)
+            if _ENVIRON is not None and k <= _K_UNDER_DEFAULT_MEMORY and not _ENVIRON.get(_TIME_KEY) \
+                    and not _ENVIRON.get(_MEMORY_KEY):   # no limit set, and the default memory limit is far
+                seconds = DEFAULT_TIME_LIMIT
+            else:
+                seconds = _environment_time_limit()
+                _check_memory(method, k)
+            z = _empty(k)
+            w = _empty(k)
+            answer, iterations, err, used, rule, stages, eig = (_once or _load_once())(
+                M, q, z, w, code, tol, _ONCE_MAX_ITER[code], fast_paths, _OPTIONS, _CHUNK)
+            if answer == _ONCE_SOLVED:
+                if code != S.AUTO:
+                    return make_result(z, w, SOLVED, err, iterations, method)
+                message = "" if stages == 1 << (4 * used) or stages == _PGS_GAVE_WAY[used] else \
+                    engine.auto_message(S.OK, used, engine.unpack_stages(stages), -1, engine.known(eig), -1, k)
+                return make_result(z, w, SOLVED, err, iterations, _AUTO_LABELS[used], message)
+            if answer == _ONCE_CLOSED_FORM:
+                return make_result(z, w, SOLVED, err, 0, "auto:closed form" if code == S.AUTO else method,
+                                   _CLOSED_FORM_MESSAGES[rule])
+            if answer == engine.ONCE_OTHER:
+                return _solve_sliced(M, q, code, tol, DEFAULT_MAX_ITER[method], fast_paths,
+                                     _deadline(seconds, started), _OPTIONS)
+            # NaN or inf: the full path raises the validation error
+    # The full path.
     M, q = check_lcp(M, q)
     if not (isinstance(tol, (int, float, np.integer, np.floating)) and not isinstance(tol, bool)
             and TOL_RANGE[0] <= tol <= TOL_RANGE[1]):
         raise LCPError(f"tol must be in [{TOL_RANGE[0]:g}, {TOL_RANGE[1]:g}]; got {tol!r}")
     tol = float(tol)
-    if max_iter is not None and DEFAULT_MAX_ITER[method] is None:
+    if max_iter is not None and method == "enum":
         raise LCPError(f"max_iter does not apply to method {method!r} (it visits every complementary basis once; "
                        f"k <= 12); got max_iter = {max_iter!r}")
     if max_iter is None:
@@ -83,28 +150,61 @@ def solve_lcp(M, q, method: str = "lemke", tol: float = 1e-10, max_iter: int | N
     elif not (isinstance(max_iter, (int, np.integer)) and not isinstance(max_iter, bool)
               and MAX_ITER_RANGE[0] <= max_iter <= MAX_ITER_RANGE[1]):
         raise LCPError(f"max_iter must be an integer in [{MAX_ITER_RANGE[0]}, {MAX_ITER_RANGE[1]}]; got {max_iter!r}")
+    opts = engine.options_array(method, options)
     seconds = check_time_limit(time_limit)
     k = q.shape[0]
-    limits.check_memory(f"solve_lcp (method {method}): k = {k} ({WORK_ARRAYS[method]} work arrays of k x k doubles)",
-                        8.0 * WORK_ARRAYS[method] * k * k, remedy="a smaller problem")
-    deadline = limits.Deadline(seconds)
+    if method == "enum" and k > ENUM_MAX_K:
+        raise LCPError(f"enumeration visits 2^k bases: k must be <= {ENUM_MAX_K}; got k = {k}; "
+                       "use method='lemke' or 'murty'")
+    _check_memory(method, k)
+    return _solve_sliced(M, q, code, tol, max_iter, fast_paths, _deadline(seconds, started), opts)
+
+
+def _solve_sliced(M, q, code, tol, max_iter, fast_paths, deadline, opts) -> LCPResult:
+    """The full path on a validated problem: normalise, closed forms, the method in slices with the deadline
+    looked at between them, then scale back and check on the original problem."""
+    method = engine.METHODS[code]
     Ms, qs, shift = normalise(M, q)
-    if fast_paths and method != "enum":
-        for rule in (fastpaths.trivial, fastpaths.scalar, fastpaths.pair):
-            z = rule(Ms, qs)
-            if z is not None:    # checked once, on the original problem
-                result = finish(M, q, np.ldexp(z, shift) if shift else z, status=SOLVED, iterations=0,
-                                method=method, tol=tol, message=f"closed form ({rule.__name__})")
+    if fast_paths and code != S.ENUM:
+        label = "auto:closed form" if code == S.AUTO else method
+        for rule, name in enumerate(RULES):
+            z = np.zeros(q.shape[0])
+            if closed_form(Ms, qs, rule, z):    # checked once, on the original problem
+                result = finish(M, q, _scaled(z, shift), status=SOLVED, iterations=0, method=label, tol=tol,
+                                message=f"closed form ({name})")
                 if result.solved:
                     return result
-    result = SOLVERS[method](Ms, qs, tol=tol, max_iter=max_iter, deadline=deadline, **options)
-    return unscale(result, M, q, shift, tol)
+    run = engine.Run(code, Ms, qs, tol=tol, max_iter=-1 if max_iter is None else int(max_iter), deadline=deadline,
+                     opts=opts)
+    status, message, label, iterations = run.outcome()
+    final = finish(M, q, _scaled(run.z, shift), status=status, iterations=iterations, method=label, tol=tol,
+                   message=message, solutions=[_scaled(s, shift) for s in run.solutions()])
+    if status == SOLVED and not final.solved:   # solved when normalised, not once z is scaled back by 2^shift
+        final = make_result(final.z, final.w, final.status, final.err, final.iterations, final.method,
+                            f"{final.message} (z solves the normalised problem but not once scaled back by "
+                            f"2^{shift}: the solution is not representable in double precision)", final.solutions)
+    return final
+
+
+def _scaled(z: np.ndarray, shift: int) -> np.ndarray:
+    if not shift:
+        return z.copy()
+    out = np.empty_like(z)
+    engine.scale_pow2(z, shift, out)
+    return out
+
+
+def normalise(M: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
+    """(M / 2^em, q / 2^es, es - em) with 2^es ~ max|q|, 2^em ~ max|M| (exact: powers of two); a zero M or q is
+    left as it is. z = z' 2^(es - em) maps solutions of the normalised problem back."""
+    Ms, qs, shift, _ = engine.normalised(np.ascontiguousarray(M, dtype=float), np.ascontiguousarray(q, dtype=float))
+    return Ms, qs, int(shift)
 
 
 def check_time_limit(time_limit) -> float:
     """Seconds for one solve: ``time_limit`` when given (checked), else --time-limit / PCSUITE_TIME_LIMIT, else 20 s."""
     if time_limit is None:
-        return limits.time_limit(DEFAULT_TIME_LIMIT)
+        return _environment_time_limit()
     low, high = limits.TIME_RANGE
     if not (isinstance(time_limit, (int, float, np.integer, np.floating)) and not isinstance(time_limit, bool)
             and low <= time_limit <= high):
@@ -112,29 +212,11 @@ def check_time_limit(time_limit) -> float:
     return float(time_limit)
 
 
-def normalise(M: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
-    """(M / 2^em, q / 2^es, es - em) with 2^es ~ max|q|, 2^em ~ max|M| (exact: powers of two); a zero M or q is
-    left as it is. z = z' 2^(es - em) maps solutions of the normalised problem back."""
-    qbig = float(np.abs(q).max())
-    mbig = float(np.abs(M).max())
-    es = math.frexp(qbig)[1]    # 0 when qbig = 0
-    em = math.frexp(mbig)[1]
-    Ms = np.ldexp(M, -em) if em else M
-    qs = np.ldexp(q, -es) if es else q
-    return Ms, qs, es - em
-
-
-def unscale(result: LCPResult, M, q, shift: int, tol: float) -> LCPResult:
-    """The result of the normalised problem as a result of LCP(q, M), checked again on (q, M)."""
-    with np.errstate(all="ignore"):
-        z = np.ldexp(result.z, shift) if shift else result.z
-        solutions = [np.ldexp(s, shift) for s in result.solutions] if shift else result.solutions
-    final = finish(M, q, z, status=result.status, iterations=result.iterations, method=result.method, tol=tol,
-                   message=result.message, solutions=solutions)
-    if result.solved and not final.solved:   # solved when normalised, not once z is scaled back by 2^shift
-        final = replace(final, message=f"{final.message} (z solves the normalised problem but not once scaled back "
-                                       f"by 2^{shift}: the solution is not representable in double precision)")
-    return final
+def _deadline(seconds: float, started: float) -> limits.Deadline:
+    """The deadline of a solve that started at ``started`` (monotonic clock)."""
+    deadline = limits.Deadline(seconds)
+    deadline.end = started + seconds
+    return deadline
 
 
 def check_lcp(M, q) -> tuple[np.ndarray, np.ndarray]:
@@ -150,4 +232,78 @@ def check_lcp(M, q) -> tuple[np.ndarray, np.ndarray]:
         raise LCPError(str(exc)) from None
     if M.shape[0] == 0:
         raise LCPError("M must be at least 1x1; got an empty matrix")
-    return M, q
+    return np.ascontiguousarray(M), np.ascontiguousarray(q)
+
+
+# ------------------------------------------------------------------------- limits, read at the cost of a dict lookup
+# os.environ.get costs half a microsecond when the variable is unset (it raises and catches KeyError inside),
+# as much as a whole small solve; os.environ keeps its values in the dict ``_data`` (CPython), read here
+# directly, and the parsed value is kept for as long as the raw value does not change. Same values, same
+# validation and messages as converters.limits.
+
+_ENVIRON = getattr(os.environ, "_data", None)
+
+
+def _environ_key(name: str):
+    try:
+        return os.environ.encodekey(name)
+    except AttributeError:   # not CPython's os.environ: read it the ordinary way
+        return None
+
+
+_TIME_KEY = _environ_key(limits.TIME_ENV)
+_MEMORY_KEY = _environ_key(limits.MEMORY_ENV)
+if _TIME_KEY is None or _MEMORY_KEY is None:
+    _ENVIRON = None
+_parsed: dict = {}
+#: Below this k every method's working memory is under the default limit.
+_K_UNDER_DEFAULT_MEMORY = int((limits.DEFAULT_MAX_MEMORY / (8.0 * max(WORK_ARRAYS.values()))) ** 0.5)
+
+
+def _environment_time_limit() -> float:
+    if _ENVIRON is None:
+        return limits.time_limit(DEFAULT_TIME_LIMIT)
+    raw = _ENVIRON.get(_TIME_KEY)
+    if not raw:
+        return DEFAULT_TIME_LIMIT
+    key = (_TIME_KEY, raw)
+    value = _parsed.get(key)
+    if value is None:
+        value = _parsed[key] = limits.time_limit(DEFAULT_TIME_LIMIT)    # parses and checks (raises when bad)
+    return value
+
+
+def _check_memory(method: str, k: int) -> None:
+    nbytes = 8.0 * WORK_ARRAYS[method] * k * k
+    if _ENVIRON is not None:
+        raw = _ENVIRON.get(_MEMORY_KEY)
+        if not raw:
+            limit = limits.DEFAULT_MAX_MEMORY
+        else:
+            limit = _parsed.get((_MEMORY_KEY, raw))
+            if limit is None:
+                limit = _parsed[(_MEMORY_KEY, raw)] = limits.max_memory()   # parses and checks (raises when bad)
+        if nbytes <= limit:
+            return
+    limits.check_memory(f"solve_lcp (method {method}): k = {k} ({WORK_ARRAYS[method]} work arrays of k x k doubles)",
+                        nbytes, remedy="a smaller problem")
+
+
+# ------------------------------------------------------------------------- the compiled call, without dispatch
+# Calling a numba function costs ~0.35 us of type dispatch; the thin path has already checked the exact types
+# (float64 C arrays, Python float / int / bool), so it calls the compiled entry point for those types directly
+# (~0.2 us). Compiled (or loaded from numba's cache) at the first solve, not at import.
+
+_OPTIONS = engine.options_array("auto", {})
+_ONCE_MAX_ITER = tuple(-1 if name in ("auto", "enum") else DEFAULT_MAX_ITER[name] for name in engine.METHODS)
+_once = None
+
+
+def _load_once():
+    global _once
+    args = (np.eye(1), np.ones(1), np.empty(1), np.empty(1), 0, 1e-10, -1, True, _OPTIONS, engine.CHUNK)
+    engine.solve_once(*args)
+    from numba import typeof
+    overload = engine.solve_once.overloads.get(tuple(typeof(a) for a in args))
+    _once = overload.entry_point if overload is not None else engine.solve_once
+    return _once

@@ -8,7 +8,7 @@ import pytest
 from converters.lcp.problems import murty_exponential
 from validation.cli import main
 
-ALL = ["lemke", "murty", "enum", "pgs", "newton"]
+ALL = ["auto", "lemke", "murty", "enum", "pgs", "newton"]
 
 
 @pytest.fixture(autouse=True)
@@ -81,12 +81,13 @@ def test_a_50000_header_is_refused_naming_the_limit_and_the_flag(capsys, tmp_pat
     assert "--max-memory 32G" in err
 
 
-def test_the_max_memory_flag_applies_to_the_solver_working_memory(capsys, tmp_path):
+@pytest.mark.parametrize("method,flags", [("lemke", ["--method", "lemke"]), ("auto", [])])   # auto: the default
+def test_the_max_memory_flag_applies_to_the_solver_working_memory(capsys, tmp_path, method, flags):
     path = write_dense(tmp_path / "eye600.dat", np.eye(600), -np.ones(600))   # M: 2.9 MB; Lemke's work: 20.2 MB
-    code, out, err = run(capsys, "lcp", "solve", str(path), "--max-memory", "16M")
+    code, out, err = run(capsys, "lcp", "solve", str(path), "--max-memory", "16M", *flags)
     assert code == 2 and out == ""
-    assert err.startswith("pcsuite: error: solve_lcp (method lemke): k = 600 (7 work arrays of k x k doubles) needs "
-                          "about 19.2 MiB, above the memory limit of 16 MiB")
+    assert err.startswith(f"pcsuite: error: solve_lcp (method {method}): k = 600 (7 work arrays of k x k doubles) "
+                          "needs about 19.2 MiB, above the memory limit of 16 MiB")
 
 
 def test_dev_zero_is_refused_at_once(capsys):

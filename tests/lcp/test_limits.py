@@ -6,15 +6,11 @@ import pytest
 
 from converters.errors import LCPError, ResourceError
 from converters.lcp import solve_lcp
-from converters.lcp.enumeration import enumerate_bases
-from converters.lcp.lemke import lemke
-from converters.lcp.murty import murty
-from converters.lcp.newton import newton_fb
-from converters.lcp.pgs import pgs
+from converters.lcp.engine import enumerate_bases, lemke, murty, newton_fb, pgs
 from converters.lcp.problems import murty_exponential, random_p_matrix
 from converters.limits import Deadline
 
-ALL = ["lemke", "murty", "enum", "pgs", "newton"]
+ALL = ["auto", "lemke", "murty", "enum", "pgs", "newton"]
 TIME_MESSAGE = "reached the time limit of {:g} s; raise it with --time-limit S"
 
 

@@ -8,7 +8,7 @@ from converters.lcp import lcp_error, solve_lcp
 from converters.lcp.problems import murty_exponential, problem_set, random_p_matrix
 
 P_SOLVERS = ["lemke", "murty", "newton"]  # guaranteed on every P-matrix
-ALL = ["lemke", "murty", "enum", "pgs", "newton"]
+ALL = ["auto", "lemke", "murty", "enum", "pgs", "newton"]
 
 
 @settings(max_examples=60, deadline=None)
@@ -100,7 +100,8 @@ def test_pgs_divergence_is_reported_not_returned_as_nan():
     (dict(M=np.eye(2), q=[1.0, 2.0, 3.0]), r"q must be a vector of length 2; got shape 3"),
     (dict(M=[[np.nan]], q=[1.0]), r"M must contain only finite numbers; got nan"),
     (dict(M=[[1.0]], q=[np.inf]), r"q must contain only finite numbers; got inf"),
-    (dict(M=np.eye(2), q=[1, 1], method="simplex"), r"method must be one of lemke, murty, enum, pgs, newton; got 'simplex'"),
+    (dict(M=np.eye(2), q=[1, 1], method="simplex"),
+     r"method must be one of auto, lemke, murty, enum, pgs, newton; got 'simplex'"),
     (dict(M=np.eye(2), q=[1, 1], tol=0.0), r"tol must be in \[1e-16, 0.01\]; got 0.0"),
     (dict(M=np.eye(2), q=[1, 1], max_iter=0), r"max_iter must be an integer in \[1, 1000000000\]; got 0"),
     (dict(M=np.eye(13), q=-np.ones(13), method="enum"), r"k must be <= 12; got k = 13"),

@@ -14,10 +14,13 @@ def add(sub) -> None:
     lcp = sub.add_parser("lcp", help="linear complementarity problems").add_subparsers(title="lcp commands")
     solve = lcp.add_parser("solve", help="solve an LCP stored in the Siconos .dat format")
     solve.add_argument("file", type=Path)
-    solve.add_argument("--method", default="lemke", choices=list(SOLVERS))
+    solve.add_argument("--method", default="auto", choices=list(SOLVERS),
+                       help="auto (default: chooses by size and structure, falls back on failure; the output "
+                            "names the method that solved it), lemke, murty, enum, pgs or newton")
     solve.add_argument("--tol", type=float, default=1e-10, help="accepted residual, in [1e-16, 1e-2] (default 1e-10)")
     solve.add_argument("--max-iter", type=int, default=None,
-                       help="pivots, sweeps or Newton steps, in [1, 10^9] (default: per method); the solve also "
+                       help="pivots, sweeps or Newton steps, in [1, 10^9] (default: per method; with auto, each "
+                            "method of its plan); the solve also "
                             "stops at --time-limit (default 20 s)")
     solve.add_argument("--json", action="store_true", help="print one JSON object")
     solve.set_defaults(run=run)

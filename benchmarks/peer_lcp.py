@@ -1,0 +1,293 @@
+"""Per-call time of ``solve_lcp(M, q)`` (default method) against Siconos' fastest successful LCP solver,
+problem by problem on the Siconos peer collection, measured side by side in one run.
+
+Run: .venv/bin/python benchmarks/peer_lcp.py   (``run()`` returns the rows for another benchmark).
+
+Siconos 4.4 (Debian's python3-siconos) is importable only by the system Python, so its side runs in a
+worker process, ``/usr/bin/python3 -c WORKER``, fed the same M and q as JSON (it also reads each dense .dat
+file with Siconos' own reader and says whether that agrees). In the worker, every LCP solver Siconos
+offers is tried on each problem through ``lcp_driver_DenseMatrix`` with its default options (tolerance
+1e-6 for most); a solver succeeds when its info flag is 0 and Siconos' own ``lcp_compute_error`` is at most
+1e-6. Our side is ``solve_lcp(M, q)`` with every default (method auto, tol = 1e-10: a stricter test than
+Siconos').
+
+Timing: a warm process on each side; each measurement is a loop of n calls (n chosen so a loop takes about
+10 ms), and the measurements alternate, ours then each successful Siconos solver, ``REPEATS`` times: the
+medians are reported (the machine is shared; alternating spreads its noise over both sides). Our loop
+times the whole call (validation, result object and all). Siconos' loop resets z and w to zero before each
+call (its iterative solvers would otherwise restart from the previous solution); the cost of that reset
+is measured by the same loop without the solve and subtracted, so Siconos is charged for its call only.
+"""
+from __future__ import annotations
+
+import json
+import os
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+if str(ROOT) not in sys.path:
+    sys.path.insert(0, str(ROOT))
+
+from converters.lcp import read_siconos_lcp, solve_lcp  # noqa: E402
+from validation.peer import peer_directory  # noqa: E402
+
+SYSTEM_PYTHON = "/usr/bin/python3"
+REPEATS = 7
+LOOP_SECONDS = 0.01
+#: Siconos' enumeration visits 2^k bases with no limit of its own: it is not tried above this k.
+SICONOS_ENUM_MAX_K = 16
+SUCCESS_ERR = 1e-6
+
+WORKER = r"""
+import json, os, sys, time
+# Siconos' solvers print on the C stdout: the answers go to a copy of it, the C stdout to /dev/null
+answers = os.fdopen(os.dup(1), "w")
+os.dup2(os.open(os.devnull, os.O_WRONLY), 1)
+import numpy as np
+import siconos
+import siconos.numerics as sn
+
+SKIP = {"NSGS_SBM"}   # sparse-block storage only (the driver refuses dense M)
+names = sorted((n[len("SICONOS_LCP_"):], getattr(sn, n)) for n in dir(sn)
+               if n.startswith("SICONOS_LCP_") and not n.endswith("_STR") and isinstance(getattr(sn, n), int)
+               and hasattr(sn, n + "_STR"))
+SOLVERS = {name: sid for name, sid in names if name not in SKIP}
+problem = z = w = None
+options = {}
+
+def send(obj):
+    answers.write(json.dumps(obj) + "\n")
+    answers.flush()
+
+send({"ready": True, "version": str(getattr(siconos, "version", "?")), "solvers": sorted(SOLVERS)})
+for line in sys.stdin:
+    cmd = json.loads(line)
+    op = cmd["op"]
+    if op == "load":
+        M = np.array(cmd["M"], dtype=float)
+        q = np.array(cmd["q"], dtype=float)
+        problem = sn.LCP(M, q)
+        z, w = np.zeros(len(q)), np.zeros(len(q))
+        options = {}
+        agrees = None
+        if cmd.get("file"):
+            try:
+                read = sn.newLCP()
+                sn.linearComplementarity_newFromFilename(read, cmd["file"])
+                if isinstance(read.M, np.ndarray):
+                    agrees = bool(np.array_equal(read.M, M) and np.array_equal(np.asarray(read.q).ravel(), q))
+            except Exception:
+                agrees = None
+        send({"loaded": True, "reader_agrees": agrees})
+    elif op == "try":
+        name = cmd["solver"]
+        try:
+            o = sn.SolverOptions(SOLVERS[name])
+            z[:] = 0.0
+            w[:] = 0.0
+            start = time.perf_counter()
+            info = sn.lcp_driver_DenseMatrix(problem, z, w, o)
+            seconds = time.perf_counter() - start
+            err = float(sn.lcp_compute_error(problem, z, w, 1e-6))
+            options[name] = o
+            send({"info": int(info), "err": err, "seconds": seconds, "tol": float(o.dparam[sn.SICONOS_DPARAM_TOL])})
+        except Exception as exc:
+            send({"error": " ".join(str(exc).split())[:200]})
+    elif op == "time":
+        name, n = cmd["solver"], cmd["calls"]
+        o = options.get(name) or options.setdefault(name, sn.SolverOptions(SOLVERS[name]))
+        driver, reset_z, reset_w = sn.lcp_driver_DenseMatrix, z.fill, w.fill
+        start = time.perf_counter()
+        for _ in range(n):
+            reset_z(0.0)
+            reset_w(0.0)
+            driver(problem, z, w, o)
+        total = time.perf_counter() - start
+        start = time.perf_counter()
+        for _ in range(n):
+            reset_z(0.0)
+            reset_w(0.0)
+        send({"seconds": total - (time.perf_counter() - start)})
+"""
+
+
+class Siconos:
+    """The worker process; restarted (and the problem reloaded) if a solver crashes it."""
+
+    def __init__(self):
+        self.process = None
+        self.problem = None
+        version, self.solvers = self._start()
+        package = subprocess.run(["dpkg-query", "-W", "-f=${Version}", "python3-siconos"], capture_output=True,
+                                 text=True) if Path("/usr/bin/dpkg-query").exists() else None
+        self.version = (f"python3-siconos {package.stdout.strip()}" if package is not None and package.returncode == 0
+                        else f"siconos {version}")
+
+    def _start(self):
+        env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "PYTHONHOME")}
+        self.process = subprocess.Popen([SYSTEM_PYTHON, "-c", WORKER], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                                        stderr=subprocess.DEVNULL, text=True, env=env, cwd="/")
+        hello = self._read()
+        return hello["version"], hello["solvers"]
+
+    def _read(self):
+        line = self.process.stdout.readline()
+        if not line:
+            raise EOFError("the Siconos worker exited")
+        return json.loads(line)
+
+    def _ask(self, cmd):
+        self.process.stdin.write(json.dumps(cmd) + "\n")
+        self.process.stdin.flush()
+        return self._read()
+
+    def load(self, name, M, q, file):
+        self.problem = {"op": "load", "name": name, "M": M.tolist(), "q": q.tolist(), "file": str(file)}
+        return self._ask(self.problem)
+
+    def attempt(self, solver):
+        try:
+            return self._ask({"op": "try", "solver": solver})
+        except (EOFError, BrokenPipeError):
+            self._restart()
+            return {"error": "crashed the worker"}
+
+    def time(self, solver, calls):
+        """Seconds per call, or None when the solver crashed the worker this time."""
+        try:
+            return self._ask({"op": "time", "solver": solver, "calls": calls})["seconds"] / calls
+        except (EOFError, BrokenPipeError):
+            self._restart()
+            return None
+
+    def _restart(self):
+        self.close()
+        self._start()
+        self._ask(self.problem)
+
+    def close(self):
+        if self.process is not None:
+            try:
+                self.process.stdin.close()
+            except BrokenPipeError:
+                pass
+            self.process.wait(timeout=10)
+            self.process = None
+
+
+def start_siconos():
+    """The worker, or (None, reason) when /usr/bin/python3 cannot import siconos."""
+    if not Path(SYSTEM_PYTHON).exists():
+        return None, f"{SYSTEM_PYTHON} not found"
+    probe = subprocess.run([SYSTEM_PYTHON, "-c", "import siconos.numerics"], capture_output=True, text=True, cwd="/",
+                           env={k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "PYTHONHOME")})
+    if probe.returncode != 0:
+        last = (probe.stderr.strip().splitlines() or ["no message"])[-1]
+        return None, f"{SYSTEM_PYTHON} cannot import siconos ({last})"
+    return Siconos(), ""
+
+
+def ours_per_call(M, q, calls: int) -> float:
+    start = time.perf_counter()
+    for _ in range(calls):
+        solve_lcp(M, q)
+    return (time.perf_counter() - start) / calls
+
+
+def calls_for(seconds_per_call: float) -> int:
+    return max(1, min(200_000, int(LOOP_SECONDS / max(seconds_per_call, 1e-9))))
+
+
+def run(directory: Path | None = None, repeats: int = REPEATS, siconos: bool = True) -> list[dict]:
+    """One row per problem: k, our status / method / err / us per call, Siconos' fastest successful solver
+    and its us per call, the ratio ours / Siconos (None when Siconos has no success), the Siconos solvers
+    that succeeded, and ``siconos_note`` when its side could not run."""
+    directory = directory or peer_directory()
+    worker, note = start_siconos() if siconos else (None, "Siconos side not requested")
+    rows = []
+    try:
+        for path in sorted(directory.glob("lcp_*.dat")):
+            p = read_siconos_lcp(path)
+            k = p.q.shape[0]
+            result = solve_lcp(p.M, p.q)                      # warm: compiled code loaded, caches filled
+            ours_calls = calls_for(ours_per_call(p.M, p.q, 3))
+            successes, trials = {}, {}
+            if worker is not None:
+                loaded = worker.load(p.name, p.M, p.q, path)
+                for solver in worker.solvers:
+                    if solver == "ENUM" and k > SICONOS_ENUM_MAX_K:
+                        trials[solver] = {"error": f"not tried: 2^{k} bases"}
+                        continue
+                    trials[solver] = attempt = worker.attempt(solver)
+                    if "error" not in attempt and attempt["info"] == 0 and attempt["err"] <= SUCCESS_ERR:
+                        successes[solver] = calls_for(attempt["seconds"])
+            ours, theirs, crashed = [], {s: [] for s in successes}, set()
+            for _ in range(repeats):                          # alternate: ours, then each Siconos solver
+                ours.append(ours_per_call(p.M, p.q, ours_calls))
+                for solver, calls in successes.items():
+                    if solver not in crashed:
+                        seconds = worker.time(solver, calls)
+                        if seconds is None:
+                            crashed.add(solver)
+                            trials[solver] = {"error": "crashed the worker when called again"}
+                        else:
+                            theirs[solver].append(seconds)
+            ours_us = 1e6 * statistics.median(ours)
+            medians = {s: 1e6 * statistics.median(t) for s, t in theirs.items() if s not in crashed}
+            fastest = min(medians, key=medians.get) if medians else None
+            row = {"problem": p.name, "k": k, "status": result.status, "method": result.method, "err": result.err,
+                   "us_per_call": ours_us, "siconos_solver": fastest,
+                   "siconos_us_per_call": medians.get(fastest) if fastest else None,
+                   "ratio": ours_us / medians[fastest] if fastest else None,
+                   "siconos_successes": sorted(medians, key=medians.get), "siconos_us": medians,
+                   "siconos_note": note}
+            if worker is not None:
+                row["siconos_version"] = worker.version
+                row["siconos_reader_agrees"] = loaded.get("reader_agrees")
+                row["siconos_failures"] = {s: (t.get("error") or f"info {t['info']}, err {t['err']:.2g}")
+                                           for s, t in trials.items() if s not in medians}
+            rows.append(row)
+    finally:
+        if worker is not None:
+            worker.close()
+    return rows
+
+
+def main():
+    rows = run()
+    note = rows[0]["siconos_note"] if rows else ""
+    print("Siconos peer collection: solve_lcp(M, q) (default: auto, tol 1e-10) against Siconos' fastest successful "
+          "LCP solver (info 0, err <= 1e-6)")
+    print(f"median of {REPEATS} alternating loops of ~{LOOP_SECONDS * 1e3:.0f} ms, in us per call")
+    if note:
+        print(f"Siconos side skipped: {note}")
+    print(f"{'problem':28s} {'k':>3s} {'ours: status':13s} {'method':17s} {'us/call':>9s}   "
+          f"{'Siconos fastest':17s} {'us/call':>9s} {'ours/Siconos':>12s}")
+    for r in rows:
+        none = "(not run)" if r["siconos_note"] else "(none succeeds)"
+        sic = (f"{r['siconos_solver']:17s} {r['siconos_us_per_call']:9.2f} {r['ratio']:12.2f}" if r["siconos_solver"]
+               else f"{none:17s} {'':9s} {'':12s}")
+        print(f"{r['problem']:28s} {r['k']:3d} {r['status']:13s} {r['method']:17s} {r['us_per_call']:9.2f}   {sic}")
+    ratios = [r["ratio"] for r in rows if r["ratio"] is not None and r["status"] == "solved"]
+    if ratios:
+        faster = sum(1 for x in ratios if x < 1.0)
+        print(f"median ratio ours/Siconos: {statistics.median(ratios):.2f} over {len(ratios)} problems "
+              f"(ours faster on {faster}, slower on {len(ratios) - faster})")
+    if rows and not note:
+        tried = sorted({s for r in rows for s in [*r["siconos_us"], *r["siconos_failures"]]})
+        differ = [r["problem"] for r in rows if r["siconos_reader_agrees"] is False]
+        print(f"{rows[0]['siconos_version']}: {len(tried)} LCP solvers tried on each problem ({', '.join(tried)}); "
+              "its reader " + (f"differs from ours on {', '.join(differ)}" if differ else
+                               "reads the same M and q as ours from every dense file"))
+    unsolved = [r["problem"] for r in rows if r["status"] != "solved"]
+    if unsolved:
+        print("not solved by ours: " + ", ".join(f"{r['problem']} ({r['status']}: {r['method']})" for r in rows
+                                                if r["status"] != "solved"))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,184 @@
+"""The compiled methods against the former pure-Python ones (tests/lcp/reference.py, the oracle), and the thin
+path of solve_lcp against its full path: same answers, same checks, same limits."""
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+
+from converters.errors import LCPError, ResourceError
+from converters.lcp import engine, read_siconos_lcp, solve_lcp
+from converters.lcp.engine import enumerate_bases, lemke, murty, newton_fb, pgs
+from converters.lcp.problems import murty_exponential, problem_set, random_p_matrix
+from converters.lcp.solve import normalise
+
+from . import reference
+
+COMPILED = {"lemke": lemke, "murty": murty, "pgs": pgs, "newton": newton_fb, "enum": enumerate_bases}
+MAX_ITER = {"lemke": 10_000, "murty": 100_000, "pgs": 10_000, "newton": 1000}
+
+
+def same_path(method, M, q):
+    """The compiled method takes the oracle's path: same status and iterations, and the same z (to rounding)
+    wherever the run ends at an answer (a run stopped at max_iter may drift in the last bits for 10^4 sweeps)."""
+    M, q, _ = normalise(M, q)
+    kwargs = {} if method == "enum" else {"max_iter": MAX_ITER[method]}
+    old = reference.REFERENCE[method](M, q, tol=1e-10, **kwargs)
+    new = COMPILED[method](M, q, tol=1e-10, **kwargs)
+    assert new.status == old.status, (method, new.message)
+    if method in ("newton", "pgs"):
+        # an iteration stopping on a residual threshold: the compiled sums (another order than NumPy's BLAS) may
+        # cross it one iteration apart (seen: Newton 119 vs 118 on an integer problem); pivots are exact
+        assert abs(new.iterations - old.iterations) <= 1, (method, new.iterations, old.iterations)
+    else:
+        assert new.iterations == old.iterations, (method, new.message)
+    if new.status != "max_iterations":
+        np.testing.assert_allclose(new.z, old.z, rtol=1e-9, atol=1e-12 * (1.0 + np.abs(old.z).max()))
+    if method == "enum":
+        assert len(new.solutions) == len(old.solutions)
+        for a, b in zip(new.solutions, old.solutions):
+            np.testing.assert_allclose(a, b, rtol=1e-9, atol=1e-12)
+
+
+@pytest.mark.parametrize("method", list(COMPILED))
+def test_compiled_methods_take_the_reference_path_on_the_project_problem_set(method):
+    for case in problem_set():
+        if method == "enum" and case.M.shape[0] > 12:
+            continue
+        same_path(method, case.M, case.q)
+
+
+@pytest.mark.parametrize("method", list(COMPILED))
+def test_compiled_methods_take_the_reference_path_on_the_peer_collection(peer, method):
+    for path in sorted(peer.glob("lcp_*.dat")):
+        p = read_siconos_lcp(path)
+        if method == "enum" and p.M.shape[0] > 12:
+            continue
+        same_path(method, p.M, p.q)
+
+
+@settings(max_examples=40, deadline=None)
+@given(k=st.integers(1, 12), seed=st.integers(0, 2**32 - 1),
+       kind=st.sampled_from(["pd", "spd", "triangular", "integer"]))
+def test_compiled_methods_take_the_reference_path_on_random_problems(k, seed, kind):
+    rng = np.random.default_rng(seed)
+    if kind == "integer":        # any matrix: rays, singular submatrices, degenerate ties, no solution
+        M, q = rng.integers(-3, 4, (k, k)).astype(float), rng.integers(-3, 4, k).astype(float)
+    else:
+        M, q = random_p_matrix(rng, k, kind), rng.standard_normal(k)
+    for method in COMPILED:
+        same_path(method, M, q)
+
+
+def peer_problems(peer):
+    return [read_siconos_lcp(path) for path in sorted(peer.glob("lcp_*.dat"))]
+
+
+@pytest.mark.parametrize("method", ["auto", "lemke", "murty", "pgs", "newton"])
+def test_the_thin_path_answers_as_the_full_path(peer, method):
+    """float64 C arrays take the thin path; lists take the full one (validation in Python, sliced run)."""
+    for p in peer_problems(peer):
+        thin = solve_lcp(p.M, p.q, method=method)
+        full = solve_lcp(p.M.tolist(), p.q.tolist(), method=method)
+        assert (thin.status, thin.method, thin.iterations, thin.message) == \
+            (full.status, full.method, full.iterations, full.message), p.name
+        np.testing.assert_array_equal(thin.z, full.z)
+        np.testing.assert_array_equal(thin.w, full.w)
+        assert thin.err == full.err
+
+
+def test_a_small_solve_takes_the_thin_path(monkeypatch, peer):
+    p = read_siconos_lcp(peer / "lcp_CPS_2.dat")
+    solve_lcp(p.M, p.q)
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("the sliced run was used")
+    monkeypatch.setattr(engine, "Run", refuse)
+    assert solve_lcp(p.M, p.q).solved and solve_lcp(np.asfortranarray(p.M), p.q).solved   # F order: one copy
+    with pytest.raises(AssertionError, match="sliced run"):
+        solve_lcp(p.M.tolist(), p.q)
+
+
+def test_a_solve_longer_than_one_slice_continues_where_it_stopped():
+    M, q = murty_exponential(16)           # 65535 pivots: many slices of CHUNK multiply-adds
+    result = solve_lcp(M, q, method="murty")
+    assert result.solved and result.iterations == 2**16 - 1
+    np.testing.assert_allclose(result.z, np.eye(16)[-1])
+    enum = solve_lcp(*murty_exponential(12), method="enum")   # 4096 bases, also in slices
+    assert enum.solved and enum.iterations == 4096 and len(enum.solutions) == 1
+
+
+@pytest.mark.parametrize("M,q,match", [
+    (np.array([[np.nan]]), np.array([1.0]), r"M must contain only finite numbers; got nan"),
+    (np.eye(2), np.array([1.0, np.inf]), r"q must contain only finite numbers; got inf"),
+    (np.eye(2, dtype=np.float32), np.array([1.0, np.nan], dtype=np.float32), r"q must contain only finite"),
+    (np.eye(3), np.ones(2), r"q must be a vector of length 3; got shape 2"),
+    (np.ones((2, 3)), np.ones(2), r"M must be square \(k x k\); got shape 2x3"),
+    (np.zeros((0, 0)), np.zeros(0), r"M must be at least 1x1; got an empty matrix"),
+])
+def test_the_thin_path_refuses_what_the_full_path_refuses(M, q, match):
+    with pytest.raises(LCPError, match=match):
+        solve_lcp(M, q)
+
+
+def test_other_dtypes_and_layouts_give_the_same_answer(peer):
+    p = read_siconos_lcp(peer / "lcp_mmc.dat")
+    base = solve_lcp(p.M, p.q)
+    for M, q in ((np.asfortranarray(p.M), p.q), (p.M.astype(np.longdouble), p.q), (p.M.tolist(), p.q[::-1][::-1]),
+                 (p.M.copy(), np.asfortranarray(p.q))):
+        again = solve_lcp(M, q)
+        assert again.method == base.method and again.iterations == base.iterations
+        np.testing.assert_array_equal(again.z, base.z)
+
+
+def test_the_limits_in_the_environment_are_read_at_every_call(monkeypatch):
+    M, q = np.eye(2) + 1.0, -np.ones(2)
+    monkeypatch.setenv("PCSUITE_TIME_LIMIT", "soon")
+    with pytest.raises(ResourceError, match=r"PCSUITE_TIME_LIMIT must be a number of seconds"):
+        solve_lcp(M, q)
+    monkeypatch.setenv("PCSUITE_TIME_LIMIT", "5")
+    assert solve_lcp(M, q).solved
+    monkeypatch.setenv("PCSUITE_MAX_MEMORY", "lots")
+    with pytest.raises(ResourceError, match=r"PCSUITE_MAX_MEMORY must be a size in bytes"):
+        solve_lcp(M, q)
+    monkeypatch.setenv("PCSUITE_MAX_MEMORY", "16M")
+    with pytest.raises(ResourceError, match=r"solve_lcp \(method auto\): k = 600 .* above the memory limit of 16 MiB"):
+        solve_lcp(np.eye(600), -np.ones(600))
+    monkeypatch.delenv("PCSUITE_MAX_MEMORY")
+    assert solve_lcp(np.eye(600), -np.ones(600)).solved
+
+
+@pytest.mark.parametrize("options,match", [
+    (dict(method="lemke", omega=1.2), r"option 'omega' does not apply to method 'lemke'"),
+    (dict(method="pgs", omega=2.0), r"omega must be in \(0, 2\); got 2.0"),
+    (dict(method="pgs", omega=-1.0), r"omega must be a positive finite number; got -1.0"),
+    (dict(method="newton", beta=1.5), r"beta must be in \(0, 1\); got 1.5"),
+    (dict(method="lemke", pivot_tol=float("nan")), r"pivot_tol must be a positive finite number; got nan"),
+])
+def test_options_are_checked(options, match):
+    with pytest.raises(LCPError, match=match):
+        solve_lcp(np.eye(2), -np.ones(2), **options)
+
+
+def test_options_act():
+    M = random_p_matrix(np.random.default_rng(8), 10, "spd")
+    q = -np.ones(10)
+    plain, over = (solve_lcp(M, q, method="pgs", omega=omega, fast_paths=False) for omega in (1.0, 1.5))
+    assert plain.solved and over.solved and plain.iterations != over.iterations
+    np.testing.assert_allclose(over.z, plain.z, atol=1e-8)
+
+
+def test_a_changed_source_clears_the_compiled_caches_that_may_hold_an_old_copy_of_it(tmp_path):
+    from converters.lcp import cache
+    for name in cache.SOURCES:
+        (tmp_path / f"{name}.py").write_text(f"# {name}\n")
+    stale = tmp_path / "__pycache__"
+    stale.mkdir()
+    files = [stale / "lemke.run-40.py311.nbi", stale / "lemke.run-40.py311.nbc", stale / "engine.solve_once-9.py311.nbc",
+             stale / "kernels.solve_augmented-14.py311.nbi", stale / "other.py311.pyc"]
+    for path in files:
+        path.write_text("x")
+    assert cache.refresh(tmp_path)                               # no stamp yet: cleared
+    assert [p.exists() for p in files] == [False, False, False, True, True]   # kernels' own cache: numba's job
+    files[0].write_text("x")
+    assert not cache.refresh(tmp_path) and files[0].exists()     # unchanged sources: kept
+    (tmp_path / "result.py").write_text("# result, changed\n")   # a callee changed: its callers' copies go
+    assert cache.refresh(tmp_path) and not files[0].exists()
