@@ -7,7 +7,7 @@ STAMP := $(VENV)/.installed-stamp
 SUDO := $(shell [ "$$(id -u)" -eq 0 ] || echo sudo)
 SUITE ?= default
 
-.PHONY: all setup system-deps siconos test report bench clean
+.PHONY: all setup system-deps siconos warm test report bench clean
 
 all: test
 
@@ -34,7 +34,13 @@ $(STAMP): pyproject.toml
 
 setup: system-deps $(STAMP)
 
-test: setup
+# numba compiles the kernels once per checkout (about 30 s, cached on disk beside the sources): pay it here, once,
+# rather than inside the first tests that happen to call them (some of which have time bounds)
+warm: setup
+	$(VENV)/bin/pcsuite simulate buck --periods 2 --json > /dev/null
+	$(PY) -c "import numpy as np; from converters.lcp import solve_lcp; solve_lcp(np.eye(3), -np.ones(3))"
+
+test: setup warm
 	$(PY) -m pytest -q
 
 report: setup

@@ -3,7 +3,8 @@
 ``run_converter`` resolves the model and its parameters, builds the method from command-line style
 options (:meth:`~converters.methods.base.Method.from_options`), picks h and the duration, and either
 simulates (split at the model's load steps) or, with ``steady``, finds the method's own periodic orbit
-by Newton shooting (:mod:`converters.analysis.periodic`) and simulates the last periods from it. The
+by Newton shooting (:mod:`converters.analysis.periodic`) and simulates the periods asked for from it (the
+stepper on the same step plan as Newton's period map). The
 Trajectory carries the model's labels (signals ``vout``, ``switch``, ..., and modes) and the run's
 metadata: model, control, params, method options, periods, and the orbit's statistics.
 """
@@ -17,13 +18,19 @@ import numpy as np
 from .analysis.periodic import PeriodicOrbit, require, shoot
 from .errors import ParameterError, SimulationError
 from .methods.base import Method, get_method
+from .methods.theta import StepPlanMap
 from .models import Model, check_h, get_model
 from .simulate import simulate
 from .trajectory import Trajectory, concatenate
 from .validate import parse_value
 
-#: Periods simulated from rest before Newton shooting starts (its first guess), and from the orbit after.
-WARM_UP_PERIODS = 20
+#: Periods simulated from x0 before Newton shooting starts: none. With the exact Jacobian Newton starts from x0
+#: itself; where no fraction of its step lowers the residual (far from the orbit, off its mode sequence) it takes
+#: a plain period instead, so the warm-up is only as long as the map needs (the buck's D and R sweeps of
+#: benchmarks/steady_rate.py: 3.8-4.9 periods per point in all, against 20 fixed ones plus Newton's 5 before; the
+#: same orbits, and the same modes at all 3,600 points of the four GDCM maps). Periods returned on the orbit by
+#: default: STEADY_PERIODS.
+WARM_UP_PERIODS = 0
 STEADY_PERIODS = 20
 DEFAULT_PERIODS = 500
 #: Duration of a run of a model without a fixed period (s), when none is given.
@@ -92,11 +99,12 @@ def run_converter(name_or_model, params: dict | None = None, *, control: str = "
         Duration in s or in switching periods (default 500 periods; with ``steady``, the span returned on the
         orbit, default 20 periods).
     steady : bool
-        Run to the method's own periodic orbit: ``WARM_UP_PERIODS`` from x0, then Newton shooting on the
-        method's period map with its exact Jacobian until the estimated distance to the orbit is below
-        ``steady_tol`` / 10 (relative); the span asked for (default ``STEADY_PERIODS`` periods) is then
-        simulated from the orbit and returned (its time starts at 0; ``metadata['steady_periods']`` counts
-        every period simulated: warm-up, Newton's and the span returned).
+        Run to the method's own periodic orbit: Newton shooting from x0 (``WARM_UP_PERIODS`` plain periods
+        first: none) on the method's period map with its exact Jacobian until the estimated distance to the
+        orbit is below ``steady_tol`` / 10 (relative); the span asked for (default ``STEADY_PERIODS`` periods)
+        is then simulated from the orbit and returned (its time starts at 0; ``metadata['steady_periods']``
+        counts every period simulated: Newton's, its plain periods and the span returned). The stepper builds
+        its step plan once per operating point: Newton's map and the span returned share it.
         A run that cannot reach the orbit, or whose orbit is unstable (the circuit would not settle on it), raises
         SimulationError with the reason.
     x0 : array_like, optional
@@ -129,7 +137,7 @@ def run_converter(name_or_model, params: dict | None = None, *, control: str = "
     meta = {"model": model.name, "control": model.control, "params": p, "method_options": method.options(),
             "method_object": method}
     if steady:
-        orbit = steady_state(model, p, method, x0=x0, tol=0.1 * steady_tol)
+        orbit, period_map = _orbit_and_map(model, p, method, x0=x0, tol=0.1 * steady_tol)
         if not orbit.stable:
             # A fixed point of the period map the circuit does not settle on is no steady state.
             mu = orbit.multipliers[0]
@@ -138,7 +146,7 @@ def run_converter(name_or_model, params: dict | None = None, *, control: str = "
                 f"a multiplier at {mu.real:.6g}{f'{mu.imag:+.3g}j' if abs(mu.imag) > 1e-12 else ''}): the circuit "
                 "settles elsewhere (a period-doubled orbit, or chaos); run --periods N without --steady, or follow "
                 "its orbits with pcsuite bifurcation")
-        tr = simulate(model.problem(p, span, orbit.x0), method)
+        tr = _on_orbit(model, p, method, period_map, orbit.x0, span)
         simulated = orbit.evaluations + span / T        # the warm-up and Newton's spans, then the output
         # periods: what the returned run spans; steady_periods: every period simulated to get there and it
         meta.update(periods=int(round(span / T)), steady_periods=int(round(simulated)), orbit=orbit.summary())
@@ -197,21 +205,37 @@ def _simulate_phases(model: Model, p: dict, method: Method, t_end: float, x0) ->
 def steady_state(model: Model, p: dict, method: Method, *, x0=None, warm_up: int = WARM_UP_PERIODS,
                  tol: float = 1e-10, periods: int = 1) -> PeriodicOrbit:
     """The method's own periodic orbit of ``model`` at ``p`` (raises SimulationError when Newton fails)."""
+    return _orbit_and_map(model, p, method, x0=x0, warm_up=warm_up, tol=tol, periods=periods)[0]
+
+
+def _orbit_and_map(model: Model, p: dict, method: Method, *, x0=None, warm_up: int = WARM_UP_PERIODS, tol: float = 1e-10,
+           periods: int = 1):
+    """(orbit, period map): :func:`steady_state` and the map it shot on (its step plan, for the stepper,
+    serves the run on the orbit too: :func:`_on_orbit`)."""
     problem = model.problem(p, periods * model.period(p), x0)
-    return require(shoot(problem, method, problem.x0, periods=periods, warm_up=warm_up, tol=tol),
-                   f"the periodic orbit of {model.key}")
+    period_map = method.period_map(problem)
+    orbit = shoot(problem, method, problem.x0, periods=periods, warm_up=warm_up, tol=tol, period_map=period_map)
+    return require(orbit, f"the periodic orbit of {model.key}"), period_map
+
+
+def _on_orbit(model: Model, p: dict, method: Method, period_map, x0, span: float) -> Trajectory:
+    """The run over [0, span] from x0 (on the orbit): the stepper repeats the step plan of its period map (grid
+    and matrices built once per operating point); any other method simulates the model's problem."""
+    if isinstance(period_map, StepPlanMap):
+        return period_map.plan.spanning(span, x0).trajectory(x0)
+    return simulate(model.problem(p, span, x0), method)
 
 
 def steady_orbit(name_or_model, params: dict | None = None, *, method: str | Method = "lcp", h=None,
-                 tol: float = 1e-8, warm_up: int = 5, **options) -> Trajectory:
-    """One period of the method's periodic orbit, labelled (conduction modes, maps, GDCM): a few warm-up
-    periods from rest, Newton shooting, one reused step plan. ``metadata['orbit']`` holds the orbit's
-    statistics (residual, distance, multipliers)."""
+                 tol: float = 1e-8, warm_up: int = WARM_UP_PERIODS, **options) -> Trajectory:
+    """One period of the method's periodic orbit, labelled (conduction modes, maps, GDCM): Newton shooting
+    from rest (after ``warm_up`` plain periods), one step plan for Newton and the period returned.
+    ``metadata['orbit']`` holds the orbit's statistics (residual, distance, multipliers)."""
     model = resolve_model(name_or_model)
     p = model.resolve(params)
     method = make_method(model, p, method, h, **options)
-    orbit = steady_state(model, p, method, warm_up=warm_up, tol=tol)
-    tr = simulate(model.problem(p, model.period(p), orbit.x0), method)
+    orbit, period_map = _orbit_and_map(model, p, method, warm_up=warm_up, tol=tol)
+    tr = _on_orbit(model, p, method, period_map, orbit.x0, model.period(p))
     return replace(tr, labels=model.labels(p),
                    metadata={**tr.metadata, "model": model.name, "params": p, "orbit": orbit.summary()})
 

@@ -19,6 +19,7 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
+from numba import njit
 
 from ..errors import ParameterError, SimulationError
 from ..problems import LCSProblem
@@ -89,11 +90,53 @@ def multipliers_of(jacobian: np.ndarray) -> np.ndarray:
     return values[np.argsort(-np.abs(values), kind="stable")]
 
 
-def _distance(step: np.ndarray, residual_vector: np.ndarray, rho: float, scale: float) -> float:
-    newton = float(np.abs(step).max()) / scale
+@njit(cache=True)
+def newton_step(x, px, jac, step, work):
+    """The arithmetic of one Newton iteration on P(x) - x = 0 (compiled: the serial engine and the batched
+    steady states, :mod:`converters.sweeps.batch`, share it). Fills ``step`` with the Newton step dx,
+    (jac - I) dx = -(P(x) - x) (Gaussian elimination with partial pivoting on ``work``, n x (n + 1)).
+
+    Returns (residual, worst, rho, distance, solved): worst = max |P(x) - x|, residual = worst / scale with
+    scale = 1 + max |x|; rho the spectral radius of jac; distance = max(max |dx|, worst / (1 - rho) when
+    rho < 1) / scale, the estimated distance to the orbit; solved False when jac - I is singular (a pivot
+    exactly 0: a multiplier at 1), step and distance then undefined."""
+    n = x.shape[0]
+    scale = 1.0
+    worst = 0.0
+    for i in range(n):
+        scale = max(scale, 1.0 + abs(x[i]))
+        worst = max(worst, abs(px[i] - x[i]))
+    rho = np.abs(np.linalg.eigvals(jac.astype(np.complex128))).max()   # complex: real matrices may have complex roots
+    for i in range(n):
+        for l in range(n):
+            work[i, l] = jac[i, l] - (1.0 if i == l else 0.0)
+        work[i, n] = x[i] - px[i]
+    for col in range(n):
+        pivot = col
+        for row in range(col + 1, n):
+            if abs(work[row, col]) > abs(work[pivot, col]):
+                pivot = row
+        for cc in range(n + 1):
+            tmp = work[col, cc]
+            work[col, cc] = work[pivot, cc]
+            work[pivot, cc] = tmp
+        if work[col, col] == 0.0:
+            return worst / scale, worst, rho, np.inf, False
+        for row in range(col + 1, n):
+            f = work[row, col] / work[col, col]
+            for cc in range(col, n + 1):
+                work[row, cc] -= f * work[col, cc]
+    largest = 0.0
+    for row in range(n - 1, -1, -1):
+        acc = work[row, n]
+        for l in range(row + 1, n):
+            acc -= work[row, l] * step[l]
+        step[row] = acc / work[row, row]
+        largest = max(largest, abs(step[row]))
+    distance = largest / scale
     if rho < 1.0:
-        return float(max(newton, float(np.abs(residual_vector).max()) / (1.0 - rho) / scale))
-    return newton
+        distance = max(distance, worst / (1.0 - rho) / scale)
+    return worst / scale, worst, rho, distance, True
 
 
 def newton_orbit(period_map, x_guess, *, tol: float = 1e-10, max_iter: int = 50, period: float = np.nan,
@@ -102,25 +145,21 @@ def newton_orbit(period_map, x_guess, *, tol: float = 1e-10, max_iter: int = 50,
     ``polish``: return x + the last Newton step (within about its square of the orbit) instead of x."""
     x = np.array(x_guess, dtype=float)
     n = x.size
-    eye = np.eye(n)
+    step, work = np.empty(n), np.empty((n, n + 1))
     px, jac = period_map(x)
     distance, residual, message, relaxations = np.inf, np.inf, "", 0
     for iteration in range(max_iter + 1):
-        r = px - x
-        scale = 1.0 + np.abs(x).max()
-        residual = float(np.abs(r).max() / scale)
-        multipliers = multipliers_of(jac)
-        rho = float(np.abs(multipliers).max())
-        try:
-            step = np.linalg.solve(jac - eye, -r)
-        except np.linalg.LinAlgError:
+        residual, worst, rho, estimate, solved = newton_step(x, np.asarray(px, dtype=float),
+                                                             np.asarray(jac, dtype=float), step, work)
+        if not solved:
             message = ("the period map's Jacobian has a multiplier at 1 (the orbit is not isolated: an undamped "
                        "or marginal circuit)")
             break
-        distance = _distance(step, r, rho, scale)
+        distance = estimate
         if distance <= tol:
-            return PeriodicOrbit(x + step if polish else x, getattr(period_map, "period", period), jac, multipliers,
-                                 residual, distance, iteration, period_map.evaluations, True, period_map.jacobian_kind)
+            return PeriodicOrbit(x + step if polish else x, getattr(period_map, "period", period), jac,
+                                 multipliers_of(jac), residual, distance, iteration, period_map.evaluations, True,
+                                 period_map.jacobian_kind)
         if residual <= ROUNDING * np.finfo(float).eps:
             message = (f"the residual is at the rounding level of the map and 1 - rho = {1.0 - rho:.3g} amplifies it: "
                        f"the orbit is resolved to ~{distance:.3g} in double precision, not to the tolerance asked for")
@@ -133,13 +172,14 @@ def newton_orbit(period_map, x_guess, *, tol: float = 1e-10, max_iter: int = 50,
         # map can point past a change of mode sequence). If no fraction of it helps, the state is still far
         # from the orbit (a start-up transient): take one period of the map itself and try Newton again.
         accepted = False
+        dx = step.copy()
         for _ in range(8):
-            trial = x + step
+            trial = x + dx
             p_trial, jac_trial = period_map(trial)
-            if np.all(np.isfinite(p_trial)) and np.abs(p_trial - trial).max() < np.abs(r).max():
+            if np.abs(p_trial - trial).max() < worst:       # False when P(trial) is not finite (inf, nan)
                 accepted = True
                 break
-            step = 0.5 * step
+            dx = 0.5 * dx
         if not accepted:
             relaxations += 1
             trial = px
@@ -155,19 +195,20 @@ def newton_orbit(period_map, x_guess, *, tol: float = 1e-10, max_iter: int = 50,
 
 
 def shoot(problem: LCSProblem, method, x_guess=None, *, periods: int = 1, warm_up: int = 0, tol: float = 1e-10,
-          max_iter: int = 50, polish: bool = False) -> PeriodicOrbit:
+          max_iter: int = 50, polish: bool = False, period_map=None) -> PeriodicOrbit:
     """The method's periodic orbit of a periodically switched problem (period T of its switching law).
 
     ``periods``: the orbit's period in switching periods (a period-m orbit); ``warm_up``: periods simulated
     from ``x_guess`` (default problem.x0) before Newton starts, so that it begins on the right sequence of
-    modes. The problem's own t_span is ignored (only its start)."""
+    modes. The problem's own t_span is ignored (only its start). ``period_map``: the method's map over
+    [t0, t0 + periods T] when the caller has built it already (to reuse its plan after the orbit is found)."""
     T = problem.period
     if not np.isfinite(T):
         raise SimulationError("shoot() needs a periodic switching law (a schedule or a ramp); for an autonomous "
                               "state-switched problem use autonomous_orbit()")
-    t0 = problem.t_span[0]
-    one = replace(problem, t_span=(t0, t0 + periods * T))
-    period_map = method.period_map(one)
+    if period_map is None:
+        t0 = problem.t_span[0]
+        period_map = method.period_map(replace(problem, t_span=(t0, t0 + periods * T)))
     x = np.array(problem.x0 if x_guess is None else x_guess, dtype=float)
     for _ in range(warm_up):
         x = period_map.end(x)

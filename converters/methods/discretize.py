@@ -1,4 +1,4 @@
-"""The one-step matrices of the theta-method: the only place their formulas live.
+"""The one-step matrices of the theta-method.
 
 For a configuration (A, B, C, D, E, F), a step dt and theta:
     W     = (I - dt theta A)^-1
@@ -6,6 +6,14 @@ For a configuration (A, B, C, D, E, F), a step dt and theta:
     Gamma = dt W E
     H     = dt W B                          x_{k+1} = x_free + H u_{k+1}
     M     = D + C H                         q = C x_free + F,  y_{k+1} = q + M u_{k+1}
+
+and the same step as affine maps of x_k (:func:`.theta_kernels.branch_maps`): q = CPhi x_k + q0 with
+CPhi = C Phi, q0 = C Gamma + F; for one pair, x_{k+1} = Phi_b[0] x_k + Gamma_b[0] when it is free (q >= 0)
+and Phi_b[1] x_k + Gamma_b[1] = (Phi - H CPhi / M) x_k + Gamma - H q0 / M when it is held (q < 0).
+
+The arithmetic is :func:`.theta_kernels.theta_matrices` (compiled, one elimination per set), the one the
+state-driven loops and the batched steady states use too: a plan's matrices are the same to the last bit
+whichever path builds them.
 """
 from __future__ import annotations
 
@@ -14,13 +22,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..problems import Configuration
+from .theta_kernels import set_matrices
 
 
 @dataclass(frozen=True)
 class StepMatrices:
     """Stacked one-step matrices; entry s is one (configuration, dt) pair.
 
-    Shapes: Phi (m, n, n), Gamma (m, n), H (m, n, k), C (m, k, n), F (m, k), M (m, k, k).
+    Shapes: Phi (m, n, n), Gamma (m, n), H (m, n, k), C (m, k, n), F (m, k), M (m, k, k); the affine maps
+    (module docstring) Phi_b (m, 2, n, n), Gamma_b (m, 2, n) (branch 0: every pair free; 1: the one pair
+    held), CPhi (m, k, n), q0 (m, k).
     """
 
     Phi: np.ndarray
@@ -29,23 +40,29 @@ class StepMatrices:
     C: np.ndarray
     F: np.ndarray
     M: np.ndarray
+    Phi_b: np.ndarray
+    Gamma_b: np.ndarray
+    CPhi: np.ndarray
+    q0: np.ndarray
+
+    def __len__(self) -> int:
+        return self.Phi.shape[0]
+
+    def concatenate(self, other: "StepMatrices") -> "StepMatrices":
+        """These sets followed by ``other``'s."""
+        return StepMatrices(*(np.ascontiguousarray(np.concatenate([getattr(self, f), getattr(other, f)]))
+                              for f in self.__dataclass_fields__))
 
 
 def step_matrices(configs: list[Configuration], dts: np.ndarray, theta: float) -> StepMatrices:
-    """One-step matrices for configs[i] over dts[i], batched (one LAPACK call for all of them)."""
-    dts = np.asarray(dts, dtype=float)
-    A = np.stack([c.A for c in configs])
-    B = np.stack([c.B for c in configs])
-    E = np.stack([c.E for c in configs])
-    C = np.stack([c.C for c in configs])
-    n = A.shape[1]
-    eye = np.eye(n)[None]
-    lhs = eye - (dts * theta)[:, None, None] * A
-    rhs_phi = eye + (dts * (1.0 - theta))[:, None, None] * A
-    # Solve for [Phi | W E | W B] at once.
-    rhs = np.concatenate([rhs_phi, (dts[:, None] * E)[:, :, None], dts[:, None, None] * B], axis=2)
-    sol = np.linalg.solve(lhs, rhs)
-    Phi, Gamma, H = sol[:, :, :n], sol[:, :, n], sol[:, :, n + 1:]
-    M = np.stack([c.D for c in configs]) + C @ H
-    F = np.stack([c.F for c in configs])
-    return StepMatrices(*(np.ascontiguousarray(a) for a in (Phi, Gamma, H, C, F, M)))
+    """One-step matrices for configs[i] over dts[i], and their affine maps (one compiled call for all of them:
+    :func:`.theta_kernels.theta_matrices`, the formulas above, as the batched steady states use them)."""
+    dts = np.ascontiguousarray(dts, dtype=float)
+    A, B, C, D, E, F = (np.stack([getattr(c, key) for c in configs]) for key in "ABCDEF")
+    sets, n, k = A.shape[0], A.shape[1], B.shape[2]
+    Phi, Gamma, H, M = np.empty((sets, n, n)), np.empty((sets, n)), np.empty((sets, n, k)), np.empty((sets, k, k))
+    Phi_b, Gamma_b = np.empty((sets, 2, n, n)), np.empty((sets, 2, n))
+    CPhi, q0 = np.empty((sets, k, n)), np.empty((sets, k))
+    if not set_matrices(A, B, C, D, E, F, dts, float(theta), Phi, Gamma, H, M, Phi_b, Gamma_b, CPhi, q0):
+        raise np.linalg.LinAlgError("Singular matrix")
+    return StepMatrices(Phi, Gamma, H, C, F, M, Phi_b, Gamma_b, CPhi, q0)

@@ -12,7 +12,8 @@ two sub-steps); the implicit :class:`Relay` in :func:`.theta_kernels.run_relay` 
 k + 2 per step).
 
 The period map of a scheduled run has an exact Jacobian: the product of the one-step derivatives
-Phi - H_J M_JJ^-1 C_J Phi over the run (:func:`.theta_kernels.step_jacobian`).
+Phi - H_J M_JJ^-1 C_J Phi over the run (:func:`.theta_kernels.step_jacobian`; with one pair, each step's
+own affine map).
 """
 from __future__ import annotations
 
@@ -28,8 +29,8 @@ from ..problems import LCSProblem, Relay, Schedule, StateSwitching
 from ..trajectory import Trajectory
 from .base import Method, PeriodMap, check_step_and_theta
 from .discretize import step_matrices
-from .theta_kernels import (EVENTS_FULL, NO_SOLUTION, OK, run_relay, run_state_switched, run_steps,
-                            step_jacobian)
+from .theta_kernels import (EVENTS_FULL, NO_SOLUTION, OK, register_state, run_relay, run_state_switched,
+                            run_steps, step_jacobian)
 
 
 @dataclass(frozen=True)
@@ -110,102 +111,187 @@ def time_grid(problem: LCSProblem, h: float) -> np.ndarray:
     breaks = problem.switching.breakpoints(t0, t1)
     if breaks.size == 0:
         return uniform
-    nearest = np.searchsorted(breaks, uniform)
-    gap = np.full(uniform.shape, np.inf)
-    inside = nearest < breaks.size
-    gap[inside] = np.abs(breaks[nearest[inside]] - uniform[inside])
-    before = nearest > 0
-    gap[before] = np.minimum(gap[before], np.abs(uniform[before] - breaks[nearest[before] - 1]))
+    nearest = np.searchsorted(breaks, uniform)         # breaks[nearest - 1] < uniform <= breaks[nearest]
+    bounded = np.concatenate(([-np.inf], breaks, [np.inf]))
+    gap = np.minimum(bounded[nearest + 1] - uniform, uniform - bounded[nearest])     # to the nearer switching
     keep = (gap > 1e-3 * h)
     keep[0] = keep[-1] = True
-    return np.union1d(uniform[keep], breaks)
+    grid = np.concatenate((uniform[keep], breaks))
+    grid.sort()
+    return np.unique(grid) if (grid[1:] == grid[:-1]).any() else grid      # np.union1d, without its overhead
 
 
 def _step_sets(dt: np.ndarray, step_config: np.ndarray, h: float, n_configs: int):
     """Matrix set of each step: sets 0..m-1 are the uniform step h in each configuration, then one per
     distinct (configuration, shorter step) at the switching instants. Returns (which, set_configs, set_dts)."""
-    which = step_config.astype(np.int64)
+    which = step_config.astype(np.int32)
     split = np.flatnonzero(np.abs(dt - h) > 1e-9 * h)
     # key = configuration * 2 + fraction of h (in (0, 1.001]): one float per split step, unique by value
     keys = step_config[split] * 2.0 + np.round(dt[split] / h, 10)
-    _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
+    if keys.size <= 64:          # a period's few split steps: np.unique's sets (sorted keys), without its overhead
+        listed = keys.tolist()
+        distinct = sorted(set(listed))
+        first = [listed.index(key) for key in distinct]
+        inverse = np.array([distinct.index(key) for key in listed], dtype=np.int32)
+    else:
+        _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
     which[split] = n_configs + inverse
     set_configs = list(range(n_configs)) + [int(c) for c in step_config[split][first]]
     set_dts = np.concatenate([np.full(n_configs, h), dt[split][first]])
     return which, set_configs, set_dts
 
 
-def _plan_arrays(problem: LCSProblem, h: float):
-    """(t, step_config, which, set_configs, set_dts) of a run.
-
-    When the period is a whole number of steps and the run starts at 0, one period is built and
-    repeated (the split steps at the switching instants are then the same in every period: one
-    matrix set each); otherwise the whole grid is built and sorted by :func:`time_grid`."""
+def _period_grid(problem: LCSProblem, h: float):
+    """One period of a run that repeats it, from 0: (local grid [0, T] with the switching instants, each
+    step's configuration, each step's matrix set, set_configs, set_dts); None when the run does not repeat
+    a period of whole steps (no period, T not a whole number of steps, a start other than 0)."""
     schedule = problem.switching
-    t0, t1 = problem.t_span
     T, n_configs = schedule.period, len(problem.configurations)
     per_period = T / h if np.isfinite(T) else 0.0
     steps = int(round(per_period))
-    periods = int(np.ceil(t1 / T * (1.0 - 1e-12))) if np.isfinite(T) else 0
-    if (not np.isfinite(T) or steps < 1 or abs(per_period - steps) > 1e-9 * per_period or t0 != 0.0
-            or periods * (steps + len(schedule.starts)) > MAX_STEPS):
-        t = time_grid(problem, h)
-        step_config = schedule.config_at(0.5 * (t[:-1] + t[1:]))
-        return (t, step_config, *_step_sets(np.diff(t), step_config, h, n_configs))
-    local = time_grid(replace(problem, t_span=(0.0, T)), h)              # [0, T] with the breakpoints
+    if not np.isfinite(T) or steps < 1 or abs(per_period - steps) > 1e-9 * per_period or problem.t_span[0] != 0.0:
+        return None
+    one = problem if problem.t_span == (0.0, T) else replace(problem, t_span=(0.0, T))
+    local = time_grid(one, h)                                            # [0, T] with the breakpoints
     local_config = schedule.config_at(0.5 * (local[:-1] + local[1:]))
     local_which, set_configs, set_dts = _step_sets(np.diff(local), local_config, h, n_configs)
-    t = (np.arange(periods)[:, None] * T + local[None, :-1]).ravel()
-    t = np.append(t[t < t1 - 1e-3 * h], t1)
-    count = t.size - 1
-    which = np.tile(local_which, periods)[:count]
-    step_config = np.tile(local_config, periods)[:count]
+    return local, local_config, local_which, set_configs, set_dts
+
+
+def _repeat_period(period, T: float, t1: float, h: float):
+    """(t, config, which, set_configs, set_dts) of the run over [0, t1] made of the period repeated (config:
+    the configuration at each grid point, :attr:`StepPlan.config`); a run that ends inside a step gets that
+    step's own matrix set (the last one). Each array is written once, in place (no temporaries of the run's
+    size: a steady-state point allocates little more than the run it returns)."""
+    local, local_config, local_which, set_configs, set_dts = period
+    periods, steps = int(np.ceil(t1 / T * (1.0 - 1e-12))), local.size - 1
+    grid = np.empty(periods * steps + 1)
+    np.add(np.arange(periods)[:, None] * T, local[None, :-1], out=grid[:-1].reshape(periods, steps))   # increasing
+    count = int(np.searchsorted(grid[:-1], t1 - 1e-3 * h))                   # the grid points before t1
+    t = grid[:count + 1]
+    t[count] = t1
+    configs = np.empty(periods * steps + 1, dtype=local_config.dtype)
+    configs[1:].reshape(periods, steps)[:] = local_config
+    configs[0] = local_config[0]
+    config = configs[:count + 1]
+    step_config = config[1:]
+    which = np.empty(periods * steps, dtype=local_which.dtype)
+    which.reshape(periods, steps)[:] = local_which
+    which = which[:count]
     last_dt, nominal = t[-1] - t[-2], set_dts[which[-1]]
     if abs(last_dt - nominal) > 1e-9 * h:    # the run ends inside a step: its own matrix set
         which[-1] = len(set_configs)
         set_configs = set_configs + [int(step_config[-1])]
         set_dts = np.append(set_dts, last_dt)
-    return t, step_config, which, set_configs, set_dts
+    return t, config, which, set_configs, set_dts
+
+
+def _too_long(problem: LCSProblem, h: float) -> bool:
+    """More than MAX_STEPS steps in the repeated grid (the general grid then refuses the run)."""
+    T, t1 = problem.switching.period, problem.t_span[1]
+    periods = int(np.ceil(t1 / T * (1.0 - 1e-12)))
+    return periods * (int(round(T / h)) + len(problem.switching.starts)) > MAX_STEPS
+
+
+def _plan_arrays(problem: LCSProblem, h: float):
+    """(t, step_config, which, set_configs, set_dts) of a run (:func:`_plan`; step_config: each step's
+    configuration)."""
+    t, config, which, set_configs, set_dts = _plan(problem, h)
+    return t, config[1:], which, set_configs, set_dts
+
+
+def _plan(problem: LCSProblem, h: float, period=None):
+    """(t, config, which, set_configs, set_dts) of a run: config the configuration at each grid point (each
+    step's, the first step's at t0), which each step's matrix set.
+
+    When the period is a whole number of steps and the run starts at 0, one period is built
+    (:func:`_period_grid`, or ``period`` when given) and repeated (the split steps at the switching instants
+    are then the same in every period: one matrix set each); otherwise the whole grid is built and sorted by
+    :func:`time_grid`."""
+    period = _period_grid(problem, h) if period is None else period
+    if period is None or _too_long(problem, h):
+        t = time_grid(problem, h)
+        config = np.empty(t.size, dtype=np.int64)
+        config[1:] = problem.switching.config_at(0.5 * (t[:-1] + t[1:]))
+        config[0] = config[1]
+        return (t, config, *_step_sets(np.diff(t), config[1:], h, len(problem.configurations)))
+    return _repeat_period(period, problem.switching.period, problem.t_span[1], h)
 
 
 @dataclass(frozen=True)
 class StepPlan:
     """Everything about a run that does not depend on the initial state: the time grid, the
     configuration of each step and the one-step matrix set each step uses. Reused by shooting
-    (one period map, many initial states) without rebuilding anything."""
+    (one period map, many initial states) without rebuilding anything, and over a longer span
+    (:meth:`spanning`: the same period's grid and matrix sets repeated)."""
 
     problem: LCSProblem
     method: Theta
     t: np.ndarray
-    step_config: np.ndarray
+    #: The configuration at each grid point: each step's (step j at config[j + 1]), the first step's at t0.
+    config: np.ndarray
     which: np.ndarray
     mats: object
+    #: The period the grid repeats (:func:`_period_grid`), or None.
+    period: tuple | None = None
 
     @classmethod
     def build(cls, problem: LCSProblem, method: Theta) -> "StepPlan":
-        t, step_config, which, set_configs, set_dts = _plan_arrays(problem, method.h)
+        period = _period_grid(problem, method.h)
+        t, config, which, set_configs, set_dts = _plan(problem, method.h, period)
         mats = step_matrices([problem.configurations[c] for c in set_configs], set_dts, method.theta)
-        return cls(problem, method, t, step_config, which, mats)
+        return cls(problem, method, t, config, which, mats, period)
+
+    @property
+    def step_config(self) -> np.ndarray:
+        """Each step's configuration."""
+        return self.config[1:]
+
+    def spanning(self, t_end: float, x0=None) -> "StepPlan":
+        """The plan of the same problem over [t0, t_end] (from x0, default the problem's): the period's grid
+        and matrix sets repeated when the plan has a period (one more set when the run ends inside a
+        step), otherwise built anew. The run's memory is checked first, as
+        :func:`~converters.simulate.simulate` does."""
+        problem = replace(self.problem, t_span=(self.problem.t_span[0], t_end),
+                          x0=self.problem.x0 if x0 is None else x0)
+        self.method.check_memory(problem)
+        if self.period is None or _too_long(problem, self.method.h):
+            return StepPlan.build(problem, self.method)
+        t, config, which, set_configs, set_dts = _repeat_period(self.period, problem.switching.period, t_end,
+                                                                self.method.h)
+        mats = self.mats
+        if len(set_configs) > len(mats):          # the run ends inside a step
+            extra = step_matrices([problem.configurations[c] for c in set_configs[len(mats):]],
+                                  set_dts[len(mats):], self.method.theta)
+            mats = mats.concatenate(extra)
+        return StepPlan(problem, self.method, t, config, which, mats, self.period)
 
     def advance(self, x0):
         """Run every step from x0: (x, u, y, general_solves), arrays of shape (N, n), (N, k), (N, k)."""
-        problem, mats, which, t = self.problem, self.mats, self.which, self.t
-        x_init = np.asarray(x0, dtype=float)
-        if x_init.shape != (problem.n,) or not np.all(np.isfinite(x_init)):
-            raise ParameterError(f"x0 must be {problem.n} finite numbers; got {x0!r}")
-        N, n, k = t.shape[0], problem.n, problem.k
+        problem = self.problem
+        x_init = _checked_start(problem, x0)
+        N, n, k = self.t.shape[0], problem.n, problem.k
         x = np.empty((N, n))
         u = np.zeros((N, k))
         y = np.empty((N, k))
         x[0] = x_init
-        u[0], y[0] = _initial_pair(problem, int(self.step_config[0]), x_init)
+        u[0], y[0] = _initial_pair(problem, int(self.config[0]), x_init)
+        return x, u, y, self.steps(x, u, y)
+
+    def steps(self, x, u, y) -> int:
+        """Every step from x[0], in place of rows 1.. of x, u, y (u[0], y[0] are not read); returns the
+        number of steps solved by the general LCP solver."""
+        mats, which, t = self.mats, self.which, self.t
+        k = self.problem.k
         inline = k <= MAX_INLINE_K
+        state = register_state(self.problem.n)
         general_solves = 0
         j = 0
         while True:
-            status, j = run_steps(which, mats.Phi, mats.Gamma, mats.H, mats.C, mats.F, mats.M, x, u, y, j, inline)
+            status, j = run_steps(which, mats.Phi, mats.Gamma, mats.H, mats.C, mats.F, mats.M, mats.Phi_b,
+                                  mats.Gamma_b, mats.CPhi, mats.q0, x, u, y, j, inline, state)
             if status == OK:
-                return x, u, y, general_solves
+                return general_solves
             s = which[j]
             x_free = mats.Phi[s] @ x[j] + mats.Gamma[s]
             q = mats.C[s] @ x_free + mats.F[s]
@@ -226,33 +312,47 @@ class StepPlan:
     def jacobian(self, u: np.ndarray) -> np.ndarray:
         """d x_end / d x0 of the run that produced the multipliers ``u`` (exact; see the module docstring)."""
         jac = np.eye(self.problem.n)
-        step_jacobian(self.which, u, self.mats.Phi, self.mats.H, self.mats.C, self.mats.M, jac)
+        step_jacobian(self.which, u, self.mats.Phi_b, self.mats.H, self.mats.CPhi, self.mats.M, jac)
         return jac
 
     def trajectory(self, x0, wall_s: float = 0.0) -> Trajectory:
         start_clock = time.perf_counter()
         x, u, y, general_solves = self.advance(x0)
-        config = np.concatenate([self.step_config[:1], self.step_config])
-        events = _events(self.t, u, y, config, self.mats.M, self.which)
-        return _trajectory(self.problem, self.method, self.t, x, u, y, config, events,
+        events = _events(self.t, u, y, self.config, self.mats.M, self.which)
+        return _trajectory(self.problem, self.method, self.t, x, u, y, self.config, events,
                            wall_s + time.perf_counter() - start_clock, general_solves=general_solves)
 
 
+def _checked_start(problem: LCSProblem, x0) -> np.ndarray:
+    x_init = np.asarray(x0, dtype=float)
+    if x_init.shape != (problem.n,) or not np.isfinite(x_init).all():
+        raise ParameterError(f"x0 must be {problem.n} finite numbers; got {x0!r}")
+    return x_init
+
+
 class StepPlanMap(PeriodMap):
-    """The stepper's map over a scheduled problem's span, with the exact Jacobian of the discrete map."""
+    """The stepper's map over a scheduled problem's span, with the exact Jacobian of the discrete map.
+    One plan and one set of run buffers serve every evaluation."""
 
     def __init__(self, plan: StepPlan):
         super().__init__()
         self.plan = plan
+        N, n, k = plan.t.shape[0], plan.problem.n, plan.problem.k
+        self._x, self._u, self._y = np.empty((N, n)), np.zeros((N, k)), np.empty((N, k))
+
+    def _run(self, x0) -> np.ndarray:
+        self._x[0] = _checked_start(self.plan.problem, x0)
+        self.plan.steps(self._x, self._u, self._y)
+        return self._x[-1].copy()
 
     def end(self, x0):
         self.evaluations += 1
-        return self.plan.advance(x0)[0][-1]
+        return self._run(x0)
 
     def __call__(self, x0):
         self.evaluations += 1
-        x, u, _, _ = self.plan.advance(x0)
-        return x[-1], self.plan.jacobian(u)
+        end = self._run(x0)
+        return end, self.plan.jacobian(self._u)
 
 
 def _trajectory(problem: LCSProblem, method: Theta, t, x, u, y, config, events, wall_s, relay=None,
@@ -370,7 +470,7 @@ def _events(t, u, y, config, M_stack, which) -> dict:
     Step j used the matrix set ``which[j]`` of ``M_stack``.
     """
     active = u > y
-    steps, pairs = np.nonzero(active[1:] != active[:-1])
+    steps, pairs = np.divmod(np.flatnonzero(active[1:] != active[:-1]), u.shape[1])   # np.nonzero's order, faster
     keep = (config[steps] == config[steps + 1]) | (steps == 0)
     steps, pairs = steps[keep], pairs[keep]
     m_ii = M_stack[which[steps], pairs, pairs]

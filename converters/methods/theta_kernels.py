@@ -1,32 +1,125 @@
 """Compiled hot loop of the theta stepper (numba, cached on disk): the per-step LCS update.
 
 Everything here works on plain arrays; the problem/method objects stay in Python.
+
+One complementarity pair (k = 1): each step is one of two affine maps of its start state x, chosen by the
+sign of the step LCP's q, itself affine in x (:func:`branch_maps` builds them once per matrix set):
+
+    q = CPhi x + q0                           (CPhi = C Phi, q0 = C Gamma + F)
+    q >= 0: u = 0,       x+ = Phi_b[0] x + Gamma_b[0]    (the pair free: Phi, Gamma)
+    q < 0:  u = -q / M,  x+ = Phi_b[1] x + Gamma_b[1]    (held: Phi - H CPhi / M, Gamma - H q0 / M)
+
+and y = q + M u. The serial loop (:func:`run_steps`), the batched steady states
+(:mod:`converters.sweeps.batch`) and the exact Jacobian (:func:`step_jacobian`: the held step's derivative is
+Phi_b[1], the free step's Phi_b[0]) all read these maps; x+ no longer waits on the division
+for u, so a step's dependency chain is one affine map.
 """
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from numba import njit, types
+from numba.cpython.unsafe.tuple import tuple_setitem
+from numba.extending import overload
 
 from ..lcp.kernels import _masks_by_size, solve_augmented, solve_small_lcp
 
 #: Status codes returned by :func:`run_steps`.
 OK, NEEDS_GENERAL_SOLVER, NO_SOLUTION = 0, 1, 2
 
+#: Up to this many states the one-pair loop carries the state in registers (a tuple of n floats, its
+#: length fixing n at compile time: one specialisation per n, cached); above it, in the rows of x
+#: (measured: registers 4.4 ns/step at n = 2, 7.1 at n = 4; rows 7.1 and 19.7; even at n = 8, 40 against 31).
+MAX_REGISTER_STATES = 6
+
+
+def register_state(n: int):
+    """The ``state`` argument of the one-pair loop: n zeros (the state in registers) or None (in x)."""
+    return (0.0,) * n if n <= MAX_REGISTER_STATES else None
+
+
+def _size(state, x):
+    """n: the length of the register tuple (a compile-time constant) or the width of x."""
+
+
+@overload(_size)
+def _size_impl(state, x):
+    if isinstance(state, types.UniTuple):
+        return lambda state, x: len(state)
+    return lambda state, x: x.shape[1]
+
+
+def _get(current, x, j, l):
+    """Component l of the state of row j: from the registers, or from x."""
+
+
+@overload(_get)
+def _get_impl(current, x, j, l):
+    if isinstance(current, types.UniTuple):
+        return lambda current, x, j, l: current[l]
+    return lambda current, x, j, l: x[j, l]
+
+
+def _put(state, x, j, i, value):
+    """Component i of the state of row j set to value, in x and (when it is a tuple) in the returned state."""
+
+
+@overload(_put)
+def _put_impl(state, x, j, i, value):
+    if isinstance(state, types.UniTuple):
+        def into_registers(state, x, j, i, value):
+            x[j, i] = value
+            return tuple_setitem(state, i, value)
+        return into_registers
+
+    def into_rows(state, x, j, i, value):
+        x[j, i] = value
+        return state
+    return into_rows
+
 
 @njit(cache=True)
-def run_steps(which, Phi, Gamma, H, C, F, M, x, u, y, start, inline):
+def branch_maps(Phi, Gamma, H, C, F, M, Phi_b, Gamma_b, CPhi, q0):
+    """The step as affine maps of its start state (module docstring), for every matrix set s, in place:
+    CPhi = C Phi (k, n) and q0 = C Gamma + F (k): the step LCP's q = CPhi x + q0; Phi_b[s, 0] = Phi,
+    Gamma_b[s, 0] = Gamma: every pair free; for one pair with M > 0, Phi_b[s, 1] = Phi - H CPhi / M and
+    Gamma_b[s, 1] = Gamma - H q0 / M: the pair held (u = -q / M). Otherwise (k > 1, or M <= 0 where a
+    held pair has no solution) Phi_b[s, 1], Gamma_b[s, 1] repeat the free branch and are never used."""
+    sets, n, k = Phi.shape[0], Phi.shape[1], H.shape[2]
+    for s in range(sets):
+        for i in range(k):
+            acc = F[s, i]
+            for r in range(n):
+                acc += C[s, i, r] * Gamma[s, r]
+            q0[s, i] = acc
+            for l in range(n):
+                acc = 0.0
+                for r in range(n):
+                    acc += C[s, i, r] * Phi[s, r, l]
+                CPhi[s, i, l] = acc
+        held = k == 1 and M[s, 0, 0] > 0.0
+        for i in range(n):
+            Gamma_b[s, 0, i] = Gamma[s, i]
+            Gamma_b[s, 1, i] = Gamma[s, i] - H[s, i, 0] * q0[s, 0] / M[s, 0, 0] if held else Gamma[s, i]
+            for l in range(n):
+                Phi_b[s, 0, i, l] = Phi[s, i, l]
+                Phi_b[s, 1, i, l] = Phi[s, i, l] - H[s, i, 0] * CPhi[s, 0, l] / M[s, 0, 0] if held else Phi[s, i, l]
+
+
+@njit(cache=True)
+def run_steps(which, Phi, Gamma, H, C, F, M, Phi_b, Gamma_b, CPhi, q0, x, u, y, start, inline, state):
     """Advance x, u, y from row ``start`` to the end; step j uses the matrix set ``which[j]``.
 
     Returns (status, j): OK when every step is done, NEEDS_GENERAL_SOLVER at the first step j
     whose LCP is too large or degenerate for the inline solver (the caller solves it and resumes
-    at j + 1), NO_SOLUTION when a scalar LCP provably has none.
+    at j + 1), NO_SOLUTION when a scalar LCP provably has none. One pair: :func:`run_scalar`
+    (``state`` from :func:`register_state`).
     """
     n = x.shape[1]
     k = u.shape[1]
     if not inline:
         return NEEDS_GENERAL_SOLVER, start
     if k == 1:
-        return _run_scalar(which, Phi, Gamma, H, C, F, M, x, u, y, start)
+        return run_scalar(which, Phi_b, Gamma_b, CPhi, q0, M, x, u, y, start, state)
     xf = np.empty(n)
     q = np.empty(k)
     z = np.empty(k)
@@ -63,32 +156,39 @@ def run_steps(which, Phi, Gamma, H, C, F, M, x, u, y, start, inline):
 
 
 @njit(cache=True)
-def _run_scalar(which, Phi, Gamma, H, C, F, M, x, u, y, start):
-    """k = 1: the step LCP is z = max(0, -q/M) inline (the common case of one diode)."""
-    n = x.shape[1]
-    xf = np.empty(n)
+def run_scalar(which, Phi_b, Gamma_b, CPhi, q0, M, x, u, y, start, state):
+    """k = 1: the step as the affine map of its branch (module docstring): q = CPhi x + q0; q >= 0 frees the
+    pair (u = 0), q < 0 holds it (u = -q / M > 0) or, when M <= 0, has no solution (NO_SOLUTION at that step).
+    ``state``: n zeros to carry the state in registers, or None to read it from x (:func:`register_state`).
+    The one loop of the one-pair stepper: the serial runs and the batched steady states call it."""
+    n = _size(state, x)
+    current = state
+    for i in range(n):
+        current = _put(current, x, start, i, x[start, i])
     for j in range(start, which.shape[0]):
         s = which[j]
-        q = F[s, 0]
-        for i in range(n):
-            acc = Gamma[s, i]
-            for l in range(n):
-                acc += Phi[s, i, l] * x[j, l]
-            xf[i] = acc
-            q += C[s, 0, i] * acc
+        q = q0[s, 0]
+        for l in range(n):
+            q += CPhi[s, 0, l] * _get(current, x, j, l)
         m = M[s, 0, 0]
         if q >= 0.0:
+            branch = 0
             z = 0.0
         elif m > 0.0:
+            branch = 1
             z = -q / m
         else:
             return NO_SOLUTION, j
+        following = state
         for i in range(n):
-            x[j + 1, i] = xf[i] + H[s, i, 0] * z
+            acc = Gamma_b[s, branch, i]
+            for l in range(n):
+                acc += Phi_b[s, branch, i, l] * _get(current, x, j, l)
+            following = _put(following, x, j + 1, i, acc)
         u[j + 1, 0] = z
         y[j + 1, 0] = q + m * z
+        current = following
     return OK, which.shape[0]
-
 
 
 #: Extra status of the state-switched loop: the event buffers are full (the caller grows them, resumes).
@@ -98,7 +198,9 @@ EVENTS_FULL = 3
 @njit(cache=True)
 def theta_matrices(A, B, C, D, E, F, dt, theta, Phi, Gamma, H, M, W):
     """One-step matrices of one configuration over dt (the formulas of :mod:`.discretize`), in place:
-    W = (I - dt theta A)^-1, Phi = W (I + dt (1 - theta) A), Gamma = dt W E, H = dt W B, M = D + C H."""
+    W = (I - dt theta A)^-1, Phi = W (I + dt (1 - theta) A), Gamma = dt W E, H = dt W B, M = D + C H.
+    Returns False when I - dt theta A is singular. Every plan's matrices come from here
+    (:func:`set_matrices`)."""
     n, k = A.shape[0], B.shape[1]
     cols = 2 * n + 1 + k
     a = np.empty((n, n + cols))
@@ -128,6 +230,19 @@ def theta_matrices(A, B, C, D, E, F, dt, theta, Phi, Gamma, H, M, W):
             for j in range(n):
                 acc += C[i, j] * H[j, l]
             M[i, l] = acc
+    return True
+
+
+@njit(cache=True)
+def set_matrices(A, B, C, D, E, F, dts, theta, Phi, Gamma, H, M, Phi_b, Gamma_b, CPhi, q0):
+    """Every matrix set s (configuration matrices A[s]..F[s], step dts[s]) in place: :func:`theta_matrices` and
+    :func:`branch_maps`. Returns False when some I - dt theta A is singular."""
+    n = A.shape[1]
+    W = np.empty((n, n))
+    for s in range(A.shape[0]):
+        if not theta_matrices(A[s], B[s], C[s], D[s], E[s], F[s], dts[s], theta, Phi[s], Gamma[s], H[s], M[s], W):
+            return False
+    branch_maps(Phi, Gamma, H, C, F, M, Phi_b, Gamma_b, CPhi, q0)
     return True
 
 
@@ -168,7 +283,7 @@ def _uniform_step(Phi, Gamma, H, C, F, M, s, x, u, y, j, mask, order, work, xf, 
     """Step j -> j + 1 with the stacked uniform-step matrices of set s (no slicing: indices only); k = 1 in
     closed form. Returns the active-set mask, or -1 (no solution the inline solver finds).
 
-    run_steps keeps its own loops (and _run_scalar for k = 1): built on this function it measured
+    run_steps keeps its own loops (and run_scalar for k = 1): built on this function it measured
     57 ns/step against 12.7 on the half-wave rectifier (benchmarks/step_cost.py)."""
     n, k = x.shape[1], u.shape[1]
     for i in range(n):
@@ -411,17 +526,58 @@ def run_relay(A, B, C, D, E, F, low, high, t, h, theta, c, d, x, u, y, blend, st
 
 
 @njit(cache=True)
-def step_jacobian(which, u, Phi, H, C, M, jac):
+def _left_multiply(left, right, work):
+    """right <- left right (n x n; ``work`` n x n scratch; left may be right)."""
+    n = right.shape[0]
+    for r in range(n):
+        for col in range(n):
+            acc = 0.0
+            for l in range(n):
+                acc += left[r, l] * right[l, col]
+            work[r, col] = acc
+    for r in range(n):
+        for col in range(n):
+            right[r, col] = work[r, col]
+
+
+@njit(cache=True)
+def step_jacobian(which, u, Phi_b, H, CPhi, M, jac):
     """d x_N / d x_0 of a run of the scheduled stepper, in place of ``jac`` (n x n, identity on entry).
 
     Each step is x_{j+1} = x_free + H z with x_free = Phi x_j + Gamma and, on the step's active set
-    J = {i: z_i > 0}, z_J = -M_JJ^-1 (C_J x_free + F_J): so d x_{j+1} / d x_j = Phi - H_J M_JJ^-1 C_J Phi
-    (exact wherever the active sets stay the same under a small change of x_0)."""
+    J = {i: z_i > 0}, z_J = -M_JJ^-1 (C_J x_free + F_J): so d x_{j+1} / d x_j = Phi - H_J M_JJ^-1 (C Phi)_J
+    (exact wherever the active sets stay the same under a small change of x_0). One pair: the step's own
+    affine map, Phi_b[s, 1] when held, Phi_b[s, 0] = Phi when free (:func:`branch_maps`); a run of L steps
+    with the same map multiplies by its L-th power, formed by repeated squaring (a period of 1000 steps in
+    four such runs takes some 40 matrix products instead of 1000)."""
     n, k = jac.shape[0], u.shape[1]
+    new = np.empty((n, n))
+    if k == 1:
+        power = np.empty((n, n))
+        steps = which.shape[0]
+        j = 0
+        while j < steps:
+            s = which[j]
+            held = u[j + 1, 0] > 0.0
+            length = 1
+            while j + length < steps and which[j + length] == s and (u[j + length + 1, 0] > 0.0) == held:
+                length += 1
+            j += length
+            branch = 1 if held else 0
+            for r in range(n):
+                for col in range(n):
+                    power[r, col] = Phi_b[s, branch, r, col]
+            while True:
+                if length & 1:                                   # jac <- power jac
+                    _left_multiply(power, jac, new)
+                length >>= 1
+                if length == 0:
+                    break
+                _left_multiply(power, power, new)                # power <- power^2
+        return
     S = np.empty((n, n))
     a = np.empty((k, k + n))
     act = np.empty(k, dtype=np.int64)
-    new = np.empty((n, n))
     for j in range(which.shape[0]):
         s = which[j]
         m = 0
@@ -431,16 +587,13 @@ def step_jacobian(which, u, Phi, H, C, M, jac):
                 m += 1
         for r in range(n):
             for col in range(n):
-                S[r, col] = Phi[s, r, col]
+                S[r, col] = Phi_b[s, 0, r, col]
         if m > 0:
             for r in range(m):
                 for col in range(m):
                     a[r, col] = M[s, act[r], act[col]]
                 for col in range(n):
-                    acc = 0.0
-                    for l in range(n):
-                        acc += C[s, act[r], l] * Phi[s, l, col]
-                    a[r, m + col] = acc
+                    a[r, m + col] = CPhi[s, act[r], col]
             if solve_augmented(a, m, n):
                 for r in range(n):
                     for col in range(n):
@@ -448,12 +601,4 @@ def step_jacobian(which, u, Phi, H, C, M, jac):
                         for l in range(m):
                             acc += H[s, r, act[l]] * a[l, m + col]
                         S[r, col] -= acc
-        for r in range(n):
-            for col in range(n):
-                acc = 0.0
-                for l in range(n):
-                    acc += S[r, l] * jac[l, col]
-                new[r, col] = acc
-        for r in range(n):
-            for col in range(n):
-                jac[r, col] = new[r, col]
+        _left_multiply(S, jac, new)

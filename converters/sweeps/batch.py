@@ -1,114 +1,49 @@
 """Batched steady states of the theta stepper: many parameter points of one scheduled LCS (one complementarity
 pair, the PWM converters) advanced together in one compiled call.
 
-Per point: the one-step matrices of its plan's sets (:func:`.theta_kernels.theta_matrices`), ``warm_up``
-periods from x0, then Newton on the one-period map with its exact Jacobian (the product of the one-step
-derivatives Phi - H (C Phi) / M on the steps where the pair is held), exactly as the serial engine
-(:func:`batch_steady`); finally one period on the orbit, recorded for the row's measures. The plan (grid, step configurations, matrix sets) comes from the serial stepper's own planner, so
-a batched point and a serial one solve the same discrete map.
+Per point: the one-step matrices of its plan's sets (:func:`.theta_kernels.theta_matrices`) and their
+affine maps (:func:`.theta_kernels.branch_maps`), ``warm_up`` periods from x0, then Newton on the one-period
+map with its exact Jacobian, exactly as the serial engine (:func:`batch_steady`); finally one period on the
+orbit, recorded for the row's measures. The plan (grid, step configurations, matrix sets) comes from the
+serial stepper's own planner, each period is the serial stepper's own loop and Jacobian
+(:func:`.theta_kernels.run_scalar`, :func:`.theta_kernels.step_jacobian`) and each Newton iteration the
+serial engine's own arithmetic (:func:`converters.analysis.periodic.newton_step`), so a batched point and a
+serial one solve the same discrete map the same way.
 """
 from __future__ import annotations
 
 import numpy as np
 from numba import njit
 
-from .theta_kernels import theta_matrices
+from ..analysis.periodic import ROUNDING as ROUNDING_LEVEL
+from ..analysis.periodic import newton_step
+from ..methods.theta_kernels import branch_maps, register_state, run_scalar, step_jacobian, theta_matrices
 
 #: Status per point.
 CONVERGED, NOT_CONVERGED, NO_SOLUTION, ROUNDING, SINGULAR, NONFINITE = 0, 1, 2, 3, 4, 5
 
 
-@njit(cache=True, inline="always")
-def _period(x0, which, steps, Phi, Gamma, H, C, F, M, xs, us, ys, jac, with_jacobian):
-    """One period from x0 (one pair): states into xs[0..steps], pair into us, ys; the Jacobian into jac when
-    asked. Returns False when a step LCP has no solution (M <= 0 with q < 0)."""
+@njit(cache=True)
+def _period(x0, which, Phi_b, Gamma_b, CPhi, q0, M, H, xs, us, ys, jac, with_jacobian, state):
+    """One period from x0 (one pair; ``which`` its steps): states into xs, pair into us, ys (rows 0..steps,
+    shapes (rows, n), (rows, 1), (rows, 1)); the Jacobian into jac when asked. The serial stepper's own loop
+    and Jacobian (:func:`.theta_kernels.run_scalar`, :func:`.theta_kernels.step_jacobian`), called once a
+    period: a batched point equals a serial one step for step. Returns False when a step LCP has no
+    solution (M <= 0 with q < 0)."""
     n = x0.shape[0]
     for i in range(n):
         xs[0, i] = x0[i]
+    status, _ = run_scalar(which, Phi_b, Gamma_b, CPhi, q0, M, xs, us, ys, 0, state)
+    if status != 0:
+        return False
     if with_jacobian:
         for i in range(n):
             for l in range(n):
                 jac[i, l] = 1.0 if i == l else 0.0
-    xf = np.empty(n)
-    step = np.empty((n, n))
-    tmp = np.empty((n, n))
-    for j in range(steps):
-        # the step is theta_kernels._run_scalar's, written out again on purpose: the same arithmetic in the
-        # same order (a batched point equals a serial one to rounding); a shared @njit helper measured 35 %
-        # slower here (10,000-point sweep 3.0 -> 4.2 s), the per-step call not being inlined.
-        s = which[j]
-        q = F[s, 0]
-        for i in range(n):
-            acc = Gamma[s, i]
-            for l in range(n):
-                acc += Phi[s, i, l] * xs[j, l]
-            xf[i] = acc
-            q += C[s, 0, i] * acc
-        m = M[s, 0, 0]
-        z = 0.0
-        if q < 0.0:
-            if m <= 0.0:
-                return False
-            z = -q / m
-        for i in range(n):
-            xs[j + 1, i] = xf[i] + H[s, i, 0] * z
-        us[j + 1] = z
-        ys[j + 1] = q + m * z
-        if with_jacobian:
-            for i in range(n):
-                for l in range(n):
-                    step[i, l] = Phi[s, i, l]
-            if z > 0.0:                                      # held: d z / d x = -(C Phi) / M
-                for l in range(n):
-                    cphi = 0.0
-                    for r in range(n):
-                        cphi += C[s, 0, r] * Phi[s, r, l]
-                    for i in range(n):
-                        step[i, l] -= H[s, i, 0] * cphi / m
-            for i in range(n):
-                for l in range(n):
-                    acc = 0.0
-                    for r in range(n):
-                        acc += step[i, r] * jac[r, l]
-                    tmp[i, l] = acc
-            for i in range(n):
-                for l in range(n):
-                    jac[i, l] = tmp[i, l]
+        step_jacobian(which, us, Phi_b, H, CPhi, M, jac)
     return True
 
 
-@njit(cache=True, inline="always")
-def _solve_shifted(jac, r, a, dx):
-    """dx with (jac - I) dx = -r, by elimination with partial pivoting (n is small); False when singular."""
-    n = r.shape[0]
-    for i in range(n):
-        for l in range(n):
-            a[i, l] = jac[i, l] - (1.0 if i == l else 0.0)
-        a[i, n] = -r[i]
-    for col in range(n):
-        piv = col
-        for row in range(col + 1, n):
-            if abs(a[row, col]) > abs(a[piv, col]):
-                piv = row
-        for cc in range(n + 1):
-            tmp = a[col, cc]
-            a[col, cc] = a[piv, cc]
-            a[piv, cc] = tmp
-        if a[col, col] == 0.0:
-            return False
-        for row in range(col + 1, n):
-            f = a[row, col] / a[col, col]
-            for cc in range(col, n + 1):
-                a[row, cc] -= f * a[col, cc]
-    for row in range(n - 1, -1, -1):
-        acc = a[row, n]
-        for l in range(row + 1, n):
-            acc -= a[row, l] * dx[l]
-        dx[row] = acc / a[row, row]
-    return True
-
-
-@njit(cache=True)
 def batch_steady(A, B, C, D, E, F, set_configs, set_dts, counts, which, steps, theta, x0, warm_up, tol, max_iter,
                  xs, us, ys, x_star, jac_out, status, iterations, residuals, distances):
     """Steady states of P points (module docstring), in place.
@@ -122,6 +57,14 @@ def batch_steady(A, B, C, D, E, F, set_configs, set_dts, counts, which, steps, t
     max(|dx|, |r| / (1 - rho)), the same halving of a step that does not lower the residual, the same plain
     period when no fraction does, the same refusal at the rounding level), so a batched point and a serial one
     take the same iterations to the same orbit."""
+    _batch_steady(A, B, C, D, E, F, set_configs, set_dts, counts, which, steps, theta, x0, warm_up, tol, max_iter,
+                  xs, us, ys, x_star, jac_out, status, iterations, residuals, distances, register_state(x0.shape[1]))
+
+
+@njit(cache=True)
+def _batch_steady(A, B, C, D, E, F, set_configs, set_dts, counts, which, steps, theta, x0, warm_up, tol, max_iter,
+                  xs, us, ys, x_star, jac_out, status, iterations, residuals, distances, state):
+    """:func:`batch_steady` compiled (``state``: :func:`.theta_kernels.register_state`)."""
     P, n = x0.shape[0], x0.shape[1]
     eps = 2.220446049250313e-16
     for p in range(P):
@@ -143,47 +86,39 @@ def batch_steady(A, B, C, D, E, F, set_configs, set_dts, counts, which, steps, t
             for i in range(n):
                 Cs[s, 0, i] = C[p, c, 0, i]
             Fs[s, 0] = F[p, c, 0]
+        Phi_b, Gamma_b = np.empty((sets, 2, n, n)), np.empty((sets, 2, n))
+        CPhi, q0 = np.empty((sets, 1, n)), np.empty((sets, 1))
+        if ok:
+            branch_maps(Phi, Gamma, Hm, Cs, Fs, Mm, Phi_b, Gamma_b, CPhi, q0)
         x = x0[p].copy()
         jac = np.empty((n, n))
         S = steps[p]
-        xp, up, yp = xs[p], us[p], ys[p]
+        wp = which[p, :S]
+        xp, up, yp = xs[p], us[p].reshape((us.shape[1], 1)), ys[p].reshape((ys.shape[1], 1))
         status[p] = NO_SOLUTION
         if not ok:
             continue
         for _ in range(warm_up):
-            if not _period(x, which[p], S, Phi, Gamma, Hm, Cs, Fs, Mm, xp, up, yp, jac, False):
+            if not _period(x, wp, Phi_b, Gamma_b, CPhi, q0, Mm, Hm, xp, up, yp, jac, False, state):
                 ok = False
                 break
             for i in range(n):
                 x[i] = xp[S, i]
-        if not ok or not _period(x, which[p], S, Phi, Gamma, Hm, Cs, Fs, Mm, xp, up, yp, jac, True):
+        if not ok or not _period(x, wp, Phi_b, Gamma_b, CPhi, q0, Mm, Hm, xp, up, yp, jac, True, state):
             continue
         px = xp[S].copy()
-        r = np.empty(n)
         dx = np.empty(n)
         trial = np.empty(n)
         jac_trial = np.empty((n, n))
         a = np.empty((n, n + 1))
         status[p] = NOT_CONVERGED
         for it in range(max_iter + 1):
-            scale = 1.0
-            worst = 0.0
-            for i in range(n):
-                scale = max(scale, 1.0 + abs(x[i]))
-                r[i] = px[i] - x[i]
-                worst = max(worst, abs(r[i]))
-            residuals[p] = worst / scale
+            residual, worst, rho, distance, solved = newton_step(x, px, jac, dx, a)
+            residuals[p] = residual
             iterations[p] = it
-            rho = np.abs(np.linalg.eigvals(jac.astype(np.complex128))).max()   # complex: a real matrix may have complex roots
-            if not _solve_shifted(jac, r, a, dx):
+            if not solved:
                 status[p] = SINGULAR
                 break
-            step = 0.0
-            for i in range(n):
-                step = max(step, abs(dx[i]))
-            distance = step / scale
-            if rho < 1.0:
-                distance = max(distance, worst / (1.0 - rho) / scale)
             distances[p] = distance
             if distance <= tol:
                 status[p] = CONVERGED
@@ -192,7 +127,7 @@ def batch_steady(A, B, C, D, E, F, set_configs, set_dts, counts, which, steps, t
                     for l in range(n):
                         jac_out[p, i, l] = jac[i, l]
                 break
-            if worst / scale <= 64.0 * eps:
+            if residual <= ROUNDING_LEVEL * eps:
                 status[p] = ROUNDING
                 break
             if it == max_iter:
@@ -201,7 +136,7 @@ def batch_steady(A, B, C, D, E, F, set_configs, set_dts, counts, which, steps, t
             for _ in range(8):
                 for i in range(n):
                     trial[i] = x[i] + dx[i]
-                if _period(trial, which[p], S, Phi, Gamma, Hm, Cs, Fs, Mm, xp, up, yp, jac_trial, True):
+                if _period(trial, wp, Phi_b, Gamma_b, CPhi, q0, Mm, Hm, xp, up, yp, jac_trial, True, state):
                     finite = True
                     gap = 0.0
                     for i in range(n):
@@ -215,7 +150,7 @@ def batch_steady(A, B, C, D, E, F, set_configs, set_dts, counts, which, steps, t
             if not accepted:
                 for i in range(n):
                     trial[i] = px[i]
-                if not _period(trial, which[p], S, Phi, Gamma, Hm, Cs, Fs, Mm, xp, up, yp, jac_trial, True):
+                if not _period(trial, wp, Phi_b, Gamma_b, CPhi, q0, Mm, Hm, xp, up, yp, jac_trial, True, state):
                     status[p] = NO_SOLUTION
                     break
                 finite = True
@@ -230,7 +165,7 @@ def batch_steady(A, B, C, D, E, F, set_configs, set_dts, counts, which, steps, t
                 for l in range(n):
                     jac[i, l] = jac_trial[i, l]
         if status[p] == CONVERGED:                           # the recorded period: the one on the orbit
-            _period(x_star[p], which[p], S, Phi, Gamma, Hm, Cs, Fs, Mm, xp, up, yp, jac, False)
+            _period(x_star[p], wp, Phi_b, Gamma_b, CPhi, q0, Mm, Hm, xp, up, yp, jac, False, state)
 
 
 __all__ = ["batch_steady", "CONVERGED", "NOT_CONVERGED", "NO_SOLUTION", "ROUNDING", "SINGULAR", "NONFINITE"]

@@ -9,7 +9,7 @@ ripple of vout and the RMS of the first state over one period on the orbit, the 
 held, the Floquet spectral radius and the Newton iterations. A point that fails is a row with its message, never an exception.
 
 ``rows`` runs the points of a PWM converter on the LCP stepper (one complementarity pair) through
-one compiled call (:mod:`converters.methods.theta_batch`); any other model or method, and a point the batch
+one compiled call (:mod:`converters.sweeps.batch`); any other model or method, and a point the batch
 cannot take, goes through the per-point path :meth:`ModelSweep.row`. Both read their measures with
 :func:`orbit_row` from the same one-period trajectory, so their rows agree to rounding.
 """
@@ -168,7 +168,7 @@ class ModelSweep:
         if not self.batchable():
             return [self.row(i, point) for i, point in items]
         from ..methods.theta import _plan_arrays
-        from ..methods.theta_batch import CONVERGED, batch_steady
+        from .batch import CONVERGED, batch_steady
         model = self._model()
         prepared, rows = [], {}
         for index, point in items:
@@ -230,7 +230,7 @@ class ModelSweep:
 
 
 def _batch_failure(code: int, residual: float, distance: float) -> str:
-    from ..methods import theta_batch as tb
+    from . import batch as tb
     why = {tb.NO_SOLUTION: "a step LCP has no solution (a held pair with M <= 0)",
            tb.SINGULAR: "the period map's Jacobian has a multiplier at 1 (the orbit is not isolated)",
            tb.NONFINITE: "the period map left the finite numbers",

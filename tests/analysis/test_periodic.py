@@ -10,6 +10,7 @@ from converters.methods import EventDriven, Theta
 from converters.methods.base import FiniteDifferenceMap, PeriodMap
 from converters.models import get_converter
 from converters.run import run_converter, run_summary
+from converters.simulate import simulate
 
 POINTS = {"DCM buck": ("buck", {}), "GDCM Cuk": ("cuk", {"L1": "10u", "L2": "10u"})}
 METHODS = {"backward Euler": lambda T: Theta(T / 1000, 1.0), "theta 0.5": lambda T: Theta(T / 1000, 0.5),
@@ -119,3 +120,24 @@ class _Rotation(PeriodMap):
 def test_a_non_isolated_orbit_is_reported_not_guessed():
     orbit = newton_orbit(_Rotation(), np.zeros(2))
     assert not orbit.converged and "multiplier at 1" in orbit.message
+
+
+@pytest.mark.parametrize("span", [{"periods": 3}, {"t_end": 3.3337e-5}])     # whole periods; ending inside a step
+def test_the_span_returned_is_the_stepper_run_from_the_orbit(span):
+    """run_converter(steady=True) repeats the step plan of Newton's period map over the span asked for: the run
+    is the one simulate() gives from the orbit, to the last bit."""
+    run = run_converter("buck", {}, steady=True, **span)
+    conv = get_converter("buck")
+    p = conv.resolve({})
+    ref = simulate(conv.problem(p, run.t[-1], run.x[0]), run.metadata["method_object"])
+    for key in ("t", "x", "u", "y", "config"):
+        np.testing.assert_array_equal(getattr(run, key), getattr(ref, key))
+    assert run.events.equals(ref.events)
+
+
+def test_steady_shoots_from_rest_with_no_fixed_warm_up():
+    """Newton starts from rest; plain periods only where no step fraction helps (the buck: 5 periods in all)."""
+    run = run_converter("buck", {}, steady=True)
+    orbit = run.metadata["orbit"]
+    assert orbit["converged"] and orbit["evaluations"] <= 8
+    assert run.metadata["steady_periods"] == orbit["evaluations"] + 20

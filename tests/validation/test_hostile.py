@@ -260,7 +260,8 @@ def _alive(pids) -> list[int]:
 
 
 @pytest.mark.parametrize("argv,workers", [(["report", "default", "--out", "OUT"], 3),
-                                          (["compare", "boost"], 1)], ids=["report", "compare"])
+                                          (["compare", "boost", "--control", "smc", "--t-end", "60m"], 1)],
+                         ids=["report", "compare"])
 def test_sigkill_leaves_no_pcsuite_or_ngspice_process_behind(ngspice, tmp_path, argv, workers):
     """SIGKILL of a command with ngspice workers: 2 s later none of its processes is alive."""
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
@@ -273,7 +274,7 @@ def test_sigkill_leaves_no_pcsuite_or_ngspice_process_behind(ngspice, tmp_path, 
         if len(seen) >= workers:
             break
         time.sleep(0.1)
-    time.sleep(1.0)
+    time.sleep(0.3)
     seen |= set(_descendants(proc.pid))
     assert proc.poll() is None and len(seen) >= workers, (proc.poll(), seen)
     os.kill(proc.pid, signal.SIGKILL)
