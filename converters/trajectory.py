@@ -70,7 +70,7 @@ class Trajectory:
         Columns ``time``, ``step``, ``pair`` (-1 for switching-law events) and ``kind`` (``activate``,
         ``release``, ``impulse``, ``switch``); switching-law events also give ``config`` (the
         configuration entered).
-        Built on first access from ``event_columns``.
+        Built on first access from ``event_columns`` (data, or a function giving it: computed when first read).
     labels : object or None
         The model's laws bound to its parameters (``signal_names``, ``signal(name, samples)``,
         ``conducting(samples)``, ``modes(conducting, switch, x)``); None for a bare LCS run.
@@ -115,13 +115,22 @@ class Trajectory:
         import pandas as pd
         frame = self.__dict__.get("_events_frame")
         if frame is None:
-            columns = self.event_columns
+            columns = self.event_table()
             if columns is None:
                 columns = {"time": np.empty(0), "step": np.empty(0, dtype=np.int64),
                            "pair": np.empty(0, dtype=np.int64), "kind": np.empty(0, dtype=object)}
             frame = columns if isinstance(columns, pd.DataFrame) else pd.DataFrame(columns)
             object.__setattr__(self, "_events_frame", frame)
         return frame
+
+    def event_table(self):
+        """The event columns as data: ``event_columns``, or what it gives when it is a function (a method may
+        defer locating its events until they are read; computed once)."""
+        columns = self.event_columns
+        if callable(columns):
+            columns = columns()
+            object.__setattr__(self, "event_columns", columns)
+        return columns
 
     @property
     def active(self) -> np.ndarray:

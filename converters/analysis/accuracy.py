@@ -121,7 +121,8 @@ def _inductor_currents(model) -> list[str]:
 def substep_events(tr, T: float, t0: float = 0.0) -> list[tuple[str, str, float]]:
     """(pair, kind, (time - t0) / T) of each pair event in [t0, t0 + T): exact for the event method; for the
     stepper located inside its step from the quantity that vanishes there (module docstring)."""
-    columns = tr.event_columns if tr.event_columns is not None else {}
+    columns = tr.event_table()
+    columns = columns if columns is not None else {}
     times = np.asarray(columns.get("time", ()), dtype=float)
     out = []
     if times.size == 0:

@@ -318,7 +318,8 @@ class StepPlan:
     def trajectory(self, x0, wall_s: float = 0.0) -> Trajectory:
         start_clock = time.perf_counter()
         x, u, y, general_solves = self.advance(x0)
-        events = _events(self.t, u, y, self.config, self.mats.M, self.which)
+        t, config, M, which = self.t, self.config, self.mats.M, self.which
+        events = (lambda: _events(t, u, y, config, M, which))        # located when first read
         return _trajectory(self.problem, self.method, self.t, x, u, y, self.config, events,
                            wall_s + time.perf_counter() - start_clock, general_solves=general_solves)
 
