@@ -16,7 +16,7 @@ from numba import njit
 
 from . import state as S
 from .kernels import solve_augmented
-from .result import accepts, residual
+from .result import accepts, mark_done, residual
 
 MAX_K = 12
 
@@ -83,7 +83,7 @@ def run(M, q, z, fw, iw, st, tol, budget, first):
                     z[:] = zc
                     st[S.ITER] = visited
                     st[S.INFO] = nsol
-                    return _done(st, S.SOLVED, S.OK)
+                    return mark_done(st, S.SOLVED, S.OK)
                 size = _next_subset(J, size, k)
                 continue
             duplicate = False
@@ -104,10 +104,10 @@ def run(M, q, z, fw, iw, st, tol, budget, first):
     st[S.INFO] = nsol
     if nsol == 0:
         z[:] = 0.0
-        return _done(st, S.NO_SOLUTION, S.NOBASIS)
+        return mark_done(st, S.NO_SOLUTION, S.NOBASIS)
     if first:     # feasible bases, none of which passed the check
         z[:] = 0.0
-        return _done(st, S.FAILED, S.CHECK)
+        return mark_done(st, S.FAILED, S.CHECK)
     best, best_norm = 0, np.inf
     for s in range(nsol):
         norm = 0.0
@@ -117,7 +117,7 @@ def run(M, q, z, fw, iw, st, tol, budget, first):
             best, best_norm = s, norm
     z[:] = sols[best]
     if accepts(M, q, z, w, tol):
-        return _done(st, S.SOLVED, S.OK)
+        return mark_done(st, S.SOLVED, S.OK)
     best, best_err = 0, np.inf     # the least-norm one may be ill-conditioned; take the most accurate
     for s in range(nsol):
         zc[:] = sols[s]
@@ -126,8 +126,8 @@ def run(M, q, z, fw, iw, st, tol, budget, first):
             best, best_err = s, err
     z[:] = sols[best]
     if accepts(M, q, z, w, tol):
-        return _done(st, S.SOLVED, S.OK)
-    return _done(st, S.FAILED, S.CHECK)
+        return mark_done(st, S.SOLVED, S.OK)
+    return mark_done(st, S.FAILED, S.CHECK)
 
 
 @njit(cache=True)
@@ -187,14 +187,6 @@ def _next_subset(J, m, k):
     for j in range(min(m, k)):
         J[j] = j
     return m
-
-
-@njit(cache=True)
-def _done(st, status, outcome):
-    st[S.PHASE] = S.DONE
-    st[S.STATUS] = status
-    st[S.OUTCOME] = outcome
-    return True
 
 
 __all__ = ["run", "sizes", "MAX_K"]

@@ -18,7 +18,7 @@ import numpy as np
 from numba import njit
 
 from . import state as S
-from .result import accepts
+from .result import accepts, mark_done
 
 PIVOT_TOL = 1e-13
 
@@ -137,10 +137,7 @@ def _done(M, q, z, w, st, tol, status, outcome):
     """Record the end; a claimed solution must pass the check on this (normalised) problem."""
     if status == S.SOLVED and not accepts(M, q, z, w, tol):
         status, outcome = S.FAILED, S.CHECK
-    st[S.PHASE] = S.DONE
-    st[S.STATUS] = status
-    st[S.OUTCOME] = outcome
-    return True
+    return mark_done(st, status, outcome)
 
 
 @njit(cache=True)

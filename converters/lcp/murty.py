@@ -12,7 +12,7 @@ from numba import njit
 
 from . import state as S
 from .kernels import solve_augmented
-from .result import accepts
+from .result import accepts, mark_done
 
 
 @njit(cache=True)
@@ -53,7 +53,7 @@ def run(M, q, z, fw, iw, st, tol, max_iter, budget):
             if not solve_augmented(aug, m, 1):
                 z[:] = 0.0
                 st[S.ITER] = iteration
-                return _done(st, S.FAILED, S.SINGULAR)
+                return mark_done(st, S.FAILED, S.SINGULAR)
             for r in range(m):
                 z[idx[r]] = aug[r, m]
         negative = -1
@@ -70,8 +70,8 @@ def run(M, q, z, fw, iw, st, tol, max_iter, budget):
                 z[i] = z[i] if z[i] > 0.0 else 0.0
             st[S.ITER] = iteration
             if not accepts(M, q, z, w, tol):
-                return _done(st, S.FAILED, S.CHECK)
-            return _done(st, S.SOLVED, S.OK)
+                return mark_done(st, S.FAILED, S.CHECK)
+            return mark_done(st, S.SOLVED, S.OK)
         if iteration == max_iter:
             break
         in_basis[negative] = 1 - in_basis[negative]
@@ -81,15 +81,7 @@ def run(M, q, z, fw, iw, st, tol, max_iter, budget):
             st[S.ITER] = iteration
             return False
     st[S.ITER] = max_iter
-    return _done(st, S.MAX_ITERATIONS, S.MAXIT)
-
-
-@njit(cache=True)
-def _done(st, status, outcome):
-    st[S.PHASE] = S.DONE
-    st[S.STATUS] = status
-    st[S.OUTCOME] = outcome
-    return True
+    return mark_done(st, S.MAX_ITERATIONS, S.MAXIT)
 
 
 __all__ = ["run", "sizes"]

@@ -14,7 +14,7 @@ from numba import njit
 
 from . import state as S
 from .kernels import solve_augmented
-from .result import accepts_scaled, max_abs, max_abs_matrix
+from .result import accepts_scaled, affine, mark_done, max_abs, max_abs_matrix
 
 #: Defaults of the options rho, p (descent test), beta (step reduction) and sigma (Armijo constant).
 RHO, P, BETA, SIGMA = 1e-10, 2.1, 0.5, 1e-4
@@ -79,12 +79,12 @@ def run(M, q, z, fw, iw, st, tol, max_iter, budget, rho, p, beta, sigma):
         if not accepted:
             z[:] = x       # the last iterate as it is
             st[S.ITER] = iteration
-            return _done(st, S.FAILED, S.LINESEARCH)
+            return mark_done(st, S.FAILED, S.LINESEARCH)
         x[:] = trial
         _clip(x, z)
         if accepts_scaled(M, q, q_big, m_big, z, w, tol):
             st[S.ITER] = iteration
-            return _done(st, S.SOLVED, S.OK)
+            return mark_done(st, S.SOLVED, S.OK)
         budget -= k * k * k // 3 + 6 * k * k
         if budget <= 0 and iteration < max_iter:    # the caller checks its deadline here, then calls again
             st[S.ITER] = iteration
@@ -92,7 +92,7 @@ def run(M, q, z, fw, iw, st, tol, max_iter, budget, rho, p, beta, sigma):
         iteration += 1
     _clip(x, z)
     st[S.ITER] = max_iter
-    return _done(st, S.MAX_ITERATIONS, S.MAXIT)
+    return mark_done(st, S.MAX_ITERATIONS, S.MAXIT)
 
 
 @njit(cache=True)
@@ -111,12 +111,8 @@ def _clip(x, z):
 
 @njit(cache=True)
 def _fb(M, q, x, w, phi):
-    k = q.shape[0]
-    for i in range(k):
-        s = 0.0
-        for j in range(k):
-            s += M[i, j] * x[j]
-        w[i] = q[i] + s
+    affine(M, q, x, w)
+    for i in range(q.shape[0]):
         phi[i] = math.sqrt(x[i] * x[i] + w[i] * w[i]) - x[i] - w[i]
 
 
@@ -134,14 +130,6 @@ def _fb_and_jacobian(M, q, x, w, phi, jac):
         for j in range(k):
             jac[i, j] = db * M[i, j]
         jac[i, i] += da
-
-
-@njit(cache=True)
-def _done(st, status, outcome):
-    st[S.PHASE] = S.DONE
-    st[S.STATUS] = status
-    st[S.OUTCOME] = outcome
-    return True
 
 
 __all__ = ["run", "sizes"]

@@ -12,7 +12,7 @@ import math
 from numba import njit
 
 from . import state as S
-from .result import check_scaled, error, max_abs, max_abs_matrix, residual
+from .result import check_scaled, error, mark_done, max_abs, max_abs_matrix, residual
 
 
 @njit(cache=True)
@@ -36,7 +36,7 @@ def run(M, q, z, fw, iw, st, sf, tol, max_iter, budget, omega, probe):
             if M[i, i] <= 0.0:
                 st[S.INFO] = i
                 sf[S.INFO_X] = M[i, i]
-                return _done(st, S.FAILED, S.DIAG)
+                return mark_done(st, S.FAILED, S.DIAG)
         sf[S.PREVIOUS_ERR] = error(q, z, q)     # err of z = 0 (w = q)
         st[S.PHASE] = S.RUNNING
     q_big, m_big = max_abs(q), max_abs_matrix(M)
@@ -55,11 +55,11 @@ def run(M, q, z, fw, iw, st, sf, tol, max_iter, budget, omega, probe):
             z[:] = 0.0
             st[S.ITER] = sweep
             st[S.INFO] = sweep
-            return _done(st, S.FAILED, S.DIVERGED)
+            return mark_done(st, S.FAILED, S.DIVERGED)
         err = residual(M, q, z, w)
         if check_scaled(q_big, m_big, z, w, err, tol)[0] == 0:
             st[S.ITER] = sweep
-            return _done(st, S.SOLVED, S.OK)
+            return mark_done(st, S.SOLVED, S.OK)
         if probe:
             previous = sf[S.PREVIOUS_ERR]
             sf[S.PREVIOUS_ERR] = err
@@ -67,22 +67,14 @@ def run(M, q, z, fw, iw, st, sf, tol, max_iter, budget, omega, probe):
                 rate = err / previous
                 if not rate < 1.0 or sweep + math.log(tol / err) / math.log(rate) > max_iter:
                     st[S.ITER] = sweep
-                    return _done(st, S.MAX_ITERATIONS, S.SLOW)
+                    return mark_done(st, S.MAX_ITERATIONS, S.SLOW)
         budget -= 2 * k * k + k
         if budget <= 0 and sweep < max_iter:    # the caller checks its deadline here, then calls again
             st[S.ITER] = sweep
             return False
         sweep += 1
     st[S.ITER] = max_iter
-    return _done(st, S.MAX_ITERATIONS, S.MAXIT)
-
-
-@njit(cache=True)
-def _done(st, status, outcome):
-    st[S.PHASE] = S.DONE
-    st[S.STATUS] = status
-    st[S.OUTCOME] = outcome
-    return True
+    return mark_done(st, S.MAX_ITERATIONS, S.MAXIT)
 
 
 __all__ = ["run", "sizes"]

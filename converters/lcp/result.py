@@ -13,6 +13,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit
 
+from . import state as S
+
 SOLVED = "solved"
 NO_SOLUTION = "no_solution"
 MAX_ITERATIONS = "max_iterations"
@@ -34,14 +36,29 @@ def scaled_norm(v: np.ndarray) -> float:
 
 
 @njit(cache=True)
-def residual(M, q, z, w):
-    """w = q + M z (each sum_j M_ij z_j accumulated in index order, then q_i added); returns err of (z, w)."""
+def mark_done(st, status, outcome):
+    """End a compiled method's run in its state array (``state`` layout): done, with its status and why."""
+    st[S.PHASE] = S.DONE
+    st[S.STATUS] = status
+    st[S.OUTCOME] = outcome
+    return True
+
+
+@njit(cache=True)
+def affine(M, q, z, w):
+    """w = q + M z (each sum_j M_ij z_j accumulated in index order, then q_i added)."""
     k = q.shape[0]
     for i in range(k):
         s = 0.0
         for j in range(k):
             s += M[i, j] * z[j]
         w[i] = q[i] + s
+
+
+@njit(cache=True)
+def residual(M, q, z, w):
+    """w = q + M z (:func:`affine`); returns err of (z, w)."""
+    affine(M, q, z, w)
     return error(q, z, w)
 
 
