@@ -12,11 +12,12 @@ SUITE ?= default
 all: test
 
 # ngspice and its shared library (PySpice loads libngspice.so), and Chromium with its driver for the
-# report's browser test, from the system package manager when missing.
-APT_PACKAGES := ngspice libngspice0 libngspice0-dev chromium chromium-driver
+# report's browser test, and a C compiler for the ahead-of-time kernels, from the system package manager when missing.
+APT_PACKAGES := ngspice libngspice0 libngspice0-dev chromium chromium-driver gcc
 system-deps:
 	@missing=""; \
 	command -v ngspice >/dev/null 2>&1 || missing="yes"; \
+	command -v gcc >/dev/null 2>&1 || missing="yes"; \
 	[ -n "$$(ls /usr/lib/*/libngspice.so /usr/lib/libngspice.so 2>/dev/null)" ] || missing="yes"; \
 	command -v chromium >/dev/null 2>&1 && command -v chromedriver >/dev/null 2>&1 || missing="yes"; \
 	if [ -n "$$missing" ]; then \
@@ -32,12 +33,16 @@ $(STAMP): pyproject.toml
 	$(PY) -m pip install -q -e '.[test]'
 	touch $(STAMP)
 
+# The compiled kernels ahead of time (numba.pycc, ~15 s; converters/compiled.py says why): rebuilt when a kernel
+# source changed, a no-op otherwise. A build that fails (no C compiler) leaves numba's JIT to do the same work.
 setup: system-deps $(STAMP)
+	-@$(PY) -m converters.build_kernels
 
 # numba compiles the kernels once per checkout (about 30 s, cached on disk beside the sources): pay it here, once,
 # rather than inside the first tests that happen to call them (some of which have time bounds)
 warm: setup
 	$(VENV)/bin/pcsuite simulate buck --periods 2 --json > /dev/null
+	PCSUITE_KERNELS=jit $(VENV)/bin/pcsuite simulate buck --periods 2 --steady --json > /dev/null
 	$(PY) -c "import numpy as np; from converters.lcp import solve_lcp; solve_lcp(np.eye(3), -np.ones(3))"
 
 test: setup warm

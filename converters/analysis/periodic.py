@@ -19,8 +19,7 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
-from numba import njit
-
+from ..compiled import kernel
 from ..errors import ParameterError, SimulationError
 from ..problems import LCSProblem
 
@@ -90,53 +89,10 @@ def multipliers_of(jacobian: np.ndarray) -> np.ndarray:
     return values[np.argsort(-np.abs(values), kind="stable")]
 
 
-@njit(cache=True)
-def newton_step(x, px, jac, step, work):
-    """The arithmetic of one Newton iteration on P(x) - x = 0 (compiled: the serial engine and the batched
-    steady states, :mod:`converters.sweeps.batch`, share it). Fills ``step`` with the Newton step dx,
-    (jac - I) dx = -(P(x) - x) (Gaussian elimination with partial pivoting on ``work``, n x (n + 1)).
-
-    Returns (residual, worst, rho, distance, solved): worst = max |P(x) - x|, residual = worst / scale with
-    scale = 1 + max |x|; rho the spectral radius of jac; distance = max(max |dx|, worst / (1 - rho) when
-    rho < 1) / scale, the estimated distance to the orbit; solved False when jac - I is singular (a pivot
-    exactly 0: a multiplier at 1), step and distance then undefined."""
-    n = x.shape[0]
-    scale = 1.0
-    worst = 0.0
-    for i in range(n):
-        scale = max(scale, 1.0 + abs(x[i]))
-        worst = max(worst, abs(px[i] - x[i]))
-    rho = np.abs(np.linalg.eigvals(jac.astype(np.complex128))).max()   # complex: real matrices may have complex roots
-    for i in range(n):
-        for l in range(n):
-            work[i, l] = jac[i, l] - (1.0 if i == l else 0.0)
-        work[i, n] = x[i] - px[i]
-    for col in range(n):
-        pivot = col
-        for row in range(col + 1, n):
-            if abs(work[row, col]) > abs(work[pivot, col]):
-                pivot = row
-        for cc in range(n + 1):
-            tmp = work[col, cc]
-            work[col, cc] = work[pivot, cc]
-            work[pivot, cc] = tmp
-        if work[col, col] == 0.0:
-            return worst / scale, worst, rho, np.inf, False
-        for row in range(col + 1, n):
-            f = work[row, col] / work[col, col]
-            for cc in range(col, n + 1):
-                work[row, cc] -= f * work[col, cc]
-    largest = 0.0
-    for row in range(n - 1, -1, -1):
-        acc = work[row, n]
-        for l in range(row + 1, n):
-            acc -= work[row, l] * step[l]
-        step[row] = acc / work[row, row]
-        largest = max(largest, abs(step[row]))
-    distance = largest / scale
-    if rho < 1.0:
-        distance = max(distance, worst / (1.0 - rho) / scale)
-    return worst / scale, worst, rho, distance, True
+def spectral_radius(jac: np.ndarray) -> float:
+    """max |eigenvalue| of jac, in complex arithmetic (a real matrix may have complex roots). Plain numpy, so
+    compiled callers can wrap it with numba's njit."""
+    return np.abs(np.linalg.eigvals(jac.astype(np.complex128))).max()
 
 
 def newton_orbit(period_map, x_guess, *, tol: float = 1e-10, max_iter: int = 50, period: float = np.nan,
@@ -148,9 +104,12 @@ def newton_orbit(period_map, x_guess, *, tol: float = 1e-10, max_iter: int = 50,
     step, work = np.empty(n), np.empty((n, n + 1))
     px, jac = period_map(x)
     distance, residual, message, relaxations = np.inf, np.inf, "", 0
+    newton_step = kernel("newton_step")
     for iteration in range(max_iter + 1):
-        residual, worst, rho, estimate, solved = newton_step(x, np.asarray(px, dtype=float),
-                                                             np.asarray(jac, dtype=float), step, work)
+        jac = np.ascontiguousarray(jac, dtype=float)
+        rho = spectral_radius(jac)
+        residual, worst, estimate, solved = newton_step(x, np.ascontiguousarray(px, dtype=float), jac, rho, step,
+                                                        work)
         if not solved:
             message = ("the period map's Jacobian has a multiplier at 1 (the orbit is not isolated: an undamped "
                        "or marginal circuit)")

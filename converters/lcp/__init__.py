@@ -1,11 +1,29 @@
-"""Linear complementarity problem solvers: one algorithm per module, one entry point."""
+"""Linear complementarity problem solvers: one algorithm per module, one entry point (:func:`solve_lcp`).
+
+The names below load on first use (PEP 562 ``__getattr__``): the solvers are compiled (numba), and a process
+that imports this package without solving an LCP (``pcsuite simulate`` of a converter whose steps the compiled
+loop solves inline) does not pay numba's import.
+"""
+import importlib
+
 from . import cache
+from .state import METHOD_NAMES
 
 cache.refresh()   # before any compiled function loads its cache (see converters.lcp.cache)
 
-from .result import FAILED, MAX_ITERATIONS, NO_SOLUTION, SOLVED, STATUSES, LCPResult, lcp_error  # noqa: E402
-from .siconos import LCPFile, read_siconos_lcp  # noqa: E402
-from .solve import SOLVERS, check_lcp, solve_lcp  # noqa: E402
+#: Each public name and the module that defines it.
+_WHERE = {"solve_lcp": "solve", "check_lcp": "solve", "SOLVERS": "solve", "LCPResult": "result",
+          "lcp_error": "result", "SOLVED": "result", "NO_SOLUTION": "result", "MAX_ITERATIONS": "result",
+          "FAILED": "result", "STATUSES": "result", "read_siconos_lcp": "siconos", "LCPFile": "siconos"}
+
+
+def __getattr__(name):
+    if name not in _WHERE:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f".{_WHERE[name]}", __name__), name)
+    globals()[name] = value
+    return value
+
 
 __all__ = ["solve_lcp", "check_lcp", "LCPResult", "lcp_error", "read_siconos_lcp", "LCPFile", "SOLVERS",
-           "SOLVED", "NO_SOLUTION", "MAX_ITERATIONS", "FAILED", "STATUSES"]
+           "SOLVED", "NO_SOLUTION", "MAX_ITERATIONS", "FAILED", "STATUSES", "METHOD_NAMES"]

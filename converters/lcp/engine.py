@@ -36,7 +36,7 @@ from .fastpaths import closed_form
 from .result import STATUSES, check, check_message, check_scaled, residual
 
 #: Method names, indexed by the compiled code's method numbers (``state.AUTO`` .. ``state.NEWTON``).
-METHODS = ("auto", "lemke", "murty", "enum", "pgs", "newton")
+METHODS = S.METHOD_NAMES
 CODES = {name: code for code, name in enumerate(METHODS)}
 #: What one iteration of each method is called in messages.
 UNITS = ("steps", "pivots", "pivots", "bases", "sweeps", "steps")

@@ -8,8 +8,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-#: Largest k solved inline.
-MAX_INLINE_K = 8
+from ..compiled import MAX_INLINE_K  # noqa: F401 (largest k solved inline; the callers read it there)
 
 
 @njit(cache=True)

@@ -23,9 +23,10 @@ START, RUNNING, DONE = 0, 1, 2
 # statuses: indices into converters.lcp.result.STATUSES
 SOLVED, NO_SOLUTION, MAX_ITERATIONS, FAILED = 0, 1, 2, 3
 
-# method codes: indices into converters.lcp.engine.METHODS
-AUTO, LEMKE, MURTY, ENUM, PGS, NEWTON = 0, 1, 2, 3, 4, 5
-N_METHODS = 6
+# method codes: indices into METHOD_NAMES (solve_lcp's ``method``)
+METHOD_NAMES = ("auto", "lemke", "murty", "enum", "pgs", "newton")
+AUTO, LEMKE, MURTY, ENUM, PGS, NEWTON = range(6)
+N_METHODS = len(METHOD_NAMES)
 
 # outcomes (why a method ended)
 OK = 0              # solved

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..problems import Configuration
-from .theta_kernels import set_matrices
+from ..compiled import kernel
 
 
 @dataclass(frozen=True)
@@ -58,11 +58,11 @@ def step_matrices(configs: list[Configuration], dts: np.ndarray, theta: float) -
     """One-step matrices for configs[i] over dts[i], and their affine maps (one compiled call for all of them:
     :func:`.theta_kernels.theta_matrices`, the formulas above, as the batched steady states use them)."""
     dts = np.ascontiguousarray(dts, dtype=float)
-    A, B, C, D, E, F = (np.stack([getattr(c, key) for c in configs]) for key in "ABCDEF")
+    A, B, C, D, E, F = (np.stack([getattr(c, key) for c in configs], dtype=float) for key in "ABCDEF")
     sets, n, k = A.shape[0], A.shape[1], B.shape[2]
     Phi, Gamma, H, M = np.empty((sets, n, n)), np.empty((sets, n)), np.empty((sets, n, k)), np.empty((sets, k, k))
     Phi_b, Gamma_b = np.empty((sets, 2, n, n)), np.empty((sets, 2, n))
     CPhi, q0 = np.empty((sets, k, n)), np.empty((sets, k))
-    if not set_matrices(A, B, C, D, E, F, dts, float(theta), Phi, Gamma, H, M, Phi_b, Gamma_b, CPhi, q0):
+    if not kernel("set_matrices")(A, B, C, D, E, F, dts, float(theta), Phi, Gamma, H, M, Phi_b, Gamma_b, CPhi, q0):
         raise np.linalg.LinAlgError("Singular matrix")
     return StepMatrices(Phi, Gamma, H, C, F, M, Phi_b, Gamma_b, CPhi, q0)

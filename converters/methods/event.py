@@ -45,7 +45,6 @@ from functools import cached_property
 import numpy as np
 
 from ..errors import ParameterError, SimulationError
-from ..lcp import solve_lcp
 from ..problems import LCSProblem, Relay, Schedule, StateSwitching
 from ..problems.mechanical import MechanicalProblem
 from . import event_mechanical
@@ -601,6 +600,7 @@ class _Machine:
         if np.all(y >= -_CROSS_RTOL * np.abs(xt).max() * row_scale):
             return xt, None
         M = CK @ BK
+        from ..lcp import solve_lcp                 # imported here: a run that never needs it starts faster
         result = solve_lcp(M, y, method="lemke")
         if not result.solved:
             raise SimulationError(f"at t = {t:.9g} s configuration {c.name!r} starts with y = {y.tolist()} and no "

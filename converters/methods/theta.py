@@ -23,14 +23,11 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..errors import ParameterError, SimulationError
-from ..lcp import solve_lcp
-from ..lcp.kernels import MAX_INLINE_K
+from ..compiled import EVENTS_FULL, MAX_INLINE_K, NO_SOLUTION, OK, kernel, register_state
 from ..problems import LCSProblem, Relay, Schedule, StateSwitching
 from ..trajectory import Trajectory
 from .base import Method, PeriodMap, check_step_and_theta
 from .discretize import step_matrices
-from .theta_kernels import (EVENTS_FULL, NO_SOLUTION, OK, register_state, run_relay, run_state_switched,
-                            run_steps, step_jacobian)
 
 
 @dataclass(frozen=True)
@@ -285,6 +282,7 @@ class StepPlan:
         k = self.problem.k
         inline = k <= MAX_INLINE_K
         state = register_state(self.problem.n)
+        run_steps = kernel("run_steps")
         general_solves = 0
         j = 0
         while True:
@@ -297,6 +295,7 @@ class StepPlan:
             q = mats.C[s] @ x_free + mats.F[s]
             if status == NO_SOLUTION:
                 raise SimulationError(_no_solution_message(t[j], mats.M[s], q))
+            from ..lcp import solve_lcp                 # imported here: a run that never needs it starts faster
             result = solve_lcp(mats.M[s], q, method="lemke")
             if not result.solved:
                 result = solve_lcp(mats.M[s], q, method="enum") if k <= 12 else result
@@ -312,7 +311,7 @@ class StepPlan:
     def jacobian(self, u: np.ndarray) -> np.ndarray:
         """d x_end / d x0 of the run that produced the multipliers ``u`` (exact; see the module docstring)."""
         jac = np.eye(self.problem.n)
-        step_jacobian(self.which, u, self.mats.Phi_b, self.mats.H, self.mats.CPhi, self.mats.M, jac)
+        kernel("step_jacobian")(self.which, u, self.mats.Phi_b, self.mats.H, self.mats.CPhi, self.mats.M, jac)
         return jac
 
     def trajectory(self, x0, wall_s: float = 0.0) -> Trajectory:
@@ -375,6 +374,7 @@ def _config_stacks(problem: LCSProblem):
 
 
 def _solve_state_switched(problem: LCSProblem, method: Theta, x0: np.ndarray, start: float) -> Trajectory:
+    from . import theta_kernels                 # numba's JIT (the ahead-of-time module holds the scheduled loop)
     law: StateSwitching = problem.switching
     A, B, C, D, E, F = _config_stacks(problem)
     n_configs = len(problem.configurations)
@@ -395,7 +395,7 @@ def _solve_state_switched(problem: LCSProblem, method: Theta, x0: np.ndarray, st
     ev_time, ev_config, ev_step = np.empty(capacity), np.empty(capacity, dtype=np.int64), np.empty(capacity, dtype=np.int64)
     j = 0
     while True:
-        status, j = run_state_switched(A, B, C, D, E, F, mats.Phi, mats.Gamma, mats.H, mats.M, t, method.h,
+        status, j = theta_kernels.run_state_switched(A, B, C, D, E, F, mats.Phi, mats.Gamma, mats.H, mats.M, t, method.h,
                                        method.theta, f.c, f.d, low, slope, ramp_period, law.band, law.below,
                                        law.above, law.latch, x, u, y, config, j, state, ev_time, ev_config, ev_step)
         if status == OK:
@@ -413,6 +413,7 @@ def _solve_state_switched(problem: LCSProblem, method: Theta, x0: np.ndarray, st
 
 
 def _solve_relay(problem: LCSProblem, method: Theta, x0: np.ndarray, start: float) -> Trajectory:
+    from . import theta_kernels                 # numba's JIT (the ahead-of-time module holds the scheduled loop)
     law: Relay = problem.switching
     A, B, C, D, E, F = _config_stacks(problem)
     t = time_grid(problem, method.h)   # step h, with the ramp resets inserted
@@ -421,7 +422,7 @@ def _solve_relay(problem: LCSProblem, method: Theta, x0: np.ndarray, start: floa
     blend = np.zeros(N)
     x[0] = x0
     u[0], y[0] = _initial_pair(problem, law.low, x0)
-    status, j = run_relay(A, B, C, D, E, F, law.low, law.high, t, method.h, method.theta, law.function.c,
+    status, j = theta_kernels.run_relay(A, B, C, D, E, F, law.low, law.high, t, method.h, method.theta, law.function.c,
                           law.function.d, x, u, y, blend, 0)
     if status != OK:
         raise SimulationError(f"the relay step LCP at t = {t[j]:.6g} s (size k + 2 = {k + 2}) has no solution "
@@ -449,9 +450,11 @@ def _initial_pair(problem: LCSProblem, config: int, x0: np.ndarray):
     """The consistent pair at t0: LCP(C x0 + F, D); when D is singular and no solution exists, u = 0."""
     c = problem.configurations[config]
     q = c.C @ x0 + c.F
-    result = solve_lcp(c.D, q, method="lemke") if np.any(c.D) else None
-    if result is not None and result.solved:
-        return result.z, result.w
+    if np.any(c.D):
+        from ..lcp import solve_lcp             # imported here: a run that never needs it starts faster
+        result = solve_lcp(c.D, q, method="lemke")
+        if result.solved:
+            return result.z, result.w
     return np.zeros(problem.k), q
 
 

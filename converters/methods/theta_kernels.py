@@ -21,20 +21,8 @@ from numba import njit, types
 from numba.cpython.unsafe.tuple import tuple_setitem
 from numba.extending import overload
 
+from ..compiled import EVENTS_FULL, NEEDS_GENERAL_SOLVER, NO_SOLUTION, OK  # noqa: F401 (shared with the callers)
 from ..lcp.kernels import _masks_by_size, solve_augmented, solve_small_lcp
-
-#: Status codes returned by :func:`run_steps`.
-OK, NEEDS_GENERAL_SOLVER, NO_SOLUTION = 0, 1, 2
-
-#: Up to this many states the one-pair loop carries the state in registers (a tuple of n floats, its
-#: length fixing n at compile time: one specialisation per n, cached); above it, in the rows of x
-#: (measured: registers 4.4 ns/step at n = 2, 7.1 at n = 4; rows 7.1 and 19.7; even at n = 8, 40 against 31).
-MAX_REGISTER_STATES = 6
-
-
-def register_state(n: int):
-    """The ``state`` argument of the one-pair loop: n zeros (the state in registers) or None (in x)."""
-    return (0.0,) * n if n <= MAX_REGISTER_STATES else None
 
 
 def _size(state, x):
@@ -112,7 +100,7 @@ def run_steps(which, Phi, Gamma, H, C, F, M, Phi_b, Gamma_b, CPhi, q0, x, u, y, 
     Returns (status, j): OK when every step is done, NEEDS_GENERAL_SOLVER at the first step j
     whose LCP is too large or degenerate for the inline solver (the caller solves it and resumes
     at j + 1), NO_SOLUTION when a scalar LCP provably has none. One pair: :func:`run_scalar`
-    (``state`` from :func:`register_state`).
+    (``state`` from :func:`converters.compiled.register_state`).
     """
     n = x.shape[1]
     k = u.shape[1]
@@ -159,7 +147,8 @@ def run_steps(which, Phi, Gamma, H, C, F, M, Phi_b, Gamma_b, CPhi, q0, x, u, y, 
 def run_scalar(which, Phi_b, Gamma_b, CPhi, q0, M, x, u, y, start, state):
     """k = 1: the step as the affine map of its branch (module docstring): q = CPhi x + q0; q >= 0 frees the
     pair (u = 0), q < 0 holds it (u = -q / M > 0) or, when M <= 0, has no solution (NO_SOLUTION at that step).
-    ``state``: n zeros to carry the state in registers, or None to read it from x (:func:`register_state`).
+    ``state``: n zeros to carry the state in registers, or None to read it from x
+    (:func:`converters.compiled.register_state`).
     The one loop of the one-pair stepper: the serial runs and the batched steady states call it."""
     n = _size(state, x)
     current = state
@@ -189,10 +178,6 @@ def run_scalar(which, Phi_b, Gamma_b, CPhi, q0, M, x, u, y, start, state):
         y[j + 1, 0] = q + m * z
         current = following
     return OK, which.shape[0]
-
-
-#: Extra status of the state-switched loop: the event buffers are full (the caller grows them, resumes).
-EVENTS_FULL = 3
 
 
 @njit(cache=True)

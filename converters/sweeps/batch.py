@@ -15,9 +15,13 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ..analysis.newton_kernel import newton_step
 from ..analysis.periodic import ROUNDING as ROUNDING_LEVEL
-from ..analysis.periodic import newton_step
-from ..methods.theta_kernels import branch_maps, register_state, run_scalar, step_jacobian, theta_matrices
+from ..analysis.periodic import spectral_radius
+from ..compiled import register_state
+from ..methods.theta_kernels import branch_maps, run_scalar, step_jacobian, theta_matrices
+
+_spectral_radius = njit(cache=True)(spectral_radius)
 
 #: Status per point.
 CONVERGED, NOT_CONVERGED, NO_SOLUTION, ROUNDING, SINGULAR, NONFINITE = 0, 1, 2, 3, 4, 5
@@ -64,7 +68,7 @@ def batch_steady(A, B, C, D, E, F, set_configs, set_dts, counts, which, steps, t
 @njit(cache=True)
 def _batch_steady(A, B, C, D, E, F, set_configs, set_dts, counts, which, steps, theta, x0, warm_up, tol, max_iter,
                   xs, us, ys, x_star, jac_out, status, iterations, residuals, distances, state):
-    """:func:`batch_steady` compiled (``state``: :func:`.theta_kernels.register_state`)."""
+    """:func:`batch_steady` compiled (``state``: :func:`converters.compiled.register_state`)."""
     P, n = x0.shape[0], x0.shape[1]
     eps = 2.220446049250313e-16
     for p in range(P):
@@ -113,7 +117,8 @@ def _batch_steady(A, B, C, D, E, F, set_configs, set_dts, counts, which, steps, 
         a = np.empty((n, n + 1))
         status[p] = NOT_CONVERGED
         for it in range(max_iter + 1):
-            residual, worst, rho, distance, solved = newton_step(x, px, jac, dx, a)
+            rho = _spectral_radius(jac)
+            residual, worst, distance, solved = newton_step(x, px, jac, rho, dx, a)
             residuals[p] = residual
             iterations[p] = it
             if not solved:

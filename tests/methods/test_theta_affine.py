@@ -7,7 +7,8 @@ import pytest
 from converters.errors import SimulationError
 from converters.methods import Theta
 from converters.methods.theta import StepPlan
-from converters.methods.theta_kernels import NO_SOLUTION, OK, register_state, run_scalar
+from converters.compiled import NO_SOLUTION, OK, register_state
+from converters.methods.theta_kernels import run_scalar
 from converters.models import get_converter
 from converters.problems import Configuration, LCSProblem, Schedule
 

@@ -7,14 +7,14 @@ from pathlib import Path
 
 import numpy as np
 
-from converters.lcp import SOLVERS
+from converters.lcp import METHOD_NAMES
 
 
 def add(sub) -> None:
     lcp = sub.add_parser("lcp", help="linear complementarity problems").add_subparsers(title="lcp commands")
     solve = lcp.add_parser("solve", help="solve an LCP stored in the Siconos .dat format")
     solve.add_argument("file", type=Path)
-    solve.add_argument("--method", default="auto", choices=list(SOLVERS),
+    solve.add_argument("--method", default="auto", choices=list(METHOD_NAMES),
                        help="auto (default: chooses by size and structure, falls back on failure; the output "
                             "names the method that solved it), lemke, murty, enum, pgs or newton")
     solve.add_argument("--tol", type=float, default=1e-10, help="accepted residual, in [1e-16, 1e-2] (default 1e-10)")

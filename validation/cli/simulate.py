@@ -122,9 +122,10 @@ def run(args) -> int:
 
 
 def _set_up(converter, params, control, method, steady, options) -> float:
-    """The one-time set-up of a process (numba loading the compiled kernels from its disk cache, on their first
-    call), paid here on one coarse period of the same model and method so that the run's ``wall_s`` measures the
-    computation alone; returns its time (the JSON's ``setup_s``)."""
+    """The one-time set-up of a process (loading the compiled kernels: the ahead-of-time module, ~2 ms, or numba
+    loading them from its disk cache on their first call, ~0.3 s; :mod:`converters.compiled`), paid here on one
+    coarse period of the same model and method so that the run's ``wall_s`` measures the computation alone;
+    returns its time (the JSON's ``setup_s``)."""
     from converters.models import get_model
     from converters.run import run_converter
     start = time.perf_counter()

@@ -1,0 +1,116 @@
+"""Build the ahead-of-time module of the compiled kernels (:mod:`converters.compiled` says why and how it is
+used): ``python -m converters.build_kernels`` (``make setup`` runs it) compiles, with numba.pycc, the functions
+of :data:`converters.compiled.KERNELS` for this machine's CPU into ``converters/_kernels`` and records the
+SHA-256 of every source they were compiled from in ``converters/_kernels.json``. ``--check``: only say whether
+the module is current; ``--force``: rebuild a current one."""
+from __future__ import annotations
+
+import json
+import os
+import sys
+from pathlib import Path
+
+from .compiled import HERE, MAX_REGISTER_STATES, MODULE, RECORD, digest, register_state, stale
+
+def _exports():
+    """(exported name, numba signature, Python function) of every function the module holds."""
+    from numba import types as T
+
+    from .analysis.newton_kernel import newton_step
+    from .methods import theta_kernels as K
+
+    def a(ndim, dtype=T.float64):
+        return T.Array(dtype, ndim, "C")
+
+    run_args = (a(1, T.int32), a(3), a(2), a(3), a(3), a(2), a(3), a(4), a(3), a(3), a(2), a(2), a(2), a(2),
+                T.int64, T.boolean)
+
+    def run_steps_with(state):
+        def run(which, Phi, Gamma, H, C, F, M, Phi_b, Gamma_b, CPhi, q0, x, u, y, start, inline):
+            return K.run_steps(which, Phi, Gamma, H, C, F, M, Phi_b, Gamma_b, CPhi, q0, x, u, y, start, inline,
+                               state)
+        return run
+
+    out = [(f"run_steps_r{n}", T.UniTuple(T.int64, 2)(*run_args), run_steps_with(register_state(n)))
+           for n in range(1, MAX_REGISTER_STATES + 1)]
+    out.append(("run_steps_rows", T.UniTuple(T.int64, 2)(*run_args), run_steps_with(None)))
+    out.append(("set_matrices", T.boolean(a(3), a(3), a(3), a(3), a(2), a(2), a(1), T.float64, a(3), a(2), a(3),
+                                          a(3), a(4), a(3), a(3), a(2)), K.set_matrices.py_func))
+    out.append(("step_jacobian", T.none(a(1, T.int32), a(2), a(4), a(3), a(3), a(3), a(2)), K.step_jacobian.py_func))
+    out.append(("newton_step", T.Tuple((T.float64, T.float64, T.float64, T.boolean))(a(1), a(1), a(2), T.float64,
+                                                                                      a(1), a(2)),
+                newton_step.py_func))
+    return out
+
+
+def _sources() -> dict:
+    """Every source file of this package holding compiled code that the build has imported, with its digest
+    (the exported functions call across these modules, so any of them changing makes the module stale)."""
+    from numba.core.registry import CPUDispatcher
+    sources = {"compiled.py": digest(HERE / "compiled.py"),        # the constants the kernels read
+               "build_kernels.py": digest(HERE / "build_kernels.py")}  # the exports and their signatures
+    for name, module in list(sys.modules.items()):
+        path = getattr(module, "__file__", None)
+        if not name.startswith("converters.") or not path:
+            continue
+        if any(isinstance(value, CPUDispatcher) for value in vars(module).values()):
+            relative = Path(path).resolve().relative_to(HERE).as_posix()
+            sources[relative] = digest(HERE / relative)
+    return dict(sorted(sources.items()))
+
+
+def build(quiet: bool = False) -> str:
+    """Compile :func:`_exports` into ``converters/_kernels`` and record its sources; returns a one-line summary.
+    Written to a temporary directory and moved into place (the record last), so an interrupted build leaves
+    the previous module, or none, never a half-written one."""
+    import tempfile
+    import time
+    import warnings
+    start = time.perf_counter()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")            # numba.pycc's pending deprecation (module docstring)
+        from numba.pycc import CC
+        exports = _exports()
+        with tempfile.TemporaryDirectory(prefix=".kernels-build.", dir=HERE) as tmp:
+            cc = CC(MODULE)
+            cc.output_dir = tmp
+            cc.target_cpu = "host"
+            cc.verbose = False
+            for name, signature, function in exports:
+                cc.export(name, signature)(function)
+            cc.compile()
+            built = [p for p in Path(tmp).iterdir() if p.name.startswith(MODULE + ".") and p.suffix in (".so", ".pyd")]
+            if len(built) != 1:
+                raise RuntimeError(f"numba.pycc wrote {sorted(p.name for p in Path(tmp).iterdir())}")
+            record = {"python": sys.implementation.cache_tag, "sources": _sources(),
+                      "exports": [name for name, _, _ in exports]}
+            RECORD.unlink(missing_ok=True)         # stale from here until the new record lands
+            os.replace(built[0], HERE / built[0].name)
+            (Path(tmp) / "record").write_text(json.dumps(record, indent=1) + "\n")
+            os.replace(Path(tmp) / "record", RECORD)
+    return (f"converters/{built[0].name}: {len(exports)} kernels compiled ahead of time from "
+            f"{len(record['sources'])} sources in {time.perf_counter() - start:.0f} s")
+
+
+def main(argv=None) -> int:
+    """``python -m converters.build_kernels [--check] [--force]``: build the module when it is missing or stale (``--check``:
+    only say whether it is current)."""
+    args = sys.argv[1:] if argv is None else argv
+    why = stale()
+    if "--check" in args:
+        print(f"ahead-of-time kernels: {why or 'current'}")
+        return 1 if why else 0
+    if not why and "--force" not in args:
+        print("ahead-of-time kernels: current")
+        return 0
+    try:
+        print(build())
+    except Exception as exc:                       # noqa: BLE001 (no compiler, headers, ...: the JIT still works)
+        print(f"ahead-of-time kernels not built ({type(exc).__name__}: {' '.join(str(exc).split())[:300]}); "
+              "numba compiles them on first use instead", file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

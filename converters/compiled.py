@@ -1,0 +1,131 @@
+"""The compiled kernels of the hot loops, and where they come from: a module built ahead of time when the
+package is installed, or numba's just-in-time compiler.
+
+The kernels are written once, in Python, for numba (:mod:`.methods.theta_kernels`, :mod:`.lcp.kernels`,
+:mod:`.analysis.newton_kernel`). ``make setup`` (or ``python -m converters.build_kernels``) also compiles the ones a
+plain run needs with numba's ahead-of-time compiler (``numba.pycc``, the same front end and LLVM code as the
+JIT, for this machine's CPU) into the extension module ``converters/_kernels``; beside it, ``_kernels.json``
+records the SHA-256 of every source file the build read. A process whose sources still match loads that
+module: it imports neither numba nor scipy (about 0.25 s) and compiles nothing (numba's first call of a cached
+kernel costs 0.05-0.1 s more each), so ``pcsuite simulate`` starts in about a tenth of a second. When the
+module is missing, stale (a kernel source edited since the build) or unloadable, :func:`kernel` returns the
+numba dispatcher instead: the same code, compiled on first call and cached on disk. ``PCSUITE_KERNELS=jit``
+forces the JIT (both give the same numbers: ``tests/methods/test_compiled.py``).
+
+Why numba.pycc: it compiles the very functions the JIT runs (one source of truth), and the module it writes
+depends on NumPy only. numba marks it "pending deprecation" since 0.57 while a replacement is developed; it is
+still shipped (0.68) and, if it ever goes, the JIT path is unchanged.
+
+This module itself imports neither numba nor the kernels' modules: it also holds the constants the callers
+share with the kernels (status codes, sizes).
+"""
+from __future__ import annotations
+
+import hashlib
+import importlib
+import json
+import os
+import sys
+from pathlib import Path
+
+#: Status codes of the compiled step loops (:func:`.methods.theta_kernels.run_steps` and the state-driven ones).
+OK, NEEDS_GENERAL_SOLVER, NO_SOLUTION = 0, 1, 2
+#: Extra status of the state-switched loop: the event buffers are full (the caller grows them, resumes).
+EVENTS_FULL = 3
+#: Largest k solved inline by the step loops (:func:`.lcp.kernels.solve_small_lcp`).
+MAX_INLINE_K = 8
+#: Up to this many states the one-pair loop carries the state in registers (a tuple of n floats, its
+#: length fixing n at compile time: one specialisation per n, cached); above it, in the rows of x
+#: (measured: registers 4.4 ns/step at n = 2, 7.1 at n = 4; rows 7.1 and 19.7; even at n = 8, 40 against 31).
+MAX_REGISTER_STATES = 6
+
+
+def register_state(n: int):
+    """The ``state`` argument of the one-pair loop: n zeros (the state in registers) or None (in x)."""
+    return (0.0,) * n if n <= MAX_REGISTER_STATES else None
+
+
+HERE = Path(__file__).resolve().parent
+MODULE = "_kernels"
+RECORD = HERE / f"{MODULE}.json"
+#: name -> (module, function): the kernels this module serves.
+KERNELS = {
+    "run_steps": ("converters.methods.theta_kernels", "run_steps"),
+    "set_matrices": ("converters.methods.theta_kernels", "set_matrices"),
+    "step_jacobian": ("converters.methods.theta_kernels", "step_jacobian"),
+    "newton_step": ("converters.analysis.newton_kernel", "newton_step"),
+}
+
+_loaded: dict = {}
+_source = None          # "ahead-of-time" or "jit: <why>", once decided
+
+
+def kernel(name: str):
+    """The compiled function ``name`` of :data:`KERNELS`: from the ahead-of-time module when it is built from the
+    current sources (and ``PCSUITE_KERNELS`` is not ``jit``), else numba's dispatcher."""
+    if name not in _loaded:
+        module = _ahead_of_time()
+        if module is not None:
+            _loaded[name] = _run_steps_by_size(module) if name == "run_steps" else getattr(module, name)
+        else:
+            where, function = KERNELS[name]
+            _loaded[name] = getattr(importlib.import_module(where), function)
+    return _loaded[name]
+
+
+def source() -> str:
+    """Where the kernels come from in this process: ``ahead-of-time`` or ``jit: <the reason>``."""
+    _ahead_of_time()
+    return _source
+
+
+def _ahead_of_time():
+    global _source
+    if os.environ.get("PCSUITE_KERNELS", "").strip().lower() == "jit":
+        _source = "jit: PCSUITE_KERNELS=jit"
+        return None
+    why = stale()
+    if why:
+        _source = f"jit: {why}"
+        return None
+    try:
+        module = importlib.import_module(f"converters.{MODULE}")
+    except ImportError as exc:
+        _source = f"jit: the ahead-of-time module does not load ({exc})"
+        return None
+    _source = "ahead-of-time"
+    return module
+
+
+def digest(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def stale() -> str:
+    """Why the ahead-of-time module cannot be used ('' when it can): not built, or a source changed since."""
+    try:
+        record = json.loads(RECORD.read_text())
+    except (OSError, ValueError):
+        return "the ahead-of-time module is not built (make setup, or python -m converters.build_kernels)"
+    if record.get("python") != sys.implementation.cache_tag:
+        return f"the ahead-of-time module was built for {record.get('python')}, not {sys.implementation.cache_tag}"
+    for relative, recorded in record.get("sources", {}).items():
+        try:
+            if digest(HERE / relative) != recorded:
+                return f"{relative} changed since the ahead-of-time build"
+        except OSError:
+            return f"{relative} is missing since the ahead-of-time build"
+    if not record.get("sources"):
+        return "the ahead-of-time record lists no sources"
+    return ""
+
+
+def _run_steps_by_size(module):
+    """run_steps with numba's signature: the ahead-of-time module has one export per register size."""
+    by_size = {n: getattr(module, f"run_steps_r{n}") for n in range(1, MAX_REGISTER_STATES + 1)}
+    rows = module.run_steps_rows
+
+    def run_steps(which, Phi, Gamma, H, C, F, M, Phi_b, Gamma_b, CPhi, q0, x, u, y, start, inline, state):
+        return (rows if state is None else by_size[len(state)])(which, Phi, Gamma, H, C, F, M, Phi_b, Gamma_b,
+                                                                CPhi, q0, x, u, y, start, inline)
+    return run_steps
