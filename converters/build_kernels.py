@@ -17,6 +17,7 @@ def _exports():
     from numba import types as T
 
     from .analysis.newton_kernel import newton_step
+    from .lcp import dispatch, engine
     from .methods import theta_kernels as K
 
     def a(ndim, dtype=T.float64):
@@ -40,6 +41,9 @@ def _exports():
     out.append(("newton_step", T.Tuple((T.float64, T.float64, T.float64, T.boolean))(a(1), a(1), a(2), T.float64,
                                                                                       a(1), a(2)),
                 newton_step.py_func))
+    out.append(("solve_once", T.Tuple((T.int64, T.int64, T.float64, T.int64, T.int64, T.int64, T.float64))(
+        a(2), a(1), a(1), a(1), T.int64, T.float64, T.int64, T.boolean, a(1), T.int64), engine.solve_once.py_func))
+    out.append(("lcp_default_options", a(1)(), dispatch.default_options.py_func))
     return out
 
 

@@ -2,7 +2,7 @@
 package is installed, or numba's just-in-time compiler.
 
 The kernels are written once, in Python, for numba (:mod:`.methods.theta_kernels`, :mod:`.lcp.kernels`,
-:mod:`.analysis.newton_kernel`). ``make setup`` (or ``python -m converters.build_kernels``) also compiles the ones a
+:mod:`.analysis.newton_kernel`, the LCP methods of :mod:`.lcp`). ``make setup`` (or ``python -m converters.build_kernels``) also compiles the ones a
 plain run needs with numba's ahead-of-time compiler (``numba.pycc``, the same front end and LLVM code as the
 JIT, for this machine's CPU) into the extension module ``converters/_kernels``; beside it, ``_kernels.json``
 records the SHA-256 of every source file the build read. A process whose sources still match loads that
@@ -54,6 +54,8 @@ KERNELS = {
     "set_matrices": ("converters.methods.theta_kernels", "set_matrices"),
     "step_jacobian": ("converters.methods.theta_kernels", "step_jacobian"),
     "newton_step": ("converters.analysis.newton_kernel", "newton_step"),
+    "solve_once": ("converters.lcp.engine", "solve_once"),
+    "lcp_default_options": ("converters.lcp.dispatch", "default_options"),
 }
 
 _loaded: dict = {}

@@ -31,8 +31,8 @@ _BYTES = re.compile(r"^\s*(\d+(?:\.\d*)?|\.\d+)(?:[eE]([+-]?\d+))?\s*([kKmMgGtT]
 _FACTOR = {"": 1, "b": 1, "k": 1 << 10, "m": 1 << 20, "g": 1 << 30, "t": 1 << 40}
 
 
-def parse_bytes(name: str, text) -> int:
-    """Bytes from ``4G``, ``512MiB``, ``1e9`` (binary multiples: K, M, G, T = 2^10 .. 2^40)."""
+def parse_bytes(name: str, text, bounds: tuple = MEMORY_RANGE) -> int:
+    """Bytes from ``4G``, ``512MiB``, ``1e9`` (binary multiples: K, M, G, T = 2^10 .. 2^40), within ``bounds``."""
     if isinstance(text, (int, float)) and not isinstance(text, bool):
         value = float(text)
     else:
@@ -41,9 +41,8 @@ def parse_bytes(name: str, text) -> int:
             raise ResourceError(f"{name} must be a size in bytes such as 512M, 4G or 2e9; got {text!r}")
         mantissa, exponent, suffix = match.groups()
         value = float(mantissa) * 10.0 ** int(exponent or 0) * _FACTOR[(suffix or "")[:1].lower()]
-    if not (math.isfinite(value) and MEMORY_RANGE[0] <= value <= MEMORY_RANGE[1]):
-        raise ResourceError(f"{name} must be in [{human_bytes(MEMORY_RANGE[0])}, {human_bytes(MEMORY_RANGE[1])}]; "
-                            f"got {text!r}")
+    if not (math.isfinite(value) and bounds[0] <= value <= bounds[1]):
+        raise ResourceError(f"{name} must be in [{human_bytes(bounds[0])}, {human_bytes(bounds[1])}]; got {text!r}")
     return int(value)
 
 
@@ -126,6 +125,7 @@ class Deadline:
 #: ``PCSUITE_MALLOC_PAD``: bytes of freed memory glibc's malloc keeps for the next run (0: leave malloc alone).
 MALLOC_PAD_ENV = "PCSUITE_MALLOC_PAD"
 DEFAULT_MALLOC_PAD = 64 << 20
+MALLOC_PAD_RANGE = (0, 1 << 30)
 _M_TOP_PAD, _M_MMAP_THRESHOLD = -2, -3     # glibc's mallopt parameter numbers (malloc.h)
 #: Blocks up to this size come from the heap (glibc's own ceiling for its adaptive threshold), larger ones from mmap.
 _MMAP_THRESHOLD = 32 << 20
@@ -137,18 +137,25 @@ def keep_freed_memory() -> bool:
     32 MiB from that heap (``M_MMAP_THRESHOLD``; setting the pad turns glibc's adaptive threshold off, and
     its 128 KiB start would send every result array to mmap). A run allocates its grid
     and its x, u, y afresh (5 MB for 100k steps of the buck); returned to the OS after each run, every next
-    run page-faults them in again (750 faults: 0.7 ms of a 1.7 ms warm run, ``benchmarks/peers.py``); kept,
+    run page-faults them in again (750-1,300 faults: 0.7-1 ms of a 1.7-2 ms warm run, ``benchmarks/peers.py``); kept,
     it reuses them. Returns True when the setting took (glibc only; elsewhere nothing changes)."""
-    try:
-        pad = parse_bytes(MALLOC_PAD_ENV, os.environ.get(MALLOC_PAD_ENV) or DEFAULT_MALLOC_PAD)
-    except ResourceError:
-        pad = DEFAULT_MALLOC_PAD
+    raw = os.environ.get(MALLOC_PAD_ENV, "").strip()
+    pad = DEFAULT_MALLOC_PAD
+    if raw:
+        try:
+            pad = parse_bytes(MALLOC_PAD_ENV, raw, MALLOC_PAD_RANGE)
+        except ResourceError as exc:          # a tuning knob: warn, keep the default, do not stop the run
+            import warnings
+            warnings.warn(f"{exc}; using the default {DEFAULT_MALLOC_PAD >> 20}M", stacklevel=2)
     if pad <= 0 or not sys.platform.startswith("linux"):
         return False
+    return bool(_mallopt(_M_MMAP_THRESHOLD, _MMAP_THRESHOLD)) and bool(_mallopt(_M_TOP_PAD, pad))
+
+
+def _mallopt(parameter: int, value: int) -> int:
+    """glibc's mallopt (1 when the setting took, 0 otherwise, or when there is no mallopt: musl)."""
     try:
         import ctypes
-        libc = ctypes.CDLL(None)
-        return bool(libc.mallopt(_M_MMAP_THRESHOLD, _MMAP_THRESHOLD)) and bool(libc.mallopt(_M_TOP_PAD,
-                                                                                             min(pad, 1 << 30)))
-    except (OSError, AttributeError):        # not glibc (musl has no mallopt)
-        return False
+        return ctypes.CDLL(None).mallopt(parameter, value)
+    except (OSError, AttributeError):
+        return 0

@@ -12,9 +12,9 @@ from .state import METHOD_NAMES
 cache.refresh()   # before any compiled function loads its cache (see converters.lcp.cache)
 
 #: Each public name and the module that defines it.
-_WHERE = {"solve_lcp": "solve", "check_lcp": "solve", "SOLVERS": "solve", "LCPResult": "result",
-          "lcp_error": "result", "SOLVED": "result", "NO_SOLUTION": "result", "MAX_ITERATIONS": "result",
-          "FAILED": "result", "STATUSES": "result", "read_siconos_lcp": "siconos", "LCPFile": "siconos"}
+_WHERE = {"solve_lcp": "solve", "check_lcp": "solve", "SOLVERS": "engine", "LCPResult": "answer",
+          "lcp_error": "result", "SOLVED": "answer", "NO_SOLUTION": "answer", "MAX_ITERATIONS": "answer",
+          "FAILED": "answer", "STATUSES": "answer", "read_siconos_lcp": "siconos", "LCPFile": "siconos"}
 
 
 def __getattr__(name):

@@ -18,6 +18,12 @@ DEFAULT_MAX_ITER = (0, 10_000, 100_000, 0, 10_000, 1000)
 
 
 @njit(cache=True)
+def default_options():
+    """A fresh copy of :data:`DEFAULT_OPTIONS` (compiled: the ahead-of-time module holds it too)."""
+    return DEFAULT_OPTIONS.copy()
+
+
+@njit(cache=True)
 def advance_method(method, M, q, z, fw, iw, st, sf, tol, max_iter, budget, opts, first):
     """Advance ``method`` (not auto) on LCP(q, M) by at most ``budget`` multiply-adds; True when it ended.
     ``first``: auto's use (enumeration stops at the first solution, PGS stops when converging too slowly)."""

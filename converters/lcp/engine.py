@@ -40,13 +40,12 @@ METHODS = S.METHOD_NAMES
 CODES = {name: code for code, name in enumerate(METHODS)}
 #: What one iteration of each method is called in messages.
 UNITS = ("steps", "pivots", "pivots", "bases", "sweeps", "steps")
-#: Multiply-adds between two looks at the clock (a few milliseconds of work at most).
-CHUNK = 1 << 22
+CHUNK = S.CHUNK
 #: Options each method takes, with their index in the options array.
 OPTIONS = {"lemke": {"pivot_tol": OPT_PIVOT_TOL}, "pgs": {"omega": OPT_OMEGA},
            "newton": {"rho": OPT_RHO, "p": OPT_P, "beta": OPT_BETA, "sigma": OPT_SIGMA}}
-# solve_once's answers
-ONCE_SOLVED, ONCE_CLOSED_FORM, ONCE_OTHER, ONCE_NOT_FINITE = range(4)
+ONCE_SOLVED, ONCE_CLOSED_FORM, ONCE_OTHER, ONCE_NOT_FINITE = (S.ONCE_SOLVED, S.ONCE_CLOSED_FORM, S.ONCE_OTHER,
+                                                              S.ONCE_NOT_FINITE)
 _MAX_FLOAT = 1.7976931348623157e308
 
 
@@ -398,3 +397,8 @@ def enumerate_bases(M: np.ndarray, q: np.ndarray, *, tol: float, max_iter: int |
 def auto_plan(M: np.ndarray, q: np.ndarray, *, tol: float, max_iter: int | None = None, deadline=None):
     """The ``auto`` plan (:mod:`converters.lcp.auto`) on LCP(q, M) as given (see :func:`lemke`)."""
     return run_method("auto", M, q, tol=tol, max_iter=max_iter, deadline=deadline)
+
+
+#: Each method on a problem as given (no normalisation, no closed forms): what solve_lcp runs, after those.
+SOLVERS = {"auto": auto_plan, "lemke": lemke, "murty": murty, "enum": enumerate_bases, "pgs": pgs,
+           "newton": newton_fb}

@@ -18,7 +18,7 @@ from . import state as S
 from .kernels import solve_augmented
 from .result import accepts, mark_done, residual
 
-MAX_K = 12
+MAX_K = S.ENUM_MAX_K
 
 
 @njit(cache=True)

@@ -8,8 +8,10 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from . import state as S
+
 #: The rules in the order they are tried; :func:`closed_form` takes the index.
-RULES = ("trivial", "scalar", "pair")
+RULES = S.CLOSED_FORM_RULES
 
 
 @njit(cache=True)

@@ -8,18 +8,12 @@ functions; :func:`check_message` turns the check's code into the sentence a user
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 
 import numpy as np
 from numba import njit
 
 from . import state as S
-
-SOLVED = "solved"
-NO_SOLUTION = "no_solution"
-MAX_ITERATIONS = "max_iterations"
-FAILED = "failed"
-STATUSES = (SOLVED, NO_SOLUTION, MAX_ITERATIONS, FAILED)   # the compiled code's status numbers index this tuple
+from .answer import FAILED, MAX_ITERATIONS, NO_SOLUTION, SOLVED, STATUSES, LCPResult, make_result  # noqa: F401
 
 #: Codes returned by :func:`check` (0: the pair solves the LCP).
 CHECK_OK, CHECK_NOT_FINITE, CHECK_W_NEGATIVE, CHECK_Z_NEGATIVE, CHECK_NOT_COMPLEMENTARY, CHECK_RESIDUAL = range(6)
@@ -226,72 +220,6 @@ def check_solution(M, q, z, w, err, tol) -> str:
     """'' when (z, w) solves LCP(q, M) to ``tol`` (scale-relative, see :func:`check`), else which condition fails."""
     M, q, z = _floats(M, q, z)
     return check_message(*check(M, q, z, np.ascontiguousarray(w, dtype=float), float(err), float(tol)), tol)
-
-
-@dataclass(frozen=True)
-class LCPResult:
-    """Outcome of :func:`solve_lcp`.
-
-    Attributes
-    ----------
-    z, w : ndarray, shape (k,)
-        The complementary pair, w = q + M z (the last iterate when not solved).
-    status : str
-        ``solved``, ``no_solution`` (ray termination: for copositive-plus M this proves that no
-        solution exists), ``max_iterations`` or ``failed``.
-    err : float
-        ||z - max(0, z - w)|| / ||q|| of the returned z.
-    iterations : int
-        Pivots (pivoting methods), sweeps (PGS), Newton steps or visited bases (enumeration); for
-        ``auto``, those of the method that produced the answer.
-    method : str
-        The method that produced the answer; ``auto:<method>`` when ``auto`` chose it.
-    message : str
-        Why the solve did not succeed, with the remedy, or empty.
-    solutions : list of ndarray
-        Every basic solution (enumeration only).
-    """
-
-    z: np.ndarray
-    w: np.ndarray
-    status: str
-    err: float
-    iterations: int
-    method: str
-    message: str = ""
-    solutions: list = field(default_factory=list)
-
-    @property
-    def solved(self) -> bool:
-        return self.status == SOLVED
-
-    def to_dict(self) -> dict:
-        out = {"status": self.status, "method": self.method, "z": self.z.tolist(), "w": self.w.tolist(),
-               "err": self.err, "iterations": self.iterations}
-        if self.message:
-            out["message"] = self.message
-        if self.method == "enum":
-            out["solutions"] = [s.tolist() for s in self.solutions]
-        return out
-
-
-_new = object.__new__
-
-
-def make_result(z, w, status, err, iterations, method, message="", solutions=None) -> LCPResult:
-    """An LCPResult built without the frozen dataclass's per-field ``object.__setattr__`` (a quarter of the
-    cost of a small solve); the same object as ``LCPResult(...)``."""
-    result = _new(LCPResult)
-    d = result.__dict__
-    d["z"] = z
-    d["w"] = w
-    d["status"] = status
-    d["err"] = err
-    d["iterations"] = iterations
-    d["method"] = method
-    d["message"] = message
-    d["solutions"] = [] if solutions is None else solutions
-    return result
 
 
 def finish(M, q, z, *, status, iterations, method, tol, message="", solutions=()):

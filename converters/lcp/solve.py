@@ -1,4 +1,9 @@
-"""One entry point for every LCP solver: :func:`solve_lcp`."""
+"""One entry point for every LCP solver: :func:`solve_lcp`.
+
+This module imports no compiled code: the thin path calls one compiled function, :func:`.engine.solve_once`,
+through :func:`converters.compiled.kernel` (from the ahead-of-time module when it is current, so a process
+that solves small LCPs never imports numba); the full path imports the engine when it first runs.
+"""
 from __future__ import annotations
 
 import os
@@ -6,19 +11,13 @@ import time
 
 import numpy as np
 
-from .. import limits
+from .. import compiled, limits
 from ..errors import LCPError
 from ..validate import as_matrix, as_vector
-from . import engine
 from . import state as S
-from .engine import auto_plan, enumerate_bases, lemke, murty, newton_fb, pgs
-from .enumeration import MAX_K as ENUM_MAX_K
-from .fastpaths import RULES, closed_form
-from .result import SOLVED, LCPResult, finish, make_result
+from .answer import SOLVED, LCPResult, make_result
 
-#: Each method on a problem as given (no normalisation, no closed forms): what solve_lcp runs, after those.
-SOLVERS = {"auto": auto_plan, "lemke": lemke, "murty": murty, "enum": enumerate_bases, "pgs": pgs,
-           "newton": newton_fb}
+ENUM_MAX_K = S.ENUM_MAX_K
 DEFAULT_MAX_ITER = {"auto": None, "lemke": 10_000, "murty": 100_000, "enum": None, "pgs": 10_000, "newton": 1000}
 #: Accepted range of ``tol`` (below 1e-16 double precision cannot resolve it; above 1e-2 it is no solution).
 TOL_RANGE = (1e-16, 1e-2)
@@ -33,15 +32,15 @@ DEFAULT_TIME_LIMIT = 20.0
 WORK_ARRAYS = {"auto": 7, "lemke": 7, "murty": 4, "enum": 3, "pgs": 3, "newton": 7}
 
 _F64 = np.dtype(np.float64)
-_CODES = engine.CODES
-_CHUNK = engine.CHUNK
-_ONCE_SOLVED, _ONCE_CLOSED_FORM = engine.ONCE_SOLVED, engine.ONCE_CLOSED_FORM
+_CODES = {name: code for code, name in enumerate(S.METHOD_NAMES)}
+_CHUNK = S.CHUNK
+_ONCE_SOLVED, _ONCE_CLOSED_FORM, _ONCE_OTHER = S.ONCE_SOLVED, S.ONCE_CLOSED_FORM, S.ONCE_OTHER
 _ndarray = np.ndarray
 _empty = np.empty
 _monotonic = time.monotonic
 _TOL_LOW, _TOL_HIGH = TOL_RANGE
-_AUTO_LABELS = tuple(f"auto:{name}" for name in engine.METHODS)
-_CLOSED_FORM_MESSAGES = tuple(f"closed form ({rule})" for rule in RULES)
+_AUTO_LABELS = tuple(f"auto:{name}" for name in S.METHOD_NAMES)
+_CLOSED_FORM_MESSAGES = tuple(f"closed form ({rule})" for rule in S.CLOSED_FORM_RULES)
 #: auto's stages (packed as solve_once packs them) when PGS gave way and method m solved: nothing to report
 _PGS_GAVE_WAY = tuple((1 << (4 * m)) | ((S.SLOW + 1) << (4 * S.PGS)) for m in range(S.N_METHODS))
 
@@ -100,7 +99,7 @@ def solve_lcp(M, q, method: str = "auto", tol: float = 1e-10, max_iter: int | No
     """
     code = _CODES.get(method) if method.__class__ is str else None
     if code is None:
-        raise LCPError(f"method must be one of {', '.join(SOLVERS)}; got {method!r}")
+        raise LCPError(f"method must be one of {', '.join(S.METHOD_NAMES)}; got {method!r}")
     started = _monotonic()
     # The thin path: everything it needs checked here, the rest (finiteness included) in the compiled call.
     if (M.__class__ is _ndarray and q.__class__ is _ndarray and M.dtype is _F64 and q.dtype is _F64
@@ -126,13 +125,17 @@ def solve_lcp(M, q, method: str = "auto", tol: float = 1e-10, max_iter: int | No
             if answer == _ONCE_SOLVED:
                 if code != S.AUTO:
                     return make_result(z, w, SOLVED, err, iterations, method)
-                message = "" if stages == 1 << (4 * used) or stages == _PGS_GAVE_WAY[used] else \
-                    engine.auto_message(S.OK, used, engine.unpack_stages(stages), -1, engine.known(eig), -1, k)
+                if stages == 1 << (4 * used) or stages == _PGS_GAVE_WAY[used]:
+                    message = ""
+                else:
+                    from . import engine
+                    message = engine.auto_message(S.OK, used, engine.unpack_stages(stages), -1, engine.known(eig),
+                                                  -1, k)
                 return make_result(z, w, SOLVED, err, iterations, _AUTO_LABELS[used], message)
             if answer == _ONCE_CLOSED_FORM:
                 return make_result(z, w, SOLVED, err, 0, "auto:closed form" if code == S.AUTO else method,
                                    _CLOSED_FORM_MESSAGES[rule])
-            if answer == engine.ONCE_OTHER:
+            if answer == _ONCE_OTHER:
                 return _solve_sliced(M, q, code, tol, DEFAULT_MAX_ITER[method], fast_paths,
                                      _deadline(seconds, started), _OPTIONS)
             # NaN or inf: the full path raises the validation error
@@ -150,6 +153,7 @@ def solve_lcp(M, q, method: str = "auto", tol: float = 1e-10, max_iter: int | No
     elif not (isinstance(max_iter, (int, np.integer)) and not isinstance(max_iter, bool)
               and MAX_ITER_RANGE[0] <= max_iter <= MAX_ITER_RANGE[1]):
         raise LCPError(f"max_iter must be an integer in [{MAX_ITER_RANGE[0]}, {MAX_ITER_RANGE[1]}]; got {max_iter!r}")
+    from . import engine
     opts = engine.options_array(method, options)
     seconds = check_time_limit(time_limit)
     k = q.shape[0]
@@ -163,7 +167,10 @@ def solve_lcp(M, q, method: str = "auto", tol: float = 1e-10, max_iter: int | No
 def _solve_sliced(M, q, code, tol, max_iter, fast_paths, deadline, opts) -> LCPResult:
     """The full path on a validated problem: normalise, closed forms, the method in slices with the deadline
     looked at between them, then scale back and check on the original problem."""
-    method = engine.METHODS[code]
+    from . import engine
+    from .fastpaths import RULES, closed_form
+    from .result import finish
+    method = S.METHOD_NAMES[code]
     Ms, qs, shift = normalise(M, q)
     if fast_paths and code != S.ENUM:
         label = "auto:closed form" if code == S.AUTO else method
@@ -189,15 +196,17 @@ def _solve_sliced(M, q, code, tol, max_iter, fast_paths, deadline, opts) -> LCPR
 def _scaled(z: np.ndarray, shift: int) -> np.ndarray:
     if not shift:
         return z.copy()
+    from .engine import scale_pow2
     out = np.empty_like(z)
-    engine.scale_pow2(z, shift, out)
+    scale_pow2(z, shift, out)
     return out
 
 
 def normalise(M: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
     """(M / 2^em, q / 2^es, es - em) with 2^es ~ max|q|, 2^em ~ max|M| (exact: powers of two); a zero M or q is
     left as it is. z = z' 2^(es - em) maps solutions of the normalised problem back."""
-    Ms, qs, shift, _ = engine.normalised(np.ascontiguousarray(M, dtype=float), np.ascontiguousarray(q, dtype=float))
+    from .engine import normalised
+    Ms, qs, shift, _ = normalised(np.ascontiguousarray(M, dtype=float), np.ascontiguousarray(q, dtype=float))
     return Ms, qs, int(shift)
 
 
@@ -290,20 +299,25 @@ def _check_memory(method: str, k: int) -> None:
 
 
 # ------------------------------------------------------------------------- the compiled call, without dispatch
-# Calling a numba function costs ~0.35 us of type dispatch; the thin path has already checked the exact types
-# (float64 C arrays, Python float / int / bool), so it calls the compiled entry point for those types directly
-# (~0.2 us). Compiled (or loaded from numba's cache) at the first solve, not at import.
+# The thin path has already checked the exact types (float64 C arrays, Python float / int / bool). From the
+# ahead-of-time module, solve_once takes exactly those; from numba's JIT, calling the dispatcher would cost
+# ~0.35 us of type dispatch, so the compiled entry point for those types is called directly (~0.2 us). Loaded
+# at the first solve, not at import.
 
-_OPTIONS = engine.options_array("auto", {})
-_ONCE_MAX_ITER = tuple(-1 if name in ("auto", "enum") else DEFAULT_MAX_ITER[name] for name in engine.METHODS)
+_ONCE_MAX_ITER = tuple(-1 if name in ("auto", "enum") else DEFAULT_MAX_ITER[name] for name in S.METHOD_NAMES)
+_OPTIONS = None
 _once = None
 
 
 def _load_once():
-    global _once
-    args = (np.eye(1), np.ones(1), np.empty(1), np.empty(1), 0, 1e-10, -1, True, _OPTIONS, engine.CHUNK)
-    engine.solve_once(*args)
-    from numba import typeof
-    overload = engine.solve_once.overloads.get(tuple(typeof(a) for a in args))
-    _once = overload.entry_point if overload is not None else engine.solve_once
+    global _once, _OPTIONS
+    _OPTIONS = compiled.kernel("lcp_default_options")()
+    once = compiled.kernel("solve_once")
+    if hasattr(once, "overloads"):                 # numba's dispatcher
+        args = (np.eye(1), np.ones(1), np.empty(1), np.empty(1), 0, 1e-10, -1, True, _OPTIONS, _CHUNK)
+        once(*args)
+        from numba import typeof
+        overload = once.overloads.get(tuple(typeof(a) for a in args))
+        once = overload.entry_point if overload is not None else once
+    _once = once
     return _once

@@ -23,6 +23,15 @@ START, RUNNING, DONE = 0, 1, 2
 # statuses: indices into converters.lcp.result.STATUSES
 SOLVED, NO_SOLUTION, MAX_ITERATIONS, FAILED = 0, 1, 2, 3
 
+#: Multiply-adds between two looks at the clock (a few milliseconds of work at most).
+CHUNK = 1 << 22
+#: The closed forms, in the order they are tried (:mod:`converters.lcp.fastpaths`).
+CLOSED_FORM_RULES = ("trivial", "scalar", "pair")
+#: Largest k enumeration takes (2^k bases).
+ENUM_MAX_K = 12
+# solve_once's answers (:func:`converters.lcp.engine.solve_once`)
+ONCE_SOLVED, ONCE_CLOSED_FORM, ONCE_OTHER, ONCE_NOT_FINITE = range(4)
+
 # method codes: indices into METHOD_NAMES (solve_lcp's ``method``)
 METHOD_NAMES = ("auto", "lemke", "murty", "enum", "pgs", "newton")
 AUTO, LEMKE, MURTY, ENUM, PGS, NEWTON = range(6)

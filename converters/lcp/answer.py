@@ -1,0 +1,79 @@
+"""What :func:`converters.lcp.solve_lcp` returns (:class:`LCPResult`) and its statuses: plain Python, so the
+compiled solve path can build its answer without importing the compiled modules."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+SOLVED = "solved"
+NO_SOLUTION = "no_solution"
+MAX_ITERATIONS = "max_iterations"
+FAILED = "failed"
+STATUSES = (SOLVED, NO_SOLUTION, MAX_ITERATIONS, FAILED)   # the compiled code's status numbers index this tuple
+
+
+@dataclass(frozen=True)
+class LCPResult:
+    """Outcome of :func:`solve_lcp`.
+
+    Attributes
+    ----------
+    z, w : ndarray, shape (k,)
+        The complementary pair, w = q + M z (the last iterate when not solved).
+    status : str
+        ``solved``, ``no_solution`` (ray termination: for copositive-plus M this proves that no
+        solution exists), ``max_iterations`` or ``failed``.
+    err : float
+        ||z - max(0, z - w)|| / ||q|| of the returned z.
+    iterations : int
+        Pivots (pivoting methods), sweeps (PGS), Newton steps or visited bases (enumeration); for
+        ``auto``, those of the method that produced the answer.
+    method : str
+        The method that produced the answer; ``auto:<method>`` when ``auto`` chose it.
+    message : str
+        Why the solve did not succeed, with the remedy, or empty.
+    solutions : list of ndarray
+        Every basic solution (enumeration only).
+    """
+
+    z: np.ndarray
+    w: np.ndarray
+    status: str
+    err: float
+    iterations: int
+    method: str
+    message: str = ""
+    solutions: list = field(default_factory=list)
+
+    @property
+    def solved(self) -> bool:
+        return self.status == SOLVED
+
+    def to_dict(self) -> dict:
+        out = {"status": self.status, "method": self.method, "z": self.z.tolist(), "w": self.w.tolist(),
+               "err": self.err, "iterations": self.iterations}
+        if self.message:
+            out["message"] = self.message
+        if self.method == "enum":
+            out["solutions"] = [s.tolist() for s in self.solutions]
+        return out
+
+
+_new = object.__new__
+
+
+def make_result(z, w, status, err, iterations, method, message="", solutions=None) -> LCPResult:
+    """An LCPResult built without the frozen dataclass's per-field ``object.__setattr__`` (a quarter of the
+    cost of a small solve); the same object as ``LCPResult(...)``."""
+    result = _new(LCPResult)
+    d = result.__dict__
+    d["z"] = z
+    d["w"] = w
+    d["status"] = status
+    d["err"] = err
+    d["iterations"] = iterations
+    d["method"] = method
+    d["message"] = message
+    d["solutions"] = [] if solutions is None else solutions
+    return result

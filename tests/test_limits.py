@@ -1,0 +1,66 @@
+"""converters.limits.keep_freed_memory: malloc keeps a run's freed arrays for the next run (counted in page
+faults, not timed), and its environment variable is read like every other size."""
+import os
+import subprocess
+import sys
+import warnings
+from pathlib import Path
+
+import pytest
+
+from converters import limits
+
+ROOT = Path(__file__).resolve().parents[1]
+
+FAULTS = """
+import resource
+from converters.methods import BackwardEuler
+from converters.models import get_model
+from converters.simulate import simulate
+model = get_model("buck")
+problem = model.problem(model.resolve({}), 5e-3)
+method = BackwardEuler(50e-9)
+faults = []
+for _ in range(4):
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+    tr = simulate(problem, method)                       # 100k steps: 5 MB of grid, x, u, y
+    faults.append(resource.getrusage(resource.RUSAGE_SELF).ru_minflt - before)
+    del tr
+print(max(faults[1:]))
+"""
+
+
+def _faults(pad: str) -> int:
+    env = {**os.environ, limits.MALLOC_PAD_ENV: pad}
+    done = subprocess.run([sys.executable, "-c", FAULTS], capture_output=True, text=True, cwd=ROOT, env=env,
+                          timeout=120, check=True)
+    return int(done.stdout)
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="mallopt is glibc's (Linux)")
+def test_a_repeated_run_reuses_its_freed_memory_instead_of_faulting_it_in_again():
+    kept, returned = _faults("64M"), _faults("0")
+    assert returned >= 500                 # each page of the 5 MB touched anew (measured 750-1,300)
+    assert kept <= 20                      # measured 0
+
+
+@pytest.mark.parametrize("raw, pad", [("0", None), ("64M", 64 << 20), ("1G", 1 << 30), ("1e8", 100_000_000)])
+def test_the_pad_is_read_as_a_size(monkeypatch, raw, pad):
+    monkeypatch.setenv(limits.MALLOC_PAD_ENV, raw)
+    calls = []
+    monkeypatch.setattr(limits, "_mallopt", lambda parameter, value: calls.append((parameter, value)) or 1)
+    assert limits.keep_freed_memory() is (pad is not None)
+    assert calls == ([] if pad is None else [(limits._M_MMAP_THRESHOLD, 32 << 20), (limits._M_TOP_PAD, pad)])
+
+
+@pytest.mark.parametrize("raw", ["2G", "abc", "-1", "nan"])
+def test_a_bad_pad_is_a_warning_naming_the_variable_and_the_default_is_used(monkeypatch, raw):
+    monkeypatch.setenv(limits.MALLOC_PAD_ENV, raw)
+    calls = []
+    monkeypatch.setattr(limits, "_mallopt", lambda parameter, value: calls.append((parameter, value)) or 1)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        assert limits.keep_freed_memory() is True
+    assert len(caught) == 1 and str(caught[0].message).startswith(f"{limits.MALLOC_PAD_ENV} must be")
+    assert repr(raw) in str(caught[0].message) and "using the default 64M" in str(caught[0].message)
+    assert calls[-1] == (limits._M_TOP_PAD, limits.DEFAULT_MALLOC_PAD)
