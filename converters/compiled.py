@@ -59,14 +59,16 @@ KERNELS = {
 }
 
 _loaded: dict = {}
-_source = None          # "ahead-of-time" or "jit: <why>", once decided
+_decided: list = []     # [the ahead-of-time module or None, "ahead-of-time" or "jit: <why>"], once decided
+#: Values of PCSUITE_KERNELS: ``auto`` (the default: ahead of time when current) or ``jit``.
+KERNEL_SOURCES = ("auto", "jit")
 
 
 def kernel(name: str):
     """The compiled function ``name`` of :data:`KERNELS`: from the ahead-of-time module when it is built from the
     current sources (and ``PCSUITE_KERNELS`` is not ``jit``), else numba's dispatcher."""
     if name not in _loaded:
-        module = _ahead_of_time()
+        module = _ahead_of_time()[0]
         if module is not None:
             _loaded[name] = _run_steps_by_size(module) if name == "run_steps" else getattr(module, name)
         else:
@@ -77,26 +79,31 @@ def kernel(name: str):
 
 def source() -> str:
     """Where the kernels come from in this process: ``ahead-of-time`` or ``jit: <the reason>``."""
-    _ahead_of_time()
-    return _source
+    return _ahead_of_time()[1]
 
 
 def _ahead_of_time():
-    global _source
-    if os.environ.get("PCSUITE_KERNELS", "").strip().lower() == "jit":
-        _source = "jit: PCSUITE_KERNELS=jit"
-        return None
+    """(module or None, source), decided once per process."""
+    if not _decided:
+        _decided.extend(_decide())
+    return _decided
+
+
+def _decide():
+    choice = os.environ.get("PCSUITE_KERNELS", "").strip().lower() or "auto"
+    if choice not in KERNEL_SOURCES:
+        import warnings
+        warnings.warn(f"PCSUITE_KERNELS must be one of {', '.join(KERNEL_SOURCES)}; got {choice!r}; using auto",
+                      stacklevel=3)
+    if choice == "jit":
+        return None, "jit: PCSUITE_KERNELS=jit"
     why = stale()
     if why:
-        _source = f"jit: {why}"
-        return None
+        return None, f"jit: {why}"
     try:
-        module = importlib.import_module(f"converters.{MODULE}")
+        return importlib.import_module(f"converters.{MODULE}"), "ahead-of-time"
     except ImportError as exc:
-        _source = f"jit: the ahead-of-time module does not load ({exc})"
-        return None
-    _source = "ahead-of-time"
-    return module
+        return None, f"jit: the ahead-of-time module does not load ({exc})"
 
 
 def digest(path: Path) -> str:

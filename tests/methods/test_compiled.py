@@ -30,6 +30,10 @@ def test_the_ahead_of_time_module_is_current_and_used():
     assert _run("from converters import compiled; print(compiled.source())").strip() == "ahead-of-time"
     assert _run("from converters import compiled; print(compiled.source())",
                 PCSUITE_KERNELS="jit").strip() == "jit: PCSUITE_KERNELS=jit"
+    warned = subprocess.run([sys.executable, "-c", "from converters import compiled; print(compiled.source())"],
+                            capture_output=True, text=True, cwd=ROOT, env={**os.environ, "PCSUITE_KERNELS": "fast"})
+    assert warned.stdout.strip() == "ahead-of-time"
+    assert "PCSUITE_KERNELS must be one of auto, jit; got 'fast'; using auto" in warned.stderr
 
 
 SUMMARY = """
@@ -66,6 +70,7 @@ def test_a_module_built_from_other_sources_is_refused(tmp_path, monkeypatch):
     (tmp_path / "record.json").write_text(json.dumps(record))
     monkeypatch.setattr(compiled, "RECORD", tmp_path / "record.json")
     monkeypatch.setattr(compiled, "_loaded", {})
+    monkeypatch.setattr(compiled, "_decided", [])          # as a new process decides
     assert compiled.stale() == f"{source} changed since the ahead-of-time build"
     from converters.methods import theta_kernels
     assert compiled.kernel("run_steps") is theta_kernels.run_steps            # numba's dispatcher instead
