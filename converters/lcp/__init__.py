@@ -6,10 +6,7 @@ loop solves inline) does not pay numba's import.
 """
 import importlib
 
-from . import cache
 from .state import METHOD_NAMES
-
-cache.refresh()   # before any compiled function loads its cache (see converters.lcp.cache)
 
 #: Each public name and the module that defines it.
 _WHERE = {"solve_lcp": "solve", "check_lcp": "solve", "SOLVERS": "engine", "LCPResult": "answer",

@@ -164,21 +164,3 @@ def test_options_act():
     plain, over = (solve_lcp(M, q, method="pgs", omega=omega, fast_paths=False) for omega in (1.0, 1.5))
     assert plain.solved and over.solved and plain.iterations != over.iterations
     np.testing.assert_allclose(over.z, plain.z, atol=1e-8)
-
-
-def test_a_changed_source_clears_the_compiled_caches_that_may_hold_an_old_copy_of_it(tmp_path):
-    from converters.lcp import cache
-    for name in cache.SOURCES:
-        (tmp_path / f"{name}.py").write_text(f"# {name}\n")
-    stale = tmp_path / "__pycache__"
-    stale.mkdir()
-    files = [stale / "lemke.run-40.py311.nbi", stale / "lemke.run-40.py311.nbc", stale / "engine.solve_once-9.py311.nbc",
-             stale / "kernels.solve_augmented-14.py311.nbi", stale / "other.py311.pyc"]
-    for path in files:
-        path.write_text("x")
-    assert cache.refresh(tmp_path)                               # no stamp yet: cleared
-    assert [p.exists() for p in files] == [False, False, False, True, True]   # kernels' own cache: numba's job
-    files[0].write_text("x")
-    assert not cache.refresh(tmp_path) and files[0].exists()     # unchanged sources: kept
-    (tmp_path / "result.py").write_text("# result, changed\n")   # a callee changed: its callers' copies go
-    assert cache.refresh(tmp_path) and not files[0].exists()

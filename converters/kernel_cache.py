@@ -1,0 +1,53 @@
+"""Keep numba's on-disk cache of the compiled kernels consistent with their sources.
+
+numba stamps each cached function with its own file's modification time and size only. A compiled
+function that calls a compiled function (or reads a constant) of another module keeps, in its cache, the
+old copy when only that other module changes (numba issue 6845). The kernels call across their modules
+(the step loops call the small-LCP kernels, the LCP methods call result.check and each other, every one reads
+constants of lcp/state.py and compiled.py); so :func:`refresh`, run when :mod:`converters` is imported (before
+any kernel loads), hashes their sources and, when the hash differs from the one recorded beside them, removes
+every compiled module's cache files (numba then compiles them again, once). A directory that cannot be written
+is left alone (numba then keeps its cache in NUMBA_CACHE_DIR or compiles in memory). The ahead-of-time module
+(:mod:`converters.compiled`) has its own record of the sources it was built from.
+"""
+from __future__ import annotations
+
+import hashlib
+import os
+from pathlib import Path
+
+#: The modules with compiled code (paths under converters/): a test checks this is every one of them.
+COMPILED = ("lcp/result.py", "lcp/fastpaths.py", "lcp/lemke.py", "lcp/murty.py", "lcp/pgs.py", "lcp/newton.py",
+            "lcp/enumeration.py", "lcp/dispatch.py", "lcp/auto.py", "lcp/engine.py", "lcp/kernels.py",
+            "methods/theta_kernels.py", "methods/moreau_kernels.py", "analysis/newton_kernel.py", "sweeps/batch.py")
+#: Their sources: those modules and the constants they read at compile time.
+SOURCES = COMPILED + ("lcp/state.py", "compiled.py")
+STAMP = "kernel-sources.sha256"
+
+
+def refresh(root: Path | None = None) -> bool:
+    """Remove the compiled modules' cache files when any source changed; True when it removed them."""
+    root = root or Path(__file__).parent
+    try:
+        digest = hashlib.sha256(b"".join((root / name).read_bytes() for name in SOURCES)).hexdigest()
+    except OSError:
+        return False
+    stamp = root / "__pycache__" / STAMP
+    try:
+        if stamp.read_text() == digest:
+            return False
+    except OSError:
+        pass
+    try:
+        stamp.parent.mkdir(exist_ok=True)
+        for name in COMPILED:
+            path = Path(name)
+            cache = root / path.parent / "__pycache__"
+            for stale in list(cache.glob(f"{path.stem}.*.nbi")) + list(cache.glob(f"{path.stem}.*.nbc")):
+                stale.unlink(missing_ok=True)
+        temporary = stamp.parent / f"{STAMP}.{os.getpid()}.tmp"
+        temporary.write_text(digest)
+        os.replace(temporary, stamp)
+    except OSError:
+        return False
+    return True
