@@ -86,7 +86,8 @@ def build(quiet: bool = False) -> str:
             built = [p for p in Path(tmp).iterdir() if p.name.startswith(MODULE + ".") and p.suffix in (".so", ".pyd")]
             if len(built) != 1:
                 raise RuntimeError(f"numba.pycc wrote {sorted(p.name for p in Path(tmp).iterdir())}")
-            record = {"python": sys.implementation.cache_tag, "sources": _sources(),
+            import numpy
+            record = {"python": sys.implementation.cache_tag, "numpy": numpy.__version__, "sources": _sources(),
                       "exports": [name for name, _, _ in exports]}
             RECORD.unlink(missing_ok=True)         # stale from here until the new record lands
             os.replace(built[0], HERE / built[0].name)

@@ -118,6 +118,9 @@ def stale() -> str:
         return "the ahead-of-time module is not built (make setup, or python -m converters.build_kernels)"
     if record.get("python") != sys.implementation.cache_tag:
         return f"the ahead-of-time module was built for {record.get('python')}, not {sys.implementation.cache_tag}"
+    import numpy
+    if record.get("numpy") != numpy.__version__:
+        return f"the ahead-of-time module was built against numpy {record.get('numpy')}, not {numpy.__version__}"
     for relative, recorded in record.get("sources", {}).items():
         try:
             if digest(HERE / relative) != recorded:

@@ -78,6 +78,9 @@ def test_a_module_built_from_other_sources_is_refused(tmp_path, monkeypatch):
     record["python"] = "cpython-299"
     (tmp_path / "record.json").write_text(json.dumps(record))
     assert "built for cpython-299" in compiled.stale()
+    record["python"], record["numpy"] = sys.implementation.cache_tag, "1.0.0"
+    (tmp_path / "record.json").write_text(json.dumps(record))
+    assert compiled.stale() == f"the ahead-of-time module was built against numpy 1.0.0, not {np.__version__}"
     (tmp_path / "record.json").unlink()
     assert "not built" in compiled.stale()
 
