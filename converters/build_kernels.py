@@ -10,7 +10,8 @@ import os
 import sys
 from pathlib import Path
 
-from .compiled import HERE, MAX_REGISTER_STATES, MODULE, RECORD, digest, register_state, stale
+from .compiled import (HERE, MAX_REGISTER_STATES, MODULE, RECORD, cpu_signature, digest, file_stat, register_state,
+                       stale)
 
 def _exports():
     """(exported name, numba signature, Python function) of every function the module holds."""
@@ -48,19 +49,28 @@ def _exports():
 
 
 def _sources() -> dict:
-    """Every source file of this package holding compiled code that the build has imported, with its digest
-    (the exported functions call across these modules, so any of them changing makes the module stale)."""
-    from numba.core.registry import CPUDispatcher
-    sources = {"compiled.py": digest(HERE / "compiled.py"),        # the constants the kernels read
-               "build_kernels.py": digest(HERE / "build_kernels.py")}  # the exports and their signatures
+    """Every source file of this package the build has imported, with its digest: the exported functions, what
+    they call, and every module whose constants they read are among them (compiled in: any of them changing
+    makes the module stale; a module the kernels do not read only costs a rebuild)."""
+    sources = {}
     for name, module in list(sys.modules.items()):
         path = getattr(module, "__file__", None)
-        if not name.startswith("converters.") or not path:
-            continue
-        if any(isinstance(value, CPUDispatcher) for value in vars(module).values()):
+        if (name == "converters" or name.startswith("converters.")) and path and path.endswith(".py"):
             relative = Path(path).resolve().relative_to(HERE).as_posix()
             sources[relative] = digest(HERE / relative)
+    sources["build_kernels.py"] = digest(HERE / "build_kernels.py")      # the exports and their signatures
     return dict(sorted(sources.items()))
+
+
+def _argument(numba_type) -> str:
+    """An argument's spec as :func:`converters.compiled.conforms` reads it: ``f8:2`` (a C-contiguous float64
+    array of 2 dimensions), ``i4:1``, or a scalar: ``f8``, ``i8``, ``b1``."""
+    from numba import types as T
+    codes = {T.float64: "f8", T.int32: "i4", T.int64: "i8", T.boolean: "b1"}
+    if isinstance(numba_type, T.Array):
+        assert numba_type.layout == "C", numba_type
+        return f"{codes[numba_type.dtype]}:{numba_type.ndim}"
+    return codes[numba_type]
 
 
 def build(quiet: bool = False) -> str:
@@ -87,8 +97,10 @@ def build(quiet: bool = False) -> str:
             if len(built) != 1:
                 raise RuntimeError(f"numba.pycc wrote {sorted(p.name for p in Path(tmp).iterdir())}")
             import numpy
-            record = {"python": sys.implementation.cache_tag, "numpy": numpy.__version__, "sources": _sources(),
-                      "exports": [name for name, _, _ in exports]}
+            record = {"python": sys.implementation.cache_tag, "numpy": numpy.__version__, "cpu": cpu_signature(),
+                      "sources": (sources := _sources()),
+                      "stats": {relative: file_stat(HERE / relative) for relative in sources},
+                      "exports": {name: [_argument(t) for t in signature.args] for name, signature, _ in exports}}
             RECORD.unlink(missing_ok=True)         # stale from here until the new record lands
             os.replace(built[0], HERE / built[0].name)
             (Path(tmp) / "record").write_text(json.dumps(record, indent=1) + "\n")

@@ -5,12 +5,15 @@ The kernels are written once, in Python, for numba (:mod:`.methods.theta_kernels
 :mod:`.analysis.newton_kernel`, the LCP methods of :mod:`.lcp`). ``make setup`` (or ``python -m converters.build_kernels``) also compiles the ones a
 plain run needs with numba's ahead-of-time compiler (``numba.pycc``, the same front end and LLVM code as the
 JIT, for this machine's CPU) into the extension module ``converters/_kernels``; beside it, ``_kernels.json``
-records the SHA-256 of every source file the build read. A process whose sources still match loads that
-module: it imports neither numba nor scipy (about 0.25 s) and compiles nothing (numba's first call of a cached
+records the SHA-256 of every source file of the package the build imported, the Python, numpy and CPU it was
+built for, and each export's argument types. A process whose sources (and Python, numpy, CPU) still match loads
+that module: it imports neither numba nor scipy (about 0.25 s) and compiles nothing (numba's first call of a cached
 kernel costs 0.05-0.1 s more each), so ``pcsuite simulate`` starts in about a tenth of a second. When the
 module is missing, stale (a kernel source edited since the build) or unloadable, :func:`kernel` returns the
 numba dispatcher instead: the same code, compiled on first call and cached on disk. ``PCSUITE_KERNELS=jit``
-forces the JIT (both give the same numbers: ``tests/methods/test_compiled.py``).
+forces the JIT (both give the same numbers: ``tests/methods/test_compiled.py``). numba.pycc's wrappers check
+only that an array argument is an ndarray, so :func:`kernel` checks every argument's dtype, dimensions and
+C order (:func:`conforms`, ~2 us a call) and hands any other kind to the JIT, which compiles a version for it.
 
 Why numba.pycc: it compiles the very functions the JIT runs (one source of truth), and the module it writes
 depends on NumPy only. numba marks it "pending deprecation" since 0.57 while a replacement is developed; it is
@@ -58,6 +61,9 @@ KERNELS = {
     "lcp_default_options": ("converters.lcp.dispatch", "default_options"),
 }
 
+#: Exports called without :func:`conforms` (the caller has checked every argument's type itself: the thin path
+#: of :func:`converters.lcp.solve_lcp`, where the check would cost as much as the solve).
+UNCHECKED = ("solve_once", "lcp_default_options")
 _loaded: dict = {}
 _decided: list = []     # [the ahead-of-time module or None, "ahead-of-time" or "jit: <why>"], once decided
 #: Values of PCSUITE_KERNELS: ``auto`` (the default: ahead of time when current) or ``jit``.
@@ -70,11 +76,18 @@ def kernel(name: str):
     if name not in _loaded:
         module = _ahead_of_time()[0]
         if module is not None:
-            _loaded[name] = _run_steps_by_size(module) if name == "run_steps" else getattr(module, name)
+            _loaded[name] = (_run_steps_by_size(module) if name == "run_steps" else
+                             getattr(module, name) if name in UNCHECKED else
+                             _checked(name, getattr(module, name), _record()["exports"][name]))
         else:
-            where, function = KERNELS[name]
-            _loaded[name] = getattr(importlib.import_module(where), function)
+            _loaded[name] = _jit(name)
     return _loaded[name]
+
+
+def _jit(name: str):
+    """numba's dispatcher of kernel ``name`` (its module imported on first use)."""
+    where, function = KERNELS[name]
+    return getattr(importlib.import_module(where), function)
 
 
 def source() -> str:
@@ -106,14 +119,30 @@ def _decide():
         return None, f"jit: the ahead-of-time module does not load ({exc})"
 
 
+def file_stat(path: Path) -> list:
+    """[size, modification time in ns]: a file with both unchanged since the build is not read again."""
+    info = path.stat()
+    return [info.st_size, info.st_mtime_ns]
+
+
 def digest(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
+def _record(_read={}) -> dict:
+    """The build's record (read once per path)."""
+    if RECORD not in _read:
+        _read[RECORD] = json.loads(RECORD.read_text())
+    return _read[RECORD]
+
+
 def stale() -> str:
-    """Why the ahead-of-time module cannot be used ('' when it can): not built, or a source changed since."""
+    """Why the ahead-of-time module cannot be used ('' when it can): not built, built for another Python, numpy or
+    CPU, or a source changed since."""
     try:
         record = json.loads(RECORD.read_text())
+        if not isinstance(record.get("exports"), dict):
+            raise ValueError("no argument specs")
     except (OSError, ValueError):
         return "the ahead-of-time module is not built (make setup, or python -m converters.build_kernels)"
     if record.get("python") != sys.implementation.cache_tag:
@@ -121,10 +150,13 @@ def stale() -> str:
     import numpy
     if record.get("numpy") != numpy.__version__:
         return f"the ahead-of-time module was built against numpy {record.get('numpy')}, not {numpy.__version__}"
+    if record.get("cpu") != cpu_signature():
+        return "the ahead-of-time module was built for another CPU (its instruction set may not run here)"
+    stats = record.get("stats", {})
     for relative, recorded in record.get("sources", {}).items():
         try:
-            if digest(HERE / relative) != recorded:
-                return f"{relative} changed since the ahead-of-time build"
+            if file_stat(HERE / relative) != stats.get(relative) and digest(HERE / relative) != recorded:
+                return f"{relative} changed since the ahead-of-time build"      # (same size and time: unchanged)
         except OSError:
             return f"{relative} is missing since the ahead-of-time build"
     if not record.get("sources"):
@@ -132,12 +164,82 @@ def stale() -> str:
     return ""
 
 
+def cpu_signature() -> str:
+    """What the ahead-of-time code was compiled for (this CPU's model and instruction-set flags, hashed): the
+    module is built for the host CPU, and a directory shared with another machine must not run it there."""
+    text = os.uname().machine if hasattr(os, "uname") else sys.platform
+    try:
+        with open("/proc/cpuinfo", encoding="ascii", errors="replace") as info:
+            for line in info:
+                if line.startswith(("model name", "flags", "Features", "CPU part")):
+                    text += line
+                elif not line.strip() and ("flags" in text or "Features" in text):
+                    break                                      # the first processor's block is enough
+    except OSError:
+        pass
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+_DTYPES = {"f8": "float64", "i4": "int32", "i8": "int64"}
+
+
+def _parsed(specs) -> tuple:
+    """(numpy dtype or scalar code, ndim) per argument spec (``f8:2``: a float64 array of 2 dimensions)."""
+    import numpy as np
+    out = []
+    for spec in specs:
+        code, _, ndim = spec.partition(":")
+        out.append((np.dtype(_DTYPES[code]), int(ndim)) if ndim else (code, 0))
+    return tuple(out)
+
+
+def conforms(specs, args) -> bool:
+    """True when ``args`` are exactly what the ahead-of-time export takes (``specs`` from its record, or parsed
+    by :func:`_parsed`): numpy's ndarray of that dtype and ndim, C-contiguous, or a Python float / int / bool.
+    numba.pycc's wrappers check only that an array is an ndarray: anything else would be read wrongly."""
+    import numpy as np
+    if len(specs) != len(args):
+        return False
+    for (kind, ndim), arg in zip(specs if specs and isinstance(specs[0], tuple) else _parsed(specs), args):
+        if ndim:
+            if not (arg.__class__ is np.ndarray and arg.dtype == kind and arg.ndim == ndim
+                    and arg.flags.c_contiguous):
+                return False
+        elif kind == "f8":
+            if not isinstance(arg, (float, np.floating)):
+                return False
+        elif kind == "b1":
+            if not isinstance(arg, (bool, np.bool_)):
+                return False
+        elif not isinstance(arg, (int, np.integer)) or isinstance(arg, bool):
+            return False
+    return True
+
+
+def _checked(name, function, specs):
+    """The export behind a check of its arguments (:func:`conforms`); arguments of any other kind go to numba's
+    JIT of the same function, which compiles a version for them."""
+    parsed = _parsed(specs)
+
+    def call(*args):
+        if conforms(parsed, args):
+            return function(*args)
+        return _jit(name)(*args)
+    call.__name__ = call.__qualname__ = name
+    call.__doc__ = f"{name} from the ahead-of-time module (arguments checked: {', '.join(specs)})"
+    return call
+
+
 def _run_steps_by_size(module):
     """run_steps with numba's signature: the ahead-of-time module has one export per register size."""
     by_size = {n: getattr(module, f"run_steps_r{n}") for n in range(1, MAX_REGISTER_STATES + 1)}
     rows = module.run_steps_rows
 
+    specs = _parsed(_record()["exports"]["run_steps_rows"])
+
     def run_steps(which, Phi, Gamma, H, C, F, M, Phi_b, Gamma_b, CPhi, q0, x, u, y, start, inline, state):
-        return (rows if state is None else by_size[len(state)])(which, Phi, Gamma, H, C, F, M, Phi_b, Gamma_b,
-                                                                CPhi, q0, x, u, y, start, inline)
+        args = (which, Phi, Gamma, H, C, F, M, Phi_b, Gamma_b, CPhi, q0, x, u, y, start, inline)
+        if not conforms(specs, args) or not (state is None or len(state) in by_size):
+            return _jit("run_steps")(*args, state)
+        return (rows if state is None else by_size[len(state)])(*args)
     return run_steps

@@ -6,8 +6,8 @@ old copy when only that other module changes (numba issue 6845). The kernels cal
 (the step loops call the small-LCP kernels, the LCP methods call result.check and each other, every one reads
 constants of lcp/state.py and compiled.py); so :func:`refresh`, run when :mod:`converters` is imported (before
 any kernel loads), hashes their sources and, when the hash differs from the one recorded beside them, removes
-every compiled module's cache files (numba then compiles them again, once). A directory that cannot be written
-is left alone (numba then keeps its cache in NUMBA_CACHE_DIR or compiles in memory). The ahead-of-time module
+every compiled module's cache files, beside the sources and in NUMBA_CACHE_DIR when it is set (numba then
+compiles them again, once). A directory that cannot be written is left alone. The ahead-of-time module
 (:mod:`converters.compiled`) has its own record of the sources it was built from.
 """
 from __future__ import annotations
@@ -16,10 +16,12 @@ import hashlib
 import os
 from pathlib import Path
 
-#: The modules with compiled code (paths under converters/): a test checks this is every one of them.
+#: The modules with compiled code (paths under converters/; numba keeps a function's cache beside the module that
+#: defines it: periodic.py's spectral_radius is compiled by sweeps/batch.py): a test checks this is every one.
 COMPILED = ("lcp/result.py", "lcp/fastpaths.py", "lcp/lemke.py", "lcp/murty.py", "lcp/pgs.py", "lcp/newton.py",
             "lcp/enumeration.py", "lcp/dispatch.py", "lcp/auto.py", "lcp/engine.py", "lcp/kernels.py",
-            "methods/theta_kernels.py", "methods/moreau_kernels.py", "analysis/newton_kernel.py", "sweeps/batch.py")
+            "methods/theta_kernels.py", "methods/moreau_kernels.py", "analysis/newton_kernel.py", "sweeps/batch.py",
+            "analysis/periodic.py")
 #: Their sources: those modules and the constants they read at compile time.
 SOURCES = COMPILED + ("lcp/state.py", "compiled.py")
 STAMP = "kernel-sources.sha256"
@@ -42,12 +44,24 @@ def refresh(root: Path | None = None) -> bool:
         stamp.parent.mkdir(exist_ok=True)
         for name in COMPILED:
             path = Path(name)
-            cache = root / path.parent / "__pycache__"
-            for stale in list(cache.glob(f"{path.stem}.*.nbi")) + list(cache.glob(f"{path.stem}.*.nbc")):
-                stale.unlink(missing_ok=True)
+            for cache in _cache_directories(root / path.parent):
+                for stale in list(cache.glob(f"{path.stem}.*.nbi")) + list(cache.glob(f"{path.stem}.*.nbc")):
+                    stale.unlink(missing_ok=True)
         temporary = stamp.parent / f"{STAMP}.{os.getpid()}.tmp"
         temporary.write_text(digest)
         os.replace(temporary, stamp)
     except OSError:
         return False
     return True
+
+
+def _cache_directories(source_directory: Path) -> list:
+    """Where numba caches the functions of modules in ``source_directory``: its __pycache__ and, when
+    NUMBA_CACHE_DIR is set, numba's directory for it there (``<name>_<sha1 of its absolute path>``, as
+    numba.core.caching names it)."""
+    out = [source_directory / "__pycache__"]
+    user = os.environ.get("NUMBA_CACHE_DIR")
+    if user:
+        absolute = os.path.abspath(source_directory)
+        out.append(Path(user) / f"{os.path.basename(absolute)}_{hashlib.sha1(absolute.encode()).hexdigest()}")
+    return out

@@ -98,7 +98,7 @@ def check_range(name: str, value, low: float, high: float, *, low_open=False, hi
 def as_matrix(name: str, value, shape: tuple[int | None, int | None]) -> np.ndarray:
     """A finite float matrix of the given shape (``None`` leaves a dimension free)."""
     try:
-        arr = np.array(value, dtype=float)
+        arr = np.array(value, dtype=float, order="C")      # C order: what the compiled kernels read
     except (TypeError, ValueError):
         raise ParameterError(f"{name} must be a numeric matrix; got {value!r}") from None
     if arr.ndim == 1 and shape[1] == 1:
@@ -114,7 +114,7 @@ def as_matrix(name: str, value, shape: tuple[int | None, int | None]) -> np.ndar
 def as_vector(name: str, value, size: int | None) -> np.ndarray:
     """A finite float vector of the given size (``None`` leaves it free)."""
     try:
-        arr = np.array(value, dtype=float)
+        arr = np.array(value, dtype=float, order="C")
     except (TypeError, ValueError):
         raise ParameterError(f"{name} must be a numeric vector; got {value!r}") from None
     if arr.ndim == 0:

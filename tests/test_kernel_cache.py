@@ -10,8 +10,21 @@ PACKAGE = Path(kernel_cache.__file__).parent
 
 
 def test_the_list_holds_every_module_with_compiled_code():
-    compiled = {p.relative_to(PACKAGE).as_posix() for p in PACKAGE.rglob("*.py")
-                if re.search(r"^@njit|^\s*@njit|= njit\(", p.read_text(), re.M)}
+    """Every module that defines a numba function, and every module whose plain function another compiles with
+    njit(...)(name) (numba caches it beside its own module)."""
+    compiled = set()
+    for path in PACKAGE.rglob("*.py"):
+        text = path.read_text()
+        if re.search(r"^\s*@njit", text, re.M):
+            compiled.add(path.relative_to(PACKAGE).as_posix())
+        for name in re.findall(r"= njit\([^)]*\)\((\w+)\)", text):
+            source = re.search(rf"^from (\.+)([\w.]*) import .*\b{name}\b", text, re.M)
+            assert source, f"{path}: where does {name} come from?"
+            base = path.parent
+            for _ in range(len(source.group(1)) - 1):
+                base = base.parent
+            compiled.add((base / (source.group(2).replace(".", "/") + ".py")).relative_to(PACKAGE).as_posix())
+    assert "analysis/periodic.py" in compiled                     # spectral_radius, compiled by sweeps/batch.py
     assert compiled == set(kernel_cache.COMPILED)
 
 
@@ -37,3 +50,17 @@ def test_a_changed_source_clears_the_compiled_caches_that_may_hold_an_old_copy_o
     files[4].write_text("x")
     (tmp_path / "compiled.py").write_text("MAX_INLINE_K = 9\n")            # a constant the kernels read
     assert kernel_cache.refresh(tmp_path) and not files[4].exists()
+
+
+def test_the_caches_in_numba_cache_dir_go_too(tmp_path, monkeypatch):
+    import hashlib
+    root, user = tmp_path / "src", tmp_path / "numba-cache"
+    for name in kernel_cache.SOURCES:
+        (root / name).parent.mkdir(parents=True, exist_ok=True)
+        (root / name).write_text(f"# {name}\n")
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(user))
+    lcp = str((root / "lcp").resolve())
+    where = user / f"lcp_{hashlib.sha1(lcp.encode()).hexdigest()}"     # numba.core.caching's naming
+    where.mkdir(parents=True)
+    (where / "lemke.run-40.py311.nbi").write_text("x")
+    assert kernel_cache.refresh(root) and not (where / "lemke.run-40.py311.nbi").exists()

@@ -146,7 +146,7 @@ def newton_orbit(period_map, x_guess, *, tol: float = 1e-10, max_iter: int = 50,
             if not np.all(np.isfinite(p_trial)):
                 message = "the period map left the finite numbers"
                 break
-        x, px, jac = trial, p_trial, jac_trial
+        x, px, jac = np.array(trial, dtype=float), p_trial, jac_trial     # a copy: P's output may be a view
     multipliers = multipliers_of(jac)
     return PeriodicOrbit(x, getattr(period_map, "period", period), jac, multipliers, residual, distance,
                          iteration, period_map.evaluations, False, period_map.jacobian_kind,

@@ -14,6 +14,10 @@ _WHERE = {"solve_lcp": "solve", "check_lcp": "solve", "SOLVERS": "engine", "LCPR
           "FAILED": "answer", "STATUSES": "answer", "read_siconos_lcp": "siconos", "LCPFile": "siconos"}
 
 
+def __dir__():
+    return sorted(set(globals()) | set(_WHERE))
+
+
 def __getattr__(name):
     if name not in _WHERE:
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -58,7 +58,8 @@ def step_matrices(configs: list[Configuration], dts: np.ndarray, theta: float) -
     """One-step matrices for configs[i] over dts[i], and their affine maps (one compiled call for all of them:
     :func:`.theta_kernels.theta_matrices`, the formulas above, as the batched steady states use them)."""
     dts = np.ascontiguousarray(dts, dtype=float)
-    A, B, C, D, E, F = (np.stack([getattr(c, key) for c in configs], dtype=float) for key in "ABCDEF")
+    A, B, C, D, E, F = (np.ascontiguousarray(np.stack([getattr(c, key) for c in configs], dtype=float))
+                        for key in "ABCDEF")
     sets, n, k = A.shape[0], A.shape[1], B.shape[2]
     Phi, Gamma, H, M = np.empty((sets, n, n)), np.empty((sets, n)), np.empty((sets, n, k)), np.empty((sets, k, k))
     Phi_b, Gamma_b = np.empty((sets, 2, n, n)), np.empty((sets, 2, n))

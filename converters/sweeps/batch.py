@@ -7,8 +7,10 @@ map with its exact Jacobian, exactly as the serial engine (:func:`batch_steady`)
 orbit, recorded for the row's measures. The plan (grid, step configurations, matrix sets) comes from the
 serial stepper's own planner, each period is the serial stepper's own loop and Jacobian
 (:func:`.theta_kernels.run_scalar`, :func:`.theta_kernels.step_jacobian`) and each Newton iteration the
-serial engine's own arithmetic (:func:`converters.analysis.periodic.newton_step`), so a batched point and a
-serial one solve the same discrete map the same way.
+serial engine's own arithmetic (:func:`converters.analysis.newton_kernel.newton_step`), so a batched point and a
+serial one solve the same discrete map the same way. One difference: the spectral radius rho that bounds the
+distance to the orbit comes from numba's LAPACK here and numpy's in the serial engine (the last bits may
+differ, so a point right at the tolerance can take one Newton iteration more or less).
 """
 from __future__ import annotations
 

@@ -66,6 +66,10 @@ def test_ahead_of_time_and_jit_kernels_give_identical_numbers():
 def test_a_module_built_from_other_sources_is_refused(tmp_path, monkeypatch):
     record = json.loads(compiled.RECORD.read_text())
     source = next(iter(record["sources"]))
+    record["stats"][source] = [0, 0]                          # touched since the build (size and time differ) ...
+    (tmp_path / "record.json").write_text(json.dumps(record))
+    monkeypatch.setattr(compiled, "RECORD", tmp_path / "record.json")
+    assert compiled.stale() == ""                              # ... with the same content: still current
     record["sources"][source] = "0" * 64                      # as if that kernel were edited since the build
     (tmp_path / "record.json").write_text(json.dumps(record))
     monkeypatch.setattr(compiled, "RECORD", tmp_path / "record.json")
@@ -124,3 +128,42 @@ def test_run_steps_serves_every_register_size_and_the_rows():
         assert 0 < (results[0][1] > 0).sum() < N - 1, n      # both branches taken
         for a, b in zip(results[0][:3], results[1][:3]):
             assert np.array_equal(a, b), n
+
+
+def test_arguments_of_another_kind_go_to_the_jit_never_read_wrongly():
+    """numba.pycc's wrappers check only that an array is an ndarray: a strided, Fortran-order or int64 argument
+    would be read wrongly (or crash); compiled.kernel checks every argument and hands those to numba's JIT."""
+    from converters.analysis.newton_kernel import newton_step as jit
+    aot = compiled.kernel("newton_step")
+    x, px = np.array([1.0, 2.0]), np.array([1.1, 2.1])
+    jac = np.array([[0.5, 0.1], [0.0, 0.3]])
+    kinds = [(np.array([1.0, 0.0, 2.0, 0.0])[::2], px, jac),          # strided
+             (x, px, np.asfortranarray(jac)),                         # Fortran order
+             (np.array([1, 2]), px, jac)]                             # int64
+    for a, b, c in kinds:
+        expected_step, step = np.empty(2), np.empty(2)
+        expected = jit(np.ascontiguousarray(a, dtype=float), b, np.ascontiguousarray(c), 0.5, expected_step,
+                       np.empty((2, 3)))
+        assert aot(a, b, c, 0.5, step, np.empty((2, 3))) == expected
+        assert np.array_equal(step, expected_step)
+    assert not compiled.conforms(["f8:1", "i8"], (np.zeros(2), True))      # a bool is not an int here
+    assert not compiled.conforms(["f8:1"], (np.zeros(2, dtype=np.float32),))
+    assert compiled.conforms(["f8:2", "f8", "b1"], (np.zeros((2, 2)), 1.0, False))
+
+
+def test_a_problem_built_from_fortran_order_matrices_gives_the_same_numbers():
+    from dataclasses import replace
+
+    from converters.methods import BackwardEuler
+    from converters.models import get_model
+    from converters.problems import Configuration
+    from converters.simulate import simulate
+    model = get_model("buck")
+    p = model.resolve({})
+    T = model.period(p)
+    problem = model.problem(p, 20 * T)
+    transposed = tuple(Configuration(A=np.asfortranarray(c.A), B=np.asfortranarray(c.B), C=np.asfortranarray(c.C),
+                                     D=np.asfortranarray(c.D), E=c.E, F=c.F, name=c.name)
+                       for c in problem.configurations)
+    fortran = replace(problem, configurations=transposed)
+    assert np.array_equal(simulate(problem, BackwardEuler(T / 200)).x, simulate(fortran, BackwardEuler(T / 200)).x)
