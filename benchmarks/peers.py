@@ -13,7 +13,7 @@ The case (issue 20): buck in DCM, Vin 12 V, f_sw 100 kHz, D 0.4, L 10 uH, C 100 
   call after the other programs ran is slower, 1.3-2 ms against 1.0-1.2: the caches and TLB they evicted;
   printed too).
 - **Cold**: each as a fresh process, as a user runs it: `pcsuite simulate buck ... --t-end 5e-3 --json`, `ngspice
-  -b FILE.cir`, `/usr/bin/python3 siconos_buck.py`.
+  -b FILE.cir`, `/usr/bin/python3 siconos_buck.py` (pcsuite's bytecode compiled first, as any earlier run leaves it).
 - The LCP peer collection per call against Siconos' solvers (benchmarks/peer_lcp.py), when present.
 
 Medians of REPEATS interleaved runs (2 shared cores: noisy). Run: .venv/bin/python benchmarks/peers.py
@@ -156,6 +156,10 @@ def main() -> None:
     errors = {h: error_at(h) for h in candidates}
     equal_h = max((h for h in candidates if errors[h] <= spice_error), default=candidates[-1])
 
+    # The sources' bytecode, as any run after the first leaves it (a process started with PYTHONDONTWRITEBYTECODE
+    # set, as in some CI sandboxes, would otherwise compile ~40 modules anew each time: 0.05-0.06 s)
+    subprocess.run([sys.executable, "-m", "compileall", "-q", "converters", "validation", "netlists"], cwd=ROOT,
+                   check=True, capture_output=True)
     warm_ours, warm_equal, warm_siconos, cold_ours, cold_spice, cold_siconos = [], [], [], [], [], []
     cold_argv = [sys.executable, "-m", "validation.cli", "simulate", "buck", *argv_p, "--h", str(H_SICONOS), "--t-end",
                  str(T_END), "--json"]
