@@ -15,6 +15,8 @@ SUBCOMMANDS = (listing, simulate, lcp, compare, gdcm, gdcm_map, sweep, bifurcati
 
 
 def main(argv=None) -> int:
+    import warnings
+    warnings.formatwarning = _one_line          # a warning (a bad tuning variable, ...) is one line, like an error
     try:
         return _main(argv)
     finally:
@@ -22,6 +24,10 @@ def main(argv=None) -> int:
         # for a 500k-step run): freeze them out of its sight; the OS reclaims the memory
         import gc
         gc.freeze()
+
+
+def _one_line(message, category, filename, lineno, line=None) -> str:
+    return f"pcsuite: warning: {message}\n"
 
 
 def _main(argv=None) -> int:
