@@ -73,7 +73,7 @@ def _argument(numba_type) -> str:
     return codes[numba_type]
 
 
-def build(quiet: bool = False) -> str:
+def build() -> str:
     """Compile :func:`_exports` into ``converters/_kernels`` and record its sources; returns a one-line summary.
     Written to a temporary directory and moved into place (the record last), so an interrupted build leaves
     the previous module, or none, never a half-written one."""
@@ -85,6 +85,7 @@ def build(quiet: bool = False) -> str:
         warnings.simplefilter("ignore")            # numba.pycc's pending deprecation (module docstring)
         from numba.pycc import CC
         exports = _exports()
+        sources = _sources()                       # as imported: what the compiler reads
         with tempfile.TemporaryDirectory(prefix=".kernels-build.", dir=HERE) as tmp:
             cc = CC(MODULE)
             cc.output_dir = tmp
@@ -98,7 +99,7 @@ def build(quiet: bool = False) -> str:
                 raise RuntimeError(f"numba.pycc wrote {sorted(p.name for p in Path(tmp).iterdir())}")
             import numpy
             record = {"python": sys.implementation.cache_tag, "numpy": numpy.__version__, "cpu": cpu_signature(),
-                      "sources": (sources := _sources()),
+                      "sources": sources,
                       "stats": {relative: file_stat(HERE / relative) for relative in sources},
                       "exports": {name: [_argument(t) for t in signature.args] for name, signature, _ in exports}}
             RECORD.unlink(missing_ok=True)         # stale from here until the new record lands
@@ -113,6 +114,10 @@ def main(argv=None) -> int:
     """``python -m converters.build_kernels [--check] [--force]``: build the module when it is missing or stale (``--check``:
     only say whether it is current)."""
     args = sys.argv[1:] if argv is None else argv
+    unknown = [a for a in args if a not in ("--check", "--force")]
+    if unknown:
+        print(f"build_kernels: unknown argument {unknown[0]!r}; the arguments are --check and --force", file=sys.stderr)
+        return 2
     why = stale()
     if "--check" in args:
         print(f"ahead-of-time kernels: {why or 'current'}")
