@@ -302,3 +302,13 @@ def scenes_of(suite: str, directory=SCENE_DIR) -> list[Scene]:
 
 def suite_names(directory=SCENE_DIR) -> list[str]:
     return sorted({name for p in Path(directory).glob("*.toml") for name in load_scene(p).suites})
+
+
+#: The suites made of report sections (:data:`validation.sections.EXTRA_SECTIONS`, whose module imports pandas,
+#: matplotlib and the solvers: ``pcsuite list`` reads the names here; a test checks that the two agree).
+EXTRA_SUITES = ("bench", "bifurcation", "default", "gdcm", "lcp", "mechanics")
+
+
+def all_suites() -> list[str]:
+    """Every suite ``pcsuite report`` takes: those of the scene files and those of report sections."""
+    return sorted(set(suite_names()) | set(EXTRA_SUITES))

@@ -98,6 +98,20 @@ def test_list_shows_every_converter_with_units(capsys):
     assert buck["L"]["unit"] == "H" and buck["L"]["default"] == 1e-5 and buck["rL"]["optional"]
 
 
+def test_list_names_every_report_suite_without_importing_the_report():
+    from validation.scenes import EXTRA_SUITES, suite_names
+    from validation.sections import EXTRA_SECTIONS
+    assert sorted(EXTRA_SUITES) == sorted(EXTRA_SECTIONS)
+    code = ("import sys, io, contextlib, json\nfrom validation.cli import main\nbuf = io.StringIO()\n"
+            "with contextlib.redirect_stdout(buf):\n    main(['list', '--json'])\n"
+            "print(json.dumps([json.loads(buf.getvalue())['suites'], sorted(m for m in ('numba', 'pandas', "
+            "'matplotlib', 'scipy') if m in sys.modules)]))")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                          cwd=Path(__file__).resolve().parents[2])
+    suites, heavy = json.loads(done.stdout)
+    assert suites == sorted(set(suite_names()) | set(EXTRA_SECTIONS)) and heavy == []
+
+
 def test_console_script_runs_as_a_program():
     out = subprocess.run([sys.executable, "-m", "validation.cli", "simulate", "buck", "-p", "D=2"],
                          capture_output=True, text=True)

@@ -19,8 +19,7 @@ def run(args) -> int:
     from converters.methods.base import METHODS
     from converters.models import CONVERTERS, MODELS
 
-    from ..scenes import SCENE_DIR, load_scene, suite_names
-    from ..sections import EXTRA_SECTIONS
+    from ..scenes import SCENE_DIR, all_suites, load_scene
     info = {"converters": {name: {"title": c.title, "states": list(c.state_names), "parameters": _parameters(c)}
                            for name, c in CONVERTERS.items()},
             "methods": {**{key: cls.description for key, cls in METHODS.items()},
@@ -28,7 +27,7 @@ def run(args) -> int:
             "controls": {control: {"converter": name, "title": m.title, "parameters": _parameters(m)}
                          for (name, control), m in MODELS.items() if control != "pwm"},
             "scenes": {p.stem: load_scene(p).converter for p in sorted(SCENE_DIR.glob("*.toml"))},
-            "suites": sorted(set(suite_names()) | set(EXTRA_SECTIONS))}
+            "suites": all_suites()}
     if args.json:
         print(json.dumps(info, indent=2))
         return 0

@@ -40,12 +40,12 @@ def add(sub) -> None:
 def run(args) -> int:
     from ..io import check_output_dir, safe_name
     from ..report import write_report
-    from ..scenes import load_scenes, scene_files, suite_names
+    from ..scenes import all_suites, load_scenes, scene_files
     from ..sections import EXTRA_SECTIONS
     from ..suite import run_suite, scene_section, scenes_summary
     if isinstance(args.workers, bool) or not (isinstance(args.workers, int) and args.workers >= 1):
         raise ParameterError(f"--workers must be an integer >= 1; got {args.workers!r}")
-    suites = sorted(set(suite_names()) | set(EXTRA_SECTIONS))
+    suites = all_suites()
     if args.suite in suites:
         label, scenes, extra = args.suite, None, EXTRA_SECTIONS.get(args.suite, ())
         # the bench suite's report must not land on `pcsuite bench`'s own results (reports/bench), which it reads
