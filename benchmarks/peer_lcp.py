@@ -167,18 +167,11 @@ class Siconos:
             self._restart()
             return {"error": "crashed the worker"}
 
-    def time(self, solver, calls):
-        """Seconds per call, or None when the solver crashed the worker this time."""
+    def time(self, solver, calls, op="time"):
+        """Seconds per call, or None when the solver crashed the worker this time. ``op``: ``time`` (the solver
+        call alone) or ``time_new`` (the problem built from (M, q) in each call, the solver's options reused)."""
         try:
-            return self._ask({"op": "time", "solver": solver, "calls": calls})["seconds"] / calls
-        except (EOFError, BrokenPipeError):
-            self._restart()
-            return None
-
-    def time_new(self, solver, calls):
-        """Seconds per call with the problem built from (M, q) in each call (the solver's options reused)."""
-        try:
-            return self._ask({"op": "time_new", "solver": solver, "calls": calls})["seconds"] / calls
+            return self._ask({"op": op, "solver": solver, "calls": calls})["seconds"] / calls
         except (EOFError, BrokenPipeError):
             self._restart()
             return None
@@ -260,7 +253,7 @@ def run(directory: Path | None = None, repeats: int = REPEATS, siconos: bool = T
             fastest = min(medians, key=medians.get) if medians else None
             new_us = None
             if fastest is not None:                   # the same solver, a new problem object per call
-                new = [worker.time_new(fastest, successes[fastest]) for _ in range(repeats)]
+                new = [worker.time(fastest, successes[fastest], op="time_new") for _ in range(repeats)]
                 new_us = 1e6 * statistics.median(new) if None not in new else None
             row = {"problem": p.name, "k": k, "status": result.status, "method": result.method, "err": result.err,
                    "us_per_call": ours_us, "siconos_solver": fastest,
