@@ -44,7 +44,7 @@ PSD_TOL = 1e-13
 PSD_MAX_K = 1000
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def first_stage(M):
     """PGS when M is symmetric with a positive diagonal, else Lemke."""
     k = M.shape[0]
@@ -57,7 +57,7 @@ def first_stage(M):
     return S.PGS
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def stage_max_iter(stage, max_iter, k):
     """max_iter of a method of the plan: the caller's (> 0) or the method's default; PGS at most max(8, k/2)."""
     limit = max_iter if max_iter > 0 else DEFAULT_MAX_ITER[stage]
@@ -66,7 +66,7 @@ def stage_max_iter(stage, max_iter, k):
     return limit
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def next_stage(stage, k):
     if stage == S.PGS:
         return S.LEMKE
@@ -77,7 +77,7 @@ def next_stage(stage, k):
     return S.AUTO     # none left
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def sizes(k):
     """The workspace of the largest method of the plan (they run one after another in it)."""
     nf, ni = method_sizes(S.LEMKE, k, True)
@@ -89,7 +89,7 @@ def sizes(k):
     return nf, ni
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def infeasible_row(M, q):
     """A row i with q_i < 0 and M_ij <= 0 for every j (w_i < 0 for every z >= 0), or -1."""
     k = q.shape[0]
@@ -105,12 +105,12 @@ def infeasible_row(M, q):
     return -1
 
 
-@njit(cache=True)
-def positive_semidefinite(M, st, sf):
-    """Whether (M + M^T)/2 is positive semidefinite to ``PSD_TOL`` k max|M| (False: not shown). Cheap
-    disproofs first (a 2 x 2 principal submatrix's least eigenvalue bounds the whole matrix's from above),
-    then, for k <= PSD_MAX_K, the least eigenvalue itself, left in sf[INFO_X] (relative to max|M|; NaN
-    when not computed)."""
+@njit(cache=True, _nrt=False)
+def semidefinite_by_minors(M, st, sf):
+    """Whether (M + M^T)/2 is positive semidefinite to ``PSD_TOL`` k max|M|, as far as the cheap tests tell:
+    -1 disproved (a 2 x 2 principal submatrix's least eigenvalue bounds the whole matrix's from above) or
+    not tested (k above PSD_MAX_K); 1 proven (M = 0); 0 when only the least eigenvalue can tell (the caller
+    computes it: :func:`least_symmetric_eigenvalue`, then :func:`semidefinite_by_eigenvalue`)."""
     k = M.shape[0]
     big = 0.0
     for i in range(k):
@@ -119,24 +119,28 @@ def positive_semidefinite(M, st, sf):
     if big == 0.0:
         st[S.PSD] = S.PSD_EIGENVALUE
         sf[S.INFO_X] = 0.0
-        return True
+        return 1
     bound = -PSD_TOL * k * big
     st[S.PSD] = S.PSD_MINOR
     for i in range(k):
         a = M[i, i]
         if a < bound:
-            return False
+            return -1
         for j in range(i):
             c, b = M[j, j], 0.5 * (M[i, j] + M[j, i])
             if 0.5 * (a + c) - np.sqrt(0.25 * (a - c) ** 2 + b * b) < bound:
-                return False
+                return -1
     if k > PSD_MAX_K:
         st[S.PSD] = S.PSD_UNTESTED
-        return False
+        return -1
     st[S.PSD] = S.PSD_EIGENVALUE
-    eig = least_symmetric_eigenvalue(M)
-    sf[S.INFO_X] = eig
-    return eig >= -PSD_TOL * k
+    return 0
+
+
+@njit(cache=True, _nrt=False)
+def semidefinite_by_eigenvalue(sf, k):
+    """The verdict once sf[INFO_X] holds the least eigenvalue (relative to max|M|)."""
+    return sf[S.INFO_X] >= -PSD_TOL * k
 
 
 @njit(cache=True)
@@ -154,14 +158,23 @@ def least_symmetric_eigenvalue(M):
     return np.linalg.eigvalsh(sym)[0] / big
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def run(M, q, z, fw, iw, st, sf, tol, max_iter, budget, opts):
     """Advance the plan by slices of at most ``budget`` multiply-adds per method; True when it ended, with
     st[STATUS], st[OUTCOME] (OK, PROOF_ROW, PROOF_PSD or EXHAUSTED), st[USED] (the method that produced the
     answer, or the last one run), st[ITER] (its iterations), st[STAGE_OUTCOME + m] and st[STAGE_ITER + m]
     (what each method m of the plan ended with; -1 when it did not run) and sf[INFO_X] (the eigenvalue,
-    when Lemke's ray made the plan compute it)."""
+    when Lemke's ray made the plan compute it).
+
+    Allocation-free, like every method: when Lemke's ray needs the least eigenvalue of (M + M^T)/2 (LAPACK,
+    which allocates), it returns False with st[PHASE] = EIGENVALUE; the caller puts the eigenvalue in
+    sf[INFO_X] (:func:`least_symmetric_eigenvalue`) and calls again (:func:`converters.lcp.engine.advance`)."""
     k = q.shape[0]
+    if st[S.PHASE] == S.EIGENVALUE:   # Lemke's ray: the caller has put the least eigenvalue in sf[INFO_X]
+        if semidefinite_by_eigenvalue(sf, k):
+            return _no_solution_psd(st)
+        if not _next(st, k):
+            return True
     if st[S.STAGE] == S.AUTO:       # not started
         for m in range(S.N_METHODS):
             st[S.STAGE_OUTCOME + m] = -1
@@ -188,14 +201,32 @@ def run(M, q, z, fw, iw, st, sf, tol, max_iter, budget, opts):
                 st[S.OUTCOME] = S.PROOF_ROW
                 st[S.INFO] = row
                 return True
-            if positive_semidefinite(M, st, sf):
-                st[S.STATUS] = S.NO_SOLUTION
-                st[S.OUTCOME] = S.PROOF_PSD
-                return True
-        following = next_stage(stage, k)
-        if following == S.AUTO:
-            st[S.STATUS] = S.FAILED
-            st[S.OUTCOME] = S.EXHAUSTED
+            verdict = semidefinite_by_minors(M, st, sf)
+            if verdict == 1:
+                return _no_solution_psd(st)
+            if verdict == 0:         # the caller computes the eigenvalue (LAPACK allocates), then calls again
+                st[S.PHASE] = S.EIGENVALUE
+                return False
+        if not _next(st, k):
             return True
-        st[S.STAGE] = following
-        st[S.PHASE] = S.START
+
+
+@njit(cache=True, _nrt=False)
+def _no_solution_psd(st):
+    st[S.PHASE] = S.DONE
+    st[S.STATUS] = S.NO_SOLUTION
+    st[S.OUTCOME] = S.PROOF_PSD
+    return True
+
+
+@njit(cache=True, _nrt=False)
+def _next(st, k):
+    """Move the plan to its next method; False (with status failed) when none is left."""
+    following = next_stage(st[S.STAGE], k)
+    if following == S.AUTO:
+        st[S.STATUS] = S.FAILED
+        st[S.OUTCOME] = S.EXHAUSTED
+        return False
+    st[S.STAGE] = following
+    st[S.PHASE] = S.START
+    return True

@@ -23,7 +23,7 @@ def default_options():
     return DEFAULT_OPTIONS.copy()
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def advance_method(method, M, q, z, fw, iw, st, sf, tol, max_iter, budget, opts, first):
     """Advance ``method`` (not auto) on LCP(q, M) by at most ``budget`` multiply-adds; True when it ended.
     ``first``: auto's use (enumeration stops at the first solution, PGS stops when converging too slowly)."""
@@ -39,7 +39,7 @@ def advance_method(method, M, q, z, fw, iw, st, sf, tol, max_iter, budget, opts,
                       opts[OPT_SIGMA])
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def method_sizes(method, k, first):
     """(doubles, integers) of workspace ``method`` (not auto) needs for size k (``first``: as auto runs it)."""
     if method == S.LEMKE:

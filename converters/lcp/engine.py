@@ -51,14 +51,14 @@ _MAX_FLOAT = 1.7976931348623157e308
 
 # ----------------------------------------------------------------------------------------------- compiled
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def exponents(M, q):
     """(es, em, finite): 2^es ~ max|q|, 2^em ~ max|M| (frexp exponents; 0 for a zero vector or matrix)."""
     es, em, finite, _, _ = magnitudes(M, q)
     return es, em, finite
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def magnitudes(M, q):
     """(es, em, finite, max|q|, max|M|) (see :func:`exponents`)."""
     qbig = 0.0
@@ -79,7 +79,7 @@ def magnitudes(M, q):
     return math.frexp(qbig)[1], math.frexp(mbig)[1], True, qbig, mbig
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def scale_pow2(x, e, out):
     """out = x * 2^e, exactly as ldexp (a multiplication by the power of two when it is a normal number:
     the same correctly rounded result)."""
@@ -108,16 +108,18 @@ def normalised(M, q):
     return Ms, qs, es - em, finite
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def sizes(method, k):
     if method == S.AUTO:
         return auto.sizes(k)
     return method_sizes(method, k, False)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def advance(method, M, q, z, fw, iw, st, sf, tol, max_iter, budget, opts):
-    """Advance ``method`` (auto included) by a slice of at most ``budget`` multiply-adds; True when it ended."""
+    """Advance ``method`` (auto included) by a slice of at most ``budget`` multiply-adds; True when it ended.
+    False also when auto waits for the least eigenvalue (st[PHASE] == EIGENVALUE): the caller puts
+    :func:`converters.lcp.auto.least_symmetric_eigenvalue` in sf[INFO_X] and calls again (:class:`Run`)."""
     if method == S.AUTO:
         return auto.run(M, q, z, fw, iw, st, sf, tol, max_iter, budget, opts)
     return advance_method(method, M, q, z, fw, iw, st, sf, tol, max_iter, budget, opts, False)
@@ -131,17 +133,30 @@ def solve_once(M, q, z, w, method, tol, max_iter, fast_paths, opts, budget):
     and err are filled and checked on (q, M); ``used`` is the method that solved it (auto's choice);
     ``stages`` packs what each method of auto's plan ended with (4 bits per method, outcome + 1; 0: not
     run; then st[PSD]) and info_x the eigenvalue auto computed (NaN: none). ONCE_CLOSED_FORM: solved by closed form
-    ``rule``. ONCE_OTHER: anything else (not solved, or not within the budget): the caller runs the sliced
-    solve, which reports it. ONCE_NOT_FINITE: M or q holds NaN or inf (the caller raises).
+    ``rule``. ONCE_OTHER: anything else (not solved, not within the budget, or auto needing an eigenvalue):
+    the caller runs the sliced solve, which reports it. ONCE_NOT_FINITE: M or q holds NaN or inf (the
+    caller raises).
+
+    This function only allocates the workspace; :func:`solve_in` does the rest without numba's reference
+    counting (with it, the atomic increments and decrements of every array argument of every call were
+    three quarters of a small solve's time).
     """
+    k = q.shape[0]
+    nf, ni = sizes(method, k)
+    buf = np.empty(k * k + 2 * k + S.SF_SIZE + nf)     # one allocation: M', q', z', sf and the workspace
+    ibuf = np.zeros(S.ST_SIZE + ni, dtype=np.int64)    # and one for st and the integer workspace
+    return solve_in(M, q, z, w, method, tol, max_iter, fast_paths, opts, budget, buf, ibuf)
+
+
+@njit(cache=True, _nrt=False)
+def solve_in(M, q, z, w, method, tol, max_iter, fast_paths, opts, budget, buf, ibuf):
+    """:func:`solve_once` in the caller's workspace: ``buf`` (k^2 + 2k + SF_SIZE + the method's doubles)
+    and ``ibuf`` (ST_SIZE + its integers, zeros)."""
     k = q.shape[0]
     es, em, finite, q_big, m_big = magnitudes(M, q)
     if not finite:
         return ONCE_NOT_FINITE, 0, 0.0, method, -1, 0, 0.0
     shift = es - em
-    nf, ni = sizes(method, k)
-    buf = np.empty(k * k + 2 * k + S.SF_SIZE + nf)     # one allocation: M', q', z', sf and the workspace
-    ibuf = np.zeros(S.ST_SIZE + ni, dtype=np.int64)    # and one for st and the integer workspace
     Ms = M
     if em != 0:
         Ms = buf[:k * k].reshape((k, k))
@@ -217,6 +232,8 @@ class Run:
         self.timed_out = deadline is not None and deadline.expired()
         while not self.timed_out and not advance(code, M, q, self.z, self.fw, self.iw, self.st, self.sf, tol,
                                                  max_iter, CHUNK, opts):
+            if self.st[S.PHASE] == S.EIGENVALUE:     # auto's plan asks for it (Lemke's ray)
+                self.sf[S.INFO_X] = auto.least_symmetric_eigenvalue(M)
             self.timed_out = deadline is not None and deadline.expired()
 
     def stage(self) -> int:

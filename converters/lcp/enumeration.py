@@ -11,24 +11,26 @@ answers with the least-norm one (the most accurate one when that fails the check
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
 from . import state as S
 from .kernels import solve_augmented
-from .result import accepts, mark_done, residual
+from .result import accepts, copy_into, mark_done, residual
 
 MAX_K = S.ENUM_MAX_K
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def sizes(k, listing):
     """Doubles and integers of workspace: the augmented M_JJ | -q_J, M_JJ, two vectors and, when ``listing``
     (every basic solution is kept), up to 2^k solutions; the index set J."""
     return _solutions_offset(k) + ((1 << k) * k if listing else 0), k
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _solutions_offset(k):
     return k * (k + 1) + k * k + 2 * k
 
@@ -39,7 +41,7 @@ def solutions(fw: np.ndarray, st: np.ndarray, k: int) -> list:
     return [fw[o + s * k:o + (s + 1) * k].copy() for s in range(int(st[S.INFO]))]
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def run(M, q, z, fw, iw, st, tol, budget, first):
     """Advance the enumeration by at most ``budget`` multiply-adds; True when finished (see ``lemke.run``).
     st[ITER] counts the visited bases, st[INFO] the solutions found."""
@@ -71,7 +73,7 @@ def run(M, q, z, fw, iw, st, tol, budget, first):
             st[S.ITER] = visited - 1
             st[S.INFO] = nsol
             if nsol > 0 and not first:
-                z[:] = sols[0]
+                copy_into(sols[0], z)
             else:
                 z[:] = 0.0
             return False
@@ -80,7 +82,7 @@ def run(M, q, z, fw, iw, st, tol, budget, first):
             if first:     # auto: the first one that passes the check ends it; none is kept
                 nsol += 1
                 if accepts(M, q, zc, w, tol):
-                    z[:] = zc
+                    copy_into(zc, z)
                     st[S.ITER] = visited
                     st[S.INFO] = nsol
                     return mark_done(st, S.SOLVED, S.OK)
@@ -97,7 +99,7 @@ def run(M, q, z, fw, iw, st, tol, budget, first):
                     duplicate = True
                     break
             if not duplicate:
-                sols[nsol, :] = zc
+                copy_into(zc, sols[nsol])
                 nsol += 1
         size = _next_subset(J, size, k)
     st[S.ITER] = visited
@@ -115,27 +117,27 @@ def run(M, q, z, fw, iw, st, tol, budget, first):
             norm += sols[s, i] * sols[s, i]
         if norm < best_norm:
             best, best_norm = s, norm
-    z[:] = sols[best]
+    copy_into(sols[best], z)
     if accepts(M, q, z, w, tol):
         return mark_done(st, S.SOLVED, S.OK)
     best, best_err = 0, np.inf     # the least-norm one may be ill-conditioned; take the most accurate
     for s in range(nsol):
-        zc[:] = sols[s]
+        copy_into(sols[s], zc)
         err = residual(M, q, zc, w)
         if err < best_err:
             best, best_err = s, err
-    z[:] = sols[best]
+    copy_into(sols[best], z)
     if accepts(M, q, z, w, tol):
         return mark_done(st, S.SOLVED, S.OK)
     return mark_done(st, S.FAILED, S.CHECK)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _basic_solution(M, q, J, m, z, w, aug_buf, sub_buf, qscale, conditioned):
     """z with z_J = -M_JJ^-1 q_J (zero elsewhere); True when it is feasible (z, w >= -1e-9 scale), then
     clipped at 0. False too when M_JJ is singular, or, with ``conditioned``, ill-conditioned (2-norm
-    condition number above 1e12: an SVD per basis; auto's first-solution search goes without it, as the
-    check on the answer judges it anyway)."""
+    condition number above 1e12: an SVD per basis, :func:`condition_number`; auto's first-solution search
+    goes without it, as the check on the answer judges it anyway)."""
     k = q.shape[0]
     z[:] = 0.0
     if m > 0:
@@ -144,7 +146,7 @@ def _basic_solution(M, q, J, m, z, w, aug_buf, sub_buf, qscale, conditioned):
             for r in range(m):
                 for c in range(m):
                     sub[r, c] = M[J[r], J[c]]
-            if np.linalg.cond(sub) > 1e12:
+            if condition_number(sub, m) > 1e12:
                 return False
         aug = aug_buf[:m * (m + 1)].reshape((m, m + 1))
         for r in range(m):
@@ -171,7 +173,47 @@ def _basic_solution(M, q, J, m, z, w, aug_buf, sub_buf, qscale, conditioned):
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
+def condition_number(a, m):
+    """The 2-norm condition number sigma_max / sigma_min of the m x m matrix ``a`` (overwritten; inf when
+    singular), by one-sided Jacobi (Hestenes): rotate pairs of columns until they are orthogonal, then the
+    singular values are the column norms, each to high relative accuracy (the smallest included, which
+    the condition number needs). Written here rather than np.linalg.cond because it allocates nothing (the
+    methods are compiled without numba's reference counting); m <= 12, a few sweeps of m^3 work."""
+    for _ in range(60):
+        rotated = False
+        for p in range(m - 1):
+            for r in range(p + 1, m):
+                alpha = beta = gamma = 0.0
+                for i in range(m):
+                    alpha += a[i, p] * a[i, p]
+                    beta += a[i, r] * a[i, r]
+                    gamma += a[i, p] * a[i, r]
+                if not abs(gamma) > 1e-15 * math.sqrt(alpha * beta):
+                    continue
+                rotated = True
+                zeta = (beta - alpha) / (2.0 * gamma)
+                t = math.copysign(1.0, zeta) / (abs(zeta) + math.sqrt(1.0 + zeta * zeta))
+                c = 1.0 / math.sqrt(1.0 + t * t)
+                s = c * t
+                for i in range(m):
+                    x, y = a[i, p], a[i, r]
+                    a[i, p] = c * x - s * y
+                    a[i, r] = s * x + c * y
+        if not rotated:
+            break
+    largest, smallest = 0.0, np.inf
+    for j in range(m):
+        norm = 0.0
+        for i in range(m):
+            norm += a[i, j] * a[i, j]
+        norm = math.sqrt(norm)
+        largest = max(largest, norm)
+        smallest = min(smallest, norm)
+    return np.inf if smallest == 0.0 else largest / smallest
+
+
+@njit(cache=True, _nrt=False)
 def _next_subset(J, m, k):
     """Advance J (of size m) to the next index set: lexicographic within a size, then the next size.
     Returns the new size (k + 1 when every set was visited)."""

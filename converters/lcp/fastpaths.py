@@ -14,7 +14,7 @@ from . import state as S
 RULES = S.CLOSED_FORM_RULES
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def closed_form(M, q, rule, z):
     """Rule 0 (trivial): q >= 0, z = 0 (the least-norm solution); 1 (scalar): k = 1 with M > 0,
     z = max(0, -q/M); 2 (pair): k = 2, the four complementary bases in order of size, the least-norm
@@ -37,7 +37,7 @@ def closed_form(M, q, rule, z):
     return False
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _pair(M, q, z):
     scale = 1e-12 * (1.0 + max(abs(q[0]), abs(q[1])))
     m_big = max(max(abs(M[0, 0]), abs(M[0, 1])), max(abs(M[1, 0]), abs(M[1, 1])))

@@ -23,14 +23,14 @@ from .result import accepts, mark_done
 PIVOT_TOL = 1e-13
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def sizes(k):
     """Doubles and integers of workspace: the k x (k + 2) condensed tableau, w and the pivot row; the
     basis, the nonbasic variables, every variable's place, candidate rows and lexicographic scratch."""
     return k * (k + 2) + k + (k + 2), 6 * k + 2
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def run(M, q, z, fw, iw, st, tol, max_iter, budget, pivot_tol):
     """Advance Lemke on LCP(q, M) by at most ``budget`` multiply-adds; returns True when finished (status,
     outcome and iterations in ``st``), False when the budget is spent (z then holds the current iterate).
@@ -132,7 +132,7 @@ def run(M, q, z, fw, iw, st, tol, max_iter, budget, pivot_tol):
             return False
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _done(M, q, z, w, st, tol, status, outcome):
     """Record the end; a claimed solution must pass the check on this (normalised) problem."""
     if status == S.SOLVED and not accepts(M, q, z, w, tol):
@@ -140,7 +140,7 @@ def _done(M, q, z, w, st, tol, status, outcome):
     return mark_done(st, status, outcome)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _inverse_entry(C, place, r, j):
     """Entry (r, j) of B^-1: the column of w_j, a unit vector while w_j is basic."""
     p = place[j]
@@ -149,7 +149,7 @@ def _inverse_entry(C, place, r, j):
     return 1.0 if -1 - p == r else 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _lexmin_rows(C, place, rows, nrows, col, k, sign, rem):
     """Row of rows[:nrows] whose vector (rhs, B^-1 row) / (sign * entry) is lexicographically smallest."""
     rhs = k + 1
@@ -177,7 +177,7 @@ def _lexmin_rows(C, place, rows, nrows, col, k, sign, rem):
     return rem[0]
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _pivot(C, row, col, prow):
     """Exchange the basic variable of ``row`` with the nonbasic one of ``col``: the leaving variable takes
     the column, which becomes B^-1's new column (the full tableau's numbers, operation for operation)."""
@@ -196,7 +196,7 @@ def _pivot(C, row, col, prow):
                 C[i, j] -= f * prow[j]
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _z_from_basis(C, basis, k, z, clip):
     z[:] = 0.0
     for r in range(k):

@@ -15,13 +15,13 @@ from .kernels import solve_augmented
 from .result import accepts, mark_done
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def sizes(k):
     """Doubles and integers of workspace: the augmented M_JJ | -q_J and w; the basis flags and J."""
     return k * (k + 1) + k, 2 * k
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def run(M, q, z, fw, iw, st, tol, max_iter, budget):
     """Advance Murty by at most ``budget`` multiply-adds; True when finished (see ``lemke.run``)."""
     k = q.shape[0]

@@ -14,19 +14,19 @@ from numba import njit
 
 from . import state as S
 from .kernels import solve_augmented
-from .result import accepts_scaled, affine, mark_done, max_abs, max_abs_matrix
+from .result import accepts_scaled, affine, copy_into, mark_done, max_abs, max_abs_matrix
 
 #: Defaults of the options rho, p (descent test), beta (step reduction) and sigma (Armijo constant).
 RHO, P, BETA, SIGMA = 1e-10, 2.1, 0.5, 1e-4
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def sizes(k):
     """Doubles of workspace: the Jacobian, its augmented copy, and 7 vectors."""
     return k * k + k * (k + 1) + 7 * k, 0
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def run(M, q, z, fw, iw, st, tol, max_iter, budget, rho, p, beta, sigma):
     """Advance Newton by at most ``budget`` multiply-adds; True when finished (see ``lemke.run``).
     The iterate x lives in the workspace; z holds max(x, 0)."""
@@ -53,8 +53,9 @@ def run(M, q, z, fw, iw, st, tol, max_iter, budget, rho, p, beta, sigma):
             for i in range(k):
                 s += jac[i, j] * phi[i]
             grad[j] = s
-        aug[:, :k] = jac
         for i in range(k):
+            for j in range(k):
+                aug[i, j] = jac[i, j]
             aug[i, k] = -phi[i]
         if solve_augmented(aug, k, 1):
             for i in range(k):
@@ -77,10 +78,10 @@ def run(M, q, z, fw, iw, st, tol, max_iter, budget, rho, p, beta, sigma):
                 break
             step *= beta
         if not accepted:
-            z[:] = x       # the last iterate as it is
+            copy_into(x, z)       # the last iterate as it is
             st[S.ITER] = iteration
             return mark_done(st, S.FAILED, S.LINESEARCH)
-        x[:] = trial
+        copy_into(trial, x)
         _clip(x, z)
         if accepts_scaled(M, q, q_big, m_big, z, w, tol):
             st[S.ITER] = iteration
@@ -95,7 +96,7 @@ def run(M, q, z, fw, iw, st, tol, max_iter, budget, rho, p, beta, sigma):
     return mark_done(st, S.MAX_ITERATIONS, S.MAXIT)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _dot(a, b):
     s = 0.0
     for i in range(a.shape[0]):
@@ -103,20 +104,20 @@ def _dot(a, b):
     return s
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _clip(x, z):
     for i in range(x.shape[0]):
         z[i] = x[i] if x[i] > 0.0 else 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _fb(M, q, x, w, phi):
     affine(M, q, x, w)
     for i in range(q.shape[0]):
         phi[i] = math.sqrt(x[i] * x[i] + w[i] * w[i]) - x[i] - w[i]
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _fb_and_jacobian(M, q, x, w, phi, jac):
     """Phi and a generalized Jacobian element diag(da) + diag(db) M; at (0, 0) the limit along (1, 1)."""
     k = q.shape[0]

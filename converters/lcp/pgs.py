@@ -15,13 +15,13 @@ from . import state as S
 from .result import check_scaled, error, mark_done, max_abs, max_abs_matrix, residual
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def sizes(k):
     """Doubles and integers of workspace: w."""
     return k, 0
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def run(M, q, z, fw, iw, st, sf, tol, max_iter, budget, omega, probe):
     """Advance PGS by at most ``budget`` multiply-adds; True when finished (see ``lemke.run``).
 

@@ -29,7 +29,7 @@ def scaled_norm(v: np.ndarray) -> float:
     return big * math.sqrt(float(u @ u))
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def mark_done(st, status, outcome):
     """End a compiled method's run in its state array (``state`` layout): done, with its status and why."""
     st[S.PHASE] = S.DONE
@@ -38,7 +38,7 @@ def mark_done(st, status, outcome):
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def affine(M, q, z, w):
     """w = q + M z (each sum_j M_ij z_j accumulated in index order, then q_i added)."""
     k = q.shape[0]
@@ -49,14 +49,22 @@ def affine(M, q, z, w):
         w[i] = q[i] + s
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
+def copy_into(src, out):
+    """out[:] = src, element by element (an array-to-array slice assignment may allocate a temporary, which
+    the allocation-free kernels cannot)."""
+    for i in range(out.shape[0]):
+        out[i] = src[i]
+
+
+@njit(cache=True, _nrt=False)
 def residual(M, q, z, w):
     """w = q + M z (:func:`affine`); returns err of (z, w)."""
     affine(M, q, z, w)
     return error(q, z, w)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def error(q, z, w):
     """Siconos' accuracy measure err = ||z - max(0, z - w)||_2 / ||q||_2 of the pair (z, w).
 
@@ -96,7 +104,7 @@ def error(q, z, w):
     return (rbig / qbig) * (math.sqrt(rsum) / math.sqrt(usum))
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def check(M, q, z, w, err, tol):
     """(code, i, a, b, c, d): code 0 when (z, w) solves LCP(q, M) to ``tol``, else which condition fails
     (``CHECK_*``) with the index and the numbers :func:`check_message` prints.
@@ -107,7 +115,7 @@ def check(M, q, z, w, err, tol):
     return check_scaled(max_abs(q), max_abs_matrix(M), z, w, err, tol)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def max_abs(v):
     big = 0.0
     for i in range(v.shape[0]):
@@ -116,7 +124,7 @@ def max_abs(v):
     return big
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def max_abs_matrix(M):
     big = 0.0
     for i in range(M.shape[0]):
@@ -126,7 +134,7 @@ def max_abs_matrix(M):
     return big
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def check_scaled(q_big, m_big, z, w, err, tol):
     """:func:`check` with q_big = max|q| and m_big = max|M| known (the iterative methods check every sweep)."""
     k = z.shape[0]
@@ -172,14 +180,14 @@ def check_scaled(q_big, m_big, z, w, err, tol):
     return CHECK_OK, 0, 0.0, 0.0, 0.0, 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def accepts(M, q, z, w, tol):
     """True when (z, q + M z) passes :func:`check` (the stopping test of the iterative methods); fills w."""
     err = residual(M, q, z, w)
     return check(M, q, z, w, err, tol)[0] == CHECK_OK
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def accepts_scaled(M, q, q_big, m_big, z, w, tol):
     """:func:`accepts` with max|q| and max|M| known."""
     err = residual(M, q, z, w)

@@ -17,8 +17,8 @@ INFO_X = 0
 PREVIOUS_ERR = 1     # pgs probing for auto: the residual of the previous sweep
 SF_SIZE = 4
 
-# phases
-START, RUNNING, DONE = 0, 1, 2
+# phases (EIGENVALUE: auto waits for the caller to compute the least eigenvalue of (M + M^T)/2 after Lemke's ray)
+START, RUNNING, DONE, EIGENVALUE = 0, 1, 2, 3
 
 # statuses: indices into converters.lcp.result.STATUSES
 SOLVED, NO_SOLUTION, MAX_ITERATIONS, FAILED = 0, 1, 2, 3

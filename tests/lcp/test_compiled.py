@@ -1,5 +1,11 @@
 """The compiled methods against the former pure-Python ones (tests/lcp/reference.py, the oracle), and the thin
 path of solve_lcp against its full path: same answers, same checks, same limits."""
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
@@ -11,6 +17,8 @@ from converters.lcp.problems import murty_exponential, problem_set, random_p_mat
 from converters.lcp.solve import normalise
 
 from . import reference
+
+ROOT = Path(__file__).resolve().parents[2]
 
 COMPILED = {"lemke": lemke, "murty": murty, "pgs": pgs, "newton": newton_fb, "enum": enumerate_bases}
 MAX_ITER = {"lemke": 10_000, "murty": 100_000, "pgs": 10_000, "newton": 1000}
@@ -164,3 +172,87 @@ def test_options_act():
     plain, over = (solve_lcp(M, q, method="pgs", omega=omega, fast_paths=False) for omega in (1.0, 1.5))
     assert plain.solved and over.solved and plain.iterations != over.iterations
     np.testing.assert_allclose(over.z, plain.z, atol=1e-8)
+
+
+# ------------------------------------------------------------------- compiled without reference counting
+
+def test_the_solve_path_below_the_allocation_does_no_reference_counting(tmp_path):
+    # solve_once allocates the workspace; everything below it (solve_in and the methods it calls) is compiled
+    # with _nrt=False: the atomic increments and decrements of array arguments were 3/4 of a small solve.
+    # Read in the LLVM IR of a fresh compile (numba does not keep the IR of cached code): a new cache dir.
+    script = """
+import numpy as np
+from converters.lcp import engine, state as S
+from converters.lcp.dispatch import DEFAULT_OPTIONS
+M, q = np.array([[2.0, 1.0, 0.0], [1.0, 2.0, 1.0], [0.0, 1.0, 2.0]]), -np.ones(3)
+answer = engine.solve_once(M, q, np.empty(3), np.empty(3), S.AUTO, 1e-10, -1, True, DEFAULT_OPTIONS, S.CHUNK)
+assert answer[0] == S.ONCE_SOLVED
+(ir,) = engine.solve_once.inspect_llvm().values()
+print(ir)
+"""
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path), "PYTHONPATH": str(ROOT)}
+    run = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, env=env, cwd=tmp_path)
+    assert run.returncode == 0, run.stderr[-2000:]
+    bodies = {}                                     # the package's compiled functions, linked into the module
+    for chunk in run.stdout.split("\ndefine ")[1:]:
+        name = re.search(r'@"?([^"\s(]+)', chunk.split("\n", 1)[0]).group(1)
+        if "converters" in name:
+            bodies[name] = chunk.split("\n}\n", 1)[0]
+    once = [name for name in bodies if "solve_once" in name]
+    rest = {name: body for name, body in bodies.items() if "solve_once" not in name}
+    assert any("solve_in" in name for name in rest) and any("lemke" in name for name in rest) and len(rest) > 30
+    counted = [name for name, body in rest.items() if "@NRT_incref" in body or "@NRT_decref" in body
+               or "@NRT_MemInfo_alloc" in body]
+    assert counted == []
+    assert any("@NRT_MemInfo_alloc" in bodies[name] for name in once)     # the one function that allocates
+
+
+def test_auto_hands_the_eigenvalue_to_its_caller_and_concludes_with_it():
+    # Lemke's ray on a positive semidefinite M: the least eigenvalue of (M + M^T)/2 (LAPACK allocates) is
+    # asked of the caller; given it, the plan proves that no solution exists
+    from converters.lcp import auto
+    from converters.lcp import state as S
+    from converters.lcp.dispatch import DEFAULT_OPTIONS
+    M, q = np.array([[1.0, -1.0, 0.0], [-1.0, 1.0, 0.0], [0.0, 0.0, 1.0]]), -np.ones(3)
+    nf, ni = engine.sizes(S.AUTO, 3)
+    z, fw, iw = np.zeros(3), np.empty(nf), np.empty(ni, dtype=np.int64)
+    st, sf = np.zeros(S.ST_SIZE, dtype=np.int64), np.zeros(S.SF_SIZE)
+    args = (S.AUTO, M, q, z, fw, iw, st, sf, 1e-10, -1, S.CHUNK, DEFAULT_OPTIONS)
+    assert not engine.advance(*args) and st[S.PHASE] == S.EIGENVALUE and st[S.STATUS] == S.NO_SOLUTION
+    assert np.isnan(sf[S.INFO_X])
+    sf[S.INFO_X] = auto.least_symmetric_eigenvalue(M)
+    assert sf[S.INFO_X] == pytest.approx(0.0, abs=1e-15)      # eigenvalues 0, 1, 2
+    assert engine.advance(*args) and st[S.STATUS] == S.NO_SOLUTION and st[S.OUTCOME] == S.PROOF_PSD
+    # told a negative eigenvalue instead, the plan goes on to enumeration (and finds no basis either)
+    st[:] = 0
+    assert not engine.advance(*args) and st[S.PHASE] == S.EIGENVALUE
+    sf[S.INFO_X] = -0.5
+    while not engine.advance(*args):
+        pass
+    assert st[S.STAGE_OUTCOME + S.LEMKE] == S.RAY and st[S.STAGE_OUTCOME + S.ENUM] == S.NOBASIS
+    # through solve_lcp: the one-call path leaves it to the sliced one, which answers with the proof
+    result = solve_lcp(M, q)
+    assert result.status == "no_solution" and "M is positive semidefinite" in result.message
+
+
+@pytest.mark.parametrize("m", [1, 2, 3, 5, 8, 12])
+@pytest.mark.parametrize("log_cond", [0.0, 3.0, 7.0, 11.0])
+def test_the_condition_number_agrees_with_numpy(m, log_cond):
+    # enumeration's conditioning test, written allocation-free (one-sided Jacobi), against LAPACK's SVD
+    from converters.lcp.enumeration import condition_number
+    rng = np.random.default_rng(m * 100 + int(log_cond))
+    U, _ = np.linalg.qr(rng.standard_normal((m, m)))
+    V, _ = np.linalg.qr(rng.standard_normal((m, m)))
+    exact = 10.0 ** log_cond if m > 1 else 1.0
+    A = U @ np.diag(np.logspace(0.0, -log_cond, m)) @ V.T
+    # rounding A perturbs sigma_min by ~eps sigma_max: the condition number is known to ~eps cond (relative)
+    rel = 1e-10 + 10.0 * m * np.finfo(float).eps * exact
+    assert np.linalg.cond(A) == pytest.approx(exact, rel=rel)           # the bound holds for LAPACK
+    assert condition_number(A.copy(), m) == pytest.approx(exact, rel=rel)
+
+
+def test_the_condition_number_of_a_singular_matrix_is_above_any_threshold():
+    from converters.lcp.enumeration import condition_number
+    assert condition_number(np.zeros((3, 3)), 3) == np.inf
+    assert condition_number(np.array([[1.0, 2.0], [2.0, 4.0]]), 2) > 1e15
+    assert condition_number(np.array([[1.0, 2.0, 3.0], [4.0, 5.0, 6.0], [7.0, 8.0, 9.0]]), 3) > 1e15
