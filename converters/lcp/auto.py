@@ -110,7 +110,7 @@ def semidefinite_by_minors(M, st, sf):
     """Whether (M + M^T)/2 is positive semidefinite to ``PSD_TOL`` k max|M|, as far as the cheap tests tell:
     -1 disproved (a 2 x 2 principal submatrix's least eigenvalue bounds the whole matrix's from above) or
     not tested (k above PSD_MAX_K); 1 proven (M = 0); 0 when only the least eigenvalue can tell (the caller
-    computes it: :func:`least_symmetric_eigenvalue`, then :func:`semidefinite_by_eigenvalue`)."""
+    computes it, :func:`least_symmetric_eigenvalue`, and :func:`run` concludes with it)."""
     k = M.shape[0]
     big = 0.0
     for i in range(k):
@@ -135,12 +135,6 @@ def semidefinite_by_minors(M, st, sf):
         return -1
     st[S.PSD] = S.PSD_EIGENVALUE
     return 0
-
-
-@njit(cache=True, _nrt=False)
-def semidefinite_by_eigenvalue(sf, k):
-    """The verdict once sf[INFO_X] holds the least eigenvalue (relative to max|M|)."""
-    return sf[S.INFO_X] >= -PSD_TOL * k
 
 
 @njit(cache=True)
@@ -171,7 +165,7 @@ def run(M, q, z, fw, iw, st, sf, tol, max_iter, budget, opts):
     sf[INFO_X] (:func:`least_symmetric_eigenvalue`) and calls again (:func:`converters.lcp.engine.advance`)."""
     k = q.shape[0]
     if st[S.PHASE] == S.EIGENVALUE:   # Lemke's ray: the caller has put the least eigenvalue in sf[INFO_X]
-        if semidefinite_by_eigenvalue(sf, k):
+        if sf[S.INFO_X] >= -PSD_TOL * k:      # relative to max|M|, as the minors' bound
             return _no_solution_psd(st)
         if not _next(st, k):
             return True

@@ -3,13 +3,13 @@
 Every method's compiled ``run`` advances by at most a budget of multiply-adds and can be called again to
 continue (its state lives in the workspace arrays). Two drivers use them:
 
-- :func:`solve_once` (compiled, one call from Python): checks finiteness, normalises (q, M by powers of
-  two), tries the closed forms, runs the method with a budget of ``CHUNK`` multiply-adds (a few
-  milliseconds at most; the shortest time limit one can set is 0.1 s), scales back and checks the answer
-  on the original problem. It answers only when the method solved the problem within that budget; every
-  other outcome is left to
+- :func:`solve_once` (compiled, one call from Python): allocates the workspace, then :func:`solve_in` checks
+  finiteness, normalises (q, M by powers of two), tries the closed forms, runs the method with a budget of
+  ``CHUNK`` multiply-adds (a few milliseconds at most; the shortest time limit one can set is 0.1 s), scales
+  back and checks the answer on the original problem. It answers only when the method solved the problem
+  within that budget; every other outcome (auto asking for an eigenvalue included) is left to
 - :class:`Run` (Python): the same compiled ``run`` in slices of ``CHUNK``, the deadline looked at between
-  slices, then :meth:`Run.outcome` turns the state into status and message (run again from the start:
+  slices (and the least eigenvalue computed when auto asks for it), then :meth:`Run.outcome` turns the state into status and message (run again from the start:
   the one-call solve keeps no state, and its budget is a few milliseconds).
 
 So the time limit is honoured to within one slice, and each algorithm exists once, compiled. The
