@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hypothesis import given, settings, strategies as st
+from hypothesis import example, given, settings, strategies as st
 
 from converters.errors import LCPError, ResourceError
 from converters.lcp import engine, read_siconos_lcp, solve_lcp
@@ -32,18 +32,36 @@ def same_path(method, M, q):
     old = reference.REFERENCE[method](M, q, tol=1e-10, **kwargs)
     new = COMPILED[method](M, q, tol=1e-10, **kwargs)
     assert new.status == old.status, (method, new.message)
+    same = True
     if method in ("newton", "pgs"):
         # an iteration stopping on a residual threshold: the compiled sums (another order than NumPy's BLAS) may
         # cross it one iteration apart (seen: Newton 119 vs 118 on an integer problem); pivots are exact
-        assert abs(new.iterations - old.iterations) <= 1, (method, new.iterations, old.iterations)
+        if abs(new.iterations - old.iterations) > 1:
+            # more only where the path is decided by rounding: the oracle itself strays as far when one
+            # entry of q moves by one ulp (seen: Newton on a degenerate integer problem, k = 7, whose
+            # iterates oscillate and amplify a 1e-16 difference 3x per step: 49 vs 40 iterations, and the
+            # oracle takes 39-62 on q nudged by one ulp)
+            strays = max(abs(reference.REFERENCE[method](M, nudged, tol=1e-10, **kwargs).iterations
+                             - old.iterations) for nudged in _nudged(q))
+            assert strays >= abs(new.iterations - old.iterations), (method, new.iterations, old.iterations, strays)
+            same = False
     else:
         assert new.iterations == old.iterations, (method, new.message)
-    if new.status != "max_iterations":
+    if new.status != "max_iterations" and same:
         np.testing.assert_allclose(new.z, old.z, rtol=1e-9, atol=1e-12 * (1.0 + np.abs(old.z).max()))
     if method == "enum":
         assert len(new.solutions) == len(old.solutions)
         for a, b in zip(new.solutions, old.solutions):
             np.testing.assert_allclose(a, b, rtol=1e-9, atol=1e-12)
+
+
+def _nudged(q):
+    """q with one entry moved by one ulp, up or down: every such copy."""
+    for i in range(q.shape[0]):
+        for direction in (np.inf, -np.inf):
+            nudged = q.copy()
+            nudged[i] = np.nextafter(nudged[i], direction)
+            yield nudged
 
 
 @pytest.mark.parametrize("method", list(COMPILED))
@@ -64,6 +82,7 @@ def test_compiled_methods_take_the_reference_path_on_the_peer_collection(peer, m
 
 
 @settings(max_examples=40, deadline=None)
+@example(k=7, seed=1, kind="integer")     # Newton's path decided by rounding (see same_path)
 @given(k=st.integers(1, 12), seed=st.integers(0, 2**32 - 1),
        kind=st.sampled_from(["pd", "spd", "triangular", "integer"]))
 def test_compiled_methods_take_the_reference_path_on_random_problems(k, seed, kind):
