@@ -6,6 +6,7 @@ that solves small LCPs never imports numba); the full path imports the engine wh
 """
 from __future__ import annotations
 
+import functools
 import os
 import time
 
@@ -128,9 +129,7 @@ def solve_lcp(M, q, method: str = "auto", tol: float = 1e-10, max_iter: int | No
                 if stages == 1 << (4 * used) or stages == _PGS_GAVE_WAY[used]:
                     message = ""
                 else:
-                    from . import engine
-                    message = engine.auto_message(S.OK, used, engine.unpack_stages(stages), -1, engine.known(eig),
-                                                  -1, k)
+                    message = _solved_message(used, stages, eig if eig == eig else None, k)
                 return make_result(z, w, SOLVED, err, iterations, _AUTO_LABELS[used], message)
             if answer == _ONCE_CLOSED_FORM:
                 return make_result(z, w, SOLVED, err, 0, "auto:closed form" if code == S.AUTO else method,
@@ -162,6 +161,15 @@ def solve_lcp(M, q, method: str = "auto", tol: float = 1e-10, max_iter: int | No
                        "use method='lemke' or 'murty'")
     _check_memory(method, k)
     return _solve_sliced(M, q, code, tol, max_iter, fast_paths, _deadline(seconds, started), opts)
+
+
+@functools.lru_cache(maxsize=1024)
+def _solved_message(used: int, stages: int, eig: float | None, k: int) -> str:
+    """auto's message when it solved the problem after other methods of its plan did not (``stages`` as
+    solve_once packs them; ``eig`` None when not computed). Cached whole: unpacking and formatting it took
+    three times as long as the compiled solve of a k = 4 problem."""
+    from . import engine
+    return engine.auto_message(S.OK, used, engine.unpack_stages(stages), -1, eig, -1, k)
 
 
 def _solve_sliced(M, q, code, tol, max_iter, fast_paths, deadline, opts) -> LCPResult:
