@@ -18,7 +18,11 @@ times the whole call (validation, result object and all). Siconos' loop resets z
 call (its iterative solvers would otherwise restart from the previous solution); the cost of that reset
 is measured by the same loop without the solve and subtracted, so Siconos is charged for its call only. A
 second Siconos time, for information, is that solver given a new (M, q) in each call as ``solve_lcp(M, q)`` is:
-``lcp_driver_DenseMatrix(sn.LCP(M, q), zeros(k), zeros(k), options)`` (the options reused).
+``lcp_driver_DenseMatrix(sn.LCP(M, q), zeros(k), zeros(k), options)`` (the options reused). A second time of
+ours, also for information, is the compiled solve alone: ``engine.solve_once`` (what ``solve_lcp``'s thin path
+calls: normalisation, closed forms, auto's plan, the check on the original problem, its workspace allocated)
+called from a compiled loop, so no Python call and no result object; it tells how much of the difference is
+the call from Python and how much the algorithms.
 """
 from __future__ import annotations
 
@@ -210,6 +214,36 @@ def ours_per_call(M, q, calls: int) -> float:
     return (time.perf_counter() - start) / calls
 
 
+_compiled_loop = None
+
+
+def compiled_per_call(M, q, calls: int) -> float | None:
+    """Seconds per call of the compiled solve alone (``engine.solve_once``, auto, defaults) in a compiled loop;
+    None when it does not answer in one call (the thin path then hands the problem to the sliced solve)."""
+    global _compiled_loop
+    import numpy as np
+    from numba import njit
+
+    from converters.lcp import engine
+    from converters.lcp import state as S
+    if _compiled_loop is None:
+        @njit(cache=False)
+        def loop(M, q, z, w, opts, calls):
+            answer = 0
+            for _ in range(calls):
+                answer = engine.solve_once(M, q, z, w, S.AUTO, 1e-10, -1, True, opts, S.CHUNK)[0]
+            return answer
+        _compiled_loop = loop
+    M, q = np.ascontiguousarray(M, dtype=float), np.ascontiguousarray(q, dtype=float)
+    z, w = np.empty(q.shape[0]), np.empty(q.shape[0])
+    opts = engine.options_array("auto", {})
+    if _compiled_loop(M, q, z, w, opts, 1) not in (S.ONCE_SOLVED, S.ONCE_CLOSED_FORM):
+        return None
+    start = time.perf_counter()
+    _compiled_loop(M, q, z, w, opts, calls)
+    return (time.perf_counter() - start) / calls
+
+
 def calls_for(seconds_per_call: float) -> int:
     return max(1, min(200_000, int(LOOP_SECONDS / max(seconds_per_call, 1e-9))))
 
@@ -227,6 +261,8 @@ def run(directory: Path | None = None, repeats: int = REPEATS, siconos: bool = T
             k = p.q.shape[0]
             result = solve_lcp(p.M, p.q)                      # warm: compiled code loaded, caches filled
             ours_calls = calls_for(ours_per_call(p.M, p.q, 3))
+            alone = compiled_per_call(p.M, p.q, 3)
+            alone_calls = calls_for(alone) if alone is not None else 0
             successes, trials = {}, {}
             if worker is not None:
                 loaded = worker.load(p.name, p.M, p.q, path)
@@ -237,9 +273,11 @@ def run(directory: Path | None = None, repeats: int = REPEATS, siconos: bool = T
                     trials[solver] = attempt = worker.attempt(solver)
                     if "error" not in attempt and attempt["info"] == 0 and attempt["err"] <= SUCCESS_ERR:
                         successes[solver] = calls_for(attempt["seconds"])
-            ours, theirs, crashed = [], {s: [] for s in successes}, set()
+            ours, compiled, theirs, crashed = [], [], {s: [] for s in successes}, set()
             for _ in range(repeats):                          # alternate: ours, then each Siconos solver
                 ours.append(ours_per_call(p.M, p.q, ours_calls))
+                if alone_calls:
+                    compiled.append(compiled_per_call(p.M, p.q, alone_calls))
                 for solver, calls in successes.items():
                     if solver not in crashed:
                         seconds = worker.time(solver, calls)
@@ -249,6 +287,7 @@ def run(directory: Path | None = None, repeats: int = REPEATS, siconos: bool = T
                         else:
                             theirs[solver].append(seconds)
             ours_us = 1e6 * statistics.median(ours)
+            compiled_us = 1e6 * statistics.median(compiled) if compiled else None
             medians = {s: 1e6 * statistics.median(t) for s, t in theirs.items() if s not in crashed}
             fastest = min(medians, key=medians.get) if medians else None
             new_us = None
@@ -260,6 +299,8 @@ def run(directory: Path | None = None, repeats: int = REPEATS, siconos: bool = T
                    "siconos_us_per_call": medians.get(fastest) if fastest else None,
                    "ratio": ours_us / medians[fastest] if fastest else None,
                    "siconos_new_us_per_call": new_us, "ratio_new": ours_us / new_us if new_us else None,
+                   "compiled_us_per_call": compiled_us,
+                   "ratio_compiled": compiled_us / medians[fastest] if fastest and compiled_us else None,
                    "siconos_successes": sorted(medians, key=medians.get), "siconos_us": medians,
                    "siconos_note": note}
             if worker is not None:
@@ -284,10 +325,12 @@ def main():
         print(f"Siconos side skipped: {note}")
     print(f"{'problem':28s} {'k':>3s} {'ours: status':13s} {'method':17s} {'us/call':>9s}   "
           f"{'Siconos fastest':17s} {'us/call':>9s} {'ours/Siconos':>12s}   {'new (M, q):':>11s} {'us/call':>8s} "
-          f"{'ours/it':>8s}")
+          f"{'ours/it':>8s}   {'compiled alone':>14s} {'/Siconos':>8s}")
     for r in rows:
         none = "(not run)" if r["siconos_note"] else "(none succeeds)"
         new = (f"   {'':11s} {r['siconos_new_us_per_call']:8.2f} {r['ratio_new']:8.2f}" if r.get("ratio_new") else "")
+        if r.get("ratio_compiled"):
+            new += f"   {r['compiled_us_per_call']:14.2f} {r['ratio_compiled']:8.2f}"
         sic = (f"{r['siconos_solver']:17s} {r['siconos_us_per_call']:9.2f} {r['ratio']:12.2f}{new}" if r["siconos_solver"]
                else f"{none:17s} {'':9s} {'':12s}")
         print(f"{r['problem']:28s} {r['k']:3d} {r['status']:13s} {r['method']:17s} {r['us_per_call']:9.2f}   {sic}")
@@ -302,6 +345,11 @@ def main():
             print(f"against the same Siconos solver given a new (M, q) each call (sn.LCP(M, q), z, w built in the "
                   f"call, as solve_lcp takes them; options reused): median ratio {statistics.median(news):.2f} "
                   f"(ours faster on {sum(1 for x in news if x < 1.0)} of {len(news)})")
+        alone = [r["ratio_compiled"] for r in rows if r.get("ratio_compiled") is not None and r["status"] == "solved"]
+        if alone:
+            print(f"our compiled solve alone (engine.solve_once in a compiled loop: no Python call, no result object) "
+                  f"against Siconos' call alone: median ratio {statistics.median(alone):.2f} (faster on "
+                  f"{sum(1 for x in alone if x < 1.0)} of {len(alone)})")
     if rows and not note:
         tried = sorted({s for r in rows for s in [*r["siconos_us"], *r["siconos_failures"]]})
         differ = [r["problem"] for r in rows if r["siconos_reader_agrees"] is False]
