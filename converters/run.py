@@ -300,4 +300,13 @@ def run_summary(tr: Trajectory) -> dict:
         out["accuracy"] = check
         if "warning" in check:
             out["warnings"] = [check["warning"]]
+    elif "method_object" in meta and isinstance(out.get("vout_mean"), float) and ("window_s" in out or
+                                                                                 "window_periods" in out):
+        # no periodic orbit to compare with: the sliding-mode boost (its window_s), a run with a step, another control
+        from .analysis.accuracy import window_check
+        window = out.get("window_s") or (float(tr.t[-1]) - out["window_periods"] * model.period(p), float(tr.t[-1]))
+        check = window_check(model, p, meta["method_object"], tr, out, window)
+        out["accuracy"] = check
+        if "warning" in check:
+            out["warnings"] = [check["warning"]]
     return out

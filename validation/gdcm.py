@@ -97,25 +97,19 @@ def _constraint_residuals(conv, p, orbit) -> dict:
 
 def _combinations(conv, p, orbit) -> dict:
     """Several pairs (the PRC's bridge): which devices conduct, as fractions of the period, in both
-    simulators; no closed-form prediction."""
+    simulators, named by the model's own mode labels (``D2+D3``, ``DCM``: as the waveform file's ``mode``
+    column); no closed-form prediction."""
     T = conv.period(p)
-    lcp = _combination_fractions(orbit.t, orbit.conducting()[1:], conv.pair_names, T, 1)
+    lcp = orbit.mode_fractions(periods=None)
     netlist = build_netlist(conv.name, p, SPICE_PERIODS * T, SPICE_OPTIONS, x0=orbit.x[0])
     start = netlist.t_end - WINDOW_PERIODS * T
     run = spice_trajectory(conv, p, netlist, run_spice(netlist), start)
-    sel = run.t >= start
-    spice = _combination_fractions(run.t[sel], run.conducting()[sel][:-1], conv.pair_names, T, WINDOW_PERIODS)
+    spice = run.mode_fractions(periods=None, t0=start)
     keys = sorted(set(lcp) | set(spice))
     diff = max(abs(lcp.get(k, 0.0) - spice.get(k, 0.0)) for k in keys)
     return {"predicted": f"n/a ({len(conv.pair_names)} pairs: combinations of conducting devices)", "lcp": lcp, "spice": spice,
             "max_fraction_difference": diff, "agree": set(k for k, v in lcp.items() if v > 0.01) ==
             set(k for k, v in spice.items() if v > 0.01)}
-
-
-def _combination_fractions(t, conducting, names, T, periods) -> dict:
-    labels = np.array(["+".join(d for d, c in zip(names, row) if c) or "none" for row in conducting])
-    dt = np.diff(t)
-    return {str(k): float(dt[labels == k].sum() / (periods * T)) for k in sorted(set(labels))}
 
 
 # --- D-K maps -----------------------------------------------------------------------------------------

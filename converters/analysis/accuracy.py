@@ -490,5 +490,63 @@ def default_check(model, p: dict, method, tr, reported: float) -> dict:
     return out
 
 
+#: The measures of a run's summary that :func:`window_check` estimates (those the summary has).
+WINDOW_MEASURES = ("vout_mean", "switching_frequency_Hz", "lambda_mean")
+
+
+def window_check(model, p: dict, method, tr, summary: dict, window: tuple) -> dict:
+    """How far the measures of a run with no periodic orbit to compare with (a model without a fixed period, the
+    sliding-mode boost; or a run with a load or input step) may be off, over the ``window`` (t0, t1) its summary
+    read:
+
+    - discretization: the same run at 2h, Richardson with order 1, |Q(h) - Q(2h)| (the state-switched stepper
+      locates each switching by linear interpolation inside its step, first order in h, whatever the theta
+      method's own order); the event method: none (exact flows);
+    - transient: how far vout's mean over the window moved from the window of the same length before it (not
+      estimated when the run is shorter than two windows or a step time lies in them).
+
+    Each relative estimate is the sum of its parts; a warning names the larger part when one exceeds
+    ``DEFAULT_RTOL``."""
+    from ..run import run_converter
+    out = {"target": DEFAULT_RTOL}
+    if method.key not in ("lcp", "event"):
+        return {**out, "checked": False, "reason": f"the {method.key} method's error is its model's (O(eps)), "
+                "not estimated here" if method.key == "smooth" else f"not estimated for the {method.key} method"}
+    names = [name for name in WINDOW_MEASURES if isinstance(summary.get(name), float)]
+    t0, t1 = (float(t) for t in window)
+    coarse_summary = None
+    if method.key == "lcp":
+        coarse = run_converter(model, p, method=replace(method, h=2.0 * method.h), t_end=float(tr.t[-1] - tr.t[0]),
+                               x0=tr.x[0])
+        coarse_summary = model.summary(coarse, p)
+    a = 2.0 * t0 - t1
+    steps = [t for t in model.step_times(p) if a < t < t1]
+    transient = None
+    if a >= tr.t[0] - 1e-12 * (t1 - t0) and not steps:
+        transient = abs(tr.mean("vout", t0=a, t1=t0) - summary["vout_mean"]) / max(abs(summary["vout_mean"]), 1e-300)
+    estimates = {}
+    for name in names:
+        value = summary[name]
+        part = {"discretization": abs(value - coarse_summary[name]) / max(abs(value), 1e-300) if coarse_summary
+                else None}
+        if name == "vout_mean":
+            part["transient"] = transient
+        known = [x for x in part.values() if x is not None]
+        if known:       # the event method's switching frequency: exact flows, no transient measured: nothing to say
+            estimates[name] = {**part, "error_estimate": sum(known)}
+    out.update(checked=True, window_s=[t0, t1], estimates=estimates,
+               how=("the same run at 2h" if coarse_summary else "exact flows") + "; vout's mean over the window before"
+               + ("" if transient is not None else " (not estimated: the run is shorter than two windows or a step "
+                  "lies in them)"))
+    worst = max(estimates, key=lambda name: estimates[name]["error_estimate"]) if estimates else None
+    if worst is not None and estimates[worst]["error_estimate"] > DEFAULT_RTOL:
+        part = estimates[worst]
+        why = ("the run has not settled: use a longer --t-end" if (part.get("transient") or 0.0) >
+               (part["discretization"] or 0.0) else "the step is too coarse: use a smaller --h")
+        out["warning"] = (f"{worst} may be {part['error_estimate']:.1e} off (relative; more than {DEFAULT_RTOL:g}): "
+                          f"{why}")
+    return out
+
+
 __all__ = ["accurate_steady", "AccurateSteady", "Estimate", "measures", "substep_events", "mode_fractions",
-           "default_check", "last_period", "DEFAULT_RTOL"]
+           "default_check", "last_period", "window_check", "DEFAULT_RTOL"]

@@ -153,13 +153,14 @@ class BoostSMC(Model):
 
     def summary(self, tr, p: dict, window_s: float | None = None) -> dict:
         """Measures over the last ``window_s`` (default min(T_end / 4, 2 ms), after the load step): mean vout
-        against Vref; hysteresis: the switching frequency against the prediction at the measured v;
+        against Vref, every state's and signal's mean, RMS, min, max and ripple (``measurements``); hysteresis: the switching frequency against the prediction at the measured v;
         implicit: the blend z against 1 - Vin / v and its spread; with a load step the recovery time."""
         t_end = tr.t[-1]
         t0 = t_end - (window_s or min(0.25 * (t_end - tr.t[0]), 2e-3))
         if "t_step" in p and p["t_step"] < t_end:
             t0 = max(t0, p["t_step"])
-        out = {"vout_mean": tr.mean("vout", t0=t0), "vref": p["Vref"], "window_s": [t0, t_end]}
+        out = {"vout_mean": tr.mean("vout", t0=t0), "vref": p["Vref"], "window_s": [t0, t_end],
+               "measurements": tr.measurement_rows(t0=t0, t1=t_end)}
         if self.implicit:
             lam = 1.0 - tr.signal("switch", tr._rows(t0, t_end))
             out.update(lambda_mean=float(lam.mean()), lambda_spread=float(lam.max() - lam.min()),

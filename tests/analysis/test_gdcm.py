@@ -166,6 +166,11 @@ def test_cli_gdcm_json_and_prc_combinations(capsys):
     assert main(["gdcm", "prc", "--json"]) == 0
     prc = json.loads(capsys.readouterr().out)
     assert prc["lcp"]["D1+D4"] == pytest.approx(prc["spice"]["D1+D4"], abs=0.01) and prc["agree"]
+    assert prc["lcp"]["D2+D3"] == pytest.approx(prc["spice"]["D2+D3"], abs=0.01)
+    # named as the waveform file's mode column names them (D2+D3, not the pairs' order D3+D2)
+    labels = set(get_converter("prc").mode_labels)
+    assert set(prc["lcp"]) <= labels and set(prc["spice"]) <= labels
+    assert sum(prc["lcp"].values()) == pytest.approx(1.0, abs=1e-9)
     assert main(["gdcm", "boost", "-p", "D=1.5"]) == 2
     assert "D (duty ratio) must be in [0, 1]; got 1.5" in capsys.readouterr().err
 

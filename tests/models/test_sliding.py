@@ -132,6 +132,43 @@ def test_switching_frequency_does_not_depend_on_the_step_beyond_its_own_accuracy
     assert max(f) / min(f) - 1.0 < 1e-3
 
 
+@pytest.mark.parametrize("control, measure", [("smc", "switching_frequency_Hz"), ("smc-implicit", "lambda_mean")])
+def test_the_summary_says_how_accurate_its_measures_are_and_the_estimate_is_first_order(control, measure):
+    """run_summary's accuracy for a model without a fixed period: the same run at 2h estimates the error at h as
+    |Q(h) - Q(2h)|; the stepper is first order, so the distance to the run at h/4 is 3/4 of that (measured
+    0.746-0.751 on both laws)."""
+    model = get_model("boost", control)
+    run = run_converter(model, P, t_end=10e-3)
+    s = run_summary(run)
+    h = run.metadata["method_object"].h
+    fine = run_summary(run_converter(model, P, t_end=10e-3, h=h / 4))
+    estimates = s["accuracy"]["estimates"]
+    for name in ("vout_mean", measure):
+        ratio = abs(s[name] - fine[name]) / abs(fine[name]) / estimates[name]["discretization"]
+        assert 0.6 <= ratio <= 0.9, (name, ratio)
+    # the window's measurements: vout's mean is the summary's; iL swings by the hysteresis band 2 x 0.05 A, or
+    # (implicit relay) sits on Iref = Vref^2 / (R Vin) = 1 A without chatter
+    iL = s["measurements"]["iL"]
+    assert s["measurements"]["vout"]["mean"] == pytest.approx(s["vout_mean"], rel=1e-12) and iL["unit"] == "A"
+    if control == "smc":
+        assert iL["ripple"] == pytest.approx(2 * P["band"], abs=1e-5)
+    else:
+        assert iL["ripple"] <= 1e-9 and iL["mean"] == pytest.approx(1.0, abs=1e-9)
+
+
+def test_a_run_that_has_not_settled_says_so():
+    short = run_summary(run_converter(SMC, P, t_end=5e-3))   # vout still rising towards Vref: 19.07 V at 5 ms
+    transient = short["accuracy"]["estimates"]["vout_mean"]["transient"]
+    assert transient > 1e-2
+    assert short["warnings"] == [f"vout_mean may be {short['accuracy']['estimates']['vout_mean']['error_estimate']:.1e} "
+                                 "off (relative; more than 0.001): the run has not settled: use a longer --t-end"]
+    settled = run_summary(run_converter(SMC, P, t_end=30e-3))
+    assert settled["accuracy"]["estimates"]["vout_mean"]["error_estimate"] < 1e-4 and "warnings" not in settled
+    exact = run_summary(run_converter(SMC, P, t_end=5e-3, method="event"))    # exact flows: the transient only
+    assert exact["accuracy"]["estimates"]["vout_mean"]["discretization"] is None
+    assert exact["accuracy"]["estimates"]["vout_mean"]["transient"] == pytest.approx(transient, rel=0.05)
+
+
 def test_implicit_relay_step_is_the_reference_lcp_and_the_clip_formula():
     rng = np.random.default_rng(5)
     Vin, L, h = 10.0, 1e-3, 1e-6

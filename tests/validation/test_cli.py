@@ -31,6 +31,23 @@ def test_lcp_solve_reports_no_solution_with_exit_code_one(capsys, tmp_path):
     assert code == 1 and json.loads(out)["status"] == "no_solution"
 
 
+@pytest.mark.parametrize("converter, control, span", [("buck", "pwm", {"periods": 1}),
+                                                       ("boost", "smc", {"t_end": 50 * 2e-8}),
+                                                       ("buck", "pwm", {"t_end": 50 * 1e-8})])
+def test_the_one_time_set_up_runs_before_the_timed_run_for_every_kind_of_model(monkeypatch, converter, control, span):
+    """simulate's setup_s: a coarse period of a periodic model; 50 default steps of a model without a fixed period
+    (the sliding-mode boost: h 20 ns) or with a step (the buck with t_step: h = T/1000 = 10 ns)."""
+    import converters.run
+    from validation.cli.simulate import _set_up
+    calls = []
+    monkeypatch.setattr(converters.run, "run_converter", lambda model, p, **kw: calls.append(kw))
+    params = {"t_step": 1e-3, "R_step": 5} if "t_end" in span and converter == "buck" else {}
+    assert _set_up(converter, params, control, "lcp", False, {}) >= 0.0
+    assert len(calls) == 1
+    for key, value in span.items():
+        assert calls[0][key] == pytest.approx(value, rel=1e-12)
+
+
 def test_simulate_json_summary_and_csv_columns(capsys, tmp_path):
     target = tmp_path / "buck.csv"
     code, out, _ = run_cli(capsys, "simulate", "buck", "-p", "L=100u", "--periods", "50", "--out", str(target), "--json")

@@ -23,8 +23,8 @@ def run(args) -> int:
     if args.json:
         print(json.dumps(result, default=float))
         return 0 if result["agree"] else 1
-    print(f"{result['converter']}: predicted {result['predicted']} (exact, from the matrices)")
     pred = result.get("prediction")
+    print(f"{result['converter']}: predicted {result['predicted']}" + (" (exact, from the matrices)" if pred else ""))
     if pred:
         print(f"  closed form: K = {pred['K']:.4g}, Kcrit(D) = {pred['Kcrit']:.4g} -> {pred['closed_form']}; "
               f"exact (CCM orbit from the matrices): {pred['exact_matrix']}")

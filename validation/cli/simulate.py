@@ -124,18 +124,21 @@ def run(args) -> int:
 def _set_up(converter, params, control, method, steady, options) -> float:
     """The one-time set-up of a process (loading the compiled kernels: the ahead-of-time module, ~2 ms, or numba
     loading them from its disk cache on their first call, ~0.3 s; :mod:`converters.compiled`), paid here on one
-    coarse period of the same model and method so that the run's ``wall_s`` measures the computation alone;
-    returns its time (the JSON's ``setup_s``)."""
+    coarse period of the same model and method (a model without a fixed period, or with a step: 50 of its
+    default steps) so that the run's ``wall_s`` measures the computation alone; returns its time (the JSON's
+    ``setup_s``)."""
     from converters.models import get_model
     from converters.run import run_converter
     start = time.perf_counter()
     model = get_model(converter, control)
     p = model.resolve(params)
-    if model.periodic(p) and not model.step_times(p):
-        try:
+    try:
+        if model.periodic(p) and not model.step_times(p):
             run_converter(model, p, method=method, h=model.period(p) / 20, periods=1, steady=steady, **options)
-        except (ValueError, RuntimeError):      # a set-up that fails says nothing: the run itself reports
-            pass
+        else:
+            run_converter(model, p, method=method, t_end=50 * model.default_h(p), **options)
+    except (ValueError, RuntimeError):      # a set-up that fails says nothing: the run itself reports
+        pass
     return time.perf_counter() - start
 
 
@@ -237,6 +240,9 @@ def _print(summary: dict, tr, args) -> None:
             print(f"  {name:18s} {q['value']:.10g}  +- {q['error_estimate']:.2g} ({q['relative_error_estimate']:.1g})")
         for event in accuracy["events"]:
             print(f"  {event['pair']} {event['kind']} at {event['time_T']:.9f} T  +- {event['error_estimate_T']:.2g} T")
+    elif accuracy.get("estimates"):
+        print("accuracy (relative; " + accuracy["how"] + "): " + ", ".join(
+            f"{name} within ~{q['error_estimate']:.1g}" for name, q in accuracy["estimates"].items()))
     elif accuracy.get("checked"):
         print(f"vout mean within ~{accuracy['vout_mean_error_estimate']:.1g} (relative) of the exact periodic value "
               f"(estimated: the run's distance to its orbit and Richardson at h and 2h)")
