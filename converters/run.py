@@ -305,7 +305,10 @@ def run_summary(tr: Trajectory) -> dict:
         # no periodic orbit to compare with: the sliding-mode boost (its window_s), a run with a step, another control
         from .analysis.accuracy import window_check
         window = out.get("window_s") or (float(tr.t[-1]) - out["window_periods"] * model.period(p), float(tr.t[-1]))
-        check = window_check(model, p, meta["method_object"], tr, out, window)
+        method = meta["method_object"]
+        coarse = (run_converter(model, p, method=replace(method, h=2.0 * method.h), t_end=float(tr.t[-1] - tr.t[0]),
+                                x0=tr.x[0]) if method.key == "lcp" else None)      # the same run at 2h
+        check = window_check(model, p, method, tr, out, window, coarse)
         out["accuracy"] = check
         if "warning" in check:
             out["warnings"] = [check["warning"]]

@@ -494,7 +494,7 @@ def default_check(model, p: dict, method, tr, reported: float) -> dict:
 WINDOW_MEASURES = ("vout_mean", "switching_frequency_Hz", "lambda_mean")
 
 
-def window_check(model, p: dict, method, tr, summary: dict, window: tuple) -> dict:
+def window_check(model, p: dict, method, tr, summary: dict, window: tuple, coarse=None) -> dict:
     """How far the measures of a run with no periodic orbit to compare with (a model without a fixed period, the
     sliding-mode boost; or a run with a load or input step) may be off, over the ``window`` (t0, t1) its summary
     read:
@@ -505,20 +505,18 @@ def window_check(model, p: dict, method, tr, summary: dict, window: tuple) -> di
     - transient: how far vout's mean over the window moved from the window of the same length before it (not
       estimated when the run is shorter than two windows or a step time lies in them).
 
+    ``coarse``: that run at 2h (the caller's, from the same x0 over the same span; None for the event method).
     Each relative estimate is the sum of its parts; a warning names the larger part when one exceeds
     ``DEFAULT_RTOL``."""
-    from ..run import run_converter
     out = {"target": DEFAULT_RTOL}
     if method.key not in ("lcp", "event"):
         return {**out, "checked": False, "reason": f"the {method.key} method's error is its model's (O(eps)), "
                 "not estimated here" if method.key == "smooth" else f"not estimated for the {method.key} method"}
     names = [name for name in WINDOW_MEASURES if isinstance(summary.get(name), float)]
     t0, t1 = (float(t) for t in window)
-    coarse_summary = None
-    if method.key == "lcp":
-        coarse = run_converter(model, p, method=replace(method, h=2.0 * method.h), t_end=float(tr.t[-1] - tr.t[0]),
-                               x0=tr.x[0])
-        coarse_summary = model.summary(coarse, p)
+    if method.key == "lcp" and coarse is None:
+        raise ValueError("window_check: the stepper's run needs its coarse twin at 2h")
+    coarse_summary = model.summary(coarse, p) if coarse is not None else None
     a = 2.0 * t0 - t1
     steps = [t for t in model.step_times(p) if a < t < t1]
     transient = None
