@@ -120,6 +120,9 @@ def _read(path: Path, where: str) -> dict:
     except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
         detail = str(exc).replace("\n", " ")
         raise ParameterError(f"{where}: not a readable TOML file ({detail})") from None
+    except RecursionError:      # tomllib parses nested arrays and tables recursively
+        raise ParameterError(f"{where}: not a readable TOML file (arrays or tables nested too deeply; a scene "
+                             "needs at most a few levels)") from None
 
 
 def load_scene(path) -> Scene:

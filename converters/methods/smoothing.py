@@ -22,10 +22,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ParameterError, SimulationError
-from ..validate import check_positive, parse_value
+from ..validate import check_positive, check_range, parse_value
 from ..problems import LCSProblem, Schedule
 from ..trajectory import Trajectory
 from .base import Method
+
+#: Accepted eps (V or A): the error is O(eps), so above 0.1 the answer is the smoothing's, not the circuit's; below
+#: 1e-8 the stiffness (~1/eps) and the corner's width eps^2 leave double precision and the solver nothing to resolve.
+EPS_RANGE = (1e-8, 0.1)
 
 
 @dataclass(frozen=True)
@@ -39,7 +43,8 @@ class Smoothing(Method, key="smooth"):
     Parameters
     ----------
     eps : float
-        Smoothing width in the units of y (> 0; smaller is closer to the ideal diode and stiffer).
+        Smoothing width in the units of y, in [1e-8, 0.1] (``EPS_RANGE``; smaller is closer to the ideal diode and
+        stiffer).
     solver_rtol, atol : float
         Tolerances of scipy's solve_ivp (atol default 1e-3 solver_rtol). Not an accuracy target: the result's
         error is the smoothing's, O(eps), whatever the solver's tolerance (``--rtol`` is the accuracy target
@@ -60,7 +65,7 @@ class Smoothing(Method, key="smooth"):
     description = "pairs smoothed by u = eps log(1 + exp(-y / eps^2)) (--eps), scipy Radau (--solver-rtol)"
 
     def __post_init__(self):
-        object.__setattr__(self, "eps", check_positive("eps", self.eps))
+        object.__setattr__(self, "eps", check_range("eps", self.eps, *EPS_RANGE))
         rtol = parse_value("solver_rtol", self.solver_rtol)
         if not 1e-13 <= rtol <= 0.1:
             raise ParameterError(f"solver_rtol must be in [1e-13, 0.1]; got {rtol!r}")

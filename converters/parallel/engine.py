@@ -13,6 +13,7 @@ loses (a dead worker, a time limit) comes back as failed rows. Every backend giv
 """
 from __future__ import annotations
 
+import re
 import sys
 
 import numpy as np
@@ -32,12 +33,26 @@ def backend_for(spec="local", *, workers: int | None = None):
         return LocalBackend(workers)
     if isinstance(spec, str) and "://" in spec:
         from .cluster import DaskBackend
-        return DaskBackend(spec)
+        return DaskBackend(check_address(spec))
     if type(spec).__name__ == "Client":
         from .cluster import DaskBackend
         return DaskBackend(spec)
     raise ParameterError(f"scheduler must be one of {', '.join(BACKENDS)} or a Dask address tcp://HOST:PORT; "
                          f"got {spec!r}")
+
+
+_ADDRESS = re.compile(r"tcp://(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9_.-]+):([0-9]{1,5})")
+
+
+def check_address(spec: str) -> str:
+    """A Dask scheduler address this process can reach as given: tcp://HOST:PORT, PORT in [1, 65535] (tls://
+    needs a security context, which a plain address cannot carry: pass a dask.distributed Client instead)."""
+    match = _ADDRESS.fullmatch(spec)
+    if match is None or not 1 <= int(match.group(2)) <= 65535:
+        raise ParameterError("scheduler must be a Dask address tcp://HOST:PORT with PORT in [1, 65535] (or one of "
+                             f"{', '.join(BACKENDS)}; tls:// needs a dask.distributed Client with its security); "
+                             f"got {spec!r}")
+    return spec
 
 
 class _Chunk:

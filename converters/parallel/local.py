@@ -96,14 +96,16 @@ class ProcessSlot:
     def call(self, function, *args, timeout: float | None = None):
         """``function(*args)`` in the process. Raises ``concurrent.futures.TimeoutError`` (the process is then
         terminated) or ``concurrent.futures.process.BrokenProcessPool`` (it died; the next call gets a new one)."""
-        future = self.submit(function, *args)
         try:
-            return future.result(timeout=timeout)
+            return self.submit(function, *args).result(timeout=timeout)
         except futures.TimeoutError:
             self.kill()
             raise
         except futures.process.BrokenProcessPool:
             self.discard()
+            raise
+        except KeyboardInterrupt:       # Ctrl-C: end the process now (close() at exit would wait for its run)
+            self.kill()
             raise
 
     def kill(self):

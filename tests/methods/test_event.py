@@ -139,8 +139,10 @@ def test_ill_posed_and_unsupported_problems_are_refused():
         simulate(smc.problem(smc.resolve({}), 1e-4), EventDriven())
     with pytest.raises(ParameterError, match=r"event_tol must be in \(0, 1e-2\]"):
         EventDriven(event_tol=0.5)
-    with pytest.raises(ParameterError, match="eps must be positive"):
+    with pytest.raises(ParameterError, match=r"eps must be in \[1e-08, 0.1\]; got 0.0"):
         Smoothing(eps=0)
+    with pytest.raises(ParameterError, match=r"eps must be in \[1e-08, 0.1\]; got 100000.0"):
+        Smoothing(eps=1e5)           # was accepted: a 12 V buck then reported vout 13433 V
     with pytest.raises(ParameterError, match=r"unknown option 'eps' for method 'event'; valid options: event_tol"):
         run_converter("buck", {}, method="event", eps=1e-3)
 

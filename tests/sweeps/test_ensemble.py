@@ -176,3 +176,24 @@ def test_a_bad_axis_is_refused_with_what_was_given(text, message):
 def test_a_steady_sweep_of_a_model_without_a_forcing_period_is_refused():
     with pytest.raises(ParameterError, match="no forcing period"):
         ModelSweep("boost", "smc")
+
+
+def test_ctrl_c_while_waiting_for_a_worker_ends_the_worker_at_once():
+    """A KeyboardInterrupt in ProcessSlot.call terminates its process (exiting would otherwise wait for the run:
+    an ngspice transient kept a Ctrl-C'd pcsuite alive for minutes)."""
+    import threading
+    import time
+
+    from converters.parallel.local import ProcessSlot
+    slot = ProcessSlot()
+    slot.call(_sleep, 0.0)                                   # the process exists
+    process = next(iter(slot._pool._processes.values()))
+    timer = threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGINT))    # a real Ctrl-C, to this process
+    timer.start()
+    start = time.monotonic()
+    with pytest.raises(KeyboardInterrupt):
+        slot.call(_sleep, 30.0)
+    process.join(5.0)
+    assert not process.is_alive() and slot._pool is None
+    assert time.monotonic() - start < 5.0
+    slot.close()                                             # nothing left to wait for

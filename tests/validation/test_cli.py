@@ -229,3 +229,42 @@ def test_spice_steady_starts_on_the_lcp_orbit_and_runs_until_ngspice_settles(cap
     assert code == code_lcp == 0 and spice["spice_settled"] and spice["spice_settle"] <= 1e-5
     assert spice["steady_periods"] % 20 == 0 and spice["steady_periods"] >= 20
     assert spice["vout_mean"] == pytest.approx(lcp["vout_mean"], rel=1e-3)      # the diode's drop apart
+
+
+def _strict(text: str):
+    """json.loads refusing NaN and the infinities, as strict parsers (RFC 8259) do."""
+    def refuse(constant):
+        raise ValueError(f"not JSON: {constant}")
+    return json.loads(text, parse_constant=refuse)
+
+
+def test_json_output_is_strict_json_with_null_where_a_value_is_not_finite(capsys, tmp_path):
+    # D = 0: no input power, the efficiency 0/0 (it printed NaN)
+    code, out, _ = run_cli(capsys, "simulate", "buck", "-p", "D=0", "--periods", "20", "--json")
+    assert code == 0 and _strict(out)["power"]["efficiency"] is None
+    # M of 1e-320: z = q / M overflows (it printed Infinity and NaN)
+    path = tmp_path / "lcp_tiny.dat"
+    path.write_text("2\n0\n2 2\n2 2\n1e-320 0 0 1e-320\n-1 -1\n")
+    code, out, _ = run_cli(capsys, "lcp", "solve", str(path), "--json")
+    data = _strict(out)
+    assert code != 0 and data["status"] != "solved" and None in data["z"]
+
+
+def test_ctrl_c_is_one_line_and_the_shells_code(capsys, monkeypatch):
+    from validation.cli import simulate
+
+    def interrupted(args):
+        raise KeyboardInterrupt
+    monkeypatch.setattr(simulate, "run", interrupted)
+    code, out, err = run_cli(capsys, "simulate", "buck")
+    assert code == 130 and err == "pcsuite: interrupted\n" and out == ""
+
+
+def test_a_sweep_where_no_point_succeeds_exits_with_one(capsys, tmp_path):
+    code, out, _ = run_cli(capsys, "sweep", "buck", "--grid", "D=0.1:0.9:3", "--periods", "99999999999", "--no-progress",
+                           "--out", str(tmp_path / "s"), "--json")
+    summary = json.loads(out)
+    assert code == 1 and summary["ok"] == 0 and summary["failed"] == 3
+    code, out, _ = run_cli(capsys, "sweep", "buck", "--grid", "D=0.1:0.9:3", "--periods", "20", "--no-progress",
+                           "--out", str(tmp_path / "t"), "--json")
+    assert code == 0 and json.loads(out)["ok"] == 3

@@ -10,6 +10,8 @@ from converters.errors import PcsuiteError
 from . import bench, bifurcation, compare, gdcm, gdcm_map, lcp, listing, mech, netlist, report, simulate, sweep
 
 EXIT_BAD_INPUT = 2
+#: Ctrl-C (128 + SIGINT), as the shell reports it
+EXIT_INTERRUPTED = 130
 #: The subcommands, in the order ``pcsuite --help`` lists them.
 SUBCOMMANDS = (listing, simulate, lcp, compare, gdcm, gdcm_map, sweep, bifurcation, mech, netlist, report, bench)
 
@@ -45,6 +47,9 @@ def _main(argv=None) -> int:
     except (PcsuiteError, ValueError) as exc:
         print(f"pcsuite: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    except KeyboardInterrupt:   # Ctrl-C: one line, the shell's code for SIGINT (outputs are written atomically)
+        print("pcsuite: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
 
 
 class Parser(argparse.ArgumentParser):

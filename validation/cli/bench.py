@@ -1,8 +1,9 @@
 """``pcsuite bench``: the speed-accuracy trade-off of every method and the stability map."""
 from __future__ import annotations
 
-import json
 from pathlib import Path
+
+from .common import json_text
 
 
 def add(sub) -> None:
@@ -29,7 +30,7 @@ def run(args) -> int:
     summary = run_bench(out, quick=args.quick, spice=not args.no_spice, only=args.only, periods=args.periods,
                         progress=not args.json)
     if args.json:
-        print(json.dumps(summary, default=float))
+        print(json_text(summary))
         return 0
     import pandas as pd
     with pd.option_context("display.width", 200, "display.max_columns", 20, "display.float_format", "{:.3g}".format):

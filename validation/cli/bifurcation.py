@@ -2,12 +2,11 @@
 along a parameter, their bifurcations, and the brute-force diagram."""
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 from converters.errors import ParameterError
 
-from .common import add_params
+from .common import add_params, check_workers, json_text
 
 
 def add(sub) -> None:
@@ -52,6 +51,7 @@ def run(args) -> int:
     if args.points == 0 and diagram_flags:
         raise ParameterError(f"{', '.join(diagram_flags)} set{'s' if len(diagram_flags) == 1 else ''} the brute-force "
                              "diagram; --points 0 asks for continuation only")
+    check_workers(args.workers)
     name, start, stop = parse_path(args.param)
     study = run_study(args.converter, args.control, parse_assignments(args.params), name, start, stop,
                       max_period=args.max_period, points=args.points,
@@ -65,7 +65,7 @@ def run(args) -> int:
     if args.diagram is not None:
         summary["diagram"]["file"] = str(args.diagram)
     if args.json:
-        print(json.dumps(summary, default=float))
+        print(json_text(summary))
     else:
         _print(study, summary, args)
     return 0

@@ -6,6 +6,17 @@ from pathlib import Path
 from converters.errors import ParameterError
 
 
+#: Most worker processes a command starts (--workers): each holds a Python with numpy and the kernels (~50-100 MB).
+MAX_WORKERS = 64
+
+
+def check_workers(workers, flag: str = "--workers") -> None:
+    """Refuse a number of processes outside [1, MAX_WORKERS] (None: the command's default)."""
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)
+                                or not 1 <= workers <= MAX_WORKERS):
+        raise ParameterError(f"{flag} must be an integer in [1, {MAX_WORKERS}]; got {workers!r}")
+
+
 def add_params(parser) -> None:
     parser.add_argument("-p", dest="params", action="append", default=[], metavar="NAME=VALUE",
                         help="parameter value, SPICE suffixes allowed (repeatable)")
@@ -65,15 +76,13 @@ def write_frame(frame, path: Path, meta: dict | None = None) -> None:
     ``meta`` (converter, parameters, method and its options) and the columns' units (default: a converter's,
     by :func:`column_units`) travel with it: in the
     Parquet schema's metadata (key ``pcsuite``), or in a JSON sidecar ``FILE.csv.json`` beside a CSV."""
-    import json
-
     from ..io import atomic_write_bytes
     frame = frame.copy()
     if "mode" in frame:
         frame["mode"] = frame["mode"].astype(str)
     meta = dict(meta or {})
     meta.setdefault("units", column_units(frame.columns))
-    info = json.dumps(meta, default=_plain).encode()
+    info = json_text(meta).encode()
     if path.suffix.lower() == ".csv":
         atomic_write_bytes(path, frame.to_csv(index=False).encode())
         atomic_write_bytes(path.with_name(path.name + ".json"), info)
@@ -94,3 +103,30 @@ def _plain(value):
         return float(value)
     except (TypeError, ValueError):
         return str(value)
+
+
+def json_text(value, **options) -> str:
+    """Strict JSON (RFC 8259: what json.loads with parse_constant refusing, jq and browsers all read): NaN and the
+    infinities, which JSON has no words for, become null (an efficiency at D = 0, a z that overflows); numpy
+    scalars and arrays become numbers and lists; anything else its float, else its str."""
+    import json
+    return json.dumps(_finite(value), allow_nan=False, default=lambda v: _finite(_plain(v)), **options)
+
+
+def _finite(value):
+    import math
+
+    import numpy as np
+    if isinstance(value, dict):
+        return {key: _finite(v) for key, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_finite(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return _finite(value.tolist())
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    if isinstance(value, (int, np.integer)):
+        return int(value)
+    if isinstance(value, (float, np.floating)):
+        return float(value) if math.isfinite(value) else None
+    return value

@@ -1,12 +1,11 @@
 """``pcsuite compare CONVERTER``: the LCP time-stepper against ngspice on the same circuit."""
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 from converters.errors import ParameterError
 
-from .common import add_params, add_spice_options, spice_options
+from .common import add_params, add_spice_options, json_text, spice_options
 
 
 def add(sub) -> None:
@@ -54,9 +53,8 @@ def run(args) -> int:
     if args.plot is not None:
         atomic_write_bytes(args.plot, plot())
     if args.json:
-        print(json.dumps({**extra, "metrics": metrics, "checks": {name: ok for name, _, _, ok in rows},
-                          "thresholds": {name: threshold for name, _, threshold, _ in rows}, "passed": passed},
-                         default=float))
+        print(json_text({**extra, "metrics": metrics, "checks": {name: ok for name, _, _, ok in rows},
+                         "thresholds": {name: threshold for name, _, threshold, _ in rows}, "passed": passed}))
     else:
         print(header)
         for key, value in metrics.items():

@@ -1,9 +1,8 @@
 """``pcsuite gdcm CONVERTER``: predicted CCM/DCM/GDCM against the modes detected in LCP and ngspice."""
 from __future__ import annotations
 
-import json
 
-from .common import add_params
+from .common import add_params, json_text
 
 
 def add(sub) -> None:
@@ -21,7 +20,7 @@ def run(args) -> int:
     from ..gdcm import gdcm_check
     result = gdcm_check(args.converter, parse_assignments(args.params), h=args.h)
     if args.json:
-        print(json.dumps(result, default=float))
+        print(json_text(result))
         return 0 if result["agree"] else 1
     pred = result.get("prediction")
     print(f"{result['converter']}: predicted {result['predicted']}" + (" (exact, from the matrices)" if pred else ""))

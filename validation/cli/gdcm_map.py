@@ -1,12 +1,11 @@
 """``pcsuite gdcm-map CONVERTER``: the D-K map of the conduction mode (prediction, LCP, ngspice)."""
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
+from .common import MAX_WORKERS, check_workers, json_text
 
 SIZE_RANGE = (2, 1000)
-MAX_WORKERS = 64
 OUT_FILES = ("map.csv", "map.png")
 #: A map point's row (its columns, the ngspice run's record) and the plot's share, measured generously.
 BYTES_PER_POINT = 4000
@@ -41,8 +40,7 @@ def run(args) -> int:
         if args.no_spice:
             raise ParameterError(f"--workers sets the ngspice processes; it does not apply with --no-spice (got "
                                  f"--workers {args.workers})")
-        if not 1 <= args.workers <= MAX_WORKERS:
-            raise ParameterError(f"--workers must be in [1, {MAX_WORKERS}]; got {args.workers}")
+        check_workers(args.workers)
     check_memory(f"gdcm-map: {n_d} x {n_k} points", n_d * n_k * BYTES_PER_POINT, remedy="a smaller --size")
     frame = dk_map(args.converter, n_d, n_k, spice=not args.no_spice,
                    spice_workers=2 if args.workers is None else args.workers)
@@ -53,7 +51,7 @@ def run(args) -> int:
             atomic_write_bytes(args.out / "map.csv", table)
             atomic_write_bytes(args.out / "map.png", picture)
     if args.json:
-        print(json.dumps(summary, default=float))
+        print(json_text(summary))
     else:
         for key, value in summary.items():
             print(f"  {key:<28} {value:.4g}" if isinstance(value, float) else f"  {key:<28} {value}")

@@ -1,13 +1,14 @@
 """``pcsuite lcp solve FILE``: solve an LCP stored in the Siconos .dat format."""
 from __future__ import annotations
 
-import json
 import sys
 from pathlib import Path
 
 import numpy as np
 
 from converters.lcp import METHOD_NAMES
+
+from .common import json_text
 
 
 def add(sub) -> None:
@@ -31,7 +32,7 @@ def run(args) -> int:
     problem = read_siconos_lcp(args.file, context="lcp solve")
     result = solve_lcp(problem.M, problem.q, method=args.method, tol=args.tol, max_iter=args.max_iter)
     if args.json:
-        print(json.dumps({"file": str(args.file), "k": int(problem.q.shape[0]), **result.to_dict()}))
+        print(json_text({"file": str(args.file), "k": int(problem.q.shape[0]), **result.to_dict()}))
     else:
         print(f"{problem.name}: k = {problem.q.shape[0]}, method = {result.method}, status = {result.status}, "
               f"err = {result.err:.3g}, iterations = {result.iterations}")

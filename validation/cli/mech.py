@@ -1,12 +1,11 @@
 """``pcsuite mech list|simulate|bifurcations MODEL``: the mechanical models (friction, impacts)."""
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 from converters.errors import ParameterError
 
-from .common import add_params, check_out, write_frame
+from .common import add_params, check_out, json_text, write_frame
 
 
 def add(sub) -> None:
@@ -51,7 +50,7 @@ def run_list(args) -> int:
                    "parameters": {p.name: {"default": p.default, "unit": p.unit, "doc": p.doc, "range": p.range_text()}
                                   for p in m.parameters}} for name, m in MECHANICAL_MODELS.items()}
     if args.json:
-        print(json.dumps(data, default=float))
+        print(json_text(data))
         return 0
     for name, m in MECHANICAL_MODELS.items():
         print(f"{name}: {m.title}  (states: {', '.join(m.state_names)})")
@@ -101,7 +100,7 @@ def run_simulate(args) -> int:
                     meta={"model": model.name, "method": run.method, "params": p,
                           "units": {"time": "s", "note": "SI units of each state and signal (m, m/s, N, rad)"}})
     if args.json:
-        print(json.dumps(summary, default=float))
+        print(json_text(summary))
     else:
         print(f"{model.name} ({args.method}): {summary['steps']} {'segments' if args.method == 'event' else 'steps'} in "
               f"{summary['wall_s']:.3f} s; events: " + ", ".join(f"{k} {v}" for k, v in summary["events"].items()))
@@ -174,7 +173,7 @@ def run_bifurcations(args) -> int:
         atomic_write_bytes(args.diagram, diagram_figure(model, name, rows, study, args.diagram.suffix.lower().lstrip(".")))
         out["diagram"]["file"] = str(args.diagram)
     if args.json:
-        print(json.dumps(out, default=float))
+        print(json_text(out))
         return 0
     if study is not None:
         print(f"{model.name} along {name} = {start:g} .. {stop:g} (continuation on the event method's exact map, "

@@ -30,6 +30,7 @@ def run(args) -> int:
     from netlists import model_netlist, standalone
 
     from ..io import atomic_write_text
+    from ..spice import check_spice_memory
     if args.out is not None and args.out.suffix.lower() not in (".cir", ".sp", ".net"):
         raise ParameterError(f"--out must end in .cir, .sp or .net; got {str(args.out)!r}")
     model = get_model(args.converter, args.control)
@@ -38,7 +39,12 @@ def run(args) -> int:
     if args.steady:
         check_steady(model, p)
         x0 = steady_state(model, p, make_method(model, p, "lcp")).x0
-    netlist = model_netlist(model, p, duration(model, p, args.t_end), x0=x0)
+    t_end = duration(model, p, args.t_end)
+    if model.periodic(p) and t_end < model.period(p):
+        raise ParameterError(f"t_end must be at least one switching period ({model.period(p):.3g} s): the netlist's "
+                             f".meas lines measure the last periods; got {t_end:.3g} s")
+    netlist = model_netlist(model, p, t_end, x0=x0)
+    check_spice_memory(netlist)             # refused here, not when ngspice runs out of memory on it
     text = standalone(netlist, model.period(p), model.state_names) if model.periodic(p) else netlist.text
     if args.out is None:
         print(text, end="")

@@ -7,6 +7,8 @@ from pathlib import Path
 
 from converters.errors import ParameterError
 
+from .common import check_workers
+
 DESCRIPTION = """\
 Run the scenes of a named suite (and the suite's other sections), or your own scene files, and write the
 HTML validation report (index.html, metrics.json, summary.csv, scenes.csv, scenes/NAME/...) into --out.
@@ -43,8 +45,7 @@ def run(args) -> int:
     from ..scenes import all_suites, load_scenes, scene_files
     from ..sections import EXTRA_SECTIONS
     from ..suite import run_suite, scene_section, scenes_summary
-    if isinstance(args.workers, bool) or not (isinstance(args.workers, int) and args.workers >= 1):
-        raise ParameterError(f"--workers must be an integer >= 1; got {args.workers!r}")
+    check_workers(args.workers)
     suites = all_suites()
     if args.suite in suites:
         label, scenes, extra = args.suite, None, EXTRA_SECTIONS.get(args.suite, ())

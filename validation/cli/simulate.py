@@ -1,14 +1,13 @@
 """``pcsuite simulate CONVERTER``: one run, its waveform file and its JSON summary."""
 from __future__ import annotations
 
-import json
 import sys
 import time
 from pathlib import Path
 
 from converters.errors import ParameterError
 
-from .common import add_params, add_spice_options, check_out, spice_options, write_frame
+from .common import add_params, add_spice_options, check_out, json_text, spice_options, write_frame
 
 
 def add(sub) -> None:
@@ -115,7 +114,7 @@ def run(args) -> int:
         plt.close(fig)
         atomic_write_bytes(args.plot, buffer.getvalue())
     if args.json:
-        print(json.dumps(summary, default=float))
+        print(json_text(summary))
     else:
         _print(summary, tr, args)
     return 0

@@ -3,14 +3,13 @@ hypercube of parameter points, one row per point, streamed to a Parquet dataset 
 resumes."""
 from __future__ import annotations
 
-import json
 import signal
 import sys
 from pathlib import Path
 
 from converters.errors import ParameterError
 
-from .common import add_params
+from .common import add_params, check_workers, json_text
 
 EXIT_INTERRUPTED = 130
 #: A stored row as the summary loads it back (25 columns), generously.
@@ -85,7 +84,7 @@ def build(args):
         ensemble = ModelSweep(args.model, args.control, base, steady=args.steady, rtol=float(args.rtol))
     else:
         ensemble = ModelSweep(args.model, args.control, base, method=args.method,
-                              h_fraction=args.h_fraction or 1.0 / 200.0, steady=args.steady, periods=args.periods or 50)
+                              h_fraction=1.0 / 200.0 if args.h_fraction is None else args.h_fraction, steady=args.steady, periods=args.periods or 50)
     if args.metric not in ensemble.measures or ensemble.measures[args.metric] is str:
         numeric = [k for k, t in ensemble.measures.items() if t is not str]
         raise ParameterError(f"--metric must be one of {', '.join(numeric)}; got {args.metric!r}")
@@ -121,8 +120,7 @@ def run(args) -> int:
 
     from ..sweep import run_sweep, write_summary
     ensemble, points = build(args)
-    if args.workers is not None and args.workers < 1:
-        raise ParameterError(f"--workers must be an integer >= 1; got {args.workers}")
+    check_workers(args.workers)
     if args.chunk is not None and args.chunk < 1:
         raise ParameterError(f"--chunk must be an integer >= 1; got {args.chunk}")
     backend = backend_for(args.scheduler, workers=args.workers)
@@ -148,16 +146,21 @@ def run(args) -> int:
                "wall_s": result.wall_s, "points_per_s": result.rate,
                "failures": failed["message"].value_counts().head(5).to_dict(),
                "dataset": str(out / "parts"), "summary_plot": str(out / "summary.png")}
+    # no point succeeded: say so in the exit code too (1, as a failed check), not only in the counts
+    code = 1 if points.size and not summary["ok"] else 0
     if args.json:
-        print(json.dumps(summary, default=float))
-        return 0
+        print(json_text(summary))
+        return code
     print(f"  {points.size:,} points: {summary['ok']:,} ok, {summary['failed']:,} failed "
           f"({result.on_disk_before:,} already stored, {result.computed:,} computed in {result.wall_s:.2f} s, "
           f"{result.rate:,.0f} points/s)")
     for message, count in summary["failures"].items():
         print(f"  failed x{count}: {message}")
     print(f"  dataset: {summary['dataset']}  (pandas.read_parquet)\n  plot:    {summary['summary_plot']}")
-    return 0
+    if code:
+        print(f"pcsuite: no point of the sweep succeeded ({points.size:,} failed); the reasons are above",
+              file=sys.stderr)
+    return code
 
 
 def _interrupt(signum, frame):
