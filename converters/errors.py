@@ -24,3 +24,7 @@ class SimulationError(PcsuiteError, RuntimeError):
 class ResourceError(ParameterError):
     """A run would exceed a resource limit (memory it would allocate, or time); the message names the limit and the
     flag that raises it (``--max-memory``, ``--time-limit``)."""
+
+
+class TimeLimitReached(ResourceError):
+    """A command's --time-limit passed while it ran (raised by the alarm the command line sets)."""

@@ -18,7 +18,7 @@ import sys
 import time
 from dataclasses import dataclass
 
-from ..errors import ParameterError
+from ..errors import ParameterError, TimeLimitReached
 
 
 def default_workers() -> int:
@@ -104,8 +104,8 @@ class ProcessSlot:
         except futures.process.BrokenProcessPool:
             self.discard()
             raise
-        except KeyboardInterrupt:       # Ctrl-C: end the process now (close() at exit would wait for its run)
-            self.kill()
+        except (KeyboardInterrupt, TimeLimitReached):   # Ctrl-C, --time-limit: end the process now (close() at
+            self.kill()                                 # exit would wait for its run)
             raise
 
     def kill(self):

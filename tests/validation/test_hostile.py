@@ -126,6 +126,13 @@ FUZZ = [
     ("netlist-t-end-1e308", ["netlist", "buck", "--t-end", "1e308", "--out", "OUT.cir"], {}, "--max-memory"),
     ("netlist-t-end-1e-30", ["netlist", "buck", "--t-end", "1e-30"], {},
      "t_end must be at least one switching period (1e-05 s)"),
+    # --time-limit accepted and ignored before: a command that is one run stops at it
+    ("mech-time-limit", ["mech", "simulate", "stick-slip", "--t-end", "1e5", "--time-limit", "2"], {},
+     "the run did not finish within the time limit of 2 s (--time-limit)"),
+    ("event-time-limit", ["simulate", "buck", "--method", "event", "--t-end", "5", "--h", "9e-6", "--time-limit", "2"],
+     {}, "the run did not finish within the time limit of 2 s (--time-limit)"),
+    ("bifurcation-time-limit", ["bifurcation", "buck", "--param", "A=1:2", "--time-limit", "5"], {},
+     "--time-limit bounds ngspice runs and LCP solves; this command runs neither"),
     # a path escape before
     ("scene-name-escape", ["report", "s.toml", "--out", "OUT"], {"s.toml": scene('name = "../../../../escaped"\n')},
      "name"),

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from converters.errors import PcsuiteError
+from converters.errors import ParameterError, PcsuiteError
 
 from . import bench, bifurcation, compare, gdcm, gdcm_map, lcp, listing, mech, netlist, report, simulate, sweep
 
@@ -22,6 +22,8 @@ def main(argv=None) -> int:
     try:
         return _main(argv)
     finally:
+        import signal
+        signal.setitimer(signal.ITIMER_REAL, 0.0)      # a --time-limit alarm ends with its command
         # the interpreter's last collection would walk every large result just to free it at exit (0.2-0.3 s
         # for a 500k-step run): freeze them out of its sight; the OS reclaims the memory
         import gc
@@ -86,14 +88,32 @@ def _add_limits(parser) -> None:
                         help=f"refuse a run estimated to allocate more than SIZE (default {human_bytes(DEFAULT_MAX_MEMORY)}"
                              "; 512M, 4G, ...; workers inherit it)")
     parser.add_argument("--time-limit", default=None, metavar="S",
-                        help="seconds one ngspice run or one iterative LCP solve may take (defaults: ngspice 600 s, "
-                             "lcp solve 20 s)")
+                        help="seconds one run may take: the whole of simulate, mech simulate and lcp solve; each "
+                             "ngspice run and each iterative LCP solve of the other commands (defaults: ngspice 600 s, "
+                             "an LCP solve 20 s)")
 
 
 def _apply_limits(args) -> None:
-    """--max-memory and --time-limit, set in the environment so that every worker process sees them."""
+    """--max-memory and --time-limit, set in the environment so that every worker process sees them. A command
+    that is one run (simulate, mech simulate, lcp solve) also gets an alarm at its --time-limit: the run stops there
+    with one line (a compiled loop is stopped when it returns; the memory limit bounds its length)."""
     from converters.limits import set_max_memory, set_time_limit
     if getattr(args, "max_memory", None) is not None:
         set_max_memory(args.max_memory)
     if getattr(args, "time_limit", None) is not None:
-        set_time_limit(args.time_limit)
+        if getattr(args, "no_time_limit", False):
+            raise ParameterError(f"--time-limit bounds ngspice runs and LCP solves; this command runs neither (got "
+                                 f"--time-limit {args.time_limit})")
+        seconds = set_time_limit(args.time_limit)
+        if getattr(args, "one_run", False):
+            import signal
+            signal.signal(signal.SIGALRM, _time_is_up(seconds))
+            signal.setitimer(signal.ITIMER_REAL, seconds)
+
+
+def _time_is_up(seconds: float):
+    def handler(signum, frame):
+        from converters.errors import TimeLimitReached
+        raise TimeLimitReached(f"the run did not finish within the time limit of {seconds:g} s (--time-limit); "
+                               "raise it, or ask for a shorter run (--t-end, --periods) or a coarser one")
+    return handler

@@ -32,7 +32,7 @@ def add(sub) -> None:
     bif.add_argument("--workers", type=int, default=None, help="processes for the diagram (default: every core)")
     bif.add_argument("--diagram", type=Path, default=None, help="write the diagram to FILE.png or FILE.svg")
     bif.add_argument("--json", action="store_true", help="print one JSON object (bifurcations, branches, diagram)")
-    bif.set_defaults(run=run)
+    bif.set_defaults(run=run, no_time_limit=True)
 
 
 def run(args) -> int:

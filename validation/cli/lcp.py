@@ -24,7 +24,7 @@ def add(sub) -> None:
                             "method of its plan); the solve also "
                             "stops at --time-limit (default 20 s)")
     solve.add_argument("--json", action="store_true", help="print one JSON object")
-    solve.set_defaults(run=run)
+    solve.set_defaults(run=run, one_run=True)
 
 
 def run(args) -> int:

@@ -29,7 +29,7 @@ def add(sub) -> None:
                       help="duration in forcing periods (autonomous models: in their time unit; default 20)")
     sim.add_argument("--out", type=Path, default=None, help="trajectory file, .csv or .parquet")
     sim.add_argument("--json", action="store_true", help="print one JSON summary object")
-    sim.set_defaults(run=run_simulate)
+    sim.set_defaults(run=run_simulate, one_run=True)
 
     bif = mech_sub.add_parser("bifurcations", help="sliding bifurcations (friction), or the diagram of a model along "
                                                    "a parameter (stick-slip: the section, cam-follower: impact phases)")
@@ -41,7 +41,7 @@ def add(sub) -> None:
     bif.add_argument("--workers", type=int, default=None, help="processes for the diagram (default: every core)")
     bif.add_argument("--diagram", type=Path, default=None, help="write the diagram to FILE.png or FILE.svg")
     bif.add_argument("--json", action="store_true", help="print one JSON object")
-    bif.set_defaults(run=run_bifurcations)
+    bif.set_defaults(run=run_bifurcations, no_time_limit=True)
 
 
 def run_list(args) -> int:

@@ -48,7 +48,7 @@ def add(sub) -> None:
     sim.add_argument("--plot", type=Path, default=None,
                      help="FILE.png or FILE.svg: the last periods' waveforms and the mode timeline")
     sim.add_argument("--json", action="store_true", help="print one JSON summary object")
-    sim.set_defaults(run=run)
+    sim.set_defaults(run=run, one_run=True)
 
 
 def run(args) -> int:
