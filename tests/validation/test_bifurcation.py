@@ -82,7 +82,7 @@ def test_a_small_diagram_is_written_and_summarised(capsys, tmp_path):
     (["--param", "Vin=20:36", "--points", "0", "--diagram", "d.png"], "--diagram needs the brute-force diagram"),
     (["--param", "Vin=20:36", "--max-period", "0"], "max_period must be an integer >= 1; got 0"),
     (["--param", "Vin=20:36", "--state", "q"], "state must be one of iL, vC; got 'q'"),
-    (["--param", "Vin=20:36", "--workers", "0"], "workers must be an integer >= 1; got 0"),
+    (["--param", "Vin=20:36", "--workers", "0"], "--workers must be an integer in [1, 64]; got 0"),
 ])
 def test_bad_input_gets_one_clear_line(capsys, tmp_path, argv, message):
     code, out, err = run_cli(capsys, "bifurcation", "buck", *argv)

@@ -12,6 +12,9 @@ from . import bench, bifurcation, compare, gdcm, gdcm_map, lcp, listing, mech, n
 EXIT_BAD_INPUT = 2
 #: Ctrl-C (128 + SIGINT), as the shell reports it
 EXIT_INTERRUPTED = 130
+#: A command that is one run stops at a x --time-limit + b s: its ngspice run or LCP solve, timed from its own start,
+#: reports its own limit first (with its partial answer); the alarm stops anything else (parsing, a simulation).
+ALARM_GRACE = (1.05, 0.5)
 #: The subcommands, in the order ``pcsuite --help`` lists them.
 SUBCOMMANDS = (listing, simulate, lcp, compare, gdcm, gdcm_map, sweep, bifurcation, mech, netlist, report, bench)
 
@@ -95,8 +98,9 @@ def _add_limits(parser) -> None:
 
 def _apply_limits(args) -> None:
     """--max-memory and --time-limit, set in the environment so that every worker process sees them. A command
-    that is one run (simulate, mech simulate, lcp solve) also gets an alarm at its --time-limit: the run stops there
-    with one line (a compiled loop is stopped when it returns; the memory limit bounds its length)."""
+    that is one run (simulate, mech simulate, lcp solve) also gets an alarm just after its --time-limit
+    (``ALARM_GRACE``): the run stops there with one line (a compiled loop is stopped when it returns; the memory
+    limit bounds its length)."""
     from converters.limits import set_max_memory, set_time_limit
     if getattr(args, "max_memory", None) is not None:
         set_max_memory(args.max_memory)
@@ -105,10 +109,10 @@ def _apply_limits(args) -> None:
             raise ParameterError(f"--time-limit bounds ngspice runs and LCP solves; this command runs neither (got "
                                  f"--time-limit {args.time_limit})")
         seconds = set_time_limit(args.time_limit)
-        if getattr(args, "one_run", False):
+        if getattr(args, "one_run", False):     # a backstop: an ngspice run or an LCP solve reports its own limit first
             import signal
             signal.signal(signal.SIGALRM, _time_is_up(seconds))
-            signal.setitimer(signal.ITIMER_REAL, seconds)
+            signal.setitimer(signal.ITIMER_REAL, ALARM_GRACE[0] * seconds + ALARM_GRACE[1])
 
 
 def _time_is_up(seconds: float):
