@@ -128,6 +128,10 @@ def run_converter(name_or_model, params: dict | None = None, *, control: str = "
     if steady and t_end is None and periods is None:
         periods = STEADY_PERIODS                 # what --steady returns: periods on the orbit
     span = duration(model, p, t_end, periods)
+    for instant in model.step_times(p):
+        if not 0.0 < instant < span:
+            raise ParameterError(f"t_step must lie inside the run, in (0, {span:.6g}) s (the run's length); got "
+                                 f"{instant:.6g} s: the step would not happen (a longer --t-end or more --periods)")
     step = getattr(method, method.step_option, None) if method.step_option else None
     if step is not None and span < step:
         raise ParameterError(f"t_end must be at least one step ({method.step_option} = {step:.3g} s); got {span:.3g} s")

@@ -72,6 +72,9 @@ class Model(ABC):
     #: The state that carries the output voltage (what a bifurcation diagram shows by default).
     output_state: str = "vC"
 
+    #: The parameters of a load or input step, where a model has them (a run in phases: :meth:`step_times`).
+    STEP_PARAMETERS = ("t_step", "R_step", "Vin_step")
+
     def resolve(self, given: dict | None = None) -> dict:
         """Validated parameter values (defaults overlaid with ``given``)."""
         return resolve(self.parameters, dict(given or {}), self.key)

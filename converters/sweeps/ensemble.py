@@ -42,6 +42,16 @@ def failed_row(index: int, point: dict, message: str, wall_s: float = 0.0) -> di
             "message": message, "wall_s": wall_s}
 
 
+
+def _refuse_steps(model, params: dict) -> None:
+    """A sweep's row is a periodic steady state or the last period of a run from rest: a load or input step
+    would be ignored (each point's problem is the circuit before it), so it is refused."""
+    given = [name for name in getattr(model, "STEP_PARAMETERS", ()) if name in params]
+    if given:
+        raise ParameterError(f"{', '.join(given)}: a sweep measures each point's steady state (or the last period "
+                             "from rest), not a step response; simulate the step with pcsuite simulate -p t_step=.. "
+                             "-p R_step=.. (or Vin_step)")
+
 @dataclass(frozen=True)
 class ModelSweep:
     """Rows of ``model`` (under ``control``) at parameter points: ``base`` parameters overlaid with each point's.
@@ -70,6 +80,7 @@ class ModelSweep:
     def __post_init__(self):
         from ..models import get_model
         model = get_model(self.model, self.control)
+        _refuse_steps(model, self.base)
         p = model.resolve(self.base)
         if self.steady and not np.isfinite(model.problem(p, 1.0).period):
             raise ParameterError(f"steady: {model.key} switches on its state, with no forcing period to shoot over; "
@@ -89,7 +100,9 @@ class ModelSweep:
 
     def validate(self, point: dict) -> None:
         """Refuse a point outside the model's parameter ranges (ParameterError naming the parameter)."""
-        self._model().resolve({**self.base, **point})
+        model = self._model()
+        _refuse_steps(model, point)
+        model.resolve({**self.base, **point})
 
     def _model(self):
         from ..models import get_model

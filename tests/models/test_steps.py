@@ -39,3 +39,11 @@ def test_a_step_needs_its_instant_and_a_steady_run_refuses_one():
         model.resolve({"R_step": 3})
     with pytest.raises(ParameterError, match="a run with a step"):
         run_converter("buck", {"t_step": "1m", "R_step": 3}, steady=True)
+
+
+def test_a_step_outside_the_run_is_refused_not_ignored():
+    with pytest.raises(ParameterError, match=r"t_step must lie inside the run, in \(0, 0.005\) s .* got 0.01 s: "
+                                             r"the step would not happen"):
+        run_converter("buck", {**BUCK, "t_step": "10m", "R_step": 2.5}, t_end="5m")
+    with pytest.raises(ParameterError, match=r"t_step must lie inside the run"):
+        run_converter(get_model("boost", "smc"), {"t_step": "40m", "R_step": 20}, t_end="30m")

@@ -119,6 +119,10 @@ def test_a_second_writer_is_refused_while_the_first_holds_the_sweep(tmp_path, ca
     (["--grid", "D=0.2:0.5:3", "--metric", "mode"], ["--metric", "vout_mean"]),
     (["--grid", "D=0.2:0.5:3", "--workers", "0"], ["--workers", "0"]),
     (["--grid", "D=1e9:2e9:3:log"], ["D"]),
+    # a load step would be ignored (each point is the circuit before it): refused, in the base or on the grid
+    (["--grid", "D=0.2:0.5:3", "-p", "t_step=1m", "-p", "R_step=5"], ["t_step, R_step", "not a step response"]),
+    (["--grid", "t_step=1m:2m:2", "-p", "R_step=5"], ["R_step", "not a step response"]),
+    (["--grid", "R_step=1:10:2", "--grid", "t_step=1m:2m:2"], ["R_step", "not a step response"]),
 ])
 def test_bad_input_is_one_line_naming_the_parameter_and_nothing_is_written(args, words, tmp_path, capsys):
     out = tmp_path / "never"
