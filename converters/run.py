@@ -164,8 +164,8 @@ def run_converter(name_or_model, params: dict | None = None, *, control: str = "
 def check_steady(model: Model, p: dict) -> None:
     """The one refusal of --steady (every method, ngspice and netlists): a steady state needs a fixed period."""
     if model.step_times(p):
-        raise ParameterError("--steady finds a periodic steady state; a run with a step (t_step) is not "
-                             "periodic: run --periods N (or --t-end) from rest")
+        raise ParameterError("a periodic steady state (--steady, gdcm, compare's start on the orbit) needs a periodic "
+                             "circuit; a run with a step (t_step) is not periodic: run --periods N (or --t-end) from rest")
     if not model.periodic(p):
         raise ParameterError(f"--steady needs a fixed switching period; {model.key} has none (run --t-end, or find "
                              "its cycle with converters.analysis.periodic.autonomous_orbit and the event method)")
@@ -215,7 +215,9 @@ def steady_state(model: Model, p: dict, method: Method, *, x0=None, warm_up: int
 def _orbit_and_map(model: Model, p: dict, method: Method, *, x0=None, warm_up: int = WARM_UP_PERIODS, tol: float = 1e-10,
            periods: int = 1):
     """(orbit, period map): :func:`steady_state` and the map it shot on (its step plan, for the stepper,
-    serves the run on the orbit too: :func:`_on_orbit`)."""
+    serves the run on the orbit too: :func:`_on_orbit`). Every orbit goes through here, so a step (no steady
+    state: its problem over one period would be the circuit before the step) is refused here for all of them."""
+    check_steady(model, p)
     problem = model.problem(p, periods * model.period(p), x0)
     period_map = method.period_map(problem)
     orbit = shoot(problem, method, problem.x0, periods=periods, warm_up=warm_up, tol=tol, period_map=period_map)

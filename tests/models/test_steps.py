@@ -47,3 +47,13 @@ def test_a_step_outside_the_run_is_refused_not_ignored():
         run_converter("buck", {**BUCK, "t_step": "10m", "R_step": 2.5}, t_end="5m")
     with pytest.raises(ParameterError, match=r"t_step must lie inside the run"):
         run_converter(get_model("boost", "smc"), {"t_step": "40m", "R_step": 20}, t_end="30m")
+
+
+def test_an_orbit_of_a_stepped_run_is_refused_wherever_it_is_asked_for():
+    """gdcm, gdcm-map and steady_orbit shoot on one period of the circuit: with a step given they answered for the
+    circuit before it (the step silently ignored)."""
+    from converters.run import steady_orbit
+    stepped = {**BUCK, "t_step": "1m", "R_step": 2.5}
+    for ask in (lambda: steady_orbit("buck", stepped), lambda: run_converter("buck", stepped, steady=True)):
+        with pytest.raises(ParameterError, match="a run with a step \\(t_step\\) is not periodic: run --periods N"):
+            ask()
