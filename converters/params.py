@@ -78,5 +78,8 @@ def parse_assignments(items: list[str]) -> dict:
         name, sep, value = item.partition("=")
         if not sep or not name.strip():
             raise ParameterError(f"-p takes NAME=VALUE (e.g. -p L=10u); got {item!r}")
+        if name.strip() in out:     # which one was meant? (the last would silently win)
+            raise ParameterError(f"-p {name.strip()} is given twice ({name.strip()}={out[name.strip()]} and {item.strip()}); "
+                                 "give it once")
         out[name.strip()] = value.strip()
     return out

@@ -61,7 +61,14 @@ def parse_value(name: str, text, unit: str | None = None) -> float:
             raise ParameterError(f"{name}: {str(text)!r} means milli in SPICE (M = m); did you mean "
                                  f"{number}meg{typed}?")
         # Decimal scaling keeps "100u" exactly 1e-4 (not 9.999999999999999e-05).
-        value = float(Decimal(number).scaleb(SI_EXPONENTS.get(suffix.lower(), 0)))
+        exact = Decimal(number).scaleb(SI_EXPONENTS.get(suffix.lower(), 0))
+        value = float(exact)
+        shown = text if len(text) <= 40 else f"{text[:20]}...{text[-10:]} ({len(text)} characters)"
+        if value == 0.0 and exact != 0:
+            raise ParameterError(f"{name} must be 0 or at least 5e-324 in magnitude (smaller underflows to 0 in double precision); "
+                                 f"got {shown!r}")
+        if not math.isfinite(value):
+            raise ParameterError(f"{name} must be a finite number, at most 1.8e308 in magnitude; got {shown!r}")
     if not math.isfinite(value):
         raise ParameterError(f"{name} must be a finite number; got {value!r}")
     return value

@@ -18,6 +18,15 @@ def test_anything_but_a_plain_finite_number_is_refused(text):
         parse_value("x", text)
 
 
+def test_a_value_beyond_double_precision_is_refused_with_what_was_typed():
+    with pytest.raises(ParameterError, match=r"^x must be 0 or at least 5e-324 in magnitude .*; got '1e-400'$"):
+        parse_value("x", "1e-400")          # was read as 0 (while 1e-20 V is refused as implausible)
+    assert parse_value("x", "1e-320") == 1e-320 and parse_value("x", "0e-400") == 0.0
+    with pytest.raises(ParameterError, match=r"at most 1.8e308 in magnitude; got '99999999999999999999\.\.\.9999999999 "
+                                             r"\(1000 characters\)'$"):
+        parse_value("x", "9" * 1000)        # was "got inf"
+
+
 def test_a_unit_on_a_value_without_one_is_refused():
     with pytest.raises(ParameterError, match=r"^x: the unit 'H' in '10uH' contradicts the parameter \(it takes no unit\)"):
         parse_value("x", "10uH")

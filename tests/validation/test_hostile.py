@@ -133,6 +133,8 @@ FUZZ = [
      {}, "the run did not finish within the time limit of 2 s (--time-limit)"),
     ("bifurcation-time-limit", ["bifurcation", "buck", "--param", "A=1:2", "--time-limit", "5"], {},
      "--time-limit bounds ngspice runs and LCP solves; this command runs neither"),
+    ("param-twice", ["simulate", "buck", "-p", "Vin=1", "-p", "Vin=2"], {}, "-p Vin is given twice (Vin=1 and Vin=2)"),
+    ("param-underflow", ["simulate", "buck", "-p", "Vin=1e-400"], {}, "Vin must be 0 or at least 5e-324 in magnitude"),
     # a path escape before
     ("scene-name-escape", ["report", "s.toml", "--out", "OUT"], {"s.toml": scene('name = "../../../../escaped"\n')},
      "name"),
