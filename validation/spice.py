@@ -139,14 +139,13 @@ def spice_points(netlist: Netlist) -> float:
     return 1.3 * t_end / tmax + 1000.0
 
 
-def check_spice_memory(netlist: Netlist) -> None:
+def check_spice_memory(netlist: Netlist, remedy: str = "fewer periods, a shorter --t-end or a larger --spice-tmax") -> None:
     """Refuse, before ngspice starts, a run whose points exceed the memory limit (:mod:`converters.limits`)."""
     points = spice_points(netlist)
     vectors = sum(1 for line in netlist.text.splitlines() if line[:1].isalpha()) + 4
     check_memory(f"ngspice on {netlist.converter}: {netlist.t_end:.3g} s at TMAX {1.3 * netlist.t_end / (points - 1000):.3g} s "
                  f"(about {points:.3g} points x {vectors} vectors)" if points > 1000 else f"ngspice on {netlist.converter}",
-                 points * vectors * BYTES_PER_POINT_VECTOR,
-                 remedy="fewer periods, a shorter --t-end or a larger --spice-tmax")
+                 points * vectors * BYTES_PER_POINT_VECTOR, remedy=remedy)
 
 
 def _reason(log: str) -> str:

@@ -268,3 +268,11 @@ def test_a_sweep_where_no_point_succeeds_exits_with_one(capsys, tmp_path):
     code, out, _ = run_cli(capsys, "sweep", "buck", "--grid", "D=0.1:0.9:3", "--periods", "20", "--no-progress",
                            "--out", str(tmp_path / "t"), "--json")
     assert code == 0 and json.loads(out)["ok"] == 3
+
+
+def test_a_bad_time_limit_in_the_environment_is_refused_by_every_command(capsys, monkeypatch):
+    """PCSUITE_TIME_LIMIT=abc was refused only by the runs that use a time limit (ngspice, iterative LCP solves)."""
+    monkeypatch.setenv("PCSUITE_TIME_LIMIT", "abc")
+    code, out, err = run_cli(capsys, "simulate", "buck", "--periods", "2")
+    assert code == 2 and out == ""
+    assert err == "pcsuite: error: PCSUITE_TIME_LIMIT must be a number of seconds in [0.1, 604800]; got 'abc'\n"

@@ -248,6 +248,10 @@ IGNORED = [
      "--workers must be >= 1 and needs the diagram"),
     (["mech", "bifurcations", "friction", "--param", "omega=2.85:2.95", "--points", "100000000"],
      "--points must be an integer in [0, 100000]"),
+    (["mech", "bifurcations", "stick-slip", "--param", "k2=1:2", "--points", "0"],     # printed nothing, exit 0
+     "--points must be an integer in [2, 100000] for the stick-slip (its study is the brute-force diagram); got 0"),
+    (["mech", "bifurcations", "cam-follower", "--param", "rpm=100:200", "--workers", "1000"],
+     "--workers must be an integer in [1, 64]; got 1000"),
 ]
 
 

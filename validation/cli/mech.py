@@ -5,7 +5,7 @@ from pathlib import Path
 
 from converters.errors import ParameterError
 
-from .common import add_params, check_out, json_text, write_frame
+from .common import add_params, check_out, check_workers, json_text, write_frame
 
 
 def add(sub) -> None:
@@ -132,8 +132,13 @@ def run_bifurcations(args) -> int:
     if args.diagram is not None and args.diagram.suffix.lower() not in (".png", ".svg"):
         raise ParameterError(f"--diagram must end in .png or .svg; got {str(args.diagram)!r}")
     points = args.points if args.points is not None else (0 if model.sliding and args.diagram is None else 60)
-    if not (isinstance(points, int) and 0 <= points <= MAX_POINTS) or (args.diagram is not None and points < 2):
-        raise ParameterError(f"--points must be an integer in [{2 if args.diagram else 0}, {MAX_POINTS}]; got {points!r}")
+    # without a sliding study (friction's continuation), the diagram is the whole answer: it needs points
+    low = 2 if args.diagram is not None or not model.sliding else 0
+    if not (isinstance(points, int) and low <= points <= MAX_POINTS):
+        raise ParameterError(f"--points must be an integer in [{low}, {MAX_POINTS}]"
+                             + ("" if low == 0 or args.diagram is not None else
+                                f" for the {args.model} (its study is the brute-force diagram)") + f"; got {points!r}")
+    check_workers(args.workers)
     if args.workers is not None and (points == 0 or args.workers < 1):
         raise ParameterError(f"--workers must be >= 1 and needs the diagram (--points >= 2); got --workers {args.workers}"
                              f" with {points} points")

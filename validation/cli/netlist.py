@@ -44,7 +44,7 @@ def run(args) -> int:
         raise ParameterError(f"t_end must be at least one switching period ({model.period(p):.3g} s): the netlist's "
                              f".meas lines measure the last periods; got {t_end:.3g} s")
     netlist = model_netlist(model, p, t_end, x0=x0)
-    check_spice_memory(netlist)             # refused here, not when ngspice runs out of memory on it
+    check_spice_memory(netlist, remedy="a shorter --t-end")      # refused here, not when ngspice runs out of memory
     text = standalone(netlist, model.period(p), model.state_names) if model.periodic(p) else netlist.text
     if args.out is None:
         print(text, end="")
