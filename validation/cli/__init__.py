@@ -8,10 +8,8 @@ import sys
 from converters.errors import ParameterError, PcsuiteError
 
 from . import bench, bifurcation, compare, gdcm, gdcm_map, lcp, listing, mech, netlist, report, simulate, sweep
+from .common import EXIT_BAD_INPUT, EXIT_INTERRUPTED
 
-EXIT_BAD_INPUT = 2
-#: Ctrl-C (128 + SIGINT), as the shell reports it
-EXIT_INTERRUPTED = 130
 #: A command that is one run stops at a x --time-limit + b s: its ngspice run or LCP solve, timed from its own start,
 #: reports its own limit first (with its partial answer); the alarm stops anything else (parsing, a simulation).
 ALARM_GRACE = (1.05, 0.5)

@@ -6,6 +6,10 @@ from pathlib import Path
 from converters.errors import ParameterError
 
 
+#: Exit codes: bad input (one line on stderr), and Ctrl-C (128 + SIGINT, as the shell reports it).
+EXIT_BAD_INPUT = 2
+EXIT_INTERRUPTED = 130
+
 #: Most worker processes a command starts (--workers): each holds a Python with numpy and the kernels (~50-100 MB).
 MAX_WORKERS = 64
 
@@ -105,12 +109,12 @@ def _plain(value):
         return str(value)
 
 
-def json_text(value, **options) -> str:
+def json_text(value) -> str:
     """Strict JSON (RFC 8259: what json.loads with parse_constant refusing, jq and browsers all read): NaN and the
     infinities, which JSON has no words for, become null (an efficiency at D = 0, a z that overflows); numpy
     scalars and arrays become numbers and lists; anything else its float, else its str."""
     import json
-    return json.dumps(_finite(value), allow_nan=False, default=lambda v: _finite(_plain(v)), **options)
+    return json.dumps(_finite(value), allow_nan=False, default=lambda v: _finite(_plain(v)))
 
 
 def _finite(value):

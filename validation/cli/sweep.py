@@ -9,9 +9,8 @@ from pathlib import Path
 
 from converters.errors import ParameterError
 
-from .common import add_params, check_workers, json_text
+from .common import EXIT_INTERRUPTED, add_params, check_workers, json_text
 
-EXIT_INTERRUPTED = 130
 #: A stored row as the summary loads it back (25 columns), generously.
 BYTES_PER_ROW = 400
 
