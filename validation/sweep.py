@@ -149,6 +149,9 @@ class SweepStore:
     def claim(self) -> np.ndarray:
         """Take the directory (create it, or check it holds this very sweep) and return the indices on disk."""
         out = self.out
+        if out.is_symlink():                                        # as every other --out: no writes through a link
+            raise ParameterError(f"--out {str(out)}: a symbolic link; give the directory's own path or choose another "
+                                 "--out")
         if out.exists() and not out.is_dir():
             raise ParameterError(f"--out must be a directory; {str(out)!r} is a file")
         manifest = out / MANIFEST

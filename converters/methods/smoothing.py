@@ -136,8 +136,11 @@ def _integrate(problem: LCSProblem, method: Smoothing, x: np.ndarray) -> Traject
         if method.output_step is not None:
             inner = a + method.output_step * np.arange(1, int(np.ceil((b - a) / method.output_step)) + 1)
             t_eval = np.concatenate([[a], inner[inner < b - 1e-9 * method.output_step], [b]])   # sol.t[0] = a
-        sol = solve_ivp(rhs, (a, b), x, method=method.solver, rtol=method.solver_rtol, atol=atol, jac=jac,
-                        t_eval=t_eval)
+        # with a small eps, scipy's Radau step-size predictor (predict_factor) can divide by zero; the infinite
+        # ratio is then capped by its min(1, .), as scipy intends: not a warning for the user
+        with np.errstate(divide="ignore"):
+            sol = solve_ivp(rhs, (a, b), x, method=method.solver, rtol=method.solver_rtol, atol=atol, jac=jac,
+                            t_eval=t_eval)
         if sol.status != 0 or not np.all(np.isfinite(sol.y)):
             raise SimulationError(f"the smoothed system could not be integrated over [{a:.6g}, {b:.6g}] s "
                                   f"({method.solver}, eps = {eps:g}, solver_rtol = {method.solver_rtol:g}): {sol.message}")

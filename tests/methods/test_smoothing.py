@@ -47,3 +47,16 @@ def test_smoothing_output_grid_keeps_every_schedule_interval():
     nodes, w = simulate(problem, EventDriven()).exact.quadrature()
     exact = float(np.sum(w * nodes.x[:, 0] * (nodes.config == 0))) * p["Vin"]
     assert exact > 0 and drawn == pytest.approx(exact, rel=1e-3)
+
+
+def test_a_small_eps_runs_without_a_numpy_warning():
+    # eps = 1e-6 made scipy's Radau predictor divide by zero on the way (harmless: capped by its min(1, .)),
+    # which the CLI printed as "pcsuite: warning: divide by zero encountered in scalar divide"
+    import warnings
+    conv = get_converter("buck")
+    p = conv.resolve({})
+    T = conv.period(p)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        tr = simulate(conv.problem(p, 50 * T), Smoothing(eps=1e-6, solver_rtol=1e-6, output_step=T / 1000))
+    assert tr.metadata["stats"]["nlu"] > 100 and np.isfinite(tr.x).all()

@@ -100,6 +100,33 @@ def test_a_directory_holding_another_sweep_or_other_files_is_refused_and_left_al
     assert sorted(p.name for p in other.iterdir()) == ["thesis.tex"]
 
 
+def test_a_symlinked_out_is_refused_as_on_every_other_command(tmp_path, capsys):
+    (tmp_path / "real").mkdir()
+    (tmp_path / "link").symlink_to("real")
+    assert main(["sweep", "buck", "--grid", "D=0.3:0.6:3", "--no-progress", "--out", str(tmp_path / "link")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == (f"pcsuite: error: --out {tmp_path}/link: a symbolic link; give the directory's own path or choose "
+                   "another --out")
+    assert list((tmp_path / "real").iterdir()) == []
+
+
+def test_a_dask_scheduler_that_does_not_answer_leaves_no_sweep_directory(tmp_path, capsys, monkeypatch):
+    from converters.errors import ParameterError
+    from converters.parallel.cluster import DaskBackend
+    asked = []
+
+    def no_answer(self):
+        asked.append(self.scheduler)
+        raise ParameterError(f"scheduler: no Dask scheduler answers at {self.scheduler} (refused)")
+    monkeypatch.setattr(DaskBackend, "client", no_answer)
+    out = tmp_path / "s"
+    assert main(["sweep", "buck", "--grid", "D=0.3:0.6:3", "--no-progress", "--scheduler", "tcp://127.0.0.1:9",
+                 "--out", str(out)]) == 2
+    assert asked == ["tcp://127.0.0.1:9"]
+    assert "no Dask scheduler answers at tcp://127.0.0.1:9" in capsys.readouterr().err
+    assert not out.exists()                                 # was: sweep.json written before the first chunk
+
+
 def test_a_second_writer_is_refused_while_the_first_holds_the_sweep(tmp_path, capsys):
     import fcntl
     out = tmp_path / "s"

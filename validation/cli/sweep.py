@@ -124,6 +124,8 @@ def run(args) -> int:
         raise ParameterError(f"--chunk must be an integer >= 1; got {args.chunk}")
     backend = backend_for(args.scheduler, workers=args.workers)
     out = args.out or Path(f"sweep-{args.model}")
+    if hasattr(backend, "client"):
+        backend.client()                              # a scheduler that does not answer: refused before --out is made
     previous = signal.signal(signal.SIGTERM, _interrupt)          # a terminated sweep stops like an interrupted one
     try:
         result = run_sweep(ensemble, points, out, backend=backend, chunk=args.chunk, progress=not args.no_progress)
