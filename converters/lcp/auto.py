@@ -1,6 +1,7 @@
 """``method="auto"``: choose a method by size and structure, fall back on failure (compiled, resumable).
 
-The plan (closed forms for q >= 0, k = 1 and k = 2 are tried before it by :func:`converters.lcp.solve_lcp`):
+The plan (closed forms for q >= 0, k = 1, k = 2 and a triangular M with a positive diagonal are tried before it
+by :func:`converters.lcp.solve_lcp`):
 
 1. **pgs** first when M is symmetric with a positive diagonal (the structure of a symmetric positive
    definite M; definiteness itself is not tested: a Cholesky factorisation would cost a third of a Lemke

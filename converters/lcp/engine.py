@@ -46,6 +46,7 @@ OPTIONS = {"lemke": {"pivot_tol": OPT_PIVOT_TOL}, "pgs": {"omega": OPT_OMEGA},
            "newton": {"rho": OPT_RHO, "p": OPT_P, "beta": OPT_BETA, "sigma": OPT_SIGMA}}
 ONCE_SOLVED, ONCE_CLOSED_FORM, ONCE_OTHER, ONCE_NOT_FINITE = (S.ONCE_SOLVED, S.ONCE_CLOSED_FORM, S.ONCE_OTHER,
                                                               S.ONCE_NOT_FINITE)
+N_RULES = len(S.CLOSED_FORM_RULES)
 _MAX_FLOAT = 1.7976931348623157e308
 
 
@@ -173,7 +174,7 @@ def solve_in(M, q, z, w, method, tol, max_iter, fast_paths, opts, budget, buf, i
     st = ibuf[:S.ST_SIZE]
     iw = ibuf[S.ST_SIZE:]
     if fast_paths and method != S.ENUM:
-        for rule in range(3):
+        for rule in range(N_RULES):
             if closed_form(Ms, qs, rule, zs):     # checked once, on the original problem
                 scale_pow2(zs, shift, z)
                 err = residual(M, q, z, w)

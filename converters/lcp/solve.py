@@ -84,7 +84,9 @@ def solve_lcp(M, q, method: str = "auto", tol: float = 1e-10, max_iter: int | No
         Pivots, sweeps or Newton steps; a method-specific default when omitted (for ``auto``: applies to
         each method of its plan).
     fast_paths : bool
-        Use the closed forms for q >= 0, k = 1 and k = 2 (not for ``enum``, which lists all solutions).
+        Use the closed forms for q >= 0, k = 1, k = 2 and a triangular M with a positive diagonal (exact
+        by substitution, where pivoting may take 2^k steps), also for a named method; not for ``enum``, which
+        lists all solutions.
     time_limit : float, optional
         Seconds the solve may take (0.1 .. 7 days); when omitted, --time-limit / PCSUITE_TIME_LIMIT, else
         20 s. A solve that reaches it returns ``failed`` with a message saying so.

@@ -26,7 +26,7 @@ SOLVED, NO_SOLUTION, MAX_ITERATIONS, FAILED = 0, 1, 2, 3
 #: Multiply-adds between two looks at the clock (a few milliseconds of work at most).
 CHUNK = 1 << 22
 #: The closed forms, in the order they are tried (:mod:`converters.lcp.fastpaths`).
-CLOSED_FORM_RULES = ("trivial", "scalar", "pair")
+CLOSED_FORM_RULES = ("trivial", "scalar", "pair", "triangular")
 #: Largest k enumeration takes (2^k bases).
 ENUM_MAX_K = 12
 # solve_once's answers (:func:`converters.lcp.engine.solve_once`)

@@ -30,8 +30,11 @@ def test_auto_solves_every_peer_problem_that_has_a_solution(peer, name):
 
 
 def test_auto_is_the_default_of_solve_lcp_and_of_the_cli(capsys, tmp_path, peer):
-    trivial = read_siconos_lcp(peer / "lcp_trivial.dat")    # symmetric, diagonally dominant: PGS, one sweep
-    assert solve_lcp(trivial.M, trivial.q).method == solve_lcp(trivial.M, trivial.q, method="auto").method == "auto:pgs"
+    M, q = np.array([[4.0, 0.1, 0.0], [0.1, 4.0, 0.1], [0.0, 0.1, 4.0]]), np.array([-1.0, 2.0, -1.0])   # PGS
+    assert solve_lcp(M, q).method == solve_lcp(M, q, method="auto").method == "auto:pgs"
+    trivial = read_siconos_lcp(peer / "lcp_trivial.dat")    # diagonal: triangular with a positive diagonal
+    assert solve_lcp(trivial.M, trivial.q).method == solve_lcp(trivial.M, trivial.q, method="auto").method == \
+        "auto:closed form"
     code = main(["lcp", "solve", str(peer / "lcp_CPS_3.dat"), "--json"])
     out = json.loads(capsys.readouterr().out)
     assert code == 0 and out["status"] == "solved" and out["method"] == "auto:enum"
@@ -46,12 +49,14 @@ def test_auto_is_the_default_of_solve_lcp_and_of_the_cli(capsys, tmp_path, peer)
     (np.eye(5), np.ones(5), "auto:closed form"),                                      # q >= 0
     ([[4.0, 0.1, 0.0], [0.1, 4.0, 0.1], [0.0, 0.1, 4.0]], [-1.0, 2.0, -1.0], "auto:pgs"),   # symmetric, dominant
     ([[4.0, 1.0, 0.0], [1.0, 4.0, 1.0], [0.0, 1.0, 4.0]], [-1.0, -1.0, -1.0], "auto:lemke"),  # PGS: 12 sweeps
-    ([[1.0, 2.0, 0.0], [0.0, 1.0, 2.0], [0.0, 0.0, 1.0]], [-1.0, -1.0, -1.0], "auto:lemke"),  # P, not symmetric
+    ([[1.0, 2.0, 0.0], [0.0, 1.0, 2.0], [0.5, 0.0, 1.0]], [-1.0, -1.0, -1.0], "auto:lemke"),  # P, not symmetric
+    ([[1.0, 2.0, 0.0], [0.0, 1.0, 2.0], [0.0, 0.0, 1.0]], [-1.0, -1.0, -1.0], "auto:closed form"),  # triangular
 ])
 def test_auto_chooses_by_size_and_structure(M, q, method):
     result = solve_lcp(M, q)
     assert result.solved and result.method == method
-    assert result.message in ("", "closed form (pair)", "closed form (scalar)", "closed form (trivial)")
+    assert result.message in ("", "closed form (pair)", "closed form (scalar)", "closed form (trivial)",
+                              "closed form (triangular)")
 
 
 def test_pgs_gives_way_to_lemke_at_once_when_it_converges_slowly():
@@ -111,8 +116,8 @@ def test_auto_on_the_project_problem_set():
 
 
 def test_max_iter_applies_to_each_method_of_the_plan():
-    M, q = murty_exponential(8)
-    result = solve_lcp(M, q, max_iter=3)
+    M, q = murty_exponential(8)                     # without the closed form for a triangular M
+    result = solve_lcp(M, q, max_iter=3, fast_paths=False)
     assert result.solved and result.method == "auto:lemke" and result.iterations == 2
     M = random_p_matrix(np.random.default_rng(2), 20, "pd")
     result = solve_lcp(M, -np.ones(20), max_iter=1)

@@ -62,7 +62,7 @@ def test_murty_with_a_huge_max_iter_stops_at_the_time_limit(capsys, tmp_path):
     path = write_dense(tmp_path / "lcp_murty300.dat", M, q)
     start = time.perf_counter()
     code, out, err = run(capsys, "lcp", "solve", str(path), "--method", "murty", "--max-iter", "1000000000",
-                         "--time-limit", "1", "--json")
+                         "--time-limit", "1", "--no-fast-paths", "--json")
     assert 1.0 <= time.perf_counter() - start < 2.5
     assert code == 1 and json.loads(out)["status"] == "failed"
     assert err.count("\n") == 1 and err.startswith(f"pcsuite: lcp solve {path}: failed: murty (after ")
@@ -96,3 +96,13 @@ def test_dev_zero_is_refused_at_once(capsys):
     assert time.perf_counter() - start < 0.5
     assert (code, out) == (2, "")
     assert err == "pcsuite: error: FILE must be a regular file; got '/dev/zero', a character device\n"
+
+
+def test_no_fast_paths_runs_the_method_itself(capsys, tmp_path):
+    path = write_dense(tmp_path / "lcp_murty6.dat", *murty_exponential(6))
+    code, out, _ = run(capsys, "lcp", "solve", str(path), "--method", "murty", "--json")
+    fast = json.loads(out)
+    assert code == 0 and fast["iterations"] == 0 and fast["message"] == "closed form (triangular)"
+    code, out, _ = run(capsys, "lcp", "solve", str(path), "--method", "murty", "--no-fast-paths", "--json")
+    pivoted = json.loads(out)
+    assert code == 0 and pivoted["iterations"] == 2**6 - 1 and pivoted["z"] == fast["z"] == [0, 0, 0, 0, 0, 1]

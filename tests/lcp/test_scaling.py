@@ -94,6 +94,8 @@ def test_a_solution_that_is_not_representable_is_failed_not_solved(method):
     ([[2.0]], [4.0], [0.0], "trivial"),
     ([[2.0, 1.0], [1.0, 2.0]], [-3.0, -3.0], [1.0, 1.0], "pair"),
     ([[2.0, 1.0], [1.0, 2.0]], [-2.0, 1.0], [1.0, 0.0], "pair"),
+    ([[1.0, 2.0, 2.0], [0.0, 1.0, 2.0], [0.0, 0.0, 1.0]], [-5.0, -3.0, -1.0], [1.0, 1.0, 1.0], "triangular"),
+    ([[2.0, 0.0, 0.0], [1.0, 2.0, 0.0], [1.0, 1.0, 2.0]], [-2.0, 1.0, -4.0], [1.0, 0.0, 1.5], "triangular"),
 ])
 def test_fast_paths_at_any_magnitude(scale, M, q, z_star, rule):
     M, q, z_star = np.array(M), scale * np.array(q), scale * np.array(z_star)

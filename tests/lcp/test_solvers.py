@@ -80,6 +80,49 @@ def test_fast_paths_give_the_exact_solution_without_pivoting(M, q, z):
     np.testing.assert_allclose(result.z, z)
 
 
+@settings(max_examples=60, deadline=None)
+@given(k=st.integers(3, 10), seed=st.integers(0, 2**32 - 1), lower=st.booleans())
+def test_a_triangular_m_with_a_positive_diagonal_is_solved_by_substitution_as_enumeration_solves_it(k, seed, lower):
+    from .reference import enumerate_bases
+    rng = np.random.default_rng(seed)
+    M, q = random_p_matrix(rng, k, "triangular"), rng.standard_normal(k)
+    M = M.T.copy() if lower else M
+    result = solve_lcp(M, q)
+    rule = "trivial" if np.all(q >= 0) else "triangular"      # q >= 0 is tried first: z = 0
+    assert result.solved and result.method == "auto:closed form" and result.message == f"closed form ({rule})"
+    assert result.iterations == 0 and result.err <= 1e-12
+    reference = enumerate_bases(M, q, tol=1e-10)            # pure Python, every basis: the one solution
+    assert len(reference.solutions) == 1
+    np.testing.assert_allclose(result.z, reference.z, rtol=1e-10, atol=1e-12 * (1 + np.abs(reference.z).max()))
+    for method in ("lemke", "murty"):                      # the closed form also answers a named method
+        assert solve_lcp(M, q, method=method).message == f"closed form ({rule})"
+
+
+@pytest.mark.parametrize("k", [6, 40, 300])
+def test_murtys_exponential_example_is_exact_by_substitution_where_pivoting_takes_2_to_the_k(k):
+    M, q = murty_exponential(k)                             # least-index Murty: 2^k - 1 pivots
+    result = solve_lcp(M, q)
+    assert result.solved and result.message == "closed form (triangular)" and result.err == 0.0
+    np.testing.assert_array_equal(result.z, np.eye(k)[-1])  # z = (0, ..., 0, 1), exactly
+    np.testing.assert_array_equal(result.w, np.r_[np.ones(k - 1), 0.0])
+
+
+@pytest.mark.parametrize("M", [
+    [[1.0, 2.0, 0.0], [0.0, 0.0, 2.0], [0.0, 0.0, 1.0]],     # a zero on the diagonal: not a P-matrix
+    [[1.0, 2.0, 0.0], [0.0, -1.0, 2.0], [0.0, 0.0, 1.0]],    # a negative one
+    [[1.0, 2.0, 0.0], [0.0, 1.0, 2.0], [1e-300, 0.0, 1.0]],   # one entry below the diagonal: not triangular
+    [[1.0, 0.0, 0.0], [2.0, 1.0, 0.0], [3.0, 4.0, 1.0]],     # lower triangular: applies (the control)
+])
+def test_the_triangular_rule_applies_only_to_a_triangular_m_with_a_positive_diagonal(M):
+    from converters.lcp.fastpaths import triangular
+    M = np.array(M)
+    z = triangular(M, -np.ones(3))
+    applies = bool(np.all(np.diag(M) > 0) and (np.array_equal(M, np.triu(M)) or np.array_equal(M, np.tril(M))))
+    assert (z is not None) == applies
+    if applies:
+        np.testing.assert_array_equal(z, [1.0, 0.0, 0.0])   # z0 = 1; row 1: -1 + 2 > 0, z1 = 0; row 2: -1 + 3 > 0
+
+
 def test_project_problem_set_outcomes():
     for case in problem_set():
         result = solve_lcp(case.M, case.q, method="lemke", fast_paths=False)

@@ -23,6 +23,9 @@ def add(sub) -> None:
                        help="pivots, sweeps or Newton steps, in [1, 10^9] (default: per method; with auto, each "
                             "method of its plan); the solve also "
                             "stops at --time-limit (default 20 s)")
+    solve.add_argument("--no-fast-paths", action="store_true",
+                       help="always run the method itself: no closed form (q >= 0, k <= 2, triangular M with a "
+                            "positive diagonal) answers first; to study a method's pivots, e.g. on Murty's example")
     solve.add_argument("--json", action="store_true", help="print one JSON object")
     solve.set_defaults(run=run, one_run=True)
 
@@ -30,7 +33,8 @@ def add(sub) -> None:
 def run(args) -> int:
     from converters.lcp import read_siconos_lcp, solve_lcp
     problem = read_siconos_lcp(args.file, context="lcp solve")
-    result = solve_lcp(problem.M, problem.q, method=args.method, tol=args.tol, max_iter=args.max_iter)
+    result = solve_lcp(problem.M, problem.q, method=args.method, tol=args.tol, max_iter=args.max_iter,
+                       fast_paths=not args.no_fast_paths)
     if args.json:
         print(json_text({"file": str(args.file), "k": int(problem.q.shape[0]), **result.to_dict()}))
     else:
