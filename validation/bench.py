@@ -27,6 +27,9 @@ TRADEOFF_FILES = ("tradeoff.csv", "tradeoff_references.csv", "tradeoff_acceptanc
 STABILITY_FILES = ("stability.csv", "stability_summary.csv", "ill_posed.csv")
 STIFFNESS_EPS = (1e-2, 1e-3, 1e-4, 1e-5, 1e-6)
 
+#: --periods of the trade-off runs.
+PERIODS_RANGE = (2, 100_000)
+
 
 def read_csv(data: bytes) -> pd.DataFrame:
     return pd.read_csv(io.BytesIO(data), keep_default_na=False, na_values=["", "nan", "NaN"])
@@ -74,8 +77,9 @@ def run_bench(out: Path = DEFAULT_OUT, quick: bool = False, spice: bool = True, 
     and the environment), the parts run now replacing their earlier summaries."""
     if only not in (None, *PARTS):
         raise ParameterError(f"only must be one of {', '.join(PARTS)}; got {only!r}")
-    if periods is not None and not (isinstance(periods, int) and 2 <= periods <= 100000):
-        raise ParameterError(f"periods must be an integer in [2, 100000]; got {periods!r}")
+    low, high = PERIODS_RANGE
+    if periods is not None and not (isinstance(periods, int) and low <= periods <= high):
+        raise ParameterError(f"periods must be an integer in [{low}, {high}]; got {periods!r}")
     from .environment import environment
     out = Path(out)
     stamp = {"date": time.strftime("%Y-%m-%d %H:%M:%S %Z"), "environment": environment()}

@@ -113,6 +113,8 @@ class LatinHypercube:
         _check_names(self.axes)
         if not (isinstance(n, int) and 1 <= n <= MAX_POINTS):
             raise ParameterError(f"--lhs must be an integer in [1, {MAX_POINTS:,}]; got {n!r}")
+        if not (isinstance(seed, (int, np.integer)) and not isinstance(seed, bool) and seed >= 0):
+            raise ParameterError(f"--seed must be an integer >= 0; got {seed!r}")
         from scipy.stats import qmc
         self.size, self.seed, self.shape = n, int(seed), (n,)
         unit = qmc.LatinHypercube(d=len(self.axes), seed=self.seed).random(n)

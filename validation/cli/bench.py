@@ -3,7 +3,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .common import json_text
+from .common import integer, json_text
+
+
+def _max_periods() -> int:
+    from ..bench import PERIODS_RANGE
+    return PERIODS_RANGE[1]
 
 
 def add(sub) -> None:
@@ -11,7 +16,8 @@ def add(sub) -> None:
     bench.add_argument("--quick", action="store_true", help="trade-off: the DCM cases, a short sweep")
     bench.add_argument("--no-spice", action="store_true", help="leave ngspice out")
     bench.add_argument("--only", choices=["tradeoff", "stability"], default=None)
-    bench.add_argument("--periods", type=int, default=None, help="trade-off: periods per run (default 200)")
+    bench.add_argument("--periods", type=integer(2, _max_periods), default=None,
+                       help="trade-off: periods per run (default 200)")
     bench.add_argument("--out", type=Path, default=None, help="output directory (default reports/bench)")
     bench.add_argument("--json", action="store_true", help="print the summary as JSON")
     bench.set_defaults(run=run)

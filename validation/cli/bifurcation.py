@@ -6,7 +6,7 @@ from pathlib import Path
 
 from converters.errors import ParameterError
 
-from .common import add_params, check_workers, json_text
+from .common import MAX_WORKERS, add_params, check_workers, integer, json_text
 
 
 def add(sub) -> None:
@@ -20,16 +20,16 @@ def add(sub) -> None:
                           "-p VU=.. [-p latch=1])")
     bif.add_argument("--param", required=True, metavar="NAME=START:STOP",
                      help="the parameter path, e.g. Vin=20:36 (SPICE suffixes allowed)")
-    bif.add_argument("--max-period", type=int, default=8,
+    bif.add_argument("--max-period", type=integer(1), default=8,
                      help="follow period doublings up to orbits of this many switching periods (default 8)")
-    bif.add_argument("--points", type=int, default=800,
+    bif.add_argument("--points", type=integer(0), default=800,
                      help="values of the brute-force diagram (default 800; 0: continuation only)")
-    bif.add_argument("--transient", type=int, default=None, help="periods dropped at each diagram value (default 200)")
-    bif.add_argument("--record", type=int, default=None, help="periods kept at each diagram value (default 64)")
+    bif.add_argument("--transient", type=integer(0), default=None, help="periods dropped at each diagram value (default 200)")
+    bif.add_argument("--record", type=integer(2), default=None, help="periods kept at each diagram value (default 64)")
     bif.add_argument("--diagram-method", default=None, choices=["lcp", "event"],
                      help="lcp: the compiled stepper, theta 0.5, h = T/500 (default, fast); event: exact, ~5x slower")
     bif.add_argument("--state", default=None, help="the state drawn (default: the model's output, e.g. vC)")
-    bif.add_argument("--workers", type=int, default=None, help="processes for the diagram (default: every core)")
+    bif.add_argument("--workers", type=integer(1, MAX_WORKERS), default=None, help="processes for the diagram (default: every core)")
     bif.add_argument("--diagram", type=Path, default=None, help="write the diagram to FILE.png or FILE.svg")
     bif.add_argument("--json", action="store_true", help="print one JSON object (bifurcations, branches, diagram)")
     bif.set_defaults(run=run, no_time_limit=True)

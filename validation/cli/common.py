@@ -21,6 +21,34 @@ def check_workers(workers, flag: str = "--workers") -> None:
         raise ParameterError(f"{flag} must be an integer in [1, {MAX_WORKERS}]; got {workers!r}")
 
 
+def integer(low: int, high=None):
+    """An argparse ``type`` for an integer option whose text may not parse: the error then names the range too
+    (argparse's own says only "invalid int value"). ``high``: an int, None (no upper bound), or a function
+    returning it (a constant of a module the parser should not import). The range itself is checked where the
+    value is used."""
+    def described():
+        top = high() if callable(high) else high
+        return f"an integer >= {low}" if top is None else f"an integer in [{low}, {top:,}]"
+    return _typed(int, described)
+
+
+def number(described):
+    """An argparse ``type`` for a real option, as :func:`integer`; ``described``: its range ("(0, 1)"), or a
+    function returning it."""
+    return _typed(float, lambda: f"a number in {described() if callable(described) else described}")
+
+
+def _typed(parse, described):
+    import argparse
+
+    def typed(text):
+        try:
+            return parse(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"must be {described()}; got {text!r}") from None
+    return typed
+
+
 def add_params(parser) -> None:
     parser.add_argument("-p", dest="params", action="append", default=[], metavar="NAME=VALUE",
                         help="parameter value, SPICE suffixes allowed (repeatable)")

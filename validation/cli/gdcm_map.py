@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .common import MAX_WORKERS, check_workers, json_text
+from .common import MAX_WORKERS, check_workers, integer, json_text
 
 SIZE_RANGE = (2, 1000)
 OUT_FILES = ("map.csv", "map.png")
@@ -15,10 +15,10 @@ def add(sub) -> None:
     from ..defaults import K_RANGES
     gmap = sub.add_parser("gdcm-map", help="D-K map of the conduction mode: prediction, LCP and ngspice")
     gmap.add_argument("converter", choices=list(K_RANGES))
-    gmap.add_argument("--size", type=int, nargs=2, default=[30, 30], metavar=("N_D", "N_K"),
+    gmap.add_argument("--size", type=integer(*SIZE_RANGE), nargs=2, default=[30, 30], metavar=("N_D", "N_K"),
                       help=f"points along D and along K, each in [{SIZE_RANGE[0]}, {SIZE_RANGE[1]}] (default 30 30)")
     gmap.add_argument("--no-spice", action="store_true", help="LCP and prediction only")
-    gmap.add_argument("--workers", type=int, default=None,
+    gmap.add_argument("--workers", type=integer(1, MAX_WORKERS), default=None,
                       help=f"parallel ngspice processes, in [1, {MAX_WORKERS}] (default 2)")
     gmap.add_argument("--out", type=Path, default=None, help="directory for map.csv and map.png")
     gmap.add_argument("--json", action="store_true", help="print the summary as JSON")

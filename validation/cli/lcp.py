@@ -8,7 +8,7 @@ import numpy as np
 
 from converters.lcp import METHOD_NAMES
 
-from .common import json_text
+from .common import integer, json_text, number
 
 
 def add(sub) -> None:
@@ -18,8 +18,8 @@ def add(sub) -> None:
     solve.add_argument("--method", default="auto", choices=list(METHOD_NAMES),
                        help="auto (default: chooses by size and structure, falls back on failure; the output "
                             "names the method that solved it), lemke, murty, enum, pgs or newton")
-    solve.add_argument("--tol", type=float, default=1e-10, help="accepted residual, in [1e-16, 1e-2] (default 1e-10)")
-    solve.add_argument("--max-iter", type=int, default=None,
+    solve.add_argument("--tol", type=number(_tol_range), default=1e-10, help="accepted residual, in [1e-16, 1e-2] (default 1e-10)")
+    solve.add_argument("--max-iter", type=integer(1, _max_iter), default=None,
                        help="pivots, sweeps or Newton steps, in [1, 10^9] (default: per method; with auto, each "
                             "method of its plan); the solve also "
                             "stops at --time-limit (default 20 s)")
@@ -28,6 +28,16 @@ def add(sub) -> None:
                             "positive diagonal) answers first; to study a method's pivots, e.g. on Murty's example")
     solve.add_argument("--json", action="store_true", help="print one JSON object")
     solve.set_defaults(run=run, one_run=True)
+
+
+def _tol_range() -> str:
+    from converters.lcp.solve import TOL_RANGE
+    return f"[{TOL_RANGE[0]:g}, {TOL_RANGE[1]:g}]"
+
+
+def _max_iter() -> int:
+    from converters.lcp.solve import MAX_ITER_RANGE
+    return MAX_ITER_RANGE[1]
 
 
 def run(args) -> int:

@@ -7,7 +7,7 @@ from pathlib import Path
 
 from converters.errors import ParameterError
 
-from .common import check_workers
+from .common import MAX_WORKERS, check_workers, integer
 
 DESCRIPTION = """\
 Run the scenes of a named suite (and the suite's other sections), or your own scene files, and write the
@@ -35,7 +35,7 @@ def add(sub) -> None:
     report.add_argument("--out", type=Path, default=None,
                         help="output directory (default reports/SUITE or reports/STEM); new, empty, or an earlier "
                              "pcsuite report, which is replaced whole")
-    report.add_argument("--workers", type=int, default=2, help="parallel processes (default 2)")
+    report.add_argument("--workers", type=integer(1, MAX_WORKERS), default=2, help="parallel processes (default 2)")
     report.set_defaults(run=run)
 
 

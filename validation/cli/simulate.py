@@ -7,7 +7,7 @@ from pathlib import Path
 
 from converters.errors import ParameterError
 
-from .common import add_params, add_spice_options, check_out, json_text, spice_options, write_frame
+from .common import add_params, add_spice_options, check_out, integer, json_text, spice_options, write_frame
 
 
 def add(sub) -> None:
@@ -32,7 +32,7 @@ def add(sub) -> None:
     sim.add_argument("--theta", default=None, help="theta in [0.5, 1] (default 1, PRC 0.5)")
     span = sim.add_mutually_exclusive_group()
     span.add_argument("--t-end", default=None, help="duration in s (with --steady: the span returned on the orbit)")
-    span.add_argument("--periods", type=int, default=None,
+    span.add_argument("--periods", type=integer(1), default=None,
                       help="duration in switching periods (default 500; with --steady: the periods returned on the "
                            "orbit, default 20)")
     sim.add_argument("--control", default="pwm", choices=list(CONTROLS),

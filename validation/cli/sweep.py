@@ -9,7 +9,7 @@ from pathlib import Path
 
 from converters.errors import ParameterError
 
-from .common import EXIT_INTERRUPTED, add_params, check_workers, json_text
+from .common import EXIT_INTERRUPTED, MAX_WORKERS, add_params, check_workers, integer, json_text, number
 
 #: A stored row as the summary loads it back (25 columns), generously.
 BYTES_PER_ROW = 400
@@ -22,9 +22,9 @@ def add(sub) -> None:
     sw.add_argument("model", help="the converter (buck, boost, buck-boost, cuk, prc)")
     sw.add_argument("--grid", action="append", default=[], metavar="NAME=START:STOP:COUNT[:log]",
                     help="a swept parameter (repeatable: the full grid of all of them; SPICE suffixes allowed)")
-    sw.add_argument("--lhs", type=int, default=None, metavar="N",
+    sw.add_argument("--lhs", type=integer(1, _max_points), default=None, metavar="N",
                     help="N Latin-hypercube points over the --grid ranges instead of the full grid (COUNT optional)")
-    sw.add_argument("--seed", type=int, default=0, help="the Latin hypercube's seed (default 0)")
+    sw.add_argument("--seed", type=integer(0), default=0, help="the Latin hypercube's seed (default 0)")
     add_params(sw)
     sw.add_argument("--control", default="pwm", choices=list(CONTROLS), help="the control law (default pwm)")
     sw.add_argument("--method", default="lcp", choices=["lcp", "event", "spice"],
@@ -32,24 +32,34 @@ def add(sub) -> None:
     sw.add_argument("--steady", action="store_true",
                     help="measure on the periodic orbit (lcp, event: Newton shooting; spice: started on the LCP's "
                          "orbit); without it: --periods periods from rest, measured over the last one")
-    sw.add_argument("--periods", type=int, default=None,
+    sw.add_argument("--periods", type=integer(1), default=None,
                     help="periods simulated (default 50 from rest; spice: 10, from the orbit with --steady)")
-    sw.add_argument("--h-fraction", type=float, default=None, help="lcp: step h / T (default 1/200)")
-    sw.add_argument("--rtol", type=float, default=None,
+    sw.add_argument("--h-fraction", type=number("(0, 1)"), default=None, help="lcp: step h / T (default 1/200)")
+    sw.add_argument("--rtol", type=number(_rtol_range), default=None,
                     help="accuracy on request (with --steady): each point's measures with error estimates below "
                          "RTOL, the method and step chosen per point (columns error_estimate, "
                          "vout_mean_error_estimate, accuracy_method, steps_per_period, rtol_met)")
     sw.add_argument("--scheduler", default="local",
                     help="local (this machine's processes, default), serial, batched (one process), or a Dask "
                          "scheduler tcp://HOST:PORT")
-    sw.add_argument("--workers", type=int, default=None, help="local: processes (default: every core)")
-    sw.add_argument("--chunk", type=int, default=None, help="points per task (default: 500 batched, 2 ngspice)")
+    sw.add_argument("--workers", type=integer(1, MAX_WORKERS), default=None, help="local: processes (default: every core)")
+    sw.add_argument("--chunk", type=integer(1), default=None, help="points per task (default: 500 batched, 2 ngspice)")
     sw.add_argument("--out", type=Path, default=None,
                     help="the sweep directory (default sweep-MODEL); an interrupted sweep resumes from it")
     sw.add_argument("--metric", default="vout_mean", help="the summary plot's metric (default vout_mean)")
     sw.add_argument("--no-progress", action="store_true", help="no progress bar")
     sw.add_argument("--json", action="store_true", help="print one JSON summary object")
     sw.set_defaults(run=run)
+
+
+def _max_points() -> int:
+    from converters.sweeps.points import MAX_POINTS
+    return MAX_POINTS
+
+
+def _rtol_range() -> str:
+    from converters.analysis.accuracy import RTOL_RANGE
+    return f"[{RTOL_RANGE[0]:g}, {RTOL_RANGE[1]:g}]"
 
 
 def build(args):
