@@ -254,6 +254,8 @@ IGNORED = [
      "--workers must be an integer in [1, 64]; got 1000"),
     (["sweep", "buck", "--grid", "D=0.2:0.8", "--lhs", "3", "--seed", "-1"],      # numpy's words, no flag, before
      "--seed must be an integer >= 0; got -1"),
+    (["report", ""], "TARGET must be a suite (bench, bifurcation, default, gdcm, lcp, mechanics), a scene file "
+                     "FILE.toml or a directory of them; got ''"),                 # read as '.' before
 ]
 
 #: A number that does not parse: the one line names the flag, the range and the text (argparse named no range).
@@ -288,6 +290,49 @@ UNPARSABLE = [
     (["sweep", "buck", "--grid", "D=0.2:0.8:3", "--workers", "x"], "argument --workers: must be an integer in [1, 64]; got 'x'"),
     (["sweep", "buck", "--grid", "D=0.2:0.8:3", "--chunk", "x"], "argument --chunk: must be an integer >= 1; got 'x'"),
 ]
+
+
+#: An empty path (an unset variable in ``--out "$OUT"``) had been read as the current directory.
+EMPTY_PATHS = [
+    ["bench", "--out", ""], ["bifurcation", "buck", "--param", "Vin=20:30", "--diagram", ""],
+    ["compare", "buck", "--plot", ""], ["gdcm-map", "buck", "--out", ""], ["lcp", "solve", ""],
+    ["mech", "simulate", "friction", "--out", ""], ["mech", "bifurcations", "friction", "--param", "omega=2.85:2.95",
+                                                      "--diagram", ""],
+    ["netlist", "buck", "--out", " "], ["report", "lcp", "--out", ""], ["simulate", "buck", "--out", ""],
+    ["simulate", "buck", "--plot", ""], ["sweep", "buck", "--grid", "D=0.2:0.8:3", "--out", ""],
+]
+
+
+@pytest.mark.parametrize("argv", EMPTY_PATHS, ids=[" ".join(a) for a in EMPTY_PATHS])
+def test_an_empty_path_is_refused_not_read_as_the_current_directory(capsys, tmp_path, monkeypatch, argv):
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(SystemExit) as stop:
+        main(argv)
+    flag = "file" if argv[:2] == ["lcp", "solve"] else argv[-2]
+    assert stop.value.code == 2 and capsys.readouterr().err == f"pcsuite: error: argument {flag}: must be a path; got {argv[-1]!r}\n"
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_every_path_option_refuses_an_empty_path():
+    import argparse
+    from pathlib import Path
+
+    from validation.cli import build_parser
+    paths = set()
+
+    def walk(parser, path):
+        for action in parser._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                for name, child in action.choices.items():
+                    walk(child, path + (name,))
+            else:
+                assert action.type is not Path, (path, action.option_strings)
+                if getattr(action.type, "__name__", "") == "given_path":
+                    paths.add((path, (action.option_strings or [action.dest])[0]))
+    walk(build_parser(), ())
+    table = {(tuple(a[:2] if a[0] in ("lcp", "mech") else a[:1]), "file" if a[:2] == ["lcp", "solve"] else a[-2])
+             for a in EMPTY_PATHS}
+    assert table == paths and len(paths) == 12
 
 
 @pytest.mark.parametrize("argv,message", UNPARSABLE, ids=[" ".join(a) for a, _ in UNPARSABLE])

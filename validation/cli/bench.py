@@ -1,9 +1,7 @@
 """``pcsuite bench``: the speed-accuracy trade-off of every method and the stability map."""
 from __future__ import annotations
 
-from pathlib import Path
-
-from .common import integer, json_text
+from .common import given_path, integer, json_text
 
 
 def _max_periods() -> int:
@@ -18,7 +16,7 @@ def add(sub) -> None:
     bench.add_argument("--only", choices=["tradeoff", "stability"], default=None)
     bench.add_argument("--periods", type=integer(2, _max_periods), default=None,
                        help="trade-off: periods per run (default 200)")
-    bench.add_argument("--out", type=Path, default=None, help="output directory (default reports/bench)")
+    bench.add_argument("--out", type=given_path, default=None, help="output directory (default reports/bench)")
     bench.add_argument("--json", action="store_true", help="print the summary as JSON")
     bench.set_defaults(run=run)
 

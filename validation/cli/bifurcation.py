@@ -2,11 +2,9 @@
 along a parameter, their bifurcations, and the brute-force diagram."""
 from __future__ import annotations
 
-from pathlib import Path
-
 from converters.errors import ParameterError
 
-from .common import MAX_WORKERS, add_params, check_workers, integer, json_text
+from .common import MAX_WORKERS, add_params, check_workers, given_path, integer, json_text
 
 
 def add(sub) -> None:
@@ -30,7 +28,7 @@ def add(sub) -> None:
                      help="lcp: the compiled stepper, theta 0.5, h = T/500 (default, fast); event: exact, ~5x slower")
     bif.add_argument("--state", default=None, help="the state drawn (default: the model's output, e.g. vC)")
     bif.add_argument("--workers", type=integer(1, MAX_WORKERS), default=None, help="processes for the diagram (default: every core)")
-    bif.add_argument("--diagram", type=Path, default=None, help="write the diagram to FILE.png or FILE.svg")
+    bif.add_argument("--diagram", type=given_path, default=None, help="write the diagram to FILE.png or FILE.svg")
     bif.add_argument("--json", action="store_true", help="print one JSON object (bifurcations, branches, diagram)")
     bif.set_defaults(run=run, no_time_limit=True)
 

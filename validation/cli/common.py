@@ -38,6 +38,15 @@ def number(described):
     return _typed(float, lambda: f"a number in {described() if callable(described) else described}")
 
 
+def given_path(text: str) -> Path:
+    """An argparse ``type`` for a file or directory option: an empty text (an unset shell variable, ``--out
+    "$OUT"``) is refused rather than read as the current directory."""
+    if not text.strip():
+        import argparse
+        raise argparse.ArgumentTypeError(f"must be a path; got {text!r}")
+    return Path(text)
+
+
 def _typed(parse, described):
     import argparse
 

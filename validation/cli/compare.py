@@ -1,11 +1,9 @@
 """``pcsuite compare CONVERTER``: the LCP time-stepper against ngspice on the same circuit."""
 from __future__ import annotations
 
-from pathlib import Path
-
 from converters.errors import ParameterError
 
-from .common import add_params, add_spice_options, json_text, spice_options
+from .common import add_params, add_spice_options, given_path, json_text, spice_options
 
 
 def add(sub) -> None:
@@ -19,7 +17,7 @@ def add(sub) -> None:
                      help="boost only: sliding-mode current control (see simulate)")
     cmp.add_argument("--t-end", default=None, help="duration in s (sliding mode; default 30 ms)")
     add_spice_options(cmp)
-    cmp.add_argument("--plot", type=Path, default=None, help="write the overlay/residual plot (.png)")
+    cmp.add_argument("--plot", type=given_path, default=None, help="write the overlay/residual plot (.png)")
     cmp.add_argument("--json", action="store_true")
     cmp.set_defaults(run=run)
 

@@ -1,7 +1,6 @@
 """``pcsuite gdcm CONVERTER``: predicted CCM/DCM/GDCM against the modes detected in LCP and ngspice."""
 from __future__ import annotations
 
-
 from .common import add_params, json_text
 
 

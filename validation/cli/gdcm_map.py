@@ -1,9 +1,7 @@
 """``pcsuite gdcm-map CONVERTER``: the D-K map of the conduction mode (prediction, LCP, ngspice)."""
 from __future__ import annotations
 
-from pathlib import Path
-
-from .common import MAX_WORKERS, check_workers, integer, json_text
+from .common import MAX_WORKERS, check_workers, given_path, integer, json_text
 
 SIZE_RANGE = (2, 1000)
 OUT_FILES = ("map.csv", "map.png")
@@ -20,7 +18,7 @@ def add(sub) -> None:
     gmap.add_argument("--no-spice", action="store_true", help="LCP and prediction only")
     gmap.add_argument("--workers", type=integer(1, MAX_WORKERS), default=None,
                       help=f"parallel ngspice processes, in [1, {MAX_WORKERS}] (default 2)")
-    gmap.add_argument("--out", type=Path, default=None, help="directory for map.csv and map.png")
+    gmap.add_argument("--out", type=given_path, default=None, help="directory for map.csv and map.png")
     gmap.add_argument("--json", action="store_true", help="print the summary as JSON")
     gmap.set_defaults(run=run)
 

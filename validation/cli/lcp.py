@@ -2,19 +2,18 @@
 from __future__ import annotations
 
 import sys
-from pathlib import Path
 
 import numpy as np
 
 from converters.lcp import METHOD_NAMES
 
-from .common import integer, json_text, number
+from .common import given_path, integer, json_text, number
 
 
 def add(sub) -> None:
     lcp = sub.add_parser("lcp", help="linear complementarity problems").add_subparsers(title="lcp commands")
     solve = lcp.add_parser("solve", help="solve an LCP stored in the Siconos .dat format")
-    solve.add_argument("file", type=Path)
+    solve.add_argument("file", type=given_path)
     solve.add_argument("--method", default="auto", choices=list(METHOD_NAMES),
                        help="auto (default: chooses by size and structure, falls back on failure; the output "
                             "names the method that solved it), lemke, murty, enum, pgs or newton")

@@ -1,11 +1,9 @@
 """``pcsuite mech list|simulate|bifurcations MODEL``: the mechanical models (friction, impacts)."""
 from __future__ import annotations
 
-from pathlib import Path
-
 from converters.errors import ParameterError
 
-from .common import MAX_WORKERS, add_params, check_out, check_workers, integer, json_text, write_frame
+from .common import MAX_WORKERS, add_params, check_out, check_workers, given_path, integer, json_text, write_frame
 
 
 def add(sub) -> None:
@@ -27,7 +25,7 @@ def add(sub) -> None:
     span.add_argument("--t-end", default=None, help="duration in s")
     span.add_argument("--periods", type=integer(1), default=None,
                       help="duration in forcing periods (autonomous models: in their time unit; default 20)")
-    sim.add_argument("--out", type=Path, default=None, help="trajectory file, .csv or .parquet")
+    sim.add_argument("--out", type=given_path, default=None, help="trajectory file, .csv or .parquet")
     sim.add_argument("--json", action="store_true", help="print one JSON summary object")
     sim.set_defaults(run=run_simulate, one_run=True)
 
@@ -39,7 +37,7 @@ def add(sub) -> None:
     bif.add_argument("--points", type=integer(0, lambda: MAX_POINTS), default=None,
                      help="values of the brute-force diagram (default: 0 for friction, 60 otherwise)")
     bif.add_argument("--workers", type=integer(1, MAX_WORKERS), default=None, help="processes for the diagram (default: every core)")
-    bif.add_argument("--diagram", type=Path, default=None, help="write the diagram to FILE.png or FILE.svg")
+    bif.add_argument("--diagram", type=given_path, default=None, help="write the diagram to FILE.png or FILE.svg")
     bif.add_argument("--json", action="store_true", help="print one JSON object")
     bif.set_defaults(run=run_bifurcations, no_time_limit=True)
 

@@ -2,11 +2,9 @@
 (``ngspice -b FILE.cir`` prints the ``.meas`` mean and ripple of vout over the last 10 periods)."""
 from __future__ import annotations
 
-from pathlib import Path
-
 from converters.errors import ParameterError
 
-from .common import add_params
+from .common import add_params, given_path
 
 
 def add(sub) -> None:
@@ -18,7 +16,7 @@ def add(sub) -> None:
     net.add_argument("--t-end", default=None, help="duration in s (default 500 periods)")
     net.add_argument("--steady", action="store_true",
                      help="start on the periodic orbit (the LCP stepper's, by Newton shooting) instead of at rest")
-    net.add_argument("--out", type=Path, default=None, help="write FILE.cir (atomically) instead of printing")
+    net.add_argument("--out", type=given_path, default=None, help="write FILE.cir (atomically) instead of printing")
     net.set_defaults(run=run)
 
 

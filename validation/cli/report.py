@@ -7,7 +7,7 @@ from pathlib import Path
 
 from converters.errors import ParameterError
 
-from .common import MAX_WORKERS, check_workers, integer
+from .common import MAX_WORKERS, check_workers, given_path, integer
 
 DESCRIPTION = """\
 Run the scenes of a named suite (and the suite's other sections), or your own scene files, and write the
@@ -32,7 +32,7 @@ def add(sub) -> None:
                             formatter_class=argparse.RawDescriptionHelpFormatter)
     report.add_argument("suite", nargs="?", default="default", metavar="TARGET",
                         help="a suite name (default: default), a scene file FILE.toml, or a directory of them")
-    report.add_argument("--out", type=Path, default=None,
+    report.add_argument("--out", type=given_path, default=None,
                         help="output directory (default reports/SUITE or reports/STEM); new, empty, or an earlier "
                              "pcsuite report, which is replaced whole")
     report.add_argument("--workers", type=integer(1, MAX_WORKERS), default=2, help="parallel processes (default 2)")
@@ -53,7 +53,7 @@ def run(args) -> int:
         default_out = Path("reports") / ("bench-report" if args.suite == "bench" else args.suite)
         options = {"suite": args.suite, "workers": args.workers}
     else:
-        if not Path(args.suite).exists():
+        if not args.suite.strip() or not Path(args.suite).exists():      # '' would be read as '.'
             raise ParameterError(f"TARGET must be a suite ({', '.join(suites)}), a scene file FILE.toml or a "
                                  f"directory of them; got {args.suite!r}")
         files = scene_files(args.suite)

@@ -3,11 +3,10 @@ from __future__ import annotations
 
 import sys
 import time
-from pathlib import Path
 
 from converters.errors import ParameterError
 
-from .common import add_params, add_spice_options, check_out, integer, json_text, spice_options, write_frame
+from .common import add_params, add_spice_options, check_out, given_path, integer, json_text, spice_options, write_frame
 
 
 def add(sub) -> None:
@@ -44,8 +43,8 @@ def add(sub) -> None:
                      help="with --steady: relative distance to the orbit at which the steady state counts as reached "
                           "(default 1e-6)")
     add_spice_options(sim)
-    sim.add_argument("--out", type=Path, default=None, help="waveform file, .csv or .parquet")
-    sim.add_argument("--plot", type=Path, default=None,
+    sim.add_argument("--out", type=given_path, default=None, help="waveform file, .csv or .parquet")
+    sim.add_argument("--plot", type=given_path, default=None,
                      help="FILE.png or FILE.svg: the last periods' waveforms and the mode timeline")
     sim.add_argument("--json", action="store_true", help="print one JSON summary object")
     sim.set_defaults(run=run, one_run=True)

@@ -9,7 +9,7 @@ from pathlib import Path
 
 from converters.errors import ParameterError
 
-from .common import EXIT_INTERRUPTED, MAX_WORKERS, add_params, check_workers, integer, json_text, number
+from .common import EXIT_INTERRUPTED, MAX_WORKERS, add_params, check_workers, given_path, integer, json_text, number
 
 #: A stored row as the summary loads it back (25 columns), generously.
 BYTES_PER_ROW = 400
@@ -44,7 +44,7 @@ def add(sub) -> None:
                          "scheduler tcp://HOST:PORT")
     sw.add_argument("--workers", type=integer(1, MAX_WORKERS), default=None, help="local: processes (default: every core)")
     sw.add_argument("--chunk", type=integer(1), default=None, help="points per task (default: 500 batched, 2 ngspice)")
-    sw.add_argument("--out", type=Path, default=None,
+    sw.add_argument("--out", type=given_path, default=None,
                     help="the sweep directory (default sweep-MODEL); an interrupted sweep resumes from it")
     sw.add_argument("--metric", default="vout_mean", help="the summary plot's metric (default vout_mean)")
     sw.add_argument("--no-progress", action="store_true", help="no progress bar")
