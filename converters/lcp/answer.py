@@ -22,8 +22,9 @@ class LCPResult:
     z, w : ndarray, shape (k,)
         The complementary pair, w = q + M z (the last iterate when not solved).
     status : str
-        ``solved``, ``no_solution`` (ray termination: for copositive-plus M this proves that no
-        solution exists), ``max_iterations`` or ``failed``.
+        ``solved``, ``no_solution`` (proven: Lemke's ray with a row of w negative for every z >= 0 or with
+        M positive semidefinite, hence copositive-plus; or no feasible complementary basis, enumeration),
+        ``max_iterations`` or ``failed`` (a ray that proves nothing is ``failed``: a solution may exist).
     err : float
         ||z - max(0, z - w)|| / ||q|| of the returned z.
     iterations : int

@@ -47,6 +47,8 @@ OPTIONS = {"lemke": {"pivot_tol": OPT_PIVOT_TOL}, "pgs": {"omega": OPT_OMEGA},
 ONCE_SOLVED, ONCE_CLOSED_FORM, ONCE_OTHER, ONCE_NOT_FINITE = (S.ONCE_SOLVED, S.ONCE_CLOSED_FORM, S.ONCE_OTHER,
                                                               S.ONCE_NOT_FINITE)
 N_RULES = len(S.CLOSED_FORM_RULES)
+#: Largest pivot tolerance Lemke accepts: a larger one counts true pivots as zero.
+MAX_PIVOT_TOL = 1e-6
 _MAX_FLOAT = 1.7976931348623157e308
 
 
@@ -214,6 +216,13 @@ def options_array(method: str, options: dict) -> np.ndarray:
             raise LCPError(f"omega must be in (0, 2); got {value!r}")
         if name == "beta" and not value < 1.0:
             raise LCPError(f"beta must be in (0, 1); got {value!r}")
+        # a pivot below pivot_tol (relative) counts as zero: 0.5 made Lemke end on a ray for a positive definite M
+        if name == "pivot_tol" and not value <= MAX_PIVOT_TOL:
+            raise LCPError(f"pivot_tol must be in (0, {MAX_PIVOT_TOL:g}]; got {value!r}")
+        if name == "sigma" and not value < 0.5:         # Armijo's constant: a sufficient decrease needs < 1/2
+            raise LCPError(f"sigma must be in (0, 0.5); got {value!r}")
+        if name == "p" and not value > 2.0:             # the descent test's exponent (De Luca, Facchinei, Kanzow)
+            raise LCPError(f"p must be > 2; got {value!r}")
         opts[allowed[name]] = float(value)
     return opts
 
@@ -260,7 +269,30 @@ class Run:
             message = auto_message(int(st[S.OUTCOME]), used, outcomes + (int(st[S.PSD]),), int(st[S.INFO]),
                                    known(self.sf[S.INFO_X]), self.max_iter, k)
             return status, message, f"auto:{METHODS[used]}", int(st[S.ITER])
+        if self.code == S.LEMKE and int(st[S.OUTCOME]) == S.RAY:
+            status, message = self._ray()
+            return status, message, name, int(st[S.ITER])
         return status, self._message(int(st[S.OUTCOME])), name, int(st[S.ITER])
+
+    def _ray(self) -> tuple[str, str]:
+        """Lemke's ray, judged as auto judges it: ``no_solution`` only with a proof (a row of w negative for every
+        z >= 0, or M positive semidefinite, hence copositive-plus), else ``failed`` (a solution may exist)."""
+        M, q, k = self.M, self.q, self.q.shape[0]
+        row = auto.infeasible_row(M, q)
+        if row >= 0:
+            return "no_solution", (f"lemke: ray termination, and no solution exists: w[{row}] = q[{row}] + sum_j "
+                                   f"M[{row},j] z_j <= q[{row}] < 0 for every z >= 0")
+        st, sf = np.zeros(S.ST_SIZE, dtype=np.int64), np.zeros(S.SF_SIZE)
+        verdict = auto.semidefinite_by_minors(M, st, sf)
+        eig = sf[S.INFO_X] if verdict == 1 else None
+        if verdict == 0:
+            eig = auto.least_symmetric_eigenvalue(M)
+            verdict = 1 if eig >= -auto.PSD_TOL * k else -1
+        if verdict == 1:
+            return "no_solution", (f"lemke: ray termination, and M is positive semidefinite (least eigenvalue of "
+                                   f"(M + M^T)/2: {eig:.3g} max|M|), hence copositive-plus: no solution exists")
+        return "failed", (f"lemke: ray termination, which proves nothing here ({_not_psd(int(st[S.PSD]), eig)}): a "
+                          "solution may exist; try method='auto' (it goes on to enumeration and Newton)")
 
     def _message(self, outcome: int) -> str:
         name, st, max_iter = METHODS[self.code], self.st, self.max_iter
@@ -270,8 +302,6 @@ class Run:
             w = np.empty_like(self.q)
             err = residual(self.M, self.q, self.z, w)
             return f"{name}: " + check_message(*check(self.M, self.q, self.z, w, err, self.tol), self.tol)
-        if outcome == S.RAY:
-            return "lemke: ray termination (no solution found; for copositive-plus M none exists)"
         if outcome == S.SINGULAR:
             return "murty: singular principal submatrix (M is not a P-matrix); try method='lemke'"
         if outcome == S.DIAG:
@@ -325,16 +355,20 @@ def auto_message(outcome: int, used: int, outcomes: tuple, row: int, eig: float 
             "exists (a row of w negative for every z >= 0, or Lemke's ray with M positive semidefinite)")
 
 
+def _not_psd(psd: int, eig: float | None) -> str:
+    """Why a Lemke ray proves nothing: M not positive semidefinite (how that was found), or not tested."""
+    return {S.PSD_EIGENVALUE: f"M is not positive semidefinite: least eigenvalue of (M + M^T)/2 = {eig:.3g} "
+                              "max|M|" if eig is not None else "",
+            S.PSD_MINOR: "M is not positive semidefinite: a diagonal entry or a 2 x 2 principal minor of "
+                         "(M + M^T)/2 is negative",
+            S.PSD_UNTESTED: f"M was not tested for positive semidefiniteness, k > {auto.PSD_MAX_K}"}.get(psd, "")
+
+
 def _stage_report(method: int, outcome: int, psd: int, eig: float | None, max_iter: int, k: int) -> str:
     name = METHODS[method]
     limit = auto.stage_max_iter(method, max_iter, k)
     if outcome == S.RAY:
-        why = {S.PSD_EIGENVALUE: f"M is not positive semidefinite: least eigenvalue of (M + M^T)/2 = {eig:.3g} "
-                                 "max|M|" if eig is not None else "",
-               S.PSD_MINOR: "M is not positive semidefinite: a diagonal entry or a 2 x 2 principal minor of "
-                            "(M + M^T)/2 is negative",
-               S.PSD_UNTESTED: f"M was not tested for positive semidefiniteness, k > {auto.PSD_MAX_K}"}.get(psd, "")
-        return f"lemke ended on a ray (which proves nothing here: {why})"
+        return f"lemke ended on a ray (which proves nothing here: {_not_psd(psd, eig)})"
     if outcome == S.MAXIT:
         return f"{name} reached max_iter ({limit}) {UNITS[method]}"
     if outcome == S.CHECK:

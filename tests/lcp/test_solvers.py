@@ -31,7 +31,22 @@ def test_p_matrix_lcps_are_solved_by_every_applicable_solver(k, seed, kind):
 def test_lemke_reports_no_solution_for_minus_identity():
     result = solve_lcp(-np.eye(3), -np.ones(3), method="lemke")
     assert result.status == "no_solution"
-    assert "ray termination" in result.message
+    assert result.message == ("lemke: ray termination, and no solution exists: w[0] = q[0] + sum_j M[0,j] z_j <= "
+                              "q[0] < 0 for every z >= 0")
+
+
+def test_lemkes_ray_is_no_solution_only_with_a_proof(peer):
+    from converters.lcp import read_siconos_lcp
+    # M positive semidefinite (eigenvalues 0 and 2) and w1 + w2 = -2 for every z: Lemke's ray is a proof
+    result = solve_lcp(np.array([[1.0, -1.0], [-1.0, 1.0]]), np.array([-1.0, -1.0]), method="lemke", fast_paths=False)
+    assert result.status == "no_solution" and "M is positive semidefinite" in result.message
+    # CPS_3: Lemke ends on a ray, yet z = (0.1, 0, 0.1, 0) solves it (auto finds it by enumeration): was no_solution
+    cps3 = read_siconos_lcp(peer / "lcp_CPS_3.dat")
+    result = solve_lcp(cps3.M, cps3.q, method="lemke")
+    assert result.status == "failed" and "which proves nothing here (M is not positive semidefinite" in result.message
+    assert "a solution may exist; try method='auto'" in result.message
+    solved = solve_lcp(cps3.M, cps3.q)
+    assert solved.solved and solved.err <= 1e-10
 
 
 def test_enumeration_lists_both_vertices_of_the_seed_psd_example():
