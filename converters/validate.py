@@ -102,6 +102,22 @@ def check_range(name: str, value, low: float, high: float, *, low_open=False, hi
     return value
 
 
+def check_integer(name: str, value, low: int, high: int | None = None) -> int:
+    """An integer (int or numpy integer, not bool) in [low, high] (high None: >= low)."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low \
+            or (high is not None and value > high):
+        within = f">= {low}" if high is None else f"in [{low}, {high:,}]"
+        raise ParameterError(f"{name} must be an integer {within}; got {value!r}")
+    return int(value)
+
+
+def check_flag(name: str, value) -> bool:
+    """A bool (or numpy bool): a string such as "no" is refused, not read as True."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise ParameterError(f"{name} must be True or False; got {value!r}")
+    return bool(value)
+
+
 def as_matrix(name: str, value, shape: tuple[int | None, int | None]) -> np.ndarray:
     """A finite float matrix of the given shape (``None`` leaves a dimension free)."""
     try:

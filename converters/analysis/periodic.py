@@ -21,6 +21,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from ..compiled import kernel
 from ..errors import ParameterError, SimulationError
+from ..validate import as_vector, check_flag, check_integer
 from ..problems import LCSProblem
 
 
@@ -95,11 +96,30 @@ def spectral_radius(jac: np.ndarray) -> float:
     return np.abs(np.linalg.eigvals(jac.astype(np.complex128))).max()
 
 
+#: Newton shooting's tolerance on the distance to the orbit (state units), its iterations, and the periods a
+#: warm-up may simulate (Newton needs a few; more only adds time: a bound against a hang, not a model limit).
+TOL_RANGE = (1e-15, 0.1)
+MAX_NEWTON_ITER = 10_000
+MAX_WARM_UP = 100_000
+
+
+def check_newton(tol, max_iter) -> None:
+    """Refuse a tolerance or an iteration count Newton shooting cannot honour (tol = 1e308 had "converged" at
+    any state)."""
+    if not (isinstance(tol, (int, float, np.integer, np.floating)) and not isinstance(tol, bool)
+            and TOL_RANGE[0] <= tol <= TOL_RANGE[1]):
+        raise ParameterError(f"tol must be in [{TOL_RANGE[0]:g}, {TOL_RANGE[1]:g}] (the distance to the orbit, in "
+                             f"state units); got {tol!r}")
+    check_integer("max_iter", max_iter, 1, MAX_NEWTON_ITER)
+
+
 def newton_orbit(period_map, x_guess, *, tol: float = 1e-10, max_iter: int = 50, period: float = np.nan,
                  polish: bool = False) -> PeriodicOrbit:
     """Newton's method on P(x) - x = 0 for a :class:`~converters.methods.base.PeriodMap` ``period_map``.
     ``polish``: return x + the last Newton step (within about its square of the orbit) instead of x."""
-    x = np.array(x_guess, dtype=float)
+    check_newton(tol, max_iter)
+    check_flag("polish", polish)
+    x = as_vector("x_guess", x_guess, None)
     n = x.size
     step, work = np.empty(n), np.empty((n, n + 1))
     px, jac = period_map(x)
@@ -161,6 +181,9 @@ def shoot(problem: LCSProblem, method, x_guess=None, *, periods: int = 1, warm_u
     from ``x_guess`` (default problem.x0) before Newton starts, so that it begins on the right sequence of
     modes. The problem's own t_span is ignored (only its start). ``period_map``: the method's map over
     [t0, t0 + periods T] when the caller has built it already (to reuse its plan after the orbit is found)."""
+    check_integer("periods", periods, 1, MAX_WARM_UP)
+    check_integer("warm_up", warm_up, 0, MAX_WARM_UP)
+    check_newton(tol, max_iter)
     T = problem.period
     if not np.isfinite(T):
         raise SimulationError("shoot() needs a periodic switching law (a schedule or a ramp); for an autonomous "
@@ -168,7 +191,7 @@ def shoot(problem: LCSProblem, method, x_guess=None, *, periods: int = 1, warm_u
     if period_map is None:
         t0 = problem.t_span[0]
         period_map = method.period_map(replace(problem, t_span=(t0, t0 + periods * T)))
-    x = np.array(problem.x0 if x_guess is None else x_guess, dtype=float)
+    x = as_vector("x_guess", problem.x0 if x_guess is None else x_guess, problem.n)
     for _ in range(warm_up):
         x = period_map.end(x)
     return newton_orbit(period_map, x, tol=tol, max_iter=max_iter, period=periods * T, polish=polish)
@@ -183,8 +206,13 @@ def autonomous_orbit(problem: LCSProblem, method, x_guess, *, config: int, cross
     if not hasattr(method, "return_map"):
         raise ParameterError(f"autonomous orbits need a method with a return map to the switching surface (the "
                              f"event method, EventDriven); got {type(method).__name__}")
+    check_integer("crossings", crossings, 1, MAX_WARM_UP)
+    check_integer("warm_up", warm_up, 0, MAX_WARM_UP)
+    check_newton(tol, max_iter)
+    k = len(problem.configurations)
+    check_integer("config", config, 0, k - 1)
     period_map = method.return_map(problem, config, crossings)
-    x = np.array(x_guess, dtype=float)
+    x = as_vector("x_guess", x_guess, problem.n)
     for _ in range(warm_up + 1):             # the first return puts x on the section
         x = period_map.end(x)
     return newton_orbit(period_map, x, tol=tol, max_iter=max_iter)

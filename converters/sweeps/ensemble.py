@@ -87,7 +87,14 @@ class ModelSweep:
                                  "sweep it without --steady (periods from rest, measured over the last one)")
         if self.method not in ("lcp", "event"):
             raise ParameterError(f"method must be lcp or event for a sweep; got {self.method!r}")
-        if not 0.0 < self.h_fraction < 1.0:
+        from ..analysis.periodic import MAX_WARM_UP
+        from ..validate import check_flag, check_integer, check_range
+        check_flag("steady", self.steady)
+        check_integer("warm_up", self.warm_up, 0, MAX_WARM_UP)
+        check_integer("periods", self.periods, 1, MAX_WARM_UP)
+        check_range("theta", self.theta, 0.5, 1.0)
+        if not (isinstance(self.h_fraction, (float, int)) and not isinstance(self.h_fraction, bool)
+                and 0.0 < self.h_fraction < 1.0):
             raise ParameterError(f"h_fraction (h / T) must be in (0, 1); got {self.h_fraction!r}")
         if self.rtol is not None:
             from ..analysis.accuracy import RTOL_RANGE

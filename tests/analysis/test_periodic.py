@@ -141,3 +141,28 @@ def test_steady_shoots_from_rest_with_no_fixed_warm_up():
     orbit = run.metadata["orbit"]
     assert orbit["converged"] and orbit["evaluations"] <= 8
     assert run.metadata["steady_periods"] == orbit["evaluations"] + 20
+
+
+@pytest.mark.parametrize("kwargs,message", [
+    (dict(tol=1e308), "tol must be in [1e-15, 0.1] (the distance to the orbit, in state units); got 1e+308"),
+    (dict(tol=float("nan")), "tol must be in [1e-15, 0.1]"),
+    (dict(tol=0.0), "tol must be in [1e-15, 0.1]"),
+    (dict(warm_up=10**9), "warm_up must be an integer in [0, 100,000]; got 1000000000"),
+    (dict(warm_up=-1), "warm_up must be an integer in [0, 100,000]; got -1"),
+    (dict(warm_up=1.5), "warm_up must be an integer in [0, 100,000]; got 1.5"),
+    (dict(periods=True), "periods must be an integer in [1, 100,000]; got True"),
+    (dict(periods=1.5), "periods must be an integer in [1, 100,000]; got 1.5"),
+    (dict(max_iter=-1), "max_iter must be an integer in [1, 10,000]; got -1"),
+    (dict(polish="no"), "polish must be True or False; got 'no'"),
+    (dict(x_guess=[0.0] * 3), "x_guess must be a vector of length 2; got shape 3"),
+    (dict(x_guess=[np.nan, 0.0]), "x_guess must contain only finite numbers"),
+])
+def test_shooting_refuses_what_it_cannot_honour(kwargs, message):
+    # tol = 1e308 had "converged" at x = (4.64, 0.378) (the orbit is (0, 6.95)); warm_up = 10^9 hung
+    from converters.errors import ParameterError
+    conv = get_converter("buck")
+    p = conv.resolve({})
+    problem = conv.problem(p, conv.period(p))
+    with pytest.raises(ParameterError) as refused:
+        shoot(problem, Theta(h=conv.period(p) / 200), **kwargs)
+    assert str(refused.value).startswith(message)

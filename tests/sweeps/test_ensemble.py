@@ -197,3 +197,17 @@ def test_ctrl_c_while_waiting_for_a_worker_ends_the_worker_at_once():
     assert not process.is_alive() and slot._pool is None
     assert time.monotonic() - start < 5.0
     slot.close()                                             # nothing left to wait for
+
+
+@pytest.mark.parametrize("kwargs,message", [
+    (dict(steady="no"), "steady must be True or False; got 'no'"),          # was read as True
+    (dict(warm_up=10**9), "warm_up must be an integer in [0, 100,000]; got 1000000000"),   # hung
+    (dict(warm_up=1.5), "warm_up must be an integer in [0, 100,000]; got 1.5"),
+    (dict(periods=0, steady=False), "periods must be an integer in [1, 100,000]; got 0"),
+    (dict(theta=0.1), "theta must be in [0.5, 1]; got 0.1"),                # every row failed
+    (dict(h_fraction="0.01"), "h_fraction (h / T) must be in (0, 1); got '0.01'"),
+])
+def test_a_model_sweep_refuses_bad_settings_before_any_point(kwargs, message):
+    with pytest.raises(ParameterError) as refused:
+        ModelSweep("buck", **kwargs)
+    assert str(refused.value) == message
