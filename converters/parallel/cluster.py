@@ -47,6 +47,9 @@ class DaskBackend:
                 self._client = Client(self.scheduler, timeout="10s")
             except OSError as exc:
                 raise ParameterError(f"scheduler: no Dask scheduler answers at {self.scheduler} ({exc})") from None
+            except Exception as exc:    # something else answers there (an HTTP server: its bytes read as frame sizes)
+                raise ParameterError(f"scheduler: what answers at {self.scheduler} is not a Dask scheduler "
+                                     f"({type(exc).__name__}: {str(exc)[:120]})") from None
         return self._client
 
     def close(self):

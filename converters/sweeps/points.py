@@ -30,15 +30,21 @@ class Axis:
 
     @classmethod
     def parse(cls, text: str, *, count_required: bool = True) -> "Axis":
-        """``NAME=START:STOP:COUNT[:log]`` (values with SPICE suffixes: ``L=10u:100u:10``)."""
+        """``NAME=START:STOP:COUNT[:log]`` (values with SPICE suffixes: ``L=10u:100u:10``); with
+        ``count_required`` False (a Latin hypercube's range), ``NAME=START:STOP[:log]``: a COUNT is refused,
+        as it would be ignored."""
         name, sep, spec = str(text).partition("=")
         fields = spec.split(":")
-        usage = "NAME=START:STOP:COUNT[:log]" if count_required else "NAME=START:STOP[:COUNT][:log]"
+        usage = "NAME=START:STOP:COUNT[:log]" if count_required else "NAME=START:STOP[:log]"
         log = fields[-1].strip().lower() == "log"
         if log:
             fields = fields[:-1]
-        if not sep or not name.strip() or len(fields) not in ((3,) if count_required else (2, 3)):
-            raise ParameterError(f"--grid takes {usage} (e.g. R=1:50:100); got {text!r}")
+        if sep and name.strip() and len(fields) == 3 and not count_required:
+            raise ParameterError(f"--grid {name.strip()}: COUNT does not apply with --lhs (the hypercube draws its "
+                                 f"N points over START:STOP); give {name.strip()}=START:STOP[:log]; got {text!r}")
+        if not sep or not name.strip() or len(fields) != (3 if count_required else 2):
+            example = "R=1:50:100" if count_required else "R=1:50"
+            raise ParameterError(f"--grid takes {usage} (e.g. {example}); got {text!r}")
         name = name.strip()
         start, stop = parse_value(f"{name} start", fields[0]), parse_value(f"{name} stop", fields[1])
         count = 1

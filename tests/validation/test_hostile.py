@@ -254,6 +254,9 @@ IGNORED = [
      "--workers must be an integer in [1, 64]; got 1000"),
     (["sweep", "buck", "--grid", "D=0.2:0.8", "--lhs", "3", "--seed", "-1"],      # numpy's words, no flag, before
      "--seed must be an integer >= 0; got -1"),
+    (["sweep", "buck", "--grid", "R=5:200:40:log", "--lhs", "50"],                 # COUNT silently dropped before
+     "--grid R: COUNT does not apply with --lhs (the hypercube draws its N points over START:STOP); give "
+     "R=START:STOP[:log]; got 'R=5:200:40:log'"),
     (["report", ""], "TARGET must be a suite (bench, bifurcation, default, gdcm, lcp, mechanics), a scene file "
                      "FILE.toml or a directory of them; got ''"),                 # read as '.' before
 ]

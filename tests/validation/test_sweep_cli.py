@@ -127,6 +127,35 @@ def test_a_dask_scheduler_that_does_not_answer_leaves_no_sweep_directory(tmp_pat
     assert not out.exists()                                 # was: sweep.json written before the first chunk
 
 
+def test_a_scheduler_address_where_something_else_answers_gets_one_line(tmp_path, capsys):
+    # an HTTP server on the port: dask read its bytes as frame sizes, tried to allocate 3 EiB and crashed
+    import socket
+    import threading
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen(4)
+
+    def answer():
+        while True:
+            try:
+                conn, _ = server.accept()
+            except OSError:
+                return
+            with conn:
+                conn.sendall(b"HTTP/1.1 200 OK\r\nContent-Length: 5\r\n\r\nhello" * 100)
+    threading.Thread(target=answer, daemon=True).start()
+    address = f"tcp://127.0.0.1:{server.getsockname()[1]}"
+    out = tmp_path / "s"
+    try:
+        code = main(["sweep", "buck", "--grid", "D=0.3:0.6:3", "--no-progress", "--scheduler", address, "--out", str(out)])
+    finally:
+        server.close()
+    err = capsys.readouterr().err
+    assert code == 2 and len(err.strip().splitlines()) == 1, err
+    assert err.startswith(f"pcsuite: error: scheduler: what answers at {address} is not a Dask scheduler (")
+    assert not out.exists()
+
+
 def test_a_second_writer_is_refused_while_the_first_holds_the_sweep(tmp_path, capsys):
     import fcntl
     out = tmp_path / "s"

@@ -23,7 +23,8 @@ def add(sub) -> None:
     sw.add_argument("--grid", action="append", default=[], metavar="NAME=START:STOP:COUNT[:log]",
                     help="a swept parameter (repeatable: the full grid of all of them; SPICE suffixes allowed)")
     sw.add_argument("--lhs", type=integer(1, _max_points), default=None, metavar="N",
-                    help="N Latin-hypercube points over the --grid ranges instead of the full grid (COUNT optional)")
+                    help="N Latin-hypercube points over the --grid ranges (NAME=START:STOP[:log], no COUNT) "
+                         "instead of the full grid")
     sw.add_argument("--seed", type=integer(0), default=0, help="the Latin hypercube's seed (default 0)")
     add_params(sw)
     sw.add_argument("--control", default="pwm", choices=list(CONTROLS), help="the control law (default pwm)")
