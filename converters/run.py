@@ -274,6 +274,10 @@ class ParameterPath:
         return self.model.problem(p, span)
 
 
+#: The power summary's error estimates (:func:`converters.analysis.accuracy.power_check`).
+POWER_ESTIMATES = ("efficiency_error_estimate", "input_W_error_estimate", "losses_W_error_estimate")
+
+
 def run_summary(tr: Trajectory) -> dict:
     """The JSON summary of a run: converter, method, its options, steps, wall_s, and the model's measures
     (PWM converters: vout_mean over the last 10 periods, mode fractions of the last period)."""
@@ -297,12 +301,21 @@ def run_summary(tr: Trajectory) -> dict:
         out["accuracy"] = accuracy
         if not accuracy["met"]:
             out["warnings"] = [f"rtol {accuracy['rtol']:g} not met: {accuracy['message']}"]
+        if "power" in out:        # the rtol covers the measures above; the power summary gets its own estimate
+            from .analysis.accuracy import power_check
+            check = power_check(model, p, meta["method_object"], tr, out["power"])
+            out["power"].update({k: v for k, v in check.items() if k != "warning"})
+            if "warning" in check:
+                out.setdefault("warnings", []).append(check["warning"])
     elif meta.get("control", "pwm") == "pwm" and model.periodic(p) and "method_object" in meta and not model.step_times(p):
         from .analysis.accuracy import default_check, last_period
         period = last_period(model, p, tr)
         out["mode_fractions"] = period["mode_fractions"]        # read inside the step, not on the grid
         out["events"] = [{"pair": pair, "kind": kind, "time_T": t} for pair, kind, t in period["events"]]
-        check = default_check(model, p, meta["method_object"], tr, out["vout_mean"])
+        check = default_check(model, p, meta["method_object"], tr, out["vout_mean"], out.get("power"))
+        for key in POWER_ESTIMATES:          # the power summary's estimates stand beside its values
+            if key in check:
+                out["power"][key] = check.pop(key)
         out["accuracy"] = check
         if "warning" in check:
             out["warnings"] = [check["warning"]]

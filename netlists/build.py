@@ -253,16 +253,24 @@ def build_smc_netlist(params: dict | None, t_end, options: SpiceOptions | None =
     return Netlist("\n".join(lines) + "\n", "boost-smc", p, t_end, options, probes)
 
 
+#: The voltage-mode comparator's gain (1/V) before its tanh saturation (:func:`build_voltage_mode_netlist`).
+COMPARATOR_GAIN = 100.0
+
+
 def build_voltage_mode_netlist(params: dict | None, t_end, options: SpiceOptions | None = None,
                                x0=None) -> Netlist:
     """The buck under voltage-mode control (``converters.models.voltage_mode``) as an ngspice netlist.
 
     The sawtooth is a PULSE source rising from VL to VU over T - edge and falling back over the edge
-    (edge = ``edge_fraction`` T); a behavioural source ctrl = ramp - A (v_out - Vref), saturated at +-1 V
-    like a comparator's output, drives an SW switch with VT = 0 and no hysteresis, so the switch is
-    closed while vcon = A (v_out - Vref) is below the ramp: the comparator of the LCS model. Without the
-    saturation ngspice stops with "timestep too small" in the first period where the loop takes over
-    (the control voltage swings by tens of volts across the switch's threshold; measured). The diode is
+    (edge = ``edge_fraction`` T); a behavioural source ctrl = tanh(G (ramp - A (v_out - Vref))), G =
+    ``COMPARATOR_GAIN``, a comparator's output saturating smoothly at +-1 V, drives an SW switch with VT = 0
+    and no hysteresis, so the switch is closed while vcon = A (v_out - Vref) is below the ramp: the
+    comparator of the LCS model. Without the saturation ngspice stops with "timestep too small" in the first
+    period where the loop takes over (the control voltage swings by tens of volts across the switch's
+    threshold); with a hard clip at +-1 V (min/max), or G = 1 to 10, it still stopped so at the defaults
+    (Vin = 24 V, t = 3.6 ms). G = 100 runs at 20, 24, 28 and 36 V and settles on the event method's
+    period-2 orbit at 28 V; in the chaotic band (33 V) ngspice still stops, at 0.18 s (the hard clip: at
+    0.023 s). G = 1000 runs at 33 V too but finds period 6 at 28 V (measured). The diode is
     the D(N = 0.001) model (it may block: DCM). The comparator's switchings are not breakpoints of
     ngspice's step control: TMAX = T/1000 keeps their timing error small (``pcsuite bifurcation`` uses it).
     There is no latch in the netlist: ``latch = 1`` is refused. Every value is a validated number (``_num``).
@@ -283,7 +291,7 @@ def build_voltage_mode_netlist(params: dict | None, t_end, options: SpiceOptions
     body = [f"Vin in 0 DC {_num('Vin', p['Vin'])}",
             f"Vramp ramp 0 PULSE({_num('VL', p['VL'])} {_num('VU', p['VU'])} 0 {_num('rise', T - edge)} "
             f"{_num('edge', edge)} 0 {_num('T', T)})",
-            f"Bctrl ctrl 0 V=max(min(V(ramp)-{_num('A', p['A'])}*(V(out)-{_num('Vref', p['Vref'])}),1),-1)",
+            f"Bctrl ctrl 0 V=tanh({COMPARATOR_GAIN:g}*(V(ramp)-{_num('A', p['A'])}*(V(out)-{_num('Vref', p['Vref'])})))",
             "S1 in sw ctrl 0 SWVM", *_diode("0", "sw", p), *_inductor("sw", "out", p, ic=iL0),
             *_capacitor("out", "0", p, ic=v0), f"R1 out 0 {_num('R', p['R'])}",
             f".model SWVM SW(VT=0 VH=0 RON={_num('switch_ron', options.switch_ron)} "
@@ -324,14 +332,21 @@ def _vector(probe) -> str | None:
     return f"v({target})"
 
 
-def standalone(netlist: Netlist, period: float, state_names=(), window_periods: int = MEASURE_PERIODS) -> str:
+def standalone(netlist: Netlist, period: float, state_names=(), window_periods: int = MEASURE_PERIODS,
+               window: tuple | None = None) -> str:
     """The netlist as a file ngspice runs on its own (``ngspice -b FILE.cir``): ``.meas`` of vout's mean and
-    peak-to-peak ripple and of each state's mean over the last ``window_periods`` periods (states with a
-    negative probe sign are printed as the probe reads them: the comment says so)."""
+    peak-to-peak ripple and of each state's mean over the last ``window_periods`` periods, or over ``window``
+    (t0, t1) in seconds for a model without a period (the sliding-mode boost: its summary's window); states
+    with a negative probe sign are printed as the probe reads them: the comment says so."""
     t1 = netlist.t_end
-    t0 = max(0.0, t1 - window_periods * period)
+    if window is None:
+        t0 = max(0.0, t1 - window_periods * period)
+        over = f"the last {window_periods} periods"
+    else:
+        t0, t1 = window
+        over = "the summary's window"
     window = f"FROM={_num('t0', t0)} TO={_num('t1', t1)}"
-    lines = [f"* ngspice -b this file: .meas over the last {window_periods} periods [{t0:.6g}, {t1:.6g}] s",
+    lines = [f"* ngspice -b this file: .meas over {over} [{t0:.6g}, {t1:.6g}] s",
              f"* parameters: {' '.join(f'{k}={v:g}' for k, v in netlist.params.items())}"]
     measures = [f".meas tran vout_mean AVG {_vector(netlist.probes['vout'])} {window}",
                 f".meas tran vout_ripple PP {_vector(netlist.probes['vout'])} {window}"]

@@ -441,42 +441,104 @@ def last_period(model, p: dict, tr) -> dict:
             "shortest_interval_T": float(np.diff(bounds)[np.diff(bounds) > 1e-12 * T].min() / T)}
 
 
-def default_check(model, p: dict, method, tr, reported: float) -> dict:
+def _orbit_runs(model, p: dict, method, x_guess):
+    """One period on the method's periodic orbit, and for the stepper also on its orbit at 2h (None for the
+    event method, exact); or a string saying which orbit was not found."""
+    from ..simulate import simulate
+    from .periodic import shoot
+    T = model.period(p)
+    orbit = shoot(model.problem(p, T, x_guess), method, x_guess, tol=1e-8, polish=True)
+    if not orbit.converged:
+        return f"the method's periodic orbit was not found ({orbit.message})"
+
+    def run(m, x0):
+        return replace(simulate(model.problem(p, T, x0), m), labels=model.labels(p))
+    if method.key != "lcp":
+        return run(method, orbit.x0), None
+    coarse = replace(method, h=2 * method.h)
+    orbit_2h = shoot(model.problem(p, T, orbit.x0), coarse, orbit.x0, tol=1e-8, polish=True)
+    if not orbit_2h.converged:
+        return f"the orbit at 2h was not found ({orbit_2h.message})"
+    return run(method, orbit.x0), run(coarse, orbit_2h.x0)
+
+
+def _power_check(model, p: dict, method, fine, coarse, reported: dict | None) -> dict:
+    """How far the reported efficiency (absolute), input power and each loss (relative to the input power) may
+    be from the exact periodic ones: the reported values' distance to the orbit's plus Richardson's estimate
+    from the orbits at h and 2h.
+    The stepper integrates the switched currents (input, switch, diode) by its end-point rule, first order at
+    each switching: at h = T/200 the efficiency of an ideal buck reads 0.9975."""
+    if reported is None or not hasattr(model, "power") or not np.isfinite(reported.get("input_W", np.nan)):
+        return {}
+    T = model.period(p)
+    at_h = model.power(fine, p, 0.0, T)
+    exact = {"efficiency": at_h["efficiency"], "input_W": at_h["input_W"], **at_h["losses_W"]}
+    if coarse is not None:
+        # order 1 whatever the scheme's: a current that jumps at a switching makes any rule on the step's
+        # end points first order there (theta = 0.5 included); for smooth parts this overestimates, safely
+        at_2h = model.power(coarse, p, 0.0, T)
+        fine_values = {"efficiency": at_h["efficiency"], "input_W": at_h["input_W"], **at_h["losses_W"]}
+        coarse_values = {"efficiency": at_2h["efficiency"], "input_W": at_2h["input_W"], **at_2h["losses_W"]}
+        exact = {k: 2.0 * v - coarse_values[k] for k, v in fine_values.items()}
+    scale = max(abs(exact["input_W"]), 1e-300)
+    losses = [abs(v - exact[k]) / scale for k, v in reported["losses_W"].items() if k in exact]
+    return {"efficiency_error_estimate": abs(reported["efficiency"] - exact["efficiency"]),
+            "input_W_error_estimate": abs(reported["input_W"] - exact["input_W"]) / scale,
+            "losses_W_error_estimate": max(losses, default=0.0)}
+
+
+def power_check(model, p: dict, method, tr, reported: dict | None) -> dict:
+    """:func:`_power_check` on its own (a run whose vout has its estimate already: accuracy on request), with a
+    warning when the efficiency may be off by more than ``DEFAULT_RTOL``."""
+    if reported is None or method.key not in ("lcp", "event"):
+        return {}
+    runs = _orbit_runs(model, p, method, tr.x[-1])
+    if isinstance(runs, str):
+        return {}
+    out = _power_check(model, p, method, *runs, reported)
+    warning = _power_warning(out, method)
+    return {**out, "warning": warning} if warning else out
+
+
+def _power_warning(check: dict, method) -> str:
+    error = check.get("efficiency_error_estimate", 0.0)
+    if not error > DEFAULT_RTOL:
+        return ""
+    remedy = ("use --method event (exact at the switchings) or a smaller --h" if method.key == "lcp"
+              else "use --steady")
+    return (f"efficiency may be {error:.1e} off (more than {DEFAULT_RTOL:g}; input power {check['input_W_error_estimate']:.1e}):"
+            f" the switched currents are integrated to first order at each switching: {remedy}")
+
+
+def default_check(model, p: dict, method, tr, reported: float, power: dict | None = None) -> dict:
     """How far the reported mean (vout over the run's last 10 periods) may be from the exact periodic one:
     the run's distance to the method's own orbit (a transient not settled) plus the method's discretization
     error, Richardson's from the orbit at h and 2h (the stepper's declared order; the event method: none).
     Returns the estimate, its parts, the shortest interval between switchings in steps, and a warning when
-    the estimate exceeds ``DEFAULT_RTOL``."""
-    from .periodic import shoot
+    the estimate exceeds ``DEFAULT_RTOL``; with the run's ``power`` summary, also the efficiency's and the
+    input power's estimates (:func:`_power_check`), and a warning when the efficiency's exceeds it."""
     T = model.period(p)
     out = {"target": DEFAULT_RTOL}
     if method.key not in ("lcp", "event"):
         return {**out, "checked": False, "reason": f"the {method.key} method's error is its model's (O(eps)), "
                 "not estimated here"}
-    problem = model.problem(p, T, tr.x[-1])
-    orbit = shoot(problem, method, tr.x[-1], tol=1e-8, polish=True)
-    if not orbit.converged:
-        return {**out, "checked": False, "reason": f"the method's periodic orbit was not found ({orbit.message})"}
-
-    def orbit_mean(m, x0):
-        from ..simulate import simulate
-        run = replace(simulate(model.problem(p, T, x0), m), labels=model.labels(p))
-        return run.mean("vout", t0=0.0, t1=T)
-    m_h = orbit_mean(method, orbit.x0)
+    runs = _orbit_runs(model, p, method, tr.x[-1])
+    if isinstance(runs, str):
+        return {**out, "checked": False, "reason": runs}
+    fine, coarse = runs
+    m_h = fine.mean("vout", t0=0.0, t1=T)
     exact = m_h
-    if method.key == "lcp":
-        coarse = replace(method, h=2 * method.h)
-        orbit_2h = shoot(model.problem(p, T, orbit.x0), coarse, orbit.x0, tol=1e-8, polish=True)
-        if not orbit_2h.converged:
-            return {**out, "checked": False, "reason": f"the orbit at 2h was not found ({orbit_2h.message})"}
-        exact = m_h + (m_h - orbit_mean(coarse, orbit_2h.x0)) / (2.0 ** method.order - 1.0)
+    if coarse is not None:
+        exact = m_h + (m_h - coarse.mean("vout", t0=0.0, t1=T)) / (2.0 ** method.order - 1.0)
     scale = max(abs(exact), 1e-300)
     transient, discretization = abs(reported - m_h) / scale, abs(m_h - exact) / scale
     error = abs(reported - exact) / scale
     period = last_period(model, p, tr)
     step = getattr(method, "h", None)
     out.update(checked=True, vout_mean_error_estimate=error, transient=transient, discretization=discretization,
-               shortest_interval_steps=period["shortest_interval_T"] * T / step if step else None)
+               shortest_interval_steps=period["shortest_interval_T"] * T / step if step else None,
+               **_power_check(model, p, method, fine, coarse, power))
+    power_warning = _power_warning(out, method)
     if error > DEFAULT_RTOL:
         reasons = []
         if transient > 0.5 * error:
@@ -487,6 +549,8 @@ def default_check(model, p: dict, method, tr, reported: float) -> dict:
                                                        if few is not None and few < FEW_STEPS else "")
                            + ": use --rtol 1e-4 (or a smaller --h)")
         out["warning"] = (f"vout mean may be {error:.1e} off (more than {DEFAULT_RTOL:g}): " + "; ".join(reasons))
+    if power_warning:
+        out["warning"] = f"{out['warning']}; {power_warning}" if "warning" in out else power_warning
     return out
 
 

@@ -151,14 +151,20 @@ class BoostSMC(Model):
     def vout(self, samples: Samples, p: dict) -> np.ndarray:
         return samples.x[:, 1]
 
+    def window_start(self, p: dict, t_start: float, t_end: float, window_s: float | None = None) -> float:
+        """Where the summary's window begins: ``window_s`` (default min(a quarter of the run, 2 ms)) before the
+        end, and not before a load step (standalone netlists measure over the same window)."""
+        t0 = t_end - (window_s or min(0.25 * (t_end - t_start), 2e-3))
+        if "t_step" in p and p["t_step"] < t_end:
+            t0 = max(t0, p["t_step"])
+        return t0
+
     def summary(self, tr, p: dict, window_s: float | None = None) -> dict:
         """Measures over the last ``window_s`` (default min(T_end / 4, 2 ms), after the load step): mean vout
         against Vref, every state's and signal's mean, RMS, min, max and ripple (``measurements``); hysteresis: the switching frequency against the prediction at the measured v;
         implicit: the blend z against 1 - Vin / v and its spread; with a load step the recovery time."""
         t_end = tr.t[-1]
-        t0 = t_end - (window_s or min(0.25 * (t_end - tr.t[0]), 2e-3))
-        if "t_step" in p and p["t_step"] < t_end:
-            t0 = max(t0, p["t_step"])
+        t0 = self.window_start(p, tr.t[0], t_end, window_s)
         out = {"vout_mean": tr.mean("vout", t0=t0), "vref": p["Vref"], "window_s": [t0, t_end],
                "measurements": tr.measurement_rows(t0=t0, t1=t_end)}
         if self.implicit:

@@ -168,7 +168,9 @@ def test_the_default_steady_run_warns_that_its_mean_is_1_percent_off(capsys):
     assert code == 0 and abs(summary["vout_mean"] / LIGHT_DCM_EXACT - 1) == pytest.approx(1.05e-2, rel=0.01)
     assert summary["accuracy"]["vout_mean_error_estimate"] == pytest.approx(1.05e-2, rel=0.01)
     assert summary["warnings"] == ["vout mean may be 1.1e-02 off (more than 0.001): the step is too coarse: use "
-                                   "--rtol 1e-4 (or a smaller --h)"]
+                                   "--rtol 1e-4 (or a smaller --h); efficiency may be 2.2e-02 off (more than 0.001; "
+                                   "input power 1.4e-03): the switched currents are integrated to first order at "
+                                   "each switching: use --method event (exact at the switchings) or a smaller --h"]
     code, out, err = run_cli(capsys, "simulate", *LIGHT_DCM, "--steady")
     assert "warning: vout mean may be 1.1e-02 off" in err
 
@@ -261,8 +263,8 @@ def test_ctrl_c_is_one_line_and_the_shells_code(capsys, monkeypatch):
 
 
 def test_a_sweep_where_no_point_succeeds_exits_with_one(capsys, tmp_path):
-    code, out, _ = run_cli(capsys, "sweep", "buck", "--grid", "D=0.1:0.9:3", "--periods", "99999999999", "--no-progress",
-                           "--out", str(tmp_path / "s"), "--json")
+    code, out, _ = run_cli(capsys, "sweep", "buck", "--grid", "D=0.1:0.9:3", "--periods", "100000", "--max-memory", "16M",
+                           "--no-progress", "--out", str(tmp_path / "s"), "--json")       # each point above the limit
     summary = json.loads(out)
     assert code == 1 and summary["ok"] == 0 and summary["failed"] == 3
     code, out, _ = run_cli(capsys, "sweep", "buck", "--grid", "D=0.1:0.9:3", "--periods", "20", "--no-progress",

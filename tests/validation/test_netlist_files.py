@@ -35,3 +35,35 @@ def test_ngspice_runs_the_file_alone_and_its_meas_mean_is_pcsuites(name, ngspice
     summary = json.loads(capsys.readouterr().out)
     assert summary["window_periods"] == 10
     assert meas["vout_mean"] == pytest.approx(summary["vout_mean"], rel=1e-5)      # measured <= 1.3e-7 (7 digits)
+
+
+def test_the_sliding_mode_netlist_measures_over_the_summary_window_as_pcsuite_does(ngspice, tmp_path, capsys):
+    # it had a .tran and no .meas: `ngspice -b` said "no simulations run" and printed nothing
+    path = tmp_path / "smc.cir"
+    assert main(["netlist", "boost", "--control", "smc", "--out", str(path)]) == 0
+    out = subprocess.run([shutil.which("ngspice"), "-b", str(path)], capture_output=True, text=True, timeout=300,
+                         cwd=tmp_path)
+    assert out.returncode == 0, out.stderr[-2000:]
+    meas = {m.group(1).lower(): (float(m.group(2)), float(m.group(3)), float(m.group(4))) for m in re.finditer(
+        r"^(\w+)\s*=\s*([-+0-9.eE]+)\s+from=\s*([-+0-9.eE]+)\s+to=\s*([-+0-9.eE]+)", out.stdout, re.MULTILINE)}
+    capsys.readouterr()
+    assert main(["simulate", "boost", "--control", "smc", "--method", "spice", "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    mean, t0, t1 = meas["vout_mean"]
+    assert [t0, t1] == pytest.approx(summary["window_s"], rel=1e-9)       # the same window: the last 2 ms
+    assert mean == pytest.approx(summary["vout_mean"], rel=1e-4)
+    assert mean == pytest.approx(20.0, rel=1e-3)                          # Vref, held by the sliding law
+
+
+def test_the_voltage_mode_netlist_runs_at_the_defaults(ngspice, tmp_path, capsys):
+    # Vin = 24 V from rest: the hard-clipped comparator stopped ngspice at 3.6 ms ("timestep too small")
+    path = tmp_path / "vm.cir"
+    assert main(["netlist", "buck", "--control", "voltage-mode", "--out", str(path)]) == 0
+    out = subprocess.run([shutil.which("ngspice"), "-b", str(path)], capture_output=True, text=True, timeout=300,
+                         cwd=tmp_path)
+    assert out.returncode == 0 and "too small" not in out.stdout + out.stderr, out.stdout[-2000:]
+    mean = float(re.search(r"^vout_mean\s*=\s*([-+0-9.eE]+)", out.stdout, re.MULTILINE).group(1))
+    capsys.readouterr()
+    assert main(["simulate", "buck", "--control", "voltage-mode", "--t-end", "0.2", "--json"]) == 0
+    lcp = json.loads(capsys.readouterr().out)["vout_mean"]               # the same last 10 periods
+    assert mean == pytest.approx(lcp, rel=1e-3)                           # measured 8e-5

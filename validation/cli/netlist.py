@@ -43,7 +43,10 @@ def run(args) -> int:
                              f".meas lines measure the last periods; got {t_end:.3g} s")
     netlist = model_netlist(model, p, t_end, x0=x0)
     check_spice_memory(netlist, remedy="a shorter --t-end")      # refused here, not when ngspice runs out of memory
-    text = standalone(netlist, model.period(p), model.state_names) if model.periodic(p) else netlist.text
+    if model.periodic(p):
+        text = standalone(netlist, model.period(p), model.state_names)
+    else:                # a switching law of its own (the sliding-mode boost): over its summary's window
+        text = standalone(netlist, float("nan"), model.state_names, window=(model.window_start(p, 0.0, t_end), t_end))
     if args.out is None:
         print(text, end="")
     else:

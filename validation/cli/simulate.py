@@ -218,8 +218,10 @@ def _print(summary: dict, tr, args) -> None:
     power = summary.get("power")
     if power and power["losses_W"]:
         losses = ", ".join(f"{k} {v * 1e3:.4g} mW" for k, v in power["losses_W"].items())
+        within = (f" +- {100 * power['efficiency_error_estimate']:.1g}" if "efficiency_error_estimate" in power
+                  else "")
         print(f"power over the last {summary['window_periods']:g} periods: in {power['input_W']:.6g} W, out "
-              f"{power['output_W']:.6g} W, efficiency {100 * power['efficiency']:.3f} % (losses: {losses})")
+              f"{power['output_W']:.6g} W, efficiency {100 * power['efficiency']:.3f}{within} % (losses: {losses})")
     step = summary.get("step")
     if step:
         over = f", overshoot {100 * step['overshoot']:.3g} %" if "overshoot" in step else ""
