@@ -520,8 +520,19 @@ def default_check(model, p: dict, method, tr, reported: float, power: dict | Non
     T = model.period(p)
     out = {"target": DEFAULT_RTOL}
     if method.key not in ("lcp", "event"):
-        return {**out, "checked": False, "reason": f"the {method.key} method's error is its model's (O(eps)), "
-                "not estimated here"}
+        reason = f"the {method.key} method's error is its model's (O(eps)), not estimated here"
+        end = float(tr.t[-1])
+        if end - float(tr.t[0]) < 20 * T * (1 - 1e-9):
+            return {**out, "checked": False, "reason": reason}
+        # what can be said: how far the mean moved from the 10 periods before (a transient it still carries)
+        before = tr.mean("vout", t0=end - 20 * T, t1=end - 10 * T)
+        transient = abs(reported - before) / max(abs(reported), 1e-300)
+        out.update(checked=False, reason=reason, transient=transient)
+        if transient > DEFAULT_RTOL:
+            out["warning"] = (f"vout mean may be {transient:.1e} off (more than {DEFAULT_RTOL:g}): the run has not "
+                              f"settled (its 10-period mean moved {transient:.1e} from the 10 periods before): run "
+                              "more --periods")
+        return out
     runs = _orbit_runs(model, p, method, tr.x[-1])
     if isinstance(runs, str):
         return {**out, "checked": False, "reason": runs}

@@ -37,7 +37,9 @@ def get_model(name: str, control: str = "pwm") -> Model:
         return MODELS[(name, control)]
     except KeyError:
         available = sorted(n for n, c in MODELS if c == control)
-        raise ParameterError(f"--control {control} is available for {', '.join(available)} only; got {name!r}") from None
+        takes = ", ".join(c for c in CONTROLS if (name, c) in MODELS)
+        raise ParameterError(f"--control {control} is available for {', '.join(available)} only ({name} takes "
+                             f"--control {takes}); got {name!r}") from None
 
 
 __all__ = ["CONVERTERS", "MODELS", "CONTROLS", "get_converter", "get_model", "Converter", "Model", "ON", "OFF",

@@ -257,6 +257,8 @@ IGNORED = [
     (["sweep", "buck", "--grid", "R=5:200:40:log", "--lhs", "50"],                 # COUNT silently dropped before
      "--grid R: COUNT does not apply with --lhs (the hypercube draws its N points over START:STOP); give "
      "R=START:STOP[:log]; got 'R=5:200:40:log'"),
+    (["bifurcation", "boost", "--param", "D=0.2:0.5", "--points", "0"],     # the default control, not given
+     "--control voltage-mode is available for buck only (boost takes --control pwm, smc, smc-implicit)"),
     (["report", ""], "TARGET must be a suite (bench, bifurcation, default, gdcm, lcp, mechanics), a scene file "
                      "FILE.toml or a directory of them; got ''"),                 # read as '.' before
 ]

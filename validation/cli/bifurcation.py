@@ -77,12 +77,16 @@ def _print(study, summary: dict, args) -> None:
         born = f", born at {branch['born_at']:.7g}" if branch["born_at"] is not None else ""
         print(f"  period-{branch['period']} orbit: {branch['orbits']} orbits{born}; stable on {stable}"
               + (f" ({branch['message']})" if branch["message"] else ""))
-    print("bifurcations:")
+    print("bifurcations:" + ("" if study.bifurcations else " none along the path"))
     for b in study.bifurcations:
         mults = ", ".join(f"{m.real:.4f}{m.imag:+.4f}j" if abs(m.imag) > 1e-9 else f"{m.real:.4f}" for m in b.multipliers)
         change = (f"{'stable' if b.stable_before else 'unstable'} -> {'stable' if b.stable_after else 'unstable'}")
+        # a bracket the search could not shrink (no orbit found inside it) is said, not only its width
+        unrefined = b.located_by[b.located_by.index("bracket left"):].rstrip(")") if "bracket left" in b.located_by \
+            else ""
         print(f"  {b.kind:<17} {study.name} = {b.value:.7g} (+- {b.width:.1g})  period {b.period}  multipliers "
-              f"[{mults}]  {change}" + (f"  {b.detail}" if b.detail else ""))
+              f"[{mults}]  {change}" + (f"  {b.detail}" if b.detail else "")
+              + (f"  (not refined: {unrefined})" if unrefined else ""))
     feigenbaum = summary["feigenbaum"]
     if feigenbaum.get("ratios"):
         print(f"  doubling intervals shrink by {', '.join(f'{r:.3f}' for r in feigenbaum['ratios'])}; the cascade "
