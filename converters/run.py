@@ -22,7 +22,7 @@ from .methods.theta import StepPlanMap
 from .models import Model, check_h, get_model
 from .simulate import simulate
 from .trajectory import Trajectory, concatenate
-from .validate import parse_value
+from .validate import check_flag, check_integer, parse_value
 
 #: Periods simulated from x0 before Newton shooting starts: none. With the exact Jacobian Newton starts from x0
 #: itself; where no fraction of its step lowers the residual (far from the orbit, off its mode sequence) it takes
@@ -38,7 +38,12 @@ DEFAULT_AUTONOMOUS_T_END = 30e-3
 
 
 def resolve_model(name_or_model, control: str = "pwm") -> Model:
-    return get_model(name_or_model, control) if isinstance(name_or_model, str) else name_or_model
+    if isinstance(name_or_model, str):
+        return get_model(name_or_model, control)
+    if not isinstance(name_or_model, Model):
+        from .models import CONVERTERS
+        raise ParameterError(f"the converter must be one of {', '.join(CONVERTERS)} or a Model; got {name_or_model!r}")
+    return name_or_model
 
 
 def make_method(model: Model, p: dict, method: str | Method = "lcp", h=None, **options) -> Method:
@@ -116,7 +121,12 @@ def run_converter(name_or_model, params: dict | None = None, *, control: str = "
         ``error_estimate``, the method and h; the span returned (default ``STEADY_PERIODS``) starts on the orbit.
     """
     model = resolve_model(name_or_model, control)
+    if params is not None and not isinstance(params, dict):
+        raise ParameterError(f"params must be a dict of NAME: VALUE; got {params!r}")
     p = model.resolve(params)
+    check_flag("steady", steady)
+    if periods is not None:
+        check_integer("periods", periods, 1)
     start = time.perf_counter()
     if rtol is not None:
         return _accurate(model, p, rtol, start, method=method, h=h, t_end=t_end, periods=periods, steady=steady,

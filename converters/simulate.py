@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .errors import ParameterError
+from .errors import ParameterError, SimulationError
 from .methods.base import METHODS, Method
 from .problems import LCSProblem
 from .trajectory import Trajectory
@@ -29,9 +29,19 @@ def simulate(problem: LCSProblem, method: Method, *, x0=None) -> Trajectory:
     if not isinstance(method, Method):
         raise ParameterError(f"method must be a pcsuite method ({', '.join(f'{k}: {c.__name__}' for k, c in METHODS.items())}"
                              f"); got {method!r}")
+    if not isinstance(problem, LCSProblem) and not hasattr(problem, "t_span"):
+        raise ParameterError(f"problem must be an LCSProblem (or a mechanical problem); got {problem!r}")
     method.supports(problem)
     method.check_memory(problem)
-    return method.solve(problem, check_x0(problem, x0))
+    start = check_x0(problem, x0)
+    trajectory = method.solve(problem, start)
+    # inf and NaN are absorbing: a state that left the finite numbers is not finite at the end (one look, O(1))
+    if not np.all(np.isfinite(trajectory.x[-1])):
+        bad = np.flatnonzero(~np.all(np.isfinite(trajectory.x), axis=1))
+        raise SimulationError(f"the state left the finite numbers at t = {trajectory.t[bad[0]]:.6g} s (x0 = "
+                              f"{np.array2string(start, precision=3)}): a start or a parameter "
+                              "beyond what double precision can carry")
+    return trajectory
 
 
 def check_x0(problem: LCSProblem, x0=None) -> np.ndarray:

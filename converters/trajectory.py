@@ -191,6 +191,12 @@ class Trajectory:
 
     def window(self, periods: float | None = None, t0: float | None = None, t1: float | None = None) -> tuple:
         """(t0, t1) of the last ``periods`` switching periods, or of the given times (default: the run)."""
+        for label, value in (("periods", periods), ("t0", t0), ("t1", t1)):     # NaN had meant the whole run
+            if value is not None and (isinstance(value, (bool, str)) or not isinstance(value, (int, float, np.number))
+                                      or not np.isfinite(value)):
+                raise ValueError(f"{label} must be a finite number; got {value!r}")
+        if periods is not None and not periods > 0:
+            raise ValueError(f"periods must be > 0; got {periods!r}")
         end = self.t[-1] if t1 is None else min(float(t1), self.t[-1])
         if periods is not None:
             if not np.isfinite(self.period):

@@ -120,10 +120,11 @@ def check_flag(name: str, value) -> bool:
 
 def as_matrix(name: str, value, shape: tuple[int | None, int | None]) -> np.ndarray:
     """A finite float matrix of the given shape (``None`` leaves a dimension free)."""
+    _check_real(name, value, "matrix")
     try:
         arr = np.array(value, dtype=float, order="C")      # C order: what the compiled kernels read
-    except (TypeError, ValueError):
-        raise ParameterError(f"{name} must be a numeric matrix; got {value!r}") from None
+    except (TypeError, ValueError, OverflowError):
+        raise ParameterError(f"{name} must be a numeric matrix of doubles; got {_short(value)}") from None
     if arr.ndim == 1 and shape[1] == 1:
         arr = arr.reshape(-1, 1)
     if arr.ndim != 2 or any(s is not None and s != a for s, a in zip(shape, arr.shape)):
@@ -136,10 +137,11 @@ def as_matrix(name: str, value, shape: tuple[int | None, int | None]) -> np.ndar
 
 def as_vector(name: str, value, size: int | None) -> np.ndarray:
     """A finite float vector of the given size (``None`` leaves it free)."""
+    _check_real(name, value, "vector")
     try:
         arr = np.array(value, dtype=float, order="C")
-    except (TypeError, ValueError):
-        raise ParameterError(f"{name} must be a numeric vector; got {value!r}") from None
+    except (TypeError, ValueError, OverflowError):
+        raise ParameterError(f"{name} must be a numeric vector of doubles; got {_short(value)}") from None
     if arr.ndim == 0:
         arr = arr.reshape(1)
     if arr.ndim == 2 and 1 in arr.shape:
@@ -150,6 +152,28 @@ def as_vector(name: str, value, size: int | None) -> np.ndarray:
     if not np.all(np.isfinite(arr)):
         raise ParameterError(f"{name} must contain only finite numbers; got {_first_bad(arr)}")
     return arr
+
+
+def _check_real(name: str, value, what: str) -> None:
+    """Refuse what float() would quietly mangle: complex numbers (the imaginary part dropped), booleans (read as
+    0/1), dates, strings and records. A list or an object array is left to the conversion."""
+    if value is None:
+        raise ParameterError(f"{name} must be a numeric {what}; got None")
+    kind = getattr(getattr(value, "dtype", None), "kind", None)
+    if kind is None and isinstance(value, (list, tuple)):
+        try:
+            kind = np.asarray(value).dtype.kind
+        except (TypeError, ValueError, OverflowError):
+            kind = None
+    if kind is not None and kind not in "fiuO":
+        names = {"c": "complex", "b": "boolean", "M": "datetime", "m": "timedelta", "U": "text", "S": "bytes",
+                 "V": "record"}
+        raise ParameterError(f"{name} must be a {what} of real numbers; got {names.get(kind, kind)} values")
+
+
+def _short(value) -> str:
+    text = repr(value)
+    return text if len(text) <= 80 else text[:77] + "..."
 
 
 def _first_bad(arr: np.ndarray) -> str:

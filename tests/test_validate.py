@@ -1,4 +1,5 @@
 """Number parsing with SPICE suffixes: the gate every value passes before a model or a netlist."""
+import numpy as np
 import pytest
 
 from converters.errors import ParameterError
@@ -66,3 +67,46 @@ def test_the_cli_takes_units_and_refuses_a_contradicting_one_in_one_line(capsys)
     assert main(["simulate", "buck", "-p", "L=10uF", "--periods", "5"]) == 2
     err = capsys.readouterr().err.strip()
     assert err == "pcsuite: error: L: the unit 'F' in '10uF' contradicts the parameter (its unit is H)"
+
+
+@pytest.mark.parametrize("call,error,message", [
+    # a public entry point given what would be mangled, ignored or crash deep inside: one error naming it
+    (lambda: __import__("converters.lcp", fromlist=["x"]).solve_lcp(np.eye(2) + 1j, -np.ones(2)), "LCPError",
+     "M must be a matrix of real numbers; got complex values"),                  # the imaginary part was dropped
+    (lambda: __import__("converters.lcp", fromlist=["x"]).solve_lcp([[True, False], [False, True]], -np.ones(2)),
+     "LCPError", "M must be a matrix of real numbers; got boolean values"),
+    (lambda: __import__("converters.lcp", fromlist=["x"]).solve_lcp([[10**400, 0], [0, 1]], -np.ones(2)), "LCPError",
+     "M must be a numeric matrix of doubles; got [[1000"),                        # OverflowError traceback
+    (lambda: __import__("converters.lcp", fromlist=["x"]).solve_lcp(np.eye(2), -np.ones(2), fast_paths="False"),
+     "LCPError", "fast_paths must be True or False; got 'False'"),               # "False" was true
+    (lambda: __import__("converters.run", fromlist=["x"]).run_converter(None), "ParameterError",
+     "the converter must be one of buck, boost, buck-boost, cuk, prc or a Model; got None"),   # AttributeError
+    (lambda: __import__("converters.models", fromlist=["x"]).get_converter(["buck"]), "ParameterError",
+     "CONVERTER must be one of buck, boost, buck-boost, cuk, prc; got ['buck']"),  # unhashable type
+    (lambda: __import__("converters.run", fromlist=["x"]).run_converter("buck", "D=0.5"), "ParameterError",
+     "params must be a dict of NAME: VALUE; got 'D=0.5'"),
+    (lambda: __import__("converters.run", fromlist=["x"]).run_converter("buck", steady="no"), "ParameterError",
+     "steady must be True or False; got 'no'"),                                  # was read as True
+    (lambda: __import__("converters.run", fromlist=["x"]).run_converter("buck", periods=True), "ParameterError",
+     "periods must be an integer >= 1; got True"),
+])
+def test_the_python_api_refuses_what_it_would_mangle(call, error, message):
+    with pytest.raises(Exception) as refused:
+        call()
+    assert type(refused.value).__name__ == error and str(refused.value).startswith(message)
+
+
+def test_a_state_that_leaves_the_finite_numbers_is_an_error_not_a_trajectory():
+    from converters.errors import SimulationError
+    from converters.methods import EventDriven, Theta
+    from converters.models.circuits import diode_bridge
+    from converters.run import run_converter
+    from converters.simulate import simulate
+    for method in (Theta(h=1e-6), EventDriven()):
+        with pytest.raises(SimulationError, match=r"the state left the finite numbers at t = "):
+            with np.errstate(all="ignore"):
+                simulate(diode_bridge(), method, x0=[-1e308, 1e308])     # returned inf and NaN before
+    run = run_converter("buck", periods=5)
+    for window in ({"periods": np.nan}, {"t0": np.nan}, {"periods": -1.0}):  # NaN meant the whole run
+        with pytest.raises(ValueError):
+            run.mean("vout", **window)

@@ -377,11 +377,20 @@ def follow(family: OrbitFamily, start: float, stop: float, x_guess, *, max_step:
     on_point : callable, optional
         Called with each new orbit's parameter value (a progress bar).
     """
-    span = float(stop) - float(start)
+    from ..validate import as_vector, check_integer, check_positive, check_range, parse_value
+    start, stop = parse_value("start", start), parse_value("stop", stop)
+    span = stop - start
     if span == 0.0:
         raise ParameterError(f"the parameter path must have STOP != START; got {start:g}:{stop:g}")
+    if max_step is not None:       # -1 or NaN had hung
+        check_positive("max_step", max_step)
+    check_range("tol", tol, 1e-15, 0.1)
+    check_range("locate_tol", locate_tol, 1e-15, 0.1)
+    check_range("fd_step", fd_step, 1e-15, 0.1)
+    check_integer("max_points", max_points, 2, 10**6)
+    check_integer("warm_up", warm_up, 0, 100_000)
     branch = Branch(family.periods)
-    x = np.array(x_guess, dtype=float)
+    x = as_vector("x_guess", x_guess, None)
     try:
         one = family.period_map(start, 1)
         for _ in range(warm_up):

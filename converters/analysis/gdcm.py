@@ -106,6 +106,8 @@ def _augmented(config: Configuration, tau: float) -> np.ndarray:
 
 def ccm_orbit(problem: LCSProblem, samples_per_phase: int = 100) -> CCMOrbit:
     """Exact periodic orbit with every pair at u = 0 (matrix exponentials; no small-ripple assumption)."""
+    from ..validate import check_integer
+    check_integer("samples_per_phase", samples_per_phase, 1, 100_000)      # 1e9 had hung (0: a division by 0)
     schedule = problem.switching
     if not np.isfinite(schedule.period):
         raise ParameterError("ccm_orbit needs a periodic schedule; got a constant one")

@@ -100,7 +100,7 @@ def solve_lcp(M, q, method: str = "auto", tol: float = 1e-10, max_iter: int | No
         Never a silent wrong answer: ``solved`` only when z >= 0, w >= 0, z . w = 0 (relative to the
         problem's scale) and err <= tol hold on the original problem.
     """
-    code = _CODES.get(method) if method.__class__ is str else None
+    code = _CODES.get(method) if isinstance(method, str) else None
     if code is None:
         raise LCPError(f"method must be one of {', '.join(S.METHOD_NAMES)}; got {method!r}")
     started = _monotonic()
@@ -146,6 +146,8 @@ def solve_lcp(M, q, method: str = "auto", tol: float = 1e-10, max_iter: int | No
             and TOL_RANGE[0] <= tol <= TOL_RANGE[1]):
         raise LCPError(f"tol must be in [{TOL_RANGE[0]:g}, {TOL_RANGE[1]:g}]; got {tol!r}")
     tol = float(tol)
+    if not isinstance(fast_paths, (bool, np.bool_)):      # "False" would be true
+        raise LCPError(f"fast_paths must be True or False; got {fast_paths!r}")
     if max_iter is not None and method == "enum":
         raise LCPError(f"max_iter does not apply to method {method!r} (it visits every complementary basis once; "
                        f"k <= 12); got max_iter = {max_iter!r}")

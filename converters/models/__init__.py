@@ -24,13 +24,15 @@ CONTROLS = tuple(dict.fromkeys(control for _, control in MODELS))
 def get_converter(name: str) -> Converter:
     try:
         return CONVERTERS[name]
-    except KeyError:
+    except (KeyError, TypeError):          # TypeError: an unhashable name (a list)
         raise ParameterError(f"CONVERTER must be one of {', '.join(CONVERTERS)}; got {name!r}") from None
 
 
 def get_model(name: str, control: str = "pwm") -> Model:
     """The model of converter ``name`` under ``control``; errors name the valid choices."""
     get_converter(name)
+    if not isinstance(control, str):
+        raise ParameterError(f"control must be one of {', '.join(CONTROLS)}; got {control!r}")
     if control not in CONTROLS:
         raise ParameterError(f"control must be one of {', '.join(CONTROLS)}; got {control!r}")
     try:

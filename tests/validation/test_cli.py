@@ -262,7 +262,8 @@ def test_ctrl_c_is_one_line_and_the_shells_code(capsys, monkeypatch):
     assert code == 130 and err == "pcsuite: interrupted\n" and out == ""
 
 
-def test_a_sweep_where_no_point_succeeds_exits_with_one(capsys, tmp_path):
+def test_a_sweep_where_no_point_succeeds_exits_with_one(capsys, tmp_path, monkeypatch):
+    monkeypatch.setenv("PCSUITE_MAX_MEMORY", "4G")      # --max-memory sets it for the process: restored after the test
     code, out, _ = run_cli(capsys, "sweep", "buck", "--grid", "D=0.1:0.9:3", "--periods", "100000", "--max-memory", "16M",
                            "--no-progress", "--out", str(tmp_path / "s"), "--json")       # each point above the limit
     summary = json.loads(out)
