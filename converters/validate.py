@@ -111,6 +111,14 @@ def check_integer(name: str, value, low: int, high: int | None = None) -> int:
     return int(value)
 
 
+def check_indices(name: str, indices, size: int) -> np.ndarray:
+    """Integer indices in [0, size) as int64 (0.7 is refused, not truncated to 0; -1 is refused, not the last)."""
+    given = np.asarray(indices)
+    if given.ndim != 1 or (given.size and (given.dtype.kind not in "iu" or given.min() < 0 or given.max() >= size)):
+        raise ParameterError(f"{name} must be integers in [0, {size - 1}]; got {np.array2string(given, threshold=8)}")
+    return given.astype(np.int64)
+
+
 def check_flag(name: str, value) -> bool:
     """A bool (or numpy bool): a string such as "no" is refused, not read as True."""
     if not isinstance(value, (bool, np.bool_)):

@@ -180,9 +180,13 @@ def brute_force(problem_of, method, values, x0, *, transient: int = 200, record:
     values = np.asarray(values, dtype=float).ravel()
     if values.size == 0 or not np.all(np.isfinite(values)):
         raise ParameterError(f"values must be finite numbers, at least one; got {values!r}")
-    for name, count, low in (("transient", transient, 0), ("record", record, 1)):
-        if not (isinstance(count, (int, np.integer)) and count >= low):
-            raise ParameterError(f"{name} must be an integer >= {low} (periods); got {count!r}")
+    for name, count, low in (("transient", transient, 0), ("record", record, 1), ("chunk", chunk, 1)):
+        if isinstance(count, bool) or not (isinstance(count, (int, np.integer)) and count >= low):
+            raise ParameterError(f"{name} must be an integer >= {low}; got {count!r}")     # chunk 0: range() crash
+    if not (isinstance(period_rtol, (int, float, np.floating)) and 0.0 < period_rtol < 1.0):
+        raise ParameterError(f"period_rtol must be in (0, 1); got {period_rtol!r}")   # -1 or NaN: accepted before
+    if not isinstance(lyapunov, (bool, np.bool_)):
+        raise ParameterError(f"lyapunov must be True or False; got {lyapunov!r}")
     task = _Chunk(problem_of, method, np.array(x0, dtype=float), int(transient), int(record), lyapunov, period_rtol)
     chunks = [values[i:i + chunk] for i in range(0, values.size, chunk)]
     results = parallel_map(task, chunks, workers=workers, chunk=1, progress=progress, label="brute-force diagram",

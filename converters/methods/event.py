@@ -161,6 +161,9 @@ _EXPONENTS = np.arange(_TAYLOR_TERMS)
 _POWERS = 64           # sampling steps per batched product
 _ZERO_RTOL = 1e-10     # a derivative counts as zero below this fraction of its own scale
 _CROSS_RTOL = 1e-13    # a watched value counts as negative below -this fraction of its scale
+#: Most substeps (each a quarter of the mode's fastest time constant at most) one crossing search may take: about
+#: 5 s of work. A circuit far stiffer than its run (C = 1e-15 F in a 5 ms run: 2e10 substeps) is refused, not hung.
+MAX_SUBSTEPS = 100_000_000
 _ON_SET_RTOL = 1e-9    # a held pair's constraint N^T (C x + F) counts as met up to this (relative)
 
 
@@ -668,6 +671,12 @@ class _Machine:
         if watch.timed:
             g_scale = g_scale + np.abs(watch.slopes) * self.scale
         threshold = -_CROSS_RTOL * g_scale
+        if not (flow.delta > 0.0 and tau_max / flow.delta <= MAX_SUBSTEPS):
+            from ..errors import ResourceError
+            raise ResourceError(f"--method event: the stiffest mode's time constant is about {4.0 * flow.delta:.3g} s, "
+                                f"so crossing {tau_max:.3g} s takes {tau_max / flow.delta if flow.delta > 0 else np.inf:.3g}"
+                                f" substeps (at most {MAX_SUBSTEPS:.0e}): a run far longer than the circuit's fastest time "
+                                "constant (a tiny C, L or R, or a long --t-end); use --method lcp, or a shorter --t-end")
         full = int(np.floor(tau_max / flow.delta * (1.0 - 1e-12)))
         tau, state = 0.0, xt
         while full > 0:

@@ -87,9 +87,13 @@ def run_ensemble(ensemble, points, *, backend="local", indices=None, chunk: int 
         A tqdm progress bar on stderr, in points (``done``: points already computed, a resumed sweep's).
     """
     backend = backend_for(backend, workers=workers)
-    indices = np.arange(points.size, dtype=np.int64) if indices is None else np.asarray(indices, dtype=np.int64)
-    chunk = chunk or ensemble.chunk_hint
-    if not (isinstance(chunk, (int, np.integer)) and chunk >= 1):
+    if indices is None:
+        indices = np.arange(points.size, dtype=np.int64)
+    else:       # 0.7 had been truncated to 0, 5 of a 3-point grid failed deep in numpy
+        from ..validate import check_indices
+        indices = check_indices("indices", indices, points.size)
+    chunk = ensemble.chunk_hint if chunk is None else chunk      # 0 is refused, not replaced by the default
+    if isinstance(chunk, bool) or not (isinstance(chunk, (int, np.integer)) and chunk >= 1):
         raise ParameterError(f"chunk must be an integer >= 1; got {chunk!r}")
     chunks = [indices[i:i + chunk] for i in range(0, indices.size, chunk)]
     kept: list = []

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ParameterError
-from ..validate import parse_value
+from ..validate import check_indices, parse_value
 
 #: The most points a sweep may ask for (a typo like COUNT=1e9 is refused, not started).
 MAX_POINTS = 10_000_000
@@ -27,6 +27,22 @@ class Axis:
     stop: float
     count: int = 1
     log: bool = False
+
+    def __post_init__(self):
+        # Axis.parse checks the text; an Axis built directly is checked here (NaN ends, count 0 or 2.5, a log axis
+        # across zero had been accepted or failed deep in numpy)
+        if not (isinstance(self.name, str) and self.name.strip()):
+            raise ParameterError(f"an axis needs a parameter name; got {self.name!r}")
+        for end in ("start", "stop"):
+            value = getattr(self, end)
+            if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)) \
+                    or not np.isfinite(value):
+                raise ParameterError(f"--grid {self.name}: {end.upper()} must be a finite number; got {value!r}")
+        if isinstance(self.count, bool) or not (isinstance(self.count, (int, np.integer)) and self.count >= 1):
+            raise ParameterError(f"--grid {self.name}: COUNT must be an integer >= 1; got {self.count!r}")
+        if self.log and not (self.start > 0 and self.stop > 0):
+            raise ParameterError(f"--grid {self.name}: a log axis needs START and STOP > 0; got "
+                                 f"{self.start:g}:{self.stop:g}")
 
     @classmethod
     def parse(cls, text: str, *, count_required: bool = True) -> "Axis":
@@ -99,7 +115,7 @@ class Grid:
         return tuple(a.name for a in self.axes)
 
     def points(self, indices) -> list[tuple[int, dict]]:
-        indices = np.asarray(indices, dtype=np.int64)
+        indices = check_indices("indices", indices, self.size)
         where = np.unravel_index(indices, self.shape)
         return [(int(i), {a.name: float(self._values[k][where[k][j]]) for k, a in enumerate(self.axes)})
                 for j, i in enumerate(indices)]
@@ -117,12 +133,12 @@ class LatinHypercube:
     def __init__(self, axes, n: int, seed: int = 0):
         self.axes = tuple(axes)
         _check_names(self.axes)
-        if not (isinstance(n, int) and 1 <= n <= MAX_POINTS):
+        if isinstance(n, bool) or not (isinstance(n, (int, np.integer)) and 1 <= n <= MAX_POINTS):
             raise ParameterError(f"--lhs must be an integer in [1, {MAX_POINTS:,}]; got {n!r}")
         if not (isinstance(seed, (int, np.integer)) and not isinstance(seed, bool) and seed >= 0):
             raise ParameterError(f"--seed must be an integer >= 0; got {seed!r}")
         from scipy.stats import qmc
-        self.size, self.seed, self.shape = n, int(seed), (n,)
+        self.size, self.seed, self.shape = int(n), int(seed), (int(n),)
         unit = qmc.LatinHypercube(d=len(self.axes), seed=self.seed).random(n)
         self._samples = np.column_stack([a.scale(unit[:, k]) for k, a in enumerate(self.axes)])
 
@@ -132,7 +148,7 @@ class LatinHypercube:
 
     def points(self, indices) -> list[tuple[int, dict]]:
         return [(int(i), {a.name: float(self._samples[i, k]) for k, a in enumerate(self.axes)})
-                for i in np.asarray(indices, dtype=np.int64)]
+                for i in check_indices("indices", indices, self.size)]
 
     def describe(self) -> dict:
         return {"kind": "lhs", "axes": [f"{a.name}={a.start:g}:{a.stop:g}" + (":log" if a.log else "")

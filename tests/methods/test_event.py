@@ -189,3 +189,18 @@ def test_event_method_on_the_diode_bridge_is_its_closed_form_and_the_steppers_li
     ends = {h: simulate(problem, Theta(h, 0.5)).x[-1, 0] for h in (5e-8, 2.5e-8)}
     richardson = 2 * ends[2.5e-8] - ends[5e-8]
     assert abs(richardson - exact.x[-1, 0]) / abs(exact.x[-1, 0]) < 1e-6    # measured 1.7e-7
+
+
+@pytest.mark.parametrize("problem", ["C=1e-15", "C=1e-308", "R=1e-300", "t_end=1e30"])
+def test_a_run_far_longer_than_the_fastest_time_constant_is_refused_not_hung(problem):
+    # C = 1e-15 F in a 5 ms run had run for more than 280 s (2e13 substeps); R = 1e-300 divided by zero
+    import time
+
+    from converters.errors import ResourceError
+    from converters.models.circuits import half_wave_rectifier
+    name, value = problem.split("=")
+    started = time.perf_counter()
+    with pytest.raises(ResourceError, match=r"^--method event: the stiffest mode's time constant is about .* "
+                                            r"substeps \(at most 1e\+08\)"):
+        simulate(half_wave_rectifier(**{name: float(value)}), EventDriven())
+    assert time.perf_counter() - started < 5.0

@@ -211,3 +211,23 @@ def test_a_model_sweep_refuses_bad_settings_before_any_point(kwargs, message):
     with pytest.raises(ParameterError) as refused:
         ModelSweep("buck", **kwargs)
     assert str(refused.value) == message
+
+
+@pytest.mark.parametrize("call,message", [
+    (lambda: Axis("D", 0.2, 0.8, -2), "--grid D: COUNT must be an integer >= 1; got -2"),     # numpy ValueError
+    (lambda: Axis("D", float("nan"), 0.8, 3), "--grid D: START must be a finite number; got nan"),   # NaN points
+    (lambda: Axis("D", -1.0, 1.0, 5, True), "--grid D: a log axis needs START and STOP > 0; got -1:1"),
+    (lambda: Grid([Axis("D", 0.2, 0.8, 3)]).points([5]), "indices must be integers in [0, 2]; got [5]"),
+    (lambda: Grid([Axis("D", 0.2, 0.8, 3)]).points([0.7]), "indices must be integers in [0, 2]; got [0.7]"),  # -> 0
+    (lambda: LatinHypercube([Axis("D", 0.2, 0.8)], 3).points([-1]), "indices must be integers in [0, 2]; got [-1]"),
+    (lambda: run_ensemble(ModelSweep("buck"), Grid([Axis("D", 0.2, 0.8, 3)]), backend="serial", chunk=0),
+     "chunk must be an integer >= 1; got 0"),                               # was replaced by the default
+])
+def test_sweep_building_blocks_refuse_what_they_would_mangle(call, message):
+    with pytest.raises(ParameterError) as refused:
+        call()
+    assert str(refused.value) == message
+
+
+def test_a_latin_hypercube_takes_a_numpy_integer():
+    assert LatinHypercube([Axis("D", 0.2, 0.8)], np.int64(5)).size == 5      # "must be an integer" before
