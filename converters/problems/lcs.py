@@ -98,6 +98,8 @@ class LCSProblem:
                                  f"got {function.n}")
         x0 = as_vector("x0", self.x0, n)
         x0.setflags(write=False)
+        if isinstance(self.t_span, (str, bytes)) or not hasattr(self.t_span, "__len__") or len(self.t_span) != 2:
+            raise ParameterError(f"t_span must be (t_start, t_end) in s; got {self.t_span!r}")   # "01", (0, 1, 2)
         t0, t1 = (parse_value("t_span[0]", self.t_span[0]), parse_value("t_span[1]", self.t_span[1]))
         if not t1 > t0:
             raise ParameterError(f"t_span must satisfy t_end > t_start = {t0:g} s; got t_end = {t1:g}")

@@ -81,3 +81,15 @@ def test_switching_instants_are_grid_points():
             assert np.min(np.abs(t - instant)) < 1e-18
     assert np.diff(t).max() <= 0.7e-6 * (1 + 1e-12)
     assert np.diff(t).min() > 0.7e-9  # points within h/1000 of an instant are merged
+
+
+@pytest.mark.parametrize("build,message", [
+    (lambda: Schedule(1.0, (0, np.nan), (0, 1)), "schedule start must be a finite number; got nan"),  # never applied
+    (lambda: Schedule(np.nan, (0,), (0,)), "schedule period must be a positive number of seconds, or inf"),
+    (lambda: Schedule(1.0, (0, 0.5), (0.7, 1.9)), "schedule config must be an integer >= 0; got 0.7"),  # int() before
+    (lambda: Schedule.pwm(1.0, 0.5, 2.7, 1), "schedule config must be an integer >= 0; got 2.7"),
+])
+def test_a_schedule_refuses_what_it_would_truncate_or_ignore(build, message):
+    with pytest.raises(ParameterError) as refused:
+        build()
+    assert str(refused.value).startswith(message)
