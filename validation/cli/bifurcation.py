@@ -70,8 +70,9 @@ def run(args) -> int:
 
 
 def _print(study, summary: dict, args) -> None:
-    print(f"{study.model.key} along {study.name} = {study.start:g} .. {study.stop:g}: continuation (event method, "
-          f"exact Jacobians) in {study.continuation_s:.2f} s")
+    unit = next((f" {q.unit}" for q in study.model.parameters if q.name == study.name and q.unit not in ("", "1")), "")
+    print(f"{study.model.key} along {study.name} = {study.start:g} .. {study.stop:g}{unit}: continuation (event "
+          f"method, exact Jacobians) in {study.continuation_s:.2f} s")
     for branch in summary["branches"]:
         stable = ", ".join(f"{a:.6g}..{b:.6g}" for a, b in branch["stable"]) or "nowhere"
         born = f", born at {branch['born_at']:.7g}" if branch["born_at"] is not None else ""
@@ -84,7 +85,7 @@ def _print(study, summary: dict, args) -> None:
         # a bracket the search could not shrink (no orbit found inside it) is said, not only its width
         unrefined = b.located_by[b.located_by.index("bracket left"):].rstrip(")") if "bracket left" in b.located_by \
             else ""
-        print(f"  {b.kind:<17} {study.name} = {b.value:.7g} (+- {b.width:.1g})  period {b.period}  multipliers "
+        print(f"  {b.kind:<17} {study.name} = {b.value:.7g}{unit} (+- {b.width:.1g})  period {b.period}  multipliers "
               f"[{mults}]  {change}" + (f"  {b.detail}" if b.detail else "")
               + (f"  (not refined: {unrefined})" if unrefined else ""))
     feigenbaum = summary["feigenbaum"]

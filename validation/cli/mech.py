@@ -179,10 +179,13 @@ def run_bifurcations(args) -> int:
         print(json_text(out))
         return 0
     if study is not None:
-        print(f"{model.name} along {name} = {start:g} .. {stop:g} (continuation on the event method's exact map, "
+        unit = next((f" {q.unit}" for q in getattr(model, "parameters", ()) if q.name == name and q.unit not in ("", "1")),
+                    "")
+        print(f"{model.name} along {name} = {start:g} .. {stop:g}{unit} (continuation on the event method's exact map, "
               f"{study.wall_s:.1f} s); " + "; ".join(study.notes))
         for b in study.bifurcations:
-            print(f"  {b.kind:<18} {name} = {b.value:.7g} (+- {b.width:.1g}, orbit of period {b.period})  {b.detail}")
+            print(f"  {b.kind:<18} {name} = {b.value:.7g}{unit} (+- {b.width:.1g}, orbit of period {b.period})  "
+                  f"{b.detail}")
         for branch in out["branches"]:
             if branch["message"]:
                 print(f"  period-{branch['period']} branch: {branch['message']}")
