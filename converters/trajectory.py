@@ -18,6 +18,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+import math
+
 import numpy as np
 
 RULES = ("end", "linear", "exact")
@@ -193,7 +195,7 @@ class Trajectory:
         """(t0, t1) of the last ``periods`` switching periods, or of the given times (default: the run)."""
         for label, value in (("periods", periods), ("t0", t0), ("t1", t1)):     # NaN had meant the whole run
             if value is not None and (isinstance(value, (bool, str)) or not isinstance(value, (int, float, np.number))
-                                      or not np.isfinite(value)):
+                                      or not math.isfinite(value)):
                 raise ValueError(f"{label} must be a finite number; got {value!r}")
         if periods is not None and not periods > 0:
             raise ValueError(f"periods must be > 0; got {periods!r}")

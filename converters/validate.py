@@ -169,10 +169,13 @@ def _check_real(name: str, value, what: str) -> None:
         raise ParameterError(f"{name} must be a numeric {what}; got None")
     kind = getattr(getattr(value, "dtype", None), "kind", None)
     if kind is None and isinstance(value, (list, tuple)):
-        try:
+        # a list of Python floats (the models' matrices) is common and cannot hold the dtypes refused here
+        # except through its entries: look at one row's first entry, not a whole conversion
+        first = value
+        while isinstance(first, (list, tuple)) and first:
+            first = first[0]
+        if isinstance(first, (bool, np.bool_, complex, np.complexfloating, str, bytes)):
             kind = np.asarray(value).dtype.kind
-        except (TypeError, ValueError, OverflowError):
-            kind = None
     if kind is not None and kind not in "fiuO":
         names = {"c": "complex", "b": "boolean", "M": "datetime", "m": "timedelta", "U": "text", "S": "bytes",
                  "V": "record"}

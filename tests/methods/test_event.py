@@ -201,6 +201,6 @@ def test_a_run_far_longer_than_the_fastest_time_constant_is_refused_not_hung(pro
     name, value = problem.split("=")
     started = time.perf_counter()
     with pytest.raises(ResourceError, match=r"^--method event: the stiffest mode's time constant is about .* "
-                                            r"substeps \(at most 1e\+08\)"):
-        simulate(half_wave_rectifier(**{name: float(value)}), EventDriven())
+                                            r"substeps \(at most 1e\+08\)"), np.errstate(all="ignore"):
+        simulate(half_wave_rectifier(**{name: float(value)}), EventDriven())      # 1e-308: its series overflow
     assert time.perf_counter() - started < 5.0

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from converters.errors import ParameterError
 
-from .common import MAX_WORKERS, add_params, check_workers, given_path, integer, json_text
+from .common import MAX_WORKERS, add_params, check_workers, given_path, integer, json_text, unit_of
 
 
 def add(sub) -> None:
@@ -70,7 +70,7 @@ def run(args) -> int:
 
 
 def _print(study, summary: dict, args) -> None:
-    unit = next((f" {q.unit}" for q in study.model.parameters if q.name == study.name and q.unit not in ("", "1")), "")
+    unit = unit_of(study.model, study.name)
     print(f"{study.model.key} along {study.name} = {study.start:g} .. {study.stop:g}{unit}: continuation (event "
           f"method, exact Jacobians) in {study.continuation_s:.2f} s")
     for branch in summary["branches"]:

@@ -58,6 +58,12 @@ def _typed(parse, described):
     return typed
 
 
+def unit_of(model, parameter: str) -> str:
+    """" UNIT" of a model's parameter for printing after its value ("" when it has none)."""
+    unit = {q.name: q.unit for q in getattr(model, "parameters", ())}.get(parameter, "")
+    return f" {unit}" if unit not in ("", "1") else ""
+
+
 def add_params(parser) -> None:
     parser.add_argument("-p", dest="params", action="append", default=[], metavar="NAME=VALUE",
                         help="parameter value, SPICE suffixes allowed (repeatable)")

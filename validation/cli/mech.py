@@ -3,7 +3,8 @@ from __future__ import annotations
 
 from converters.errors import ParameterError
 
-from .common import MAX_WORKERS, add_params, check_out, check_workers, given_path, integer, json_text, write_frame
+from .common import (MAX_WORKERS, add_params, check_out, check_workers, given_path, integer, json_text, unit_of,
+                     write_frame)
 
 
 def add(sub) -> None:
@@ -179,8 +180,7 @@ def run_bifurcations(args) -> int:
         print(json_text(out))
         return 0
     if study is not None:
-        unit = next((f" {q.unit}" for q in getattr(model, "parameters", ()) if q.name == name and q.unit not in ("", "1")),
-                    "")
+        unit = unit_of(model, name)
         print(f"{model.name} along {name} = {start:g} .. {stop:g}{unit} (continuation on the event method's exact map, "
               f"{study.wall_s:.1f} s); " + "; ".join(study.notes))
         for b in study.bifurcations:
