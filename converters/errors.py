@@ -28,3 +28,11 @@ class ResourceError(ParameterError):
 
 class TimeLimitReached(ResourceError):
     """A command's --time-limit passed while it ran (raised by the alarm the command line sets)."""
+
+
+class SignalError(KeyError, ParameterError):
+    """A signal or state name a trajectory does not have: a KeyError (a lookup by name) that is also a
+    ParameterError, so the command line reports it in one line; its text is the message, not its repr."""
+
+    def __str__(self) -> str:
+        return str(self.args[0]) if self.args else ""

@@ -22,6 +22,8 @@ import math
 
 import numpy as np
 
+from .errors import SignalError
+
 RULES = ("end", "linear", "exact")
 
 
@@ -143,7 +145,7 @@ class Trajectory:
         try:
             return self.x[:, self.state_names.index(name)]
         except ValueError:
-            raise KeyError(f"state must be one of {', '.join(self.state_names)}; got {name!r}") from None
+            raise SignalError(f"state must be one of {', '.join(self.state_names)}; got {name!r}") from None
 
     # --- labelled signals and modes ------------------------------------------------------------------
 
@@ -163,7 +165,7 @@ class Trajectory:
         if name in self.state_names:
             return self.x[rows, self.state_names.index(name)]
         if self.labels is None or name not in self.labels.signal_names:
-            raise KeyError(f"signal must be one of {', '.join(self.signal_names)}; got {name!r}")
+            raise SignalError(f"signal must be one of {', '.join(self.signal_names)}; got {name!r}")
         whole = isinstance(rows, slice) and rows == slice(None)
         cache = self.__dict__.setdefault("_signal_cache", {})
         if whole and name in cache:
@@ -184,7 +186,7 @@ class Trajectory:
         if "mode" in self.measured:
             return np.asarray(self.measured["mode"])[rows]
         if self.labels is None:
-            raise KeyError("modes need a model's labels (this trajectory has none)")
+            raise SignalError("modes need a model's labels (this trajectory has none)")
         if hasattr(self.labels, "mode_labels_of"):             # mechanical models read the mode from the run's state
             return self.labels.mode_labels_of(self.samples(rows))
         return self.labels.modes(self.conducting(rows), self.signal("switch", rows), self.x[rows])
@@ -226,7 +228,7 @@ class Trajectory:
         """Integral of signal**power over [t0, t1] by the trajectory's rule."""
         if self.rule == "exact" and self.exact is not None and name not in self.measured:
             if name not in self.state_names and (self.labels is None or name not in self.labels.signal_names):
-                raise KeyError(f"signal must be one of {', '.join(self.signal_names)}; got {name!r}")
+                raise SignalError(f"signal must be one of {', '.join(self.signal_names)}; got {name!r}")
             cache = self.__dict__.setdefault("_quadrature_cache", {})
             if (t0, t1) not in cache:
                 cache.clear()                    # one window at a time: the nodes of a long run are large
@@ -335,7 +337,12 @@ class Trajectory:
             names = list(self.config_names) or [str(c) for c in range(int(self.config.max()) + 1)]
             data["config"] = pd.Categorical.from_codes(self.config, categories=names)
         frame = pd.DataFrame(data)
-        return frame if columns is None else frame[list(columns)]
+        if columns is None:
+            return frame
+        unknown = [c for c in (columns if not isinstance(columns, str) else [columns]) if c not in frame.columns]
+        if unknown:
+            raise SignalError(f"columns must be among {', '.join(frame.columns)}; got {unknown[0]!r}")
+        return frame[[columns] if isinstance(columns, str) else list(columns)]
 
     def waveforms(self):
         """The waveform table of the command line: time, states, the model's signals, mode (a signal the run

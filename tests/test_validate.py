@@ -110,3 +110,27 @@ def test_a_state_that_leaves_the_finite_numbers_is_an_error_not_a_trajectory():
     for window in ({"periods": np.nan}, {"t0": np.nan}, {"periods": -1.0}):  # NaN meant the whole run
         with pytest.raises(ValueError):
             run.mean("vout", **window)
+
+
+def test_an_unknown_signal_is_a_key_error_the_command_line_reports_in_one_line():
+    from converters.run import run_converter
+    run = run_converter("buck", periods=3)
+    for call in (lambda: run.mean("nope"), lambda: run.to_pandas(columns=["time", "nope"])):
+        with pytest.raises(KeyError) as refused:                      # still a lookup error by name
+            call()
+        assert isinstance(refused.value, ValueError) and "got 'nope'" in str(refused.value)
+        assert not str(refused.value).startswith("'")                 # the message, not its repr
+
+
+@pytest.mark.parametrize("build,message", [
+    (lambda: __import__("converters.problems.switching", fromlist=["x"]).Relay(None, 0, 1),
+     "function must be a SwitchingFunction; got None"),               # an AttributeError later, before
+    (lambda: __import__("converters.problems.switching", fromlist=["x"]).StateSwitching(None, 0, 1),
+     "function must be a SwitchingFunction; got None"),
+    (lambda: __import__("converters.analysis.bifurcation", fromlist=["x"]).brute_force(None, None, "abc", [0.0]),
+     "values must be finite numbers, at least one; got 'abc'"),        # numpy's words, no parameter
+])
+def test_switching_laws_and_diagrams_refuse_what_fails_later(build, message):
+    with pytest.raises(ParameterError) as refused:
+        build()
+    assert str(refused.value) == message

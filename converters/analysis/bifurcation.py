@@ -177,7 +177,10 @@ def brute_force(problem_of, method, values, x0, *, transient: int = 200, record:
     -------
     list of Attractor, one per value.
     """
-    values = np.asarray(values, dtype=float).ravel()
+    try:
+        values = np.asarray(values, dtype=float).ravel()
+    except (TypeError, ValueError):           # "abc": numpy's words had named no parameter
+        raise ParameterError(f"values must be finite numbers, at least one; got {values!r}") from None
     if values.size == 0 or not np.all(np.isfinite(values)):
         raise ParameterError(f"values must be finite numbers, at least one; got {values!r}")
     for name, count, low in (("transient", transient, 0), ("record", record, 1), ("chunk", chunk, 1)):
@@ -245,7 +248,10 @@ def section_diagram(problem_of, method, values, x0, *, kind: str, pair: int, tra
     """A brute-force diagram on a Poincare section: at each value, the events of ``kind`` on ``pair`` after
     ``transient`` time units, over ``record`` more (the unit: the forcing period, or ``unit`` for an
     autonomous problem); chunks seeded along the path and run in parallel as in :func:`brute_force`."""
-    values = np.asarray(values, dtype=float).ravel()
+    try:
+        values = np.asarray(values, dtype=float).ravel()
+    except (TypeError, ValueError):           # "abc": numpy's words had named no parameter
+        raise ParameterError(f"values must be finite numbers, at least one; got {values!r}") from None
     if values.size == 0 or not np.all(np.isfinite(values)):
         raise ParameterError(f"values must be finite numbers, at least one; got {values!r}")
     task = _SectionChunk(problem_of, method, np.array(x0, dtype=float), float(transient), float(record),

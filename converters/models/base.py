@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import ParameterError
+from ..errors import ParameterError, SignalError
 from ..problems import Configuration, LCSProblem, Schedule
 from ..params import Param, resolve
 from ..trajectory import Samples
@@ -115,7 +115,7 @@ class Model(ABC):
             return self.vout(samples, p)
         if name == "switch":
             return self.switch(samples)
-        raise KeyError(f"signal must be one of {', '.join(self.signal_names)}; got {name!r}")
+        raise SignalError(f"signal must be one of {', '.join(self.signal_names)}; got {name!r}")
 
     @abstractmethod
     def vout(self, samples: Samples, p: dict) -> np.ndarray:

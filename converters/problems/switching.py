@@ -82,6 +82,11 @@ def _check_config(name: str, value) -> int:
     return int(value)
 
 
+def _check_function(function) -> None:
+    if not isinstance(function, SwitchingFunction):        # None failed later with an AttributeError
+        raise ParameterError(f"function must be a SwitchingFunction; got {function!r}")
+
+
 @dataclass(frozen=True)
 class StateSwitching:
     """Hysteresis (or latched) switching between two configurations on a switching function.
@@ -110,6 +115,9 @@ class StateSwitching:
     initial: int | None = None
 
     def __post_init__(self):
+        _check_function(self.function)
+        if not isinstance(self.latch, (bool, np.bool_)):                   # "no" had been true
+            raise ParameterError(f"latch must be True or False; got {self.latch!r}")
         object.__setattr__(self, "below", _check_config("below", self.below))
         object.__setattr__(self, "above", _check_config("above", self.above))
         if self.below == self.above:
@@ -162,6 +170,7 @@ class Relay:
     high: int
 
     def __post_init__(self):
+        _check_function(self.function)
         object.__setattr__(self, "low", _check_config("low", self.low))
         object.__setattr__(self, "high", _check_config("high", self.high))
         if self.low == self.high:
