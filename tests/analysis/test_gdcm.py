@@ -171,6 +171,9 @@ def test_cli_gdcm_json_and_prc_combinations(capsys):
     labels = set(get_converter("prc").mode_labels)
     assert set(prc["lcp"]) <= labels and set(prc["spice"]) <= labels
     assert sum(prc["lcp"].values()) == pytest.approx(1.0, abs=1e-9)
+    assert main(["gdcm", "prc"]) == 0           # the text says what "agree" compares (it did not)
+    assert capsys.readouterr().out.splitlines()[-1] == (f"agree (the modes held more than 1 % of the period; largest "
+                                                        f"fraction difference {prc['max_fraction_difference']:.2g})")
     assert main(["gdcm", "boost", "-p", "D=1.5"]) == 2
     assert "D (duty ratio) must be in [0, 1]; got 1.5" in capsys.readouterr().err
 

@@ -37,5 +37,9 @@ def run(args) -> int:
     else:
         for side in ("lcp", "spice"):
             print(f"  {side}: " + ", ".join(f"{k} {v:.4f}" for k, v in result[side].items()))
-    print("agree" if result["agree"] else "DISAGREE")
+    verdict = "agree" if result["agree"] else "DISAGREE"
+    if "max_fraction_difference" in result:      # say what is compared (shorter modes, switching overlaps, are not)
+        verdict += (f" (the modes held more than 1 % of the period; largest fraction difference "
+                    f"{result['max_fraction_difference']:.2g})")
+    print(verdict)
     return 0 if result["agree"] else 1
