@@ -23,6 +23,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..errors import ParameterError
+from ..validate import check_integer
 from ..parallel import parallel_map
 
 
@@ -149,6 +150,17 @@ class _Chunk:
         return samples, x_end, lyap
 
 
+def _path_values(values) -> np.ndarray:
+    """The diagram's parameter values: finite numbers, at least one ("abc": numpy's words had named no parameter)."""
+    try:
+        out = np.asarray(values, dtype=float).ravel()
+    except (TypeError, ValueError):
+        out = np.empty(0)
+    if out.size == 0 or not np.all(np.isfinite(out)):
+        raise ParameterError(f"values must be finite numbers, at least one; got {values!r}")
+    return out
+
+
 def brute_force(problem_of, method, values, x0, *, transient: int = 200, record: int = 64, lyapunov: bool = False,
                 period_rtol: float = 1e-6, chunk: int = 20, workers: int | None = None,
                 progress: bool = False) -> list[Attractor]:
@@ -177,15 +189,9 @@ def brute_force(problem_of, method, values, x0, *, transient: int = 200, record:
     -------
     list of Attractor, one per value.
     """
-    try:
-        values = np.asarray(values, dtype=float).ravel()
-    except (TypeError, ValueError):           # "abc": numpy's words had named no parameter
-        raise ParameterError(f"values must be finite numbers, at least one; got {values!r}") from None
-    if values.size == 0 or not np.all(np.isfinite(values)):
-        raise ParameterError(f"values must be finite numbers, at least one; got {values!r}")
+    values = _path_values(values)
     for name, count, low in (("transient", transient, 0), ("record", record, 1), ("chunk", chunk, 1)):
-        if isinstance(count, bool) or not (isinstance(count, (int, np.integer)) and count >= low):
-            raise ParameterError(f"{name} must be an integer >= {low}; got {count!r}")     # chunk 0: range() crash
+        check_integer(name, count, low)                                     # chunk 0: a range() crash before
     if not (isinstance(period_rtol, (int, float, np.floating)) and 0.0 < period_rtol < 1.0):
         raise ParameterError(f"period_rtol must be in (0, 1); got {period_rtol!r}")   # -1 or NaN: accepted before
     if not isinstance(lyapunov, (bool, np.bool_)):
@@ -248,12 +254,7 @@ def section_diagram(problem_of, method, values, x0, *, kind: str, pair: int, tra
     """A brute-force diagram on a Poincare section: at each value, the events of ``kind`` on ``pair`` after
     ``transient`` time units, over ``record`` more (the unit: the forcing period, or ``unit`` for an
     autonomous problem); chunks seeded along the path and run in parallel as in :func:`brute_force`."""
-    try:
-        values = np.asarray(values, dtype=float).ravel()
-    except (TypeError, ValueError):           # "abc": numpy's words had named no parameter
-        raise ParameterError(f"values must be finite numbers, at least one; got {values!r}") from None
-    if values.size == 0 or not np.all(np.isfinite(values)):
-        raise ParameterError(f"values must be finite numbers, at least one; got {values!r}")
+    values = _path_values(values)
     task = _SectionChunk(problem_of, method, np.array(x0, dtype=float), float(transient), float(record),
                          float(unit or 1.0), kind, int(pair))
     chunks = [values[i:i + chunk] for i in range(0, values.size, chunk)]

@@ -138,6 +138,13 @@ def semidefinite_by_minors(M, st, sf):
     return 0
 
 
+@njit(cache=True, _nrt=False)
+def proves_psd(eig, k):
+    """Whether the least eigenvalue of (M + M^T)/2 over max|M| shows M positive semidefinite (to PSD_TOL k,
+    relative to max|M|, as the minors' bound): the proof after Lemke's ray."""
+    return eig >= -PSD_TOL * k
+
+
 @njit(cache=True)
 def least_symmetric_eigenvalue(M):
     """The least eigenvalue of (M + M^T)/2 divided by max|M| (0 for M = 0)."""
@@ -166,7 +173,7 @@ def run(M, q, z, fw, iw, st, sf, tol, max_iter, budget, opts):
     sf[INFO_X] (:func:`least_symmetric_eigenvalue`) and calls again (:func:`converters.lcp.engine.advance`)."""
     k = q.shape[0]
     if st[S.PHASE] == S.EIGENVALUE:   # Lemke's ray: the caller has put the least eigenvalue in sf[INFO_X]
-        if sf[S.INFO_X] >= -PSD_TOL * k:      # relative to max|M|, as the minors' bound
+        if proves_psd(sf[S.INFO_X], k):
             return _no_solution_psd(st)
         if not _next(st, k):
             return True

@@ -287,7 +287,7 @@ class Run:
         eig = sf[S.INFO_X] if verdict == 1 else None
         if verdict == 0:
             eig = auto.least_symmetric_eigenvalue(M)
-            verdict = 1 if eig >= -auto.PSD_TOL * k else -1
+            verdict = 1 if auto.proves_psd(eig, k) else -1
         if verdict == 1:
             return "no_solution", (f"lemke: ray termination, and M is positive semidefinite (least eigenvalue of "
                                    f"(M + M^T)/2: {eig:.3g} max|M|), hence copositive-plus: no solution exists")
