@@ -23,7 +23,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..errors import ParameterError
-from ..validate import check_integer
+from ..validate import _short, as_matrix, as_vector, check_integer, check_range
 from ..parallel import parallel_map
 
 
@@ -52,8 +52,15 @@ class Attractor:
 
 
 def detect_period(samples: np.ndarray, rtol: float = 1e-6) -> int:
-    """The smallest p <= len(samples) / 2 with |x_{m+p} - x_m| <= rtol (1 + max |x|) for every m, else 0."""
-    samples = np.asarray(samples, dtype=float)
+    """The smallest p <= len(samples) / 2 with |x_{m+p} - x_m| <= rtol (1 + max |x|) for every m, else 0.
+
+    ``samples``: one sample per period, as a vector (a scalar per period) or a (periods, n) matrix."""
+    rtol = check_range("rtol", rtol, 0.0, 1.0, low_open=True)
+    if getattr(samples, "ndim", None) == 2 or (isinstance(samples, (list, tuple)) and samples
+                                                and isinstance(samples[0], (list, tuple, np.ndarray))):
+        samples = as_matrix("samples", samples, (None, None))
+    else:
+        samples = as_vector("samples", samples, None)
     if samples.shape[0] < 2:
         return 0
     limit = rtol * (1.0 + np.abs(samples).max())
@@ -267,6 +274,8 @@ def aperiodic_onset(attractors: list[Attractor], run: int = 3) -> float | None:
     """The first value (in path order) that starts ``run`` consecutive attractors without a period (and
     without errors), or None. Isolated aperiodic values next to a bifurcation (slow convergence where a
     multiplier nears the unit circle) do not count."""
+    _check_attractors(attractors)
+    run = check_integer("run", run, 1)
     streak = 0
     for i, a in enumerate(attractors):
         streak = streak + 1 if (not a.error and a.period == 0) else 0
@@ -275,8 +284,14 @@ def aperiodic_onset(attractors: list[Attractor], run: int = 3) -> float | None:
     return None
 
 
+def _check_attractors(attractors) -> None:
+    if not (isinstance(attractors, (list, tuple)) and all(isinstance(a, Attractor) for a in attractors)):
+        raise ParameterError(f"attractors must be a list of Attractor (from brute_force); got {_short(attractors)}")
+
+
 def period_windows(attractors: list[Attractor]) -> list[dict]:
     """Consecutive values with the same detected period: [{period, first, last, count}] in path order."""
+    _check_attractors(attractors)
     windows: list[dict] = []
     for a in attractors:
         period = -1 if a.error else a.period

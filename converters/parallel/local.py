@@ -19,6 +19,13 @@ import time
 from dataclasses import dataclass
 
 from ..errors import ParameterError, TimeLimitReached
+from ..limits import TIME_RANGE
+from ..validate import check_integer, check_range
+
+#: Most worker processes a backend starts: each holds a Python with numpy and the kernels (~50-100 MB).
+MAX_WORKERS = 64
+#: Longest time a chunk may be given (seconds): the longest time limit of a run.
+MAX_TIMEOUT = TIME_RANGE[1]
 
 
 def default_workers() -> int:
@@ -164,13 +171,15 @@ class LocalBackend:
 
     def __init__(self, workers: int | None = None, *, timeout: float | None = None, attempts: int = 3,
                  tasks_per_process: int | None = None, finalize=None):
-        workers = default_workers() if workers is None else workers
-        if not (isinstance(workers, int) and workers >= 1):
-            raise ParameterError(f"workers must be an integer >= 1; got {workers!r}")
-        if timeout is not None and not timeout > 0:
-            raise ParameterError(f"timeout must be > 0 seconds; got {timeout!r}")
-        if not (isinstance(attempts, int) and attempts >= 1):
-            raise ParameterError(f"attempts must be an integer >= 1; got {attempts!r}")
+        workers = min(default_workers(), MAX_WORKERS) if workers is None else check_integer("workers", workers, 1,
+                                                                                             MAX_WORKERS)
+        if timeout is not None:
+            timeout = check_range("timeout (seconds)", timeout, 0.0, MAX_TIMEOUT, low_open=True)
+        attempts = check_integer("attempts", attempts, 1, 100)
+        if tasks_per_process is not None:
+            tasks_per_process = check_integer("tasks_per_process", tasks_per_process, 1)
+        if finalize is not None and not callable(finalize):
+            raise ParameterError(f"finalize must be callable or None; got {finalize!r}")
         self.workers, self.timeout, self.attempts = workers, timeout, attempts
         self.tasks_per_process, self.finalize = tasks_per_process, finalize
 
@@ -178,6 +187,7 @@ class LocalBackend:
         """Yield (position, result or :class:`Lost`) for each chunk, as they complete."""
         chunks = list(chunks)
         call = _Call(function, self.finalize)
+        check_picklable(call)
         queue = list(range(len(chunks)))[::-1]              # popped from the end: in order
         tries = [0] * len(chunks)
         slots = [ProcessSlot(self.tasks_per_process) for _ in range(min(self.workers, len(chunks)))]
@@ -222,6 +232,20 @@ class LocalBackend:
                     slot.close()
 
 
+def check_picklable(function) -> None:
+    """Refuse up front a function that cannot reach a worker process (a lambda, a function defined inside
+    another): each chunk would otherwise come back lost with pickle's words."""
+    import pickle
+    if not callable(function):
+        raise ParameterError(f"function must be callable; got {function!r}")
+    try:
+        pickle.dumps(function)
+    except (pickle.PicklingError, AttributeError, TypeError) as exc:
+        raise ParameterError(f"function must be picklable to run in worker processes (a module-level function or a "
+                             f"picklable object; a lambda or a nested function is not), or use workers=1; "
+                             f"{type(exc).__name__}: {exc}") from None
+
+
 def parallel_map(function, items, *, workers: int | None = None, chunk: int = 1, progress: bool = False,
                  label: str = "", unit: str = "pt", finalize=None, timeout: float | None = None,
                  tasks_per_process: int | None = None, attempts: int = 3, on_lost=None) -> list:
@@ -245,9 +269,10 @@ def parallel_map(function, items, *, workers: int | None = None, chunk: int = 1,
         message starts ``worker lost``; a time limit: ``timeout``; an exception: its type and text);
         without it a lost chunk raises.
     """
+    if not callable(function):
+        raise ParameterError(f"function must be callable; got {function!r}")
     items = list(items)
-    if not (isinstance(chunk, int) and chunk >= 1):
-        raise ParameterError(f"chunk must be an integer >= 1; got {chunk!r}")
+    chunk = check_integer("chunk", chunk, 1)
     chunks = [items[i:i + chunk] for i in range(0, len(items), chunk)]
     backend = LocalBackend(workers, timeout=timeout, attempts=attempts, tasks_per_process=tasks_per_process,
                            finalize=finalize)
@@ -285,4 +310,4 @@ class _Apply:
         return [self.function(item) for item in chunk]
 
 
-__all__ = ["parallel_map", "default_workers", "LocalBackend", "ProcessSlot", "Lost"]
+__all__ = ["parallel_map", "default_workers", "LocalBackend", "ProcessSlot", "Lost", "MAX_WORKERS", "check_picklable"]

@@ -56,6 +56,17 @@ def test_detect_period_and_bad_input():
     samples = np.array([[1.0], [2.0], [1.0], [2.0], [1.0], [2.0]])
     assert detect_period(samples) == 2
     assert detect_period(samples + np.array([[0], [0], [1e-3], [0], [0], [0]])) == 0
+    assert detect_period(samples.ravel()) == 2 and detect_period(samples.tolist()) == 2   # a vector, a list
+    for bad, message in [(None, "samples must be a numeric vector; got None"),        # IndexError before
+                         ([1.0, 2.0, np.nan], "samples must contain only finite numbers; got nan at index (2,)")]:
+        with pytest.raises(ParameterError) as refused:
+            detect_period(bad)
+        assert str(refused.value) == message
+    with pytest.raises(ParameterError, match=r"rtol must be in \(0, 1\]; got -1.0"):
+        detect_period(samples, rtol=-1)
+    for call in (aperiodic_onset, period_windows):                                   # TypeError before
+        with pytest.raises(ParameterError, match="attractors must be a list of Attractor .from brute_force.; got None"):
+            call(None)
     with pytest.raises(ParameterError, match="record must be an integer >= 1"):
         logistic([3.0], record=0)
     with pytest.raises(ParameterError, match="values must be finite numbers"):

@@ -222,11 +222,23 @@ def test_a_model_sweep_refuses_bad_settings_before_any_point(kwargs, message):
     (lambda: LatinHypercube([Axis("D", 0.2, 0.8)], 3).points([-1]), "indices must be integers in [0, 2]; got [-1]"),
     (lambda: run_ensemble(ModelSweep("buck"), Grid([Axis("D", 0.2, 0.8, 3)]), backend="serial", chunk=0),
      "chunk must be an integer >= 1; got 0"),                               # was replaced by the default
+    (lambda: LocalBackend(10**6), "workers must be an integer in [1, 64]; got 1000000"),     # a million forks
+    (lambda: LocalBackend(2, timeout=-1.0), "timeout (seconds) must be in (0, 604800]; got -1.0"),
+    (lambda: LocalBackend(2, tasks_per_process=0.5), "tasks_per_process must be an integer >= 1; got 0.5"),
+    (lambda: parallel_map(None, [1, 2]), "function must be callable; got None"),
 ])
 def test_sweep_building_blocks_refuse_what_they_would_mangle(call, message):
     with pytest.raises(ParameterError) as refused:
         call()
     assert str(refused.value) == message
+
+
+def test_a_lambda_is_refused_before_any_worker_starts_and_runs_in_process():
+    """pickle's AttributeError had come back as each chunk's loss, and the pool's shutdown printed a traceback."""
+    with pytest.raises(ParameterError, match=r"^function must be picklable to run in worker processes .* or use "
+                                             r"workers=1; AttributeError: Can't pickle local object"):
+        parallel_map(lambda x: 2 * x, [1, 2, 3], workers=2)
+    assert parallel_map(lambda x: 2 * x, [1, 2, 3], workers=1) == [2, 4, 6]
 
 
 def test_a_latin_hypercube_takes_a_numpy_integer():

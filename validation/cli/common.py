@@ -4,14 +4,11 @@ from __future__ import annotations
 from pathlib import Path
 
 from converters.errors import ParameterError
-
+from converters.parallel.local import MAX_WORKERS
 
 #: Exit codes: bad input (one line on stderr), and Ctrl-C (128 + SIGINT, as the shell reports it).
 EXIT_BAD_INPUT = 2
 EXIT_INTERRUPTED = 130
-
-#: Most worker processes a command starts (--workers): each holds a Python with numpy and the kernels (~50-100 MB).
-MAX_WORKERS = 64
 
 
 def check_workers(workers, flag: str = "--workers") -> None:
