@@ -68,9 +68,15 @@ def _gate(T: float, D: float, options: SpiceOptions) -> str:
         return "Vg gate 0 DC 0"
     if D >= 1.0:
         return "Vg gate 0 DC 1"
+    # On from t = 0, as the LCP's period starts: an initial state taken at the start of that period (x0, the
+    # periodic orbit) is then consistent with the switch's state. A gate that rose at t = 0 turned the switch on
+    # while ngspice's first steps, under UIC, were still settling the conducting diode: 20 kA flowed backwards
+    # through it for 1 ns and took 0.1-0.2 V off the boost's capacitor at every start. Each period: off at
+    # D T, on at T (both crossings edge / 2 later), on for D T.
     edge = options.edge_fraction * T
-    width = max(D * T - edge, edge)
-    return f"Vg gate 0 PULSE(0 1 0 {_num('edge', edge)} {_num('edge', edge)} {_num('width', width)} {_num('T', T)})"
+    off = max(T - D * T - edge, edge)
+    return (f"Vg gate 0 PULSE(1 0 {_num('D T', D * T)} {_num('edge', edge)} {_num('edge', edge)} {_num('off', off)} "
+            f"{_num('T', T)})")
 
 
 def _models(options: SpiceOptions) -> list[str]:
