@@ -51,6 +51,10 @@ def register_state(n: int):
 HERE = Path(__file__).resolve().parent
 MODULE = "_kernels"
 RECORD = HERE / f"{MODULE}.json"
+#: solve_lcp's C entry point (:mod:`converters.lcp.solve`), built with the module above from this C source and
+#: :func:`converters.lcp.engine.solve_raw`, and used when the module above is.
+FAST_MODULE = "_lcpfast"
+FAST_SOURCE = "lcp/_fast.c"
 #: name -> (module, function): the kernels this module serves.
 KERNELS = {
     "run_steps": ("converters.methods.theta_kernels", "run_steps"),
@@ -82,6 +86,17 @@ def kernel(name: str):
         else:
             _loaded[name] = _jit(name)
     return _loaded[name]
+
+
+def fast_lcp():
+    """The module of solve_lcp's C entry point, or None: when the ahead-of-time kernels are not used (stale, not
+    built, ``PCSUITE_KERNELS=jit``), or it does not load."""
+    if _ahead_of_time()[0] is None:
+        return None
+    try:
+        return importlib.import_module(f"converters.{FAST_MODULE}")
+    except ImportError:
+        return None
 
 
 def _jit(name: str):

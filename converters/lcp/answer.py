@@ -13,7 +13,7 @@ FAILED = "failed"
 STATUSES = (SOLVED, NO_SOLUTION, MAX_ITERATIONS, FAILED)   # the compiled code's status numbers index this tuple
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class LCPResult:
     """Outcome of :func:`solve_lcp`.
 
@@ -62,19 +62,23 @@ class LCPResult:
 
 
 _new = object.__new__
+#: the fields' slot descriptors: a frozen dataclass sets its fields through them (object.__setattr__ is what
+#: its __init__ calls, and costs more); the C entry point of solve_lcp writes the same slots
+_SLOTS = tuple(LCPResult.__dict__[name].__set__ for name in ("z", "w", "status", "err", "iterations", "method",
+                                                            "message", "solutions"))
+_Z, _W, _STATUS, _ERR, _ITERATIONS, _METHOD, _MESSAGE, _SOLUTIONS = _SLOTS
 
 
 def make_result(z, w, status, err, iterations, method, message="", solutions=None) -> LCPResult:
     """An LCPResult built without the frozen dataclass's per-field ``object.__setattr__`` (a quarter of the
     cost of a small solve); the same object as ``LCPResult(...)``."""
     result = _new(LCPResult)
-    d = result.__dict__
-    d["z"] = z
-    d["w"] = w
-    d["status"] = status
-    d["err"] = err
-    d["iterations"] = iterations
-    d["method"] = method
-    d["message"] = message
-    d["solutions"] = [] if solutions is None else solutions
+    _Z(result, z)
+    _W(result, w)
+    _STATUS(result, status)
+    _ERR(result, err)
+    _ITERATIONS(result, iterations)
+    _METHOD(result, method)
+    _MESSAGE(result, message)
+    _SOLUTIONS(result, [] if solutions is None else solutions)
     return result

@@ -21,7 +21,7 @@ import functools
 import math
 
 import numpy as np
-from numba import njit
+from numba import carray, njit
 
 from ..errors import LCPError
 from . import auto
@@ -197,6 +197,42 @@ def solve_in(M, q, z, w, method, tol, max_iter, fast_paths, opts, budget, buf, i
             stages |= (st[S.STAGE_OUTCOME + m] + 1) << (4 * m)
         stages |= st[S.PSD] << (4 * S.N_METHODS)
     return ONCE_SOLVED, st[S.ITER], err, used, -1, stages, sf[S.INFO_X]
+
+
+#: What :func:`solve_raw` writes in ``out`` (doubles): solve_in's answer after its first entry; RAW_WORKSPACE is
+#: its answer when the caller's workspace is too small (``out`` then holds the doubles and integers it needs).
+RAW_ITERATIONS, RAW_ERR, RAW_USED, RAW_RULE, RAW_STAGES, RAW_INFO_X = range(6)
+RAW_OUT_SIZE = 6
+RAW_WORKSPACE = -1
+
+
+def solve_raw(M_ptr, q_ptr, z_ptr, w_ptr, k, method, tol, max_iter, fast_paths, opts_ptr, n_opts, budget,
+              buf_ptr, n_buf, ibuf_ptr, n_ibuf, out_ptr):
+    """:func:`solve_once` for a caller in C (``converters/lcp/_fast.c``, the C entry point of solve_lcp): arrays as
+    pointers (C-contiguous doubles; M is k x k), the workspace the caller's, nothing allocated, so no reference
+    counting; solve_in's answer returned, the rest of its tuple written to ``out``
+    (RAW_ITERATIONS .. RAW_INFO_X). Not jitted here: ``python -m converters.build_kernels`` compiles it ahead of
+    time into an object with C arguments (:func:`converters.build_kernels.build_fast`)."""
+    out = carray(out_ptr, (RAW_OUT_SIZE,))
+    nf, ni = sizes(method, k)
+    need_f = k * k + 2 * k + S.SF_SIZE + nf
+    need_i = S.ST_SIZE + ni
+    if need_f > n_buf or need_i > n_ibuf:
+        out[0] = need_f
+        out[1] = need_i
+        return RAW_WORKSPACE
+    ibuf = carray(ibuf_ptr, (need_i,))
+    ibuf[:] = 0
+    answer, iterations, err, used, rule, stages, info_x = solve_in(
+        carray(M_ptr, (k, k)), carray(q_ptr, (k,)), carray(z_ptr, (k,)), carray(w_ptr, (k,)), method, tol, max_iter,
+        fast_paths != 0, carray(opts_ptr, (n_opts,)), budget, carray(buf_ptr, (need_f,)), ibuf)
+    out[RAW_ITERATIONS] = iterations
+    out[RAW_ERR] = err
+    out[RAW_USED] = used
+    out[RAW_RULE] = rule
+    out[RAW_STAGES] = stages
+    out[RAW_INFO_X] = info_x
+    return answer
 
 
 # ------------------------------------------------------------------------------------------------- Python

@@ -333,3 +333,37 @@ def _load_once():
         once = overload.entry_point if overload is not None else once
     _once = once
     return _once
+
+
+# ------------------------------------------------------------------------- the C entry point
+# From Python, the thin path above costs about 2 us around a few hundred nanoseconds of compiled work. When the
+# ahead-of-time kernels are used, solve_lcp is a converters._lcpfast.Solver: the same thin path in C
+# (converters/lcp/_fast.c), calling the same compiled solve (engine.solve_raw -> solve_in), which hands every
+# call and every answer it does not take to the functions below (the Python solve_lcp itself, the sliced solve,
+# auto's messages). Otherwise solve_lcp is the Python function. ``solve_lcp.__wrapped__`` is the Python function.
+
+#: Largest k the C entry point takes: its workspace is kept between calls (at most 7 k^2 doubles, 0.9 MB).
+FAST_MAX_K = 128
+
+
+def _after_once(M, q, code: int, tol: float, fast_paths: bool, started: float) -> LCPResult:
+    """The thin path's ONCE_OTHER answer, from the C entry point: the sliced solve under the default time limit."""
+    return _solve_sliced(M, q, code, tol, DEFAULT_MAX_ITER[S.METHOD_NAMES[code]], fast_paths,
+                         _deadline(DEFAULT_TIME_LIMIT, started), _OPTIONS)
+
+
+def _with_c_entry(python):
+    fast = compiled.fast_lcp() if _ENVIRON is not None else None
+    if fast is None:
+        return python
+    _load_once()                                           # _OPTIONS
+    slots = tuple(LCPResult.__dict__[name] for name in ("z", "w", "status", "err", "iterations", "method", "message",
+                                                        "solutions"))
+    solver = fast.Solver(python, _after_once, _solved_message, LCPResult, slots, SOLVED, "", tuple(S.METHOD_NAMES),
+                         _AUTO_LABELS, _CLOSED_FORM_MESSAGES, "auto:closed form", _ENVIRON, _TIME_KEY, _MEMORY_KEY,
+                         _OPTIONS, _ONCE_MAX_ITER, _PGS_GAVE_WAY, 1e-10, _TOL_LOW, _TOL_HIGH,
+                         min(FAST_MAX_K, _K_UNDER_DEFAULT_MEMORY), S.AUTO, S.ENUM, _CHUNK)
+    return functools.update_wrapper(solver, python)
+
+
+solve_lcp = _with_c_entry(solve_lcp)
