@@ -88,7 +88,7 @@ def build_fast(tmp: Path) -> Path:
     from .lcp import engine
     pointer, integer = T.CPointer(T.float64), T.int64
     signature = T.int64(pointer, pointer, pointer, pointer, integer, integer, T.float64, integer, integer, pointer,
-                        integer, integer, pointer, integer, T.CPointer(T.int64), integer, pointer)
+                        integer, integer, pointer, pointer, integer, T.CPointer(T.int64), integer, pointer)
     raw = tmp / "solve_raw.o"
     compiler = ModuleCompiler([ExportEntry("pcsuite_lcp_solve_raw", signature, engine.solve_raw)], FAST_MODULE,
                               use_nrt=True, cpu_name="host")

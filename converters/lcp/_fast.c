@@ -42,8 +42,8 @@ VISIBILITY_HIDDEN void NRT_MemInfo_call_dtor(void *meminfo) { (void)meminfo; abo
 typedef struct { char *a; int32_t b; char *c; char *d; int32_t e; } excinfo_t;
 extern int32_t pcsuite_lcp_solve_raw(int64_t *answer, excinfo_t **excinfo, double *M, double *q, double *z,
                                      double *w, int64_t k, int64_t method, double tol, int64_t max_iter,
-                                     int64_t fast_paths, double *opts, int64_t n_opts, int64_t budget, double *buf,
-                                     int64_t n_buf, int64_t *ibuf, int64_t n_ibuf, double *out);
+                                     int64_t fast_paths, double *opts, int64_t n_opts, int64_t budget, double *mbuf,
+                                     double *buf, int64_t n_buf, int64_t *ibuf, int64_t n_ibuf, double *out);
 
 /* solve_once's answers and solve_raw's layout (converters/lcp/state.py, engine.py: checked at construction) */
 enum { ONCE_SOLVED = 0, ONCE_CLOSED_FORM = 1, ONCE_OTHER = 2, RAW_WORKSPACE = -1 };
@@ -53,6 +53,8 @@ enum { RAW_ITERATIONS = 0, RAW_ERR, RAW_USED, RAW_RULE, RAW_STAGES, RAW_INFO_X, 
 enum { F_Z, F_W, F_STATUS, F_ERR, F_ITERATIONS, F_METHOD, F_MESSAGE, F_SOLUTIONS, N_FIELDS };
 
 /* The workspace, shared by every call (the GIL is held throughout: one solve at a time), grown when needed. */
+static double *work_m = NULL;      /* k x k: M normalised */
+static Py_ssize_t n_work_m = 0;
 static double *work_f = NULL;
 static int64_t n_work_f = 0;
 static int64_t *work_i = NULL;
@@ -74,6 +76,8 @@ typedef struct {
     PyObject *closed_forms;   /* "closed form (<rule>)", by rule */
     PyObject *closed_label;   /* "auto:closed form" */
     PyObject *environ;        /* os.environ._data */
+    uint64_t environ_version; /* its version when neither limit was set in it */
+    int environ_seen;
     PyObject *time_key, *memory_key;
     PyObject *opts;           /* the default options (a float64 array) */
     Py_ssize_t n_methods, n_rules, auto_code, enum_code;
@@ -128,6 +132,32 @@ set_in_environ(Solver *s, PyObject *key)
     return !PyBytes_Check(value) || PyBytes_GET_SIZE(value) > 0;
 }
 
+/* Whether PCSUITE_TIME_LIMIT or PCSUITE_MAX_MEMORY is set (1), or looking failed (-1: the Python path then
+   raises it again). Looked up only when os.environ has changed since the last look (CPython < 3.12 numbers
+   every change of a dict: ma_version_tag). */
+static int
+limits_set(Solver *s)
+{
+#if PY_VERSION_HEX < 0x030C0000
+    uint64_t version = ((PyDictObject *)s->environ)->ma_version_tag;
+    if (s->environ_seen && version == s->environ_version) return 0;
+#endif
+    int set = set_in_environ(s, s->time_key);
+    if (set == 0) set = set_in_environ(s, s->memory_key);
+    if (set < 0) {
+        PyErr_Clear();
+        return 1;
+    }
+#if PY_VERSION_HEX < 0x030C0000
+    s->environ_seen = set == 0;
+    s->environ_version = version;
+#endif
+    return set;
+}
+
+/* time.monotonic()'s clock on Linux. Read when a solve goes on in Python after the first slice of work: its
+   deadline (the default 20 s; a limit set in the environment takes the Python path from the start) then
+   counts from the end of that slice, a few milliseconds late at most. */
 static double
 monotonic(void)
 {
@@ -205,11 +235,7 @@ solver_call(PyObject *self, PyObject *const *args, size_t nargsf, PyObject *kwna
         if (fast_o != Py_True && fast_o != Py_False) goto python;
         fast_paths = fast_o == Py_True;
     }
-    int set = set_in_environ(s, s->time_key);
-    if (set == 0) set = set_in_environ(s, s->memory_key);
-    if (set < 0) return NULL;
-    if (set) goto python;                        /* a time or memory limit: Python reads and checks it */
-    double started = monotonic();
+    if (limits_set(s)) goto python;              /* a time or memory limit (or an error): Python reads it */
 
     PyObject *z = PyArray_EMPTY(1, &k, NPY_DOUBLE, 0);
     PyObject *w = z == NULL ? NULL : PyArray_EMPTY(1, &k, NPY_DOUBLE, 0);
@@ -218,6 +244,16 @@ solver_call(PyObject *self, PyObject *const *args, size_t nargsf, PyObject *kwna
         return NULL;
     }
     PyArrayObject *opts = (PyArrayObject *)s->opts;
+    if (k * k > n_work_m) {
+        double *m = PyMem_RawRealloc(work_m, (size_t)(k * k) * sizeof(double));
+        if (m == NULL) {
+            Py_DECREF(z);
+            Py_DECREF(w);
+            return PyErr_NoMemory();
+        }
+        work_m = m;
+        n_work_m = k * k;
+    }
     double out[RAW_OUT_SIZE];
     int64_t answer = RAW_WORKSPACE;
     int32_t status = 0;
@@ -227,8 +263,8 @@ solver_call(PyObject *self, PyObject *const *args, size_t nargsf, PyObject *kwna
                                        (double *)PyArray_DATA((PyArrayObject *)z),
                                        (double *)PyArray_DATA((PyArrayObject *)w), (int64_t)k, (int64_t)code, tol,
                                        s->once_max_iter[code], fast_paths, (double *)PyArray_DATA(opts),
-                                       (int64_t)PyArray_DIM(opts, 0), s->budget, work_f, n_work_f, work_i, n_work_i,
-                                       out);
+                                       (int64_t)PyArray_DIM(opts, 0), s->budget, work_m, work_f, n_work_f, work_i,
+                                       n_work_i, out);
         if (status != 0) break;
         if (answer == RAW_WORKSPACE && grow((int64_t)out[0], (int64_t)out[1]) < 0) {
             Py_DECREF(z);
@@ -280,7 +316,7 @@ solver_call(PyObject *self, PyObject *const *args, size_t nargsf, PyObject *kwna
     else if (status == 0 && answer == ONCE_OTHER) {
         /* not solved within the first slice of work, or not solved: the sliced solve, as the thin path does */
         r = PyObject_CallFunction(s->after_once, "OOndOd", Mo, qo, code, tol, fast_paths ? Py_True : Py_False,
-                                  started);
+                                  monotonic());
     }
     Py_DECREF(z);
     Py_DECREF(w);

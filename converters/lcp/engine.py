@@ -128,6 +128,20 @@ def advance(method, M, q, z, fw, iw, st, sf, tol, max_iter, budget, opts):
     return advance_method(method, M, q, z, fw, iw, st, sf, tol, max_iter, budget, opts, False)
 
 
+@njit(cache=True, _nrt=False)
+def scale_pow2_matrix(A, e, out):
+    """:func:`scale_pow2` of a k x k matrix."""
+    if -1022 <= e <= 1023:
+        f = math.ldexp(1.0, e)
+        for i in range(A.shape[0]):
+            for j in range(A.shape[1]):
+                out[i, j] = A[i, j] * f
+    else:
+        for i in range(A.shape[0]):
+            for j in range(A.shape[1]):
+                out[i, j] = math.ldexp(A[i, j], e)
+
+
 @njit(cache=True)
 def solve_once(M, q, z, w, method, tol, max_iter, fast_paths, opts, budget):
     """The whole solve in one compiled call, when it succeeds within ``budget``.
@@ -148,13 +162,15 @@ def solve_once(M, q, z, w, method, tol, max_iter, fast_paths, opts, budget):
     nf, ni = sizes(method, k)
     buf = np.empty(k * k + 2 * k + S.SF_SIZE + nf)     # one allocation: M', q', z', sf and the workspace
     ibuf = np.zeros(S.ST_SIZE + ni, dtype=np.int64)    # and one for st and the integer workspace
-    return solve_in(M, q, z, w, method, tol, max_iter, fast_paths, opts, budget, buf, ibuf)
+    return solve_in(M, q, z, w, method, tol, max_iter, fast_paths, opts, budget, buf[:k * k].reshape((k, k)),
+                    buf[k * k:], ibuf)
 
 
 @njit(cache=True, _nrt=False)
-def solve_in(M, q, z, w, method, tol, max_iter, fast_paths, opts, budget, buf, ibuf):
-    """:func:`solve_once` in the caller's workspace: ``buf`` (k^2 + 2k + SF_SIZE + the method's doubles)
-    and ``ibuf`` (ST_SIZE + its integers, zeros)."""
+def solve_in(M, q, z, w, method, tol, max_iter, fast_paths, opts, budget, mbuf, buf, ibuf):
+    """:func:`solve_once` in the caller's workspace: ``mbuf`` (k x k, for M'), ``buf`` (2k + SF_SIZE + the
+    method's doubles) and ``ibuf`` (ST_SIZE + its integers, zeros). (M' has its own 2-D buffer: a reshape costs
+    a call into numba's helper library, a fifth of a small solve.)"""
     k = q.shape[0]
     es, em, finite, q_big, m_big = magnitudes(M, q)
     if not finite:
@@ -162,9 +178,9 @@ def solve_in(M, q, z, w, method, tol, max_iter, fast_paths, opts, budget, buf, i
     shift = es - em
     Ms = M
     if em != 0:
-        Ms = buf[:k * k].reshape((k, k))
-        scale_pow2(M.reshape(-1), -em, buf[:k * k])
-    o = k * k
+        Ms = mbuf
+        scale_pow2_matrix(M, -em, mbuf)
+    o = 0
     qs = q
     if es != 0:
         qs = buf[o:o + k]
@@ -207,15 +223,15 @@ RAW_WORKSPACE = -1
 
 
 def solve_raw(M_ptr, q_ptr, z_ptr, w_ptr, k, method, tol, max_iter, fast_paths, opts_ptr, n_opts, budget,
-              buf_ptr, n_buf, ibuf_ptr, n_ibuf, out_ptr):
+              mbuf_ptr, buf_ptr, n_buf, ibuf_ptr, n_ibuf, out_ptr):
     """:func:`solve_once` for a caller in C (``converters/lcp/_fast.c``, the C entry point of solve_lcp): arrays as
-    pointers (C-contiguous doubles; M is k x k), the workspace the caller's, nothing allocated, so no reference
+    pointers (C-contiguous doubles; M and mbuf are k x k), the workspace the caller's, nothing allocated, so no reference
     counting; solve_in's answer returned, the rest of its tuple written to ``out``
     (RAW_ITERATIONS .. RAW_INFO_X). Not jitted here: ``python -m converters.build_kernels`` compiles it ahead of
     time into an object with C arguments (:func:`converters.build_kernels.build_fast`)."""
     out = carray(out_ptr, (RAW_OUT_SIZE,))
     nf, ni = sizes(method, k)
-    need_f = k * k + 2 * k + S.SF_SIZE + nf
+    need_f = 2 * k + S.SF_SIZE + nf
     need_i = S.ST_SIZE + ni
     if need_f > n_buf or need_i > n_ibuf:
         out[0] = need_f
@@ -225,7 +241,8 @@ def solve_raw(M_ptr, q_ptr, z_ptr, w_ptr, k, method, tol, max_iter, fast_paths, 
     ibuf[:] = 0
     answer, iterations, err, used, rule, stages, info_x = solve_in(
         carray(M_ptr, (k, k)), carray(q_ptr, (k,)), carray(z_ptr, (k,)), carray(w_ptr, (k,)), method, tol, max_iter,
-        fast_paths != 0, carray(opts_ptr, (n_opts,)), budget, carray(buf_ptr, (need_f,)), ibuf)
+        fast_paths != 0, carray(opts_ptr, (n_opts,)), budget, carray(mbuf_ptr, (k, k)), carray(buf_ptr, (need_f,)),
+        ibuf)
     out[RAW_ITERATIONS] = iterations
     out[RAW_ERR] = err
     out[RAW_USED] = used
