@@ -93,8 +93,10 @@ def run(M, q, z, fw, iw, st, tol, max_iter, budget, pivot_tol):
                 st[S.ITER] = iterations
                 return _done(M, q, z, w, st, tol, S.NO_SOLUTION, S.RAY)
             best = np.inf
+            ratios = w              # free until the end (the check fills it): each candidate's ratio, once
             for t in range(nc):
                 ratio = C[cand[t], rhs] / C[cand[t], col]
+                ratios[t] = ratio
                 if ratio < best:
                     best = ratio
             # z0 leaves as soon as it ties for the minimum ratio: that ends the algorithm.
@@ -102,11 +104,11 @@ def run(M, q, z, fw, iw, st, tol, max_iter, budget, pivot_tol):
             row = -1
             for t in range(nc):
                 c = cand[t]
-                if basis[c] == z0 and C[c, rhs] / C[c, col] <= bound:
+                if basis[c] == z0 and ratios[t] <= bound:
                     row = c
                     break
             if row < 0:
-                row = _lexmin_rows(C, place, cand, nc, col, k, 1.0, rem)
+                row = _lexmin_ratios(C, place, cand, nc, col, k, ratios, best, rem)
         have_row = False
         leaving = basis[row]
         _pivot(C, row, col, prow)
@@ -175,6 +177,23 @@ def _lexmin_rows(C, place, rows, nrows, col, k, sign, rem):
         if n == 1:
             break
     return rem[0]
+
+
+@njit(cache=True, _nrt=False)
+def _lexmin_ratios(C, place, rows, nrows, col, k, ratios, low, rem):
+    """:func:`_lexmin_rows` (sign 1) with the first level known: ``ratios[t]`` = rhs / entry of rows[t], ``low``
+    their least. The same rows and the same comparisons, without dividing again."""
+    bound = low + 1e-11 * max(1.0, abs(low))
+    m = 0
+    for t in range(nrows):
+        if ratios[t] <= bound:
+            rem[m] = rows[t]
+            m += 1
+    if m == 1:
+        return rem[0]
+    for t in range(m):
+        rows[t] = rem[t]
+    return _lexmin_rows(C, place, rows, m, col, k, 1.0, rem)
 
 
 @njit(cache=True, _nrt=False)

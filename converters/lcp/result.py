@@ -155,15 +155,17 @@ def check_scaled(q_big, m_big, z, w, err, tol):
         z_scale = q_big / m_big
     zdiv = z_scale if z_scale > 0.0 else 1.0    # z_scale = 0: z = 0 exactly
     wdiv = w_scale if w_scale > 0.0 else 1.0    # w_scale = 0: w = q + M z = 0 exactly
+    # the least w[i] / wdiv is the least w[i] divided by wdiv (> 0: the quotient is monotone), so the index is
+    # found on w itself (a division per entry was a tenth of a small solve); likewise z
     i = 0
     for j in range(1, k):
-        if w[j] / wdiv < w[i] / wdiv:
+        if w[j] < w[i]:
             i = j
     if not w[i] / wdiv >= -tol:
         return CHECK_W_NEGATIVE, i, w[i], w[i] / wdiv, w_scale, 0.0
     i = 0
     for j in range(1, k):
-        if z[j] / zdiv < z[i] / zdiv:
+        if z[j] < z[i]:
             i = j
     if not z[i] / zdiv >= -tol:
         return CHECK_Z_NEGATIVE, i, z[i], z[i] / zdiv, z_scale, 0.0
