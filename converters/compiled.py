@@ -15,6 +15,10 @@ forces the JIT (both give the same numbers: ``tests/methods/test_compiled.py``).
 only that an array argument is an ndarray, so :func:`kernel` checks every argument's dtype, dimensions and
 C order (:func:`conforms`, ~2 us a call) and hands any other kind to the JIT, which compiles a version for it.
 
+The build also makes ``converters/_lcpfast``, the C entry point of :func:`converters.lcp.solve_lcp`
+(``lcp/_fast.c`` with :func:`converters.lcp.engine.solve_raw` compiled by numba.pycc's compiler into an object
+with C arguments), recorded and used with the module above (:func:`fast_lcp`).
+
 Why numba.pycc: it compiles the very functions the JIT runs (one source of truth), and the module it writes
 depends on NumPy only. numba marks it "pending deprecation" since 0.57 while a replacement is developed; it is
 still shipped (0.68) and, if it ever goes, the JIT path is unchanged.

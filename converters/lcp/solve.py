@@ -1,8 +1,10 @@
 """One entry point for every LCP solver: :func:`solve_lcp`.
 
-This module imports no compiled code: the thin path calls one compiled function, :func:`.engine.solve_once`,
-through :func:`converters.compiled.kernel` (from the ahead-of-time module when it is current, so a process
-that solves small LCPs never imports numba); the full path imports the engine when it first runs.
+This module imports no numba: the thin path calls one compiled function, :func:`.engine.solve_once`, through
+:func:`converters.compiled.kernel` (from the ahead-of-time module when it is current, so a process that solves
+small LCPs never imports numba); the full path imports the engine when it first runs. When the ahead-of-time
+kernels are used, ``solve_lcp`` is their C entry point (``converters/lcp/_fast.c``, end of this module): the thin
+path in C, handing everything else to the Python function, which is ``solve_lcp.__wrapped__``.
 """
 from __future__ import annotations
 
