@@ -261,6 +261,10 @@ def build_smc_netlist(params: dict | None, t_end, options: SpiceOptions | None =
 
 #: The voltage-mode comparator's gain (1/V) before its tanh saturation (:func:`build_voltage_mode_netlist`).
 COMPARATOR_GAIN = 100.0
+#: The comparator's output reaches the switch through an RC low-pass of time constant this fraction of T (its
+#: resistance COMPARATOR_R): see :func:`build_voltage_mode_netlist`.
+COMPARATOR_DELAY_FRACTION = 1e-5
+COMPARATOR_R = 1e3
 
 
 def build_voltage_mode_netlist(params: dict | None, t_end, options: SpiceOptions | None = None,
@@ -270,13 +274,17 @@ def build_voltage_mode_netlist(params: dict | None, t_end, options: SpiceOptions
     The sawtooth is a PULSE source rising from VL to VU over T - edge and falling back over the edge
     (edge = ``edge_fraction`` T); a behavioural source ctrl = tanh(G (ramp - A (v_out - Vref))), G =
     ``COMPARATOR_GAIN``, a comparator's output saturating smoothly at +-1 V, drives an SW switch with VT = 0
-    and no hysteresis, so the switch is closed while vcon = A (v_out - Vref) is below the ramp: the
-    comparator of the LCS model. Without the saturation ngspice stops with "timestep too small" in the first
-    period where the loop takes over (the control voltage swings by tens of volts across the switch's
-    threshold); with a hard clip at +-1 V (min/max), or G = 1 to 10, it still stopped so at the defaults
-    (Vin = 24 V, t = 3.6 ms). G = 100 runs at 20, 24, 28 and 36 V and settles on the event method's
-    period-2 orbit at 28 V; in the chaotic band (33 V) ngspice still stops, at 0.18 s (the hard clip: at
-    0.023 s). G = 1000 runs at 33 V too but finds period 6 at 28 V (measured). The diode is
+    and no hysteresis through an RC low-pass of time constant ``COMPARATOR_DELAY_FRACTION`` T, so the switch is
+    closed while vcon = A (v_out - Vref) is below the ramp: the comparator of the LCS model. Without the
+    saturation ngspice stops with "timestep too small" in the first period where the loop takes over (the
+    control voltage swings by tens of volts across the switch's threshold); with a hard clip at +-1 V
+    (min/max), or G = 1 to 10, it still stopped so at the defaults (Vin = 24 V, t = 3.6 ms). G = 100 runs at 20,
+    24, 28 and 36 V and settles on the event method's period-2 orbit at 28 V; G = 1000 runs at 33 V too but finds
+    period 6 at 28 V (measured). Without the low-pass, in the chaotic band (33 V) ngspice stopped at 0.18 s
+    (trouble with node ctrl, the source driving the switch directly). With it (measured, 300 periods from rest
+    against the event method's orbit): 1e-5 T runs 0.4 s at 33, 36 and 40 V, keeps period 2 at 28 V (1.8e-5,
+    2.7e-5 without) and at 31 V (1.7e-5); 1e-4 T read the 31 V orbit as period 8; 1e-6 T was 3e-5 and 5.5e-5.
+    The diode is
     the D(N = 0.001) model (it may block: DCM). The comparator's switchings are not breakpoints of
     ngspice's step control: TMAX = T/1000 keeps their timing error small (``pcsuite bifurcation`` uses it).
     There is no latch in the netlist: ``latch = 1`` is refused. Every value is a validated number (``_num``).
@@ -297,7 +305,9 @@ def build_voltage_mode_netlist(params: dict | None, t_end, options: SpiceOptions
     body = [f"Vin in 0 DC {_num('Vin', p['Vin'])}",
             f"Vramp ramp 0 PULSE({_num('VL', p['VL'])} {_num('VU', p['VU'])} 0 {_num('rise', T - edge)} "
             f"{_num('edge', edge)} 0 {_num('T', T)})",
-            f"Bctrl ctrl 0 V=tanh({COMPARATOR_GAIN:g}*(V(ramp)-{_num('A', p['A'])}*(V(out)-{_num('Vref', p['Vref'])})))",
+            f"Bctrl craw 0 V=tanh({COMPARATOR_GAIN:g}*(V(ramp)-{_num('A', p['A'])}*(V(out)-{_num('Vref', p['Vref'])})))",
+            f"Rcf craw ctrl {_num('comparator R', COMPARATOR_R)}",
+            f"Ccf ctrl 0 {_num('comparator C', COMPARATOR_DELAY_FRACTION * T / COMPARATOR_R)}",
             "S1 in sw ctrl 0 SWVM", *_diode("0", "sw", p), *_inductor("sw", "out", p, ic=iL0),
             *_capacitor("out", "0", p, ic=v0), f"R1 out 0 {_num('R', p['R'])}",
             f".model SWVM SW(VT=0 VH=0 RON={_num('switch_ron', options.switch_ron)} "
