@@ -46,7 +46,7 @@ extern int32_t pcsuite_lcp_solve_raw(int64_t *answer, excinfo_t **excinfo, doubl
                                      double *buf, int64_t n_buf, int64_t *ibuf, int64_t n_ibuf, double *out);
 
 /* solve_once's answers and solve_raw's layout (converters/lcp/state.py, engine.py: checked at construction) */
-enum { ONCE_SOLVED = 0, ONCE_CLOSED_FORM = 1, ONCE_OTHER = 2, RAW_WORKSPACE = -1 };
+enum { ONCE_SOLVED = 0, ONCE_CLOSED_FORM = 1, ONCE_OTHER = 2, RAW_WORKSPACE = -1, RAW_BAD_OPTIONS = -2 };
 enum { RAW_ITERATIONS = 0, RAW_ERR, RAW_USED, RAW_RULE, RAW_STAGES, RAW_INFO_X, RAW_OUT_SIZE };
 #define MAX_METHODS 16
 /* LCPResult's fields, in the order of the slot descriptors the Solver is given */
@@ -368,20 +368,24 @@ solver_new(PyTypeObject *type, PyObject *args, PyObject *kwargs)
         }
         offsets[i] = ((PyMemberDescrObject *)descr)->d_member->offset;
     }
+    /* everything read before the object exists: a conversion may run Python code (__index__) */
+    int64_t max_iters[MAX_METHODS], gave_way[MAX_METHODS];
+    for (Py_ssize_t i = 0; i < n; i++) {
+        if (!PyLong_CheckExact(PyTuple_GET_ITEM(once_max_iter, i))
+            || !PyLong_CheckExact(PyTuple_GET_ITEM(pgs_gave_way, i))
+            || !PyUnicode_Check(PyTuple_GET_ITEM(names, i)) || !PyUnicode_Check(PyTuple_GET_ITEM(auto_labels, i))) {
+            PyErr_SetString(PyExc_ValueError, "Solver: method names and labels must be str, limits int");
+            return NULL;
+        }
+        max_iters[i] = PyLong_AsLongLong(PyTuple_GET_ITEM(once_max_iter, i));
+        gave_way[i] = PyLong_AsLongLong(PyTuple_GET_ITEM(pgs_gave_way, i));
+        if (PyErr_Occurred()) return NULL;
+    }
     s = (Solver *)type->tp_alloc(type, 0);
     if (s == NULL) return NULL;
     memcpy(s->offsets, offsets, sizeof(offsets));
-    for (Py_ssize_t i = 0; i < n; i++) {
-        s->once_max_iter[i] = PyLong_AsLongLong(PyTuple_GET_ITEM(once_max_iter, i));
-        s->pgs_gave_way[i] = PyLong_AsLongLong(PyTuple_GET_ITEM(pgs_gave_way, i));
-        if (!PyUnicode_Check(PyTuple_GET_ITEM(names, i)) || !PyUnicode_Check(PyTuple_GET_ITEM(auto_labels, i))) {
-            PyErr_SetString(PyExc_ValueError, "Solver: method names and labels must be str");
-        }
-    }
-    if (PyErr_Occurred()) {
-        Py_DECREF(s);
-        return NULL;
-    }
+    memcpy(s->once_max_iter, max_iters, (size_t)n * sizeof(int64_t));
+    memcpy(s->pgs_gave_way, gave_way, (size_t)n * sizeof(int64_t));
     s->vectorcall = solver_call;
     s->python = Py_NewRef(python);
     s->after_once = Py_NewRef(after_once);
@@ -417,7 +421,15 @@ solver_traverse(Solver *s, visitproc visit, void *arg)
     Py_VISIT(s->after_once);
     Py_VISIT(s->auto_message);
     Py_VISIT(s->result_type);
+    Py_VISIT(s->solved);
+    Py_VISIT(s->empty);
+    Py_VISIT(s->names);
+    Py_VISIT(s->auto_labels);
+    Py_VISIT(s->closed_forms);
+    Py_VISIT(s->closed_label);
     Py_VISIT(s->environ);
+    Py_VISIT(s->time_key);
+    Py_VISIT(s->memory_key);
     Py_VISIT(s->opts);
     return 0;
 }
@@ -461,6 +473,11 @@ solver_repr(Solver *s)
 static PyObject *
 solver_reduce(Solver *s, PyObject *unused)
 {
+    (void)unused;
+    if (s->python == NULL) {
+        PyErr_SetString(PyExc_TypeError, "solve_lcp's C entry point is not set up");
+        return NULL;
+    }
     return PyObject_GetAttrString(s->python, "__qualname__");
 }
 

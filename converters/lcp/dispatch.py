@@ -12,6 +12,7 @@ from . import enumeration, lemke, murty, newton, pgs
 from . import state as S
 
 OPT_PIVOT_TOL, OPT_OMEGA, OPT_RHO, OPT_P, OPT_BETA, OPT_SIGMA = range(6)
+N_OPTIONS = OPT_SIGMA + 1
 DEFAULT_OPTIONS = np.array([lemke.PIVOT_TOL, 1.0, newton.RHO, newton.P, newton.BETA, newton.SIGMA])
 #: max_iter of each method when the caller gives none (indexed by method code; enumeration has none).
 DEFAULT_MAX_ITER = (0, 10_000, 100_000, 0, 10_000, 1000)

@@ -29,7 +29,7 @@ from . import lemke as lemke_module
 from . import newton as newton_module
 from . import state as S
 from .dispatch import (DEFAULT_MAX_ITER, DEFAULT_OPTIONS, OPT_BETA, OPT_OMEGA, OPT_P, OPT_PIVOT_TOL, OPT_RHO,
-                       OPT_SIGMA, advance_method, method_sizes)
+                       OPT_SIGMA, N_OPTIONS, advance_method, method_sizes)
 from .enumeration import MAX_K as ENUM_MAX_K
 from .enumeration import solutions as enum_solutions
 from .fastpaths import closed_form
@@ -220,6 +220,8 @@ def solve_in(M, q, z, w, method, tol, max_iter, fast_paths, opts, budget, mbuf, 
 RAW_ITERATIONS, RAW_ERR, RAW_USED, RAW_RULE, RAW_STAGES, RAW_INFO_X = range(6)
 RAW_OUT_SIZE = 6
 RAW_WORKSPACE = -1
+#: solve_raw's answer when ``opts`` holds fewer than N_OPTIONS entries (the caller then takes another path)
+RAW_BAD_OPTIONS = -2
 
 
 def solve_raw(M_ptr, q_ptr, z_ptr, w_ptr, k, method, tol, max_iter, fast_paths, opts_ptr, n_opts, budget,
@@ -230,6 +232,8 @@ def solve_raw(M_ptr, q_ptr, z_ptr, w_ptr, k, method, tol, max_iter, fast_paths, 
     (RAW_ITERATIONS .. RAW_INFO_X). Not jitted here: ``python -m converters.build_kernels`` compiles it ahead of
     time into an object with C arguments (:func:`converters.build_kernels.build_fast`)."""
     out = carray(out_ptr, (RAW_OUT_SIZE,))
+    if n_opts < N_OPTIONS:                 # the methods read opts[OPT_*] unchecked
+        return RAW_BAD_OPTIONS
     nf, ni = sizes(method, k)
     need_f = 2 * k + S.SF_SIZE + nf
     need_i = S.ST_SIZE + ni

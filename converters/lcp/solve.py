@@ -359,13 +359,17 @@ def _with_c_entry(python):
     if fast is None:
         return python
     _load_once()                                           # _OPTIONS
+    return functools.update_wrapper(fast.Solver(*_solver_arguments(python)), python)
+
+
+def _solver_arguments(python) -> tuple:
+    """converters._lcpfast.Solver's arguments."""
     slots = tuple(LCPResult.__dict__[name] for name in ("z", "w", "status", "err", "iterations", "method", "message",
                                                         "solutions"))
-    solver = fast.Solver(python, _after_once, _solved_message, LCPResult, slots, SOLVED, "", tuple(S.METHOD_NAMES),
-                         _AUTO_LABELS, _CLOSED_FORM_MESSAGES, "auto:closed form", _ENVIRON, _TIME_KEY, _MEMORY_KEY,
-                         _OPTIONS, _ONCE_MAX_ITER, _PGS_GAVE_WAY, 1e-10, _TOL_LOW, _TOL_HIGH,
-                         min(FAST_MAX_K, _K_UNDER_DEFAULT_MEMORY), S.AUTO, S.ENUM, _CHUNK)
-    return functools.update_wrapper(solver, python)
+    return (python, _after_once, _solved_message, LCPResult, slots, SOLVED, "", tuple(S.METHOD_NAMES), _AUTO_LABELS,
+            _CLOSED_FORM_MESSAGES, "auto:closed form", _ENVIRON, _TIME_KEY, _MEMORY_KEY,
+            _OPTIONS, _ONCE_MAX_ITER, _PGS_GAVE_WAY, 1e-10, _TOL_LOW, _TOL_HIGH,
+            min(FAST_MAX_K, _K_UNDER_DEFAULT_MEMORY), S.AUTO, S.ENUM, _CHUNK)
 
 
 solve_lcp = _with_c_entry(solve_lcp)

@@ -171,3 +171,14 @@ def test_a_hundred_thousand_calls_leak_no_reference():
         solve_lcp(M2, q2)                                          # a closed form
         outcome(lambda: solve_lcp(M, q, max_iter=-1))             # an error, in Python
     assert [sys.getrefcount(x) for x in watched] == before
+
+
+@needs_c_entry
+def test_the_solver_refuses_a_configuration_it_would_misread():
+    """Its limits are read before the object exists (an int subclass's __index__ could otherwise reach a half-built
+    Solver through the garbage collector); anything but exact ints and str is refused."""
+    from converters.lcp import solve as solve_module
+    arguments = list(solve_module._solver_arguments(PYTHON))
+    arguments[15] = (1.5,) * len(arguments[15])                           # once_max_iter
+    with pytest.raises(ValueError, match="names and labels must be str, limits int"):
+        type(solve_lcp)(*arguments)
