@@ -130,16 +130,9 @@ def advance(method, M, q, z, fw, iw, st, sf, tol, max_iter, budget, opts):
 
 @njit(cache=True, _nrt=False)
 def scale_pow2_matrix(A, e, out):
-    """:func:`scale_pow2` of a k x k matrix."""
-    if -1022 <= e <= 1023:
-        f = math.ldexp(1.0, e)
-        for i in range(A.shape[0]):
-            for j in range(A.shape[1]):
-                out[i, j] = A[i, j] * f
-    else:
-        for i in range(A.shape[0]):
-            for j in range(A.shape[1]):
-                out[i, j] = math.ldexp(A[i, j], e)
+    """:func:`scale_pow2` of a matrix, row by row (a row is a view; a reshape would call numba's helper library)."""
+    for i in range(A.shape[0]):
+        scale_pow2(A[i], e, out[i])
 
 
 @njit(cache=True)
@@ -180,15 +173,14 @@ def solve_in(M, q, z, w, method, tol, max_iter, fast_paths, opts, budget, mbuf, 
     if em != 0:
         Ms = mbuf
         scale_pow2_matrix(M, -em, mbuf)
-    o = 0
     qs = q
     if es != 0:
-        qs = buf[o:o + k]
+        qs = buf[:k]
         scale_pow2(q, -es, qs)
-    zs = buf[o + k:o + 2 * k]
-    sf = buf[o + 2 * k:o + 2 * k + S.SF_SIZE]
+    zs = buf[k:2 * k]
+    sf = buf[2 * k:2 * k + S.SF_SIZE]
     sf[:] = 0.0
-    fw = buf[o + 2 * k + S.SF_SIZE:]
+    fw = buf[2 * k + S.SF_SIZE:]
     st = ibuf[:S.ST_SIZE]
     iw = ibuf[S.ST_SIZE:]
     if fast_paths and method != S.ENUM:

@@ -22,6 +22,8 @@ from .answer import SOLVED, LCPResult, make_result
 
 ENUM_MAX_K = S.ENUM_MAX_K
 DEFAULT_MAX_ITER = {"auto": None, "lemke": 10_000, "murty": 100_000, "enum": None, "pgs": 10_000, "newton": 1000}
+#: ``tol`` when not given.
+DEFAULT_TOL = 1e-10
 #: Accepted range of ``tol`` (below 1e-16 double precision cannot resolve it; above 1e-2 it is no solution).
 TOL_RANGE = (1e-16, 1e-2)
 #: Accepted range of ``max_iter``: every iteration costs at least a microsecond, so 10^9 is already beyond any
@@ -48,7 +50,7 @@ _CLOSED_FORM_MESSAGES = tuple(f"closed form ({rule})" for rule in S.CLOSED_FORM_
 _PGS_GAVE_WAY = tuple((1 << (4 * m)) | ((S.SLOW + 1) << (4 * S.PGS)) for m in range(S.N_METHODS))
 
 
-def solve_lcp(M, q, method: str = "auto", tol: float = 1e-10, max_iter: int | None = None,
+def solve_lcp(M, q, method: str = "auto", tol: float = DEFAULT_TOL, max_iter: int | None = None,
               fast_paths: bool = True, time_limit: float | None = None, **options) -> LCPResult:
     """Solve LCP(q, M): find z >= 0 with w = q + M z >= 0 and z . w = 0.
 
@@ -368,7 +370,7 @@ def _solver_arguments(python) -> tuple:
                                                         "solutions"))
     return (python, _after_once, _solved_message, LCPResult, slots, SOLVED, "", tuple(S.METHOD_NAMES), _AUTO_LABELS,
             _CLOSED_FORM_MESSAGES, "auto:closed form", _ENVIRON, _TIME_KEY, _MEMORY_KEY,
-            _OPTIONS, _ONCE_MAX_ITER, _PGS_GAVE_WAY, 1e-10, _TOL_LOW, _TOL_HIGH,
+            _OPTIONS, _ONCE_MAX_ITER, _PGS_GAVE_WAY, DEFAULT_TOL, _TOL_LOW, _TOL_HIGH,
             min(FAST_MAX_K, _K_UNDER_DEFAULT_MEMORY), S.AUTO, S.ENUM, _CHUNK)
 
 

@@ -236,8 +236,6 @@ def check_picklable(function) -> None:
     """Refuse up front a function that cannot reach a worker process (a lambda, a function defined inside
     another): each chunk would otherwise come back lost with pickle's words."""
     import pickle
-    if not callable(function):
-        raise ParameterError(f"function must be callable; got {function!r}")
     try:
         pickle.dumps(function)
     except (pickle.PicklingError, AttributeError, TypeError) as exc:
