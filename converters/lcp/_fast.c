@@ -1,7 +1,10 @@
 /* The C entry point of solve_lcp: converters._lcpfast.Solver.
 
    solve_lcp(M, q) on a small problem is a few hundred nanoseconds of compiled work; called from Python, the
-   checks, the two output arrays and the result object had cost about 2 us more. A Solver is callable as
+   checks, the two output arrays and the result object had cost about 2 us more. Results are recycled once
+   nothing but the Solver's pool refers to them (take_free): up to POOL results stay alive after the caller has
+   dropped them (a weak reference to one of their arrays may outlive the caller's last reference; such an
+   array is never written again). A Solver is callable as
    solve_lcp is and takes exactly the problems of solve_lcp's thin path (converters/lcp/solve.py): float64
    C-contiguous M (k x k) and q (k), 0 < k <= k_max, the defaults for max_iter, time_limit and the options,
    any method but enum, a Python float tol in range, a bool fast_paths, and neither PCSUITE_TIME_LIMIT nor
@@ -49,6 +52,8 @@ extern int32_t pcsuite_lcp_solve_raw(int64_t *answer, excinfo_t **excinfo, doubl
 enum { ONCE_SOLVED = 0, ONCE_CLOSED_FORM = 1, ONCE_OTHER = 2, RAW_WORKSPACE = -1, RAW_BAD_OPTIONS = -2 };
 enum { RAW_ITERATIONS = 0, RAW_ERR, RAW_USED, RAW_RULE, RAW_STAGES, RAW_INFO_X, RAW_OUT_SIZE };
 #define MAX_METHODS 16
+/* Results kept for recycling: a loop that drops or rebinds its result each call finds one free in two. */
+#define POOL 4
 /* LCPResult's fields, in the order of the slot descriptors the Solver is given */
 enum { F_Z, F_W, F_STATUS, F_ERR, F_ITERATIONS, F_METHOD, F_MESSAGE, F_SOLUTIONS, N_FIELDS };
 
@@ -85,6 +90,8 @@ typedef struct {
     double tol_default, tol_low, tol_high;
     Py_ssize_t k_max;
     int64_t budget;
+    PyObject *pool[POOL];     /* results handed out recently, recycled once nothing else refers to them */
+    int pool_next;            /* the entry a new result replaces when every one is in use */
 } Solver;
 
 static PyObject *s_method, *s_tol, *s_fast_paths, *s_max_iter, *s_time_limit;
@@ -166,29 +173,76 @@ monotonic(void)
     return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
-/* The LCPResult of a solved problem, built as answer.make_result builds it: object.__new__, then each field's
-   slot (the offsets its member descriptors give; the object is new and its slots empty). */
+#define FIELD(s, r, f) (*(PyObject **)((char *)(r) + (s)->offsets[f]))
+
+/* A result of the pool that nothing but the pool refers to, with a new reference (so a call made while this one
+   runs, by a destructor say, cannot take it too); NULL when every one is in use. CPython recycles its floats,
+   lists and frames the same way: allocating and freeing two arrays, a list and the result was a third of a
+   small solve's time. Nothing can see a recycled object: only the pool refers to it. */
 static PyObject *
-result(Solver *s, PyObject *z, PyObject *w, double err, int64_t iterations, PyObject *method, PyObject *message)
+take_free(Solver *s)
+{
+    for (int i = 0; i < POOL; i++) {
+        PyObject *r = s->pool[i];
+        if (r != NULL && Py_REFCNT(r) == 1) return Py_NewRef(r);
+    }
+    return NULL;
+}
+
+/* An array of a free result that can hold the next answer: nothing else refers to it (no view, no weak
+   reference, no buffer), and it is still what solve_lcp made (k float64s, owned, writeable). */
+static inline int
+reusable_array(PyObject *o, npy_intp k)
+{
+    if (o == NULL || Py_REFCNT(o) != 1 || !plain(o, 1)) return 0;
+    PyArrayObject *a = (PyArrayObject *)o;
+    return PyArray_DIM(a, 0) == k && PyArray_CHKFLAGS(a, NPY_ARRAY_OWNDATA | NPY_ARRAY_WRITEABLE)
+           && PyArray_BASE(a) == NULL && ((PyArrayObject_fields *)a)->weakreflist == NULL;
+}
+
+/* The LCPResult of a solved problem, built as answer.make_result builds it (object.__new__, then each field's
+   slot, at the offsets its member descriptors give), or ``held`` (a free result of the pool) given the new
+   fields. Every field is set before the old values are released: their destructors may run Python code. */
+static PyObject *
+result(Solver *s, PyObject *held, PyObject *z, PyObject *w, double err, int64_t iterations, PyObject *method,
+       PyObject *message)
 {
     PyTypeObject *type = (PyTypeObject *)s->result_type;
-    PyObject *e = PyFloat_FromDouble(err), *it = PyLong_FromLongLong(iterations), *solutions = PyList_New(0);
-    PyObject *r = (e == NULL || it == NULL || solutions == NULL) ? NULL : type->tp_alloc(type, 0);
+    PyObject *solutions = NULL;
+    if (held != NULL) {
+        PyObject *old = FIELD(s, held, F_SOLUTIONS);
+        if (old != NULL && Py_REFCNT(old) == 1 && PyList_CheckExact(old) && PyList_GET_SIZE(old) == 0)
+            solutions = Py_NewRef(old);
+    }
+    if (solutions == NULL) solutions = PyList_New(0);
+    PyObject *e = PyFloat_FromDouble(err), *it = PyLong_FromLongLong(iterations);
+    PyObject *r = (e == NULL || it == NULL || solutions == NULL) ? NULL
+                  : held != NULL ? Py_NewRef(held) : type->tp_alloc(type, 0);
     if (r == NULL) {
         Py_XDECREF(e);
         Py_XDECREF(it);
         Py_XDECREF(solutions);
         return NULL;
     }
-    char *base = (char *)r;
-    *(PyObject **)(base + s->offsets[F_Z]) = Py_NewRef(z);
-    *(PyObject **)(base + s->offsets[F_W]) = Py_NewRef(w);
-    *(PyObject **)(base + s->offsets[F_STATUS]) = Py_NewRef(s->solved);
-    *(PyObject **)(base + s->offsets[F_ERR]) = e;
-    *(PyObject **)(base + s->offsets[F_ITERATIONS]) = it;
-    *(PyObject **)(base + s->offsets[F_METHOD]) = Py_NewRef(method);
-    *(PyObject **)(base + s->offsets[F_MESSAGE]) = Py_NewRef(message);
-    *(PyObject **)(base + s->offsets[F_SOLUTIONS]) = solutions;
+    PyObject *values[N_FIELDS] = {Py_NewRef(z), Py_NewRef(w), Py_NewRef(s->solved), e, it, Py_NewRef(method),
+                                  Py_NewRef(message), solutions};
+    PyObject *old[N_FIELDS];
+    for (int f = 0; f < N_FIELDS; f++) {       /* a new object's slots are NULL */
+        old[f] = FIELD(s, r, f);
+        FIELD(s, r, f) = values[f];
+    }
+    if (held == NULL) {                       /* into the pool: an empty entry, else the oldest one's place */
+        int i = 0;
+        while (i < POOL && s->pool[i] != NULL) i++;
+        if (i == POOL) {
+            i = s->pool_next;
+            s->pool_next = (s->pool_next + 1) % POOL;
+        }
+        PyObject *out = s->pool[i];
+        s->pool[i] = Py_NewRef(r);
+        Py_XDECREF(out);
+    }
+    for (int f = 0; f < N_FIELDS; f++) Py_XDECREF(old[f]);
     return r;
 }
 
@@ -237,10 +291,16 @@ solver_call(PyObject *self, PyObject *const *args, size_t nargsf, PyObject *kwna
     }
     if (limits_set(s)) goto python;              /* a time or memory limit (or an error): Python reads it */
 
-    PyObject *z = PyArray_EMPTY(1, &k, NPY_DOUBLE, 0);
-    PyObject *w = z == NULL ? NULL : PyArray_EMPTY(1, &k, NPY_DOUBLE, 0);
+    PyObject *held = take_free(s), *z = NULL, *w = NULL;
+    if (held != NULL) {
+        if (reusable_array(FIELD(s, held, F_Z), k)) z = Py_NewRef(FIELD(s, held, F_Z));
+        if (reusable_array(FIELD(s, held, F_W), k)) w = Py_NewRef(FIELD(s, held, F_W));
+    }
+    if (z == NULL) z = PyArray_EMPTY(1, &k, NPY_DOUBLE, 0);
+    if (w == NULL && z != NULL) w = PyArray_EMPTY(1, &k, NPY_DOUBLE, 0);
     if (w == NULL) {
         Py_XDECREF(z);
+        Py_XDECREF(held);
         return NULL;
     }
     PyArrayObject *opts = (PyArrayObject *)s->opts;
@@ -249,6 +309,7 @@ solver_call(PyObject *self, PyObject *const *args, size_t nargsf, PyObject *kwna
         if (m == NULL) {
             Py_DECREF(z);
             Py_DECREF(w);
+            Py_XDECREF(held);
             return PyErr_NoMemory();
         }
         work_m = m;
@@ -269,6 +330,7 @@ solver_call(PyObject *self, PyObject *const *args, size_t nargsf, PyObject *kwna
         if (answer == RAW_WORKSPACE && grow((int64_t)out[0], (int64_t)out[1]) < 0) {
             Py_DECREF(z);
             Py_DECREF(w);
+            Py_XDECREF(held);
             return PyErr_NoMemory();
         }
     }
@@ -277,7 +339,7 @@ solver_call(PyObject *self, PyObject *const *args, size_t nargsf, PyObject *kwna
         Py_ssize_t used = (Py_ssize_t)out[RAW_USED];
         int64_t stages = (int64_t)out[RAW_STAGES];
         if (code != s->auto_code) {
-            r = result(s, z, w, out[RAW_ERR], (int64_t)out[RAW_ITERATIONS], PyTuple_GET_ITEM(s->names, code),
+            r = result(s, held, z, w, out[RAW_ERR], (int64_t)out[RAW_ITERATIONS], PyTuple_GET_ITEM(s->names, code),
                        s->empty);
         }
         else if (used >= 0 && used < s->n_methods) {
@@ -293,8 +355,8 @@ solver_call(PyObject *self, PyObject *const *args, size_t nargsf, PyObject *kwna
                 Py_XDECREF(eig_o);
             }
             if (message != NULL) {
-                r = result(s, z, w, out[RAW_ERR], (int64_t)out[RAW_ITERATIONS], PyTuple_GET_ITEM(s->auto_labels, used),
-                           message);
+                r = result(s, held, z, w, out[RAW_ERR], (int64_t)out[RAW_ITERATIONS],
+                           PyTuple_GET_ITEM(s->auto_labels, used), message);
                 Py_DECREF(message);
             }
         }
@@ -305,7 +367,7 @@ solver_call(PyObject *self, PyObject *const *args, size_t nargsf, PyObject *kwna
     else if (status == 0 && answer == ONCE_CLOSED_FORM) {
         Py_ssize_t rule = (Py_ssize_t)out[RAW_RULE];
         if (rule >= 0 && rule < s->n_rules) {
-            r = result(s, z, w, out[RAW_ERR], 0,
+            r = result(s, held, z, w, out[RAW_ERR], 0,
                        code == s->auto_code ? s->closed_label : PyTuple_GET_ITEM(s->names, code),
                        PyTuple_GET_ITEM(s->closed_forms, rule));
         }
@@ -320,6 +382,7 @@ solver_call(PyObject *self, PyObject *const *args, size_t nargsf, PyObject *kwna
     }
     Py_DECREF(z);
     Py_DECREF(w);
+    Py_XDECREF(held);
     if (r != NULL || PyErr_Occurred()) return r;
     /* NaN or inf in M or q, or an exception inside the compiled code: Python's checks say what is wrong */
 python:
@@ -340,8 +403,8 @@ solver_new(PyTypeObject *type, PyObject *args, PyObject *kwargs)
         return NULL;
     }
     if (!PyArg_ParseTuple(args, "OOOOO!UUO!O!O!UO!O!O!O!O!O!dddnnnL:Solver", &python, &after_once, &auto_message,
-                          &result_type, &PyTuple_Type, &slots, &solved, &empty, &PyTuple_Type, &names, &PyTuple_Type, &auto_labels,
-                          &PyTuple_Type, &closed_forms, &closed_label, &PyDict_Type, &environ, &PyBytes_Type,
+                          &result_type, &PyTuple_Type, &slots, &solved, &empty, &PyTuple_Type, &names,
+                          &PyTuple_Type, &auto_labels, &PyTuple_Type, &closed_forms, &closed_label, &PyDict_Type, &environ, &PyBytes_Type,
                           &time_key, &PyBytes_Type, &memory_key, &PyArray_Type, &opts, &PyTuple_Type, &once_max_iter,
                           &PyTuple_Type, &pgs_gave_way, &tol_default, &tol_low, &tol_high, &k_max, &auto_code,
                           &enum_code, &budget))
@@ -431,6 +494,7 @@ solver_traverse(Solver *s, visitproc visit, void *arg)
     Py_VISIT(s->time_key);
     Py_VISIT(s->memory_key);
     Py_VISIT(s->opts);
+    for (int i = 0; i < POOL; i++) Py_VISIT(s->pool[i]);
     return 0;
 }
 
@@ -452,6 +516,7 @@ solver_clear(Solver *s)
     Py_CLEAR(s->time_key);
     Py_CLEAR(s->memory_key);
     Py_CLEAR(s->opts);
+    for (int i = 0; i < POOL; i++) Py_CLEAR(s->pool[i]);
     return 0;
 }
 

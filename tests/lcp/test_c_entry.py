@@ -174,6 +174,38 @@ def test_a_hundred_thousand_calls_leak_no_reference():
 
 
 @needs_c_entry
+@pytest.mark.parametrize("keep", ["the result", "z alone", "w alone", "a view of z", "a weak reference to z",
+                                  "a read-only z", "a list of solutions grown"])
+def test_a_result_or_array_still_held_is_never_recycled(keep):
+    """The C entry recycles a result (its arrays and list) only once nothing else refers to it: whatever the caller
+    keeps keeps its values, and every recycled result is the new answer in full (writeable arrays, an empty list)."""
+    import weakref
+    M, q = murty_exponential(3)                                        # z = (0, 0, 1), w = (1, 1, 0)
+    other = (2.0 * np.eye(3), np.array([-2.0, -4.0, -6.0]))           # z = (1, 2, 3), w = 0: the same k
+    expected = PYTHON(M, q)
+    held = solve_lcp(M, q)
+    kept = {"the result": lambda r: r, "z alone": lambda r: r.z, "w alone": lambda r: r.w,
+            "a view of z": lambda r: r.z[:], "a weak reference to z": lambda r: weakref.ref(r.z),
+            "a read-only z": lambda r: r.z.flags.__setattr__("writeable", False),
+            "a list of solutions grown": lambda r: r.solutions.append("mine")}[keep](held)
+    del held
+    for _ in range(3):                                                 # more calls than the pool has entries
+        for problem in (other, (np.eye(1), -np.ones(1)), other):
+            again = solve_lcp(*problem)
+            same(again, PYTHON(*problem))
+            assert again.solutions == [] and again.z.flags.writeable and again.w.flags.writeable
+            del again
+            if keep == "the result":
+                same(kept, expected)
+            elif keep in ("z alone", "a view of z"):
+                assert np.array_equal(kept, expected.z)
+            elif keep == "w alone":
+                assert np.array_equal(kept, expected.w)
+            elif keep == "a weak reference to z":
+                assert kept() is None or np.array_equal(kept(), expected.z)
+
+
+@needs_c_entry
 def test_the_solver_refuses_a_configuration_it_would_misread():
     """Its limits are read before the object exists (an int subclass's __index__ could otherwise reach a half-built
     Solver through the garbage collector); anything but exact ints and str is refused."""
