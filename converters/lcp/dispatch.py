@@ -24,7 +24,7 @@ def default_options():
     return DEFAULT_OPTIONS.copy()
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline='always')
 def advance_method(method, M, q, z, fw, iw, st, sf, tol, max_iter, budget, opts, first):
     """Advance ``method`` (not auto) on LCP(q, M) by at most ``budget`` multiply-adds; True when it ended.
     ``first``: auto's use (enumeration stops at the first solution, PGS stops when converging too slowly)."""

@@ -61,7 +61,7 @@ def exponents(M, q):
     return es, em, finite
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline='always')
 def magnitudes(M, q):
     """(es, em, finite, max|q|, max|M|) (see :func:`exponents`)."""
     qbig = 0.0
@@ -82,7 +82,7 @@ def magnitudes(M, q):
     return math.frexp(qbig)[1], math.frexp(mbig)[1], True, qbig, mbig
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline='always')
 def scale_pow2(x, e, out):
     """out = x * 2^e, exactly as ldexp (a multiplication by the power of two when it is a normal number:
     the same correctly rounded result)."""
@@ -118,7 +118,7 @@ def sizes(method, k):
     return method_sizes(method, k, False)
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline='always')
 def advance(method, M, q, z, fw, iw, st, sf, tol, max_iter, budget, opts):
     """Advance ``method`` (auto included) by a slice of at most ``budget`` multiply-adds; True when it ended.
     False also when auto waits for the least eigenvalue (st[PHASE] == EIGENVALUE): the caller puts
@@ -128,7 +128,7 @@ def advance(method, M, q, z, fw, iw, st, sf, tol, max_iter, budget, opts):
     return advance_method(method, M, q, z, fw, iw, st, sf, tol, max_iter, budget, opts, False)
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline='always')
 def scale_pow2_matrix(A, e, out):
     """:func:`scale_pow2` of a matrix, row by row (a row is a view; a reshape would call numba's helper library)."""
     for i in range(A.shape[0]):

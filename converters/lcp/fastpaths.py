@@ -15,7 +15,7 @@ from . import state as S
 RULES = S.CLOSED_FORM_RULES
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline='always')
 def closed_form(M, q, rule, z):
     """Rule 0 (trivial): q >= 0, z = 0 (the least-norm solution); 1 (scalar): k = 1 with M > 0,
     z = max(0, -q/M); 2 (pair): k = 2, the four complementary bases in order of size, the least-norm

@@ -29,7 +29,7 @@ def scaled_norm(v: np.ndarray) -> float:
     return big * math.sqrt(float(u @ u))
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline='always')
 def mark_done(st, status, outcome):
     """End a compiled method's run in its state array (``state`` layout): done, with its status and why."""
     st[S.PHASE] = S.DONE
@@ -38,7 +38,7 @@ def mark_done(st, status, outcome):
     return True
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline='always')
 def affine(M, q, z, w):
     """w = q + M z (each sum_j M_ij z_j accumulated in index order, then q_i added)."""
     k = q.shape[0]
@@ -57,14 +57,14 @@ def copy_into(src, out):
         out[i] = src[i]
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline='always')
 def residual(M, q, z, w):
     """w = q + M z (:func:`affine`); returns err of (z, w)."""
     affine(M, q, z, w)
     return error(q, z, w)
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline='always')
 def error(q, z, w):
     """Siconos' accuracy measure err = ||z - max(0, z - w)||_2 / ||q||_2 of the pair (z, w).
 
@@ -104,7 +104,7 @@ def error(q, z, w):
     return (rbig / qbig) * (math.sqrt(rsum) / math.sqrt(usum))
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline='always')
 def check(M, q, z, w, err, tol):
     """(code, i, a, b, c, d): code 0 when (z, w) solves LCP(q, M) to ``tol``, else which condition fails
     (``CHECK_*``) with the index and the numbers :func:`check_message` prints.
@@ -182,14 +182,14 @@ def check_scaled(q_big, m_big, z, w, err, tol):
     return CHECK_OK, 0, 0.0, 0.0, 0.0, 0.0
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline='always')
 def accepts(M, q, z, w, tol):
     """True when (z, q + M z) passes :func:`check` (the stopping test of the iterative methods); fills w."""
     err = residual(M, q, z, w)
     return check(M, q, z, w, err, tol)[0] == CHECK_OK
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline='always')
 def accepts_scaled(M, q, q_big, m_big, z, w, tol):
     """:func:`accepts` with max|q| and max|M| known."""
     err = residual(M, q, z, w)

@@ -225,7 +225,8 @@ print(ir)
             bodies[name] = chunk.split("\n}\n", 1)[0]
     once = [name for name in bodies if "solve_once" in name]
     rest = {name: body for name, body in bodies.items() if "solve_once" not in name}
-    assert any("solve_in" in name for name in rest) and any("lemke" in name for name in rest) and len(rest) > 30
+    # the whole call tree is in the module (its small helpers inlined into their callers: inline='always')
+    assert any("solve_in" in name for name in rest) and any("lemke" in name for name in rest) and len(rest) > 15
     counted = [name for name, body in rest.items() if "@NRT_incref" in body or "@NRT_decref" in body
                or "@NRT_MemInfo_alloc" in body]
     assert counted == []
