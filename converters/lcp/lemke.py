@@ -69,8 +69,18 @@ def run(M, q, z, fw, iw, st, tol, max_iter, budget, pivot_tol):
             cand[i] = i
         nonbasic[k] = z0
         place[z0] = k
-        # First pivot: z0 enters, the lexicographically most negative row (rhs/1, e_i) leaves.
-        row = _lexmin_rows(C, place, cand, k, k, k, -1.0, rem)
+        # First pivot: z0 enters (its column is -1 in every row), and the lexicographically least row of
+        # (q_i, e_i) leaves: the least q_i, and of the rows tied with it (to the tolerance of _lexmin_rows) the
+        # last, since e_i of a later row is lexicographically smaller. _lexmin_rows' very comparisons, without
+        # its divisions by -(-1) and its walk through the k unit vectors.
+        low = np.inf
+        for i in range(k):
+            if q[i] < low:
+                low = q[i]
+        bound = low + 1e-11 * max(1.0, abs(low))
+        for i in range(k):
+            if q[i] <= bound:
+                row = i
         st[S.AUX] = z0
         st[S.PHASE] = S.RUNNING
         have_row = True

@@ -28,6 +28,29 @@ def test_p_matrix_lcps_are_solved_by_every_applicable_solver(k, seed, kind):
             np.testing.assert_allclose(result.z, reference.z, atol=1e-7 * (1 + np.abs(reference.z).max()))
 
 
+@settings(max_examples=300, deadline=None)
+@given(q=st.lists(st.sampled_from([-2.0, -1.0, -1.0 + 1e-12, -1.0 - 1e-12, -1.0 + 1e-9, -1e-12, 0.0, 1e-12, 1.0]),
+                  min_size=1, max_size=8))
+def test_lemkes_first_pivot_is_the_lexicographic_rule_in_closed_form(q):
+    """Lemke's first pivot (z0 enters) is written in closed form: the least q_i, the last of the rows tied with it.
+    It must pick the row the lexicographic test itself picks on the initial tableau (ties within its tolerance)."""
+    from converters.lcp.lemke import _lexmin_rows
+    from converters.lcp import lemke, state as S
+    q = np.array(q)
+    k = q.shape[0]
+    C = np.zeros((k, k + 2))
+    C[:, k], C[:, k + 1] = -1.0, q                                   # the initial tableau: -M = 0, the z0 column
+    place = np.r_[-1 - np.arange(k), np.arange(k), k].astype(np.int64)
+    expected = _lexmin_rows(C, place, np.arange(k), k, k, k, -1.0, np.zeros(k, dtype=np.int64))
+    if np.all(q >= 0.0):
+        return                                                       # no pivot: z = 0
+    nf, ni = lemke.sizes(k)
+    fw, iw, st_ = np.zeros(nf), np.zeros(ni, dtype=np.int64), np.zeros(S.ST_SIZE, dtype=np.int64)
+    lemke.run(np.eye(k), q, np.zeros(k), fw, iw, st_, 1e-10, 1, 10**6, lemke.PIVOT_TOL)   # max_iter 1: one pivot
+    basis = iw[:k]
+    assert basis[expected] == 2 * k and list(basis).count(2 * k) == 1      # z0 is basic in that row
+
+
 def test_lemke_reports_no_solution_for_minus_identity():
     result = solve_lcp(-np.eye(3), -np.ones(3), method="lemke")
     assert result.status == "no_solution"
