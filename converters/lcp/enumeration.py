@@ -47,7 +47,7 @@ def run(M, q, z, fw, iw, st, tol, budget, first):
     st[ITER] counts the visited bases, st[INFO] the solutions found."""
     k = q.shape[0]
     o = 0
-    aug = fw[o:o + k * (k + 1)]
+    aug = fw[o:o + k * (k + 1)].reshape((k, k + 1))    # M_JJ | -q_J in its top-left m x (m + 1) block
     o += k * (k + 1)
     sub_buf = fw[o:o + k * k]
     o += k * k
@@ -132,14 +132,14 @@ def run(M, q, z, fw, iw, st, tol, budget, first):
     return mark_done(st, S.FAILED, S.CHECK)
 
 
-@njit(cache=True, _nrt=False)
-def _basic_solution(M, q, J, m, z, w, aug_buf, sub_buf, qscale, conditioned):
+@njit(cache=True, _nrt=False, inline='always')
+def _basic_solution(M, q, J, m, z, w, aug, sub_buf, qscale, conditioned):
     """z with z_J = -M_JJ^-1 q_J (zero elsewhere); True when it is feasible (z, w >= -1e-9 scale), then
     clipped at 0. False too when M_JJ is singular, or, with ``conditioned``, ill-conditioned (2-norm
     condition number above 1e12: an SVD per basis, :func:`condition_number`; auto's first-solution search
-    goes without it, as the check on the answer judges it anyway)."""
+    goes without it, as the check on the answer judges it anyway). ``aug`` (k x (k + 1)) holds M_JJ | -q_J in
+    its top-left block (solve_augmented takes the block's size: no reshape per basis)."""
     k = q.shape[0]
-    z[:] = 0.0
     if m > 0:
         if conditioned:
             sub = sub_buf[:m * m].reshape((m, m))
@@ -148,15 +148,19 @@ def _basic_solution(M, q, J, m, z, w, aug_buf, sub_buf, qscale, conditioned):
                     sub[r, c] = M[J[r], J[c]]
             if condition_number(sub, m) > 1e12:
                 return False
-        aug = aug_buf[:m * (m + 1)].reshape((m, m + 1))
         for r in range(m):
             for c in range(m):
                 aug[r, c] = M[J[r], J[c]]
             aug[r, m] = -q[J[r]]
         if not solve_augmented(aug, m, 1):
             return False
-        for r in range(m):
-            z[J[r]] = aug[r, m]
+    r = 0                       # z in one pass (J ascending): no zeroing first, which a call to memset would do
+    for i in range(k):
+        if r < m and J[r] == i:
+            z[i] = aug[r, m]
+            r += 1
+        else:
+            z[i] = 0.0
     zbig = 0.0
     for i in range(k):
         zbig = max(zbig, abs(z[i]))
@@ -213,7 +217,7 @@ def condition_number(a, m):
     return np.inf if smallest == 0.0 else largest / smallest
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline='always')
 def _next_subset(J, m, k):
     """Advance J (of size m) to the next index set: lexicographic within a size, then the next size.
     Returns the new size (k + 1 when every set was visited)."""

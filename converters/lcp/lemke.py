@@ -99,7 +99,7 @@ def run(M, q, z, fw, iw, st, tol, max_iter, budget, pivot_tol):
                     cand[nc] = i
                     nc += 1
             if nc == 0:
-                _z_from_basis(C, basis, k, z, False)
+                _z_from_basis(C, place, k, z, False)
                 st[S.ITER] = iterations
                 return _done(M, q, z, w, st, tol, S.NO_SOLUTION, S.RAY)
             best = np.inf
@@ -128,19 +128,19 @@ def run(M, q, z, fw, iw, st, tol, max_iter, budget, pivot_tol):
         place[leaving] = col
         iterations += 1
         if leaving == z0:
-            _z_from_basis(C, basis, k, z, True)
+            _z_from_basis(C, place, k, z, True)
             st[S.ITER] = iterations
             return _done(M, q, z, w, st, tol, S.SOLVED, S.OK)
         entering = leaving + k if leaving < k else leaving - k  # the complement of what left
         if iterations >= max_iter:
-            _z_from_basis(C, basis, k, z, False)
+            _z_from_basis(C, place, k, z, False)
             st[S.ITER] = iterations
             return _done(M, q, z, w, st, tol, S.MAX_ITERATIONS, S.MAXIT)
         budget -= k * n
         if budget <= 0:    # the caller checks its deadline here, then calls again
             st[S.AUX] = entering
             st[S.ITER] = iterations
-            _z_from_basis(C, basis, k, z, False)
+            _z_from_basis(C, place, k, z, False)
             return False
 
 
@@ -232,13 +232,17 @@ def _pivot(C, row, col, prow):
 
 
 @njit(cache=True, _nrt=False, inline='always')
-def _z_from_basis(C, basis, k, z, clip):
-    z[:] = 0.0
-    for r in range(k):
-        var = basis[r]
-        if k <= var < 2 * k:
-            v = C[r, k + 1]
-            z[var - k] = (v if v > 0.0 else 0.0) if clip else v
+def _z_from_basis(C, place, k, z, clip):
+    """z from the tableau: z_i is the rhs of its row when basic (place[k + i] = -1 - row), else 0. Each entry
+    written once, by value (zeroing z first compiles to a call to memset, whose masked stores the loads of z
+    just after, in the check, cannot be forwarded from: they wait for the stores to reach the cache)."""
+    for i in range(k):
+        p = place[k + i]
+        if p < 0:
+            v = C[-1 - p, k + 1]
+            z[i] = (v if v > 0.0 else 0.0) if clip else v
+        else:
+            z[i] = 0.0
 
 
 __all__ = ["run", "sizes"]

@@ -169,20 +169,25 @@ def check_scaled(q_big, m_big, z, w, err, tol):
             i = j
     if not z[i] / zdiv >= -tol:
         return CHECK_Z_NEGATIVE, i, z[i], z[i] / zdiv, z_scale, 0.0
-    # the largest gap found with the reciprocals (two divisions, not 2k), then computed by division for that
-    # index: a different index only between gaps within a rounding of each other (by division throughout when
-    # a scale is subnormal: its reciprocal overflows)
+    # The largest gap, first with the reciprocals (two divisions, not 2k): each product is within 3.3e-16 (relative)
+    # of the quotient, so a largest product below tol / (1 + 1e-15) (less the absolute error of a subnormal one)
+    # proves every quotient <= tol. Otherwise (and when a scale is subnormal: its reciprocal overflows) the
+    # quotients themselves decide, as they always did.
     zinv, winv = 1.0 / zdiv, 1.0 / wdiv
-    divide = not (zinv <= 1.7976931348623157e308 and winv <= 1.7976931348623157e308)
-    i = 0
-    gap_i = -np.inf
-    for j in range(k):
-        gap = min(z[j] / zdiv, w[j] / wdiv) if divide else min(z[j] * zinv, w[j] * winv)
-        if gap > gap_i:
-            i, gap_i = j, gap
-    gap_i = min(z[i] / zdiv, w[i] / wdiv)
-    if not gap_i <= tol:
-        return CHECK_NOT_COMPLEMENTARY, i, z[i], w[i], z[i] / zdiv, w[i] / wdiv
+    gap_big = np.inf
+    if zinv <= 1.7976931348623157e308 and winv <= 1.7976931348623157e308:
+        gap_big = -np.inf
+        for j in range(k):
+            gap_big = max(gap_big, min(z[j] * zinv, w[j] * winv))
+    if not gap_big * (1.0 + 1e-15) + 1e-300 <= tol:
+        i = 0
+        gap_i = min(z[0] / zdiv, w[0] / wdiv)
+        for j in range(1, k):
+            gap = min(z[j] / zdiv, w[j] / wdiv)
+            if gap > gap_i:
+                i, gap_i = j, gap
+        if not gap_i <= tol:
+            return CHECK_NOT_COMPLEMENTARY, i, z[i], w[i], z[i] / zdiv, w[i] / wdiv
     if not err <= tol:
         return CHECK_RESIDUAL, 0, err, 0.0, 0.0, 0.0
     return CHECK_OK, 0, 0.0, 0.0, 0.0, 0.0

@@ -179,3 +179,30 @@ def test_project_problem_set_outcomes_are_scale_free():
         assert tiny.status == base.status, case.name
         if base.solved:
             np.testing.assert_allclose(tiny.z, 1e-200 * base.z, rtol=1e-9, atol=1e-209 * np.abs(base.z).max())
+
+
+@pytest.mark.parametrize("scale", [1e-310, 1e-200, 1.0, 1e200])
+def test_the_complementarity_test_decides_as_the_exact_quotients_do_at_its_tolerance(scale):
+    """The check looks for the largest gap min(z_i / z_scale, w_i / w_scale) with reciprocals first and falls back
+    to the quotients near tol: its verdict must be the quotients' own, for tol just below, at and just above the
+    largest gap (at 1e-310 the scales are subnormal and their reciprocals overflow)."""
+    from converters.lcp.result import CHECK_NOT_COMPLEMENTARY, CHECK_OK, check
+    rng = np.random.default_rng(5)
+    decided = 0
+    for _ in range(300):
+        k = int(rng.integers(1, 7))
+        M = np.eye(k) + np.triu(rng.uniform(0.0, 0.1, (k, k)), 1)
+        z = rng.uniform(0.5, 1.0, k) * scale                  # z_i and w_i both positive: a gap of w_i / w_scale
+        w = rng.uniform(0.5, 1.0, k) * scale * rng.choice([1e-3, 1e-9, 1e-13], k)
+        q = w - M @ z
+        big_q, big_m = np.abs(q).max(), np.abs(M).max()
+        z_scale = max(np.abs(z).max(), big_q / big_m)
+        w_scale = max(big_q, big_m * np.abs(z).max())
+        gap = max(min(zi / z_scale, wi / w_scale) for zi, wi in zip(z, w))
+        if not 1e-16 < gap < 1e-2:
+            continue
+        for tol in (np.nextafter(gap, 0.0), gap, np.nextafter(gap, 1.0), gap * (1 - 1e-15), gap * (1 + 1e-15)):
+            code = check(M, q, z, w, 0.0, tol)[0]
+            assert code == (CHECK_OK if gap <= tol else CHECK_NOT_COMPLEMENTARY), (k, scale, gap, tol, code)
+            decided += 1
+    assert decided > 500
