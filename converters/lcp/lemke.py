@@ -18,16 +18,17 @@ import numpy as np
 from numba import njit
 
 from . import state as S
-from .result import accepts, mark_done
+from .result import accepts_scaled, mark_done
 
 PIVOT_TOL = 1e-13
 
 
 @njit(cache=True, _nrt=False)
 def sizes(k):
-    """Doubles and integers of workspace: the k x (k + 2) condensed tableau, w and the pivot row; the
-    basis, the nonbasic variables, every variable's place, candidate rows and lexicographic scratch."""
-    return k * (k + 2) + k + (k + 2), 6 * k + 2
+    """Doubles and integers of workspace: the k x (k + 2) condensed tableau, w, the pivot row and max|q|, max|M|
+    (for the check at the end); the basis, the nonbasic variables, every variable's place, candidate rows and
+    lexicographic scratch."""
+    return k * (k + 2) + k + (k + 2) + 2, 6 * k + 2
 
 
 @njit(cache=True, _nrt=False)
@@ -44,6 +45,7 @@ def run(M, q, z, fw, iw, st, tol, max_iter, budget, pivot_tol):
     C = fw[:k * n].reshape((k, n))
     w = fw[k * n:k * n + k]
     prow = fw[k * n + k:k * n + k + n]
+    big = fw[k * n + k + n:k * n + k + n + 2]       # max|q|, max|M|: read once, while setting up
     basis, nonbasic, place = iw[:k], iw[k:2 * k + 1], iw[2 * k + 1:4 * k + 2]
     cand, rem = iw[4 * k + 2:5 * k + 2], iw[5 * k + 2:6 * k + 2]
     have_row = False
@@ -51,15 +53,25 @@ def run(M, q, z, fw, iw, st, tol, max_iter, budget, pivot_tol):
     if st[S.PHASE] == S.START:
         st[S.ITER] = 0
         nonneg = True
+        q_big = 0.0
         for i in range(k):
             if not q[i] >= 0.0:
                 nonneg = False
-        if nonneg:
-            z[:] = 0.0
-            return _done(M, q, z, w, st, tol, S.SOLVED, S.OK)
+            if abs(q[i]) > q_big:
+                q_big = abs(q[i])
+        m_big = 0.0
         for i in range(k):
             for j in range(k):
-                C[i, j] = -M[i, j]
+                a = M[i, j]
+                C[i, j] = -a
+                if abs(a) > m_big:
+                    m_big = abs(a)
+        big[0] = q_big
+        big[1] = m_big
+        if nonneg:
+            z[:] = 0.0
+            return _done(M, q, z, w, big, st, tol, S.SOLVED, S.OK)
+        for i in range(k):
             C[i, k] = -1.0
             C[i, rhs] = q[i]
             basis[i] = i            # w_i basic in row i
@@ -101,7 +113,7 @@ def run(M, q, z, fw, iw, st, tol, max_iter, budget, pivot_tol):
             if nc == 0:
                 _z_from_basis(C, place, k, z, False)
                 st[S.ITER] = iterations
-                return _done(M, q, z, w, st, tol, S.NO_SOLUTION, S.RAY)
+                return _done(M, q, z, w, big, st, tol, S.NO_SOLUTION, S.RAY)
             best = np.inf
             ratios = w              # free until the end (the check fills it): each candidate's ratio, once
             for t in range(nc):
@@ -130,12 +142,12 @@ def run(M, q, z, fw, iw, st, tol, max_iter, budget, pivot_tol):
         if leaving == z0:
             _z_from_basis(C, place, k, z, True)
             st[S.ITER] = iterations
-            return _done(M, q, z, w, st, tol, S.SOLVED, S.OK)
+            return _done(M, q, z, w, big, st, tol, S.SOLVED, S.OK)
         entering = leaving + k if leaving < k else leaving - k  # the complement of what left
         if iterations >= max_iter:
             _z_from_basis(C, place, k, z, False)
             st[S.ITER] = iterations
-            return _done(M, q, z, w, st, tol, S.MAX_ITERATIONS, S.MAXIT)
+            return _done(M, q, z, w, big, st, tol, S.MAX_ITERATIONS, S.MAXIT)
         budget -= k * n
         if budget <= 0:    # the caller checks its deadline here, then calls again
             st[S.AUX] = entering
@@ -145,9 +157,10 @@ def run(M, q, z, fw, iw, st, tol, max_iter, budget, pivot_tol):
 
 
 @njit(cache=True, _nrt=False, inline='always')
-def _done(M, q, z, w, st, tol, status, outcome):
-    """Record the end; a claimed solution must pass the check on this (normalised) problem."""
-    if status == S.SOLVED and not accepts(M, q, z, w, tol):
+def _done(M, q, z, w, big, st, tol, status, outcome):
+    """Record the end; a claimed solution must pass the check on this (normalised) problem (max|q| and max|M| in
+    ``big``, read while setting up)."""
+    if status == S.SOLVED and not accepts_scaled(M, q, big[0], big[1], z, w, tol):
         status, outcome = S.FAILED, S.CHECK
     return mark_done(st, status, outcome)
 
