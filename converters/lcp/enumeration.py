@@ -18,21 +18,21 @@ from numba import njit
 
 from . import state as S
 from .kernels import solve_augmented
-from .result import accepts, copy_into, mark_done, residual
+from .result import accepts, accepts_scaled, copy_into, mark_done, max_abs, max_abs_matrix, residual
 
 MAX_K = S.ENUM_MAX_K
 
 
 @njit(cache=True, _nrt=False)
 def sizes(k, listing):
-    """Doubles and integers of workspace: the augmented M_JJ | -q_J, M_JJ, two vectors and, when ``listing``
-    (every basic solution is kept), up to 2^k solutions; the index set J."""
+    """Doubles and integers of workspace: the augmented M_JJ | -q_J, M_JJ, two vectors, max|q| and max|M| and,
+    when ``listing`` (every basic solution is kept), up to 2^k solutions; the index set J."""
     return _solutions_offset(k) + ((1 << k) * k if listing else 0), k
 
 
 @njit(cache=True, _nrt=False)
 def _solutions_offset(k):
-    return k * (k + 1) + k * k + 2 * k
+    return k * (k + 1) + k * k + 2 * k + 2
 
 
 def solutions(fw: np.ndarray, st: np.ndarray, k: int) -> list:
@@ -53,6 +53,8 @@ def run(M, q, z, fw, iw, st, tol, budget, first):
     o += k * k
     zc, w = fw[o:o + k], fw[o + k:o + 2 * k]
     o += 2 * k
+    big = fw[o:o + 2]          # max|q|, max|M| for the check, read once
+    o += 2
     sols = fw[o:o + (0 if first else (1 << k) * k)].reshape((0 if first else 1 << k, k))
     J = iw[:k]
     if st[S.PHASE] == S.START:
@@ -60,6 +62,8 @@ def run(M, q, z, fw, iw, st, tol, budget, first):
         st[S.ITER] = 0         # bases visited
         st[S.INFO] = 0         # solutions found
         st[S.PHASE] = S.RUNNING
+        big[0] = max_abs(q)
+        big[1] = max_abs_matrix(M)
     size = st[S.AUX]
     visited = st[S.ITER]
     nsol = st[S.INFO]
@@ -81,7 +85,7 @@ def run(M, q, z, fw, iw, st, tol, budget, first):
         if _basic_solution(M, q, J, size, zc, w, aug, sub_buf, qscale, not first):
             if first:     # auto: the first one that passes the check ends it; none is kept
                 nsol += 1
-                if accepts(M, q, zc, w, tol):
+                if accepts_scaled(M, q, big[0], big[1], zc, w, tol):
                     copy_into(zc, z)
                     st[S.ITER] = visited
                     st[S.INFO] = nsol

@@ -11,7 +11,7 @@ from numba import njit
 from ..compiled import MAX_INLINE_K  # noqa: F401 (largest k solved inline; the callers read it there)
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, inline='always')
 def solve_augmented(a, m, cols):
     """Gaussian elimination with partial pivoting on the m x (m + cols) augmented matrix ``a`` in place;
     the solution is left in a[:m, m:m + cols]. Returns False when the left block is (numerically) singular."""
