@@ -54,6 +54,9 @@ enum { RAW_ITERATIONS = 0, RAW_ERR, RAW_USED, RAW_RULE, RAW_STAGES, RAW_INFO_X, 
 #define MAX_METHODS 16
 /* Results kept for recycling: a loop that drops or rebinds its result each call finds one free in two. */
 #define POOL 4
+/* auto's messages kept, by what they say (the method used, the stages, the eigenvalue's bits, k) */
+#define MESSAGES 8
+typedef struct { int64_t used, stages, k; uint64_t eig; PyObject *text; } Message;
 /* LCPResult's fields, in the order of the slot descriptors the Solver is given */
 enum { F_Z, F_W, F_STATUS, F_ERR, F_ITERATIONS, F_METHOD, F_MESSAGE, F_SOLUTIONS, N_FIELDS };
 
@@ -92,6 +95,8 @@ typedef struct {
     int64_t budget;
     PyObject *pool[POOL];     /* results handed out recently, recycled once nothing else refers to them */
     int pool_next;            /* the entry a new result replaces when every one is in use */
+    Message messages[MESSAGES];
+    int messages_next;
 } Solver;
 
 static PyObject *s_method, *s_tol, *s_fast_paths, *s_max_iter, *s_time_limit;
@@ -246,6 +251,35 @@ result(Solver *s, PyObject *held, PyObject *z, PyObject *w, double err, int64_t 
     return r;
 }
 
+/* auto's message after other methods of its plan gave way: the Python function's words (it is pure), kept in the
+   Solver by their arguments: calling it through its lru_cache had cost a third of a k = 4 solve. */
+static PyObject *
+auto_words(Solver *s, Py_ssize_t used, int64_t stages, double eig, Py_ssize_t k)
+{
+    uint64_t bits = 0x7ff8000000000000ULL;       /* NaN: no eigenvalue computed */
+    if (eig == eig) memcpy(&bits, &eig, sizeof(bits));
+    for (int i = 0; i < MESSAGES; i++) {
+        Message *m = &s->messages[i];
+        if (m->text != NULL && m->used == used && m->stages == stages && m->eig == bits && m->k == k)
+            return Py_NewRef(m->text);
+    }
+    PyObject *eig_o = eig == eig ? PyFloat_FromDouble(eig) : Py_NewRef(Py_None);
+    if (eig_o == NULL) return NULL;
+    PyObject *text = PyObject_CallFunction(s->auto_message, "nLOn", used, (long long)stages, eig_o, k);
+    Py_DECREF(eig_o);
+    if (text == NULL || !PyUnicode_CheckExact(text)) return text;
+    Message *m = &s->messages[s->messages_next];
+    s->messages_next = (s->messages_next + 1) % MESSAGES;
+    PyObject *old = m->text;
+    m->used = used;
+    m->stages = stages;
+    m->k = k;
+    m->eig = bits;
+    m->text = Py_NewRef(text);
+    Py_XDECREF(old);
+    return text;
+}
+
 static PyObject *
 solver_call(PyObject *self, PyObject *const *args, size_t nargsf, PyObject *kwnames)
 {
@@ -348,11 +382,7 @@ solver_call(PyObject *self, PyObject *const *args, size_t nargsf, PyObject *kwna
                 message = Py_NewRef(s->empty);
             }
             else {
-                double eig = out[RAW_INFO_X];
-                PyObject *eig_o = eig == eig ? PyFloat_FromDouble(eig) : Py_NewRef(Py_None);
-                message = eig_o == NULL ? NULL : PyObject_CallFunction(s->auto_message, "nLOn", used,
-                                                                       (long long)stages, eig_o, (Py_ssize_t)k);
-                Py_XDECREF(eig_o);
+                message = auto_words(s, used, stages, out[RAW_INFO_X], (Py_ssize_t)k);
             }
             if (message != NULL) {
                 r = result(s, held, z, w, out[RAW_ERR], (int64_t)out[RAW_ITERATIONS],
@@ -495,6 +525,7 @@ solver_traverse(Solver *s, visitproc visit, void *arg)
     Py_VISIT(s->memory_key);
     Py_VISIT(s->opts);
     for (int i = 0; i < POOL; i++) Py_VISIT(s->pool[i]);
+    for (int i = 0; i < MESSAGES; i++) Py_VISIT(s->messages[i].text);
     return 0;
 }
 
@@ -517,6 +548,7 @@ solver_clear(Solver *s)
     Py_CLEAR(s->memory_key);
     Py_CLEAR(s->opts);
     for (int i = 0; i < POOL; i++) Py_CLEAR(s->pool[i]);
+    for (int i = 0; i < MESSAGES; i++) Py_CLEAR(s->messages[i].text);
     return 0;
 }
 
