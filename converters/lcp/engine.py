@@ -33,7 +33,7 @@ from .dispatch import (DEFAULT_MAX_ITER, DEFAULT_OPTIONS, OPT_BETA, OPT_OMEGA, O
 from .enumeration import MAX_K as ENUM_MAX_K
 from .enumeration import solutions as enum_solutions
 from .fastpaths import closed_form
-from .result import STATUSES, check, check_message, check_scaled, residual
+from .result import STATUSES, check, check_message, check_scaled, max_abs_finite, max_abs_matrix_finite, residual
 
 #: Method names, indexed by the compiled code's method numbers (``state.AUTO`` .. ``state.NEWTON``).
 METHODS = S.METHOD_NAMES
@@ -64,21 +64,10 @@ def exponents(M, q):
 @njit(cache=True, _nrt=False, inline='always')
 def magnitudes(M, q):
     """(es, em, finite, max|q|, max|M|) (see :func:`exponents`)."""
-    qbig = 0.0
-    for i in range(q.shape[0]):
-        a = abs(q[i])
-        if not a <= _MAX_FLOAT:
-            return 0, 0, False, 0.0, 0.0
-        if a > qbig:
-            qbig = a
-    mbig = 0.0
-    for i in range(M.shape[0]):
-        for j in range(M.shape[1]):
-            a = abs(M[i, j])
-            if not a <= _MAX_FLOAT:
-                return 0, 0, False, 0.0, 0.0
-            if a > mbig:
-                mbig = a
+    qbig, q_finite = max_abs_finite(q)
+    mbig, m_finite = max_abs_matrix_finite(M)
+    if not (q_finite and m_finite):
+        return 0, 0, False, 0.0, 0.0
     return math.frexp(qbig)[1], math.frexp(mbig)[1], True, qbig, mbig
 
 

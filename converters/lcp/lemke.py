@@ -18,7 +18,7 @@ import numpy as np
 from numba import njit
 
 from . import state as S
-from .result import accepts_scaled, mark_done
+from .result import accepts_scaled, mark_done, max_abs, max_abs_matrix
 
 PIVOT_TOL = 1e-13
 
@@ -53,21 +53,14 @@ def run(M, q, z, fw, iw, st, tol, max_iter, budget, pivot_tol):
     if st[S.PHASE] == S.START:
         st[S.ITER] = 0
         nonneg = True
-        q_big = 0.0
         for i in range(k):
             if not q[i] >= 0.0:
                 nonneg = False
-            if abs(q[i]) > q_big:
-                q_big = abs(q[i])
-        m_big = 0.0
         for i in range(k):
             for j in range(k):
-                a = M[i, j]
-                C[i, j] = -a
-                if abs(a) > m_big:
-                    m_big = abs(a)
-        big[0] = q_big
-        big[1] = m_big
+                C[i, j] = -M[i, j]
+        big[0] = max_abs(q)
+        big[1] = max_abs_matrix(M)
         if nonneg:
             z[:] = 0.0
             return _done(M, q, z, w, big, st, tol, S.SOLVED, S.OK)

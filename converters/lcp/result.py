@@ -15,6 +15,8 @@ from numba import njit
 from . import state as S
 from .answer import FAILED, MAX_ITERATIONS, NO_SOLUTION, SOLVED, STATUSES, LCPResult, make_result  # noqa: F401
 
+_MAX_FLOAT = 1.7976931348623157e308
+
 #: Codes returned by :func:`check` (0: the pair solves the LCP).
 CHECK_OK, CHECK_NOT_FINITE, CHECK_W_NEGATIVE, CHECK_Z_NEGATIVE, CHECK_NOT_COMPLEMENTARY, CHECK_RESIDUAL = range(6)
 
@@ -115,23 +117,59 @@ def check(M, q, z, w, err, tol):
     return check_scaled(max_abs(q), max_abs_matrix(M), z, w, err, tol)
 
 
+@njit(cache=True, _nrt=False, inline='always')
+def largest(x, n, acc):
+    """Fold |x[0:n]| into the four running maxima ``acc`` (a 4-tuple; NaN passed over, as ``a > m`` is false);
+    also whether every entry is finite. Four maxima, not one: a single running maximum is a chain of dependent
+    vmaxsd, 4 cycles an entry (110 ns over a 9 x 9 M, a tenth of its solve); the largest of the four is the same
+    number."""
+    m0, m1, m2, m3 = acc
+    finite = True
+    j = 0
+    while j + 4 <= n:
+        a0, a1, a2, a3 = abs(x[j]), abs(x[j + 1]), abs(x[j + 2]), abs(x[j + 3])
+        finite &= a0 <= _MAX_FLOAT and a1 <= _MAX_FLOAT and a2 <= _MAX_FLOAT and a3 <= _MAX_FLOAT
+        m0 = a0 if a0 > m0 else m0
+        m1 = a1 if a1 > m1 else m1
+        m2 = a2 if a2 > m2 else m2
+        m3 = a3 if a3 > m3 else m3
+        j += 4
+    while j < n:
+        a0 = abs(x[j])
+        finite &= a0 <= _MAX_FLOAT
+        m0 = a0 if a0 > m0 else m0
+        j += 1
+    return (m0, m1, m2, m3), finite
+
+
+@njit(cache=True, _nrt=False, inline='always')
+def max_abs_finite(v):
+    """(max|v|, whether every entry is finite)."""
+    acc, finite = largest(v, v.shape[0], (0.0, 0.0, 0.0, 0.0))
+    return max(max(acc[0], acc[1]), max(acc[2], acc[3])), finite
+
+
+@njit(cache=True, _nrt=False, inline='always')
+def max_abs_matrix_finite(M):
+    """(max|M|, whether every entry is finite), row by row."""
+    acc = (0.0, 0.0, 0.0, 0.0)
+    finite = True
+    for i in range(M.shape[0]):
+        acc, row_finite = largest(M[i], M.shape[1], acc)
+        finite &= row_finite
+    return max(max(acc[0], acc[1]), max(acc[2], acc[3])), finite
+
+
 @njit(cache=True, _nrt=False)
 def max_abs(v):
-    big = 0.0
-    for i in range(v.shape[0]):
-        if abs(v[i]) > big:
-            big = abs(v[i])
-    return big
+    """max|v| (NaN passed over)."""
+    return max_abs_finite(v)[0]
 
 
 @njit(cache=True, _nrt=False)
 def max_abs_matrix(M):
-    big = 0.0
-    for i in range(M.shape[0]):
-        for j in range(M.shape[1]):
-            if abs(M[i, j]) > big:
-                big = abs(M[i, j])
-    return big
+    """max|M| (NaN passed over)."""
+    return max_abs_matrix_finite(M)[0]
 
 
 @njit(cache=True, _nrt=False)

@@ -206,3 +206,24 @@ def test_the_complementarity_test_decides_as_the_exact_quotients_do_at_its_toler
             assert code == (CHECK_OK if gap <= tol else CHECK_NOT_COMPLEMENTARY), (k, scale, gap, tol, code)
             decided += 1
     assert decided > 500
+
+
+@pytest.mark.parametrize("k", [1, 2, 3, 4, 5, 7, 8, 9, 13])
+def test_the_magnitudes_are_numpys_and_any_entry_that_is_not_finite_is_found(k):
+    """max|q| and max|M| are kept as four running maxima (the remainder of k / 4 separately): the same numbers as
+    numpy's, and a NaN or inf anywhere, in the blocks of four or in the remainder, makes the problem not finite."""
+    from converters.lcp import engine
+    from converters.lcp.result import max_abs, max_abs_matrix
+    rng = np.random.default_rng(k)
+    M, q = rng.standard_normal((k, k)) * 10.0 ** rng.integers(-5, 5, (k, k)), rng.standard_normal(k)
+    assert engine.magnitudes(M, q)[2:] == (True, np.abs(q).max(), np.abs(M).max())
+    assert max_abs(q) == np.abs(q).max() and max_abs_matrix(M) == np.abs(M).max()
+    for bad in (np.nan, np.inf, -np.inf):
+        for i in range(k):
+            for j in range(k):
+                Mb = M.copy()
+                Mb[i, j] = bad
+                assert not engine.magnitudes(Mb, q)[2], (bad, i, j)
+            qb = q.copy()
+            qb[i] = bad
+            assert not engine.magnitudes(M, qb)[2], (bad, i)
