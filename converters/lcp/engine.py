@@ -175,6 +175,7 @@ def solve_in(M, q, z, w, method, tol, max_iter, fast_paths, opts, budget, mbuf, 
     sf[:] = 0.0
     fw = buf[2 * k + S.SF_SIZE:]
     st = ibuf[:S.ST_SIZE]
+    st[S.CALLER_CHECKS] = 1     # the check below is the one that counts (Lemke's own would repeat it)
     iw = ibuf[S.ST_SIZE:]
     if fast_paths and method != S.ENUM:
         for rule in range(N_RULES):
@@ -189,7 +190,7 @@ def solve_in(M, q, z, w, method, tol, max_iter, fast_paths, opts, budget, mbuf, 
         return ONCE_OTHER, 0, 0.0, method, -1, 0, 0.0
     scale_pow2(zs, shift, z)
     err = residual(M, q, z, w)
-    if check_scaled(q_big, m_big, z, w, err, tol)[0] != 0:      # solved once normalised, not once scaled back
+    if check_scaled(q_big, m_big, z, w, err, tol)[0] != 0:      # not solved once scaled back (or Lemke unchecked)
         return ONCE_OTHER, 0, 0.0, method, -1, 0, 0.0
     used, stages = method, 0
     if method == S.AUTO:

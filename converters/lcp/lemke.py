@@ -169,8 +169,9 @@ def _column_scale(C, col, k):
 @njit(cache=True, _nrt=False, inline='always')
 def _done(M, q, z, w, big, st, tol, status, outcome):
     """Record the end; a claimed solution must pass the check on this (normalised) problem (max|q| and max|M| in
-    ``big``, read while setting up)."""
-    if status == S.SOLVED and not accepts_scaled(M, q, big[0], big[1], z, w, tol):
+    ``big``, read while setting up), unless the caller checks it on the original one (st[CALLER_CHECKS]: the
+    one-call solve, which hands a failure to the sliced solve, where Lemke checks and auto goes on)."""
+    if status == S.SOLVED and st[S.CALLER_CHECKS] == 0 and not accepts_scaled(M, q, big[0], big[1], z, w, tol):
         status, outcome = S.FAILED, S.CHECK
     return mark_done(st, status, outcome)
 

@@ -11,6 +11,9 @@ STAGE = 7
 STAGE_OUTCOME = 9      # 9 .. 9 + N_METHODS - 1: outcome of each method auto ran (-1: not run)
 STAGE_ITER = 15        # 15 .. 15 + N_METHODS - 1: its iterations
 PSD = 21               # how auto looked at M's semidefiniteness after Lemke's ray (PSD_* below)
+# 1: the caller checks a claimed solution itself, on the original problem (engine.solve_in); Lemke then leaves its
+# own check of the same answer on the normalised problem to it (0, a zeroed st: Lemke checks)
+CALLER_CHECKS = 22
 ST_SIZE = 24
 # sf
 INFO_X = 0

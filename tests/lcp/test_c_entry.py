@@ -223,6 +223,20 @@ def test_auto_messages_kept_by_the_c_entry_are_pythons_own_words():
 
 
 @needs_c_entry
+def test_a_lemke_answer_that_fails_the_check_goes_on_through_auto_as_in_python():
+    """In the one-call solve Lemke leaves the check of its answer to the check on the original problem; when that
+    fails, the sliced solve runs the plan again, where Lemke's own check fails and auto goes on. An ill-conditioned
+    M (condition ~1e11) at tol = 1e-16: the message must name Lemke's failed check, and the answer be Python's."""
+    rng = np.random.default_rng(4)
+    k = int(rng.integers(2, 9))
+    U, _ = np.linalg.qr(rng.normal(size=(k, k)))
+    M = U @ np.diag(np.logspace(0, -rng.uniform(6, 15), k)) @ U.T
+    q = rng.normal(size=k)
+    result = same_outcome(M, q, tol=1e-16, fast_paths=False)
+    assert "lemke's answer failed the residual check" in result.message
+
+
+@needs_c_entry
 def test_the_solver_refuses_a_configuration_it_would_misread():
     """Its limits are read before the object exists (an int subclass's __index__ could otherwise reach a half-built
     Solver through the garbage collector); anything but exact ints and str is refused."""
