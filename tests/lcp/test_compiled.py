@@ -41,11 +41,12 @@ def same_path(method, M, q):
         # cross it one iteration apart (seen: Newton 119 vs 118 on an integer problem); pivots are exact
         if abs(new.iterations - old.iterations) > 1:
             # more only where the path is decided by rounding: the oracle itself strays as far when one
-            # entry of q moves by one ulp (seen: Newton on a degenerate integer problem, k = 7, whose
+            # entry of q or M moves by one ulp (seen: Newton on a degenerate integer problem, k = 7, whose
             # iterates oscillate and amplify a 1e-16 difference 3x per step: 49 vs 40 iterations, and the
-            # oracle takes 39-62 on q nudged by one ulp)
-            strays = max(abs(reference.REFERENCE[method](M, nudged, tol=1e-10, **kwargs).iterations
-                             - old.iterations) for nudged in _nudged(q))
+            # oracle takes 39-62 on q nudged by one ulp; k = 4, seed 113: 146 vs 155, the oracle 147-161 on q
+            # nudged and 145-169 on M nudged: the compiled sums round differently inside M z, not only in q)
+            strays = max(abs(reference.REFERENCE[method](M_n, q_n, tol=1e-10, **kwargs).iterations
+                             - old.iterations) for M_n, q_n in _nudged(M, q))
             assert strays >= abs(new.iterations - old.iterations), (method, new.iterations, old.iterations, strays)
             same = False
     else:
@@ -58,13 +59,17 @@ def same_path(method, M, q):
             np.testing.assert_allclose(a, b, rtol=1e-9, atol=1e-12)
 
 
-def _nudged(q):
-    """q with one entry moved by one ulp, up or down: every such copy."""
+def _nudged(M, q):
+    """(M, q) with one entry of q or of M moved by one ulp, up or down: every such copy."""
     for i in range(q.shape[0]):
         for direction in (np.inf, -np.inf):
             nudged = q.copy()
             nudged[i] = np.nextafter(nudged[i], direction)
-            yield nudged
+            yield M, nudged
+            for j in range(q.shape[0]):
+                nudged_M = M.copy()
+                nudged_M[i, j] = np.nextafter(nudged_M[i, j], direction)
+                yield nudged_M, q
 
 
 @pytest.mark.parametrize("method", list(COMPILED))
@@ -86,6 +91,7 @@ def test_compiled_methods_take_the_reference_path_on_the_peer_collection(peer, m
 
 @settings(max_examples=40, deadline=None)
 @example(k=7, seed=1, kind="integer")     # Newton's path decided by rounding (see same_path)
+@example(k=4, seed=113, kind="integer")   # the same, the oracle straying further on M nudged than on q
 @given(k=st.integers(1, 12), seed=st.integers(0, 2**32 - 1),
        kind=st.sampled_from(["pd", "spd", "triangular", "integer"]))
 def test_compiled_methods_take_the_reference_path_on_random_problems(k, seed, kind):
