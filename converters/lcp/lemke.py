@@ -18,7 +18,7 @@ import numpy as np
 from numba import njit
 
 from . import state as S
-from .result import accepts_scaled, mark_done, max_abs, max_abs_matrix
+from .result import accepts_scaled, mark_done, max_abs, max_abs_finite, max_abs_matrix
 
 PIVOT_TOL = 1e-13
 
@@ -94,7 +94,8 @@ def run(M, q, z, fw, iw, st, tol, max_iter, budget, pivot_tol):
     while True:
         col = place[entering]
         if not have_row:
-            scale = _column_scale(C, col, k)
+            scale = max(1.0, max_abs_finite(C[:, col])[0])    # four running maxima (result.largest): one had
+            #                                                    been a maxsd chain, 1/8 of Lemke's time at k = 9
             nc = 0
             for i in range(k):
                 if C[i, col] > pivot_tol * scale:
@@ -144,26 +145,6 @@ def run(M, q, z, fw, iw, st, tol, max_iter, budget, pivot_tol):
             st[S.ITER] = iterations
             _z_from_basis(C, place, k, z, False)
             return False
-
-
-@njit(cache=True, _nrt=False, inline='always')
-def _column_scale(C, col, k):
-    """max(1, max_i |C[i, col]|), as four running maxima (one is a chain of dependent maxsd down the column: an
-    eighth of Lemke's time at k = 9); NaN passed over."""
-    s0 = s1 = s2 = s3 = 1.0
-    i = 0
-    while i + 4 <= k:
-        a0, a1, a2, a3 = abs(C[i, col]), abs(C[i + 1, col]), abs(C[i + 2, col]), abs(C[i + 3, col])
-        s0 = a0 if a0 > s0 else s0
-        s1 = a1 if a1 > s1 else s1
-        s2 = a2 if a2 > s2 else s2
-        s3 = a3 if a3 > s3 else s3
-        i += 4
-    while i < k:
-        a0 = abs(C[i, col])
-        s0 = a0 if a0 > s0 else s0
-        i += 1
-    return max(max(s0, s1), max(s2, s3))
 
 
 @njit(cache=True, _nrt=False, inline='always')
