@@ -9,8 +9,9 @@ continue (its state lives in the workspace arrays). Two drivers use them:
   back and checks the answer on the original problem. It answers only when the method solved the problem
   within that budget; every other outcome (auto asking for an eigenvalue included) is left to
 - :class:`Run` (Python): the same compiled ``run`` in slices of ``CHUNK``, the deadline looked at between
-  slices (and the least eigenvalue computed when auto asks for it), then :meth:`Run.outcome` turns the state into status and message (run again from the start:
-  the one-call solve keeps no state, and its budget is a few milliseconds).
+  slices (and the least eigenvalue computed when auto asks for it), then :meth:`Run.outcome` turns the state
+  into status and message (run again from the start: the one-call solve keeps no state, and its budget is a
+  few milliseconds).
 
 So the time limit is honoured to within one slice, and each algorithm exists once, compiled. The
 public functions at the end (:func:`lemke`, :func:`murty`, ...) run one method on a problem as given.
@@ -147,7 +148,7 @@ def solve_once(M, q, z, w, method, tol, max_iter, fast_paths, opts, budget):
     k = q.shape[0]
     nf, ni = sizes(method, k)
     buf = np.empty(k * k + 2 * k + S.SF_SIZE + nf)     # one allocation: M', q', z', sf and the workspace
-    ibuf = np.zeros(S.ST_SIZE + ni, dtype=np.int64)    # and one for st and the integer workspace
+    ibuf = np.empty(S.ST_SIZE + ni, dtype=np.int64)    # and one for st and the integer workspace
     return solve_in(M, q, z, w, method, tol, max_iter, fast_paths, opts, budget, buf[:k * k].reshape((k, k)),
                     buf[k * k:], ibuf)
 
@@ -155,8 +156,8 @@ def solve_once(M, q, z, w, method, tol, max_iter, fast_paths, opts, budget):
 @njit(cache=True, _nrt=False)
 def solve_in(M, q, z, w, method, tol, max_iter, fast_paths, opts, budget, mbuf, buf, ibuf):
     """:func:`solve_once` in the caller's workspace: ``mbuf`` (k x k, for M'), ``buf`` (2k + SF_SIZE + the
-    method's doubles) and ``ibuf`` (ST_SIZE + its integers, zeros). (M' has its own 2-D buffer: a reshape costs
-    a call into numba's helper library, a fifth of a small solve.)"""
+    method's doubles) and ``ibuf`` (ST_SIZE + its integers: st is zeroed here, the methods set up their own). (M'
+    has its own 2-D buffer: a reshape costs a call into numba's helper library, a fifth of a small solve.)"""
     k = q.shape[0]
     es, em, finite, q_big, m_big = magnitudes(M, q)
     if not finite:
@@ -175,6 +176,7 @@ def solve_in(M, q, z, w, method, tol, max_iter, fast_paths, opts, budget, mbuf, 
     sf[:] = 0.0
     fw = buf[2 * k + S.SF_SIZE:]
     st = ibuf[:S.ST_SIZE]
+    st[:] = 0
     st[S.CALLER_CHECKS] = 1     # the check below is the one that counts (Lemke's own would repeat it)
     iw = ibuf[S.ST_SIZE:]
     if fast_paths and method != S.ENUM:
@@ -213,8 +215,8 @@ RAW_BAD_OPTIONS = -2
 def solve_raw(M_ptr, q_ptr, z_ptr, w_ptr, k, method, tol, max_iter, fast_paths, opts_ptr, n_opts, budget,
               mbuf_ptr, buf_ptr, n_buf, ibuf_ptr, n_ibuf, out_ptr):
     """:func:`solve_once` for a caller in C (``converters/lcp/_fast.c``, the C entry point of solve_lcp): arrays as
-    pointers (C-contiguous doubles; M and mbuf are k x k), the workspace the caller's, nothing allocated, so no reference
-    counting; solve_in's answer returned, the rest of its tuple written to ``out``
+    pointers (C-contiguous doubles; M and mbuf are k x k), the workspace the caller's, nothing allocated, so no
+    reference counting; solve_in's answer returned, the rest of its tuple written to ``out``
     (RAW_ITERATIONS .. RAW_INFO_X). Not jitted here: ``python -m converters.build_kernels`` compiles it ahead of
     time into an object with C arguments (:func:`converters.build_kernels.build_fast`)."""
     out = carray(out_ptr, (RAW_OUT_SIZE,))
@@ -228,7 +230,6 @@ def solve_raw(M_ptr, q_ptr, z_ptr, w_ptr, k, method, tol, max_iter, fast_paths, 
         out[1] = need_i
         return RAW_WORKSPACE
     ibuf = carray(ibuf_ptr, (need_i,))
-    ibuf[:] = 0
     answer, iterations, err, used, rule, stages, info_x = solve_in(
         carray(M_ptr, (k, k)), carray(q_ptr, (k,)), carray(z_ptr, (k,)), carray(w_ptr, (k,)), method, tol, max_iter,
         fast_paths != 0, carray(opts_ptr, (n_opts,)), budget, carray(mbuf_ptr, (k, k)), carray(buf_ptr, (need_f,)),
