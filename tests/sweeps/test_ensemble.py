@@ -45,7 +45,8 @@ def serial_rows():
 def _same_rows(a: pd.DataFrame, b: pd.DataFrame):
     assert list(a.index) == list(b.index) == list(range(GRID.size))
     for column in ("status", "message", "mode", "iterations", "D", "R"):
-        assert (a[column] == b[column]).all(), column
+        differ = a[column] != b[column]
+        assert not differ.any(), (column, b.loc[differ, ["status", "message"]].head(5).to_dict("index"))
     np.testing.assert_allclose(b[NUMERIC].to_numpy(float), a[NUMERIC].to_numpy(float), rtol=1e-12, atol=1e-12)
 
 
