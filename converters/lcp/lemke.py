@@ -112,16 +112,28 @@ def run(M, q, z, fw, iw, st, tol, max_iter, budget, pivot_tol):
                 ratios[t] = ratio
                 if ratio < best:
                     best = ratio
-            # z0 leaves as soon as it ties for the minimum ratio: that ends the algorithm.
+            # z0 leaves as soon as it ties for the minimum ratio: that ends the algorithm. Else the rows tied
+            # with the minimum to _lexmin_rows' tolerance (wider) are its first level, found in the same pass (the
+            # ratios not divided again); more than one go on to its next levels.
             bound = best + 1e-12 * max(1.0, abs(best))
+            tie = best + 1e-11 * max(1.0, abs(best))
             row = -1
+            m = 0
             for t in range(nc):
-                c = cand[t]
-                if basis[c] == z0 and ratios[t] <= bound:
-                    row = c
-                    break
+                if ratios[t] <= tie:
+                    c = cand[t]
+                    if basis[c] == z0 and ratios[t] <= bound:
+                        row = c
+                        break
+                    rem[m] = c
+                    m += 1
             if row < 0:
-                row = _lexmin_ratios(C, place, cand, nc, col, k, ratios, best, rem)
+                if m == 1:
+                    row = rem[0]
+                else:
+                    for t in range(m):
+                        cand[t] = rem[t]
+                    row = _lexmin_rows(C, place, cand, m, col, k, 1.0, rem)
         have_row = False
         leaving = basis[row]
         _pivot(C, row, col, prow)
@@ -192,23 +204,6 @@ def _lexmin_rows(C, place, rows, nrows, col, k, sign, rem):
         if n == 1:
             break
     return rem[0]
-
-
-@njit(cache=True, _nrt=False, inline='always')
-def _lexmin_ratios(C, place, rows, nrows, col, k, ratios, low, rem):
-    """:func:`_lexmin_rows` (sign 1) with the first level known: ``ratios[t]`` = rhs / entry of rows[t], ``low``
-    their least. The same rows and the same comparisons, without dividing again."""
-    bound = low + 1e-11 * max(1.0, abs(low))
-    m = 0
-    for t in range(nrows):
-        if ratios[t] <= bound:
-            rem[m] = rows[t]
-            m += 1
-    if m == 1:
-        return rem[0]
-    for t in range(m):
-        rows[t] = rem[t]
-    return _lexmin_rows(C, place, rows, m, col, k, 1.0, rem)
 
 
 @njit(cache=True, _nrt=False)
