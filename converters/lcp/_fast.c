@@ -434,8 +434,9 @@ solver_new(PyTypeObject *type, PyObject *args, PyObject *kwargs)
     }
     if (!PyArg_ParseTuple(args, "OOOOO!UUO!O!O!UO!O!O!O!O!O!dddnnnL:Solver", &python, &after_once, &auto_message,
                           &result_type, &PyTuple_Type, &slots, &solved, &empty, &PyTuple_Type, &names,
-                          &PyTuple_Type, &auto_labels, &PyTuple_Type, &closed_forms, &closed_label, &PyDict_Type, &environ, &PyBytes_Type,
-                          &time_key, &PyBytes_Type, &memory_key, &PyArray_Type, &opts, &PyTuple_Type, &once_max_iter,
+                          &PyTuple_Type, &auto_labels, &PyTuple_Type, &closed_forms, &closed_label, &PyDict_Type,
+                          &environ, &PyBytes_Type, &time_key, &PyBytes_Type, &memory_key, &PyArray_Type, &opts,
+                          &PyTuple_Type, &once_max_iter,
                           &PyTuple_Type, &pgs_gave_way, &tol_default, &tol_low, &tol_high, &k_max, &auto_code,
                           &enum_code, &budget))
         return NULL;

@@ -50,7 +50,6 @@ ONCE_SOLVED, ONCE_CLOSED_FORM, ONCE_OTHER, ONCE_NOT_FINITE = (S.ONCE_SOLVED, S.O
 N_RULES = len(S.CLOSED_FORM_RULES)
 #: Largest pivot tolerance Lemke accepts: a larger one counts true pivots as zero.
 MAX_PIVOT_TOL = 1e-6
-_MAX_FLOAT = 1.7976931348623157e308
 
 
 # ----------------------------------------------------------------------------------------------- compiled

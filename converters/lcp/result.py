@@ -15,6 +15,7 @@ from numba import njit
 from . import state as S
 from .answer import FAILED, MAX_ITERATIONS, NO_SOLUTION, SOLVED, STATUSES, LCPResult, make_result  # noqa: F401
 
+#: The largest finite double: |x| <= _MAX_FLOAT is false for inf and NaN.
 _MAX_FLOAT = 1.7976931348623157e308
 
 #: Codes returned by :func:`check` (0: the pair solves the LCP).
@@ -180,7 +181,7 @@ def check_scaled(q_big, m_big, z, w, err, tol):
     w_scale = 0.0
     for i in range(k):
         a, b = abs(z[i]), abs(w[i])
-        if not (a <= 1.7976931348623157e308 and b <= 1.7976931348623157e308):
+        if not (a <= _MAX_FLOAT and b <= _MAX_FLOAT):
             return CHECK_NOT_FINITE, 0, 0.0, 0.0, 0.0, 0.0
         if a > z_scale:
             z_scale = a
@@ -213,7 +214,7 @@ def check_scaled(q_big, m_big, z, w, err, tol):
     # quotients themselves decide, as they always did.
     zinv, winv = 1.0 / zdiv, 1.0 / wdiv
     gap_big = np.inf
-    if zinv <= 1.7976931348623157e308 and winv <= 1.7976931348623157e308:
+    if zinv <= _MAX_FLOAT and winv <= _MAX_FLOAT:
         gap_big = -np.inf
         for j in range(k):
             gap_big = max(gap_big, min(z[j] * zinv, w[j] * winv))
