@@ -167,6 +167,9 @@ def run_converter(name_or_model, params: dict | None = None, *, control: str = "
     else:
         tr = _simulate_phases(model, p, method, span, x0)
         meta.update(periods=int(round(span / T)) if model.periodic(p) else None)
+        target = _step_target(model, p, method)
+        if target is not None:
+            meta["step_target"] = target
     return replace(tr, labels=model.labels(p), wall_s=time.perf_counter() - start,
                    metadata={**tr.metadata, **meta})
 
@@ -201,6 +204,23 @@ def _accurate(model: Model, p: dict, rtol, start: float, *, method, h, t_end, pe
             "method_object": result.method, "orbit": result.orbit.summary(), "accuracy": result.summary(),
             "steady_periods": int(round(simulated)), "periods": int(round(span / T))}
     return replace(tr, labels=model.labels(p), wall_s=time.perf_counter() - start, metadata={**tr.metadata, **meta})
+
+
+def _step_target(model: Model, p: dict, method: Method) -> float | None:
+    """Where an open-loop step leads: the mean of vout over the periodic orbit of the circuit after the step (V),
+    found by the same method; the step response is read against it, so a run that ends before settling says so
+    rather than taking its last periods for the final value. None when the model has no such step (the
+    sliding-mode boost's load step is judged on its own window) or the orbit cannot be found."""
+    if not model.step_times(p) or not hasattr(model, "stepped") or not model.periodic(p):
+        return None
+    after = {k: v for k, v in model.stepped(p).items() if k not in model.STEP_PARAMETERS}
+    try:
+        orbit, period_map = _orbit_and_map(model, after, method)
+    except (SimulationError, ParameterError):
+        return None
+    tr = replace(_on_orbit(model, after, method, period_map, orbit.x0, model.period(after)),
+                 labels=model.labels(after))
+    return tr.mean("vout")
 
 
 def _simulate_phases(model: Model, p: dict, method: Method, t_end: float, x0) -> Trajectory:

@@ -376,8 +376,30 @@ def concatenate(parts: list[Trajectory]) -> Trajectory:
         frame = part.events.copy()
         frame["step"] = frame["step"] + offset
         events.append(frame)
+    exact = (JoinedExact(tuple((float(p.t[0]), float(p.t[-1]), p.exact) for p in parts))
+             if all(p.rule == "exact" and p.exact is not None for p in parts) else None)
     return replace(first, t=stack("t"), x=stack("x"), u=stack("u"), y=stack("y"), config=stack("config"),
                    relay=stack("relay"), held=stack("held"), steps=sum(p.steps for p in parts), wall_s=sum(p.wall_s for p in parts),
-                   event_columns=pd.concat(events, ignore_index=True), exact=None,
-                   rule="linear" if first.rule == "exact" else first.rule, general_solves=sum(p.general_solves
-                                                                                            for p in parts))
+                   event_columns=pd.concat(events, ignore_index=True), exact=exact,
+                   rule="linear" if first.rule == "exact" and exact is None else first.rule,
+                   general_solves=sum(p.general_solves for p in parts))
+
+
+@dataclass(frozen=True)
+class JoinedExact:
+    """The exact pieces of consecutive event-driven runs (a run split at a load step): a window's quadrature is
+    each part's over its share, so a current that jumps at a switching instant is integrated as exactly across
+    the parts as within one (the linear rule on the samples had put 3.5e-4 into a buck's input power)."""
+
+    parts: tuple     # (t0, t1, exact) per part, in time order
+
+    def quadrature(self, t0: float | None = None, t1: float | None = None) -> tuple[Samples, np.ndarray]:
+        t0 = self.parts[0][0] if t0 is None else t0
+        t1 = self.parts[-1][1] if t1 is None else t1
+        pieces = [exact.quadrature(max(a, t0), min(b, t1)) for a, b, exact in self.parts if min(b, t1) > max(a, t0)]
+        if len(pieces) == 1:
+            return pieces[0]
+        join = lambda name: (None if getattr(pieces[0][0], name) is None      # noqa: E731
+                             else np.concatenate([getattr(q, name) for q, _ in pieces]))
+        samples = Samples(join("t"), join("x"), join("u"), join("y"), join("config"), join("relay"), join("held"))
+        return samples, np.concatenate([w for _, w in pieces])

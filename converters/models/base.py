@@ -52,6 +52,20 @@ class Labels(BoundLabels):
         return self.model.modes(conducting, switch, x)
 
 
+@dataclass(frozen=True)
+class SteppedLabels(Labels):
+    """The laws of a run with a load or input step: a point after t_step is read with the circuit after the step
+    (vout through the ESR, the capacitor's current and the input current depend on R and Vin); a point at t_step
+    ends the step before it and belongs to the circuit before."""
+
+    def signal(self, name: str, samples: Samples) -> np.ndarray:
+        after = np.asarray(samples.t) > self.params["t_step"]
+        if not after.any():
+            return super().signal(name, samples)
+        stepped = self.model.signal(name, samples, self.model.stepped(self.params))
+        return stepped if after.all() else np.where(after, stepped, super().signal(name, samples))
+
+
 class Model(ABC):
     """A parametrised family of problems with its own signals and mode rules."""
 
@@ -165,10 +179,14 @@ class Model(ABC):
                "mode_fractions": tr.mode_fractions(1)}
         out["measurements"] = tr.measurement_rows(t0=t0, t1=t1)
         if hasattr(self, "power"):
-            power = self.power(tr, p, t0, t1)
+            power = self.window_power(tr, p, t0, t1)
             if np.isfinite(power["input_W"]):          # an ngspice run of a two-state converter: not measured
                 out["power"] = power
         return out
+
+    def window_power(self, tr, p: dict, t0: float, t1: float) -> dict:
+        """The power summary over [t0, t1] (a model with a step measures each side with its own circuit)."""
+        return self.power(tr, p, t0, t1)
 
     off_held_label = "DCM"
     #: The mode whose end is the diode's turn-off in a period (None: not compared).
@@ -221,10 +239,27 @@ class Converter(Model):
     def phase_options(self, p: dict, t: float) -> dict:
         return {"after_step": bool(t >= p["t_step"])} if "t_step" in p else {}
 
+    def labels(self, p: dict) -> Labels:
+        return SteppedLabels(self, p) if "t_step" in p else Labels(self, p)
+
+    def window_power(self, tr, p: dict, t0: float, t1: float) -> dict:
+        """:meth:`power` over [t0, t1] with the circuit in force: a window across the step is the energy-weighted
+        sum of its two parts (each measured with its own R and Vin)."""
+        if "t_step" not in p or t1 <= p["t_step"]:
+            return self.power(tr, p, t0, t1)
+        after = self.stepped(p)
+        if t0 >= p["t_step"]:
+            return self.power(tr, after, t0, t1)
+        parts = ((self.power(tr, p, t0, p["t_step"]), p["t_step"] - t0),
+                 (self.power(tr, after, p["t_step"], t1), t1 - p["t_step"]))
+        energy = lambda key: sum(part[key] * span for part, span in parts) / (t1 - t0)      # noqa: E731
+        losses = {k: sum(part["losses_W"][k] * span for part, span in parts) / (t1 - t0) for k in parts[0][0]["losses_W"]}
+        return power_balance(energy("input_W"), energy("output_W"), losses)
+
     def summary(self, tr, p: dict) -> dict:
         out = super().summary(tr, p)
         if "t_step" in p and tr.t[0] < p["t_step"] < tr.t[-1]:
-            out["step"] = step_response(tr, p["t_step"], self.period(p))
+            out["step"] = step_response(tr, p["t_step"], self.period(p), tr.metadata.get("step_target"))
         return out
 
     @abstractmethod
@@ -237,6 +272,9 @@ class Converter(Model):
 #: the final value when the step barely moves it (a load step on an open-loop converter in CCM).
 SETTLING_BAND = 0.02
 LOAD_BAND = 1e-3
+#: Periods the per-period mean must stay inside the band, at the end of the run, for the response to count as
+#: settled: a ringing response that has just crossed into the band may leave it again.
+SETTLED_PERIODS = 10
 
 
 def power_balance(p_in: float, p_out: float, losses: dict) -> dict:
@@ -248,32 +286,58 @@ def power_balance(p_in: float, p_out: float, losses: dict) -> dict:
             "balance": (p_in - p_out - total) / p_in if p_in > 0 else float("nan")}
 
 
-def step_response(tr, t_step: float, T: float) -> dict:
-    """vout's response to a step at t_step, read on its per-period means (the switching ripple averaged out):
-    the values before (the 10 periods before the step) and at the end (the last 10 periods), the largest
-    deviation from the final value, the overshoot past it (a fraction of the step, when the step moves vout)
-    and the settling time (from the step until the per-period mean stays within the band around the final
-    value; ``settled`` False when it had not by 10 periods before the end)."""
+def step_response(tr, t_step: float, T: float, target: float | None = None) -> dict:
+    """vout's response to a step at t_step, read on its per-period means (the switching ripple averaged out).
+
+    Parameters
+    ----------
+    tr : Trajectory
+        The run, labelled (it has ``vout``).
+    t_step, T : float
+        The step's instant and the switching period (s).
+    target : float, optional
+        The final value the step leads to: the periodic steady-state mean of vout of the circuit after the step
+        (V; what :func:`converters.run.run_converter` computes). Without it the final value is the mean of the
+        run's last 10 periods, exact only when the run has settled.
+
+    Returns
+    -------
+    dict
+        ``vout_before`` (mean of the 10 periods before the step), ``vout_final`` (the target, or the last 10
+        periods' mean: ``final_from`` says which), ``vout_end`` (the last 10 periods' mean), ``deviation_V``
+        (largest |mean - final| after the step), ``band_V`` (the settling band: 2 % of the step, or 0.1 % of the
+        final value for a step that barely moves vout), ``settling_time_s`` (from the step to the end of the last
+        period whose mean lies outside the band), ``settled`` (the means have stayed inside the band for the last
+        ``SETTLED_PERIODS`` periods of the run), and, when the step moves vout by more than 0.1 % of the final
+        value, how far the means go past the final value in the step's direction: ``overshoot_V`` (V),
+        ``overshoot_percent`` (% of the final value) and ``overshoot_of_step`` (a fraction of the step, the
+        control textbook's measure).
+    """
     first = int(np.ceil((t_step - tr.t[0]) / T - 1e-9))
     count = int(np.floor((tr.t[-1] - tr.t[0]) / T + 1e-9))
     starts = tr.t[0] + T * np.arange(count)
     means = np.array([tr.mean("vout", t0=a, t1=a + T) for a in starts])
     before = float(np.mean(means[max(0, first - 10):first])) if first > 0 else float("nan")
-    final = float(np.mean(means[-10:]))
-    change = final - before
     after = means[first:]
-    # an input step moves vout: overshoot and band are fractions of that move; a load step on an open-loop
-    # converter barely does (CCM): the deviation is then read against LOAD_BAND of the final value
+    end = float(np.mean(after[-10:])) if len(after) else float("nan")
+    final = end if target is None else float(target)
+    change = final - before
+    # an input step moves vout: the band is a fraction of that move; a load step on an open-loop converter in CCM
+    # barely does: the band is then a fraction of the final value
     moved = abs(change) > LOAD_BAND * abs(final)
     band = SETTLING_BAND * abs(change) if moved else LOAD_BAND * abs(final)
     outside = np.flatnonzero(np.abs(after - final) > band)
-    settled = len(outside) == 0 or outside[-1] + 1 < len(after) - 10
+    inside_at_end = len(after) - (outside[-1] + 1 if len(outside) else 0)      # periods inside the band at the end
+    past = float(max(((after - final) * np.sign(change)).max(), 0.0)) if len(after) and change != 0 else 0.0
     out = {"t_step_s": t_step, "vout_before": before, "vout_final": final,
-           "deviation_V": float(np.abs(after - final).max()), "band_V": float(band),
-           "settling_time_s": float(starts[first + outside[-1] + 1] + T - t_step) if len(outside) else float(T),
-           "settled": bool(settled)}
-    if moved:
-        out["overshoot"] = float(max(((after - final) * np.sign(change)).max(), 0.0) / abs(change))
+           "final_from": "run end" if target is None else "steady state after the step", "vout_end": end,
+           "deviation_V": float(np.abs(after - final).max()) if len(after) else float("nan"),
+           "band_V": float(band),
+           "settling_time_s": float(tr.t[0] + T * (first + (outside[-1] + 1 if len(outside) else 0)) - t_step),
+           "settled": bool(inside_at_end >= SETTLED_PERIODS)}
+    if moved:         # a step that barely moves vout has no direction to overshoot in: its deviation says it all
+        out.update(overshoot_V=past, overshoot_percent=100.0 * past / abs(final) if final else float("nan"),
+                   overshoot_of_step=past / abs(change))
     return out
 
 

@@ -236,10 +236,17 @@ def _print(summary: dict, tr, args) -> None:
               f"{power['output_W']:.6g} W, efficiency {100 * power['efficiency']:.3f}{within} % (losses: {losses})")
     step = summary.get("step")
     if step:
-        over = f", overshoot {100 * step['overshoot']:.3g} %" if "overshoot" in step else ""
-        print(f"step at {step['t_step_s'] * 1e3:.6g} ms: vout {step['vout_before']:.6g} -> {step['vout_final']:.6g} V{over}, "
-              f"largest deviation {step['deviation_V']:.3g} V, settling {step['settling_time_s'] * 1e3:.4g} ms "
-              f"(band +- {step['band_V']:.3g} V){'' if step['settled'] else ' NOT settled by the end of the run'}")
+        final = ("steady state after the step" if step["final_from"] != "run end"
+                 else "the last periods' mean: the final value is not known")
+        over = ("" if "overshoot_V" not in step else
+                f", overshoot {step['overshoot_V']:.3g} V ({step['overshoot_percent']:.3g} % of the final value)"
+                if step["overshoot_V"] > 0 else ", no overshoot")
+        settling = (f"settling {step['settling_time_s'] * 1e3:.4g} ms" if step["settled"] else
+                    f"NOT settled by the end of the run ({step['vout_end']:.6g} V; outside the band until "
+                    f"{step['settling_time_s'] * 1e3:.4g} ms after the step)")
+        print(f"step at {step['t_step_s'] * 1e3:.6g} ms: vout {step['vout_before']:.6g} -> {step['vout_final']:.6g} V "
+              f"({final}){over}, largest deviation {step['deviation_V']:.3g} V, {settling} (band +- "
+              f"{step['band_V']:.3g} V)")
     if "mode_fractions" in summary:
         print("modes (last period): " + ", ".join(f"{k} {v:.6f}" for k, v in summary["mode_fractions"].items()))
     accuracy = summary.get("accuracy", {})
