@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import functools
 import os
+import sys
+import threading
 import time
 
 import numpy as np
@@ -93,7 +95,9 @@ def solve_lcp(M, q, method: str = "auto", tol: float = DEFAULT_TOL, max_iter: in
         lists all solutions.
     time_limit : float, optional
         Seconds the solve may take (0.1 .. 7 days); when omitted, --time-limit / PCSUITE_TIME_LIMIT, else
-        20 s. A solve that reaches it returns ``failed`` with a message saying so.
+        20 s. A solve that reaches it returns ``failed`` with a message saying so. The limit measures the
+        solve: neither the first import of the solvers nor numba's compile (or cache load) of a kernel at its
+        first call counts.
     **options
         Method-specific: ``pivot_tol`` (lemke), ``omega`` in (0, 2) (pgs), ``rho``, ``p``, ``beta``,
         ``sigma`` (newton).
@@ -107,7 +111,6 @@ def solve_lcp(M, q, method: str = "auto", tol: float = DEFAULT_TOL, max_iter: in
     code = _CODES.get(method) if isinstance(method, str) else None
     if code is None:
         raise LCPError(f"method must be one of {', '.join(S.METHOD_NAMES)}; got {method!r}")
-    started = _monotonic()
     # The thin path: everything it needs checked here, the rest (finiteness included) in the compiled call.
     if (M.__class__ is _ndarray and q.__class__ is _ndarray and M.dtype is _F64 and q.dtype is _F64
             and tol.__class__ is float and _TOL_LOW <= tol <= _TOL_HIGH and max_iter is None
@@ -127,7 +130,9 @@ def solve_lcp(M, q, method: str = "auto", tol: float = DEFAULT_TOL, max_iter: in
                 _check_memory(method, k)
             z = _empty(k)
             w = _empty(k)
-            answer, iterations, err, used, rule, stages, eig = (_once or _load_once())(
+            once = _once or _load_once()       # loaded (imported, compiled) before the clock starts
+            started = _monotonic()
+            answer, iterations, err, used, rule, stages, eig = once(
                 M, q, z, w, code, tol, _ONCE_MAX_ITER[code], fast_paths, _OPTIONS, _CHUNK)
             if answer == _ONCE_SOLVED:
                 if code != S.AUTO:
@@ -145,6 +150,8 @@ def solve_lcp(M, q, method: str = "auto", tol: float = DEFAULT_TOL, max_iter: in
                                      _deadline(seconds, started), _OPTIONS)
             # NaN or inf: the full path raises the validation error
     # The full path.
+    started = _monotonic()
+    setup = _setup_seconds()
     M, q = check_lcp(M, q)
     if not (isinstance(tol, (int, float, np.integer, np.floating)) and not isinstance(tol, bool)
             and TOL_RANGE[0] <= tol <= TOL_RANGE[1]):
@@ -160,7 +167,7 @@ def solve_lcp(M, q, method: str = "auto", tol: float = DEFAULT_TOL, max_iter: in
     elif not (isinstance(max_iter, (int, np.integer)) and not isinstance(max_iter, bool)
               and MAX_ITER_RANGE[0] <= max_iter <= MAX_ITER_RANGE[1]):
         raise LCPError(f"max_iter must be an integer in [{MAX_ITER_RANGE[0]}, {MAX_ITER_RANGE[1]}]; got {max_iter!r}")
-    from . import engine
+    engine = _engine()                  # its first import is set-up, not the solve's time
     opts = engine.options_array(method, options)
     seconds = check_time_limit(time_limit)
     k = q.shape[0]
@@ -168,7 +175,7 @@ def solve_lcp(M, q, method: str = "auto", tol: float = DEFAULT_TOL, max_iter: in
         raise LCPError(f"enumeration visits 2^k bases: k must be <= {ENUM_MAX_K}; got k = {k}; "
                        "use method='lemke' or 'murty'")
     _check_memory(method, k)
-    return _solve_sliced(M, q, code, tol, max_iter, fast_paths, _deadline(seconds, started), opts)
+    return _solve_sliced(M, q, code, tol, max_iter, fast_paths, _deadline(seconds, started, setup), opts)
 
 
 @functools.lru_cache(maxsize=1024)
@@ -183,7 +190,7 @@ def _solved_message(used: int, stages: int, eig: float | None, k: int) -> str:
 def _solve_sliced(M, q, code, tol, max_iter, fast_paths, deadline, opts) -> LCPResult:
     """The full path on a validated problem: normalise, closed forms, the method in slices with the deadline
     looked at between them, then scale back and check on the original problem."""
-    from . import engine
+    engine = _engine()
     from .fastpaths import RULES, closed_form
     from .result import finish
     method = S.METHOD_NAMES[code]
@@ -237,11 +244,90 @@ def check_time_limit(time_limit) -> float:
     return float(time_limit)
 
 
-def _deadline(seconds: float, started: float) -> limits.Deadline:
-    """The deadline of a solve that started at ``started`` (monotonic clock)."""
-    deadline = limits.Deadline(seconds)
-    deadline.end = started + seconds
-    return deadline
+def _deadline(seconds: float, started: float, setup: float | None = None) -> limits.Deadline:
+    """The deadline of a solve that started at ``started`` (monotonic clock), when this thread's set-up time
+    (:func:`_setup_seconds`) was ``setup`` (None: it is now)."""
+    return _SolveDeadline(seconds, started, _setup_seconds() if setup is None else setup)
+
+
+# ------------------------------------------------------------------------- the clock of the time limit
+# A time limit measures the solve, never the compile or the import of the code that runs it. numba compiles a
+# kernel, or loads it from its on-disk cache, at its first call with new argument types: inside the first solve
+# that needs it. With an empty cache (a fresh machine, a kernel source changed) the methods take tens of seconds
+# to compile, longer than the default limit of 20 s, and a first solve would end at its limit before its first
+# step. So a solve's clock does not run while its thread is in numba's compiler (whose lock spans every compile
+# and cache load: the "numba:compiler_lock" event) or imports the engine (numba with it), and the thin path reads
+# the clock once its kernel is loaded.
+
+_setup: dict = {}         # thread id -> seconds that thread spent compiling kernels and importing the engine
+_get_ident = threading.get_ident
+
+
+def _setup_seconds() -> float:
+    """Seconds this thread has spent so far in numba's compiler and importing the engine (counted from the
+    install of the compile clock, which comes before a solve can compile anything)."""
+    return _setup.get(_get_ident(), 0.0)
+
+
+def _add_setup(seconds: float) -> None:
+    ident = _get_ident()
+    _setup[ident] = _setup.get(ident, 0.0) + seconds
+
+
+class _SolveDeadline(limits.Deadline):
+    """:class:`converters.limits.Deadline` on the solve's own time: what its thread spent compiling kernels or
+    importing the engine since the solve started is not counted."""
+
+    def __init__(self, seconds: float, started: float, setup: float):
+        self.seconds = float(seconds)
+        self.end = started - setup + self.seconds
+
+    def expired(self) -> bool:
+        return _monotonic() - _setup.get(_get_ident(), 0.0) > self.end
+
+
+def _engine():
+    """converters.lcp.engine, imported at its first use (numba with it) with the time that takes counted as
+    set-up, and numba's compile clock installed."""
+    engine = sys.modules.get(f"{__package__}.engine")
+    if engine is None:
+        begun = _monotonic()
+        from . import engine
+        _add_setup(_monotonic() - begun)
+    if not _compile_clock:
+        _install_compile_clock()
+    return engine
+
+
+_compile_clock: list = []
+
+
+def _install_compile_clock() -> None:
+    """Count, per thread, the time spent in numba's compiler: from the outermost acquisition of its lock to its
+    release (the lock is re-entrant; a compile takes it again for every function it compiles)."""
+    from numba.core import event
+
+    class CompileClock(event.Listener):
+        def __init__(self):
+            self.open: dict = {}          # thread id -> (depth, monotonic time of the outermost acquisition)
+
+        def on_start(self, event):
+            ident = _get_ident()
+            depth, since = self.open.get(ident, (0, 0.0))
+            self.open[ident] = (depth + 1, since if depth else _monotonic())
+
+        def on_end(self, event):
+            ident = _get_ident()
+            depth, since = self.open.pop(ident, (0, 0.0))
+            if depth > 1:
+                self.open[ident] = (depth - 1, since)
+            elif depth == 1:
+                _add_setup(_monotonic() - since)
+            # depth 0: taken before the clock was installed, so before any solve could be compiling
+
+    clock = CompileClock()
+    event.register("numba:compiler_lock", clock)
+    _compile_clock.append(clock)
 
 
 def check_lcp(M, q) -> tuple[np.ndarray, np.ndarray]:

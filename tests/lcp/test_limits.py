@@ -112,3 +112,97 @@ def test_solver_working_memory_is_checked_before_solving(monkeypatch):
     result = solve_lcp(M, -q, method="murty", fast_paths=False)   # q >= 0: z = 0 at the first pivot
     assert result.solved and result.iterations == 0
     np.testing.assert_array_equal(result.z, 0.0)
+
+
+# ------------------------------------------------------------------ the clock measures the solve, not its set-up
+# numba compiles a kernel (or loads it from its on-disk cache) at its first call, inside the first solve that needs
+# it; with an empty cache that takes longer than the default limit of 20 s, and a limit that counted it would end
+# the first solve before its first step ("enum (after 0 of 4 bases) reached the time limit").
+
+PAIR = (np.array([[2.0, 1.0], [1.0, 2.0]]), np.array([-3.0, -3.0]))      # z = (1, 1), one basic solution of four
+RAY = (-np.eye(3), -np.ones(3))          # Lemke ends on a ray: the one-call solve hands it to the sliced one
+
+
+def _hold_the_compiler_lock(seconds: float) -> None:
+    """What a kernel's first call costs its caller: ``seconds`` inside numba's compiler lock, as a compile."""
+    from numba.core.compiler_lock import global_compiler_lock
+    with global_compiler_lock:
+        time.sleep(seconds)
+
+
+def test_a_compile_inside_the_solve_does_not_count_against_its_time_limit(monkeypatch):
+    from converters.lcp import engine
+    sizes = engine.sizes
+
+    def compiled_now(method, k):
+        _hold_the_compiler_lock(0.3)
+        return sizes(method, k)
+    monkeypatch.setattr(engine, "sizes", compiled_now)
+    result = solve_lcp(*PAIR, method="enum", time_limit=0.1, fast_paths=False)
+    assert result.solved and result.iterations == 4 and result.message == ""
+    np.testing.assert_allclose(result.z, [1.0, 1.0], rtol=1e-15)
+
+    def slow_work(method, k):       # the same 0.3 s as the solve's own work: it still reaches the limit
+        time.sleep(0.3)
+        return sizes(method, k)
+    monkeypatch.setattr(engine, "sizes", slow_work)
+    result = solve_lcp(*PAIR, method="enum", time_limit=0.1, fast_paths=False)
+    assert result.status == "failed" and result.iterations == 0
+    assert result.message.startswith("enum (after 0 of 4 bases) " + TIME_MESSAGE.format(0.1))
+
+
+def test_loading_the_one_call_solve_does_not_count_against_the_time_limit(monkeypatch):
+    """The thin path's first call loads its kernel (an import, a compile): a solve it hands to the sliced solve
+    has its whole limit left."""
+    from converters.lcp import solve
+    monkeypatch.setenv("PCSUITE_TIME_LIMIT", "0.1")
+    solve._load_once()
+    load = solve._load_once
+
+    def slow_load():
+        time.sleep(0.3)
+        return load()
+    monkeypatch.setattr(solve, "_once", None)
+    monkeypatch.setattr(solve, "_load_once", slow_load)
+    python = getattr(solve.solve_lcp, "__wrapped__", solve.solve_lcp)       # the C entry point loads nothing
+    result = python(*RAY, method="lemke", fast_paths=False)
+    assert result.status == "no_solution" and result.iterations == 1
+    assert result.message.startswith("lemke: ray termination, and no solution exists: w[0] = q[0]")
+
+
+FRESH = """
+import json, time
+import numpy as np
+from converters import compiled
+from converters.lcp import solve_lcp
+out = {"kernels": compiled.source()}
+for name, M, q, method, limit in (("full", [[2.0, 1.0], [1.0, 2.0]], [-3.0, -3.0], "enum", 1.0),
+                                  ("thin", -np.eye(3), -np.ones(3), "lemke", None)):
+    start = time.monotonic()
+    r = solve_lcp(np.array(M, dtype=float), np.array(q, dtype=float), method=method, fast_paths=False,
+                  time_limit=limit)
+    out[name] = {"status": r.status, "iterations": r.iterations, "message": r.message,
+                 "seconds": time.monotonic() - start}
+print(json.dumps(out))
+"""
+
+
+@pytest.mark.slow
+def test_a_fresh_machine_compiles_the_solvers_outside_the_time_limit(tmp_path):
+    """numba's JIT with an empty cache (as on a fresh machine, or after a kernel source changed): the first solves
+    compile the methods, which takes longer than their limit of 1 s, and still solve."""
+    import json
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path), "PCSUITE_KERNELS": "jit", "PCSUITE_TIME_LIMIT": "1"}
+    done = subprocess.run([sys.executable, "-c", FRESH], capture_output=True, text=True, env=env, timeout=900,
+                          cwd=Path(__file__).resolve().parents[2])
+    assert done.returncode == 0, done.stderr
+    out = json.loads(done.stdout)
+    assert out["kernels"] == "jit: PCSUITE_KERNELS=jit"
+    assert out["full"]["seconds"] > 1.0 and out["thin"]["seconds"] > 1.0, out      # the compiles were inside the calls
+    assert (out["full"]["status"], out["full"]["iterations"], out["full"]["message"]) == ("solved", 4, ""), out
+    assert (out["thin"]["status"], out["thin"]["iterations"]) == ("no_solution", 1), out
+    assert out["thin"]["message"].startswith("lemke: ray termination, and no solution exists"), out
