@@ -304,7 +304,7 @@ class ParameterPath:
         return self.model.problem(p, span)
 
 
-#: The power summary's error estimates (:func:`converters.analysis.accuracy.power_check`).
+#: The power summary's error estimates (:func:`converters.analysis.accuracy.default_check`).
 POWER_ESTIMATES = ("efficiency_error_estimate", "input_W_error_estimate", "losses_W_error_estimate")
 
 
@@ -331,12 +331,14 @@ def run_summary(tr: Trajectory) -> dict:
         out["accuracy"] = accuracy
         if not accuracy["met"]:
             out["warnings"] = [f"rtol {accuracy['rtol']:g} not met: {accuracy['message']}"]
-        if "power" in out:        # the rtol covers the measures above; the power summary gets its own estimate
-            from .analysis.accuracy import power_check
-            check = power_check(model, p, meta["method_object"], tr, out["power"])
-            out["power"].update({k: v for k, v in check.items() if k != "warning"})
-            if "warning" in check:
-                out.setdefault("warnings", []).append(check["warning"])
+        quantities = accuracy["quantities"]
+        if "power" in out and "input_W" in quantities:      # the rtol covers the power summary too
+            from .analysis.accuracy import efficiency_estimate
+            losses = [quantities[f"loss_{k}"]["relative_error_estimate"] for k in out["power"]["losses_W"]
+                      if f"loss_{k}" in quantities]
+            out["power"].update(efficiency_error_estimate=efficiency_estimate(quantities),
+                                input_W_error_estimate=quantities["input_W"]["relative_error_estimate"],
+                                losses_W_error_estimate=max(losses, default=0.0))
     elif meta.get("control", "pwm") == "pwm" and model.periodic(p) and "method_object" in meta and not model.step_times(p):
         from .analysis.accuracy import default_check, last_period
         period = last_period(model, p, tr)

@@ -244,10 +244,31 @@ class Trajectory:
         dt = np.diff(t)
         if self.rule == "end":
             return float(dt @ v[1:] ** power)
-        a, b = v[:-1], v[1:]
+        a, b = self._step_starts(name, rows, v[:-1]), v[1:]
         if power == 1:
             return float(dt @ (0.5 * (a + b)))
         return float(dt @ ((a * a + a * b + b * b) / 3.0))
+
+    def _step_starts(self, name: str, rows: np.ndarray, starts: np.ndarray) -> np.ndarray:
+        """The value each step of ``rows`` starts from, for the linear rule: a step that starts at a switching
+        edge reads its first point in its own configuration (with its own pair, the one it ends with), not in
+        the one the point ended: a switch current that jumps to zero there would otherwise be integrated over
+        half the step after the edge, a first-order error whose size follows the split step's length, not h
+        (a buck's input power 5.5e-5 off at every h from T/1600 to T/12800)."""
+        if (self.config is None or self.u is None or self.labels is None or name in self.state_names
+                or name in self.measured):
+            return starts
+        config = self.config[rows]
+        edges = np.flatnonzero(config[1:] != config[:-1])
+        if edges.size == 0:
+            return starts
+        left, right = rows[edges], rows[edges + 1]
+        pick = (lambda a: None if a is None else a[right])
+        first = Samples(self.t[left], self.x[left], self.u[right], self.y[right], self.config[right],
+                        pick(self.relay), pick(self.held))
+        starts = np.array(starts, dtype=float)
+        starts[edges] = np.asarray(self.labels.signal(name, first), dtype=float)
+        return starts
 
     def _span(self, t0: float, t1: float) -> float:
         if self.rule == "exact" and self.exact is not None:

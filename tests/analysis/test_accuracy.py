@@ -154,7 +154,8 @@ def test_default_settings_warn_on_exactly_the_points_whose_mean_misses_1e_3(key,
     if vout_warned:
         (warning,) = summary["warnings"]
         assert warning.startswith(f"vout mean may be {estimate:.1e} off (more than 0.001)")
-        assert ("use --steady" in warning) == (not steady and summary["accuracy"]["transient"] > 0.5 * estimate)
+        vout_part = warning.split("; efficiency may be")[0]           # the efficiency's remedy is its own
+        assert ("use --steady" in vout_part) == (not steady and summary["accuracy"]["transient"] > 0.5 * estimate)
 
 
 @pytest.mark.parametrize("name,params", [("buck", {}), ("boost", {"rL": 0.05, "Ron": 0.02, "Vf": 0.4}),
@@ -180,12 +181,28 @@ def test_the_power_summary_says_how_accurate_it_is(name, params):
         assert 0.5 <= power["losses_W_error_estimate"] / worst <= 2.0
 
 
-def test_accuracy_on_request_gives_the_power_summary_its_own_estimate():
-    # --rtol 1e-5 picked theta = 0.5 at T/200: vout to 4e-8, yet the Vf loss 0.6 % off; the estimate says so
+@pytest.mark.parametrize("name,params", [
+    ("boost", {"rL": 0.05, "Ron": 0.02, "Vf": 0.4}),
+    ("buck", {"Vin": 48, "f_sw": "250k", "L": "24u", "C": "22u", "R": 2.4, "D": 0.2606, "rL": "10m", "Ron": "20m",
+              "Vf": 0.5, "rC": "5m"}),
+    ("buck", {"rL": 0.05, "Ron": 0.02, "Vf": 0.4})])                      # DCM: the diode's turn-off inside a step
+@pytest.mark.parametrize("rtol", [1e-4, 1e-6])
+def test_accuracy_on_request_covers_the_power_summary(name, params, rtol):
+    """--rtol covers every number the summary reports: the input and output power and each loss (relative to the
+    input power) meet rtol against the event method's exact quadrature, and the efficiency's bound holds (the
+    boost at --rtol 1e-5 had its Vf loss 0.6 % off, and a 48 V buck at 1e-4 printed 95.764 +- 0.3 % with 'rtol
+    met', exact 95.922 %)."""
     from converters.run import run_converter, run_summary
-    params = {"rL": 0.05, "Ron": 0.02, "Vf": 0.4}
-    power = run_summary(run_converter("boost", params, rtol=1e-5))["power"]
-    exact = run_summary(run_converter("boost", params, steady=True, method="event"))["power"]
-    worst = max(abs(power["losses_W"][k] - v) for k, v in exact["losses_W"].items()) / exact["input_W"]
-    assert worst > 1e-5 and 0.5 <= power["losses_W_error_estimate"] / worst <= 2.0
-    assert abs(power["efficiency"] - exact["efficiency"]) <= power["efficiency_error_estimate"] * 2.0 + 1e-9
+    summary = run_summary(run_converter(name, params, rtol=rtol))
+    exact = run_summary(run_converter(name, params, steady=True, method="event"))["power"]
+    power, quantities = summary["power"], summary["accuracy"]["quantities"]
+    assert summary["accuracy"]["met"] and "warnings" not in summary
+    for key in ("input_W", "output_W"):
+        true = abs(quantities[key]["value"] - exact[key]) / abs(exact[key])
+        assert true <= rtol and true <= 10 * max(quantities[key]["relative_error_estimate"], 1e-11)
+    for loss, value in exact["losses_W"].items():
+        true = abs(quantities[f"loss_{loss}"]["value"] - value) / exact["input_W"]
+        assert true <= rtol and true <= 10 * max(quantities[f"loss_{loss}"]["relative_error_estimate"], 1e-11)
+    true = abs(power["efficiency"] - exact["efficiency"])
+    assert true <= rtol and true <= 10 * max(power["efficiency_error_estimate"], 1e-11)
+    assert power["efficiency_error_estimate"] <= rtol

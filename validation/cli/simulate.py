@@ -228,8 +228,8 @@ def _print(summary: dict, tr, args) -> None:
               f"iterations, distance to the orbit {orbit['distance']:.2g}, Floquet spectral radius "
               f"{orbit['spectral_radius']:.6g})")
     power = summary.get("power")
-    if power and power["losses_W"]:
-        losses = ", ".join(f"{k} {v * 1e3:.4g} mW" for k, v in power["losses_W"].items())
+    if power:                 # every converter with a power balance: a warning about it names what is printed
+        losses = ", ".join(f"{k} {v * 1e3:.4g} mW" for k, v in power["losses_W"].items()) or "none: ideal parts"
         within = (f" +- {100 * power['efficiency_error_estimate']:.1g}" if "efficiency_error_estimate" in power
                   else "")
         print(f"power over the last {summary['window_periods']:g} periods: in {power['input_W']:.6g} W, out "
