@@ -11,6 +11,8 @@ import os
 import time
 from pathlib import Path
 
+import numpy as np
+
 from converters.lcp import read_siconos_lcp, solve_lcp
 from converters.lcp.enumeration import MAX_K
 
@@ -91,8 +93,23 @@ def peer_directory() -> Path:
     return path
 
 
+#: Solved by every method before the timed runs: numba compiles (or loads from its cache) each solver at its
+#: first call, and a table's time measures the solve. A pair the one-call solve answers, and a problem on which
+#: Lemke ends on a ray (the sliced solve and its proof of non-existence).
+WARM_UP = ((np.array([[2.0, 1.0], [1.0, 2.0]]), np.array([-3.0, -3.0])), (-np.eye(3), -np.ones(3)))
+
+
+def warm_up(methods=METHODS, tol=PEER_TOL) -> None:
+    """Load every solver the table runs, as the table calls them, before anything is timed."""
+    for M, q in WARM_UP:
+        for method in methods:
+            solve_lcp(M, q, method=method, tol=tol, fast_paths=False)
+
+
 def solver_table(problems, methods=METHODS, tol=PEER_TOL):
-    """Run every solver on every (name, M, q); one row per pair with status, err, iterations, time."""
+    """Run every solver on every (name, M, q); one row per pair with status, err, iterations, time (the solvers
+    loaded first: :func:`warm_up`)."""
+    warm_up(methods, tol)
     rows = []
     for name, M, q in problems:
         for method in methods:
