@@ -27,6 +27,13 @@ def _eng(value: float) -> str:
     return f"{value:.3g}"
 
 
+def held_pairs(tr, rows) -> np.ndarray:
+    """Per row, the names of the complementarity pairs that hold (u carries the pair), joined by '+'; 'none'."""
+    active = np.asarray(tr.active[rows], dtype=bool)
+    names = np.asarray(tr.pair_names, dtype=object)
+    return np.array(["+".join(names[row]) or "none" for row in active])
+
+
 def plot(tr, periods: float | None = None, signals=None, title: str | None = None):
     """A matplotlib Figure: one panel per signal (default: the states and vout) over the last ``periods``
     switching periods (default 3; the whole run without a period), then the mode timeline."""
@@ -41,7 +48,8 @@ def plot(tr, periods: float | None = None, signals=None, title: str | None = Non
     names = list(signals) if signals is not None else (
         list(tr.state_names) + (["vout"] if "vout" in tr.signal_names and "vout" not in tr.state_names else []))
     scale, unit = _time_unit(t1 - t0)
-    has_modes = tr.labels is not None or tr.measured
+    # the mode timeline: the model's conduction modes, or for a bare LCS the pairs that hold (u > y) at each step
+    has_modes = tr.labels is not None or "mode" in tr.measured or tr.u is not None
     fig, axes = plt.subplots(len(names) + int(has_modes), 1, figsize=(8, 1.7 * len(names) + 1.6), sharex=True,
                              gridspec_kw={"height_ratios": [3] * len(names) + ([1] if has_modes else [])})
     axes = np.atleast_1d(axes)
@@ -53,7 +61,8 @@ def plot(tr, periods: float | None = None, signals=None, title: str | None = Non
         ax.grid(alpha=0.3)
     if has_modes:
         ax = axes[-1]
-        modes = np.asarray(tr.modes(rows)).astype(str)
+        modes = (np.asarray(tr.modes(rows)).astype(str) if tr.labels is not None or "mode" in tr.measured
+                 else held_pairs(tr, rows))
         labels = sorted(set(modes))
         colours = plt.cm.tab10(np.arange(len(labels)))
         step_modes = modes[1:]                                        # each step by its end point's mode
@@ -65,7 +74,7 @@ def plot(tr, periods: float | None = None, signals=None, title: str | None = Non
         for k, label in enumerate(labels):
             ax.plot([], [], color=colours[k], lw=6, label=label)
         ax.set_yticks([])
-        ax.set_ylabel("mode")
+        ax.set_ylabel("mode" if tr.labels is not None or "mode" in tr.measured else "held pairs")
         ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
     axes[-1].set_xlabel(f"time from {t0 * scale:.6g} {unit} ({unit})")
     if not has_modes:
@@ -74,7 +83,7 @@ def plot(tr, periods: float | None = None, signals=None, title: str | None = Non
         meta = tr.metadata or {}
         params = meta.get("params") or {}
         point = ", ".join(f"{k} = {_eng(v)}" for k, v in params.items() if isinstance(v, (int, float)))
-        title = f"{meta.get('model', '')} ({tr.method}){': ' + point if point else ''}"
+        title = f"{meta.get('model') or 'LCS'} ({tr.method}){': ' + point if point else ''}"
     fig.suptitle(title, fontsize=9)
     fig.tight_layout()
     return fig

@@ -3,6 +3,8 @@ mode fractions and concatenation."""
 import numpy as np
 import pytest
 
+from converters.methods import EventDriven, Theta
+from converters.simulate import simulate
 from converters.trajectory import Samples, Trajectory, concatenate
 
 
@@ -101,3 +103,16 @@ def test_exact_mode_fractions_put_an_event_where_it_is():
     stop = events.loc[(events["kind"] == "activate") & (events["time"] > last), "time"].iloc[0]
     fractions = run.mode_fractions(1)
     assert fractions["CCM-OFF"] == pytest.approx((stop - last) / run.period - 0.4, abs=1e-12)
+
+
+@pytest.mark.parametrize("method", [Theta(h=1e-6, theta=0.5), EventDriven()], ids=["lcp", "event"])
+def test_a_bare_lcs_run_plots_its_states_and_the_pairs_that_hold(method):
+    """Trajectory.plot() raised on any run of a plain LCSProblem (no model labels): it draws the states and, as its
+    mode timeline, the pairs that hold at each step (the diode bridge: D1 with D3, then D2 with D4)."""
+    from converters.models.circuits import diode_bridge
+    fig = simulate(diode_bridge(), method).plot()
+    axes = fig.axes
+    assert [ax.get_ylabel() for ax in axes] == ["vC (V)", "iL (A)", "held pairs"]
+    legend = {text.get_text() for text in axes[-1].get_legend().get_texts()}
+    assert legend == {"D3+D1", "D4+D2"}
+    assert fig.texts[0].get_text() == f"LCS ({method.key})"
