@@ -33,16 +33,23 @@ _FACTOR = {"": 1, "b": 1, "k": 1 << 10, "m": 1 << 20, "g": 1 << 30, "t": 1 << 40
 
 def parse_bytes(name: str, text, bounds: tuple = MEMORY_RANGE) -> int:
     """Bytes from ``4G``, ``512MiB``, ``1e9`` (binary multiples: K, M, G, T = 2^10 .. 2^40), within ``bounds``."""
+    from .validate import shown
     if isinstance(text, (int, float)) and not isinstance(text, bool):
-        value = float(text)
+        try:
+            value = float(text)
+        except OverflowError:           # an int beyond a double: beyond every bound
+            value = math.inf
     else:
         match = _BYTES.match(str(text))
         if not match:
-            raise ResourceError(f"{name} must be a size in bytes such as 512M, 4G or 2e9; got {text!r}")
+            raise ResourceError(f"{name} must be a size in bytes such as 512M, 4G or 2e9; got {shown(str(text), 80)}")
         mantissa, exponent, suffix = match.groups()
-        value = float(mantissa) * 10.0 ** int(exponent or 0) * _FACTOR[(suffix or "")[:1].lower()]
+        # float() reads any exponent (1e400 -> inf, 1e-400 -> 0); 10.0 ** int(...) overflowed, and int() of a
+        # 5,000-digit exponent raised Python's digit limit
+        value = float(f"{mantissa}e{exponent or 0}") * _FACTOR[(suffix or "")[:1].lower()]
     if not (math.isfinite(value) and bounds[0] <= value <= bounds[1]):
-        raise ResourceError(f"{name} must be in [{human_bytes(bounds[0])}, {human_bytes(bounds[1])}]; got {text!r}")
+        raise ResourceError(f"{name} must be in [{human_bytes(bounds[0])}, {human_bytes(bounds[1])}]; "
+                            f"got {shown(text if isinstance(text, (int, float)) else str(text), 80)}")
     return int(value)
 
 

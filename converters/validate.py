@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import math
 import re
-from decimal import Decimal
+from decimal import Decimal, InvalidOperation
 
 import numpy as np
 
@@ -22,6 +22,38 @@ UNIT_SPELLINGS = {"V": ("v",), "A": ("a",), "H": ("h",), "F": ("f",), "Hz": ("hz
                   "s": ("s",)}
 #: Units where SPICE's "M" (milli) is the classic slip for mega: refused with a hint.
 _MEGA_SLIPS = ("Hz", "H")
+#: The largest integer an integer option takes (numpy's int64: every count ends up in one).
+INT64_MAX = 2 ** 63 - 1
+_LOG10_2 = math.log10(2.0)
+
+
+def digits(value: int) -> int:
+    """The number of decimal digits of an integer, without its text (str() refuses beyond 4300 digits)."""
+    n = abs(int(value))
+    count = max(1, int(n.bit_length() * _LOG10_2))
+    while n >= 10 ** count:
+        count += 1
+    while count > 1 and n < 10 ** (count - 1):
+        count -= 1
+    return count
+
+
+def shown(value, limit: int = 40) -> str:
+    """``repr(value)`` for a one-line message, shortened: an integer of more than ``limit`` digits by its number
+    of digits (repr raises beyond 4300), a text longer than ``limit`` by its ends and its length."""
+    if isinstance(value, (int, np.integer)) and not isinstance(value, bool) and abs(int(value)) >= 10 ** limit:
+        return f"an integer of {digits(value)} digits"
+    if isinstance(value, str) and len(value) > limit:
+        return repr(f"{value[:20]}...{value[-10:]} ({len(value)} characters)")
+    return repr(value)
+
+
+def _to_float(name: str, value) -> float:
+    """float(value) for a number given as a Python or numpy number; an int beyond a double is refused by name."""
+    try:
+        return float(value)
+    except OverflowError:
+        raise ParameterError(f"{name} must be a finite number, at most 1.8e308 in magnitude; got {shown(value)}") from None
 
 
 def parse_value(name: str, text, unit: str | None = None) -> float:
@@ -33,7 +65,7 @@ def parse_value(name: str, text, unit: str | None = None) -> float:
     several numbers) is refused: values end up in netlists, so only a plain finite number may pass.
     """
     if isinstance(text, (int, float, np.floating, np.integer)) and not isinstance(text, bool):
-        value = float(text)
+        value = _to_float(name, text)
     else:
         text = str(text).strip()
         if not all(ch.isascii() or ch in "µΩ" for ch in text):
@@ -61,14 +93,17 @@ def parse_value(name: str, text, unit: str | None = None) -> float:
             raise ParameterError(f"{name}: {str(text)!r} means milli in SPICE (M = m); did you mean "
                                  f"{number}meg{typed}?")
         # Decimal scaling keeps "100u" exactly 1e-4 (not 9.999999999999999e-05).
-        exact = Decimal(number).scaleb(SI_EXPONENTS.get(suffix.lower(), 0))
-        value = float(exact)
-        shown = text if len(text) <= 40 else f"{text[:20]}...{text[-10:]} ({len(text)} characters)"
-        if value == 0.0 and exact != 0:
+        try:
+            exact = Decimal(number).scaleb(SI_EXPONENTS.get(suffix.lower(), 0))
+            value, zero = float(exact), exact == 0
+        except InvalidOperation:        # an exponent beyond Decimal's own (1e99999999999999999999): far beyond a double
+            zero = not any(ch in "123456789" for ch in re.split("[eE]", number)[0])
+            value = 0.0 if zero or "e-" in number.lower() else math.inf
+        if value == 0.0 and not zero:
             raise ParameterError(f"{name} must be 0 or at least 5e-324 in magnitude (smaller underflows to 0 in double precision); "
-                                 f"got {shown!r}")
+                                 f"got {shown(text)}")
         if not math.isfinite(value):
-            raise ParameterError(f"{name} must be a finite number, at most 1.8e308 in magnitude; got {shown!r}")
+            raise ParameterError(f"{name} must be a finite number, at most 1.8e308 in magnitude; got {shown(text)}")
     if not math.isfinite(value):
         raise ParameterError(f"{name} must be a finite number; got {value!r}")
     return value
@@ -103,11 +138,13 @@ def check_range(name: str, value, low: float, high: float, *, low_open=False, hi
 
 
 def check_integer(name: str, value, low: int, high: int | None = None) -> int:
-    """An integer (int or numpy integer, not bool) in [low, high] (high None: >= low)."""
+    """An integer (int or numpy integer, not bool) in [low, high] (high None: >= low, and at most 2^63 - 1, where
+    every count ends up: a larger one would overflow later, far from its name)."""
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low \
-            or (high is not None and value > high):
-        within = f">= {low}" if high is None else f"in [{low}, {high:,}]"
-        raise ParameterError(f"{name} must be an integer {within}; got {value!r}")
+            or value > (INT64_MAX if high is None else high):
+        within = f"in [{low}, {high:,}]" if high is not None else \
+            f">= {low}" + (" (at most 2^63 - 1)" if isinstance(value, (int, np.integer)) and value > INT64_MAX else "")
+        raise ParameterError(f"{name} must be an integer {within}; got {shown(value)}")
     return int(value)
 
 

@@ -28,6 +28,39 @@ def test_a_value_beyond_double_precision_is_refused_with_what_was_typed():
         parse_value("x", "9" * 1000)        # was "got inf"
 
 
+@pytest.mark.parametrize("text,message", [
+    ("1e99999999999999999999", "x must be a finite number, at most 1.8e308 in magnitude; got '1e99999999999999999999'"),
+    ("-1e99999999999999999999", "x must be a finite number, at most 1.8e308 in magnitude; got '-1e99999999999999999999'"),
+    ("1e-99999999999999999999", "x must be 0 or at least 5e-324 in magnitude"),
+    ("0e99999999999999999999", None),                                  # zero whatever its exponent
+    ("1e99999999999999999999u", "x must be a finite number, at most 1.8e308 in magnitude"),
+    (10 ** 400, "x must be a finite number, at most 1.8e308 in magnitude; got an integer of 401 digits"),
+    (-10 ** 5000, "x must be a finite number, at most 1.8e308 in magnitude; got an integer of 5001 digits"),
+    (np.float64(1e300), None),
+], ids=["exponent-huge", "exponent-huge-negative", "exponent-tiny", "zero-exponent-huge", "exponent-huge-suffix",
+        "int-400-digits", "int-5001-digits", "float64"])
+def test_an_exponent_or_an_integer_beyond_any_float_is_refused_naming_the_parameter(text, message):
+    """decimal.InvalidOperation (an exponent beyond Decimal's), OverflowError (an int beyond a float) and
+    ValueError "Exceeds the limit (4300 digits)" (its repr), naming nothing, before."""
+    if message is None:
+        assert parse_value("x", text) == float(text)
+        return
+    with pytest.raises(ParameterError) as refused:
+        parse_value("x", text)
+    assert str(refused.value).startswith(message), str(refused.value)
+
+
+def test_an_integer_option_beyond_int64_is_refused_naming_it():
+    from converters.validate import check_integer
+    assert check_integer("periods", 2 ** 63 - 1, 1) == 2 ** 63 - 1
+    for value, shown in ((2 ** 63, "9223372036854775808"), (10 ** 5000, "an integer of 5001 digits")):
+        with pytest.raises(ParameterError) as refused:
+            check_integer("periods", value, 1)
+        assert str(refused.value) == f"periods must be an integer >= 1 (at most 2^63 - 1); got {shown}"
+    with pytest.raises(ParameterError, match=r"^n must be an integer in \[0, 10\]; got an integer of 5001 digits$"):
+        check_integer("n", -10 ** 5000, 0, 10)
+
+
 def test_a_unit_on_a_value_without_one_is_refused():
     with pytest.raises(ParameterError, match=r"^x: the unit 'H' in '10uH' contradicts the parameter \(it takes no unit\)"):
         parse_value("x", "10uH")
@@ -89,6 +122,23 @@ def test_the_cli_takes_units_and_refuses_a_contradicting_one_in_one_line(capsys)
      "steady must be True or False; got 'no'"),                                  # was read as True
     (lambda: __import__("converters.run", fromlist=["x"]).run_converter("buck", periods=True), "ParameterError",
      "periods must be an integer >= 1; got True"),
+    # beyond any float: decimal.InvalidOperation, OverflowError or "Exceeds the limit (4300 digits)" before
+    (lambda: __import__("converters.run", fromlist=["x"]).run_converter("buck", {"L": "1e99999999999999999999"}),
+     "ParameterError", "L must be a finite number, at most 1.8e308 in magnitude; got '1e99999999999999999999'"),
+    (lambda: __import__("converters.run", fromlist=["x"]).run_converter("buck", {"L": 10 ** 400}), "ParameterError",
+     "L must be a finite number, at most 1.8e308 in magnitude; got an integer of 401 digits"),
+    (lambda: __import__("converters.run", fromlist=["x"]).run_converter("buck", {"D": 10 ** 5000}), "ParameterError",
+     "D must be a finite number, at most 1.8e308 in magnitude; got an integer of 5001 digits"),
+    (lambda: __import__("converters.run", fromlist=["x"]).run_converter("buck", h="1e99999999999999999999"),
+     "ParameterError", "h must be a finite number, at most 1.8e308 in magnitude"),
+    (lambda: __import__("converters.run", fromlist=["x"]).run_converter("buck", h=10 ** 400), "ParameterError",
+     "h must be a finite number, at most 1.8e308 in magnitude; got an integer of 401 digits"),
+    (lambda: __import__("converters.run", fromlist=["x"]).run_converter("buck", t_end=10 ** 400), "ParameterError",
+     "t_end must be a finite number, at most 1.8e308 in magnitude; got an integer of 401 digits"),
+    (lambda: __import__("converters.run", fromlist=["x"]).run_converter("buck", periods=10 ** 400), "ParameterError",
+     "periods must be an integer >= 1 (at most 2^63 - 1); got an integer of 401 digits"),
+    (lambda: __import__("converters.run", fromlist=["x"]).run_converter("buck", periods=10 ** 5000), "ParameterError",
+     "periods must be an integer >= 1 (at most 2^63 - 1); got an integer of 5001 digits"),
 ])
 def test_the_python_api_refuses_what_it_would_mangle(call, error, message):
     with pytest.raises(Exception) as refused:

@@ -24,13 +24,14 @@ refused at load with one line naming the file, the key and the value, before any
 """
 from __future__ import annotations
 
+import re
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from converters.errors import ParameterError
 from converters.models import get_converter, get_model
-from converters.validate import parse_value
+from converters.validate import parse_value, shown
 from netlists import SpiceOptions
 
 from .defaults import AT_LEAST, THRESHOLDS
@@ -107,8 +108,30 @@ def _number(where: str, key: str, value) -> float:
 
 def _integer(where: str, key: str, value, low: int, high: int) -> int:
     if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
-        raise ParameterError(f"{where} {key} must be an integer in [{low}, {high}]; got {value!r}")
+        raise ParameterError(f"{where} {key} must be an integer in [{low}, {high}]; got {shown(value)}")
     return value
+
+
+#: An integer longer than Python reads from text (sys.get_int_max_str_digits, 4300): tomllib then raises a bare
+#: ValueError that names neither the key nor the line.
+_LONG_DIGITS = re.compile(r"[0-9][0-9_]{4300,}")
+
+
+def _long_integer(text: str, where: str) -> ParameterError:
+    """The one-line error for the first integer tomllib could not read: its table, key, line and length."""
+    table = ""
+    for number, line in enumerate(text.splitlines(), 1):
+        header = re.match(r"\s*(\[\[?[^\]]*\]\]?)", line)
+        if header and "=" not in line[:header.end()]:
+            table = header.group(1).strip()
+        found = _LONG_DIGITS.search(line)
+        if found:
+            key = line[:found.start()].partition("=")[0].strip() or "a value"
+            count = sum(ch.isdigit() for ch in found.group())
+            place = f"{where} {table} {key}" if table else f"{where} {key}"
+            return ParameterError(f"{place}: an integer of {count} digits (line {number}), beyond every range of a "
+                                  "scene's values")
+    return ParameterError(f"{where}: not a readable TOML file (an integer too long to read)")
 
 
 def _read(path: Path, where: str) -> dict:
@@ -123,6 +146,10 @@ def _read(path: Path, where: str) -> dict:
     except RecursionError:      # tomllib parses nested arrays and tables recursively
         raise ParameterError(f"{where}: not a readable TOML file (arrays or tables nested too deeply; a scene "
                              "needs at most a few levels)") from None
+    except ParameterError:
+        raise
+    except ValueError:          # int() of more digits than Python reads from text
+        raise _long_integer(path.read_bytes().decode("utf-8", "replace"), where) from None
 
 
 def load_scene(path) -> Scene:

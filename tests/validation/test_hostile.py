@@ -35,9 +35,9 @@ print(json.dumps({"code": code, "out": out, "err": err, "wall": time.monotonic()
 """
 
 
-def bounded(argv, cwd):
-    """(code, stdout, stderr, wall_s, max RSS in KiB) of ``pcsuite argv`` run in ``cwd``."""
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+def bounded(argv, cwd, env=None):
+    """(code, stdout, stderr, wall_s, max RSS in KiB) of ``pcsuite argv`` run in ``cwd`` (``env``: variables added)."""
+    env = {**os.environ, "PYTHONPATH": str(ROOT), **(env or {})}
     done = subprocess.run([sys.executable, "-c", WRAPPER, str(TIME_BOUND_S + 15), *PCSUITE, *map(str, argv)],
                           cwd=cwd, capture_output=True, text=True, env=env)
     result = json.loads(done.stdout)
@@ -138,6 +138,32 @@ FUZZ = [
     # a path escape before
     ("scene-name-escape", ["report", "s.toml", "--out", "OUT"], {"s.toml": scene('name = "../../../../escaped"\n')},
      "name"),
+    # the third audit: exponents and integers beyond any float (tracebacks before)
+    ("param-exponent-huge", ["simulate", "buck", "-p", "L=1e99999999999999999999"], {},
+     "L must be a finite number, at most 1.8e308 in magnitude; got '1e99999999999999999999'"),
+    ("param-exponent-tiny", ["simulate", "buck", "-p", "L=1e-99999999999999999999"], {},
+     "L must be 0 or at least 5e-324 in magnitude"),
+    ("h-exponent-huge", ["simulate", "buck", "--h", "1e99999999999999999999"], {}, "h must be a finite number"),
+    ("t-end-exponent-huge", ["simulate", "buck", "--t-end", "1e99999999999999999999"], {},
+     "t_end must be a finite number"),
+    ("sweep-grid-exponent-huge", ["sweep", "buck", "--grid", "D=0.1:1e99999999999999999999:3", "--out", "OUT"], {},
+     "D stop must be a finite number"),
+    ("scene-quoted-exponent-huge", ["report", "s.toml", "--out", "OUT"],
+     {"s.toml": scene('[params]\nL = "1e99999999999999999999"\n')}, "[params]: L must be a finite number"),
+    ("max-memory-1e400", ["simulate", "buck", "--max-memory", "1e400"], {},
+     "--max-memory must be in [16 MiB, 1 TiB]; got '1e400'"),
+    ("max-memory-exponent-5000-digits", ["simulate", "buck", "--max-memory", "1e" + "9" * 5000], {},
+     "--max-memory must be in [16 MiB, 1 TiB]"),
+    ("scene-int-400-digits", ["report", "s.toml", "--out", "OUT"], {"s.toml": scene("[params]\nD = " + "1" * 400 + "\n")},
+     "[params]: D must be a finite number, at most 1.8e308 in magnitude; got an integer of 400 digits"),
+    ("scene-periods-400-digits", ["report", "s.toml", "--out", "OUT"],
+     {"s.toml": scene("[run]\nperiods = " + "1" * 400 + "\n")},
+     "[run] periods must be an integer in [1, 100000]; got an integer of 400 digits"),
+    # 5,000-digit integers: Python's "Exceeds the limit (4300 digits)", naming nothing, before
+    ("scene-int-5000-digits", ["report", "s.toml", "--out", "OUT"],
+     {"s.toml": scene("[run]\nperiods = " + "1" * 5000 + "\n")}, "scene s.toml [run] periods: an integer of 5000 digits"),
+    ("scene-param-5000-digits", ["report", "s.toml", "--out", "OUT"],
+     {"s.toml": scene("[params]\nD = -" + "1" * 5000 + "\n")}, "scene s.toml [params] D: an integer of 5000 digits"),
 ]
 
 
@@ -382,6 +408,15 @@ def test_every_flag_acts_or_is_refused_with_one_line(capsys, tmp_path, monkeypat
     assert code == 2 and message in err and len(err.strip().splitlines()) == 1, err
     assert time.monotonic() - start < 10.0                  # refused before anything long runs
     assert sorted(p.name for p in tmp_path.iterdir()) == ["x.dat"]
+
+
+@pytest.mark.parametrize("argv", [["simulate", "buck", "--periods", "2"], ["list"]], ids=["simulate", "list"])
+def test_a_memory_limit_variable_beyond_any_float_is_one_line_naming_it(tmp_path, argv):
+    """PCSUITE_MAX_MEMORY=1e400 raised OverflowError where a command checked memory (a traceback), and was
+    ignored by those that check none: it is read before anything runs, as PCSUITE_TIME_LIMIT is."""
+    code, out, err, _, _ = bounded(argv, tmp_path, env={"PCSUITE_MAX_MEMORY": "1e400"})
+    assert (code, out) == (2, ""), (code, err)
+    assert err == "pcsuite: error: PCSUITE_MAX_MEMORY must be in [16 MiB, 1 TiB]; got '1e400'\n"
 
 
 def test_gdcm_h_acts(ngspice):

@@ -99,10 +99,12 @@ def _apply_limits(args) -> None:
     that is one run (simulate, mech simulate, lcp solve) also gets an alarm just after its --time-limit
     (``ALARM_GRACE``): the run stops there with one line (a compiled loop is stopped when it returns; the memory
     limit bounds its length)."""
-    from converters.limits import set_max_memory, set_time_limit, time_limit
+    from converters.limits import max_memory, set_max_memory, set_time_limit, time_limit
     time_limit(0.0)             # PCSUITE_TIME_LIMIT (or the variable's absence) checked before anything runs
     if getattr(args, "max_memory", None) is not None:
         set_max_memory(args.max_memory)
+    else:
+        max_memory()            # PCSUITE_MAX_MEMORY too, whether or not this command checks a run's size
     if getattr(args, "time_limit", None) is not None:
         if getattr(args, "no_time_limit", False):
             raise ParameterError(f"--time-limit bounds ngspice runs and LCP solves; this command runs neither (got "
