@@ -109,6 +109,12 @@ def _inductor(a: str, b: str, p: dict, name="L1", value_key="L", sense="Vsl", dc
     return lines
 
 
+def _plate(a: str, p: dict, esr_key="rC") -> str:
+    """The node of the capacitor's own plate on side ``a`` (:func:`_capacitor`): behind its ESR when it has one,
+    where the capacitor voltage is read (the terminal ``a`` is the output, ESR drop included)."""
+    return f"{a}_esr" if p.get(esr_key) else a
+
+
 def _capacitor(a: str, b: str, p: dict, name="C1", value_key="C", esr_key="rC", ic=0.0) -> list[str]:
     ic_text = _num(name + " initial voltage", ic)
     if p.get(esr_key):
@@ -152,21 +158,25 @@ def _buck(p, T, o, ic):
     body = [f"Vin in 0 DC {_num('Vin', p['Vin'])}", _gate(T, p["D"], o), "S1 in sw gate 0 SWMOD",
             *_diode("0", "sw", p), *_inductor("sw", "out", p, ic=ic["iL"]), *_capacitor("out", "0", p, ic=ic["vC"]),
             f"R1 out 0 {_num('R', p['R'])}"]
-    return body, {"iL": ("vsl#branch", 1.0), "vC": ("out", 1.0), "vout": ("out", 1.0), "i_D": ("vsd#branch", 1.0)}
+    return body, {"iL": ("vsl#branch", 1.0), "vC": (_plate("out", p), 1.0), "vout": ("out", 1.0),
+                  "i_D": ("vsd#branch", 1.0)}
 
 
 def _boost(p, T, o, ic):
     body = [f"Vin in 0 DC {_num('Vin', p['Vin'])}", _gate(T, p["D"], o), *_inductor("in", "sw", p, ic=ic["iL"]),
             "S1 sw 0 gate 0 SWMOD", *_diode("sw", "out", p), *_capacitor("out", "0", p, ic=ic["vC"]),
             f"R1 out 0 {_num('R', p['R'])}"]
-    return body, {"iL": ("vsl#branch", 1.0), "vC": ("out", 1.0), "vout": ("out", 1.0), "i_D": ("vsd#branch", 1.0)}
+    return body, {"iL": ("vsl#branch", 1.0), "vC": (_plate("out", p), 1.0), "vout": ("out", 1.0),
+                  "i_D": ("vsd#branch", 1.0)}
 
 
 def _buck_boost(p, T, o, ic):
     body = [f"Vin in 0 DC {_num('Vin', p['Vin'])}", _gate(T, p["D"], o), "S1 in sw gate 0 SWMOD",
-            *_inductor("sw", "0", p, ic=ic["iL"]), *_diode("out", "sw", p), *_capacitor("0", "out", p, ic=ic["vC"]),
-            f"R1 out 0 {_num('R', p['R'])}"]
-    return body, {"iL": ("vsl#branch", 1.0), "vC": ("out", -1.0), "vout": ("out", 1.0), "i_D": ("vsd#branch", 1.0)}
+            *_inductor("sw", "0", p, ic=ic["iL"]), *_diode("out", "sw", p),
+            *_capacitor("out", "0", p, ic=0.0 - ic["vC"]), f"R1 out 0 {_num('R', p['R'])}"]
+    # the output is negative: the capacitor's plate on the output side carries -vC
+    return body, {"iL": ("vsl#branch", 1.0), "vC": (_plate("out", p), -1.0), "vout": ("out", 1.0),
+                  "i_D": ("vsd#branch", 1.0)}
 
 
 def _cuk(p, T, o, ic):
