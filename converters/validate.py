@@ -48,6 +48,13 @@ def shown(value, limit: int = 40) -> str:
     return repr(value)
 
 
+def quoted(path) -> str:
+    """A path as a one-line message shows it: as typed when every character prints, else quoted as repr does (a
+    newline or an ESC in a file name never reaches the terminal raw, nor splits the line)."""
+    text = str(path)
+    return text if text.isprintable() else repr(text)
+
+
 def _to_float(name: str, value) -> float:
     """float(value) for a number given as a Python or numpy number; an int beyond a double is refused by name."""
     try:

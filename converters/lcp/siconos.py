@@ -24,10 +24,15 @@ import numpy as np
 
 from .. import limits
 from ..errors import LCPError
+from ..validate import quoted
 
-_TOKEN = re.compile(r"\S+")
-_FLOAT = re.compile(r"^[+-]?(?:\d+\.?\d*|\.\d+)(?:[eEdD][+-]?\d+)?$")
-_INT = re.compile(r"^[+-]?\d+$")
+#: Tokens are separated by ASCII white space only, and numbers are ASCII digits: a no-break or thin space inside a
+#: number (1\u00a0000) had split it into two numbers, and other scripts' digits (\u0661, \uff11) had been read.
+_TOKEN = re.compile(r"[^ \t\n\r\f\v]+")
+_FLOAT = re.compile(r"^[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eEdD][+-]?[0-9]+)?$")
+_INT = re.compile(r"^[+-]?[0-9]+$")
+#: The longest integer a header holds (n^2 doubles of a 19-digit n are beyond any memory limit anyway).
+_INT_DIGITS = 18
 _CONTROL = re.compile(r"[\x00-\x08\x0e-\x1f\x7f]")
 _KINDS = ((stat.S_ISDIR, "a directory"), (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
           (stat.S_ISFIFO, "a pipe"), (stat.S_ISSOCK, "a socket"))
@@ -45,9 +50,9 @@ def read_siconos_lcp(path, *, context: str = "reading") -> LCPFile:
     """Read a Siconos .dat LCP file. ``context`` starts the memory-limit message (the CLI passes ``lcp solve``)."""
     path = Path(path)
     text = _read_text(path)
-    reader = _Tokens(text, str(path))
+    reader = _Tokens(text, quoted(path))
     n = reader.int("n", low=1)
-    limits.check_memory(f"{context} {path}: n = {n} (dense M of n^2 doubles)", 8.0 * n * n,
+    limits.check_memory(f"{context} {quoted(path)}: n = {n} (dense M of n^2 doubles)", 8.0 * n * n,
                         remedy="a smaller LCP")
     storage = reader.int("storage type")
     if storage not in (0, 1):
@@ -76,7 +81,7 @@ def _read_text(path: Path) -> str:
             kind = next((name for test, name in _KINDS if test(info.st_mode)), "not a regular file")
             raise LCPError(f"FILE must be a regular file; got {str(path)!r}, {kind}")
         # the bytes and the decoded text are both held; never read more than the size checked here
-        limits.check_memory(f"reading {path} ({info.st_size} bytes of text, held twice while decoded)",
+        limits.check_memory(f"reading {quoted(path)} ({info.st_size} bytes of text, held twice while decoded)",
                             2.0 * info.st_size, remedy="a smaller LCP")
         with open(path, "rb") as handle:
             data = handle.read(info.st_size + 1)
@@ -89,11 +94,11 @@ def _read_text(path: Path) -> str:
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError as exc:
-        raise LCPError(f"{path} is not a text .dat file (byte 0x{data[exc.start]:02x} at offset {exc.start})") from None
+        raise LCPError(f"{quoted(path)} is not a text .dat file (byte 0x{data[exc.start]:02x} at offset {exc.start})") from None
     bad = _CONTROL.search(text)
     if bad:
         offset = len(text[:bad.start()].encode("utf-8"))
-        raise LCPError(f"{path} is not a text .dat file (byte 0x{ord(bad.group()):02x} at offset {offset})")
+        raise LCPError(f"{quoted(path)} is not a text .dat file (byte 0x{ord(bad.group()):02x} at offset {offset})")
     return text
 
 
@@ -189,6 +194,9 @@ class _Tokens:
         token = self._next(what)
         if not _INT.match(token):
             self._bad(token, what, "an integer")
+        if len(token.lstrip("+-")) > _INT_DIGITS:     # int() of 4,300+ digits raises Python's limit, naming nothing
+            self.fail(f"{what} must be an integer of at most {_INT_DIGITS} digits; got one of "
+                      f"{len(token.lstrip('+-'))} digits")
         value = int(token)
         if (low is not None and value < low) or (high is not None and value > high):
             if low is not None and high is not None and low == high:

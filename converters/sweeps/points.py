@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ParameterError
-from ..validate import check_indices, parse_value
+from ..validate import check_indices, parse_value, shown
 
 #: The most points a sweep may ask for (a typo like COUNT=1e9 is refused, not started).
 MAX_POINTS = 10_000_000
@@ -66,8 +66,10 @@ class Axis:
         count = 1
         if len(fields) == 3:
             raw = fields[2].strip()
-            if not raw.isdigit() or int(raw) < 1:
-                raise ParameterError(f"--grid {name}: COUNT must be an integer >= 1; got {raw!r}")
+            # ASCII digits only ('５' and '²' are digits to str.isdigit), and no more than the largest grid has: int()
+            # of a 5,000-digit text raises Python's digit limit, naming nothing
+            if not (raw.isascii() and raw.isdigit()) or len(raw) > len(str(MAX_POINTS)) or not 1 <= int(raw) <= MAX_POINTS:
+                raise ParameterError(f"--grid {name}: COUNT must be an integer in [1, {MAX_POINTS:,}]; got {shown(raw)}")
             count = int(raw)
         if log and not (start > 0 and stop > 0):
             raise ParameterError(f"--grid {name}: a log axis needs START and STOP > 0; got {start:g}:{stop:g}")

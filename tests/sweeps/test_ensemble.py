@@ -168,7 +168,11 @@ def test_a_latin_hypercube_has_one_point_per_stratum_and_is_reproducible():
     ("D=0.1:abc:5", "abc"),
     ("R=0:10:5:log", "log"),
     ("D=0.1:0.5:5:cubic", "cubic"),
-])
+    ("D=0.1:0.5:\uff15", r"COUNT must be an integer in \[1, 10,000,000\]; got '\uff15'"),    # read as 5 before
+    ("D=0.1:0.5:" + "1" * 5000, r"COUNT must be an integer in \[1, 10,000,000\]; got '1{20}\.\.\.1{10} \(5000 "
+                                 r"characters\)'$"),                                            # Python's digit limit
+    ("D=0.1:0.5:20000000", r"COUNT must be an integer in \[1, 10,000,000\]; got '20000000'"),
+], ids=lambda value: value if len(value) < 40 else f"{value[:30]}... ({len(value)} characters)")
 def test_a_bad_axis_is_refused_with_what_was_given(text, message):
     with pytest.raises(ParameterError, match=message):
         Axis.parse(text)

@@ -164,6 +164,19 @@ FUZZ = [
      {"s.toml": scene("[run]\nperiods = " + "1" * 5000 + "\n")}, "scene s.toml [run] periods: an integer of 5000 digits"),
     ("scene-param-5000-digits", ["report", "s.toml", "--out", "OUT"],
      {"s.toml": scene("[params]\nD = -" + "1" * 5000 + "\n")}, "scene s.toml [params] D: an integer of 5000 digits"),
+    ("sweep-count-5000-digits", ["sweep", "buck", "--grid", "D=0.1:0.9:" + "1" * 5000, "--out", "OUT"], {},
+     "--grid D: COUNT must be an integer in [1, 10,000,000]; got '11111111111111111111...1111111111 (5000 characters)'"),
+    ("dat-n-5000-digits", ["lcp", "solve", "n.dat"], {"n.dat": "1" * 5000 + "\n0\n1 1\n1 1\n1\n-1\n"},
+     "n must be an integer of at most 18 digits; got one of 5000 digits"),
+    # .dat numbers in other scripts' digits, or split by a space that is not ASCII (read as two numbers before)
+    ("dat-arabic-indic-digit", ["lcp", "solve", "x.dat"], {"x.dat": "\u0661\n0\n1 1\n1 1\n1\n-1\n"},
+     "token '\u0661' at position 1 (line 1) is not an integer"),
+    ("dat-fullwidth-digit-in-q", ["lcp", "solve", "x.dat"], {"x.dat": "1\n0\n1 1\n1 1\n1\n-\uff11\n"},
+     "token '-\uff11' at position 8 (line 6) is not a finite number"),
+    ("dat-no-break-space-in-number", ["lcp", "solve", "x.dat"], {"x.dat": "2\n0\n2 2\n2 2\n1 0 0 1\n-1\u00a0000 2\n"},
+     "token '-1\\xa0000' at position 11 (line 6) is not a finite number"),
+    ("dat-escape-in-name", ["lcp", "solve", "e\x1b[2J.dat"], {"e\x1b[2J.dat": "x\n"},
+     "pcsuite: error: 'e\\x1b[2J.dat': token 'x' at position 1 (line 1) is not an integer (reading n)"),
 ]
 
 

@@ -41,13 +41,14 @@ def _max_iter() -> int:
 
 def run(args) -> int:
     from converters.lcp import read_siconos_lcp, solve_lcp
+    from converters.validate import quoted
     problem = read_siconos_lcp(args.file, context="lcp solve")
     result = solve_lcp(problem.M, problem.q, method=args.method, tol=args.tol, max_iter=args.max_iter,
                        fast_paths=not args.no_fast_paths)
     if args.json:
         print(json_text({"file": str(args.file), "k": int(problem.q.shape[0]), **result.to_dict()}))
     else:
-        print(f"{problem.name}: k = {problem.q.shape[0]}, method = {result.method}, status = {result.status}, "
+        print(f"{quoted(problem.name)}: k = {problem.q.shape[0]}, method = {result.method}, status = {result.status}, "
               f"err = {result.err:.3g}, iterations = {result.iterations}")
         print("z =", np.array2string(result.z, precision=6))
         if result.message and result.solved:
@@ -57,5 +58,6 @@ def run(args) -> int:
             for s in result.solutions:
                 print("  ", np.array2string(s, precision=6))
     if not result.solved:  # why, with the remedy: one line on stderr (also in the JSON object)
-        print(f"pcsuite: lcp solve {args.file}: {result.status}: {' '.join(result.message.split())}", file=sys.stderr)
+        print(f"pcsuite: lcp solve {quoted(args.file)}: {result.status}: {' '.join(result.message.split())}",
+              file=sys.stderr)
     return 0 if result.solved else 1
