@@ -300,6 +300,20 @@ IGNORED = [
      "--control voltage-mode is available for buck only (boost takes --control pwm, smc, smc-implicit)"),
     (["report", ""], "TARGET must be a suite (bench, bifurcation, default, gdcm, lcp, mechanics), a scene file "
                      "FILE.toml or a directory of them; got ''"),                 # read as '.' before
+    # the third audit: accepted and ignored before
+    (["list", "--time-limit", "5"], "--time-limit bounds ngspice runs and LCP solves; this command runs neither"),
+    (["mech", "list", "--time-limit", "5"], "--time-limit bounds ngspice runs and LCP solves; this command runs neither"),
+    (["netlist", "buck", "--time-limit", "5"], "--time-limit bounds ngspice runs and LCP solves; this command runs neither"),
+    (["gdcm-map", "buck", "--no-spice", "--size", "3", "3", "--time-limit", "5"],
+     "--time-limit bounds ngspice runs and LCP solves; this command runs neither"),
+    (["bifurcation", "buck", "--param", "Vin=20:36", "--points", "0", "--state", "iL"],
+     "--state sets the brute-force diagram; --points 0 asks for continuation only"),
+    (["bifurcation", "buck", "--param", "Vin=20:36", "-p", "Vin=25", "--points", "0"],
+     "Vin is both swept (--param) and fixed (-p); give it once"),
+    (["mech", "bifurcations", "friction", "--param", "omega=2.85:2.95", "-p", "omega=2.9"],
+     "omega is both swept (--param) and fixed (-p); give it once"),
+    (["sweep", "buck", "--grid", "D=0.2:0.8:3", "--seed", "0"],
+     "--seed sets the Latin hypercube; it does not apply without --lhs (got --seed 0)"),
 ]
 
 #: A number that does not parse: the one line names the flag, the range and the text (argparse named no range).
@@ -421,6 +435,26 @@ def test_every_flag_acts_or_is_refused_with_one_line(capsys, tmp_path, monkeypat
     assert code == 2 and message in err and len(err.strip().splitlines()) == 1, err
     assert time.monotonic() - start < 10.0                  # refused before anything long runs
     assert sorted(p.name for p in tmp_path.iterdir()) == ["x.dat"]
+
+
+def test_pcsuite_alone_says_a_command_is_needed_on_stderr_with_the_usage(capsys):
+    """Nothing on stderr and exit 2 before: the help went to stdout, as if asked for, with a failing status."""
+    with pytest.raises(SystemExit) as stop:
+        main([])
+    out, err = capsys.readouterr()
+    assert stop.value.code == 2 and out == ""
+    assert len(err.splitlines()) == 1 and err.startswith("pcsuite: error: a command is required: usage: pcsuite "), err
+    assert "simulate" in err and "pcsuite --help" in err
+
+
+def test_pcsuite_time_limit_stops_a_one_run_command_as_the_flag_does(tmp_path):
+    """PCSUITE_TIME_LIMIT bounded ngspice runs and LCP solves only: a long event run went on past it."""
+    argv = ["simulate", "buck", "--method", "event", "--t-end", "5", "--h", "9e-6"]
+    code, out, err, wall, _ = bounded(argv, tmp_path, env={"PCSUITE_TIME_LIMIT": "2"})
+    assert code == 2 and "Traceback" not in err, (code, err)
+    assert err == ("pcsuite: error: the run did not finish within the time limit of 2 s (PCSUITE_TIME_LIMIT); raise "
+                   "it, or ask for a shorter run (--t-end, --periods) or a coarser one\n")
+    assert wall < 15.0 and list(tmp_path.iterdir()) == []
 
 
 @pytest.mark.parametrize("argv", [["simulate", "buck", "--periods", "2"], ["list"]], ids=["simulate", "list"])

@@ -39,8 +39,9 @@ def _main(argv=None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     if not hasattr(args, "run"):
-        parser.print_help()
-        return EXIT_BAD_INPUT
+        # as argparse says a missing argument (usage and error on stderr, exit 2), in the project's one line
+        usage = " ".join(parser.format_usage().split()).removeprefix("usage: ")
+        parser.error(f"a command is required: usage: {usage} (pcsuite --help lists them)")
     try:
         _apply_limits(args)
         return args.run(args) or 0
@@ -99,26 +100,32 @@ def _apply_limits(args) -> None:
     that is one run (simulate, mech simulate, lcp solve) also gets an alarm just after its --time-limit
     (``ALARM_GRACE``): the run stops there with one line (a compiled loop is stopped when it returns; the memory
     limit bounds its length)."""
-    from converters.limits import max_memory, set_max_memory, set_time_limit, time_limit
+    import os
+
+    from converters.limits import TIME_ENV, max_memory, set_max_memory, set_time_limit, time_limit
     time_limit(0.0)             # PCSUITE_TIME_LIMIT (or the variable's absence) checked before anything runs
     if getattr(args, "max_memory", None) is not None:
         set_max_memory(args.max_memory)
     else:
         max_memory()            # PCSUITE_MAX_MEMORY too, whether or not this command checks a run's size
+    seconds, source = None, "--time-limit"
     if getattr(args, "time_limit", None) is not None:
-        if getattr(args, "no_time_limit", False):
+        refused = getattr(args, "no_time_limit", False)
+        if refused(args) if callable(refused) else refused:
             raise ParameterError(f"--time-limit bounds ngspice runs and LCP solves; this command runs neither (got "
                                  f"--time-limit {args.time_limit})")
         seconds = set_time_limit(args.time_limit)
-        if getattr(args, "one_run", False):     # a backstop: an ngspice run or an LCP solve reports its own limit first
-            import signal
-            signal.signal(signal.SIGALRM, _time_is_up(seconds))
-            signal.setitimer(signal.ITIMER_REAL, ALARM_GRACE[0] * seconds + ALARM_GRACE[1])
+    elif os.environ.get(TIME_ENV):          # the variable limits one run as the flag does
+        seconds, source = time_limit(0.0), TIME_ENV
+    if seconds is not None and getattr(args, "one_run", False):
+        import signal                       # a backstop: an ngspice run or an LCP solve reports its own limit first
+        signal.signal(signal.SIGALRM, _time_is_up(seconds, source))
+        signal.setitimer(signal.ITIMER_REAL, ALARM_GRACE[0] * seconds + ALARM_GRACE[1])
 
 
-def _time_is_up(seconds: float):
+def _time_is_up(seconds: float, source: str = "--time-limit"):
     def handler(signum, frame):
         from converters.errors import TimeLimitReached
-        raise TimeLimitReached(f"the run did not finish within the time limit of {seconds:g} s (--time-limit); "
+        raise TimeLimitReached(f"the run did not finish within the time limit of {seconds:g} s ({source}); "
                                "raise it, or ask for a shorter run (--t-end, --periods) or a coarser one")
     return handler

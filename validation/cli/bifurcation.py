@@ -44,14 +44,18 @@ def run(args) -> int:
     if args.diagram is not None and args.points == 0:
         raise ParameterError("--diagram needs the brute-force diagram: --points must be >= 1; got 0")
     diagram_flags = [flag for flag, value in (("--transient", args.transient), ("--record", args.record),
-                                              ("--diagram-method", args.diagram_method), ("--workers", args.workers))
+                                              ("--diagram-method", args.diagram_method), ("--state", args.state),
+                                              ("--workers", args.workers))
                      if value is not None]
     if args.points == 0 and diagram_flags:
         raise ParameterError(f"{', '.join(diagram_flags)} set{'s' if len(diagram_flags) == 1 else ''} the brute-force "
                              "diagram; --points 0 asks for continuation only")
     check_workers(args.workers)
     name, start, stop = parse_path(args.param)
-    study = run_study(args.converter, args.control, parse_assignments(args.params), name, start, stop,
+    params = parse_assignments(args.params)
+    if name in params:              # which value was meant? (the path would silently win)
+        raise ParameterError(f"{name} is both swept (--param) and fixed (-p); give it once")
+    study = run_study(args.converter, args.control, params, name, start, stop,
                       max_period=args.max_period, points=args.points,
                       transient=200 if args.transient is None else args.transient,
                       record=64 if args.record is None else args.record,

@@ -20,7 +20,13 @@ def add(sub) -> None:
                       help=f"parallel ngspice processes, in [1, {MAX_WORKERS}] (default 2)")
     gmap.add_argument("--out", type=given_path, default=None, help="directory for map.csv and map.png")
     gmap.add_argument("--json", action="store_true", help="print the summary as JSON")
-    gmap.set_defaults(run=run)
+    gmap.set_defaults(run=run, no_time_limit=_without_spice)
+
+
+def _without_spice(args) -> bool:
+    """--time-limit bounds the map's ngspice runs: with --no-spice there are none (the LCP map solves no LCP
+    iteratively)."""
+    return args.no_spice
 
 
 def run(args) -> int:

@@ -7,7 +7,7 @@ import json
 def add(sub) -> None:
     listing = sub.add_parser("list", help="converters with their parameters, methods, scenes")
     listing.add_argument("--json", action="store_true")
-    listing.set_defaults(run=run)
+    listing.set_defaults(run=run, no_time_limit=True)
 
 
 def _parameters(model) -> list[dict]:

@@ -14,7 +14,7 @@ def add(sub) -> None:
 
     listing = mech_sub.add_parser("list", help="the mechanical models and their parameters")
     listing.add_argument("--json", action="store_true")
-    listing.set_defaults(run=run_list)
+    listing.set_defaults(run=run_list, no_time_limit=True)
 
     sim = mech_sub.add_parser("simulate", help="simulate a mechanical model and write its trajectory")
     sim.add_argument("model")
@@ -128,6 +128,8 @@ def run_bifurcations(args) -> int:
     name, start, stop = parse_path(args.param)
     model = get_mechanical(args.model)
     params = parse_assignments(args.params)
+    if name in params:              # which value was meant? (the path would silently win)
+        raise ParameterError(f"{name} is both swept (--param) and fixed (-p); give it once")
     if args.diagram is not None and args.diagram.suffix.lower() not in (".png", ".svg"):
         raise ParameterError(f"--diagram must end in .png or .svg; got {str(args.diagram)!r}")
     points = args.points if args.points is not None else (0 if model.sliding and args.diagram is None else 60)

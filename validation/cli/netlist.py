@@ -17,7 +17,7 @@ def add(sub) -> None:
     net.add_argument("--steady", action="store_true",
                      help="start on the periodic orbit (the LCP stepper's, by Newton shooting) instead of at rest")
     net.add_argument("--out", type=given_path, default=None, help="write FILE.cir (atomically) instead of printing")
-    net.set_defaults(run=run)
+    net.set_defaults(run=run, no_time_limit=True)             # it writes a netlist; ngspice runs it elsewhere
 
 
 def run(args) -> int:

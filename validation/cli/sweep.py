@@ -25,7 +25,7 @@ def add(sub) -> None:
     sw.add_argument("--lhs", type=integer(1, _max_points), default=None, metavar="N",
                     help="N Latin-hypercube points over the --grid ranges (NAME=START:STOP[:log], no COUNT) "
                          "instead of the full grid")
-    sw.add_argument("--seed", type=integer(0), default=0, help="the Latin hypercube's seed (default 0)")
+    sw.add_argument("--seed", type=integer(0), default=None, help="the Latin hypercube's seed (default 0)")
     add_params(sw)
     sw.add_argument("--control", default="pwm", choices=list(CONTROLS), help="the control law (default pwm)")
     sw.add_argument("--method", default="lcp", choices=["lcp", "event", "spice"],
@@ -75,7 +75,8 @@ def build(args):
     if args.lhs is not None:
         check_memory(f"sweep: --lhs {args.lhs} points", float(args.lhs) * (BYTES_PER_ROW + 8 * len(args.grid)),
                      remedy="fewer --lhs points")
-        points = LatinHypercube([Axis.parse(g, count_required=False) for g in args.grid], args.lhs, args.seed)
+        points = LatinHypercube([Axis.parse(g, count_required=False) for g in args.grid], args.lhs,
+                                0 if args.seed is None else args.seed)
     else:
         points = Grid([Axis.parse(g) for g in args.grid])
     check_memory(f"sweep: {points.size:,} points", float(points.size) * BYTES_PER_ROW, remedy="fewer points")
@@ -103,7 +104,7 @@ def build(args):
 
 def _refuse_ignored(args) -> None:
     """Every flag acts or is refused: the combinations in which one would be ignored."""
-    if args.lhs is None and args.seed != 0:
+    if args.lhs is None and args.seed is not None:          # --seed 0 too: it is given, and would be ignored
         raise ParameterError(f"--seed sets the Latin hypercube; it does not apply without --lhs (got --seed {args.seed})")
     if args.method == "spice":
         given = [f for f, v in (("--h-fraction", args.h_fraction), ("--rtol", args.rtol)) if v is not None]
