@@ -72,15 +72,16 @@ def compare(converter: str, params: dict | None = None, *, periods: int | None =
     periods, window = periods or defaults["periods"], window or defaults["window"]
     if not 1 <= window <= periods:
         raise ParameterError(f"window must be in [1, periods = {periods}]; got {window}")
-    x_star = None
+    x_star, rho = None, None
     if rtol is not None:                        # accuracy on request: the LCP side on its accurate orbit
         if start != "steady":
             raise ParameterError("rtol gives the periodic steady state; it needs start = 'steady'")
         lcp = run_converter(model, p, periods=periods, rtol=rtol, h=h, theta=theta)
-        x_star = lcp.x[0]
+        x_star, rho = lcp.x[0], lcp.metadata["orbit"]["spectral_radius"]
     else:
         if start == "steady":
-            x_star = steady_state(model, p, make_method(model, p, "lcp", h, theta=theta), tol=1e-7).x0
+            orbit = steady_state(model, p, make_method(model, p, "lcp", h, theta=theta), tol=1e-7)
+            x_star, rho = orbit.x0, orbit.spectral_radius
         lcp = run_converter(model, p, h=h, theta=theta, periods=periods, x0=x_star)
     netlist = build_netlist(model.name, p, periods * T, spice_options, x0=x_star)
     window_start = (periods - window) * T
@@ -109,9 +110,24 @@ def compare(converter: str, params: dict | None = None, *, periods: int | None =
                             "ngspice has not settled")
     if start == "steady" and settle > SPICE_SETTLE:
         result.notes.append(f"ngspice has not settled: after {spice_periods} periods its window's mean of vout still "
-                            f"moves {settle:.2g} from the window before (lightly damped, or wandering between "
-                            "modes at a CCM/DCM boundary); the comparison includes that drift")
+                            f"moves {settle:.2g} from the window before ({unsettled_cause(rho, spice_periods)}); the "
+                            "comparison includes that drift")
     return result
+
+
+def unsettled_cause(rho: float, periods: int) -> str:
+    """Why ngspice's window mean may still move after ``periods`` periods, from the LCP orbit's Floquet spectral
+    radius ``rho`` (ngspice's circuit is the same but for its switch and diode models): a transient, if its slowest
+    mode has not decayed (rho^periods above 1e-3); otherwise not a transient, but ngspice's own solution moving
+    between periods (switching instants decided at its time points inside a finite transition)."""
+    remaining = rho ** periods
+    if remaining > 1e-3:
+        return (f"lightly damped: its slowest mode decays by {rho:.6g} per period, to {remaining:.2g} of a start "
+                f"error after {periods} periods")
+    return (f"not a transient: the circuit's slowest mode decays by {rho:.4g} per period, to {remaining:.1e} after "
+            f"{periods} periods; ngspice's switches change state at its time points, and where those fall inside a "
+            "gate edge or a comparator's transition moves its switching instants from period to period (a shorter "
+            "edge_fraction, or TMAX for a comparator, narrows it)")
 
 
 #: ngspice counts as settled when its window's mean of vout moves less than this (relative) from the window

@@ -169,8 +169,8 @@ def test_the_default_steady_run_warns_that_its_mean_is_1_percent_off(capsys):
     assert summary["accuracy"]["vout_mean_error_estimate"] == pytest.approx(1.05e-2, rel=0.01)
     assert summary["warnings"] == ["vout mean may be 1.1e-02 off (more than 0.001): the step is too coarse: use "
                                    "--rtol 1e-4 (or a smaller --h); efficiency may be 2.2e-02 off (more than 0.001; "
-                                   "input power 1.4e-03): the switched currents are integrated to first order at "
-                                   "each switching: use --method event (exact at the switchings) or a smaller --h"]
+                                   "input power 1.4e-03): the step is too coarse: use --method event (exact at the "
+                                   "switchings), a smaller --h, or --rtol"]
     code, out, err = run_cli(capsys, "simulate", *LIGHT_DCM, "--steady")
     assert "warning: vout mean may be 1.1e-02 off" in err
 
