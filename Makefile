@@ -7,7 +7,7 @@ STAMP := $(VENV)/.installed-stamp
 SUDO := $(shell [ "$$(id -u)" -eq 0 ] || echo sudo)
 SUITE ?= default
 
-.PHONY: all setup system-deps siconos warm test report bench clean
+.PHONY: all setup system-deps siconos warm test package-check report bench clean
 
 all: test
 
@@ -48,6 +48,11 @@ warm: setup
 
 test: setup warm
 	$(PY) -m pytest -q
+
+# The package as a user installs it (tests/test_packaging.py, also in the test run above): an sdist and a wheel,
+# the wheel in a fresh venv, pcsuite run from outside the checkout; 1.5 to 3 minutes.
+package-check: setup
+	$(PY) -m pytest -q tests/test_packaging.py
 
 report: setup
 	$(VENV)/bin/pcsuite report $(SUITE)
