@@ -4,13 +4,17 @@ Layout of a sweep directory::
 
     DIR/sweep.json          what was asked (model, method, parameters, points): the sweep's identity
     DIR/parts/*.parquet     one part per finished chunk, each written atomically (whole or absent)
+    DIR/parts.jsonl         one line per part written: its name, rows, bytes and SHA-256
     DIR/summary.png         a metric over the grid (written when the sweep completes)
     DIR/.lock               held while a process writes (a second writer is refused)
 
 Resuming is running the same sweep into the same directory: the indices already on disk are skipped, so an
 interrupted sweep (SIGINT, a killed process, a lost machine) computes only its missing points and ends with
 the dataset an uninterrupted run writes. A directory holding a different sweep, or anything else, is
-refused, never overwritten. Read a sweep back with :func:`load_sweep` (or ``pandas.read_parquet(DIR /
+refused, never overwritten. Resume trusts no part blindly: a part listed in ``parts.jsonl`` must have the
+bytes listed there, and one that is not (a kill between a part's rename and its line) must have the sweep's
+columns; every part's indices must lie in the sweep and appear once. Anything else in ``parts/`` (a copied
+part, another table, a link, a FIFO) is refused with one line naming it, and nothing is changed. Read a sweep back with :func:`load_sweep` (or ``pandas.read_parquet(DIR /
 "parts")``).
 
 :class:`SpiceSweep` is the ensemble of ngspice runs (the same circuits as netlists): per point, the LCP's
@@ -20,8 +24,11 @@ recycled, time-limited ngspice worker of :mod:`.spice` inside whichever worker h
 """
 from __future__ import annotations
 
+import hashlib
 import io
 import json
+import os
+import stat
 import time
 import uuid
 from dataclasses import asdict, dataclass, field
@@ -33,12 +40,17 @@ import pandas as pd
 from converters.errors import ParameterError
 from converters.parallel import run_ensemble
 from converters.sweeps import failed_row
+from converters.validate import quoted
 
-from .io import atomic_write_bytes, atomic_write_text
+from .io import _kind, atomic_write_bytes, atomic_write_text
 
 MANIFEST = "sweep.json"
 PARTS = "parts"
+JOURNAL = "parts.jsonl"
+LOCK = ".lock"
 FORMAT = 1
+#: A sweep.json is a few hundred bytes; a larger one is not a sweep's (and is not read whole).
+MANIFEST_MAX_BYTES = 1 << 20
 
 
 # --- the ngspice ensemble -----------------------------------------------------------------------------------
@@ -147,23 +159,20 @@ class SweepStore:
         return self.out / PARTS
 
     def claim(self) -> np.ndarray:
-        """Take the directory (create it, or check it holds this very sweep) and return the indices on disk."""
+        """Take the directory (create it, or check it holds this very sweep) and return the indices on disk, every
+        part verified (module docstring)."""
         out = self.out
         if out.is_symlink():                                        # as every other --out: no writes through a link
-            raise ParameterError(f"--out {str(out)}: a symbolic link; give the directory's own path or choose another "
-                                 "--out")
+            raise ParameterError(f"--out {quoted(out)}: a symbolic link; give the directory's own path or choose "
+                                 "another --out")
         if out.exists() and not out.is_dir():
             raise ParameterError(f"--out must be a directory; {str(out)!r} is a file")
         manifest = out / MANIFEST
-        if out.exists() and any(out.iterdir()) and not manifest.exists():
+        if out.exists() and any(out.iterdir()) and not os.path.lexists(manifest):
             raise ParameterError(f"--out {str(out)!r} is a non-empty directory that holds no sweep; choose a new "
                                  "or empty directory (nothing was written)")
-        if manifest.exists():
-            try:
-                held = json.loads(manifest.read_text())
-            except (OSError, ValueError) as exc:
-                raise ParameterError(f"--out {str(out)!r}: its {MANIFEST} is unreadable ({exc}); choose another "
-                                     "directory") from None
+        if os.path.lexists(manifest):
+            held = self._identity_on_disk(manifest)
             if held != self.identity:
                 keys = sorted(k for k in set(held) | set(self.identity) if held.get(k) != self.identity.get(k))
                 diff = "; ".join(f"{k}: {held.get(k)!r} on disk, {self.identity.get(k)!r} asked" for k in keys[:3])
@@ -171,43 +180,212 @@ class SweepStore:
                                      "arguments or choose another directory (nothing was changed)")
         out.mkdir(parents=True, exist_ok=True)
         self._take_lock()
-        if not manifest.exists():
-            atomic_write_text(manifest, json.dumps(self.identity, indent=1) + "\n")
-        return self.done()
+        try:
+            done, journal, adopt = self._verify()           # under the lock: no other writer adds parts meanwhile
+            if not manifest.exists():
+                atomic_write_text(manifest, json.dumps(self.identity, indent=1) + "\n")
+            self.parts.mkdir(exist_ok=True)
+            if adopt or journal.torn:
+                atomic_write_text(out / JOURNAL, "".join(journal.lines) + "".join(adopt))
+        except BaseException:
+            self.release()
+            raise
+        return done
+
+    def _refuse(self, problem: str) -> ParameterError:
+        return ParameterError(f"--out {quoted(self.out)}: {problem}; remove it or choose another --out (nothing was "
+                              "changed)")
+
+    def _identity_on_disk(self, manifest: Path) -> dict:
+        where = f"--out {str(self.out)!r}: its {MANIFEST}"
+        try:
+            info = os.lstat(manifest)
+            if not stat.S_ISREG(info.st_mode):               # a FIFO would be waited on forever, a link followed
+                raise ParameterError(f"{where} is {_what(info.st_mode)}, not the file a sweep writes; choose another "
+                                     "directory")
+            if info.st_size > MANIFEST_MAX_BYTES:
+                raise ParameterError(f"{where} is not a pcsuite sweep's ({info.st_size:,} bytes); choose another "
+                                     "directory")
+            held = json.loads(manifest.read_text())
+        except (OSError, ValueError) as exc:
+            if isinstance(exc, ParameterError):
+                raise
+            raise ParameterError(f"{where} is unreadable ({exc}); choose another directory") from None
+        if not isinstance(held, dict):
+            raise ParameterError(f"{where} is not a pcsuite sweep's (it holds {type(held).__name__ if held is not None else 'null'}"
+                                 "); choose another directory")
+        return held
 
     def _take_lock(self):
         import fcntl
-        handle = open(self.out / ".lock", "a+")
+        path = self.out / LOCK
+        # never through a link (it would create its target), never a FIFO's open that waits for a writer
+        flags = os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_NONBLOCK | os.O_CLOEXEC
         try:
-            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            fd = os.open(path, flags, 0o666)
+            mode = os.fstat(fd).st_mode
+        except OSError as exc:
+            try:
+                what = _what(os.lstat(path).st_mode)
+            except OSError:
+                what = f"unusable ({exc.strerror})"
+            raise ParameterError(f"--out {quoted(self.out)}: its {LOCK} is {what}, not the lock file a sweep creates; "
+                                 "remove it or choose another --out") from None
+        if not stat.S_ISREG(mode):
+            os.close(fd)
+            raise ParameterError(f"--out {quoted(self.out)}: its {LOCK} is {_what(mode)}, not the lock file a sweep "
+                                 "creates; remove it or choose another --out")
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except OSError:
-            handle.close()
+            os.close(fd)
             raise ParameterError(f"--out {str(self.out)!r}: another process is writing this sweep; wait for it or "
                                  "choose another directory") from None
-        self._lock = handle
+        self._lock = fd
 
     def release(self):
         if self._lock is not None:
-            self._lock.close()
+            os.close(self._lock)
             self._lock = None
 
     def done(self) -> np.ndarray:
-        """The indices already stored (sorted)."""
-        if not self.parts.is_dir():
-            return np.empty(0, dtype=np.int64)
+        """The indices already stored (sorted), every part verified."""
+        return self._verify()[0]
+
+    def _verify(self):
+        """(indices stored, the journal, journal lines for the verified parts it does not list), or a refusal
+        naming the first part resume cannot trust."""
+        journal = _Journal.read(self.out / JOURNAL, self._refuse)
+        size = int(self.identity["size"])
+        seen = np.zeros(size, dtype=bool)
+        if not os.path.lexists(self.parts):
+            return np.flatnonzero(seen), journal, []
+        mode = os.lstat(self.parts).st_mode
+        if not stat.S_ISDIR(mode):
+            raise self._refuse(f"{PARTS} is {_what(mode)}, not the directory of parts a sweep writes")
+        names = sorted(entry for entry in os.listdir(self.parts) if not entry.startswith((".", "_")))  # temporaries
+        # the parts the journal lists first: a copy of one of them is the stranger
+        names.sort(key=lambda name: name not in journal.parts)
+        stored, adopt = [], []
+        for name in names:
+            path = self.parts / name
+            where = f"{PARTS}/{quoted(name)}"
+            info = os.lstat(path)
+            if not stat.S_ISREG(info.st_mode):
+                raise self._refuse(f"{where} is {_what(info.st_mode)}, not a part pcsuite wrote")
+            if not name.endswith(".parquet"):
+                raise self._refuse(f"{where} is not a part of this sweep (not a .parquet file)")
+            data = path.read_bytes()
+            listed = journal.parts.get(name)
+            if listed is not None and (listed.get("bytes") != len(data)
+                                       or listed.get("sha256") != hashlib.sha256(data).hexdigest()):
+                raise self._refuse(f"{where} was changed after pcsuite wrote it (its size or SHA-256 is not the one "
+                                   f"{JOURNAL} lists)")
+            indices = self._indices(data, where, check_schema=listed is None)
+            outside = indices[(indices < 0) | (indices >= size)]
+            if outside.size:
+                raise self._refuse(f"{where} holds index {int(outside[0])}, outside the sweep's {size:,} points "
+                                   f"[0, {size - 1:,}]")
+            unique, counts = np.unique(indices, return_counts=True)
+            if (counts > 1).any():
+                raise self._refuse(f"{where} holds index {int(unique[counts > 1][0])} more than once")
+            again = indices[seen[indices]]
+            if again.size:
+                owner = next(other for other, held in stored if np.isin(again[0], held))
+                more = f" and {again.size - 1:,} more" if again.size > 1 else ""
+                raise self._refuse(f"{where} holds indices also stored in {PARTS}/{quoted(owner)} (index "
+                                   f"{int(again[0])}{more}); one of them is not a part this sweep wrote")
+            seen[indices] = True
+            stored.append((name, indices))
+            if listed is None:
+                adopt.append(_Journal.line(name, len(indices), data))
+        return np.flatnonzero(seen).astype(np.int64), journal, adopt
+
+    def _indices(self, data: bytes, where: str, check_schema: bool) -> np.ndarray:
+        """A part's index column; for a part the journal does not list, its columns are checked first."""
+        import pyarrow as pa
         import pyarrow.parquet as pq
-        found = [pq.read_table(path, columns=["index"]).column(0).to_numpy() for path in sorted(self.parts.glob("*.parquet"))]
-        return np.sort(np.concatenate(found)).astype(np.int64) if found else np.empty(0, dtype=np.int64)
+        try:
+            source = pa.BufferReader(data)
+            if check_schema:
+                found = pq.read_schema(source)
+                if not found.equals(self.schema, check_metadata=False):
+                    columns = ", ".join(found.names[:8]) + (", ..." if len(found.names) > 8 else "")
+                    wanted = ", ".join(self.schema.names[:8]) + (", ..." if len(self.schema.names) > 8 else "")
+                    raise self._refuse(f"{where} is not a part of this sweep (its columns: {columns}; a part's: "
+                                       f"{wanted})")
+            column = pq.read_table(pa.BufferReader(data), columns=["index"]).column(0)
+        except (pa.ArrowException, OSError, ValueError) as exc:
+            if isinstance(exc, ParameterError):
+                raise
+            first = str(exc).splitlines()[0][:120] if str(exc) else type(exc).__name__
+            raise self._refuse(f"{where} is not a part of this sweep (not a Parquet table: {first})") from None
+        if column.null_count:
+            raise self._refuse(f"{where} is not a part of this sweep (rows without an index)")
+        return column.to_numpy().astype(np.int64)
 
     def write(self, rows: list[dict]) -> None:
-        """One part, atomically."""
+        """One part, atomically, then its line in the journal."""
         import pyarrow as pa
         import pyarrow.parquet as pq
         table = pa.Table.from_pylist(rows, schema=self.schema)
         buffer = io.BytesIO()
         pq.write_table(table, buffer)
         first = min(row["index"] for row in rows)
-        atomic_write_bytes(self.parts / f"part-{first:09d}-{uuid.uuid4().hex[:8]}.parquet", buffer.getvalue())
+        name = f"part-{first:09d}-{uuid.uuid4().hex[:8]}.parquet"
+        data = buffer.getvalue()
+        atomic_write_bytes(self.parts / name, data)
+        _Journal.append(self.out / JOURNAL, _Journal.line(name, len(rows), data))
+
+
+def _what(mode: int) -> str:
+    return "a directory" if stat.S_ISDIR(mode) else _kind(mode)
+
+
+class _Journal:
+    """``parts.jsonl``: one JSON line per part the sweep wrote (name, rows, bytes, SHA-256), appended after the
+    part is in place. A last line without its newline is a kill's torn write: dropped, and rewritten away."""
+
+    def __init__(self, lines: list[str], torn: bool):
+        self.lines, self.torn = lines, torn
+        self.parts = {json.loads(line)["part"]: json.loads(line) for line in lines}
+
+    @staticmethod
+    def line(name: str, rows: int, data: bytes) -> str:
+        return json.dumps({"part": name, "rows": int(rows), "bytes": len(data),
+                           "sha256": hashlib.sha256(data).hexdigest()}) + "\n"
+
+    @classmethod
+    def read(cls, path: Path, refuse) -> "_Journal":
+        if not os.path.lexists(path):
+            return cls([], False)
+        mode = os.lstat(path).st_mode
+        if not stat.S_ISREG(mode):
+            raise refuse(f"{JOURNAL} is {_what(mode)}, not the list of parts a sweep writes")
+        text = path.read_text(errors="replace")
+        lines = text.splitlines(keepends=True)
+        torn = bool(lines) and not lines[-1].endswith("\n")
+        if torn:
+            lines = lines[:-1]
+        for number, line in enumerate(lines, 1):
+            try:
+                entry = json.loads(line)
+                ok = isinstance(entry, dict) and isinstance(entry.get("part"), str)
+            except ValueError:
+                ok = False
+            if not ok:
+                raise refuse(f"{JOURNAL} line {number} is not a line pcsuite wrote (without the file, every part is "
+                             "checked again)")
+        return cls(lines, torn)
+
+    @staticmethod
+    def append(path: Path, line: str) -> None:
+        fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC, 0o666)
+        try:
+            os.write(fd, line.encode())
+            os.fsync(fd)
+        finally:
+            os.close(fd)
 
 
 def load_sweep(out) -> pd.DataFrame:

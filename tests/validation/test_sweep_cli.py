@@ -242,3 +242,144 @@ def test_a_sweep_on_a_dask_scheduler_address_stores_the_local_rows(tmp_path, cap
     summary = _summary(capsys)
     assert summary["computed"] == 100 and summary["ok"] == 100
     _same(load_sweep(tmp_path / "local"), load_sweep(tmp_path / "dask"))
+
+
+# --- resume verifies what it finds (issue 33) -------------------------------------------------------------------
+
+SMALL = ["sweep", "buck", "--grid", "D=0.3:0.6:2", "--grid", "R=5:10:2", "--steady", "--no-progress", "--chunk", "2",
+         "--scheduler", "batched"]
+
+
+def _files(root: Path) -> dict:
+    """Every entry under ``root`` (relative path -> bytes, link target or kind), to show nothing changed."""
+    import os
+    import stat
+    out = {}
+    for path in sorted(root.rglob("*")):
+        mode = os.lstat(path).st_mode
+        out[path.relative_to(root).as_posix()] = (os.readlink(path) if stat.S_ISLNK(mode) else path.read_bytes()
+                                                  if stat.S_ISREG(mode) else stat.S_IFMT(mode))
+    return out
+
+
+def _table(frame: pd.DataFrame, path: Path, like: Path | None = None) -> None:
+    """``frame`` as a Parquet file (with the columns' types of the part ``like``)."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+    schema = pq.read_schema(like) if like is not None else None
+    pq.write_table(pa.Table.from_pandas(frame, schema=schema, preserve_index=False), path)
+
+
+def _tamper(kind: str, out: Path, tmp_path: Path) -> str:
+    """Put something in a complete 4-point sweep that resume must not trust; returns the part's name."""
+    import os
+    parts = sorted((out / "parts").glob("*.parquet"))
+    first = pd.read_parquet(parts[0])
+    if kind == "duplicate copy":                       # 6 rows for 4 points, exit 0, before
+        (out / "parts" / "part-copy.parquet").write_bytes(parts[0].read_bytes())
+        return "part-copy.parquet"
+    if kind == "duplicate under a part's name":
+        (out / "parts" / "part-000000000-0badcafe.parquet").write_bytes(parts[0].read_bytes())
+        return "part-000000000-0badcafe.parquet"
+    if kind == "bogus columns":                        # its indices counted as done, their rows without results
+        parts[1].unlink()
+        _table(pd.DataFrame({"index": [2, 3], "bogus": ["x", "y"]}), out / "parts" / "part-bogus.parquet")
+        return "part-bogus.parquet"
+    if kind == "index outside the grid":               # an IndexError after the sweep, before
+        extra = first.copy()
+        extra["index"] = [99, 100]
+        _table(extra, out / "parts" / "part-outside.parquet", like=parts[0])
+        return "part-outside.parquet"
+    if kind == "changed after it was written":         # a value edited in a part pcsuite wrote
+        changed = first.copy()
+        changed.loc[0, "vout_mean"] = 1234.5
+        _table(changed, parts[0], like=parts[0])
+        return parts[0].name
+    if kind == "symbolic link":
+        elsewhere = tmp_path / "elsewhere.parquet"
+        parts[1].rename(elsewhere)
+        (out / "parts" / parts[1].name).symlink_to(elsewhere)
+        return parts[1].name
+    if kind == "not a parquet file":                   # pandas.read_parquet(DIR/parts) fails on it
+        (out / "parts" / "notes.txt").write_text("mine")
+        return "notes.txt"
+    if kind == "FIFO":                                 # reading it waited forever, before
+        os.mkfifo(out / "parts" / "part-fifo.parquet")
+        return "part-fifo.parquet"
+    raise AssertionError(kind)
+
+
+TAMPERED = {"duplicate copy": "holds indices also stored in parts/", "duplicate under a part's name":
+            "holds indices also stored in parts/", "bogus columns": "is not a part of this sweep (its columns: index, bogus",
+            "index outside the grid": "holds index 99, outside the sweep's 4 points", "changed after it was written":
+            "was changed after pcsuite wrote it", "symbolic link": "is a symbolic link, not a part pcsuite wrote",
+            "not a parquet file": "is not a part of this sweep (not a .parquet file)",
+            "FIFO": "is a FIFO (named pipe), not a part pcsuite wrote"}
+
+
+@pytest.mark.parametrize("kind", list(TAMPERED))
+def test_resume_verifies_every_stored_part_and_refuses_one_it_did_not_write(kind, tmp_path):
+    out = tmp_path / "s"
+    env = {**__import__("os").environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])}
+    run = lambda: subprocess.run([sys.executable, "-m", "validation.cli", *SMALL, "--out", str(out)],   # noqa: E731
+                                 capture_output=True, text=True, env=env, timeout=60)
+    assert run().returncode == 0
+    name = _tamper(kind, out, tmp_path)
+    before = _files(tmp_path)
+    done = run()                                        # a subprocess: a FIFO had made it wait forever
+    lines = done.stderr.strip().splitlines()
+    assert done.returncode == 2 and len(lines) == 1 and "Traceback" not in done.stderr, done.stderr
+    assert lines[0].startswith(f"pcsuite: error: --out {out}: parts/{name} "), lines[0]
+    assert TAMPERED[kind] in lines[0] and lines[0].endswith("(nothing was changed)"), lines[0]
+    assert _files(tmp_path) == before                   # refused whole: nothing written, nothing removed
+
+
+def test_a_part_stored_just_before_a_kill_is_verified_and_kept(tmp_path, capsys):
+    """A kill between a part's rename and its line in parts.jsonl leaves a whole part the journal does not list:
+    resume checks it like a stranger's (schema, indices, no duplicates), keeps it and lists it."""
+    out = tmp_path / "s"
+    assert main(SMALL + ["--out", str(out)]) == 0
+    journal = out / "parts.jsonl"
+    lines = journal.read_text().splitlines(keepends=True)
+    assert len(lines) == 2 and all(json.loads(line)["rows"] == 2 for line in lines)
+    journal.write_text(lines[0] + lines[1][:10])        # the last line torn by the kill
+    capsys.readouterr()
+    assert main(SMALL + ["--out", str(out), "--json"]) == 0
+    assert _summary(capsys)["computed"] == 0
+    assert [json.loads(line) for line in journal.read_text().splitlines()] == [json.loads(line) for line in lines]
+
+
+@pytest.mark.parametrize("held", ["[1, 2]", "null", "\"sweep\"", "{\"format\": 1, \"points\": 5}"])
+def test_a_sweep_json_that_is_not_a_sweeps_is_refused_in_one_line(held, tmp_path, capsys):
+    """A list or null in sweep.json raised AttributeError or TypeError (a traceback) before."""
+    out = tmp_path / "s"
+    out.mkdir()
+    (out / "sweep.json").write_text(held)
+    assert main(SMALL + ["--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert len(err.splitlines()) == 1 and err.startswith(f"pcsuite: error: --out {str(out)!r}"), err
+    assert ("its sweep.json is not a pcsuite sweep's" in err) or ("holds a different sweep" in err), err
+    assert sorted(p.name for p in out.iterdir()) == ["sweep.json"]
+
+
+@pytest.mark.parametrize("kind", ["symbolic link", "directory", "FIFO"])
+def test_a_lock_that_is_not_a_regular_file_is_refused_and_nothing_is_created_where_it_points(kind, tmp_path):
+    """``open(.lock, "a+")`` followed a planted link (creating its target) and failed on a directory with a traceback."""
+    import os
+    out = tmp_path / "s"
+    assert main(SMALL + ["--out", str(out)]) == 0
+    lock = out / ".lock"
+    lock.unlink()
+    (tmp_path / "elsewhere").mkdir()
+    target = tmp_path / "elsewhere" / "planted"
+    {"symbolic link": lambda: lock.symlink_to(target), "directory": lock.mkdir, "FIFO": lambda: os.mkfifo(lock)}[kind]()
+    before = _files(tmp_path)
+    done = subprocess.run([sys.executable, "-m", "validation.cli", *SMALL, "--out", str(out)], capture_output=True,
+                          text=True, timeout=60, env={**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])})
+    assert done.returncode == 2 and len(done.stderr.splitlines()) == 1, done.stderr
+    what = {"symbolic link": "a symbolic link", "directory": "a directory", "FIFO": "a FIFO (named pipe)"}[kind]
+    assert done.stderr.startswith(f"pcsuite: error: --out {out}: its .lock is {what}, not the lock file a sweep "
+                                  "creates"), done.stderr
+    assert not target.exists() and _files(tmp_path) == before
+
+
