@@ -12,6 +12,10 @@ from __future__ import annotations
 from ..errors import ParameterError
 from .local import Lost
 
+#: Seconds to reach a scheduler and hear its handshake (or --time-limit when shorter). Dask's own connect bounds
+#: the TCP connection only: a server that accepts and never answers held the client's first read forever.
+CONNECT_TIMEOUT_S = 10.0
+
 
 class DaskBackend:
     """Chunks on a Dask distributed cluster.
@@ -43,8 +47,10 @@ class DaskBackend:
         if isinstance(self.scheduler, Client):
             return self.scheduler
         if self._client is None:
+            timeout = _connect_timeout()
+            _handshake(self.scheduler, timeout)
             try:
-                self._client = Client(self.scheduler, timeout="10s")
+                self._client = Client(self.scheduler, timeout=f"{timeout}s")
             except OSError as exc:
                 raise ParameterError(f"scheduler: no Dask scheduler answers at {self.scheduler} ({exc})") from None
             except Exception as exc:    # something else answers there (an HTTP server: its bytes read as frame sizes)
@@ -88,6 +94,47 @@ class DaskBackend:
         finally:
             for future in pending:                           # interrupted: nothing keeps running for us
                 future.cancel()
+
+
+def _connect_timeout() -> float:
+    from ..limits import time_limit
+    return min(CONNECT_TIMEOUT_S, time_limit(CONNECT_TIMEOUT_S))
+
+
+def _handshake(address: str, timeout: float) -> None:
+    """Reach ``address`` (tcp://HOST:PORT) and hear Dask's handshake within ``timeout`` s each, or refuse in one
+    line. The probe runs in a thread of its own, whatever event loop the caller runs."""
+    if not address.startswith("tcp://"):
+        return
+    import asyncio
+    import socket
+    from concurrent.futures import ThreadPoolExecutor
+
+    from distributed.comm import connect
+    from distributed.comm.addressing import parse_address, parse_host_port
+    host, port = parse_host_port(parse_address(address)[1])
+    try:                                # a refused port is said at once (Dask's connect retries it until timeout)
+        socket.create_connection((host, port), timeout=timeout).close()
+    except TimeoutError:
+        raise ParameterError(f"scheduler: no Dask scheduler answered at {address} within {timeout:g} s (the connection "
+                             "was not accepted); check the address") from None
+    except OSError as exc:
+        raise ParameterError(f"scheduler: no Dask scheduler answers at {address} ({exc.strerror or exc})") from None
+
+    async def probe():
+        comm = await connect(address, timeout=timeout)
+        await comm.close()
+    try:
+        with ThreadPoolExecutor(1) as pool:
+            pool.submit(asyncio.run, asyncio.wait_for(probe(), timeout)).result()
+    except TimeoutError:
+        raise ParameterError(f"scheduler: no Dask scheduler answered at {address} within {timeout:g} s (the connection "
+                             "is accepted, the handshake never answered); check the address") from None
+    except OSError as exc:
+        raise ParameterError(f"scheduler: no Dask scheduler answers at {address} ({exc})") from None
+    except Exception as exc:        # something else answers there (an HTTP server: its bytes read as frame sizes)
+        raise ParameterError(f"scheduler: what answers at {address} is not a Dask scheduler "
+                             f"({type(exc).__name__}: {str(exc)[:120]})") from None
 
 
 __all__ = ["DaskBackend"]

@@ -383,3 +383,47 @@ def test_a_lock_that_is_not_a_regular_file_is_refused_and_nothing_is_created_whe
     assert not target.exists() and _files(tmp_path) == before
 
 
+def test_a_scheduler_that_accepts_and_never_answers_is_refused_within_the_connect_timeout(tmp_path):
+    """The handshake's read had no timeout: a server that accepts and stays silent held the sweep forever,
+    --time-limit included. Now: 10 s, or --time-limit when shorter."""
+    import os
+    import socket
+    import threading
+    from concurrent.futures import ThreadPoolExecutor
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen(16)
+    held = []
+
+    def accept():
+        while True:
+            try:
+                held.append(server.accept()[0])             # kept open, never written to
+            except OSError:
+                return
+    threading.Thread(target=accept, daemon=True).start()
+    address = f"tcp://127.0.0.1:{server.getsockname()[1]}"
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])}
+
+    def run(extra, out):
+        start = time.monotonic()
+        try:
+            done = subprocess.run([sys.executable, "-m", "validation.cli", "sweep", "buck", "--grid", "D=0.3:0.6:3",
+                                   "--no-progress", "--scheduler", address, "--out", str(out), *extra],
+                                  capture_output=True, text=True, env=env, timeout=90)
+        except subprocess.TimeoutExpired:
+            return "timeout", "", time.monotonic() - start
+        return done.returncode, done.stderr, time.monotonic() - start
+    try:
+        with ThreadPoolExecutor(2) as pool:
+            plain, limited = pool.map(run, [[], ["--time-limit", "2"]], [tmp_path / "a", tmp_path / "b"])
+    finally:
+        server.close()
+        for conn in held:
+            conn.close()
+    for (code, err, wall), seconds in ((plain, 10), (limited, 2)):
+        assert code == 2 and len(err.splitlines()) == 1, (code, err)
+        assert err == (f"pcsuite: error: scheduler: no Dask scheduler answered at {address} within {seconds} s (the "
+                       "connection is accepted, the handshake never answered); check the address\n"), err
+        assert wall < seconds + 15, wall
+    assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()
