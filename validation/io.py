@@ -6,7 +6,8 @@ moves anything it did not write, and a bad output path is refused with one line 
 - :func:`check_output_file` (``--out F.csv``, ``--plot``, ``--diagram``, ...): a new file, or an existing regular
   file (replaced atomically: that is what an output option means), in a directory pcsuite can write. A
   directory, a device (``/dev/null``), a FIFO, a socket or a symbolic link is refused, and so is a parent that
-  is not a writable directory (``/proc``, ``/dev/full/x``).
+  is missing or not a writable directory (``nodir/x.csv``, ``/proc``, ``/dev/full/x``). A path is shown as typed,
+  or quoted as repr quotes it when it holds a character that does not print (a newline, an ESC).
 - :func:`check_output_dir` (``pcsuite report --out``, ``gdcm-map --out``, ``bench --out``): a new or empty
   directory, or one holding nothing but an earlier output of the same command. A report directory carries
   :data:`MANIFEST` (every file it wrote, with sizes and SHA-256): it may be replaced only when it holds nothing
@@ -14,7 +15,8 @@ moves anything it did not write, and a bad output path is refused with one line 
   current directory or one of its ancestors, ``/``) is refused.
 - :func:`atomic_write_bytes` and :func:`atomic_directory` apply the same checks again at write time (a long
   run gives time for things to change) and write through a temporary named ``.NAME.PID.XXXXXXXX.tmp`` beside the
-  target. The writer holds an flock on its temporary; a temporary whose process is gone (``kill -9``) and which
+  target; :func:`atomic_write_files` writes a set of files (gdcm-map's table and plot) that lands together. A
+  file option's directory must exist: pcsuite does not create it. The writer holds an flock on its temporary; a temporary whose process is gone (``kill -9``) and which
   nobody holds is removed by the next write to the same target. Report swaps are serialised by an flock on the
   parent directory: concurrent reports into one directory each land whole, the last one stays.
 
@@ -39,6 +41,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from converters.errors import ParameterError
+from converters.validate import quoted
 
 #: The file a report directory carries: what pcsuite wrote there (relative path -> size and SHA-256).
 MANIFEST = ".pcsuite-report.json"
@@ -89,7 +92,7 @@ def _key(path: Path) -> str:
 
 
 def _output(path: Path) -> _Output:
-    return _OUTPUTS.get(_key(path)) or _Output(None, str(path))
+    return _OUTPUTS.get(_key(path)) or _Output(None, quoted(path))
 
 
 def _label(output: _Output) -> str:
@@ -108,17 +111,17 @@ def check_output_file(flag: str, path) -> None:
     if path is None:
         return
     path = Path(path)
-    output = _Output(flag, str(path))
+    output = _Output(flag, quoted(path))
     _OUTPUTS[_key(path)] = output
     _check_file(path, output)
-    _check_parent(path, output)
+    _check_parent(path, output, exists=True)
 
 
 def check_output_parent(flag: str, path) -> None:
     """Refuse, before a run, an output whose parent is not a directory pcsuite can write in (for an output that
     checks the rest itself: the sweep store). ``None`` passes."""
     if path is not None:
-        _check_parent(Path(path), _Output(flag, str(path)))
+        _check_parent(Path(path), _Output(flag, quoted(path)))
 
 
 def _kind(mode: int) -> str:
@@ -147,20 +150,25 @@ def _check_file(path: Path, output: _Output) -> None:
         raise ParameterError(f"{_label(output)}: {what}{hint} choose {_another(output)}")
 
 
-def _check_parent(path: Path, output: _Output, probe: bool = True) -> None:
-    """The nearest existing ancestor of ``path`` must be a directory pcsuite can create files in."""
+def _check_parent(path: Path, output: _Output, probe: bool = True, exists: bool = False) -> None:
+    """The nearest existing ancestor of ``path`` must be a directory pcsuite can create files in; with ``exists``
+    (a file option) that must be its own directory: a file is written where it is named, and a missing directory
+    is a typo more often than a wish (pcsuite does not create it)."""
     parent, mode = path.parent, None
     while mode is None:
         try:
             mode = os.stat(parent).st_mode
         except OSError as exc:
             if exc.errno not in (errno.ENOENT, errno.ENOTDIR):
-                raise ParameterError(f"{_label(output)}: cannot write in {parent} ({exc.strerror})") from None
+                raise ParameterError(f"{_label(output)}: cannot write in {quoted(parent)} ({exc.strerror})") from None
             if parent == parent.parent:
-                raise ParameterError(f"{_label(output)}: cannot write in {parent} ({exc.strerror})") from None
+                raise ParameterError(f"{_label(output)}: cannot write in {quoted(parent)} ({exc.strerror})") from None
             parent = parent.parent
     if not stat.S_ISDIR(mode):
-        raise ParameterError(f"{_label(output)}: cannot write in {parent} (not a directory)")
+        raise ParameterError(f"{_label(output)}: cannot write in {quoted(parent)} (not a directory)")
+    if exists and parent != path.parent:
+        raise ParameterError(f"{_label(output)}: its directory {quoted(path.parent)} does not exist; create it or "
+                             f"choose {_another(output)}")
     if probe:
         _probe(parent, output)
 
@@ -170,7 +178,7 @@ def _probe(directory: Path, output: _Output) -> None:
     try:
         fd, name = tempfile.mkstemp(prefix=f".pcsuite-probe.{os.getpid()}.", suffix=".tmp", dir=directory)
     except OSError as exc:
-        raise ParameterError(f"{_label(output)}: cannot write in {directory} "
+        raise ParameterError(f"{_label(output)}: cannot write in {quoted(directory)} "
                              f"(creating a file there fails: {exc.strerror})") from None
     os.close(fd)
     with contextlib.suppress(OSError):
@@ -179,9 +187,37 @@ def _probe(directory: Path, output: _Output) -> None:
 
 def atomic_write_bytes(path, data: bytes) -> Path:
     """Write ``data`` to a temporary file beside ``path`` (named with this process's id, flocked while written),
-    then rename it into place (mode 0666 & ~umask). The target must be a new or regular file in a writable
-    directory (checked again here); stale temporaries of dead writers to the same target are removed first."""
-    path = Path(path)
+    then rename it into place (mode 0666 & ~umask). The target must be a new or regular file in an existing,
+    writable directory (checked again here); stale temporaries of dead writers to the same target are removed
+    first."""
+    atomic_write_files({path: data})
+    return Path(path)
+
+
+def atomic_write_files(files: dict) -> list[Path]:
+    """Write several files (path -> bytes) so that they land together: every one is written to its temporary
+    first (:func:`atomic_write_bytes`), and only when all are written in full are they renamed into place. A
+    failure while writing (a full disk) leaves every target as it was: the earlier set, or none of the new
+    files; a rename that fails puts back the files already replaced."""
+    targets = [(Path(path), data) for path, data in files.items()]
+    for path, _ in targets:
+        _check_target(path)
+    staged: list[tuple[Path, str, int]] = []
+    try:
+        for path, data in targets:
+            staged.append(_stage(path, data))
+        for path, _, _ in staged:
+            _check_file(path, _output(path))                     # still not a directory, device, link...
+        _replace_all([(tmp, path) for path, tmp, _ in staged])
+    finally:
+        for _, tmp, fd in staged:
+            with contextlib.suppress(FileNotFoundError):
+                os.unlink(tmp)                                   # left only when not renamed into place
+            os.close(fd)
+    return [path for path, _ in targets]
+
+
+def _check_target(path: Path) -> None:
     output = _output(path)
     _check_file(path, output)
     guard = _OUTPUTS.get(_key(path.parent))
@@ -189,12 +225,24 @@ def atomic_write_bytes(path, data: bytes) -> Path:
         if path.name not in guard.names:
             raise ParameterError(f"{_label(guard)}: {path.name} is not one of its files ({', '.join(guard.names)})")
         _check_dir(path.parent, guard)
-    _make_parent(path, output)
+    _check_parent(path, output, probe=False, exists=True)      # a failing mkstemp says why
     _remove_stale(path.parent, path.name)
+
+
+def _failed(path: Path, exc: OSError) -> ParameterError:
+    """A write that failed, named by its option: a file option's, or its directory option's (gdcm-map, bench)."""
+    guard = _OUTPUTS.get(_key(path.parent))
+    if _key(path) not in _OUTPUTS and guard is not None and guard.names:
+        return ParameterError(f"{_label(guard)}: cannot write {quoted(path.name)} ({exc.strerror or exc})")
+    return ParameterError(f"{_label(_output(path))}: cannot write it ({exc.strerror or exc})")
+
+
+def _stage(path: Path, data: bytes) -> tuple[Path, str, int]:
+    """``data`` in full in a flocked temporary beside ``path``: (path, temporary, its open descriptor)."""
     try:
         fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.{os.getpid()}.", suffix=".tmp", dir=path.parent)
     except OSError as exc:
-        raise ParameterError(f"{_label(output)}: cannot write in {path.parent} ({exc.strerror})") from None
+        raise ParameterError(f"{_label(_output(path))}: cannot write in {quoted(path.parent)} ({exc.strerror})") from None
     try:
         fcntl.flock(fd, fcntl.LOCK_EX)
         with os.fdopen(fd, "wb", closefd=False) as handle:
@@ -202,17 +250,44 @@ def atomic_write_bytes(path, data: bytes) -> Path:
             handle.flush()
             os.fsync(handle.fileno())
         os.chmod(tmp, 0o666 & ~umask())
-        _check_file(path, output)                                # still not a directory, device, link...
-        os.replace(tmp, path)
     except BaseException as exc:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
-        if isinstance(exc, OSError) and not isinstance(exc, ParameterError):
-            raise ParameterError(f"{_label(output)}: cannot write it ({exc.strerror or exc})") from None
-        raise
-    finally:
         os.close(fd)
-    return path
+        if isinstance(exc, OSError):
+            raise _failed(path, exc) from None
+        raise
+    return path, tmp, fd
+
+
+def _replace_all(moves: list[tuple[str, Path]]) -> None:
+    """Rename each temporary onto its target; if one rename fails, the targets already replaced get their earlier
+    content back (kept as hard links until every rename is done)."""
+    import uuid
+    kept: list[tuple[Path, str | None]] = []        # (target, its earlier content's link, or None: it was new)
+    try:
+        for tmp, path in moves:
+            earlier = None
+            if len(moves) > 1 and os.path.lexists(path):      # named as a temporary: a kill leaves a stale one
+                earlier = str(path.parent / f".{path.name}.{os.getpid()}.{uuid.uuid4().hex[:8]}.tmp")
+                os.link(path, earlier)
+            try:
+                os.replace(tmp, path)
+            except OSError:
+                if earlier:
+                    os.unlink(earlier)
+                raise
+            kept.append((path, earlier))
+    except OSError as exc:
+        for path, earlier in reversed(kept):
+            with contextlib.suppress(OSError):
+                os.replace(earlier, path) if earlier else os.unlink(path)
+        raise _failed(moves[len(kept)][1], exc) from None
+    finally:
+        for _, earlier in kept:
+            if earlier:
+                with contextlib.suppress(FileNotFoundError):
+                    os.unlink(earlier)
 
 
 def atomic_write_text(path, text: str) -> Path:
@@ -224,7 +299,7 @@ def _make_parent(path: Path, output: _Output) -> None:
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
-        raise ParameterError(f"{_label(output)}: cannot create {path.parent} ({exc.strerror})") from None
+        raise ParameterError(f"{_label(output)}: cannot create {quoted(path.parent)} ({exc.strerror})") from None
 
 
 # --- leftovers of dead writers -------------------------------------------------------------------------------
@@ -314,7 +389,7 @@ def check_output_dir(flag: str | None, path, kind: str = "report", names: tuple 
     if path is None:
         return
     path = Path(path)
-    output = _Output(flag, str(path), kind, tuple(names))
+    output = _Output(flag, quoted(path), kind, tuple(names))
     _OUTPUTS[_key(path)] = output
     _check_dir_locked(path, output)
 
@@ -493,7 +568,7 @@ def atomic_directory(target, manifest: dict | None = None):
     try:
         staging = Path(tempfile.mkdtemp(prefix=f".{target.name}.{os.getpid()}.", suffix=".tmp", dir=parent))
     except OSError as exc:
-        raise ParameterError(f"{_label(output)}: cannot write in {parent} ({exc.strerror})") from None
+        raise ParameterError(f"{_label(output)}: cannot write in {quoted(parent)} ({exc.strerror})") from None
     hold = os.open(staging, os.O_RDONLY | os.O_DIRECTORY)
     try:
         fcntl.flock(hold, fcntl.LOCK_EX)               # a live writer's staging is never taken for a leftover
@@ -558,10 +633,17 @@ def locked_output_dir(path, kind: str, names: tuple):
     output = _Output(known.flag, known.shown, kind, tuple(names))
     _OUTPUTS[_key(path)] = output
     _check_dir(path, output)
+    made = [folder for folder in (path, *path.parents) if not os.path.lexists(folder)]
     try:
         path.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise ParameterError(f"{_label(output)}: cannot create it ({exc.strerror})") from None
-    with _locked(path, _label(output)):
-        _check_dir(path, output)
-        yield path
+    try:
+        with _locked(path, _label(output)):
+            _check_dir(path, output)
+            yield path
+    except BaseException:
+        for folder in made:                 # the directories made for a write that failed, when still empty
+            with contextlib.suppress(OSError):
+                os.rmdir(folder)
+        raise

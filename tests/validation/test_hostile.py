@@ -177,6 +177,15 @@ FUZZ = [
      "token '-1\\xa0000' at position 11 (line 6) is not a finite number"),
     ("dat-escape-in-name", ["lcp", "solve", "e\x1b[2J.dat"], {"e\x1b[2J.dat": "x\n"},
      "pcsuite: error: 'e\\x1b[2J.dat': token 'x' at position 1 (line 1) is not an integer (reading n)"),
+    # a file option's missing directory was created silently before; a path is shown quoted when it is not printable
+    ("out-missing-directory", ["simulate", "buck", "--periods", "2", "--out", "nodir/x.csv"], {},
+     "--out nodir/x.csv: its directory nodir does not exist"),
+    ("out-newline-in-path", ["simulate", "buck", "--periods", "2", "--out", "a\nb/x.csv"], {},
+     "--out 'a\\nb/x.csv': its directory 'a\\nb' does not exist"),
+    ("plot-escape-in-path", ["simulate", "buck", "--periods", "2", "--plot", "/proc/\x1b[2Jx.png"], {},
+     "--plot '/proc/\\x1b[2Jx.png': cannot write in /proc"),
+    ("netlist-missing-directory", ["netlist", "buck", "--out", "nodir/x.cir"], {},
+     "--out nodir/x.cir: its directory nodir does not exist"),
 ]
 
 

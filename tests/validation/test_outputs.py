@@ -296,6 +296,31 @@ def test_a_gdcm_map_directory_is_rewritten_only_while_it_holds_its_own_files(tmp
     assert code == 2 and "(it holds notes.txt)" in one_line(err) and tree(tmp_path) == before
 
 
+@pytest.mark.parametrize("earlier", [False, True], ids=["new directory", "earlier map"])
+def test_a_full_disk_leaves_neither_new_map_file_or_the_earlier_pair(tmp_path, capsys, monkeypatch, earlier):
+    """map.csv then map.png were each written atomically, so a disk that filled between them left a new map.csv
+    beside no map.png (or beside the earlier map.png). Both are now staged before either is put in place."""
+    import errno
+    out = tmp_path / "map"
+    argv = ["gdcm-map", "buck", "--size", "3", "3", "--no-spice", "--out", out]
+    if earlier:
+        assert cli(capsys, *argv[:3], "4", "4", *argv[5:])[0] == 0
+    before = tree(tmp_path)
+    real, calls = os.fsync, []
+
+    def full_on_the_second(fd):                         # the second file's data does not fit
+        calls.append(fd)
+        if len(calls) == 2:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return real(fd)
+    monkeypatch.setattr(os, "fsync", full_on_the_second)
+    code, out_text, err = cli(capsys, *argv)
+    lines = err.replace("\r", "\n").strip().splitlines()           # the map's progress bar, then the error
+    assert code == 2 and "Traceback" not in err
+    assert lines[-1] == f"pcsuite: error: --out {out}: cannot write map.png (No space left on device)", err
+    assert tree(tmp_path) == before                     # the earlier pair, or no directory at all
+
+
 def test_a_fixed_name_directory_is_checked_again_when_written(tmp_path):
     from validation.bench import OUT_FILES
     out = tmp_path / "bench"

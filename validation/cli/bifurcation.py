@@ -103,4 +103,5 @@ def _print(study, summary: dict, args) -> None:
               + (f"aperiodic from {onset:.5g}" if onset is not None else "periodic everywhere")
               + (f"; {diagram['errors']} values failed" if diagram["errors"] else ""))
         if args.diagram is not None:
-            print(f"wrote {args.diagram}")
+            from converters.validate import quoted
+            print(f"wrote {quoted(args.diagram)}")

@@ -34,7 +34,7 @@ def run(args) -> int:
     from converters.limits import check_memory
 
     from ..gdcm import dk_map, map_plot, map_summary
-    from ..io import atomic_write_bytes, check_output_dir, locked_output_dir
+    from ..io import atomic_write_files, check_output_dir, locked_output_dir
     check_output_dir("--out", args.out, "gdcm-map", OUT_FILES)         # before the run
     n_d, n_k = args.size
     for name, value in (("N_D", n_d), ("N_K", n_k)):
@@ -52,8 +52,8 @@ def run(args) -> int:
     if args.out is not None:
         table, picture = frame.drop(columns=["x0"], errors="ignore").to_csv(index=False).encode(), map_plot(frame)
         with locked_output_dir(args.out, "gdcm-map", OUT_FILES):     # checked again; two writers take turns
-            atomic_write_bytes(args.out / "map.csv", table)
-            atomic_write_bytes(args.out / "map.png", picture)
+            # the table and its plot land together: a full disk leaves the earlier pair, or neither new file
+            atomic_write_files({args.out / "map.csv": table, args.out / "map.png": picture})
     if args.json:
         print(json_text(summary))
     else:

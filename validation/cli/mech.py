@@ -105,7 +105,8 @@ def run_simulate(args) -> int:
               f"{summary['wall_s']:.3f} s; events: " + ", ".join(f"{k} {v}" for k, v in summary["events"].items()))
         print("modes (last time unit): " + ", ".join(f"{k} {v:.3f}" for k, v in summary["mode_fractions"].items()))
         if args.out is not None:
-            print(f"wrote {args.out}")
+            from converters.validate import quoted
+            print(f"wrote {quoted(args.out)}")
     return 0
 
 
@@ -194,7 +195,8 @@ def run_bifurcations(args) -> int:
     if rows is not None:
         print(f"diagram: {len(rows)} values; " + out["diagram"]["text"])
     if args.diagram is not None:
-        print(f"wrote {args.diagram}")
+        from converters.validate import quoted
+        print(f"wrote {quoted(args.diagram)}")
     return 0
 
 

@@ -51,5 +51,6 @@ def run(args) -> int:
         print(text, end="")
     else:
         atomic_write_text(args.out, text)
-        print(f"wrote {args.out} (run it: ngspice -b {args.out})")
+        from converters.validate import quoted
+        print(f"wrote {quoted(args.out)} (run it: ngspice -b {quoted(args.out)})")
     return 0

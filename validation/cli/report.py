@@ -73,7 +73,8 @@ def run(args) -> int:
     index = write_report(sections, out, label, options=options)
     failed = [s for s in sections if s.status == "fail"]
     skipped = [s for s in sections if s.status == "skipped"]
-    print(f"wrote {index} ({sum(s.status == 'pass' for s in sections)}/{len(sections)} sections pass"
+    from converters.validate import quoted
+    print(f"wrote {quoted(index)} ({sum(s.status == 'pass' for s in sections)}/{len(sections)} sections pass"
           + (f", {len(skipped)} skipped" if skipped else "") + (f", {len(failed)} FAIL" if failed else "") + ")")
     for section in failed:
         print(f"  failed: {section.title}: {section.why}")

@@ -129,6 +129,8 @@ def run(args) -> int:
     from ..io import check_output_parent; check_output_parent("--out", args.out)  # noqa: E702 (before the run)
     from converters.parallel import backend_for
 
+    from converters.validate import quoted
+
     from ..sweep import run_sweep, write_summary
     ensemble, points = build(args)
     check_workers(args.workers)
@@ -144,8 +146,8 @@ def run(args) -> int:
     except KeyboardInterrupt:
         from ..sweep import load_sweep
         stored = len(load_sweep(out)) if (out / "sweep.json").exists() else 0
-        print(f"pcsuite: interrupted: {stored:,} of {points.size:,} points are stored in {out}; run the same command "
-              "to compute the rest", file=sys.stderr)
+        print(f"pcsuite: interrupted: {stored:,} of {points.size:,} points are stored in {quoted(out)}; run the same "
+              "command to compute the rest", file=sys.stderr)
         return EXIT_INTERRUPTED
     finally:
         signal.signal(signal.SIGTERM, previous)
@@ -169,7 +171,7 @@ def run(args) -> int:
           f"{result.rate:,.0f} points/s)")
     for message, count in summary["failures"].items():
         print(f"  failed x{count}: {message}")
-    print(f"  dataset: {summary['dataset']}  (pandas.read_parquet)\n  plot:    {summary['summary_plot']}")
+    print(f"  dataset: {quoted(summary['dataset'])}  (pandas.read_parquet)\n  plot:    {quoted(summary['summary_plot'])}")
     if code:
         print(f"pcsuite: no point of the sweep succeeded ({points.size:,} failed); the reasons are above",
               file=sys.stderr)
