@@ -86,7 +86,7 @@ def duration(model: Model, p: dict, t_end=None, periods=None) -> float:
 
 def run_converter(name_or_model, params: dict | None = None, *, control: str = "pwm", method: str | Method = "lcp",
                   h=None, t_end=None, periods=None, steady: bool = False, steady_tol: float = 1e-6, x0=None,
-                  rtol=None, **options) -> Trajectory:
+                  rtol=None, output_step=None, **options) -> Trajectory:
     """Simulate a model (a converter under ``control``) with any method; returns a labelled Trajectory.
 
     Parameters
@@ -119,6 +119,13 @@ def run_converter(name_or_model, params: dict | None = None, *, control: str = "
         with every measure's error estimate below rtol; pcsuite picks the method and h (so neither ``method``
         nor ``h`` nor method options may be given). ``metadata['accuracy']`` holds each value, its
         ``error_estimate``, the method and h; the span returned (default ``STEADY_PERIODS``) starts on the orbit.
+    output_step : float, optional
+        Output spacing (s) of a run from rest, as SPICE's: before what the summary and the plot read (the model's
+        :meth:`~converters.models.base.Model.summary_from`: the last 20 periods, the sliding-mode window and the
+        one before it, every period after a step), the run keeps one sample per ``output_step``; from there on
+        every step. The run is simulated in chunks, so its memory is bounded by what it keeps, not by its steps.
+        Default: every step, or, for a run whose steps would not fit in the memory limit, the finest spacing whose
+        samples fit in half of it (``metadata['output_step']`` says which).
     """
     model = resolve_model(name_or_model, control)
     if params is not None and not isinstance(params, dict):
@@ -165,8 +172,14 @@ def run_converter(name_or_model, params: dict | None = None, *, control: str = "
         # periods: what the returned run spans; steady_periods: every period simulated to get there and it
         meta.update(periods=int(round(span / T)), steady_periods=int(round(simulated)), orbit=orbit.summary())
     else:
-        tr = _simulate_phases(model, p, method, span, x0)
+        if output_step is not None and (steady or rtol is not None):
+            raise ParameterError("output_step applies to a run from rest; --steady returns its periods on the orbit "
+                                 "at every step")
+        spacing, resolved = output_plan(model, p, method, span, x0, output_step)
+        tr = _simulate_phases(model, p, method, span, x0, spacing, resolved)
         meta.update(periods=int(round(span / T)) if model.periodic(p) else None)
+        if spacing is not None:
+            meta.update(output_step=spacing, resolved_from_s=tr.resolved_from)
         target = _step_target(model, p, method)
         if target is not None:
             meta["step_target"] = target
@@ -223,17 +236,79 @@ def _step_target(model: Model, p: dict, method: Method) -> float | None:
     return tr.mean("vout")
 
 
-def _simulate_phases(model: Model, p: dict, method: Method, t_end: float, x0) -> Trajectory:
+#: Steps one chunk of a run kept at an output spacing simulates at once (its memory before thinning: ~300 MB for
+#: a two-state converter's stepper).
+CHUNK_STEPS = 500_000
+
+
+def output_plan(model: Model, p: dict, method: Method, span: float, x0, output_step=None) -> tuple:
+    """(spacing, resolved_from) of a run from rest over [0, span]: the output spacing (s; None: every step) and
+    where every step is kept from (the model's ``summary_from``). Default spacing: none while the whole run fits
+    in the memory limit, else the finest multiple of the step whose samples fit in half of it. Refuses, before
+    the first step, a run whose kept samples would not fit."""
+    from .limits import check_memory, max_memory
+    resolved = model.summary_from(p, 0.0, span)
+    step = getattr(method, method.step_option, None) if method.step_option else None
+    if step is None:
+        if output_step is not None:
+            raise ParameterError(f"output_step needs a method with a fixed step or output spacing; --method "
+                                 f"{method.key} keeps its own points")
+        return None, resolved
+    whole = model.problem(p, span, x0)
+    estimate = method.memory_estimate(whole)
+    per_sample = estimate / method.samples(whole)
+    if output_step is None:
+        if estimate <= max_memory():
+            return None, resolved
+        tail = (span - resolved) / step * per_sample
+        check_memory(f"--method {method.key}: the last {span - resolved:.3g} s, what the summary and the plot read "
+                     f"at every {method.step_option} = {step:.3g} s,", 2.0 * tail,
+                     remedy="a larger --h, or a shorter --t-end")
+        head = (0.5 * max_memory() - tail) / per_sample              # samples left for the rest
+        spacing = step * max(1.0, float(np.ceil(resolved / max(head, 1.0) / step)))
+    else:
+        spacing = parse_value("output_step", output_step, "s")
+        if not step <= spacing <= span:
+            raise ParameterError(f"output_step must be in [{step:.3g}, {span:.3g}] s (the method's "
+                                 f"{method.step_option} and the run's length); got {spacing:g}")
+    check_memory(f"--method {method.key}: {span:.3g} s kept at output_step = {spacing:.3g} s before {resolved:.3g} s "
+                 "and at every step after it", (resolved / spacing + (span - resolved) / step) * per_sample,
+                 remedy="a larger --output-step, a larger --h, or a shorter --t-end")
+    return spacing, resolved
+
+
+def _simulate_phases(model: Model, p: dict, method: Method, t_end: float, x0, spacing: float | None = None,
+                     resolved: float = 0.0) -> Trajectory:
     """One simulation per phase between the model's step times (a load step), the state and the switching
-    law's memory carried across."""
+    law's memory carried across; with an output ``spacing``, each phase in chunks of ``CHUNK_STEPS`` steps, the
+    rows before ``resolved`` thinned to it as each chunk ends."""
     bounds = [0.0] + [t for t in model.step_times(p) if 0.0 < t < t_end] + [t_end]
     parts, state, initial = [], x0, None
     for a, b in zip(bounds[:-1], bounds[1:]):
-        problem = model.problem(p, b, state, t_start=a, initial=initial, **model.phase_options(p, a))
-        part = simulate(problem, method)
-        parts.append(part)
-        state, initial = part.x[-1], int(part.config[-1])
+        options = model.phase_options(p, a)
+        for c0, c1 in _chunks(a, b, method, spacing, model.period(p) if model.periodic(p) else np.inf):
+            part = simulate(model.problem(p, c1, state, t_start=c0, initial=initial, **options), method)
+            state, initial = part.x[-1], int(part.config[-1])
+            parts.append(part.thinned(spacing, resolved) if spacing is not None and c0 < resolved else part)
     return concatenate(parts)
+
+
+def _chunks(a: float, b: float, method: Method, spacing: float | None, period: float) -> list:
+    """[a, b] whole, or, for a run kept at an output spacing, in pieces of about CHUNK_STEPS of the method's steps:
+    whole periods where the run has a period and a starts on one (each chunk then starts on the grid of the run
+    whole, bit for bit), else a multiple of the step."""
+    if spacing is None:
+        return [(a, b)]
+    step = getattr(method, method.step_option)
+    if np.isfinite(period) and a == round(a / period) * period:
+        per = max(1, int(CHUNK_STEPS * step / period))
+        first = int(round(a / period))
+        edges = [a] + [(first + k * per) * period for k in range(1, int(np.ceil((b - a) / (per * period))) + 1)]
+    else:
+        length = CHUNK_STEPS * step
+        edges = [a + k * length for k in range(int(np.ceil((b - a) / length - 1e-9)) + 1)]
+    edges = [e for e in edges if e < b - 1e-9 * (b - a)] + [b]
+    return list(zip(edges[:-1], edges[1:]))
 
 
 def steady_state(model: Model, p: dict, method: Method, *, x0=None, warm_up: int = WARM_UP_PERIODS,
@@ -318,7 +393,7 @@ def run_summary(tr: Trajectory) -> dict:
         out["control"] = meta["control"]
     model, p = tr.labels.model, meta["params"]
     out.update(model.summary(tr, p))
-    for key in ("periods", "steady_periods"):
+    for key in ("periods", "steady_periods", "output_step", "resolved_from_s"):
         if meta.get(key) is not None:
             out[key] = meta[key]
     if "orbit" in meta:

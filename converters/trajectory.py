@@ -83,6 +83,9 @@ class Trajectory:
         ``conducting`` (N, k) bool: they take the place of the model's laws.
     period : float
         The switching period T (s) when there is one (windows of "the last m periods"); inf otherwise.
+    resolved_from : float
+        Every step is stored from this time on (s); before it only the output samples (:meth:`thinned`), and a
+        measure reaching before it is refused.
     """
 
     t: np.ndarray
@@ -106,6 +109,8 @@ class Trajectory:
     period: float = float("inf")
     general_solves: int = 0
     metadata: dict = field(default_factory=dict, compare=False)
+    #: Rows before this time were kept at an output spacing only (:meth:`thinned`): measures need every step.
+    resolved_from: float = float("-inf")
 
     # --- raw views -----------------------------------------------------------------------------------
 
@@ -215,6 +220,10 @@ class Trajectory:
     def _rows(self, t0: float, t1: float) -> np.ndarray:
         """Indices of the samples in [t0, t1]; at least the two around a window shorter than a step."""
         span = max(t1 - t0, 1e-300)
+        if t0 < self.resolved_from - 1e-9 * span:
+            raise SignalError(f"the window [{t0:.6g}, {t1:.6g}] s starts before {self.resolved_from:.6g} s, where this "
+                              "run kept its output samples only (--output-step): measures need every step; measure "
+                              "a later window, or run with a finer --output-step")
         # t is non-decreasing: the window's rows by bisection (a scan would cost O(N) per window)
         first = int(np.searchsorted(self.t, t0 - 1e-12 * span, side="left"))
         last = int(np.searchsorted(self.t, t1 + 1e-12 * span, side="right"))
@@ -334,6 +343,38 @@ class Trajectory:
         total = dt.sum()
         return {str(label): float(dt[labels == label].sum() / total) for label in sorted(set(labels))}
 
+    def thinned(self, spacing: float, until: float, origin: float = 0.0) -> "Trajectory":
+        """The run with its rows before ``until`` kept at ``spacing`` (s): the first sample at or after each
+        multiple of it from ``origin``, as SPICE's output step keeps points (the steps' own values, not
+        interpolated); every row from the last one before ``until`` on. Chunks of one run thinned with the same
+        origin keep one sample per slot across their joints (the first row, the joint :func:`concatenate` drops,
+        counts for its slot). Events keep their times and point at the kept row at or after their step. The exact
+        pieces of an event-driven run stay whole (they are few)."""
+        if not spacing > 0.0:
+            raise ValueError(f"spacing must be positive; got {spacing!r}")
+        t = self.t
+        heads = int(np.searchsorted(t, until, side="left"))          # rows before ``until``
+        slot = np.floor((t[:heads] - origin) / spacing + 1e-9)
+        keep = np.ones(t.size, dtype=bool)
+        keep[1:heads] = slot[1:] != slot[:-1]
+        resolved = self.resolved_from
+        if heads < t.size and heads > 0:          # the row before ``until`` too: a window starting there is whole
+            keep[heads - 1] = True
+            resolved = max(resolved, float(t[heads - 1]))
+        rows = np.flatnonzero(keep)
+        pick = (lambda a: None if a is None else a[rows])
+        columns = self.event_table()
+        if columns is not None:
+            import pandas as pd
+            columns = pd.DataFrame(columns).copy()
+            columns["step"] = np.minimum(np.searchsorted(rows, np.asarray(columns["step"], dtype=np.int64)),
+                                         rows.size - 1)
+        measured = {k: np.asarray(v)[rows] for k, v in self.measured.items()}
+        from dataclasses import replace
+        return replace(self, t=t[rows], x=self.x[rows], u=pick(self.u), y=pick(self.y), config=pick(self.config),
+                       relay=pick(self.relay), held=pick(self.held), event_columns=columns, measured=measured,
+                       resolved_from=resolved)
+
     # --- tables --------------------------------------------------------------------------------------
 
     def to_pandas(self, columns=None):
@@ -403,7 +444,8 @@ def concatenate(parts: list[Trajectory]) -> Trajectory:
                    relay=stack("relay"), held=stack("held"), steps=sum(p.steps for p in parts), wall_s=sum(p.wall_s for p in parts),
                    event_columns=pd.concat(events, ignore_index=True), exact=exact,
                    rule="linear" if first.rule == "exact" and exact is None else first.rule,
-                   general_solves=sum(p.general_solves for p in parts))
+                   general_solves=sum(p.general_solves for p in parts),
+                   resolved_from=max(p.resolved_from for p in parts))
 
 
 @dataclass(frozen=True)

@@ -139,14 +139,17 @@ def _step_sets(dt: np.ndarray, step_config: np.ndarray, h: float, n_configs: int
 
 
 def _period_grid(problem: LCSProblem, h: float):
-    """One period of a run that repeats it, from 0: (local grid [0, T] with the switching instants, each
-    step's configuration, each step's matrix set, set_configs, set_dts); None when the run does not repeat
-    a period of whole steps (no period, T not a whole number of steps, a start other than 0)."""
+    """One period of a run that repeats it, from a whole period m T: (local grid [0, T] with the switching
+    instants, each step's configuration, each step's matrix set, set_configs, set_dts); None when the run does
+    not repeat a period of whole steps (no period, T not a whole number of steps, a start other than m T: a run
+    kept in chunks of whole periods starts each on the same grid as the run whole)."""
     schedule = problem.switching
     T, n_configs = schedule.period, len(problem.configurations)
     per_period = T / h if np.isfinite(T) else 0.0
     steps = int(round(per_period))
-    if not np.isfinite(T) or steps < 1 or abs(per_period - steps) > 1e-9 * per_period or problem.t_span[0] != 0.0:
+    t0 = problem.t_span[0]
+    if (not np.isfinite(T) or steps < 1 or abs(per_period - steps) > 1e-9 * per_period
+            or t0 != round(t0 / T) * T):
         return None
     one = problem if problem.t_span == (0.0, T) else replace(problem, t_span=(0.0, T))
     local = time_grid(one, h)                                            # [0, T] with the breakpoints
@@ -155,15 +158,17 @@ def _period_grid(problem: LCSProblem, h: float):
     return local, local_config, local_which, set_configs, set_dts
 
 
-def _repeat_period(period, T: float, t1: float, h: float):
-    """(t, config, which, set_configs, set_dts) of the run over [0, t1] made of the period repeated (config:
-    the configuration at each grid point, :attr:`StepPlan.config`); a run that ends inside a step gets that
-    step's own matrix set (the last one). Each array is written once, in place (no temporaries of the run's
-    size: a steady-state point allocates little more than the run it returns)."""
+def _repeat_period(period, T: float, t1: float, h: float, t0: float = 0.0):
+    """(t, config, which, set_configs, set_dts) of the run over [t0, t1] (t0 a whole number of periods) made of
+    the period repeated (config: the configuration at each grid point, :attr:`StepPlan.config`); a run that
+    ends inside a step gets that step's own matrix set (the last one). Each array is written once, in place
+    (no temporaries of the run's size: a steady-state point allocates little more than the run it returns)."""
     local, local_config, local_which, set_configs, set_dts = period
-    periods, steps = int(np.ceil(t1 / T * (1.0 - 1e-12))), local.size - 1
+    first = int(round(t0 / T))
+    periods, steps = int(np.ceil((t1 - t0) / T * (1.0 - 1e-12))), local.size - 1
     grid = np.empty(periods * steps + 1)
-    np.add(np.arange(periods)[:, None] * T, local[None, :-1], out=grid[:-1].reshape(periods, steps))   # increasing
+    np.add((first + np.arange(periods))[:, None] * T, local[None, :-1],
+           out=grid[:-1].reshape(periods, steps))                                                        # increasing
     count = int(np.searchsorted(grid[:-1], t1 - 1e-3 * h))                   # the grid points before t1
     t = grid[:count + 1]
     t[count] = t1
@@ -185,8 +190,8 @@ def _repeat_period(period, T: float, t1: float, h: float):
 
 def _too_long(problem: LCSProblem, h: float) -> bool:
     """More than MAX_STEPS steps in the repeated grid (the general grid then refuses the run)."""
-    T, t1 = problem.switching.period, problem.t_span[1]
-    periods = int(np.ceil(t1 / T * (1.0 - 1e-12)))
+    T, (t0, t1) = problem.switching.period, problem.t_span
+    periods = int(np.ceil((t1 - t0) / T * (1.0 - 1e-12)))
     return periods * (int(round(T / h)) + len(problem.switching.starts)) > MAX_STEPS
 
 
@@ -212,7 +217,7 @@ def _plan(problem: LCSProblem, h: float, period=None):
         config[1:] = problem.switching.config_at(0.5 * (t[:-1] + t[1:]))
         config[0] = config[1]
         return (t, config, *_step_sets(np.diff(t), config[1:], h, len(problem.configurations)))
-    return _repeat_period(period, problem.switching.period, problem.t_span[1], h)
+    return _repeat_period(period, problem.switching.period, problem.t_span[1], h, problem.t_span[0])
 
 
 @dataclass(frozen=True)
@@ -255,7 +260,7 @@ class StepPlan:
         if self.period is None or _too_long(problem, self.method.h):
             return StepPlan.build(problem, self.method)
         t, config, which, set_configs, set_dts = _repeat_period(self.period, problem.switching.period, t_end,
-                                                                self.method.h)
+                                                                self.method.h, problem.t_span[0])
         mats = self.mats
         if len(set_configs) > len(mats):          # the run ends inside a step
             extra = step_matrices([problem.configurations[c] for c in set_configs[len(mats):]],

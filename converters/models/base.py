@@ -166,6 +166,13 @@ class Model(ABC):
     #: Periods the summary measures over (at most; a shorter run: all of it).
     SUMMARY_PERIODS = 10
 
+    def summary_from(self, p: dict, t_start: float, t_end: float) -> float:
+        """Where what a run's summary and plot read begins (s): its window and the window before it (the
+        accuracy check's transient); a run stored at an output spacing keeps every step from here on."""
+        if not self.periodic(p):
+            return t_start
+        return max(t_start, t_end - 2 * self.SUMMARY_PERIODS * self.period(p))
+
     def summary(self, tr, p: dict) -> dict:
         """The model's measures of a run for its JSON summary, over its last min(10, all) periods
         (``window_periods``): the mean output, every signal's mean, RMS, min, max and ripple
@@ -242,6 +249,10 @@ class Converter(Model):
     def labels(self, p: dict) -> Labels:
         return SteppedLabels(self, p) if "t_step" in p else Labels(self, p)
 
+    def summary_from(self, p: dict, t_start: float, t_end: float) -> float:
+        start = super().summary_from(p, t_start, t_end)        # the step response reads every period after it
+        return max(t_start, min(start, p["t_step"] - self.SUMMARY_PERIODS * self.period(p))) if "t_step" in p else start
+
     def window_power(self, tr, p: dict, t0: float, t1: float) -> dict:
         """:meth:`power` over [t0, t1] with the circuit in force: a window across the step is the energy-weighted
         sum of its two parts (each measured with its own R and Vin)."""
@@ -315,10 +326,10 @@ def step_response(tr, t_step: float, T: float, target: float | None = None) -> d
     """
     first = int(np.ceil((t_step - tr.t[0]) / T - 1e-9))
     count = int(np.floor((tr.t[-1] - tr.t[0]) / T + 1e-9))
-    starts = tr.t[0] + T * np.arange(count)
-    means = np.array([tr.mean("vout", t0=a, t1=a + T) for a in starts])
-    before = float(np.mean(means[max(0, first - 10):first])) if first > 0 else float("nan")
-    after = means[first:]
+    read_from = max(0, first - 10)                  # the 10 periods before the step, and every one after it
+    means = np.array([tr.mean("vout", t0=tr.t[0] + j * T, t1=tr.t[0] + (j + 1) * T) for j in range(read_from, count)])
+    before = float(np.mean(means[:first - read_from])) if first > 0 else float("nan")
+    after = means[first - read_from:]
     end = float(np.mean(after[-10:])) if len(after) else float("nan")
     final = end if target is None else float(target)
     change = final - before

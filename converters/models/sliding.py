@@ -159,6 +159,13 @@ class BoostSMC(Model):
             t0 = max(t0, p["t_step"])
         return t0
 
+    def summary_from(self, p: dict, t_start: float, t_end: float) -> float:
+        """The window, the window before it (the accuracy check's transient), and from the load step on (the
+        recovery time)."""
+        window = t_end - self.window_start(p, t_start, t_end)
+        start = t_end - 2 * window
+        return max(t_start, min(start, p["t_step"]) if "t_step" in p else start)
+
     def summary(self, tr, p: dict, window_s: float | None = None) -> dict:
         """Measures over the last ``window_s`` (default min(T_end / 4, 2 ms), after the load step): mean vout
         against Vref, every state's and signal's mean, RMS, min, max and ripple (``measurements``); hysteresis: the switching frequency against the prediction at the measured v;

@@ -43,6 +43,10 @@ def add(sub) -> None:
                      help="with --steady: relative distance to the orbit at which the steady state counts as reached "
                           "(default 1e-6)")
     add_spice_options(sim)
+    sim.add_argument("--output-step", default=None,
+                     help="output spacing in s, as SPICE's: one sample per OUTPUT_STEP before what the summary and "
+                          "the plot read (every step there); the run's memory is then bounded by its output (default: "
+                          "every step, or the finest spacing that fits in half the memory limit)")
     sim.add_argument("--out", type=given_path, default=None, help="waveform file, .csv or .parquet")
     sim.add_argument("--plot", type=given_path, default=None,
                      help="FILE.png or FILE.svg: the last periods' waveforms and the mode timeline")
@@ -65,6 +69,9 @@ def run(args) -> int:
     if spice_flags and args.method != "spice":
         raise ParameterError(f"ngspice options ({', '.join(spice_flags)}) need --method spice; got --method "
                              f"{args.method or 'lcp'}")
+    if args.output_step is not None and (args.steady or args.rtol is not None or args.method == "spice"):
+        raise ParameterError("--output-step applies to a run from rest with --method lcp or event (--steady and "
+                             "--rtol return their periods on the orbit at every step; ngspice keeps its own points)")
     if args.rtol is not None:
         given = [flag for flag, value in (("--method", args.method), ("--h", args.h), ("--theta", args.theta),
                                           ("--eps", args.eps), ("--solver-rtol", args.solver_rtol),
@@ -96,12 +103,13 @@ def run(args) -> int:
         tr = run_converter(args.converter, params, control=args.control, method=method, h=args.h,
                            t_end=args.t_end, periods=args.periods, steady=args.steady,
                            steady_tol=1e-6 if args.steady_tol is None else args.steady_tol,
-                           **options)
+                           output_step=args.output_step, **options)
         summary = run_summary(tr)
         summary["setup_s"] = setup_s
     if args.out is not None:
         write_frame(tr.waveforms(), args.out, meta={k: summary.get(k) for k in ("converter", "control", "method",
-                                                                                   "options") if k in summary})
+                                                                                   "options", "output_step",
+                                                                                   "resolved_from_s") if k in summary})
     if args.plot is not None:
         import io
 
@@ -247,6 +255,9 @@ def _print(summary: dict, tr, args) -> None:
         print(f"step at {step['t_step_s'] * 1e3:.6g} ms: vout {step['vout_before']:.6g} -> {step['vout_final']:.6g} V "
               f"({final}){over}, largest deviation {step['deviation_V']:.3g} V, {settling} (band +- "
               f"{step['band_V']:.3g} V)")
+    if "output_step" in summary:
+        print(f"kept every step from {summary['resolved_from_s'] * 1e3:.6g} ms (what the summary and the plot read); "
+              f"before it one sample per {summary['output_step']:.3g} s (--output-step)")
     if "mode_fractions" in summary:
         print("modes (last period): " + ", ".join(f"{k} {v:.6f}" for k, v in summary["mode_fractions"].items()))
     accuracy = summary.get("accuracy", {})
