@@ -105,6 +105,13 @@ def figure_png(fig) -> bytes:
     return buffer.getvalue()
 
 
+def runs_alone(builder):
+    """Mark a section builder whose measurement is wall time (returns it): :func:`validation.suite.run_suite` runs it
+    after the other jobs, with the machine to itself (two runs at once on shared cores distort each other's times)."""
+    builder.runs_alone = True
+    return builder
+
+
 def run_section(builder, title: str) -> Section:
     start = time.perf_counter()
     try:

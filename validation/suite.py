@@ -212,12 +212,21 @@ def _failed_job(item, message: str):
 
 def run_suite(suite: str, sections=(), workers: int = 2, progress: bool = True, scenes=None):
     """Run the suite's scenes (or ``scenes``, loaded by :func:`validation.scenes.load_scenes`: a user's files)
-    and extra report sections in parallel processes (each job's ngspice worker shut down after it); results in
+    and extra report sections in parallel processes (each job's ngspice worker shut down after it), then the
+    sections marked :func:`validation.report.runs_alone` one at a time, each in its own process; results in
     input order."""
     scenes = scenes_of(suite) if scenes is None else list(scenes)
     jobs = [("scene", s) for s in scenes] + [("section", sec) for sec in sections]
-    results = parallel_map(_job, jobs, workers=workers, progress=progress, label=f"suite {suite}",
-                           unit="job", finalize=close_spice_worker, on_lost=_failed_job)
+    alone = [kind == "section" and getattr(payload[1], "runs_alone", False) for kind, payload in jobs]
+    results: list = [None] * len(jobs)
+    for last, options in ((False, {"workers": workers, "label": f"suite {suite}"}),
+                          (True, {"workers": 1, "tasks_per_process": 1, "label": f"suite {suite}, timed alone"})):
+        where = [i for i, marked in enumerate(alone) if marked == last]
+        if where:
+            done = parallel_map(_job, [jobs[i] for i in where], progress=progress, unit="job",
+                                finalize=close_spice_worker, on_lost=_failed_job, **options)
+            for i, result in zip(where, done):
+                results[i] = result
     scene_results = [r for (kind, _), r in zip(jobs, results) if kind == "scene"]
     section_results = [r for (kind, _), r in zip(jobs, results) if kind == "section"]
     return scene_results, section_results
