@@ -11,7 +11,8 @@ measured side by side in this one run on this machine:
   * accuracy on request (``benchmarks/accuracy.py``): per case and R in {1e-3, 1e-5, 1e-7}, the time to meet
     R against the best hand-picked setting (target <= 3x) and against ngspice where it can reach R.
 
-Files go to reports/bench/ (or the directory given as the first argument); ``make report`` shows them.
+Files go to reports/bench/ (or the directory given as the first argument); ``make report`` then shows this full-size
+trade-off in place of the quick form it measures itself.
 """
 from __future__ import annotations
 

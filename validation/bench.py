@@ -4,7 +4,8 @@ Files (each written atomically): tradeoff.csv (one row per run), tradeoff_refere
 values), tradeoff_acceptance.csv (per case: ngspice default against the LCP stepper and the event
 method), tradeoff.png (Pareto plot), stiffness.csv (smoothing: stiffness against eps), stability.csv,
 stability_summary.csv, ill_posed.csv, and bench.json (date, versions, options, acceptance, counts).
-The validation report shows the newest of these when they exist (:mod:`validation.sections`).
+The default validation report measures both itself, the trade-off in its quick form; when this directory holds a
+full-size trade-off (``make bench``), the report shows that instead (:mod:`validation.sections`).
 """
 from __future__ import annotations
 
@@ -37,7 +38,8 @@ def read_csv(data: bytes) -> pd.DataFrame:
 
 def collect_tradeoff(quick: bool = False, spice: bool = True, periods: int | None = None,
                      progress: bool = True) -> tuple[dict, dict]:
-    """Run the trade-off: (files by name, summary). ``quick``: the DCM cases and a short sweep."""
+    """Run the trade-off: (files by name, summary). ``quick``: the DCM cases and a short sweep (the form the
+    default report measures itself)."""
     from .tradeoff import CASES, FULL, PERIODS, QUICK, acceptance, pareto_plot, stiffness_table, tradeoff_table
     start = time.perf_counter()
     cases = CASES[1::2] if quick else CASES
@@ -49,7 +51,8 @@ def collect_tradeoff(quick: bool = False, spice: bool = True, periods: int | Non
              "tradeoff_acceptance.csv": _csv(accept), "tradeoff.png": pareto_plot(runs),
              "stiffness.csv": _csv(stiffness)}
     summary = {"runs": len(runs), "failed_runs": int((runs["failure"] != "").sum()), "periods": periods,
-               "quick": quick, "spice": spice, "wall_s": time.perf_counter() - start,
+               "quick": quick, "spice": spice, "cases": [case.name for case in cases],
+               "wall_s": time.perf_counter() - start,
                "acceptance": accept.to_dict(orient="records")}
     return files, summary
 
@@ -116,6 +119,14 @@ def _read_json(path: Path) -> dict:
         return json.loads(path.read_text())
     except (OSError, ValueError):
         return {}
+
+
+def full_size(summary: dict) -> bool:
+    """Whether a saved trade-off summary is the full-size measurement (``make bench``): every case and the whole sweep,
+    with ngspice, over at least the default periods per run."""
+    from .tradeoff import PERIODS
+    return (summary.get("quick") is False and summary.get("spice") is True
+            and isinstance(summary.get("periods"), int) and summary["periods"] >= PERIODS)
 
 
 def read_bench(directory: Path = DEFAULT_OUT, part: str = "tradeoff") -> tuple[dict, dict] | None:

@@ -15,7 +15,7 @@ from converters.lcp.problems import problem_set  # noqa: E402
 from .defaults import K_RANGES  # noqa: E402
 from .core_checks import convergence_table, core_waveforms, observed_orders  # noqa: E402
 from .peer import METHODS, PEER_TOL, peer_directory, peer_table, solver_table  # noqa: E402
-from .report import Section, csv_bytes, esc, figure_png, table_html, url  # noqa: E402
+from .report import Section, csv_bytes, esc, figure_png, runs_alone, table_html, url  # noqa: E402
 
 
 def _pivot(rows: pd.DataFrame) -> pd.DataFrame:
@@ -182,12 +182,26 @@ TRADEOFF_TEXT = (
     "fastest event run below 1e-8 takes less time than that ngspice run.</p>")
 
 
-def _saved_note(kind: str, command: str) -> Section:
-    text = (f"<p>No saved {kind} results: run <code>{command}</code> (writes <code>reports/bench/</code>), "
-            "then <code>make report</code> shows them here, or <code>pcsuite report bench</code> runs them live "
-            "(quick sweep).</p>")
-    return Section(f"{kind[0].upper()}{kind[1:]}: not measured yet", text, ok=True, metrics={"measured": False},
-                   skipped=True, reason=f"no saved {kind} results: run {command}")
+def _sweep_size(sweep: dict) -> int:
+    """Runs per case of a trade-off sweep (validation.tradeoff.FULL or QUICK), ngspice included."""
+    return (len(sweep["thetas"]) * len(sweep["lcp_steps"]) + len(sweep["event_tols"]) + len(sweep["smooth"])
+            + len(sweep["spice"]))
+
+
+def tradeoff_form(runs: pd.DataFrame, meta: dict) -> str:
+    """What a trade-off measurement covered, for the reader: its form (quick or full size) and its size."""
+    from .tradeoff import CASES, FULL, PERIODS
+    cases = list(dict.fromkeys(runs["case"]))
+    per_case = int(runs.groupby("case").size().max()) if len(runs) else 0
+    size = (f"{len(runs)} runs, {per_case} settings for each of {len(cases)} of the {len(CASES)} cases "
+            f"({', '.join(cases)}), {meta.get('periods', 'an unknown number of')} periods each"
+            + (", without ngspice" if meta.get("spice") is False else ""))
+    full = (f"{len(CASES)} cases x {_sweep_size(FULL)} settings = {len(CASES) * _sweep_size(FULL)} runs of {PERIODS} "
+            "periods")
+    if meta.get("quick"):
+        return (f"Quick form: {size}. <code>make bench</code> measures the full size ({full}) and the next report "
+                "shows it.")
+    return f"Full size: {size}."
 
 
 def tradeoff_section(files: dict, meta: dict, source: str) -> Section:
@@ -202,7 +216,8 @@ def tradeoff_section(files: dict, meta: dict, source: str) -> Section:
     columns = ["case", "family", "setting", "wall_s", "error", "err_mean_vout", "err_rms_iL", "err_event_T"]
     failed = runs[runs["failure"].astype(object).fillna("").astype(str) != ""]
     ok = bool(len(accept)) and bool((accept["result"] == "pass").all())
-    text = (f"<p>{html.escape(source)}</p>" + TRADEOFF_TEXT.format(periods=meta.get("periods", "the same"))
+    text = (f"<p>{source} {tradeoff_form(runs, meta)}</p>"
+            + TRADEOFF_TEXT.format(periods=meta.get("periods", "the same"))
             + table_html(accept, "result", good=("pass",))
             + "<img src='tradeoff.png' alt='Pareto plot: error against wall time per case and method'>"
             + "<p>The exact references:</p>" + table_html(refs)
@@ -215,7 +230,8 @@ def tradeoff_section(files: dict, meta: dict, source: str) -> Section:
             + "<p>Every run: <a href='tradeoff.csv'>tradeoff.csv</a>; per case: "
               "<a href='tradeoff_acceptance.csv'>tradeoff_acceptance.csv</a>.</p>")
     metrics = {"runs": len(runs), "failed_runs": len(failed), "acceptance": accept.to_dict(orient="records"),
-               "date": meta.get("date", "")}
+               "date": meta.get("date", ""), "quick": bool(meta.get("quick")), "periods": meta.get("periods"),
+               "cases": runs["case"].nunique()}
     return Section("Speed-accuracy trade-off", text, dict(files), ok=ok, metrics=metrics)
 
 
@@ -247,7 +263,7 @@ def stability_section(files: dict, meta: dict, source: str) -> Section:
     ok = lcp_finite and all_refused
     flagged = table[table["verdict"] != "ok"]
     columns = ["vary", "value", "h", "method", "verdict", "energy_residual", "points", "wall_s", "error"]
-    text = (f"<p>{html.escape(source)}</p>" + STABILITY_TEXT + table_html(counts)
+    text = (f"<p>{source} The whole map: {len(table)} runs.</p>" + STABILITY_TEXT + table_html(counts)
             + f"<p>Runs not ok: {len(flagged)} of {len(table)}" + (":" if len(flagged) else ".") + "</p>"
             + (table_html(flagged[columns]) if len(flagged) else "") + STABILITY_NOTE
             + "<p>Ill-posed requests:</p>" + table_html(refused)
@@ -258,27 +274,40 @@ def stability_section(files: dict, meta: dict, source: str) -> Section:
     return Section("Numerical stability at the extremes", text, dict(files), ok=ok, metrics=metrics)
 
 
-def saved_bench_section(part: str) -> Section:
-    """The newest saved ``pcsuite bench`` results of one part, or a note saying how to make them."""
+def saved_bench_section(part: str) -> Section | None:
+    """The newest saved ``pcsuite bench`` results of one part as a section, or None when there are none."""
     from .bench import DEFAULT_OUT, read_bench
     saved = read_bench(DEFAULT_OUT, part)
     if saved is None:
-        return _saved_note("speed-accuracy trade-off" if part == "tradeoff" else "stability map",
-                           "make bench" if part == "tradeoff" else "pcsuite bench --only stability")
+        return None
     files, meta = saved
-    source = f"Saved by pcsuite bench on {meta.get('date', 'an unknown date')} ({DEFAULT_OUT})."
+    source = (f"Saved by pcsuite bench on {html.escape(str(meta.get('date', 'an unknown date')))} "
+              f"(<code>{html.escape(str(DEFAULT_OUT))}</code>).")
     build = tradeoff_section if part == "tradeoff" else stability_section
     return build(files, meta, source)
 
 
 def live_bench_section(part: str) -> Section:
-    """The part measured now (trade-off: the quick sweep)."""
+    """The part measured now: the trade-off in its quick form, the stability map whole (98 runs of 10 periods from
+    rest, each in its own process: about half a minute)."""
     from .bench import collect_stability, collect_tradeoff
     if part == "tradeoff":
         files, meta = collect_tradeoff(quick=True, progress=False)
     else:
         files, meta = collect_stability(progress=False)
-    return (tradeoff_section if part == "tradeoff" else stability_section)(files, meta, "Measured for this report.")
+    source = f"Measured for this report in {meta['wall_s']:.0f} s."
+    return (tradeoff_section if part == "tradeoff" else stability_section)(files, meta, source)
+
+
+def default_bench_section(part: str) -> Section:
+    """The default report's section of one part, always measured: the trade-off from a full-size ``make bench``
+    saved in reports/bench when there is one, else measured now in its quick form; the stability map measured now."""
+    if part == "tradeoff":
+        from .bench import DEFAULT_OUT, full_size, read_bench
+        saved = read_bench(DEFAULT_OUT, part)
+        if saved is not None and full_size(saved[1]):
+            return saved_bench_section(part)
+    return live_bench_section(part)
 
 
 # The bifurcation study: alone in its suite it may use every core for its diagram; in the default suite the
@@ -300,7 +329,7 @@ EXTRA_SECTIONS["mechanics"] = [
     ("Mechanics: the cam-follower's impact phases", partial(_mechanics, "cam_section")),
     ("Mechanics: two blocks on a belt", partial(_mechanics, "two_block_section"))]
 EXTRA_SECTIONS["default"] += [(_BIFURCATION_TITLE, partial(bifurcation_section, workers=1))]
-EXTRA_SECTIONS["default"] += [("Speed-accuracy trade-off", partial(saved_bench_section, "tradeoff")),
-                              ("Numerical stability at the extremes", partial(saved_bench_section, "stability"))]
-EXTRA_SECTIONS["bench"] = [("Speed-accuracy trade-off", partial(live_bench_section, "tradeoff")),
+EXTRA_SECTIONS["default"] += [("Speed-accuracy trade-off", runs_alone(partial(default_bench_section, "tradeoff"))),
+                              ("Numerical stability at the extremes", partial(default_bench_section, "stability"))]
+EXTRA_SECTIONS["bench"] = [("Speed-accuracy trade-off", runs_alone(partial(live_bench_section, "tradeoff"))),
                            ("Numerical stability at the extremes", partial(live_bench_section, "stability"))]

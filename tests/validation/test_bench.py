@@ -112,9 +112,72 @@ def test_bench_cli_writes_its_files_and_the_report_shows_them(tmp_path, monkeypa
     section = sections.saved_bench_section("tradeoff")
     assert section.title == "Speed-accuracy trade-off" and "tradeoff.png" in section.html
     assert section.metrics["runs"] == summary["tradeoff"]["runs"] and section.metrics["failed_runs"] == 0
-    assert sections.saved_bench_section("stability").metrics == {"measured": False}
+    assert (section.metrics["quick"], section.metrics["periods"], section.metrics["cases"]) == (True, 5, 3)
+    assert ("Quick form: 27 runs, 9 settings for each of 3 of the 6 cases (buck-dcm, boost-dcm, cuk-gdcm), 5 periods "
+            "each, without ngspice.") in section.html
+    assert sections.saved_bench_section("stability") is None
+    # a quick or partial run is not the full size the default report would show instead of measuring its own
+    assert not bench.full_size(json.loads((out / "bench.json").read_text())["tradeoff"])
+    assert bench.full_size({"quick": False, "spice": True, "periods": 200})
+    assert not bench.full_size({"quick": False, "spice": False, "periods": 200})
     index = write_report([section], tmp_path / "report", "t")
     for name in ("tradeoff.png", "tradeoff.csv", "tradeoff_acceptance.csv"):
         assert (index.parent / name).stat().st_size > 0
     assert main(["bench", "--periods", "1", "--out", str(out)]) == 2
     assert "periods must be an integer in [2, 100000]; got 1" in capsys.readouterr().err
+
+
+def test_the_default_report_measures_the_trade_off_and_the_stability_map_itself(tmp_path, monkeypatch, ngspice):
+    """Nothing saved by make bench (a fresh clone): both sections of the default suite measure now, none is skipped,
+    and the trade-off says it is the quick form and at what size. (Shrunk here: 5 periods, 3 settings per case, the
+    stability map over two extremes.)"""
+    from validation import bench, sections
+    monkeypatch.setattr(bench, "DEFAULT_OUT", tmp_path / "bench")
+    collect = bench.collect_tradeoff
+    monkeypatch.setattr(bench, "collect_tradeoff", lambda **kwargs: collect(**kwargs, periods=5))
+    monkeypatch.setattr(tradeoff, "QUICK", {"lcp_steps": (100,), "thetas": (0.5,), "event_tols": (1e-13,), "smooth": (),
+                                            "spice": (tradeoff.SPICE_DEFAULT,)})
+    cases = [c for c in stability.extreme_cases() if (c["vary"], c["value"]) in (("h", 0.5), ("R", 1e9))]
+    monkeypatch.setattr(stability, "extreme_cases", lambda: cases)
+    built = dict(sections.EXTRA_SECTIONS["default"])
+    trade = built["Speed-accuracy trade-off"]()
+    assert trade.status != "skipped" and trade.title == "Speed-accuracy trade-off"
+    assert (trade.metrics["runs"], trade.metrics["failed_runs"], trade.metrics["quick"], trade.metrics["cases"]) == (
+        9, 0, True, 3)
+    assert [row["case"] for row in trade.metrics["acceptance"]] == ["buck-dcm", "boost-dcm", "cuk-gdcm"]
+    assert ("Quick form: 9 runs, 3 settings for each of 3 of the 6 cases (buck-dcm, boost-dcm, cuk-gdcm), 5 periods "
+            "each. <code>make bench</code> measures the full size (6 cases x 40 settings = 240 runs of 200 periods) "
+            "and the next report shows it.") in trade.html
+    assert "Measured for this report in " in trade.html
+    stable = built["Numerical stability at the extremes"]()
+    assert stable.status == "pass" and stable.metrics["runs"] == 2 + 5 and stable.metrics["lcp_nan_inf"] == 0
+    assert stable.metrics["ill_posed_refused"] == len(stability.ILL_POSED)
+    assert "Measured for this report in " in stable.html and "The whole map: 7 runs." in stable.html
+    assert not (tmp_path / "bench").exists()                       # measured for the report, not saved
+
+
+def test_a_full_size_bench_saved_by_make_bench_refines_the_default_report(tmp_path, monkeypatch):
+    """The trade-off saved by a full-size pcsuite bench is shown (with its date and size) rather than measured."""
+    from validation import bench, sections
+    out = tmp_path / "bench"
+    out.mkdir()
+    runs = pd.DataFrame([{"case": case.name, "family": "LCP theta=1", "setting": f"h=T/{steps}", "wall_s": steps * 1e-5,
+                          "error": 1e-2 / steps, "failure": ""} for case in tradeoff.CASES for steps in (100, 1000)])
+    files = {"tradeoff.csv": runs, "tradeoff_acceptance.csv": pd.DataFrame([{"case": "buck-ccm", "result": "pass"}]),
+             "tradeoff_references.csv": pd.DataFrame([{"case": "buck-ccm"}]),
+             "stiffness.csv": pd.DataFrame([{"eps": 1e-3}])}
+    for name, frame in files.items():
+        frame.to_csv(out / name, index=False)
+    (out / "tradeoff.png").write_bytes(b"png")
+    (out / "bench.json").write_text(json.dumps({"tradeoff": {"quick": False, "spice": True, "periods": 200,
+                                                             "date": "2026-01-02 03:04:05 UTC"}}))
+    monkeypatch.setattr(bench, "DEFAULT_OUT", out)
+
+    def measured(**kwargs):
+        raise AssertionError("the saved full-size trade-off is shown, not measured again")
+    monkeypatch.setattr(bench, "collect_tradeoff", measured)
+    section = dict(sections.EXTRA_SECTIONS["default"])["Speed-accuracy trade-off"]()
+    assert section.status == "pass" and (section.metrics["quick"], section.metrics["cases"]) == (False, 6)
+    assert "Saved by pcsuite bench on 2026-01-02 03:04:05 UTC" in section.html
+    assert ("Full size: 12 runs, 2 settings for each of 6 of the 6 cases (buck-ccm, buck-dcm, boost-ccm, boost-dcm, "
+            "cuk-ccm, cuk-gdcm), 200 periods each.") in section.html

@@ -51,6 +51,50 @@ def test_every_default_scene_passes_and_the_header_names_the_versions(report):
     assert ",fail" not in summary and summary.count(",pass") >= len(scenes_of("default")) + 1
 
 
+def test_every_section_of_the_default_report_is_measured(report):
+    """None skipped: the trade-off (quick form, or the full size a make bench saved) and the stability map (whole)
+    are measured by the report itself."""
+    import json
+    metrics = json.loads((report.parent / "metrics.json").read_text())
+    statuses = {title: section["status"] for title, section in metrics["sections"].items()}
+    assert [title for title, status in statuses.items() if status not in ("pass", "fail")] == []
+    assert "skipped" not in metrics["verdict"]
+    trade = metrics["sections"]["Speed-accuracy trade-off"]
+    assert (trade["quick"], trade["runs"], trade["cases"], trade["periods"]) in ((True, 33, 3, 200), (False, 240, 6, 200))
+    assert trade["failed_runs"] == 0 and len(trade["acceptance"]) == trade["cases"]
+    stable = metrics["sections"]["Numerical stability at the extremes"]
+    assert (stable["runs"], stable["lcp_nan_inf"], stable["ill_posed_refused"]) == (98, 0, 6)
+    page = report.read_text()
+    assert ("Quick form: 33 runs, 11 settings for each of 3 of the 6 cases (buck-dcm, boost-dcm, cuk-gdcm), 200 periods "
+            "each." in page) == trade["quick"]
+
+
+def _logged(log, name):
+    """A section that notes its start and end in ``log`` (one line each, appended)."""
+    from validation.report import Section
+    with open(log, "a") as out:
+        out.write(f"start {name}\n")
+    with open(log, "a") as out:
+        out.write(f"end {name}\n")
+    return Section(name, f"<p>{name}</p>")
+
+
+def test_a_section_timed_by_wall_clock_runs_after_the_others_alone(tmp_path):
+    from functools import partial
+
+    from validation.report import runs_alone
+    from validation.suite import run_suite
+    log = tmp_path / "log"
+    sections = [("a", partial(_logged, log, "a")), ("timed", runs_alone(partial(_logged, log, "timed"))),
+                ("b", partial(_logged, log, "b")), ("c", partial(_logged, log, "c"))]
+    scenes, results = run_suite("t", sections, workers=2, progress=False, scenes=[])
+    assert scenes == [] and [s.title for s in results] == ["a", "timed", "b", "c"]
+    assert all(s.status == "pass" for s in results)
+    lines = log.read_text().splitlines()
+    assert lines[-2:] == ["start timed", "end timed"] and sorted(lines[:-2]) == sorted(
+        f"{when} {name}" for name in "abc" for when in ("start", "end"))
+
+
 def _chromium():
     binary, driver = shutil.which("chromium"), shutil.which("chromedriver")
     if not (binary and driver):

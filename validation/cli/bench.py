@@ -11,7 +11,8 @@ def _max_periods() -> int:
 
 def add(sub) -> None:
     bench = sub.add_parser("bench", help="the speed-accuracy trade-off of every method and the stability map")
-    bench.add_argument("--quick", action="store_true", help="trade-off: the DCM cases, a short sweep")
+    bench.add_argument("--quick", action="store_true",
+                       help="trade-off: the DCM cases, a short sweep (the form make report measures itself)")
     bench.add_argument("--no-spice", action="store_true", help="leave ngspice out")
     bench.add_argument("--only", choices=["tradeoff", "stability"], default=None)
     bench.add_argument("--periods", type=integer(2, _max_periods), default=None,
