@@ -42,7 +42,11 @@ def resolve_model(name_or_model, control: str = "pwm") -> Model:
         return get_model(name_or_model, control)
     if not isinstance(name_or_model, Model):
         from .models import CONVERTERS
-        raise ParameterError(f"the converter must be one of {', '.join(CONVERTERS)} or a Model; got {name_or_model!r}")
+        from .circuits import is_netlist
+        if is_netlist(name_or_model):
+            return get_model(name_or_model, control)
+        raise ParameterError(f"the converter must be one of {', '.join(CONVERTERS)}, a netlist FILE.cir or a Model; "
+                             f"got {name_or_model!r}")
     return name_or_model
 
 
@@ -81,6 +85,8 @@ def duration(model: Model, p: dict, t_end=None, periods=None) -> float:
         if not model.periodic(p):
             raise ParameterError(f"--periods does not apply to {model.key} (no fixed period); use --t-end")
         return periods * model.period(p)
+    if hasattr(model, "default_duration"):          # a netlist: the .tran it states
+        return model.default_duration(p)
     return DEFAULT_PERIODS * model.period(p) if model.periodic(p) else DEFAULT_AUTONOMOUS_T_END
 
 

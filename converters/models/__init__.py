@@ -25,11 +25,18 @@ def get_converter(name: str) -> Converter:
     try:
         return CONVERTERS[name]
     except (KeyError, TypeError):          # TypeError: an unhashable name (a list)
-        raise ParameterError(f"CONVERTER must be one of {', '.join(CONVERTERS)}; got {name!r}") from None
+        raise ParameterError(f"CONVERTER must be one of {', '.join(CONVERTERS)} or a netlist FILE.cir; got {name!r}") from None
 
 
 def get_model(name: str, control: str = "pwm") -> Model:
-    """The model of converter ``name`` under ``control``; errors name the valid choices."""
+    """The model of converter ``name`` under ``control``, or of the netlist file ``name`` names (``FILE.cir``:
+    :class:`converters.circuits.Circuit`); errors name the valid choices."""
+    from ..circuits.model import is_netlist, load
+    if is_netlist(name):
+        if control != "pwm":
+            raise ParameterError(f"--control {control} applies to the built-in converters; a netlist states its own "
+                                 f"drives (got {str(name)!r})")
+        return load(name)
     get_converter(name)
     if not isinstance(control, str):
         raise ParameterError(f"control must be one of {', '.join(CONTROLS)}; got {control!r}")

@@ -1,0 +1,628 @@
+"""A netlist compiled into a linear complementarity system: modified nodal analysis per switch configuration.
+
+Per configuration (which switches are closed, which level each piecewise-constant source holds), the circuit
+is a resistive network once each capacitor is a voltage source at its state, each inductor a current source
+at its state and each ideal diode a port (Acary, Bonnefon and Brogliato, "Nonsmooth Modeling and Simulation
+for Switched Circuits", Springer 2011, ch. 2). Modified nodal analysis solves it for every node voltage and
+branch current as a linear function of (x, u, the sources): the capacitors' currents and the inductors'
+voltages give x' = A x + B u + E, the ports y = C x + D u + F, and every other quantity a signal.
+
+The port of each diode is chosen per configuration: u = i_D (a current source; y = -v_D) where the network
+leaves its current free, u = -v_D (a voltage source; y = i_D) where an inductor or another port fixes it
+(the choice made by hand for the built-in converters). A configuration the network cannot solve is refused
+naming the elements: a loop of voltage sources, capacitors and closed switches (their voltages are not
+independent), a cutset of inductors and current sources (a current interrupted with no path), a node with
+no path to ground. Ideal diodes whose ports are the same (in parallel, or in series with nothing between)
+give an LCP without a unique solution and are refused too.
+
+Switches are ideal (closed: a 0 V branch, or ``RON`` when its model gives one; open: no branch); a diode's
+model ``RS`` is a series resistance. A switch whose control voltage is a combination of independent sources
+(a PULSE gate) is driven by a time schedule: its threshold crossings with the model's ``VT`` +- ``VH``
+(hysteresis), located exactly on the piecewise-linear waveform; a PULSE source in the power circuit switches
+between its two levels at the middle of its edges.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from fractions import Fraction
+
+import numpy as np
+
+from ..problems import Configuration, Schedule
+from .netlist import Element, Netlist, NetlistError, Pulse, Pwl, Sin, with_models
+
+#: The diode's port: a current source (u = i_D, y = -v_D) or a voltage source (u = -v_D, y = i_D).
+CURRENT, VOLTAGE = "current", "voltage"
+
+
+@dataclass(frozen=True)
+class Compiled:
+    """The LCS of a netlist: configurations, the schedule, names, and each configuration's signal maps."""
+
+    configurations: tuple
+    schedule: Schedule
+    state_names: tuple               # "v(c1)", "i(l1)" (capacitor voltages and inductor currents)
+    pair_names: tuple                # diode names ("d1"); "none" for a circuit without diodes
+    pair_currents: tuple             # per configuration, per pair: u is the diode current
+    switch_names: tuple
+    closed: tuple                    # per configuration: which switches are closed
+    signal_names: tuple              # "v(node)", "i(element)"
+    signal_maps: tuple               # per configuration: (Sx (S, n), Su (S, k), s0 (S,))
+    period: float
+    x0: np.ndarray
+    units: dict = field(default_factory=dict)
+
+
+def compile_netlist(netlist: Netlist) -> Compiled:
+    """The LCS of ``netlist`` (its values already final: overrides applied by the reader)."""
+    return _Compiler(with_models(netlist)).run()
+
+
+class _Compiler:
+    def __init__(self, netlist: Netlist):
+        self.nl = netlist
+        self.path = netlist.path
+        els = netlist.elements
+        self.by_kind = {k: [e for e in els if e.kind == k] for k in "RLCKVIEGFHDSW"}
+        names = [e.name for e in els]
+        duplicate = next((n for n in names if names.count(n) > 1), None)
+        if duplicate:
+            first = [e for e in els if e.name == duplicate][1]
+            raise self.error(first, f"{first.title}: the name is used twice")
+        for e in els:
+            if e.kind == "W":
+                raise self.error(e, f"{e.title}: current-controlled switches are not compiled yet (their law is a "
+                                    "state-driven one); drive the switch with a PULSE source (S)")
+            if e.kind in "VI" and isinstance(e.waveform, (Sin, Pwl)):
+                kind = "SIN" if isinstance(e.waveform, Sin) else "PWL"
+                raise self.error(e, f"{e.title}: a {kind} source is not compiled yet (an LCS input here is piecewise "
+                                    "constant: DC or PULSE); a square wave is PULSE(-V V ...)")
+            if e.kind in "FHW":
+                ctrl = next((v for v in self.by_kind["V"] if v.name == e.control[0]), None)
+                if ctrl is None:
+                    raise self.error(e, f"{e.title}: its controlling source {e.control[0].upper()} is not a V source "
+                                        "of the netlist")
+            if e.kind == "K":
+                for name in e.control:
+                    if not any(l.name == name for l in self.by_kind["L"]):
+                        raise self.error(e, f"{e.title}: {name.upper()} is not an inductor of the netlist")
+        if netlist.tran is None:
+            raise NetlistError(f"{self.path}: no .tran (pcsuite and ngspice both run the transient it states)")
+        nodes = [n for n in netlist.nodes if n != "0"]
+        if "0" not in netlist.nodes:
+            raise NetlistError(f"{self.path}: no ground node (0)")
+        self.nodes = nodes
+        self.node_index = {n: i for i, n in enumerate(nodes)}
+        self.capacitors, self.inductors = self.by_kind["C"], self.by_kind["L"]
+        self.diodes, self.switches = self.by_kind["D"], self.by_kind["S"]
+        self.sources = self.by_kind["V"] + self.by_kind["I"]
+        self.n = len(self.capacitors) + len(self.inductors)
+        if self.n == 0:
+            raise NetlistError(f"{self.path}: no capacitor or inductor: the circuit has no state")
+        self.k = max(1, len(self.diodes))
+        # every diode's series resistance as an inner node and a resistor
+        self.diode_rs = {d.name: self.nl.models[d.model].params.get("RS", 0.0) for d in self.diodes}
+        for d in self.diodes:
+            if self.diode_rs[d.name] < 0:
+                raise self.error(d, f"{d.title}: model {d.model} RS must be >= 0")
+            self.node_index.setdefault(f"{d.name}#a", len(self.node_index)) if self.diode_rs[d.name] else None
+        self.switch_ron = {s.name: self.nl.models[s.model].params.get("RON", 0.0) for s in self.switches}
+        self.mutual = self.inductance_matrix()
+
+    def error(self, element: Element, what: str) -> NetlistError:
+        return NetlistError(f"{self.path}:{element.line}: {what}")
+
+    # --- the inductance matrix (K couplings) -------------------------------------------------------------------
+
+    def inductance_matrix(self) -> np.ndarray:
+        m = len(self.inductors)
+        L = np.diag([l.value for l in self.inductors]).astype(float)
+        index = {l.name: i for i, l in enumerate(self.inductors)}
+        for k in self.by_kind["K"]:
+            a, b = (index[name] for name in k.control)
+            if a == b:
+                raise self.error(k, f"{k.title}: couples {k.control[0].upper()} with itself")
+            L[a, b] = L[b, a] = k.value * math.sqrt(L[a, a] * L[b, b])
+        if m and np.linalg.eigvalsh(L).min() <= 1e-12 * np.abs(L).max():
+            couplings = ", ".join(k.name.upper() for k in self.by_kind["K"])
+            raise NetlistError(f"{self.path}: the coupled inductances ({couplings}) are not positive definite (a "
+                               "coupling of 1 makes the currents dependent: use a coupling below 1)")
+        return L
+
+    # --- drives and the schedule -------------------------------------------------------------------------------
+
+    def run(self) -> Compiled:
+        period = self.period()
+        drives = {s.name: self.switch_drive(s) for s in self.switches}
+        power = [s for s in self.sources if isinstance(s.waveform, Pulse) and self.in_power_circuit(s)]
+        for s in power:
+            if not math.isfinite(s.waveform.per):
+                raise self.error(s, f"{s.title}: a single pulse in the power circuit: give it a period (PER)")
+        starts, keys = self.schedule_keys(period, drives, power)
+        distinct = list(dict.fromkeys(keys))
+        configs, pair_currents, closed, maps = [], [], [], []
+        for key in distinct:
+            switch_state = dict(zip([s.name for s in self.switches], key[0]))
+            levels = dict(zip([s.name for s in power], key[1]))
+            config, forms, signals = self.configuration(switch_state, levels)
+            configs.append(config)
+            pair_currents.append(tuple(f == CURRENT for f in forms))
+            closed.append(tuple(key[0]))
+            maps.append(signals)
+        index = [distinct.index(k) for k in keys]
+        merged_starts, merged = [], []
+        for t, c in zip(starts, index):
+            if not merged or merged[-1] != c:
+                merged_starts.append(t)
+                merged.append(c)
+        if len(merged) > 1 and merged[0] == merged[-1] and math.isfinite(period):
+            merged_starts, merged = merged_starts[:-1], merged[:-1]      # the last slot runs into the next period
+        schedule = (Schedule(period=period, starts=tuple(merged_starts), configs=tuple(merged))
+                    if math.isfinite(period) and len(merged) > 1 else Schedule.constant(merged[0]))
+        state_names = tuple(f"v({c.name})" for c in self.capacitors) + tuple(f"i({l.name})" for l in self.inductors)
+        return Compiled(tuple(configs), schedule, state_names,
+                        tuple(d.name for d in self.diodes) or ("none",), tuple(pair_currents),
+                        tuple(s.name for s in self.switches), tuple(closed), self.signal_names(), tuple(maps),
+                        period if len(merged) > 1 else math.inf, self.initial_state(), self.units())
+
+    def period(self) -> float:
+        """The common period of the PULSE sources (their least common multiple), inf without one."""
+        periods = [s.waveform.per for s in self.sources if isinstance(s.waveform, Pulse) and math.isfinite(s.waveform.per)]
+        for s in self.sources:
+            w = s.waveform
+            if isinstance(w, Pulse) and not math.isfinite(w.per) and w.td + w.tr + w.pw + w.tf < math.inf:
+                raise self.error(s, f"{s.title}: a single pulse (no period): the schedule needs a periodic PULSE "
+                                    "(give PER)")
+            if isinstance(w, Pulse) and math.isfinite(w.per) and w.td >= w.per:
+                raise self.error(s, f"{s.title}: a PULSE delay TD = {w.td:g} s of a whole period ({w.per:g} s) or "
+                                    "more: the waveform is not periodic from t = 0")
+        if not periods:
+            return math.inf
+        base = max(periods)
+        fractions = [Fraction(p / base).limit_denominator(1000) for p in periods]
+        for p, f in zip(periods, fractions):
+            if abs(float(f) * base - p) > 1e-9 * p:
+                raise NetlistError(f"{self.path}: the PULSE periods {sorted(set(periods))} s have no common period")
+        lcm_denominator = math.lcm(*[f.denominator for f in fractions])
+        numerators = [f.numerator * lcm_denominator // f.denominator for f in fractions]
+        common = math.lcm(*numerators) / lcm_denominator
+        return base * common
+
+    def in_power_circuit(self, source: Element) -> bool:
+        """False for a gate driver: a source whose nodes reach, through resistors and other sources, only switch
+        control terminals and ground (its value then decides when switches close, not the circuit's dynamics)."""
+        power = {n for e in self.nl.elements if e.kind in "LCDSEGFH" for n in e.nodes[:2]}
+        power |= {n for e in self.by_kind["I"] for n in e.nodes}
+        seen, todo = set(), [n for n in source.nodes if n != "0"]
+        while todo:
+            node = todo.pop()
+            if node in seen:
+                continue
+            seen.add(node)
+            if node in power:
+                return True
+            for e in self.nl.elements:
+                if e.kind in "RV" and node in e.nodes:
+                    todo += [m for m in e.nodes if m != "0" and m not in seen]
+        return False
+
+    def switch_drive(self, switch: Element) -> dict:
+        """The control voltage V(nc+) - V(nc-) as {source name: coefficient}: it must be fixed by sources alone."""
+        a, b = switch.nodes[2], switch.nodes[3]
+        solution = None
+        for closed in (False, True):
+            try:
+                solution = self.network({s.name: closed for s in self.switches}, {})[0]
+                break
+            except NetlistError:
+                continue
+        if solution is None:
+            raise self.error(switch, f"{switch.title}: its control nodes {a} and {b} cannot be solved for (the "
+                                     "network cannot be solved with every switch open, nor closed)")
+        row = solution.voltage(a) - solution.voltage(b)
+        scale = max(np.abs(row).max(initial=0.0), 1e-300)
+        if np.abs(row[:self.n + self.k]).max(initial=0.0) > 1e-12 * scale:
+            raise self.error(switch, f"{switch.title}: its control voltage v({a}) - v({b}) depends on the circuit's "
+                                     "states: state-driven switching from a netlist is not compiled yet; drive it "
+                                     "with a PULSE source")
+        return {s.name: row[self.n + self.k + i] for i, s in enumerate(self.sources) if row[self.n + self.k + i] != 0.0}
+
+    def schedule_keys(self, period: float, drives: dict, power: list):
+        """The instants in [0, T) where a switch or a power source changes, and the key of each interval:
+        ((switch closed...), (source level index...))."""
+        span = period if math.isfinite(period) else 1.0
+        times = {0.0}
+        waveforms = {}
+        for name, coefficients in drives.items():
+            model = self.nl.models[next(s for s in self.switches if s.name == name).model]
+            vt, vh = model.params.get("VT", 0.0), abs(model.params.get("VH", 0.0))
+            waveforms[name] = ("switch", coefficients, vt, vh)
+        for s in power:
+            waveforms[s.name] = ("level", s.waveform)
+        events = []
+        for name, spec in waveforms.items():
+            if spec[0] == "switch":
+                events.append(self.switch_events(name, spec[1], spec[2], spec[3], period))
+            else:
+                events.append(self.level_events(spec[1], period))
+        for changes in events:
+            times.update(t for t, _ in changes[1])
+        starts = sorted(t for t in times if 0.0 <= t < span * (1 - 1e-12))
+        keys = []
+        for t in starts:
+            values = []
+            for initial, changes in events:
+                state = initial
+                for when, value in changes:
+                    if when <= t * (1 + 1e-15) + 1e-300:
+                        state = value
+                values.append(state)
+            switches = tuple(bool(v) for v in values[:len(drives)])
+            levels = tuple(int(v) for v in values[len(drives):])
+            keys.append((switches, levels))
+        return starts, keys
+
+    def waveform_value(self, coefficients: dict, t: np.ndarray) -> np.ndarray:
+        total = np.zeros_like(t)
+        for name, c in coefficients.items():
+            total += c * _value(next(s for s in self.sources if s.name == name).waveform, t)
+        return total
+
+    def corners(self, coefficients: dict, period: float) -> np.ndarray:
+        points = [0.0]
+        for name in coefficients:
+            w = next(s for s in self.sources if s.name == name).waveform
+            if isinstance(w, Pulse):
+                per = w.per if math.isfinite(w.per) else period
+                for m in range(int(math.ceil(2 * period / per)) + 1):
+                    base = w.td + m * per
+                    points += [base, base + w.tr, base + w.tr + w.pw, base + w.tr + w.pw + w.tf]
+        points = np.unique(np.array([p for p in points if 0.0 <= p <= 2 * period]))
+        return points
+
+    def switch_events(self, name: str, coefficients: dict, vt: float, vh: float, period: float):
+        """(state at t = 0 on the periodic orbit, [(t in [0, T), closed)]) from the crossings of the control
+        voltage with VT + VH (closing) and VT - VH (opening)."""
+        switch = next(s for s in self.switches if s.name == name)
+        if not math.isfinite(period):
+            value = float(self.waveform_value(coefficients, np.array([0.0]))[0])
+            if abs(value - vt) <= vh:
+                raise self.error(switch, f"{switch.title}: its DC control {value:g} V lies inside the hysteresis "
+                                         f"band VT +- VH = {vt:g} +- {vh:g} V: its state is not defined")
+            return value > vt, []
+        corners = self.corners(coefficients, period)
+        values = self.waveform_value(coefficients, corners)
+        on, off = vt + vh, vt - vh
+        state = values[0] > vt
+        changes = []
+        for (t0, v0), (t1, v1) in zip(zip(corners[:-1], values[:-1]), zip(corners[1:], values[1:])):
+            target = off if state else on
+            crossing = (v1 < off) if state else (v1 > on)
+            if crossing:
+                t = t0 + (target - v0) / (v1 - v0) * (t1 - t0) if v1 != v0 else t1
+                state = not state
+                changes.append((t, state))
+        # the state at the start of the second period is the periodic one
+        initial = next((s for t, s in reversed(changes) if t <= period * (1 + 1e-12)), values[0] > vt)
+        inside = [(t - period, s) for t, s in changes if period * (1 - 1e-12) < t < 2 * period * (1 - 1e-12)]
+        if not any(True for _ in changes):
+            value = float(values[0])
+            if abs(value - vt) <= vh:
+                raise self.error(switch, f"{switch.title}: its control never leaves the hysteresis band")
+        return initial, [(max(t, 0.0), s) for t, s in inside]
+
+    def level_events(self, w: Pulse, period: float):
+        """(level at t = 0 on the periodic orbit, [(t in [0, T), level)]): a power PULSE holds v1 (level 0) or v2
+        (level 1), changing at the middle of its edges."""
+        per = w.per
+        one = sorted([((w.td + w.tr / 2) % per, 1), ((w.td + w.tr + w.pw + w.tf / 2) % per, 0)])
+        initial = one[-1][1]                        # the level the period ends with holds through t = 0
+        inside = [(t + m * per, level) for m in range(int(round(period / per))) for t, level in one]
+        return initial, sorted(inside)
+
+    # --- one configuration ---------------------------------------------------------------------------------
+
+    def network(self, switch_state: dict, levels: dict):
+        """(the solved network, the port forms) of one configuration: every diode a current port, but those the
+        network then cannot solve for (an inductor or another port fixes their current), which are voltage ports."""
+        forms = [CURRENT] * len(self.diodes)
+        nullity = _Network(self, switch_state, levels, forms).nullity()
+        for i in range(len(self.diodes)):
+            if nullity == 0:
+                break
+            forms[i] = VOLTAGE
+            trial = _Network(self, switch_state, levels, forms).nullity()
+            if trial < nullity:
+                nullity = trial
+            else:
+                forms[i] = CURRENT
+        return _Network(self, switch_state, levels, forms).solve(), forms
+
+    def configuration(self, switch_state: dict, levels: dict):
+        """(Configuration, port forms, signal maps) of one configuration."""
+        solution, forms = self.network(switch_state, levels)
+        config, signals = self.lcs(solution, forms, switch_state)
+        self.check_unique_ports(config, switch_state)
+        return config, forms, signals
+
+    def lcs(self, solution, forms, switch_state):
+        n, k = self.n, self.k
+        dx = solution.derivatives()                       # (n, n + k + sources)
+        ports = solution.ports()                          # (k, n + k + sources)
+        s = self.source_values(solution.levels)
+        A, B, E = dx[:, :n], dx[:, n:n + k], dx[:, n + k:] @ s
+        C, D, F = ports[:, :n], ports[:, n:n + k], ports[:, n + k:] @ s
+        if not self.diodes:                   # no diode: a pair that never holds (y = u + 1: u = 0)
+            D, F = np.ones((1, 1)), np.ones(1)
+        name = ",".join(f"{sw}={'on' if on else 'off'}" for sw, on in switch_state.items()) or "circuit"
+        config = Configuration(A=A, B=B, C=C, D=D, E=E, F=F, name=name)
+        rows = solution.signal_rows(self.signal_names())
+        signals = (rows[:, :n].copy(), rows[:, n:n + k].copy(), rows[:, n + k:] @ s)
+        return config, signals
+
+    def check_unique_ports(self, config: Configuration, switch_state: dict):
+        if len(self.diodes) < 2:
+            return
+        rows = np.hstack([config.C, config.D, config.F[:, None]])
+        for i in range(len(self.diodes)):
+            for j in range(i + 1, len(self.diodes)):
+                a, b = rows[i], rows[j]
+                scale = max(np.abs(a).max(), np.abs(b).max(), 1e-300)
+                if np.abs(a - b).max() <= 1e-12 * scale and np.abs(config.D[i, j] - config.D[i, i]) <= 1e-12 * scale:
+                    d1, d2 = self.diodes[i], self.diodes[j]
+                    raise self.error(d2, f"{d2.title} and {d1.title} are ideal diodes in parallel (or in series with "
+                                         "nothing between): the split of their current or voltage is not unique; put a "
+                                         "resistance (RS in their .model) on one")
+
+    def source_values(self, levels: dict) -> np.ndarray:
+        values = []
+        for s in self.sources:
+            w = s.waveform
+            if isinstance(w, Pulse):
+                values.append(w.v2 if levels.get(s.name, 0) else w.v1)
+            else:
+                values.append(float(w))
+        return np.array(values, dtype=float)
+
+    def signal_names(self) -> tuple:
+        nodes = tuple(f"v({n})" for n in self.nodes)
+        elements = tuple(f"i({e.name})" for e in self.nl.elements if e.kind not in "K")
+        return nodes + elements
+
+    def units(self) -> dict:
+        return {name: ("V" if name.startswith("v(") else "A") for name in self.signal_names()}
+
+    def initial_state(self) -> np.ndarray:
+        """The states at t = 0: each element's IC=, or .ic v(node) across a capacitor, else 0 (UIC)."""
+        x = []
+        for c in self.capacitors:
+            if c.ic is not None:
+                x.append(c.ic)
+            else:
+                a, b = c.nodes
+                va = self.nl.ic.get(a, 0.0) if a != "0" else 0.0
+                vb = self.nl.ic.get(b, 0.0) if b != "0" else 0.0
+                x.append(va - vb)
+        x += [l.ic or 0.0 for l in self.inductors]
+        return np.array(x, dtype=float)
+
+
+def _value(w, t: np.ndarray) -> np.ndarray:
+    """A source's waveform at times t (DC or PULSE)."""
+    t = np.asarray(t, dtype=float)
+    if not isinstance(w, Pulse):
+        return np.full_like(t, float(w))
+    per = w.per if math.isfinite(w.per) else math.inf
+    local = t - w.td
+    if math.isfinite(per):
+        local = np.where(local >= 0, np.mod(local, per), local)
+    out = np.full_like(t, w.v1)
+    rise = (local >= 0) & (local < w.tr)
+    out[rise] = w.v1 + (w.v2 - w.v1) * local[rise] / w.tr if w.tr > 0 else w.v2
+    high = (local >= w.tr) & (local < w.tr + w.pw)
+    out[high] = w.v2
+    fall = (local >= w.tr + w.pw) & (local < w.tr + w.pw + w.tf)
+    out[fall] = w.v2 + (w.v1 - w.v2) * (local[fall] - w.tr - w.pw) / w.tf if w.tf > 0 else w.v1
+    return out
+
+
+class _Network:
+    """The resistive network of one configuration: MNA unknowns z = (node voltages, branch currents), each
+    equation's right-hand side a linear function of (x, u, sources)."""
+
+    def __init__(self, compiler: _Compiler, switch_state: dict, levels: dict, forms: list):
+        self.c, self.levels, self.forms = compiler, levels, forms
+        nodes = dict(compiler.node_index)
+        branches = []                 # (kind, element, a, b)
+        c = compiler
+        for e in c.by_kind["V"]:
+            branches.append(("V", e, e.nodes[0], e.nodes[1]))
+        for e in c.capacitors:
+            branches.append(("C", e, e.nodes[0], e.nodes[1]))
+        for e in c.switches:
+            if switch_state.get(e.name) and not c.switch_ron[e.name]:
+                branches.append(("S", e, e.nodes[0], e.nodes[1]))
+        for e, form in zip(c.diodes, forms):
+            anode = f"{e.name}#a" if c.diode_rs[e.name] else e.nodes[0]
+            if form == VOLTAGE:
+                branches.append(("D", e, anode, e.nodes[1]))
+        for e in c.by_kind["E"] + c.by_kind["H"]:
+            branches.append((e.kind, e, e.nodes[0], e.nodes[1]))
+        self.nodes, self.branches = nodes, branches
+        self.switch_state = switch_state
+        size = len(nodes) + len(branches)
+        self.size = size
+        cols = c.n + c.k + len(c.sources)
+        G = np.zeros((size, size))
+        R = np.zeros((size, cols))
+        idx = lambda node: None if node == "0" else nodes[node]          # noqa: E731
+        self.idx = idx
+
+        def conductance(a, b, g):
+            for p, q, sign in ((a, a, 1), (b, b, 1), (a, b, -1), (b, a, -1)):
+                if idx(p) is not None and idx(q) is not None:
+                    G[idx(p), idx(q)] += sign * g
+
+        def inject(a, b, column, scale=1.0):
+            """A current ``scale`` x column flowing from a through the element to b."""
+            if idx(a) is not None:
+                R[idx(a), column] -= scale
+            if idx(b) is not None:
+                R[idx(b), column] += scale
+
+        for e in c.by_kind["R"]:
+            conductance(e.nodes[0], e.nodes[1], 1.0 / e.value)
+        for e in c.switches:
+            if switch_state.get(e.name) and c.switch_ron[e.name]:
+                conductance(e.nodes[0], e.nodes[1], 1.0 / c.switch_ron[e.name])
+        for d in c.diodes:
+            if c.diode_rs[d.name]:
+                conductance(d.nodes[0], f"{d.name}#a", 1.0 / c.diode_rs[d.name])
+        for i, e in enumerate(c.inductors):
+            inject(e.nodes[0], e.nodes[1], len(c.capacitors) + i)
+        for j, (e, form) in enumerate(zip(c.diodes, forms)):
+            if form == CURRENT:
+                anode = f"{e.name}#a" if c.diode_rs[e.name] else e.nodes[0]
+                inject(anode, e.nodes[1], c.n + j)
+        for i, e in enumerate(c.sources):
+            if e.kind == "I":
+                inject(e.nodes[0], e.nodes[1], c.n + c.k + i)
+        for e in c.by_kind["G"]:
+            a, b, cp, cn = e.nodes
+            for node, sign in ((a, 1.0), (b, -1.0)):
+                if idx(node) is None:
+                    continue
+                for ctrl, s2 in ((cp, 1.0), (cn, -1.0)):
+                    if idx(ctrl) is not None:
+                        G[idx(node), idx(ctrl)] += sign * s2 * e.value
+        branch_of = {}
+        for j, (kind, e, a, b) in enumerate(branches):
+            row = len(nodes) + j
+            branch_of[e.name] = row
+            if idx(a) is not None:
+                G[idx(a), row] += 1.0
+                G[row, idx(a)] += 1.0
+            if idx(b) is not None:
+                G[idx(b), row] -= 1.0
+                G[row, idx(b)] -= 1.0
+            if kind == "V":
+                R[row, c.n + c.k + [s.name for s in c.sources].index(e.name)] = 1.0
+            elif kind == "C":
+                R[row, c.capacitors.index(e)] = 1.0
+            elif kind == "D":
+                R[row, c.n + c.diodes.index(e)] = -1.0            # v_D = -u
+            elif kind == "E":
+                cp, cn = e.nodes[2], e.nodes[3]
+                for ctrl, s2 in ((cp, 1.0), (cn, -1.0)):
+                    if idx(ctrl) is not None:
+                        G[row, idx(ctrl)] -= s2 * e.value
+        for e in c.by_kind["H"]:
+            G[branch_of[e.name], branch_of[e.control[0]]] -= e.value
+        for e in c.by_kind["F"]:
+            a, b = e.nodes
+            col = branch_of[e.control[0]]
+            if idx(a) is not None:
+                G[idx(a), col] += e.value
+            if idx(b) is not None:
+                G[idx(b), col] -= e.value
+        self.G, self.R, self.branch_of = G, R, branch_of
+
+    def nullity(self) -> int:
+        if self.size == 0:
+            return 0
+        return self.size - np.linalg.matrix_rank(self.G, tol=1e-12 * max(np.abs(self.G).max(), 1.0))
+
+    def solve(self):
+        if self.nullity():
+            raise self.singular()
+        self.Z = np.linalg.solve(self.G, self.R)
+        return self
+
+    def singular(self) -> NetlistError:
+        c = self.c
+        _, s, vt = np.linalg.svd(self.G)
+        null = vt[-1]
+        null = null / np.abs(null).max()
+        where = ", ".join(f"{k}={'closed' if v else 'open'}" for k, v in self.switch_state.items())
+        where = f" (with {where})" if where else ""
+        loop = [e.name.upper() for j, (kind, e, a, b) in enumerate(self.branches)
+                if abs(null[len(self.nodes) + j]) > 1e-6]
+        nodes = [n for n, i in self.nodes.items() if abs(null[i]) > 1e-6 and "#" not in n]
+        if loop:
+            return NetlistError(f"{c.path}: {', '.join(loop)} form a loop of voltage sources, capacitors, closed "
+                                f"switches and conducting diodes{where}: their voltages are not independent")
+        around = [e.name.upper() for e in c.nl.elements if set(e.nodes) & set(nodes)]
+        return NetlistError(f"{c.path}: node{'s' if len(nodes) > 1 else ''} {', '.join(nodes)} ha"
+                            f"{'ve' if len(nodes) > 1 else 's'} no path to ground but through inductors and current "
+                            f"sources{where} ({', '.join(around)}): a current interrupted with no path, or a floating "
+                            "node")
+
+    def voltage(self, node: str) -> np.ndarray:
+        i = self.idx(node)
+        return np.zeros(self.Z.shape[1]) if i is None else self.Z[i]
+
+    def branch(self, element: Element) -> np.ndarray:
+        return self.Z[self.branch_of[element.name]]
+
+    def derivatives(self) -> np.ndarray:
+        c = self.c
+        rows = [self.branch(e) / e.value for e in c.capacitors]
+        if c.inductors:
+            volts = np.array([self.voltage(e.nodes[0]) - self.voltage(e.nodes[1]) for e in c.inductors])
+            rows += list(np.linalg.solve(c.mutual, volts))
+        return np.array(rows)
+
+    def ports(self) -> np.ndarray:
+        c = self.c
+        cols = self.Z.shape[1]
+        if not c.diodes:                      # no diode: a pair that never holds (y = u + 1)
+            row = np.zeros(cols)
+            return row[None, :]
+        rows = []
+        for j, (e, form) in enumerate(zip(c.diodes, self.forms)):
+            anode = f"{e.name}#a" if c.diode_rs[e.name] else e.nodes[0]
+            if form == CURRENT:
+                rows.append(self.voltage(e.nodes[1]) - self.voltage(anode))         # y = -v_D
+            else:
+                rows.append(self.branch(e))                                      # y = i_D
+        return np.array(rows)
+
+    def current(self, e: Element) -> np.ndarray:
+        c, cols = self.c, self.Z.shape[1]
+        if e.name in self.branch_of:
+            return self.branch(e)
+        unit = np.zeros(cols)
+        if e.kind == "R":
+            return (self.voltage(e.nodes[0]) - self.voltage(e.nodes[1])) / e.value
+        if e.kind == "L":
+            unit[len(c.capacitors) + c.inductors.index(e)] = 1.0
+            return unit
+        if e.kind == "D":
+            unit[c.n + c.diodes.index(e)] = 1.0
+            return unit
+        if e.kind == "I":
+            unit[c.n + c.k + c.sources.index(e)] = 1.0
+            return unit
+        if e.kind == "S":
+            if self.switch_state.get(e.name) and c.switch_ron[e.name]:
+                return (self.voltage(e.nodes[0]) - self.voltage(e.nodes[1])) / c.switch_ron[e.name]
+            return unit
+        if e.kind == "G":
+            return e.value * (self.voltage(e.nodes[2]) - self.voltage(e.nodes[3]))
+        if e.kind == "F":
+            return e.value * self.Z[self.branch_of[e.control[0]]]
+        return unit
+
+    def signal_rows(self, names: tuple) -> np.ndarray:
+        rows = []
+        elements = {f"i({e.name})": e for e in self.c.nl.elements}
+        for name in names:
+            if name.startswith("v("):
+                rows.append(self.voltage(name[2:-1]))
+            else:
+                rows.append(self.current(elements[name]))
+        return np.array(rows)
+
+
+__all__ = ["compile_netlist", "Compiled", "CURRENT", "VOLTAGE"]

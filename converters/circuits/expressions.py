@@ -1,0 +1,188 @@
+"""Numbers and ``.param`` expressions as SPICE writes them, evaluated without ``eval``.
+
+A netlist comes from a user's directory: its text is parsed here by a small recursive-descent parser over a
+fixed grammar (numbers with SPICE suffixes, names of parameters, + - * / ^ **, parentheses and a fixed list of
+functions), so nothing in it can reach Python. Numbers take SPICE's magnitude suffixes (T G meg k m u n p f,
+``mil``) and, as ngspice does, ignore letters after them (``10uF``, ``48V``, ``1kohm``).
+"""
+from __future__ import annotations
+
+import math
+import re
+from decimal import Decimal, InvalidOperation
+
+from ..errors import ParameterError
+
+#: SPICE magnitude suffixes (case-insensitive; ``m`` is milli, ``meg`` mega, ``mil`` 25.4e-6).
+SUFFIXES = {"t": 1e12, "g": 1e9, "meg": 1e6, "k": 1e3, "mil": 25.4e-6, "m": 1e-3, "u": 1e-6, "n": 1e-9, "p": 1e-12,
+            "f": 1e-15}
+_EXPONENTS = {"t": 12, "g": 9, "meg": 6, "k": 3, "m": -3, "u": -6, "n": -9, "p": -12, "f": -15}
+_NUMBER = re.compile(r"(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?", re.ASCII)
+_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_.]*", re.ASCII)
+FUNCTIONS = {"sqrt": (math.sqrt, 1), "exp": (math.exp, 1), "ln": (math.log, 1), "log": (math.log, 1),
+             "log10": (math.log10, 1), "abs": (abs, 1), "sin": (math.sin, 1), "cos": (math.cos, 1),
+             "tan": (math.tan, 1), "atan": (math.atan, 1), "sinh": (math.sinh, 1), "cosh": (math.cosh, 1),
+             "tanh": (math.tanh, 1), "floor": (math.floor, 1), "ceil": (math.ceil, 1), "min": (min, 2),
+             "max": (max, 2), "pow": (math.pow, 2), "pwr": (math.pow, 2)}
+CONSTANTS = {"pi": math.pi}
+#: Longest expression read (characters): a value is a formula, not a program.
+MAX_LENGTH = 2000
+
+
+def number(text: str) -> tuple[float, int]:
+    """(value, characters read) of the SPICE number at the start of ``text``, or (nan, 0) when there is none.
+    The suffix is scaled exactly (``100u`` is 1e-4, not 9.999999999999999e-05); letters after it are skipped."""
+    match = _NUMBER.match(text)
+    if not match:
+        return math.nan, 0
+    end = match.end()
+    rest = text[end:end + 3].lower()
+    exponent = 0
+    for suffix in ("meg", "mil", "t", "g", "k", "m", "u", "n", "p", "f"):
+        if rest.startswith(suffix):
+            end += len(suffix)
+            if suffix == "mil":
+                return float(match.group()) * SUFFIXES["mil"], _skip_letters(text, end)
+            exponent = _EXPONENTS[suffix]
+            break
+    try:
+        value = float(Decimal(match.group()).scaleb(exponent))
+    except InvalidOperation:
+        value = math.inf
+    return value, _skip_letters(text, end)
+
+
+def _skip_letters(text: str, end: int) -> int:
+    while end < len(text) and text[end].isascii() and text[end].isalpha():
+        end += 1
+    return end
+
+
+def evaluate(text: str, names: dict, what: str = "value") -> float:
+    """The value of ``text``: a number, or an expression over ``names`` (parameter name -> value, lower case).
+
+    Raises ParameterError naming ``what`` and the problem (an unknown name, a syntax error, a result that is
+    not a finite number)."""
+    text = text.strip()
+    if text.startswith("{") and text.endswith("}") or text.startswith("'") and text.endswith("'"):
+        text = text[1:-1]
+    if len(text) > MAX_LENGTH:
+        raise ParameterError(f"{what}: an expression of {len(text)} characters (at most {MAX_LENGTH})")
+    parser = _Parser(text, names, what)
+    value = parser.expression()
+    parser.skip()
+    if parser.pos != len(text):
+        raise ParameterError(f"{what}: cannot read {text!r} past {text[:parser.pos]!r}")
+    if not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise ParameterError(f"{what}: {text!r} is not a finite number (it gives {value!r})")
+    return float(value)
+
+
+class _Parser:
+    """expression := term (('+' | '-') term)*; term := power (('*' | '/') power)*;
+    power := unary (('^' | '**') power)?; unary := ('-' | '+') unary | atom;
+    atom := number | name | name '(' args ')' | '(' expression ')'."""
+
+    def __init__(self, text: str, names: dict, what: str):
+        self.text, self.names, self.what, self.pos, self.depth = text, names, what, 0, 0
+
+    def skip(self):
+        while self.pos < len(self.text) and self.text[self.pos] in " \t":
+            self.pos += 1
+
+    def peek(self, token: str) -> bool:
+        self.skip()
+        return self.text.startswith(token, self.pos)
+
+    def take(self, token: str) -> bool:
+        if self.peek(token):
+            self.pos += len(token)
+            return True
+        return False
+
+    def fail(self, why: str):
+        raise ParameterError(f"{self.what}: {why} in {self.text!r} at character {self.pos + 1}")
+
+    def expression(self) -> float:
+        self.depth += 1
+        if self.depth > 100:
+            self.fail("expressions nested too deep")
+        value = self.term()
+        while True:
+            if self.take("+"):
+                value = value + self.term()
+            elif self.take("-"):
+                value = value - self.term()
+            else:
+                self.depth -= 1
+                return value
+
+    def term(self) -> float:
+        value = self.power()
+        while True:
+            if self.peek("**"):
+                return value
+            if self.take("*"):
+                value = value * self.power()
+            elif self.take("/"):
+                divisor = self.power()
+                if divisor == 0:
+                    self.fail("division by zero")
+                value = value / divisor
+            else:
+                return value
+
+    def power(self) -> float:
+        base = self.unary()
+        if self.take("**") or self.take("^"):
+            exponent = self.power()
+            try:
+                return math.pow(base, exponent)
+            except (OverflowError, ValueError):
+                self.fail(f"{base!r} to the power {exponent!r} is not a finite number")
+        return base
+
+    def unary(self) -> float:
+        if self.take("-"):
+            return -self.unary()
+        if self.take("+"):
+            return self.unary()
+        return self.atom()
+
+    def atom(self) -> float:
+        self.skip()
+        if self.take("("):
+            value = self.expression()
+            if not self.take(")"):
+                self.fail("a ')' is missing")
+            return value
+        value, used = number(self.text[self.pos:])
+        if used:
+            self.pos += used
+            return value
+        match = _NAME.match(self.text, self.pos)
+        if not match:
+            self.fail("a number, a name or '(' expected")
+        name = match.group().lower()
+        self.pos = match.end()
+        if self.peek("("):
+            if name not in FUNCTIONS:
+                self.fail(f"unknown function {name!r} (known: {', '.join(sorted(FUNCTIONS))})")
+            self.take("(")
+            function, arity = FUNCTIONS[name]
+            args = [self.expression()]
+            while self.take(","):
+                args.append(self.expression())
+            if not self.take(")"):
+                self.fail("a ')' is missing")
+            if len(args) != arity:
+                self.fail(f"{name}() takes {arity} argument{'s' if arity > 1 else ''}; got {len(args)}")
+            try:
+                return float(function(*args))
+            except (ValueError, OverflowError):
+                self.fail(f"{name}{tuple(args)} is not defined")
+        if name in self.names:
+            return self.names[name]
+        if name in CONSTANTS:
+            return CONSTANTS[name]
+        self.fail(f"{name!r} is not a parameter defined before it (.param)")

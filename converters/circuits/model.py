@@ -1,0 +1,265 @@
+"""A circuit from its netlist as a model like the built-in ones: parameters, problems, signals and modes.
+
+``Circuit.from_netlist(path)`` reads the file once; every ``.param`` and every element value (R, L, C, the
+couplings, the sources' DC values, the controlled sources' gains) is a parameter (``-p R1=5``, ``-p vin=48``,
+names case-insensitive as in SPICE). ``problem(p, t_end)`` compiles the netlist with those values
+(:mod:`.compile`, cached per parameter set) into an :class:`~converters.problems.LCSProblem`. The signals are
+every node voltage and branch current under its SPICE name (``v(out)``, ``i(l1)``, ``i(d1)``), ``vout`` the
+output the file names (its first ``.meas`` vector, else ``v(out)``) and ``switch`` the first switch's state; the
+mode of a point is the set of conducting diodes and closed switches (``S1+D2``; ``off`` when none).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import ParameterError, SignalError
+from ..validate import quoted
+from ..models.base import Labels, Model
+from ..params import Param
+from ..problems import LCSProblem
+from ..trajectory import Samples
+from .compile import Compiled, compile_netlist
+from .netlist import Netlist, NetlistError, Pulse, read_netlist
+
+#: Units of the element values by letter.
+UNITS = {"R": "ohm", "L": "H", "C": "F", "V": "V", "I": "A", "K": "", "E": "", "G": "S", "F": "", "H": "ohm"}
+
+
+@dataclass(frozen=True)
+class CircuitLabels(Labels):
+    """A circuit's laws bound to one parameter set: signals from the compiled maps, modes from the conducting
+    diodes and the closed switches."""
+
+    def mode_labels_of(self, samples: Samples) -> np.ndarray:
+        return self.model.mode_labels(samples, self.params)
+
+
+class Circuit(Model):
+    """A netlist as a model (module docstring)."""
+
+    control = "pwm"
+    default_theta = 1.0
+
+    def __init__(self, netlist: Netlist, source: str):
+        self.netlist = netlist
+        self.source = source
+        self.name = Path(source).name if "\n" not in source else "netlist"
+        self.title = netlist.title or self.name
+        self.parameters = self._parameters()
+        compiled = self.compiled(self.resolve({}))
+        self.state_names = compiled.state_names
+        self.pair_names = compiled.pair_names
+        self.output = self._output(compiled)
+        extra = (self.output,) if self.output not in compiled.signal_names else ()
+        self.signal_names = ("vout", "switch") + compiled.signal_names + extra
+        compiled.units.setdefault(self.output, "V")
+        self.signal_units = {"vout": "V", "switch": "1", **compiled.units}
+        self.output_state = next((s for s in compiled.state_names if s.startswith("v(")), compiled.state_names[0])
+
+    @classmethod
+    def from_netlist(cls, path, text: str | None = None) -> "Circuit":
+        """The model of the netlist at ``path`` (or of ``text``, ``path`` naming it in messages)."""
+        netlist = read_netlist(text if text is not None else Path(path), name=str(path) if text is not None else None)
+        return cls(netlist, str(path))
+
+    @property
+    def key(self) -> str:
+        return self.name
+
+    def __reduce__(self):            # picklable for worker processes: rebuilt from the file's text
+        return (_rebuild, (self.netlist.text, self.source))
+
+    # --- parameters ------------------------------------------------------------------------------------------
+
+    def _parameters(self) -> tuple:
+        out = []
+        for name, value in self.netlist.params.items():
+            if name not in self.netlist.derived:
+                out.append(Param(name, value, "", ".param", low=-math.inf, low_open=False))
+        for e in self.netlist.elements:
+            if e.name in self.netlist.expressions:       # follows its .param
+                continue
+            if e.kind in "RLC":
+                out.append(Param(e.name, e.value, UNITS[e.kind], f"{e.title} (line {e.line})"))
+            elif e.kind == "K":
+                out.append(Param(e.name, e.value, "", f"{e.title} (line {e.line})", low=-1.0, high=1.0,
+                                 high_open=False))
+            elif e.kind in "VI" and not isinstance(e.waveform, Pulse) and isinstance(e.waveform, float):
+                out.append(Param(e.name, e.waveform, UNITS[e.kind], f"{e.title} (line {e.line})", low=-math.inf,
+                                 low_open=False))
+            elif e.kind in "EGFH":
+                out.append(Param(e.name, e.value, UNITS[e.kind], f"{e.title} (line {e.line})", low=-math.inf,
+                                 low_open=False))
+        return tuple(out)
+
+    def resolve(self, given: dict | None = None) -> dict:
+        lowered = {}
+        for key, value in dict(given or {}).items():
+            name = str(key).lower()
+            if name in lowered:
+                raise ParameterError(f"-p {key} is given twice")
+            lowered[name] = value
+        return super().resolve(lowered)
+
+    def compiled(self, p: dict) -> Compiled:
+        return _compile(self.netlist.text, self.source, tuple(sorted(p.items())))
+
+    # --- the problem -----------------------------------------------------------------------------------------
+
+    def problem(self, p: dict, t_end: float, x0=None, t_start: float = 0.0, initial: int | None = None) -> LCSProblem:
+        c = self.compiled(p)
+        x0 = c.x0 if x0 is None else x0
+        return LCSProblem(c.configurations, c.schedule, x0=x0, t_span=(t_start, t_end), state_names=c.state_names,
+                          pair_names=c.pair_names, metadata={"circuit": self.name, **p})
+
+    def period(self, p: dict) -> float:
+        return self.compiled(p).period
+
+    def periodic(self, p: dict) -> bool:
+        return math.isfinite(self.period(p))
+
+    def default_h(self, p: dict) -> float:
+        if self.periodic(p):
+            return self.period(p) / 1000.0
+        tran = self.netlist.tran
+        return tran.tmax or tran.tstep
+
+    def max_h(self, p: dict) -> float:
+        return self.netlist.tran.tstop / 20.0
+
+    def default_duration(self, p: dict) -> float:
+        """The run the file states: its .tran TSTOP."""
+        return self.netlist.tran.tstop
+
+    def time_scale(self, p: dict) -> float:
+        return self.default_h(p) * 1000.0
+
+    # --- signals and modes -----------------------------------------------------------------------------------
+
+    def labels(self, p: dict) -> CircuitLabels:
+        return CircuitLabels(self, p)
+
+    def _output(self, compiled: Compiled) -> str:
+        """The file's output: the first vector a .meas names (v(NODE), v(A,B) or i(ELEMENT)), else v(out), else the
+        first node's voltage."""
+        for vector in self.netlist.outputs:
+            if vector in compiled.signal_names or _difference(vector, compiled.signal_names):
+                return vector
+        if "v(out)" in compiled.signal_names:
+            return "v(out)"
+        return next(s for s in compiled.signal_names if s.startswith("v("))
+
+    def signal(self, name: str, samples: Samples, p: dict) -> np.ndarray:
+        if name == "vout":
+            return self.signal(self.output, samples, p)
+        if name == "switch":
+            return self.switch_state(samples, p)
+        if name in ("v(0)", "v(gnd)"):
+            return np.zeros(len(samples.t))
+        c = self.compiled(p)
+        pair = _difference(name, c.signal_names)
+        if pair:
+            return self.signal(pair[0], samples, p) - self.signal(pair[1], samples, p)
+        try:
+            row = c.signal_names.index(name)
+        except ValueError:
+            raise SignalError(f"signal must be one of vout, switch, {', '.join(c.signal_names)}; got {name!r}") from None
+        config = np.asarray(samples.config, dtype=np.int64)
+        out = np.empty(len(samples.t))
+        for index, (Sx, Su, s0) in enumerate(c.signal_maps):
+            rows = config == index
+            if rows.any():
+                u = samples.u[rows] if samples.u is not None else np.zeros((rows.sum(), Su.shape[1]))
+                out[rows] = samples.x[rows] @ Sx[row] + u @ Su[row] + s0[row]
+        return out
+
+    def vout(self, samples: Samples, p: dict) -> np.ndarray:
+        return self.signal("vout", samples, p)
+
+    def switch_state(self, samples: Samples, p: dict) -> np.ndarray:
+        c = self.compiled(p)
+        if not c.switch_names:
+            return np.zeros(len(samples.t), dtype=np.int8)
+        closed = np.array([cl[0] for cl in c.closed], dtype=np.int8)
+        return closed[np.asarray(samples.config, dtype=np.int64)]
+
+    def conducting(self, samples: Samples, p: dict | None = None) -> np.ndarray:
+        c = self.compiled(p if p is not None else self.resolve({}))
+        currents = np.asarray(c.pair_currents, dtype=bool)[np.asarray(samples.config, dtype=np.int64)]
+        held = samples.held if samples.held is not None else samples.u > samples.y
+        return held == currents
+
+    def mode_labels(self, samples: Samples, p: dict) -> np.ndarray:
+        c = self.compiled(p)
+        conducting = self.conducting(samples, p) if c.pair_names != ("none",) else np.zeros((len(samples.t), 0), bool)
+        config = np.asarray(samples.config, dtype=np.int64)
+        names = {}
+        out = np.empty(len(samples.t), dtype=object)
+        diodes = [d.upper() for d in c.pair_names] if c.pair_names != ("none",) else []
+        switches = [s.upper() for s in c.switch_names]
+        keys = np.concatenate([config[:, None], conducting.astype(np.int64)], axis=1)
+        for i, key in enumerate(map(tuple, keys)):
+            label = names.get(key)
+            if label is None:
+                closed = [s for s, on in zip(switches, c.closed[key[0]]) if on]
+                label = "+".join(closed + [d for d, on in zip(diodes, key[1:]) if on]) or "off"
+                names[key] = label
+            out[i] = label
+        return out
+
+    @property
+    def mode_labels_all(self) -> tuple:
+        return ()
+
+    off_held_label = "off"
+    turn_off_label = None
+
+
+def _difference(name: str, names: tuple):
+    """("v(a)", "v(b)") for "v(a,b)" when both are node voltages of the circuit (ground: 0)."""
+    if not (name.startswith("v(") and name.endswith(")") and "," in name):
+        return None
+    a, b = (part.strip() for part in name[2:-1].split(",", 1))
+    pair = tuple(f"v({node})" for node in (a, b))
+    if all(v in names or v == "v(0)" for v in pair):
+        return pair
+    return None
+
+
+@lru_cache(maxsize=64)
+def _compile(text: str, source: str, values: tuple) -> Compiled:
+    netlist = read_netlist(text, overrides=dict(values), name=source)
+    return compile_netlist(netlist)
+
+
+def _rebuild(text: str, source: str) -> Circuit:
+    return Circuit(read_netlist(text, name=source), source)
+
+
+def load(path) -> Circuit:
+    """The Circuit of a netlist file, read once per process while the file is unchanged (its path, size and
+    modification time)."""
+    path = Path(path)
+    try:
+        stat = path.stat()
+    except OSError:
+        raise NetlistError(f"{quoted(path)}: no such file") from None
+    return _load(str(path.resolve()), stat.st_size, stat.st_mtime_ns, str(path))
+
+
+@lru_cache(maxsize=16)
+def _load(resolved: str, size: int, mtime: int, given: str) -> Circuit:
+    return Circuit.from_netlist(given)
+
+
+def is_netlist(name) -> bool:
+    """A CONVERTER argument that names a netlist file (``.cir``, ``.sp``, ``.net``, ``.spice``)."""
+    return isinstance(name, (str, Path)) and str(name).lower().endswith((".cir", ".sp", ".net", ".spice", ".ckt"))
+
+
+__all__ = ["Circuit", "is_netlist", "NetlistError"]

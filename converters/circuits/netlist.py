@@ -1,0 +1,637 @@
+"""Reading a SPICE netlist: the subset switching circuits use, flattened, every value a number.
+
+Why a reader of its own: PySpice 1.5's parser (already a dependency, for ngspice) stops at an ``S`` switch line
+and at ``IC=`` on an inductor and does not evaluate ``.param`` expressions; spicelib edits netlists as text
+with a regular expression per element and looks for included libraries in the user's directories. pcsuite
+reads files other people wrote, so its reader evaluates values without ``eval`` (:mod:`.expressions`), follows
+no ``.include`` or ``.lib``, and refuses a ``.control`` block (ngspice would run its ``shell`` commands).
+
+Supported (case-insensitive, SPICE's own conventions: the first line is the title, ``*`` a comment line, ``;``
+an inline comment, ``+`` a continuation):
+
+- ``R L C`` (value, ``IC=`` on L and C), ``K`` (coupled inductors), ``V I`` (``DC``, ``PULSE``, ``SIN``,
+  ``PWL``), ``E G`` (voltage-controlled, gain), ``F H`` (current-controlled through a V source, gain), ``D``
+  (with its ``.model D``), ``S`` and ``W`` (voltage- and current-controlled switches with ``.model SW`` /
+  ``CSW``), ``X`` (a ``.subckt``, with ``params:``);
+- ``.param`` (expressions of numbers and earlier parameters), ``.model``, ``.subckt``/``.ends``, ``.ic``,
+  ``.tran``, ``.meas`` (the vector it measures names an output), ``.options``, ``.end``; ``.save``,
+  ``.print``, ``.plot``, ``.probe``, ``.op`` are read and left to ngspice.
+
+Every problem is one :class:`NetlistError` naming the file, the line and the element.
+"""
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+from ..errors import ParameterError
+from ..validate import quoted
+from .expressions import evaluate, number
+
+#: Largest netlist read (bytes): a circuit, not a data file.
+MAX_BYTES = 1 << 20
+#: Most elements after flattening, and the deepest subcircuit nesting.
+MAX_ELEMENTS = 20_000
+MAX_DEPTH = 20
+
+#: What each element letter is, for the messages.
+KINDS = {"R": "resistor", "L": "inductor", "C": "capacitor", "K": "coupling", "V": "voltage source",
+         "I": "current source", "E": "voltage-controlled voltage source", "G": "voltage-controlled current source",
+         "F": "current-controlled current source", "H": "current-controlled voltage source", "D": "diode",
+         "S": "voltage-controlled switch", "W": "current-controlled switch", "X": "subcircuit instance"}
+#: Elements an LCS cannot hold, with what to write instead.
+REFUSED = {"M": "a MOSFET", "Q": "a bipolar transistor", "J": "a JFET", "Z": "a MESFET", "B": "a behavioural source",
+           "A": "an XSPICE code model", "T": "a transmission line", "O": "a lossy transmission line",
+           "U": "an RC line", "Y": "a transmission line", "N": "a device model", "P": "a coupled line"}
+MODEL_TYPES = {"D": "D", "S": "SW", "W": "CSW"}
+
+
+class NetlistError(ParameterError):
+    """A netlist pcsuite cannot read or compile; the message names the file, the line and the element."""
+
+
+@dataclass(frozen=True)
+class Pulse:
+    """PULSE(v1 v2 td tr tf pw per): v1 until td, a ramp to v2 over tr, v2 for pw, back over tf; per repeats."""
+    v1: float
+    v2: float
+    td: float = 0.0
+    tr: float = 0.0
+    tf: float = 0.0
+    pw: float = math.inf
+    per: float = math.inf
+
+
+@dataclass(frozen=True)
+class Sin:
+    """SIN(vo va freq td theta phase)."""
+    vo: float
+    va: float
+    freq: float
+    td: float = 0.0
+    theta: float = 0.0
+    phase: float = 0.0
+
+
+@dataclass(frozen=True)
+class Pwl:
+    """PWL(t1 v1 t2 v2 ...), times non-decreasing."""
+    points: tuple
+
+
+@dataclass(frozen=True)
+class Element:
+    name: str                  # lower case; inside a subcircuit instance: "x1.l1"
+    kind: str                  # the element letter, upper case
+    nodes: tuple               # node names, lower case ("0" is ground; inside an instance "x1.n")
+    value: float | None = None
+    waveform: object = None    # V and I sources: a float (DC), Pulse, Sin or Pwl
+    model: str | None = None
+    control: tuple = ()        # F, H, W: the controlling V source; K: the inductors
+    ic: float | None = None
+    line: int = 0
+
+    @property
+    def title(self) -> str:
+        return f"{KINDS.get(self.kind, 'element')} {self.name.upper()}"
+
+
+@dataclass(frozen=True)
+class Model:
+    name: str
+    kind: str          # D, SW, CSW
+    params: dict
+    line: int = 0
+
+
+@dataclass(frozen=True)
+class Tran:
+    tstep: float
+    tstop: float
+    tstart: float = 0.0
+    tmax: float | None = None
+    uic: bool = False
+
+
+@dataclass(frozen=True)
+class Netlist:
+    """A netlist read and flattened: elements with numbers, models, parameters, directives."""
+
+    path: str
+    title: str
+    elements: tuple
+    models: dict
+    params: dict                                    # .param name -> value (lower case names)
+    ic: dict = field(default_factory=dict)          # node -> initial voltage (.ic v(node)=value)
+    tran: Tran | None = None
+    outputs: tuple = ()                             # vectors named by .meas (v(out), i(l1), ...)
+    text: str = ""
+    #: Element name -> the parameter expression its value came from (an element given by a .param follows it).
+    expressions: dict = field(default_factory=dict)
+    #: The .param names defined by expressions of others (they follow them; not parameters of their own).
+    derived: frozenset = frozenset()
+
+    def element(self, name: str) -> Element:
+        for e in self.elements:
+            if e.name == name.lower():
+                return e
+        raise NetlistError(f"{quoted(self.path)}: no element {name!r}")
+
+    @property
+    def nodes(self) -> tuple:
+        seen = []
+        for e in self.elements:
+            for n in e.nodes:
+                if n not in seen:
+                    seen.append(n)
+        return tuple(seen)
+
+
+@dataclass
+class _Line:
+    number: int
+    text: str
+
+
+def read_netlist(source, overrides: dict | None = None, name: str | None = None) -> Netlist:
+    """Read a netlist file (a path) or text (with ``name`` for the messages), with ``overrides`` of its
+    ``.param`` values and element values ({name: number}, names case-insensitive)."""
+    if isinstance(source, Path) or (isinstance(source, str) and "\n" not in source and name is None):
+        path = Path(source)
+        label = quoted(path)
+        if not path.is_file():
+            raise NetlistError(f"{label}: not a regular file" if path.exists() else f"{label}: no such file")
+        size = path.stat().st_size
+        if size > MAX_BYTES:
+            raise NetlistError(f"{label}: {size:,} bytes, more than a netlist's {MAX_BYTES:,}")
+        raw = path.read_bytes()
+        try:
+            text = raw.decode("utf-8")
+        except UnicodeDecodeError as e:
+            raise NetlistError(f"{label}: not UTF-8 text (byte {e.start})") from None
+    else:
+        text, label = str(source), quoted(name or "<netlist>")
+        if len(text.encode()) > MAX_BYTES:
+            raise NetlistError(f"{label}: {len(text.encode()):,} bytes, more than a netlist's {MAX_BYTES:,}")
+    return _Reader(text, label, overrides or {}).read()
+
+
+class _Reader:
+    def __init__(self, text: str, label: str, overrides: dict):
+        self.text, self.label = text, label
+        self.overrides = {}
+        for key, value in overrides.items():
+            try:
+                self.overrides[str(key).lower()] = float(value)
+            except (TypeError, ValueError):
+                raise NetlistError(f"{label}: -p {key} must be a number; got {value!r}") from None
+        self.used = set()
+        self.derived = set()
+
+    def error(self, line: _Line | int, what: str) -> NetlistError:
+        number_ = line.number if isinstance(line, _Line) else line
+        return NetlistError(f"{self.label}:{number_}: {what}")
+
+    # --- lines -----------------------------------------------------------------------------------------------
+
+    def lines(self) -> tuple[str, list[_Line]]:
+        raw = self.text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
+        title = raw[0].strip() if raw else ""
+        out: list[_Line] = []
+        for i, line in enumerate(raw[1:], start=2):
+            if "\x00" in line:
+                raise self.error(i, "a NUL character (a binary file?)")
+            stripped = line.strip()
+            if not stripped or stripped.startswith("*"):
+                continue
+            for mark in (";", "$ ", "//"):           # inline comments (ngspice's)
+                at = stripped.find(mark)
+                if at >= 0:
+                    stripped = stripped[:at].rstrip()
+            if not stripped:
+                continue
+            if stripped.startswith("+"):
+                if not out:
+                    raise self.error(i, "a continuation '+' with no line before it")
+                out[-1].text += " " + stripped[1:].strip()
+                continue
+            out.append(_Line(i, stripped))
+        return title, out
+
+    # --- the whole file --------------------------------------------------------------------------------------
+
+    def read(self) -> Netlist:
+        title, lines = self.lines()
+        params: dict = {}
+        models: dict = {}
+        subckts: dict = {}
+        top: list[_Line] = []
+        ic: dict = {}
+        tran = None
+        outputs: list = []
+        expressions: dict = {}
+        i = 0
+        while i < len(lines):
+            line = lines[i]
+            word = line.text.split()[0].lower()
+            if word == ".control":
+                raise self.error(line, "a .control block: pcsuite runs ngspice on the file and never runs its "
+                                       "commands (shell, ...); remove it")
+            if word in (".include", ".inc", ".lib"):
+                raise self.error(line, f"{word} reads another file: pcsuite reads this file alone; paste the "
+                                       "models and subcircuits in")
+            if word == ".subckt":
+                end = i + 1
+                depth = 1
+                while end < len(lines):
+                    head = lines[end].text.split()[0].lower()
+                    depth += head == ".subckt"
+                    depth -= head == ".ends"
+                    if depth == 0:
+                        break
+                    end += 1
+                if end >= len(lines):
+                    raise self.error(line, ".subckt without its .ends")
+                words = line.text.split()
+                if len(words) < 2:
+                    raise self.error(line, ".subckt needs a name")
+                sub_name = words[1].lower()
+                if sub_name in subckts:
+                    raise self.error(line, f"subcircuit {sub_name!r} defined twice")
+                subckts[sub_name] = (line, lines[i + 1:end])
+                i = end + 1
+                continue
+            if word == ".ends":
+                raise self.error(line, ".ends without its .subckt")
+            if word == ".param":
+                self.param_line(line, params, scope=True)
+            elif word == ".model":
+                model = self.model_line(line, params)
+                if model.name in models:
+                    raise self.error(line, f"model {model.name!r} defined twice")
+                models[model.name] = model
+            elif word == ".ic":
+                for key, value in self.assignments(line, line.text.split(None, 1)[1] if len(line.text.split()) > 1
+                                                   else ""):
+                    match = re.fullmatch(r"v\(([^(),\s]+)\)", key)
+                    if not match:
+                        raise self.error(line, f".ic takes v(NODE)=VALUE; got {key!r}")
+                    ic[match.group(1)] = self.value(line, value, params, f".ic {key}")
+            elif word == ".tran":
+                tran = self.tran_line(line, params)
+            elif word in (".meas", ".measure"):
+                found = re.findall(r"\b([vi]\([^()]+\))", line.text.lower())
+                outputs.extend(v.replace(" ", "") for v in found if v not in outputs)
+            elif word == ".end":
+                break
+            elif word.startswith("."):
+                if word not in (".options", ".option", ".opt", ".save", ".print", ".plot", ".probe", ".op",
+                                ".temp", ".global", ".width", ".nodeset"):
+                    raise self.error(line, f"{word} is not a directive pcsuite reads (it reads .param, .model, "
+                                           ".subckt, .ic, .tran, .meas, .options, .end)")
+            else:
+                top.append(line)
+            i += 1
+        for key in self.overrides:
+            if key in params:
+                self.used.add(key)
+        elements: list[Element] = []
+        self.expand(top, params, models, subckts, "", {}, elements, 0, expressions)
+        unknown = [k for k in self.overrides if k not in self.used]
+        if unknown:
+            names = sorted(set(params) | {e.name for e in elements if e.value is not None})
+            raise NetlistError(f"{self.label}: -p {unknown[0]}: no .param or element of that name (valid: "
+                               f"{', '.join(names)})")
+        return Netlist(self.label, title, tuple(elements), models, params, ic, tran, tuple(outputs), self.text,
+                       expressions, frozenset(self.derived))
+
+    # --- directives --------------------------------------------------------------------------------------------
+
+    def assignments(self, line: _Line, text: str) -> list[tuple[str, str]]:
+        """NAME=VALUE pairs; a value may be {expr}, 'expr' or a bare expression without spaces."""
+        out = []
+        text = re.sub(r"\s*=\s*", "=", text.strip())
+        pos = 0
+        while pos < len(text):
+            while pos < len(text) and text[pos] in " \t,":
+                pos += 1
+            if pos >= len(text):
+                break
+            match = re.match(r"([A-Za-z_][\w.]*|[vV]\([^()]+\))=", text[pos:])
+            if not match:
+                raise self.error(line, f"NAME=VALUE expected at {text[pos:pos + 30]!r}")
+            key = match.group(1).lower().replace(" ", "")
+            pos += match.end()
+            if pos < len(text) and text[pos] in "{'":
+                close = "}" if text[pos] == "{" else "'"
+                end = text.find(close, pos + 1)
+                if end < 0:
+                    raise self.error(line, f"{key}: an unclosed {text[pos]!r}")
+                value = text[pos:end + 1]
+                pos = end + 1
+            else:
+                end = pos
+                depth = 0
+                while end < len(text) and (depth > 0 or text[end] not in " \t"):
+                    depth += (text[end] == "(") - (text[end] == ")")
+                    end += 1
+                value = text[pos:end]
+                pos = end
+            out.append((key, value))
+        return out
+
+    def param_line(self, line: _Line, params: dict, scope: bool):
+        body = line.text.split(None, 1)
+        if len(body) < 2:
+            raise self.error(line, ".param needs NAME=VALUE")
+        for key, value in self.assignments(line, body[1]):
+            if key in FUNCTION_NAMES:
+                raise self.error(line, f".param {key}: the name of a function")
+            if scope:
+                try:
+                    evaluate(value, {}, key)
+                except ParameterError:        # an expression of other parameters: it follows them
+                    self.derived.add(key)
+            if scope and key in self.overrides and key not in self.derived:
+                params[key] = self.overrides[key]
+            elif scope and key in self.overrides:
+                raise self.error(line, f"-p {key}: .param {key} is an expression of other parameters ({value}); "
+                                       "set those")
+            else:
+                params[key] = self.value(line, value, params, f".param {key}")
+
+    def value(self, line: _Line, text: str, params: dict, what: str) -> float:
+        try:
+            return evaluate(text, params, what)
+        except ParameterError as e:
+            raise self.error(line, str(e)) from None
+
+    def model_line(self, line: _Line, params: dict) -> Model:
+        match = re.match(r"\.model\s+(\S+)\s+([A-Za-z]+)\s*(?:\((.*)\)|(.*))$", line.text, re.IGNORECASE | re.DOTALL)
+        if not match:
+            raise self.error(line, ".model NAME TYPE(PARAMS) expected")
+        name, kind = match.group(1).lower(), match.group(2).upper()
+        if kind not in ("D", "SW", "CSW"):
+            raise self.error(line, f".model {name} {kind}: pcsuite compiles ideal diodes (D) and switches (SW, CSW); "
+                                   f"a {kind} model has no complementarity form")
+        body = (match.group(3) if match.group(3) is not None else match.group(4) or "").replace(",", " ")
+        values = {key.upper(): self.value(line, value, params, f".model {name} {key}")
+                  for key, value in self.assignments(line, body)}
+        return Model(name, kind, values, line.number)
+
+    def tran_line(self, line: _Line, params: dict) -> Tran:
+        words = line.text.split()[1:]
+        uic = any(w.lower() == "uic" for w in words)
+        numbers = [self.value(line, w, params, ".tran") for w in words if w.lower() != "uic"]
+        if len(numbers) < 2:
+            raise self.error(line, ".tran needs TSTEP and TSTOP")
+        tstep, tstop = numbers[0], numbers[1]
+        tstart = numbers[2] if len(numbers) > 2 else 0.0
+        tmax = numbers[3] if len(numbers) > 3 else None
+        if not (tstep > 0 and tstop > 0 and 0 <= tstart < tstop and (tmax is None or tmax > 0)):
+            raise self.error(line, f".tran needs TSTEP > 0, TSTOP > TSTART >= 0 (and TMAX > 0); got "
+                                   f"{' '.join(words)}")
+        return Tran(tstep, tstop, tstart, tmax, uic)
+
+    # --- elements ----------------------------------------------------------------------------------------------
+
+    def expand(self, lines, params, models, subckts, prefix, nodemap, out, depth, expressions, chain=()):
+        if depth > MAX_DEPTH:
+            raise self.error(lines[0] if lines else 0, f"subcircuits nested deeper than {MAX_DEPTH}")
+        for line in lines:
+            words = line.text.split()
+            letter = words[0][0].upper()
+            if letter in REFUSED:
+                raise self.error(line, f"element {words[0]} is {REFUSED[letter]}: an LCS holds ideal switches and "
+                                       "diodes (write a switch as S with a .model SW, a rectifier as D)")
+            if letter not in KINDS:
+                raise self.error(line, f"element {words[0]}: unknown element letter {letter!r}")
+            if letter == "X":
+                self.instance(line, params, models, subckts, prefix, nodemap, out, depth, expressions, chain)
+            else:
+                out.append(self.element(line, params, prefix, nodemap, expressions))
+            if len(out) > MAX_ELEMENTS:
+                raise self.error(line, f"more than {MAX_ELEMENTS:,} elements")
+
+    def node(self, name: str, prefix: str, nodemap: dict) -> str:
+        name = name.lower()
+        if name in ("0", "gnd"):
+            return "0"
+        if name in nodemap:
+            return nodemap[name]
+        return prefix + name
+
+    def element(self, line: _Line, params: dict, prefix: str, nodemap: dict, expressions: dict) -> Element:
+        words = line.text.split()
+        raw_name = words[0]
+        name = prefix + raw_name.lower()
+        letter = raw_name[0].upper()
+        need = {"R": 3, "L": 3, "C": 3, "K": 3, "V": 2, "I": 2, "E": 5, "G": 5, "F": 4, "H": 4, "D": 3, "S": 5, "W": 4}
+        rest = line.text[len(raw_name):].strip()
+        title = f"{KINDS[letter]} {raw_name}"
+        if letter in "RLCDVIEGFHSW":
+            count = {"R": 2, "L": 2, "C": 2, "D": 2, "V": 2, "I": 2, "E": 4, "G": 4, "F": 2, "H": 2, "S": 4, "W": 2}[letter]
+            tokens = rest.split()
+            if len(tokens) < count or len(words) - 1 < need[letter]:
+                raise self.error(line, f"{title}: {count} nodes and its value or model expected")
+            nodes = tuple(self.node(n, prefix, nodemap) for n in tokens[:count])
+            after = rest.split(None, count)[count] if len(tokens) > count else ""
+        else:                                         # K: two inductors and a coefficient
+            nodes, after = (), rest
+        own = raw_name.lower()
+        if letter in "RLC":
+            value_text, _, options = after.partition(" ")
+            assigns = dict(self.assignments(line, options)) if options.strip() else {}
+            unknown = [k for k in assigns if k not in ("ic", "m", "tc1", "tc2")]
+            if unknown:
+                raise self.error(line, f"{title}: {unknown[0].upper()}= is not read (value and IC= only)")
+            if value_text.lower().startswith(("r=", "l=", "c=")):
+                value_text = value_text[2:]
+            value = self.element_value(line, own, prefix, value_text, params, f"{title} value", expressions)
+            if not value > 0:
+                raise self.error(line, f"{title}: its value must be positive; got {value:g}")
+            ic = self.value(line, assigns["ic"], params, f"{title} IC") if "ic" in assigns and letter != "R" else None
+            return Element(name, letter, nodes, value=value, ic=ic, line=line.number)
+        if letter == "K":
+            tokens = after.split()
+            if len(tokens) != 3:
+                raise self.error(line, f"{title}: K L1 L2 COUPLING expected")
+            value = self.element_value(line, own, prefix, tokens[2], params, f"{title} coupling", expressions)
+            if not 0 < abs(value) <= 1:
+                raise self.error(line, f"{title}: the coupling must be in (0, 1]; got {value:g}")
+            return Element(name, letter, (), value=value, control=tuple(prefix + t.lower() for t in tokens[:2]),
+                           line=line.number)
+        if letter in "VI":
+            waveform = self.waveform(line, own, prefix, after, params, title, expressions)
+            return Element(name, letter, nodes, waveform=waveform, line=line.number)
+        if letter in "EG":
+            value = self.element_value(line, own, prefix, after.split()[0] if after.split() else "", params,
+                                       f"{title} gain", expressions)
+            return Element(name, letter, nodes, value=value, line=line.number)
+        if letter in "FH":
+            tokens = after.split()
+            if len(tokens) != 2:
+                raise self.error(line, f"{title}: {letter} N+ N- VSOURCE GAIN expected")
+            value = self.element_value(line, own, prefix, tokens[1], params, f"{title} gain", expressions)
+            return Element(name, letter, nodes, value=value, control=(prefix + tokens[0].lower(),), line=line.number)
+        if letter == "D":
+            tokens = after.split()
+            if len(tokens) != 1:
+                raise self.error(line, f"{title}: D ANODE CATHODE MODEL expected (no area or options)")
+            return Element(name, letter, nodes, model=tokens[0].lower(), line=line.number)
+        if letter == "S":
+            tokens = after.split()
+            if len(tokens) not in (1, 2) or (len(tokens) == 2 and tokens[1].lower() not in ("on", "off")):
+                raise self.error(line, f"{title}: S N+ N- NC+ NC- MODEL [ON|OFF] expected")
+            return Element(name, letter, nodes, model=tokens[0].lower(), line=line.number)
+        tokens = after.split()                       # W N+ N- VSENSE MODEL
+        if len(tokens) not in (2, 3):
+            raise self.error(line, f"{title}: W N+ N- VSENSE MODEL [ON|OFF] expected")
+        return Element(name, letter, nodes, model=tokens[1].lower(), control=(prefix + tokens[0].lower(),),
+                       line=line.number)
+
+    def element_value(self, line, own, prefix, text, params, what, expressions) -> float:
+        key = prefix + own
+        if key in self.overrides:
+            self.used.add(key)
+            return self.overrides[key]
+        if not text:
+            raise self.error(line, f"{what} missing")
+        stripped = text.strip().strip("{}'").strip().lower()
+        if stripped in params:
+            expressions[key] = stripped
+        return self.value(line, text, params, what)
+
+    def waveform(self, line, own, prefix, text, params, title, expressions):
+        key = prefix + own
+        text = text.strip()
+        if re.match(r"(?i)dc\b", text):
+            text = text[2:].strip()
+            if re.match(r"(?i)(pulse|sin|pwl)\s*\(", text):
+                pass
+            elif re.search(r"(?i)\b(pulse|sin|pwl|ac)\b", text):
+                raise self.error(line, f"{title}: give either DC VALUE or one waveform")
+        match = re.match(r"(?i)(pulse|sin|pwl)\s*\((.*)\)\s*$", text)
+        if not match:
+            if re.match(r"(?i)(pulse|sin|pwl|exp|sffm|am|trrandom|trnoise)\b", text):
+                raise self.error(line, f"{title}: {text.split('(')[0].upper()} is not read (DC, PULSE, SIN, PWL)")
+            if key in self.overrides:
+                self.used.add(key)
+                return self.overrides[key]
+            if not text:
+                raise self.error(line, f"{title}: its value is missing")
+            return self.element_value(line, own, prefix, text.split()[0], params, f"{title} value", expressions)
+        kind, body = match.group(1).upper(), match.group(2).replace(",", " ")
+        if key in self.overrides:
+            raise self.error(line, f"-p {own}: {title} is a {kind} source; change its parameters with .param")
+        values = [self.value(line, w, params, f"{title} {kind}") for w in self.words(body)]
+        if kind == "PULSE":
+            if not 2 <= len(values) <= 7:
+                raise self.error(line, f"{title}: PULSE(V1 V2 TD TR TF PW PER) takes 2 to 7 numbers; got {len(values)}")
+            pulse = Pulse(*values)
+            if min(pulse.td, pulse.tr, pulse.tf) < 0 or pulse.pw <= 0 or pulse.per <= 0:
+                raise self.error(line, f"{title}: PULSE times must be >= 0 (PW, PER > 0)")
+            if math.isfinite(pulse.per) and pulse.tr + pulse.pw + pulse.tf > pulse.per * (1 + 1e-12):
+                raise self.error(line, f"{title}: PULSE TR + PW + TF = {pulse.tr + pulse.pw + pulse.tf:g} s exceeds "
+                                       f"its period {pulse.per:g} s")
+            return pulse
+        if kind == "SIN":
+            if not 3 <= len(values) <= 6:
+                raise self.error(line, f"{title}: SIN(VO VA FREQ TD THETA PHASE) takes 3 to 6 numbers")
+            return Sin(*values)
+        if len(values) < 2 or len(values) % 2:
+            raise self.error(line, f"{title}: PWL takes pairs of time and value; got {len(values)} numbers")
+        points = tuple(zip(values[::2], values[1::2]))
+        if any(b[0] < a[0] for a, b in zip(points, points[1:])) or points[0][0] < 0:
+            raise self.error(line, f"{title}: PWL times must be >= 0 and non-decreasing")
+        return Pwl(points)
+
+    @staticmethod
+    def words(body: str) -> list[str]:
+        out, depth, current = [], 0, ""
+        for ch in body:
+            if ch in "{(":
+                depth += 1
+            elif ch in "})":
+                depth -= 1
+            if ch in " \t" and depth == 0:
+                if current:
+                    out.append(current)
+                current = ""
+            else:
+                current += ch
+        if current:
+            out.append(current)
+        return out
+
+    def instance(self, line, params, models, subckts, prefix, nodemap, out, depth, expressions, chain):
+        text = line.text
+        head, _, tail = re.split(r"(?i)\bparams:", text)[0], None, None
+        parts = re.split(r"(?i)\s+params:\s*", text, maxsplit=1)
+        words = parts[0].split()
+        assigns = self.assignments(line, parts[1]) if len(parts) > 1 else []
+        # X n1 n2 ... SUBNAME [k=v ...] (ngspice also takes assignments without params:)
+        while words and "=" in words[-1]:
+            key, _, value = words.pop().partition("=")
+            assigns.insert(0, (key.lower(), value))
+        if len(words) < 2:
+            raise self.error(line, f"subcircuit instance {words[0] if words else '?'}: X NODES... SUBCKT expected")
+        sub = words[-1].lower()
+        if sub not in subckts:
+            raise self.error(line, f"subcircuit instance {words[0]}: no .subckt {sub!r}")
+        if sub in chain:
+            raise self.error(line, f"subcircuit {sub!r} instantiates itself ({' -> '.join(chain + (sub,))})")
+        definition_line, body = subckts[sub]
+        header = re.split(r"(?i)\s+params:\s*", definition_line.text, maxsplit=1)
+        ports = header[0].split()[2:]
+        defaults = dict(self.assignments(definition_line, header[1])) if len(header) > 1 else {}
+        while ports and "=" in ports[-1]:
+            key, _, value = ports.pop().partition("=")
+            defaults[key.lower()] = value
+        given = words[1:-1]
+        if len(given) != len(ports):
+            raise self.error(line, f"subcircuit instance {words[0]}: {len(given)} nodes for .subckt {sub}'s "
+                                   f"{len(ports)}")
+        inner_prefix = prefix + words[0].lower() + "."
+        mapping = {p.lower(): self.node(g, prefix, nodemap) for p, g in zip(ports, given)}
+        scope = dict(params)
+        for key, value in defaults.items():
+            scope[key] = self.value(definition_line, value, params, f".subckt {sub} {key}")
+        for key, value in assigns:
+            if key not in defaults:
+                raise self.error(line, f"subcircuit instance {words[0]}: {key} is not a parameter of .subckt {sub} "
+                                       f"({', '.join(defaults) or 'it has none'})")
+            scope[key] = self.value(line, value, params, f"{words[0]} {key}")
+        inner = [ln for ln in body if not ln.text.lower().startswith((".param", ".model"))]
+        for ln in body:
+            if ln.text.lower().startswith(".param"):
+                self.param_line(ln, scope, scope=False)
+            elif ln.text.lower().startswith(".model"):
+                raise self.error(ln, ".model inside a .subckt: define it at the top level")
+            elif ln.text.lower().startswith(".subckt"):
+                raise self.error(ln, ".subckt inside a .subckt: define it at the top level")
+        self.expand(inner, scope, models, subckts, inner_prefix, mapping, out, depth + 1, expressions,
+                    chain + (sub,))
+
+
+FUNCTION_NAMES = {"sqrt", "exp", "ln", "log", "log10", "abs", "sin", "cos", "tan", "atan", "min", "max", "pow"}
+
+
+def with_models(netlist: Netlist) -> Netlist:
+    """Check every element's model exists and has the element's type."""
+    for e in netlist.elements:
+        if e.kind in MODEL_TYPES:
+            model = netlist.models.get(e.model)
+            if model is None:
+                raise NetlistError(f"{netlist.path}:{e.line}: {e.title} names model {e.model!r}, which no .model "
+                                   "defines")
+            if model.kind != MODEL_TYPES[e.kind]:
+                raise NetlistError(f"{netlist.path}:{e.line}: {e.title} needs a .model of type "
+                                   f"{MODEL_TYPES[e.kind]}; {e.model!r} is {model.kind}")
+    return netlist
+
+
+__all__ = ["read_netlist", "Netlist", "Element", "Model", "Pulse", "Sin", "Pwl", "Tran", "NetlistError",
+           "with_models", "number", "replace"]
