@@ -42,7 +42,7 @@ def resolve_model(name_or_model, control: str = "pwm") -> Model:
         return get_model(name_or_model, control)
     if not isinstance(name_or_model, Model):
         from .models import CONVERTERS
-        from .circuits import is_netlist
+        from .models import is_netlist
         if is_netlist(name_or_model):
             return get_model(name_or_model, control)
         raise ParameterError(f"the converter must be one of {', '.join(CONVERTERS)}, a netlist FILE.cir or a Model; "

@@ -1,6 +1,7 @@
-"""Circuits from SPICE netlists: read (:mod:`.netlist`), compiled by modified nodal analysis into a linear
-complementarity system (:mod:`.compile`), and wrapped as a model like the built-in ones (:mod:`.model`)."""
-from .model import Circuit, is_netlist
+"""Circuits from SPICE netlists: read (:mod:`.netlist`) and compiled by modified nodal analysis into a linear
+complementarity system (:mod:`.compile`); :class:`converters.models.netlist.Circuit` makes one a model like the
+built-in ones."""
+from .compile import Compiled, compile_netlist
 from .netlist import NetlistError, read_netlist
 
-__all__ = ["Circuit", "is_netlist", "NetlistError", "read_netlist"]
+__all__ = ["Compiled", "compile_netlist", "NetlistError", "read_netlist"]

@@ -10,6 +10,7 @@ from .buckboost import BuckBoost
 from .cuk import Cuk
 from .prc import PRC
 from .sliding import BoostSMC
+from .netlist import Circuit, is_netlist, load
 from .voltage_mode import BuckVoltageMode
 
 CONVERTERS: dict[str, Converter] = {c.name: c for c in (Buck(), Boost(), BuckBoost(), Cuk(), PRC())}
@@ -31,7 +32,6 @@ def get_converter(name: str) -> Converter:
 def get_model(name: str, control: str = "pwm") -> Model:
     """The model of converter ``name`` under ``control``, or of the netlist file ``name`` names (``FILE.cir``:
     :class:`converters.circuits.Circuit`); errors name the valid choices."""
-    from ..circuits.model import is_netlist, load
     if is_netlist(name):
         if control != "pwm":
             raise ParameterError(f"--control {control} applies to the built-in converters; a netlist states its own "
@@ -51,5 +51,5 @@ def get_model(name: str, control: str = "pwm") -> Model:
                              f"--control {takes}); got {name!r}") from None
 
 
-__all__ = ["CONVERTERS", "MODELS", "CONTROLS", "get_converter", "get_model", "Converter", "Model", "ON", "OFF",
+__all__ = ["Circuit", "is_netlist", "CONVERTERS", "MODELS", "CONTROLS", "get_converter", "get_model", "Converter", "Model", "ON", "OFF",
            "check_h"]

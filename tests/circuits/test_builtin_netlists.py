@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from converters.analysis.accuracy import mode_fractions, substep_events
-from converters.circuits import Circuit
+from converters.models import Circuit
 from converters.methods import EventDriven
 from converters.models import get_model
 from converters.run import steady_state

@@ -3,7 +3,7 @@
 ``Circuit.from_netlist(path)`` reads the file once; every ``.param`` and every element value (R, L, C, the
 couplings, the sources' DC values, the controlled sources' gains) is a parameter (``-p R1=5``, ``-p vin=48``,
 names case-insensitive as in SPICE). ``problem(p, t_end)`` compiles the netlist with those values
-(:mod:`.compile`, cached per parameter set) into an :class:`~converters.problems.LCSProblem`. The signals are
+(:mod:`converters.circuits.compile`, cached per parameter set) into an :class:`~converters.problems.LCSProblem`. The signals are
 every node voltage and branch current under its SPICE name (``v(out)``, ``i(l1)``, ``i(d1)``), ``vout`` the
 output the file names (its first ``.meas`` vector, else ``v(out)``) and ``switch`` the first switch's state; the
 mode of a point is the set of conducting diodes and closed switches (``S1+D2``; ``off`` when none).
@@ -17,14 +17,14 @@ from pathlib import Path
 
 import numpy as np
 
+from ..circuits.compile import Compiled, compile_netlist
+from ..circuits.netlist import Netlist, NetlistError, Pulse, read_netlist
 from ..errors import ParameterError, SignalError
-from ..validate import quoted
-from ..models.base import Labels, Model
 from ..params import Param
 from ..problems import LCSProblem
 from ..trajectory import Samples
-from .compile import Compiled, compile_netlist
-from .netlist import Netlist, NetlistError, Pulse, read_netlist
+from ..validate import quoted
+from .base import Labels, Model
 
 #: Units of the element values by letter.
 UNITS = {"R": "ohm", "L": "H", "C": "F", "V": "V", "I": "A", "K": "", "E": "", "G": "S", "F": "", "H": "ohm"}
