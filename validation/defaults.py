@@ -14,7 +14,7 @@ _DATA = tomllib.loads(DEFAULTS_FILE.read_text())
 #: Thresholds per study (``compare``, ``smc``, ``smc-implicit``, ``closed_form``).
 THRESHOLDS: dict[str, dict[str, float]] = {study: dict(values) for study, values in _DATA["thresholds"].items()}
 #: Checks whose threshold is a minimum (every other threshold is a maximum).
-AT_LEAST = frozenset({"mode_agreement"})
+AT_LEAST = frozenset({"mode_agreement", "mode_time_agreement"})
 #: (converter, parameters, expected mode) checked against the closed forms.
 OPERATING_POINTS: list[tuple[str, dict, str]] = [(p["converter"], dict(p["params"]), p["mode"])
                                                  for p in _DATA["operating_points"]]

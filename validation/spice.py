@@ -196,3 +196,53 @@ def spice_trajectory(model, params: dict, netlist: Netlist, result: SpiceResult,
                       period=model.period(params),
                       metadata={"spice_options": result.options, "ngspice": result.ngspice_version,
                                 "model": model.name, "params": params})
+
+
+def circuit_trajectory(circuit, params: dict, netlist: Netlist, result: SpiceResult, window_start: float = 0.0):
+    """An ngspice run of a netlist (:func:`netlists.circuit.circuit_netlist`) as a Trajectory labelled by its
+    Circuit: the states, every node voltage and every current ngspice measures (sources, inductors, diodes and
+    switches through their sense sources; resistors from their nodes), ``vout`` and ``switch``, and the mode of
+    each point from the diodes conducting (current above CURRENT_FRACTION of the largest after
+    ``window_start``) and the switches closed (control voltage above VT)."""
+    from converters.trajectory import Trajectory
+    t = result.time
+    compiled = circuit.compiled(params)
+    x = np.column_stack([result.signal(netlist.probes[name]) for name in compiled.state_names])
+    measured = {}
+    for name in compiled.signal_names:
+        if name in netlist.probes:
+            measured[name] = result.signal(netlist.probes[name])
+    nodes = lambda n: np.zeros_like(t) if n == "0" else measured.get(f"v({n})", np.full_like(t, np.nan))   # noqa: E731
+    for e in circuit.netlist.elements:
+        if e.kind == "R":
+            measured[f"i({e.name})"] = (nodes(e.nodes[0]) - nodes(e.nodes[1])) / e.value
+    for name in compiled.signal_names:
+        measured.setdefault(name, np.full_like(t, np.nan))
+    if circuit.output not in measured:
+        a, b = circuit.output[2:-1].split(",")
+        measured[circuit.output] = nodes(a.strip()) - nodes(b.strip())
+    measured["vout"] = measured[circuit.output]
+    in_window = t >= window_start
+    diodes = [d for d in compiled.pair_names if d != "none"]
+    conducting = np.zeros((t.size, len(diodes)), dtype=bool)
+    for i, d in enumerate(diodes):
+        current = measured[f"i({d})"]
+        peak = np.abs(current[in_window]).max() if in_window.any() else 0.0
+        conducting[:, i] = current > CURRENT_FRACTION * peak
+    closed = []
+    for s in (e for e in circuit.netlist.elements if e.kind == "S"):
+        vt = circuit.netlist.models[s.model].params.get("VT", 0.0)
+        closed.append(nodes(s.nodes[2]) - nodes(s.nodes[3]) > vt)
+    measured["switch"] = closed[0].astype(np.int8) if closed else np.zeros(t.size, np.int8)
+    labels = np.empty(t.size, dtype=object)
+    names = [s.upper() for s in compiled.switch_names] + [d.upper() for d in diodes]
+    flags = np.column_stack(closed + [conducting[:, i] for i in range(len(diodes))]) if names else np.zeros((t.size, 0))
+    for i, row in enumerate(flags):
+        labels[i] = "+".join(n for n, on in zip(names, row) if on) or "off"
+    measured["mode"] = labels
+    measured["conducting"] = conducting
+    return Trajectory(t=t, x=x, state_names=tuple(compiled.state_names), method="spice", steps=result.accepted_steps,
+                      wall_s=result.wall_s, rule="linear", labels=circuit.labels(params), measured=measured,
+                      period=circuit.period(params),
+                      metadata={"spice_options": result.options, "ngspice": result.ngspice_version,
+                                "model": circuit.name, "params": params})

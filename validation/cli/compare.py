@@ -30,7 +30,13 @@ def run(args) -> int:
     if args.plot is not None and args.plot.suffix.lower() != ".png":
         raise ParameterError(f"--plot must end in .png; got {str(args.plot)!r}")
     params = parse_assignments(args.params)
-    if args.control == "smc":
+    from converters.models import is_netlist
+    if is_netlist(args.converter):
+        if args.control != "pwm" or args.t_end is not None:
+            raise ParameterError("--control and --t-end apply to the built-in converters; a netlist states its drives "
+                                 "and its .tran")
+        rows, metrics, header, plot, extra = _circuit(args, params)
+    elif args.control == "smc":
         if args.start is not None:
             raise ParameterError(f"--start applies to PWM comparisons; the sliding-mode comparison starts from rest "
                                  f"(got --start {args.start})")
@@ -64,6 +70,18 @@ def run(args) -> int:
             print(f"  note: {note}")
         print("PASS" if passed else "FAIL")
     return 0 if passed else 1
+
+
+def _circuit(args, params):
+    from converters.models import get_model
+    from ..circuit_compare import compare_circuit
+    from ..plots import comparison_plot
+    circuit = get_model(args.converter)
+    p = circuit.resolve(params)
+    period = circuit.period(p) if circuit.periodic(p) else circuit.default_duration(p)
+    result = compare_circuit(circuit, params, h=args.h, start=args.start, spice_options=spice_options(args, period))
+    header = f"{result.circuit}: LCP against {result.spice.metadata['ngspice']} on the same netlist"
+    return result.rows, result.metrics, header, (lambda: comparison_plot(result)), result.to_dict()
 
 
 def _smc(args, params):

@@ -171,6 +171,13 @@ def _spice(args, params):
             args.periods = STEADY_PERIODS
     t_end = duration(model, p, args.t_end, args.periods)
     T = model.period(p)
+    if hasattr(model, "netlist"):             # a netlist file: ngspice runs the same circuit
+        from netlists.circuit import circuit_netlist
+
+        from ..spice import circuit_trajectory
+        model_netlist = lambda m, q, span, o, x0=None: circuit_netlist(m, q, span, o, x0=x0)   # noqa: E731
+        spice_trajectory = circuit_trajectory                                                   # noqa: F811
+        T = T if model.periodic(p) else t_end / 10
     netlist = model_netlist(model, p, t_end, options, x0=x0)
     result = run_spice(netlist)
     window_start = result.time[-1] - 10 * T

@@ -1,0 +1,123 @@
+"""A user's netlist as ngspice runs it: the same circuit, its ideal devices mapped to near-ideal models.
+
+The file is read and flattened by :mod:`converters.circuits.netlist` (every value a number, ``.control``
+refused), and written back element by element with numbers formatted here only, so nothing of the file's
+text reaches ngspice but what the reader understood. What changes: a switch model without ``RON`` gets the
+near-ideal ``RON``/``ROFF`` of :class:`~netlists.build.SpiceOptions`, a diode model without ``IS``/``N`` the
+near-ideal ``IS``/``N``, each diode and inductor a 0 V sense source (its current is a probe), the
+``.tran`` and ``.options`` pcsuite's, and the initial conditions the run's start (``IC=`` on every
+capacitor and inductor, with ``UIC``). Element names keep their letter; a subcircuit's elements and nodes
+keep their flattened names with ``.`` written as ``_``.
+"""
+from __future__ import annotations
+
+import math
+
+from converters.circuits.netlist import Pulse
+from converters.errors import ParameterError
+
+from .build import Netlist, SpiceOptions, _num
+
+
+def _name(flat: str) -> str:
+    return flat.replace(".", "_").replace("#", "_")
+
+
+def _node(flat: str) -> str:
+    return "0" if flat == "0" else _name(flat)
+
+
+def circuit_netlist(circuit, p: dict, t_end: float, options: SpiceOptions | None = None, x0=None) -> Netlist:
+    """The ngspice netlist of ``circuit`` (a :class:`converters.models.netlist.Circuit`) at parameters ``p`` over
+    [0, t_end], started from ``x0`` (the circuit's state vector; default its own initial state)."""
+    from converters.circuits.netlist import read_netlist
+    options = options or SpiceOptions()
+    netlist = read_netlist(circuit.netlist.text, overrides=p, name=circuit.source)
+    compiled = circuit.compiled(p)
+    T = compiled.period if math.isfinite(compiled.period) else t_end
+    x = compiled.x0 if x0 is None else list(x0)
+    if len(x) != len(compiled.state_names):
+        raise ParameterError(f"x0 must have {len(compiled.state_names)} entries ({', '.join(compiled.state_names)}); "
+                             f"got {len(x)}")
+    ic = dict(zip(compiled.state_names, (_num(f"x0[{n}]", v) for n, v in zip(compiled.state_names, x))))
+    lines = [f"* pcsuite: {circuit.title}"]
+    probes, pairs = {}, []
+    for e in netlist.elements:
+        n = [_node(node) for node in e.nodes]
+        name = e.kind + _name(e.name)[1:] if _name(e.name)[0].upper() == e.kind else e.kind + "_" + _name(e.name)
+        if e.kind == "R":
+            lines.append(f"{name} {n[0]} {n[1]} {_num(e.name, e.value)}")
+        elif e.kind == "C":
+            lines.append(f"{name} {n[0]} {n[1]} {_num(e.name, e.value)} IC={ic[f'v({e.name})']}")
+            probes[f"v({e.name})"] = ((n[1], -1.0) if n[0] == "0" else (n[0], 1.0) if n[1] == "0"
+                                      else ((n[0], n[1]), 1.0))
+        elif e.kind == "L":
+            sense = f"vsense_{_name(e.name)}"
+            lines += [f"{sense} {n[0]} {n[0]}_{_name(e.name)}s DC 0",
+                      f"{name} {n[0]}_{_name(e.name)}s {n[1]} {_num(e.name, e.value)} IC={ic[f'i({e.name})']}"]
+            probes[f"i({e.name})"] = (f"{sense}#branch", 1.0)
+        elif e.kind == "K":
+            a, b = (f"L{_name(c)[1:]}" if _name(c)[0].upper() == "L" else "L_" + _name(c) for c in e.control)
+            lines.append(f"{name} {a} {b} {_num(e.name, e.value)}")
+        elif e.kind in "VI":
+            lines.append(f"{name} {n[0]} {n[1]} {_waveform(e.name, e.waveform)}")
+            if e.kind == "V":
+                probes[f"i({e.name})"] = (f"{name.lower()}#branch", 1.0)
+        elif e.kind in "EG":
+            lines.append(f"{name} {n[0]} {n[1]} {n[2]} {n[3]} {_num(e.name, e.value)}")
+        elif e.kind in "FH":
+            control = e.control[0]
+            vname = "V" + _name(control)[1:] if _name(control)[0].upper() == "V" else "V_" + _name(control)
+            lines.append(f"{name} {n[0]} {n[1]} {vname} {_num(e.name, e.value)}")
+        elif e.kind == "D":
+            sense = f"vsense_{_name(e.name)}"
+            lines += [f"{sense} {n[0]} {n[0]}_{_name(e.name)}s DC 0",
+                      f"{name} {n[0]}_{_name(e.name)}s {n[1]} {_name(e.model)}"]
+            probes[f"i({e.name})"] = (f"{sense}#branch", 1.0)
+            pairs.append(f"i({e.name})")
+        elif e.kind == "S":                # no sense source: in series with a switch it stalled ngspice (a Cuk)
+            lines.append(f"{name} {n[0]} {n[1]} {n[2]} {n[3]} {_name(e.model)}")
+    for model in netlist.models.values():
+        lines.append(_model(model, options))
+    for node in netlist.nodes:
+        if node != "0":
+            probes.setdefault(f"v({node})", (_node(node), 1.0))
+    switches = [e for e in netlist.elements if e.kind == "S"]
+    if switches:
+        s = switches[0]
+        model = netlist.models[s.model]
+        probes["switch"] = ({_node(s.nodes[2]): 1.0, **({_node(s.nodes[3]): -1.0} if s.nodes[3] != "0" else {})},
+                            model.params.get("VT", 0.0))
+    # a period's fraction (TMAX = T/200 by default), or without a period the file's own .tran step
+    tran = netlist.tran
+    tmax = options.tmax_fraction * T if math.isfinite(compiled.period) else min(tran.tmax or tran.tstep,
+                                                                                 options.tmax_fraction * t_end / 10)
+    lines += [f".options RELTOL={_num('reltol', options.reltol)} METHOD={options.method} ITL4=100",
+              f".tran {_num('tstep', tmax)} {_num('t_end', t_end)} 0 {_num('tmax', tmax)} UIC", ".end"]
+    return Netlist("\n".join(lines) + "\n", circuit.name, dict(p), t_end, options, probes, tuple(pairs) or ("none",))
+
+
+def _waveform(name: str, w) -> str:
+    if isinstance(w, Pulse):
+        values = [w.v1, w.v2, w.td, w.tr, w.tf, w.pw, w.per]
+        if not math.isfinite(w.per):
+            values = values[:-1] if math.isfinite(w.pw) else values[:-2]
+        return "PULSE(" + " ".join(_num(f"{name} PULSE", v) for v in values) + ")"
+    return f"DC {_num(name, float(w))}"
+
+
+def _model(model, options: SpiceOptions) -> str:
+    params = dict(model.params)
+    if model.kind == "SW":
+        params.setdefault("RON", options.switch_ron)
+        params.setdefault("ROFF", options.switch_roff)
+        params.setdefault("VT", 0.0)
+        params.setdefault("VH", 0.0)
+    elif model.kind == "D":
+        if "IS" not in params and "N" not in params:
+            params.update(IS=options.diode_is, N=options.diode_n)
+    text = " ".join(f"{key}={_num(f'.model {model.name} {key}', value)}" for key, value in params.items())
+    return f".model {_name(model.name)} {model.kind}({text})"
+
+
+__all__ = ["circuit_netlist"]

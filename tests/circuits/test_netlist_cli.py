@@ -1,0 +1,58 @@
+"""A netlist file wherever a converter name is accepted: simulate (every method, ngspice included) and compare,
+which runs ngspice on the same file (its ideal devices mapped to near-ideal models)."""
+import json
+from pathlib import Path
+
+import pytest
+
+from validation.cli import main
+
+NETLISTS = Path(__file__).resolve().parents[2] / "netlists" / "circuits"
+
+
+def run_cli(capsys, *argv):
+    code = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+@pytest.mark.parametrize("method", ["lcp", "event"])
+def test_simulate_a_netlist_reports_every_signal_under_its_spice_name(capsys, method):
+    code, out, err = run_cli(capsys, "simulate", NETLISTS / "buck.cir", "-p", "R=5", "-p", "D=0.5", "-p", "L=100u", "--steady",
+                             "--method", method, "--json")
+    summary = json.loads(out)
+    assert code == 0 and summary["converter"] == "buck.cir"
+    assert summary["vout_mean"] == pytest.approx(6.0, rel=1e-3)           # CCM: D Vin
+    rows = summary["measurements"]
+    assert {"v(out)", "v(sw)", "i(l1)", "i(d1)", "i(r1)", "i(vin)"} <= set(rows)
+    assert rows["i(r1)"]["mean"] == pytest.approx(rows["v(out)"]["mean"] / 5.0, rel=1e-9)
+    assert rows["i(l1)"]["mean"] == pytest.approx(rows["i(r1)"]["mean"], rel=1e-6)      # the capacitor's charge balance
+    assert set(summary["mode_fractions"]) == {"S1", "D1"}
+
+
+def test_a_netlist_parameter_is_refused_by_name(capsys):
+    code, out, err = run_cli(capsys, "simulate", NETLISTS / "buck.cir", "-p", "Lx=1u")
+    assert code == 2 and "unknown parameter 'lx'" in err and "valid names" in err and len(err.splitlines()) == 1
+
+
+@pytest.mark.spice
+@pytest.mark.parametrize("name", ["buck", "boost", "buck-boost", "cuk", "diode-bridge", "half-wave"])
+def test_compare_runs_ngspice_on_the_same_netlist_and_passes(capsys, ngspice, name):
+    code, out, err = run_cli(capsys, "compare", NETLISTS / f"{name}.cir", "--json")
+    result = json.loads(out)
+    assert code == 0 and result["passed"], (result["checks"], result["metrics"])
+    if name in ("buck", "boost", "buck-boost", "cuk"):
+        assert result["checks"] == {"mean_rel": True, "ripple_rel": True, "mode_agreement": True}
+        key = "v(out)_mean_rel_error"
+        assert result["metrics"][key] <= 1e-3 and result["metrics"]["spice_settled"]
+
+
+@pytest.mark.spice
+def test_simulate_a_netlist_in_ngspice_reads_the_same_signals(capsys, ngspice):
+    code, out, err = run_cli(capsys, "simulate", NETLISTS / "boost.cir", "--method", "spice", "--steady", "--json")
+    spice = json.loads(out)
+    code2, out2, _ = run_cli(capsys, "simulate", NETLISTS / "boost.cir", "--steady", "--json")
+    lcp = json.loads(out2)
+    assert code == code2 == 0
+    assert spice["vout_mean"] == pytest.approx(lcp["vout_mean"], rel=1e-3)
+    assert spice["measurements"]["i(l1)"]["mean"] == pytest.approx(lcp["measurements"]["i(l1)"]["mean"], rel=2e-3)

@@ -1,0 +1,171 @@
+"""``pcsuite compare FILE.cir``: a netlist's LCS (the LCP time-stepper) against ngspice on the same file.
+
+Both start on the stepper's periodic orbit (a periodic circuit; initial conditions in the netlist) or from the
+file's own initial state, run the same span, and are read over its last ``window`` periods (or the last tenth of
+a circuit without a period). ngspice's near-ideal devices give it a steady state of its own: from the orbit it
+runs on, from where it ended, until its window's mean of vout moves less than SPICE_SETTLE (at most
+MAX_SPICE_PERIODS periods), as for the built-in converters. Checked per named output (each ``.meas`` vector and
+vout): the mean and the per-period peak-to-peak ripple; and the mode sequence of every compared period (the
+conducting diodes and the closed switches, ngspice's diodes conducting above CURRENT_FRACTION of their peak).
+Thresholds: ``[thresholds.circuit]`` in ``validation/data/defaults.toml``.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from converters.run import make_method, run_converter, steady_state
+
+from .compare import MAX_SPICE_PERIODS, SPICE_SETTLE, spice_drift, unsettled_cause
+from .defaults import THRESHOLDS, passes
+
+PERIODS, WINDOW = 30, 10
+
+
+@dataclass
+class CircuitComparison:
+    circuit: str
+    params: dict
+    lcp: object
+    spice: object
+    window: tuple
+    metrics: dict = field(default_factory=dict)
+    rows: list = field(default_factory=list)
+    notes: list = field(default_factory=list)
+
+    @property
+    def converter(self) -> str:           # what the comparison plot titles
+        return self.circuit
+
+    @property
+    def passed(self) -> bool:
+        return all(ok for _, _, _, ok in self.rows)
+
+    def to_dict(self) -> dict:
+        return {"converter": self.circuit, "params": self.params, "metrics": self.metrics, "notes": self.notes,
+                "ngspice": self.spice.metadata["ngspice"], "spice_options": self.spice.metadata["spice_options"],
+                "passed": self.passed}
+
+
+def compare_circuit(circuit, params: dict | None = None, *, h=None, spice_options=None, start: str | None = None,
+                    periods: int = PERIODS, window: int = WINDOW) -> CircuitComparison:
+    """Run a netlist's LCS and ngspice on the same file and measure their agreement (module docstring)."""
+    from netlists.circuit import circuit_netlist
+
+    from .spice import circuit_trajectory, run_spice
+    p = circuit.resolve(params)
+    periodic = circuit.periodic(p)
+    start = start or ("steady" if periodic else "rest")
+    if start == "steady" and not periodic:
+        from converters.errors import ParameterError
+        raise ParameterError(f"--start steady needs a periodic circuit; {circuit.name} has no period (its sources "
+                             "are DC): use --start rest")
+    T = circuit.period(p) if periodic else circuit.default_duration(p) / periods
+    span = periods * T
+    x0 = None
+    rho = None
+    if start == "steady":
+        orbit = steady_state(circuit, p, make_method(circuit, p, "lcp", h), tol=1e-9)
+        x0, rho = orbit.x0, orbit.spectral_radius
+    lcp = run_converter(circuit, p, h=h, t_end=span, x0=x0)
+    t0 = span - window * T
+    netlist = circuit_netlist(circuit, p, span, spice_options, x0=lcp.x[0])
+    spice = circuit_trajectory(circuit, p, netlist, run_spice(netlist), t0)
+    spice_periods, settle = periods, spice_drift(spice, T, periods, window)
+    while start == "steady" and settle > SPICE_SETTLE and spice_periods < MAX_SPICE_PERIODS:
+        netlist = circuit_netlist(circuit, p, span, spice_options, x0=spice.x[-1])
+        spice = circuit_trajectory(circuit, p, netlist, run_spice(netlist), t0)
+        spice_periods += periods
+        settle = spice_drift(spice, T, periods, window)
+    result = CircuitComparison(circuit.name, p, lcp, spice, (t0, span))
+    th = THRESHOLDS["circuit"]
+    m = result.metrics
+    if not periodic:
+        return _transient(result, circuit, th)
+    outputs = list(dict.fromkeys(["vout", *[v for v in circuit.netlist.outputs if v != circuit.output]]))
+    worst_mean, worst_ripple = 0.0, 0.0
+    for name in outputs:
+        mean_l, mean_s = lcp.mean(name, t0=t0, t1=span), spice.mean(name, t0=t0, t1=span)
+        scale = max(abs(mean_l), 1e-12)
+        rip_l = _period_ripple(lcp, name, t0, T, window)
+        rip_s = _period_ripple(spice, name, t0, T, window)
+        label = circuit.output if name == "vout" else name
+        m[f"{label}_mean_lcp"], m[f"{label}_mean_spice"] = mean_l, mean_s
+        m[f"{label}_mean_rel_error"] = abs(mean_s - mean_l) / scale
+        m[f"{label}_ripple_lcp"], m[f"{label}_ripple_spice"] = rip_l, rip_s
+        m[f"{label}_ripple_rel_error"] = abs(rip_s - rip_l) / max(abs(rip_l), 1e-12 * scale)
+        worst_mean = max(worst_mean, m[f"{label}_mean_rel_error"])
+        worst_ripple = max(worst_ripple, m[f"{label}_ripple_rel_error"])
+    sequences_l = _mode_sequences(lcp, t0, T, window)
+    sequences_s = _mode_sequences(spice, t0, T, window)
+    agreement = float(np.mean([a == b for a, b in zip(sequences_l, sequences_s)]))
+    m["mode_sequence_lcp"], m["mode_sequence_spice"] = " > ".join(sequences_l[-1]), " > ".join(sequences_s[-1])
+    m["mode_agreement"] = agreement
+    m["spice_settle"], m["spice_periods"], m["spice_settled"] = settle, spice_periods, bool(settle <= SPICE_SETTLE)
+    m["lcp_wall_s"], m["spice_wall_s"] = lcp.wall_s, spice.wall_s
+    m["current_signal"] = next((s for s in lcp.state_names if s.startswith("i(")), lcp.state_names[0])
+    result.rows = [("mean_rel", worst_mean, th["mean_rel"], passes("mean_rel", worst_mean, th["mean_rel"])),
+                   ("mode_agreement", agreement, th["mode_agreement"],
+                    passes("mode_agreement", agreement, th["mode_agreement"]))]
+    if settle <= SPICE_SETTLE or start != "steady":
+        result.rows.insert(1, ("ripple_rel", worst_ripple, th["ripple_rel"],
+                               passes("ripple_rel", worst_ripple, th["ripple_rel"])))
+    else:
+        result.notes.append(f"the ripple agreement ({worst_ripple:.2g}) is not checked: ngspice has not settled after "
+                            f"{spice_periods} periods (its window's mean moves {settle:.2g}; "
+                            f"{unsettled_cause(rho, spice_periods)})")
+    return result
+
+
+def _transient(result: CircuitComparison, circuit, th: dict) -> CircuitComparison:
+    """A circuit without a period (a transient from its initial state): each named output's waveform over the
+    whole run on a common grid (RMS of the difference over the RMS of the LCP's), and the fraction of the run
+    in the same mode."""
+    lcp, spice, m = result.lcp, result.spice, result.metrics
+    grid = np.linspace(lcp.t[0], lcp.t[-1], 20001)
+    worst = 0.0
+    for name in dict.fromkeys(["vout", *circuit.netlist.outputs]):
+        a = np.interp(grid, lcp.t, np.asarray(lcp.signal(name), dtype=float))
+        b = np.interp(grid, spice.t, np.asarray(spice.signal(name), dtype=float))
+        label = circuit.output if name == "vout" else name
+        m[f"{label}_waveform_rel_error"] = float(np.sqrt(np.mean((b - a) ** 2)) / max(np.sqrt(np.mean(a ** 2)), 1e-300))
+        worst = max(worst, m[f"{label}_waveform_rel_error"])
+    labels_l = np.asarray(lcp.modes()).astype(str)[np.clip(np.searchsorted(lcp.t, grid), 0, lcp.t.size - 1)]
+    labels_s = np.asarray(spice.modes()).astype(str)[np.clip(np.searchsorted(spice.t, grid), 0, spice.t.size - 1)]
+    agreement = float(np.mean(labels_l == labels_s))
+    m["mode_time_agreement"] = agreement
+    m["lcp_wall_s"], m["spice_wall_s"] = lcp.wall_s, spice.wall_s
+    m["current_signal"] = next((s for s in lcp.state_names if s.startswith("i(")), lcp.state_names[0])
+    result.rows = [("waveform_rel", worst, th["waveform_rel"], passes("waveform_rel", worst, th["waveform_rel"])),
+                   ("mode_time_agreement", agreement, th["mode_time_agreement"],
+                    passes("mode_time_agreement", agreement, th["mode_time_agreement"]))]
+    return result
+
+
+def _period_ripple(tr, name: str, t0: float, T: float, window: int) -> float:
+    """The mean over the window's periods of each period's peak-to-peak value of a signal."""
+    values = []
+    for k in range(window):
+        rows = tr._rows(t0 + k * T, t0 + (k + 1) * T)
+        values.append(float(np.ptp(np.asarray(tr.signal(name, rows), dtype=float))))
+    return float(np.mean(values))
+
+
+def _mode_sequences(tr, t0: float, T: float, window: int) -> list:
+    """Per period of the window, its sequence of modes (consecutive duplicates merged; a mode shorter than 0.2 % of
+    T, an edge's transient, left out)."""
+    out = []
+    for k in range(window):
+        rows = tr._rows(t0 + k * T, t0 + (k + 1) * T)
+        t, labels = tr.t[rows], np.asarray(tr.modes(rows)).astype(str)
+        sequence, start = [], t[0]
+        for i in range(1, len(labels) + 1):
+            if i == len(labels) or labels[i] != labels[i - 1]:
+                end = t[min(i, len(t) - 1)]
+                if end - start >= 2e-3 * T and (not sequence or sequence[-1] != labels[i - 1]):
+                    sequence.append(labels[i - 1])
+                start = end
+        out.append(tuple(sequence))
+    return out
