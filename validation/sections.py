@@ -215,8 +215,19 @@ def tradeoff_section(files: dict, meta: dict, source: str) -> Section:
     front = pd.concat([pareto_front(g) for _, g in runs.groupby("case", sort=False)])
     columns = ["case", "family", "setting", "wall_s", "error", "err_mean_vout", "err_rms_iL", "err_event_T"]
     failed = runs[runs["failure"].astype(object).fillna("").astype(str) != ""]
-    ok = bool(len(accept)) and bool((accept["result"] == "pass").all())
-    text = (f"<p>{source} {tradeoff_form(runs, meta)}</p>"
+    if meta.get("quick"):
+        # the report's quick form judges what a loaded machine cannot change: an LCP run as accurate as ngspice's
+        # default and an event run below 1e-8 exist; their speed-ups are measured here and judged by make bench
+        found = [c for c in ("lcp_setting", "event_setting") if c in accept]
+        ok = bool(len(accept)) and len(found) == 2 and bool(accept[found].notna().all().all())
+        verdict = ("<p>Verdict of this quick form: accuracy only (per case an LCP run at least as accurate as "
+                   "ngspice's default, and an event run below 1e-8); the speed-ups below are measured on this "
+                   "machine under its load, and <code>make bench</code> checks them (LCP at least 100x ngspice's "
+                   "default, the event method faster than it).</p>")
+    else:
+        ok = bool(len(accept)) and bool((accept["result"] == "pass").all())
+        verdict = ""
+    text = (f"<p>{source} {tradeoff_form(runs, meta)}</p>" + verdict
             + TRADEOFF_TEXT.format(periods=meta.get("periods", "the same"))
             + table_html(accept, "result", good=("pass",))
             + "<img src='tradeoff.png' alt='Pareto plot: error against wall time per case and method'>"
