@@ -412,6 +412,19 @@ def test_a_number_that_does_not_parse_gets_one_line_with_the_range(capsys, tmp_p
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.parametrize("flag", ["--periods", "--lhs"])
+def test_a_5000_digit_option_is_named_with_its_range_and_its_length(capsys, tmp_path, monkeypatch, flag):
+    """Python's "Exceeds the limit (4300 digits)" is a ValueError: the option was named, then all 5,000 digits."""
+    monkeypatch.chdir(tmp_path)
+    argv = ["sweep", "buck", "--grid", "D=0.2:0.8", flag, "1" * 5000]
+    with pytest.raises(SystemExit) as stop:
+        main(argv)
+    err = capsys.readouterr().err
+    within = {"--periods": ">= 1", "--lhs": "in [1, 10,000,000]"}[flag]
+    assert stop.value.code == 2 and err == (f"pcsuite: error: argument {flag}: must be an integer {within}; got "
+                                            "'11111111111111111111...1111111111 (5000 characters)'\n")
+
+
 def test_every_integer_and_real_option_names_its_range_when_its_value_does_not_parse():
     import argparse
 

@@ -51,7 +51,8 @@ def _typed(parse, described):
         try:
             return parse(text)
         except ValueError:
-            raise argparse.ArgumentTypeError(f"must be {described()}; got {text!r}") from None
+            from converters.validate import shown      # a 5,000-digit number is named by its length, not printed
+            raise argparse.ArgumentTypeError(f"must be {described()}; got {shown(text)}") from None
     return typed
 
 
