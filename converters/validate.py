@@ -60,7 +60,8 @@ def _to_float(name: str, value) -> float:
     try:
         return float(value)
     except OverflowError:
-        raise ParameterError(f"{name} must be a finite number, at most 1.8e308 in magnitude; got {shown(value)}") from None
+        raise ParameterError(f"{name} must be a finite number, at most 1.8e308 in magnitude; "
+                             f"got {shown(value)}") from None
 
 
 def parse_value(name: str, text, unit: str | None = None) -> float:
@@ -107,8 +108,8 @@ def parse_value(name: str, text, unit: str | None = None) -> float:
             zero = not any(ch in "123456789" for ch in re.split("[eE]", number)[0])
             value = 0.0 if zero or "e-" in number.lower() else math.inf
         if value == 0.0 and not zero:
-            raise ParameterError(f"{name} must be 0 or at least 5e-324 in magnitude (smaller underflows to 0 in double precision); "
-                                 f"got {shown(text)}")
+            raise ParameterError(f"{name} must be 0 or at least 5e-324 in magnitude (smaller underflows to 0 in double "
+                                 f"precision); got {shown(text)}")
         if not math.isfinite(value):
             raise ParameterError(f"{name} must be a finite number, at most 1.8e308 in magnitude; got {shown(text)}")
     if not math.isfinite(value):

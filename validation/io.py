@@ -16,8 +16,9 @@ moves anything it did not write, and a bad output path is refused with one line 
 - :func:`atomic_write_bytes` and :func:`atomic_directory` apply the same checks again at write time (a long
   run gives time for things to change) and write through a temporary named ``.NAME.PID.XXXXXXXX.tmp`` beside the
   target; :func:`atomic_write_files` writes a set of files (gdcm-map's table and plot) that lands together. A
-  file option's directory must exist: pcsuite does not create it. The writer holds an flock on its temporary; a temporary whose process is gone (``kill -9``) and which
-  nobody holds is removed by the next write to the same target. Report swaps are serialised by an flock on the
+  file option's directory must exist: pcsuite does not create it. The writer holds an flock on its temporary;
+  a temporary whose process is gone (``kill -9``) and which nobody holds is removed by the next write to the
+  same target. Report swaps are serialised by an flock on the
   parent directory: concurrent reports into one directory each land whole, the last one stays.
 
 The checks raise :class:`converters.errors.ParameterError` (one line, exit 2 on the command line) naming the
@@ -242,7 +243,8 @@ def _stage(path: Path, data: bytes) -> tuple[Path, str, int]:
     try:
         fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.{os.getpid()}.", suffix=".tmp", dir=path.parent)
     except OSError as exc:
-        raise ParameterError(f"{_label(_output(path))}: cannot write in {quoted(path.parent)} ({exc.strerror})") from None
+        raise ParameterError(f"{_label(_output(path))}: cannot write in {quoted(path.parent)} "
+                             f"({exc.strerror})") from None
     try:
         fcntl.flock(fd, fcntl.LOCK_EX)
         with os.fdopen(fd, "wb", closefd=False) as handle:

@@ -14,8 +14,8 @@ the dataset an uninterrupted run writes. A directory holding a different sweep, 
 refused, never overwritten. Resume trusts no part blindly: a part listed in ``parts.jsonl`` must have the
 bytes listed there, and one that is not (a kill between a part's rename and its line) must have the sweep's
 columns; every part's indices must lie in the sweep and appear once. Anything else in ``parts/`` (a copied
-part, another table, a link, a FIFO) is refused with one line naming it, and nothing is changed. Read a sweep back with :func:`load_sweep` (or ``pandas.read_parquet(DIR /
-"parts")``).
+part, another table, a link, a FIFO) is refused with one line naming it, and nothing is changed. Read a sweep
+back with :func:`load_sweep` (or ``pandas.read_parquet(DIR / "parts")``).
 
 :class:`SpiceSweep` is the ensemble of ngspice runs (the same circuits as netlists): per point, the LCP's
 periodic orbit as the initial condition (``steady``) or rest, ``periods`` periods in ngspice, the measures
@@ -212,8 +212,8 @@ class SweepStore:
                 raise
             raise ParameterError(f"{where} is unreadable ({exc}); choose another directory") from None
         if not isinstance(held, dict):
-            raise ParameterError(f"{where} is not a pcsuite sweep's (it holds {type(held).__name__ if held is not None else 'null'}"
-                                 "); choose another directory")
+            holds = "null" if held is None else type(held).__name__
+            raise ParameterError(f"{where} is not a pcsuite sweep's (it holds {holds}); choose another directory")
         return held
 
     def _take_lock(self):
