@@ -27,6 +27,8 @@ FUNCTIONS = {"sqrt": (math.sqrt, 1), "exp": (math.exp, 1), "ln": (math.log, 1), 
 CONSTANTS = {"pi": math.pi}
 #: Longest expression read (characters): a value is a formula, not a program.
 MAX_LENGTH = 2000
+#: Deepest nesting of parentheses, function calls and powers.
+MAX_DEPTH = 100
 
 
 def number(text: str) -> tuple[float, int]:
@@ -72,10 +74,17 @@ def evaluate(text: str, names: dict, what: str = "value") -> float:
     value = parser.expression()
     parser.skip()
     if parser.pos != len(text):
-        raise ParameterError(f"{what}: cannot read {text!r} past {text[:parser.pos]!r}")
+        raise ParameterError(f"{what}: cannot read {_shown(text)} past {_shown(text[:parser.pos])}")
     if not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise ParameterError(f"{what}: {text!r} is not a finite number (it gives {value!r})")
+        raise ParameterError(f"{what}: {_shown(text)} is not a finite number (it gives {value!r})")
     return float(value)
+
+
+def _shown(text: str, limit: int = 60) -> str:
+    """``text`` quoted for a one-line message, its middle elided past ``limit`` characters."""
+    if len(text) > limit:
+        text = text[:limit // 2] + "..." + text[-(limit // 2):]
+    return repr(text)
 
 
 class _Parser:
@@ -101,12 +110,17 @@ class _Parser:
         return False
 
     def fail(self, why: str):
-        raise ParameterError(f"{self.what}: {why} in {self.text!r} at character {self.pos + 1}")
+        raise ParameterError(f"{self.what}: {why} in {_shown(self.text)} at character {self.pos + 1}")
+
+    def nest(self, step: int):
+        """Count the recursion (parentheses, signs, powers, calls): a formula deeper than MAX_DEPTH is refused
+        before Python's own recursion limit is reached (a RecursionError would be a traceback)."""
+        self.depth += step
+        if self.depth > MAX_DEPTH:
+            self.fail(f"expressions nested deeper than {MAX_DEPTH} (parentheses, calls or powers)")
 
     def expression(self) -> float:
-        self.depth += 1
-        if self.depth > 100:
-            self.fail("expressions nested too deep")
+        self.nest(1)
         value = self.term()
         while True:
             if self.take("+"):
@@ -114,7 +128,7 @@ class _Parser:
             elif self.take("-"):
                 value = value - self.term()
             else:
-                self.depth -= 1
+                self.nest(-1)
                 return value
 
     def term(self) -> float:
@@ -135,7 +149,9 @@ class _Parser:
     def power(self) -> float:
         base = self.unary()
         if self.take("**") or self.take("^"):
+            self.nest(1)
             exponent = self.power()
+            self.nest(-1)
             try:
                 return math.pow(base, exponent)
             except (OverflowError, ValueError):
@@ -143,11 +159,14 @@ class _Parser:
         return base
 
     def unary(self) -> float:
-        if self.take("-"):
-            return -self.unary()
-        if self.take("+"):
-            return self.unary()
-        return self.atom()
+        sign = 1.0
+        while True:                        # a run of signs is a loop, not a recursion
+            if self.take("-"):
+                sign = -sign
+            elif not self.take("+"):
+                break
+        value = self.atom()
+        return -value if sign < 0 else value
 
     def atom(self) -> float:
         self.skip()
@@ -167,7 +186,7 @@ class _Parser:
         self.pos = match.end()
         if self.peek("("):
             if name not in FUNCTIONS:
-                self.fail(f"unknown function {name!r} (known: {', '.join(sorted(FUNCTIONS))})")
+                self.fail(f"unknown function {_shown(name)} (known: {', '.join(sorted(FUNCTIONS))})")
             self.take("(")
             function, arity = FUNCTIONS[name]
             args = [self.expression()]
@@ -185,4 +204,4 @@ class _Parser:
             return self.names[name]
         if name in CONSTANTS:
             return CONSTANTS[name]
-        self.fail(f"{name!r} is not a parameter defined before it (.param)")
+        self.fail(f"{_shown(name)} is not a parameter defined before it (.param)")
