@@ -46,6 +46,12 @@ REFUSED = {"M": "a MOSFET", "Q": "a bipolar transistor", "J": "a JFET", "Z": "a 
            "A": "an XSPICE code model", "T": "a transmission line", "O": "a lossy transmission line",
            "U": "an RC line", "Y": "a transmission line", "N": "a device model", "P": "a coupled line"}
 MODEL_TYPES = {"D": "D", "S": "SW", "W": "CSW"}
+#: .model types pcsuite refuses, with what they are.
+MODEL_KINDS = {"NPN": "a bipolar transistor", "PNP": "a bipolar transistor", "NMOS": "a MOSFET", "PMOS": "a MOSFET",
+               "VDMOS": "a MOSFET", "NJF": "a JFET", "PJF": "a JFET", "NMF": "a MESFET", "PMF": "a MESFET",
+               "R": "a semiconductor resistor", "C": "a semiconductor capacitor", "L": "an inductor model",
+               "URC": "an RC line", "LTRA": "a lossy transmission line", "TXL": "a transmission line",
+               "CPL": "a coupled line"}
 
 
 class NetlistError(ParameterError):
@@ -132,6 +138,17 @@ class Netlist:
     expressions: dict = field(default_factory=dict)
     #: The .param names defined by expressions of others (they follow them; not parameters of their own).
     derived: frozenset = frozenset()
+    #: .param name -> (its line, the text of its value) (the first definition at the top level).
+    param_lines: dict = field(default_factory=dict)
+
+    def where(self, name: str | None = None) -> str:
+        """``FILE:LINE`` of the .param or element ``name`` (case-insensitive), ``FILE`` when it names neither:
+        the start of a message about it."""
+        key = (name or "").lower()
+        if key in self.param_lines:
+            return f"{self.path}:{self.param_lines[key][0]}"
+        line = next((e.line for e in self.elements if e.name == key), None)
+        return f"{self.path}:{line}" if line else self.path
 
     def element(self, name: str) -> Element:
         for e in self.elements:
@@ -167,15 +184,34 @@ def read_netlist(source, overrides: dict | None = None, name: str | None = None)
         if size > MAX_BYTES:
             raise NetlistError(f"{label}: {size:,} bytes, more than a netlist's {MAX_BYTES:,}")
         raw = path.read_bytes()
+        nul = raw.find(b"\x00")
         try:
             text = raw.decode("utf-8")
         except UnicodeDecodeError as e:
-            raise NetlistError(f"{label}: not UTF-8 text (byte {e.start})") from None
+            if not 0 <= nul < e.start:
+                line, column = _position(raw, e.start)
+                raise NetlistError(f"{label}:{line}: not UTF-8 text: byte 0x{raw[e.start]:02x} at column {column} "
+                                   "(a binary file, or text in another encoding: save it as UTF-8)") from None
+            text = raw[:nul].decode("utf-8") + "\x00"
     else:
         text, label = str(source), quoted(name or "<netlist>")
-        if len(text.encode()) > MAX_BYTES:
-            raise NetlistError(f"{label}: {len(text.encode()):,} bytes, more than a netlist's {MAX_BYTES:,}")
+        if len(text.encode("utf-8", "surrogatepass")) > MAX_BYTES:
+            raise NetlistError(f"{label}: {len(text.encode('utf-8', 'surrogatepass')):,} bytes, more than a "
+                               f"netlist's {MAX_BYTES:,}")
+    nul = text.find("\x00")
+    if nul >= 0:
+        line, column = _position(text, nul)
+        raise NetlistError(f"{label}:{line}: a NUL byte at column {column}: a binary file, not a netlist")
     return _Reader(text, label, overrides or {}).read()
+
+
+def _position(text, offset: int) -> tuple[int, int]:
+    """(line, column) of ``offset`` in ``text`` (str or bytes), lines counted as the reader counts them (CR LF,
+    CR and LF each end one)."""
+    head = text[:offset]
+    cr, lf = ("\r", "\n") if isinstance(head, str) else (b"\r", b"\n")
+    head = head.replace(cr + lf, lf).replace(cr, lf)
+    return head.count(lf) + 1, len(head) - (head.rfind(lf) + 1) + 1
 
 
 class _Reader:
@@ -201,8 +237,6 @@ class _Reader:
         title = raw[0].strip() if raw else ""
         out: list[_Line] = []
         for i, line in enumerate(raw[1:], start=2):
-            if "\x00" in line:
-                raise self.error(i, "a NUL character (a binary file?)")
             stripped = line.strip()
             if not stripped or stripped.startswith("*"):
                 continue
@@ -232,16 +266,12 @@ class _Reader:
         tran = None
         outputs: list = []
         expressions: dict = {}
+        param_lines: dict = {}
+        self.refuse_commands(lines)
         i = 0
         while i < len(lines):
             line = lines[i]
             word = line.text.split()[0].lower()
-            if word == ".control":
-                raise self.error(line, "a .control block: pcsuite runs ngspice on the file and never runs its "
-                                       "commands (shell, ...); remove it")
-            if word in (".include", ".inc", ".lib"):
-                raise self.error(line, f"{word} reads another file: pcsuite reads this file alone; paste the "
-                                       "models and subcircuits in")
             if word == ".subckt":
                 end = i + 1
                 depth = 1
@@ -267,6 +297,8 @@ class _Reader:
                 raise self.error(line, ".ends without its .subckt")
             if word == ".param":
                 self.param_line(line, params, scope=True)
+                for key, value in self.assignments(line, line.text.split(None, 1)[1]):
+                    param_lines.setdefault(key, (line.number, value))
             elif word == ".model":
                 model = self.model_line(line, params)
                 if model.name in models:
@@ -304,10 +336,28 @@ class _Reader:
             names = sorted(set(params) | {e.name for e in elements if e.value is not None})
             raise NetlistError(f"{self.label}: -p {unknown[0]}: no .param or element of that name (valid: "
                                f"{', '.join(names)})")
+        seen: dict = {}
+        for e in elements:
+            if e.name in seen:
+                raise self.error(e.line, f"{e.title}: the name is used twice (first on line {seen[e.name].line}): "
+                                         "SPICE names an element by its name; rename one")
+            seen[e.name] = e
         return Netlist(self.label, title, tuple(elements), models, params, ic, tran, tuple(outputs), self.text,
-                       expressions, frozenset(self.derived))
+                       expressions, frozenset(self.derived), param_lines)
 
     # --- directives --------------------------------------------------------------------------------------------
+
+    def refuse_commands(self, lines: list[_Line]):
+        """A .control block or a .include/.lib anywhere (inside a .subckt, after .end) is refused before any
+        other line is read: nothing the file says is evaluated first."""
+        for line in lines:
+            word = line.text.split()[0].lower()
+            if word in (".control", ".endc"):
+                raise self.error(line, f"{word}: a .control block holds ngspice commands (shell, ...); pcsuite "
+                                       "never runs its commands: remove the block")
+            if word in (".include", ".inc", ".lib", ".libinclude", ".incl"):
+                raise self.error(line, f"{word} reads another file: pcsuite reads this file alone; paste the "
+                                       "models and subcircuits in")
 
     def assignments(self, line: _Line, text: str) -> list[tuple[str, str]]:
         """NAME=VALUE pairs; a value may be {expr}, 'expr' or a bare expression without spaces."""
@@ -334,7 +384,7 @@ class _Reader:
             else:
                 end = pos
                 depth = 0
-                while end < len(text) and (depth > 0 or text[end] not in " \t"):
+                while end < len(text) and (depth > 0 or text[end] not in " \t,"):
                     depth += (text[end] == "(") - (text[end] == ")")
                     end += 1
                 value = text[pos:end]
@@ -374,15 +424,16 @@ class _Reader:
             raise self.error(line, ".model NAME TYPE(PARAMS) expected")
         name, kind = match.group(1).lower(), match.group(2).upper()
         if kind not in ("D", "SW", "CSW"):
-            raise self.error(line, f".model {name} {kind}: pcsuite compiles ideal diodes (D) and switches (SW, CSW); "
-                                   f"a {kind} model has no complementarity form")
-        body = (match.group(3) if match.group(3) is not None else match.group(4) or "").replace(",", " ")
+            what = MODEL_KINDS.get(kind, f"a {kind} model")
+            raise self.error(line, f".model {match.group(1)} {kind} is {what}: pcsuite compiles ideal diodes (D) and "
+                                   "switches (SW, CSW); it has no complementarity form")
+        body = match.group(3) if match.group(3) is not None else match.group(4) or ""
         values = {key.upper(): self.value(line, value, params, f".model {name} {key}")
                   for key, value in self.assignments(line, body)}
         return Model(name, kind, values, line.number)
 
     def tran_line(self, line: _Line, params: dict) -> Tran:
-        words = line.text.split()[1:]
+        words = self.words(line.text)[1:]
         uic = any(w.lower() == "uic" for w in words)
         numbers = [self.value(line, w, params, ".tran") for w in words if w.lower() != "uic"]
         if len(numbers) < 2:
@@ -390,9 +441,14 @@ class _Reader:
         tstep, tstop = numbers[0], numbers[1]
         tstart = numbers[2] if len(numbers) > 2 else 0.0
         tmax = numbers[3] if len(numbers) > 3 else None
-        if not (tstep > 0 and tstop > 0 and 0 <= tstart < tstop and (tmax is None or tmax > 0)):
-            raise self.error(line, f".tran needs TSTEP > 0, TSTOP > TSTART >= 0 (and TMAX > 0); got "
-                                   f"{' '.join(words)}")
+        problems = [(tstep > 0, f"TSTEP = {tstep:g} s must be positive"),
+                    (tstop > 0, f"TSTOP = {tstop:g} s must be positive"),
+                    (tstart >= 0, f"TSTART = {tstart:g} s must not be negative"),
+                    (tstart < tstop, f"TSTOP = {tstop:g} s must be after TSTART = {tstart:g} s"),
+                    (tmax is None or tmax > 0, f"TMAX = {tmax} s must be positive")]
+        for ok, why in problems:
+            if not ok:
+                raise self.error(line, f".tran {' '.join(words)}: {why} (.tran TSTEP TSTOP [TSTART [TMAX]] [UIC])")
         return Tran(tstep, tstop, tstart, tmax, uic)
 
     # --- elements ----------------------------------------------------------------------------------------------
@@ -403,11 +459,15 @@ class _Reader:
         for line in lines:
             words = line.text.split()
             letter = words[0][0].upper()
+            if letter == "." and prefix:
+                raise self.error(line, f"{words[0]} inside a .subckt (instance {prefix[:-1].upper()}): a subcircuit "
+                                       "holds elements, .param and .model; write the directive at the top level")
             if letter in REFUSED:
                 raise self.error(line, f"element {words[0]} is {REFUSED[letter]}: an LCS holds ideal switches and "
                                        "diodes (write a switch as S with a .model SW, a rectifier as D)")
             if letter not in KINDS:
-                raise self.error(line, f"element {words[0]}: unknown element letter {letter!r}")
+                raise self.error(line, f"{words[0]} is not an element: an element's name starts with its letter "
+                                       f"({', '.join(KINDS)}); {letter!r} is none")
             if letter == "X":
                 self.instance(line, params, models, subckts, prefix, nodemap, out, depth, expressions, chain)
             else:
@@ -430,7 +490,7 @@ class _Reader:
         letter = raw_name[0].upper()
         need = {"R": 3, "L": 3, "C": 3, "K": 3, "V": 2, "I": 2, "E": 5, "G": 5, "F": 4, "H": 4, "D": 3, "S": 5, "W": 4}
         rest = line.text[len(raw_name):].strip()
-        title = f"{KINDS[letter]} {raw_name}"
+        title = f"{KINDS[letter]} {raw_name}" + (f" (in {prefix[:-1].upper()})" if prefix else "")
         if letter in "RLCDVIEGFHSW":
             count = {"R": 2, "L": 2, "C": 2, "D": 2, "V": 2, "I": 2, "E": 4, "G": 4, "F": 2, "H": 2, "S": 4, "W": 2}[letter]
             tokens = rest.split()
@@ -442,11 +502,15 @@ class _Reader:
             nodes, after = (), rest
         own = raw_name.lower()
         if letter in "RLC":
-            value_text, _, options = after.partition(" ")
+            tokens = self.words(after)             # a value may be {a * b} or 'a * b', spaces and all
+            value_text, options = (tokens[0] if tokens else ""), " ".join(tokens[1:])
             assigns = dict(self.assignments(line, options)) if options.strip() else {}
             unknown = [k for k in assigns if k not in ("ic", "m", "tc1", "tc2")]
             if unknown:
                 raise self.error(line, f"{title}: {unknown[0].upper()}= is not read (value and IC= only)")
+            if "m" in assigns and self.value(line, assigns["m"], params, f"{title} M") != 1:
+                raise self.error(line, f"{title}: M={assigns['m']} (a multiplicity: that many in parallel) is not "
+                                       "read; write the value of the combination")
             if value_text.lower().startswith(("r=", "l=", "c=")):
                 value_text = value_text[2:]
             value = self.element_value(line, own, prefix, value_text, params, f"{title} value", expressions)
@@ -455,7 +519,7 @@ class _Reader:
             ic = self.value(line, assigns["ic"], params, f"{title} IC") if "ic" in assigns and letter != "R" else None
             return Element(name, letter, nodes, value=value, ic=ic, line=line.number)
         if letter == "K":
-            tokens = after.split()
+            tokens = self.words(after)
             if len(tokens) != 3:
                 raise self.error(line, f"{title}: K L1 L2 COUPLING expected")
             value = self.element_value(line, own, prefix, tokens[2], params, f"{title} coupling", expressions)
@@ -467,11 +531,11 @@ class _Reader:
             waveform = self.waveform(line, own, prefix, after, params, title, expressions)
             return Element(name, letter, nodes, waveform=waveform, line=line.number)
         if letter in "EG":
-            value = self.element_value(line, own, prefix, after.split()[0] if after.split() else "", params,
+            value = self.element_value(line, own, prefix, (self.words(after) or [""])[0], params,
                                        f"{title} gain", expressions)
             return Element(name, letter, nodes, value=value, line=line.number)
         if letter in "FH":
-            tokens = after.split()
+            tokens = self.words(after)
             if len(tokens) != 2:
                 raise self.error(line, f"{title}: {letter} N+ N- VSOURCE GAIN expected")
             value = self.element_value(line, own, prefix, tokens[1], params, f"{title} gain", expressions)
@@ -522,8 +586,8 @@ class _Reader:
                 return self.overrides[key]
             if not text:
                 raise self.error(line, f"{title}: its value is missing")
-            return self.element_value(line, own, prefix, text.split()[0], params, f"{title} value", expressions)
-        kind, body = match.group(1).upper(), match.group(2).replace(",", " ")
+            return self.element_value(line, own, prefix, self.words(text)[0], params, f"{title} value", expressions)
+        kind, body = match.group(1).upper(), match.group(2)
         if key in self.overrides:
             raise self.error(line, f"-p {own}: {title} is a {kind} source; change its parameters with .param")
         values = [self.value(line, w, params, f"{title} {kind}") for w in self.words(body)]
@@ -531,8 +595,12 @@ class _Reader:
             if not 2 <= len(values) <= 7:
                 raise self.error(line, f"{title}: PULSE(V1 V2 TD TR TF PW PER) takes 2 to 7 numbers; got {len(values)}")
             pulse = Pulse(*values)
-            if min(pulse.td, pulse.tr, pulse.tf) < 0 or pulse.pw <= 0 or pulse.per <= 0:
-                raise self.error(line, f"{title}: PULSE times must be >= 0 (PW, PER > 0)")
+            for field_, value in (("TD", pulse.td), ("TR", pulse.tr), ("TF", pulse.tf)):
+                if value < 0:
+                    raise self.error(line, f"{title}: PULSE {field_} = {value:g} s is negative (times are >= 0)")
+            for field_, value in (("PW", pulse.pw), ("PER", pulse.per)):
+                if value <= 0:
+                    raise self.error(line, f"{title}: PULSE {field_} = {value:g} s must be positive")
             if math.isfinite(pulse.per) and pulse.tr + pulse.pw + pulse.tf > pulse.per * (1 + 1e-12):
                 raise self.error(line, f"{title}: PULSE TR + PW + TF = {pulse.tr + pulse.pw + pulse.tf:g} s exceeds "
                                        f"its period {pulse.per:g} s")
@@ -544,19 +612,26 @@ class _Reader:
         if len(values) < 2 or len(values) % 2:
             raise self.error(line, f"{title}: PWL takes pairs of time and value; got {len(values)} numbers")
         points = tuple(zip(values[::2], values[1::2]))
-        if any(b[0] < a[0] for a, b in zip(points, points[1:])) or points[0][0] < 0:
-            raise self.error(line, f"{title}: PWL times must be >= 0 and non-decreasing")
+        if points[0][0] < 0:
+            raise self.error(line, f"{title}: PWL starts at a negative time {points[0][0]:g} s (times are >= 0)")
+        for n, (a, b) in enumerate(zip(points, points[1:]), start=2):
+            if b[0] < a[0]:
+                raise self.error(line, f"{title}: PWL time {b[0]:g} s (point {n}) comes before {a[0]:g} s: times "
+                                       "must not decrease")
         return Pwl(points)
 
     @staticmethod
     def words(body: str) -> list[str]:
-        out, depth, current = [], 0, ""
+        """``body`` split at blanks and commas outside {...}, (...) and '...'."""
+        out, depth, quoted_, current = [], 0, False, ""
         for ch in body:
-            if ch in "{(":
+            if ch == "'":
+                quoted_ = not quoted_
+            elif ch in "{(" and not quoted_:
                 depth += 1
-            elif ch in "})":
-                depth -= 1
-            if ch in " \t" and depth == 0:
+            elif ch in "})" and not quoted_:
+                depth = max(depth - 1, 0)
+            if ch in " \t," and depth == 0 and not quoted_:
                 if current:
                     out.append(current)
                 current = ""
@@ -582,7 +657,8 @@ class _Reader:
         if sub not in subckts:
             raise self.error(line, f"subcircuit instance {words[0]}: no .subckt {sub!r}")
         if sub in chain:
-            raise self.error(line, f"subcircuit {sub!r} instantiates itself ({' -> '.join(chain + (sub,))})")
+            raise self.error(line, f"subcircuit instance {words[0]}: .subckt {sub} instantiates itself "
+                                   f"({' -> '.join(chain + (sub,))}): a recursion without end")
         definition_line, body = subckts[sub]
         header = re.split(r"(?i)\s+params:\s*", definition_line.text, maxsplit=1)
         ports = header[0].split()[2:]
@@ -616,6 +692,49 @@ class _Reader:
                     chain + (sub,))
 
 
+def check_overrides(netlist: Netlist, given: dict, parameters=()) -> None:
+    """Refuse a ``-p NAME=VALUE`` on ``netlist`` with one line naming the file, the line of the .param or element
+    and the problem: a derived .param (an expression of others: set those), a name that is neither a parameter
+    nor an element (the valid names listed), a value outside the parameter's range. ``parameters``: the model's
+    :class:`~converters.params.Param` list (what ``-p`` may set, each with its ``check``); names are
+    case-insensitive."""
+    known = {p.name.lower(): p for p in parameters}
+    for key, value in given.items():
+        name = str(key).lower()
+        if name in netlist.derived:
+            text = netlist.param_lines.get(name, (None, "?"))[1]
+            inputs = ", ".join(_inputs(netlist, name))
+            raise NetlistError(f"{netlist.where(name)}: -p {key}: .param {name} = {text} is an expression of other "
+                               "parameters, not a parameter of its own; set those"
+                               + (f" ({inputs})" if inputs else ""))
+        if known and name not in known:
+            raise NetlistError(f"{netlist.where()}: -p {key}: unknown parameter {name!r}; valid names: "
+                               f"{', '.join(known)}")
+        if name in known:
+            try:
+                known[name].check(value)
+            except ParameterError as e:
+                raise NetlistError(f"{netlist.where(name)}: -p {key}={value}: {e}") from None
+
+
+def _inputs(netlist: Netlist, name: str) -> list[str]:
+    """The .param names (not derived) the derived .param ``name`` follows, through the derived ones it names."""
+    out, todo, seen = [], [name], set()
+    while todo:
+        current = todo.pop()
+        if current in seen:
+            continue
+        seen.add(current)
+        text = netlist.param_lines.get(current, (None, ""))[1]
+        for other in netlist.params:
+            if other not in seen and re.search(rf"(?i)(?<![\w.]){re.escape(other)}(?![\w.(])", text):
+                if other in netlist.derived:
+                    todo.append(other)
+                elif other not in out:
+                    out.append(other)
+    return sorted(out)
+
+
 FUNCTION_NAMES = {"sqrt", "exp", "ln", "log", "log10", "abs", "sin", "cos", "tan", "atan", "min", "max", "pow"}
 
 
@@ -633,5 +752,6 @@ def with_models(netlist: Netlist) -> Netlist:
     return netlist
 
 
-__all__ = ["read_netlist", "Netlist", "Element", "Model", "Pulse", "Sin", "Pwl", "Tran", "NetlistError",
+__all__ = ["read_netlist", "check_overrides", "Netlist",
+           "Element", "Model", "Pulse", "Sin", "Pwl", "Tran", "NetlistError",
            "with_models", "number", "replace"]
