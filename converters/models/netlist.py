@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from ..circuits.compile import Compiled, compile_netlist
-from ..circuits.netlist import Netlist, NetlistError, Pulse, read_netlist
+from ..circuits.netlist import Netlist, NetlistError, Pulse, check_overrides, read_netlist
 from ..errors import ParameterError, SignalError
 from ..params import Param
 from ..problems import LCSProblem
@@ -106,6 +106,7 @@ class Circuit(Model):
             if name in lowered:
                 raise ParameterError(f"-p {key} is given twice")
             lowered[name] = value
+        check_overrides(self.netlist, dict(given or {}), self.parameters)
         return super().resolve(lowered)
 
     def compiled(self, p: dict) -> Compiled:

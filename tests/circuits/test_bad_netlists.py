@@ -239,9 +239,6 @@ XFAIL = {
     "inductor-current-source-cutset": _MASKED,
     "floating-node": _MASKED,
     "current-source-into-node": _MASKED,
-    "override-unknown": _OVERRIDES,
-    "override-out-of-range": _OVERRIDES,
-    "override-derived-param": _OVERRIDES,
 }
 
 
