@@ -29,8 +29,10 @@ def test_a_value_beyond_double_precision_is_refused_with_what_was_typed():
 
 
 @pytest.mark.parametrize("text,message", [
-    ("1e99999999999999999999", "x must be a finite number, at most 1.8e308 in magnitude; got '1e99999999999999999999'"),
-    ("-1e99999999999999999999", "x must be a finite number, at most 1.8e308 in magnitude; got '-1e99999999999999999999'"),
+    ("1e99999999999999999999",
+     "x must be a finite number, at most 1.8e308 in magnitude; got '1e99999999999999999999'"),
+    ("-1e99999999999999999999",
+     "x must be a finite number, at most 1.8e308 in magnitude; got '-1e99999999999999999999'"),
     ("1e-99999999999999999999", "x must be 0 or at least 5e-324 in magnitude"),
     ("0e99999999999999999999", None),                                  # zero whatever its exponent
     ("1e99999999999999999999u", "x must be a finite number, at most 1.8e308 in magnitude"),
@@ -113,9 +115,10 @@ def test_the_cli_takes_units_and_refuses_a_contradicting_one_in_one_line(capsys)
     (lambda: __import__("converters.lcp", fromlist=["x"]).solve_lcp(np.eye(2), -np.ones(2), fast_paths="False"),
      "LCPError", "fast_paths must be True or False; got 'False'"),               # "False" was true
     (lambda: __import__("converters.run", fromlist=["x"]).run_converter(None), "ParameterError",
-     "the converter must be one of buck, boost, buck-boost, cuk, prc or a Model; got None"),   # AttributeError
+     "the converter must be one of buck, boost, buck-boost, cuk, prc, a netlist FILE.cir or a Model; "
+     "got None"),                                                                  # AttributeError
     (lambda: __import__("converters.models", fromlist=["x"]).get_converter(["buck"]), "ParameterError",
-     "CONVERTER must be one of buck, boost, buck-boost, cuk, prc; got ['buck']"),  # unhashable type
+     "CONVERTER must be one of buck, boost, buck-boost, cuk, prc or a netlist FILE.cir; got ['buck']"),   # unhashable
     (lambda: __import__("converters.run", fromlist=["x"]).run_converter("buck", "D=0.5"), "ParameterError",
      "params must be a dict of NAME: VALUE; got 'D=0.5'"),
     (lambda: __import__("converters.run", fromlist=["x"]).run_converter("buck", steady="no"), "ParameterError",
