@@ -242,6 +242,8 @@ def _step_target(model: Model, p: dict, method: Method) -> float | None:
     return tr.mean("vout")
 
 
+#: The most steps a run kept in chunks may take (memory no longer bounds it: ~20-60 s of compiled stepping).
+MAX_RUN_STEPS = 2e9
 #: Steps one chunk of a run kept at an output spacing simulates at once (its memory before thinning: ~300 MB for
 #: a two-state converter's stepper).
 CHUNK_STEPS = 500_000
@@ -280,6 +282,10 @@ def output_plan(model: Model, p: dict, method: Method, span: float, x0, output_s
     check_memory(f"--method {method.key}: {span:.3g} s kept at output_step = {spacing:.3g} s before {resolved:.3g} s "
                  "and at every step after it", (resolved / spacing + (span - resolved) / step) * per_sample,
                  remedy="a larger --output-step, a larger --h, or a shorter --t-end")
+    if not span / step <= MAX_RUN_STEPS:           # kept in chunks, memory no longer bounds its length
+        raise ParameterError(f"t_end: {span:.3g} s at {method.step_option} = {step:.3g} s is {span / step:.3g} steps, "
+                             f"more than a run takes ({MAX_RUN_STEPS:.0e}); use a shorter --t-end or fewer --periods, "
+                             f"or a larger --{method.step_option.replace('_', '-')}")
     return spacing, resolved
 
 
@@ -299,22 +305,28 @@ def _simulate_phases(model: Model, p: dict, method: Method, t_end: float, x0, sp
     return concatenate(parts)
 
 
-def _chunks(a: float, b: float, method: Method, spacing: float | None, period: float) -> list:
+def _chunks(a: float, b: float, method: Method, spacing: float | None, period: float):
     """[a, b] whole, or, for a run kept at an output spacing, in pieces of about CHUNK_STEPS of the method's steps:
     whole periods where the run has a period and a starts on one (each chunk then starts on the grid of the run
     whole, bit for bit), else a multiple of the step."""
     if spacing is None:
-        return [(a, b)]
+        yield a, b
+        return
     step = getattr(method, method.step_option)
     if np.isfinite(period) and a == round(a / period) * period:
         per = max(1, int(CHUNK_STEPS * step / period))
         first = int(round(a / period))
-        edges = [a] + [(first + k * per) * period for k in range(1, int(np.ceil((b - a) / (per * period))) + 1)]
+        edge = lambda k: (first + k * per) * period          # noqa: E731
     else:
-        length = CHUNK_STEPS * step
-        edges = [a + k * length for k in range(int(np.ceil((b - a) / length - 1e-9)) + 1)]
-    edges = [e for e in edges if e < b - 1e-9 * (b - a)] + [b]
-    return list(zip(edges[:-1], edges[1:]))
+        edge = lambda k: a + k * CHUNK_STEPS * step          # noqa: E731
+    k, start = 1, a
+    while True:                                       # lazily: a long run has many chunks
+        end = edge(k)
+        if end >= b - 1e-9 * (b - a):
+            yield start, b
+            return
+        yield start, end
+        start, k = end, k + 1
 
 
 def steady_state(model: Model, p: dict, method: Method, *, x0=None, warm_up: int = WARM_UP_PERIODS,

@@ -107,3 +107,13 @@ def test_a_60_ms_sliding_mode_run_at_the_default_step_writes_its_waveform_within
     head = frame["time"][frame["time"] < summary["resolved_from_s"]].to_numpy()
     assert frame["time"].iloc[-1] == pytest.approx(0.06) and np.diff(head).min() >= summary["output_step"] * (1 - 1e-6)
     assert summary["vout_mean"] == pytest.approx(24.0, rel=1e-3)
+
+
+def test_a_run_kept_in_chunks_is_still_bounded_in_length():
+    """Memory no longer bounds a run kept at an output spacing: 1e9 s of the buck (1e17 steps) had built the list of
+    its chunks (23 GB) before anything refused it; its length is refused in one line, before any chunk."""
+    import time
+    start = time.perf_counter()
+    with pytest.raises(ParameterError, match=r"t_end: 1e\+09 s at h = 1e-08 s is 1e\+17 steps, more than a run takes"):
+        run_converter("buck", {}, t_end=1e9)
+    assert time.perf_counter() - start < 5.0
