@@ -18,7 +18,7 @@ import pandas as pd
 
 from converters.errors import ParameterError
 
-from .io import atomic_write_bytes, atomic_write_text, check_output_dir, locked_output_dir
+from .io import atomic_write_files, check_output_dir, locked_output_dir
 from .report import csv_bytes as _csv
 
 DEFAULT_OUT = Path("reports/bench")
@@ -97,10 +97,10 @@ def run_bench(out: Path = DEFAULT_OUT, quick: bool = False, spice: bool = True, 
     for part in summary.values():
         part.update(stamp)
     with locked_output_dir(out, "bench", OUT_FILES):   # checked again; two writers take turns
-        for name, data in files.items():
-            atomic_write_bytes(out / name, data)
         saved = _read_json(out / "bench.json")        # a part not run keeps its earlier summary
-        atomic_write_text(out / "bench.json", json.dumps({**saved, **summary}, indent=2, default=float))
+        files["bench.json"] = json.dumps({**saved, **summary}, indent=2, default=float).encode()
+        # the tables, plots and summary land together: a full disk leaves the earlier set, never half of each
+        atomic_write_files({out / name: data for name, data in files.items()})
     return summary
 
 

@@ -209,3 +209,33 @@ def test_the_reports_quick_trade_off_judges_accuracy_not_the_loaded_machines_spe
     inaccurate = slow.drop(columns=["event_setting"])
     files["tradeoff_acceptance.csv"] = csv(inaccurate)
     assert not tradeoff_section(files, {"quick": True, "periods": 200}, "Measured.").ok
+
+
+def test_a_full_disk_while_saving_the_bench_leaves_the_earlier_set(tmp_path, monkeypatch):
+    """The bench's tables, plots and bench.json were written one file at a time: a disk that filled after the first
+    left a new table beside the earlier ones. They are staged together now."""
+    import errno
+    import os
+
+    import validation.bench as bench
+    from converters.errors import ParameterError
+    monkeypatch.setattr(bench, "collect_stability", lambda spice, progress: (
+        {name: f"new {name}".encode() for name in bench.STABILITY_FILES}, {"runs": 1}))
+    out = tmp_path / "bench"
+    out.mkdir()
+    earlier = {name: f"earlier {name}".encode() for name in bench.STABILITY_FILES}
+    for name, data in earlier.items():
+        (out / name).write_bytes(data)
+    (out / "bench.json").write_text("{}")
+    real, calls = os.fsync, []
+
+    def full_on_the_second(fd):
+        calls.append(fd)
+        if len(calls) == 2:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return real(fd)
+    monkeypatch.setattr(os, "fsync", full_on_the_second)
+    with pytest.raises((OSError, ParameterError)):
+        bench.run_bench(out, only="stability", progress=False)
+    assert {name: (out / name).read_bytes() for name in earlier} == earlier
+    assert (out / "bench.json").read_text() == "{}"

@@ -52,5 +52,6 @@ def run(args) -> int:
             print(f"stability: {part['runs']} runs in {part['wall_s']:.0f} s; ill-posed requests refused "
                   f"{part['ill_posed_refused']} of {part['ill_posed']}")
             print(pd.DataFrame(part["summary"]).to_string(index=False))
-    print(f"wrote {out}/")
+    from converters.validate import quoted
+    print(f"wrote {quoted(out)}/")
     return 0

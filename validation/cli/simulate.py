@@ -291,4 +291,5 @@ def _print(summary: dict, tr, args) -> None:
     for warning in summary.get("warnings", []):
         print(f"warning: {warning}", file=sys.stderr)
     if args.out is not None:
-        print(f"wrote {args.out}")
+        from converters.validate import quoted
+        print(f"wrote {quoted(args.out)}")
