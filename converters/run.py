@@ -382,6 +382,7 @@ class ParameterPath:
     name: str
 
     def __post_init__(self):
+        object.__setattr__(self, "name", self.model.parameter_name(self.name))
         known = [p.name for p in self.model.parameters]
         if self.name not in known:
             raise ParameterError(f"unknown parameter {self.name!r} for {self.model.key}; valid names: {', '.join(known)}")

@@ -93,6 +93,10 @@ class Model(ABC):
         """Validated parameter values (defaults overlaid with ``given``)."""
         return resolve(self.parameters, dict(given or {}), self.key)
 
+    def parameter_name(self, name: str) -> str:
+        """A parameter's name as the model keys it (a netlist's are case-insensitive, as SPICE's)."""
+        return name
+
     @property
     def key(self) -> str:
         return self.name if self.control == "pwm" else f"{self.name} --control {self.control}"

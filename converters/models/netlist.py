@@ -109,6 +109,9 @@ class Circuit(Model):
         check_overrides(self.netlist, dict(given or {}), self.parameters)
         return super().resolve(lowered)
 
+    def parameter_name(self, name: str) -> str:
+        return str(name).lower()
+
     def compiled(self, p: dict) -> Compiled:
         return _compile(self.netlist.text, self.source, tuple(sorted(p.items())))
 

@@ -56,3 +56,16 @@ def test_simulate_a_netlist_in_ngspice_reads_the_same_signals(capsys, ngspice):
     assert code == code2 == 0
     assert spice["vout_mean"] == pytest.approx(lcp["vout_mean"], rel=1e-3)
     assert spice["measurements"]["i(l1)"]["mean"] == pytest.approx(lcp["measurements"]["i(l1)"]["mean"], rel=2e-3)
+
+
+def test_bifurcation_follows_a_netlists_orbits_and_finds_the_hand_models_border_collision(capsys):
+    """The buck along R (case-insensitive, as SPICE names are): the CCM/DCM border collision (the diode's
+    turn-off appears) at the R the hand-derived buck gives, 3.3267 ohm (the small-ripple 2 L / ((1 - D) T) = 3.333)."""
+    values = []
+    for name, control in ((NETLISTS / "buck.cir", None), ("buck", "pwm")):
+        argv = ["bifurcation", name, "--param", "R=2:20", "--points", "0", "--json"]
+        code, out, err = run_cli(capsys, *argv, *(["--control", control] if control else []))
+        assert code == 0, err
+        collisions = [b for b in json.loads(out)["bifurcations"] if b["type"] == "border-collision"]
+        values.append(collisions[0]["value"])
+    assert values[0] == pytest.approx(values[1], rel=1e-6) and values[0] == pytest.approx(3.3267, rel=1e-3)

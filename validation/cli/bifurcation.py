@@ -13,9 +13,9 @@ def add(sub) -> None:
                                              "brute-force diagram")
     bif.add_argument("converter")
     add_params(bif)
-    bif.add_argument("--control", default="voltage-mode", choices=list(CONTROLS),
+    bif.add_argument("--control", default=None, choices=list(CONTROLS),
                      help="the control law (default voltage-mode: the ramp comparator, -p A=.. -p Vref=.. -p VL=.. "
-                          "-p VU=.. [-p latch=1])")
+                          "-p VU=.. [-p latch=1]; a netlist FILE.cir states its own drives)")
     bif.add_argument("--param", required=True, metavar="NAME=START:STOP",
                      help="the parameter path, e.g. Vin=20:36 (SPICE suffixes allowed)")
     bif.add_argument("--max-period", type=integer(1), default=8,
@@ -55,7 +55,9 @@ def run(args) -> int:
     params = parse_assignments(args.params)
     if name in params:              # which value was meant? (the path would silently win)
         raise ParameterError(f"{name} is both swept (--param) and fixed (-p); give it once")
-    study = run_study(args.converter, args.control, params, name, start, stop,
+    from converters.models import is_netlist
+    control = args.control or ("pwm" if is_netlist(args.converter) else "voltage-mode")
+    study = run_study(args.converter, control, params, name, start, stop,
                       max_period=args.max_period, points=args.points,
                       transient=200 if args.transient is None else args.transient,
                       record=64 if args.record is None else args.record,
