@@ -13,7 +13,9 @@ leaves its current free, u = -v_D (a voltage source; y = i_D) where an inductor 
 naming the elements: a loop of voltage sources, capacitors and closed switches (their voltages are not
 independent), a cutset of inductors and current sources (a current interrupted with no path), a node with
 no path to ground. Ideal diodes whose ports are the same (in parallel, or in series with nothing between)
-give an LCP without a unique solution and are refused too.
+give an LCP without a unique solution and are refused too, unless sources alone reverse-bias them (both
+blocked: u = 0 is unique). An ideal diode whose terminals closed ideal switches join (a MOSFET's body diode
+while the switch conducts) has 0 V whatever its current: the switch carries it all, the diode's pair never holds.
 
 Switches are ideal (closed: a 0 V branch, or ``RON`` when its model gives one; open: no branch); a diode's
 model ``RS`` is a series resistance. A switch whose control voltage is a combination of independent sources
@@ -355,22 +357,62 @@ class _Compiler:
         C, D, F = ports[:, :n], ports[:, n:n + k], ports[:, n + k:] @ s
         if not self.diodes:                   # no diode: a pair that never holds (y = u + 1: u = 0)
             D, F = np.ones((1, 1)), np.ones(1)
+        for i in self.shorted_diodes(switch_state, forms):
+            # an ideal diode across closed ideal switches (a body diode): its voltage is 0 whatever its current, so
+            # any current would do (0 <= u, y = 0); the switch carries it all: a pair that never holds (y = u + 1)
+            B, C, D, F = B.copy(), C.copy(), D.copy(), F.copy()
+            B[:, i], C[i], D[i], D[:, i], F[i] = 0.0, 0.0, 0.0, 0.0, 1.0
+            D[i, i] = 1.0
         name = ",".join(f"{sw}={'on' if on else 'off'}" for sw, on in switch_state.items()) or "circuit"
         config = Configuration(A=A, B=B, C=C, D=D, E=E, F=F, name=name)
         rows = solution.signal_rows(self.signal_names())
         signals = (rows[:, :n].copy(), rows[:, n:n + k].copy(), rows[:, n + k:] @ s)
         return config, signals
 
+    def joined(self, switch_state: dict):
+        """The node a node is joined to by closed ideal switches (a representative of its class)."""
+        parent = {}
+
+        def root(node):
+            while parent.get(node, node) != node:
+                node = parent[node]
+            return node
+
+        for s in self.switches:
+            if switch_state.get(s.name) and not self.switch_ron[s.name]:
+                a, b = root(s.nodes[0]), root(s.nodes[1])
+                if a != b:
+                    parent[a] = b
+        return root
+
+    def shorted_diodes(self, switch_state: dict, forms) -> list:
+        """The ideal diodes (no RS, current ports) whose two terminals closed ideal switches join."""
+        root = self.joined(switch_state)
+        return [i for i, (d, form) in enumerate(zip(self.diodes, forms))
+                if form == CURRENT and not self.diode_rs[d.name] and root(d.nodes[0]) == root(d.nodes[1])]
+
     def check_unique_ports(self, config: Configuration, switch_state: dict):
+        """Refuse two ideal diodes in parallel (the same two nodes, closed ideal switches joining nodes) or whose
+        ports are the same; a diode reverse-biased by sources alone (y = F > 0 whatever x and u) never conducts
+        (its u = 0 is unique) and passes."""
         if len(self.diodes) < 2:
             return
         rows = np.hstack([config.C, config.D, config.F[:, None]])
+        root = self.joined(switch_state)
+        ends = [(root(d.nodes[0]), root(d.nodes[1])) for d in self.diodes]
         for i in range(len(self.diodes)):
             for j in range(i + 1, len(self.diodes)):
                 a, b = rows[i], rows[j]
                 scale = max(np.abs(a).max(), np.abs(b).max(), 1e-300)
-                if np.abs(a - b).max() <= 1e-12 * scale and np.abs(config.D[i, j] - config.D[i, i]) <= 1e-12 * scale:
-                    d1, d2 = self.diodes[i], self.diodes[j]
+                blocked = [np.abs(r[:-1]).max() <= 1e-12 * scale and r[-1] > 0 for r in (a, b)]
+                if all(blocked):
+                    continue
+                d1, d2 = self.diodes[i], self.diodes[j]
+                parallel = (ends[i] == ends[j] and ends[i][0] != ends[i][1] and not self.diode_rs[d1.name]
+                            and not self.diode_rs[d2.name])
+                same = (np.abs(a - b).max() <= 1e-12 * scale
+                        and np.abs(config.D[i, j] - config.D[i, i]) <= 1e-12 * scale)
+                if parallel or same:
                     raise self.error(d2, f"{d2.title} and {d1.title} are ideal diodes in parallel (or in series with "
                                          "nothing between): the split of their current or voltage is not unique; put a "
                                          "resistance (RS in their .model) on one")

@@ -1,0 +1,146 @@
+"""The circuits shipped only as netlists (netlists/circuits/): each compiled netlist's exact periodic orbit (event
+method, Newton shooting) against its closed form, the modes it must show, and `pcsuite simulate FILE --steady
+--json`. Every tolerance is the closed form's own error (derived in each test's docstring), not the solver's.
+
+- sync-buck: vout = Vin (D + td/T [i_L < 0 in the second dead time]), exact (the mean inductor voltage is 0 and
+  v(sw) is fixed in every interval: Vin with S1, 0 with S2, in a dead time 0 or Vin by the sign of i_L).
+- interleaved-buck: vout = D Vin / (1 + RL/(2R)), exact in CCM; at D = 0.5 the summed inductor current and vout
+  have no ripple at all."""
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from converters.circuits.compile import compile_netlist
+from converters.circuits.netlist import NetlistError, read_netlist
+from converters.models import Circuit
+from converters.run import run_converter, run_summary
+
+NETLISTS = Path(__file__).resolve().parents[2] / "netlists" / "circuits"
+
+
+def orbit(circuit, params=None, method="event", tol=1e-9, summary=True):
+    """(resolved parameters, one period on the method's periodic orbit, its summary: mode fractions, events; None
+    with summary=False, which saves its accuracy check)."""
+    if not isinstance(circuit, Circuit):
+        circuit = Circuit.from_netlist(NETLISTS / f"{circuit}.cir")
+    params = dict(params or {})
+    tr = run_converter(circuit, params, steady=True, method=method, steady_tol=tol, periods=1)
+    return circuit.resolve(params), tr, run_summary(tr) if summary else None
+
+
+def mean(tr, name, t0, t1):
+    return tr.mean(name, t0=t0, t1=t1)
+
+
+# --- synchronous buck ---------------------------------------------------------------------------------------------
+
+#: (R, the inductor current's sign in the second dead time): R = 100 and 10 ohm are DCM loads for a diode buck
+#: (I_o < ripple/2), where the synchronous buck's inductor current goes negative; 2 and 0.5 ohm keep it positive.
+SYNC_LOADS = {100.0: "light", 10.0: "light", 2.0: "medium", 0.5: "heavy"}
+
+
+@pytest.mark.parametrize("td", ["50n", "0"])
+@pytest.mark.parametrize("R", list(SYNC_LOADS))
+@pytest.mark.parametrize("method", ["event", "lcp"])
+def test_sync_buck_output_is_d_vin_plus_the_dead_time_the_body_diodes_conduct(R, td, method):
+    """S1 closes on [0, DT), S2 on [DT + td, T - td). v(sw) is Vin with S1 closed, 0 with S2 closed; in the first
+    dead time i_L > 0 (its peak: the mean i_L = vout/R > 0) flows through D2 (v(sw) = 0), in the second it flows
+    through D2 (0) when positive and back into Vin through D1 (v(sw) = Vin) when negative. On the periodic orbit
+    the inductor's mean voltage is exactly 0, so
+
+        vout_mean = mean v(sw) = Vin (D + td/T [i_L(T - td) < 0])
+
+    exactly (no small-ripple step), provided i_L keeps its sign through each dead time (it moves by ~vout td/L =
+    0.02 A there, far from the loads' 1 A margins). The sign follows from the small-ripple valley
+    I_o - dI/2, dI = (Vin - vout) D T / L; the orbit must agree with it. At td = 0 it is D Vin at every load."""
+    p, tr, summary = orbit("sync-buck", {"R": R, "td": td}, method)
+    T, D, Vin, L, td_s = 1 / p["f_sw"], p["d"], p["vin"], p["l"], p["td"]
+    vout = D * Vin
+    valley = vout / R - (Vin - vout) * D * T / L / 2
+    negative = valley < 0
+    assert negative == (SYNC_LOADS[R] == "light")
+    i_l = tr.signal("i(l1)")
+    assert (i_l.min() < 0) == negative               # the synchronous buck stays in CCM, its current reversing
+    expected = Vin * (D + (td_s / T if negative else 0.0))
+    assert mean(tr, "vout", 0, T) == pytest.approx(expected, rel=1e-9)
+    if method != "event":
+        return
+    # modes: a diode conducts only in the dead times, D1 only in the second one and only at light load
+    fractions = summary["mode_fractions"]
+    want = {"S1": D, "S2": 1 - D - 2 * td_s / T}
+    if td_s:
+        want["D2"] = td_s / T * (1 if negative else 2)
+        if negative:
+            want["D1"] = td_s / T
+    assert set(fractions) == set(want)
+    for label, fraction in want.items():
+        assert fractions[label] == pytest.approx(fraction, abs=1e-9)
+    # the closed switch carries the current of its body diode (0 V across the pair: the diode never conducts)
+    t = tr.t
+    with_s2 = (t > (D * T + td_s) * (1 + 1e-6)) & (t < (T - td_s) * (1 - 1e-6))
+    assert np.abs(tr.signal("i(d2)")[with_s2]).max() == 0.0
+    assert np.allclose(tr.signal("i(s2)")[with_s2], -i_l[with_s2], rtol=0, atol=1e-12)
+
+
+def test_a_body_diode_across_a_closed_switch_is_a_pair_that_never_holds():
+    """The compiler's rule for an ideal diode whose terminals closed ideal switches join: 0 V whatever its current,
+    so the split with the switch is not unique; the switch carries it all (y = u + 1: u = 0). Without it the sync
+    buck's mode while S2 conducts read 'S2+D2'."""
+    compiled = compile_netlist(read_netlist(NETLISTS / "sync-buck.cir"))
+    d2 = compiled.pair_names.index("d2")
+    d1 = compiled.pair_names.index("d1")
+    for config, closed in zip(compiled.configurations, compiled.closed):
+        s1, s2 = (closed[compiled.switch_names.index(s)] for s in ("s1", "s2"))
+        for pair, shorted in ((d1, s1), (d2, s2)):
+            if shorted:
+                assert config.D[pair, pair] == 1.0 and config.F[pair] == 1.0
+                assert not config.C[pair].any() and not config.B[:, pair].any()
+                assert not np.delete(config.D[pair], pair).any() and not np.delete(config.D[:, pair], pair).any()
+
+
+# --- interleaved buck ---------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("D", [0.3, 0.5, 0.7])
+@pytest.mark.parametrize("method", ["event", "lcp"])
+def test_interleaved_buck_output_and_its_ripple_cancellation(D, method):
+    """Each phase's switch node averages D Vin in CCM (ideal switch and diode), each inductor's mean voltage is 0 and
+    its resistance RL drops RL i_k: mean i_1 = mean i_2 (the resistances are what makes the current sharing unique:
+    without them any circulating DC current between the phases is a periodic orbit) and vout = D Vin - RL i_k with
+    i_1 + i_2 = vout/R in the mean:
+
+        vout = D Vin / (1 + RL/(2R))                                                       (exact)
+
+    At D = 0.5 exactly one switch node is at Vin at any time, so L (i_1 + i_2)' = Vin - 2 vout - RL (i_1 + i_2) and
+    C vout' = i_1 + i_2 - vout/R are time-invariant: the orbit is their equilibrium, the sum current and vout have
+    no ripple at all (each phase's own ripple is (Vin - vout) D T/L). Away from 0.5 the sum's ripple is
+    Vin (1 - 2D) D T/L (D < 0.5), Vin (2D - 1)(1 - D) T/L (D > 0.5), small-ripple (RL and vout's ripple: 2e-4)."""
+    p, tr, summary = orbit("interleaved-buck", {"D": D}, method)
+    T, Vin, L, R, RL = 1 / p["f_sw"], p["vin"], p["l"], p["r"], p["rl"]
+    vout = mean(tr, "vout", 0, T)
+    assert vout == pytest.approx(D * Vin / (1 + RL / (2 * R)), rel=1e-9)
+    assert mean(tr, "i(l1)", 0, T) == pytest.approx(mean(tr, "i(l2)", 0, T), rel=1e-9)
+    total = tr.signal("i(l1)") + tr.signal("i(l2)")
+    phase = (Vin - D * Vin) * D * T / L
+    assert np.ptp(tr.signal("i(l1)")) == pytest.approx(phase, rel=1e-3)
+    if D == 0.5:
+        assert np.ptp(total) <= 1e-9 * total.mean()
+        assert np.ptp(tr.signal("vout")) <= 1e-9 * vout
+    else:
+        swing = Vin * (1 - 2 * D) * D * T / L if D < 0.5 else Vin * (2 * D - 1) * (1 - D) * T / L
+        assert np.ptp(total) == pytest.approx(swing, rel=1e-3)
+    if method == "event":
+        want = {0.3: {"S1+D2": 0.3, "D1+D2": 0.4, "S2+D1": 0.3}, 0.5: {"S1+D2": 0.5, "S2+D1": 0.5},
+                0.7: {"S1+S2": 0.4, "S1+D2": 0.3, "S2+D1": 0.3}}[D]
+        assert summary["mode_fractions"] == pytest.approx(want, abs=1e-9)
+
+
+def test_ideal_diodes_in_parallel_only_when_sources_reverse_bias_them_are_accepted():
+    """With both switches of the interleaved buck closed (D > 0.5), D1 and D2 are in parallel (ground to Vin) and
+    reverse-biased by Vin alone: u = 0 is the unique solution, the compiler accepts them. Two ideal diodes on the
+    same two nodes of a plain buck are still refused (their split is not unique while they conduct)."""
+    compiled = compile_netlist(read_netlist(NETLISTS / "interleaved-buck.cir", overrides={"d": 0.7}))
+    assert (True, True) in compiled.closed
+    buck = (NETLISTS / "buck.cir").read_text().replace("D1 0 sw DMOD", "D1 0 sw DMOD\nD2 0 sw DMOD")
+    with pytest.raises(NetlistError, match="in parallel"):
+        compile_netlist(read_netlist(buck, name="buck-d2.cir"))
