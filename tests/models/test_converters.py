@@ -102,7 +102,7 @@ def test_bad_parameters_are_refused(name, params, match):
 def test_step_must_be_below_the_period_and_the_converter_must_exist():
     with pytest.raises(ParameterError, match=r"h must be positive and below the switching period \(1e-05 s\); got 2e-05"):
         run_converter("buck", {}, h=2e-5, periods=1)
-    with pytest.raises(ParameterError, match=r"CONVERTER must be one of buck, boost, buck-boost, cuk, prc; got 'sepic'"):
+    with pytest.raises(ParameterError, match=r"CONVERTER must be one of buck, boost, buck-boost, cuk, prc or a netlist FILE.cir; got 'sepic'"):
         run_converter("sepic", {})
 
 

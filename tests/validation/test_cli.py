@@ -81,7 +81,7 @@ def test_simulate_steady_reports_periods_and_cuk_columns(capsys, tmp_path):
     (["simulate", "buck", "-p", "D=1.5"], "D (duty ratio) must be in [0, 1]; got 1.5"),
     (["simulate", "buck", "-p", "f_sw=-1k"], "f_sw (switching frequency) must be in (0, inf) Hz; got -1000.0"),
     (["simulate", "buck", "--h", "1e-4"], "h must be positive and below the switching period (1e-05 s); got 0.0001"),
-    (["simulate", "flyback"], "CONVERTER must be one of buck, boost, buck-boost, cuk, prc; got 'flyback'"),
+    (["simulate", "flyback"], "CONVERTER must be one of buck, boost, buck-boost, cuk, prc or a netlist FILE.cir; got 'flyback'"),
     (["simulate", "buck", "-p", "Q=1"], "unknown parameter 'Q' for buck; valid names: Vin, L, C, R, f_sw, D, rL"),
     (["simulate", "buck", "-p", "L"], "-p takes NAME=VALUE (e.g. -p L=10u); got 'L'"),
     (["simulate", "buck", "--method", "magic"], "argument --method: invalid choice: 'magic'"),
