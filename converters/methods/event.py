@@ -118,6 +118,9 @@ class EventDriven(Method, key="event"):
     def supports(self, problem) -> None:
         if isinstance(problem, MechanicalProblem):
             return
+        if getattr(problem, "inputs", None) is not None:
+            raise ParameterError("the event-driven method's exact flows take constant inputs per configuration; "
+                                 "sinusoidal inputs (SIN sources): use --method lcp")
         if isinstance(problem.switching, Relay):
             raise ParameterError("the event-driven method follows a hysteresis or latched law (StateSwitching) "
                                  "exactly; the implicit relay is a time-stepping scheme: use --method lcp")

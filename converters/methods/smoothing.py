@@ -87,6 +87,9 @@ class Smoothing(Method, key="smooth"):
         return f"smooth({self.eps:g})"
 
     def supports(self, problem: LCSProblem) -> None:
+        if problem.inputs is not None:
+            raise ParameterError("the smoothing method takes constant inputs per configuration; sinusoidal inputs "
+                                 "(SIN sources): use --method lcp")
         if not isinstance(problem.switching, Schedule):
             raise ParameterError(f"the smoothing method integrates time schedules only; this problem is switched by "
                                  f"{type(problem.switching).__name__}: use --method lcp or event")

@@ -65,6 +65,9 @@ class Theta(Method, key="lcp"):
         return "backward-euler" if self.theta == 1.0 else f"theta({self.theta:g})"
 
     def supports(self, problem: LCSProblem) -> None:
+        if getattr(problem, "inputs", None) is not None and not isinstance(problem.switching, Schedule):
+            raise ParameterError("sinusoidal inputs (SIN sources) need a time schedule in the stepper; a state-driven "
+                                 "law with them is not supported")
         if not isinstance(problem.switching, Schedule) and problem.k > MAX_INLINE_K:
             raise ParameterError(f"the state-driven laws need k <= {MAX_INLINE_K} complementarity pairs in the "
                                  f"stepper; this problem has k = {problem.k}")
@@ -154,8 +157,23 @@ def _period_grid(problem: LCSProblem, h: float):
     one = problem if problem.t_span == (0.0, T) else replace(problem, t_span=(0.0, T))
     local = time_grid(one, h)                                            # [0, T] with the breakpoints
     local_config = schedule.config_at(0.5 * (local[:-1] + local[1:]))
+    if problem.inputs is not None:
+        # sinusoidal inputs: every step of the period has its own E and F (the same in every period): one set per
+        # step, named (configuration, start, dt) for :func:`_set_configuration`
+        dts = np.diff(local)
+        set_configs = [(int(c), float(t), float(dt)) for c, t, dt in zip(local_config, local[:-1], dts)]
+        return local, local_config, np.arange(dts.size, dtype=np.int32), set_configs, dts
     local_which, set_configs, set_dts = _step_sets(np.diff(local), local_config, h, n_configs)
     return local, local_config, local_which, set_configs, set_dts
+
+
+def _set_configuration(problem: LCSProblem, key, theta: float):
+    """The Configuration of a matrix set: a configuration index, or (index, step start, dt) under sinusoidal
+    inputs (E at the step's theta point, F at its end, where the step's LCP holds)."""
+    if isinstance(key, tuple):
+        index, start, dt = key
+        return problem.configuration_at(index, start + theta * dt, start + dt)
+    return problem.configurations[key]
 
 
 def _repeat_period(period, T: float, t1: float, h: float, t0: float = 0.0):
@@ -183,7 +201,9 @@ def _repeat_period(period, T: float, t1: float, h: float, t0: float = 0.0):
     last_dt, nominal = t[-1] - t[-2], set_dts[which[-1]]
     if abs(last_dt - nominal) > 1e-9 * h:    # the run ends inside a step: its own matrix set
         which[-1] = len(set_configs)
-        set_configs = set_configs + [int(step_config[-1])]
+        last = int(step_config[-1])
+        set_configs = set_configs + [(last, float(t[-2]), float(last_dt)) if isinstance(set_configs[0], tuple)
+                                     else last]
         set_dts = np.append(set_dts, last_dt)
     return t, config, which, set_configs, set_dts
 
@@ -211,6 +231,10 @@ def _plan(problem: LCSProblem, h: float, period=None):
     are then the same in every period: one matrix set each); otherwise the whole grid is built and sorted by
     :func:`time_grid`."""
     period = _period_grid(problem, h) if period is None else period
+    if problem.inputs is not None and (period is None or _too_long(problem, h)):
+        raise ParameterError(f"sinusoidal inputs need a run on whole steps of whole periods from a period start: the "
+                             f"period T = {problem.switching.period:g} s a whole number of steps h = {h:g} s, t_start a "
+                             f"multiple of T (got t_start = {problem.t_span[0]:g} s)")
     if period is None or _too_long(problem, h):
         t = time_grid(problem, h)
         config = np.empty(t.size, dtype=np.int64)
@@ -241,7 +265,8 @@ class StepPlan:
     def build(cls, problem: LCSProblem, method: Theta) -> "StepPlan":
         period = _period_grid(problem, method.h)
         t, config, which, set_configs, set_dts = _plan(problem, method.h, period)
-        mats = step_matrices([problem.configurations[c] for c in set_configs], set_dts, method.theta)
+        mats = step_matrices([_set_configuration(problem, c, method.theta) for c in set_configs], set_dts,
+                             method.theta)
         return cls(problem, method, t, config, which, mats, period)
 
     @property
@@ -263,7 +288,7 @@ class StepPlan:
                                                                 self.method.h, problem.t_span[0])
         mats = self.mats
         if len(set_configs) > len(mats):          # the run ends inside a step
-            extra = step_matrices([problem.configurations[c] for c in set_configs[len(mats):]],
+            extra = step_matrices([_set_configuration(problem, c, self.method.theta) for c in set_configs[len(mats):]],
                                   set_dts[len(mats):], self.method.theta)
             mats = mats.concatenate(extra)
         return StepPlan(problem, self.method, t, config, which, mats, self.period)
@@ -277,7 +302,7 @@ class StepPlan:
         u = np.zeros((N, k))
         y = np.empty((N, k))
         x[0] = x_init
-        u[0], y[0] = _initial_pair(problem, int(self.config[0]), x_init)
+        u[0], y[0] = _initial_pair(problem, int(self.config[0]), x_init, problem.t_span[0])
         return x, u, y, self.steps(x, u, y)
 
     def steps(self, x, u, y) -> int:
@@ -451,9 +476,9 @@ def _merge_events(pair_events: dict, times, steps, configs) -> dict:
     return {key: value[order] for key, value in out.items()}
 
 
-def _initial_pair(problem: LCSProblem, config: int, x0: np.ndarray):
+def _initial_pair(problem: LCSProblem, config: int, x0: np.ndarray, t0: float = 0.0):
     """The consistent pair at t0: LCP(C x0 + F, D); when D is singular and no solution exists, u = 0."""
-    c = problem.configurations[config]
+    c = problem.configuration_at(config, t0)
     q = c.C @ x0 + c.F
     if np.any(c.D):
         from ..lcp import solve_lcp             # imported here: a run that never needs it starts faster

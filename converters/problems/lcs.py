@@ -62,6 +62,41 @@ class Configuration:
 
 
 @dataclass(frozen=True)
+class Sinusoids:
+    """Sinusoidal inputs (AC sources) added to each configuration's E and F:
+
+        E_c(t) = E_c + sum_j E[c, j] sin(omega_j t + phase_j),   F_c(t) likewise with F[c, j],
+
+    shapes omega, phase (m,), E (configurations, m, n), F (configurations, m, k); omega in rad/s, phase in rad.
+    Every omega_j T must be a whole multiple of 2 pi for the problem's period T (the inputs repeat with it)."""
+
+    omega: np.ndarray
+    phase: np.ndarray
+    E: np.ndarray
+    F: np.ndarray
+
+    def __post_init__(self):
+        omega, phase = (np.asarray(getattr(self, key), dtype=float).reshape(-1) for key in ("omega", "phase"))
+        E, F = (np.asarray(getattr(self, key), dtype=float) for key in ("E", "F"))
+        m = omega.size
+        if phase.size != m or E.ndim != 3 or F.ndim != 3 or E.shape[1] != m or F.shape[1] != m \
+                or E.shape[0] != F.shape[0]:
+            raise ParameterError(f"sinusoids: omega and phase (m,), E (configurations, m, n) and F (configurations, m, "
+                                 f"k) must agree; got {omega.shape}, {phase.shape}, {E.shape}, {F.shape}")
+        if not (np.all(np.isfinite(omega)) and np.all(omega > 0) and np.all(np.isfinite(phase))
+                and np.all(np.isfinite(E)) and np.all(np.isfinite(F))):
+            raise ParameterError("sinusoids: omega must be positive, and every value finite")
+        for key, value in (("omega", omega), ("phase", phase), ("E", E), ("F", F)):
+            value.setflags(write=False)
+            object.__setattr__(self, key, value)
+
+    def values(self, t) -> np.ndarray:
+        """sin(omega_j t + phase_j) at each time, shape (len(t), m) (t a scalar: (m,))."""
+        t = np.asarray(t, dtype=float)
+        return np.sin(np.multiply.outer(t, self.omega) + self.phase)
+
+
+@dataclass(frozen=True)
 class LCSProblem:
     """An LCS initial-value problem: configurations, the switching law, x0 and the time span (s).
 
@@ -77,6 +112,8 @@ class LCSProblem:
     state_names: tuple[str, ...] = ()
     pair_names: tuple[str, ...] = ()
     metadata: dict = field(default_factory=dict, compare=False)
+    #: Sinusoidal inputs (AC sources) on top of each configuration's constant E and F, or None.
+    inputs: Sinusoids | None = None
 
     def __post_init__(self):
         configs = tuple(self.configurations)
@@ -108,6 +145,17 @@ class LCSProblem:
         if len(states) != n or len(pairs) != k:
             raise ParameterError(f"state_names must have n = {n} and pair_names k = {k} entries; "
                                  f"got {len(states)} and {len(pairs)}")
+        if self.inputs is not None:
+            if not isinstance(self.inputs, Sinusoids):
+                raise ParameterError(f"inputs must be Sinusoids or None; got {self.inputs!r}")
+            if self.inputs.E.shape[0] != len(configs) or self.inputs.E.shape[2] != n or self.inputs.F.shape[2] != k:
+                raise ParameterError(f"inputs: E must be ({len(configs)}, m, {n}) and F ({len(configs)}, m, {k}); got "
+                                     f"{self.inputs.E.shape} and {self.inputs.F.shape}")
+            T = self.switching.period
+            cycles = self.inputs.omega * T / (2 * np.pi)
+            if not (np.isfinite(T) and np.all(np.abs(cycles - np.round(cycles)) <= 1e-9 * np.maximum(cycles, 1.0))):
+                raise ParameterError(f"inputs: each sinusoid must repeat with the switching law's period T = {T:g} s "
+                                     "(omega T a whole multiple of 2 pi)")
         object.__setattr__(self, "configurations", configs)
         object.__setattr__(self, "x0", x0)
         object.__setattr__(self, "t_span", (t0, t1))
@@ -121,6 +169,16 @@ class LCSProblem:
     @property
     def k(self) -> int:
         return self.configurations[0].k
+
+    def configuration_at(self, index: int, t_e: float, t_f: float | None = None) -> Configuration:
+        """Configuration ``index`` with its sinusoidal inputs evaluated: E at t_e, F at t_f (default t_e)."""
+        c = self.configurations[index]
+        if self.inputs is None:
+            return c
+        from dataclasses import replace
+        t_f = t_e if t_f is None else t_f
+        return replace(c, E=c.E + self.inputs.values(t_e) @ self.inputs.E[index],
+                       F=c.F + self.inputs.values(t_f) @ self.inputs.F[index])
 
     @property
     def period(self) -> float:
