@@ -92,7 +92,8 @@ def circuit_netlist(circuit, p: dict, t_end: float, options: SpiceOptions | None
     tran = netlist.tran
     tmax = options.tmax_fraction * T if math.isfinite(compiled.period) else min(tran.tmax or tran.tstep,
                                                                                  options.tmax_fraction * t_end / 10)
-    lines += [f".options RELTOL={_num('reltol', options.reltol)} METHOD={options.method} ITL4=100",
+    # RSHUNT: every node a 1e12 ohm path to ground (a bridge's output floats while its diodes block)
+    lines += [f".options RELTOL={_num('reltol', options.reltol)} METHOD={options.method} ITL4=100 RSHUNT=1e12",
               f".tran {_num('tstep', tmax)} {_num('t_end', t_end)} 0 {_num('tmax', tmax)} UIC", ".end"]
     return Netlist("\n".join(lines) + "\n", circuit.name, dict(p), t_end, options, probes, tuple(pairs) or ("none",))
 

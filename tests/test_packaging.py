@@ -151,6 +151,12 @@ def test_the_installed_wheel_runs_from_anywhere_with_the_jit_and_then_ahead_of_t
     assert solved["status"] == "solved" and solved["err"] <= 1e-10
     assert (solved["method"], solved["z"], solved["w"]) == (reference["method"], reference["z"], reference["w"])
 
+    netlist = site / "netlists" / "circuits" / "buck.cir"              # a shipped netlist, compiled by the wheel
+    exact = ["--steady", "--method", "event", "--json"]
+    compiled = json.loads(_run([pcsuite, "simulate", netlist, *exact], cwd=elsewhere, env=env).stdout)
+    built_in = json.loads(_run([pcsuite, "simulate", "buck", *exact], cwd=elsewhere, env=env).stdout)
+    assert compiled["vout_mean"] == pytest.approx(built_in["vout_mean"], rel=1e-9)
+
 
 def _read_only(site: Path, args) -> list:
     """``args`` run with ``site`` mounted read-only (root writes anywhere else: a mount namespace of their own)."""

@@ -54,7 +54,7 @@ def compare_circuit(circuit, params: dict | None = None, *, h=None, spice_option
     """Run a netlist's LCS and ngspice on the same file and measure their agreement (module docstring)."""
     from netlists.circuit import circuit_netlist
 
-    from .spice import circuit_trajectory, run_spice
+    from .spice import circuit_trajectory, run_spice_retrying
     p = circuit.resolve(params)
     periodic = circuit.periodic(p)
     start = start or ("steady" if periodic else "rest")
@@ -71,15 +71,18 @@ def compare_circuit(circuit, params: dict | None = None, *, h=None, spice_option
         x0, rho = orbit.x0, orbit.spectral_radius
     lcp = run_converter(circuit, p, h=h, t_end=span, x0=x0)
     t0 = span - window * T
-    netlist = circuit_netlist(circuit, p, span, spice_options, x0=lcp.x[0])
-    spice = circuit_trajectory(circuit, p, netlist, run_spice(netlist), t0)
+    netlist, run, notes = run_spice_retrying(lambda o: circuit_netlist(circuit, p, span, o, x0=lcp.x[0]), spice_options)
+    options = netlist.options                         # the TMAX it took, kept for the runs on
+    spice = circuit_trajectory(circuit, p, netlist, run, t0)
     spice_periods, settle = periods, spice_drift(spice, T, periods, window)
     while start == "steady" and settle > SPICE_SETTLE and spice_periods < MAX_SPICE_PERIODS:
-        netlist = circuit_netlist(circuit, p, span, spice_options, x0=spice.x[-1])
-        spice = circuit_trajectory(circuit, p, netlist, run_spice(netlist), t0)
+        netlist, run, more = run_spice_retrying(lambda o: circuit_netlist(circuit, p, span, o, x0=spice.x[-1]), options)
+        options, notes = netlist.options, notes + more
+        spice = circuit_trajectory(circuit, p, netlist, run, t0)
         spice_periods += periods
         settle = spice_drift(spice, T, periods, window)
     result = CircuitComparison(circuit.name, p, lcp, spice, (t0, span))
+    result.notes += notes
     th = THRESHOLDS["circuit"]
     m = result.metrics
     if not periodic:

@@ -233,9 +233,17 @@ def circuit_trajectory(circuit, params: dict, netlist: Netlist, result: SpiceRes
     for s in (e for e in circuit.netlist.elements if e.kind == "S"):
         vt = circuit.netlist.models[s.model].params.get("VT", 0.0)
         closed.append(nodes(s.nodes[2]) - nodes(s.nodes[3]) > vt)
+    # a diode across a closed switch (a body diode) shares its current in ngspice (its near-ideal drop against the
+    # switch's RON); the LCS gives the switch all of it: the diode is not counted as conducting there either
+    switches = [e for e in circuit.netlist.elements if e.kind == "S"]
+    for i, d in enumerate(diodes):
+        terminals = set(next(e for e in circuit.netlist.elements if e.name == d).nodes)
+        for s, on in zip(switches, closed):
+            if set(s.nodes[:2]) == terminals:
+                conducting[:, i] &= ~on
     measured["switch"] = closed[0].astype(np.int8) if closed else np.zeros(t.size, np.int8)
     labels = np.empty(t.size, dtype=object)
-    names = [s.upper() for s in compiled.switch_names] + [d.upper() for d in diodes]
+    names = [sw.upper() for sw in compiled.switch_names] + [d.upper() for d in diodes]
     flags = np.column_stack(closed + [conducting[:, i] for i in range(len(diodes))]) if names else np.zeros((t.size, 0))
     for i, row in enumerate(flags):
         labels[i] = "+".join(n for n, on in zip(names, row) if on) or "off"
@@ -246,3 +254,29 @@ def circuit_trajectory(circuit, params: dict, netlist: Netlist, result: SpiceRes
                       period=circuit.period(params),
                       metadata={"spice_options": result.options, "ngspice": result.ngspice_version,
                                 "model": circuit.name, "params": params})
+
+
+#: Times a netlist's ngspice run is retried with TMAX a quarter of the last after "timestep too small".
+TMAX_RETRIES = 3
+
+
+def run_spice_retrying(build, options=None):
+    """(netlist, result, notes) of ``build(options)`` run in ngspice; a run that stops with "timestep too small"
+    (ngspice's Newton failing at its minimum step, typically on a near-ideal diode that an ideal switch's edge
+    turns off) is run again with TMAX a quarter of the last, up to TMAX_RETRIES times: smaller steps before the
+    edge give its Newton a closer start. The notes say which TMAX it took."""
+    from dataclasses import replace
+
+    from netlists import SpiceOptions
+    options = options or SpiceOptions()
+    notes = []
+    for attempt in range(TMAX_RETRIES + 1):
+        netlist = build(options)
+        try:
+            return netlist, run_spice(netlist), notes
+        except SpiceError as error:
+            if "timestep too small" not in str(error).lower() or attempt == TMAX_RETRIES:
+                raise
+            notes.append(f"ngspice stopped with TMAX = {options.tmax_fraction:g} T ({str(error).split(': ', 1)[-1]}); "
+                         f"run again with TMAX = {options.tmax_fraction / 4:g} T")
+            options = replace(options, tmax_fraction=options.tmax_fraction / 4)
