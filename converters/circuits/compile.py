@@ -158,8 +158,6 @@ class _Compiler:
             if not merged or merged[-1] != c:
                 merged_starts.append(t)
                 merged.append(c)
-        if len(merged) > 1 and merged[0] == merged[-1] and math.isfinite(period):
-            merged_starts, merged = merged_starts[:-1], merged[:-1]      # the last slot runs into the next period
         schedule = (Schedule(period=period, starts=tuple(merged_starts), configs=tuple(merged))
                     if math.isfinite(period) and len(merged) > 1 else Schedule.constant(merged[0]))
         state_names = tuple(f"v({c.name})" for c in self.capacitors) + tuple(f"i({l.name})" for l in self.inductors)

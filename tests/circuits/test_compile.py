@@ -1,0 +1,35 @@
+"""The compiler's schedules and inputs, against what the waveforms say."""
+import math
+
+import pytest
+
+from converters.models import Circuit
+from converters.run import run_converter, run_summary
+
+BUCK = """buck whose gate opens at t = 0 and closes later in the period
+.param Vin=12 L=100u C=100u R=5 f=100k
+.param T={{1/f}} e={{1e-6/f}}
+Vin in 0 DC {{Vin}}
+Vg gate 0 PULSE(0 1 {td} {{e}} {{e}} {pw} {{T}})
+S1 in sw gate 0 SW1
+D1 0 sw D1
+L1 sw out {{L}}
+C1 out 0 {{C}}
+R1 out 0 {{R}}
+.model SW1 SW(VT=0.5)
+.model D1 D
+.tran 100n 5m
+.end
+"""
+
+
+def test_a_switch_that_is_off_at_the_start_and_the_end_of_the_period_is_on_only_between():
+    """The gate rises at 0.2 T and falls at 0.6 T: the schedule is off, on, off (the last slot had been merged into
+    the first across the period's end, which left the switch on from 0.2 T to T: a duty of 0.8, not 0.4)."""
+    circuit = Circuit.from_netlist("late.cir", text=BUCK.format(td="{0.2*T - e/2}", pw="{0.4*T - e}"))
+    p = circuit.resolve({})
+    schedule = circuit.compiled(p).schedule
+    assert [round(s / 1e-5, 12) for s in schedule.starts] == [0.0, 0.2, 0.6]
+    summary = run_summary(run_converter(circuit, {}, steady=True, method="event"))
+    assert summary["vout_mean"] == pytest.approx(0.4 * 12, rel=1e-9)          # CCM: D Vin
+    assert summary["mode_fractions"]["S1"] == pytest.approx(0.4, abs=1e-12)
