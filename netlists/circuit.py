@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 
-from converters.circuits.netlist import Pulse
+from converters.circuits.netlist import Pulse, Sin
 from converters.errors import ParameterError
 
 from .build import Netlist, SpiceOptions, _num
@@ -53,8 +53,9 @@ def circuit_netlist(circuit, p: dict, t_end: float, options: SpiceOptions | None
                                       else ((n[0], n[1]), 1.0))
         elif e.kind == "L":
             sense = f"vsense_{_name(e.name)}"
-            lines += [f"{sense} {n[0]} {n[0]}_{_name(e.name)}s DC 0",
-                      f"{name} {n[0]}_{_name(e.name)}s {n[1]} {_num(e.name, e.value)} IC={ic[f'i({e.name})']}"]
+            inner = f"sense_{_name(e.name)}"          # never a node name that starts with a digit ("0_...")
+            lines += [f"{sense} {n[0]} {inner} DC 0",
+                      f"{name} {inner} {n[1]} {_num(e.name, e.value)} IC={ic[f'i({e.name})']}"]
             probes[f"i({e.name})"] = (f"{sense}#branch", 1.0)
         elif e.kind == "K":
             a, b = (f"L{_name(c)[1:]}" if _name(c)[0].upper() == "L" else "L_" + _name(c) for c in e.control)
@@ -71,8 +72,8 @@ def circuit_netlist(circuit, p: dict, t_end: float, options: SpiceOptions | None
             lines.append(f"{name} {n[0]} {n[1]} {vname} {_num(e.name, e.value)}")
         elif e.kind == "D":
             sense = f"vsense_{_name(e.name)}"
-            lines += [f"{sense} {n[0]} {n[0]}_{_name(e.name)}s DC 0",
-                      f"{name} {n[0]}_{_name(e.name)}s {n[1]} {_name(e.model)}"]
+            inner = f"sense_{_name(e.name)}"
+            lines += [f"{sense} {n[0]} {inner} DC 0", f"{name} {inner} {n[1]} {_name(e.model)}"]
             probes[f"i({e.name})"] = (f"{sense}#branch", 1.0)
             pairs.append(f"i({e.name})")
         elif e.kind == "S":                # no sense source: in series with a switch it stalled ngspice (a Cuk)
@@ -104,6 +105,8 @@ def _waveform(name: str, w) -> str:
         if not math.isfinite(w.per):
             values = values[:-1] if math.isfinite(w.pw) else values[:-2]
         return "PULSE(" + " ".join(_num(f"{name} PULSE", v) for v in values) + ")"
+    if isinstance(w, Sin):
+        return "SIN(" + " ".join(_num(f"{name} SIN", v) for v in (w.vo, w.va, w.freq, w.td, w.theta, w.phase)) + ")"
     return f"DC {_num(name, float(w))}"
 
 

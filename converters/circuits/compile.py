@@ -25,6 +25,7 @@ between its two levels at the middle of its edges.
 """
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass, field
 from fractions import Fraction
@@ -50,10 +51,12 @@ class Compiled:
     switch_names: tuple
     closed: tuple                    # per configuration: which switches are closed
     signal_names: tuple              # "v(node)", "i(element)"
-    signal_maps: tuple               # per configuration: (Sx (S, n), Su (S, k), s0 (S,))
+    signal_maps: tuple               # per configuration: (Sx (S, n), Su (S, k), s0 (S,), Ssin (S, m))
     period: float
     x0: np.ndarray
     units: dict = field(default_factory=dict)
+    #: The SIN sources as sinusoidal inputs: (omega (m,), phase (m,), E (configs, m, n), F (configs, m, k)), or None.
+    inputs: tuple | None = None
 
 
 def compile_netlist(netlist: Netlist) -> Compiled:
@@ -76,10 +79,12 @@ class _Compiler:
             if e.kind == "W":
                 raise self.error(e, f"{e.title}: current-controlled switches are not compiled yet (their law is a "
                                     "state-driven one); drive the switch with a PULSE source (S)")
-            if e.kind in "VI" and isinstance(e.waveform, (Sin, Pwl)):
-                kind = "SIN" if isinstance(e.waveform, Sin) else "PWL"
-                raise self.error(e, f"{e.title}: a {kind} source is not compiled yet (an LCS input here is piecewise "
-                                    "constant: DC or PULSE); a square wave is PULSE(-V V ...)")
+            if e.kind in "VI" and isinstance(e.waveform, Pwl):
+                raise self.error(e, f"{e.title}: a PWL source is not compiled yet (an LCS input here is DC, PULSE or "
+                                    "SIN)")
+            if e.kind in "VI" and isinstance(e.waveform, Sin) and (e.waveform.td or e.waveform.theta):
+                raise self.error(e, f"{e.title}: a SIN with a delay or damping (TD, THETA) is not periodic from t = 0; "
+                                    "give SIN(VO VA FREQ 0 0 PHASE)")
             if e.kind in "FHW":
                 ctrl = next((v for v in self.by_kind["V"] if v.name == e.control[0]), None)
                 if ctrl is None:
@@ -143,11 +148,12 @@ class _Compiler:
                 raise self.error(s, f"{s.title}: a single pulse in the power circuit: give it a period (PER)")
         starts, keys = self.schedule_keys(period, drives, power)
         distinct = list(dict.fromkeys(keys))
-        configs, pair_currents, closed, maps = [], [], [], []
+        configs, pair_currents, closed, maps, per_config_sinusoids = [], [], [], [], []
         for key in distinct:
             switch_state = dict(zip([s.name for s in self.switches], key[0]))
             levels = dict(zip([s.name for s in power], key[1]))
-            config, forms, signals = self.configuration(switch_state, levels)
+            config, forms, signals, sinusoids = self.configuration(switch_state, levels)
+            per_config_sinusoids.append(sinusoids)
             configs.append(config)
             pair_currents.append(tuple(f == CURRENT for f in forms))
             closed.append(tuple(key[0]))
@@ -158,13 +164,21 @@ class _Compiler:
             if not merged or merged[-1] != c:
                 merged_starts.append(t)
                 merged.append(c)
+        sines = [src.waveform for src in self.sources if isinstance(src.waveform, Sin)]
+        periodic = math.isfinite(period) and (len(merged) > 1 or bool(sines))
         schedule = (Schedule(period=period, starts=tuple(merged_starts), configs=tuple(merged))
-                    if math.isfinite(period) and len(merged) > 1 else Schedule.constant(merged[0]))
+                    if periodic else Schedule.constant(merged[0]))
+        inputs = None
+        if sines:
+            E_sin = np.array([e for e, _ in per_config_sinusoids])
+            F_sin = np.array([f for _, f in per_config_sinusoids])
+            inputs = (np.array([2 * math.pi * w.freq for w in sines]), np.array([math.radians(w.phase) for w in sines]),
+                      E_sin, F_sin)
         state_names = tuple(f"v({c.name})" for c in self.capacitors) + tuple(f"i({l.name})" for l in self.inductors)
         return Compiled(tuple(configs), schedule, state_names,
                         tuple(d.name for d in self.diodes) or ("none",), tuple(pair_currents),
                         tuple(s.name for s in self.switches), tuple(closed), self.signal_names(), tuple(maps),
-                        period if len(merged) > 1 else math.inf, self.initial_state(), self.units())
+                        period if periodic else math.inf, self.initial_state(), self.units(), inputs)
 
     def period(self) -> float:
         """The common period of the PULSE sources (their least common multiple), inf without one."""
@@ -177,6 +191,7 @@ class _Compiler:
             if isinstance(w, Pulse) and math.isfinite(w.per) and w.td >= w.per:
                 raise self.error(s, f"{s.title}: a PULSE delay TD = {w.td:g} s of a whole period ({w.per:g} s) or "
                                     "more: the waveform is not periodic from t = 0")
+        periods += [1.0 / s.waveform.freq for s in self.sources if isinstance(s.waveform, Sin) and s.waveform.freq > 0]
         if not periods:
             return math.inf
         base = max(periods)
@@ -210,16 +225,21 @@ class _Compiler:
     def switch_drive(self, switch: Element) -> dict:
         """The control voltage V(nc+) - V(nc-) as {source name: coefficient}: it must be fixed by sources alone."""
         a, b = switch.nodes[2], switch.nodes[3]
-        solution = None
-        for closed in (False, True):
+        # any configuration the network can be solved in will do (a switch's control terminals draw no current): the
+        # first of every switch state (a synchronous buck cannot be solved with both switches open, nor closed); if
+        # none can, the network's own refusal (the loop or cutset it names) is the one to give
+        names = [s.name for s in self.switches]
+        states = (itertools.product((False, True), repeat=len(names)) if len(names) <= 10
+                  else [(False,) * len(names), (True,) * len(names)])
+        solution, failure = None, None
+        for state in states:
             try:
-                solution = self.network({s.name: closed for s in self.switches}, {})[0]
+                solution = self.network(dict(zip(names, state)), {})[0]
                 break
-            except NetlistError:
-                continue
+            except NetlistError as error:
+                failure = failure or error
         if solution is None:
-            raise self.error(switch, f"{switch.title}: its control nodes {a} and {b} cannot be solved for (the "
-                                     "network cannot be solved with every switch open, nor closed)")
+            raise failure
         row = solution.voltage(a) - solution.voltage(b)
         scale = max(np.abs(row).max(initial=0.0), 1e-300)
         if np.abs(row[:self.n + self.k]).max(initial=0.0) > 1e-12 * scale:
@@ -340,11 +360,11 @@ class _Compiler:
         return _Network(self, switch_state, levels, forms).solve(), forms
 
     def configuration(self, switch_state: dict, levels: dict):
-        """(Configuration, port forms, signal maps) of one configuration."""
+        """(Configuration, port forms, signal maps, (E, F) of the SIN sources) of one configuration."""
         solution, forms = self.network(switch_state, levels)
-        config, signals = self.lcs(solution, forms, switch_state)
+        config, signals, sinusoids = self.lcs(solution, forms, switch_state)
         self.check_unique_ports(config, switch_state)
-        return config, forms, signals
+        return config, forms, signals, sinusoids
 
     def lcs(self, solution, forms, switch_state):
         n, k = self.n, self.k
@@ -364,8 +384,21 @@ class _Compiler:
         name = ",".join(f"{sw}={'on' if on else 'off'}" for sw, on in switch_state.items()) or "circuit"
         config = Configuration(A=A, B=B, C=C, D=D, E=E, F=F, name=name)
         rows = solution.signal_rows(self.signal_names())
-        signals = (rows[:, :n].copy(), rows[:, n:n + k].copy(), rows[:, n + k:] @ s)
-        return config, signals
+        columns, amplitudes = self.sinusoid_columns()
+        E_sin, F_sin = dx[:, columns] * amplitudes, ports[:, columns] * amplitudes
+        if not self.diodes:
+            F_sin = np.zeros_like(F_sin)
+        for i in self.shorted_diodes(switch_state, forms):
+            F_sin = F_sin.copy()
+            F_sin[i] = 0.0
+        signals = (rows[:, :n].copy(), rows[:, n:n + k].copy(), rows[:, n + k:] @ s, rows[:, columns] * amplitudes)
+        return config, signals, (E_sin.T.copy(), F_sin.T.copy())
+
+    def sinusoid_columns(self):
+        """(columns of the SIN sources among the MNA's input columns, their amplitudes VA)."""
+        sines = [i for i, src in enumerate(self.sources) if isinstance(src.waveform, Sin)]
+        return ([self.n + self.k + i for i in sines],
+                np.array([self.sources[i].waveform.va for i in sines], dtype=float))
 
     def joined(self, switch_state: dict):
         """The node a node is joined to by closed ideal switches (a representative of its class)."""
@@ -421,6 +454,8 @@ class _Compiler:
             w = s.waveform
             if isinstance(w, Pulse):
                 values.append(w.v2 if levels.get(s.name, 0) else w.v1)
+            elif isinstance(w, Sin):
+                values.append(w.vo)              # its sinusoid is an input of its own (:meth:`sinusoid_columns`)
             else:
                 values.append(float(w))
         return np.array(values, dtype=float)

@@ -21,7 +21,7 @@ from ..circuits.compile import Compiled, compile_netlist
 from ..circuits.netlist import Netlist, NetlistError, Pulse, check_overrides, read_netlist
 from ..errors import ParameterError, SignalError
 from ..params import Param
-from ..problems import LCSProblem
+from ..problems import LCSProblem, Sinusoids
 from ..trajectory import Samples
 from ..validate import quoted
 from .base import Labels, Model
@@ -120,8 +120,9 @@ class Circuit(Model):
     def problem(self, p: dict, t_end: float, x0=None, t_start: float = 0.0, initial: int | None = None) -> LCSProblem:
         c = self.compiled(p)
         x0 = c.x0 if x0 is None else x0
+        inputs = Sinusoids(*c.inputs) if c.inputs is not None else None
         return LCSProblem(c.configurations, c.schedule, x0=x0, t_span=(t_start, t_end), state_names=c.state_names,
-                          pair_names=c.pair_names, metadata={"circuit": self.name, **p})
+                          pair_names=c.pair_names, metadata={"circuit": self.name, **p}, inputs=inputs)
 
     def period(self, p: dict) -> float:
         return self.compiled(p).period
@@ -196,11 +197,14 @@ class Circuit(Model):
             raise SignalError(f"signal must be one of vout, switch, {', '.join(c.signal_names)}; got {name!r}") from None
         config = np.asarray(samples.config, dtype=np.int64)
         out = np.empty(len(samples.t))
-        for index, (Sx, Su, s0) in enumerate(c.signal_maps):
+        for index, (Sx, Su, s0, Ssin) in enumerate(c.signal_maps):
             rows = config == index
             if rows.any():
                 u = samples.u[rows] if samples.u is not None else np.zeros((rows.sum(), Su.shape[1]))
                 out[rows] = samples.x[rows] @ Sx[row] + u @ Su[row] + s0[row]
+                if c.inputs is not None:          # the SIN sources' share at each point's time
+                    omega, phase = c.inputs[0], c.inputs[1]
+                    out[rows] += np.sin(np.multiply.outer(np.asarray(samples.t)[rows], omega) + phase) @ Ssin[row]
         return out
 
     def vout(self, samples: Samples, p: dict) -> np.ndarray:
@@ -216,8 +220,12 @@ class Circuit(Model):
     def conducting(self, samples: Samples, p: dict | None = None) -> np.ndarray:
         c = self.compiled(p if p is not None else self.resolve({}))
         currents = np.asarray(c.pair_currents, dtype=bool)[np.asarray(samples.config, dtype=np.int64)]
-        held = samples.held if samples.held is not None else samples.u > samples.y
-        return held == currents
+        if samples.held is not None:                  # the event method's own modes
+            return samples.held == currents
+        # a diode conducts where its current exceeds its reverse voltage (u > y where u is its current, y > u where u
+        # is its voltage: the model's rule), and a pair at u = y = 0 (a bridge's output floating while every diode
+        # blocks) carries nothing, whichever variable u is
+        return np.where(currents, samples.u > samples.y, samples.y > samples.u)
 
     def mode_labels(self, samples: Samples, p: dict) -> np.ndarray:
         c = self.compiled(p)

@@ -120,7 +120,9 @@ CASES = {
                              ["voltage source Vg", "PULSE", "TD", "negative"], 3),
     "pulse-longer-than-period": (buck({3: "Vg gate 0 PULSE(1 0 0 1u 1u 9u 10u)"}), [],
                                  ["voltage source Vg", "TR + PW + TF", "exceeds its period"], 3),
-    "sin-in-power-path": (buck({2: "Vin in 0 SIN(12 1 50)"}), [], ["voltage source VIN", "SIN", "not compiled"], 2),
+    "sin-delayed": (buck({2: "Vin in 0 SIN(12 1 50 1m)"}), [], ["voltage source VIN", "SIN with a delay",
+                                                                "not periodic from t = 0"], 2),
+    "pwl-in-power-path": (buck({2: "Vin in 0 PWL(0 0 1m 12)"}), [], ["voltage source VIN", "PWL", "not compiled"], 2),
     # --- subcircuits ---------------------------------------------------------------------------------------
     "subckt-recursive": (SUBCKT_RECURSIVE, [], ["XA2", "instantiates itself", "a -> b -> a"], 10),
     "subckt-self": (SUBCKT_SELF, [], ["X9", "instantiates itself", "loop -> loop"], 7),
@@ -234,11 +236,6 @@ _OVERRIDES = ("models/netlist.py Circuit.resolve: -p is checked by Model.resolve
               "converters.circuits.netlist.check_overrides(self.netlist, lowered, self.parameters) before "
               "super().resolve(lowered)")
 XFAIL = {
-    "voltage-source-loop": _MASKED,
-    "capacitor-across-source": _MASKED,
-    "inductor-current-source-cutset": _MASKED,
-    "floating-node": _MASKED,
-    "current-source-into-node": _MASKED,
 }
 
 
