@@ -60,27 +60,23 @@ def buck_per_step(periods: int) -> None:
     print(f"  final states equal to {np.abs(tr_c.x[-1][::-1] - tr_h.x[-1]).max():.2g}")
 
 
-def cockcroft_walton(stages: int) -> Path | None:
-    """The N-stage multiplier's netlist (netlists/circuits/cockcroft-walton.cir with N set, or its generator)."""
-    try:
-        from netlists.circuits import cockcroft_walton_netlist
-    except ImportError:
-        return None
-    path = Path(f"/tmp/pcsuite-cw-{stages}.cir")
-    path.write_text(cockcroft_walton_netlist(stages))
+def cockcroft_walton(stages: int) -> Path:
+    """The N-stage multiplier's netlist (netlists.generators.cockcroft_walton), written to a temporary file."""
+    import tempfile
+
+    from netlists.generators import cockcroft_walton as generate
+    path = Path(tempfile.gettempdir()) / f"pcsuite-cw-{stages}.cir"
+    path.write_text(generate(stages))
     return path
 
 
 def multiplier(stages: list, periods: int) -> None:
     from netlists.circuit import circuit_netlist
-    from validation.spice import circuit_trajectory, run_spice
+    from validation.spice import SpiceError, circuit_trajectory, run_spice
     from netlists import SpiceOptions
     rows = []
     for n in stages:
         path = cockcroft_walton(n)
-        if path is None:
-            print("Cockcroft-Walton: no generator (netlists.circuits.cockcroft_walton_netlist) yet: skipped")
-            return
         circuit = Circuit.from_netlist(path)
         p = circuit.resolve({})
         T = circuit.period(p)
@@ -95,9 +91,15 @@ def multiplier(stages: list, periods: int) -> None:
         error = abs(mean_lcp - coarse.mean("vout", t0=(periods - 10) * T, t1=periods * T)) / 3.0
         fraction, previous, spice_wall = 1 / 50, None, None
         while fraction > 1 / 3200:
-            netlist = circuit_netlist(circuit, p, periods * T, SpiceOptions(tmax_fraction=fraction))
+            netlist = circuit_netlist(circuit, p, periods * T, SpiceOptions(tmax_fraction=fraction),
+                                      diode_currents=False)
             start = time.perf_counter()
-            result = run_spice(netlist)
+            try:
+                result = run_spice(netlist)
+            except SpiceError as failure:            # ngspice's own convergence: said, not hidden
+                print(f"  N = {n}: ngspice at TMAX = T/{1 / fraction:.0f}: {str(failure).split(': ', 1)[-1][:120]}")
+                previous, fraction = None, fraction / 2
+                continue
             wall = time.perf_counter() - start
             mean = circuit_trajectory(circuit, p, netlist, result, (periods - 10) * T).mean(
                 "vout", t0=(periods - 10) * T, t1=periods * T)

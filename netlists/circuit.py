@@ -27,9 +27,13 @@ def _node(flat: str) -> str:
     return "0" if flat == "0" else _name(flat)
 
 
-def circuit_netlist(circuit, p: dict, t_end: float, options: SpiceOptions | None = None, x0=None) -> Netlist:
+def circuit_netlist(circuit, p: dict, t_end: float, options: SpiceOptions | None = None, x0=None,
+                    diode_currents: bool = True) -> Netlist:
     """The ngspice netlist of ``circuit`` (a :class:`converters.models.netlist.Circuit`) at parameters ``p`` over
-    [0, t_end], started from ``x0`` (the circuit's state vector; default its own initial state)."""
+    [0, t_end], started from ``x0`` (the circuit's state vector; default its own initial state). Without
+    ``diode_currents`` the diodes have no sense source (their currents, and the modes, are not measured): in a
+    capacitor-diode ladder or a capacitor-input bridge the 0 V sources in series with near-ideal diodes stop
+    ngspice ("timestep too small" at the commutations), which runs the ladder without them."""
     from converters.circuits.netlist import read_netlist
     options = options or SpiceOptions()
     netlist = read_netlist(circuit.netlist.text, overrides=p, name=circuit.source)
@@ -73,8 +77,11 @@ def circuit_netlist(circuit, p: dict, t_end: float, options: SpiceOptions | None
         elif e.kind == "D":
             sense = f"vsense_{_name(e.name)}"
             inner = f"sense_{_name(e.name)}"
-            lines += [f"{sense} {n[0]} {inner} DC 0", f"{name} {inner} {n[1]} {_name(e.model)}"]
-            probes[f"i({e.name})"] = (f"{sense}#branch", 1.0)
+            if diode_currents:
+                lines += [f"{sense} {n[0]} {inner} DC 0", f"{name} {inner} {n[1]} {_name(e.model)}"]
+                probes[f"i({e.name})"] = (f"{sense}#branch", 1.0)
+            else:
+                lines.append(f"{name} {n[0]} {n[1]} {_name(e.model)}")
             pairs.append(f"i({e.name})")
         elif e.kind == "S":                # no sense source: in series with a switch it stalled ngspice (a Cuk)
             lines.append(f"{name} {n[0]} {n[1]} {n[2]} {n[3]} {_name(e.model)}")
