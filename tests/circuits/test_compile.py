@@ -33,3 +33,16 @@ def test_a_switch_that_is_off_at_the_start_and_the_end_of_the_period_is_on_only_
     summary = run_summary(run_converter(circuit, {}, steady=True, method="event"))
     assert summary["vout_mean"] == pytest.approx(0.4 * 12, rel=1e-9)          # CCM: D Vin
     assert summary["mode_fractions"]["S1"] == pytest.approx(0.4, abs=1e-12)
+
+
+def test_a_circuit_with_more_diodes_than_the_inline_solver_takes_runs_in_the_stepper():
+    """A 5-stage multiplier has k = 10 diodes, more than the compiled loop's inline LCP solver takes (8): every step
+    goes to the general solver, and the loop had indexed past the last step when it came back (IndexError)."""
+    from converters.methods import Theta
+    from converters.simulate import simulate
+    from netlists.generators import cockcroft_walton
+    circuit = Circuit.from_netlist("cw5.cir", text=cockcroft_walton(5))
+    p = circuit.resolve({})
+    T = circuit.period(p)
+    tr = simulate(circuit.problem(p, 2 * T), Theta(h=T / 200, theta=0.5))
+    assert circuit.compiled(p).configurations[0].k == 10 and tr.general_solves == tr.steps == 400
