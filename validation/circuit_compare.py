@@ -11,7 +11,6 @@ Thresholds: ``[thresholds.circuit]`` in ``validation/data/defaults.toml``.
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np

@@ -643,7 +643,6 @@ class _Reader:
 
     def instance(self, line, params, models, subckts, prefix, nodemap, out, depth, expressions, chain):
         text = line.text
-        head, _, tail = re.split(r"(?i)\bparams:", text)[0], None, None
         parts = re.split(r"(?i)\s+params:\s*", text, maxsplit=1)
         words = parts[0].split()
         assigns = self.assignments(line, parts[1]) if len(parts) > 1 else []

@@ -245,10 +245,6 @@ class Circuit(Model):
             out[i] = label
         return out
 
-    @property
-    def mode_labels_all(self) -> tuple:
-        return ()
-
     off_held_label = "off"
     turn_off_label = None
 
