@@ -382,7 +382,8 @@ class ParameterPath:
     name: str
 
     def __post_init__(self):
-        object.__setattr__(self, "name", self.model.parameter_name(self.name))
+        # a netlist's names are case-insensitive (Model.parameter_name); a mechanical model's are as typed
+        object.__setattr__(self, "name", getattr(self.model, "parameter_name", str)(self.name))
         known = [p.name for p in self.model.parameters]
         if self.name not in known:
             raise ParameterError(f"unknown parameter {self.name!r} for {self.model.key}; valid names: {', '.join(known)}")

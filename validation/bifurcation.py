@@ -153,7 +153,7 @@ def run_study(converter: str, control: str, params: dict | None, name: str, star
         raise ParameterError(f"bifurcation analysis follows orbits of the stroboscopic map: {model.key} has no fixed "
                              "switching period")
     spec = {p.name: p for p in model.parameters}
-    name = model.parameter_name(name)
+    name = getattr(model, "parameter_name", str)(name)
     if name not in spec:
         raise ParameterError(f"--param must name a parameter of {model.key} ({', '.join(spec)}); got {name!r}")
     p = spec[name]

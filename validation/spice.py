@@ -236,8 +236,9 @@ def circuit_trajectory(circuit, params: dict, netlist: Netlist, result: SpiceRes
     # a diode across a closed switch (a body diode) shares its current in ngspice (its near-ideal drop against the
     # switch's RON); the LCS gives the switch all of it: the diode is not counted as conducting there either
     switches = [e for e in circuit.netlist.elements if e.kind == "S"]
+    by_name = {e.name: e for e in circuit.netlist.elements}
     for i, d in enumerate(diodes):
-        terminals = set(next(e for e in circuit.netlist.elements if e.name == d).nodes)
+        terminals = set(by_name[d].nodes)
         for s, on in zip(switches, closed):
             if set(s.nodes[:2]) == terminals:
                 conducting[:, i] &= ~on
