@@ -140,8 +140,11 @@ class _Compiler:
     # --- drives and the schedule -------------------------------------------------------------------------------
 
     def run(self) -> Compiled:
-        period = self.period()
+        self.state_rows = {}
         drives = {s.name: self.switch_drive(s) for s in self.switches}
+        if self.state_rows:
+            return self.run_state_driven(drives)
+        period = self.period()
         power = [s for s in self.sources if isinstance(s.waveform, Pulse) and self.in_power_circuit(s)]
         for s in power:
             if not math.isfinite(s.waveform.per):
@@ -179,6 +182,48 @@ class _Compiler:
                         tuple(d.name for d in self.diodes) or ("none",), tuple(pair_currents),
                         tuple(s.name for s in self.switches), tuple(closed), self.signal_names(), tuple(maps),
                         period if periodic else math.inf, self.initial_state(), self.units(), inputs)
+
+    def run_state_driven(self, drives: dict) -> Compiled:
+        """One switch driven by the circuit's own quantities (a comparator), the others by DC: two configurations
+        and a :class:`~converters.problems.StateSwitching` law (its ramp's period, or none: an autonomous circuit)."""
+        from ..problems import StateSwitching, SwitchingFunction
+        if len(self.state_rows) > 1 or any(d for d in drives.values() if d is not None and any(
+                isinstance(next(x for x in self.sources if x.name == name).waveform, Pulse) for name in d)):
+            names = ", ".join(n.upper() for n in self.state_rows)
+            raise NetlistError(f"{self.path}: {names} driven by the circuit's own quantities beside other switches "
+                               "or PULSE gates: one state-driven switch, the others at DC, is what is compiled yet")
+        if any(isinstance(x.waveform, (Pulse, Sin)) and self.in_power_circuit(x) for x in self.sources):
+            raise NetlistError(f"{self.path}: a state-driven switch with PULSE or SIN sources in the power circuit is "
+                               "not compiled yet")
+        (name, _), = self.state_rows.items()
+        switch = next(x for x in self.switches if x.name == name)
+        fixed = {}
+        for other in self.switches:
+            if other.name != name:
+                model = self.nl.models[other.model]
+                value = sum(c * float(next(x for x in self.sources if x.name == src).waveform)
+                            for src, c in (drives[other.name] or {}).items())
+                fixed[other.name] = value > model.params.get("VT", 0.0)
+        pieces, configs, pair_currents, closed, maps = [], [], [], [], []
+        for on in (False, True):
+            state = {**fixed, name: on}
+            config, forms, signals, _ = self.configuration(state, {})
+            configs.append(config)
+            pair_currents.append(tuple(f == CURRENT for f in forms))
+            closed.append(tuple(state[x.name] for x in self.switches))
+            maps.append(signals)
+            solution = self.network(state, {})[0]
+            pieces.append(solution.voltage(switch.nodes[2]) - solution.voltage(switch.nodes[3]))
+        if np.abs(pieces[0] - pieces[1]).max() > 1e-9 * max(np.abs(pieces[0]).max(), 1e-300):
+            raise self.error(switch, f"{switch.title}: its control voltage changes with its own state: a comparator "
+                                     "whose input the switch itself moves is not compiled")
+        c, d, ramp = self.state_law(switch, pieces[0])
+        band = abs(self.nl.models[switch.model].params.get("VH", 0.0))
+        law = StateSwitching(SwitchingFunction(c=c, d=d, ramp=ramp), below=1, above=0, band=band)
+        state_names = tuple(f"v({x.name})" for x in self.capacitors) + tuple(f"i({x.name})" for x in self.inductors)
+        return Compiled(tuple(configs), law, state_names, tuple(d.name for d in self.diodes) or ("none",),
+                        tuple(pair_currents), tuple(x.name for x in self.switches), tuple(closed), self.signal_names(),
+                        tuple(maps), ramp.period if ramp is not None else math.inf, self.initial_state(), self.units())
 
     def period(self) -> float:
         """The common period of the PULSE sources (their least common multiple), inf without one."""
@@ -243,10 +288,37 @@ class _Compiler:
         row = solution.voltage(a) - solution.voltage(b)
         scale = max(np.abs(row).max(initial=0.0), 1e-300)
         if np.abs(row[:self.n + self.k]).max(initial=0.0) > 1e-12 * scale:
-            raise self.error(switch, f"{switch.title}: its control voltage v({a}) - v({b}) depends on the circuit's "
-                                     "states: state-driven switching from a netlist is not compiled yet; drive it "
-                                     "with a PULSE source")
+            self.state_rows[switch.name] = row          # a comparator on the circuit's own quantities
+            return None
         return {s.name: row[self.n + self.k + i] for i, s in enumerate(self.sources) if row[self.n + self.k + i] != 0.0}
+
+    def state_law(self, switch: Element, row: np.ndarray):
+        """The StateSwitching of a switch whose control voltage V = c.x + (sources) depends on the states: with
+        s = VT - V the switch closes when s falls below -VH and opens when it rises above +VH (SW's thresholds VT
+        +- VH); a sawtooth PULSE in its control (TF and PW a thousandth of its period at most) is the law's ramp.
+        Returns (function pieces: c, d, ramp) or raises naming what it cannot take."""
+        from ..problems import Ramp
+        n, k = self.n, self.k
+        if np.abs(row[n:n + k]).max(initial=0.0) > 1e-12 * max(np.abs(row).max(), 1e-300):
+            raise self.error(switch, f"{switch.title}: its control voltage depends on a diode's current or voltage; a "
+                                     "comparator here reads node voltages and branch currents of the states only")
+        vt = self.nl.models[switch.model].params.get("VT", 0.0)
+        d, ramp = vt, None
+        for i, src in enumerate(self.sources):
+            a = row[n + k + i]
+            if a == 0.0:
+                continue
+            w = src.waveform
+            if isinstance(w, Pulse):
+                if ramp is not None or not math.isfinite(w.per) or w.td != 0.0 or w.tf + w.pw > 1e-3 * w.per:
+                    raise self.error(src, f"{src.title}: in {switch.title}'s control a PULSE must be one sawtooth "
+                                          "ramp: PULSE(V1 V2 0 TR TF PW PER) with TF + PW at most PER/1000")
+                ramp = Ramp(low=a * w.v1, high=a * w.v2, period=w.per)      # s = VT - V: the ramp enters as -a pulse
+            elif isinstance(w, Sin):
+                raise self.error(src, f"{src.title}: a SIN in {switch.title}'s control is not compiled")
+            else:
+                d -= a * float(w)
+        return -row[:n], d, ramp
 
     def schedule_keys(self, period: float, drives: dict, power: list):
         """The instants in [0, T) where a switch or a power source changes, and the key of each interval:

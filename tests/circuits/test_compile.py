@@ -1,5 +1,6 @@
 """The compiler's schedules and inputs, against what the waveforms say."""
 import math
+from pathlib import Path
 
 import pytest
 
@@ -46,3 +47,32 @@ def test_a_circuit_with_more_diodes_than_the_inline_solver_takes_runs_in_the_ste
     T = circuit.period(p)
     tr = simulate(circuit.problem(p, 2 * T), Theta(h=T / 200, theta=0.5))
     assert circuit.compiled(p).configurations[0].k == 10 and tr.general_solves == tr.steps == 400
+
+
+VOLTAGE_MODE = Path(__file__).resolve().parents[2] / "netlists" / "circuits" / "voltage-mode-buck.cir"
+
+
+@pytest.mark.parametrize("vin", [20, 24])
+def test_a_comparator_on_the_circuits_own_voltages_is_the_hand_models_state_driven_law(vin):
+    """The voltage-mode buck as a netlist (an E amplifier, a sawtooth PULSE, a switch whose control is v(ramp) -
+    v(vcon)) compiles to the hand model's StateSwitching: the same period-1 orbit (to 1e-10) and Floquet multipliers."""
+    from converters.methods import EventDriven
+    from converters.models import get_model
+    from converters.run import steady_state
+    circuit, hand = Circuit.from_netlist(VOLTAGE_MODE), get_model("buck", "voltage-mode")
+    p_c, p_h = circuit.resolve({"Vin": vin}), hand.resolve({"Vin": vin})
+    orbit_c = steady_state(circuit, p_c, EventDriven(), tol=1e-11)
+    orbit_h = steady_state(hand, p_h, EventDriven(), tol=1e-11)
+    assert abs(orbit_c.x0[::-1] - orbit_h.x0).max() <= 1e-10 * abs(orbit_h.x0).max()
+    assert orbit_c.spectral_radius == pytest.approx(orbit_h.spectral_radius, rel=1e-9)
+
+
+def test_the_voltage_mode_netlist_doubles_its_period_at_the_published_input_voltage(capsys):
+    """Its period-1 orbit flips at Vin = 24.516573 V, as the hand model's (and Fossas and Olivar's) does."""
+    import json
+
+    from validation.cli import main
+    assert main(["bifurcation", str(VOLTAGE_MODE), "--param", "Vin=20:26", "--points", "0", "--max-period", "2",
+                 "--json"]) == 0
+    flips = [b for b in json.loads(capsys.readouterr().out)["bifurcations"] if b["type"] == "period-doubling"]
+    assert flips[0]["value"] == pytest.approx(24.516573, abs=2e-6)
