@@ -41,10 +41,10 @@ CURRENT, VOLTAGE = "current", "voltage"
 
 @dataclass(frozen=True)
 class Compiled:
-    """The LCS of a netlist: configurations, the schedule, names, and each configuration's signal maps."""
+    """The LCS of a netlist: configurations, the switching law, names, and each configuration's signal maps."""
 
     configurations: tuple
-    schedule: Schedule
+    law: object                      # the switching law: a Schedule (time-driven) or a StateSwitching (a comparator)
     state_names: tuple               # "v(c1)", "i(l1)" (capacitor voltages and inductor currents)
     pair_names: tuple                # diode names ("d1"); "none" for a circuit without diodes
     pair_currents: tuple             # per configuration, per pair: u is the diode current

@@ -121,7 +121,7 @@ class Circuit(Model):
         c = self.compiled(p)
         x0 = c.x0 if x0 is None else x0
         inputs = Sinusoids(*c.inputs) if c.inputs is not None else None
-        return LCSProblem(c.configurations, c.schedule, x0=x0, t_span=(t_start, t_end), state_names=c.state_names,
+        return LCSProblem(c.configurations, c.law, x0=x0, t_span=(t_start, t_end), state_names=c.state_names,
                           pair_names=c.pair_names, metadata={"circuit": self.name, **p}, inputs=inputs)
 
     def period(self, p: dict) -> float:

@@ -29,7 +29,7 @@ def test_a_switch_that_is_off_at_the_start_and_the_end_of_the_period_is_on_only_
     the first across the period's end, which left the switch on from 0.2 T to T: a duty of 0.8, not 0.4)."""
     circuit = Circuit.from_netlist("late.cir", text=BUCK.format(td="{0.2*T - e/2}", pw="{0.4*T - e}"))
     p = circuit.resolve({})
-    schedule = circuit.compiled(p).schedule
+    schedule = circuit.compiled(p).law
     assert [round(s / 1e-5, 12) for s in schedule.starts] == [0.0, 0.2, 0.6]
     summary = run_summary(run_converter(circuit, {}, steady=True, method="event"))
     assert summary["vout_mean"] == pytest.approx(0.4 * 12, rel=1e-9)          # CCM: D Vin
