@@ -97,6 +97,12 @@ class Circuit(Model):
             elif e.kind in "EGFH":
                 out.append(Param(e.name, e.value, UNITS[e.kind], f"{e.title} (line {e.line})", low=-math.inf,
                                  low_open=False))
+        names = [q.name for q in out]
+        twice = next((n for n in names if names.count(n) > 1), None)
+        if twice is not None:          # -p NAME would be ambiguous: SPICE names are case-insensitive
+            element = next(e for e in self.netlist.elements if e.name == twice)
+            raise NetlistError(f"{self.netlist.where(twice)}: .param {twice} and {element.title} (line {element.line}) "
+                               "share a name, so -p would not know which to set; rename one")
         return tuple(out)
 
     def resolve(self, given: dict | None = None) -> dict:

@@ -76,3 +76,11 @@ def test_the_voltage_mode_netlist_doubles_its_period_at_the_published_input_volt
                  "--json"]) == 0
     flips = [b for b in json.loads(capsys.readouterr().out)["bifurcations"] if b["type"] == "period-doubling"]
     assert flips[0]["value"] == pytest.approx(24.516573, abs=2e-6)
+
+
+def test_a_param_and_an_element_of_the_same_name_are_refused():
+    """-p R1=7 had silently set one of them (.param r1 and the resistor R1: SPICE names ignore case)."""
+    from converters.circuits.netlist import NetlistError
+    text = "dup\n.param r1=5\nVin in 0 DC 12\nR1 in out 10\nC1 out 0 1u\n.tran 1u 1m\n.end\n"
+    with pytest.raises(NetlistError, match=r"dup.cir:2: .param r1 and resistor R1 \(line 4\) share a name"):
+        Circuit.from_netlist("dup.cir", text=text)
