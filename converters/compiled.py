@@ -39,8 +39,10 @@ from pathlib import Path
 OK, NEEDS_GENERAL_SOLVER, NO_SOLUTION = 0, 1, 2
 #: Extra status of the state-switched loop: the event buffers are full (the caller grows them, resumes).
 EVENTS_FULL = 3
-#: Largest k solved inline by the step loops (:func:`.lcp.kernels.solve_small_lcp`).
+#: Largest k solved inline by the step loops (:func:`.lcp.kernels.solve_small_lcp`); above it they pivot
+#: (:func:`.lcp.kernels.solve_pivoting`), at most PIVOTS_PER_PAIR k flips a step before the general solver takes it.
 MAX_INLINE_K = 8
+PIVOTS_PER_PAIR = 4
 #: Up to this many states the one-pair loop carries the state in registers (a tuple of n floats, its
 #: length fixing n at compile time: one specialisation per n, cached); above it, in the rows of x
 #: (measured: registers 4.4 ns/step at n = 2, 7.1 at n = 4; rows 7.1 and 19.7; even at n = 8, 40 against 31).

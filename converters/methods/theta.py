@@ -316,7 +316,7 @@ class StepPlan:
         general_solves = 0
         j = 0
         while True:
-            if j >= which.shape[0]:     # more pairs than the inline solver takes: every step was solved here
+            if j >= which.shape[0]:     # the run's last step was solved here
                 return general_solves
             status, j = run_steps(which, mats.Phi, mats.Gamma, mats.H, mats.C, mats.F, mats.M, mats.Phi_b,
                                   mats.Gamma_b, mats.CPhi, mats.q0, x, u, y, j, inline, state)

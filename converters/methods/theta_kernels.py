@@ -21,8 +21,9 @@ from numba import njit, types
 from numba.cpython.unsafe.tuple import tuple_setitem
 from numba.extending import overload
 
-from ..compiled import EVENTS_FULL, NEEDS_GENERAL_SOLVER, NO_SOLUTION, OK  # noqa: F401 (shared with the callers)
-from ..lcp.kernels import _masks_by_size, solve_augmented, solve_small_lcp
+from ..compiled import (EVENTS_FULL, NEEDS_GENERAL_SOLVER, NO_SOLUTION, OK,  # noqa: F401 (shared with the callers)
+                        PIVOTS_PER_PAIR)
+from ..lcp.kernels import _masks_by_size, solve_augmented, solve_pivoting, solve_small_lcp
 
 
 def _size(state, x):
@@ -98,21 +99,25 @@ def run_steps(which, Phi, Gamma, H, C, F, M, Phi_b, Gamma_b, CPhi, q0, x, u, y, 
     """Advance x, u, y from row ``start`` to the end; step j uses the matrix set ``which[j]``.
 
     Returns (status, j): OK when every step is done, NEEDS_GENERAL_SOLVER at the first step j
-    whose LCP is too large or degenerate for the inline solver (the caller solves it and resumes
-    at j + 1), NO_SOLUTION when a scalar LCP provably has none. One pair: :func:`run_scalar`
+    whose LCP the compiled solvers do not solve (singular, or degenerate beyond them: the caller solves it
+    and resumes at j + 1), NO_SOLUTION when a scalar LCP provably has none. ``inline``: k <= MAX_INLINE_K,
+    solved by :func:`solve_small_lcp`; otherwise by principal pivoting from the last step's active set
+    (:func:`solve_pivoting`, at most PIVOTS_PER_PAIR k flips a step). One pair: :func:`run_scalar`
     (``state`` from :func:`converters.compiled.register_state`).
     """
     n = x.shape[1]
     k = u.shape[1]
-    if not inline:
-        return NEEDS_GENERAL_SOLVER, start
     if k == 1:
         return run_scalar(which, Phi_b, Gamma_b, CPhi, q0, M, x, u, y, start, state)
     xf = np.empty(n)
     q = np.empty(k)
     z = np.empty(k)
     work = np.empty((k, k + 1))
-    order = _masks_by_size(k)
+    order = _masks_by_size(k) if inline else np.empty(0, dtype=np.int64)
+    active = np.empty(k, dtype=np.bool_)
+    idx = np.empty(k, dtype=np.int64)
+    for i in range(k):
+        active[i] = u[start, i] > 0.0
     mask = 0
     for j in range(start, which.shape[0]):
         s = which[j]
@@ -126,8 +131,11 @@ def run_steps(which, Phi, Gamma, H, C, F, M, Phi_b, Gamma_b, CPhi, q0, x, u, y, 
             for l in range(n):
                 acc += C[s, i, l] * xf[l]
             q[i] = acc
-        mask = solve_small_lcp(M[s], q, k, z, mask, order, work)
-        if mask < 0:
+        if inline:
+            mask = solve_small_lcp(M[s], q, k, z, mask, order, work)
+            if mask < 0:
+                return NEEDS_GENERAL_SOLVER, j
+        elif solve_pivoting(M[s], q, k, z, active, work, idx, PIVOTS_PER_PAIR * k) < 0:
             return NEEDS_GENERAL_SOLVER, j
         for i in range(n):
             acc = xf[i]
