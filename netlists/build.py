@@ -16,6 +16,10 @@ from converters.models import get_converter
 from converters.validate import parse_value
 
 
+#: ngspice's default ABSTOL in A.
+NGSPICE_ABSTOL = 1e-12
+
+
 @dataclass(frozen=True)
 class SpiceOptions:
     """Transient settings. ``tmax`` defaults to T/200; ``method`` is 'trap' or 'gear'."""
@@ -32,12 +36,18 @@ class SpiceOptions:
     # 12 V buck's switch-on moved by up to ~36 ps, its steady mean wandering between levels 34 ppm apart for
     # thousands of periods (RELTOL and TMAX changed nothing); at 1e-6 T it settles in 90 periods.
     edge_fraction: float = 1e-6
+    # ngspice's own ABSTOL (then not written); the power-electronics tolerances (CONVERGENCE_FALLBACK) loosen it.
+    abstol: float = NGSPICE_ABSTOL
+    # The diodes' junction capacitance CJO in F (0: none, the near-ideal default).
+    diode_cjo: float = 0.0
 
     def __post_init__(self):
-        for name in ("tmax_fraction", "reltol", "diode_n", "diode_is", "switch_ron", "switch_roff", "edge_fraction"):
+        for name in ("tmax_fraction", "reltol", "diode_n", "diode_is", "switch_ron", "switch_roff", "edge_fraction",
+                     "abstol", "diode_cjo"):
             value = parse_value(name, getattr(self, name))
-            if value <= 0:
-                raise ParameterError(f"{name} must be positive; got {value!r}")
+            if value < 0 or (value == 0 and name != "diode_cjo"):
+                raise ParameterError(f"{name} must be {'non-negative' if name == 'diode_cjo' else 'positive'}; "
+                                     f"got {value!r}")
             object.__setattr__(self, name, value)
         if self.method not in ("trap", "gear"):
             raise ParameterError(f"method must be one of trap, gear; got {self.method!r}")
@@ -86,7 +96,19 @@ def _gate(T: float, D: float, options: SpiceOptions) -> str:
 def _models(options: SpiceOptions) -> list[str]:
     return [f".model SWMOD SW(VT=0.5 VH=0 RON={_num('switch_ron', options.switch_ron)} "
             f"ROFF={_num('switch_roff', options.switch_roff)})",
-            f".model DMOD D(IS={_num('diode_is', options.diode_is)} N={_num('diode_n', options.diode_n)})"]
+            f".model DMOD D({diode_parameters(options)})"]
+
+
+def diode_parameters(options: SpiceOptions) -> str:
+    """The near-ideal diode's ``.model`` parameters: IS, N, and CJO where the options give one."""
+    text = f"IS={_num('diode_is', options.diode_is)} N={_num('diode_n', options.diode_n)}"
+    return text + (f" CJO={_num('diode_cjo', options.diode_cjo)}" if options.diode_cjo else "")
+
+
+def options_line(options: SpiceOptions, extra: str = "") -> str:
+    """The ``.options`` line every pcsuite netlist carries."""
+    abstol = f" ABSTOL={_num('abstol', options.abstol)}" if options.abstol != NGSPICE_ABSTOL else ""
+    return f".options RELTOL={_num('reltol', options.reltol)}{abstol} METHOD={options.method} ITL4=100{extra}"
 
 
 def _diode(anode: str, cathode: str, p: dict) -> list[str]:
@@ -152,7 +174,7 @@ def build_netlist(converter: str, params: dict | None, t_end, options: SpiceOpti
     probes.setdefault("switch", ({"gate": 1.0}, 0.5))
     tmax = options.tmax_fraction * T
     lines = [f"* pcsuite {conv.name}", *body, *_models(options),
-             f".options RELTOL={_num('reltol', options.reltol)} METHOD={options.method} ITL4=100",
+             options_line(options),
              f".tran {_num('tstep', tmax)} {_num('t_end', t_end)} 0 {_num('tmax', tmax)} UIC", ".end"]
     pairs = tuple(f"i_{name}" if f"i_{name}" in probes else "i_D" for name in conv.pair_names)
     return Netlist("\n".join(lines) + "\n", conv.name, p, t_end, options, probes, pairs)
@@ -267,9 +289,9 @@ def build_smc_netlist(params: dict | None, t_end, options: SpiceOptions | None =
             f"Bctrl ctrl 0 V=max({i0}+{_num('Kp', p['Kp'])}*({vref}-V(out))+{_num('Ki', p['Ki'])}*V(zi),0)-I(Vsl)",
             f".model SWSMC SW(VT=0 VH={_num('band', p['band'])} RON={_num('switch_ron', options.switch_ron)} "
             f"ROFF={_num('switch_roff', options.switch_roff)})",
-            f".model DMOD D(IS={_num('diode_is', options.diode_is)} N={_num('diode_n', options.diode_n)})"]
+            f".model DMOD D({diode_parameters(options)})"]
     lines = ["* pcsuite boost-smc", *body,
-             f".options RELTOL={_num('reltol', options.reltol)} METHOD={options.method} ITL4=100",
+             options_line(options),
              f".tran {_num('tstep', tmax)} {_num('t_end', t_end)} 0 {_num('tmax', tmax)} UIC", ".end"]
     # The comparator's switch is closed where the switch node is pulled below half the output.
     probes = {"switch": ({"out": 0.5, "sw": -1.0}, 0.0), "iL": ("vsl#branch", 1.0), "vC": ("out", 1.0),
@@ -336,9 +358,9 @@ def build_voltage_mode_netlist(params: dict | None, t_end, options: SpiceOptions
             *_capacitor("out", "0", p, ic=v0), f"R1 out 0 {_num('R', p['R'])}",
             f".model SWVM SW(VT=0 VH=0 RON={_num('switch_ron', options.switch_ron)} "
             f"ROFF={_num('switch_roff', options.switch_roff)})",
-            f".model DMOD D(IS={_num('diode_is', options.diode_is)} N={_num('diode_n', options.diode_n)})"]
+            f".model DMOD D({diode_parameters(options)})"]
     lines = ["* pcsuite buck voltage-mode", *body,
-             f".options RELTOL={_num('reltol', options.reltol)} METHOD={options.method} ITL4=100",
+             options_line(options),
              f".tran {_num('tstep', tmax)} {_num('t_end', t_end)} 0 {_num('tmax', tmax)} UIC", ".end"]
     probes = {"switch": ({"ctrl": 1.0}, 0.0), "iL": ("vsl#branch", 1.0), "vC": ("out", 1.0), "vout": ("out", 1.0),
               "i_D": ("vsd#branch", 1.0), "ramp": ("ramp", 1.0)}

@@ -16,7 +16,7 @@ import math
 from converters.circuits.netlist import Pulse, Sin
 from converters.errors import ParameterError
 
-from .build import Netlist, SpiceOptions, _num
+from .build import Netlist, SpiceOptions, _num, options_line
 
 
 def _name(flat: str) -> str:
@@ -101,7 +101,7 @@ def circuit_netlist(circuit, p: dict, t_end: float, options: SpiceOptions | None
     tmax = options.tmax_fraction * T if math.isfinite(compiled.period) else min(tran.tmax or tran.tstep,
                                                                                  options.tmax_fraction * t_end / 10)
     # RSHUNT: every node a 1e12 ohm path to ground (a bridge's output floats while its diodes block)
-    lines += [f".options RELTOL={_num('reltol', options.reltol)} METHOD={options.method} ITL4=100 RSHUNT=1e12",
+    lines += [options_line(options, " RSHUNT=1e12"),
               f".tran {_num('tstep', tmax)} {_num('t_end', t_end)} 0 {_num('tmax', tmax)} UIC", ".end"]
     return Netlist("\n".join(lines) + "\n", circuit.name, dict(p), t_end, options, probes, tuple(pairs) or ("none",))
 
@@ -126,7 +126,8 @@ def _model(model, options: SpiceOptions) -> str:
         params.setdefault("VH", 0.0)
     elif model.kind == "D":
         if "IS" not in params and "N" not in params:
-            params.update(IS=options.diode_is, N=options.diode_n)
+            params.update(IS=options.diode_is, N=options.diode_n, **({"CJO": options.diode_cjo}
+                                                                     if options.diode_cjo else {}))
     text = " ".join(f"{key}={_num(f'.model {model.name} {key}', value)}" for key, value in params.items())
     return f".model {_name(model.name)} {model.kind}({text})"
 

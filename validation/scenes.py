@@ -17,7 +17,8 @@ refused at load with one line naming the file, the key and the value, before any
     [params]            # converter parameters, SPICE suffixes allowed
     [run]               # start = "steady" | "rest", periods, window; control scenes: t_end
     [methods.lcp]       # h, theta; or rtol (accuracy on request: pcsuite picks the method and h)
-    [methods.spice]     # tmax_fraction, reltol, method, diode_n, diode_is, switch_ron, switch_roff, edge_fraction
+    [methods.spice]     # tmax_fraction, reltol, method, diode_n, diode_is, switch_ron, switch_roff, edge_fraction,
+                        # abstol, diode_cjo
     [checks]            # vout_mean_rel, mode_agreement, turn_off_error_T, closed_form_rel;
                         # control scenes: vout_ref_rel, frequency_rel, frequency_agreement,
                         # recovery_agreement, lambda_settle
@@ -85,6 +86,8 @@ SPICE_RANGES = {
     "switch_ron": (1e-9, 1e3, False, "the switch's on resistance in ohm"),
     "switch_roff": (1.0, 1e15, False, "the switch's off resistance in ohm"),
     "edge_fraction": (1e-9, 1e-2, False, "the gate's rise and fall time as a fraction of the switching period"),
+    "abstol": (1e-15, 1e-3, False, "ngspice ABSTOL in A"),
+    "diode_cjo": (0.0, 1e-6, False, "the diode's junction capacitance CJO in F"),
 }
 #: Keys of [run] and [methods] that apply to each kind of scene.
 RUN_FOR = {"pwm": ("start", "periods", "window"), "smc": ("t_end",), "smc-implicit": ("t_end",)}

@@ -259,25 +259,43 @@ def circuit_trajectory(circuit, params: dict, netlist: Netlist, result: SpiceRes
 
 #: Times a netlist's ngspice run is retried with TMAX a quarter of the last after "timestep too small".
 TMAX_RETRIES = 3
+#: The tolerances ngspice's users in power electronics reach for when a near-ideal diode stops it: ABSTOL 1 uA
+#: (the default 1 pA asks every branch current, a 0 V sense source's in series with a diode whose N = 0.001 makes
+#: its current exponential in 26 uV, to converge to 1 pA) and a 1 pF junction capacitance (a bridge's output
+#: floats while its diodes block; the charge is far below any run's). Measured: the capacitor-input bridges and
+#: the Cockcroft-Walton ladder, which stopped at their first commutation, run with both, not with either alone.
+#: METHOD stays gear: trap rings on the bridge's commutations (all four diodes read conducting in turn).
+CONVERGENCE_FALLBACK = {"abstol": 1e-6, "diode_cjo": 1e-12}
 
 
 def run_spice_retrying(build, options=None):
     """(netlist, result, notes) of ``build(options)`` run in ngspice; a run that stops with "timestep too small"
     (ngspice's Newton failing at its minimum step, typically on a near-ideal diode that an ideal switch's edge
-    turns off) is run again with TMAX a quarter of the last, up to TMAX_RETRIES times: smaller steps before the
-    edge give its Newton a closer start. The notes say which TMAX it took."""
+    turns off or a commutation between diodes) is run again, first with the CONVERGENCE_FALLBACK tolerances (where
+    the options are looser already, skipped), then with TMAX a quarter of the last, up to TMAX_RETRIES times:
+    smaller steps before the edge give its Newton a closer start. The notes say what it took."""
     from dataclasses import replace
 
     from netlists import SpiceOptions
     options = options or SpiceOptions()
     notes = []
-    for attempt in range(TMAX_RETRIES + 1):
+    fallback = options.abstol >= CONVERGENCE_FALLBACK["abstol"] and options.diode_cjo > 0
+    attempt = 0
+    while True:
         netlist = build(options)
         try:
             return netlist, run_spice(netlist), notes
         except SpiceError as error:
             if "timestep too small" not in str(error).lower() or attempt == TMAX_RETRIES:
                 raise
-            notes.append(f"ngspice stopped with TMAX = {options.tmax_fraction:g} T ({str(error).split(': ', 1)[-1]}); "
+            reason = str(error).split(': ', 1)[-1]
+            if not fallback:
+                fallback = True
+                notes.append(f"ngspice stopped ({reason}); run again with ABSTOL {CONVERGENCE_FALLBACK['abstol']:g} A, "
+                             f"diode CJO {CONVERGENCE_FALLBACK['diode_cjo']:g} F")
+                options = replace(options, **CONVERGENCE_FALLBACK)
+                continue
+            attempt += 1
+            notes.append(f"ngspice stopped with TMAX = {options.tmax_fraction:g} T ({reason}); "
                          f"run again with TMAX = {options.tmax_fraction / 4:g} T")
             options = replace(options, tmax_fraction=options.tmax_fraction / 4)
