@@ -67,6 +67,7 @@ bench: setup siconos
 	$(PY) benchmarks/step_cost.py
 	$(PY) benchmarks/peers.py
 	$(PY) benchmarks/tradeoff.py
+	$(PY) benchmarks/netlist.py
 
 clean:
 	rm -rf $(VENV) reports/*/ build *.egg-info

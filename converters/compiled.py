@@ -40,7 +40,7 @@ OK, NEEDS_GENERAL_SOLVER, NO_SOLUTION = 0, 1, 2
 #: Extra status of the state-switched loop: the event buffers are full (the caller grows them, resumes).
 EVENTS_FULL = 3
 #: Largest k solved inline by the step loops (:func:`.lcp.kernels.solve_small_lcp`); above it they pivot
-#: (:func:`.lcp.kernels.solve_pivoting`), at most PIVOTS_PER_PAIR k flips a step before the general solver takes it.
+#: (:func:`.lcp.murty.solve_warm`), at most PIVOTS_PER_PAIR k flips a step before the general solver takes it.
 MAX_INLINE_K = 8
 PIVOTS_PER_PAIR = 4
 #: Up to this many states the one-pair loop carries the state in registers (a tuple of n floats, its

@@ -2,11 +2,8 @@
 
 k = 1 in closed form; otherwise the previous step's active set first (it almost always still holds),
 then every complementary basis by increasing size (warm-started enumeration; k <= MAX_INLINE_K). Above
-MAX_INLINE_K (a Cockcroft-Walton ladder's 2N diodes), Murty's least-index principal pivoting from the previous
-step's active set (:func:`solve_pivoting`): one solve of the active block when the set still holds, a few
-single flips when it changes; finite for a P-matrix from any start (K. G. Murty, "Note on a Bard-type scheme for
-solving the complementarity problem", Opsearch 11, 1974). Written here rather than taken from a library: it runs
-inside the compiled step loop, where no Python call may happen.
+MAX_INLINE_K (a Cockcroft-Walton ladder's 2N diodes) the step loops pivot from the previous step's active set
+(:func:`converters.lcp.murty.solve_warm`).
 """
 from __future__ import annotations
 
@@ -114,53 +111,6 @@ def solve_small_lcp(M, q, k, z, mask_prev, order, work):
             for i in range(k):
                 z[i] = max(z[i], 0.0)
             return mask
-    return -1
-
-
-@njit(cache=True)
-def solve_pivoting(M, q, k, z, active, work, idx, max_pivots):
-    """LCP(q, M) for any k by Murty's least-index principal pivoting, starting from ``active`` (True where
-    z_i > 0 is guessed) and leaving the solution's active set there; z in place. Each pass solves
-    M_JJ z_J = -q_J on the active set J, then flips the least index that is infeasible (z_i < 0 in J, or
-    w_i = (q + M z)_i < 0 outside J). Returns the number of flips, or -1 when M_JJ is singular or
-    ``max_pivots`` flips did not end (the caller's general solver takes that step)."""
-    qmax = 0.0
-    for i in range(k):
-        qmax = max(qmax, abs(q[i]))
-    eps = 1e-12 * (1.0 + qmax)
-    for flips in range(max_pivots + 1):
-        m = 0
-        for i in range(k):
-            z[i] = 0.0
-            if active[i]:
-                idx[m] = i
-                m += 1
-        for r in range(m):
-            for c in range(m):
-                work[r, c] = M[idx[r], idx[c]]
-            work[r, m] = -q[idx[r]]
-        if not solve_augmented(work, m, 1):
-            return -1
-        for r in range(m):
-            z[idx[r]] = work[r, m]
-        bad = -1
-        for i in range(k):
-            if active[i]:
-                if z[i] < -eps:
-                    bad = i
-                    break
-            else:
-                w = q[i]
-                for r in range(m):
-                    w += M[i, idx[r]] * z[idx[r]]
-                if w < -eps:
-                    bad = i
-                    break
-        if bad < 0:
-            for i in range(k):
-                z[i] = max(z[i], 0.0)
-            return flips
-        active[bad] = not active[bad]
     return -1
 
 

@@ -4,10 +4,14 @@ The basis is the set J of indices with z basic. Each iteration solves M_JJ z_J =
 w = q + M z and flips the least index whose basic variable is negative. On P-matrices this
 terminates in at most 2^k pivots (Murty's exponential examples reach that bound), so a wall-clock
 deadline (checked between slices of work) bounds the run. :func:`run` is resumable (see
-:mod:`converters.lcp.lemke`).
+:mod:`converters.lcp.lemke`). :func:`solve_warm` starts it from a given basis: the step loops' solver above
+MAX_INLINE_K pairs, from the previous step's active set (one solve of the active block when the set still holds,
+a few flips when it changes; finite for a P-matrix from any start: K. G. Murty, "Note on a Bard-type scheme for
+solving the complementarity problem", Opsearch 11, 1974).
 """
 from __future__ import annotations
 
+import numpy as np
 from numba import njit
 
 from . import state as S
@@ -84,4 +88,28 @@ def run(M, q, z, fw, iw, st, tol, max_iter, budget):
     return mark_done(st, S.MAX_ITERATIONS, S.MAXIT)
 
 
-__all__ = ["run", "sizes"]
+#: The check a warm solve's answer passes (solve_lcp's default tolerance).
+WARM_TOL = 1e-10
+
+
+@njit(cache=True)
+def solve_warm(M, q, z, active, fw, iw, st, max_pivots):
+    """LCP(q, M) by :func:`run` started from the basis ``active`` (True where z_i > 0 is guessed), which is left
+    holding the solution's basis; z in place; ``fw``, ``iw``, ``st`` its workspace (:func:`sizes`, ST_SIZE).
+    Returns the number of flips, or -1 when a principal block is singular, the answer fails the check or
+    ``max_pivots`` flips did not end (the caller's general solver takes that LCP)."""
+    k = q.shape[0]
+    for i in range(st.shape[0]):
+        st[i] = 0
+    st[S.PHASE] = S.RUNNING
+    for i in range(k):
+        iw[i] = 1 if active[i] else 0
+    run(M, q, z, fw, iw, st, WARM_TOL, max_pivots, np.int64(1) << 62)
+    if st[S.STATUS] != S.SOLVED:
+        return -1
+    for i in range(k):
+        active[i] = iw[i] != 0
+    return st[S.ITER]
+
+
+__all__ = ["run", "sizes", "solve_warm"]

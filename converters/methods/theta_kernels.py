@@ -23,7 +23,10 @@ from numba.extending import overload
 
 from ..compiled import (EVENTS_FULL, NEEDS_GENERAL_SOLVER, NO_SOLUTION, OK,  # noqa: F401 (shared with the callers)
                         PIVOTS_PER_PAIR)
-from ..lcp.kernels import _masks_by_size, solve_augmented, solve_pivoting, solve_small_lcp
+from ..lcp import state as LCP_STATE
+from ..lcp.kernels import _masks_by_size, solve_augmented, solve_small_lcp
+from ..lcp.murty import sizes as pivoting_sizes
+from ..lcp.murty import solve_warm
 
 
 def _size(state, x):
@@ -102,7 +105,7 @@ def run_steps(which, Phi, Gamma, H, C, F, M, Phi_b, Gamma_b, CPhi, q0, x, u, y, 
     whose LCP the compiled solvers do not solve (singular, or degenerate beyond them: the caller solves it
     and resumes at j + 1), NO_SOLUTION when a scalar LCP provably has none. ``inline``: k <= MAX_INLINE_K,
     solved by :func:`solve_small_lcp`; otherwise by principal pivoting from the last step's active set
-    (:func:`solve_pivoting`, at most PIVOTS_PER_PAIR k flips a step). One pair: :func:`run_scalar`
+    (:func:`converters.lcp.murty.solve_warm`, at most PIVOTS_PER_PAIR k flips a step). One pair: :func:`run_scalar`
     (``state`` from :func:`converters.compiled.register_state`).
     """
     n = x.shape[1]
@@ -115,7 +118,8 @@ def run_steps(which, Phi, Gamma, H, C, F, M, Phi_b, Gamma_b, CPhi, q0, x, u, y, 
     work = np.empty((k, k + 1))
     order = _masks_by_size(k) if inline else np.empty(0, dtype=np.int64)
     active = np.empty(k, dtype=np.bool_)
-    idx = np.empty(k, dtype=np.int64)
+    floats, ints = pivoting_sizes(k)
+    fw, iw, st = np.empty(floats), np.empty(ints, dtype=np.int64), np.empty(LCP_STATE.ST_SIZE, dtype=np.int64)
     for i in range(k):
         active[i] = u[start, i] > 0.0
     mask = 0
@@ -135,7 +139,7 @@ def run_steps(which, Phi, Gamma, H, C, F, M, Phi_b, Gamma_b, CPhi, q0, x, u, y, 
             mask = solve_small_lcp(M[s], q, k, z, mask, order, work)
             if mask < 0:
                 return NEEDS_GENERAL_SOLVER, j
-        elif solve_pivoting(M[s], q, k, z, active, work, idx, PIVOTS_PER_PAIR * k) < 0:
+        elif solve_warm(M[s], q, z, active, fw, iw, st, PIVOTS_PER_PAIR * k) < 0:
             return NEEDS_GENERAL_SOLVER, j
         for i in range(n):
             acc = xf[i]

@@ -8,7 +8,13 @@ import pytest
 
 from converters.compiled import MAX_INLINE_K
 from converters.lcp import solve_lcp
-from converters.lcp.kernels import solve_pivoting
+from converters.lcp.murty import sizes, solve_warm
+from converters.lcp.state import ST_SIZE
+
+def workspace(k):
+    floats, ints = sizes(k)
+    return np.empty(k), np.empty(floats), np.empty(ints, dtype=np.int64), np.empty(ST_SIZE, dtype=np.int64)
+
 
 def _p_matrix(rng, k):
     """Positive definite, not symmetric (an SPD part plus a skew part): a P-matrix, one solution for every q."""
@@ -20,11 +26,11 @@ def _p_matrix(rng, k):
 @pytest.mark.parametrize("k", [9, 16, 40])
 def test_pivoting_finds_lemkes_solution_from_any_start(k):
     rng = np.random.default_rng(k)
-    z, work, idx = np.empty(k), np.empty((k, k + 1)), np.empty(k, dtype=np.int64)
+    z, fw, iw, st = workspace(k)
     for trial in range(40):
         M, q = _p_matrix(rng, k), rng.normal(size=k)
         active = rng.random(k) < 0.5                   # a wrong guess: the solver must flip its way out
-        flips = solve_pivoting(M, q, k, z, active, work, idx, 1000)
+        flips = solve_warm(M, q, z, active, fw, iw, st, 1000)
         assert flips >= 0
         reference = solve_lcp(M, q, method="lemke")
         assert reference.solved
@@ -32,7 +38,7 @@ def test_pivoting_finds_lemkes_solution_from_any_start(k):
         w = q + M @ z
         assert z.min() >= 0 and w.min() >= -1e-10 and abs(z @ w) <= 1e-9
         assert np.array_equal(active, z > 0)              # the active set it leaves is the solution's
-        again = solve_pivoting(M, q, k, z, active, work, idx, 1000)
+        again = solve_warm(M, q, z, active, fw, iw, st, 1000)
         assert again == 0                                 # warm: the set still holds, no flip
 
 
@@ -40,8 +46,8 @@ def test_pivoting_gives_up_on_a_singular_block_instead_of_guessing():
     k = MAX_INLINE_K + 1
     M = np.zeros((k, k))
     q = -np.ones(k)
-    z, work, idx = np.empty(k), np.empty((k, k + 1)), np.empty(k, dtype=np.int64)
-    assert solve_pivoting(M, q, k, z, np.ones(k, dtype=np.bool_), work, idx, 100) == -1
+    z, fw, iw, st = workspace(k)
+    assert solve_warm(M, q, z, np.ones(k, dtype=np.bool_), fw, iw, st, 100) == -1
 
 
 def test_a_ladder_of_16_diodes_steps_without_the_general_solver_and_equals_lemke_step_by_step():
