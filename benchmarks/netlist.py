@@ -6,13 +6,12 @@ cores: noisy, each the best of REPEATS):
 1. the buck from netlists/circuits/buck.cir against the hand-derived buck model: ns per step of the stepper over
    the same 2,000 periods (target: the same per-step cost; the compile itself is paid once per operating point and
    printed apart);
-2. the N-stage Cockcroft-Walton multiplier (k = 2N diodes), N = 1, 2, 4, 8, 16, 32: the stepper's time per
-   simulated period against ngspice on the same file at TMAX = T/50 ... T/400 (its convergence fallback where the
-   defaults stop it), each with its mean output against the stepper's: ngspice's near-ideal diodes keep it moving
-   by 1e-3 to 1e-2 per halving, far above the stepper's own error estimate, so "equal accuracy" is not reached and
-   the table shows the cost at each TMAX with the disagreement it leaves; and the
-   growth of the cost with N; against Siconos 4.4's own time loop on the same LCS and steps (EulerMoreauOSI, its
-   Lemke; benchmarks/peers.py's script) where python3-siconos is installed (``make bench``), at N <= 8.
+2. the N-stage Cockcroft-Walton multiplier (k = 2N diodes), N = 1, 2, 4, 8, 16, 32, from rest: the stepper's time
+   per simulated period against ngspice's on the same file at equal accuracy: each run's mean output over its
+   last 10 periods is measured against the stepper at h = T/25600, and each side's step (the stepper's h from
+   T/100, ngspice's TMAX from T/200) is halved until that error is TARGET; the growth of the cost with N; and
+   Siconos 4.4's own time loop on the same LCS and steps (EulerMoreauOSI, its Lemke; benchmarks/peers.py's script) where
+   python3-siconos is installed (``make bench``), at N <= 8.
 """
 from __future__ import annotations
 
@@ -30,8 +29,12 @@ from converters.simulate import simulate
 
 ROOT = Path(__file__).resolve().parents[1]
 REPEATS = 3
-#: ngspice's TMAX as fractions of T (compare's default is T/200).
-SPICE_TMAX = (1 / 50, 1 / 100, 1 / 200, 1 / 400)
+#: The accuracy both sides are asked for: compare's threshold on a mean.
+TARGET = 1e-3
+#: ngspice's TMAX and the stepper's h as fractions of T, halved until the error is TARGET; the reference's steps.
+SPICE_TMAX = tuple(1 / (200 * 2 ** k) for k in range(7))
+LCP_FRACTIONS = tuple(1 / (100 * 2 ** k) for k in range(7))
+REFERENCE_STEPS = 25600
 
 
 def best(function, repeats: int = REPEATS) -> tuple:
@@ -76,24 +79,26 @@ def cockcroft_walton(stages: int) -> Path:
 
 
 def spice_period(circuit, p, periods: int, fraction: float):
-    """(wall s, ngspice run's mean vout over the last 10 periods) at TMAX = fraction T, ngspice's convergence
-    fallback (validation.spice.CONVERGENCE_FALLBACK) taken where the defaults stop it, as compare does."""
-    from netlists import SpiceOptions
-    from netlists.circuit import circuit_netlist
-    from validation.spice import CONVERGENCE_FALLBACK, SpiceError, circuit_trajectory, run_spice
+    """(wall s, ngspice's mean vout over the last 10 periods) at TMAX = fraction T, with the file's own .options
+    (ABSTOL 1 uA) as compare takes them, run 10 periods at a time from where the last ended (as :func:`chunked`)."""
+    from dataclasses import replace
+
+    from netlists.circuit import circuit_netlist, file_spice_options
+    from validation.spice import SpiceError, circuit_trajectory, run_spice
     T = circuit.period(p)
-    for options in (SpiceOptions(tmax_fraction=fraction), SpiceOptions(tmax_fraction=fraction, **CONVERGENCE_FALLBACK)):
-        netlist = circuit_netlist(circuit, p, periods * T, options, diode_currents=False)
-        start = time.perf_counter()
+    options = replace(file_spice_options(circuit), tmax_fraction=fraction)
+    x0, wall = None, 0.0
+    for start in range(0, periods, 10):
+        netlist = circuit_netlist(circuit, p, 10 * T, options, x0=x0, diode_currents=False)
+        begin = time.perf_counter()
         try:
             result = run_spice(netlist)
         except SpiceError as failure:
-            reason = str(failure).split(": ", 1)[-1][:100]
-            continue
-        wall = time.perf_counter() - start
-        return wall, circuit_trajectory(circuit, p, netlist, result, (periods - 10) * T).mean(
-            "vout", t0=(periods - 10) * T, t1=periods * T)
-    raise RuntimeError(reason)
+            raise RuntimeError(str(failure).split(": ", 1)[-1][:100]) from None
+        wall += time.perf_counter() - begin
+        tr = circuit_trajectory(circuit, p, netlist, result, 0.0)
+        x0 = tr.x[-1]
+    return wall, tr.mean("vout", t0=0.0, t1=10 * T)
 
 
 def siconos_period(problem, h: float, theta: float, t_end: float):
@@ -118,52 +123,84 @@ def siconos_period(problem, h: float, theta: float, t_end: float):
     return json.loads(done.stdout.splitlines()[-1])["wall_s"], np.load(work / "x.npy")[-1]
 
 
+def chunked(circuit, p: dict, periods: int, h: float) -> tuple:
+    """(wall s, mean vout over the last 10 of ``periods`` from rest) of the stepper at theta 0.5, run 10 periods at
+    a time, each from where the last ended (at N = 32 and h = T/25600 the whole run's samples would not fit in
+    memory); the first call loads the compiled loop and is not timed."""
+    from dataclasses import replace
+    T = circuit.period(p)
+    method, x0, wall = Theta(h=h, theta=0.5), None, 0.0
+    simulate(circuit.problem(p, T), method)
+    for start in range(0, periods, 10):
+        problem = circuit.problem(p, (start + 10) * T, x0=x0, t_start=start * T)
+        begin = time.perf_counter()
+        tr = simulate(problem, method)
+        wall += time.perf_counter() - begin
+        x0 = tr.x[-1]
+    return wall, replace(tr, labels=circuit.labels(p)).mean("vout", t0=(periods - 10) * T, t1=periods * T)
+
+
+def refined(run, fractions, reference: float):
+    """[(fraction, s/period, error)] of ``run(fraction)`` -> (wall s per period, mean), the step halved until the
+    mean's error against the reference is at most TARGET (or a run would not fit in memory: said)."""
+    from converters.errors import ResourceError
+    out = []
+    for fraction in fractions:
+        try:
+            wall, mean = run(fraction)
+        except (RuntimeError, ResourceError) as failure:       # ngspice's own convergence, memory: said, not hidden
+            print(f"       at T/{1 / fraction:.0f}: {str(failure)[:120]}")
+            break
+        out.append((fraction, wall, abs(mean / reference - 1)))
+        if out[-1][2] <= TARGET:
+            break
+    return out
+
+
 def multiplier(stages: list, periods: int, siconos_periods: int) -> None:
-    rows = []
+    print(f"Cockcroft-Walton multiplier (netlists.generators: RS C = T/20, edges T/1000, 100 kohm), {periods} periods "
+          f"from rest. Error: of the mean vout over the last 10 periods against the stepper at h = T/{REFERENCE_STEPS}; "
+          f"each side's step (the stepper's h at theta 0.5, ngspice's TMAX) halved until the error is {TARGET:g} "
+          "(compare's threshold); ngspice's near-ideal diodes leave it 6e-5 from the ideal circuit (their ~1 mV drop). "
+          "Siconos: its own loop on the same LCS and steps (the stepper's last h).")
+    print("   N    k   reference vout (V)   step     stepper s/period   error     TMAX      ngspice s/period   error"
+          "     ngspice/stepper   Siconos/stepper (end states apart)")
+    costs = []
     for n in stages:
-        path = cockcroft_walton(n)
-        circuit = Circuit.from_netlist(path)
+        circuit = Circuit.from_netlist(cockcroft_walton(n))
         p = circuit.resolve({})
         T = circuit.period(p)
-        method = Theta(h=T / 400, theta=0.5)
-        problem = circuit.problem(p, periods * T)
-        simulate(problem, method)
-        wall_lcp, tr = best(lambda: simulate(problem, method))
-        from dataclasses import replace
-        tr = replace(tr, labels=circuit.labels(p))
-        mean_lcp = tr.mean("vout", t0=(periods - 10) * T, t1=periods * T)
-        coarse = replace(simulate(circuit.problem(p, periods * T), Theta(h=T / 200, theta=0.5)), labels=circuit.labels(p))
-        error = abs(mean_lcp - coarse.mean("vout", t0=(periods - 10) * T, t1=periods * T)) / 3.0
-        spice = []                      # (TMAX fraction, s/period, mean vout) at T/50 ... T/400
-        for fraction in SPICE_TMAX:
-            try:
-                wall, mean = spice_period(circuit, p, periods, fraction)
-                spice.append((fraction, wall / periods, mean))
-            except RuntimeError as failure:            # ngspice's own convergence: said, not hidden
-                print(f"  N = {n}: ngspice at TMAX = T/{1 / fraction:.0f}: {failure}")
-        sic = None
+
+        def lcp(fraction):
+            wall, mean = min((chunked(circuit, p, periods, fraction * T) for _ in range(REPEATS)), key=lambda r: r[0])
+            return wall / periods, mean
+
+        def spice(fraction):
+            wall, mean = spice_period(circuit, p, periods, fraction)
+            return wall / periods, mean
+        reference = chunked(circuit, p, periods, T / REFERENCE_STEPS)[1]
+        stepper = refined(lcp, LCP_FRACTIONS, reference)
+        ngspice = refined(spice, SPICE_TMAX, reference)
+        sic_text = "-"
         if n <= 8:
             short = circuit.problem(p, siconos_periods * T)
-            sic = siconos_period(short, method.h, method.theta, siconos_periods * T)
+            h = stepper[-1][0] * T
+            sic = siconos_period(short, h, 0.5, siconos_periods * T)
             if sic is not None:
-                same = simulate(short, method).x[-1]
-                sic = (sic[0] / siconos_periods, float(np.abs(sic[1] - same).max() / np.abs(same).max()))
-        rows.append((n, 2 * n, wall_lcp / periods, spice, mean_lcp, error, sic))
-    print(f"Cockcroft-Walton multiplier, {periods} periods from rest (stepper theta 0.5, h = T/400; Siconos "
-          f"{siconos_periods} periods, same LCS, same steps):")
-    print("   N    k   LCP s/period   vout (V)   its error   Siconos s/period   Siconos/LCP   Siconos' end state apart")
-    for n, k, lcp, spice, mean, error, sic in rows:
-        sic_text = f"{sic[0]:16.3e}   {sic[0] / lcp:11.1f}   {sic[1]:.1e}" if sic else f"{'-':>16}   {'-':>11}   -"
-        print(f"  {n:2d}  {k:3d}   {lcp:12.3e}   {mean:9.4f}   {error:.1e}   {sic_text}")
-    print("  ngspice on the same file, TMAX halved (its mean vout still moving: no TMAX reaches the stepper's error):")
-    print("   N   TMAX    s/period   ngspice/LCP   vout (V)   vs the stepper")
-    for n, k, lcp, spice, mean, error, sic in rows:
-        for fraction, wall, spice_mean in spice:
-            print(f"  {n:2d}  T/{1 / fraction:<4.0f} {wall:10.3e}   {wall / lcp:11.1f}   {spice_mean:9.4f}   "
-                  f"{spice_mean / mean - 1:+.1e}")
-    if len(rows) > 1:
-        growth = np.polyfit(np.log([r[0] for r in rows]), np.log([r[2] for r in rows]), 1)[0]
-        print(f"  the stepper's cost grows as N^{growth:.2f}")
+                same_method = Theta(h=h, theta=0.5)
+                simulate(short, same_method)
+                wall, tr = best(lambda: simulate(short, same_method))
+                apart = float(np.abs(sic[1] - tr.x[-1]).max() / np.abs(tr.x[-1]).max())
+                sic_text = f"{sic[0] / wall:8.1f} ({apart:.1e})"
+        (hs, ws, es), (ht, wt, et) = stepper[-1], ngspice[-1]
+        met = es <= TARGET and et <= TARGET
+        ratio = f"{wt / ws:8.1f}" if met else "not reached"
+        print(f"  {n:2d}  {2 * n:3d}   {reference:18.4f}   T/{1 / hs:<5.0f} {ws:12.3e}   {es:.1e}   T/{1 / ht:<6.0f} "
+              f"{wt:14.3e}   {et:.1e}   {ratio:>15}   {sic_text}", flush=True)
+        costs.append((n, ws * hs))
+    if len(costs) > 1:
+        growth = np.polyfit(np.log([c[0] for c in costs]), np.log([c[1] for c in costs]), 1)[0]
+        print(f"  the stepper's cost per step grows as N^{growth:.2f}")
 
 
 def main(argv=None) -> int:
@@ -171,7 +208,7 @@ def main(argv=None) -> int:
     parser.add_argument("--quick", action="store_true", help="fewer periods and stages")
     args = parser.parse_args(argv)
     buck_per_step(200 if args.quick else 2000)
-    multiplier([1, 2, 4] if args.quick else [1, 2, 4, 8, 16, 32], 100 if args.quick else 400, 5 if args.quick else 20)
+    multiplier([1, 2, 4] if args.quick else [1, 2, 4, 8, 16, 32], 100 if args.quick else 200, 5 if args.quick else 20)
     return 0
 
 

@@ -5,7 +5,8 @@ refused), and written back element by element with numbers formatted here only, 
 text reaches ngspice but what the reader understood. What changes: a switch model without ``RON`` gets the
 near-ideal ``RON``/``ROFF`` of :class:`~netlists.build.SpiceOptions`, a diode model without ``IS``/``N`` the
 near-ideal ``IS``/``N``, each diode and inductor a 0 V sense source (its current is a probe), the
-``.tran`` and ``.options`` pcsuite's, and the initial conditions the run's start (``IC=`` on every
+``.tran`` pcsuite's span, the ``.options`` pcsuite's (by default the file's TMAX as a fraction of its period and
+its RELTOL, ABSTOL and METHOD: :func:`file_spice_options`), and the initial conditions the run's start (``IC=`` on every
 capacitor and inductor, with ``UIC``). Element names keep their letter; a subcircuit's elements and nodes
 keep their flattened names with ``.`` written as ``_``.
 """
@@ -25,6 +26,20 @@ def _name(flat: str) -> str:
 
 def _node(flat: str) -> str:
     return "0" if flat == "0" else _name(flat)
+
+
+def file_spice_options(circuit, options: SpiceOptions | None = None) -> SpiceOptions:
+    """``options`` where given, else ngspice's settings from the file itself: its ``.options`` RELTOL, ABSTOL and
+    METHOD, and its ``.tran`` TMAX as a fraction of its period at its own parameters (a ladder of capacitors
+    whose charge transfers last a few RS C asks for finer steps than the default T/200); the defaults for what
+    it does not state."""
+    if options is not None:
+        return options
+    given = dict(circuit.netlist.spice_options)
+    tmax, p = circuit.netlist.tran.tmax, circuit.resolve({})
+    if tmax is not None and circuit.periodic(p):
+        given["tmax_fraction"] = min(tmax / circuit.period(p), 0.5)
+    return SpiceOptions(**given)
 
 
 def circuit_netlist(circuit, p: dict, t_end: float, options: SpiceOptions | None = None, x0=None,
@@ -71,9 +86,7 @@ def circuit_netlist(circuit, p: dict, t_end: float, options: SpiceOptions | None
         elif e.kind in "EG":
             lines.append(f"{name} {n[0]} {n[1]} {n[2]} {n[3]} {_num(e.name, e.value)}")
         elif e.kind in "FH":
-            control = e.control[0]
-            vname = "V" + _name(control)[1:] if _name(control)[0].upper() == "V" else "V_" + _name(control)
-            lines.append(f"{name} {n[0]} {n[1]} {vname} {_num(e.name, e.value)}")
+            lines.append(f"{name} {n[0]} {n[1]} {_source(e.control[0])} {_num(e.name, e.value)}")
         elif e.kind == "D":
             sense = f"vsense_{_name(e.name)}"
             inner = f"sense_{_name(e.name)}"
@@ -85,17 +98,24 @@ def circuit_netlist(circuit, p: dict, t_end: float, options: SpiceOptions | None
             pairs.append(f"i({e.name})")
         elif e.kind == "S":                # no sense source: in series with a switch it stalled ngspice (a Cuk)
             lines.append(f"{name} {n[0]} {n[1]} {n[2]} {n[3]} {_name(e.model)}")
+        elif e.kind == "W":            # an S switch on an H transducer of its current (1 V/A): ngspice's own W
+            control = f"wctl_{_name(e.name)}"   # stalled at the first diode it turned off (a hysteretic buck)
+            lines += [f"H_{_name(e.name)} {control} 0 {_source(e.control[0])} 1",
+                      f"S_{_name(e.name)} {n[0]} {n[1]} {control} 0 {_name(e.model)}"]
     for model in netlist.models.values():
         lines.append(_model(model, options))
     for node in netlist.nodes:
         if node != "0":
             probes.setdefault(f"v({node})", (_node(node), 1.0))
-    switches = [e for e in netlist.elements if e.kind == "S"]
+    switches = [e for e in netlist.elements if e.kind in "SW"]
     if switches:
         s = switches[0]
         model = netlist.models[s.model]
-        probes["switch"] = ({_node(s.nodes[2]): 1.0, **({_node(s.nodes[3]): -1.0} if s.nodes[3] != "0" else {})},
-                            model.params.get("VT", 0.0))
+        if s.kind == "S":
+            probes["switch"] = ({_node(s.nodes[2]): 1.0, **({_node(s.nodes[3]): -1.0} if s.nodes[3] != "0" else {})},
+                                model.params.get("VT", 0.0))
+        else:
+            probes["switch"] = ({f"wctl_{_name(s.name)}": 1.0}, model.params.get("IT", 0.0))
     # a period's fraction (TMAX = T/200 by default), or without a period the file's own .tran step
     tran = netlist.tran
     tmax = options.tmax_fraction * T if math.isfinite(compiled.period) else min(tran.tmax or tran.tstep,
@@ -117,11 +137,18 @@ def _waveform(name: str, w) -> str:
     return f"DC {_num(name, float(w))}"
 
 
+def _source(control: str) -> str:
+    """The name a controlling V source is written under (the element's own, its letter V kept)."""
+    return "V" + _name(control)[1:] if _name(control)[0].upper() == "V" else "V_" + _name(control)
+
+
 def _model(model, options: SpiceOptions) -> str:
     params = dict(model.params)
-    if model.kind == "SW":
+    if model.kind in ("SW", "CSW"):
         params.setdefault("RON", options.switch_ron)
         params.setdefault("ROFF", options.switch_roff)
+        if model.kind == "CSW":            # the W switch's S equivalent reads its current as 1 V/A
+            params["VT"], params["VH"] = params.pop("IT", 0.0), params.pop("IH", 0.0)
         params.setdefault("VT", 0.0)
         params.setdefault("VH", 0.0)
     elif model.kind == "D":
@@ -129,7 +156,7 @@ def _model(model, options: SpiceOptions) -> str:
             params.update(IS=options.diode_is, N=options.diode_n, **({"CJO": options.diode_cjo}
                                                                      if options.diode_cjo else {}))
     text = " ".join(f"{key}={_num(f'.model {model.name} {key}', value)}" for key, value in params.items())
-    return f".model {_name(model.name)} {model.kind}({text})"
+    return f".model {_name(model.name)} {'SW' if model.kind == 'CSW' else model.kind}({text})"
 
 
 __all__ = ["circuit_netlist"]

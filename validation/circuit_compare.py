@@ -2,11 +2,15 @@
 
 Both start on the stepper's periodic orbit (a periodic circuit; initial conditions in the netlist) or from the
 file's own initial state, run the same span, and are read over its last ``window`` periods (or the last tenth of
-a circuit without a period). ngspice's near-ideal devices give it a steady state of its own: from the orbit it
+a circuit without a period); ngspice steps at most the file's own ``.tran`` TMAX (as a fraction of the period)
+unless ``spice_options`` are given. ngspice's near-ideal devices give it a steady state of its own: from the orbit it
 runs on, from where it ended, until its window's mean of vout moves less than SPICE_SETTLE (at most
 MAX_SPICE_PERIODS periods), as for the built-in converters. Checked per named output (each ``.meas`` vector and
 vout): the mean and the per-period peak-to-peak ripple; and the mode sequence of every compared period (the
 conducting diodes and the closed switches, ngspice's diodes conducting above CURRENT_FRACTION of their peak).
+A circuit that switches itself (a comparator without a clock) is read over the last tenth of its run: means,
+ripples per cycle, the cycle and the time in each mode (:func:`_self_oscillating`); another circuit without a
+period as a transient, its waveforms point by point (:func:`_transient`).
 Thresholds: ``[thresholds.circuit]`` in ``validation/data/defaults.toml``.
 """
 from __future__ import annotations
@@ -54,10 +58,11 @@ class CircuitComparison:
 def compare_circuit(circuit, params: dict | None = None, *, h=None, spice_options=None, start: str | None = None,
                     periods: int = PERIODS, window: int = WINDOW) -> CircuitComparison:
     """Run a netlist's LCS and ngspice on the same file and measure their agreement (module docstring)."""
-    from netlists.circuit import circuit_netlist
+    from netlists.circuit import circuit_netlist, file_spice_options
 
     from .spice import circuit_trajectory, run_spice_retrying
     p = circuit.resolve(params)
+    spice_options = file_spice_options(circuit, spice_options)
     periodic = circuit.periodic(p)
     start = start or ("steady" if periodic else "rest")
     if start == "steady" and not periodic:
@@ -88,6 +93,9 @@ def compare_circuit(circuit, params: dict | None = None, *, h=None, spice_option
     th = THRESHOLDS["circuit"]
     m = result.metrics
     if not periodic:
+        law = circuit.compiled(p).law
+        if getattr(law, "function", None) is not None and law.function.ramp is None:
+            return _self_oscillating(result, circuit, th)
         return _transient(result, circuit, th)
     outputs = list(dict.fromkeys(["vout", *[v for v in circuit.netlist.outputs if v != circuit.output]]))
     worst_mean, worst_ripple = 0.0, 0.0
@@ -147,6 +155,60 @@ def _transient(result: CircuitComparison, circuit, th: dict) -> CircuitCompariso
                    ("mode_time_agreement", agreement, th["mode_time_agreement"],
                     passes("mode_time_agreement", agreement, th["mode_time_agreement"]))]
     return result
+
+
+def _cycles(tr, t0: float) -> np.ndarray:
+    """The instants after t0 where the (first) switch closes."""
+    rows = tr._rows(t0, tr.t[-1])
+    closed = np.asarray(tr.signal("switch", rows)).astype(int)
+    return tr.t[rows][1:][np.diff(closed) > 0]
+
+
+def _self_oscillating(result: CircuitComparison, circuit, th: dict) -> CircuitComparison:
+    """A circuit that switches itself (a comparator without a clock: a hysteretic controller): two oscillators
+    whose cycles differ by a fraction drift apart in phase over a run, so their waveforms are not compared point
+    by point. Over the last tenth of the run: each named output's mean, and its peak-to-peak averaged over the
+    cycles (from one closing of the switch to the next), the mean cycle, and the fraction of time in each mode."""
+    lcp, spice, m = result.lcp, result.spice, result.metrics
+    t1 = float(lcp.t[-1])
+    t0 = t1 - circuit.WINDOW_FRACTION * (t1 - float(lcp.t[0]))
+    cycles_l, cycles_s = _cycles(lcp, t0), _cycles(spice, t0)
+    if min(cycles_l.size, cycles_s.size) < 3:
+        result.notes.append(f"fewer than 2 cycles in the last tenth of the run ({cycles_l.size - 1} in the LCP's, "
+                            f"{cycles_s.size - 1} in ngspice's): compared as a transient")
+        return _transient(result, circuit, th)
+    cycle_l, cycle_s = np.diff(cycles_l).mean(), np.diff(cycles_s).mean()
+    m["cycle_lcp_s"], m["cycle_spice_s"] = float(cycle_l), float(cycle_s)
+    m["cycle_rel_error"] = cycle_rel = float(abs(cycle_s / cycle_l - 1))
+    worst_mean, worst_ripple = 0.0, 0.0
+    for name in dict.fromkeys(["vout", *circuit.netlist.outputs]):
+        label = circuit.output if name == "vout" else name
+        mean_l, mean_s = lcp.mean(name, t0=t0, t1=t1), spice.mean(name, t0=t0, t1=t1)
+        scale = max(abs(mean_l), 1e-12)
+        rip_l, rip_s = _cycle_ripple(lcp, name, cycles_l), _cycle_ripple(spice, name, cycles_s)
+        m[f"{label}_mean_lcp"], m[f"{label}_mean_spice"] = mean_l, mean_s
+        m[f"{label}_mean_rel_error"] = abs(mean_s - mean_l) / scale
+        m[f"{label}_ripple_lcp"], m[f"{label}_ripple_spice"] = rip_l, rip_s
+        m[f"{label}_ripple_rel_error"] = abs(rip_s - rip_l) / max(abs(rip_l), RIPPLE_FLOOR * scale)
+        worst_mean = max(worst_mean, m[f"{label}_mean_rel_error"])
+        worst_ripple = max(worst_ripple, m[f"{label}_ripple_rel_error"])
+    fractions_l = lcp.mode_fractions(None, t0=t0, t1=t1)
+    fractions_s = spice.mode_fractions(None, t0=t0, t1=t1)
+    apart = max(abs(fractions_l.get(k, 0.0) - fractions_s.get(k, 0.0)) for k in set(fractions_l) | set(fractions_s))
+    m["mode_fractions_lcp"], m["mode_fractions_spice"] = fractions_l, fractions_s
+    m["mode_fraction_apart"] = apart
+    m["lcp_wall_s"], m["spice_wall_s"] = lcp.wall_s, spice.wall_s
+    m["current_signal"] = next((s for s in lcp.state_names if s.startswith("i(")), lcp.state_names[0])
+    result.rows = [(check, value, th[check], passes(check, value, th[check])) for check, value in
+                   (("mean_rel", worst_mean), ("ripple_rel", worst_ripple), ("cycle_rel", cycle_rel),
+                    ("mode_fraction_apart", apart))]
+    return result
+
+
+def _cycle_ripple(tr, name: str, closings: np.ndarray) -> float:
+    """The mean over the cycles between ``closings`` of each cycle's peak-to-peak value of a signal."""
+    return float(np.mean([np.ptp(np.asarray(tr.signal(name, tr._rows(a, b)), dtype=float))
+                          for a, b in zip(closings[:-1], closings[1:])]))
 
 
 def _period_ripple(tr, name: str, t0: float, T: float, window: int) -> float:

@@ -198,12 +198,30 @@ def spice_trajectory(model, params: dict, netlist: Netlist, result: SpiceResult,
                                 "model": model.name, "params": params})
 
 
+#: The fraction of a switch's hysteresis band inside its edges where ngspice's change of state is read.
+HYSTERESIS_SLACK = 0.01
+
+
+def hysteretic(control: np.ndarray, threshold: float, band: float) -> np.ndarray:
+    """A switch's state along its control signal: closed once the control exceeds threshold + band, open once it
+    falls below threshold - band, the last of these held in between (the state at the start from the threshold
+    alone). ngspice changes a switch at its own time points, the control up to 0.3 % of the band short of the
+    edge (a hysteretic buck): the edges are read HYSTERESIS_SLACK of the band inside."""
+    slack = HYSTERESIS_SLACK * band
+    marks = np.where(control > threshold + band - slack, 1, np.where(control < threshold - band + slack, 0, -1))
+    if marks.size and marks[0] < 0:
+        marks[0] = int(control[0] > threshold)
+    last = np.maximum.accumulate(np.where(marks >= 0, np.arange(marks.size), 0))
+    return marks[last].astype(bool)
+
+
 def circuit_trajectory(circuit, params: dict, netlist: Netlist, result: SpiceResult, window_start: float = 0.0):
     """An ngspice run of a netlist (:func:`netlists.circuit.circuit_netlist`) as a Trajectory labelled by its
     Circuit: the states, every node voltage and every current ngspice measures (sources, inductors, diodes and
     switches through their sense sources; resistors from their nodes), ``vout`` and ``switch``, and the mode of
     each point from the diodes conducting (current above CURRENT_FRACTION of the largest after
-    ``window_start``) and the switches closed (control voltage above VT)."""
+    ``window_start``) and the switches closed (:func:`hysteretic` on the control voltage, or a W switch's current,
+    against the model's threshold and hysteresis)."""
     from converters.trajectory import Trajectory
     t = result.time
     compiled = circuit.compiled(params)
@@ -230,12 +248,16 @@ def circuit_trajectory(circuit, params: dict, netlist: Netlist, result: SpiceRes
         peak = np.abs(current[in_window]).max() if in_window.any() else 0.0
         conducting[:, i] = current > CURRENT_FRACTION * peak
     closed = []
-    for s in (e for e in circuit.netlist.elements if e.kind == "S"):
-        vt = circuit.netlist.models[s.model].params.get("VT", 0.0)
-        closed.append(nodes(s.nodes[2]) - nodes(s.nodes[3]) > vt)
+    for s in (e for e in circuit.netlist.elements if e.kind in "SW"):
+        model = circuit.netlist.models[s.model].params
+        if s.kind == "S":
+            control, threshold, band = nodes(s.nodes[2]) - nodes(s.nodes[3]), model.get("VT", 0.0), model.get("VH", 0.0)
+        else:
+            control, threshold, band = measured[f"i({s.control[0]})"], model.get("IT", 0.0), model.get("IH", 0.0)
+        closed.append(hysteretic(control, threshold, abs(band)))
     # a diode across a closed switch (a body diode) shares its current in ngspice (its near-ideal drop against the
     # switch's RON); the LCS gives the switch all of it: the diode is not counted as conducting there either
-    switches = [e for e in circuit.netlist.elements if e.kind == "S"]
+    switches = [e for e in circuit.netlist.elements if e.kind in "SW"]
     by_name = {e.name: e for e in circuit.netlist.elements}
     for i, d in enumerate(diodes):
         terminals = set(by_name[d].nodes)

@@ -18,10 +18,12 @@ blocked: u = 0 is unique). An ideal diode whose terminals closed ideal switches 
 while the switch conducts) has 0 V whatever its current: the switch carries it all, the diode's pair never holds.
 
 Switches are ideal (closed: a 0 V branch, or ``RON`` when its model gives one; open: no branch); a diode's
-model ``RS`` is a series resistance. A switch whose control voltage is a combination of independent sources
-(a PULSE gate) is driven by a time schedule: its threshold crossings with the model's ``VT`` +- ``VH``
-(hysteresis), located exactly on the piecewise-linear waveform; a PULSE source in the power circuit switches
-between its two levels at the middle of its edges.
+model ``RS`` is a series resistance. A switch (S: its control the voltage V(nc+) - V(nc-) against the model's
+``VT`` +- ``VH``; W: the current through its controlling V source against ``IT`` +- ``IH``) whose control is a
+combination of independent sources (a PULSE gate) is driven by a time schedule: its threshold crossings (with
+the hysteresis) located exactly on the piecewise-linear waveform; one whose control depends on the states is a
+state-driven law (a comparator). A PULSE source in the power circuit switches between its two levels at the
+middle of its edges.
 """
 from __future__ import annotations
 
@@ -76,9 +78,6 @@ class _Compiler:
             first = [e for e in els if e.name == duplicate][1]
             raise self.error(first, f"{first.title}: the name is used twice")
         for e in els:
-            if e.kind == "W":
-                raise self.error(e, f"{e.title}: current-controlled switches are not compiled yet (their law is a "
-                                    "state-driven one); drive the switch with a PULSE source (S)")
             if e.kind in "VI" and isinstance(e.waveform, Pwl):
                 raise self.error(e, f"{e.title}: a PWL source is not compiled yet (an LCS input here is DC, PULSE or "
                                     "SIN)")
@@ -102,7 +101,7 @@ class _Compiler:
         self.nodes = nodes
         self.node_index = {n: i for i, n in enumerate(nodes)}
         self.capacitors, self.inductors = self.by_kind["C"], self.by_kind["L"]
-        self.diodes, self.switches = self.by_kind["D"], self.by_kind["S"]
+        self.diodes, self.switches = self.by_kind["D"], [e for e in els if e.kind in "SW"]
         self.sources = self.by_kind["V"] + self.by_kind["I"]
         self.n = len(self.capacitors) + len(self.inductors)
         if self.n == 0:
@@ -200,10 +199,9 @@ class _Compiler:
         fixed = {}
         for other in self.switches:
             if other.name != name:
-                model = self.nl.models[other.model]
                 value = sum(c * float(next(x for x in self.sources if x.name == src).waveform)
                             for src, c in (drives[other.name] or {}).items())
-                fixed[other.name] = value > model.params.get("VT", 0.0)
+                fixed[other.name] = value > self.threshold(other)[0]
         pieces, configs, pair_currents, closed, maps = [], [], [], [], []
         for on in (False, True):
             state = {**fixed, name: on}
@@ -213,12 +211,12 @@ class _Compiler:
             closed.append(tuple(state[x.name] for x in self.switches))
             maps.append(signals)
             solution = self.network(state, {})[0]
-            pieces.append(solution.voltage(switch.nodes[2]) - solution.voltage(switch.nodes[3]))
+            pieces.append(self.control(solution, switch))
         if np.abs(pieces[0] - pieces[1]).max() > 1e-9 * max(np.abs(pieces[0]).max(), 1e-300):
-            raise self.error(switch, f"{switch.title}: its control voltage changes with its own state: a comparator "
+            raise self.error(switch, f"{switch.title}: its control changes with its own state: a comparator "
                                      "whose input the switch itself moves is not compiled")
         c, d, ramp = self.state_law(switch, pieces[0])
-        band = abs(self.nl.models[switch.model].params.get("VH", 0.0))
+        band = self.threshold(switch)[1]
         law = StateSwitching(SwitchingFunction(c=c, d=d, ramp=ramp), below=1, above=0, band=band)
         state_names = tuple(f"v({x.name})" for x in self.capacitors) + tuple(f"i({x.name})" for x in self.inductors)
         return Compiled(tuple(configs), law, state_names, tuple(d.name for d in self.diodes) or ("none",),
@@ -252,7 +250,7 @@ class _Compiler:
     def in_power_circuit(self, source: Element) -> bool:
         """False for a gate driver: a source whose nodes reach, through resistors and other sources, only switch
         control terminals and ground (its value then decides when switches close, not the circuit's dynamics)."""
-        power = {n for e in self.nl.elements if e.kind in "LCDSEGFH" for n in e.nodes[:2]}
+        power = {n for e in self.nl.elements if e.kind in "LCDSWEGFH" for n in e.nodes[:2]}
         power |= {n for e in self.by_kind["I"] for n in e.nodes}
         seen, todo = set(), [n for n in source.nodes if n != "0"]
         while todo:
@@ -267,9 +265,22 @@ class _Compiler:
                     todo += [m for m in e.nodes if m != "0" and m not in seen]
         return False
 
+    def threshold(self, switch: Element) -> tuple:
+        """(threshold, hysteresis) of a switch's model: VT, VH (V) of an S switch's SW, IT, IH (A) of a W's CSW."""
+        params = self.nl.models[switch.model].params
+        keys = ("VT", "VH") if switch.kind == "S" else ("IT", "IH")
+        return params.get(keys[0], 0.0), abs(params.get(keys[1], 0.0))
+
+    def control(self, solution, switch: Element) -> np.ndarray:
+        """The row of a switch's control quantity in a solved network: V(nc+) - V(nc-) of an S switch, the current
+        through the controlling V source of a W switch."""
+        if switch.kind == "W":
+            return solution.current(next(v for v in self.by_kind["V"] if v.name == switch.control[0]))
+        return solution.voltage(switch.nodes[2]) - solution.voltage(switch.nodes[3])
+
     def switch_drive(self, switch: Element) -> dict:
-        """The control voltage V(nc+) - V(nc-) as {source name: coefficient}: it must be fixed by sources alone."""
-        a, b = switch.nodes[2], switch.nodes[3]
+        """The switch's control (:meth:`control`) as {source name: coefficient} where sources alone fix it; None
+        (and its row in ``state_rows``) where it depends on the states: a comparator."""
         # any configuration the network can be solved in will do (a switch's control terminals draw no current): the
         # first of every switch state (a synchronous buck cannot be solved with both switches open, nor closed); if
         # none can, the network's own refusal (the loop or cutset it names) is the one to give
@@ -285,7 +296,7 @@ class _Compiler:
                 failure = failure or error
         if solution is None:
             raise failure
-        row = solution.voltage(a) - solution.voltage(b)
+        row = self.control(solution, switch)
         scale = max(np.abs(row).max(initial=0.0), 1e-300)
         if np.abs(row[:self.n + self.k]).max(initial=0.0) > 1e-12 * scale:
             self.state_rows[switch.name] = row          # a comparator on the circuit's own quantities
@@ -302,8 +313,7 @@ class _Compiler:
         if np.abs(row[n:n + k]).max(initial=0.0) > 1e-12 * max(np.abs(row).max(), 1e-300):
             raise self.error(switch, f"{switch.title}: its control voltage depends on a diode's current or voltage; a "
                                      "comparator here reads node voltages and branch currents of the states only")
-        vt = self.nl.models[switch.model].params.get("VT", 0.0)
-        d, ramp = vt, None
+        d, ramp = self.threshold(switch)[0], None
         for i, src in enumerate(self.sources):
             a = row[n + k + i]
             if a == 0.0:
@@ -327,8 +337,7 @@ class _Compiler:
         times = {0.0}
         waveforms = {}
         for name, coefficients in drives.items():
-            model = self.nl.models[next(s for s in self.switches if s.name == name).model]
-            vt, vh = model.params.get("VT", 0.0), abs(model.params.get("VH", 0.0))
+            vt, vh = self.threshold(next(s for s in self.switches if s.name == name))
             waveforms[name] = ("switch", coefficients, vt, vh)
         for s in power:
             waveforms[s.name] = ("level", s.waveform)
@@ -380,8 +389,10 @@ class _Compiler:
         if not math.isfinite(period):
             value = float(self.waveform_value(coefficients, np.array([0.0]))[0])
             if abs(value - vt) <= vh:
-                raise self.error(switch, f"{switch.title}: its DC control {value:g} V lies inside the hysteresis "
-                                         f"band VT +- VH = {vt:g} +- {vh:g} V: its state is not defined")
+                names, unit = (("VT", "VH"), "V") if switch.kind == "S" else (("IT", "IH"), "A")
+                raise self.error(switch, f"{switch.title}: its DC control {value:g} {unit} lies inside the hysteresis "
+                                         f"band {names[0]} +- {names[1]} = {vt:g} +- {vh:g} {unit}: its state is not "
+                                         "defined")
             return value > vt, []
         corners = self.corners(coefficients, period)
         values = self.waveform_value(coefficients, corners)
@@ -408,7 +419,10 @@ class _Compiler:
         """(level at t = 0 on the periodic orbit, [(t in [0, T), level)]): a power PULSE holds v1 (level 0) or v2
         (level 1), changing at the middle of its edges."""
         per = w.per
-        one = sorted([((w.td + w.tr / 2) % per, 1), ((w.td + w.tr + w.pw + w.tf / 2) % per, 0)])
+        # an edge whose middle falls on the period's end (T/2 - e/2 + e + T/2 - e + e/2) is at 0, not at the
+        # 1e-21 s that rounding leaves of it (a step of 1e-21 s at every period)
+        snap = lambda t: 0.0 if min(t % per, per - t % per) <= 1e-12 * per else t % per      # noqa: E731
+        one = sorted([(snap(w.td + w.tr / 2), 1), (snap(w.td + w.tr + w.pw + w.tf / 2), 0)])
         initial = one[-1][1]                        # the level the period ends with holds through t = 0
         inside = [(t + m * per, level) for m in range(int(round(period / per))) for t, level in one]
         return initial, sorted(inside)
@@ -751,7 +765,7 @@ class _Network:
         if e.kind == "I":
             unit[c.n + c.k + c.sources.index(e)] = 1.0
             return unit
-        if e.kind == "S":
+        if e.kind in "SW":
             if self.switch_state.get(e.name) and c.switch_ron[e.name]:
                 return (self.voltage(e.nodes[0]) - self.voltage(e.nodes[1])) / c.switch_ron[e.name]
             return unit

@@ -14,7 +14,8 @@ an inline comment, ``+`` a continuation):
   (with its ``.model D``), ``S`` and ``W`` (voltage- and current-controlled switches with ``.model SW`` /
   ``CSW``), ``X`` (a ``.subckt``, with ``params:``);
 - ``.param`` (expressions of numbers and earlier parameters), ``.model``, ``.subckt``/``.ends``, ``.ic``,
-  ``.tran``, ``.meas`` (the vector it measures names an output), ``.options``, ``.end``; ``.save``,
+  ``.tran``, ``.meas`` (the vector it measures names an output), ``.options`` (RELTOL, ABSTOL and METHOD are
+  kept for ngspice's run of the file, the rest is ngspice's), ``.end``; ``.save``,
   ``.print``, ``.plot``, ``.probe``, ``.op`` are read and left to ngspice.
 
 Every problem is one :class:`NetlistError` naming the file, the line and the element.
@@ -140,6 +141,8 @@ class Netlist:
     derived: frozenset = frozenset()
     #: .param name -> (its line, the text of its value) (the first definition at the top level).
     param_lines: dict = field(default_factory=dict)
+    #: The .options ngspice's run takes from the file (reltol, abstol in A, method); the others are pcsuite's.
+    spice_options: dict = field(default_factory=dict)
 
     def where(self, name: str | None = None) -> str:
         """``FILE:LINE`` of the .param or element ``name`` (case-insensitive), ``FILE`` when it names neither:
@@ -264,6 +267,7 @@ class _Reader:
         top: list[_Line] = []
         ic: dict = {}
         tran = None
+        spice: dict = {}
         outputs: list = []
         expressions: dict = {}
         param_lines: dict = {}
@@ -313,13 +317,15 @@ class _Reader:
                     ic[match.group(1)] = self.value(line, value, params, f".ic {key}")
             elif word == ".tran":
                 tran = self.tran_line(line, params)
+            elif word in (".options", ".option", ".opt"):
+                spice.update(self.options_line(line, params))
             elif word in (".meas", ".measure"):
                 found = re.findall(r"\b([vi]\([^()]+\))", line.text.lower())
                 outputs.extend(v.replace(" ", "") for v in found if v not in outputs)
             elif word == ".end":
                 break
             elif word.startswith("."):
-                if word not in (".options", ".option", ".opt", ".save", ".print", ".plot", ".probe", ".op",
+                if word not in (".save", ".print", ".plot", ".probe", ".op",
                                 ".temp", ".global", ".width", ".nodeset"):
                     raise self.error(line, f"{word} is not a directive pcsuite reads (it reads .param, .model, "
                                            ".subckt, .ic, .tran, .meas, .options, .end)")
@@ -343,7 +349,7 @@ class _Reader:
                                          "SPICE names an element by its name; rename one")
             seen[e.name] = e
         return Netlist(self.label, title, tuple(elements), models, params, ic, tran, tuple(outputs), self.text,
-                       expressions, frozenset(self.derived), param_lines)
+                       expressions, frozenset(self.derived), param_lines, spice)
 
     # --- directives --------------------------------------------------------------------------------------------
 
@@ -431,6 +437,26 @@ class _Reader:
         values = {key.upper(): self.value(line, value, params, f".model {name} {key}")
                   for key, value in self.assignments(line, body)}
         return Model(name, kind, values, line.number)
+
+    #: The .options a run of the file keeps: its transient's tolerances and integration method.
+    OPTIONS = ("reltol", "abstol", "method")
+
+    def options_line(self, line: _Line, params: dict) -> dict:
+        """RELTOL, ABSTOL and METHOD of a .options line (flags and other options are ngspice's own business)."""
+        out = {}
+        for key, value in re.findall(r"(\w+)\s*=\s*(\{[^}]*\}|\S+)", line.text.split(None, 1)[1] if " " in line.text
+                                     else ""):
+            key = key.lower()
+            if key == "method":
+                if value.lower() not in ("gear", "trap", "trapezoidal"):
+                    raise self.error(line, f".options METHOD={value}: pcsuite runs gear or trap")
+                out[key] = "trap" if value.lower().startswith("trap") else "gear"
+            elif key in self.OPTIONS:
+                number = self.value(line, value, params, f".options {key.upper()}")
+                if not number > 0:
+                    raise self.error(line, f".options {key.upper()}={value}: must be positive")
+                out[key] = number
+        return out
 
     def tran_line(self, line: _Line, params: dict) -> Tran:
         words = self.words(line.text)[1:]

@@ -109,6 +109,9 @@ CASES = {
     "model-npn": (buck(insert=[".model QMOD NPN(BF=100)"]), [], [".model QMOD NPN", "a bipolar transistor"], 11),
     "model-nmos": (buck({9: ".model SWMOD NMOS(VTO=2)"}), [], [".model SWMOD NMOS", "a MOSFET"], 9),
     # --- the analysis --------------------------------------------------------------------------------------
+    "options-reltol-negative": (buck(insert=[".options RELTOL=-1m"]), [], [".options RELTOL=-1m", "positive"], 11),
+    "options-method-unknown": (buck(insert=[".options METHOD=euler"]), [], [".options METHOD=euler", "gear or trap"],
+                               11),
     "no-tran": (buck({11: None}), [], ["no .tran"], None),
     "tran-tstop-zero": (buck({11: ".tran 10n 0"}), [], [".tran 10n 0", "TSTOP = 0 s must be positive"], 11),
     "tran-tstop-negative": (buck({11: ".tran 10n -1m"}), [], [".tran 10n -1m", "TSTOP = -0.001 s must be positive"],

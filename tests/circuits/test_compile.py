@@ -48,6 +48,7 @@ def test_a_circuit_with_more_diodes_than_the_inline_solver_takes_runs_in_the_ste
     T = circuit.period(p)
     tr = simulate(circuit.problem(p, 2 * T), Theta(h=T / 200, theta=0.5))
     assert circuit.compiled(p).configurations[0].k == 10 and tr.steps == 400 and tr.general_solves == 0
+    assert circuit.compiled(p).law.starts == (0.0, T / 2)     # the edges' middles, none a rounding's 1e-21 s
     assert np.isfinite(tr.x).all()
 
 

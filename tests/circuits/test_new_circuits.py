@@ -348,3 +348,70 @@ def test_bridge_rectifier_output_is_vpk_through_the_source_resistance(R, method)
         assert mean(tr, "vout", 0, T) == pytest.approx(Vpk, rel=1e-9)
     if method == "event":
         assert summary["mode_fractions"] == pytest.approx({"D2+D3": 0.5, "D1+D4": 0.5}, abs=1e-12)
+
+
+# --- hysteretic current-mode buck (a W switch) ----------------------------------------------------------------
+
+def _cycle(tr, t0: float):
+    """(mean cycle period after t0 from the switch's closings, min and max of i(l1) after t0)."""
+    rows = np.arange(tr.t.size)
+    closed = np.asarray(tr.signal("switch", rows)).astype(int)
+    up = np.where(np.diff(closed) > 0)[0]
+    up = up[tr.t[up] > t0]
+    current = np.asarray(tr.signal("i(l1)", rows))[tr.t > t0]
+    return (tr.t[up[-1]] - tr.t[up[0]]) / (len(up) - 1), current.min(), current.max()
+
+
+@pytest.mark.parametrize("method", ["event", "lcp"])
+def test_hysteretic_buck_holds_its_inductor_current_in_the_band(method):
+    """W1 (CSW, IT = -Iref, IH = Ih, reading -i(l1)) closes at i(l1) = Iref - Ih and opens at Iref + Ih: on the
+    event method's orbit the current's extremes are the band's edges exactly; the stepper (h = 5 ns) switches at
+    a step's end, within one step of the steepest slope, (Vin - vout)/L h = 3.5 mA, of them. With straight ramps the mean
+    current is Iref, so vout = Iref R; the output ripple (dI T/(8C) = 0.7 mV, 1.4e-4 of vout) bends the ramps by
+    its ratio to Vin - vout, ~1e-4, and moves the mean by ~1e-4 of that: 1e-6 bounds it. The cycle's period at
+    constant vout is 2 Ih L (1/(Vin - vout) + 1/vout); the ripple's first order, ~(0.35 mV/7 V) = 5e-5, bounds its
+    error: 1e-4. Started on vout = Iref R, the output's time constant R C = 250 us has decayed 12 times by 3 ms."""
+    circuit = Circuit.from_netlist(NETLISTS / "hysteretic-buck.cir")
+    p = circuit.resolve({})
+    tr = run_converter(circuit, p, method=method)
+    period, low, high = _cycle(tr, 3e-3)
+    vout = tr.mean("vout", t0=3e-3, t1=4e-3)
+    vin, iref, ih, L, R = p["vin"], p["iref"], p["ih"], p["l"], p["r"]
+    assert vout == pytest.approx(iref * R, rel=1e-6)
+    assert period == pytest.approx(2 * ih * L * (1 / (vin - vout) + 1 / vout), rel=1e-4)
+    slack = 1e-9 if method == "event" else (vin - vout) / L * 5e-9
+    assert low == pytest.approx(iref - ih, abs=slack) and high == pytest.approx(iref + ih, abs=slack)
+
+
+def test_a_w_switch_is_an_s_switch_on_an_h_transducer_of_its_current():
+    """The same buck with S1 reading a CCVS H1 = 1 V/A x i(Vsense) against VT = -Iref, VH = Ih: the same law
+    (the compiled switching functions equal), the same run to 1e-12."""
+    text = (NETLISTS / "hysteretic-buck.cir").read_text()
+    same = (text.replace("W1 in sw Vsense WMOD", "S1 in sw ctl 0 SMOD\nH1 ctl 0 Vsense 1")
+                .replace(".model WMOD CSW(IT={-Iref} IH={Ih})", ".model SMOD SW(VT={-Iref} VH={Ih})"))
+    w, s = Circuit.from_netlist("w.cir", text=text), Circuit.from_netlist("s.cir", text=same)
+    law_w, law_s = w.compiled(w.resolve({})).law, s.compiled(s.resolve({})).law
+    assert np.array_equal(law_w.function.c, law_s.function.c) and law_w.function.d == law_s.function.d
+    assert law_w.band == law_s.band == 0.2
+    a = run_converter(w, {}, method="lcp", t_end=2e-4)
+    b = run_converter(s, {}, method="lcp", t_end=2e-4)
+    assert np.abs(a.x - b.x).max() <= 1e-12 * np.abs(a.x).max()
+
+
+@pytest.mark.spice
+def test_hysteretic_buck_in_ngspice_cycles_in_the_same_band(ngspice):
+    """ngspice on the same file (W written as its S-on-H equivalent, TMAX 5 ns from the file): the band's edges
+    to 1 mA (its switch changes at its own time points), vout to 1e-3 and the cycle's period to 5e-3 of the event
+    method's (measured 3.1e-3: 6 % at TMAX 100 ns, 5e-5 at 1 ns)."""
+    from netlists.circuit import circuit_netlist, file_spice_options
+    from validation.spice import circuit_trajectory, run_spice
+    circuit = Circuit.from_netlist(NETLISTS / "hysteretic-buck.cir")
+    p = circuit.resolve({})
+    netlist = circuit_netlist(circuit, p, 4e-3, file_spice_options(circuit))
+    assert "H_w1 wctl_w1 0 Vsense 1" in netlist.text and ".model wmod SW(IT" not in netlist.text
+    spice = circuit_trajectory(circuit, p, netlist, run_spice(netlist), 3e-3)
+    exact = run_converter(circuit, p, method="event")
+    (period, low, high), (reference, _, _) = _cycle(spice, 3e-3), _cycle(exact, 3e-3)
+    assert period == pytest.approx(reference, rel=5e-3)
+    assert low == pytest.approx(1.8, abs=1e-3) and high == pytest.approx(2.2, abs=1e-3)
+    assert spice.mean("vout", t0=3e-3, t1=4e-3) == pytest.approx(exact.mean("vout", t0=3e-3, t1=4e-3), rel=1e-3)

@@ -4,6 +4,7 @@ messages of a refusal hold (file, line, element)."""
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import pytest
 
@@ -11,6 +12,8 @@ from converters.circuits.expressions import evaluate, number
 from converters.circuits.netlist import NetlistError, Pulse, check_overrides, read_netlist
 from converters.errors import ParameterError
 from converters.models import Circuit
+
+NETLISTS = Path(__file__).resolve().parents[2] / "netlists" / "circuits"
 
 
 @pytest.mark.parametrize("text, value", [
@@ -167,3 +170,29 @@ def test_every_example_netlist_reads(tmp_path):
     for path in sorted((Path(__file__).resolve().parents[2] / "netlists" / "circuits").glob("*.cir")):
         nl = read_netlist(path)
         assert nl.elements and nl.tran is not None, path
+
+
+def test_options_keep_the_transients_tolerances_and_method():
+    """RELTOL, ABSTOL (with suffixes and parameters) and METHOD are read for ngspice's run of the file; flags and
+    other options are left to ngspice; a later .options line wins."""
+    net = read_netlist("t\n.param tol=1u\nR1 a 0 1\nV1 a 0 1\n.options noacct RELTOL=1e-4 ABSTOL={tol} itl1=500\n"
+                       ".option method=trapezoidal\n.opt METHOD=Gear\n.tran 1u 1m\n.end\n")
+    assert net.spice_options == {"reltol": 1e-4, "abstol": 1e-6, "method": "gear"}
+    assert read_netlist("t\nR1 a 0 1\nV1 a 0 1\n.options METHOD=trap\n.tran 1u 1m\n.end\n").spice_options == {
+        "method": "trap"}
+
+
+def test_the_files_tmax_and_options_are_ngspices_unless_options_are_given(tmp_path):
+    """A periodic file's TMAX is kept as a fraction of its period (so -p f=... keeps T/2000 a period), its
+    tolerances with it; options given on the command line replace them; a file without them gets the defaults."""
+    from netlists import SpiceOptions
+    from netlists.circuit import file_spice_options
+    from netlists.circuit import circuit_netlist
+    cw = Circuit.from_netlist(NETLISTS / "cockcroft-walton.cir")
+    options = file_spice_options(cw)
+    assert options.tmax_fraction == pytest.approx(1 / 2000, rel=1e-12) and options.abstol == 1e-6
+    text = circuit_netlist(cw, cw.resolve({"f": "200k"}), 1e-4, options).text
+    assert ".tran 2.5e-09 0.0001 0 2.5e-09 UIC" in text and "ABSTOL=1e-06" in text
+    given = SpiceOptions(tmax_fraction=1 / 100)
+    assert file_spice_options(cw, given) is given
+    assert file_spice_options(Circuit.from_netlist(NETLISTS / "rectifier-1ph.cir")) == SpiceOptions()

@@ -172,9 +172,10 @@ def _spice(args, params):
     t_end = duration(model, p, args.t_end, args.periods)
     T = model.period(p)
     if hasattr(model, "netlist"):             # a netlist file: ngspice runs the same circuit
-        from netlists.circuit import circuit_netlist
+        from netlists.circuit import circuit_netlist, file_spice_options
 
         from ..spice import circuit_trajectory
+        options = file_spice_options(model, options)
         model_netlist = lambda m, q, span, o, x0=None: circuit_netlist(m, q, span, o, x0=x0)   # noqa: E731
         spice_trajectory = circuit_trajectory                                                   # noqa: F811
         T = T if model.periodic(p) else t_end / 10
