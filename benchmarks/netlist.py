@@ -6,11 +6,11 @@ cores: noisy, each the best of REPEATS):
 1. the buck from netlists/circuits/buck.cir against the hand-derived buck model: ns per step of the stepper over
    the same 2,000 periods (target: the same per-step cost; the compile itself is paid once per operating point and
    printed apart);
-2. the N-stage Cockcroft-Walton multiplier (k = 2N diodes), N = 1, 2, 4, 8, 16, 32, from rest: the stepper's time
-   per simulated period against ngspice's on the same file at equal accuracy: each run's mean output over its
-   last 10 periods is measured against the stepper at h = T/25600, and each side's step (the stepper's h from
-   T/100, ngspice's TMAX from T/200) is halved until that error is TARGET; the growth of the cost with N; and
-   Siconos 4.4's own time loop on the same LCS and steps (EulerMoreauOSI, its Lemke; benchmarks/peers.py's script) where
+2. the N-stage Cockcroft-Walton multiplier (k = 2N diodes), N = 1, 2, 4, 8, 16, 32, on its periodic orbit: the
+   stepper's time per simulated period against ngspice's on the same file at equal accuracy: the mean output's
+   error against the orbit's extrapolated to h -> 0, each side's step (the stepper's h from T/100, ngspice's
+   TMAX from T/200) halved until that error is TARGET; the growth of the cost with N; and Siconos 4.4's own
+   time loop on the same LCS and steps (EulerMoreauOSI, its Lemke; benchmarks/peers.py's script) where
    python3-siconos is installed (``make bench``), at N <= 8.
 """
 from __future__ import annotations
@@ -35,6 +35,8 @@ TARGET = 1e-3
 SPICE_TMAX = tuple(1 / (200 * 2 ** k) for k in range(7))
 LCP_FRACTIONS = tuple(1 / (100 * 2 ** k) for k in range(7))
 REFERENCE_STEPS = 25600
+#: ngspice is started on the orbit and run this many periods (its mean read over the last 10).
+SPICE_PERIODS = 100
 
 
 def best(function, repeats: int = REPEATS) -> tuple:
@@ -78,27 +80,24 @@ def cockcroft_walton(stages: int) -> Path:
     return path
 
 
-def spice_period(circuit, p, periods: int, fraction: float):
-    """(wall s, ngspice's mean vout over the last 10 periods) at TMAX = fraction T, with the file's own .options
-    (ABSTOL 1 uA) as compare takes them, run 10 periods at a time from where the last ended (as :func:`chunked`)."""
+def spice_period(circuit, p, x0, periods: int, fraction: float):
+    """(wall s, ngspice's mean vout over the last 10 of ``periods`` started on the orbit x0) at TMAX = fraction T,
+    with the file's own .options (ABSTOL 1 uA) as compare takes them."""
     from dataclasses import replace
 
     from netlists.circuit import circuit_netlist, file_spice_options
     from validation.spice import SpiceError, circuit_trajectory, run_spice
     T = circuit.period(p)
     options = replace(file_spice_options(circuit), tmax_fraction=fraction)
-    x0, wall = None, 0.0
-    for start in range(0, periods, 10):
-        netlist = circuit_netlist(circuit, p, 10 * T, options, x0=x0, diode_currents=False)
-        begin = time.perf_counter()
-        try:
-            result = run_spice(netlist)
-        except SpiceError as failure:
-            raise RuntimeError(str(failure).split(": ", 1)[-1][:100]) from None
-        wall += time.perf_counter() - begin
-        tr = circuit_trajectory(circuit, p, netlist, result, 0.0)
-        x0 = tr.x[-1]
-    return wall, tr.mean("vout", t0=0.0, t1=10 * T)
+    netlist = circuit_netlist(circuit, p, periods * T, options, x0=x0, diode_currents=False)
+    begin = time.perf_counter()
+    try:
+        result = run_spice(netlist)
+    except SpiceError as failure:
+        raise RuntimeError(str(failure).split(": ", 1)[-1][:100]) from None
+    wall = time.perf_counter() - begin
+    tr = circuit_trajectory(circuit, p, netlist, result, (periods - 10) * T)
+    return wall, tr.mean("vout", t0=(periods - 10) * T, t1=periods * T)
 
 
 def siconos_period(problem, h: float, theta: float, t_end: float):
@@ -123,21 +122,16 @@ def siconos_period(problem, h: float, theta: float, t_end: float):
     return json.loads(done.stdout.splitlines()[-1])["wall_s"], np.load(work / "x.npy")[-1]
 
 
-def chunked(circuit, p: dict, periods: int, h: float) -> tuple:
-    """(wall s, mean vout over the last 10 of ``periods`` from rest) of the stepper at theta 0.5, run 10 periods at
-    a time, each from where the last ended (at N = 32 and h = T/25600 the whole run's samples would not fit in
-    memory); the first call loads the compiled loop and is not timed."""
+def orbit_mean(circuit, p: dict, h: float):
+    """(x0, mean vout over one period) of the stepper's periodic orbit at theta 0.5 and step h (Newton shooting)."""
     from dataclasses import replace
+
+    from converters.run import steady_state
     T = circuit.period(p)
-    method, x0, wall = Theta(h=h, theta=0.5), None, 0.0
-    simulate(circuit.problem(p, T), method)
-    for start in range(0, periods, 10):
-        problem = circuit.problem(p, (start + 10) * T, x0=x0, t_start=start * T)
-        begin = time.perf_counter()
-        tr = simulate(problem, method)
-        wall += time.perf_counter() - begin
-        x0 = tr.x[-1]
-    return wall, replace(tr, labels=circuit.labels(p)).mean("vout", t0=(periods - 10) * T, t1=periods * T)
+    method = Theta(h=h, theta=0.5)
+    orbit = steady_state(circuit, p, method, tol=1e-10)
+    tr = simulate(circuit.problem(p, T, x0=orbit.x0), method)
+    return orbit.x0, replace(tr, labels=circuit.labels(p)).mean("vout")
 
 
 def refined(run, fractions, reference: float):
@@ -158,32 +152,40 @@ def refined(run, fractions, reference: float):
 
 
 def multiplier(stages: list, periods: int, siconos_periods: int) -> None:
-    print(f"Cockcroft-Walton multiplier (netlists.generators: RS C = T/20, edges T/1000, 100 kohm), {periods} periods "
-          f"from rest. Error: of the mean vout over the last 10 periods against the stepper at h = T/{REFERENCE_STEPS}; "
-          f"each side's step (the stepper's h at theta 0.5, ngspice's TMAX) halved until the error is {TARGET:g} "
-          "(compare's threshold); ngspice's near-ideal diodes leave it 6e-5 from the ideal circuit (their ~1 mV drop). "
-          "Siconos: its own loop on the same LCS and steps (the stepper's last h).")
-    print("   N    k   reference vout (V)   step     stepper s/period   error     TMAX      ngspice s/period   error"
-          "     ngspice/stepper   Siconos/stepper (end states apart)")
+    print(f"Cockcroft-Walton multiplier (netlists.generators: RS C = T/20, edges T/1000, 100 kohm) on its periodic "
+          f"orbit: the cost of {periods} periods started on it. Error: of the mean vout (the stepper: over its own "
+          f"orbit at that h; ngspice: over its last 10 periods) against the orbit's extrapolated to h -> 0 from h = "
+          f"T/{REFERENCE_STEPS // 2} and T/{REFERENCE_STEPS} (first order: 2 m(h/2) - m(h); its own error about their "
+          f"difference, printed); each side's step (the stepper's h at theta 0.5, ngspice's TMAX) halved until the "
+          f"error is {TARGET:g} (compare's threshold). ngspice's near-ideal diodes leave it ~6e-5 from the ideal "
+          "circuit (their ~1 mV drops). Siconos: its own loop on the same LCS and steps (the stepper's last h).")
+    print("   N    k   orbit vout (V)  (+-)      step     stepper s/period   error     TMAX      ngspice s/period   "
+          "error     ngspice/stepper   Siconos/stepper (end states apart)")
     costs = []
     for n in stages:
         circuit = Circuit.from_netlist(cockcroft_walton(n))
         p = circuit.resolve({})
         T = circuit.period(p)
+        x0, fine = orbit_mean(circuit, p, T / REFERENCE_STEPS)
+        half = orbit_mean(circuit, p, T / (REFERENCE_STEPS // 2))[1]
+        reference, uncertainty = 2 * fine - half, abs(fine - half)
 
         def lcp(fraction):
-            wall, mean = min((chunked(circuit, p, periods, fraction * T) for _ in range(REPEATS)), key=lambda r: r[0])
+            method = Theta(h=fraction * T, theta=0.5)
+            start, mean = orbit_mean(circuit, p, fraction * T)
+            problem = circuit.problem(p, periods * T, x0=start)
+            simulate(problem, method)                                   # its compiled loop loaded
+            wall, _ = best(lambda: simulate(problem, method))
             return wall / periods, mean
 
         def spice(fraction):
-            wall, mean = spice_period(circuit, p, periods, fraction)
+            wall, mean = spice_period(circuit, p, x0, periods, fraction)
             return wall / periods, mean
-        reference = chunked(circuit, p, periods, T / REFERENCE_STEPS)[1]
         stepper = refined(lcp, LCP_FRACTIONS, reference)
         ngspice = refined(spice, SPICE_TMAX, reference)
         sic_text = "-"
         if n <= 8:
-            short = circuit.problem(p, siconos_periods * T)
+            short = circuit.problem(p, siconos_periods * T, x0=x0)
             h = stepper[-1][0] * T
             sic = siconos_period(short, h, 0.5, siconos_periods * T)
             if sic is not None:
@@ -195,8 +197,8 @@ def multiplier(stages: list, periods: int, siconos_periods: int) -> None:
         (hs, ws, es), (ht, wt, et) = stepper[-1], ngspice[-1]
         met = es <= TARGET and et <= TARGET
         ratio = f"{wt / ws:8.1f}" if met else "not reached"
-        print(f"  {n:2d}  {2 * n:3d}   {reference:18.4f}   T/{1 / hs:<5.0f} {ws:12.3e}   {es:.1e}   T/{1 / ht:<6.0f} "
-              f"{wt:14.3e}   {et:.1e}   {ratio:>15}   {sic_text}", flush=True)
+        print(f"  {n:2d}  {2 * n:3d}   {reference:12.4f}  ({uncertainty / reference:.0e})   T/{1 / hs:<5.0f} "
+              f"{ws:12.3e}   {es:.1e}   T/{1 / ht:<6.0f} {wt:14.3e}   {et:.1e}   {ratio:>15}   {sic_text}", flush=True)
         costs.append((n, ws * hs))
     if len(costs) > 1:
         growth = np.polyfit(np.log([c[0] for c in costs]), np.log([c[1] for c in costs]), 1)[0]
@@ -208,7 +210,7 @@ def main(argv=None) -> int:
     parser.add_argument("--quick", action="store_true", help="fewer periods and stages")
     args = parser.parse_args(argv)
     buck_per_step(200 if args.quick else 2000)
-    multiplier([1, 2, 4] if args.quick else [1, 2, 4, 8, 16, 32], 100 if args.quick else 200, 5 if args.quick else 20)
+    multiplier([1, 2, 4] if args.quick else [1, 2, 4, 8, 16, 32], SPICE_PERIODS, 5 if args.quick else 20)
     return 0
 
 

@@ -56,7 +56,7 @@ class CircuitComparison:
 
 
 def compare_circuit(circuit, params: dict | None = None, *, h=None, spice_options=None, start: str | None = None,
-                    periods: int = PERIODS, window: int = WINDOW) -> CircuitComparison:
+                    periods: int = PERIODS, window: int = WINDOW, thresholds: dict | None = None) -> CircuitComparison:
     """Run a netlist's LCS and ngspice on the same file and measure their agreement (module docstring)."""
     from netlists.circuit import circuit_netlist, file_spice_options
 
@@ -90,7 +90,7 @@ def compare_circuit(circuit, params: dict | None = None, *, h=None, spice_option
         settle = spice_drift(spice, T, periods, window)
     result = CircuitComparison(circuit.name, p, lcp, spice, (t0, span))
     result.notes += notes
-    th = THRESHOLDS["circuit"]
+    th = {**THRESHOLDS["circuit"], **(thresholds or {})}
     m = result.metrics
     if not periodic:
         law = circuit.compiled(p).law

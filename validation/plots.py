@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import io
+import math
 
 import matplotlib
 
@@ -21,7 +22,10 @@ def comparison_plot(c, periods: int = 3) -> bytes:
     """vout and every inductor current of both simulators over the last periods, and the primary current's
     difference; legends beside the panels, off the traces; the operating point in the title."""
     from converters.plotting import _eng, _time_unit
-    T = c.lcp.period
+    T, span = c.lcp.period, "periods"
+    if not math.isfinite(T):             # a circuit that switches itself: its cycles; a transient: the whole run
+        cycle = c.metrics.get("cycle_lcp_s")
+        T, span = (cycle, "cycles") if cycle else ((c.spice.t[-1] - c.spice.t[0]) / periods, "thirds of the run")
     t_end = c.spice.t[-1]
     start = t_end - periods * T
     primary = c.metrics["current_signal"]
@@ -42,7 +46,7 @@ def comparison_plot(c, periods: int = 3) -> bytes:
     residual = np.interp(grid, t_s, c.spice.state(primary)) - np.interp(grid, t_l, c.lcp.state(primary))
     axes[-1].plot((grid - start) * scale, residual, lw=0.8)
     axes[-1].set_ylabel(f"{primary}: ngspice - LCP (A)")
-    axes[-1].set_xlabel(f"time in the last {periods} periods ({unit})")
+    axes[-1].set_xlabel(f"time in the last {periods} {span} ({unit})")
     for ax in axes:
         ax.grid(alpha=0.3)
         ax.ticklabel_format(axis="y", useOffset=False)

@@ -9,7 +9,8 @@ the name (and every suite name) must be a safe file name (:func:`validation.io.s
 refused at load with one line naming the file, the key and the value, before anything runs.
 
     name = "buck-dcm"                       # defaults to the file name
-    converter = "buck"
+    converter = "buck"                      # or circuit = "sepic.cir": a netlist (beside the scene, or shipped in
+                                            # netlists/circuits), compared by validation.circuit_compare
     description = "..."
     suites = ["default"]
     control = "smc"                         # optional: boost under sliding-mode control ("smc",
@@ -39,7 +40,10 @@ from .defaults import AT_LEAST, THRESHOLDS
 from .io import safe_name
 
 SCENE_DIR = Path(__file__).with_name("scenes")
-TOP_KEYS = ("name", "converter", "description", "suites", "control", "params", "run", "methods", "checks")
+TOP_KEYS = ("name", "converter", "circuit", "description", "suites", "control", "params", "run", "methods",
+            "checks")
+#: The keys of a circuit scene (circuit = "FILE.cir"): the netlist's compare (validation.circuit_compare).
+CIRCUIT_KEYS = ("name", "circuit", "description", "suites", "params", "run", "methods", "checks")
 RUN_KEYS = ("start", "periods", "window", "t_end")
 METHOD_KEYS = {"lcp": ("h", "theta", "rtol"), "spice": tuple(SpiceOptions.__dataclass_fields__)}
 CHECK_KEYS = ("vout_mean_rel", "mode_agreement", "vout_ripple_rel", "turn_off_error_T", "closed_form_rel", "vout_ref_rel",
@@ -61,6 +65,8 @@ class Scene:
     checks: dict = field(default_factory=lambda: dict(THRESHOLDS["compare"]))
     path: str = ""
     control: str = "pwm"
+    #: A circuit scene's netlist (its resolved path); its control is "circuit".
+    circuit: str = ""
 
 
 def _strict(table: dict, valid, where: str):
@@ -167,8 +173,11 @@ def load_scene(path) -> Scene:
         name = safe_name(f"{where}: name", _string(where, "name", data["name"]))
     else:
         name = safe_name(f"{where}: name (by default the file's name; set name = \"...\")", path.stem)
+    if "circuit" in data:
+        return _circuit_scene(data, path, name, where)
     if "converter" not in data:
-        raise ParameterError(f"{where}: 'converter' is required; valid: buck, boost, buck-boost, cuk, prc")
+        raise ParameterError(f"{where}: 'converter' (a built-in converter: buck, boost, buck-boost, cuk, prc) or "
+                             "'circuit' (a netlist FILE.cir) is required")
     converter = get_converter(_string(where, "converter", data["converter"]))
     description = _string(where, "description", data.get("description", ""), MAX_DESCRIPTION)
     control = _string(where, "control", data.get("control", "pwm"))
@@ -178,11 +187,7 @@ def load_scene(path) -> Scene:
         model = get_model(converter.name, control)
     except ParameterError as exc:
         raise ParameterError(f"{where}: {exc}") from None
-    suites = data.get("suites", ["default"])
-    if not isinstance(suites, list):
-        raise ParameterError(f"{where}: suites must be a list of names; got {suites!r}")
-    for suite in suites:
-        safe_name(f"{where}: suites entry", suite)
+    suites = _suites(data, where)
     params = data.get("params", {})
     _strict(params, tuple(p.name for p in model.parameters), f"{where} [params]")
     try:
@@ -200,6 +205,95 @@ def load_scene(path) -> Scene:
     return Scene(name=name, converter=converter.name, description=description,
                  suites=tuple(suites), params=dict(params), run=run, lcp=lcp, spice=spice, path=str(path),
                  control=control, checks={**THRESHOLDS[STUDY[control]], **checks})
+
+
+#: Where a circuit scene's netlist is looked for after the scene's own directory: the shipped circuits.
+CIRCUIT_DIR = Path(__file__).resolve().parents[1] / "netlists" / "circuits"
+
+
+def _circuit_file(where: str, value, scene_dir: Path) -> Path:
+    """The netlist a circuit scene names: a relative path without '..' ending in .cir, in the scene's directory
+    or else among the shipped circuits (netlists/circuits)."""
+    text = _string(where, "circuit", value, 300)
+    relative = Path(text)
+    if relative.is_absolute() or ".." in relative.parts or relative.suffix.lower() != ".cir":
+        raise ParameterError(f"{where}: circuit must be a relative path to a .cir file without '..' (looked for "
+                             f"beside the scene, then in the shipped circuits); got {text!r}")
+    for base in (scene_dir, CIRCUIT_DIR):
+        if (base / relative).is_file():
+            return base / relative
+    raise ParameterError(f"{where}: circuit {text!r} is neither beside the scene ({str(scene_dir)!r}) nor a shipped "
+                         f"circuit ({', '.join(sorted(p.name for p in CIRCUIT_DIR.glob('*.cir')))})")
+
+
+def _circuit_scene(data: dict, path: Path, name: str, where: str) -> Scene:
+    """A scene comparing a netlist's LCS with ngspice on the same file (validation.circuit_compare): [params] are
+    the file's (.param names and element values), [run] start, periods and window, [methods.lcp] h,
+    [methods.spice] ngspice's options (without them the file's own), [checks] those of [thresholds.circuit]."""
+    from converters.models import Circuit
+    from converters.circuits.netlist import NetlistError
+    if "converter" in data or "control" in data:
+        raise ParameterError(f"{where}: a circuit scene takes neither converter nor control; valid keys: "
+                             f"{', '.join(CIRCUIT_KEYS)}")
+    _strict(data, CIRCUIT_KEYS, where)
+    file = _circuit_file(where, data["circuit"], path.parent)
+    try:
+        circuit = Circuit.from_netlist(file)
+    except (NetlistError, ParameterError) as exc:
+        raise ParameterError(f"{where}: {exc}") from None
+    description = _string(where, "description", data.get("description", ""), MAX_DESCRIPTION)
+    suites = _suites(data, where)
+    params = data.get("params", {})
+    names = tuple(p.name for p in circuit.parameters)
+    if not isinstance(params, dict):
+        raise ParameterError(f"{where} [params] must be a table; got {type(params).__name__} {params!r}")
+    for key in params:                            # SPICE names are case-insensitive
+        if str(key).lower() not in names:
+            raise ParameterError(f"unknown key {key!r} in {where} [params]; valid keys: {', '.join(names)}")
+    try:
+        p = circuit.resolve(params)
+        circuit.compiled(p)                       # what the file cannot be compiled into is refused here
+    except (NetlistError, ParameterError) as exc:
+        raise ParameterError(f"{where} [params]: {exc}") from None
+    run = data.get("run", {})
+    _strict(run, ("start", "periods", "window"), f"{where} [run]")
+    if "start" in run and run["start"] not in ("steady", "rest"):
+        raise ParameterError(f"{where} [run] start must be 'steady' or 'rest'; got {run['start']!r}")
+    from .circuit_compare import PERIODS, WINDOW
+    periods = _integer(f"{where} [run]", "periods", run["periods"], *PERIODS_RANGE) if "periods" in run else PERIODS
+    window = _integer(f"{where} [run]", "window", run["window"], *PERIODS_RANGE) if "window" in run else WINDOW
+    if window > periods:
+        raise ParameterError(f"{where} [run] window must be in [1, periods = {periods}]; got {window}")
+    methods = data.get("methods", {})
+    _strict(methods, ("lcp", "spice"), f"{where} [methods]")
+    lcp = methods.get("lcp", {})
+    _strict(lcp, ("h",), f"{where} [methods.lcp]")
+    if "h" in lcp:
+        h = _number(f"{where} [methods.lcp]", "h", lcp["h"])
+        if not 0.0 < h <= circuit.max_h(p) or (circuit.periodic(p) and not h < circuit.period(p)):
+            raise ParameterError(f"{where} [methods.lcp] h must be a positive number below the circuit's period and "
+                                 f"at most {circuit.max_h(p):.3g} s; got {lcp['h']!r}")
+    spice = _check_spice(methods.get("spice", {}), "pwm", f"{where} [methods.spice]")
+    checks = data.get("checks", {})
+    _strict(checks, tuple(THRESHOLDS["circuit"]), f"{where} [checks]")
+    for key, value in checks.items():
+        number = _number(f"{where} [checks]", key, value)
+        if number <= 0 or (key in AT_LEAST and number > 1):
+            bound = "in (0, 1] (a fraction)" if key in AT_LEAST else "positive"
+            raise ParameterError(f"{where} [checks] {key} must be {bound}; got {value!r}")
+    return Scene(name=name, converter=file.name, description=description, suites=tuple(suites), params=dict(params),
+                 run=dict(run), lcp=dict(lcp), spice=spice, path=str(path), control="circuit", circuit=str(file),
+                 checks={**THRESHOLDS["circuit"], **checks})
+
+
+def _suites(data: dict, where: str) -> list:
+    """The scene's suites: a list of safe names (default: the default suite)."""
+    suites = data.get("suites", ["default"])
+    if not isinstance(suites, list):
+        raise ParameterError(f"{where}: suites must be a list of names; got {suites!r}")
+    for suite in suites:
+        safe_name(f"{where}: suites entry", suite)
+    return suites
 
 
 def _check_run(run, control: str, model, p: dict, where: str) -> dict:

@@ -4,6 +4,7 @@ a report section. A failing scene becomes a failed section with its reason; it n
 from __future__ import annotations
 
 import io
+import math
 import time
 import traceback
 from dataclasses import dataclass, field
@@ -51,6 +52,8 @@ def run_scene(scene: Scene) -> SceneResult:
 
 
 def _run_scene(scene: Scene) -> SceneResult:
+    if scene.control == "circuit":
+        return _run_circuit_scene(scene)
     if scene.control == "smc":
         return _run_smc_scene(scene)
     if scene.control == "smc-implicit":
@@ -87,6 +90,32 @@ def _run_scene(scene: Scene) -> SceneResult:
     failed = [name for name, _, _, passed in checks if not passed]
     return SceneResult(scene, ok=ok, reason=("failed checks: " + ", ".join(failed)) if failed else "",
                        checks=checks, metrics=m, gdcm=gdcm, files=files,
+                       accuracy=c.lcp.metadata.get("accuracy", {}), notes=list(c.notes))
+
+
+def _run_circuit_scene(scene: Scene) -> SceneResult:
+    """A netlist's LCS against ngspice on the same file (validation.circuit_compare), with the scene's run,
+    methods and thresholds."""
+    from converters.models import Circuit
+
+    from .circuit_compare import PERIODS, WINDOW, compare_circuit
+    circuit = Circuit.from_netlist(scene.circuit)
+    c = compare_circuit(circuit, scene.params, h=scene.lcp.get("h"),
+                        spice_options=SpiceOptions(**scene.spice) if scene.spice else None,
+                        start=scene.run.get("start"), periods=scene.run.get("periods", PERIODS),
+                        window=scene.run.get("window", WINDOW), thresholds=scene.checks)
+    period = circuit.period(c.params)
+    if not math.isfinite(period):                   # the timeline shows the last tenth of the run in 3 parts
+        period = (c.lcp.t[-1] - c.lcp.t[0]) / 30
+    files = {f"scenes/{scene.name}/lcp.parquet": _parquet(c.lcp.waveforms()),
+             f"scenes/{scene.name}/spice.parquet": _parquet(c.spice.waveforms()),
+             f"scenes/{scene.name}/overlay.png": comparison_plot(c),
+             f"scenes/{scene.name}/modes.png": mode_timeline_plot(c.lcp.t, c.lcp.modes(), c.spice.t, c.spice.modes(),
+                                                                  period, scene.name)}
+    checks = list(c.rows)
+    failed = [name for name, _, _, passed in checks if not passed]
+    return SceneResult(scene, ok=not failed, reason=("failed checks: " + ", ".join(failed)) if failed else "",
+                       checks=checks, metrics=c.metrics, gdcm={}, files=files,
                        accuracy=c.lcp.metadata.get("accuracy", {}), notes=list(c.notes))
 
 

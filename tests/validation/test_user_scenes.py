@@ -162,6 +162,27 @@ BAD = [
     (FAST.replace("t_end = 0.002", "periods = 3"),
      r"scene s.toml [run] periods does not apply to a control scene (smc, smc-implicit); valid keys: t_end"),
     (BUCK + "[methods]\nlcp = 5\n", r"scene s.toml [methods.lcp] must be a table; got int 5"),
+    # --- circuit scenes (a netlist's compare) ----------------------------------------------------------------
+    ('circuit = "/etc/passwd.cir"\n', r"scene s.toml: circuit must be a relative path to a .cir file without '..'"),
+    ('circuit = "../x.cir"\n', r"scene s.toml: circuit must be a relative path to a .cir file without '..'"),
+    ('circuit = "sepic.toml"\n', r"scene s.toml: circuit must be a relative path to a .cir file without '..'"),
+    ('circuit = "nowhere.cir"\n', r"scene s.toml: circuit 'nowhere.cir' is neither beside the scene"),
+    ('circuit = 5\n', r"scene s.toml: circuit must be a string; got 5"),
+    ('circuit = "sepic.cir"\nconverter = "buck"\n', r"scene s.toml: a circuit scene takes neither converter nor "
+                                                      r"control; valid keys: name, circuit,"),
+    ('circuit = "sepic.cir"\n[params]\nDx = 0.5\n', r"unknown key 'Dx' in scene s.toml [params]; valid keys: "),
+    ('circuit = "sepic.cir"\n[params]\nD = 2\n', r"scene s.toml [params]: "),   # the compile refuses PW < 0
+    ('circuit = "sepic.cir"\n[run]\nt_end = 1\n', r"unknown key 't_end' in scene s.toml [run]; valid keys: start, "
+                                                     r"periods, window"),
+    ('circuit = "sepic.cir"\n[run]\nperiods = 5\n', r"scene s.toml [run] window must be in [1, periods = 5]; got 10"),
+    ('circuit = "sepic.cir"\n[methods.lcp]\nh = 1\n', r"scene s.toml [methods.lcp] h must be a positive number "
+                                                         r"below the circuit's period"),
+    ('circuit = "sepic.cir"\n[methods.lcp]\ntheta = 1\n', r"unknown key 'theta' in scene s.toml [methods.lcp]; "
+                                                             r"valid keys: h"),
+    ('circuit = "sepic.cir"\n[checks]\nvout_mean_rel = 1e-3\n', r"unknown key 'vout_mean_rel' in scene s.toml "
+                                                                   r"[checks]; valid keys: mean_rel, ripple_rel"),
+    ('circuit = "sepic.cir"\n[checks]\nmode_agreement = 2\n',
+     r"scene s.toml [checks] mode_agreement must be in (0, 1] (a fraction); got 2"),
 ]
 
 
@@ -183,8 +204,33 @@ def test_a_scene_file_that_is_not_utf8_toml_or_too_large_is_refused(tmp_path):
 
 
 def test_every_scene_of_the_project_passes_the_strict_checks():
-    assert len(load_scenes(sorted(SCENE_DIR.glob("*.toml")))) == len(list(SCENE_DIR.glob("*.toml"))) == 12
-    assert {s.name for s in scenes_of("default")} >= {"buck-dcm", "prc", "boost-smc-implicit"}
+    assert len(load_scenes(sorted(SCENE_DIR.glob("*.toml")))) == len(list(SCENE_DIR.glob("*.toml"))) == 18
+    assert {s.name for s in scenes_of("default")} >= {"buck-dcm", "prc", "boost-smc-implicit", "netlist-sepic"}
+
+
+def test_a_circuit_scene_names_a_netlist_beside_it_or_a_shipped_one(tmp_path):
+    """circuit = "FILE.cir": the scene's own directory first (a user's circuit), then netlists/circuits; its
+    [params] are the file's names; the thresholds those of a netlist's compare."""
+    from validation.defaults import THRESHOLDS
+    shipped = load_scene(_scene(tmp_path, 'circuit = "sepic.cir"\n[params]\nD = 0.3\n[checks]\nmean_rel = 2e-3\n'))
+    assert shipped.control == "circuit" and Path(shipped.circuit).parent.name == "circuits"
+    assert shipped.checks == {**THRESHOLDS["circuit"], "mean_rel": 2e-3} and shipped.params == {"D": 0.3}
+    (tmp_path / "mine").mkdir()
+    (tmp_path / "mine" / "sepic.cir").write_text((Path(shipped.circuit)).read_text().replace("D=0.4", "D=0.35"))
+    own = load_scene(_scene(tmp_path, 'circuit = "mine/sepic.cir"\n', "own.toml"))
+    assert Path(own.circuit) == tmp_path / "mine" / "sepic.cir" and own.converter == "sepic.cir"
+
+
+@pytest.mark.spice
+def test_a_circuit_scene_runs_the_netlists_compare(tmp_path, ngspice):
+    """The scene's result is compare_circuit's: its checks and metrics; a threshold the scene tightens below what
+    is measured fails it (the scene's [checks] reach the comparison)."""
+    from validation.suite import _run_scene
+    passed = _run_scene(load_scene(_scene(tmp_path, 'circuit = "sepic.cir"\n', "a.toml")))
+    assert passed.ok and [c[0] for c in passed.checks] == ["mean_rel", "ripple_rel", "mode_agreement"]
+    assert passed.metrics["v(out)_mean_rel_error"] < 1e-3 and "scenes/a/overlay.png" in passed.files
+    tight = _run_scene(load_scene(_scene(tmp_path, 'circuit = "sepic.cir"\n[checks]\nmean_rel = 1e-9\n', "b.toml")))
+    assert not tight.ok and tight.reason == "failed checks: mean_rel"
 
 
 def test_a_bad_scene_file_fails_the_report_command_before_anything_runs(tmp_path, monkeypatch, capsys):
