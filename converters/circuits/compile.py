@@ -183,28 +183,30 @@ class _Compiler:
                         period if periodic else math.inf, self.initial_state(), self.units(), inputs)
 
     def run_state_driven(self, drives: dict) -> Compiled:
-        """One switch driven by the circuit's own quantities (a comparator), the others by DC: two configurations
+        """One switch driven by the circuit's own quantities (a comparator), with switches that follow it or its
+        complement (a synchronous rectifier's gate on the same comparator), the others by DC: two configurations
         and a :class:`~converters.problems.StateSwitching` law (its ramp's period, or none: an autonomous circuit)."""
         from ..problems import StateSwitching, SwitchingFunction
-        if len(self.state_rows) > 1 or any(d for d in drives.values() if d is not None and any(
+        if any(d for d in drives.values() if d is not None and any(
                 isinstance(next(x for x in self.sources if x.name == name).waveform, Pulse) for name in d)):
             names = ", ".join(n.upper() for n in self.state_rows)
-            raise NetlistError(f"{self.path}: {names} driven by the circuit's own quantities beside other switches "
-                               "or PULSE gates: one state-driven switch, the others at DC, is what is compiled yet")
+            raise NetlistError(f"{self.path}: {names} driven by the circuit's own quantities beside PULSE gates: a "
+                               "comparator's switches with the others at DC is what is compiled yet")
         if any(isinstance(x.waveform, (Pulse, Sin)) and self.in_power_circuit(x) for x in self.sources):
             raise NetlistError(f"{self.path}: a state-driven switch with PULSE or SIN sources in the power circuit is "
                                "not compiled yet")
-        (name, _), = self.state_rows.items()
+        (name, row0), *others = self.state_rows.items()
         switch = next(x for x in self.switches if x.name == name)
+        followers = {other: self.follows(switch, row0, other, row) for other, row in others}
         fixed = {}
         for other in self.switches:
-            if other.name != name:
+            if other.name not in self.state_rows:
                 value = sum(c * float(next(x for x in self.sources if x.name == src).waveform)
                             for src, c in (drives[other.name] or {}).items())
                 fixed[other.name] = value > self.threshold(other)[0]
         pieces, configs, pair_currents, closed, maps = [], [], [], [], []
         for on in (False, True):
-            state = {**fixed, name: on}
+            state = {**fixed, name: on, **{f: on == same for f, (same, _) in followers.items()}}
             config, forms, signals, _ = self.configuration(state, {})
             configs.append(config)
             pair_currents.append(tuple(f == CURRENT for f in forms))
@@ -212,6 +214,11 @@ class _Compiler:
             maps.append(signals)
             solution = self.network(state, {})[0]
             pieces.append(self.control(solution, switch))
+            for f, (_, scale) in followers.items():
+                other = next(x for x in self.switches if x.name == f)
+                if np.abs(self.control(solution, other) - scale * pieces[-1]).max() > 1e-9 * np.abs(pieces[-1]).max():
+                    raise self.error(other, f"{other.title}: its control is {scale:g} x {switch.title}'s in one "
+                                            "configuration, not in another: it does not follow that comparator")
         if np.abs(pieces[0] - pieces[1]).max() > 1e-9 * max(np.abs(pieces[0]).max(), 1e-300):
             raise self.error(switch, f"{switch.title}: its control changes with its own state: a comparator "
                                      "whose input the switch itself moves is not compiled")
@@ -264,6 +271,26 @@ class _Compiler:
                 if e.kind in "RV" and node in e.nodes:
                     todo += [m for m in e.nodes if m != "0" and m not in seen]
         return False
+
+    def follows(self, switch: Element, row0: np.ndarray, name: str, row: np.ndarray) -> tuple:
+        """(same, scale) of a second state-driven switch whose control is ``scale`` times the first's: closed with
+        it (same: scale > 0 and the same thresholds) or exactly when it is open (its complement: scale < 0 and the
+        thresholds swapped: S2 on v(vcon) - v(ramp) beside S1 on v(ramp) - v(vcon), both VT = 0). Anything else
+        is refused naming both."""
+        other = next(x for x in self.switches if x.name == name)
+        scale = float(row @ row0 / (row0 @ row0))
+        near = lambda a, b: abs(a - b) <= 1e-9 * max(1.0, abs(a), abs(b))       # noqa: E731
+        if np.abs(row - scale * row0).max() <= 1e-9 * np.abs(row).max():
+            (vt0, vh0), (vt, vh) = self.threshold(switch), self.threshold(other)
+            closes, opens = (vt + vh) / scale, (vt - vh) / scale
+            if scale > 0 and near(closes, vt0 + vh0) and near(opens, vt0 - vh0):
+                return True, scale
+            if scale < 0 and near(closes, vt0 - vh0) and near(opens, vt0 + vh0):
+                return False, scale
+        raise self.error(other, f"{other.title} and {switch.title} are both driven by the circuit's own quantities "
+                                f"and {other.name.upper()} neither follows {switch.name.upper()} nor its complement (the same "
+                                "control, or its negative, at matching thresholds): one comparator is what is "
+                                "compiled yet")
 
     def threshold(self, switch: Element) -> tuple:
         """(threshold, hysteresis) of a switch's model: VT, VH (V) of an S switch's SW, IT, IH (A) of a W's CSW."""

@@ -81,6 +81,42 @@ def test_the_voltage_mode_netlist_doubles_its_period_at_the_published_input_volt
     assert flips[0]["value"] == pytest.approx(24.516573, abs=2e-6)
 
 
+SYNC = VOLTAGE_MODE.with_name("voltage-mode-sync-buck.cir")
+
+
+@pytest.mark.parametrize("R", ["22", "1k"])
+def test_a_low_side_switch_on_the_same_comparator_is_its_complement(R):
+    """S2 reads v(vcon) - v(ramp), the negative of S1's control, at VT = 0: it closes exactly while S1 is open (the
+    law keeps two configurations: S1 closed and S2 open, or the reverse). At 22 ohm (CCM) the orbit is the
+    diode-rectified buck's to 1e-10 (the diode carries what S2 does); at 1 kohm, where that buck enters DCM, the
+    synchronous one stays in CCM with a negative inductor current for a while. Either way v(sw) is Vin while S1
+    is closed and 0 while S2 is: on the orbit the inductor's mean voltage is 0, so mean vout = Vin times S1's
+    fraction of the period, exactly."""
+    from converters.run import run_converter
+    sync, plain = Circuit.from_netlist(SYNC), Circuit.from_netlist(VOLTAGE_MODE)
+    compiled = sync.compiled(sync.resolve({"R": R}))
+    assert compiled.switch_names == ("s1", "s2") and compiled.closed == ((False, True), (True, False))
+    tr = run_converter(sync, {"R": R}, method="event", steady=True, periods=1, steady_tol=1e-11)
+    fractions = tr.mode_fractions(None, t0=tr.t[0], t1=tr.t[-1])
+    assert set(fractions) == {"S1", "S2"}
+    assert tr.mean("vout") == pytest.approx(24.0 * fractions["S1"], rel=1e-9)
+    current = np.asarray(tr.signal("i(l1)", np.arange(tr.t.size)))
+    other = run_converter(plain, {"R": R}, method="event", steady=True, periods=1, steady_tol=1e-11)
+    if R == "22":
+        assert np.abs(tr.x[0] - other.x[0]).max() <= 1e-10 * np.abs(other.x[0]).max() and current.min() > 0
+    else:
+        assert "off" in set(other.modes()) and current.min() < -0.04
+
+
+def test_a_second_comparator_switch_at_other_thresholds_is_refused_naming_both():
+    """S2 on the complement's control but at VT = 1 would switch at other instants than S1: not one comparator."""
+    from converters.circuits.netlist import NetlistError
+    text = SYNC.read_text().replace("S2 0 sw vcon ramp SWMOD", "S2 0 sw vcon ramp SW2\n.model SW2 SW(VT=1)")
+    with pytest.raises(NetlistError, match=r"sync.cir:\d+: voltage-controlled switch S2 and voltage-controlled switch "
+                                           r"S1 are both driven by the circuit's own quantities and S2 neither follows"):
+        Circuit.from_netlist("sync.cir", text=text)
+
+
 def test_a_param_and_an_element_of_the_same_name_are_refused():
     """-p R1=7 had silently set one of them (.param r1 and the resistor R1: SPICE names ignore case)."""
     from converters.circuits.netlist import NetlistError
