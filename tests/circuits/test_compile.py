@@ -1,5 +1,4 @@
 """The compiler's schedules and inputs, against what the waveforms say."""
-import math
 from pathlib import Path
 
 import numpy as np
