@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 
-from converters.circuits.netlist import Pulse, Sin
+from converters.circuits.netlist import Pulse, Pwl, Sin
 from converters.errors import ParameterError
 
 from .build import Netlist, SpiceOptions, _num, options_line
@@ -134,6 +134,9 @@ def _waveform(name: str, w) -> str:
         return "PULSE(" + " ".join(_num(f"{name} PULSE", v) for v in values) + ")"
     if isinstance(w, Sin):
         return "SIN(" + " ".join(_num(f"{name} SIN", v) for v in (w.vo, w.va, w.freq, w.td, w.theta, w.phase)) + ")"
+    if isinstance(w, Pwl):
+        return ("PWL(" + " ".join(_num(f"{name} PWL", v) for point in w.points for v in point) + ")"
+                + (" r=0" if w.repeat is not None else ""))
     return f"DC {_num(name, float(w))}"
 
 

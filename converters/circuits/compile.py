@@ -78,9 +78,9 @@ class _Compiler:
             first = [e for e in els if e.name == duplicate][1]
             raise self.error(first, f"{first.title}: the name is used twice")
         for e in els:
-            if e.kind in "VI" and isinstance(e.waveform, Pwl):
-                raise self.error(e, f"{e.title}: a PWL source is not compiled yet (an LCS input here is DC, PULSE or "
-                                    "SIN)")
+            if e.kind in "VI" and isinstance(e.waveform, Pwl) and e.waveform.repeat is None:
+                raise self.error(e, f"{e.title}: a PWL that does not repeat is not compiled yet (it is not periodic): "
+                                    "give r=0 (the list repeated, its last time the period)")
             if e.kind in "VI" and isinstance(e.waveform, Sin) and (e.waveform.td or e.waveform.theta):
                 raise self.error(e, f"{e.title}: a SIN with a delay or damping (TD, THETA) is not periodic from t = 0; "
                                     "give SIN(VO VA FREQ 0 0 PHASE)")
@@ -145,6 +145,10 @@ class _Compiler:
             return self.run_state_driven(drives)
         period = self.period()
         power = [s for s in self.sources if isinstance(s.waveform, Pulse) and self.in_power_circuit(s)]
+        for s in self.sources:
+            if isinstance(s.waveform, Pwl) and self.in_power_circuit(s):
+                raise self.error(s, f"{s.title}: a PWL in the power circuit is not compiled yet (an LCS input here is "
+                                    "DC, PULSE or SIN); a PWL drives switches")
         for s in power:
             if not math.isfinite(s.waveform.per):
                 raise self.error(s, f"{s.title}: a single pulse in the power circuit: give it a period (PER)")
@@ -188,7 +192,7 @@ class _Compiler:
         and a :class:`~converters.problems.StateSwitching` law (its ramp's period, or none: an autonomous circuit)."""
         from ..problems import StateSwitching, SwitchingFunction
         if any(d for d in drives.values() if d is not None and any(
-                isinstance(next(x for x in self.sources if x.name == name).waveform, Pulse) for name in d)):
+                isinstance(next(x for x in self.sources if x.name == name).waveform, (Pulse, Pwl)) for name in d)):
             names = ", ".join(n.upper() for n in self.state_rows)
             raise NetlistError(f"{self.path}: {names} driven by the circuit's own quantities beside PULSE gates: a "
                                "comparator's switches with the others at DC is what is compiled yet")
@@ -242,6 +246,7 @@ class _Compiler:
                 raise self.error(s, f"{s.title}: a PULSE delay TD = {w.td:g} s of a whole period ({w.per:g} s) or "
                                     "more: the waveform is not periodic from t = 0")
         periods += [1.0 / s.waveform.freq for s in self.sources if isinstance(s.waveform, Sin) and s.waveform.freq > 0]
+        periods += [s.waveform.period for s in self.sources if isinstance(s.waveform, Pwl)]
         if not periods:
             return math.inf
         base = max(periods)
@@ -351,8 +356,9 @@ class _Compiler:
                     raise self.error(src, f"{src.title}: in {switch.title}'s control a PULSE must be one sawtooth "
                                           "ramp: PULSE(V1 V2 0 TR TF PW PER) with TF + PW at most PER/1000")
                 ramp = Ramp(low=a * w.v1, high=a * w.v2, period=w.per)      # s = VT - V: the ramp enters as -a pulse
-            elif isinstance(w, Sin):
-                raise self.error(src, f"{src.title}: a SIN in {switch.title}'s control is not compiled")
+            elif isinstance(w, (Sin, Pwl)):
+                raise self.error(src, f"{src.title}: a {type(w).__name__.upper()} in {switch.title}'s control is not "
+                                      "compiled")
             else:
                 d -= a * float(w)
         return -row[:n], d, ramp
@@ -406,6 +412,9 @@ class _Compiler:
                 for m in range(int(math.ceil(2 * period / per)) + 1):
                     base = w.td + m * per
                     points += [base, base + w.tr, base + w.tr + w.pw, base + w.tr + w.pw + w.tf]
+            elif isinstance(w, Pwl):
+                for m in range(int(math.ceil(2 * period / w.period)) + 1):
+                    points += [m * w.period + t for t, _ in w.points]
         points = np.unique(np.array([p for p in points if 0.0 <= p <= 2 * period]))
         return points
 
@@ -567,6 +576,8 @@ class _Compiler:
             w = s.waveform
             if isinstance(w, Pulse):
                 values.append(w.v2 if levels.get(s.name, 0) else w.v1)
+            elif isinstance(w, Pwl):
+                values.append(w.points[0][1])    # a gate's: its crossings are the schedule (:meth:`switch_events`)
             elif isinstance(w, Sin):
                 values.append(w.vo)              # its sinusoid is an input of its own (:meth:`sinusoid_columns`)
             else:
@@ -597,8 +608,11 @@ class _Compiler:
 
 
 def _value(w, t: np.ndarray) -> np.ndarray:
-    """A source's waveform at times t (DC or PULSE)."""
+    """A source's waveform at times t (DC, PULSE or a repeated PWL)."""
     t = np.asarray(t, dtype=float)
+    if isinstance(w, Pwl):
+        times, values = np.array(w.points).T
+        return np.interp(np.mod(t, w.period), times, values)
     if not isinstance(w, Pulse):
         return np.full_like(t, float(w))
     per = w.per if math.isfinite(w.per) else math.inf

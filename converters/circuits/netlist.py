@@ -10,7 +10,7 @@ Supported (case-insensitive, SPICE's own conventions: the first line is the titl
 an inline comment, ``+`` a continuation):
 
 - ``R L C`` (value, ``IC=`` on L and C), ``K`` (coupled inductors), ``V I`` (``DC``, ``PULSE``, ``SIN``,
-  ``PWL``), ``E G`` (voltage-controlled, gain), ``F H`` (current-controlled through a V source, gain), ``D``
+  ``PWL`` with ``r=0`` to repeat it), ``E G`` (voltage-controlled, gain), ``F H`` (current-controlled through a V source, gain), ``D``
   (with its ``.model D``), ``S`` and ``W`` (voltage- and current-controlled switches with ``.model SW`` /
   ``CSW``), ``X`` (a ``.subckt``, with ``params:``);
 - ``.param`` (expressions of numbers and earlier parameters), ``.model``, ``.subckt``/``.ends``, ``.ic``,
@@ -84,8 +84,14 @@ class Sin:
 
 @dataclass(frozen=True)
 class Pwl:
-    """PWL(t1 v1 t2 v2 ...), times non-decreasing."""
+    """PWL(t1 v1 t2 v2 ...) [r=0], times non-decreasing; ``repeat`` 0 (r=0) repeats the whole list, with the
+    last time its period (None: it holds its last value)."""
     points: tuple
+    repeat: float | None = None
+
+    @property
+    def period(self) -> float:
+        return self.points[-1][0] - self.repeat if self.repeat is not None else math.inf
 
 
 @dataclass(frozen=True)
@@ -603,7 +609,7 @@ class _Reader:
                 pass
             elif re.search(r"(?i)\b(pulse|sin|pwl|ac)\b", text):
                 raise self.error(line, f"{title}: give either DC VALUE or one waveform")
-        match = re.match(r"(?i)(pulse|sin|pwl)\s*\((.*)\)\s*$", text)
+        match = re.match(r"(?i)(pulse|sin|pwl)\s*\((.*)\)\s*((?:r|td)\s*=.*)?$", text)
         if not match:
             if re.match(r"(?i)(pulse|sin|pwl|exp|sffm|am|trrandom|trnoise)\b", text):
                 raise self.error(line, f"{title}: {text.split('(')[0].upper()} is not read (DC, PULSE, SIN, PWL)")
@@ -635,6 +641,15 @@ class _Reader:
             if not 3 <= len(values) <= 6:
                 raise self.error(line, f"{title}: SIN(VO VA FREQ TD THETA PHASE) takes 3 to 6 numbers")
             return Sin(*values)
+        if match.group(3) and kind != "PWL":
+            raise self.error(line, f"{title}: {match.group(3).strip()!r} after {kind}(...): only a PWL takes r=")
+        repeat = None
+        for key, value in self.assignments(line, match.group(3) or ""):
+            number = self.value(line, value, params, f"{title} PWL {key}")
+            if key != "r" or number != 0:
+                raise self.error(line, f"{title}: PWL {key}={value}: pcsuite reads r=0 (the whole list repeated, "
+                                       "its last time the period) and no TD")
+            repeat = 0.0
         if len(values) < 2 or len(values) % 2:
             raise self.error(line, f"{title}: PWL takes pairs of time and value; got {len(values)} numbers")
         points = tuple(zip(values[::2], values[1::2]))
@@ -644,7 +659,11 @@ class _Reader:
             if b[0] < a[0]:
                 raise self.error(line, f"{title}: PWL time {b[0]:g} s (point {n}) comes before {a[0]:g} s: times "
                                        "must not decrease")
-        return Pwl(points)
+        if repeat is not None and (points[0][0] != 0 or points[-1][0] <= 0 or points[-1][1] != points[0][1]
+                                   or any(b[0] <= a[0] for a, b in zip(points, points[1:]))):
+            raise self.error(line, f"{title}: a repeated PWL (r=0) starts at time 0, its times increase (an edge "
+                                   "takes a rise time) and it ends at its first value (its last time the period)")
+        return Pwl(points, repeat)
 
     @staticmethod
     def words(body: str) -> list[str]:

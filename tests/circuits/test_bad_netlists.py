@@ -126,6 +126,14 @@ CASES = {
     "sin-delayed": (buck({2: "Vin in 0 SIN(12 1 50 1m)"}), [], ["voltage source VIN", "SIN with a delay",
                                                                 "not periodic from t = 0"], 2),
     "pwl-in-power-path": (buck({2: "Vin in 0 PWL(0 0 1m 12)"}), [], ["voltage source VIN", "PWL", "not compiled"], 2),
+    "pwl-repeated-in-power-path": (buck({2: "Vin in 0 PWL(0 12 5u 24 10u 12) r=0"}), [],
+                                   ["voltage source VIN", "a PWL in the power circuit is not compiled yet"], 2),
+    "pwl-repeat-not-zero": (buck({3: "Vg gate 0 PWL(0 1 4u 1 4.01u 0 9.99u 0 10u 1) r=2u"}), [],
+                            ["PWL r=2u", "pcsuite reads r=0"], 3),
+    "pwl-repeat-jumps": (buck({3: "Vg gate 0 PWL(0 1 4u 1 4.01u 0 10u 0) r=0"}), [],
+                         ["a repeated PWL (r=0)", "ends at its first value"], 3),
+    "pwl-vertical-edge": (buck({3: "Vg gate 0 PWL(0 1 4u 1 4u 0 9.99u 0 10u 1) r=0"}), [],
+                          ["a repeated PWL (r=0)", "an edge takes a rise time"], 3),
     # --- subcircuits ---------------------------------------------------------------------------------------
     "subckt-recursive": (SUBCKT_RECURSIVE, [], ["XA2", "instantiates itself", "a -> b -> a"], 10),
     "subckt-self": (SUBCKT_SELF, [], ["X9", "instantiates itself", "loop -> loop"], 7),
@@ -192,8 +200,11 @@ CASES = {
     "current-source-into-node-rc": (rc("I2 0 nc DC 1m"), [], ["node nc", "I2", "no path to ground"], None),
     "diodes-in-parallel": (buck(insert=["D2 0 sw DMOD"]), [], ["diode D2", "diode D1", "in parallel"], 11),
     # one comparator on the circuit's own voltages is compiled (tests/circuits/test_compile.py); two are not yet
-    "two-state-driven-switches": (buck({4: "S1 in sw out 0 SWMOD"}, insert=["S2 out x out 0 SWMOD", "R2 x 0 1k"]), [],
-                                  ["S1, S2 driven by the circuit's own quantities", "compiled yet"], None),
+    # (S2 on the same control at the same VT would follow S1: compiled; at another VT it is a second comparator)
+    "two-state-driven-switches": (buck({4: "S1 in sw out 0 SWMOD"},
+                                       insert=["S2 out x out 0 SW2", "R2 x 0 1k", ".model SW2 SW(VT=1)"]), [],
+                                  ["S2 and voltage-controlled switch S1 are both driven by the circuit's own quantities",
+                                   "S2 neither follows S1 nor its complement", "compiled yet"], 11),
     "no-state": (text("Resistive", "Vin in 0 DC 1", "R1 in 0 1", ".tran 1u 1m"), [],
                  ["no capacitor or inductor"], None),
     "no-ground": (text("Floating", "Vin in x DC 12", "R1 in x 10", "C1 in x 1u", ".tran 1u 1m"), [],

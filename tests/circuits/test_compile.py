@@ -122,3 +122,41 @@ def test_a_param_and_an_element_of_the_same_name_are_refused():
     text = "dup\n.param r1=5\nVin in 0 DC 12\nR1 in out 10\nC1 out 0 1u\n.tran 1u 1m\n.end\n"
     with pytest.raises(NetlistError, match=r"dup.cir:2: .param r1 and resistor R1 \(line 4\) share a name"):
         Circuit.from_netlist("dup.cir", text=text)
+
+
+BUCK_FILE = VOLTAGE_MODE.with_name("buck.cir")
+#: The buck's gate as a PULSE and as a repeated PWL with the same edges: falling around D T, rising over [T - e, T].
+GATE = "Vg gate 0 PULSE(1 0 {D*T - e/2} {e} {e} {(1-D)*T - e} {T})"
+GATE_PULSE = "Vg gate 0 PULSE(1 0 {D*T - e/2} {e} {e} {(1-D)*T - 3*e/2} {T})"
+GATE_PWL = "Vg gate 0 PWL(0 1 {D*T - e/2} 1 {D*T + e/2} 0 {T - e} 0 {T} 1) r=0"
+
+
+@pytest.mark.parametrize("D", ["0.4", "0.7"])
+def test_a_repeated_pwl_gate_is_the_pulse_with_the_same_edges(D):
+    """PWL(...) r=0 repeats its list with its last time as the period: as a gate its threshold crossings are found
+    on the same piecewise-linear waveform as a PULSE's, so the schedules are equal to the last bit and so are the
+    event method's orbits (DCM at D = 0.4, CCM at 0.7 with L = 100u)."""
+    from converters.run import run_converter
+    text = BUCK_FILE.read_text()
+    assert GATE in text
+    pulse = Circuit.from_netlist("pulse.cir", text=text.replace(GATE, GATE_PULSE))
+    pwl = Circuit.from_netlist("pwl.cir", text=text.replace(GATE, GATE_PWL))
+    params = {"D": D, "L": "100u"} if D == "0.7" else {"D": D}
+    law_pulse, law_pwl = (c.compiled(c.resolve(params)).law for c in (pulse, pwl))
+    assert law_pwl == law_pulse and law_pwl.period == 1e-5
+    a = run_converter(pulse, params, method="event", steady=True, periods=1, steady_tol=1e-12)
+    b = run_converter(pwl, params, method="event", steady=True, periods=1, steady_tol=1e-12)
+    assert np.array_equal(a.x[0], b.x[0])
+
+
+@pytest.mark.spice
+def test_ngspice_runs_the_repeated_pwl_gate_and_agrees(tmp_path, capsys, ngspice):
+    """The PWL is written back as PWL(...) r=0: compare passes on it."""
+    import json
+
+    from validation.cli import main
+    path = tmp_path / "pwl-buck.cir"
+    path.write_text(BUCK_FILE.read_text().replace(GATE, GATE_PWL))
+    assert main(["compare", str(path), "--json"]) == 0
+    result = json.loads(capsys.readouterr().out)
+    assert result["passed"] and result["metrics"]["v(out)_mean_rel_error"] < 1e-3
