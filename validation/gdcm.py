@@ -49,6 +49,9 @@ def spice_intervals(converter, netlist, result, periods_window: int = WINDOW_PER
 
 def gdcm_check(name: str, params: dict | None = None, *, h=None) -> dict:
     """Predicted mode against the modes detected in both simulators at one operating point."""
+    from converters.models.netlist import is_netlist
+    if is_netlist(name):
+        return circuit_check(name, params, h=h)
     conv = get_converter(name)
     p = conv.resolve(params)
     T = conv.period(p)
@@ -110,6 +113,61 @@ def _combinations(conv, p, orbit) -> dict:
     return {"predicted": f"n/a ({len(conv.pair_names)} pairs: combinations of conducting devices)", "lcp": lcp, "spice": spice,
             "max_fraction_difference": diff, "agree": set(k for k, v in lcp.items() if v > 0.01) ==
             set(k for k, v in spice.items() if v > 0.01)}
+
+
+def conduction_class(tr, t0: float, t1: float) -> str:
+    """A netlist's conduction class over [t0, t1] from its modes: CCM where some device always conducts; where
+    nothing does (mode 'off') for more than 1 % of the time, DCM when every inductor current is zero there
+    (below CURRENT_FRACTION, 0.1 %, of its peak: ngspice's near-ideal diode leaves 5e-6 of the peak in a DCM
+    buck) and GDCM when one is held non-zero (inductor currents circulating with the diodes blocked and the
+    switches open: the Cuk's i1 = -i2)."""
+    from .spice import CURRENT_FRACTION
+    rows = tr._rows(t0, t1)
+    off = np.asarray(tr.modes(rows)).astype(str) == "off"
+    if tr.mode_fractions(None, t0=t0, t1=t1).get("off", 0.0) <= 0.01:
+        return "CCM"
+    currents = [name for name in tr.state_names if name.startswith("i(")]
+    held = [np.abs(np.asarray(tr.state(name))[rows][off]).max()
+            > CURRENT_FRACTION * np.abs(np.asarray(tr.state(name))[rows]).max() for name in currents]
+    return "GDCM" if any(held) else "DCM"
+
+
+def circuit_check(path, params: dict | None = None, *, h=None) -> dict:
+    """``pcsuite gdcm FILE.cir``: a netlist has no closed-form prediction; its conduction class
+    (:func:`conduction_class`) and its modes' fractions of the period on the stepper's periodic orbit against
+    ngspice's on the same file (started on that orbit, SPICE_PERIODS periods, the last WINDOW_PERIODS read)."""
+    from dataclasses import replace
+
+    from converters.models import get_model
+    from converters.run import make_method, steady_state
+    from converters.simulate import simulate
+    from netlists.circuit import circuit_netlist, file_spice_options
+
+    from .spice import circuit_trajectory, run_spice_retrying
+    circuit = get_model(path)
+    p = circuit.resolve(params)
+    if not circuit.periodic(p):
+        raise ParameterError(f"gdcm needs a periodic circuit; {circuit.name} has no period (its sources are DC or "
+                             "it switches itself)")
+    T = circuit.period(p)
+    method = make_method(circuit, p, "lcp", h)
+    orbit = steady_state(circuit, p, method, tol=1e-9)
+    lcp = replace(simulate(circuit.problem(p, T, x0=orbit.x0), method), labels=circuit.labels(p))
+    span = SPICE_PERIODS * T
+    netlist, run, notes = run_spice_retrying(lambda o: circuit_netlist(circuit, p, span, o, x0=orbit.x0),
+                                             file_spice_options(circuit))
+    start = span - WINDOW_PERIODS * T
+    spice = circuit_trajectory(circuit, p, netlist, run, start)
+    fractions = {"lcp": lcp.mode_fractions(None, t0=0.0, t1=T), "spice": spice.mode_fractions(None, t0=start, t1=span)}
+    keys = sorted(set(fractions["lcp"]) | set(fractions["spice"]))
+    conduction = {"lcp": conduction_class(lcp, 0.0, T), "spice": conduction_class(spice, start, span)}
+    held = [{k for k, v in f.items() if v > 0.01} for f in fractions.values()]
+    return {"converter": circuit.name, "params": p, "period_s": T,
+            "predicted": "n/a (a netlist: no closed form; its conduction class in each simulator)",
+            "lcp": fractions["lcp"], "spice": fractions["spice"], "conduction": conduction,
+            "max_fraction_difference": max(abs(fractions["lcp"].get(k, 0.0) - fractions["spice"].get(k, 0.0))
+                                           for k in keys),
+            "notes": notes, "agree": held[0] == held[1] and conduction["lcp"] == conduction["spice"]}
 
 
 # --- D-K maps -----------------------------------------------------------------------------------------

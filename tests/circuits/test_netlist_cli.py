@@ -1,6 +1,7 @@
 """A netlist file wherever a converter name is accepted: simulate (every method, ngspice included) and compare,
 which runs ngspice on the same file (its ideal devices mapped to near-ideal models)."""
 import json
+import math
 from pathlib import Path
 
 import pytest
@@ -133,3 +134,21 @@ def test_bifurcation_follows_a_netlists_orbits_and_finds_the_hand_models_border_
         collisions = [b for b in json.loads(out)["bifurcations"] if b["type"] == "border-collision"]
         values.append(collisions[0]["value"])
     assert values[0] == pytest.approx(values[1], rel=1e-6) and values[0] == pytest.approx(3.3267, rel=1e-3)
+
+
+@pytest.mark.spice
+@pytest.mark.parametrize("name, params, expected", [
+    ("buck", [], "DCM"), ("buck", ["-p", "L=100u"], "CCM"), ("cuk", ["-p", "L1=10u", "-p", "L2=10u"], "GDCM"),
+    ("sepic", ["-p", "R=100"], "GDCM")])
+def test_gdcm_on_a_netlist_classifies_its_conduction_in_both_simulators(capsys, ngspice, name, params, expected):
+    """A netlist has no closed-form prediction: gdcm reports the class each simulator shows on the same file (an
+    interval with nothing conducting: DCM where the inductor currents are zero there, GDCM where they circulate:
+    the Cuk's and the SEPIC's i1 = -i2) and the modes' fractions. The DCM buck's diode conducts for
+    D (Vin - vout)/vout of the period, vout = 2 Vin/(1 + sqrt(1 + 4K/D^2)), K = 2L/(RT) = 0.2: 0.28941."""
+    code, out, err = run_cli(capsys, "gdcm", NETLISTS / f"{name}.cir", *params, "--json")
+    result = json.loads(out)
+    assert code == 0 and result["agree"], result
+    assert result["conduction"] == {"lcp": expected, "spice": expected}
+    if expected == "DCM":
+        vout = 2 * 12 / (1 + math.sqrt(1 + 4 * 0.2 / 0.4 ** 2))
+        assert result["lcp"]["D1"] == pytest.approx(0.4 * (12 - vout) / vout, abs=1e-3)        # h = T/1000

@@ -36,7 +36,10 @@ def run(args) -> int:
                 print(f"      {iv['mode']:<9} {iv['start'] / T:7.4f} T .. {iv['end'] / T:7.4f} T  ({iv['fraction']:.4f} T)")
     else:
         for side in ("lcp", "spice"):
-            print(f"  {side}: " + ", ".join(f"{k} {v:.4f}" for k, v in result[side].items()))
+            conduction = f"{result['conduction'][side]}: " if "conduction" in result else ""
+            print(f"  {side}: {conduction}" + ", ".join(f"{k} {v:.4f}" for k, v in result[side].items()))
+        for note in result.get("notes", []):
+            print(f"  note: {note}")
     verdict = "agree" if result["agree"] else "DISAGREE"
     if "max_fraction_difference" in result:      # say what is compared (shorter modes, switching overlaps, are not)
         verdict += (f" (the modes held more than 1 % of the period; largest fraction difference "
