@@ -2,9 +2,9 @@
 
 The file is read and flattened by :mod:`converters.circuits.netlist` (every value a number, ``.control``
 refused), and written back element by element with numbers formatted here only, so nothing of the file's
-text reaches ngspice but what the reader understood. What changes: a switch model without ``RON`` gets the
+text reaches ngspice but what the reader understood. What changes: a switch model without ``RON`` (or with ``RON=0``) gets the
 near-ideal ``RON``/``ROFF`` of :class:`~netlists.build.SpiceOptions`, a diode model without ``IS``/``N`` the
-near-ideal ``IS``/``N``, each diode and inductor a 0 V sense source (its current is a probe), the
+near-ideal ``IS``/``N``, a 0 ohm resistor a 0 V source, each diode and inductor a 0 V sense source (its current is a probe), the
 ``.tran`` pcsuite's span, the ``.options`` pcsuite's (by default the file's TMAX as a fraction of its period and
 its RELTOL, ABSTOL and METHOD: :func:`file_spice_options`), and the initial conditions the run's start (``IC=`` on every
 capacitor and inductor, with ``UIC``). Element names keep their letter; a subcircuit's elements and nodes
@@ -64,7 +64,10 @@ def circuit_netlist(circuit, p: dict, t_end: float, options: SpiceOptions | None
     for e in netlist.elements:
         n = [_node(node) for node in e.nodes]
         name = e.kind + _name(e.name)[1:] if _name(e.name)[0].upper() == e.kind else e.kind + "_" + _name(e.name)
-        if e.kind == "R":
+        if e.kind == "R" and e.value == 0:        # ngspice would make a 0 ohm resistor 1 mohm: a 0 V source is exact
+            lines.append(f"V_{_name(e.name)} {n[0]} {n[1]} DC 0")
+            probes[f"i({e.name})"] = (f"v_{_name(e.name).lower()}#branch", 1.0)
+        elif e.kind == "R":
             lines.append(f"{name} {n[0]} {n[1]} {_num(e.name, e.value)}")
         elif e.kind == "C":
             lines.append(f"{name} {n[0]} {n[1]} {_num(e.name, e.value)} IC={ic[f'v({e.name})']}")
@@ -148,7 +151,8 @@ def _source(control: str) -> str:
 def _model(model, options: SpiceOptions) -> str:
     params = dict(model.params)
     if model.kind in ("SW", "CSW"):
-        params.setdefault("RON", options.switch_ron)
+        if not params.get("RON"):              # RON = 0 is the ideal switch: ngspice's is near-ideal
+            params["RON"] = options.switch_ron
         params.setdefault("ROFF", options.switch_roff)
         if model.kind == "CSW":            # the W switch's S equivalent reads its current as 1 V/A
             params["VT"], params["VH"] = params.pop("IT", 0.0), params.pop("IH", 0.0)

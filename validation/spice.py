@@ -232,7 +232,7 @@ def circuit_trajectory(circuit, params: dict, netlist: Netlist, result: SpiceRes
             measured[name] = result.signal(netlist.probes[name])
     nodes = lambda n: np.zeros_like(t) if n == "0" else measured.get(f"v({n})", np.full_like(t, np.nan))   # noqa: E731
     for e in circuit.netlist.elements:
-        if e.kind == "R":
+        if e.kind == "R" and e.value:           # a 0 ohm resistor is a 0 V source: its current is a probe
             measured[f"i({e.name})"] = (nodes(e.nodes[0]) - nodes(e.nodes[1])) / e.value
     for name in compiled.signal_names:
         measured.setdefault(name, np.full_like(t, np.nan))

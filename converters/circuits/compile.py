@@ -17,8 +17,8 @@ give an LCP without a unique solution and are refused too, unless sources alone 
 blocked: u = 0 is unique). An ideal diode whose terminals closed ideal switches join (a MOSFET's body diode
 while the switch conducts) has 0 V whatever its current: the switch carries it all, the diode's pair never holds.
 
-Switches are ideal (closed: a 0 V branch, or ``RON`` when its model gives one; open: no branch); a diode's
-model ``RS`` is a series resistance. A switch (S: its control the voltage V(nc+) - V(nc-) against the model's
+Switches are ideal (closed: a 0 V branch, or ``RON`` when its model gives one; open: no branch), as is a 0 ohm
+resistor (a parasitic set to zero: a 0 V branch); a diode's model ``RS`` is a series resistance. A switch (S: its control the voltage V(nc+) - V(nc-) against the model's
 ``VT`` +- ``VH``; W: the current through its controlling V source against ``IT`` +- ``IH``) whose control is a
 combination of independent sources (a PULSE gate) is driven by a time schedule: its threshold crossings (with
 the hysteresis) located exactly on the piecewise-linear waveform; one whose control depends on the states is a
@@ -113,6 +113,8 @@ class _Compiler:
             if self.diode_rs[d.name] < 0:
                 raise self.error(d, f"{d.title}: model {d.model} RS must be >= 0")
             self.node_index.setdefault(f"{d.name}#a", len(self.node_index)) if self.diode_rs[d.name] else None
+        #: 0 ohm resistors (a parasitic set to zero): 0 V branches, as closed ideal switches
+        self.shorts = [r for r in self.by_kind["R"] if r.value == 0]
         self.switch_ron = {s.name: self.nl.models[s.model].params.get("RON", 0.0) for s in self.switches}
         self.mutual = self.inductance_matrix()
 
@@ -531,8 +533,8 @@ class _Compiler:
                 node = parent[node]
             return node
 
-        for s in self.switches:
-            if switch_state.get(s.name) and not self.switch_ron[s.name]:
+        for s in self.switches + self.shorts:
+            if s.kind == "R" or (switch_state.get(s.name) and not self.switch_ron[s.name]):
                 a, b = root(s.nodes[0]), root(s.nodes[1])
                 if a != b:
                     parent[a] = b
@@ -645,6 +647,8 @@ class _Network:
         for e in c.switches:
             if switch_state.get(e.name) and not c.switch_ron[e.name]:
                 branches.append(("S", e, e.nodes[0], e.nodes[1]))
+        for e in c.shorts:
+            branches.append(("R", e, e.nodes[0], e.nodes[1]))
         for e, form in zip(c.diodes, forms):
             anode = f"{e.name}#a" if c.diode_rs[e.name] else e.nodes[0]
             if form == VOLTAGE:
@@ -674,7 +678,8 @@ class _Network:
                 R[idx(b), column] += scale
 
         for e in c.by_kind["R"]:
-            conductance(e.nodes[0], e.nodes[1], 1.0 / e.value)
+            if e.value:
+                conductance(e.nodes[0], e.nodes[1], 1.0 / e.value)
         for e in c.switches:
             if switch_state.get(e.name) and c.switch_ron[e.name]:
                 conductance(e.nodes[0], e.nodes[1], 1.0 / c.switch_ron[e.name])
@@ -753,7 +758,7 @@ class _Network:
         nodes = [n for n, i in self.nodes.items() if abs(null[i]) > 1e-6 and "#" not in n]
         if loop:
             return NetlistError(f"{c.path}: {', '.join(loop)} form a loop of voltage sources, capacitors, closed "
-                                f"switches and conducting diodes{where}: their voltages are not independent")
+                                f"switches, 0 ohm resistors and conducting diodes{where}: their voltages are not independent")
         around = [e.name.upper() for e in c.nl.elements if set(e.nodes) & set(nodes)]
         return NetlistError(f"{c.path}: node{'s' if len(nodes) > 1 else ''} {', '.join(nodes)} ha"
                             f"{'ve' if len(nodes) > 1 else 's'} no path to ground but through inductors and current "

@@ -546,8 +546,9 @@ class _Reader:
             if value_text.lower().startswith(("r=", "l=", "c=")):
                 value_text = value_text[2:]
             value = self.element_value(line, own, prefix, value_text, params, f"{title} value", expressions)
-            if not value > 0:
-                raise self.error(line, f"{title}: its value must be positive; got {value:g}")
+            if not (value > 0 or (letter == "R" and value == 0)):     # a 0 ohm resistor is a short
+                raise self.error(line, f"{title}: its value must be "
+                                       f"{'non-negative' if letter == 'R' else 'positive'}; got {value:g}")
             ic = self.value(line, assigns["ic"], params, f"{title} IC") if "ic" in assigns and letter != "R" else None
             return Element(name, letter, nodes, value=value, ic=ic, line=line.number)
         if letter == "K":
@@ -596,7 +597,9 @@ class _Reader:
         if not text:
             raise self.error(line, f"{what} missing")
         stripped = text.strip().strip("{}'").strip().lower()
-        if stripped in params:
+        try:
+            evaluate(text, {}, what)
+        except ParameterError:         # {L} or {1/n}: the value follows the .param it names (-p sets those)
             expressions[key] = stripped
         return self.value(line, text, params, what)
 

@@ -5,4 +5,5 @@ from .pwm2 import PWMTwoState
 class Boost(PWMTwoState):
     name = "boost"
     title = "boost (step-up)"
+    netlist_file = "boost.cir"
     topology = "boost"

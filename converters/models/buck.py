@@ -5,4 +5,5 @@ from .pwm2 import PWMTwoState
 class Buck(PWMTwoState):
     name = "buck"
     title = "buck (step-down)"
+    netlist_file = "buck.cir"
     topology = "buck"

@@ -8,4 +8,5 @@ from .pwm2 import PWMTwoState
 class BuckBoost(PWMTwoState):
     name = "buck-boost"
     title = "buck-boost (inverting)"
+    netlist_file = "buck-boost.cir"
     topology = "buck-boost"

@@ -1,5 +1,6 @@
-"""Cuk converter (inverting), ideal parts: x = (i1, v1, i2, v2) with v1 on the coupling capacitor C1
-and v2 = |vo| on C2 (REFERENCE section 3).
+"""Cuk converter (inverting), compiled from ``netlists/circuits/cuk.cir``: x = (i1, v1, i2, v2) with v1 on the
+coupling capacitor C1 and v2 = |vo| on C2 (REFERENCE section 3); parasitics (0 unless given) the inductors' DCR
+rL1, rL2, the switch's Ron, the diode's Vf and Rd.
 
 ON:  u = i_D, y = v1 (the switch grounds C1's input side; the diode stays off while v1 > 0).
 OFF: u = -v_D, y = i_D = i1 + i2. The OFF pair held at y = 0 with i1 = -i2 != 0 is the
@@ -9,13 +10,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..problems import Configuration
 from ..params import Param, nonnegative, positive
 from .base import ON, Converter, power_balance
+from .netlist import FromNetlist
 from .pwm2 import STEPS
 
 
-class Cuk(Converter):
+class Cuk(FromNetlist, Converter):
     name = "cuk"
     title = "Cuk (inverting)"
     parameters = (
@@ -37,28 +38,12 @@ class Cuk(Converter):
     signal_names = ("vout", "switch", "i_in", "i_switch", "i_diode")
     signal_units = {"i_in": "A", "i_switch": "A", "i_diode": "A"}
     state_names = ("i1", "v1", "i2", "v2")
+    netlist_file = "cuk.cir"
+    netlist_states = ("i(l1)", "v(c1)", "i(l2)", "v(c2)")
     output_state = "v2"
     pair_names = ("diode",)
     closed_form = True
     off_held_label = "GDCM-OFF"
-
-    def configurations(self, p):
-        """Ideal: REFERENCE section 3. With parasitics (each only when given): the inductors' DCR rL1, rL2;
-        the switch's Ron, through which i_S = i1 + i2 - i_D flows in ON (so y = v1 - Ron i_S + Vf + Rd u); the
-        diode's Vf and Rd, across which v_n2 = -u + Vf + Rd (i1 + i2) in OFF."""
-        Vin, L1, C1, L2, C2, R = (p[k] for k in ("Vin", "L1", "C1", "L2", "C2", "R"))
-        rL1, rL2, Ron, Vf, Rd = (p.get(k, 0.0) for k in ("rL1", "rL2", "Ron", "Vf", "Rd"))
-        on = Configuration(
-            A=[[-(rL1 + Ron) / L1, 0, -Ron / L1, 0], [0, 0, -1 / C1, 0],
-               [-Ron / L2, 1 / L2, -(rL2 + Ron) / L2, -1 / L2], [0, 0, 1 / C2, -1 / (R * C2)]],
-            B=[[Ron / L1], [1 / C1], [Ron / L2], [0]], C=[[-Ron, 1, -Ron, 0]], D=[[Ron + Rd]],
-            E=[Vin / L1, 0, 0, 0], F=[Vf], name="ON")
-        off = Configuration(
-            A=[[-(rL1 + Rd) / L1, -1 / L1, -Rd / L1, 0], [1 / C1, 0, 0, 0],
-               [-Rd / L2, 0, -(rL2 + Rd) / L2, -1 / L2], [0, 0, 1 / C2, -1 / (R * C2)]],
-            B=[[1 / L1], [0], [1 / L2], [0]], C=[[1, 0, 1, 0]], D=[[0]],
-            E=[(Vin - Vf) / L1, 0, -Vf / L2, 0], name="OFF")
-        return on, off
 
     def signal(self, name, samples, p):
         if name in ("i_in", "i_switch", "i_diode"):

@@ -21,7 +21,7 @@ from ..circuits.compile import Compiled, compile_netlist
 from ..circuits.netlist import Netlist, NetlistError, Pulse, check_overrides, read_netlist
 from ..errors import ParameterError, SignalError
 from ..params import Param
-from ..problems import LCSProblem, Sinusoids
+from ..problems import Configuration, LCSProblem, Sinusoids
 from ..trajectory import Samples
 from ..validate import quoted
 from .base import Labels, Model
@@ -84,10 +84,11 @@ class Circuit(Model):
             if name not in self.netlist.derived:
                 out.append(Param(name, value, "", ".param", low=-math.inf, low_open=False))
         for e in self.netlist.elements:
-            if e.name in self.netlist.expressions:       # follows its .param
+            if e.name in self.netlist.expressions:       # follows the .param its value names
                 continue
-            if e.kind in "RLC":
-                out.append(Param(e.name, e.value, UNITS[e.kind], f"{e.title} (line {e.line})"))
+            if e.kind in "RLC":                  # a resistor may be 0 ohm (a short)
+                out.append(Param(e.name, e.value, UNITS[e.kind], f"{e.title} (line {e.line})", low=0.0,
+                                 low_open=e.kind != "R"))
             elif e.kind == "K":
                 out.append(Param(e.name, e.value, "", f"{e.title} (line {e.line})", low=-1.0, high=1.0,
                                  high_open=False))
@@ -270,6 +271,63 @@ def _difference(name: str, names: tuple):
 def _compile(text: str, source: str, values: tuple) -> Compiled:
     netlist = read_netlist(text, overrides=dict(values), name=source)
     return compile_netlist(netlist)
+
+
+class FromNetlist:
+    """A built-in converter compiled from its netlist (``netlists/circuits/NETLIST_FILE``), the one statement of its
+    circuit: its configurations are the compiled LCS's with the states put in the model's order
+    (``netlist_states``: each state's SPICE name), each pair's port form the compiler's. The model keeps what the
+    netlist does not say: its closed forms, its named signals, its losses and its mode names."""
+
+    netlist_file: str
+    netlist_states: tuple
+    #: The model's name of each configuration (the compiled ones are named by the switches' states).
+    configuration_names: tuple = ("ON", "OFF")
+    #: Parameters of the model's own schedule (its PWM: :meth:`Converter.schedule`), not passed to the circuit: the
+    #: configurations do not depend on them, and the file's gate is written for 0 < D < 1 where the model takes
+    #: D = 0 and 1 too.
+    schedule_parameters: frozenset = frozenset({"D"})
+
+    def configurations(self, p: dict) -> tuple:
+        return _builtin_configurations(self.netlist_file, tuple(self.netlist_states), tuple(self.configuration_names),
+                                       self.circuit_values(p))
+
+    def circuit_values(self, p: dict) -> tuple:
+        """The circuit's parameter values of the model's ``p`` (names lower-cased as SPICE's, sorted)."""
+        skip = NOT_CIRCUIT | self.schedule_parameters
+        return tuple(sorted((k.lower(), float(v)) for k, v in p.items() if v is not None and k not in skip))
+
+    @property
+    def pair_currents(self) -> tuple:
+        """Per configuration, per pair: u is the diode's current (the compiler's port form at the defaults: a
+        parameter changes values, never which quantity a port carries)."""
+        return builtin(self.netlist_file).compiled(builtin(self.netlist_file).resolve({})).pair_currents
+
+
+#: A model's parameters that are not the circuit's (the instants and values of a step: a run in phases).
+NOT_CIRCUIT = frozenset({"t_step", "R_step", "Vin_step"})
+
+
+@lru_cache(maxsize=None)
+def builtin(name: str) -> Circuit:
+    """The Circuit of a built-in netlist, ``netlists/circuits/NAME`` (package data beside the ``netlists`` package;
+    read by path so the model library does not import it)."""
+    path = Path(__file__).resolve().parents[2] / "netlists" / "circuits" / name
+    return Circuit.from_netlist(path)
+
+
+@lru_cache(maxsize=256)
+def _builtin_configurations(name: str, states: tuple, names: tuple, values: tuple) -> tuple:
+    circuit = builtin(name)
+    compiled = circuit.compiled(circuit.resolve(dict(values)))
+    order = [compiled.state_names.index(s) for s in states]
+    return tuple(_permuted(c, order, label) for c, label in zip(compiled.configurations, names, strict=True))
+
+
+def _permuted(c, order: list, name: str) -> Configuration:
+    """A configuration with its states in ``order`` (x_model = x_compiled[order]), named ``name``."""
+    A, B, C, E = np.asarray(c.A), np.asarray(c.B), np.asarray(c.C), np.asarray(c.E)
+    return Configuration(A=A[np.ix_(order, order)], B=B[order], C=C[:, order], D=c.D, E=E[order], F=c.F, name=name)
 
 
 def _rebuild(text: str, source: str) -> Circuit:

@@ -1,9 +1,11 @@
-"""Parallel resonant converter with a diode-bridge rectifier (Siconos tutorial PowerConverter/PRC).
+"""Parallel resonant converter with a diode-bridge rectifier (Siconos tutorial PowerConverter/PRC), compiled from
+``netlists/circuits/prc.cir``.
 
 x = (ir, vr, iLf, vo): resonant-tank current and voltage, output-filter inductor current and output
-voltage. u = (i_D1, i_D3, v_D2, v_D4), y = (v_D1, v_D3, i_D2, i_D4) (reverse voltages); the drive is a
-square wave +-Vin at f_sw (configuration 0 positive half, 1 negative half). D is skew, so every step
-is a monotone LCP of size 4 (REFERENCE section 6).
+voltage; the bridge's four diodes in the order D1, D3, D2, D4, each port as the compiler chooses it (D3 and D4
+carry their currents in u, D1 and D2 their reverse voltages); the drive is a square wave +-Vin at f_sw
+(configuration 0 positive half, 1 negative half). D is skew, so every step is a monotone LCP of size 4
+(REFERENCE section 6).
 """
 from __future__ import annotations
 
@@ -11,12 +13,13 @@ import itertools
 
 import numpy as np
 
-from ..problems import Configuration, Schedule
+from ..problems import Schedule
 from ..params import positive
 from .base import Converter
+from .netlist import FromNetlist
 
 
-class PRC(Converter):
+class PRC(FromNetlist, Converter):
     name = "prc"
     title = "parallel resonant converter with diode bridge"
     parameters = (
@@ -32,25 +35,17 @@ class PRC(Converter):
     state_names = ("ir", "vr", "iLf", "vo")
     output_state = "vo"
     pair_names = ("D1", "D3", "D2", "D4")
+    netlist_file = "prc.cir"
+    netlist_states = ("i(lr)", "v(cr)", "i(lf)", "v(cf)")
+    configuration_names = ("drive+", "drive-")
     default_theta = 0.5
 
     def default_h(self, p):
         return min(5e-8, self.period(p) / 200.0)
 
-    def configurations(self, p):
-        Lr, Cr, Lf, Cf, R, n, Vin = (p[k] for k in ("Lr", "Cr", "Lf", "Cf", "R", "n", "Vin"))
-        A = [[0, -1 / Lr, 0, 0], [1 / Cr, 0, 0, 0], [0, 0, 0, -1 / Lf], [0, 0, 1 / Cf, -1 / (R * Cf)]]
-        B = [[0, 0, 0, 0], [-1 / (n * Cr), 1 / (n * Cr), 0, 0], [0, 0, 1 / Lf, 1 / Lf], [0, 0, 0, 0]]
-        C = [[0, -1 / n, 0, 0], [0, 1 / n, 0, 0], [0, 0, 1, 0], [0, 0, 1, 0]]
-        D = [[0, 0, 1, 0], [0, 0, 0, 1], [-1, 0, 0, 0], [0, -1, 0, 0]]
-        return tuple(Configuration(A=A, B=B, C=C, D=D, E=[sign * Vin / Lr, 0, 0, 0], name=name)
-                     for sign, name in ((1.0, "drive+"), (-1.0, "drive-")))
-
     def schedule(self, p):
         return Schedule.pwm(self.period(p), 0.5, on=0, off=1)
 
-    #: u = (i_D1, i_D3, v_D2, v_D4): D1 and D3 carry their currents in u, D2 and D4 their voltages.
-    pair_currents = ((True, True, False, False), (True, True, False, False))
     #: Every subset of the bridge's diodes that can conduct, by name ("D1+D4"), and DCM (none).
     mode_labels = tuple("+".join(sorted(c)) for k in (1, 2, 3, 4) for c in itertools.combinations(("D1", "D2", "D3", "D4"), k)) + ("DCM",)
     #: The drive's half-periods are not diode turn-offs: no turn-off instants are compared.

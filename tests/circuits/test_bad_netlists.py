@@ -173,7 +173,9 @@ CASES = {
     # --- element lines -------------------------------------------------------------------------------------
     "too-few-nodes": (buck({8: "R1 out 10"}), [], ["resistor R1", "2 nodes"], 8),
     "switch-too-few-nodes": (buck({4: "S1 in sw SWMOD"}), [], ["voltage-controlled switch S1", "4 nodes"], 4),
-    "negative-resistor": (buck({8: "R1 out 0 -5"}), [], ["resistor R1", "positive", "-5"], 8),
+    "negative-resistor": (buck({8: "R1 out 0 -5"}), [], ["resistor R1", "non-negative", "-5"], 8),
+    # a 0 ohm resistor is a short (a parasitic set to zero): across the capacitor it makes a loop
+    "zero-resistor-across-capacitor": (buck({8: "R1 out 0 0"}), [], ["C1, R1 form a loop", "0 ohm resistors"], None),
     "zero-inductor": (buck({6: "L1 sw out 0"}), [], ["inductor L1", "positive", "got 0"], 6),
     "zero-capacitor-param": (buck({7: "C1 out 0 {c}"}, insert=[".param c=0"]), [], ["capacitor C1", "positive"], 7),
     "duplicate-names": (buck(insert=["r1 out 0 20"]), [], ["resistor R1", "used twice", "first on line 8"], 11),
@@ -212,7 +214,7 @@ CASES = {
     # --- -p overrides --------------------------------------------------------------------------------------
     "override-unknown": (buck(), ["-p", "UNKNOWN=1"], ["-p UNKNOWN", "unknown parameter 'unknown'",
                                                        "valid names: vin, l1, c1, r1"], None),
-    "override-out-of-range": (buck(), ["-p", "R1=-5"], ["-p R1=-5", "resistor R1", "(0, inf)", "got -5"], 8),
+    "override-out-of-range": (buck(), ["-p", "R1=-5"], ["-p R1=-5", "resistor R1", "[0, inf)", "got -5"], 8),
     "override-derived-param": (buck({6: "L1 sw out {L}"}, insert=[".param f=100k L={1e-1/f}"]), ["-p", "L=1u"],
                                ["-p L", ".param l = {1e-1/f}", "expression of other parameters", "set those (f)"],
                                11),

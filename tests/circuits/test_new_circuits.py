@@ -272,7 +272,7 @@ def test_ideal_diodes_in_parallel_only_when_sources_reverse_bias_them_are_accept
     same two nodes of a plain buck are still refused (their split is not unique while they conduct)."""
     compiled = compile_netlist(read_netlist(NETLISTS / "interleaved-buck.cir", overrides={"d": 0.7}))
     assert (True, True) in compiled.closed
-    buck = (NETLISTS / "buck.cir").read_text().replace("D1 0 sw DMOD", "D1 0 sw DMOD\nD2 0 sw DMOD")
+    buck = (NETLISTS / "buck.cir").read_text().replace("D1 da sw DMOD", "D1 da sw DMOD\nD2 da sw DMOD")
     with pytest.raises(NetlistError, match="in parallel"):
         compile_netlist(read_netlist(buck, name="buck-d2.cir"))
 

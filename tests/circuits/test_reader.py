@@ -144,7 +144,7 @@ def test_control_is_refused_before_any_line_is_evaluated():
 
 def test_elements_inside_an_instance_are_named_with_it():
     text = "t\nX1 a 0 BAD\n.subckt BAD p q\nR1 p q -1\n.ends\n"
-    with pytest.raises(NetlistError, match=r"^t:4: resistor R1 \(in X1\): its value must be positive; got -1$"):
+    with pytest.raises(NetlistError, match=r"^t:4: resistor R1 \(in X1\): its value must be non-negative; got -1$"):
         read_netlist(text, name="t")
 
 
@@ -161,7 +161,7 @@ def test_check_overrides_names_file_line_and_what_is_wrong():
         check_overrides(nl, {"ton": 1e-6}, parameters)
     with pytest.raises(NetlistError, match=r"^d\.cir: -p X: unknown parameter 'x'; valid names: f, d, vin, r1, c1$"):
         check_overrides(nl, {"X": 1}, parameters)
-    with pytest.raises(NetlistError, match=r"^d\.cir:5: -p R1=-5: r1 \(resistor R1 \(line 5\)\) must be in \(0, inf\)"):
+    with pytest.raises(NetlistError, match=r"^d\.cir:5: -p R1=-5: r1 \(resistor R1 \(line 5\)\) must be in \[0, inf\)"):
         check_overrides(nl, {"R1": "-5"}, parameters)
 
 
@@ -196,3 +196,14 @@ def test_the_files_tmax_and_options_are_ngspices_unless_options_are_given(tmp_pa
     given = SpiceOptions(tmax_fraction=1 / 100)
     assert file_spice_options(cw, given) is given
     assert file_spice_options(Circuit.from_netlist(NETLISTS / "rectifier-1ph.cir")) == SpiceOptions()
+
+
+def test_an_element_whose_value_is_an_expression_follows_the_parameters_it_names():
+    """L1 = {k*L}: -p k=3 triples it (the element is not a parameter of its own, which would pin it at its default)."""
+    from converters.models import Circuit
+    text = "t\n.param L=10u k=2\nV1 a 0 DC 1\nR1 a b 1\nL1 b 0 {k*L}\n.tran 1u 1m\n.end\n"
+    circuit = Circuit.from_netlist("t.cir", text=text)
+    assert "l1" not in [q.name for q in circuit.parameters]
+    for k in (2.0, 3.0):
+        A = circuit.compiled(circuit.resolve({"k": k})).configurations[0].A
+        assert A[0, 0] == pytest.approx(-1.0 / (k * 10e-6), rel=1e-14)
