@@ -1,114 +1,23 @@
-"""Netlist generation. Nothing typed by a user reaches the text: node and element names are constants
-here, and every value passes :func:`_num` (a finite float, printed by us) before it is written. A
-parameter carrying netlist text (``R=1\\n.control\\nshell ...``) is refused while it is parsed.
+"""The ngspice netlists of the built-in models. A converter's is its own circuit file (``netlists/circuits/NAME.cir``,
+what the model compiles) written by :func:`~netlists.circuit.circuit_netlist`; the controlled ones (the
+sliding-mode boost, the voltage-mode buck) are written here with behavioural sources for their comparators.
+Nothing typed by a user reaches the text: node and element names are constants here, and every value passes
+:func:`_num` (a finite float, printed by us) before it is written. A parameter carrying netlist text
+(``R=1\\n.control\\nshell ...``) is refused while it is parsed.
 
 Near-ideal parts (REFERENCE section 7): an ``SW`` switch (Ron 1 mOhm, Roff 1 MOhm) driven by a gate
-pulse with edges of 1e-4 T, a diode ``D(IS=1e-14 N=0.001)``, zero-volt sense sources for the
+pulse with edges of 1e-6 T, a diode ``D(IS=1e-14 N=0.001)``, zero-volt sense sources for the
 inductor and diode currents. The diode model sets the accuracy floor (about 1 mV of forward drop).
 """
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass, field
-
+from converters.circuits.netlist import Pulse
 from converters.errors import ParameterError
 from converters.models import get_converter
 from converters.validate import parse_value
 
-
-#: ngspice's default ABSTOL in A.
-NGSPICE_ABSTOL = 1e-12
-
-
-@dataclass(frozen=True)
-class SpiceOptions:
-    """Transient settings. ``tmax`` defaults to T/200; ``method`` is 'trap' or 'gear'."""
-
-    tmax_fraction: float = 1.0 / 200.0
-    reltol: float = 1e-3
-    method: str = "gear"
-    diode_n: float = 0.001
-    diode_is: float = 1e-14
-    switch_ron: float = 1e-3
-    switch_roff: float = 1e6
-    # The gate's edge: ngspice's SW switch changes state at the first time point past its threshold, and where its
-    # time points fall inside the edge shifts with the rounding of t from period to period: at 1e-4 T a 48 V ->
-    # 12 V buck's switch-on moved by up to ~36 ps, its steady mean wandering between levels 34 ppm apart for
-    # thousands of periods (RELTOL and TMAX changed nothing); at 1e-6 T it settles in 90 periods.
-    edge_fraction: float = 1e-6
-    # ngspice's own ABSTOL (then not written); the power-electronics tolerances (CONVERGENCE_FALLBACK) loosen it.
-    abstol: float = NGSPICE_ABSTOL
-    # The diodes' junction capacitance CJO in F (0: none, the near-ideal default).
-    diode_cjo: float = 0.0
-
-    def __post_init__(self):
-        for name in ("tmax_fraction", "reltol", "diode_n", "diode_is", "switch_ron", "switch_roff", "edge_fraction",
-                     "abstol", "diode_cjo"):
-            value = parse_value(name, getattr(self, name))
-            if value < 0 or (value == 0 and name != "diode_cjo"):
-                raise ParameterError(f"{name} must be {'non-negative' if name == 'diode_cjo' else 'positive'}; "
-                                     f"got {value!r}")
-            object.__setattr__(self, name, value)
-        if self.method not in ("trap", "gear"):
-            raise ParameterError(f"method must be one of trap, gear; got {self.method!r}")
-
-
-@dataclass(frozen=True)
-class Netlist:
-    text: str
-    converter: str
-    params: dict
-    t_end: float
-    options: SpiceOptions
-    # state name -> (vector, sign) or ((vector_a, vector_b), sign) difference, see validation.spice;
-    # "switch" -> ({vector: coefficient}, threshold): the switch is on where the combination >= threshold
-    probes: dict = field(default_factory=dict)
-    #: Probe names of each complementarity pair's device current, in the model's pair order.
-    pairs: tuple = ("i_D",)
-
-
-def _num(name: str, value) -> str:
-    """The only way a value enters a netlist: a finite float, formatted here."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        value = parse_value(name, value)
-    value = float(value)
-    if not math.isfinite(value):
-        raise ParameterError(f"{name} must be a finite number for the netlist; got {value!r}")
-    return f"{value:.12g}"
-
-
-def _gate(T: float, D: float, options: SpiceOptions) -> str:
-    if D <= 0.0:
-        return "Vg gate 0 DC 0"
-    if D >= 1.0:
-        return "Vg gate 0 DC 1"
-    # On from t = 0, as the LCP's period starts: an initial state taken at the start of that period (x0, the
-    # periodic orbit) is then consistent with the switch's state. A gate that rose at t = 0 turned the switch on
-    # while ngspice's first steps, under UIC, were still settling the conducting diode: 20 kA flowed backwards
-    # through it for 1 ns and took 0.1-0.2 V off the boost's capacitor at every start. Each period: off at
-    # D T, on at T (both crossings edge / 2 later), on for D T.
-    edge = options.edge_fraction * T
-    off = max(T - D * T - edge, edge)
-    return (f"Vg gate 0 PULSE(1 0 {_num('D T', D * T)} {_num('edge', edge)} {_num('edge', edge)} {_num('off', off)} "
-            f"{_num('T', T)})")
-
-
-def _models(options: SpiceOptions) -> list[str]:
-    return [f".model SWMOD SW(VT=0.5 VH=0 RON={_num('switch_ron', options.switch_ron)} "
-            f"ROFF={_num('switch_roff', options.switch_roff)})",
-            f".model DMOD D({diode_parameters(options)})"]
-
-
-def diode_parameters(options: SpiceOptions) -> str:
-    """The near-ideal diode's ``.model`` parameters: IS, N, and CJO where the options give one."""
-    text = f"IS={_num('diode_is', options.diode_is)} N={_num('diode_n', options.diode_n)}"
-    return text + (f" CJO={_num('diode_cjo', options.diode_cjo)}" if options.diode_cjo else "")
-
-
-def options_line(options: SpiceOptions, extra: str = "") -> str:
-    """The ``.options`` line every pcsuite netlist carries."""
-    abstol = f" ABSTOL={_num('abstol', options.abstol)}" if options.abstol != NGSPICE_ABSTOL else ""
-    return f".options RELTOL={_num('reltol', options.reltol)}{abstol} METHOD={options.method} ITL4=100{extra}"
+from .circuit import circuit_netlist
+from .options import Netlist, SpiceOptions, _num, diode_parameters, options_line
 
 
 def _diode(anode: str, cathode: str, p: dict) -> list[str]:
@@ -135,12 +44,6 @@ def _inductor(a: str, b: str, p: dict, name="L1", value_key="L", sense="Vsl", dc
     return lines
 
 
-def _plate(a: str, p: dict, esr_key="rC") -> str:
-    """The node of the capacitor's own plate on side ``a`` (:func:`_capacitor`): behind its ESR when it has one,
-    where the capacitor voltage is read (the terminal ``a`` is the output, ESR drop included)."""
-    return f"{a}_esr" if p.get(esr_key) else a
-
-
 def _capacitor(a: str, b: str, p: dict, name="C1", value_key="C", esr_key="rC", ic=0.0) -> list[str]:
     ic_text = _num(name + " initial voltage", ic)
     if p.get(esr_key):
@@ -151,7 +54,11 @@ def _capacitor(a: str, b: str, p: dict, name="C1", value_key="C", esr_key="rC", 
 
 def build_netlist(converter: str, params: dict | None, t_end, options: SpiceOptions | None = None,
                   x0=None) -> Netlist:
-    """The ngspice netlist of ``converter`` with validated ``params`` over [0, t_end].
+    """The ngspice netlist of ``converter`` with validated ``params`` over [0, t_end]: the file the model compiles
+    (``netlists/circuits/NAME.cir``) as :func:`~netlists.circuit.circuit_netlist` writes it for ngspice (its ideal
+    devices near-ideal, sense sources on the diodes and inductors), its probes also under the model's names (the
+    states, ``vout``, ``switch``). The gate is the model's PWM at the options' edge (``edge_fraction`` of T, centred
+    on D T and T, the instants the LCS switches at); a duty ratio of 0 or 1 is a DC gate.
 
     ``x0`` (the converter's state vector, default 0: from rest) becomes the inductor and capacitor
     initial conditions, so both simulators can start on the same periodic orbit.
@@ -162,87 +69,34 @@ def build_netlist(converter: str, params: dict | None, t_end, options: SpiceOpti
     t_end = parse_value("t_end", t_end)
     if t_end <= 0:
         raise ParameterError(f"t_end must be positive (> 0 s); got {t_end!r}")
-    T = conv.period(p)
-    if p.get("Ron"):
-        options = SpiceOptions(**{**options.__dict__, "switch_ron": p["Ron"]})
     x0 = [0.0] * len(conv.state_names) if x0 is None else list(x0)
     if len(x0) != len(conv.state_names):
         raise ParameterError(f"x0 must have {len(conv.state_names)} entries ({', '.join(conv.state_names)}); "
                              f"got {len(x0)}")
-    ic = {name: parse_value(f"x0[{name}]", value) for name, value in zip(conv.state_names, x0)}
-    body, probes = _BODIES[conv.name](p, T, options, ic)
-    probes.setdefault("switch", ({"gate": 1.0}, 0.5))
-    tmax = options.tmax_fraction * T
-    lines = [f"* pcsuite {conv.name}", *body, *_models(options),
-             options_line(options),
-             f".tran {_num('tstep', tmax)} {_num('t_end', t_end)} 0 {_num('tmax', tmax)} UIC", ".end"]
-    pairs = tuple(f"i_{name}" if f"i_{name}" in probes else "i_D" for name in conv.pair_names)
-    return Netlist("\n".join(lines) + "\n", conv.name, p, t_end, options, probes, pairs)
+    state = {spice: parse_value(f"x0[{name}]", value) for name, spice, value in zip(conv.state_names,
+                                                                                    conv.netlist_states, x0)}
+    circuit = conv.circuit
+    values = dict(conv.circuit_values(p))
+    gate = {}
+    if "D" in conv.schedule_parameters:          # the model's PWM: on from t = 0 for D T, edges centred on D T and T
+        D, T = p["D"], conv.period(p)
+        values["d"] = 0.5                         # (the file's PULSE is written for 0 < D < 1; it is replaced)
+        edge = options.edge_fraction * T
+        gate[GATE] = (float(D >= 1.0) if not 0.0 < D < 1.0 else
+                      Pulse(1.0, 0.0, max(D * T - edge / 2, 0.0), edge, edge, max((1.0 - D) * T - edge, 0.0), T))
+    circuit_p = circuit.resolve(values)
+    compiled = circuit.compiled(circuit_p)
+    written = circuit_netlist(circuit, circuit_p, t_end, options, x0=[state[name] for name in compiled.state_names],
+                              waveforms=gate)
+    probes = dict(written.probes)
+    for name, spice in zip(conv.state_names, conv.netlist_states):
+        probes[name] = written.probes[spice]
+    probes["vout"] = written.probes[circuit.output]
+    return Netlist(written.text, conv.name, p, t_end, options, probes, written.pairs)
 
 
-def _buck(p, T, o, ic):
-    body = [f"Vin in 0 DC {_num('Vin', p['Vin'])}", _gate(T, p["D"], o), "S1 in sw gate 0 SWMOD",
-            *_diode("0", "sw", p), *_inductor("sw", "out", p, ic=ic["iL"]), *_capacitor("out", "0", p, ic=ic["vC"]),
-            f"R1 out 0 {_num('R', p['R'])}"]
-    return body, {"iL": ("vsl#branch", 1.0), "vC": (_plate("out", p), 1.0), "vout": ("out", 1.0),
-                  "i_D": ("vsd#branch", 1.0)}
-
-
-def _boost(p, T, o, ic):
-    body = [f"Vin in 0 DC {_num('Vin', p['Vin'])}", _gate(T, p["D"], o), *_inductor("in", "sw", p, ic=ic["iL"]),
-            "S1 sw 0 gate 0 SWMOD", *_diode("sw", "out", p), *_capacitor("out", "0", p, ic=ic["vC"]),
-            f"R1 out 0 {_num('R', p['R'])}"]
-    return body, {"iL": ("vsl#branch", 1.0), "vC": (_plate("out", p), 1.0), "vout": ("out", 1.0),
-                  "i_D": ("vsd#branch", 1.0)}
-
-
-def _buck_boost(p, T, o, ic):
-    body = [f"Vin in 0 DC {_num('Vin', p['Vin'])}", _gate(T, p["D"], o), "S1 in sw gate 0 SWMOD",
-            *_inductor("sw", "0", p, ic=ic["iL"]), *_diode("out", "sw", p),
-            *_capacitor("out", "0", p, ic=0.0 - ic["vC"]), f"R1 out 0 {_num('R', p['R'])}"]
-    # the output is negative: the capacitor's plate on the output side carries -vC
-    return body, {"iL": ("vsl#branch", 1.0), "vC": (_plate("out", p), -1.0), "vout": ("out", 1.0),
-                  "i_D": ("vsd#branch", 1.0)}
-
-
-def _cuk(p, T, o, ic):
-    body = [f"Vin in 0 DC {_num('Vin', p['Vin'])}", _gate(T, p["D"], o),
-            *_inductor("in", "n1", p, name="L1", value_key="L1", sense="Vsl1", dcr_key="rL1", ic=ic["i1"]),
-            "S1 n1 0 gate 0 SWMOD", *_capacitor("n1", "n2", p, name="C1", value_key="C1", ic=ic["v1"]),
-            *_diode("n2", "0", p),
-            *_inductor("out", "n2", p, name="L2", value_key="L2", sense="Vsl2", dcr_key="rL2", ic=ic["i2"]),
-            *_capacitor("0", "out", p, name="C2", value_key="C2", ic=ic["v2"]), f"R1 out 0 {_num('R', p['R'])}"]
-    return body, {"i1": ("vsl1#branch", 1.0), "v1": (("n1", "n2"), 1.0), "i2": ("vsl2#branch", 1.0),
-                  "v2": ("out", -1.0), "vout": ("out", 1.0), "i_D": ("vsd#branch", 1.0)}
-
-
-#: The PRC's square-wave source's edge as a fraction of T: a voltage source switching the resonant tank, not a
-#: gate; at 1e-6 T ngspice stopped (timestep too small on a bridge diode).
-DRIVE_EDGE_FRACTION = 1e-4
-
-
-def _prc(p, T, o, ic):
-    if p["n"] != 1.0:
-        raise ParameterError(f"n (transformer ratio) must be 1 for the ngspice netlist; got {p['n']!r}")
-    edge = DRIVE_EDGE_FRACTION * T
-    vin = _num("Vin", p["Vin"])
-    drive = (f"Vdr drv 0 PULSE({vin} -{vin} {_num('half', T / 2 - edge / 2)} {_num('edge', edge)} "
-             f"{_num('edge', edge)} {_num('width', T / 2 - edge)} {_num('T', T)})")
-    # Bridge: top tank node a, bottom 0; D1 a->p, D3 0->p, D2 n->a, D4 n->0 (p, n: rectifier output).
-    body = [drive, *_inductor("drv", "a", p, name="Lr", value_key="Lr", sense="Vslr", ic=ic["ir"]),
-            *_capacitor("a", "0", p, name="Cr", value_key="Cr", ic=ic["vr"]),
-            # Each diode behind a zero-volt sense source (its current is a probe).
-            "Vsd1 a d1 DC 0", "D1 d1 p DMOD", "Vsd3 0 d3 DC 0", "D3 d3 p DMOD",
-            "Vsd2 nn d2 DC 0", "D2 d2 a DMOD", "Vsd4 nn d4 DC 0", "D4 d4 0 DMOD",
-            *_inductor("p", "out", p, name="Lf", value_key="Lf", sense="Vslf", ic=ic["iLf"]),
-            *_capacitor("out", "nn", p, name="Cf", value_key="Cf", ic=ic["vo"]), f"R1 out nn {_num('R', p['R'])}",
-            "Rgnd nn 0 1e9"]
-    return body, {"switch": ({"drv": 1.0}, 0.0), "ir": ("vslr#branch", 1.0), "vr": ("a", 1.0), "iLf": ("vslf#branch", 1.0),
-                  "vo": (("out", "nn"), 1.0), "vout": (("out", "nn"), 1.0),
-                  **{f"i_D{i}": (f"vsd{i}#branch", 1.0) for i in range(1, 5)}}
-
-
-_BODIES = {"buck": _buck, "boost": _boost, "buck-boost": _buck_boost, "cuk": _cuk, "prc": _prc}
+#: The gate source of the built-in PWM converters' files (a duty of 0 or 1 writes it as DC).
+GATE = "vg"
 
 
 def build_smc_netlist(params: dict | None, t_end, options: SpiceOptions | None = None, x0=None,

@@ -3,8 +3,8 @@
 The file is read and flattened by :mod:`converters.circuits.netlist` (every value a number, ``.control``
 refused), and written back element by element with numbers formatted here only, so nothing of the file's
 text reaches ngspice but what the reader understood. What changes: a switch model without ``RON`` (or with ``RON=0``) gets the
-near-ideal ``RON``/``ROFF`` of :class:`~netlists.build.SpiceOptions`, a diode model without ``IS``/``N`` the
-near-ideal ``IS``/``N``, a 0 ohm resistor a 0 V source, each diode and inductor a 0 V sense source (its current is a probe), the
+near-ideal ``RON``/``ROFF`` of :class:`~netlists.options.SpiceOptions`, a diode model without ``IS``/``N`` the
+near-ideal ``IS``/``N``, a 0 ohm resistor's two nodes one, each diode and inductor a 0 V sense source (its current is a probe), the
 ``.tran`` pcsuite's span, the ``.options`` pcsuite's (by default the file's TMAX as a fraction of its period and
 its RELTOL, ABSTOL and METHOD: :func:`file_spice_options`), and the initial conditions the run's start (``IC=`` on every
 capacitor and inductor, with ``UIC``). Element names keep their letter; a subcircuit's elements and nodes
@@ -17,7 +17,7 @@ import math
 from converters.circuits.netlist import Pulse, Pwl, Sin
 from converters.errors import ParameterError
 
-from .build import Netlist, SpiceOptions, _num, options_line
+from .options import Netlist, SpiceOptions, _num, options_line
 
 
 def _name(flat: str) -> str:
@@ -26,6 +26,32 @@ def _name(flat: str) -> str:
 
 def _node(flat: str) -> str:
     return "0" if flat == "0" else _name(flat)
+
+
+def _shorts(netlist, prefer=()) -> dict:
+    """Each node a 0 ohm resistor joins to others, mapped to the one of its class the written netlist keeps: ground
+    where it is one, else a node of ``prefer`` (the file's output), else the one with the most other elements (not
+    the inner node of a parasitic), else the first. A 0 V source in its place would be exact too, but one in series
+    with a capacitor stopped ngspice ("timestep too small" on a DCM boost's diode at RELTOL 1e-5, where the merged
+    nodes run)."""
+    zero = [e for e in netlist.elements if e.kind == "R" and e.value == 0]
+    if not zero:
+        return {}
+    degree = {n: 0 for n in netlist.nodes}
+    for e in netlist.elements:
+        if not (e.kind == "R" and e.value == 0):
+            for n in e.nodes:
+                degree[n] = degree.get(n, 0) + 1
+    order = {n: i for i, n in enumerate(netlist.nodes)}
+    rank = lambda n: (n == "0", n in prefer, degree.get(n, 0), -order.get(n, 0))      # noqa: E731
+    classes = {n: {n} for e in zero for n in e.nodes}
+    for e in zero:
+        a, b = classes[e.nodes[0]], classes[e.nodes[1]]
+        if a is not b:
+            a |= b
+            for n in b:
+                classes[n] = a
+    return {n: max(c, key=rank) for n, c in classes.items() if max(c, key=rank) != n}
 
 
 def file_spice_options(circuit, options: SpiceOptions | None = None) -> SpiceOptions:
@@ -43,12 +69,17 @@ def file_spice_options(circuit, options: SpiceOptions | None = None) -> SpiceOpt
 
 
 def circuit_netlist(circuit, p: dict, t_end: float, options: SpiceOptions | None = None, x0=None,
-                    diode_currents: bool = True) -> Netlist:
+                    diode_currents: bool = True, waveforms: dict | None = None) -> Netlist:
     """The ngspice netlist of ``circuit`` (a :class:`converters.models.netlist.Circuit`) at parameters ``p`` over
     [0, t_end], started from ``x0`` (the circuit's state vector; default its own initial state). Without
     ``diode_currents`` the diodes have no sense source (their currents, and the modes, are not measured): in a
     capacitor-diode ladder or a capacitor-input bridge the 0 V sources in series with near-ideal diodes stop
-    ngspice ("timestep too small" at the commutations), which runs the ladder without them."""
+    ngspice ("timestep too small" at the commutations), which runs the ladder without them. ``waveforms``:
+    sources written with another waveform than the file's ({name: a number (DC) or a Pulse}: a built-in
+    converter's gate at the options' edge, or DC at a duty of 0 or 1). The probes: every state, node voltage and sensed current under its SPICE name, the file's output (a
+    difference of two nodes where it names one), and ``switch``: the first switch's control against its threshold,
+    or in a circuit without switches the first PULSE source at the middle of its levels (on at its first level,
+    as the compiled configuration 0)."""
     from converters.circuits.netlist import read_netlist
     options = options or SpiceOptions()
     netlist = read_netlist(circuit.netlist.text, overrides=p, name=circuit.source)
@@ -61,13 +92,14 @@ def circuit_netlist(circuit, p: dict, t_end: float, options: SpiceOptions | None
     ic = dict(zip(compiled.state_names, (_num(f"x0[{n}]", v) for n, v in zip(compiled.state_names, x))))
     lines = [f"* pcsuite: {circuit.title}"]
     probes, pairs = {}, []
+    shorts = _shorts(netlist, prefer={part.strip() for part in circuit.output[2:-1].split(",")})
+    node_of = lambda flat: _node(shorts.get(flat, flat))          # noqa: E731
     for e in netlist.elements:
-        n = [_node(node) for node in e.nodes]
+        n = [node_of(node) for node in e.nodes]
         name = e.kind + _name(e.name)[1:] if _name(e.name)[0].upper() == e.kind else e.kind + "_" + _name(e.name)
-        if e.kind == "R" and e.value == 0:        # ngspice would make a 0 ohm resistor 1 mohm: a 0 V source is exact
-            lines.append(f"V_{_name(e.name)} {n[0]} {n[1]} DC 0")
-            probes[f"i({e.name})"] = (f"v_{_name(e.name).lower()}#branch", 1.0)
-        elif e.kind == "R":
+        if e.kind == "R" and e.value == 0:        # its nodes are merged (ngspice would make it 1 mohm)
+            continue
+        if e.kind == "R":
             lines.append(f"{name} {n[0]} {n[1]} {_num(e.name, e.value)}")
         elif e.kind == "C":
             lines.append(f"{name} {n[0]} {n[1]} {_num(e.name, e.value)} IC={ic[f'v({e.name})']}")
@@ -83,7 +115,8 @@ def circuit_netlist(circuit, p: dict, t_end: float, options: SpiceOptions | None
             a, b = (f"L{_name(c)[1:]}" if _name(c)[0].upper() == "L" else "L_" + _name(c) for c in e.control)
             lines.append(f"{name} {a} {b} {_num(e.name, e.value)}")
         elif e.kind in "VI":
-            lines.append(f"{name} {n[0]} {n[1]} {_waveform(e.name, e.waveform)}")
+            waveform = (waveforms or {}).get(e.name, e.waveform)
+            lines.append(f"{name} {n[0]} {n[1]} {_waveform(e.name, waveform)}")
             if e.kind == "V":
                 probes[f"i({e.name})"] = (f"{name.lower()}#branch", 1.0)
         elif e.kind in "EG":
@@ -109,16 +142,26 @@ def circuit_netlist(circuit, p: dict, t_end: float, options: SpiceOptions | None
         lines.append(_model(model, options))
     for node in netlist.nodes:
         if node != "0":
-            probes.setdefault(f"v({node})", (_node(node), 1.0))
+            if node_of(node) != "0":          # a node shorted to ground has no vector
+                probes.setdefault(f"v({node})", (node_of(node), 1.0))
     switches = [e for e in netlist.elements if e.kind in "SW"]
     if switches:
         s = switches[0]
         model = netlist.models[s.model]
         if s.kind == "S":
-            probes["switch"] = ({_node(s.nodes[2]): 1.0, **({_node(s.nodes[3]): -1.0} if s.nodes[3] != "0" else {})},
+            probes["switch"] = ({node_of(s.nodes[2]): 1.0, **({node_of(s.nodes[3]): -1.0} if s.nodes[3] != "0" else {})},
                                 model.params.get("VT", 0.0))
         else:
             probes["switch"] = ({f"wctl_{_name(s.name)}": 1.0}, model.params.get("IT", 0.0))
+    else:
+        pulse = next((e for e in netlist.elements if e.kind == "V" and isinstance(e.waveform, Pulse)), None)
+        if pulse is not None:
+            w, (a, b) = pulse.waveform, (node_of(node) for node in pulse.nodes)
+            sign = 1.0 if w.v1 > w.v2 else -1.0
+            probes["switch"] = ({a: sign, **({b: -sign} if b != "0" else {})}, sign * (w.v1 + w.v2) / 2)
+    if circuit.output not in probes and "," in circuit.output:
+        a, b = (part.strip() for part in circuit.output[2:-1].split(",", 1))
+        probes[circuit.output] = ((node_of(a), node_of(b)), 1.0) if b != "0" else (node_of(a), 1.0)
     # a period's fraction (TMAX = T/200 by default), or without a period the file's own .tran step
     tran = netlist.tran
     tmax = options.tmax_fraction * T if math.isfinite(compiled.period) else min(tran.tmax or tran.tstep,

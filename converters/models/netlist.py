@@ -292,6 +292,11 @@ class FromNetlist:
         return _builtin_configurations(self.netlist_file, tuple(self.netlist_states), tuple(self.configuration_names),
                                        self.circuit_values(p))
 
+    @property
+    def circuit(self) -> Circuit:
+        """The netlist the model compiles, as a :class:`Circuit`."""
+        return builtin(self.netlist_file)
+
     def circuit_values(self, p: dict) -> tuple:
         """The circuit's parameter values of the model's ``p`` (names lower-cased as SPICE's, sorted)."""
         skip = NOT_CIRCUIT | self.schedule_parameters
@@ -301,7 +306,7 @@ class FromNetlist:
     def pair_currents(self) -> tuple:
         """Per configuration, per pair: u is the diode's current (the compiler's port form at the defaults: a
         parameter changes values, never which quantity a port carries)."""
-        return builtin(self.netlist_file).compiled(builtin(self.netlist_file).resolve({})).pair_currents
+        return self.circuit.compiled(self.circuit.resolve({})).pair_currents
 
 
 #: A model's parameters that are not the circuit's (the instants and values of a step: a run in phases).

@@ -38,6 +38,7 @@ class PRC(FromNetlist, Converter):
     netlist_file = "prc.cir"
     netlist_states = ("i(lr)", "v(cr)", "i(lf)", "v(cf)")
     configuration_names = ("drive+", "drive-")
+    schedule_parameters = frozenset()
     default_theta = 0.5
 
     def default_h(self, p):

@@ -88,8 +88,8 @@ def test_with_an_esr_the_capacitor_voltage_is_read_behind_it(name):
     capacitor's own plate (it had been read on the output node)."""
     from netlists.build import build_netlist, standalone
     netlist = build_netlist(name, {"rC": 0.1}, 1e-3)
-    assert netlist.probes["vC"][0] == "out_esr" and netlist.probes["vout"][0] == "out"
-    assert ".meas tran vC_mean AVG v(out_esr) " in standalone(netlist, 1e-5, ("iL", "vC"))
+    assert netlist.probes["vC"][0] == "cp" and netlist.probes["vout"][0] == "out"        # C1's plate behind Rc
+    assert ".meas tran vC_mean AVG v(cp) " in standalone(netlist, 1e-5, ("iL", "vC"))
 
 
 @pytest.mark.spice
