@@ -55,6 +55,16 @@ class CircuitComparison:
                 "passed": self.passed}
 
 
+def _record(m: dict, label: str, means: tuple, ripples: tuple, scale: float) -> tuple:
+    """Write a signal's means and ripples (LCP, ngspice) and their relative errors into ``m``; return the errors (a
+    ripple against RIPPLE_FLOOR of the mean where the LCP's is below it)."""
+    (mean_l, mean_s), (rip_l, rip_s) = means, ripples
+    m[f"{label}_mean_lcp"], m[f"{label}_mean_spice"] = mean_l, mean_s
+    m[f"{label}_mean_rel_error"] = abs(mean_s - mean_l) / scale
+    m[f"{label}_ripple_lcp"], m[f"{label}_ripple_spice"] = rip_l, rip_s
+    m[f"{label}_ripple_rel_error"] = abs(rip_s - rip_l) / max(abs(rip_l), RIPPLE_FLOOR * scale)
+    return m[f"{label}_mean_rel_error"], m[f"{label}_ripple_rel_error"]
+
 def compare_circuit(circuit, params: dict | None = None, *, h=None, spice_options=None, start: str | None = None,
                     periods: int = PERIODS, window: int = WINDOW, thresholds: dict | None = None) -> CircuitComparison:
     """Run a netlist's LCS and ngspice on the same file and measure their agreement (module docstring)."""
@@ -105,12 +115,8 @@ def compare_circuit(circuit, params: dict | None = None, *, h=None, spice_option
         rip_l = _period_ripple(lcp, name, t0, T, window)
         rip_s = _period_ripple(spice, name, t0, T, window)
         label = circuit.output if name == "vout" else name
-        m[f"{label}_mean_lcp"], m[f"{label}_mean_spice"] = mean_l, mean_s
-        m[f"{label}_mean_rel_error"] = abs(mean_s - mean_l) / scale
-        m[f"{label}_ripple_lcp"], m[f"{label}_ripple_spice"] = rip_l, rip_s
-        m[f"{label}_ripple_rel_error"] = abs(rip_s - rip_l) / max(abs(rip_l), RIPPLE_FLOOR * scale)
-        worst_mean = max(worst_mean, m[f"{label}_mean_rel_error"])
-        worst_ripple = max(worst_ripple, m[f"{label}_ripple_rel_error"])
+        mean_error, ripple_error = _record(m, label, (mean_l, mean_s), (rip_l, rip_s), scale)
+        worst_mean, worst_ripple = max(worst_mean, mean_error), max(worst_ripple, ripple_error)
     sequences_l = _mode_sequences(lcp, t0, T, window)
     sequences_s = _mode_sequences(spice, t0, T, window)
     agreement = float(np.mean([a == b for a, b in zip(sequences_l, sequences_s)]))
@@ -186,12 +192,8 @@ def _self_oscillating(result: CircuitComparison, circuit, th: dict) -> CircuitCo
         mean_l, mean_s = lcp.mean(name, t0=t0, t1=t1), spice.mean(name, t0=t0, t1=t1)
         scale = max(abs(mean_l), 1e-12)
         rip_l, rip_s = _cycle_ripple(lcp, name, cycles_l), _cycle_ripple(spice, name, cycles_s)
-        m[f"{label}_mean_lcp"], m[f"{label}_mean_spice"] = mean_l, mean_s
-        m[f"{label}_mean_rel_error"] = abs(mean_s - mean_l) / scale
-        m[f"{label}_ripple_lcp"], m[f"{label}_ripple_spice"] = rip_l, rip_s
-        m[f"{label}_ripple_rel_error"] = abs(rip_s - rip_l) / max(abs(rip_l), RIPPLE_FLOOR * scale)
-        worst_mean = max(worst_mean, m[f"{label}_mean_rel_error"])
-        worst_ripple = max(worst_ripple, m[f"{label}_ripple_rel_error"])
+        mean_error, ripple_error = _record(m, label, (mean_l, mean_s), (rip_l, rip_s), scale)
+        worst_mean, worst_ripple = max(worst_mean, mean_error), max(worst_ripple, ripple_error)
     fractions_l = lcp.mode_fractions(None, t0=t0, t1=t1)
     fractions_s = spice.mode_fractions(None, t0=t0, t1=t1)
     apart = max(abs(fractions_l.get(k, 0.0) - fractions_s.get(k, 0.0)) for k in set(fractions_l) | set(fractions_s))

@@ -4,7 +4,6 @@ oracle of the circuits the models compile from their netlists (netlists/circuits
 converter as a model whose configurations are these, everything else the library's."""
 from __future__ import annotations
 
-import numpy as np
 
 from converters.models import CONVERTERS
 from converters.problems import Configuration
