@@ -146,6 +146,18 @@ def schema(ensemble, names):
     return pa.schema(fields)
 
 
+def read_part(data: bytes, columns=None):
+    """A part's Parquet bytes as an Arrow table, read on this thread.
+
+    Read from a path or with Arrow's thread pools, a part leaves pool threads alive that Arrow tears down at
+    interpreter exit; under load that teardown aborts the process now and then ("terminate called without an
+    active exception", SIGABRT: apache/arrow#34314) after pcsuite has said everything. A part is small: reading its
+    bytes on the calling thread starts no pool."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+    return pq.ParquetFile(pa.BufferReader(data)).read(columns=columns, use_threads=False)
+
+
 class SweepStore:
     """A sweep directory (module docstring): claim it, find what is done, add parts, read it back."""
 
@@ -306,15 +318,14 @@ class SweepStore:
         import pyarrow as pa
         import pyarrow.parquet as pq
         try:
-            source = pa.BufferReader(data)
             if check_schema:
-                found = pq.read_schema(source)
+                found = pq.ParquetFile(pa.BufferReader(data)).schema_arrow
                 if not found.equals(self.schema, check_metadata=False):
                     columns = ", ".join(found.names[:8]) + (", ..." if len(found.names) > 8 else "")
                     wanted = ", ".join(self.schema.names[:8]) + (", ..." if len(self.schema.names) > 8 else "")
                     raise self._refuse(f"{where} is not a part of this sweep (its columns: {columns}; a part's: "
                                        f"{wanted})")
-            column = pq.read_table(pa.BufferReader(data), columns=["index"]).column(0)
+            column = read_part(data, columns=["index"]).column(0)
         except (pa.ArrowException, OSError, ValueError) as exc:
             if isinstance(exc, ParameterError):
                 raise
@@ -396,7 +407,7 @@ def load_sweep(out) -> pd.DataFrame:
     files = sorted(parts.glob("*.parquet")) if parts.is_dir() else []
     if not files:
         return pd.DataFrame()
-    frame = pd.concat([pd.read_parquet(f) for f in files], ignore_index=True)
+    frame = pd.concat([read_part(f.read_bytes()).to_pandas(use_threads=False) for f in files], ignore_index=True)
     return frame.sort_values("index", kind="stable").reset_index(drop=True)
 
 

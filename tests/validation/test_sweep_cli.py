@@ -334,6 +334,34 @@ def test_resume_verifies_every_stored_part_and_refuses_one_it_did_not_write(kind
     assert _files(tmp_path) == before                   # refused whole: nothing written, nothing removed
 
 
+THREADS = """
+import os, sys
+import numpy, pandas, pyarrow, pyarrow.parquet, scipy.linalg
+from validation.cli import main
+from validation.sweep import load_sweep
+count = lambda: len(os.listdir("/proc/self/task"))
+before = count()
+refused = main(sys.argv[1:])
+frame = load_sweep(sys.argv[-1])
+print(refused, len(frame), before, count())
+"""
+
+
+def test_reading_a_sweep_back_starts_no_arrow_thread_pool(tmp_path):
+    """Arrow's pool threads, torn down at interpreter exit, aborted a refused resume now and then under load
+    (SIGABRT after the error line: "terminate called without an active exception"); verifying the parts and
+    reading them back start no thread at all."""
+    out = tmp_path / "s"
+    env = {**__import__("os").environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])}
+    assert main([*SMALL, "--out", str(out)]) == 0
+    _tamper("index outside the grid", out, tmp_path)
+    done = subprocess.run([sys.executable, "-c", THREADS, *SMALL, "--out", str(out)], capture_output=True,
+                          text=True, env=env, timeout=60)
+    assert done.returncode == 0, done.stderr
+    refused, rows, before, after = map(int, done.stdout.split())
+    assert (refused, rows) == (2, 6) and after == before, done.stdout
+
+
 def test_a_part_stored_just_before_a_kill_is_verified_and_kept(tmp_path, capsys):
     """A kill between a part's rename and its line in parts.jsonl leaves a whole part the journal does not list:
     resume checks it like a stranger's (schema, indices, no duplicates), keeps it and lists it."""
