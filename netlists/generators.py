@@ -17,7 +17,9 @@ def cockcroft_walton(n: int) -> str:
              "impulsive",
              "* transfer). The source's edges take T/1000. For ngspice: TMAX = T/2000 resolves RS C (at T/200 its "
              "mean was 6e-4 off);",
-             "* ABSTOL = 1 uA (at the default 1 pA its near-ideal diodes stall it at the first edge).",
+             "* ABSTOL = 1 uA (at the default 1 pA its near-ideal diodes stall it at the first edge). TSTEP = T/4000 is "
+             "pcsuite's step:",
+             "* after each transfer the even diodes conduct again at 1e-3 to 2e-3 of their peak, which T/1000 blurs.",
              ".param Vpk=10 C=1u R=100k f=100k RS=0.5",
              ".param T={1/f} e={1e-3/f}",
              "Vs x0 0 PULSE({-Vpk} {Vpk} {T/2 - e/2} {e} {e} {T/2 - e} {T})"]
@@ -25,6 +27,6 @@ def cockcroft_walton(n: int) -> str:
         lines += [f"Cx{k} x{k - 1} x{k} {{C}}", f"Cs{k} {s(k - 1)} {s(k)} {{C}}"]
     for k in range(1, n + 1):
         lines += [f"D{2 * k - 1} {s(k - 1)} x{k} DMOD", f"D{2 * k} x{k} {s(k)} DMOD"]
-    lines += ["R1 out 0 {R}", ".model DMOD D(RS={RS})", ".options ABSTOL=1u", ".tran {T/1000} {200*T} 0 {T/2000} UIC",
+    lines += ["R1 out 0 {R}", ".model DMOD D(RS={RS})", ".options ABSTOL=1u", ".tran {T/4000} {200*T} 0 {T/2000} UIC",
               ".meas tran vout_mean AVG v(out) FROM={190*T} TO={200*T}", ".end"]
     return "\n".join(lines) + "\n"

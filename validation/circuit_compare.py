@@ -7,7 +7,7 @@ unless ``spice_options`` are given. ngspice's near-ideal devices give it a stead
 runs on, from where it ended, until its window's mean of vout moves less than SPICE_SETTLE (at most
 MAX_SPICE_PERIODS periods), as for the built-in converters. Checked per named output (each ``.meas`` vector and
 vout): the mean and the per-period peak-to-peak ripple; and the mode sequence of every compared period (the
-conducting diodes and the closed switches, ngspice's diodes conducting above CURRENT_FRACTION of their peak).
+conducting diodes and the closed switches; on both sides a diode conducts above CURRENT_FRACTION of its peak).
 A circuit that switches itself (a comparator without a clock) is read over the last tenth of its run: means,
 ripples per cycle, the cycle and the time in each mode (:func:`_self_oscillating`); another circuit without a
 period as a transient, its waveforms point by point (:func:`_transient`).
@@ -88,6 +88,7 @@ def compare_circuit(circuit, params: dict | None = None, *, h=None, spice_option
         x0, rho = orbit.x0, orbit.spectral_radius
     lcp = run_converter(circuit, p, h=h, t_end=span, x0=x0)
     t0 = span - window * T
+    _modes_by_current(lcp, circuit, p, t0)
     netlist, run, notes = run_spice_retrying(lambda o: circuit_netlist(circuit, p, span, o, x0=lcp.x[0]), spice_options)
     options = netlist.options                         # the TMAX it took, kept for the runs on
     spice = circuit_trajectory(circuit, p, netlist, run, t0)
@@ -136,6 +137,21 @@ def compare_circuit(circuit, params: dict | None = None, *, h=None, spice_option
                             f"{spice_periods} periods (its window's mean moves {settle:.2g}; "
                             f"{unsettled_cause(rho, spice_periods)})")
     return result
+
+
+def _modes_by_current(lcp, circuit, p: dict, t0: float) -> None:
+    """The LCP's modes read by ngspice's rule (a diode conducts above CURRENT_FRACTION of its peak after t0), so
+    that both runs are read alike. The LCS's own rule (its current above its reverse voltage) counts a diode
+    whose current decays through a series resistance as conducting down to any fraction of its peak (1e-6 and
+    below on the Cockcroft-Walton ladder, until the source reverses), where ngspice's reads it off."""
+    from .spice import conducting_by_current, mode_labels
+    compiled = circuit.compiled(p)
+    diodes = [d for d in compiled.pair_names if d != "none"]
+    currents = (np.column_stack([np.asarray(lcp.signal(f"i({d})"), dtype=float) for d in diodes]) if diodes
+                else np.zeros((lcp.t.size, 0)))
+    closed = np.asarray(compiled.closed, dtype=bool)[lcp.config]
+    lcp.measured["mode"] = mode_labels(compiled.switch_names, closed, diodes, conducting_by_current(currents,
+                                                                                                   lcp.t >= t0))
 
 
 def _transient(result: CircuitComparison, circuit, th: dict) -> CircuitComparison:

@@ -215,6 +215,21 @@ def hysteretic(control: np.ndarray, threshold: float, band: float) -> np.ndarray
     return marks[last].astype(bool)
 
 
+def conducting_by_current(currents: np.ndarray, in_window: np.ndarray) -> np.ndarray:
+    """Each device (column) conducting where its current exceeds CURRENT_FRACTION of its own peak in the window."""
+    peaks = np.abs(currents[in_window]).max(axis=0) if in_window.any() else np.zeros(currents.shape[1])
+    return currents > CURRENT_FRACTION * peaks
+
+
+def mode_labels(switch_names, closed: np.ndarray, diode_names, conducting: np.ndarray) -> np.ndarray:
+    """A circuit's mode per point: its closed switches and conducting diodes (``S1+D2``; ``off`` when none)."""
+    names = [n.upper() for n in switch_names] + [n.upper() for n in diode_names]
+    flags = np.concatenate([closed, conducting], axis=1).astype(bool)
+    keys, inverse = np.unique(flags, axis=0, return_inverse=True)
+    text = np.array(["+".join(n for n, on in zip(names, key) if on) or "off" for key in keys], dtype=object)
+    return text[np.asarray(inverse).reshape(-1)] if len(flags) else np.empty(0, dtype=object)
+
+
 def circuit_trajectory(circuit, params: dict, netlist: Netlist, result: SpiceResult, window_start: float = 0.0):
     """An ngspice run of a netlist (:func:`netlists.circuit.circuit_netlist`) as a Trajectory labelled by its
     Circuit: the states, every node voltage and every current ngspice measures (sources, inductors, diodes and
@@ -242,11 +257,8 @@ def circuit_trajectory(circuit, params: dict, netlist: Netlist, result: SpiceRes
     measured["vout"] = measured[circuit.output]
     in_window = t >= window_start
     diodes = [d for d in compiled.pair_names if d != "none"]
-    conducting = np.zeros((t.size, len(diodes)), dtype=bool)
-    for i, d in enumerate(diodes):
-        current = measured[f"i({d})"]
-        peak = np.abs(current[in_window]).max() if in_window.any() else 0.0
-        conducting[:, i] = current > CURRENT_FRACTION * peak
+    conducting = conducting_by_current(np.column_stack([measured[f"i({d})"] for d in diodes]) if diodes
+                                       else np.zeros((t.size, 0)), in_window)
     closed = []
     for s in (e for e in circuit.netlist.elements if e.kind in "SW"):
         model = circuit.netlist.models[s.model].params
@@ -265,11 +277,8 @@ def circuit_trajectory(circuit, params: dict, netlist: Netlist, result: SpiceRes
             if set(s.nodes[:2]) == terminals:
                 conducting[:, i] &= ~on
     measured["switch"] = closed[0].astype(np.int8) if closed else np.zeros(t.size, np.int8)
-    labels = np.empty(t.size, dtype=object)
-    names = [sw.upper() for sw in compiled.switch_names] + [d.upper() for d in diodes]
-    flags = np.column_stack(closed + [conducting[:, i] for i in range(len(diodes))]) if names else np.zeros((t.size, 0))
-    for i, row in enumerate(flags):
-        labels[i] = "+".join(n for n, on in zip(names, row) if on) or "off"
+    closed = np.column_stack(closed) if closed else np.zeros((t.size, 0), dtype=bool)
+    labels = mode_labels(compiled.switch_names, closed, diodes, conducting)
     measured["mode"] = labels
     measured["conducting"] = conducting
     return Trajectory(t=t, x=x, state_names=tuple(compiled.state_names), method="spice", steps=result.accepted_steps,

@@ -138,10 +138,10 @@ class Circuit(Model):
         return math.isfinite(self.period(p))
 
     def default_h(self, p: dict) -> float:
-        if self.periodic(p):
-            return self.period(p) / 1000.0
-        tran = self.netlist.tran      # the file's step, at most a 5,000th of its run
-        return min(tran.tmax or tran.tstep, tran.tstop / 5000.0)
+        tran = self.netlist.tran
+        if self.periodic(p):          # T/1000, or the file's own step (a fraction of its period) where it is finer
+            return self.period(p) * min(1e-3, tran.tstep / self.period(self.resolve({})))
+        return min(tran.tmax or tran.tstep, tran.tstop / 5000.0)     # the file's step, at most a 5,000th of its run
 
     def max_h(self, p: dict) -> float:
         return self.netlist.tran.tstop / 20.0
