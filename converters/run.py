@@ -197,7 +197,8 @@ def check_steady(model: Model, p: dict) -> None:
     """The one refusal of --steady (every method, ngspice and netlists): a steady state needs a fixed period."""
     if model.step_times(p):
         raise ParameterError("a periodic steady state (--steady, gdcm, compare's start on the orbit) needs a periodic "
-                             "circuit; a run with a step (t_step) is not periodic: run --periods N (or --t-end) from rest")
+                             "circuit; a run with a step (t_step, or a switch driven by a PWL or PULSE that does not repeat) is not "
+                             "periodic: run --periods N (or --t-end) from rest")
     if not model.periodic(p):
         raise ParameterError(f"--steady needs a fixed switching period; {model.key} has none (run --t-end, or find "
                              "its cycle with converters.analysis.periodic.autonomous_orbit and the event method)")

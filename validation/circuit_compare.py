@@ -74,11 +74,13 @@ def compare_circuit(circuit, params: dict | None = None, *, h=None, spice_option
     p = circuit.resolve(params)
     spice_options = file_spice_options(circuit, spice_options)
     periodic = circuit.periodic(p)
-    start = start or ("steady" if periodic else "rest")
+    start = start or ("steady" if periodic and not circuit.step_times(p) else "rest")      # a load step runs from rest
     if start == "steady" and not periodic:
         from converters.errors import ParameterError
         raise ParameterError(f"--start steady needs a periodic circuit; {circuit.name} has no period (its sources "
                              "are DC): use --start rest")
+    if periodic and circuit.step_times(p):        # the file's whole run, its window after the last step
+        periods = max(periods, int(round(circuit.default_duration(p) / circuit.period(p))))
     T = circuit.period(p) if periodic else circuit.default_duration(p) / periods
     span = periods * T
     x0 = None

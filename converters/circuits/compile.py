@@ -22,8 +22,9 @@ resistor (a parasitic set to zero: a 0 V branch); a diode's model ``RS`` is a se
 ``VT`` +- ``VH``; W: the current through its controlling V source against ``IT`` +- ``IH``) whose control is a
 combination of independent sources (a PULSE gate) is driven by a time schedule: its threshold crossings (with
 the hysteresis) located exactly on the piecewise-linear waveform; one whose control depends on the states is a
-state-driven law (a comparator). A PULSE source in the power circuit switches between its two levels at the
-middle of its edges.
+state-driven law (a comparator). A gate that does not repeat (a PWL without r=, a PULSE without PER) makes
+phases: each of its switch's crossings is an instant where the run is split and the next phase's schedule takes
+over (a load step). A PULSE source in the power circuit switches between its two levels at the middle of its edges.
 """
 from __future__ import annotations
 
@@ -59,6 +60,17 @@ class Compiled:
     units: dict = field(default_factory=dict)
     #: The SIN sources as sinusoidal inputs: (omega (m,), phase (m,), E (configs, m, n), F (configs, m, k)), or None.
     inputs: tuple | None = None
+    #: Switches driven by sources that do not repeat (a PWL without r=, a PULSE without PER: a load step's switch):
+    #: ((t, law), ...), the law in force from each instant t > 0 on (``law`` before the first).
+    phases: tuple = ()
+
+    def law_at(self, t: float):
+        """The switching law in force at time t."""
+        law = self.law
+        for start, later in self.phases:
+            if t >= start:
+                law = later
+        return law
 
 
 def compile_netlist(netlist: Netlist) -> Compiled:
@@ -78,9 +90,6 @@ class _Compiler:
             first = [e for e in els if e.name == duplicate][1]
             raise self.error(first, f"{first.title}: the name is used twice")
         for e in els:
-            if e.kind in "VI" and isinstance(e.waveform, Pwl) and e.waveform.repeat is None:
-                raise self.error(e, f"{e.title}: a PWL that does not repeat is not compiled yet (it is not periodic): "
-                                    "give r=0 (the list repeated, its last time the period)")
             if e.kind in "VI" and isinstance(e.waveform, Sin) and (e.waveform.td or e.waveform.theta):
                 raise self.error(e, f"{e.title}: a SIN with a delay or damping (TD, THETA) is not periodic from t = 0; "
                                     "give SIN(VO VA FREQ 0 0 PHASE)")
@@ -154,8 +163,17 @@ class _Compiler:
         for s in power:
             if not math.isfinite(s.waveform.per):
                 raise self.error(s, f"{s.title}: a single pulse in the power circuit: give it a period (PER)")
-        starts, keys = self.schedule_keys(period, drives, power)
-        distinct = list(dict.fromkeys(keys))
+        once = {name: d for name, d in drives.items() if d and any(_once(self.source(n).waveform) for n in d)}
+        phase_times, phase_states = self.phases(once)
+        repeating = {name: d for name, d in drives.items() if name not in once}
+        starts, periodic_keys = self.schedule_keys(period, repeating, power)
+        names = [s.name for s in self.switches]
+
+        def full(key, state):          # a periodic key with the one-shot switches' states of a phase
+            held = dict(zip(repeating, key[0]))
+            return tuple(held[n] if n in held else state[n] for n in names), key[1]
+        phase_keys = [[full(key, state) for key in periodic_keys] for state in phase_states]
+        distinct = list(dict.fromkeys(key for keys_ in phase_keys for key in keys_))
         configs, pair_currents, closed, maps, per_config_sinusoids = [], [], [], [], []
         for key in distinct:
             switch_state = dict(zip([s.name for s in self.switches], key[0]))
@@ -166,16 +184,10 @@ class _Compiler:
             pair_currents.append(tuple(f == CURRENT for f in forms))
             closed.append(tuple(key[0]))
             maps.append(signals)
-        index = [distinct.index(k) for k in keys]
-        merged_starts, merged = [], []
-        for t, c in zip(starts, index):
-            if not merged or merged[-1] != c:
-                merged_starts.append(t)
-                merged.append(c)
         sines = [src.waveform for src in self.sources if isinstance(src.waveform, Sin)]
-        periodic = math.isfinite(period) and (len(merged) > 1 or bool(sines))
-        schedule = (Schedule(period=period, starts=tuple(merged_starts), configs=tuple(merged))
-                    if periodic else Schedule.constant(merged[0]))
+        laws = [self.schedule(period, starts, [distinct.index(k) for k in keys_], bool(sines)) for keys_ in phase_keys]
+        schedule = laws[0]
+        periodic = math.isfinite(schedule.period)
         inputs = None
         if sines:
             E_sin = np.array([e for e, _ in per_config_sinusoids])
@@ -186,7 +198,71 @@ class _Compiler:
         return Compiled(tuple(configs), schedule, state_names,
                         tuple(d.name for d in self.diodes) or ("none",), tuple(pair_currents),
                         tuple(s.name for s in self.switches), tuple(closed), self.signal_names(), tuple(maps),
-                        period if periodic else math.inf, self.initial_state(), self.units(), inputs)
+                        period if periodic else math.inf, self.initial_state(), self.units(), inputs,
+                        tuple(zip(phase_times, laws[1:])))
+
+    @staticmethod
+    def schedule(period: float, starts: list, index: list, sines: bool) -> Schedule:
+        """The schedule of configurations ``index`` from ``starts`` (consecutive repeats merged): periodic where the
+        configuration changes within the period or a SIN source runs, else constant."""
+        merged_starts, merged = [], []
+        for t, c in zip(starts, index):
+            if not merged or merged[-1] != c:
+                merged_starts.append(t)
+                merged.append(c)
+        if math.isfinite(period) and (len(merged) > 1 or sines):
+            return Schedule(period=period, starts=tuple(merged_starts), configs=tuple(merged))
+        return Schedule.constant(merged[0])
+
+    def source(self, name: str) -> Element:
+        return next(x for x in self.sources if x.name == name)
+
+    def phases(self, once: dict) -> tuple:
+        """(the instants t > 0 where a switch driven by sources that do not repeat changes, the states of those
+        switches in each phase: before the first instant, then from each on)."""
+        changes = {}
+        for name, coefficients in once.items():
+            switch = next(x for x in self.switches if x.name == name)
+            repeating = [n for n in coefficients if not _once(self.source(n).waveform)
+                         and not isinstance(self.source(n).waveform, float)]
+            if repeating:
+                raise self.error(switch, f"{switch.title}: its control adds a source that repeats ({repeating[0].upper()}) "
+                                         "to one that does not: a gate is periodic or one-shot, not both")
+            changes[name] = self.one_shot_events(switch, coefficients)
+        times = sorted({t for _, events in changes.values() for t, _ in events})
+        states = []
+        for start in [0.0, *times]:
+            state = {}
+            for name, (initial, events) in changes.items():
+                state[name] = initial
+                for t, closed in events:
+                    if t <= start:
+                        state[name] = closed
+            states.append(state)
+        return tuple(times), states
+
+    def one_shot_events(self, switch: Element, coefficients: dict):
+        """(state at t = 0, [(t > 0, closed)]) of a switch whose control is made of sources that do not repeat: its
+        crossings of VT + VH (closing) and VT - VH (opening) over the whole run (after its last corner the control
+        holds)."""
+        vt, vh = self.threshold(switch)
+        corners = {0.0}
+        for name in coefficients:
+            w = self.source(name).waveform
+            if isinstance(w, Pulse):
+                corners.update(np.cumsum([w.td, w.tr, w.pw, w.tf]).tolist())
+            elif isinstance(w, Pwl):
+                corners.update(t for t, _ in w.points)
+        corners = np.array(sorted(t for t in corners if math.isfinite(t) and t >= 0.0))
+        values = self.waveform_value(coefficients, corners)
+        if abs(values[0] - vt) <= vh:
+            names, unit = (("VT", "VH"), "V") if switch.kind == "S" else (("IT", "IH"), "A")
+            raise self.error(switch, f"{switch.title}: its control at t = 0 ({values[0]:g} {unit}) lies inside the "
+                                     f"hysteresis band {names[0]} +- {names[1]} = {vt:g} +- {vh:g} {unit}: its state is "
+                                     "not defined")
+        initial = bool(values[0] > vt)
+        events = _crossings(corners, values, vt + vh, vt - vh, initial)
+        return initial, [(t, closed) for t, closed in events if t > 0.0]
 
     def run_state_driven(self, drives: dict) -> Compiled:
         """One switch driven by the circuit's own quantities (a comparator), with switches that follow it or its
@@ -241,14 +317,11 @@ class _Compiler:
         periods = [s.waveform.per for s in self.sources if isinstance(s.waveform, Pulse) and math.isfinite(s.waveform.per)]
         for s in self.sources:
             w = s.waveform
-            if isinstance(w, Pulse) and not math.isfinite(w.per) and w.td + w.tr + w.pw + w.tf < math.inf:
-                raise self.error(s, f"{s.title}: a single pulse (no period): the schedule needs a periodic PULSE "
-                                    "(give PER)")
             if isinstance(w, Pulse) and math.isfinite(w.per) and w.td >= w.per:
                 raise self.error(s, f"{s.title}: a PULSE delay TD = {w.td:g} s of a whole period ({w.per:g} s) or "
                                     "more: the waveform is not periodic from t = 0")
         periods += [1.0 / s.waveform.freq for s in self.sources if isinstance(s.waveform, Sin) and s.waveform.freq > 0]
-        periods += [s.waveform.period for s in self.sources if isinstance(s.waveform, Pwl)]
+        periods += [s.waveform.period for s in self.sources if isinstance(s.waveform, Pwl) and not _once(s.waveform)]
         if not periods:
             return math.inf
         base = max(periods)
@@ -434,16 +507,7 @@ class _Compiler:
             return value > vt, []
         corners = self.corners(coefficients, period)
         values = self.waveform_value(coefficients, corners)
-        on, off = vt + vh, vt - vh
-        state = values[0] > vt
-        changes = []
-        for (t0, v0), (t1, v1) in zip(zip(corners[:-1], values[:-1]), zip(corners[1:], values[1:])):
-            target = off if state else on
-            crossing = (v1 < off) if state else (v1 > on)
-            if crossing:
-                t = t0 + (target - v0) / (v1 - v0) * (t1 - t0) if v1 != v0 else t1
-                state = not state
-                changes.append((t, state))
+        changes = _crossings(corners, values, vt + vh, vt - vh, values[0] > vt)
         # the state at the start of the second period is the periodic one
         initial = next((s for t, s in reversed(changes) if t <= period * (1 + 1e-12)), values[0] > vt)
         inside = [(t - period, s) for t, s in changes if period * (1 - 1e-12) < t < 2 * period * (1 - 1e-12)]
@@ -607,6 +671,26 @@ class _Compiler:
                 x.append(va - vb)
         x += [l.ic or 0.0 for l in self.inductors]
         return np.array(x, dtype=float)
+
+
+def _once(w) -> bool:
+    """A waveform that does not repeat: a PWL without r=, a PULSE without PER (its level changes a few times, then
+    holds)."""
+    return (isinstance(w, Pwl) and w.repeat is None) or (isinstance(w, Pulse) and not math.isfinite(w.per)
+                                                         and w.td + w.tr + w.pw + w.tf < math.inf)
+
+
+def _crossings(corners: np.ndarray, values: np.ndarray, on: float, off: float, state: bool) -> list:
+    """[(t, closed)] where a piecewise-linear control (``values`` at ``corners``) starting in ``state`` rises above
+    ``on`` (closing) or falls below ``off`` (opening), located on its segments."""
+    changes = []
+    for (t0, v0), (t1, v1) in zip(zip(corners[:-1], values[:-1]), zip(corners[1:], values[1:])):
+        target = off if state else on
+        if (v1 < off) if state else (v1 > on):
+            t = t0 + (target - v0) / (v1 - v0) * (t1 - t0) if v1 != v0 else t1
+            state = not state
+            changes.append((float(t), state))
+    return changes
 
 
 def _value(w, t: np.ndarray) -> np.ndarray:

@@ -128,8 +128,14 @@ class Circuit(Model):
         c = self.compiled(p)
         x0 = c.x0 if x0 is None else x0
         inputs = Sinusoids(*c.inputs) if c.inputs is not None else None
-        return LCSProblem(c.configurations, c.law, x0=x0, t_span=(t_start, t_end), state_names=c.state_names,
-                          pair_names=c.pair_names, metadata={"circuit": self.name, **p}, inputs=inputs)
+        # the law in force at t_start: a run is split at step_times (converters.run does), as a built-in's at t_step
+        return LCSProblem(c.configurations, c.law_at(t_start), x0=x0, t_span=(t_start, t_end),
+                          state_names=c.state_names, pair_names=c.pair_names, metadata={"circuit": self.name, **p},
+                          inputs=inputs)
+
+    def step_times(self, p: dict) -> list[float]:
+        """The instants where a switch driven by a source that does not repeat changes (a load step's switch)."""
+        return [t for t, _ in self.compiled(p).phases]
 
     def period(self, p: dict) -> float:
         return self.compiled(p).period
