@@ -1,4 +1,4 @@
-"""The voltage-mode buck's bifurcation study (REFERENCE section 9) against its targets, in one run.
+"""The voltage-mode buck's bifurcation study (Hamill, Deane and Jefferies 1992) against its targets, in one run.
 
 * Continuation over Vin = 20 .. 36 V (the event method's exact maps; period doublings followed up to period 8):
   target under 10 s.

@@ -1,4 +1,4 @@
-"""`pcsuite simulate buck` on the REFERENCE section 7 DCM case, in a warm process.
+"""`pcsuite simulate buck` on the DCM buck case, in a warm process.
 
 Vin 12 V, 100 kHz, D 0.4, L 10 uH, C 100 uF, R 10 ohm, 5 ms from rest, h = 50 ns (100,000 steps).
 Prints the time per step of the whole simulate path (problem building, grid, matrices, compiled

@@ -5,7 +5,7 @@ Nothing typed by a user reaches the text: node and element names are constants h
 :func:`_num` (a finite float, printed by us) before it is written. A parameter carrying netlist text
 (``R=1\\n.control\\nshell ...``) is refused while it is parsed.
 
-Near-ideal parts (REFERENCE section 7): an ``SW`` switch (Ron 1 mOhm, Roff 1 MOhm) driven by a gate
+Near-ideal parts (docs/guide/ngspice.md): an ``SW`` switch (Ron 1 mOhm, Roff 1 MOhm) driven by a gate
 pulse with edges of 1e-6 T, a diode ``D(IS=1e-14 N=0.001)``, zero-volt sense sources for the
 inductor and diode currents. The diode model sets the accuracy floor (about 1 mV of forward drop).
 """
@@ -110,7 +110,7 @@ def build_smc_netlist(params: dict | None, t_end, options: SpiceOptions | None =
     validated number (``_num``).
 
     ``rectifier``: 'switch' (default) is a second SW switch driven in antiphase (switch-as-diode,
-    REFERENCE section 7), the ideal diode's behaviour while iL > 0, which this controller keeps
+    docs/guide/ngspice.md), the ideal diode's behaviour while iL > 0, which this controller keeps
     (iL >= Iref - band). 'diode' uses the D(N = 0.001) diode: with comparator-driven switching ngspice
     then loses or gains energy at every switching event (its steady v moves by -2.4 % with gear,
     +1.8 % with MAXORD = 1, measured) because these events are not breakpoints of its integrator.

@@ -383,7 +383,7 @@ def sliding_section():
     attractors = friction_diagram({"A": A}, "omega", np.linspace(*diagram_study_path(diagram_study),
                                                                  MECHANICS["friction_diagram_points"]), workers=1)
     notes = "".join(f"<li>A = {s.params['A']:g}: {'; '.join(s.notes)} ({s.wall_s:.0f} s)</li>" for s in studies.values())
-    text = ("<p>The dry-friction oscillator of REFERENCE section 8 (k = m = 1, g = 10, Vdr = 1, Popp's law alpha = "
+    text = ("<p>The dry-friction oscillator on a moving belt (Popp and Stelter 1990; k = m = 1, g = 10, Vdr = 1, Popp's law alpha = "
             "0.3, gamma = 1.42, beta = 0.1, eta = 0.01) forced by A cos(omega t). Each path is followed by "
             "pseudo-arclength continuation on the event method's exact stroboscopic map (DOP853 between events, "
             "variational equations, saltation matrices, the sliding projector); each change of the orbit's event "
@@ -453,7 +453,7 @@ def cam_section():
     errors = sum(bool(r.error) for r in rows)
     from .report import csv_bytes, table_html
     regimes = chattering_table({}, MECHANICS["cam_regime_rpm"], workers=1)
-    text = ("<p>The cam-follower of REFERENCE section 10 (m = 1.221 kg, k = 1430.8 N/m, e = 0.8): the phase of every "
+    text = ("<p>The cam-follower of Siconos' CamFollower example (after di Bernardo, Osorio and Santini; m = 1.221 kg, k = 1430.8 N/m, e = 0.8): the phase of every "
             "impact (Moreau-Jean, h = T/4000, 20 cam revolutions after 20 of transient) against the cam speed, "
             "over a range holding the seed's 175 rpm and Siconos' 358 rpm. At low speed the follower stays on the "
             "cam (no impacts); above the speed where the cam's deceleration first exceeds what the spring supplies "

@@ -120,7 +120,7 @@ def converter_section() -> Section:
                      "result": "pass" if abs(vout / expected - 1.0) <= TOLERANCE[mode] else "fail"})
     table = pd.DataFrame(rows)
     text = ("<p>Periodic steady state (Newton shooting on the stepper's period map with its exact Jacobian; "
-            "backward Euler, h = T/1000) against the small-ripple closed forms of REFERENCE section 4: CCM "
+            "backward Euler, h = T/1000) against the small-ripple closed forms (Erickson and Maksimovic, Fundamentals of Power Electronics, ch. 5): CCM "
             "ratio to 0.05 %, DCM formula to 1 %.</p>" + table_html(table, "result", good=("pass",)))
     return Section("Converter library: steady state against closed forms", text,
                    {"converters_steady_state.csv": csv_bytes(table)}, ok=bool((table["result"] == "pass").all()))

@@ -1,5 +1,5 @@
 """Generalised discontinuous conduction (GDCM) from the matrices of a configuration, and the exact
-conduction-mode prediction of a PWM converter (REFERENCE section 4).
+conduction-mode prediction of a PWM converter (Batlle, Fossas, Merillas and Miralles 2005).
 
 For one complementarity pair (k = 1) with D = 0 and C B > 0 in a configuration (A, B, C, E, F):
 

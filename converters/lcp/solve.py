@@ -98,7 +98,7 @@ def solve_lcp(M, q, method: str = "auto", tol: float = DEFAULT_TOL, max_iter: in
         20 s. A solve that reaches it returns ``failed`` with a message saying so. The limit measures the
         solve: neither the first import of the solvers nor numba's compile (or cache load) of a kernel at its
         first call counts.
-    **options
+    **options : float
         Method-specific: ``pivot_tol`` (lemke), ``omega`` in (0, 2) (pgs), ``rho``, ``p``, ``beta``,
         ``sigma`` (newton).
 

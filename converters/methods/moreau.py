@@ -13,7 +13,7 @@ so v+ = v_free + W H^T P. The impulses obey the set-valued laws at velocity leve
 * unilateral contact j, active when its gap predicted half a step ahead is <= 0: Newton's impact law
   0 <= U_j(+) + e_j U_j <= ... _|_ P_j >= 0, U = n_j . v + c_j'(t).
 
-Both at once are one LCP of size c + 2 m (a relay is an LCP of twice its size, REFERENCE section 5:
+Both at once are one LCP of size c + 2 m (a relay is an LCP of twice its size, Acary and Brogliato 2008:
 [[D, I], [-I, 0]], [q + D lb; ub - lb]), solved by the compiled small-LCP kernel of :mod:`converters.lcp`
 inside a compiled step loop (:mod:`.moreau_kernels`). The declared order is 1 (impulsive events inside a step); sticking is exact
 (the relay holds s = 0 to rounding), impacts happen at the step ends (penetration O(h)).

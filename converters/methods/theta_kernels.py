@@ -445,7 +445,7 @@ def run_relay(A, B, C, D, E, F, low, high, t, h, theta, c, d, x, u, y, blend, st
     """The theta stepper under the implicit relay (:class:`Relay`): configuration ``low`` blended
     towards ``high`` by z in [0, 1], with f_high - f_low frozen at the step start and -s(x_end) in
     N_[0,1](z). Each step is one LCP of size k + 2: the pairs of ``low`` and the relay written as
-    0 <= z _|_ s + mu >= 0, 0 <= mu _|_ 1 - z >= 0 (REFERENCE section 5).
+    0 <= z _|_ s + mu >= 0, 0 <= mu _|_ 1 - z >= 0 (Acary and Brogliato 2008).
 
     Returns (status, j) like :func:`run_steps`."""
     n, k = x.shape[1], u.shape[1]

@@ -1,4 +1,4 @@
-"""Closed-form CCM/DCM relations of the PWM converters (small-ripple approximations, REFERENCE section 4).
+"""Closed-form CCM/DCM relations of the PWM converters (small-ripple approximations: Erickson and Maksimovic, Fundamentals of Power Electronics, 2nd ed., ch. 5).
 
 K = 2 L / (R T) (Cuk: L = Le = L1 L2 / (L1 + L2)); DCM when K < Kcrit(D). M = Vout / Vin with its sign.
 DCM interval fractions: D1 = D (switch on), D2 (diode conducting, from volt-second balance), D3 =

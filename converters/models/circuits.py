@@ -1,4 +1,4 @@
-"""Two small diode circuits from the Siconos examples that prove the core (REFERENCE section 6).
+"""Two small diode circuits from the Siconos examples that prove the core (Siconos' DiodeBridge and CircuitRLCD).
 
 Both are an LC tank (C = 1 uF, L = 10 mH, vC(0) = 10 V, iL(0) = 0) discharging into R = 1 kOhm:
 - :func:`half_wave_rectifier` (CircuitRLCD): R in series with one diode across the tank; the diode

@@ -1,5 +1,5 @@
 """Cuk converter (inverting), compiled from ``netlists/circuits/cuk.cir``: x = (i1, v1, i2, v2) with v1 on the
-coupling capacitor C1 and v2 = |vo| on C2 (REFERENCE section 3); parasitics (0 unless given) the inductors' DCR
+coupling capacitor C1 and v2 = |vo| on C2 (derived: docs/theory.md); parasitics (0 unless given) the inductors' DCR
 rL1, rL2, the switch's Ron, the diode's Vf and Rd.
 
 ON:  u = i_D, y = v1 (the switch grounds C1's input side; the diode stays off while v1 > 0).

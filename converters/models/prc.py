@@ -5,7 +5,7 @@ x = (ir, vr, iLf, vo): resonant-tank current and voltage, output-filter inductor
 voltage; the bridge's four diodes in the order D1, D3, D2, D4, each port as the compiler chooses it (D3 and D4
 carry their currents in u, D1 and D2 their reverse voltages); the drive is a square wave +-Vin at f_sw
 (configuration 0 positive half, 1 negative half). D is skew, so every step is a monotone LCP of size 4
-(REFERENCE section 6).
+(Siconos' PowerConverter/PRC example, after Merillas, Fossas and Batlle).
 """
 from __future__ import annotations
 

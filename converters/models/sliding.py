@@ -1,4 +1,4 @@
-"""Sliding-mode (indirect current) control of the boost converter (REFERENCE section 5).
+"""Sliding-mode (indirect current) control of the boost converter (Sira-Ramirez 1987; Utkin 1992).
 
 The model is the boost LCS of :mod:`.pwm2` (ideal switch, ideal diode as a complementarity pair)
 plus a switching law on the sliding variable
@@ -49,7 +49,7 @@ def iref0(p: dict) -> float:
 
 
 def predicted_frequency(p: dict, v: float | None = None) -> float:
-    """f = Vin (v - Vin) / (2 band L v) (REFERENCE section 5), at v = Vref unless given."""
+    """f = Vin (v - Vin) / (2 band L v) (the hysteresis band's switching frequency), at v = Vref unless given."""
     v = p["Vref"] if v is None else v
     return p["Vin"] * (v - p["Vin"]) / (2.0 * p["band"] * p["L"] * v)
 

@@ -1,4 +1,4 @@
-"""The voltage-mode controlled buck (REFERENCE section 9; Hamill, Deane and Jefferies 1992): the
+"""The voltage-mode controlled buck (Hamill, Deane and Jefferies 1992; Fossas and Olivar 1996): the
 bifurcation benchmark of switching converters.
 
 The buck LCS of :mod:`.pwm2` (ideal switch, ideal diode as a complementarity pair, so DCM can appear)

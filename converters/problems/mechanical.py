@@ -5,7 +5,7 @@
 * Friction contact i (a relay on a relative velocity): s_i = w_i . v - V_i (V_i: the belt's velocity).
   Slipping, lambda_i = -F_i(s_i) sign(s_i) with F_i(s) = N_i mu_i(s) >= 0; sticking (s_i held at 0),
   |lambda_i| <= F_i(0), the static friction. Popp's law: mu(s) = alpha / (1 + gamma |s|) + beta + eta s^2
-  (REFERENCE section 8). This is Filippov's convex combination of the two slip vector fields, written as
+  (Filippov; di Bernardo, Kowalczyk and Nordmark 2002). This is Filippov's convex combination of the two slip vector fields, written as
   Utkin's equivalent control: the stick force is what keeps s_i = 0.
 * Unilateral contact j: gap g_j = n_j . q + c_j(t) >= 0 (c_j a given function of time, e.g. minus a cam's
   lift), Lambda_j >= 0, g_j Lambda_j = 0; an impact at g_j = 0 with g_j' < 0 follows Newton's law

@@ -14,7 +14,7 @@ Two laws use it:
 * :class:`Relay` (the implicit, chattering-free law): the configuration is a convex blend
   x' = f_low(x) + z (f_high(x) - f_low(x)) with z in [0, 1] and -s in N_[0,1](z) (s < 0 gives z = 1,
   s > 0 gives z = 0, s = 0 lets z take the value that keeps it there: the equivalent control).
-  A time-stepper imposes it at the step end (REFERENCE section 5: an LCP of size 2 per step).
+  A time-stepper imposes it at the step end (Acary and Brogliato 2008: an LCP of size 2 per step).
 
 Every law exposes ``period`` (its clock period, inf when it has none) and ``configs`` (the
 configurations it selects), so methods treat all laws alike where they can.
@@ -161,7 +161,7 @@ class StateSwitching:
 class Relay:
     """The implicit relay: a convex blend of configurations ``low`` (z = 0) and ``high`` (z = 1).
 
-    x' = f_low(x) + z (f_high(x) - f_low(x)), z in [0, 1], with -s in N_[0,1](z) on the switching
+    x' = f_low(x) + z (f_high(x) - f_low(x)), z in [0, 1], with ``-s in N_[0,1](z)`` on the switching
     function s (z = 1 where s < 0). The complementarity pairs of configuration ``low`` stay in force.
     """
 

@@ -26,7 +26,7 @@ def test_general_condition_reproduces_the_cuk_formulas_of_the_reference():
     rng = np.random.default_rng(3)
     x = rng.normal(size=(20, 4)) * [1.0, 20.0, 1.0, 10.0]
     i1, v1, i2, v2 = x.T
-    # REFERENCE 4: u = Le ((v1 - Vin)/L1 + v2/L2); drift C(Ax + E) = (Vin - v1)/L1 - v2/L2.
+    # derived (docs/theory.md, GDCM): u = Le ((v1 - Vin)/L1 + v2/L2); drift C(Ax + E) = (Vin - v1)/L1 - v2/L2.
     assert np.allclose(cond.multiplier(x), Le * ((v1 - 12.0) / 10e-6 + v2 / 30e-6), rtol=1e-12)
     assert np.allclose(cond.drift(x), (12.0 - v1) / 10e-6 - v2 / 30e-6, rtol=1e-12)
     assert np.allclose(cond.on_set(x), i1 + i2, atol=1e-15)

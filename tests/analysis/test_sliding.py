@@ -1,4 +1,4 @@
-"""The seed's sliding bifurcations of the dry-friction oscillator (REFERENCE section 8), located by the
+"""The seed's sliding bifurcations of the dry-friction oscillator (di Bernardo, Kowalczyk and Nordmark 2002), located by the
 continuation on the event method's exact map and named from the orbit's events; the classifier on its own."""
 import pytest
 

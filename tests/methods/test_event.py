@@ -43,7 +43,7 @@ def test_ccm_buck_mean_output_is_d_vin(D):
 
 
 def test_dcm_buck_mean_is_the_reference_value():
-    # REFERENCE 4: exact periodic mean 6.962476 V for the default DCM buck.
+    # the exact periodic mean of the default DCM buck is 6.962476 V (the event method's orbit).
     conv, p, T, orbit, tr = exact_orbit("buck", {})
     assert tr.mean("vout") == pytest.approx(6.962476, abs=5e-7)
     assert tr.exact.event_kinds == ["activate"]

@@ -83,7 +83,7 @@ def test_the_cam_follower_detaches_where_the_spring_cannot_follow_the_cam():
 
 def test_the_cam_profile_and_its_derivatives():
     """Derivatives against central differences; the lift continuous at the joints, its second derivative not
-    (REFERENCE section 10: the cam is piecewise smooth)."""
+    (the cam is piecewise smooth: its profile's second derivative jumps at the joints)."""
     beta = np.linspace(0.05, np.pi - 0.05, 2001)
     h, h1, h2 = profile(beta)
     d = 1e-6

@@ -1,4 +1,4 @@
-"""The converter library against the closed-form CCM/DCM relations (REFERENCE sections 3, 4, 6)."""
+"""The converter library against the closed-form CCM/DCM relations (Erickson and Maksimovic, ch. 5; the PRC of Siconos' PowerConverter example)."""
 import numpy as np
 import pytest
 
@@ -34,7 +34,7 @@ def test_buck_dcm_idle_fraction_and_first_order_convergence():
     _, _, idle = analytic.dcm_fractions(p, "buck")
     run = run_converter("buck", {}, steady=True)  # h = T/1000
     assert run.mode_fractions()["DCM"] == pytest.approx(idle, abs=0.01)
-    # The exact ideal periodic mean (REFERENCE section 4) is 6.962476 V; its 7 digits resolve
+    # The exact ideal periodic mean (the event method's orbit) is 6.962476 V; its 7 digits resolve
     # errors down to ~1e-6 V, so h stops at T/800 (error 1.9e-5 V there).
     errors = []
     hs = np.array([1e-7, 5e-8, 2.5e-8, 1.25e-8])
@@ -79,7 +79,7 @@ def test_prc_mean_output_over_the_last_millisecond():
     # theta = 0.5, h = 50 ns (the Siconos settings): 0.6130 V; converged (h -> 0): 0.6135 V.
     run = run_converter("prc", {}, t_end=2e-3)
     assert run.mean("vout", periods=55) == pytest.approx(0.6135, rel=2e-3)
-    # REFERENCE's 0.605 V is backward Euler at h = 50 ns, damped by its O(h) error:
+    # The often-quoted 0.605 V is backward Euler at h = 50 ns, damped by its O(h) error:
     damped = run_converter("prc", {}, t_end=2e-3, theta=1.0)
     assert damped.mean("vout", periods=55) == pytest.approx(0.605, rel=1e-2)
 

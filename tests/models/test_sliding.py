@@ -1,4 +1,4 @@
-"""Sliding-mode control of the boost (REFERENCE section 5) on the generic core: the boost LCS with a
+"""Sliding-mode control of the boost (Sira-Ramirez 1987; the relay as an LCP: Acary and Brogliato 2008) on the generic core: the boost LCS with a
 hysteresis law (the stepper locates each switching inside its step; the event method exactly) or the
 implicit relay law (an LCP of size 3 per step), the PI outer loop with a load step, and ngspice."""
 from dataclasses import replace
@@ -175,7 +175,7 @@ def test_implicit_relay_step_is_the_reference_lcp_and_the_clip_formula():
     for _ in range(50):
         i, v, iref = rng.uniform(0.5, 1.5), rng.uniform(11, 30), rng.uniform(0.5, 1.5)
         m, q = h * v / L, -(i + h * Vin / L - iref)
-        # REFERENCE 5: M' = [[M, I], [-I, 0]], q' = [q + M lb; ub - lb] with lb = 0, ub = 1.
+        # the relay as an LCP (Acary and Brogliato 2008): M' = [[M, I], [-I, 0]], q' = [q + M lb; ub - lb] with lb = 0, ub = 1.
         result = solve_lcp(np.array([[m, 1.0], [-1.0, 0.0]]), np.array([q, 1.0]), method="lemke")
         assert result.solved
         clip = np.clip((i + h * Vin / L - iref) * L / (h * v), 0.0, 1.0)

@@ -1,4 +1,4 @@
-"""The voltage-mode buck (REFERENCE section 9): its period-1 orbit, Floquet multipliers and first period
+"""The voltage-mode buck (Hamill, Deane and Jefferies 1992): its period-1 orbit, Floquet multipliers and first period
 doubling against a computation independent of the package (scipy expm and root finding on the raw
 matrices), saltation multipliers against finite differences, the stepper's orbits converging to the event
 method's, and bad input."""
@@ -20,8 +20,8 @@ CLASSIC = dict(L=20e-3, C=47e-6, R=22.0, Vref=11.3, A=8.4, VL=3.8, VU=8.2, T=400
 
 
 def independent_orbit(Vin, guess=(0.6, 12.0, 0.3)):
-    """The period-1 orbit OFF on [0, d T), ON on [d T, T) (CCM), from x' = A x + E with the matrices of REFERENCE
-    section 3, and its monodromy matrix with the saltation matrix of REFERENCE section 9."""
+    """The period-1 orbit OFF on [0, d T), ON on [d T, T) (CCM), from x' = A x + E with the buck's matrices
+    (tests/models/hand.py), and its monodromy matrix with the saltation matrix S = I + (f+ - f-) n^T / (n^T f- + dg/dt)."""
     L, C, R, Vref, A, VL, VU, T = (CLASSIC[k] for k in ("L", "C", "R", "Vref", "A", "VL", "VU", "T"))
     Am = np.array([[0.0, -1.0 / L], [1.0 / C, -1.0 / (R * C)]])
     E_on = np.array([Vin / L, 0.0])

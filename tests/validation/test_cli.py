@@ -1,4 +1,4 @@
-"""The pcsuite command line: outputs as in CONTRACT, one-line errors, no partial files."""
+"""The pcsuite command line: outputs as documented (docs/guide/command-line.md), one-line errors, no partial files."""
 import json
 import subprocess
 import sys

@@ -1,4 +1,4 @@
-"""The cam-follower with impacts (REFERENCE section 10; Siconos' CamFollower example, di Bernardo, Osorio and
+"""The cam-follower with impacts (Siconos' CamFollower example, di Bernardo, Osorio and
 Santini): a follower of mass m on a spring k to a fixed point rides a rotating cam; contact is unilateral
 with Newton restitution e.
 

@@ -1,4 +1,4 @@
-"""The harmonically forced dry-friction oscillator on a moving belt (REFERENCE section 8; the seed's sliding
+"""The harmonically forced dry-friction oscillator on a moving belt (Popp and Stelter 1990; the seed's sliding
 bifurcations, after Kowalczyk and Piiroinen 2008).
 
     m x'' + k x = A cos(omega t) + lambda,   s = x' - Vdr,
