@@ -39,8 +39,9 @@ def _exports():
     out.append(("set_matrices", T.boolean(a(3), a(3), a(3), a(3), a(2), a(2), a(1), T.float64, a(3), a(2), a(3),
                                           a(3), a(4), a(3), a(3), a(2)), K.set_matrices.py_func))
     out.append(("step_jacobian", T.none(a(1, T.int32), a(2), a(4), a(3), a(3), a(3), a(2)), K.step_jacobian.py_func))
-    out.append(("newton_step", T.Tuple((T.float64, T.float64, T.float64, T.boolean))(a(1), a(1), a(2), T.float64,
-                                                                                      a(1), a(2)),
+    out.append(("newton_step", T.Tuple((T.float64, T.float64, T.float64, T.int64))(a(1), a(1), a(2), T.float64,
+                                                                                    a(1), a(2), T.float64, T.int64,
+                                                                                    T.int64),
                 newton_step.py_func))
     out.append(("solve_once", T.Tuple((T.int64, T.int64, T.float64, T.int64, T.int64, T.int64, T.float64))(
         a(2), a(1), a(1), a(1), T.int64, T.float64, T.int64, T.boolean, a(1), T.int64), engine.solve_once.py_func))

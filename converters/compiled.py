@@ -39,6 +39,12 @@ from pathlib import Path
 OK, NEEDS_GENERAL_SOLVER, NO_SOLUTION = 0, 1, 2
 #: Extra status of the state-switched loop: the event buffers are full (the caller grows them, resumes).
 EVENTS_FULL = 3
+#: The verdicts of one Newton-shooting iteration (:func:`.analysis.newton_kernel.newton_step`: the one stopping
+#: rule of the serial and the batched drivers): go on; converged (the estimated distance to the orbit within the
+#: tolerance); the residual at the rounding level (ROUNDING machine epsilons, relative: iterating cannot help);
+#: the iterations spent; the Jacobian minus I singular (a multiplier at 1).
+NEWTON_CONTINUE, NEWTON_CONVERGED, NEWTON_ROUNDING, NEWTON_EXHAUSTED, NEWTON_SINGULAR = 0, 1, 2, 3, 4
+ROUNDING = 64
 #: Largest k solved inline by the step loops (:func:`.lcp.kernels.solve_small_lcp`); above it they pivot
 #: (:func:`.lcp.murty.solve_warm`), at most PIVOTS_PER_PAIR k flips a step before the general solver takes it.
 MAX_INLINE_K = 8

@@ -329,6 +329,12 @@ def _rounding(orbit, operations: int) -> float:
     return max(orbit.distance, ROUNDING_PER_OPERATION * operations * amplification)
 
 
+def same_events(a: list, b: list) -> bool:
+    """Two runs' period events are the same sequence: as many, each of the same pair and kind in the same order
+    (only then is one run's event an estimate of the other's)."""
+    return len(a) == len(b) and all(x[:2] == y[:2] for x, y in zip(a, b))
+
+
 def _estimates(fine: dict, coarse: dict, fine_events, coarse_events, order: float, floor: float, ratio: float = 2.0):
     """Richardson's estimates of the fine values from a coarse run with ``ratio`` times the step."""
     factor = ratio ** order - 1.0
@@ -342,7 +348,7 @@ def _estimates(fine: dict, coarse: dict, fine_events, coarse_events, order: floa
     for name in coarse:
         if name.startswith("fraction_") and name not in out:             # a mode the finer orbit lost
             out[name] = Estimate(0.0, coarse[name][0] / factor, 1.0)
-    if len(fine_events) == len(coarse_events) and all(a[:2] == b[:2] for a, b in zip(fine_events, coarse_events)):
+    if same_events(fine_events, coarse_events):
         events = [(pair, kind, Estimate(tf, max(abs(tf - tc) / factor, floor), 1.0))
                   for (pair, kind, tf), (_, _, tc) in zip(fine_events, coarse_events)]
     else:                                                                # the event sequence is not settled
@@ -365,7 +371,7 @@ def _guarded(quantities: dict, events: list, history, n: int, order: float):
         before = previous.get(name)
         predicted = before.error_estimate * shrink if before is not None else 0.0
         out[name] = Estimate(q.value, max(q.error_estimate, predicted), q.scale)
-    if len(previous_events) == len(events):
+    if same_events(events, previous_events):
         events = [(pair, kind, Estimate(e.value, max(e.error_estimate, old.error_estimate * shrink), 1.0))
                   for (pair, kind, e), (_, _, old) in zip(events, previous_events)]
     return out, events

@@ -19,7 +19,8 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
-from ..compiled import kernel
+from ..compiled import NEWTON_CONVERGED, NEWTON_EXHAUSTED, NEWTON_ROUNDING, NEWTON_SINGULAR, kernel
+from ..compiled import ROUNDING as _ROUNDING
 from ..errors import ParameterError, SimulationError
 from ..validate import as_vector, check_flag, check_integer
 from ..problems import LCSProblem
@@ -81,7 +82,7 @@ class PeriodicOrbit:
 
 
 #: A residual below ROUNDING machine epsilons (relative) is rounding noise: iterating further cannot help.
-ROUNDING = 64
+ROUNDING = _ROUNDING
 
 
 def multipliers_of(jacobian: np.ndarray) -> np.ndarray:
@@ -128,22 +129,22 @@ def newton_orbit(period_map, x_guess, *, tol: float = 1e-10, max_iter: int = 50,
     for iteration in range(max_iter + 1):
         jac = np.ascontiguousarray(jac, dtype=float)
         rho = spectral_radius(jac)
-        residual, worst, estimate, solved = newton_step(x, np.ascontiguousarray(px, dtype=float), jac, rho, step,
-                                                        work)
-        if not solved:
+        residual, worst, estimate, verdict = newton_step(x, np.ascontiguousarray(px, dtype=float), jac, rho, step,
+                                                         work, float(tol), iteration, max_iter)
+        if verdict == NEWTON_SINGULAR:
             message = ("the period map's Jacobian has a multiplier at 1 (the orbit is not isolated: an undamped "
                        "or marginal circuit)")
             break
         distance = estimate
-        if distance <= tol:
+        if verdict == NEWTON_CONVERGED:
             return PeriodicOrbit(x + step if polish else x, getattr(period_map, "period", period), jac,
                                  multipliers_of(jac), residual, distance, iteration, period_map.evaluations, True,
                                  period_map.jacobian_kind)
-        if residual <= ROUNDING * np.finfo(float).eps:
+        if verdict == NEWTON_ROUNDING:
             message = (f"the residual is at the rounding level of the map and 1 - rho = {1.0 - rho:.3g} amplifies it: "
                        f"the orbit is resolved to ~{distance:.3g} in double precision, not to the tolerance asked for")
             break
-        if iteration == max_iter:
+        if verdict == NEWTON_EXHAUSTED:
             message = (f"no convergence in {max_iter} Newton iterations ({relaxations} of them plain periods where "
                        "no Newton step reduced the residual)")
             break

@@ -18,9 +18,8 @@ import numpy as np
 from numba import njit
 
 from ..analysis.newton_kernel import newton_step
-from ..analysis.periodic import ROUNDING as ROUNDING_LEVEL
 from ..analysis.periodic import spectral_radius
-from ..compiled import register_state
+from ..compiled import NEWTON_CONVERGED, NEWTON_EXHAUSTED, NEWTON_ROUNDING, NEWTON_SINGULAR, register_state
 from ..methods.theta_kernels import branch_maps, run_scalar, step_jacobian, theta_matrices
 
 _spectral_radius = njit(cache=True)(spectral_radius)
@@ -72,7 +71,6 @@ def _batch_steady(A, B, C, D, E, F, set_configs, set_dts, counts, which, steps, 
                   xs, us, ys, x_star, jac_out, status, iterations, residuals, distances, state):
     """:func:`batch_steady` compiled (``state``: :func:`converters.compiled.register_state`)."""
     P, n = x0.shape[0], x0.shape[1]
-    eps = 2.220446049250313e-16
     for p in range(P):
         sets = counts[p]
         Phi = np.empty((sets, n, n))
@@ -120,24 +118,24 @@ def _batch_steady(A, B, C, D, E, F, set_configs, set_dts, counts, which, steps, 
         status[p] = NOT_CONVERGED
         for it in range(max_iter + 1):
             rho = _spectral_radius(jac)
-            residual, worst, distance, solved = newton_step(x, px, jac, rho, dx, a)
+            residual, worst, distance, verdict = newton_step(x, px, jac, rho, dx, a, tol, it, max_iter)
             residuals[p] = residual
             iterations[p] = it
-            if not solved:
+            if verdict == NEWTON_SINGULAR:
                 status[p] = SINGULAR
                 break
             distances[p] = distance
-            if distance <= tol:
+            if verdict == NEWTON_CONVERGED:
                 status[p] = CONVERGED
                 for i in range(n):
                     x_star[p, i] = x[i] + dx[i]                   # the last (tiny) step taken too
                     for l in range(n):
                         jac_out[p, i, l] = jac[i, l]
                 break
-            if residual <= ROUNDING_LEVEL * eps:
+            if verdict == NEWTON_ROUNDING:
                 status[p] = ROUNDING
                 break
-            if it == max_iter:
+            if verdict == NEWTON_EXHAUSTED:
                 break
             accepted = False
             for _ in range(8):

@@ -143,8 +143,8 @@ def test_arguments_of_another_kind_go_to_the_jit_never_read_wrongly():
     for a, b, c in kinds:
         expected_step, step = np.empty(2), np.empty(2)
         expected = jit(np.ascontiguousarray(a, dtype=float), b, np.ascontiguousarray(c), 0.5, expected_step,
-                       np.empty((2, 3)))
-        assert aot(a, b, c, 0.5, step, np.empty((2, 3))) == expected
+                       np.empty((2, 3)), 1e-10, 0, 50)
+        assert aot(a, b, c, 0.5, step, np.empty((2, 3)), 1e-10, 0, 50) == expected
         assert np.array_equal(step, expected_step)
     assert not compiled.conforms(["f8:1", "i8"], (np.zeros(2), True))      # a bool is not an int here
     assert not compiled.conforms(["f8:1"], (np.zeros(2, dtype=np.float32),))
