@@ -61,8 +61,8 @@ from converters.methods import BackwardEuler
 from converters.simulate import simulate
 t1 = time.perf_counter()
 if compiled.source() != "ahead-of-time":
-    from converters.lcp.kernels import _masks_by_size
-    _masks_by_size(1)  # numba's own first-call set-up (type registries, its BLAS check imports scipy.linalg)
+    from converters.lcp.kernels import masks_by_size
+    masks_by_size(1)  # numba's own first-call set-up (type registries, its BLAS check imports scipy.linalg)
 t2 = time.perf_counter()
 simulate(half_wave_rectifier(t_end=1e-4), BackwardEuler(1e-6))
 simulate(diode_bridge(t_end=1e-4), BackwardEuler(1e-6))

@@ -10,14 +10,14 @@ import numpy as np
 PERIODS = 3
 
 
-def _time_unit(span: float) -> tuple[float, str]:
+def time_unit(span: float) -> tuple[float, str]:
     for scale, unit in ((1e9, "ns"), (1e6, "us"), (1e3, "ms")):
         if span * scale < 5000:
             return scale, unit
     return 1.0, "s"
 
 
-def _eng(value: float) -> str:
+def eng(value: float) -> str:
     """A value as a SPICE user writes it: 22u, 250k, 0.25."""
     if value == 0 or 1e-3 <= abs(value) < 1e3:
         return f"{value:.4g}"
@@ -43,11 +43,11 @@ def plot(tr, periods: float | None = None, signals=None, title: str | None = Non
     if periods is None:
         periods = PERIODS if np.isfinite(tr.period) else None
     t0, t1 = tr.window(periods) if periods else (tr.t[0], tr.t[-1])
-    rows = tr._rows(t0, t1)
+    rows = tr.rows_between(t0, t1)
     t = tr.t[rows]
     names = list(signals) if signals is not None else (
         list(tr.state_names) + (["vout"] if "vout" in tr.signal_names and "vout" not in tr.state_names else []))
-    scale, unit = _time_unit(t1 - t0)
+    scale, unit = time_unit(t1 - t0)
     # the mode timeline: the model's conduction modes, or for a bare LCS the pairs that hold (u > y) at each step
     has_modes = tr.labels is not None or "mode" in tr.measured or tr.u is not None
     fig, axes = plt.subplots(len(names) + int(has_modes), 1, figsize=(8, 1.7 * len(names) + 1.6), sharex=True,
@@ -82,7 +82,7 @@ def plot(tr, periods: float | None = None, signals=None, title: str | None = Non
     if title is None:
         meta = tr.metadata or {}
         params = meta.get("params") or {}
-        point = ", ".join(f"{k} = {_eng(v)}" for k, v in params.items() if isinstance(v, (int, float)))
+        point = ", ".join(f"{k} = {eng(v)}" for k, v in params.items() if isinstance(v, (int, float)))
         title = f"{meta.get('model') or 'LCS'} ({tr.method}){': ' + point if point else ''}"
     fig.suptitle(title, fontsize=9)
     fig.tight_layout()

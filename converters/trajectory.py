@@ -217,7 +217,7 @@ class Trajectory:
             raise ValueError(f"the window [{start:g}, {end:g}] s holds no time of the run [{self.t[0]:g}, {self.t[-1]:g}] s")
         return start, end
 
-    def _rows(self, t0: float, t1: float) -> np.ndarray:
+    def rows_between(self, t0: float, t1: float) -> np.ndarray:
         """Indices of the samples in [t0, t1]; at least the two around a window shorter than a step."""
         span = max(t1 - t0, 1e-300)
         if t0 < self.resolved_from - 1e-9 * span:
@@ -248,7 +248,7 @@ class Trajectory:
             else:
                 values = np.asarray(self.labels.signal(name, nodes))
             return float(weights @ values ** power)
-        rows = self._rows(t0, t1)
+        rows = self.rows_between(t0, t1)
         t, v = self.t[rows], self.signal(name, rows)
         dt = np.diff(t)
         if self.rule == "end":
@@ -282,7 +282,7 @@ class Trajectory:
     def _span(self, t0: float, t1: float) -> float:
         if self.rule == "exact" and self.exact is not None:
             return t1 - t0
-        rows = self._rows(t0, t1)
+        rows = self.rows_between(t0, t1)
         return float(self.t[rows[-1]] - self.t[rows[0]])
 
     def mean(self, name: str, periods: float | None = None, t0: float | None = None, t1: float | None = None) -> float:
@@ -297,7 +297,7 @@ class Trajectory:
     def ripple(self, name: str, periods: float | None = None, t0: float | None = None, t1: float | None = None) -> float:
         """Peak-to-peak value over the window (on the samples)."""
         a, b = self.window(periods, t0, t1)
-        return float(np.ptp(self.signal(name, self._rows(a, b))))
+        return float(np.ptp(self.signal(name, self.rows_between(a, b))))
 
     def plot(self, periods: float | None = None, signals=None, title: str | None = None):
         """The run's waveforms over the last periods and its mode timeline: a matplotlib Figure
@@ -319,7 +319,7 @@ class Trajectory:
         """:meth:`measurements` as plain data, {signal: {unit, mean, rms, min, max, ripple}} (no pandas: the JSON
         summary of a fresh process does not pay for importing it)."""
         a, b = self.window(periods, t0, t1)
-        rows = self._rows(a, b)
+        rows = self.rows_between(a, b)
         units = dict(getattr(getattr(self.labels, "model", None), "signal_units", {}) or {})
         out = {}
         for name in self.signal_names:
@@ -337,7 +337,7 @@ class Trajectory:
     def mode_fractions(self, periods: float | None = 1, t0: float | None = None, t1: float | None = None) -> dict:
         """Fraction of the window spent in each mode (each step counted by the label of its end point)."""
         a, b = self.window(periods, t0, t1)
-        rows = self._rows(a, b)
+        rows = self.rows_between(a, b)
         labels = np.asarray(self.modes(rows)).astype(str)[1:]
         dt = np.diff(self.t[rows])
         total = dt.sum()

@@ -177,7 +177,7 @@ def as_matrix(name: str, value, shape: tuple[int | None, int | None]) -> np.ndar
     try:
         arr = np.array(value, dtype=float, order="C")      # C order: what the compiled kernels read
     except (TypeError, ValueError, OverflowError):
-        raise ParameterError(f"{name} must be a numeric matrix of doubles; got {_short(value)}") from None
+        raise ParameterError(f"{name} must be a numeric matrix of doubles; got {shortened(value)}") from None
     if arr.ndim == 1 and shape[1] == 1:
         arr = arr.reshape(-1, 1)
     if arr.ndim != 2 or any(s is not None and s != a for s, a in zip(shape, arr.shape)):
@@ -194,7 +194,7 @@ def as_vector(name: str, value, size: int | None) -> np.ndarray:
     try:
         arr = np.array(value, dtype=float, order="C")
     except (TypeError, ValueError, OverflowError):
-        raise ParameterError(f"{name} must be a numeric vector of doubles; got {_short(value)}") from None
+        raise ParameterError(f"{name} must be a numeric vector of doubles; got {shortened(value)}") from None
     if arr.ndim == 0:
         arr = arr.reshape(1)
     if arr.ndim == 2 and 1 in arr.shape:
@@ -227,7 +227,7 @@ def _check_real(name: str, value, what: str) -> None:
         raise ParameterError(f"{name} must be a {what} of real numbers; got {names.get(kind, kind)} values")
 
 
-def _short(value) -> str:
+def shortened(value) -> str:
     text = repr(value)
     return text if len(text) <= 80 else text[:77] + "..."
 

@@ -193,3 +193,44 @@ def test_every_process_pool_is_the_parallel_backends():
     users = sorted(path.relative_to(ROOT).as_posix() for path in _modules().values() if pattern.search(path.read_text()))
     assert users == ["converters/parallel/local.py"]
     assert pattern.search("pool = futures.ProcessPoolExecutor(max_workers=1)")
+
+
+def _private_imports(modules: dict) -> list[str]:
+    """``from X import _name`` where X is a module of another package than the importer's (a private name reached
+    across packages: what it names may change without notice)."""
+    found = []
+    for name, path in modules.items():
+        package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+        for node in ast.walk(ast.parse(path.read_text())):
+            if not isinstance(node, ast.ImportFrom):
+                continue
+            base = node.module or ""
+            if node.level:
+                parts = package.split(".")
+                parts = parts[:len(parts) - (node.level - 1)]
+                base = ".".join(parts + ([base] if base else []))
+            if base not in modules:
+                continue
+            owner = base if modules[base].name == "__init__.py" else base.rpartition(".")[0]
+            for alias in node.names:
+                if alias.name.startswith("_") and not alias.name.startswith("__") and owner != package:
+                    found.append(f"{name} imports {base}.{alias.name}")
+    return found
+
+
+def test_no_private_name_is_imported_across_packages():
+    assert _private_imports(_modules()) == []
+
+
+def test_the_private_import_finder_finds_one(tmp_path):
+    (tmp_path / "a").mkdir()
+    (tmp_path / "a" / "__init__.py").write_text("")
+    (tmp_path / "a" / "inner.py").write_text("def _helper(): pass\n")
+    (tmp_path / "b").mkdir()
+    (tmp_path / "b" / "__init__.py").write_text("")
+    (tmp_path / "b" / "user.py").write_text("from ..a.inner import _helper\n")
+    (tmp_path / "a" / "sibling.py").write_text("from .inner import _helper\n")     # the same package: allowed
+    modules = {"a": tmp_path / "a" / "__init__.py", "a.inner": tmp_path / "a" / "inner.py",
+               "a.sibling": tmp_path / "a" / "sibling.py", "b": tmp_path / "b" / "__init__.py",
+               "b.user": tmp_path / "b" / "user.py"}
+    assert _private_imports(modules) == ["b.user imports a.inner._helper"]

@@ -183,7 +183,7 @@ def _transient(result: CircuitComparison, circuit, th: dict) -> CircuitCompariso
 
 def _cycles(tr, t0: float) -> np.ndarray:
     """The instants after t0 where the (first) switch closes."""
-    rows = tr._rows(t0, tr.t[-1])
+    rows = tr.rows_between(t0, tr.t[-1])
     closed = np.asarray(tr.signal("switch", rows)).astype(int)
     return tr.t[rows][1:][np.diff(closed) > 0]
 
@@ -227,7 +227,7 @@ def _self_oscillating(result: CircuitComparison, circuit, th: dict) -> CircuitCo
 
 def _cycle_ripple(tr, name: str, closings: np.ndarray) -> float:
     """The mean over the cycles between ``closings`` of each cycle's peak-to-peak value of a signal."""
-    return float(np.mean([np.ptp(np.asarray(tr.signal(name, tr._rows(a, b)), dtype=float))
+    return float(np.mean([np.ptp(np.asarray(tr.signal(name, tr.rows_between(a, b)), dtype=float))
                           for a, b in zip(closings[:-1], closings[1:])]))
 
 
@@ -235,7 +235,7 @@ def _period_ripple(tr, name: str, t0: float, T: float, window: int) -> float:
     """The mean over the window's periods of each period's peak-to-peak value of a signal."""
     values = []
     for k in range(window):
-        rows = tr._rows(t0 + k * T, t0 + (k + 1) * T)
+        rows = tr.rows_between(t0 + k * T, t0 + (k + 1) * T)
         values.append(float(np.ptp(np.asarray(tr.signal(name, rows), dtype=float))))
     return float(np.mean(values))
 
@@ -245,7 +245,7 @@ def _mode_sequences(tr, t0: float, T: float, window: int) -> list:
     T, an edge's transient, left out)."""
     out = []
     for k in range(window):
-        rows = tr._rows(t0 + k * T, t0 + (k + 1) * T)
+        rows = tr.rows_between(t0 + k * T, t0 + (k + 1) * T)
         t, labels = tr.t[rows], np.asarray(tr.modes(rows)).astype(str)
         sequence, start = [], t[0]
         for i in range(1, len(labels) + 1):

@@ -140,7 +140,7 @@ def _period_ripple(tr, t0: float, T: float, window: int) -> float:
     """The mean over the window's periods of each period's peak-to-peak vout, the window's linear trend
     removed first (a run still drifting towards its steady state, ngspice's on a lightly damped circuit, adds
     its drift per period to every period's peak-to-peak)."""
-    rows = tr._rows(t0, t0 + window * T)
+    rows = tr.rows_between(t0, t0 + window * T)
     t, v = tr.t[rows], np.asarray(tr.signal("vout", rows), dtype=float)
     v = v - np.polyval(np.polyfit(t - t0, v, 1), t - t0)
     return float(np.mean([np.ptp(v[(t >= t0 + k * T) & (t <= t0 + (k + 1) * T)]) for k in range(window)]))

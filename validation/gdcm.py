@@ -122,7 +122,7 @@ def conduction_class(tr, t0: float, t1: float) -> str:
     buck) and GDCM when one is held non-zero (inductor currents circulating with the diodes blocked and the
     switches open: the Cuk's i1 = -i2)."""
     from .spice import CURRENT_FRACTION
-    rows = tr._rows(t0, t1)
+    rows = tr.rows_between(t0, t1)
     off = np.asarray(tr.modes(rows)).astype(str) == "off"
     if tr.mode_fractions(None, t0=t0, t1=t1).get("off", 0.0) <= 0.01:
         return "CCM"

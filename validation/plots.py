@@ -21,7 +21,7 @@ def png(fig) -> bytes:
 def comparison_plot(c, periods: int = 3) -> bytes:
     """vout and every inductor current of both simulators over the last periods, and the primary current's
     difference; legends beside the panels, off the traces; the operating point in the title."""
-    from converters.plotting import _eng, _time_unit
+    from converters.plotting import eng, time_unit
     T, span = c.lcp.period, "periods"
     if not math.isfinite(T):             # a circuit that switches itself: its cycles; a transient: the whole run
         cycle = c.metrics.get("cycle_lcp_s")
@@ -34,7 +34,7 @@ def comparison_plot(c, periods: int = 3) -> bytes:
     sel_l, sel_s = t_l >= start, t_s >= start
     panels = ["vout", *currents]
     fig, axes = plt.subplots(len(panels) + 1, 1, figsize=(9, 2.0 * (len(panels) + 1) + 0.6), sharex=True)
-    scale, unit = _time_unit(periods * T)
+    scale, unit = time_unit(periods * T)
     for ax, name in zip(axes, panels):
         spice = c.spice.signal(name) if name == "vout" else c.spice.state(name)
         lcp = c.lcp.signal(name) if name == "vout" else c.lcp.state(name)
@@ -50,7 +50,7 @@ def comparison_plot(c, periods: int = 3) -> bytes:
     for ax in axes:
         ax.grid(alpha=0.3)
         ax.ticklabel_format(axis="y", useOffset=False)
-    point = ", ".join(f"{k} = {_eng(v)}" for k, v in c.params.items() if isinstance(v, (int, float)))
+    point = ", ".join(f"{k} = {eng(v)}" for k, v in c.params.items() if isinstance(v, (int, float)))
     fig.suptitle(f"{c.converter}: LCP time-stepper against ngspice\n{point}", fontsize=9)
     fig.tight_layout()
     return png(fig)

@@ -23,7 +23,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..errors import ParameterError
-from ..validate import _short, as_matrix, as_vector, check_integer, check_range
+from ..validate import shortened, as_matrix, as_vector, check_integer, check_range
 from ..parallel import parallel_map
 
 
@@ -286,7 +286,7 @@ def aperiodic_onset(attractors: list[Attractor], run: int = 3) -> float | None:
 
 def _check_attractors(attractors) -> None:
     if not (isinstance(attractors, (list, tuple)) and all(isinstance(a, Attractor) for a in attractors)):
-        raise ParameterError(f"attractors must be a list of Attractor (from brute_force); got {_short(attractors)}")
+        raise ParameterError(f"attractors must be a list of Attractor (from brute_force); got {shortened(attractors)}")
 
 
 def period_windows(attractors: list[Attractor]) -> list[dict]:

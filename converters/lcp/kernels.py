@@ -115,7 +115,7 @@ def solve_small_lcp(M, q, k, z, mask_prev, order, work):
 
 
 @njit(cache=True)
-def _masks_by_size(k):
+def masks_by_size(k):
     total = 1 << k
     order = np.empty(total, dtype=np.int64)
     m = 0

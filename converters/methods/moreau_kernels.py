@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..lcp.kernels import _masks_by_size, solve_small_lcp
+from ..lcp.kernels import masks_by_size, solve_small_lcp
 
 
 @njit(cache=True)
@@ -29,7 +29,7 @@ def run_moreau(q, v, impulse, status, h, theta, M, W, K, C, f, WT, V, popp, WN, 
         H[m + j] = WN[j]
     WH = W @ H.T                                  # n x (m + c)
     D = H @ WH                                    # Delassus matrix
-    order = _masks_by_size(k) if k > 0 else np.zeros(1, dtype=np.int64)
+    order = masks_by_size(k) if k > 0 else np.zeros(1, dtype=np.int64)
     A = np.zeros((k, k))
     b = np.zeros(k)
     z = np.zeros(k)

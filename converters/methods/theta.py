@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, replace
+from typing import NamedTuple
 
 import numpy as np
 
@@ -215,11 +216,24 @@ def _too_long(problem: LCSProblem, h: float) -> bool:
     return periods * (int(round(T / h)) + len(problem.switching.starts)) > MAX_STEPS
 
 
-def _plan_arrays(problem: LCSProblem, h: float):
-    """(t, step_config, which, set_configs, set_dts) of a run (:func:`_plan`; step_config: each step's
-    configuration)."""
+class GridPlan(NamedTuple):
+    """A run's grid and matrix sets as arrays (:func:`plan_arrays`), for callers that step it themselves (the
+    batched steady states of :mod:`converters.sweeps.batch`)."""
+
+    t: np.ndarray
+    #: Each step's configuration.
+    step_config: np.ndarray
+    #: Each step's matrix set.
+    which: np.ndarray
+    #: Each matrix set's configuration and step.
+    set_configs: np.ndarray
+    set_dts: np.ndarray
+
+
+def plan_arrays(problem: LCSProblem, h: float) -> GridPlan:
+    """The grid and matrix sets of a run of ``problem`` at step ``h`` (:func:`_plan`)."""
     t, config, which, set_configs, set_dts = _plan(problem, h)
-    return t, config[1:], which, set_configs, set_dts
+    return GridPlan(t, config[1:], which, set_configs, set_dts)
 
 
 def _plan(problem: LCSProblem, h: float, period=None):

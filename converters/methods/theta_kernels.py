@@ -24,7 +24,7 @@ from numba.extending import overload
 from ..compiled import (EVENTS_FULL, NEEDS_GENERAL_SOLVER, NO_SOLUTION, OK,  # noqa: F401 (shared with the callers)
                         PIVOTS_PER_PAIR)
 from ..lcp import state as LCP_STATE
-from ..lcp.kernels import _masks_by_size, solve_augmented, solve_small_lcp
+from ..lcp.kernels import masks_by_size, solve_augmented, solve_small_lcp
 from ..lcp.murty import sizes as pivoting_sizes
 from ..lcp.murty import solve_warm
 
@@ -116,7 +116,7 @@ def run_steps(which, Phi, Gamma, H, C, F, M, Phi_b, Gamma_b, CPhi, q0, x, u, y, 
     q = np.empty(k)
     z = np.empty(k)
     work = np.empty((k, k + 1))
-    order = _masks_by_size(k) if inline else np.empty(0, dtype=np.int64)
+    order = masks_by_size(k) if inline else np.empty(0, dtype=np.int64)
     active = np.empty(k, dtype=np.bool_)
     floats, ints = pivoting_sizes(k)
     fw, iw, st = np.empty(floats), np.empty(ints, dtype=np.int64), np.empty(LCP_STATE.ST_SIZE, dtype=np.int64)
@@ -352,7 +352,7 @@ def run_state_switched(A, B, C, D, E, F, Phi, Gamma, H, M, t, h, theta, c, d, lo
     EVENTS_FULL (the event buffers are full at step j: grow them and resume at j).
     """
     n, k = x.shape[1], u.shape[1]
-    order = _masks_by_size(k)
+    order = masks_by_size(k)
     work = np.empty((k, k + 1))
     xf, q, z = np.empty(n), np.empty(k), np.empty(k)
     Phi_s, Gamma_s, H_s, M_s, W_s = np.empty((n, n)), np.empty(n), np.empty((n, k)), np.empty((k, k)), np.empty((n, n))
@@ -450,7 +450,7 @@ def run_relay(A, B, C, D, E, F, low, high, t, h, theta, c, d, x, u, y, blend, st
     Returns (status, j) like :func:`run_steps`."""
     n, k = x.shape[1], u.shape[1]
     K = k + 2
-    order = _masks_by_size(K)
+    order = masks_by_size(K)
     work = np.empty((K, K + 1))
     Phi, Gamma, H, M, W = np.empty((n, n)), np.empty(n), np.empty((n, k)), np.empty((k, k)), np.empty((n, n))
     Mb, qb, zb = np.zeros((K, K)), np.empty(K), np.empty(K)

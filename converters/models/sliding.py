@@ -175,7 +175,7 @@ class BoostSMC(Model):
         out = {"vout_mean": tr.mean("vout", t0=t0), "vref": p["Vref"], "window_s": [t0, t_end],
                "measurements": tr.measurement_rows(t0=t0, t1=t_end)}
         if self.implicit:
-            lam = 1.0 - tr.signal("switch", tr._rows(t0, t_end))
+            lam = 1.0 - tr.signal("switch", tr.rows_between(t0, t_end))
             out.update(lambda_mean=float(lam.mean()), lambda_spread=float(lam.max() - lam.min()),
                        vin_over_v=p["Vin"] / out["vout_mean"])
         else:

@@ -187,7 +187,7 @@ class ModelSweep:
         the per-point path for the rest. Rows in the order of ``items``."""
         if not self.batchable():
             return [self.row(i, point) for i, point in items]
-        from ..methods.theta import _plan_arrays
+        from ..methods.theta import plan_arrays
         from .batch import CONVERGED, batch_steady
         model = self._model()
         prepared, rows = [], {}
@@ -197,7 +197,7 @@ class ModelSweep:
                 p = model.resolve({**self.base, **point})
                 method = self._method(model, p)
                 problem = model.problem(p, model.period(p))
-                plan = _plan_arrays(problem, method.h)
+                plan = plan_arrays(problem, method.h)
                 prepared.append((index, point, p, method, problem, plan, time.perf_counter() - clock))
             except (ValueError, RuntimeError, ArithmeticError) as exc:
                 rows[index] = failed_row(index, point, f"{type(exc).__name__}: {exc}", time.perf_counter() - clock)
@@ -205,8 +205,8 @@ class ModelSweep:
             P = len(prepared)
             n = prepared[0][4].n
             configs = len(prepared[0][4].configurations)
-            S = max(len(item[5][2]) for item in prepared)
-            sets = max(len(item[5][3]) for item in prepared)
+            S = max(len(item[5].which) for item in prepared)
+            sets = max(len(item[5].set_configs) for item in prepared)
             A, B = np.zeros((P, configs, n, n)), np.zeros((P, configs, n, 1))
             C, D = np.zeros((P, configs, 1, n)), np.zeros((P, configs, 1, 1))
             E, F = np.zeros((P, configs, n)), np.zeros((P, configs, 1))
@@ -216,11 +216,10 @@ class ModelSweep:
             for k, (_, _, _, _, problem, plan, _) in enumerate(prepared):
                 for c, cfg in enumerate(problem.configurations):
                     A[k, c], B[k, c], C[k, c], D[k, c], E[k, c], F[k, c] = cfg.A, cfg.B, cfg.C, cfg.D, cfg.E, cfg.F
-                _, _, plan_which, plan_configs, plan_dts = plan
-                counts[k] = len(plan_configs)
-                set_configs[k, :counts[k]], set_dts[k, :counts[k]] = plan_configs, plan_dts
-                steps[k] = len(plan_which)
-                which[k, :steps[k]] = plan_which
+                counts[k] = len(plan.set_configs)
+                set_configs[k, :counts[k]], set_dts[k, :counts[k]] = plan.set_configs, plan.set_dts
+                steps[k] = len(plan.which)
+                which[k, :steps[k]] = plan.which
                 x0[k] = problem.x0
             xs, us, ys = np.zeros((P, S + 1, n)), np.zeros((P, S + 1)), np.zeros((P, S + 1))
             x_star, jac = np.zeros((P, n)), np.zeros((P, n, n))
@@ -237,7 +236,7 @@ class ModelSweep:
                     rows[index] = failed_row(index, point, _batch_failure(status[k], residuals[k], distances[k]),
                                              time.perf_counter() - clock)
                     continue
-                t, step_config = plan[0], plan[1]
+                t, step_config = plan.t, plan.step_config
                 count = steps[k] + 1
                 config = np.concatenate([step_config[:1], step_config])
                 run = _stepper_trajectory(problem, method, t, xs[k, :count], us[k, :count, None], ys[k, :count, None],
