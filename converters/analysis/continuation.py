@@ -693,7 +693,7 @@ def cascade(family: OrbitFamily, start: float, stop: float, x_guess, *, max_peri
     the period-2k orbit born there, up to orbits of ``max_period`` switching periods. Returns every branch,
     the first one first, each child after its parent."""
     from ..validate import check_integer
-    check_integer("max_period", max_period, family.periods, 1024)         # 0, 1.5 or 1e9 had been accepted
+    check_integer("max_period", max_period, family.periods, 1024)         # 0, 1.5 or 1e9 are no period count
     branches = [follow(family, start, stop, x_guess, **options)]
     switch_options = {k: v for k, v in options.items() if k in ("max_step", "tol", "locate_tol", "max_points", "fd_step")}
     queue = [(branches[0], family)]

@@ -52,9 +52,6 @@ class GDCMCondition:
         """u = -C (A x + E) / (C B), the pair's multiplier on the GDCM set."""
         return -self.drift(x) / self.CB
 
-    def holds(self, x, atol: float) -> np.ndarray:
-        return (np.abs(self.on_set(x)) <= atol) & (self.drift(x) <= atol * self.CB)
-
     def reduced_rhs(self, x) -> np.ndarray:
         return np.atleast_2d(x) @ self.A_red.T + self.E_red
 

@@ -71,7 +71,7 @@ def magnitudes(M, q):
     return math.frexp(qbig)[1], math.frexp(mbig)[1], True, qbig, mbig
 
 
-#: 2^e for every normal exponent, POW2[e + 1022] (a table: libm's ldexp had been a twentieth of a small solve).
+#: 2^e for every normal exponent, POW2[e + 1022] (a table: libm's ldexp costs a twentieth of a small solve).
 POW2 = np.ldexp(1.0, np.arange(-1022, 1024))
 
 

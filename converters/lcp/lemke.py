@@ -213,7 +213,7 @@ def _pivot(C, row, col, prow):
     the column, which becomes B^-1's new column (the full tableau's numbers, operation for operation).
 
     The pivot row is written whole to ``prow`` before the other rows read it, and column ``col`` apart: a
-    vector load of entries just stored one by one waits for each store (store forwarding fails), which had been
+    vector load of entries just stored one by one waits for each store (store forwarding fails), which costs
     a third of Lemke's time on small tableaux (the numbers are the same: prow[col] = p / p = 1 gives C[i, col] - f
     = 0, which 0 - f / p then replaces)."""
     n = C.shape[1]

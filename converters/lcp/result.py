@@ -22,16 +22,6 @@ _MAX_FLOAT = 1.7976931348623157e308
 CHECK_OK, CHECK_NOT_FINITE, CHECK_W_NEGATIVE, CHECK_Z_NEGATIVE, CHECK_NOT_COMPLEMENTARY, CHECK_RESIDUAL = range(6)
 
 
-def scaled_norm(v: np.ndarray) -> float:
-    """||v||_2 computed on v / max|v| (never underflows nor overflows in the sum of squares)."""
-    v = np.asarray(v, dtype=float)
-    big = float(np.abs(v).max(initial=0.0))
-    if big == 0.0 or not math.isfinite(big):
-        return big
-    u = v / big
-    return big * math.sqrt(float(u @ u))
-
-
 @njit(cache=True, _nrt=False, inline='always')
 def mark_done(st, status, outcome):
     """End a compiled method's run in its state array (``state`` layout): done, with its status and why."""

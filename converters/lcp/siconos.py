@@ -27,7 +27,7 @@ from ..errors import LCPError
 from ..validate import quoted
 
 #: Tokens are separated by ASCII white space only, and numbers are ASCII digits: a no-break or thin space inside a
-#: number (1\u00a0000) had split it into two numbers, and other scripts' digits (\u0661, \uff11) had been read.
+#: number (1\u00a0000) would split it into two numbers, and other scripts' digits (\u0661, \uff11) must not be read.
 _TOKEN = re.compile(r"[^ \t\n\r\f\v]+")
 _FLOAT = re.compile(r"^[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eEdD][+-]?[0-9]+)?$")
 _INT = re.compile(r"^[+-]?[0-9]+$")

@@ -42,6 +42,8 @@ class Method(ABC):
     step_option: ClassVar[str] = ""
     #: The problems it takes: ``lcs`` (converters), ``mechanical`` (friction and impacts).
     domains: ClassVar[tuple] = ("lcs",)
+    #: What a run's ``steps`` counts (the one-line summary's unit).
+    counts: ClassVar[str] = "steps"
 
     def __init_subclass__(cls, key: str = "", **kwargs):
         super().__init_subclass__(**kwargs)

@@ -82,6 +82,8 @@ class EventDriven(Method, key="event"):
         form, exactly for a constant relative acceleration. Default 1e-6.
     """
 
+    counts = "segments"
+
     event_tol: float = 1e-13
     sample_fraction: float = 1.0 / 32.0
     output_step: float | None = None

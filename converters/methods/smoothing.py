@@ -55,6 +55,8 @@ class Smoothing(Method, key="smooth"):
         Spacing of the output samples (s); None: the solver's own steps.
     """
 
+    counts = "LU factorisations"
+
     eps: float = 1e-4
     solver_rtol: float = 1e-6
     atol: float | None = None

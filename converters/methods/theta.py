@@ -51,7 +51,8 @@ class Theta(Method, key="lcp"):
     theta: float = 0.5
     step_option = "h"
     bytes_per_value = 50.0
-    description = "LCP time-stepper: theta method (--theta, default 1 = backward Euler), one LCP per step"
+    description = ("LCP time-stepper: theta method (--theta in [0.5, 1], 1 = backward Euler; default the model's: 1 "
+                   "for the converters, 0.5 for a netlist), one LCP per step")
 
     def __post_init__(self):
         check_step_and_theta(self)

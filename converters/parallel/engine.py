@@ -89,7 +89,7 @@ def run_ensemble(ensemble, points, *, backend="local", indices=None, chunk: int 
     backend = backend_for(backend, workers=workers)
     if indices is None:
         indices = np.arange(points.size, dtype=np.int64)
-    else:       # 0.7 had been truncated to 0, 5 of a 3-point grid failed deep in numpy
+    else:       # 0.7 would truncate to 0, 5 of a 3-point grid fail deep in numpy
         from ..validate import check_indices
         indices = check_indices("indices", indices, points.size)
     chunk = ensemble.chunk_hint if chunk is None else chunk      # 0 is refused, not replaced by the default

@@ -26,7 +26,7 @@ class Schedule:
             starts = tuple(parse_value("schedule start", s) for s in self.starts)
         except TypeError:
             raise ParameterError(f"schedule starts must be a sequence of times (s); got {self.starts!r}") from None
-        try:     # an index: 0.7 or 1.9 had been truncated to 0 and 1, None crashed
+        try:     # an index: 0.7 or 1.9 would truncate to 0 and 1, None crash
             configs = tuple(check_integer("schedule config", c, 0) for c in self.configs)
         except TypeError:
             raise ParameterError(f"schedule configs must be a sequence of indices; got {self.configs!r}") from None
@@ -34,7 +34,7 @@ class Schedule:
         if not (isinstance(period, (int, float, np.integer, np.floating)) and not isinstance(period, bool)
                 and (np.isfinite(period) or period == np.inf)):
             raise ParameterError(f"schedule period must be a positive number of seconds, or inf (constant); got "
-                                 f"{period!r}")          # NaN and -inf had been taken as a constant schedule
+                                 f"{period!r}")          # NaN and -inf would read as a constant schedule
         if len(starts) != len(configs) or not starts:
             raise ParameterError(f"schedule starts and configs must have the same non-zero length; "
                                  f"got {len(starts)} and {len(configs)}")

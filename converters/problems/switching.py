@@ -116,7 +116,7 @@ class StateSwitching:
 
     def __post_init__(self):
         _check_function(self.function)
-        if not isinstance(self.latch, (bool, np.bool_)):                   # "no" had been true
+        if not isinstance(self.latch, (bool, np.bool_)):                   # a string ("no") is truthy
             raise ParameterError(f"latch must be True or False; got {self.latch!r}")
         object.__setattr__(self, "below", _check_config("below", self.below))
         object.__setattr__(self, "above", _check_config("above", self.above))

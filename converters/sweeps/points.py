@@ -30,7 +30,7 @@ class Axis:
 
     def __post_init__(self):
         # Axis.parse checks the text; an Axis built directly is checked here (NaN ends, count 0 or 2.5, a log axis
-        # across zero had been accepted or failed deep in numpy)
+        # across zero would pass or fail deep in numpy)
         if not (isinstance(self.name, str) and self.name.strip()):
             raise ParameterError(f"an axis needs a parameter name; got {self.name!r}")
         for end in ("start", "stop"):

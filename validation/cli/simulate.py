@@ -220,7 +220,8 @@ def _spice(args, params):
 
 
 def _print(summary: dict, tr, args) -> None:
-    unit = {"lcp": "steps", "event": "segments", "smooth": "LU factorisations", "spice": "accepted steps"}[tr.method]
+    from converters.methods import METHODS
+    unit = METHODS[tr.method].counts if tr.method in METHODS else "accepted steps"        # ngspice's own
     options = ", ".join(f"{k} = {v:.3g}" if isinstance(v, float) else f"{k} = {v}"
                         for k, v in summary["options"].items() if k != "params" and v is not None
                         and not isinstance(v, dict) and k != "max_events")

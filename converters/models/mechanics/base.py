@@ -13,7 +13,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...errors import ParameterError
 from ...params import Param, resolve
 from ...problems.mechanical import MechanicalProblem
 from ...trajectory import Samples
@@ -110,9 +109,3 @@ class MechanicalModel(ABC):
         t0 = max(tr.t[0], t1 - self.time_scale(p))
         return {"events": {str(k): int(v) for k, v in counts.items()},
                 "mode_fractions": tr.mode_fractions(None, t0=t0, t1=t1)}
-
-
-def check_choice(name: str, value: float, choices: tuple) -> float:
-    if value not in choices:
-        raise ParameterError(f"{name} must be one of {', '.join(f'{c:g}' for c in choices)}; got {value!r}")
-    return value
