@@ -11,15 +11,37 @@ def peer():
     return peer_directory()
 
 
-@pytest.fixture(scope="session")
-def ngspice():
-    """ngspice through PySpice; in CI its absence is a failure, never a silent skip."""
+def _ngspice_found() -> bool:
     import shutil
     from pathlib import Path
-    found = shutil.which("ngspice") and any(Path(d).glob("libngspice.so*") for d in
-                                             ("/usr/lib/x86_64-linux-gnu", "/usr/lib/aarch64-linux-gnu", "/usr/lib"))
-    if not found:
+    return bool(shutil.which("ngspice")) and any(Path(d).glob("libngspice.so*") for d in
+                                                 ("/usr/lib/x86_64-linux-gnu", "/usr/lib/aarch64-linux-gnu", "/usr/lib"))
+
+
+def _require_ngspice() -> None:
+    """In CI (``.ci/run`` sets CI) a missing ngspice is a failure, never a silent skip; elsewhere a skip that says
+    how to get it."""
+    if not _ngspice_found():
         if os.environ.get("CI"):
             pytest.fail("ngspice and libngspice must be installed in CI (make test installs them)")
         pytest.skip("ngspice not installed (make test installs it)")
+
+
+@pytest.fixture(scope="session")
+def ngspice():
+    """ngspice through PySpice (the test carries the spice mark: :func:`pytest_collection_modifyitems`)."""
+    _require_ngspice()
     return True
+
+
+def pytest_collection_modifyitems(items):
+    """Every test that asks for ngspice carries the spice mark (``pytest -m "not spice"`` leaves them all out)."""
+    for item in items:
+        if "ngspice" in getattr(item, "fixturenames", ()):
+            item.add_marker(pytest.mark.spice)
+
+
+def pytest_runtest_setup(item):
+    """A spice-marked test runs only with ngspice there, whether or not it asks for the fixture."""
+    if item.get_closest_marker("spice") is not None:
+        _require_ngspice()
