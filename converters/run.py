@@ -161,8 +161,7 @@ def run_converter(name_or_model, params: dict | None = None, *, control: str = "
     steady_tol = parse_value("steady_tol", steady_tol)
     if not 0.0 < steady_tol < 1.0:
         raise ParameterError(f"steady_tol must be in (0, 1); got {steady_tol!r}")
-    meta = {"model": model.name, "control": model.control, "params": p, "method_options": method.options(),
-            "method_object": method}
+    meta = {"model": model.name, "control": model.control, "params": p, "method_options": method.options()}
     if steady:
         orbit, period_map = _orbit_and_map(model, p, method, x0=x0, tol=0.1 * steady_tol)
         if not orbit.stable:
@@ -221,7 +220,7 @@ def _accurate(model: Model, p: dict, rtol, start: float, *, method, h, t_end, pe
     T = model.period(p)
     simulated = sum(run["periods"] for run in result.runs) + span / T     # every orbit's periods, then the span
     meta = {"model": model.name, "control": model.control, "params": p, "method_options": result.method.options(),
-            "method_object": result.method, "orbit": result.orbit.summary(), "accuracy": result.summary(),
+            "orbit": result.orbit.summary(), "accuracy": result.summary(),
             "steady_periods": int(round(simulated)), "periods": int(round(span / T))}
     return replace(tr, labels=model.labels(p), wall_s=time.perf_counter() - start, metadata={**tr.metadata, **meta})
 
@@ -435,24 +434,25 @@ def run_summary(tr: Trajectory) -> dict:
             out["power"].update(efficiency_error_estimate=efficiency_estimate(quantities),
                                 input_W_error_estimate=quantities["input_W"]["relative_error_estimate"],
                                 losses_W_error_estimate=max(losses, default=0.0))
-    elif meta.get("control", "pwm") == "pwm" and model.periodic(p) and "method_object" in meta and not model.step_times(p):
+    elif meta.get("control", "pwm") == "pwm" and model.periodic(p) and tr.algorithm is not None \
+            and not model.step_times(p):
         from .analysis.accuracy import default_check, last_period
         period = last_period(model, p, tr)
         out["mode_fractions"] = period["mode_fractions"]        # read inside the step, not on the grid
         out["events"] = [{"pair": pair, "kind": kind, "time_T": t} for pair, kind, t in period["events"]]
-        check = default_check(model, p, meta["method_object"], tr, out["vout_mean"], out.get("power"))
+        check = default_check(model, p, tr.algorithm, tr, out["vout_mean"], out.get("power"))
         for key in POWER_ESTIMATES:          # the power summary's estimates stand beside its values
             if key in check:
                 out["power"][key] = check.pop(key)
         out["accuracy"] = check
         if "warning" in check:
             out["warnings"] = [check["warning"]]
-    elif "method_object" in meta and isinstance(out.get("vout_mean"), float) and ("window_s" in out or
-                                                                                 "window_periods" in out):
+    elif tr.algorithm is not None and isinstance(out.get("vout_mean"), float) and ("window_s" in out or
+                                                                                    "window_periods" in out):
         # no periodic orbit to compare with: the sliding-mode boost (its window_s), a run with a step, another control
         from .analysis.accuracy import window_check
         window = out.get("window_s") or (float(tr.t[-1]) - out["window_periods"] * model.period(p), float(tr.t[-1]))
-        method = meta["method_object"]
+        method = tr.algorithm
         coarse = (run_converter(model, p, method=replace(method, h=2.0 * method.h), t_end=float(tr.t[-1] - tr.t[0]),
                                 x0=tr.x[0]) if method.key == "lcp" else None)      # the same run at 2h
         check = window_check(model, p, method, tr, out, window, coarse)

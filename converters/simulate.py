@@ -1,6 +1,8 @@
 """``simulate(problem, method)``: the one entry point from a problem to a Trajectory."""
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from .errors import ParameterError, SimulationError
@@ -41,7 +43,7 @@ def simulate(problem: LCSProblem, method: Method, *, x0=None) -> Trajectory:
         raise SimulationError(f"the state left the finite numbers at t = {trajectory.t[bad[0]]:.6g} s (x0 = "
                               f"{np.array2string(start, precision=3)}): a start or a parameter "
                               "beyond what double precision can carry")
-    return trajectory
+    return replace(trajectory, problem=problem, algorithm=method)
 
 
 def check_x0(problem: LCSProblem, x0=None) -> np.ndarray:

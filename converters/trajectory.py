@@ -86,6 +86,14 @@ class Trajectory:
     resolved_from : float
         Every step is stored from this time on (s); before it only the output samples (:meth:`thinned`), and a
         measure reaching before it is refused.
+    problem : LCSProblem or None
+        The problem :func:`converters.simulate.simulate` solved (of a run in phases: its first phase's); None for
+        a trajectory measured by another simulator.
+    algorithm : Method or None
+        The method object that solved it, with its options (``method`` is its registry name): what a check of the
+        run's accuracy re-runs at another step.
+    stats : dict (property)
+        What the run cost: ``steps`` (the method's unit: ``counts``), ``wall_s``, ``events``, ``general_solves``.
     """
 
     t: np.ndarray
@@ -111,6 +119,16 @@ class Trajectory:
     metadata: dict = field(default_factory=dict, compare=False)
     #: Rows before this time were kept at an output spacing only (:meth:`thinned`): measures need every step.
     resolved_from: float = float("-inf")
+    problem: object = field(default=None, compare=False, repr=False)
+    algorithm: object = field(default=None, compare=False, repr=False)
+
+    @property
+    def stats(self) -> dict:
+        """What the run cost: steps (in the unit of its method's ``counts``), wall seconds, events, and the steps
+        whose LCP went to the general solver."""
+        unit = getattr(self.algorithm, "counts", "steps") if self.algorithm is not None else "steps"
+        return {"steps": int(self.steps), "unit": unit, "wall_s": float(self.wall_s), "events": len(self.events),
+                "general_solves": int(self.general_solves)}
 
     # --- raw views -----------------------------------------------------------------------------------
 

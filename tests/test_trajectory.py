@@ -116,3 +116,21 @@ def test_a_bare_lcs_run_plots_its_states_and_the_pairs_that_hold(method):
     legend = {text.get_text() for text in axes[-1].get_legend().get_texts()}
     assert legend == {"D3+D1", "D4+D2"}
     assert fig.texts[0].get_text() == f"LCS ({method.key})"
+
+
+@pytest.mark.parametrize("method", ["lcp", "event"])
+def test_a_solution_carries_its_problem_its_method_and_what_it_cost(method):
+    """sol.prob, sol.alg and the statistics, as DifferentialEquations.jl's solutions carry them: the accuracy check of
+    a run re-runs its own method object at another step, read from the trajectory (steady runs on the stepper's
+    plan included)."""
+    from converters.models.circuits import diode_bridge
+    from converters.run import run_converter
+    problem = diode_bridge()
+    algorithm = Theta(h=1e-6, theta=0.5) if method == "lcp" else EventDriven()
+    tr = simulate(problem, algorithm)
+    assert tr.problem is problem and tr.algorithm is algorithm and tr.method == method
+    stats = tr.stats
+    assert stats["steps"] == tr.steps > 0 and stats["unit"] == ("steps" if method == "lcp" else "segments")
+    assert stats["events"] == len(tr.events) > 0 and stats["wall_s"] == tr.wall_s
+    steady = run_converter("buck", {}, steady=True, method=method)
+    assert steady.algorithm is not None and steady.algorithm.key == method and steady.problem is not None

@@ -411,7 +411,7 @@ def _trajectory(problem: LCSProblem, method: Theta, t, x, u, y, config, events, 
                       config_names=tuple(c.name or f"config{i}" for i, c in enumerate(problem.configurations)),
                       relay=relay, event_columns=events, method=method.key, steps=t.shape[0] - 1, wall_s=wall_s,
                       rule="end" if method.theta == 1.0 else "linear", period=problem.switching.period,
-                      general_solves=general_solves,
+                      general_solves=general_solves, problem=problem, algorithm=method,
                       metadata=dict(problem.metadata, h=method.h, theta=method.theta, label=method.label))
 
 

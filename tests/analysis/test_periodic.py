@@ -129,7 +129,7 @@ def test_the_span_returned_is_the_stepper_run_from_the_orbit(span):
     run = run_converter("buck", {}, steady=True, **span)
     conv = get_converter("buck")
     p = conv.resolve({})
-    ref = simulate(conv.problem(p, run.t[-1], run.x[0]), run.metadata["method_object"])
+    ref = simulate(conv.problem(p, run.t[-1], run.x[0]), run.algorithm)
     for key in ("t", "x", "u", "y", "config"):
         np.testing.assert_array_equal(getattr(run, key), getattr(ref, key))
     assert run.events.equals(ref.events)

@@ -140,7 +140,7 @@ def test_the_summary_says_how_accurate_its_measures_are_and_the_estimate_is_firs
     model = get_model("boost", control)
     run = run_converter(model, P, t_end=10e-3)
     s = run_summary(run)
-    h = run.metadata["method_object"].h
+    h = run.algorithm.h
     fine = run_summary(run_converter(model, P, t_end=10e-3, h=h / 4))
     estimates = s["accuracy"]["estimates"]
     for name in ("vout_mean", measure):
