@@ -1,0 +1,175 @@
+"""The affine flow of one mode of an LCS, exact: x~(t0 + tau) = expm(tau Z) x~ in augmented form x~ = [x; 1], its
+Taylor polynomial (for locating crossings), its powers (for sampling), and what ends it (:class:`_Watch`)."""
+from __future__ import annotations
+
+from functools import cached_property
+
+import numpy as np
+
+from ...problems import LCSProblem
+
+
+def _time_scale(problem: LCSProblem) -> float:
+    period = problem.switching.period
+    return period if np.isfinite(period) else problem.t_span[1] - problem.t_span[0]
+
+
+_GL_X, _GL_W = np.polynomial.legendre.leggauss(8)
+_TAYLOR_TERMS = 26     # (0.25)^26 / 26! < 1e-30: the series is exact to rounding on a sampling step
+_EXPONENTS = np.arange(_TAYLOR_TERMS)
+_POWERS = 64           # sampling steps per batched product
+_ZERO_RTOL = 1e-10     # a derivative counts as zero below this fraction of its own scale
+_CROSS_RTOL = 1e-13    # a watched value counts as negative below -this fraction of its scale
+#: Most substeps (each a quarter of the mode's fastest time constant at most) one crossing search may take: about
+#: 5 s of work. A circuit far stiffer than its run (C = 1e-15 F in a 5 ms run: 2e10 substeps) is refused, not hung.
+MAX_SUBSTEPS = 100_000_000
+_ON_SET_RTOL = 1e-9    # a held pair's constraint N^T (C x + F) counts as met up to this (relative)
+
+
+def expm(A: np.ndarray) -> np.ndarray:
+    """scipy's matrix exponential (imported on first use: a run that needs no event method never pays it)."""
+    from scipy.linalg import expm as scipy_expm
+    return scipy_expm(A)
+
+
+def _power_stack(S: np.ndarray, count: int) -> np.ndarray:
+    """S^0 .. S^count, shape (count + 1, m, m), by doubling (log2(count) batched products)."""
+    stack = np.eye(S.shape[0])[None].copy()
+    top = S
+    while stack.shape[0] <= count:
+        stack = np.concatenate([stack, stack @ top])
+        top = top @ top
+    return stack[: count + 1]
+
+
+class Flow:
+    """The affine flow of one mode (configuration, held set J) in augmented form x~ = [x; 1].
+
+    ``Z`` (n+1, n+1): x~' = Z x~. ``u_rows``, ``y_rows`` (k, n+1): u = u_rows x~, y = y_rows x~.
+    ``watch_rows`` (k, n+1): y_i for free pairs, u_i for held ones (the mode ends when one falls
+    through zero). ``constraint_rows``: N^T [C_J, F_J] (zero on the mode's state manifold);
+    ``project``: the matrix taking a state onto that manifold along B_J. The sampling data (series,
+    powers, quadrature maps) is built on first use.
+    """
+
+    def __init__(self, config_index: int, held: int, Z, u_rows, y_rows, constraint_rows, project, delta):
+        self.config, self.held = config_index, held
+        self.Z, self.u_rows, self.y_rows = Z, u_rows, y_rows
+        k = u_rows.shape[0]
+        held_pairs = np.array([(held >> i) & 1 for i in range(k)], dtype=bool)
+        self.watch_rows = np.where(held_pairs[:, None], u_rows, y_rows)
+        self.held_flags = held_pairs
+        self.constraint_rows, self.project = constraint_rows, project
+        self.constraint_scales = np.abs(constraint_rows).sum(axis=1)
+        self.watches: dict = {}                  # _Watch per latch state (built by the machine that owns the flow)
+        norm = float(np.abs(Z).sum(axis=1).max())
+        self.delta = min(delta, 0.25 / norm) if norm > 0.0 else delta
+
+    @property
+    def n(self) -> int:
+        return self.Z.shape[0] - 1
+
+    def field(self, xt: np.ndarray) -> np.ndarray:
+        """x' at x~."""
+        return self.Z[:-1] @ xt
+
+    def derivative_rows(self, rows: np.ndarray, order: int) -> tuple[np.ndarray, np.ndarray]:
+        """Rows r Z^j (j = 0..order) of watched rows r, shape (order + 1, m, n+1), and their scales."""
+        out, scales = [rows], [np.abs(rows).sum(axis=1)]
+        absZ, abs_rows = np.abs(self.Z), np.abs(rows)
+        for _ in range(order):
+            out.append(out[-1] @ self.Z)
+            abs_rows = abs_rows @ absZ
+            scales.append(abs_rows.sum(axis=1))
+        return np.array(out), np.array(scales)
+
+    @cached_property
+    def lexicographic_data(self):
+        return self.derivative_rows(self.watch_rows, self.n + 1)
+
+    def lexicographic_ok(self, xt: np.ndarray) -> bool:
+        """Every watched quantity's first non-vanishing entry of (g, g', g'', ...) along the flow is
+        positive (or all vanish)."""
+        rows, scales = self.lexicographic_data
+        values = (rows @ xt).T.tolist()                        # per quantity: g, g', g'', ...
+        limits = ((_ZERO_RTOL * np.abs(xt).max()) * scales + 1e-300).T.tolist()
+        for quantity, limit in zip(values, limits):            # plain floats: the first entry decides mostly
+            for value, bound in zip(quantity, limit):
+                if abs(value) > bound:
+                    if value < 0.0:
+                        return False
+                    break
+        return True
+
+    @cached_property
+    def taylor(self) -> np.ndarray:
+        """Z^j / j!, j = 0.._TAYLOR_TERMS - 1: x~(s) = sum_j s^j (Z^j / j!) x~ for s <= delta."""
+        n1 = self.Z.shape[0]
+        taylor = np.empty((_TAYLOR_TERMS, n1, n1))
+        taylor[0] = np.eye(n1)
+        for j in range(1, _TAYLOR_TERMS):
+            taylor[j] = taylor[j - 1] @ self.Z / j
+        return taylor
+
+    @cached_property
+    def powers(self) -> np.ndarray:
+        """expm(delta Z)^j, j = 0.._POWERS: the samples of a segment in one batched product."""
+        return _power_stack(expm(self.delta * self.Z), _POWERS)
+
+    @cached_property
+    def node_maps(self) -> np.ndarray:
+        """expm(s_k Z) at the Gauss-Legendre nodes s_k of [0, delta], shape (8, n+1, n+1)."""
+        weights = (0.5 * (_GL_X + 1.0) * self.delta)[:, None] ** _EXPONENTS[None, :]
+        return np.tensordot(weights, self.taylor, axes=([1], [0]))
+
+    def propagate(self, xt: np.ndarray, s: float) -> np.ndarray:
+        """x~ after s in [0, delta]."""
+        return s ** _EXPONENTS @ (self.taylor @ xt)
+
+    def advance(self, xt: np.ndarray, tau: float) -> np.ndarray:
+        """x~ after any tau >= 0 (a rounding-negative tau counts as 0): whole sampling steps by powers of
+        expm(delta Z), the rest by the series."""
+        tau = max(tau, 0.0)
+        whole = int(np.floor(tau / self.delta * (1.0 - 1e-12)))
+        q = whole
+        while q > 0:
+            m = min(q, _POWERS)
+            xt = self.powers[m] @ xt
+            q -= m
+        return self.propagate(xt, max(tau - whole * self.delta, 0.0))
+
+    def transition(self, tau: float) -> np.ndarray:
+        """The state-transition matrix over tau: d x(tau) / d x(0), shape (n, n)."""
+        return expm(tau * self.Z)[:-1, :-1]
+
+    def sample_states(self, xt: np.ndarray, count: int) -> np.ndarray:
+        """x~ at 0, delta, ..., count delta: shape (count + 1, n+1)."""
+        if count <= _POWERS:
+            return self.powers[:count + 1] @ xt
+        blocks, state = [], xt
+        while count >= 0:
+            m = min(count, _POWERS)
+            block = self.powers[:m + 1] @ state
+            blocks.append(block[:-1] if count > m else block)
+            state, count = block[-1], count - m if count > m else -1
+        return np.vstack(blocks)
+
+
+class _Watch:
+    """What ends a segment: rows g = rows x~ + slopes (phase0 + tau), with the pair (or -1: the
+    switching law) each row belongs to."""
+
+    def __init__(self, flow: Flow, switch_row=None, switch_slope=0.0):
+        rows, slopes, pairs = [flow.watch_rows], [np.zeros(flow.watch_rows.shape[0])], [np.arange(flow.watch_rows.shape[0])]
+        if switch_row is not None:
+            rows.append(switch_row[None, :])
+            slopes.append(np.array([switch_slope]))
+            pairs.append(np.array([-1]))
+        self.rows = np.vstack(rows)
+        self.rows_T = np.ascontiguousarray(self.rows.T)
+        self.slopes = np.concatenate(slopes)
+        self.timed = bool(np.any(self.slopes))
+        self.pairs = np.concatenate(pairs)
+        self.row_scales = np.abs(self.rows).sum(axis=1)
+
+

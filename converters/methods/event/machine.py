@@ -1,0 +1,391 @@
+"""The event method's engine for one problem: the modes' flows (built on demand), the mode-selection LCP at an
+event, Moreau's impulse entering a configuration, the switching law, the location of crossings, and the run from
+one event to the next."""
+from __future__ import annotations
+
+import time
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ...errors import SimulationError
+from ...problems import LCSProblem, Schedule, StateSwitching
+from .flow import _CROSS_RTOL, _ON_SET_RTOL, _POWERS, MAX_SUBSTEPS, Flow, _time_scale, _Watch
+from .solution import EventSolution, Segment
+
+if TYPE_CHECKING:
+    from . import EventDriven
+
+
+def _held_sets_by_distance(k: int, reference: int) -> list[int]:
+    """Every held set (bit mask) ordered by its distance from ``reference``, then by size."""
+    masks = range(1 << k)
+    return sorted(masks, key=lambda m: (bin(m ^ reference).count("1"), bin(m).count("1"), m))
+
+
+class _Machine:
+    """The flows of one problem (built on demand, reused for every run from a new initial state)."""
+
+    def __init__(self, problem: LCSProblem, options: EventDriven):
+        options.supports(problem)
+        self.problem, self.options = problem, options
+        self.scale = _time_scale(problem)
+        self.flows: dict = {}
+        self.orders: dict = {}
+        law = problem.switching
+        self.law = law if isinstance(law, StateSwitching) else None
+        self.index2 = [i for i in range(problem.k)
+                       if all(not np.any(c.D[i, :]) and not np.any(c.D[:, i]) for c in problem.configurations)]
+        K = self.index2
+        #: Per configuration: (C_K, F_K, B_K, row scales) of the pairs whose y is a function of the state.
+        self.impulse_data = [(c.C[K], c.F[K], c.B[:, K], np.abs(c.C[K]).sum(axis=1) + np.abs(c.F[K]))
+                             for c in problem.configurations]
+
+    # --- modes --------------------------------------------------------------------------------------
+
+    def flow(self, config: int, held: int) -> Flow:
+        key = (config, held)
+        flow = self.flows.get(key)
+        if flow is None:
+            flow = self.flows[key] = self._build_flow(config, held)
+        return flow
+
+    def _build_flow(self, index: int, held: int) -> Flow:
+        c = self.problem.configurations[index]
+        n, k = c.n, c.k
+        J = [i for i in range(k) if (held >> i) & 1]
+        xt_cols = n + 1
+        u_rows = np.zeros((k, xt_cols))
+        constraint_rows = np.zeros((0, xt_cols))
+        project = None
+        if J:
+            DJJ, CJ, FJ, BJ = c.D[np.ix_(J, J)], c.C[J], c.F[J], c.B[:, J]
+            U, S, _ = np.linalg.svd(DJJ)
+            rank = int(np.sum(S > 1e-12 * max(S.max(initial=0.0), 1e-300))) if S.size else 0
+            R, N = U[:, :rank], U[:, rank:]
+            G = np.vstack([R.T @ DJJ, N.T @ CJ @ BJ])
+            P = np.vstack([np.hstack([R.T @ CJ, (R.T @ FJ)[:, None]]),
+                           np.hstack([N.T @ CJ @ c.A, (N.T @ CJ @ c.E)[:, None]])])
+            u_rows[J] = -np.linalg.pinv(G) @ P
+            if N.shape[1]:
+                constraint_rows = np.hstack([N.T @ CJ, (N.T @ FJ)[:, None]])
+                NCB = N.T @ CJ @ BJ
+                project = (BJ, np.linalg.pinv(NCB))
+        Z = np.zeros((xt_cols, xt_cols))
+        Z[:n, :n], Z[:n, n] = c.A, c.E
+        Z[:n] += c.B @ u_rows
+        y_rows = np.hstack([c.C, c.F[:, None]]) + c.D @ u_rows
+        delta = self.options.sample_fraction * self.scale
+        return Flow(index, held, Z, u_rows, y_rows, constraint_rows, project, delta)
+
+    def _on_set(self, flow: Flow, xt: np.ndarray, size: float, rate_field, slack: float) -> tuple[bool, np.ndarray]:
+        """Is x~ on the flow's state manifold N^T (C_J x + F_J) = 0? Up to rounding, and at an event up to
+        what the located time's error (``slack`` s, along the field before the event) allows. Returns
+        (ok, x~ projected onto the manifold along B_J). ``size``: max |x~|."""
+        rows = flow.constraint_rows
+        if rows.shape[0] == 0:
+            return True, xt
+        r = rows @ xt
+        tol = _ON_SET_RTOL * (flow.constraint_scales * size + 1e-300)
+        if rate_field is not None:
+            tol = tol + slack * np.abs(rows[:, :-1] @ rate_field)
+        if (np.abs(r) > tol).any():
+            return False, xt
+        BJ, pinv = flow.project
+        out = xt.copy()
+        out[:-1] -= BJ @ (pinv @ r)
+        return True, out
+
+    def select(self, config: int, xt: np.ndarray, t: float, reference: int, rate_field=None) -> tuple[Flow, np.ndarray]:
+        """The mode-selection LCP at (t, x): the held set nearest to ``reference`` whose flow keeps every
+        watched quantity lexicographically non-negative; x~ projected onto its manifold. ``rate_field``:
+        the vector field before an event (its location error may leave a held pair's y slightly off zero)."""
+        k = self.problem.k
+        order = self.orders.get(reference)
+        if order is None:
+            order = self.orders[reference] = _held_sets_by_distance(k, reference)
+        slack = 4.0 * self.options.event_tol * self.scale
+        size = np.abs(xt).max()
+        for held in order:
+            flow = self.flow(config, held)
+            ok, projected = self._on_set(flow, xt, size, rate_field, slack)
+            if ok and flow.lexicographic_ok(projected):
+                return flow, projected
+        name = self.problem.configurations[config].name
+        raise SimulationError(f"the mode-selection LCP at t = {t:.9g} s in configuration {name!r} has no solution "
+                              "(no set of held pairs keeps every pair complementary); the LCS is not well posed there")
+
+    def enter(self, config: int, xt: np.ndarray, t: float, log) -> tuple[np.ndarray, np.ndarray | None]:
+        """Moreau's impulse when configuration ``config`` is entered with y_K < 0 on the pairs K whose y is
+        a function of the state: x+ = x + B_K lambda, 0 <= lambda _|_ C_K x+ + F_K >= 0. Returns x~+ and
+        the jump's Jacobian d x+ / d x = I - B_J (C_J B_J)^-1 C_J on the pairs J that jumped (None: no jump)."""
+        K = self.index2
+        if not K:
+            return xt, None
+        c = self.problem.configurations[config]
+        CK, FK, BK, row_scale = self.impulse_data[config]
+        y = CK @ xt[:-1] + FK
+        if np.all(y >= -_CROSS_RTOL * np.abs(xt).max() * row_scale):
+            return xt, None
+        M = CK @ BK
+        from ...lcp import solve_lcp                 # imported here: a run that never needs it starts faster
+        result = solve_lcp(M, y, method="lemke")
+        if not result.solved:
+            raise SimulationError(f"at t = {t:.9g} s configuration {c.name!r} starts with y = {y.tolist()} and no "
+                                  f"impulse restores complementarity (C B = {M.tolist()}; the circuit forces a current "
+                                  "into a blocking diode); check the model")
+        lam = result.z
+        xt = xt.copy()
+        xt[:-1] += BK @ lam
+        jumped = np.flatnonzero(lam > 0.0)
+        for i in jumped:
+            log(t, "impulse", K[i], config)
+        if not jumped.size:
+            return xt, None
+        idx = [K[i] for i in jumped]
+        Bs, Cs = c.B[:, idx], c.C[idx]
+        return xt, np.eye(c.n) - Bs @ np.linalg.solve(Cs @ Bs, Cs)
+
+    # --- switching law ------------------------------------------------------------------------------
+
+    def switch_row(self, config: int, latched: bool):
+        """(row, slope) of the switching law's watched quantity in ``config`` (None when it cannot switch)."""
+        law = self.law
+        if law is None or latched:
+            return None, 0.0
+        f = law.function
+        low, slope = (f.ramp.low, f.ramp.slope) if f.ramp is not None else (0.0, 0.0)
+        if config == law.below:      # ends when s = c x + d - ramp rises above +band: watch band - s
+            return np.append(-f.c, law.band - f.d + low), slope
+        return np.append(f.c, f.d - low + law.band), -slope       # ends when s falls below -band: s + band
+
+    def law_config(self, xt: np.ndarray, config: int) -> int:
+        """At a ramp reset: the configuration set by s against the band (inside the band it holds)."""
+        law = self.law
+        f = law.function
+        s = float(f.c @ xt[:-1] + f.d - (f.ramp.low if f.ramp is not None else 0.0))
+        if s < -law.band:
+            return law.below
+        if s > law.band:
+            return law.above
+        return config
+
+    def edges(self, t0: float, t1: float):
+        """(time, kind) of every time-driven instant in (t0, t1), then (t1, 'end'). kind: a configuration
+        index (schedule), 'reset' (ramp reset)."""
+        law = self.problem.switching
+        out = []
+        if isinstance(law, Schedule) and np.isfinite(law.period):
+            T = law.period
+            for m in range(int(np.floor(t0 / T)), int(np.ceil(t1 / T)) + 1):
+                for start, config in zip(law.starts, law.configs):
+                    t = m * T + start
+                    if t0 < t < t1 and not (out and out[-1][1] == config):
+                        out.append((t, config))
+        elif isinstance(law, StateSwitching):
+            out = [(t, "reset") for t in law.breakpoints(t0, t1)]
+        out.append((t1, "end"))
+        return out
+
+    # --- crossings ----------------------------------------------------------------------------------
+
+    def cross(self, flow: Flow, watch: _Watch, xt: np.ndarray, tau_max: float, phase0: float):
+        """First downward zero crossing of a watched quantity in (0, tau_max]: (tau, row) or (None, None),
+        and x~ at tau_max when there is none."""
+        g_scale = watch.row_scales * np.abs(xt).max()
+        if watch.timed:
+            g_scale = g_scale + np.abs(watch.slopes) * self.scale
+        threshold = -_CROSS_RTOL * g_scale
+        if not (flow.delta > 0.0 and tau_max / flow.delta <= MAX_SUBSTEPS):
+            from ...errors import ResourceError
+            raise ResourceError(f"--method event: the stiffest mode's time constant is about {4.0 * flow.delta:.3g} s, "
+                                f"so crossing {tau_max:.3g} s takes {tau_max / flow.delta if flow.delta > 0 else np.inf:.3g}"
+                                f" substeps (at most {MAX_SUBSTEPS:.0e}): a run far longer than the circuit's fastest time "
+                                "constant (a tiny C, L or R, or a long --t-end); use --method lcp, or a shorter --t-end")
+        full = int(np.floor(tau_max / flow.delta * (1.0 - 1e-12)))
+        tau, state = 0.0, xt
+        while full > 0:
+            m = min(full, _POWERS)
+            states = flow.powers[1:m + 1] @ state
+            values = states @ watch.rows_T
+            if watch.timed:
+                values += (phase0 + tau + flow.delta * np.arange(1, m + 1))[:, None] * watch.slopes[None, :]
+            below = np.flatnonzero(values[:, 0] < threshold[0] if values.shape[1] == 1
+                                   else (values < threshold).any(axis=1))
+            if below.size:
+                i = below[0]
+                start = state if i == 0 else states[i - 1]
+                return self._locate(flow, watch, start, tau + i * flow.delta, flow.delta, g_scale, phase0), None
+            tau, state, full = tau + m * flow.delta, states[m - 1], full - m
+        rest = tau_max - tau
+        if rest > 0.0:
+            end = flow.propagate(state, rest)
+            values = watch.rows @ end + (phase0 + tau_max) * watch.slopes
+            if np.any(values < threshold):
+                return self._locate(flow, watch, state, tau, rest, g_scale, phase0), None
+            state = end
+        return (None, None), state
+
+    def _locate(self, flow: Flow, watch: _Watch, xt_a, tau_a, width, g_scale, phase0):
+        """The earliest crossing inside [tau_a, tau_a + width] (width <= delta): Brent's method on each
+        watched quantity's Taylor polynomial, exact to rounding there. Returns (tau, row)."""
+        V = flow.taylor @ xt_a                                   # x~(s) = sum_j s^j V_j
+        coefficients = V @ watch.rows.T                          # (terms, rows)
+        coefficients[0] += (phase0 + tau_a) * watch.slopes
+        coefficients[1] += watch.slopes
+        xtol = max(self.options.event_tol * self.scale, 1e-300)
+        best, best_row = None, None
+        for r in range(watch.rows.shape[0]):
+            poly = coefficients[::-1, r].tolist()                # highest power first
+
+            def g(s, poly=poly):
+                value = 0.0
+                for c in poly:   # Horner on Python floats: cheaper than any numpy call here
+                    value = value * s + c
+                return value
+
+            threshold = _CROSS_RTOL * g_scale[r]
+            if g(width) >= -threshold:
+                continue
+            # The bracket's left end may sit on a zero of g (the mode just began); move it to where g > 0.
+            left, g_left = 0.0, poly[-1]
+            if g_left <= threshold:
+                probe, left = width, None
+                for _ in range(60):
+                    probe *= 0.5
+                    if g(probe) > 0.0:
+                        left = probe
+                        break
+                if left is None:                                 # leaves at once: an event at tau_a
+                    return tau_a, r
+            from scipy.optimize import brentq
+            s = brentq(g, left, width, xtol=xtol, rtol=4 * np.finfo(float).eps, maxiter=200)
+            if g(s) > threshold:
+                # A loose tolerance may stop short of the zero; the mode selection must see the crossing
+                # happen, so take the point past it (within 2 xtol, brentq's bound).
+                s = min(s + 2.0 * xtol, width)
+            if best is None or s < best:
+                best, best_row = s, r
+        if best is None:                                         # rounding: the sample said below, no root
+            return tau_a + width, int(np.argmin(watch.rows @ flow.propagate(xt_a, width)))
+        return tau_a + best, best_row
+
+    # --- runs ---------------------------------------------------------------------------------------
+
+    def run(self, x0, record: bool = True, jacobian: bool = False, stop_config: int | None = None,
+            stop_count: int = 0):
+        """Run over t_span from x0. ``jacobian``: also d x_end / d x0. ``stop_config``/``stop_count``: stop
+        at the ``stop_count``-th switching into ``stop_config`` (a return map; the run may then end before
+        t_span[1], which must be long enough). Returns (EventSolution, jacobian or None, stop time or None)."""
+        start_clock = time.perf_counter()
+        problem, options = self.problem, self.options
+        n = problem.n
+        t, t_end = problem.t_span
+        xt = np.append(np.asarray(x0, dtype=float), 1.0)
+        times, kinds, pairs, configs, segments = [], [], [], [], []
+        jac = np.eye(n) if jacobian else None
+
+        def log(time_, kind, pair, config_):
+            times.append(time_), kinds.append(kind), pairs.append(pair), configs.append(config_)
+
+        law = self.law
+        config = problem.switching.initial_config(xt[:-1], t)
+        latched = False
+        ramp_period = law.period if law is not None else np.inf
+        # The ramp's phase counts from t = 0 (ramp(t) = low + slope * (t mod T)), as in the stepper.
+        phase_start = np.floor(t / ramp_period) * ramp_period if np.isfinite(ramp_period) else t
+        xt, jump = self.enter(config, xt, t, log)
+        if jac is not None and jump is not None:
+            jac[:] = jump @ jac
+        flow, xt = self.select(config, xt, t, 0)
+        same_time_events, events, crossings = 0, 0, 0
+        stop_time = None
+        for edge_t, edge_kind in self.edges(t, t_end):
+            while True:
+                watch = flow.watches.get(latched)
+                if watch is None:                        # the law's row depends on the configuration and the latch
+                    watch = flow.watches[latched] = _Watch(flow, *self.switch_row(config, latched))
+                phase0 = t - phase_start
+                (tau, which), xt_end = self.cross(flow, watch, xt, edge_t - t, phase0)
+                if tau is not None and t + tau >= edge_t - options.event_tol * self.scale:
+                    tau = None                                   # a crossing on the edge itself: the edge handles it
+                    xt_end = flow.advance(xt, edge_t - t)
+                if tau is not None:
+                    xt_end = flow.advance(xt, tau)
+                t_next = edge_t if tau is None else t + tau
+                if record and t_next > t:
+                    segments.append(Segment(t, t_next, flow, xt, xt_end))
+                if jac is not None:
+                    jac[:] = flow.transition(t_next - t) @ jac
+                if tau is None:
+                    t, xt = edge_t, xt_end
+                    break
+                same_time_events = same_time_events + 1 if tau == 0.0 else 0
+                events += 1
+                if same_time_events > 8 or events > options.max_events:
+                    raise SimulationError(f"{'repeated events at one instant' if same_time_events > 8 else 'too many events'}"
+                                          f" near t = {t + tau:.9g} s (Zeno behaviour or a degenerate LCS); "
+                                          f"max_events = {options.max_events}")
+                t, xt = t + tau, xt_end
+                pair = int(watch.pairs[which])
+                grad = watch.rows[which, :n]
+                dgdt = watch.slopes[which]
+                f_before = flow.field(xt)
+                if pair < 0:                                     # the switching law fires
+                    config = law.above if config == law.below else law.below
+                    latched = law.latch
+                    log(t, "switch", -1, config)
+                    if stop_config is not None and config == stop_config:
+                        crossings += 1
+                        if crossings >= stop_count:
+                            if jac is not None:
+                                denominator = grad @ f_before + dgdt
+                                jac[:] = (np.eye(n) - np.outer(f_before, grad) / denominator) @ jac
+                            stop_time = t
+                            break
+                    xt_in, jump = self.enter(config, xt, t, log)
+                    new, xt_new = self.select(config, xt_in, t, flow.held, f_before)
+                else:
+                    jump = None
+                    new, xt_new = self.select(config, xt, t, flow.held ^ (1 << pair), f_before)
+                if jac is not None:
+                    # Saltation through a jump x+ = Pi(x): S = DPi + (f+ - DPi f-) n^T / (n^T f- + dg/dt).
+                    f_after = new.field(xt_new)
+                    jump_jac = np.eye(n) if jump is None else jump
+                    denominator = grad @ f_before + dgdt
+                    if denominator != 0.0:
+                        jac[:] = (jump_jac + np.outer(f_after - jump_jac @ f_before, grad) / denominator) @ jac
+                    else:
+                        jac[:] = jump_jac @ jac
+                for i in range(problem.k):
+                    was, now = (flow.held >> i) & 1, (new.held >> i) & 1
+                    if was != now:
+                        log(t, "activate" if now else "release", i, config)
+                flow, xt = new, xt_new
+            if stop_time is not None or edge_kind == "end":
+                break
+            if edge_kind == "reset":
+                phase_start, latched = t, False
+                new_config = self.law_config(xt, config)
+                if new_config != config:
+                    config = new_config
+                    log(t, "switch", -1, config)
+            else:
+                config = edge_kind
+            xt, jump = self.enter(config, xt, t, log)
+            if jac is not None and jump is not None:
+                jac[:] = jump @ jac
+            new, xt = self.select(config, xt, t, flow.held)
+            for i in range(problem.k):
+                was, now = (flow.held >> i) & 1, (new.held >> i) & 1
+                if was != now:
+                    log(t, "activate" if now else "release", i, config)
+            flow = new
+        if stop_config is not None and stop_time is None:
+            raise SimulationError(f"the return map found {crossings} of {stop_count} switchings into configuration "
+                                  f"{stop_config} before t = {t_end:g} s; lengthen the problem's t_span")
+        solution = EventSolution(problem, segments, times, kinds, pairs, configs, xt[:-1].copy(),
+                                 time.perf_counter() - start_clock, options, config)
+        return solution, jac, stop_time
+
+

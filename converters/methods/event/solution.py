@@ -1,0 +1,190 @@
+"""The event method's exact piecewise solution: its segments, events, integrals (Gauss-Legendre on each
+exponential-polynomial piece) and samples on any grid."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ...errors import ParameterError
+from ...trajectory import Samples, Trajectory
+from .flow import _EXPONENTS, _GL_W, _GL_X, Flow, _power_stack, expm
+
+_BLOCK = 1024
+
+
+@dataclass
+class Segment:
+    t0: float
+    t1: float
+    flow: Flow
+    xt0: np.ndarray     # augmented state [x; 1] at t0
+    xt1: np.ndarray     # ... and at t1, before whatever happens there
+
+
+class EventSolution:
+    """The exact piecewise solution: segments (t0, t1, flow, start state) and the events between them.
+
+    ``event_times``, ``event_kinds`` ('activate', 'release', 'impulse', 'switch'), ``event_pairs``
+    (-1 for switching-law events), ``event_configs`` (the configuration in force after the event).
+    """
+
+    def __init__(self, problem, segments, times, kinds, pairs, configs, x_end, wall_s, options, end_config):
+        self.problem, self.segments, self.options = problem, segments, options
+        self.event_times, self.event_kinds, self.event_pairs, self.event_configs = times, kinds, pairs, configs
+        self.x_end, self.wall_s, self.end_config = x_end, wall_s, end_config
+
+    def _segments_in(self, t0: float, t1: float):
+        for seg in self.segments:
+            if seg.t1 > t0 and seg.t0 < t1:
+                yield seg, max(seg.t0, t0), min(seg.t1, t1)
+
+    def quadrature(self, t0: float | None = None, t1: float | None = None) -> tuple[Samples, np.ndarray]:
+        """Gauss-Legendre nodes over [t0, t1] (default: the whole run) as Samples, and their weights.
+
+        Pieces follow the segments (no node straddles an event), each at most the flow's sampling
+        distance long, 8 nodes per piece."""
+        t0 = self.problem.t_span[0] if t0 is None else t0
+        t1 = self.problem.t_span[1] if t1 is None else t1
+        ts, ws, xs, us, ys, cs, hs = [], [], [], [], [], [], []
+        half = 0.5 * (_GL_X + 1.0)
+        for seg, a, b in self._segments_in(t0, t1):
+            flow, length = seg.flow, b - a
+            if length <= 0.0:
+                continue
+            # Whole pieces of the sampling step delta: their starts S^q x~ in batched products, their
+            # nodes by the precomputed node maps; then the rest of the segment by the series.
+            full = int(np.floor(length / flow.delta * (1.0 - 1e-12)))
+            xt = seg.xt0 if a == seg.t0 else flow.advance(seg.xt0, a - seg.t0)
+            starts = flow.sample_states(xt, full)                              # (full + 1, n+1)
+            rest = length - full * flow.delta
+            parts_t, parts_w, parts_x = [], [], []
+            if full:
+                parts_x.append(np.tensordot(starts[:full], flow.node_maps, axes=([1], [2])).reshape(-1, starts.shape[1]))
+                parts_t.append((a + flow.delta * np.arange(full)[:, None] + flow.delta * half[None, :]).ravel())
+                parts_w.append(np.tile(0.5 * flow.delta * _GL_W, full))
+            if rest > 1e-15 * length:
+                offsets = rest * half
+                parts_x.append((offsets[:, None] ** _EXPONENTS[None, :]) @ (flow.taylor @ starts[full]))
+                parts_t.append(a + full * flow.delta + offsets)
+                parts_w.append(0.5 * rest * _GL_W)
+            if not parts_x:
+                continue
+            nodes = parts_x[0] if len(parts_x) == 1 else np.vstack(parts_x)
+            ts.extend(parts_t)
+            ws.extend(parts_w)
+            xs.append(nodes[:, :-1])
+            us.append(nodes @ flow.u_rows.T)
+            ys.append(nodes @ flow.y_rows.T)
+            cs.append(np.full(nodes.shape[0], flow.config))
+            hs.append(np.broadcast_to(flow.held_flags, (nodes.shape[0], flow.held_flags.size)))
+        if not ts:
+            raise ParameterError(f"quadrature interval [{t0:g}, {t1:g}] s lies outside the run")
+        samples = Samples(np.concatenate(ts), np.vstack(xs), np.vstack(us), np.vstack(ys), np.concatenate(cs),
+                          held=np.vstack(hs))
+        return samples, np.concatenate(ws)
+
+    def sample(self, times) -> Samples:
+        """Exact states, pairs and configuration at the given times (a point on an event takes the
+        segment arriving there)."""
+        times = np.asarray(times, dtype=float)
+        starts = np.array([s.t0 for s in self.segments])
+        which = np.clip(np.searchsorted(starts, times, side="left") - 1, 0, len(self.segments) - 1)
+        n, k = self.problem.n, self.problem.k
+        x, u, y = np.empty((times.size, n)), np.empty((times.size, k)), np.empty((times.size, k))
+        config = np.empty(times.size, dtype=np.int64)
+        held = np.empty((times.size, k), dtype=bool)
+        for i, s in enumerate(which):
+            seg = self.segments[s]
+            xt = seg.flow.advance(seg.xt0, times[i] - seg.t0)
+            x[i], u[i], y[i] = xt[:n], seg.flow.u_rows @ xt, seg.flow.y_rows @ xt
+            config[i], held[i] = seg.flow.config, seg.flow.held_flags
+        return Samples(times, x, u, y, config, held=held)
+
+    def event_list(self) -> list:
+        """(time, kind, pair, config) of every event, in time order."""
+        return list(zip(self.event_times, self.event_kinds, self.event_pairs, self.event_configs))
+
+    def events_table(self, t: np.ndarray) -> dict:
+        times = np.array(self.event_times, dtype=float)
+        return {"time": times, "step": np.searchsorted(t, times) - 1, "pair": np.array(self.event_pairs, dtype=np.int64),
+                "kind": np.array(self.event_kinds, dtype=object), "config": np.array(self.event_configs, dtype=np.int64)}
+
+    def trajectory(self, output_step: float) -> Trajectory:
+        """Samples on a uniform grid of ``output_step`` plus every segment boundary, as a Trajectory."""
+        t0, t1 = self.problem.t_span
+        grid = np.append(t0 + output_step * np.arange(int(np.floor((t1 - t0) / output_step * (1 + 1e-12))) + 1), t1)
+        bounds = np.array([s.t1 for s in self.segments])
+        t = np.unique(np.concatenate([grid[grid <= t1], bounds]))
+        t = t[np.concatenate([[True], np.diff(t) > 1e-12 * output_step])]
+        # A point at a segment's end takes the state the run recorded there; the others are propagated.
+        n, k = self.problem.n, self.problem.k
+        x, u, y = np.empty((t.size, n)), np.empty((t.size, k)), np.empty((t.size, k))
+        config = np.empty(t.size, dtype=np.int64)
+        which = np.minimum(np.searchsorted(bounds, t), bounds.size - 1)
+        at_end = bounds[which] == t
+        segs = [self.segments[i] for i in which[at_end]]
+        ends = np.array([seg.xt1 for seg in segs]).reshape(-1, n + 1)
+        x[at_end] = ends[:, :n]
+        u[at_end] = np.einsum("skn,sn->sk", np.array([seg.flow.u_rows for seg in segs]).reshape(-1, k, n + 1), ends)
+        y[at_end] = np.einsum("skn,sn->sk", np.array([seg.flow.y_rows for seg in segs]).reshape(-1, k, n + 1), ends)
+        config[at_end] = [seg.flow.config for seg in segs]
+        held = np.empty((t.size, k), dtype=bool)
+        held[at_end] = np.array([seg.flow.held_flags for seg in segs]).reshape(-1, k)
+        inside = ~at_end
+        x[inside], u[inside], y[inside], config[inside], held[inside] = self._sample_sorted(t[inside], output_step)
+        problem = self.problem
+        return Trajectory(t=t, x=x, u=u, y=y, config=config, held=held, state_names=problem.state_names,
+                          pair_names=problem.pair_names,
+                          config_names=tuple(c.name or f"config{i}" for i, c in enumerate(problem.configurations)),
+                          event_columns=self.events_table(t), method="event", steps=len(self.segments),
+                          wall_s=self.wall_s, rule="exact", exact=self, period=problem.switching.period,
+                          metadata=dict(problem.metadata, event_tol=self.options.event_tol, label="event"))
+
+    def _sample_sorted(self, t: np.ndarray, step: float):
+        """Sorted times on a grid of spacing ``step`` plus segment ends: per segment, offsets q step + r share a
+        few remainders r; x = S^q expm(r Z) x0 with the powers S^q of S = expm(step Z) stacked once per flow."""
+        n, k = self.problem.n, self.problem.k
+        x, u, y = np.empty((t.size, n)), np.empty((t.size, k)), np.empty((t.size, k))
+        config = np.empty(t.size, dtype=np.int64)
+        held = np.empty((t.size, k), dtype=bool)
+        starts = np.array([seg.t0 for seg in self.segments])
+        which = np.clip(np.searchsorted(starts, t, side="left") - 1, 0, len(self.segments) - 1)
+        powers: dict = {}
+        longest: dict = {}                       # per flow, its longest segment: how many powers it needs
+        for seg in self.segments:
+            longest[id(seg.flow)] = max(longest.get(id(seg.flow), 0.0), seg.t1 - seg.t0)
+        bounds = np.searchsorted(which, np.arange(len(self.segments) + 1))
+        for s_index, seg in enumerate(self.segments):
+            lo, hi = bounds[s_index], bounds[s_index + 1]
+            if lo == hi:
+                continue
+            flow = seg.flow
+            stack = powers.get(id(flow))
+            if stack is None:
+                count = min(_BLOCK, int(longest[id(flow)] / step) + 2)
+                stack = powers[id(flow)] = _power_stack(expm(step * flow.Z), count)
+            offsets = t[lo:hi] - seg.t0
+            q = np.floor(offsets / step * (1 + 1e-12)).astype(np.int64)
+            r = offsets - q * step
+            r_key = np.round(r / step, 9)
+            states = np.empty((hi - lo, n + 1))
+            for key in np.unique(r_key):
+                sel = np.flatnonzero(r_key == key)
+                block_start = flow.advance(seg.xt0, r[sel[0]])
+                qs = q[sel]
+                blocks = int(qs.max()) // _BLOCK + 1
+                for b in range(blocks):
+                    in_block = sel[(qs // _BLOCK) == b]
+                    if in_block.size:
+                        states[in_block] = stack[q[in_block] - b * _BLOCK] @ block_start
+                    if b + 1 < blocks:
+                        block_start = stack[_BLOCK] @ block_start
+            x[lo:hi] = states[:, :n]
+            u[lo:hi] = states @ flow.u_rows.T
+            y[lo:hi] = states @ flow.y_rows.T
+            config[lo:hi] = flow.config
+            held[lo:hi] = flow.held_flags
+        return x, u, y, config, held
+
+
