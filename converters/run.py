@@ -194,13 +194,18 @@ def run_converter(name_or_model, params: dict | None = None, *, control: str = "
 
 def check_steady(model: Model, p: dict) -> None:
     """The one refusal of --steady (every method, ngspice and netlists): a steady state needs a fixed period."""
-    if model.step_times(p):
-        raise ParameterError("a periodic steady state (--steady, gdcm, compare's start on the orbit) needs a periodic "
-                             "circuit; a run with a step (t_step, or a switch driven by a PWL or PULSE that does not repeat) is not "
-                             "periodic: run --periods N (or --t-end) from rest")
+    check_no_step(model, p)
     if not model.periodic(p):
         raise ParameterError(f"--steady needs a fixed switching period; {model.key} has none (run --t-end, or find "
                              "its cycle with converters.analysis.periodic.autonomous_orbit and the event method)")
+
+
+def check_no_step(model: Model, p: dict) -> None:
+    """A periodic orbit (a steady state, a branch of orbits) is no answer for a run with a load or input step."""
+    if model.step_times(p):
+        raise ParameterError("a periodic steady state (--steady, gdcm, bifurcation, compare's start on the orbit) "
+                             "needs a periodic circuit; a run with a step (t_step, or a switch driven by a PWL or PULSE "
+                             "that does not repeat) is not periodic: run --periods N (or --t-end) from rest")
 
 
 def _accurate(model: Model, p: dict, rtol, start: float, *, method, h, t_end, periods, steady, x0, options) -> Trajectory:
@@ -387,6 +392,8 @@ class ParameterPath:
         known = [p.name for p in self.model.parameters]
         if self.name not in known:
             raise ParameterError(f"unknown parameter {self.name!r} for {self.model.key}; valid names: {', '.join(known)}")
+        if getattr(self.model, "step_times", None) is not None:       # the path's orbits are periodic ones
+            check_no_step(self.model, self.model.resolve(self.params))
 
     def resolve(self, value) -> dict:
         return self.model.resolve({**self.params, self.name: value})

@@ -51,6 +51,11 @@ def _refuse_steps(model, params: dict) -> None:
         raise ParameterError(f"{', '.join(given)}: a sweep measures each point's steady state (or the last period "
                              "from rest), not a step response; simulate the step with pcsuite simulate -p t_step=.. "
                              "-p R_step=.. (or Vin_step)")
+    steps = model.step_times(model.resolve(params))
+    if steps:                           # a netlist's switch on a gate that does not repeat
+        raise ParameterError(f"{model.key} has a step at {steps[0]:.6g} s (a switch on a gate that does not repeat): "
+                             "a sweep measures each point's steady state (or the last period from rest), not a step "
+                             "response; simulate the step with pcsuite simulate")
 
 @dataclass(frozen=True)
 class ModelSweep:

@@ -102,3 +102,17 @@ def test_compare_runs_the_load_step_from_rest_over_the_files_run_and_passes(caps
     assert result.passed, (result.rows, result.notes)
     assert m["v(out)_mean_rel_error"] < 1e-3 and m["spice_periods"] == 500 and not math.isnan(m["v(out)_mean_spice"])
     assert m["mode_sequence_lcp"] == m["mode_sequence_spice"] == "S1+S2 > S2+D1"
+
+
+def test_a_sweep_or_a_bifurcation_of_a_circuit_with_a_step_is_refused_not_answered_for_the_circuit_before_it(capsys,
+                                                                                                           tmp_path):
+    """Each point's problem would be the circuit before the step (its schedule at t = 0): the answer would ignore
+    the load step. Both commands refuse it in one line, nothing written."""
+    out = tmp_path / "s"
+    assert main(["sweep", str(STEP), "--grid", "r=5:10:2", "--steady", "--no-progress", "--scheduler", "batched",
+                 "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "has a step at 0.003001 s" in err[0] and not out.exists(), err
+    assert main(["bifurcation", str(STEP), "--param", "r=5:10", "--points", "0"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "branch" not in err[0] and "a switch driven by a PWL or PULSE" in err[0], err
