@@ -16,14 +16,14 @@ PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]
 NEEDS_SPICE = re.compile(r"\bcompare\b|--method spice|ngspice")
 
 
-def _blocks():
-    """(id, kind, text) of every ```console and ```python block of the README and the docs."""
+def _pages():
+    """(page, [(kind, text)]) of every page with ```console or ```python blocks, in the README and the docs."""
     for page in PAGES:
         text = page.read_text()
-        for number, match in enumerate(re.finditer(r"(?ms)^```(console|python)\n(.*?)^```", text), 1):
-            name = f"{page.relative_to(ROOT)}:{number}"
-            marks = [pytest.mark.spice] if NEEDS_SPICE.search(match.group(2)) else []
-            yield pytest.param(match.group(1), match.group(2), id=name, marks=marks)
+        blocks = [(m.group(1), m.group(2)) for m in re.finditer(r"(?ms)^```(console|python)\n(.*?)^```", text)]
+        if blocks:
+            marks = [pytest.mark.spice] if any(NEEDS_SPICE.search(b) for _, b in blocks) else []
+            yield pytest.param(blocks, id=str(page.relative_to(ROOT)), marks=marks)
 
 
 def test_the_site_builds_with_warnings_as_errors(tmp_path):
@@ -36,22 +36,24 @@ def test_the_site_builds_with_warnings_as_errors(tmp_path):
     assert "Solve LCP(q, M)" in (tmp_path / "site" / "api" / "index.html").read_text()    # from the docstrings
 
 
-@pytest.mark.parametrize("kind, text", list(_blocks()))
-def test_every_example_in_the_docs_runs_as_printed(kind, text, tmp_path, monkeypatch, capsys):
-    """Each ``$ pcsuite ...`` line of a console block exits 0 (its output shown in the page is one run's); each
-    python block runs (its asserts are checks). In an empty directory beside the shipped netlists."""
+@pytest.mark.parametrize("blocks", list(_pages()))
+def test_every_example_in_the_docs_runs_as_printed(blocks, tmp_path, monkeypatch, capsys):
+    """A page's blocks run in order in one empty directory beside the shipped netlists (a later block reads what an
+    earlier one wrote): each ``$ pcsuite ...`` line of a console block exits 0 (its output shown in the page is one
+    run's); each python block runs (its asserts are checks)."""
     (tmp_path / "netlists").symlink_to(ROOT / "netlists")
     monkeypatch.chdir(tmp_path)
-    if kind == "python":
-        exec(compile(text, "example", "exec"), {"__name__": "__example__"})
-        return
-    commands = [line[2:] for line in text.splitlines() if line.startswith("$ ")]
-    assert commands, text
-    for command in commands:
-        argv = shlex.split(command)
-        assert argv[0] == "pcsuite", command
-        code = main(argv[1:])
-        assert code == 0, (command, capsys.readouterr().err)
+    for kind, text in blocks:
+        if kind == "python":
+            exec(compile(text, "example", "exec"), {"__name__": "__example__"})
+            continue
+        commands = [line[2:] for line in text.splitlines() if line.startswith("$ ")]
+        assert commands, text
+        for command in commands:
+            argv = shlex.split(command)
+            assert argv[0] == "pcsuite", command
+            code = main(argv[1:])
+            assert code == 0, (command, capsys.readouterr().err)
 
 
 def test_the_readme_is_a_short_entry_point():
