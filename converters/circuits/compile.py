@@ -54,12 +54,15 @@ class Compiled:
     switch_names: tuple
     closed: tuple                    # per configuration: which switches are closed
     signal_names: tuple              # "v(node)", "i(element)"
-    signal_maps: tuple               # per configuration: (Sx (S, n), Su (S, k), s0 (S,), Ssin (S, m))
+    signal_maps: tuple               # per configuration: (Sx (S, n), Su (S, k), s0 (S,), Ssin (S, m), Sgate (S, g))
     period: float
     x0: np.ndarray
     units: dict = field(default_factory=dict)
     #: The SIN sources as sinusoidal inputs: (omega (m,), phase (m,), E (configs, m, n), F (configs, m, k)), or None.
     inputs: tuple | None = None
+    #: The gate sources (PULSE or PWL reaching only switch controls) whose waveforms the Sgate columns of the signal
+    #: maps multiply at each sample's time: a gate's node voltage follows its waveform, not a level.
+    gates: tuple = ()
     #: Switches driven by sources that do not repeat (a PWL without r=, a PULSE without PER: a load step's switch):
     #: ((t, law), ...), the law in force from each instant t > 0 on (``law`` before the first).
     phases: tuple = ()
@@ -199,7 +202,7 @@ class _Compiler:
                         tuple(d.name for d in self.diodes) or ("none",), tuple(pair_currents),
                         tuple(s.name for s in self.switches), tuple(closed), self.signal_names(), tuple(maps),
                         period if periodic else math.inf, self.initial_state(), self.units(), inputs,
-                        tuple(zip(phase_times, laws[1:])))
+                        self.gate_waveforms(), tuple(zip(phase_times, laws[1:])))
 
     @staticmethod
     def schedule(period: float, starts: list, index: list, sines: bool) -> Schedule:
@@ -310,7 +313,8 @@ class _Compiler:
         state_names = tuple(f"v({x.name})" for x in self.capacitors) + tuple(f"i({x.name})" for x in self.inductors)
         return Compiled(tuple(configs), law, state_names, tuple(d.name for d in self.diodes) or ("none",),
                         tuple(pair_currents), tuple(x.name for x in self.switches), tuple(closed), self.signal_names(),
-                        tuple(maps), ramp.period if ramp is not None else math.inf, self.initial_state(), self.units())
+                        tuple(maps), ramp.period if ramp is not None else math.inf, self.initial_state(), self.units(),
+                        gates=self.gate_waveforms())
 
     def period(self) -> float:
         """The common period of the PULSE sources (their least common multiple), inf without one."""
@@ -475,7 +479,7 @@ class _Compiler:
     def waveform_value(self, coefficients: dict, t: np.ndarray) -> np.ndarray:
         total = np.zeros_like(t)
         for name, c in coefficients.items():
-            total += c * _value(next(s for s in self.sources if s.name == name).waveform, t)
+            total += c * waveform_at(next(s for s in self.sources if s.name == name).waveform, t)
         return total
 
     def corners(self, coefficients: dict, period: float) -> np.ndarray:
@@ -579,8 +583,21 @@ class _Compiler:
         for i in self.shorted_diodes(switch_state, forms):
             F_sin = F_sin.copy()
             F_sin[i] = 0.0
-        signals = (rows[:, :n].copy(), rows[:, n:n + k].copy(), rows[:, n + k:] @ s, rows[:, columns] * amplitudes)
+        gates = self.gate_columns()
+        static = s.copy()
+        static[[c - n - k for c in gates]] = 0.0       # a gate's share is its waveform at each sample's time
+        signals = (rows[:, :n].copy(), rows[:, n:n + k].copy(), rows[:, n + k:] @ static, rows[:, columns] * amplitudes,
+                   rows[:, gates].copy())
         return config, signals, (E_sin.T.copy(), F_sin.T.copy())
+
+    def gate_waveforms(self) -> tuple:
+        return tuple(self.sources[c - self.n - self.k].waveform for c in self.gate_columns())
+
+    def gate_columns(self) -> list:
+        """The MNA input columns of the gate sources: a PULSE or PWL that reaches only switch controls (its value
+        decides when switches close; in the power circuit a PULSE is a level of the configuration)."""
+        return [self.n + self.k + i for i, src in enumerate(self.sources)
+                if isinstance(src.waveform, (Pulse, Pwl)) and not self.in_power_circuit(src)]
 
     def sinusoid_columns(self):
         """(columns of the SIN sources among the MNA's input columns, their amplitudes VA)."""
@@ -693,8 +710,8 @@ def _crossings(corners: np.ndarray, values: np.ndarray, on: float, off: float, s
     return changes
 
 
-def _value(w, t: np.ndarray) -> np.ndarray:
-    """A source's waveform at times t (DC, PULSE or a repeated PWL)."""
+def waveform_at(w, t: np.ndarray) -> np.ndarray:
+    """A source's waveform at times t (DC, PULSE, or a PWL: repeated with r=0, else holding its last value)."""
     t = np.asarray(t, dtype=float)
     if isinstance(w, Pwl):
         times, values = np.array(w.points).T

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..circuits.compile import Compiled, compile_netlist
+from ..circuits.compile import Compiled, compile_netlist, waveform_at
 from ..circuits.netlist import Netlist, NetlistError, Pulse, check_overrides, read_netlist
 from ..errors import ParameterError, SignalError
 from ..params import Param
@@ -210,7 +210,9 @@ class Circuit(Model):
             raise SignalError(f"signal must be one of vout, switch, {', '.join(c.signal_names)}; got {name!r}") from None
         config = np.asarray(samples.config, dtype=np.int64)
         out = np.empty(len(samples.t))
-        for index, (Sx, Su, s0, Ssin) in enumerate(c.signal_maps):
+        gate_values = (np.column_stack([waveform_at(w, np.asarray(samples.t, dtype=float)) for w in c.gates])
+                       if c.gates else None)
+        for index, (Sx, Su, s0, Ssin, Sgate) in enumerate(c.signal_maps):
             rows = config == index
             if rows.any():
                 u = samples.u[rows] if samples.u is not None else np.zeros((rows.sum(), Su.shape[1]))
@@ -218,6 +220,8 @@ class Circuit(Model):
                 if c.inputs is not None:          # the SIN sources' share at each point's time
                     omega, phase = c.inputs[0], c.inputs[1]
                     out[rows] += np.sin(np.multiply.outer(np.asarray(samples.t)[rows], omega) + phase) @ Ssin[row]
+                if gate_values is not None:       # a gate's node voltage follows its waveform
+                    out[rows] += gate_values[rows] @ Sgate[row]
         return out
 
     def vout(self, samples: Samples, p: dict) -> np.ndarray:

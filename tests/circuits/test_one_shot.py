@@ -116,3 +116,19 @@ def test_a_sweep_or_a_bifurcation_of_a_circuit_with_a_step_is_refused_not_answer
     assert main(["bifurcation", str(STEP), "--param", "r=5:10", "--points", "0"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "branch" not in err[0] and "a switch driven by a PWL or PULSE" in err[0], err
+
+
+@pytest.mark.parametrize("method", ["lcp", "event"])
+def test_a_gates_node_voltage_follows_its_waveform_not_a_level(method):
+    """v(gate) is the PWM PULSE (1 V while S1 conducts: its mean over a period is D), v(step) the one-shot PWL
+    (0 V before 3 ms, its ramp to 1 V, then 1 V); they had read the sources' first values throughout (v(gate) 1 V,
+    v(step) 0 V after the step)."""
+    from converters.circuits.compile import waveform_at
+    circuit = Circuit.from_netlist(STEP)
+    tr = run_converter(circuit, {}, method=method)
+    gate, step = (next(e for e in circuit.netlist.elements if e.name == name).waveform for name in ("vg", "vstep"))
+    t = np.asarray(tr.t, dtype=float)
+    np.testing.assert_allclose(tr.signal("v(gate)"), waveform_at(gate, t), atol=1e-12)
+    np.testing.assert_allclose(tr.signal("v(step)"), waveform_at(step, t), atol=1e-12)
+    assert tr.mean("v(gate)", t0=4.9e-3, t1=5e-3) == pytest.approx(D, abs=1e-3)       # the 1e-6 T edges aside
+    assert tr.signal("v(step)")[t > 3.002e-3].min() == 1.0 and tr.signal("v(step)")[t < 3e-3].max() == 0.0
