@@ -65,13 +65,16 @@ def test_no_file_cites_a_document_the_repository_does_not_hold():
     tracked = subprocess.run(["git", "ls-files"], cwd=ROOT, capture_output=True, text=True).stdout.split()
     if not tracked:                                    # not a git checkout (an unpacked sdist): every file
         tracked = [str(p.relative_to(ROOT)) for p in ROOT.rglob("*") if p.is_file() and ".venv" not in p.parts]
-    cited = re.compile(r"REFERENCE (section|sections|\d)|REFERENCE's|REFERENCE\.md|CONTRACT\.md|STYLE\.md|\.\./shared")
+    # this file names the patterns it looks for (it is skipped); the design documents outside the repository are
+    # named in two pieces, so that the pattern is not itself a path to them
+    outside = re.escape("../" + "shared")
+    cited = re.compile(r"REFERENCE (section|sections|\d)|REFERENCE's|REFERENCE\.md|CONTRACT\.md|STYLE\.md|" + outside)
     found = []
     for name in tracked:
         path = ROOT / name
         if path.suffix not in {".py", ".md", ".toml", ".cir", ".txt", ".yml", ".cfg"} or not path.is_file():
             continue
         for number, line in enumerate(path.read_text(errors="replace").splitlines(), 1):
-            if cited.search(line) and path != Path(__file__):
+            if cited.search(line) and path != Path(__file__).resolve():
                 found.append(f"{name}:{number}: {line.strip()[:100]}")
     assert not found, "\n".join(found)

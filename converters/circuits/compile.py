@@ -273,7 +273,7 @@ class _Compiler:
         and a :class:`~converters.problems.StateSwitching` law (its ramp's period, or none: an autonomous circuit)."""
         from ..problems import StateSwitching, SwitchingFunction
         if any(d for d in drives.values() if d is not None and any(
-                isinstance(next(x for x in self.sources if x.name == name).waveform, (Pulse, Pwl)) for name in d)):
+                isinstance(self.source(name).waveform, (Pulse, Pwl)) for name in d)):
             names = ", ".join(n.upper() for n in self.state_rows)
             raise NetlistError(f"{self.path}: {names} driven by the circuit's own quantities beside PULSE gates: a "
                                "comparator's switches with the others at DC is what is compiled yet")
@@ -286,7 +286,7 @@ class _Compiler:
         fixed = {}
         for other in self.switches:
             if other.name not in self.state_rows:
-                value = sum(c * float(next(x for x in self.sources if x.name == src).waveform)
+                value = sum(c * float(self.source(src).waveform)
                             for src, c in (drives[other.name] or {}).items())
                 fixed[other.name] = value > self.threshold(other)[0]
         pieces, configs, pair_currents, closed, maps = [], [], [], [], []
@@ -479,13 +479,13 @@ class _Compiler:
     def waveform_value(self, coefficients: dict, t: np.ndarray) -> np.ndarray:
         total = np.zeros_like(t)
         for name, c in coefficients.items():
-            total += c * waveform_at(next(s for s in self.sources if s.name == name).waveform, t)
+            total += c * waveform_at(self.source(name).waveform, t)
         return total
 
     def corners(self, coefficients: dict, period: float) -> np.ndarray:
         points = [0.0]
         for name in coefficients:
-            w = next(s for s in self.sources if s.name == name).waveform
+            w = self.source(name).waveform
             if isinstance(w, Pulse):
                 per = w.per if math.isfinite(w.per) else period
                 for m in range(int(math.ceil(2 * period / per)) + 1):
