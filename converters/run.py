@@ -17,7 +17,7 @@ import numpy as np
 
 from .analysis.periodic import PeriodicOrbit, require, shoot
 from .errors import ParameterError, SimulationError
-from .methods.base import Method, get_method
+from .methods.base import DEFAULT_METHOD, Method, get_method
 from .methods.theta import StepPlanMap
 from .models import Model, check_h, get_model
 from .simulate import simulate
@@ -50,21 +50,21 @@ def resolve_model(name_or_model, control: str = "pwm") -> Model:
     return name_or_model
 
 
-def make_method(model: Model, p: dict, method: str | Method = "lcp", h=None, **options) -> Method:
+def make_method(model: Model, p: dict, method: str | Method | None = None, h=None, **options) -> Method:
     """The method for a run of ``model``: h defaults to the model's (T/1000; PRC 50 ns), the stepper's theta
     to the model's. ``h`` is the stepper's step or the output spacing of the other methods."""
     if isinstance(method, Method):
         if h is not None or any(v is not None for v in options.values()):
             raise ParameterError("give either a Method object or h and method options, not both")
         return method
-    cls = get_method(method)
+    cls = get_method(method or DEFAULT_METHOD)
     h = model.default_h(p) if h is None else parse_value("h", h)
     if model.periodic(p):
         check_h(h, model.period(p))
     elif not 0.0 < h <= model.max_h(p):
         raise ParameterError(f"h must be in (0, {model.max_h(p):.3g}] s for {model.key} (at most 1/20 of the "
                              f"shorter switching interval); got {h:g}")
-    if cls.key == "lcp" and options.get("theta") is None:
+    if options.get("theta") is None and "theta" in cls.option_names():     # the model's theta (PRC, netlists 0.5)
         options["theta"] = model.default_theta
     return cls.from_options(step=h, **options)
 
@@ -90,7 +90,7 @@ def duration(model: Model, p: dict, t_end=None, periods=None) -> float:
     return DEFAULT_PERIODS * model.period(p) if model.periodic(p) else DEFAULT_AUTONOMOUS_T_END
 
 
-def run_converter(name_or_model, params: dict | None = None, *, control: str = "pwm", method: str | Method = "lcp",
+def run_converter(name_or_model, params: dict | None = None, *, control: str = "pwm", method: str | Method | None = None,
                   h=None, t_end=None, periods=None, steady: bool = False, steady_tol: float = 1e-6, x0=None,
                   rtol=None, output_step=None, **options) -> Trajectory:
     """Simulate a model (a converter under ``control``) with any method; returns a labelled Trajectory.
@@ -101,8 +101,8 @@ def run_converter(name_or_model, params: dict | None = None, *, control: str = "
         ``buck``, ``boost``, ``buck-boost``, ``cuk``, ``prc`` (with ``control``), or a Model.
     params : dict
         Parameter values (numbers or SPICE-style strings); unknown names are refused.
-    method : str or Method
-        ``lcp``, ``event``, ``smooth`` (built from ``h`` and ``options``: ``theta``, ``eps``, ``solver_rtol``,
+    method : str or Method, optional
+        ``lcp`` (the default), ``event``, ``smooth`` (built from ``h`` and ``options``: ``theta``, ``eps``, ``solver_rtol``,
         ``event_tol``, ...), or a Method object.
     h : float, optional
         The stepper's step, or the output spacing of the other methods (default: the model's, T/1000).
@@ -211,7 +211,7 @@ def check_no_step(model: Model, p: dict) -> None:
 def _accurate(model: Model, p: dict, rtol, start: float, *, method, h, t_end, periods, steady, x0, options) -> Trajectory:
     from .analysis.accuracy import accurate_steady
     rtol = parse_value("rtol", rtol)
-    given = [name for name, value in (("method", None if method in ("lcp", None) else method), ("h", h),
+    given = [name for name, value in (("method", method), ("h", h),
                                       *options.items()) if value is not None]
     if given:
         raise ParameterError(f"rtol chooses the method and its step; give either rtol or {', '.join(given)}, not "
@@ -360,7 +360,7 @@ def _on_orbit(model: Model, p: dict, method: Method, period_map, x0, span: float
     return simulate(model.problem(p, span, x0), method)
 
 
-def steady_orbit(name_or_model, params: dict | None = None, *, method: str | Method = "lcp", h=None,
+def steady_orbit(name_or_model, params: dict | None = None, *, method: str | Method | None = None, h=None,
                  tol: float = 1e-8, warm_up: int = WARM_UP_PERIODS, **options) -> Trajectory:
     """One period of the method's periodic orbit, labelled (conduction modes, maps, GDCM): Newton shooting
     from rest (after ``warm_up`` plain periods), one step plan for Newton and the period returned.
@@ -410,15 +410,16 @@ class ParameterPath:
 POWER_ESTIMATES = ("efficiency_error_estimate", "input_W_error_estimate", "losses_W_error_estimate")
 
 
-def run_summary(tr: Trajectory) -> dict:
+def run_summary(tr: Trajectory, *, check: bool = True) -> dict:
     """The JSON summary of a run: converter, method, its options, steps, wall_s, and the model's measures
-    (PWM converters: vout_mean over the last 10 periods, mode fractions of the last period)."""
+    (PWM converters: vout_mean over the last 10 periods, mode fractions of the last period); with ``check``, how
+    accurate they are (:func:`check_accuracy`: re-runs at twice the step or on the method's orbit)."""
     meta = tr.metadata
     out = {"converter": meta["model"], "method": tr.method, "options": {**meta["method_options"], "params": meta["params"]},
            "steps": int(tr.steps), "wall_s": tr.wall_s}
-    if meta.get("control", "pwm") != "pwm":
-        out["control"] = meta["control"]
     model, p = tr.labels.model, meta["params"]
+    if model.control != Model.control:
+        out["control"] = model.control
     out.update(model.summary(tr, p))
     for key in ("periods", "steady_periods", "output_step", "resolved_from_s"):
         if meta.get(key) is not None:
@@ -441,29 +442,51 @@ def run_summary(tr: Trajectory) -> dict:
             out["power"].update(efficiency_error_estimate=efficiency_estimate(quantities),
                                 input_W_error_estimate=quantities["input_W"]["relative_error_estimate"],
                                 losses_W_error_estimate=max(losses, default=0.0))
-    elif meta.get("control", "pwm") == "pwm" and model.periodic(p) and tr.algorithm is not None \
-            and not model.step_times(p):
+    elif check:
+        check_accuracy(tr, out)
+    return out
+
+
+def check_accuracy(tr: Trajectory, summary: dict) -> dict:
+    """How accurate a run's ``summary`` (:func:`run_summary`'s, without ``check``) is, by what its method declares
+    (``Method.error_kind``): ``summary["accuracy"]`` and, where an estimate exceeds the default target,
+    ``summary["warnings"]``; updated in place and returned.
+
+    - A periodic circuit run with a time schedule (no step): the run against its method's periodic orbit, and a
+      ``step`` method's orbit against the one at twice the step (Richardson's estimate by the declared order);
+      the mode fractions and events of the last period are then read inside the step
+      (:func:`converters.analysis.accuracy.default_check`).
+    - A run with no periodic orbit to compare with (a state-driven law, a load step): the same run at twice the
+      step, and the window against the one before it (:func:`converters.analysis.accuracy.window_check`).
+    - An ``exact`` method has no discretization to estimate; a ``model`` method's error is not a step's."""
+    model, p, out = tr.labels.model, tr.metadata["params"], summary
+    if tr.algorithm is None:
+        return out
+    method = tr.algorithm
+    if model.periodic(p) and not model.step_times(p) and _schedule_driven(model, p):
         from .analysis.accuracy import default_check, last_period
         period = last_period(model, p, tr)
         out["mode_fractions"] = period["mode_fractions"]        # read inside the step, not on the grid
         out["events"] = [{"pair": pair, "kind": kind, "time_T": t} for pair, kind, t in period["events"]]
-        check = default_check(model, p, tr.algorithm, tr, out["vout_mean"], out.get("power"))
+        check = default_check(model, p, method, tr, out["vout_mean"], out.get("power"))
         for key in POWER_ESTIMATES:          # the power summary's estimates stand beside its values
             if key in check:
                 out["power"][key] = check.pop(key)
-        out["accuracy"] = check
-        if "warning" in check:
-            out["warnings"] = [check["warning"]]
-    elif tr.algorithm is not None and isinstance(out.get("vout_mean"), float) and ("window_s" in out or
-                                                                                    "window_periods" in out):
-        # no periodic orbit to compare with: the sliding-mode boost (its window_s), a run with a step, another control
+    elif isinstance(out.get("vout_mean"), float) and ("window_s" in out or "window_periods" in out):
         from .analysis.accuracy import window_check
         window = out.get("window_s") or (float(tr.t[-1]) - out["window_periods"] * model.period(p), float(tr.t[-1]))
-        method = tr.algorithm
-        coarse = (run_converter(model, p, method=replace(method, h=2.0 * method.h), t_end=float(tr.t[-1] - tr.t[0]),
-                                x0=tr.x[0]) if method.key == "lcp" else None)      # the same run at 2h
+        coarse = (run_converter(model, p, method=method.coarsened(), t_end=float(tr.t[-1] - tr.t[0]), x0=tr.x[0])
+                  if method.error_kind == "step" else None)      # the same run at twice the step
         check = window_check(model, p, method, tr, out, window, coarse)
-        out["accuracy"] = check
-        if "warning" in check:
-            out["warnings"] = [check["warning"]]
+    else:
+        return out
+    out["accuracy"] = check
+    if "warning" in check:
+        out["warnings"] = [check["warning"]]
     return out
+
+
+def _schedule_driven(model: Model, p: dict) -> bool:
+    """The model switches on a time schedule (open loop: its orbit is the run's reference), not on its state."""
+    from .problems import Schedule
+    return isinstance(model.problem(p, model.period(p)).switching, Schedule)

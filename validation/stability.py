@@ -30,7 +30,6 @@ from .defaults import STABILITY_BASE
 PERIODS = 10
 TIMEOUT_S = 60.0
 BASE = STABILITY_BASE["params"]
-METHODS = ("LCP theta=1", "LCP theta=0.5", "event", "smooth", "ngspice")
 
 
 def extreme_cases() -> list[dict]:
@@ -80,47 +79,67 @@ def _energy_checks(p, t, x, on, rule, totals=None, i_in=None):
     return True, diverged, float(residual / scale)
 
 
+def _stepper(theta: float):
+    def run(problem, p, T, case):
+        from converters.methods import Theta
+        from converters.simulate import simulate
+        tr = simulate(problem, Theta(case["h_fraction"] * T, theta))
+        return tr.t, tr.x, tr.config[1:] == 0, "end" if theta == 1.0 else "mid", None, None
+    return run
+
+
+def _event(problem, p, T, case):
+    """Its samples and the exact energy totals from the piecewise solution's quadrature."""
+    from converters.methods import EventDriven
+    from converters.simulate import simulate
+    run = simulate(problem, EventDriven())
+    nodes, w = run.exact.quadrature()
+    tq, xq, cq = nodes.t, nodes.x, nodes.config
+    totals = (float(np.sum(w * p["Vin"] * xq[:, 0] * (cq == 0))), float(np.sum(w * xq[:, 1] ** 2)) / p["R"])
+    order = np.argsort(tq)
+    t = np.concatenate([[0.0], tq[order], [problem.t_span[1]]])
+    x = np.vstack([problem.x0, xq[order], run.x[-1]])
+    node_on = cq[order] == 0
+    return t, x, np.append(node_on, node_on[-1]), "trap", totals, None    # on: for the divergence check
+
+
+def _smooth(problem, p, T, case):
+    from converters.methods import Smoothing
+    from converters.simulate import simulate
+    tr = simulate(problem, Smoothing(eps=1e-4, solver_rtol=1e-6, output_step=T / 1000))
+    return tr.t, tr.x, tr.config[1:] == 0, "trap", None, None
+
+
+def _ngspice(problem, p, T, case):
+    """The source's own current (the switch's leakage included) replaces iL over every interval."""
+    from netlists import SpiceOptions, build_netlist
+
+    from .spice import run_spice
+    conv = get_converter(STABILITY_BASE["converter"])
+    netlist = build_netlist(conv.name, p, problem.t_span[1], SpiceOptions(tmax_fraction=1e-2, reltol=1e-3,
+                                                                          method="trap"))
+    result = run_spice(netlist)
+    x = np.column_stack([result.signal(netlist.probes[n]) for n in conv.state_names])
+    return result.time, x, np.ones(result.time.size - 1, bool), "trap", None, -result.vectors["vin#branch"]
+
+
+#: Each method of the study at its settings: (problem, p, T, case) -> (t, x, switch on per interval, quadrature
+#: rule, exact energy totals or None, the source's measured current or None).
+RUNNERS = {"LCP theta=1": _stepper(1.0), "LCP theta=0.5": _stepper(0.5), "event": _event, "smooth": _smooth,
+           "ngspice": _ngspice}
+METHODS = tuple(RUNNERS)
+
+
 def _run_one(case: dict, method: str) -> dict:
     """One run in the worker process: returns the checks (never raises)."""
-    from converters.methods import EventDriven, Smoothing, Theta
-    from converters.simulate import simulate
     conv = get_converter(STABILITY_BASE["converter"])
     start = time.perf_counter()
     try:
         p = conv.resolve({**BASE, **case["params"]})
         T = conv.period(p)
-        t_end = case["periods"] * T
-        problem = conv.problem(p, t_end)
-        totals = None
-        if method.startswith("LCP"):
-            theta = 1.0 if method.endswith("=1") else 0.5
-            tr = simulate(problem, Theta(case["h_fraction"] * T, theta))
-            t, x, on, rule = tr.t, tr.x, tr.config[1:] == 0, "end" if theta == 1.0 else "mid"
-        elif method == "event":
-            run = simulate(problem, EventDriven())
-            nodes, w = run.exact.quadrature()
-            tq, xq, cq = nodes.t, nodes.x, nodes.config
-            totals = (float(np.sum(w * p["Vin"] * xq[:, 0] * (cq == 0))), float(np.sum(w * xq[:, 1] ** 2)) / p["R"])
-            order = np.argsort(tq)
-            t = np.concatenate([[0.0], tq[order], [t_end]])
-            x = np.vstack([problem.x0, xq[order], run.x[-1]])
-            node_on = cq[order] == 0
-            on, rule = np.append(node_on, node_on[-1]), "trap"    # for the divergence check; totals are exact
-        elif method == "smooth":
-            tr = simulate(problem, Smoothing(eps=1e-4, solver_rtol=1e-6, output_step=T / 1000))
-            t, x, on, rule = tr.t, tr.x, tr.config[1:] == 0, "trap"
-        else:
-            from netlists import SpiceOptions, build_netlist
-
-            from .spice import run_spice
-            netlist = build_netlist(conv.name, p, t_end, SpiceOptions(tmax_fraction=1e-2, reltol=1e-3, method="trap"))
-            result = run_spice(netlist)
-            t = result.time
-            x = np.column_stack([result.signal(netlist.probes[n]) for n in conv.state_names])
-            # The source's own current (the switch's leakage included) replaces iL over every interval.
-            i_source, on, rule = -result.vectors["vin#branch"], np.ones(t.size - 1, bool), "trap"
-        finite, diverged, residual = _energy_checks(p, t, x, on, rule, totals,
-                                                    i_source if method == "ngspice" else None)
+        problem = conv.problem(p, case["periods"] * T)
+        t, x, on, rule, totals, i_source = RUNNERS[method](problem, p, T, case)
+        finite, diverged, residual = _energy_checks(p, t, x, on, rule, totals, i_source)
         return {"status": "ok", "finite": finite, "diverged": diverged, "energy_residual": residual,
                 "energy_created": bool(np.isfinite(residual) and residual > ENERGY_TOL), "points": int(t.size),
                 "wall_s": time.perf_counter() - start, "error": ""}

@@ -115,6 +115,16 @@ class AccurateSteady:
 
 # --- measures of one period ------------------------------------------------------------------------------
 
+def _exact(tr) -> bool:
+    """The run's events sit at their exact instants (its method declares exact flows)."""
+    return tr.algorithm is not None and tr.algorithm.exact
+
+
+def _model_error(method) -> str:
+    return f"the {method.key} method's error is its model's of the circuit (order {method.order:g} in its own " \
+           "width), not its step's: not estimated here"
+
+
 def _inductor_currents(model) -> list[str]:
     return [name for name in model.state_names if name.startswith("i")]
 
@@ -130,7 +140,7 @@ def substep_events(tr, T: float, t0: float = 0.0) -> list[tuple[str, str, float]
         return out
     steps, pairs = np.asarray(columns["step"]), np.asarray(columns["pair"])
     kinds = np.asarray(columns["kind"]).astype(str)
-    exact = tr.method == "event"
+    exact = _exact(tr)
     t, u, y, config = tr.t, tr.u, tr.y, tr.config
     for k in np.flatnonzero((times >= t0 - 2 * T / max(t.size, 1)) & (times <= t0 + T)):
         pair, j = int(pairs[k]), int(steps[k])
@@ -177,7 +187,7 @@ def mode_fractions(tr, T: float, events, edges, t0: float = 0.0) -> dict:
         if b - a <= 1e-12 * T:
             continue
         j = int(np.searchsorted(t, a + 1e-9 * T, side="right"))         # the first step ending inside (a, b]
-        if tr.method == "event":                                        # its samples sit on the events
+        if _exact(tr):                                                  # its samples sit on the events
             j = int(np.searchsorted(t, 0.5 * (a + b)))
         j = min(max(j, 1), t.size - 1)
         out[labels[j]] = out.get(labels[j], 0.0) + (b - a) / T
@@ -227,7 +237,7 @@ def measures(model, p: dict, tr, T: float) -> tuple[dict, list]:
     # a pair that changes at a switching edge changes with the configuration: an edge, not a state event
     events = [e for e in substep_events(tr, T)
               if not np.any(np.abs(np.concatenate([edges, [0.0, T]]) - e[2] * T) <= 1e-9 * T)]
-    instants = [e[2] * T for e in events] if tr.method != "event" else []
+    instants = [] if _exact(tr) else [e[2] * T for e in events]
     mean = tr.mean("vout", t0=0.0, t1=T)
     values["vout_mean"] = (mean, abs(mean))
     rows = np.arange(tr.t.size)
@@ -397,7 +407,7 @@ def accurate_steady(model, p: dict, rtol: float, *, x0=None, progress=None) -> A
     def run(method, guess, warm_up):
         start = time.perf_counter()
         orbit, tr = _orbit(model, p, method, guess, warm_up, tol)
-        runs.append({"method": method.key, "steps_per_period": int(round(T / method.h)) if method.key == "lcp" else None,
+        runs.append({"method": method.key, "steps_per_period": int(round(T / method.step)) if method.step else None,
                      "periods": int(warm_up + orbit.evaluations + 1), "wall_s": time.perf_counter() - start,
                      "orbit_distance": orbit.distance})
         return orbit, tr
@@ -491,9 +501,9 @@ def _orbit_runs(model, p: dict, method, x_guess):
 
     def run(m, x0):
         return replace(simulate(model.problem(p, T, x0), m), labels=model.labels(p))
-    if method.key != "lcp":
+    if method.error_kind != "step":
         return run(method, orbit.x0), None
-    coarse = replace(method, h=2 * method.h)
+    coarse = method.coarsened()
     orbit_2h = shoot(model.problem(p, T, orbit.x0), coarse, orbit.x0, tol=1e-8, polish=True)
     if not orbit_2h.converged:
         return f"the orbit at 2h was not found ({orbit_2h.message})"
@@ -534,7 +544,7 @@ def _power_warning(check: dict, method) -> str:
         remedy = "the run has not settled (its power balance still carries the transient): use --steady"
     else:
         remedy = ("the step is too coarse: use --method event (exact at the switchings), a smaller --h, or --rtol"
-                  if method.key == "lcp" else "use --steady")
+                  if method.error_kind == "step" else "use --steady")
     return (f"efficiency may be {error:.1e} off (more than {DEFAULT_RTOL:g}; input power "
             f"{check['input_W_error_estimate']:.1e}): {remedy}")
 
@@ -548,8 +558,8 @@ def default_check(model, p: dict, method, tr, reported: float, power: dict | Non
     input power's estimates (:func:`_power_check`), and a warning when the efficiency's exceeds it."""
     T = model.period(p)
     out = {"target": DEFAULT_RTOL}
-    if method.key not in ("lcp", "event"):
-        reason = f"the {method.key} method's error is its model's (O(eps)), not estimated here"
+    if method.error_kind == "model":
+        reason = _model_error(method)
         end = float(tr.t[-1])
         if end - float(tr.t[0]) < 20 * T * (1 - 1e-9):
             return {**out, "checked": False, "reason": reason}
@@ -613,12 +623,11 @@ def window_check(model, p: dict, method, tr, summary: dict, window: tuple, coars
     Each relative estimate is the sum of its parts; a warning names the larger part when one exceeds
     ``DEFAULT_RTOL``."""
     out = {"target": DEFAULT_RTOL}
-    if method.key not in ("lcp", "event"):
-        return {**out, "checked": False, "reason": f"the {method.key} method's error is its model's (O(eps)), "
-                "not estimated here" if method.key == "smooth" else f"not estimated for the {method.key} method"}
+    if method.error_kind == "model":
+        return {**out, "checked": False, "reason": _model_error(method)}
     names = [name for name in WINDOW_MEASURES if isinstance(summary.get(name), float)]
     t0, t1 = (float(t) for t in window)
-    if method.key == "lcp" and coarse is None:
+    if method.error_kind == "step" and coarse is None:
         raise ValueError("window_check: the stepper's run needs its coarse twin at 2h")
     coarse_summary = model.summary(coarse, p) if coarse is not None else None
     a = 2.0 * t0 - t1

@@ -6,6 +6,9 @@ holds only its options, validated when it is made, and declares
 * ``key``: its name in :data:`METHODS` (``lcp``, ``event``, ``smooth``; the command line's ``--method``);
 * ``order``: its declared order of convergence in its step (``inf`` for an exact method); the tests
   check the measured order against it;
+* ``error_kind``: how its error is estimated (``step``: Richardson's from a twin at twice the step,
+  :meth:`Method.coarsened`; ``exact``; ``model``: its model's, not a step's): the accuracy checks read this,
+  never the key;
 * ``supports(problem)``: the problems it can solve (a clear error otherwise, before any step);
 * ``solve(problem, x0) -> Trajectory``;
 * ``period_map(problem)``: the map x(t0) -> x(t0 + span) over ``problem.t_span`` with its Jacobian,
@@ -30,6 +33,8 @@ SEGMENTS_PER_PERIOD = 64
 
 #: Method classes by their command-line name, filled as each method module is imported.
 METHODS: dict[str, type["Method"]] = {}
+#: The method a run takes when none is named (the LCP time-stepper).
+DEFAULT_METHOD = "lcp"
 
 
 class Method(ABC):
@@ -44,6 +49,13 @@ class Method(ABC):
     domains: ClassVar[tuple] = ("lcs",)
     #: What a run's ``steps`` counts (the one-line summary's unit).
     counts: ClassVar[str] = "steps"
+    #: How the accuracy checks (:mod:`converters.analysis.accuracy`) estimate the error: ``step`` a fixed step
+    #: whose error falls as step^order (Richardson's estimate from the same run at twice the step,
+    #: :meth:`coarsened`); ``exact`` exact flows with events at their instants (rounding only); ``model`` the
+    #: error is the method's model of the circuit (a smoothing's O(eps)), which no step twin measures.
+    error_kind: ClassVar[str] = "step"
+    #: Steady states of many parameter points advance in one compiled call (:mod:`converters.sweeps.batch`).
+    batches: ClassVar[bool] = False
 
     def __init_subclass__(cls, key: str = "", **kwargs):
         super().__init_subclass__(**kwargs)
@@ -71,6 +83,22 @@ class Method(ABC):
     def options(self) -> dict:
         """The method's options as plain data (for JSON summaries and reports)."""
         return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+
+    @property
+    def exact(self) -> bool:
+        """Exact flows and event instants (``error_kind`` ``exact``)."""
+        return self.error_kind == "exact"
+
+    @property
+    def step(self) -> float | None:
+        """The fixed step in s of a ``step`` method (its ``step_option``), else None."""
+        return float(getattr(self, self.step_option)) if self.error_kind == "step" else None
+
+    def coarsened(self, factor: float = 2.0) -> "Method":
+        """The same method at ``factor`` times its step: the twin of Richardson's estimate (``step`` methods)."""
+        if self.error_kind != "step":
+            raise ValueError(f"the {self.key} method has no fixed step to coarsen (its error_kind is {self.error_kind})")
+        return dataclasses.replace(self, **{self.step_option: factor * self.step})
 
     #: Measured peak bytes per stored sample and per value of it (states, pairs, time, labels), the run and its
     #: labelled waveform table (what ``--out`` writes) included: ``benchmarks/memory.py`` calibrates them.
@@ -110,11 +138,15 @@ class Method(ABC):
         return FiniteDifferenceMap(lambda x0: self.solve(problem, x0).x[-1])
 
     @classmethod
+    def option_names(cls) -> list[str]:
+        return [f.name for f in dataclasses.fields(cls)]
+
+    @classmethod
     def from_options(cls, step: float | None = None, **options) -> "Method":
         """Build from command-line style options; ``step`` goes to the method's ``step_option``.
 
         Unknown options are refused with the list of valid ones; None values take the defaults."""
-        names = [f.name for f in dataclasses.fields(cls)]
+        names = cls.option_names()
         unknown = [k for k, v in options.items() if v is not None and k not in names]
         if unknown:
             raise ParameterError(f"unknown option {unknown[0]!r} for method {cls.key!r}; valid options: "

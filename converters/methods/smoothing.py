@@ -56,6 +56,7 @@ class Smoothing(Method, key="smooth"):
     """
 
     counts = "LU factorisations"
+    error_kind = "model"
 
     eps: float = 1e-4
     solver_rtol: float = 1e-6

@@ -50,6 +50,7 @@ class Theta(Method, key="lcp"):
     h: float
     theta: float = 0.5
     step_option = "h"
+    batches = True
     bytes_per_value = 50.0
     description = ("LCP time-stepper: theta method (--theta in [0.5, 1], 1 = backward Euler; default the model's: 1 "
                    "for the converters, 0.5 for a netlist), one LCP per step")

@@ -90,8 +90,8 @@ class ModelSweep:
         if self.steady and not np.isfinite(model.problem(p, 1.0).period):
             raise ParameterError(f"steady: {model.key} switches on its state, with no forcing period to shoot over; "
                                  "sweep it without --steady (periods from rest, measured over the last one)")
-        if self.method not in ("lcp", "event"):
-            raise ParameterError(f"method must be lcp or event for a sweep; got {self.method!r}")
+        if self.method not in sweep_methods():
+            raise ParameterError(f"method must be {' or '.join(sweep_methods())} for a sweep; got {self.method!r}")
         from ..analysis.periodic import MAX_WARM_UP
         from ..validate import check_flag, check_integer, check_range
         check_flag("steady", self.steady)
@@ -121,9 +121,12 @@ class ModelSweep:
         return get_model(self.model, self.control)
 
     def _method(self, model, p):
-        from ..methods import EventDriven, Theta
+        """A ``step`` method at h = T h_fraction (with ``theta`` where it takes one), an exact one sampled at T/1000."""
+        from ..methods.base import get_method
+        cls = get_method(self.method)
         T = model.period(p)
-        return Theta(h=T * self.h_fraction, theta=self.theta) if self.method == "lcp" else EventDriven(output_step=T / 1000)
+        options = {"theta": self.theta} if "theta" in cls.option_names() else {}
+        return cls.from_options(step=T * self.h_fraction if cls.error_kind == "step" else T / 1000, **options)
 
     def row(self, index: int, point: dict) -> dict:
         """The row of one point, by the per-point path (failures as rows)."""
@@ -176,7 +179,9 @@ class ModelSweep:
     @property
     def chunk_hint(self) -> int:
         """Points per chunk: enough that a chunk of cheap points outweighs its round trip to a worker."""
-        return 500 if self.batchable() else (100 if self.method == "lcp" and self.rtol is None else 10)
+        from ..methods.base import get_method
+        stepped = get_method(self.method).error_kind == "step"
+        return 500 if self.batchable() else (100 if stepped and self.rtol is None else 10)
 
     def failed(self, index: int, point: dict, message: str) -> dict:
         return failed_row(index, point, message)
@@ -184,7 +189,8 @@ class ModelSweep:
     def batchable(self) -> bool:
         from ..models import Converter
         model = self._model()
-        return (self.method == "lcp" and self.steady and self.rtol is None and isinstance(model, Converter)
+        from ..methods.base import get_method
+        return (get_method(self.method).batches and self.steady and self.rtol is None and isinstance(model, Converter)
                 and len(model.pair_names) == 1)
 
     def rows(self, items: list[tuple[int, dict]]) -> list[dict]:
@@ -253,6 +259,12 @@ class ModelSweep:
         return [rows[index] for index, _ in items]
 
 
+def sweep_methods() -> list[str]:
+    """The methods a sweep takes: a converter's, with an error a step twin or exact flows can state."""
+    from ..methods.base import METHODS
+    return [key for key, cls in METHODS.items() if "lcs" in cls.domains and cls.error_kind in ("step", "exact")]
+
+
 def _batch_failure(code: int, residual: float, distance: float) -> str:
     from . import batch as tb
     why = {tb.NO_SOLUTION: "a step LCP has no solution (a held pair with M <= 0)",
@@ -267,7 +279,7 @@ def _batch_failure(code: int, residual: float, distance: float) -> str:
 def _stepper_trajectory(problem, method, t, x, u, y, config):
     from ..trajectory import Trajectory
     return Trajectory(t=t, x=x, u=u, y=y, config=config, state_names=problem.state_names, pair_names=problem.pair_names,
-                      method="lcp", steps=t.size - 1, rule="end" if method.theta == 1.0 else "linear",
+                      method=method.key, algorithm=method, steps=t.size - 1, rule="end" if method.theta == 1.0 else "linear",
                       period=problem.period)
 
 

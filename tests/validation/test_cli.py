@@ -180,7 +180,10 @@ def test_the_default_steady_run_warns_that_its_mean_is_1_percent_off(capsys):
     (["--rtol", "1e-4", "--method", "event"], "give either --rtol or --method"),
     (["--rtol", "0"], r"rtol must be in [1e-10, 0.1]; got 0"),
     (["--rtol", "abc"], "rtol"),
-    (["--solver-rtol", "1e-8"], "--eps and --solver-rtol apply to --method smooth only"),
+    (["--solver-rtol", "1e-8"], "--solver-rtol does not apply to --method lcp (its options: --theta, and --h)"),
+    (["--method", "event", "--theta", "1"], "--theta does not apply to --method event (its options: none, and --h)"),
+    (["--method", "smooth", "--theta", "1", "--eps", "1e-3"],
+     "--theta does not apply to --method smooth (its options: --eps, --solver-rtol, and --h)"),
 ])
 def test_accuracy_flags_are_never_ignored(capsys, argv, message):
     code, out, err = run_cli(capsys, "simulate", "buck", *argv)

@@ -62,6 +62,20 @@ def unit_of(model, parameter: str) -> str:
     return f" {unit}" if unit not in ("", "1") else ""
 
 
+def method_options(key: str, given: dict) -> dict:
+    """The given method options (command-line names with underscores, None where not given) that method ``key``
+    takes; one an option it does not take is refused naming its flag and the method's own options."""
+    from converters.methods.base import get_method
+    names = get_method(key).option_names()
+    wrong = [name for name, value in given.items() if value is not None and name not in names]
+    if wrong:
+        flags = ", ".join("--" + name.replace("_", "-") for name in wrong)
+        own = [f"--{name.replace('_', '-')}" for name in given if name in names]
+        raise ParameterError(f"{flags} do{'es' if len(wrong) == 1 else ''} not apply to --method {key} (its options: "
+                             f"{', '.join(own) or 'none'}, and --h)")
+    return {name: value for name, value in given.items() if name in names}
+
+
 def add_params(parser) -> None:
     parser.add_argument("-p", dest="params", action="append", default=[], metavar="NAME=VALUE",
                         help="parameter value, SPICE suffixes allowed (repeatable)")

@@ -19,8 +19,10 @@ def add(sub) -> None:
     sim = mech_sub.add_parser("simulate", help="simulate a mechanical model and write its trajectory")
     sim.add_argument("model")
     add_params(sim)
-    sim.add_argument("--method", default="event", choices=["event", "moreau"],
-                     help="event: exact event-driven (DOP853 between events); moreau: Moreau-Jean time-stepping")
+    from converters.methods.base import METHODS
+    mechanical = {key: cls for key, cls in METHODS.items() if "mechanical" in cls.domains}
+    sim.add_argument("--method", default="event", choices=list(mechanical),
+                     help="; ".join(f"{key}: {cls.description}" for key, cls in mechanical.items()))
     sim.add_argument("--h", default=None, help="moreau: step in s (default 1/2000 of the period); event: output spacing")
     span = sim.add_mutually_exclusive_group()
     span.add_argument("--t-end", default=None, help="duration in s")
@@ -75,7 +77,7 @@ def run_simulate(args) -> int:
     import time
     from dataclasses import replace
 
-    from converters.methods import EventDriven, MoreauJean
+    from converters.methods.base import get_method
     from converters.models.mechanics import get_mechanical
     from converters.params import parse_assignments
     from converters.simulate import simulate
@@ -89,7 +91,8 @@ def run_simulate(args) -> int:
     h = None if args.h is None else parse_value("h", args.h)
     if h is not None and not 0.0 < h <= 0.05 * scale:
         raise ParameterError(f"h must be in (0, {0.05 * scale:.3g}] s (at most 1/20 of the model's time scale); got {h:g}")
-    method = MoreauJean(h=h or model.default_h(p)) if args.method == "moreau" else EventDriven(output_step=h)
+    cls = get_method(args.method)
+    method = cls.from_options(step=h or (model.default_h(p) if cls.error_kind == "step" else None))
     run = simulate(model.problem(p, t_end), method)
     run = replace(run, labels=model.labels(p))
     summary = {"model": model.name, "method": args.method, "options": {**method.options(), "params": p},
@@ -101,7 +104,7 @@ def run_simulate(args) -> int:
     if args.json:
         print(json_text(summary))
     else:
-        print(f"{model.name} ({args.method}): {summary['steps']} {'segments' if args.method == 'event' else 'steps'} in "
+        print(f"{model.name} ({args.method}): {summary['steps']} {method.counts} in "
               f"{summary['wall_s']:.3f} s; events: " + ", ".join(f"{k} {v}" for k, v in summary["events"].items()))
         print("modes (last time unit): " + ", ".join(f"{k} {v:.3f}" for k, v in summary["mode_fractions"].items()))
         if args.out is not None:

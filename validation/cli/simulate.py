@@ -6,7 +6,7 @@ import time
 
 from converters.errors import ParameterError
 
-from .common import add_params, add_spice_options, check_out, given_path, integer, json_text, spice_options, write_frame
+from .common import add_params, method_options, add_spice_options, check_out, given_path, integer, json_text, spice_options, write_frame
 
 
 def add(sub) -> None:
@@ -92,13 +92,7 @@ def run(args) -> int:
         tr, summary = _spice(args, params)
     else:
         method = args.method or "lcp"
-        options = {"theta": args.theta} if method == "lcp" else {}
-        if method == "smooth":
-            options.update(eps=args.eps, solver_rtol=args.solver_rtol)
-        elif args.eps is not None or args.solver_rtol is not None:
-            raise ParameterError(f"--eps and --solver-rtol apply to --method smooth only; got --method {method}")
-        if args.theta is not None and method != "lcp":
-            raise ParameterError(f"--theta applies to --method lcp only; got --method {method}")
+        options = method_options(method, {"theta": args.theta, "eps": args.eps, "solver_rtol": args.solver_rtol})
         setup_s = _set_up(args.converter, params, args.control, method, args.steady, options)
         tr = run_converter(args.converter, params, control=args.control, method=method, h=args.h,
                            t_end=args.t_end, periods=args.periods, steady=args.steady,

@@ -84,6 +84,7 @@ class EventDriven(Method, key="event"):
     """
 
     counts = "segments"
+    error_kind = "exact"
 
     event_tol: float = 1e-13
     sample_fraction: float = 1.0 / 32.0
