@@ -17,7 +17,7 @@ def _exports():
     """(exported name, numba signature, Python function) of every function the module holds."""
     from numba import types as T
 
-    from .analysis.newton_kernel import newton_step
+    from .analysis.newton_kernel import newton_advance, newton_step
     from .lcp import dispatch, engine
     from .methods import theta_kernels as K
 
@@ -43,6 +43,8 @@ def _exports():
                                                                                     a(1), a(2), T.float64, T.int64,
                                                                                     T.int64),
                 newton_step.py_func))
+    out.append(("newton_advance", T.int64(a(1), a(1), a(2), a(1), a(2), a(1), a(1), a(2), T.boolean, a(1, T.int64),
+                                          a(1), T.float64, T.int64), newton_advance.py_func))
     out.append(("solve_once", T.Tuple((T.int64, T.int64, T.float64, T.int64, T.int64, T.int64, T.float64))(
         a(2), a(1), a(1), a(1), T.int64, T.float64, T.int64, T.boolean, a(1), T.int64), engine.solve_once.py_func))
     out.append(("lcp_default_options", a(1)(), dispatch.default_options.py_func))

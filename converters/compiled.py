@@ -42,8 +42,14 @@ EVENTS_FULL = 3
 #: The verdicts of one Newton-shooting iteration (:func:`.analysis.newton_kernel.newton_step`: the one stopping
 #: rule of the serial and the batched drivers): go on; converged (the estimated distance to the orbit within the
 #: tolerance); the residual at the rounding level (ROUNDING machine epsilons, relative: iterating cannot help);
-#: the iterations spent; the Jacobian minus I singular (a multiplier at 1).
+#: the iterations spent; the Jacobian minus I singular (a multiplier at 1); and of the driver
+#: (:func:`.analysis.periodic.newton_iterate`): a relaxation period the map could not take (a step LCP without a
+#: solution), or one that left the finite numbers.
 NEWTON_CONTINUE, NEWTON_CONVERGED, NEWTON_ROUNDING, NEWTON_EXHAUSTED, NEWTON_SINGULAR = 0, 1, 2, 3, 4
+NEWTON_NO_SOLUTION, NEWTON_NONFINITE = 5, 6
+#: What the driver (:func:`.analysis.newton_kernel.newton_advance`) asks of its caller: the spectral radius of the
+#: Jacobian at the current iterate, or the period map at the trial state.
+NEWTON_RADIUS, NEWTON_EVALUATE = 10, 11
 ROUNDING = 64
 #: Largest k solved inline by the step loops (:func:`.lcp.kernels.solve_small_lcp`); above it they pivot
 #: (:func:`.lcp.murty.solve_warm`), at most PIVOTS_PER_PAIR k flips a step before the general solver takes it.
@@ -73,6 +79,7 @@ KERNELS = {
     "set_matrices": ("converters.methods.theta_kernels", "set_matrices"),
     "step_jacobian": ("converters.methods.theta_kernels", "step_jacobian"),
     "newton_step": ("converters.analysis.newton_kernel", "newton_step"),
+    "newton_advance": ("converters.analysis.newton_kernel", "newton_advance"),
     "solve_once": ("converters.lcp.engine", "solve_once"),
     "lcp_default_options": ("converters.lcp.dispatch", "default_options"),
 }

@@ -162,6 +162,17 @@ def test_one_periodic_orbit_engine_serves_the_stepper_the_event_method_gdcm_and_
     assert not [p for p in others if re.search(r"def \w*(newton|shoot|fixed_point)\w*\(", p.read_text())]
 
 
+def test_one_newton_driver_serves_the_serial_engine_and_the_batched_steady_states():
+    """Newton's iteration, its halving and its stopping rule are one compiled driver (newton_kernel.newton_advance,
+    which alone calls newton_step); the serial engine and the batched sweeps only answer its requests."""
+    def users(pattern):
+        return sorted(p.relative_to(ROOT).as_posix() for p in ROOT.joinpath("converters").rglob("*.py")
+                      if p.name not in ("compiled.py", "build_kernels.py") and re.search(pattern, p.read_text()))
+    assert users(r"(?<!def )newton_step\(") == ["converters/analysis/newton_kernel.py"]
+    assert users(r"newton_advance") == ["converters/analysis/newton_kernel.py", "converters/analysis/periodic.py",
+                                        "converters/sweeps/batch.py"]
+
+
 @pytest.mark.parametrize("name", MODEL_NAMES)
 def test_every_model_declares_its_signals_and_modes(name):
     from converters.models import get_converter

@@ -1,13 +1,19 @@
-"""One Newton iteration of the periodic-orbit engine and its stopping rule, compiled (numba; also built ahead of
-time: :mod:`converters.compiled`): the serial engine (:func:`converters.analysis.periodic.newton_orbit`) and the
-batched steady states (:mod:`converters.sweeps.batch`) share it, so the rule lives once."""
+"""Newton shooting's driver, compiled (numba; also built ahead of time: :mod:`converters.compiled`): one Newton
+iteration with its stopping rule (:func:`newton_step`) and the iteration around it (:func:`newton_advance`: the
+step halved while the residual does not fall, a plain period where no fraction helps), written once for the serial
+engine (:func:`converters.analysis.periodic.newton_orbit`, over any method's period map) and the batched steady
+states (:mod:`converters.sweeps.batch`, over the stepper's compiled period).
+
+The driver does not call the period map: it asks its caller for it (reverse communication, as ARPACK asks for
+its matrix-vector products), so the same compiled code serves a map written in Python (the event method's) and
+one compiled into the batch, and numba compiles and caches it without functions passed as values."""
 from __future__ import annotations
 
 import numpy as np
 from numba import njit
 
-from ..compiled import (NEWTON_CONTINUE, NEWTON_CONVERGED, NEWTON_EXHAUSTED, NEWTON_ROUNDING, NEWTON_SINGULAR,
-                        ROUNDING)
+from ..compiled import (NEWTON_CONTINUE, NEWTON_CONVERGED, NEWTON_EVALUATE, NEWTON_EXHAUSTED, NEWTON_NO_SOLUTION,
+                        NEWTON_NONFINITE, NEWTON_RADIUS, NEWTON_ROUNDING, NEWTON_SINGULAR, ROUNDING)
 
 EPS = 2.220446049250313e-16
 
@@ -70,3 +76,85 @@ def newton_step(x, px, jac, rho, step, work, tol, iteration, max_iter):
     if iteration >= max_iter:
         return residual, worst, distance, NEWTON_EXHAUSTED
     return residual, worst, distance, NEWTON_CONTINUE
+
+
+#: Halvings of a Newton step that does not lower the residual before a plain period of the map is taken instead.
+HALVINGS = 8
+#: The driver's phases (``istate[0]``): at a new iterate, its radius known, a trial step evaluated, a plain
+#: period evaluated.
+_NEW, _STEP, _TRIAL, _PLAIN = 0, 1, 2, 3
+
+
+@njit(cache=True)
+def _accept(x, px, jac, trial, p_trial, jac_trial, istate):
+    n = x.shape[0]
+    for i in range(n):
+        x[i] = trial[i]
+        px[i] = p_trial[i]
+        for l in range(n):
+            jac[i, l] = jac_trial[i, l]
+    istate[1] += 1
+    istate[0] = _STEP
+    return NEWTON_RADIUS
+
+
+@njit(cache=True)
+def newton_advance(x, px, jac, dx, work, trial, p_trial, jac_trial, ok, istate, rstate, tol, max_iter):
+    """Advance Newton's method on P(x) - x = 0 to its next request or its verdict (module docstring).
+
+    In place: x, px = P(x), jac = P'(x) the iterate (the caller fills px and jac for the start), dx its Newton
+    step, work (n x (n + 1)); trial, p_trial, jac_trial the state the caller evaluates and its P and P'.
+    ``istate`` (int64: phase, iteration, halvings, relaxations; zeros to start), ``rstate`` (float64: worst
+    residual, relative residual, estimated distance, rho). Returns NEWTON_RADIUS (the caller puts the spectral
+    radius of jac in rstate[3] and calls again), NEWTON_EVALUATE (the caller puts P(trial) into p_trial, P'(trial)
+    into jac_trial and ``ok``: False where the map cannot be taken, a step LCP without a solution, and calls
+    again), or a verdict of :mod:`converters.compiled`: NEWTON_CONVERGED (x + dx is within about its square of the
+    orbit), NEWTON_ROUNDING, NEWTON_EXHAUSTED, NEWTON_SINGULAR (:func:`newton_step`), NEWTON_NO_SOLUTION or
+    NEWTON_NONFINITE (a plain period the map could not take, or that left the finite numbers).
+
+    Each iteration: the Newton step; halved while the residual does not fall, up to ``HALVINGS`` times (the map is
+    piecewise affine: the Jacobian of one piece can point past a change of mode sequence); where no fraction helps
+    (a start-up transient), one plain period of the map."""
+    n = x.shape[0]
+    phase = istate[0]
+    if phase == _NEW:
+        istate[0] = _STEP
+        return NEWTON_RADIUS
+    if phase == _STEP:
+        residual, worst, distance, verdict = newton_step(x, px, jac, rstate[3], dx, work, tol, istate[1], max_iter)
+        rstate[1] = residual
+        if verdict == NEWTON_SINGULAR:
+            return verdict
+        rstate[0] = worst
+        rstate[2] = distance
+        if verdict != NEWTON_CONTINUE:
+            return verdict
+        istate[2] = 0
+        for i in range(n):
+            trial[i] = x[i] + dx[i]
+        istate[0] = _TRIAL
+        return NEWTON_EVALUATE
+    finite = True
+    gap = 0.0
+    for i in range(n):
+        finite = finite and np.isfinite(p_trial[i])
+        gap = max(gap, abs(p_trial[i] - trial[i]))
+    if phase == _TRIAL:
+        if ok and finite and gap < rstate[0]:
+            return _accept(x, px, jac, trial, p_trial, jac_trial, istate)
+        istate[2] += 1
+        if istate[2] < HALVINGS:
+            for i in range(n):
+                dx[i] *= 0.5
+                trial[i] = x[i] + dx[i]
+            return NEWTON_EVALUATE
+        istate[3] += 1
+        for i in range(n):
+            trial[i] = px[i]
+        istate[0] = _PLAIN
+        return NEWTON_EVALUATE
+    if not ok:
+        return NEWTON_NO_SOLUTION
+    if not finite:
+        return NEWTON_NONFINITE
+    return _accept(x, px, jac, trial, p_trial, jac_trial, istate)

@@ -19,7 +19,8 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
-from ..compiled import NEWTON_CONVERGED, NEWTON_EXHAUSTED, NEWTON_ROUNDING, NEWTON_SINGULAR, kernel
+from ..compiled import (NEWTON_CONVERGED, NEWTON_EVALUATE, NEWTON_EXHAUSTED, NEWTON_NONFINITE, NEWTON_RADIUS,
+                        NEWTON_ROUNDING, NEWTON_SINGULAR, kernel)
 from ..compiled import ROUNDING as _ROUNDING
 from ..errors import ParameterError, SimulationError
 from ..validate import as_vector, check_flag, check_integer
@@ -116,61 +117,43 @@ def check_newton(tol, max_iter) -> None:
 
 def newton_orbit(period_map, x_guess, *, tol: float = 1e-10, max_iter: int = 50, period: float = np.nan,
                  polish: bool = False) -> PeriodicOrbit:
-    """Newton's method on P(x) - x = 0 for a :class:`~converters.methods.base.PeriodMap` ``period_map``.
-    ``polish``: return x + the last Newton step (within about its square of the orbit) instead of x."""
+    """Newton's method on P(x) - x = 0 for a :class:`~converters.methods.base.PeriodMap` ``period_map``: the
+    compiled driver (:func:`converters.analysis.newton_kernel.newton_advance`, the batched steady states' too),
+    answered here with the map's values and numpy's spectral radius. ``polish``: return x + the last Newton step
+    (within about its square of the orbit) instead of x."""
     check_newton(tol, max_iter)
     check_flag("polish", polish)
-    x = as_vector("x_guess", x_guess, None)
+    x = np.array(as_vector("x_guess", x_guess, None), dtype=float)
     n = x.size
-    step, work = np.empty(n), np.empty((n, n + 1))
-    px, jac = period_map(x)
-    distance, residual, message, relaxations = np.inf, np.inf, "", 0
-    newton_step = kernel("newton_step")
-    for iteration in range(max_iter + 1):
-        jac = np.ascontiguousarray(jac, dtype=float)
-        rho = spectral_radius(jac)
-        residual, worst, estimate, verdict = newton_step(x, np.ascontiguousarray(px, dtype=float), jac, rho, step,
-                                                         work, float(tol), iteration, max_iter)
-        if verdict == NEWTON_SINGULAR:
-            message = ("the period map's Jacobian has a multiplier at 1 (the orbit is not isolated: an undamped "
-                       "or marginal circuit)")
+    px, jac = (np.array(v, dtype=float) for v in period_map(x))       # copies: P's output may be a view
+    dx, work, trial, p_trial, jac_trial = np.empty(n), np.empty((n, n + 1)), np.empty(n), np.empty(n), np.empty((n, n))
+    istate, rstate = np.zeros(4, dtype=np.int64), np.array([np.inf, np.inf, np.inf, 0.0])
+    advance = kernel("newton_advance")
+    while True:
+        verdict = advance(x, px, jac, dx, work, trial, p_trial, jac_trial, True, istate, rstate, float(tol), max_iter)
+        if verdict == NEWTON_RADIUS:
+            rstate[3] = spectral_radius(jac)
+        elif verdict == NEWTON_EVALUATE:            # a map that cannot be taken raises, with its own reason
+            p_trial[:], jac_trial[:, :] = period_map(trial)
+        else:
             break
-        distance = estimate
-        if verdict == NEWTON_CONVERGED:
-            return PeriodicOrbit(x + step if polish else x, getattr(period_map, "period", period), jac,
-                                 multipliers_of(jac), residual, distance, iteration, period_map.evaluations, True,
-                                 period_map.jacobian_kind)
-        if verdict == NEWTON_ROUNDING:
-            message = (f"the residual is at the rounding level of the map and 1 - rho = {1.0 - rho:.3g} amplifies it: "
-                       f"the orbit is resolved to ~{distance:.3g} in double precision, not to the tolerance asked for")
-            break
-        if verdict == NEWTON_EXHAUSTED:
-            message = (f"no convergence in {max_iter} Newton iterations ({relaxations} of them plain periods where "
-                       "no Newton step reduced the residual)")
-            break
-        # Halve the step while the residual does not fall (the Jacobian of one piece of a piecewise-affine
-        # map can point past a change of mode sequence). If no fraction of it helps, the state is still far
-        # from the orbit (a start-up transient): take one period of the map itself and try Newton again.
-        accepted = False
-        dx = step.copy()
-        for _ in range(8):
-            trial = x + dx
-            p_trial, jac_trial = period_map(trial)
-            if np.abs(p_trial - trial).max() < worst:       # False when P(trial) is not finite (inf, nan)
-                accepted = True
-                break
-            dx = 0.5 * dx
-        if not accepted:
-            relaxations += 1
-            trial = px
-            p_trial, jac_trial = period_map(trial)
-            if not np.all(np.isfinite(p_trial)):
-                message = "the period map left the finite numbers"
-                break
-        x, px, jac = np.array(trial, dtype=float), p_trial, jac_trial     # a copy: P's output may be a view
-    multipliers = multipliers_of(jac)
-    return PeriodicOrbit(x, getattr(period_map, "period", period), jac, multipliers, residual, distance,
-                         iteration, period_map.evaluations, False, period_map.jacobian_kind,
+    iteration, relaxations = int(istate[1]), int(istate[3])
+    residual, distance, rho = (float(v) for v in rstate[1:])
+    span = getattr(period_map, "period", period)
+    if verdict == NEWTON_CONVERGED:
+        return PeriodicOrbit(x + dx if polish else x, span, jac, multipliers_of(jac), residual, distance, iteration,
+                             period_map.evaluations, True, period_map.jacobian_kind)
+    message = {
+        NEWTON_SINGULAR: "the period map's Jacobian has a multiplier at 1 (the orbit is not isolated: an undamped or "
+                         "marginal circuit)",
+        NEWTON_ROUNDING: f"the residual is at the rounding level of the map and 1 - rho = {1.0 - rho:.3g} amplifies "
+                         f"it: the orbit is resolved to ~{distance:.3g} in double precision, not to the tolerance "
+                         "asked for",
+        NEWTON_EXHAUSTED: f"no convergence in {max_iter} Newton iterations ({relaxations} of them plain periods where "
+                          "no Newton step reduced the residual)",
+        NEWTON_NONFINITE: "the period map left the finite numbers"}[verdict]
+    return PeriodicOrbit(x, span, jac, multipliers_of(jac), residual, distance, iteration, period_map.evaluations,
+                         False, period_map.jacobian_kind,
                          f"{message}; residual {residual:.3g}, estimated distance {distance:.3g} > tol {tol:.3g}")
 
 

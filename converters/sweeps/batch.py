@@ -6,9 +6,10 @@ affine maps (:func:`.theta_kernels.branch_maps`), ``warm_up`` periods from x0, t
 map with its exact Jacobian, exactly as the serial engine (:func:`batch_steady`); finally one period on the
 orbit, recorded for the row's measures. The plan (grid, step configurations, matrix sets) comes from the
 serial stepper's own planner, each period is the serial stepper's own loop and Jacobian
-(:func:`.theta_kernels.run_scalar`, :func:`.theta_kernels.step_jacobian`) and each Newton iteration the
-serial engine's own arithmetic (:func:`converters.analysis.newton_kernel.newton_step`), so a batched point and a
-serial one solve the same discrete map the same way. One difference: the spectral radius rho that bounds the
+(:func:`.theta_kernels.run_scalar`, :func:`.theta_kernels.step_jacobian`) and Newton the serial engine's own
+compiled driver (:func:`converters.analysis.newton_kernel.newton_advance`: its iteration, halving and stopping
+rule), answered here by the compiled period, so a batched point and a serial one solve the same discrete map the
+same way. One difference: the spectral radius rho that bounds the
 distance to the orbit comes from numba's LAPACK here and numpy's in the serial engine (the last bits may
 differ, so a point right at the tolerance can take one Newton iteration more or less).
 """
@@ -17,15 +18,17 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..analysis.newton_kernel import newton_step
+from ..analysis.newton_kernel import newton_advance
 from ..analysis.periodic import spectral_radius
-from ..compiled import NEWTON_CONVERGED, NEWTON_EXHAUSTED, NEWTON_ROUNDING, NEWTON_SINGULAR, register_state
+from ..compiled import NEWTON_CONVERGED, NEWTON_EVALUATE, NEWTON_RADIUS, register_state
 from ..methods.theta_kernels import branch_maps, run_scalar, step_jacobian, theta_matrices
 
 _spectral_radius = njit(cache=True)(spectral_radius)
 
 #: Status per point.
 CONVERGED, NOT_CONVERGED, NO_SOLUTION, ROUNDING, SINGULAR, NONFINITE = 0, 1, 2, 3, 4, 5
+#: A point's status from the driver's verdict (indexed by the NEWTON_* verdicts of converters.compiled).
+STATUS = (NOT_CONVERGED, CONVERGED, ROUNDING, NOT_CONVERGED, SINGULAR, NO_SOLUTION, NONFINITE)
 
 
 @njit(cache=True)
@@ -58,10 +61,9 @@ def batch_steady(A, B, C, D, E, F, set_configs, set_dts, counts, which, steps, t
     (P, S + 1, n), us, ys (P, S + 1) the final period on the orbit; x_star (P, n); jac_out (P, n, n); status,
     iterations (P,); residuals, distances (P,) relative.
 
-    Newton is :func:`converters.analysis.periodic.newton_orbit` step for step (the same distance estimate
-    max(|dx|, |r| / (1 - rho)), the same halving of a step that does not lower the residual, the same plain
-    period when no fraction does, the same refusal at the rounding level), so a batched point and a serial one
-    take the same iterations to the same orbit."""
+    Newton is the serial engine's driver (:func:`converters.analysis.newton_kernel.newton_advance`, which
+    :func:`converters.analysis.periodic.newton_orbit` runs too), so a batched point and a serial one take the same
+    iterations to the same orbit."""
     _batch_steady(A, B, C, D, E, F, set_configs, set_dts, counts, which, steps, theta, x0, warm_up, tol, max_iter,
                   xs, us, ys, x_star, jac_out, status, iterations, residuals, distances, register_state(x0.shape[1]))
 
@@ -111,64 +113,27 @@ def _batch_steady(A, B, C, D, E, F, set_configs, set_dts, counts, which, steps, 
         if not ok or not _period(x, wp, Phi_b, Gamma_b, CPhi, q0, Mm, Hm, xp, up, yp, jac, True, state):
             continue
         px = xp[S].copy()
-        dx = np.empty(n)
-        trial = np.empty(n)
-        jac_trial = np.empty((n, n))
-        a = np.empty((n, n + 1))
-        status[p] = NOT_CONVERGED
-        for it in range(max_iter + 1):
-            rho = _spectral_radius(jac)
-            residual, worst, distance, verdict = newton_step(x, px, jac, rho, dx, a, tol, it, max_iter)
-            residuals[p] = residual
-            iterations[p] = it
-            if verdict == NEWTON_SINGULAR:
-                status[p] = SINGULAR
+        dx, a = np.empty(n), np.empty((n, n + 1))
+        trial, p_trial, jac_trial = np.empty(n), np.empty(n), np.empty((n, n))
+        istate, rstate = np.zeros(4, dtype=np.int64), np.full(4, np.inf)
+        ok = True
+        while True:                 # the driver asks, this answers (newton_kernel: reverse communication)
+            verdict = newton_advance(x, px, jac, dx, a, trial, p_trial, jac_trial, ok, istate, rstate, tol, max_iter)
+            if verdict == NEWTON_RADIUS:
+                rstate[3] = _spectral_radius(jac)
+            elif verdict == NEWTON_EVALUATE:
+                ok = _period(trial, wp, Phi_b, Gamma_b, CPhi, q0, Mm, Hm, xp, up, yp, jac_trial, True, state)
+                for i in range(n):
+                    p_trial[i] = xp[S, i]
+            else:
                 break
-            distances[p] = distance
-            if verdict == NEWTON_CONVERGED:
-                status[p] = CONVERGED
-                for i in range(n):
-                    x_star[p, i] = x[i] + dx[i]                   # the last (tiny) step taken too
-                    for l in range(n):
-                        jac_out[p, i, l] = jac[i, l]
-                break
-            if verdict == NEWTON_ROUNDING:
-                status[p] = ROUNDING
-                break
-            if verdict == NEWTON_EXHAUSTED:
-                break
-            accepted = False
-            for _ in range(8):
-                for i in range(n):
-                    trial[i] = x[i] + dx[i]
-                if _period(trial, wp, Phi_b, Gamma_b, CPhi, q0, Mm, Hm, xp, up, yp, jac_trial, True, state):
-                    finite = True
-                    gap = 0.0
-                    for i in range(n):
-                        finite = finite and np.isfinite(xp[S, i])
-                        gap = max(gap, abs(xp[S, i] - trial[i]))
-                    if finite and gap < worst:
-                        accepted = True
-                        break
-                for i in range(n):
-                    dx[i] *= 0.5
-            if not accepted:
-                for i in range(n):
-                    trial[i] = px[i]
-                if not _period(trial, wp, Phi_b, Gamma_b, CPhi, q0, Mm, Hm, xp, up, yp, jac_trial, True, state):
-                    status[p] = NO_SOLUTION
-                    break
-                finite = True
-                for i in range(n):
-                    finite = finite and np.isfinite(xp[S, i])
-                if not finite:
-                    status[p] = NONFINITE
-                    break
+        iterations[p], residuals[p], distances[p] = istate[1], rstate[1], rstate[2]
+        status[p] = STATUS[verdict]
+        if verdict == NEWTON_CONVERGED:
             for i in range(n):
-                x[i] = trial[i]
-                px[i] = xp[S, i]
+                x_star[p, i] = x[i] + dx[i]                   # the last (tiny) step taken too
                 for l in range(n):
-                    jac[i, l] = jac_trial[i, l]
+                    jac_out[p, i, l] = jac[i, l]
         if status[p] == CONVERGED:                           # the recorded period: the one on the orbit
             _period(x_star[p], wp, Phi_b, Gamma_b, CPhi, q0, Mm, Hm, xp, up, yp, jac, False, state)
 

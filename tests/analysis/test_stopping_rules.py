@@ -9,6 +9,7 @@ import pytest
 
 from converters import compiled
 from converters.analysis.accuracy import Estimate, _estimates, _guarded, same_events
+from converters.analysis.newton_kernel import newton_advance as jit_newton_advance
 from converters.analysis.newton_kernel import newton_step as jit_newton_step
 from converters.analysis.periodic import PeriodicOrbit
 from converters.models.base import LOAD_BAND, SETTLED_PERIODS, SETTLING_BAND, step_response
@@ -81,6 +82,73 @@ def test_rounding_exhaustion_and_a_multiplier_at_one_are_told_apart(newton_step)
     assert verdict == compiled.NEWTON_CONTINUE
     (_, _, distance, verdict), _ = _verdict(newton_step, np.eye(2), 1.0, np.array([1e-9, 0.0]))
     assert verdict == compiled.NEWTON_SINGULAR and distance == math.inf
+
+
+ADVANCES = {"jit": jit_newton_advance, "ahead-of-time": None}
+
+
+@pytest.fixture(params=list(ADVANCES))
+def advance(request):
+    """The driver as numba's JIT runs it (the batched steady states) and as the serial engine calls it."""
+    return ADVANCES[request.param] or compiled.kernel("newton_advance")
+
+
+class _Driver:
+    """newton_advance's state and work arrays for an n-state map, and the requests it made."""
+
+    def __init__(self, advance, x0, px, jac, tol=1e-12, max_iter=50):
+        n = len(x0)
+        self.advance, self.tol, self.max_iter = advance, tol, max_iter
+        self.x, self.px, self.jac = np.array(x0, float), np.array(px, float), np.array(jac, float)
+        self.dx, self.work = np.empty(n), np.empty((n, n + 1))
+        self.trial, self.p_trial, self.jac_trial = np.empty(n), np.empty(n), np.empty((n, n))
+        self.istate, self.rstate = np.zeros(4, dtype=np.int64), np.array([np.inf, np.inf, np.inf, 0.0])
+        self.requests, self.trials = [], []
+
+    def run(self, answer):
+        """Drive to a verdict, answering each map request with ``answer(trial) -> (ok, P, P')``."""
+        ok = True
+        while True:
+            verdict = self.advance(self.x, self.px, self.jac, self.dx, self.work, self.trial, self.p_trial,
+                                   self.jac_trial, ok, self.istate, self.rstate, self.tol, self.max_iter)
+            self.requests.append(int(verdict))
+            if verdict == compiled.NEWTON_RADIUS:
+                self.rstate[3] = max(abs(np.linalg.eigvals(self.jac)))
+            elif verdict == compiled.NEWTON_EVALUATE:
+                self.trials.append(self.trial.copy())
+                ok, self.p_trial[:], self.jac_trial[:, :] = answer(self.trial)
+            else:
+                return int(verdict)
+
+
+def test_the_driver_asks_for_rho_then_the_map_and_lands_on_an_affine_maps_fixed_point(advance):
+    A, b = np.array([[0.5, 0.1], [0.0, -0.3]]), np.array([1.0, 2.0])
+    star = np.linalg.solve(np.eye(2) - A, b)
+    driver = _Driver(advance, [0.0, 0.0], b, A)
+    verdict = driver.run(lambda x: (True, A @ x + b, A))
+    R, E = compiled.NEWTON_RADIUS, compiled.NEWTON_EVALUATE
+    assert verdict == compiled.NEWTON_CONVERGED and driver.requests == [R, E, R, compiled.NEWTON_CONVERGED]
+    np.testing.assert_allclose(driver.trials[0], star, rtol=1e-15)      # Newton is exact on an affine map
+    assert driver.istate[1] == 1 and driver.rstate[3] == pytest.approx(0.5)
+
+
+def test_a_step_the_map_cannot_take_is_halved_eight_times_then_one_plain_period(advance):
+    """A map refused at every trial: the steps dx, dx/2, ..., dx/128 are tried, then P(x) itself (a plain period);
+    a plain period refused is NO_SOLUTION, one that leaves the finite numbers NONFINITE, one taken is accepted."""
+    A, b = np.array([[0.5]]), np.array([1.0])
+    for plain, expected in (((False, [0.0], [[0.0]]), compiled.NEWTON_NO_SOLUTION),
+                            ((True, [np.nan], [[0.5]]), compiled.NEWTON_NONFINITE)):
+        driver = _Driver(advance, [0.0], b, A)
+        verdict = driver.run(lambda x: plain if np.array_equal(x, b) else (False, [0.0], [[0.0]]))
+        assert verdict == expected
+        steps = [t[0] for t in driver.trials]
+        assert steps == [2.0 / 2 ** k for k in range(8)] + [1.0]       # dx = 2 (fixed point 2), halved; then P(0)
+        assert driver.istate[3] == 1
+    # a trial whose residual does not fall is refused like one the map cannot take
+    driver = _Driver(advance, [0.0], b, A, max_iter=1)
+    verdict = driver.run(lambda x: (True, x + 5.0, A) if len(driver.trials) < 9 else (True, A @ x + b, A))
+    assert [t[0] for t in driver.trials] == [2.0 / 2 ** k for k in range(8)] + [1.0]
+    assert driver.istate[1] == 1 and driver.istate[3] == 1 and verdict == compiled.NEWTON_EXHAUSTED
 
 
 @pytest.mark.parametrize("multipliers, stable", [([1.0, 0.2], False), ([1.0 - 1e-12, 0.2], True),
