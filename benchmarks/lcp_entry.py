@@ -1,15 +1,19 @@
-"""solve_lcp's C entry point against the Python thin path, on what users run (not one call in a loop).
+"""solve_lcp's entry paths, on what users run: one problem per call, and many small problems in one call.
 
-Run: .venv/bin/python benchmarks/lcp_entry.py. Each workload runs in a fresh process twice, side by side (2 shared
-cores: noisy; best of REPEATS): once as installed (the ahead-of-time kernels and ``converters._lcpfast``, the
-C entry), once with the C entry unloaded (``converters.compiled.fast_lcp`` returning None: solve_lcp is then the
-Python thin path around the same ahead-of-time compiled solve). Printed: each workload's time both ways and their
-ratio (Python / C), and how many solve_lcp calls it made. The workloads:
+Run: .venv/bin/python benchmarks/lcp_entry.py. Each workload runs in a fresh process (2 shared cores: noisy; best
+of REPEATS), side by side in one run:
 
 - ``report lcp``: the report's two LCP sections (the project's problem set and Siconos' collection, every method
-  on every problem), what ``pcsuite report lcp`` computes, in process;
+  on every problem: what ``pcsuite report lcp`` computes, in process), with the number of solve_lcp calls;
 - ``lcp solve``: ``pcsuite lcp solve`` of one collection file, end to end as a fresh process (cold);
-- and, for information only, one call of solve_lcp on a k = 3 problem in a loop (a micro-benchmark).
+- a loop of 20,000 small problems (k = 3, different q each): ``solve_lcp`` once per problem against one
+  ``solve_lcp_many`` call, per problem (the loop of small problems solve_lcp_many is for).
+
+Until 2026-11-27 solve_lcp had a hand-written CPython C entry (``converters/lcp/_fast.c``, 630 lines recycling
+result objects by reference count). Measured then with this script's first two workloads side by side, C entry
+against the Python thin path: report lcp 54.9 against 58.6 ms (1.07), lcp solve 259 against 260 ms (1.005); only
+a micro-benchmark of one call gained (0.23 against 2.03 us, 8.6x). No user-level workload lost more than 20 %
+without it, so it was retired (docs/architecture.md); a loop of small problems takes solve_lcp_many.
 
 The step loops never call solve_lcp (their small LCPs are solved inline, compiled; a step the inline solvers
 refuse goes to solve_lcp, which none of the shipped circuits' runs does: ``general_solves`` is 0), nor does the
@@ -28,11 +32,8 @@ REPEATS = 3
 
 PRELUDE = """
 import sys, time, json
-if sys.argv[1] == "python":
-    import converters.compiled as compiled
-    compiled.fast_lcp = lambda: None
 import converters.lcp.solve as solve_module
-from converters.lcp import solve_lcp
+from converters.lcp import solve_lcp, solve_lcp_many
 calls = [0]
 real = solve_module.solve_lcp
 def counting(*a, **k):
@@ -43,46 +44,55 @@ def counting(*a, **k):
 WORKLOADS = {
     "report lcp": PRELUDE + """
 from validation import sections, peer
-import converters.lcp as lcp_package
 peer.solve_lcp = counting
 sections.lcp_project_section(); sections.lcp_peer_section()          # warm
 calls[0] = 0
 start = time.perf_counter()
 sections.lcp_project_section(); sections.lcp_peer_section()
-print(json.dumps({"s": time.perf_counter() - start, "calls": calls[0], "entry": type(real).__name__}))
+print(json.dumps({"s": time.perf_counter() - start, "calls": calls[0]}))
 """,
-    "one call (for information)": PRELUDE + """
+    "20,000 problems: solve_lcp each": PRELUDE + """
 import numpy as np
-M, q = np.array([[4.0, 1, 0], [1, 3, 1], [0, 1, 2]]), np.array([-1.0, 2.0, -3.0])
-for _ in range(2000):
+M = np.array([[4.0, 1, 0], [1, 3, 1], [0, 1, 2]])
+qs = np.random.default_rng(1).standard_normal((20000, 3))
+for q in qs[:2000]:
     solve_lcp(M, q)
 start = time.perf_counter()
-for _ in range(20000):
+for q in qs:
     solve_lcp(M, q)
-print(json.dumps({"s": (time.perf_counter() - start) / 20000, "calls": 1, "entry": type(solve_lcp).__name__}))
+print(json.dumps({"s": (time.perf_counter() - start) / len(qs), "calls": len(qs)}))
+""",
+    "20,000 problems: solve_lcp_many": PRELUDE + """
+import numpy as np
+M = np.array([[4.0, 1, 0], [1, 3, 1], [0, 1, 2]])
+qs = np.random.default_rng(1).standard_normal((20000, 3))
+Ms = np.broadcast_to(M, (len(qs), 3, 3))
+solve_lcp_many(Ms[:2000], qs[:2000])
+start = time.perf_counter()
+batch = solve_lcp_many(Ms, qs)
+assert batch.solved.all()
+print(json.dumps({"s": (time.perf_counter() - start) / len(qs), "calls": 1}))
 """,
 }
 
 
-def run(name: str, mode: str) -> dict:
+def run(name: str) -> dict:
     best = None
     for _ in range(REPEATS):
-        done = subprocess.run([sys.executable, "-c", WORKLOADS[name], mode], cwd=ROOT, capture_output=True, text=True,
+        done = subprocess.run([sys.executable, "-c", WORKLOADS[name]], cwd=ROOT, capture_output=True, text=True,
                               timeout=600)
         if done.returncode:
-            raise SystemExit(f"{name} ({mode}) failed:\n{done.stderr[-2000:]}")
+            raise SystemExit(f"{name} failed:\n{done.stderr[-2000:]}")
         out = json.loads(done.stdout.strip().splitlines()[-1])
         best = out if best is None or out["s"] < best["s"] else best
     return best
 
 
-def cold_cli(mode: str) -> float:
-    code = ("import sys, time\nif sys.argv[1] == 'python':\n    import converters.compiled as c\n"
-            "    c.fast_lcp = lambda: None\nfrom validation.cli import main\nsys.exit(main(sys.argv[2:]))")
+def cold_cli() -> float:
     best = float("inf")
     for _ in range(REPEATS):
         start = time.perf_counter()
-        subprocess.run([sys.executable, "-c", code, mode, "lcp", "solve",
+        subprocess.run([sys.executable, "-m", "validation.cli", "lcp", "solve",
                         "validation/data/siconos-lcp/lcp_exp_murty.dat", "--json"], cwd=ROOT, capture_output=True,
                        check=True, timeout=120)
         best = min(best, time.perf_counter() - start)
@@ -90,15 +100,13 @@ def cold_cli(mode: str) -> float:
 
 
 def main() -> None:
-    print(f"{'workload':<26} {'C entry':>11} {'Python':>11} {'Python / C':>11}  calls")
-    for name in WORKLOADS:
-        c, python = run(name, "c"), run(name, "python")
-        assert c["entry"] != python["entry"], (c, python)
-        unit, scale = ("us", 1e6) if c["s"] < 1e-3 else ("ms", 1e3)
-        print(f"{name:<26} {c['s'] * scale:8.2f} {unit} {python['s'] * scale:8.2f} {unit} "
-              f"{python['s'] / c['s']:10.3f}   {c['calls']:,}")
-    c, python = cold_cli("c"), cold_cli("python")
-    print(f"{'lcp solve (fresh process)':<26} {c * 1e3:8.2f} ms {python * 1e3:8.2f} ms {python / c:10.3f}   1")
+    times = {name: run(name) for name in WORKLOADS}
+    report = times["report lcp"]
+    print(f"report lcp                         {report['s'] * 1e3:8.2f} ms  ({report['calls']:,} solve_lcp calls)")
+    print(f"lcp solve (fresh process)          {cold_cli() * 1e3:8.2f} ms")
+    each, many = times["20,000 problems: solve_lcp each"]["s"], times["20,000 problems: solve_lcp_many"]["s"]
+    print(f"20,000 problems of k = 3, per problem: solve_lcp {each * 1e6:.2f} us, solve_lcp_many {many * 1e6:.2f} us "
+          f"({each / many:.1f}x)")
 
 
 if __name__ == "__main__":

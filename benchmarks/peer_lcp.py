@@ -20,10 +20,9 @@ restart from the previous solution); the same loop with the reset alone is timed
 sides are charged for their call only. A
 second Siconos time, for information, is that solver given a new (M, q) in each call as ``solve_lcp(M, q)`` is:
 ``lcp_driver_DenseMatrix(sn.LCP(M, q), zeros(k), zeros(k), options)`` (the options reused). A second time of
-ours, also for information, is the compiled solve alone: ``engine.solve_once`` (what ``solve_lcp``'s thin path
-calls: normalisation, closed forms, auto's plan, the check on the original problem, its workspace allocated)
-called from a compiled loop, so no Python call and no result object; it tells how much of the difference is
-the call from Python and how much the algorithms.
+ours, also for information, is per problem of ``solve_lcp_many`` given the same problem n times in one call (the
+entry for loops of small problems: the compiled solve with its workspace allocated once, no Python call per
+problem); it tells how much of the difference is the call from Python and how much the algorithms.
 """
 from __future__ import annotations
 
@@ -221,33 +220,17 @@ def ours_per_call(M, q, calls: int) -> float:
     return (total - (time.perf_counter() - start)) / calls
 
 
-_compiled_loop = None
-
-
-def compiled_per_call(M, q, calls: int) -> float | None:
-    """Seconds per call of the compiled solve alone (``engine.solve_once``, auto, defaults) in a compiled loop;
-    None when it does not answer in one call (the thin path then hands the problem to the sliced solve)."""
-    global _compiled_loop
+def compiled_per_call(M, q, calls: int) -> float:
+    """Seconds per problem of ``solve_lcp_many`` given ``calls`` copies of (M, q) in one call (the entry for loops of
+    small problems: one compiled call, its workspace allocated once; a copy the compiled call does not answer is
+    solved by solve_lcp within it, and counted)."""
     import numpy as np
-    from numba import njit
 
-    from converters.lcp import engine
-    from converters.lcp import state as S
-    if _compiled_loop is None:
-        @njit(cache=False)
-        def loop(M, q, z, w, opts, calls):
-            answer = 0
-            for _ in range(calls):
-                answer = engine.solve_once(M, q, z, w, S.AUTO, 1e-10, -1, True, opts, S.CHUNK)[0]
-            return answer
-        _compiled_loop = loop
-    M, q = np.ascontiguousarray(M, dtype=float), np.ascontiguousarray(q, dtype=float)
-    z, w = np.empty(q.shape[0]), np.empty(q.shape[0])
-    opts = engine.options_array("auto", {})
-    if _compiled_loop(M, q, z, w, opts, 1) not in (S.ONCE_SOLVED, S.ONCE_CLOSED_FORM):
-        return None
+    from converters.lcp import solve_lcp_many
+    M, q = np.asarray(M, dtype=float), np.asarray(q, dtype=float)
+    Ms, qs = np.broadcast_to(M, (calls, *M.shape)), np.broadcast_to(q, (calls, q.shape[0]))
     start = time.perf_counter()
-    _compiled_loop(M, q, z, w, opts, calls)
+    solve_lcp_many(Ms, qs)
     return (time.perf_counter() - start) / calls
 
 
@@ -332,7 +315,7 @@ def main():
         print(f"Siconos side skipped: {note}")
     print(f"{'problem':28s} {'k':>3s} {'ours: status':13s} {'method':17s} {'us/call':>9s}   "
           f"{'Siconos fastest':17s} {'us/call':>9s} {'ours/Siconos':>12s}   {'new (M, q):':>11s} {'us/call':>8s} "
-          f"{'ours/it':>8s}   {'compiled alone':>14s} {'/Siconos':>8s}")
+          f"{'ours/it':>8s}   {'solve_lcp_many':>14s} {'/Siconos':>8s}")
     for r in rows:
         none = "(not run)" if r["siconos_note"] else "(none succeeds)"
         new = (f"   {'':11s} {r['siconos_new_us_per_call']:8.2f} {r['ratio_new']:8.2f}" if r.get("ratio_new") else "")

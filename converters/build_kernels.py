@@ -10,7 +10,7 @@ import os
 import sys
 from pathlib import Path
 
-from .compiled import (FAST_MODULE, FAST_SOURCE, HERE, MAX_REGISTER_STATES, MODULE, RECORD, cpu_signature, digest,
+from .compiled import (HERE, MAX_REGISTER_STATES, MODULE, RECORD, cpu_signature, digest,
                        file_stat, register_state, stale)
 
 def _exports():
@@ -45,6 +45,9 @@ def _exports():
                 newton_step.py_func))
     out.append(("newton_advance", T.int64(a(1), a(1), a(2), a(1), a(2), a(1), a(1), a(2), T.boolean, a(1, T.int64),
                                           a(1), T.float64, T.int64), newton_advance.py_func))
+    out.append(("solve_many", T.none(a(3), a(2), a(2), a(2), T.int64, T.float64, T.int64, T.boolean, a(1), T.int64,
+                                     a(1, T.int64), a(1, T.int64), a(1), a(1, T.int64), a(1, T.int64), a(1, T.int64),
+                                     a(1)), engine.solve_many.py_func))
     out.append(("solve_once", T.Tuple((T.int64, T.int64, T.float64, T.int64, T.int64, T.int64, T.float64))(
         a(2), a(1), a(1), a(1), T.int64, T.float64, T.int64, T.boolean, a(1), T.int64), engine.solve_once.py_func))
     out.append(("lcp_default_options", a(1)(), dispatch.default_options.py_func))
@@ -62,7 +65,6 @@ def _sources() -> dict:
             relative = Path(path).resolve().relative_to(HERE).as_posix()
             sources[relative] = digest(HERE / relative)
     sources["build_kernels.py"] = digest(HERE / "build_kernels.py")      # the exports and their signatures
-    sources[FAST_SOURCE] = digest(HERE / FAST_SOURCE)                     # solve_lcp's C entry point
     return dict(sorted(sources.items()))
 
 
@@ -75,37 +77,6 @@ def _argument(numba_type) -> str:
         assert numba_type.layout == "C", numba_type
         return f"{codes[numba_type.dtype]}:{numba_type.ndim}"
     return codes[numba_type]
-
-
-def build_fast(tmp: Path) -> Path:
-    """Compile solve_lcp's C entry point (``converters/lcp/_fast.c``) into ``tmp``: :func:`converters.lcp.engine.
-    solve_raw` compiled by numba's ahead-of-time compiler into an object with C arguments (numba's calling
-    convention, no Python wrapper), linked with the C file and numba's helper functions by numba's toolchain
-    (setuptools' compiler). Returns the extension module's path."""
-    import numpy
-    import numba
-    from numba import types as T
-    from numba.pycc.compiler import ExportEntry, ModuleCompiler
-    from numba.pycc.platform import Toolchain
-
-    from .lcp import engine
-    pointer, integer = T.CPointer(T.float64), T.int64
-    signature = T.int64(pointer, pointer, pointer, pointer, integer, integer, T.float64, integer, integer, pointer,
-                        integer, integer, pointer, pointer, integer, T.CPointer(T.int64), integer, pointer)
-    raw = tmp / "solve_raw.o"
-    compiler = ModuleCompiler([ExportEntry("pcsuite_lcp_solve_raw", signature, engine.solve_raw)], FAST_MODULE,
-                              use_nrt=True, cpu_name="host")
-    compiler.write_native_object(str(raw), wrap=False)
-    toolchain = Toolchain()
-    toolchain.verbose = False
-    objects = toolchain.compile_objects([str(HERE / FAST_SOURCE)], str(tmp),
-                                        include_dirs=[str(Path(numba.__file__).parent), numpy.get_include(),
-                                                      *toolchain.get_python_include_dirs()],
-                                        macros=[("NUMBA_LAPACK_BUILD_ILP64", 0)], extra_cflags=["-O2"])
-    output = tmp / toolchain.get_ext_filename(FAST_MODULE)
-    toolchain.link_shared(str(output), [*objects, str(raw)], toolchain.get_python_libraries(),
-                          toolchain.get_python_library_dirs(), export_symbols=[f"PyInit_{FAST_MODULE}"])
-    return output
 
 
 def build() -> str:
@@ -132,7 +103,6 @@ def build() -> str:
             built = [p for p in Path(tmp).iterdir() if p.name.startswith(MODULE + ".") and p.suffix in (".so", ".pyd")]
             if len(built) != 1:
                 raise RuntimeError(f"numba.pycc wrote {sorted(p.name for p in Path(tmp).iterdir())}")
-            fast = build_fast(Path(tmp))
             import numpy
             record = {"python": sys.implementation.cache_tag, "numpy": numpy.__version__, "cpu": cpu_signature(),
                       "sources": sources,
@@ -140,7 +110,6 @@ def build() -> str:
                       "exports": {name: [_argument(t) for t in signature.args] for name, signature, _ in exports}}
             RECORD.unlink(missing_ok=True)         # stale from here until the new record lands
             os.replace(built[0], HERE / built[0].name)
-            os.replace(fast, HERE / fast.name)
             (Path(tmp) / "record").write_text(json.dumps(record, indent=1) + "\n")
             os.replace(Path(tmp) / "record", RECORD)
     return (f"converters/{built[0].name}: {len(exports)} kernels compiled ahead of time from "

@@ -15,10 +15,6 @@ forces the JIT (both give the same numbers: ``tests/methods/test_compiled.py``).
 only that an array argument is an ndarray, so :func:`kernel` checks every argument's dtype, dimensions and
 C order (:func:`conforms`, ~2 us a call) and hands any other kind to the JIT, which compiles a version for it.
 
-The build also makes ``converters/_lcpfast``, the C entry point of :func:`converters.lcp.solve_lcp`
-(``lcp/_fast.c`` with :func:`converters.lcp.engine.solve_raw` compiled by numba.pycc's compiler into an object
-with C arguments), recorded and used with the module above (:func:`fast_lcp`).
-
 Why numba.pycc: it compiles the very functions the JIT runs (one source of truth), and the module it writes
 depends on NumPy only. numba marks it "pending deprecation" since 0.57 while a replacement is developed; it is
 still shipped (0.68) and, if it ever goes, the JIT path is unchanged.
@@ -69,10 +65,6 @@ def register_state(n: int):
 HERE = Path(__file__).resolve().parent
 MODULE = "_kernels"
 RECORD = HERE / f"{MODULE}.json"
-#: solve_lcp's C entry point (:mod:`converters.lcp.solve`), built with the module above from this C source and
-#: :func:`converters.lcp.engine.solve_raw`, and used when the module above is.
-FAST_MODULE = "_lcpfast"
-FAST_SOURCE = "lcp/_fast.c"
 #: name -> (module, function): the kernels this module serves.
 KERNELS = {
     "run_steps": ("converters.methods.theta_kernels", "run_steps"),
@@ -81,6 +73,7 @@ KERNELS = {
     "newton_step": ("converters.analysis.newton_kernel", "newton_step"),
     "newton_advance": ("converters.analysis.newton_kernel", "newton_advance"),
     "solve_once": ("converters.lcp.engine", "solve_once"),
+    "solve_many": ("converters.lcp.engine", "solve_many"),
     "lcp_default_options": ("converters.lcp.dispatch", "default_options"),
 }
 
@@ -105,17 +98,6 @@ def kernel(name: str):
         else:
             _loaded[name] = _jit(name)
     return _loaded[name]
-
-
-def fast_lcp():
-    """The module of solve_lcp's C entry point, or None: when the ahead-of-time kernels are not used (stale, not
-    built, ``PCSUITE_KERNELS=jit``), or it does not load."""
-    if _ahead_of_time()[0] is None:
-        return None
-    try:
-        return importlib.import_module(f"converters.{FAST_MODULE}")
-    except ImportError:
-        return None
 
 
 def _jit(name: str):

@@ -58,6 +58,8 @@ def make_method(model: Model, p: dict, method: str | Method | None = None, h=Non
             raise ParameterError("give either a Method object or h and method options, not both")
         return method
     cls = get_method(method or DEFAULT_METHOD)
+    if h is not None and not cls.step_option:
+        raise ParameterError(f"h does not apply to the {cls.key} method (it takes no step of ours); got h = {h}")
     h = model.default_h(p) if h is None else parse_value("h", h)
     if model.periodic(p):
         check_h(h, model.period(p))
@@ -103,7 +105,8 @@ def run_converter(name_or_model, params: dict | None = None, *, control: str = "
         Parameter values (numbers or SPICE-style strings); unknown names are refused.
     method : str or Method, optional
         ``lcp`` (the default), ``event``, ``smooth`` (built from ``h`` and ``options``: ``theta``, ``eps``, ``solver_rtol``,
-        ``event_tol``, ...), or a Method object.
+        ``event_tol``, ...), or a Method object; a method of the ``circuit`` domain (``spice``, registered by
+        :mod:`validation.ngspice`) runs the model's circuit itself (its ``run_model``).
     h : float, optional
         The stepper's step, or the output spacing of the other methods (default: the model's, T/1000).
     t_end, periods : optional
@@ -145,6 +148,10 @@ def run_converter(name_or_model, params: dict | None = None, *, control: str = "
         return _accurate(model, p, rtol, start, method=method, h=h, t_end=t_end, periods=periods, steady=steady,
                          x0=x0, options=options)
     method = make_method(model, p, method, h, **options)
+    if "circuit" in method.domains:          # a method that runs the model's circuit itself (ngspice)
+        if output_step is not None:
+            raise ParameterError(f"output_step applies to the LCS methods; the {method.key} method keeps its own points")
+        return method.run_model(model, p, t_end=t_end, periods=periods, steady=steady, x0=x0)
     T = model.period(p)
     if steady:
         check_steady(model, p)
@@ -227,7 +234,8 @@ def _accurate(model: Model, p: dict, rtol, start: float, *, method, h, t_end, pe
     meta = {"model": model.name, "control": model.control, "params": p, "method_options": result.method.options(),
             "orbit": result.orbit.summary(), "accuracy": result.summary(),
             "steady_periods": int(round(simulated)), "periods": int(round(span / T))}
-    return replace(tr, labels=model.labels(p), wall_s=time.perf_counter() - start, metadata={**tr.metadata, **meta})
+    return replace(tr, labels=model.labels(p), wall_s=time.perf_counter() - start, metadata={**tr.metadata, **meta},
+                   retcode="success" if result.met else "not_converged")
 
 
 def _step_target(model: Model, p: dict, method: Method) -> float | None:
@@ -416,7 +424,7 @@ def run_summary(tr: Trajectory, *, check: bool = True) -> dict:
     accurate they are (:func:`check_accuracy`: re-runs at twice the step or on the method's orbit)."""
     meta = tr.metadata
     out = {"converter": meta["model"], "method": tr.method, "options": {**meta["method_options"], "params": meta["params"]},
-           "steps": int(tr.steps), "wall_s": tr.wall_s}
+           "steps": int(tr.steps), "wall_s": tr.wall_s, "retcode": tr.retcode}
     model, p = tr.labels.model, meta["params"]
     if model.control != Model.control:
         out["control"] = model.control
@@ -424,6 +432,7 @@ def run_summary(tr: Trajectory, *, check: bool = True) -> dict:
     for key in ("periods", "steady_periods", "output_step", "resolved_from_s"):
         if meta.get(key) is not None:
             out[key] = meta[key]
+    out.update(meta.get("notes", {}))               # what the method says of its run (ngspice: has it settled)
     if "orbit" in meta:
         out["orbit"] = meta["orbit"]
     if "accuracy" in meta:                      # accuracy on request: the orbit's values and their estimates
@@ -444,6 +453,8 @@ def run_summary(tr: Trajectory, *, check: bool = True) -> dict:
                                 losses_W_error_estimate=max(losses, default=0.0))
     elif check:
         check_accuracy(tr, out)
+    if meta.get("warnings"):
+        out["warnings"] = [*meta["warnings"], *out.get("warnings", [])]
     return out
 
 

@@ -40,6 +40,10 @@ class Samples:
     held: np.ndarray | None = None
 
 
+#: How a run can end without raising (:attr:`Trajectory.retcode`).
+RETCODES = ("success", "not_converged")
+
+
 @dataclass(frozen=True)
 class Trajectory:
     """Time series of one run.
@@ -94,6 +98,11 @@ class Trajectory:
         run's accuracy re-runs at another step.
     stats : dict (property)
         What the run cost: ``steps`` (the method's unit: ``counts``), ``wall_s``, ``events``, ``general_solves``.
+    retcode : str
+        How the run ended (``RETCODES``): ``success``, or ``not_converged`` where it returns what it reached short
+        of what was asked (accuracy on request whose rtol was not met; ngspice's steady state not settled within
+        its periods): the summary's warnings say by how much. A run that cannot give an answer raises instead
+        (SimulationError, LCPError, ResourceError, ParameterError).
     """
 
     t: np.ndarray
@@ -121,6 +130,11 @@ class Trajectory:
     resolved_from: float = float("-inf")
     problem: object = field(default=None, compare=False, repr=False)
     algorithm: object = field(default=None, compare=False, repr=False)
+    retcode: str = "success"
+
+    def __post_init__(self):
+        if self.retcode not in RETCODES:
+            raise ValueError(f"retcode must be one of {', '.join(RETCODES)}; got {self.retcode!r}")
 
     @property
     def stats(self) -> dict:

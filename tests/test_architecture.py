@@ -125,13 +125,21 @@ _BRANCH = re.compile(rf"""(==|!=)\s*["']({_NAMES})["']|["']({_NAMES})["']\s*(==|
                      rf"""\bin\s*[(\[{{]\s*["']({_NAMES})["']|\.name\s*(==|!=|in\b)""")
 
 
-def test_validation_never_branches_on_a_model_name():
+def _lines_matching(pattern, packages, skip=()) -> list[str]:
+    """path:line: text of every code line (comments cut) of ``packages`` that ``pattern`` finds."""
     hits = []
-    for path in (ROOT / "validation").rglob("*.py"):
-        for number, line in enumerate(path.read_text().splitlines(), 1):
-            if _BRANCH.search(line.split("#")[0]):
-                hits.append(f"{path.relative_to(ROOT)}:{number}: {line.strip()}")
-    assert hits == []
+    for pkg in packages:
+        for path in (ROOT / pkg).rglob("*.py"):
+            if path.relative_to(ROOT).as_posix() in skip:
+                continue
+            for number, line in enumerate(path.read_text().splitlines(), 1):
+                if pattern.search(line.split("#")[0]):
+                    hits.append(f"{path.relative_to(ROOT)}:{number}: {line.strip()}")
+    return hits
+
+
+def test_validation_never_branches_on_a_model_name():
+    assert _lines_matching(_BRANCH, ["validation"]) == []
 
 
 def test_the_branch_pattern_does_catch_a_branch():
@@ -160,6 +168,24 @@ def test_one_periodic_orbit_engine_serves_the_stepper_the_event_method_gdcm_and_
     others = [p for p in ROOT.joinpath("converters").rglob("*.py")
               if p.name not in ("periodic.py", "newton_kernel.py") and "lcp" not in p.parts]
     assert not [p for p in others if re.search(r"def \w*(newton|shoot|fixed_point)\w*\(", p.read_text())]
+
+
+_KEYS = "lcp|event|smooth|moreau|spice"
+_METHOD_BRANCH = re.compile(rf"""\b(method|key|kind)\b\s*(==|!=)\s*["']({_KEYS})["']|["']({_KEYS})["']\s*(==|!=)\s*\S*"""
+                            rf"""\b(method|key|kind)\b|\b(method|key|kind)\b\s*(not\s+)?in\s*[(\[{{]\s*["']({_KEYS})["']""")
+
+
+def test_nothing_branches_on_a_method_key_outside_the_registry():
+    """What a method can do, and how its error is estimated, are declared by the method (error_kind, batches,
+    domains, step_option, counts); nobody asks which one it is (the review found run.py, accuracy.py, the CLI and
+    the sweeps asking)."""
+    assert _lines_matching(_METHOD_BRANCH, PACKAGES, skip=("converters/methods/base.py",)) == []
+
+
+def test_the_method_branch_pattern_does_catch_a_branch():
+    assert _METHOD_BRANCH.search('if method.key == "lcp":') and _METHOD_BRANCH.search("if args.method != 'spice':")
+    assert _METHOD_BRANCH.search('if method in ("lcp", None):') and _METHOD_BRANCH.search('"event" == tr.method')
+    assert not _METHOD_BRANCH.search('run_converter("buck", method="event")')
 
 
 def test_one_newton_driver_serves_the_serial_engine_and_the_batched_steady_states():

@@ -29,8 +29,8 @@ ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("converters", "validation", "netlists")
 #: Files made by builds and runs, never shipped (the ahead-of-time module is built for one machine's CPU).
 BUILT = (".pyc", ".nbi", ".nbc", ".so", ".pyd")
-#: The ahead-of-time module, solve_lcp's C entry point and their record (converters.compiled).
-KERNEL_FILES = ("_kernels", "_lcpfast")
+#: The ahead-of-time module and its record (converters.compiled).
+KERNEL_FILES = ("_kernels",)
 LCP_FILE = "lcp_ortiz.dat"                 # k = 4, solved by Lemke: more than a closed form
 #: The checkout's own pcsuite (the editable install running these tests): the numbers the wheel must give.
 HERE = [sys.executable, "-m", "validation.cli"]
@@ -101,7 +101,7 @@ def installed(dist, tmp_path_factory):
 def test_the_sdist_and_the_wheel_hold_every_file_the_packages_read(dist):
     sdist, wheel, direct, files = dist
     data = _package_data(files)
-    assert {"validation/data/defaults.toml", "converters/lcp/_fast.c"} <= data
+    assert {"validation/data/defaults.toml", "netlists/circuits/buck.cir"} <= data
     with tarfile.open(sdist) as archive:
         prefix = archive.getnames()[0].split("/")[0] + "/"
         in_sdist = {name.removeprefix(prefix) for name in archive.getnames()}

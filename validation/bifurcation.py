@@ -26,7 +26,6 @@ from converters.analysis.bifurcation import aperiodic_onset, brute_force, period
 from converters.analysis.continuation import OrbitFamily, cascade, check_path
 from converters.errors import ParameterError
 from converters.methods.event import EventDriven
-from converters.methods.theta import Theta
 from converters.models import Model, get_model
 from converters.run import ParameterPath
 from converters.validate import parse_value
@@ -134,10 +133,17 @@ def branch_summary(branch) -> dict:
             "complete": branch.complete, "message": branch.message}
 
 
-def diagram_method(model: Model, params: dict, theta: float | None = None, steps: int | None = None):
-    """The stepper for the brute-force diagram: theta = 0.5 (second order), T / 500 steps (defaults.toml)."""
+def diagram_method(model: Model, params: dict, theta: float | None = None, steps: int | None = None,
+                   key: str = "lcp"):
+    """The brute-force diagram's method: a ``step`` method at theta = 0.5 (second order, where it takes a theta)
+    and T / 500 steps (defaults.toml); an exact one sampled once a period."""
+    from converters.methods.base import get_method
+    cls = get_method(key)
     T = model.period(params)
-    return Theta(h=T / (steps or BIFURCATION["diagram_steps"]), theta=theta or BIFURCATION["diagram_theta"])
+    if cls.error_kind != "step":
+        return cls.from_options(step=T)
+    options = {"theta": theta or BIFURCATION["diagram_theta"]} if "theta" in cls.option_names() else {}
+    return cls.from_options(step=T / (steps or BIFURCATION["diagram_steps"]), **options)
 
 
 def run_study(converter: str, control: str, params: dict | None, name: str, start: float, stop: float, *,
@@ -164,8 +170,9 @@ def run_study(converter: str, control: str, params: dict | None, name: str, star
                             ("record", record, 2)):
         if not (isinstance(count, (int, np.integer)) and count >= low):
             raise ParameterError(f"{key} must be an integer >= {low}; got {count!r}")
-    if diagram not in ("lcp", "event"):
-        raise ParameterError(f"the diagram's method must be lcp or event; got {diagram!r}")
+    from converters.sweeps.ensemble import sweep_methods
+    if diagram not in sweep_methods():
+        raise ParameterError(f"the diagram's method must be {' or '.join(sweep_methods())}; got {diagram!r}")
     if points:
         from converters.limits import check_memory
         # each value keeps its recorded period starts (and the list of attractors its summaries): 4 copies
@@ -183,13 +190,13 @@ def run_study(converter: str, control: str, params: dict | None, name: str, star
     attractors, diagram_s, label = None, 0.0, ""
     if points:
         T = model.period(base)
-        method = diagram_method(model, base) if diagram == "lcp" else EventDriven(output_step=T)
+        method = diagram_method(model, base, key=diagram)
         from dataclasses import replace as _replace
         one = path(start)          # each value is one run of transient + record periods: refuse it here, not per value
         method.check_memory(_replace(one, t_span=(one.t_span[0], one.t_span[0] + (transient + record) * T)),
                              remedy="fewer --transient or --record periods")
-        label = (f"LCP stepper, theta = {method.theta:g}, h = T/{round(T / method.h)}" if diagram == "lcp"
-                 else "event-driven (exact)")
+        label = (f"{method.key} {method.label}, h = T/{round(T / method.step)}" if method.step
+                 else f"{method.key} (exact)")
         # Every chunk starts on the operating point: the first orbit of the continuation (from rest, a start-up
         # transient can wander for hundreds of periods: transient chaos).
         seed = branches[0].points[0].x0 if branches[0].points else x_start

@@ -228,11 +228,10 @@ def _spice_run(conv, p, x0):
         return spice_intervals(conv, netlist, run_spice(netlist)), note
 
 
-def _pool_map(kind: str, rows: list[dict], workers: int, progress: bool, label: str) -> list[dict]:
-    if kind == "lcp":
-        return parallel_map(_lcp_point, rows, workers=workers, chunk=30, progress=progress, label=label)
-    return parallel_map(_spice_point, rows, workers=workers, chunk=30, progress=progress, label=label,
-                        finalize=close_spice_worker)
+def _pool_map(point, rows: list[dict], workers: int, progress: bool, label: str) -> list[dict]:
+    """``point`` (_lcp_point or _spice_point) at every row on the pool; ngspice's workers shut down after."""
+    finalize = close_spice_worker if point is _spice_point else None
+    return parallel_map(point, rows, workers=workers, chunk=30, progress=progress, label=label, finalize=finalize)
 
 
 def dk_map(name: str, n_d: int = 30, n_k: int = 30, *, spice: bool = True, workers: int = 1,
@@ -242,14 +241,14 @@ def dk_map(name: str, n_d: int = 30, n_k: int = 30, *, spice: bool = True, worke
     rows = grid.to_dict("records")
     start = time.perf_counter()
     _lcp_point(rows[0])  # load the compiled kernels once, before the workers fork
-    lcp = _pool_map("lcp", rows, workers, progress, f"{name} LCP map")
+    lcp = _pool_map(_lcp_point, rows, workers, progress, f"{name} LCP map")
     frame = pd.concat([grid, pd.DataFrame(lcp)], axis=1)
     lcp_wall = time.perf_counter() - start
     spice_wall = float("nan")
     if spice:
         start = time.perf_counter()
         spice_rows = frame.to_dict("records")
-        frame = pd.concat([frame, pd.DataFrame(_pool_map("spice", spice_rows, spice_workers, progress,
+        frame = pd.concat([frame, pd.DataFrame(_pool_map(_spice_point, spice_rows, spice_workers, progress,
                                                          f"{name} ngspice map"))], axis=1)
         spice_wall = time.perf_counter() - start
     frame.attrs.update(lcp_wall_s=lcp_wall, spice_wall_s=spice_wall)

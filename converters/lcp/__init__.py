@@ -1,4 +1,5 @@
-"""Linear complementarity problem solvers: one algorithm per module, one entry point (:func:`solve_lcp`).
+"""Linear complementarity problem solvers: one algorithm per module, one entry point (:func:`solve_lcp`; many
+small problems in one call: :func:`solve_lcp_many`).
 
 The names below load on first use (PEP 562 ``__getattr__``): the solvers are compiled (numba), and a process
 that imports this package without solving an LCP (``pcsuite simulate`` of a converter whose steps the compiled
@@ -9,7 +10,7 @@ import importlib
 from .state import METHOD_NAMES
 
 #: Each public name and the module that defines it.
-_WHERE = {"solve_lcp": "solve", "check_lcp": "solve", "SOLVERS": "engine", "LCPResult": "answer",
+_WHERE = {"solve_lcp": "solve", "solve_lcp_many": "solve", "LCPBatch": "solve", "check_lcp": "solve", "SOLVERS": "engine", "LCPResult": "answer",
           "lcp_error": "result", "SOLVED": "answer", "NO_SOLUTION": "answer", "MAX_ITERATIONS": "answer",
           "FAILED": "answer", "STATUSES": "answer", "read_siconos_lcp": "siconos", "LCPFile": "siconos"}
 
@@ -26,5 +27,5 @@ def __getattr__(name):
     return value
 
 
-__all__ = ["solve_lcp", "check_lcp", "LCPResult", "lcp_error", "read_siconos_lcp", "LCPFile", "SOLVERS",
+__all__ = ["solve_lcp", "solve_lcp_many", "LCPBatch", "check_lcp", "LCPResult", "lcp_error", "read_siconos_lcp", "LCPFile", "SOLVERS",
            "SOLVED", "NO_SOLUTION", "MAX_ITERATIONS", "FAILED", "STATUSES", "METHOD_NAMES"]

@@ -22,7 +22,7 @@ import functools
 import math
 
 import numpy as np
-from numba import carray, njit
+from numba import njit
 
 from ..errors import LCPError
 from . import auto
@@ -30,7 +30,7 @@ from . import lemke as lemke_module
 from . import newton as newton_module
 from . import state as S
 from .dispatch import (DEFAULT_MAX_ITER, DEFAULT_OPTIONS, OPT_BETA, OPT_OMEGA, OPT_P, OPT_PIVOT_TOL, OPT_RHO,
-                       OPT_SIGMA, N_OPTIONS, advance_method, method_sizes)
+                       OPT_SIGMA, advance_method, method_sizes)
 from .enumeration import MAX_K as ENUM_MAX_K
 from .enumeration import solutions as enum_solutions
 from .fastpaths import closed_form
@@ -202,44 +202,21 @@ def solve_in(M, q, z, w, method, tol, max_iter, fast_paths, opts, budget, mbuf, 
     return ONCE_SOLVED, st[S.ITER], err, used, -1, stages, sf[S.INFO_X]
 
 
-#: What :func:`solve_raw` writes in ``out`` (doubles): solve_in's answer after its first entry; RAW_WORKSPACE is
-#: its answer when the caller's workspace is too small (``out`` then holds the doubles and integers it needs).
-RAW_ITERATIONS, RAW_ERR, RAW_USED, RAW_RULE, RAW_STAGES, RAW_INFO_X = range(6)
-RAW_OUT_SIZE = 6
-RAW_WORKSPACE = -1
-#: solve_raw's answer when ``opts`` holds fewer than N_OPTIONS entries (the caller then takes another path)
-RAW_BAD_OPTIONS = -2
-
-
-def solve_raw(M_ptr, q_ptr, z_ptr, w_ptr, k, method, tol, max_iter, fast_paths, opts_ptr, n_opts, budget,
-              mbuf_ptr, buf_ptr, n_buf, ibuf_ptr, n_ibuf, out_ptr):
-    """:func:`solve_once` for a caller in C (``converters/lcp/_fast.c``, the C entry point of solve_lcp): arrays as
-    pointers (C-contiguous doubles; M and mbuf are k x k), the workspace the caller's, nothing allocated, so no
-    reference counting; solve_in's answer returned, the rest of its tuple written to ``out``
-    (RAW_ITERATIONS .. RAW_INFO_X). Not jitted here: ``python -m converters.build_kernels`` compiles it ahead of
-    time into an object with C arguments (:func:`converters.build_kernels.build_fast`)."""
-    out = carray(out_ptr, (RAW_OUT_SIZE,))
-    if n_opts < N_OPTIONS:                 # the methods read opts[OPT_*] unchecked
-        return RAW_BAD_OPTIONS
+@njit(cache=True)
+def solve_many(Ms, qs, Z, W, method, tol, max_iter, fast_paths, opts, budget, answers, iterations, errs, used, rules,
+               stages, infos):
+    """:func:`solve_once` on each of P problems of one size (Ms (P, k, k), qs (P, k); answers into Z, W (P, k) and
+    the per-problem arrays), the workspace allocated once for all of them: the compiled half of
+    :func:`converters.lcp.solve_lcp_many`."""
+    k = qs.shape[1]
     nf, ni = sizes(method, k)
-    need_f = 2 * k + S.SF_SIZE + nf
-    need_i = S.ST_SIZE + ni
-    if need_f > n_buf or need_i > n_ibuf:
-        out[0] = need_f
-        out[1] = need_i
-        return RAW_WORKSPACE
-    ibuf = carray(ibuf_ptr, (need_i,))
-    answer, iterations, err, used, rule, stages, info_x = solve_in(
-        carray(M_ptr, (k, k)), carray(q_ptr, (k,)), carray(z_ptr, (k,)), carray(w_ptr, (k,)), method, tol, max_iter,
-        fast_paths != 0, carray(opts_ptr, (n_opts,)), budget, carray(mbuf_ptr, (k, k)), carray(buf_ptr, (need_f,)),
-        ibuf)
-    out[RAW_ITERATIONS] = iterations
-    out[RAW_ERR] = err
-    out[RAW_USED] = used
-    out[RAW_RULE] = rule
-    out[RAW_STAGES] = stages
-    out[RAW_INFO_X] = info_x
-    return answer
+    buf = np.empty(k * k + 2 * k + S.SF_SIZE + nf)
+    ibuf = np.empty(S.ST_SIZE + ni, dtype=np.int64)
+    mbuf = buf[:k * k].reshape((k, k))
+    rest = buf[k * k:]
+    for p in range(qs.shape[0]):
+        answers[p], iterations[p], errs[p], used[p], rules[p], stages[p], infos[p] = solve_in(
+            Ms[p], qs[p], Z[p], W[p], method, tol, max_iter, fast_paths, opts, budget, mbuf, rest, ibuf)
 
 
 # ------------------------------------------------------------------------------------------------- Python

@@ -1,15 +1,15 @@
-"""One entry point for every LCP solver: :func:`solve_lcp`.
+"""One entry point for every LCP solver: :func:`solve_lcp`, and :func:`solve_lcp_many` for many small problems.
 
 This module imports no numba: the thin path calls one compiled function, :func:`.engine.solve_once`, through
 :func:`converters.compiled.kernel` (from the ahead-of-time module when it is current, so a process that solves
-small LCPs never imports numba); the full path imports the engine when it first runs. When the ahead-of-time
-kernels are used, ``solve_lcp`` is their C entry point (``converters/lcp/_fast.c``, end of this module): the thin
-path in C, handing everything else to the Python function, which is ``solve_lcp.__wrapped__``.
+small LCPs never imports numba); the full path imports the engine when it first runs. A loop of many small
+problems is one compiled call (:func:`solve_lcp_many`: the workspace allocated once, no Python per problem).
 """
 from __future__ import annotations
 
 import functools
 import os
+from dataclasses import dataclass
 import sys
 import threading
 import time
@@ -425,39 +425,93 @@ def _load_once():
     return _once
 
 
-# ------------------------------------------------------------------------- the C entry point
-# From Python, the thin path above costs about 2 us around a few hundred nanoseconds of compiled work. When the
-# ahead-of-time kernels are used, solve_lcp is a converters._lcpfast.Solver: the same thin path in C
-# (converters/lcp/_fast.c), calling the same compiled solve (engine.solve_raw -> solve_in), which hands every
-# call and every answer it does not take to the functions below (the Python solve_lcp itself, the sliced solve,
-# auto's messages). Otherwise solve_lcp is the Python function. ``solve_lcp.__wrapped__`` is the Python function.
+# ------------------------------------------------------------------------- many problems in one call
 
-#: Largest k the C entry point takes: its workspace is kept between calls (at most 7 k^2 doubles, 0.9 MB).
-FAST_MAX_K = 128
+@dataclass(frozen=True)
+class LCPBatch:
+    """What :func:`solve_lcp_many` returns: the answers of P problems as arrays; ``batch[i]`` is problem i's
+    :class:`LCPResult` (as :func:`solve_lcp` would have returned it), ``list(batch)`` all of them.
+
+    Attributes
+    ----------
+    z, w : ndarray, shape (P, k)
+    status : tuple of str
+    err : ndarray, shape (P,)
+    iterations : ndarray of int, shape (P,)
+    method, message : tuple of str
+    """
+
+    z: np.ndarray
+    w: np.ndarray
+    status: tuple
+    err: np.ndarray
+    iterations: np.ndarray
+    method: tuple
+    message: tuple
+
+    @property
+    def solved(self) -> np.ndarray:
+        return np.array([s == SOLVED for s in self.status], dtype=bool)
+
+    def __len__(self) -> int:
+        return len(self.status)
+
+    def __getitem__(self, i: int) -> LCPResult:
+        return make_result(self.z[i], self.w[i], self.status[i], float(self.err[i]), int(self.iterations[i]),
+                           self.method[i], self.message[i])
+
+    def __iter__(self):
+        return (self[i] for i in range(len(self)))
 
 
-def _after_once(M, q, code: int, tol: float, fast_paths: bool, started: float) -> LCPResult:
-    """The thin path's ONCE_OTHER answer, from the C entry point: the sliced solve under the default time limit."""
-    return _solve_sliced(M, q, code, tol, DEFAULT_MAX_ITER[S.METHOD_NAMES[code]], fast_paths,
-                         _deadline(DEFAULT_TIME_LIMIT, started), _OPTIONS)
+def solve_lcp_many(Ms, qs, method: str = "auto", tol: float = DEFAULT_TOL, fast_paths: bool = True) -> LCPBatch:
+    """Solve P problems LCP(qs[i], Ms[i]) of one size k, as :func:`solve_lcp` with its defaults would, in one
+    compiled call: for loops of small problems (a parameter study, a Monte Carlo of a switched network), where
+    calling :func:`solve_lcp` once per problem costs more in the call than in the solve. A problem the compiled
+    call does not finish (not solved within its first slice of work, or one auto must report on) is solved by
+    :func:`solve_lcp` itself, so every answer is the one it gives.
 
-
-def _with_c_entry(python):
-    fast = compiled.fast_lcp() if _ENVIRON is not None else None
-    if fast is None:
-        return python
-    _load_once()                                           # _OPTIONS
-    return functools.update_wrapper(fast.Solver(*_solver_arguments(python)), python)
-
-
-def _solver_arguments(python) -> tuple:
-    """converters._lcpfast.Solver's arguments."""
-    slots = tuple(LCPResult.__dict__[name] for name in ("z", "w", "status", "err", "iterations", "method", "message",
-                                                        "solutions"))
-    return (python, _after_once, _solved_message, LCPResult, slots, SOLVED, "", tuple(S.METHOD_NAMES), _AUTO_LABELS,
-            _CLOSED_FORM_MESSAGES, "auto:closed form", _ENVIRON, _TIME_KEY, _MEMORY_KEY,
-            _OPTIONS, _ONCE_MAX_ITER, _PGS_GAVE_WAY, DEFAULT_TOL, _TOL_LOW, _TOL_HIGH,
-            min(FAST_MAX_K, _K_UNDER_DEFAULT_MEMORY), S.AUTO, S.ENUM, _CHUNK)
-
-
-solve_lcp = _with_c_entry(solve_lcp)
+    Ms: array_like (P, k, k); qs: (P, k); ``method``, ``tol`` and ``fast_paths`` as :func:`solve_lcp`'s. Raises
+    LCPError naming the first problem with NaN or inf."""
+    code = _CODES.get(method) if isinstance(method, str) else None
+    if code is None:
+        raise LCPError(f"method must be one of {', '.join(S.METHOD_NAMES)}; got {method!r}")
+    Ms, qs = np.ascontiguousarray(Ms, dtype=float), np.ascontiguousarray(qs, dtype=float)
+    if Ms.ndim != 3 or qs.ndim != 2 or Ms.shape != (qs.shape[0], qs.shape[1], qs.shape[1]) or qs.shape[1] == 0:
+        raise LCPError(f"Ms must be (P, k, k) and qs (P, k) with k >= 1; got Ms {Ms.shape}, qs {qs.shape}")
+    if not (isinstance(tol, (int, float)) and not isinstance(tol, bool) and TOL_RANGE[0] <= tol <= TOL_RANGE[1]):
+        raise LCPError(f"tol must be in [{TOL_RANGE[0]:g}, {TOL_RANGE[1]:g}]; got {tol!r}")
+    if not isinstance(fast_paths, bool):
+        raise LCPError(f"fast_paths must be True or False; got {fast_paths!r}")
+    P, k = qs.shape
+    _check_memory(method, k)
+    if _once is None:
+        _load_once()
+    Z, W = np.empty((P, k)), np.empty((P, k))
+    answers, iterations, used, rules, stages = (np.empty(P, dtype=np.int64) for _ in range(5))
+    errs, infos = np.empty(P), np.empty(P)
+    if code != S.ENUM:        # enumeration lists every solution: solve_lcp's own path
+        compiled.kernel("solve_many")(Ms, qs, Z, W, code, float(tol), _ONCE_MAX_ITER[code], fast_paths, _OPTIONS, _CHUNK,
+                                      answers, iterations, errs, used, rules, stages, infos)
+    else:
+        answers[:] = _ONCE_OTHER
+    bad = np.flatnonzero(answers == S.ONCE_NOT_FINITE)
+    if bad.size:
+        raise LCPError(f"Ms[{bad[0]}] and qs[{bad[0]}] must be finite (no NaN or inf)")
+    status, labels, messages = [SOLVED] * P, [method] * P, [""] * P
+    for i in range(P):
+        if answers[i] == _ONCE_SOLVED:
+            if code == S.AUTO:
+                u = int(used[i])
+                labels[i] = _AUTO_LABELS[u]
+                if not (stages[i] == 1 << (4 * u) or stages[i] == _PGS_GAVE_WAY[u]):
+                    messages[i] = _solved_message(u, int(stages[i]), infos[i] if infos[i] == infos[i] else None, k)
+        elif answers[i] == _ONCE_CLOSED_FORM:
+            labels[i] = "auto:closed form" if code == S.AUTO else method
+            messages[i] = _CLOSED_FORM_MESSAGES[rules[i]]
+            iterations[i] = 0
+        else:
+            result = solve_lcp(Ms[i], qs[i], method=method, tol=float(tol), fast_paths=fast_paths)
+            Z[i], W[i], errs[i], iterations[i] = result.z, result.w, result.err, result.iterations
+            status[i], labels[i], messages[i] = result.status, result.method, result.message
+    return LCPBatch(Z, W, tuple(status), errs, iterations, tuple(labels), tuple(messages))

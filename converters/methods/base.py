@@ -54,6 +54,8 @@ class Method(ABC):
     #: :meth:`coarsened`); ``exact`` exact flows with events at their instants (rounding only); ``model`` the
     #: error is the method's model of the circuit (a smoothing's O(eps)), which no step twin measures.
     error_kind: ClassVar[str] = "step"
+    #: What a ``model`` method's error is (the summary's reason for not estimating it).
+    model_error: ClassVar[str] = ""
     #: Steady states of many parameter points advance in one compiled call (:mod:`converters.sweeps.batch`).
     batches: ClassVar[bool] = False
 

@@ -57,6 +57,7 @@ class Smoothing(Method, key="smooth"):
 
     counts = "LU factorisations"
     error_kind = "model"
+    model_error = "the smoothing's, O(eps)"
 
     eps: float = 1e-4
     solver_rtol: float = 1e-6

@@ -29,7 +29,7 @@ STEADY_TOL = 1e-10
 MAX_ITER = 50
 #: The measures of a row and their types (a failed row leaves them empty).
 MEASURES = {"vout_mean": float, "vout_ripple": float, "rms_state0": float, "mode": str, "held_fraction": float,
-            "spectral_radius": float, "iterations": int}
+            "spectral_radius": float, "iterations": int, "orbit_distance": float}
 #: With an rtol: the largest relative error estimate of the point's measures, the mean's, the method and steps
 #: per period chosen (0: the event method), and whether rtol was met.
 ACCURACY_MEASURES = {"error_estimate": float, "vout_mean_error_estimate": float, "accuracy_method": str,
@@ -149,7 +149,8 @@ class ModelSweep:
                 if not orbit.converged:
                     return failed_row(index, point, f"no steady state: {orbit.message}", time.perf_counter() - clock)
                 run = simulate(model.problem(p, T, orbit.x0), method)
-                extra = {"spectral_radius": orbit.spectral_radius, "iterations": orbit.iterations}
+                extra = {"spectral_radius": orbit.spectral_radius, "iterations": orbit.iterations,
+                         "orbit_distance": orbit.distance}
             else:
                 long = simulate(model.problem(p, self.periods * T), method)
                 run = simulate(model.problem(p, T, long.x[-1]), method)
@@ -169,6 +170,7 @@ class ModelSweep:
         row.update(vout_mean=q["vout_mean"].value, vout_ripple=q["vout_ripple"].value,
                    rms_state0=q[f"{model.state_names[0]}_rms"].value,
                    spectral_radius=float(np.abs(result.orbit.multipliers).max()), iterations=int(result.orbit.iterations),
+                   orbit_distance=float(result.orbit.distance),
                    error_estimate=result.worst(), vout_mean_error_estimate=q["vout_mean"].relative,
                    accuracy_method=result.method.key, steps_per_period=int(result.steps_per_period or 0),
                    rtol_met=bool(result.met))
@@ -255,7 +257,7 @@ class ModelSweep:
                 multipliers = np.linalg.eigvals(jac[k])
                 rows[index] = {"index": int(index), **{key: _number(v) for key, v in point.items()}, "status": "ok", "message": "", **orbit_row(model, p, run),
                                "spectral_radius": float(np.abs(multipliers).max()), "iterations": int(iterations[k]),
-                               "wall_s": time.perf_counter() - clock}
+                               "orbit_distance": float(distances[k]), "wall_s": time.perf_counter() - clock}
         return [rows[index] for index, _ in items]
 
 

@@ -173,6 +173,7 @@ def test_a_batched_sweep_stops_where_the_serial_engine_does_near_rho_one():
     assert [r["iterations"] for r in batched] == [r["iterations"] for r in serial]
     for a, b in zip(serial, batched):
         assert b["status"] == a["status"] and b["vout_mean"] == pytest.approx(a["vout_mean"], rel=1e-12)
+        assert b["orbit_distance"] == pytest.approx(a["orbit_distance"], rel=1e-6, abs=1e-300)  # the same bound
 
 
 # --- event estimates: the same event, pair and kind -----------------------------------------------------------

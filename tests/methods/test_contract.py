@@ -40,13 +40,21 @@ RC_EXACT = (1 - math.exp(-0.5)) * math.exp(-0.5)
 
 
 def test_the_registry_holds_every_method_by_its_command_line_name():
-    assert list(METHODS) == ["lcp", "event", "smooth", "moreau"]
+    from validation.ngspice import Spice            # ngspice registers itself from above the core
+    assert list(METHODS) == ["lcp", "event", "smooth", "moreau", "spice"] and METHODS["spice"] is Spice
     assert [cls.key for cls in METHODS.values()] == list(METHODS)
     assert all(issubclass(cls, Method) and cls.description for cls in METHODS.values())
     assert Theta(1e-6, 1.0).order == 1 and Theta(1e-6, 0.5).order == 2
     assert EventDriven().order == math.inf and Smoothing().order == 1 and METHODS["moreau"](h=1e-3).order == 1
     assert {key: cls.domains for key, cls in METHODS.items()} == {
-        "lcp": ("lcs",), "event": ("lcs", "mechanical"), "smooth": ("lcs",), "moreau": ("mechanical",)}
+        "lcp": ("lcs",), "event": ("lcs", "mechanical"), "smooth": ("lcs",), "moreau": ("mechanical",),
+        "spice": ("circuit",)}
+    # how each one's error is estimated: what the accuracy checks read instead of a key
+    assert {key: cls.error_kind for key, cls in METHODS.items()} == {
+        "lcp": "step", "event": "exact", "smooth": "model", "moreau": "step", "spice": "model"}
+    assert Theta(1e-6, 0.5).coarsened() == Theta(2e-6, 0.5) and Theta(1e-6, 1.0).step == 1e-6
+    with pytest.raises(ValueError, match="no fixed step"):
+        EventDriven().coarsened()
 
 
 @pytest.mark.parametrize("key,options,match", [

@@ -131,9 +131,10 @@ def test_a_step_lcp_without_solution_is_a_clear_error():
 
 
 def test_simulate_rejects_a_foreign_method_and_bad_x0():
+    import validation.ngspice  # noqa: F401 (the registry as the command line has it)
     problem = half_wave_rectifier(t_end=1e-4)
     with pytest.raises(ParameterError, match=r"method must be a pcsuite method \(lcp: Theta, event: EventDriven, "
-                                             r"smooth: Smoothing, moreau: MoreauJean\); got 'euler'"):
+                                             r"smooth: Smoothing, moreau: MoreauJean, spice: Spice\); got 'euler'"):
         simulate(problem, "euler")
     with pytest.raises(ParameterError, match=r"x0 must be 2 finite numbers"):
         simulate(problem, BackwardEuler(1e-6), x0=[np.nan, 0.0])

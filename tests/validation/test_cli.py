@@ -205,7 +205,7 @@ def test_ngspice_options_on_simulate_and_compare(capsys, ngspice):
     code, out, _ = run_cli(capsys, "compare", "buck", "--spice-method", "trap", "--json")
     assert code == 0 and json.loads(out)["spice_options"]["method"] == "trap"
     code, _, err = run_cli(capsys, "simulate", "buck", "--spice-tmax", "20n")
-    assert code == 2 and "ngspice options (--spice-tmax) need --method spice; got --method lcp" in err
+    assert code == 2 and "--spice-tmax does not apply to --method lcp (its options: --theta, and --h)" in err
     code, _, err = run_cli(capsys, "simulate", "buck", "--method", "spice", "--spice-tmax", "20u")
     assert code == 2 and "--spice-tmax must be in (0, 1e-05) s" in err
 

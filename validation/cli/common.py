@@ -91,22 +91,8 @@ def add_spice_options(parser) -> None:
 
 def spice_options(args, period: float):
     """The SpiceOptions the --spice-* flags ask for (None: none given)."""
-    from converters.validate import parse_value
-    from netlists import SpiceOptions
-    given = {}
-    if args.spice_tmax is not None:
-        tmax = parse_value("--spice-tmax", args.spice_tmax, "s")
-        if not 0.0 < tmax < period:
-            raise ParameterError(f"--spice-tmax must be in (0, {period:g}) s (below the switching period); got {tmax:g}")
-        given["tmax_fraction"] = tmax / period
-    if args.spice_reltol is not None:
-        reltol = parse_value("--spice-reltol", args.spice_reltol)
-        if not 1e-9 <= reltol <= 0.1:
-            raise ParameterError(f"--spice-reltol must be in [1e-9, 0.1]; got {reltol:g}")
-        given["reltol"] = reltol
-    if args.spice_method is not None:
-        given["method"] = args.spice_method
-    return SpiceOptions(**given) if given else None
+    from ..ngspice import spice_settings
+    return spice_settings(period, args.spice_tmax, args.spice_reltol, args.spice_method)
 
 
 def check_out(path: Path | None, suffixes=(".csv", ".parquet"), flag: str = "--out") -> None:

@@ -6,19 +6,21 @@ import time
 
 from converters.errors import ParameterError
 
-from .common import add_params, method_options, add_spice_options, check_out, given_path, integer, json_text, spice_options, write_frame
+from .common import add_params, add_spice_options, check_out, given_path, integer, json_text, method_options, write_frame
 
 
 def add(sub) -> None:
     from converters.methods.base import METHODS
     from converters.models import CONTROLS
+
+    from .. import ngspice  # noqa: F401 (registers --method spice)
     sim = sub.add_parser("simulate", help="simulate a converter and write its waveforms")
     sim.add_argument("converter")
     add_params(sim)
-    lcs = {key: cls for key, cls in METHODS.items() if "lcs" in cls.domains}
-    sim.add_argument("--method", default=None, choices=[*lcs, "spice"],
-                     help="; ".join(f"{key}: {cls.description}" for key, cls in lcs.items())
-                     + "; spice: the same circuit in ngspice (default lcp; with --rtol pcsuite chooses)")
+    circuits = {key: cls for key, cls in METHODS.items() if {"lcs", "circuit"} & set(cls.domains)}
+    sim.add_argument("--method", default=None, choices=list(circuits),
+                     help="; ".join(f"{key}: {cls.description}" for key, cls in circuits.items())
+                     + " (default lcp; with --rtol pcsuite chooses)")
     sim.add_argument("--h", default=None, help="step in s (default T/1000; PRC 50 ns); event and smooth: "
                                               "output sample spacing")
     sim.add_argument("--eps", default=None, help="smooth: smoothing width eps (default 1e-4, units of y)")
@@ -64,42 +66,45 @@ def run(args) -> int:
     params = parse_assignments(args.params)
     if args.steady_tol is not None and not args.steady and args.rtol is None:
         raise ParameterError(f"--steady-tol applies with --steady only; got --steady-tol {args.steady_tol} without it")
-    spice_flags = [f for f, v in (("--spice-tmax", args.spice_tmax), ("--spice-reltol", args.spice_reltol),
-                                  ("--spice-method", args.spice_method)) if v is not None]
-    if spice_flags and args.method != "spice":
-        raise ParameterError(f"ngspice options ({', '.join(spice_flags)}) need --method spice; got --method "
-                             f"{args.method or 'lcp'}")
-    if args.output_step is not None and (args.steady or args.rtol is not None or args.method == "spice"):
-        raise ParameterError("--output-step applies to a run from rest with --method lcp or event (--steady and "
-                             "--rtol return their periods on the orbit at every step; ngspice keeps its own points)")
     if args.rtol is not None:
         given = [flag for flag, value in (("--method", args.method), ("--h", args.h), ("--theta", args.theta),
                                           ("--eps", args.eps), ("--solver-rtol", args.solver_rtol),
-                                          ("--steady-tol", args.steady_tol)) if value is not None]
+                                          ("--steady-tol", args.steady_tol), ("--spice-tmax", args.spice_tmax),
+                                          ("--spice-reltol", args.spice_reltol), ("--spice-method", args.spice_method))
+                 if value is not None]
         if given:
             raise ParameterError(f"--rtol chooses the method and its step; give either --rtol or {', '.join(given)}")
+        if args.output_step is not None:
+            raise ParameterError("--output-step applies to a run from rest (--rtol returns its periods on the orbit at "
+                                 "every step)")
         tr = run_converter(args.converter, params, control=args.control, t_end=args.t_end, periods=args.periods,
                            rtol=args.rtol)
         summary = run_summary(tr)
-    elif args.method == "spice":
-        given = [flag for flag, value in (("--h", args.h), ("--theta", args.theta), ("--eps", args.eps),
-                                          ("--solver-rtol", args.solver_rtol), ("--steady-tol", args.steady_tol))
-                 if value is not None]
-        if given:
-            raise ParameterError(f"{', '.join(given)} do{'es' if len(given) == 1 else ''} not apply to --method spice "
-                                 "(ngspice's transient: --spice-tmax, --spice-reltol, --spice-method; --steady runs it "
-                                 "on until its 10-period mean settles)")
-        tr, summary = _spice(args, params)
     else:
-        method = args.method or "lcp"
-        options = method_options(method, {"theta": args.theta, "eps": args.eps, "solver_rtol": args.solver_rtol})
-        setup_s = _set_up(args.converter, params, args.control, method, args.steady, options)
+        from converters.methods.base import DEFAULT_METHOD, get_method
+        method = args.method or DEFAULT_METHOD
+        cls = get_method(method)
+        if "circuit" in cls.domains:          # it runs the circuit itself: no step of ours, no Newton, its own points
+            given = [flag for flag, value in (("--h", args.h), ("--steady-tol", args.steady_tol),
+                                              ("--output-step", args.output_step)) if value is not None]
+            if given:
+                raise ParameterError(f"{', '.join(given)} do{'es' if len(given) == 1 else ''} not apply to --method "
+                                     f"{method} ({cls.description})")
+        elif args.output_step is not None and args.steady:
+            raise ParameterError("--output-step applies to a run from rest (--steady returns its periods on the orbit "
+                                 "at every step)")
+        options = method_options(method, {"theta": args.theta, "eps": args.eps, "solver_rtol": args.solver_rtol,
+                                          "spice_tmax": args.spice_tmax, "spice_reltol": args.spice_reltol,
+                                          "spice_method": args.spice_method})
+        setup_s = _set_up(args.converter, params, args.control, method, args.steady, options) \
+            if "lcs" in cls.domains else None
         tr = run_converter(args.converter, params, control=args.control, method=method, h=args.h,
                            t_end=args.t_end, periods=args.periods, steady=args.steady,
                            steady_tol=1e-6 if args.steady_tol is None else args.steady_tol,
                            output_step=args.output_step, **options)
         summary = run_summary(tr)
-        summary["setup_s"] = setup_s
+        if "lcs" in cls.domains:
+            summary["setup_s"] = setup_s
     if args.out is not None:
         write_frame(tr.waveforms(), args.out, meta={k: summary.get(k) for k in ("converter", "control", "method",
                                                                                    "options", "output_step",
@@ -142,80 +147,8 @@ def _set_up(converter, params, control, method, steady, options) -> float:
     return time.perf_counter() - start
 
 
-def _spice(args, params):
-    """The same circuit in ngspice: a Trajectory labelled by the same model, and its summary."""
-    from converters.models import get_model
-    from converters.run import duration
-    from netlists import model_netlist
-
-    from ..compare import MAX_SPICE_PERIODS, SPICE_SETTLE, spice_drift
-    from ..spice import run_spice, spice_trajectory
-    start = time.perf_counter()
-    model = get_model(args.converter, args.control)
-    p = model.resolve(params)
-    options = spice_options(args, model.period(p))
-    x0, steady = None, {}
-    if args.steady:
-        # ngspice has no period map to shoot on: it starts on the LCP's orbit and runs on (from where it ended)
-        # until its own 10-period mean moves less than SPICE_SETTLE, at most MAX_SPICE_PERIODS periods
-        from converters.run import STEADY_PERIODS, check_steady, make_method, steady_state
-        check_steady(model, p)
-        x0 = steady_state(model, p, make_method(model, p, "lcp")).x0
-        if args.t_end is None and args.periods is None:
-            args.periods = STEADY_PERIODS
-    t_end = duration(model, p, args.t_end, args.periods)
-    T = model.period(p)
-    if hasattr(model, "netlist"):             # a netlist file: ngspice runs the same circuit
-        from netlists.circuit import circuit_netlist, file_spice_options
-
-        from ..spice import circuit_trajectory
-        options = file_spice_options(model, options)
-        model_netlist = lambda m, q, span, o, x0=None: circuit_netlist(m, q, span, o, x0=x0)   # noqa: E731
-        spice_trajectory = circuit_trajectory                                                   # noqa: F811
-        T = T if model.periodic(p) else t_end / 10
-    netlist = model_netlist(model, p, t_end, options, x0=x0)
-    result = run_spice(netlist)
-    window_start = result.time[-1] - 10 * T
-    tr = spice_trajectory(model, p, netlist, result, window_start)
-    if args.steady:
-        span = int(round(t_end / T))
-        if span < 20:
-            raise ParameterError(f"--steady with --method spice needs at least 20 periods (two 10-period windows); "
-                                 f"got {span}")
-        total, settle = span, spice_drift(tr, T, span, 10)
-        while settle > SPICE_SETTLE and total < MAX_SPICE_PERIODS:
-            netlist = model_netlist(model, p, t_end, options, x0=tr.x[-1])
-            result = run_spice(netlist)
-            tr = spice_trajectory(model, p, netlist, result, window_start)
-            total, settle = total + span, spice_drift(tr, T, span, 10)
-        steady = {"steady_periods": total, "spice_settle": settle, "spice_settled": bool(settle <= SPICE_SETTLE)}
-    summary = {"converter": model.name, "method": "spice",
-               "options": {**result.options, "params": p, "ngspice": result.ngspice_version},
-               "steps": result.accepted_steps, "wall_s": time.perf_counter() - start, **steady}
-    if steady and not steady["spice_settled"]:
-        summary["warnings"] = [f"ngspice has not settled after {steady['steady_periods']} periods (its 10-period mean "
-                               f"still moves {steady['spice_settle']:.2g})"]
-    elif not steady and model.periodic(p) and t_end >= 20 * T * (1 - 1e-9):
-        # from rest: how far the mean moved from the 10 periods before (a transient the mean still carries)
-        from converters.analysis.accuracy import DEFAULT_RTOL
-        span = int(round(t_end / T))
-        drift = spice_drift(tr, T, span, 10)
-        summary["accuracy"] = {"checked": True, "transient": drift, "target": DEFAULT_RTOL,
-                               "how": "the change of vout's mean from the 10 periods before (ngspice's own "
-                                      "discretization is not estimated)"}
-        if drift > DEFAULT_RTOL:
-            summary["warnings"] = [f"vout mean may be {drift:.1e} off (more than {DEFAULT_RTOL:g}): the run has not "
-                                   f"settled (its 10-period mean moved {drift:.1e} from the 10 periods before): use "
-                                   "--steady, or more --periods"]
-    if args.control != "pwm":
-        summary["control"] = args.control
-    summary.update(model.summary(tr, p))
-    return tr, summary
-
-
 def _print(summary: dict, tr, args) -> None:
-    from converters.methods import METHODS
-    unit = METHODS[tr.method].counts if tr.method in METHODS else "accepted steps"        # ngspice's own
+    unit = tr.algorithm.counts
     options = ", ".join(f"{k} = {v:.3g}" if isinstance(v, float) else f"{k} = {v}"
                         for k, v in summary["options"].items() if k != "params" and v is not None
                         and not isinstance(v, dict) and k != "max_events")
@@ -276,11 +209,10 @@ def _print(summary: dict, tr, args) -> None:
     elif accuracy.get("estimates"):
         print("accuracy (relative; " + accuracy["how"] + "): " + ", ".join(
             f"{name} within ~{q['error_estimate']:.1g}" for name, q in accuracy["estimates"].items()))
-    elif accuracy.get("checked") and "vout_mean_error_estimate" not in accuracy:      # ngspice from rest
-        print(f"vout mean moved {accuracy['transient']:.1g} (relative) from the 10 periods before (ngspice's own "
-              "discretization is not estimated)")
+    elif not accuracy.get("checked") and "transient" in accuracy:       # a method whose error is its model's
+        print(f"vout mean moved {accuracy['transient']:.1g} (relative) from the 10 periods before ({accuracy['reason']})")
     elif accuracy.get("checked"):
-        how = ("the run's distance to its orbit; the event method has no step error" if summary["method"] == "event"
+        how = (f"the run's distance to its orbit; the {tr.method} method has no step error" if tr.algorithm.exact
                else "the run's distance to its orbit and Richardson at h and 2h")
         print(f"vout mean within ~{accuracy['vout_mean_error_estimate']:.1g} (relative) of the exact periodic value "
               f"(estimated: {how})")

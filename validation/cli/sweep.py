@@ -28,7 +28,12 @@ def add(sub) -> None:
     sw.add_argument("--seed", type=integer(0), default=None, help="the Latin hypercube's seed (default 0)")
     add_params(sw)
     sw.add_argument("--control", default="pwm", choices=list(CONTROLS), help="the control law (default pwm)")
-    sw.add_argument("--method", default="lcp", choices=["lcp", "event", "spice"],
+    from converters.methods.base import DEFAULT_METHOD, METHODS
+    from converters.sweeps.ensemble import sweep_methods
+
+    from .. import ngspice  # noqa: F401 (registers --method spice)
+    circuits = [key for key, cls in METHODS.items() if "circuit" in cls.domains]
+    sw.add_argument("--method", default=DEFAULT_METHOD, choices=[*sweep_methods(), *circuits],
                     help="lcp: the stepper, h = T/200 (default; batched); event: exact switching; spice: ngspice")
     sw.add_argument("--steady", action="store_true",
                     help="measure on the periodic orbit (lcp, event: Newton shooting; spice: started on the LCP's "
@@ -86,10 +91,11 @@ def build(args):
     if args.periods is not None and args.periods < 1:
         raise ParameterError(f"--periods must be an integer >= 1; got {args.periods}")
     _refuse_ignored(args)
-    if args.method == "spice":
+    if _runs_circuits(args.method):
         ensemble = SpiceSweep(args.model, args.control, base, steady=args.steady, periods=args.periods or 10)
     elif args.rtol is not None:
-        if args.h_fraction is not None or args.method != "lcp":
+        from converters.methods.base import DEFAULT_METHOD
+        if args.h_fraction is not None or args.method != DEFAULT_METHOD:
             raise ParameterError("--rtol chooses the method and its step; give either --rtol or "
                                  + ("--h-fraction" if args.h_fraction is not None else f"--method {args.method}"))
         ensemble = ModelSweep(args.model, args.control, base, steady=args.steady, rtol=float(args.rtol))
@@ -102,22 +108,29 @@ def build(args):
     return ensemble, points
 
 
+def _runs_circuits(key: str) -> bool:
+    """The method runs the circuit itself (ngspice: :class:`validation.sweep.SpiceSweep`), not an LCS."""
+    from converters.methods.base import get_method
+    return "circuit" in get_method(key).domains
+
+
 def _refuse_ignored(args) -> None:
     """Every flag acts or is refused: the combinations in which one would be ignored."""
     if args.lhs is None and args.seed is not None:          # --seed 0 too: it is given, and would be ignored
         raise ParameterError(f"--seed sets the Latin hypercube; it does not apply without --lhs (got --seed {args.seed})")
-    if args.method == "spice":
+    from converters.methods.base import get_method
+    if _runs_circuits(args.method):
         given = [f for f, v in (("--h-fraction", args.h_fraction), ("--rtol", args.rtol)) if v is not None]
         if given:
-            raise ParameterError(f"{', '.join(given)} do{'es' if len(given) == 1 else ''} not apply to --method spice "
-                                 "(ngspice's own transient)")
-    elif args.method == "event" and args.h_fraction is not None:
-        raise ParameterError("--h-fraction sets the lcp stepper's step; it does not apply to --method event (exact "
-                             f"switching; got --h-fraction {args.h_fraction})")
+            raise ParameterError(f"{', '.join(given)} do{'es' if len(given) == 1 else ''} not apply to --method "
+                                 f"{args.method} (ngspice's own transient)")
+    elif get_method(args.method).error_kind != "step" and args.h_fraction is not None:
+        raise ParameterError(f"--h-fraction sets the lcp stepper's step; it does not apply to --method {args.method} "
+                             f"(exact switching; got --h-fraction {args.h_fraction})")
     if args.rtol is not None and args.periods is not None:
         raise ParameterError("--periods does not apply with --rtol (the periodic orbit is measured, whatever the "
                              f"periods; got --periods {args.periods})")
-    if args.steady and args.method != "spice" and args.periods is not None:
+    if args.steady and not _runs_circuits(args.method) and args.periods is not None:
         raise ParameterError("--periods does not apply with --steady for lcp and event (each point is measured on its "
                              f"periodic orbit found by Newton shooting; got --periods {args.periods})")
     if args.workers is not None and args.scheduler != "local":
