@@ -220,7 +220,32 @@ def test_the_mechanical_module_reuses_the_core():
     assert not [p.name for p in mechanical if pattern.search(p.read_text())]
     integrators = [p.relative_to(ROOT).as_posix() for p in ROOT.joinpath("converters").rglob("*.py")
                    if "solve_ivp(" in p.read_text()]
-    assert sorted(integrators) == ["converters/methods/event_mechanical.py", "converters/methods/smoothing.py"]
+    assert sorted(integrators) == ["converters/methods/event/mechanical.py", "converters/methods/smoothing.py"]
+
+
+def test_one_event_core_with_one_engine_per_problem_type():
+    """The event method's engines (LCS: exact flows; mechanical: DOP853 between events) return the core's piecewise
+    solution and serve the core's period map; no other module runs an event loop (a class with a ``run(self, x0``
+    that records segments)."""
+    from converters.methods import EventDriven
+    from converters.methods.event import ENGINES
+    from converters.methods.event.core import EnginePeriodMap, PiecewiseSolution
+    from converters.models import get_converter
+    from converters.models.mechanics import get_mechanical
+    from converters.simulate import simulate
+    buck = get_converter("buck")
+    p = buck.resolve({})
+    friction = get_mechanical("friction")
+    q = friction.resolve({})
+    for problem in (buck.problem(p, 2 * buck.period(p)), friction.problem(q, friction.period(q))):
+        tr = simulate(problem, EventDriven())
+        machine = EventDriven().period_map(problem).machine
+        assert isinstance(EventDriven().period_map(problem), EnginePeriodMap)
+        assert isinstance(machine.run(problem.x0)[0], PiecewiseSolution) and tr.events is not None
+    assert [engine.__name__.rsplit(".", 1)[1] for _, engine in ENGINES] == ["mechanical", "machine"]
+    loops = sorted(path.relative_to(ROOT).as_posix() for path in ROOT.joinpath("converters").rglob("*.py")
+                   if re.search(r"def run\(self, x0", path.read_text()) and "segments" in path.read_text())
+    assert loops == ["converters/methods/event/machine.py", "converters/methods/event/mechanical.py"]
 
 
 def test_every_process_pool_is_the_parallel_backends():

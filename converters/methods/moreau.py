@@ -30,7 +30,7 @@ from ..compiled import MAX_INLINE_K
 from ..problems.mechanical import MechanicalProblem
 from ..trajectory import Trajectory
 from .base import Method, check_step_and_theta
-from .event_mechanical import CLOSED, OPEN, SLIP_NEG, SLIP_POS, STICK
+from .event.mechanical import CLOSED, OPEN, SLIP_NEG, SLIP_POS, STICK
 
 MAX_STEPS = 50_000_000
 

@@ -1,5 +1,5 @@
 """Exact event-driven simulation of piecewise-linear LCS with any number of complementarity pairs (and,
-through :mod:`.event_mechanical`, of mechanical problems with friction and impacts).
+through :mod:`.mechanical`, of mechanical problems with friction and impacts).
 
 Between events the LCS is linear with constant inputs. A *mode* is a configuration and a held set J
 of pairs (y_J = 0, u_J free to be positive; every other pair has u = 0 and y free to be positive).
@@ -43,18 +43,29 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...errors import ParameterError
-from ...problems import LCSProblem, Relay, StateSwitching
+from ...problems import LCSProblem, StateSwitching
 from ...problems.mechanical import MechanicalProblem
 from ...trajectory import Trajectory
 from ...validate import check_positive, parse_value
-from .. import event_mechanical
+from . import machine as lcs_engine
+from . import mechanical as event_mechanical
 from ..base import Method, PeriodMap
-from .flow import _time_scale
 from .machine import _Machine
-from .maps import EventPeriodMap, EventReturnMap
+from .maps import EventReturnMap
 
-#: Largest number of complementarity pairs (the mode selection visits up to 2^k held sets).
-MAX_PAIRS = 12
+
+#: One engine per problem type (as Siconos has one integrator per dynamical-system type), each a module with
+#: ``supports``, ``solve`` and ``period_map`` over the core (:mod:`.core`): the exact flows of an LCS, and DOP853
+#: between the events of a mechanical problem with friction and impacts.
+ENGINES = ((MechanicalProblem, event_mechanical), (LCSProblem, lcs_engine))
+
+
+def _engine(problem):
+    for kind, engine in ENGINES:
+        if isinstance(problem, kind):
+            return engine
+    raise ParameterError(f"the event-driven method solves an LCSProblem or a MechanicalProblem; got "
+                         f"{type(problem).__name__}")
 
 
 @dataclass(frozen=True)
@@ -75,7 +86,7 @@ class EventDriven(Method, key="event"):
         Refuse runs with more events than this (Zeno behaviour). Default 10^7.
     ode_rtol : float
         Mechanical (nonlinear) problems only: the relative tolerance of the DOP853 integration of each smooth
-        phase (:mod:`.event_mechanical`; the LCS flows are exact). Default 1e-9 (event times within 1e-9 s of
+        phase (:mod:`.mechanical`; the LCS flows are exact). Default 1e-9 (event times within 1e-9 s of
         those at 1e-10 on the friction oscillator, measured).
     chatter_fraction : float
         Mechanical problems with impacts: a chattering sequence whose remaining accumulation time is below this
@@ -120,32 +131,16 @@ class EventDriven(Method, key="event"):
         return math.inf
 
     def supports(self, problem) -> None:
-        if isinstance(problem, MechanicalProblem):
-            return
-        if getattr(problem, "inputs", None) is not None:
-            raise ParameterError("the event-driven method's exact flows take constant inputs per configuration; "
-                                 "sinusoidal inputs (SIN sources): use --method lcp")
-        if isinstance(problem.switching, Relay):
-            raise ParameterError("the event-driven method follows a hysteresis or latched law (StateSwitching) "
-                                 "exactly; the implicit relay is a time-stepping scheme: use --method lcp")
-        if problem.k > MAX_PAIRS:
-            raise ParameterError(f"the event-driven method selects modes among 2^k held sets: k must be <= "
-                                 f"{MAX_PAIRS}; this problem has k = {problem.k}: use --method lcp")
+        _engine(problem).supports(problem, self)
 
-    def solve(self, problem: LCSProblem, x0: np.ndarray) -> Trajectory:
-        if isinstance(problem, MechanicalProblem):
-            return event_mechanical.solve(problem, self, x0)
-        solution = _Machine(problem, self).run(x0)[0]
-        scale = _time_scale(problem)
-        return solution.trajectory(self.output_step or scale / 1000.0)
+    def solve(self, problem, x0: np.ndarray) -> Trajectory:
+        return _engine(problem).solve(problem, self, x0)
 
-    def period_map(self, problem: LCSProblem) -> PeriodMap:
+    def period_map(self, problem) -> PeriodMap:
         """The exact map over ``problem.t_span`` with its exact Jacobian (state-transition matrices and
         saltation matrices)."""
         self.supports(problem)
-        if isinstance(problem, MechanicalProblem):
-            return event_mechanical.period_map(problem, self)
-        return EventPeriodMap(_Machine(problem, self))
+        return _engine(problem).period_map(problem, self)
 
     def return_map(self, problem: LCSProblem, config: int, crossings: int = 1) -> PeriodMap:
         """For autonomous state-switched problems: x (at a switching into ``config``) -> x at the

@@ -10,6 +10,7 @@ import numpy as np
 
 from ...errors import SimulationError
 from ...problems import LCSProblem, Schedule, StateSwitching
+from .core import EnginePeriodMap
 from .flow import _CROSS_RTOL, _ON_SET_RTOL, _POWERS, MAX_SUBSTEPS, Flow, _time_scale, _Watch
 from .solution import EventSolution, Segment
 
@@ -384,8 +385,46 @@ class _Machine:
         if stop_config is not None and stop_time is None:
             raise SimulationError(f"the return map found {crossings} of {stop_count} switchings into configuration "
                                   f"{stop_config} before t = {t_end:g} s; lengthen the problem's t_span")
-        solution = EventSolution(problem, segments, times, kinds, pairs, configs, xt[:-1].copy(),
+        solution = EventSolution(problem, segments, zip(times, kinds, pairs, configs), xt[:-1].copy(),
                                  time.perf_counter() - start_clock, options, config)
         return solution, jac, stop_time
 
+    def period_run(self, x0, jacobian: bool):
+        """(solution, Jacobian or None) of one span from x0, unrecorded (:class:`.core.EnginePeriodMap`)."""
+        solution, jac, _ = self.run(x0, record=False, jacobian=jacobian)
+        return solution, jac
 
+
+
+
+# --- the engine's entry points (converters.methods.event.ENGINES) ----------------------------------------------
+
+#: Largest number of complementarity pairs (the mode selection visits up to 2^k held sets).
+MAX_PAIRS = 12
+
+
+def supports(problem, options) -> None:
+    from ...errors import ParameterError
+    from ...problems import Relay
+    if getattr(problem, "inputs", None) is not None:
+        raise ParameterError("the event-driven method's exact flows take constant inputs per configuration; "
+                             "sinusoidal inputs (SIN sources): use --method lcp")
+    if isinstance(problem.switching, Relay):
+        raise ParameterError("the event-driven method follows a hysteresis or latched law (StateSwitching) "
+                             "exactly; the implicit relay is a time-stepping scheme: use --method lcp")
+    if problem.k > MAX_PAIRS:
+        raise ParameterError(f"the event-driven method selects modes among 2^k held sets: k must be <= "
+                             f"{MAX_PAIRS}; this problem has k = {problem.k}: use --method lcp")
+
+
+def solve(problem, options, x0):
+    solution = _Machine(problem, options).run(x0)[0]
+    return solution.trajectory(options.output_step or _time_scale(problem) / 1000.0)
+
+
+class EventPeriodMap(EnginePeriodMap):
+    """The exact map over an LCS's span, with its exact Jacobian; it keeps the events of its last run."""
+
+
+def period_map(problem, options):
+    return EventPeriodMap(_Machine(problem, options))

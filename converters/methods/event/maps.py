@@ -1,22 +1,10 @@
-"""The event method's period map and return map (exact, with exact Jacobians)."""
+"""The event method's period map and return map of an LCS (exact, with exact Jacobians)."""
 from __future__ import annotations
 
 import math
 
-from ..base import PeriodMap, RecordingPeriodMap
-from .machine import _Machine
-
-
-class EventPeriodMap(RecordingPeriodMap):
-    """The exact map over a problem's span, with its exact Jacobian; it keeps the events of its last run."""
-
-    def __init__(self, machine: _Machine):
-        super().__init__()
-        self.machine = machine
-
-    def _solve(self, x0, jacobian):
-        solution, jac, _ = self.machine.run(x0, record=False, jacobian=jacobian)
-        return solution, jac
+from ..base import PeriodMap
+from .machine import EventPeriodMap, _Machine  # noqa: F401 (EventPeriodMap: the LCS engine's)
 
 
 class EventReturnMap(PeriodMap):

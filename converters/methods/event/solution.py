@@ -8,6 +8,7 @@ import numpy as np
 
 from ...errors import ParameterError
 from ...trajectory import Samples, Trajectory
+from .core import PiecewiseSolution
 from .flow import _EXPONENTS, _GL_W, _GL_X, Flow, _power_stack, expm
 
 _BLOCK = 1024
@@ -22,17 +23,14 @@ class Segment:
     xt1: np.ndarray     # ... and at t1, before whatever happens there
 
 
-class EventSolution:
-    """The exact piecewise solution: segments (t0, t1, flow, start state) and the events between them.
+class EventSolution(PiecewiseSolution):
+    """The exact piecewise solution of an LCS: segments (t0, t1, flow, start state) and the events between them
+    (:class:`.core.PiecewiseSolution`; kinds 'activate', 'release', 'impulse', 'switch'); ``end_config`` the
+    configuration in force at the end."""
 
-    ``event_times``, ``event_kinds`` ('activate', 'release', 'impulse', 'switch'), ``event_pairs``
-    (-1 for switching-law events), ``event_configs`` (the configuration in force after the event).
-    """
-
-    def __init__(self, problem, segments, times, kinds, pairs, configs, x_end, wall_s, options, end_config):
-        self.problem, self.segments, self.options = problem, segments, options
-        self.event_times, self.event_kinds, self.event_pairs, self.event_configs = times, kinds, pairs, configs
-        self.x_end, self.wall_s, self.end_config = x_end, wall_s, end_config
+    def __init__(self, problem, segments, events, x_end, wall_s, options, end_config):
+        super().__init__(problem, segments, events, x_end, wall_s, options)
+        self.end_config = end_config
 
     def _segments_in(self, t0: float, t1: float):
         for seg in self.segments:
@@ -101,22 +99,10 @@ class EventSolution:
             config[i], held[i] = seg.flow.config, seg.flow.held_flags
         return Samples(times, x, u, y, config, held=held)
 
-    def event_list(self) -> list:
-        """(time, kind, pair, config) of every event, in time order."""
-        return list(zip(self.event_times, self.event_kinds, self.event_pairs, self.event_configs))
-
-    def events_table(self, t: np.ndarray) -> dict:
-        times = np.array(self.event_times, dtype=float)
-        return {"time": times, "step": np.searchsorted(t, times) - 1, "pair": np.array(self.event_pairs, dtype=np.int64),
-                "kind": np.array(self.event_kinds, dtype=object), "config": np.array(self.event_configs, dtype=np.int64)}
-
     def trajectory(self, output_step: float) -> Trajectory:
         """Samples on a uniform grid of ``output_step`` plus every segment boundary, as a Trajectory."""
-        t0, t1 = self.problem.t_span
-        grid = np.append(t0 + output_step * np.arange(int(np.floor((t1 - t0) / output_step * (1 + 1e-12))) + 1), t1)
         bounds = np.array([s.t1 for s in self.segments])
-        t = np.unique(np.concatenate([grid[grid <= t1], bounds]))
-        t = t[np.concatenate([[True], np.diff(t) > 1e-12 * output_step])]
+        t = self.output_times(output_step)
         # A point at a segment's end takes the state the run recorded there; the others are propagated.
         n, k = self.problem.n, self.problem.k
         x, u, y = np.empty((t.size, n)), np.empty((t.size, k)), np.empty((t.size, k))

@@ -36,10 +36,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import ParameterError, SimulationError
-from ..problems.mechanical import MechanicalProblem
-from ..trajectory import Samples, Trajectory
-from .base import FiniteDifferenceMap, PeriodMap, RecordingPeriodMap
+from ...errors import ParameterError, SimulationError
+from ...problems.mechanical import MechanicalProblem
+from ...trajectory import Samples, Trajectory
+from ..base import FiniteDifferenceMap, PeriodMap
+from .core import EnginePeriodMap, PiecewiseSolution
 
 STICK, SLIP_POS, SLIP_NEG, CLOSED, OPEN = 0, 1, 2, 3, 4
 _SIGN = {SLIP_POS: 1.0, SLIP_NEG: -1.0}
@@ -186,12 +187,13 @@ class _Segment:
     x1: np.ndarray
 
 
-class MechanicalSolution:
-    """The exact piecewise solution: segments with their dense outputs, and the events between them."""
+class MechanicalSolution(PiecewiseSolution):
+    """The piecewise solution of a mechanical problem: segments with their dense outputs, and the events between
+    them (:class:`.core.PiecewiseSolution`); ``chattered``: a chattering sequence was completed in closed form."""
 
     def __init__(self, problem, segments, events, x_end, wall_s, options, chattered):
-        self.problem, self.segments, self.events = problem, segments, events
-        self.x_end, self.wall_s, self.options, self.chattered = x_end, wall_s, options, chattered
+        super().__init__(problem, segments, events, x_end, wall_s, options)
+        self.chattered = chattered
 
     def sample(self, times) -> Samples:
         dyn = _Dynamics(self.problem)
@@ -219,23 +221,8 @@ class MechanicalSolution:
             held[i] = [s in (STICK, CLOSED) for s in seg.mode.states]
         return Samples(times, x, u, y, config, held=held)
 
-    def event_list(self) -> list:
-        """(time, kind, pair, config) of every event, in time order."""
-        return list(self.events)
-
-    def events_table(self, t: np.ndarray) -> dict:
-        times = np.array([e[0] for e in self.events], dtype=float)
-        return {"time": times, "step": np.searchsorted(t, times) - 1,
-                "pair": np.array([e[2] for e in self.events], dtype=np.int64),
-                "kind": np.array([e[1] for e in self.events], dtype=object),
-                "config": np.array([e[3] for e in self.events], dtype=np.int64)}
-
     def trajectory(self, output_step: float, method_key: str = "event") -> Trajectory:
-        t0, t1 = self.problem.t_span
-        grid = t0 + output_step * np.arange(int(np.floor((t1 - t0) / output_step * (1 + 1e-12))) + 1)
-        ends = np.array([s.t1 for s in self.segments])
-        t = np.unique(np.concatenate([grid[grid <= t1], ends, [t1]]))
-        t = t[np.concatenate([[True], np.diff(t) > 1e-12 * output_step])]
+        t = self.output_times(output_step)
         samples = self.sample(t)
         problem = self.problem
         return Trajectory(t=t, x=samples.x, u=samples.u, y=samples.y, config=samples.config, held=samples.held,
@@ -474,6 +461,14 @@ class MechanicalMachine:
 
     # --- runs --------------------------------------------------------------------------------------------
 
+    def period_run(self, x0, jacobian: bool):
+        """(solution, Jacobian or None) of one span from x0, unrecorded (:class:`.core.EnginePeriodMap`)."""
+        solution, phi = self.run(x0, record=False, jacobian=jacobian)
+        if jacobian and (solution.chattered or phi is None):
+            raise SimulationError("this run went through a completed chattering sequence, which has no exact Jacobian; "
+                                  "use the finite-difference period map")
+        return solution, phi
+
     def run(self, x0, record: bool = True, jacobian: bool = False):
         """Run over t_span from x0: (MechanicalSolution, d x_end / d x0 or None)."""
         clock = time.perf_counter()
@@ -678,20 +673,9 @@ class MechanicalMachine:
         return (np.eye(x.size) + np.outer(f_after - f_before, grad) / denominator) @ phi
 
 
-class MechanicalPeriodMap(RecordingPeriodMap):
-    """x(t0) -> x(t1) over the problem's span with the Jacobian of the variational equations and saltation
-    matrices; it keeps the events of its last run."""
-
-    def __init__(self, machine: MechanicalMachine):
-        super().__init__()
-        self.machine = machine
-
-    def _solve(self, x0, jacobian):
-        solution, phi = self.machine.run(x0, record=False, jacobian=jacobian)
-        if jacobian and (solution.chattered or phi is None):
-            raise SimulationError("this run went through a completed chattering sequence, which has no exact Jacobian; "
-                                  "use the finite-difference period map")
-        return solution, phi
+class MechanicalPeriodMap(EnginePeriodMap):
+    """x(t0) -> x(t1) over a mechanical problem's span with the Jacobian of the variational equations and
+    saltation matrices; it keeps the events of its last run."""
 
 
 def period_map(problem: MechanicalProblem, options) -> PeriodMap:
@@ -702,11 +686,15 @@ def period_map(problem: MechanicalProblem, options) -> PeriodMap:
     return MechanicalPeriodMap(machine)
 
 
+def supports(problem: MechanicalProblem, options) -> None:
+    """Every mechanical problem (its own checks ran when it was built)."""
+
+
 def solve(problem: MechanicalProblem, options, x0) -> Trajectory:
     solution = MechanicalMachine(problem, options).run(x0)[0]
     step = options.output_step or time_scale(problem) / 200.0
     return solution.trajectory(step)
 
 
-__all__ = ["MechanicalMachine", "MechanicalSolution", "MechanicalPeriodMap", "solve", "period_map",
+__all__ = ["MechanicalMachine", "MechanicalSolution", "MechanicalPeriodMap", "supports", "solve", "period_map",
            "STICK", "SLIP_POS", "SLIP_NEG", "CLOSED", "OPEN", "time_scale"]

@@ -1,0 +1,70 @@
+"""The event method's core, shared by its engines (one per problem type, as Siconos has one integrator per
+dynamical-system type: :mod:`.machine` for LCS, exact flows; :mod:`.mechanical` for mechanical problems with
+friction and impacts, DOP853 between events): the piecewise solution an engine's run returns (segments, the events
+between them, samples on an output grid, the event table) and the period map over an engine's runs.
+
+An engine is a class built from (problem, options) whose ``period_run(x0, jacobian)`` returns (solution, the
+Jacobian of the span's end state or None) and whose ``run(x0)`` returns the recorded solution first."""
+from __future__ import annotations
+
+import numpy as np
+
+from ..base import RecordingPeriodMap
+
+
+class PiecewiseSolution:
+    """An engine's run: ``segments`` (each with t0 and t1), ``events`` as (time, kind, pair, config) tuples in time
+    order (kind ``activate``, ``release``, ``impulse``, ``switch``, and the mechanical ``stick``, ``slip``, ...;
+    pair -1 for a switching-law event; config the configuration or mode code in force after it), ``x_end``."""
+
+    def __init__(self, problem, segments, events, x_end, wall_s, options):
+        self.problem, self.segments, self.events = problem, segments, list(events)
+        self.x_end, self.wall_s, self.options = x_end, wall_s, options
+
+    def event_list(self) -> list:
+        """(time, kind, pair, config) of every event, in time order."""
+        return list(self.events)
+
+    @property
+    def event_times(self) -> list:
+        return [e[0] for e in self.events]
+
+    @property
+    def event_kinds(self) -> list:
+        return [e[1] for e in self.events]
+
+    @property
+    def event_pairs(self) -> list:
+        return [e[2] for e in self.events]
+
+    @property
+    def event_configs(self) -> list:
+        return [e[3] for e in self.events]
+
+    def events_table(self, t: np.ndarray) -> dict:
+        """The events as a Trajectory's event columns; ``step``: the last sample of ``t`` before each."""
+        times = np.array([e[0] for e in self.events], dtype=float)
+        return {"time": times, "step": np.searchsorted(t, times) - 1,
+                "pair": np.array([e[2] for e in self.events], dtype=np.int64),
+                "kind": np.array([e[1] for e in self.events], dtype=object),
+                "config": np.array([e[3] for e in self.events], dtype=np.int64)}
+
+    def output_times(self, output_step: float) -> np.ndarray:
+        """A uniform grid of ``output_step`` over the span, every segment's end and the span's end, points closer
+        than 1e-12 of the step merged."""
+        t0, t1 = self.problem.t_span
+        grid = t0 + output_step * np.arange(int(np.floor((t1 - t0) / output_step * (1 + 1e-12))) + 1)
+        t = np.unique(np.concatenate([grid[grid <= t1], [s.t1 for s in self.segments], [t1]]))
+        return t[np.concatenate([[True], np.diff(t) > 1e-12 * output_step])]
+
+
+class EnginePeriodMap(RecordingPeriodMap):
+    """x(t0) -> x(t1) over the problem's span by an engine's runs, with the engine's Jacobian (state-transition
+    and saltation matrices); it keeps the events of its last run."""
+
+    def __init__(self, engine):
+        super().__init__()
+        self.machine = engine
+
+    def _solve(self, x0, jacobian):
+        return self.machine.period_run(x0, jacobian)
