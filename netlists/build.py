@@ -221,16 +221,21 @@ def build_voltage_mode_netlist(params: dict | None, t_end, options: SpiceOptions
     return Netlist("\n".join(lines) + "\n", "buck-voltage-mode", p, t_end, options, probes)
 
 
+#: The netlist writer of each control (model, params, t_end, options, x0) -> Netlist; the implicit relay has none.
+CONTROL_NETLISTS = {
+    "pwm": lambda model, p, t_end, options, x0: build_netlist(model.name, p, t_end, options, x0=x0),
+    "smc": lambda model, p, t_end, options, x0: build_smc_netlist(p, t_end, options, x0=x0),
+    "voltage-mode": lambda model, p, t_end, options, x0: build_voltage_mode_netlist(p, t_end, options, x0=x0),
+}
+
+
 def model_netlist(model, params: dict, t_end, options: SpiceOptions | None = None, x0=None) -> Netlist:
     """The netlist of a model (a converter under its control) with validated ``params``."""
-    if model.control == "pwm":
-        return build_netlist(model.name, params, t_end, options, x0=x0)
-    if model.control == "smc":
-        return build_smc_netlist(params, t_end, options, x0=x0)
-    if model.control == "voltage-mode":
-        return build_voltage_mode_netlist(params, t_end, options, x0=x0)
-    raise ParameterError(f"no ngspice netlist for {model.key}: the implicit relay is a time-stepping scheme of "
-                         "the LCP stepper only; use --control smc (the hysteresis comparator)")
+    writer = CONTROL_NETLISTS.get(model.control)
+    if writer is None:
+        raise ParameterError(f"no ngspice netlist for {model.key}: the implicit relay is a time-stepping scheme of "
+                             "the LCP stepper only; use --control smc (the hysteresis comparator)")
+    return writer(model, params, t_end, options, x0)
 
 
 #: Periods the standalone netlists measure over (at the end of the run), and the run they make.

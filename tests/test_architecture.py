@@ -182,6 +182,23 @@ def test_nothing_branches_on_a_method_key_outside_the_registry():
     assert _lines_matching(_METHOD_BRANCH, PACKAGES, skip=("converters/methods/base.py",)) == []
 
 
+_CONTROLS = "pwm|smc|smc-implicit|voltage-mode|circuit"
+_CONTROL_BRANCH = re.compile(rf"""\bcontrol\b\s*(==|!=)\s*["']({_CONTROLS})["']|["']({_CONTROLS})["']\s*(==|!=)|"""
+                             rf"""\bcontrol\b\s*(not\s+)?in\s*[(\[{{]\s*["']({_CONTROLS})["']""")
+
+
+def test_nothing_branches_on_a_control_name():
+    """What a control does lives in the tables keyed by it (the models' registry, the netlist writers, the
+    comparisons, the scene kinds' runners and rules), looked up once; no module asks which control it has."""
+    assert _lines_matching(_CONTROL_BRANCH, PACKAGES) == []
+
+
+def test_the_control_branch_pattern_does_catch_a_branch():
+    assert _CONTROL_BRANCH.search('if model.control == "smc":') and _CONTROL_BRANCH.search("elif args.control != 'pwm':")
+    assert _CONTROL_BRANCH.search('if scene.control in ("smc", "circuit"):')
+    assert not _CONTROL_BRANCH.search('get_model("boost", "smc")')
+
+
 def test_the_method_branch_pattern_does_catch_a_branch():
     assert _METHOD_BRANCH.search('if method.key == "lcp":') and _METHOD_BRANCH.search("if args.method != 'spice':")
     assert _METHOD_BRANCH.search('if method in ("lcp", None):') and _METHOD_BRANCH.search('"event" == tr.method')

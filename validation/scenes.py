@@ -98,6 +98,9 @@ SPICE_RANGES = {
 #: Keys of [run] and [methods] that apply to each kind of scene.
 RUN_FOR = {"pwm": ("start", "periods", "window"), "smc": ("t_end",), "smc-implicit": ("t_end",)}
 LCP_FOR = {"pwm": ("h", "theta", "rtol"), "smc": ("h",), "smc-implicit": ("h",)}
+#: The kinds of scene that compare over a fixed number of periods (a PWM converter's), and that run ngspice.
+PERIODIC = ("pwm",)
+RUNS_SPICE = ("pwm", "smc")
 
 
 def _string(where: str, key: str, value, limit: int = 200) -> str:
@@ -300,14 +303,14 @@ def _check_run(run, control: str, model, p: dict, where: str) -> dict:
     _strict(run, RUN_KEYS, where)
     for key in run:
         if key not in RUN_FOR[control]:
-            kind = "a control scene (smc, smc-implicit)" if control != "pwm" else "a pwm scene"
+            kind = "a pwm scene" if control in PERIODIC else "a control scene (smc, smc-implicit)"
             raise ParameterError(f"{where} {key} does not apply to {kind}; valid keys: {', '.join(RUN_FOR[control])}")
     if "start" in run and run["start"] not in ("steady", "rest"):
         raise ParameterError(f"{where} start must be 'steady' or 'rest'; got {run['start']!r}")
     for key in ("periods", "window"):
         if key in run:
             _integer(where, key, run[key], *PERIODS_RANGE)
-    if control == "pwm":
+    if control in PERIODIC:
         defaults = model.compare_defaults
         periods, window = run.get("periods", defaults["periods"]), run.get("window", defaults["window"])
         if window > periods:
@@ -358,8 +361,8 @@ def _check_lcp(lcp: dict, control: str, model, p: dict, run: dict, where: str) -
 
 
 def _check_spice(spice: dict, control: str, where: str) -> dict:
-    if spice and control == "smc-implicit":
-        raise ParameterError(f"{where}: an smc-implicit scene runs no ngspice; remove [methods.spice]")
+    if spice and control not in RUNS_SPICE:
+        raise ParameterError(f"{where}: an {control} scene runs no ngspice; remove [methods.spice]")
     for key, value in spice.items():
         if key == "method":
             if value not in ("trap", "gear"):
@@ -382,7 +385,7 @@ def _check_spice(spice: dict, control: str, where: str) -> dict:
 def _check_checks(checks: dict, control: str, converter, where: str) -> dict:
     _strict(checks, CHECK_KEYS, where)
     valid = list(THRESHOLDS[STUDY[control]])
-    if control == "pwm" and converter.closed_form:
+    if control in PERIODIC and converter.closed_form:
         valid.append("closed_form_rel")
     for key, value in checks.items():
         if key not in valid:

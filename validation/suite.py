@@ -52,12 +52,11 @@ def run_scene(scene: Scene) -> SceneResult:
 
 
 def _run_scene(scene: Scene) -> SceneResult:
-    if scene.control == "circuit":
-        return _run_circuit_scene(scene)
-    if scene.control == "smc":
-        return _run_smc_scene(scene)
-    if scene.control == "smc-implicit":
-        return _run_smc_implicit_scene(scene)
+    """The scene's study (:data:`SCENE_RUNNERS`, by its control; a PWM converter's comparison otherwise)."""
+    return SCENE_RUNNERS.get(scene.control, _run_pwm_scene)(scene)
+
+
+def _run_pwm_scene(scene: Scene) -> SceneResult:
     conv = get_converter(scene.converter)
     c = compare(scene.converter, scene.params, periods=scene.run.get("periods"), window=scene.run.get("window"),
                 h=scene.lcp.get("h"), theta=scene.lcp.get("theta"), spice_options=SpiceOptions(**scene.spice),
@@ -148,6 +147,10 @@ def _run_smc_implicit_scene(scene: Scene) -> SceneResult:
     return SceneResult(scene, ok=not failed, reason=("failed checks: " + ", ".join(failed)) if failed else "",
                        checks=checks, metrics=m, files={f"scenes/{scene.name}/lcp.parquet": _parquet(run.waveforms()),
                                                         f"scenes/{scene.name}/waveforms.png": png(run.plot())})
+
+
+#: The study of each scene kind other than a PWM converter's comparison: a netlist's, the sliding-mode boost's.
+SCENE_RUNNERS = {"circuit": _run_circuit_scene, "smc": _run_smc_scene, "smc-implicit": _run_smc_implicit_scene}
 
 
 def _parquet(frame: pd.DataFrame) -> bytes:

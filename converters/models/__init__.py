@@ -14,8 +14,10 @@ from .netlist import Circuit, is_netlist, load
 from .voltage_mode import BuckVoltageMode
 
 CONVERTERS: dict[str, Converter] = {c.name: c for c in (Buck(), Boost(), BuckBoost(), Cuk(), PRC())}
+#: The control of a converter when none is named: open-loop PWM.
+DEFAULT_CONTROL = Model.control
 #: Every model by (converter name, control): ``pwm`` is the open-loop PWM converter.
-MODELS: dict[tuple[str, str], Model] = {**{(name, "pwm"): c for name, c in CONVERTERS.items()},
+MODELS: dict[tuple[str, str], Model] = {**{(name, DEFAULT_CONTROL): c for name, c in CONVERTERS.items()},
                                         ("boost", "smc"): BoostSMC(implicit=False),
                                         ("boost", "smc-implicit"): BoostSMC(implicit=True),
                                         ("buck", "voltage-mode"): BuckVoltageMode()}
@@ -29,11 +31,11 @@ def get_converter(name: str) -> Converter:
         raise ParameterError(f"CONVERTER must be one of {', '.join(CONVERTERS)} or a netlist FILE.cir; got {name!r}") from None
 
 
-def get_model(name: str, control: str = "pwm") -> Model:
+def get_model(name: str, control: str = DEFAULT_CONTROL) -> Model:
     """The model of converter ``name`` under ``control``, or of the netlist file ``name`` names (``FILE.cir``:
     :class:`converters.circuits.Circuit`); errors name the valid choices."""
     if is_netlist(name):
-        if control != "pwm":
+        if control != DEFAULT_CONTROL:
             raise ParameterError(f"--control {control} applies to the built-in converters; a netlist states its own "
                                  f"drives (got {str(name)!r})")
         return load(name)

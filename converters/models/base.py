@@ -99,7 +99,7 @@ class Model(ABC):
 
     @property
     def key(self) -> str:
-        return self.name if self.control == "pwm" else f"{self.name} --control {self.control}"
+        return self.name if self.control == Model.control else f"{self.name} --control {self.control}"
 
     @abstractmethod
     def problem(self, p: dict, t_end: float, x0=None, t_start: float = 0.0, initial: int | None = None) -> LCSProblem:

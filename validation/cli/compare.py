@@ -13,7 +13,7 @@ def add(sub) -> None:
     cmp.add_argument("--h", default=None, help="LCP step in s (default T/1000)")
     cmp.add_argument("--start", choices=["steady", "rest"], default=None,
                      help="start both on the periodic orbit (default) or from rest (default for prc)")
-    cmp.add_argument("--control", default="pwm", choices=["pwm", "smc"],
+    cmp.add_argument("--control", default="pwm", choices=list(COMPARISONS),
                      help="boost only: sliding-mode current control (see simulate)")
     cmp.add_argument("--t-end", default=None, help="duration in s (sliding mode; default 30 ms)")
     add_spice_options(cmp)
@@ -30,29 +30,14 @@ def run(args) -> int:
     if args.plot is not None and args.plot.suffix.lower() != ".png":
         raise ParameterError(f"--plot must end in .png; got {str(args.plot)!r}")
     params = parse_assignments(args.params)
-    from converters.models import is_netlist
+    from converters.models import DEFAULT_CONTROL, is_netlist
     if is_netlist(args.converter):
-        if args.control != "pwm" or args.t_end is not None:
+        if args.control != DEFAULT_CONTROL or args.t_end is not None:
             raise ParameterError("--control and --t-end apply to the built-in converters; a netlist states its drives "
                                  "and its .tran")
         rows, metrics, header, plot, extra = _circuit(args, params)
-    elif args.control == "smc":
-        if args.start is not None:
-            raise ParameterError(f"--start applies to PWM comparisons; the sliding-mode comparison starts from rest "
-                                 f"(got --start {args.start})")
-        rows, metrics, header, plot, extra = _smc(args, params)
     else:
-        from ..compare import compare
-        from ..plots import comparison_plot
-        if args.t_end is not None:
-            raise ParameterError("--t-end applies to --control smc; a PWM comparison runs the model's periods")
-        from converters.models import get_converter
-        model = get_converter(args.converter)
-        options = spice_options(args, model.period(model.resolve(params)))
-        result = compare(args.converter, params, h=args.h, start=args.start, spice_options=options)
-        rows, metrics, plot = result.rows, result.metrics, (lambda: comparison_plot(result))
-        header = f"{result.converter}: LCP against {result.spice.metadata['ngspice']}"
-        extra = result.to_dict()
+        rows, metrics, header, plot, extra = COMPARISONS[args.control](args, params)
     passed = all(ok for _, _, _, ok in rows)
     if args.plot is not None:
         atomic_write_bytes(args.plot, plot())
@@ -84,7 +69,26 @@ def _circuit(args, params):
     return result.rows, result.metrics, header, (lambda: comparison_plot(result)), result.to_dict()
 
 
+def _pwm(args, params):
+    """A PWM converter's LCP run against ngspice (validation.compare)."""
+    from converters.models import get_converter
+
+    from ..compare import compare
+    from ..plots import comparison_plot
+    if args.t_end is not None:
+        raise ParameterError("--t-end applies to --control smc; a PWM comparison runs the model's periods")
+    model = get_converter(args.converter)
+    options = spice_options(args, model.period(model.resolve(params)))
+    result = compare(args.converter, params, h=args.h, start=args.start, spice_options=options)
+    header = f"{result.converter}: LCP against {result.spice.metadata['ngspice']}"
+    return result.rows, result.metrics, header, (lambda: comparison_plot(result)), result.to_dict()
+
+
 def _smc(args, params):
+    """The sliding-mode boost against its ngspice netlist (validation.smc), from rest."""
+    if args.start is not None:
+        raise ParameterError(f"--start applies to PWM comparisons; the sliding-mode comparison starts from rest "
+                             f"(got --start {args.start})")
     from converters.models import get_model
     from converters.validate import parse_value
 
@@ -97,3 +101,7 @@ def _smc(args, params):
     rows = smc_checks(c.metrics, THRESHOLDS["smc"], c.params, t_end)
     header = f"boost (sliding mode): LCP against {c.spice.metadata['ngspice']}"
     return rows, c.metrics, header, (lambda: smc_plot(c)), {"converter": "boost", "control": "smc", "params": c.params}
+
+
+#: The comparison of each control --control takes.
+COMPARISONS = {"pwm": _pwm, "smc": _smc}

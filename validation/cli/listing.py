@@ -17,15 +17,16 @@ def _parameters(model) -> list[dict]:
 
 def run(args) -> int:
     from converters.methods.base import METHODS
-    from converters.models import CONVERTERS, MODELS
+    from converters.models import CONVERTERS, DEFAULT_CONTROL, MODELS
+
+    from .. import ngspice  # noqa: F401 (registers the spice method)
 
     from ..scenes import SCENE_DIR, all_suites, load_scene
     info = {"converters": {name: {"title": c.title, "states": list(c.state_names), "parameters": _parameters(c)}
                            for name, c in CONVERTERS.items()},
-            "methods": {**{key: cls.description for key, cls in METHODS.items()},
-                        "spice": "the same circuit in ngspice (PySpice)"},
+            "methods": {key: cls.description for key, cls in METHODS.items()},
             "controls": {control: {"converter": name, "title": m.title, "parameters": _parameters(m)}
-                         for (name, control), m in MODELS.items() if control != "pwm"},
+                         for (name, control), m in MODELS.items() if control != DEFAULT_CONTROL},
             "scenes": {p.stem: load_scene(p).converter for p in sorted(SCENE_DIR.glob("*.toml"))},
             "suites": all_suites()}
     if args.json:
