@@ -6,8 +6,9 @@ of REPEATS), side by side in one run:
 - ``report lcp``: the report's two LCP sections (the project's problem set and Siconos' collection, every method
   on every problem: what ``pcsuite report lcp`` computes, in process), with the number of solve_lcp calls;
 - ``lcp solve``: ``pcsuite lcp solve`` of one collection file, end to end as a fresh process (cold);
-- a loop of 20,000 small problems (k = 3, different q each): ``solve_lcp`` once per problem against one
-  ``solve_lcp_many`` call, per problem (the loop of small problems solve_lcp_many is for).
+- a loop of 20,000 small problems (k = 3, a nonsymmetric P-matrix, a different q each: Lemke or a closed form
+  answers each in one compiled call; a symmetric M sends auto's PGS probe, and its eigenvalue, to the sliced path,
+  ~20 us a problem either way): ``solve_lcp`` once per problem against one ``solve_lcp_many`` call, per problem.
 
 Until 2026-11-27 solve_lcp had a hand-written CPython C entry (``converters/lcp/_fast.c``, 630 lines recycling
 result objects by reference count). Measured then with this script's first two workloads side by side, C entry
@@ -53,7 +54,7 @@ print(json.dumps({"s": time.perf_counter() - start, "calls": calls[0]}))
 """,
     "20,000 problems: solve_lcp each": PRELUDE + """
 import numpy as np
-M = np.array([[4.0, 1, 0], [1, 3, 1], [0, 1, 2]])
+M = np.array([[4.0, 1, 0], [0.5, 3, 1], [0, 1.5, 2]])
 qs = np.random.default_rng(1).standard_normal((20000, 3))
 for q in qs[:2000]:
     solve_lcp(M, q)
@@ -64,7 +65,7 @@ print(json.dumps({"s": (time.perf_counter() - start) / len(qs), "calls": len(qs)
 """,
     "20,000 problems: solve_lcp_many": PRELUDE + """
 import numpy as np
-M = np.array([[4.0, 1, 0], [1, 3, 1], [0, 1, 2]])
+M = np.array([[4.0, 1, 0], [0.5, 3, 1], [0, 1.5, 2]])
 qs = np.random.default_rng(1).standard_normal((20000, 3))
 Ms = np.broadcast_to(M, (len(qs), 3, 3))
 solve_lcp_many(Ms[:2000], qs[:2000])

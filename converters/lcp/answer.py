@@ -63,7 +63,7 @@ class LCPResult:
 
 _new = object.__new__
 #: the fields' slot descriptors: a frozen dataclass sets its fields through them (object.__setattr__ is what
-#: its __init__ calls, and costs more); the C entry point of solve_lcp writes the same slots
+#: its __init__ calls, and costs more)
 _SLOTS = tuple(LCPResult.__dict__[name].__set__ for name in ("z", "w", "status", "err", "iterations", "method",
                                                             "message", "solutions"))
 _Z, _W, _STATUS, _ERR, _ITERATIONS, _METHOD, _MESSAGE, _SOLUTIONS = _SLOTS

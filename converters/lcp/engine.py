@@ -212,11 +212,18 @@ def solve_many(Ms, qs, Z, W, method, tol, max_iter, fast_paths, opts, budget, an
     nf, ni = sizes(method, k)
     buf = np.empty(k * k + 2 * k + S.SF_SIZE + nf)
     ibuf = np.empty(S.ST_SIZE + ni, dtype=np.int64)
-    mbuf = buf[:k * k].reshape((k, k))
-    rest = buf[k * k:]
+    _solve_many_in(Ms, qs, Z, W, method, tol, max_iter, fast_paths, opts, budget, answers, iterations, errs, used,
+                   rules, stages, infos, buf[:k * k].reshape((k, k)), buf[k * k:], ibuf)
+
+
+@njit(cache=True, _nrt=False)
+def _solve_many_in(Ms, qs, Z, W, method, tol, max_iter, fast_paths, opts, budget, answers, iterations, errs, used,
+                   rules, stages, infos, mbuf, buf, ibuf):
+    """:func:`solve_many`'s loop in its workspace, without reference counting (each problem's rows are views: with
+    it, every view's atomic increment and decrement cost more than a small solve)."""
     for p in range(qs.shape[0]):
         answers[p], iterations[p], errs[p], used[p], rules[p], stages[p], infos[p] = solve_in(
-            Ms[p], qs[p], Z[p], W[p], method, tol, max_iter, fast_paths, opts, budget, mbuf, rest, ibuf)
+            Ms[p], qs[p], Z[p], W[p], method, tol, max_iter, fast_paths, opts, budget, mbuf, buf, ibuf)
 
 
 # ------------------------------------------------------------------------------------------------- Python

@@ -498,20 +498,23 @@ def solve_lcp_many(Ms, qs, method: str = "auto", tol: float = DEFAULT_TOL, fast_
     bad = np.flatnonzero(answers == S.ONCE_NOT_FINITE)
     if bad.size:
         raise LCPError(f"Ms[{bad[0]}] and qs[{bad[0]}] must be finite (no NaN or inf)")
-    status, labels, messages = [SOLVED] * P, [method] * P, [""] * P
-    for i in range(P):
-        if answers[i] == _ONCE_SOLVED:
-            if code == S.AUTO:
-                u = int(used[i])
-                labels[i] = _AUTO_LABELS[u]
-                if not (stages[i] == 1 << (4 * u) or stages[i] == _PGS_GAVE_WAY[u]):
-                    messages[i] = _solved_message(u, int(stages[i]), infos[i] if infos[i] == infos[i] else None, k)
-        elif answers[i] == _ONCE_CLOSED_FORM:
-            labels[i] = "auto:closed form" if code == S.AUTO else method
-            messages[i] = _CLOSED_FORM_MESSAGES[rules[i]]
-            iterations[i] = 0
-        else:
-            result = solve_lcp(Ms[i], qs[i], method=method, tol=float(tol), fast_paths=fast_paths)
-            Z[i], W[i], errs[i], iterations[i] = result.z, result.w, result.err, result.iterations
-            status[i], labels[i], messages[i] = result.status, result.method, result.message
-    return LCPBatch(Z, W, tuple(status), errs, iterations, tuple(labels), tuple(messages))
+    # the answers of the compiled call as solve_lcp labels them, by array (no Python per solved problem)
+    solved, closed = answers == _ONCE_SOLVED, answers == _ONCE_CLOSED_FORM
+    status = np.full(P, SOLVED, dtype=object)
+    labels = np.full(P, method, dtype=object)
+    messages = np.full(P, "", dtype=object)
+    if code == S.AUTO:
+        labels[solved] = np.array(_AUTO_LABELS, dtype=object)[used[solved]]
+        labels[closed] = "auto:closed form"
+        done, by = np.flatnonzero(solved), used[solved]
+        plain = (stages[done] == np.left_shift(1, 4 * by)) | (stages[done] == np.array(_PGS_GAVE_WAY)[by])
+        for i in done[~plain]:                            # a method of auto's plan gave way: its message
+            u = int(used[i])
+            messages[i] = _solved_message(u, int(stages[i]), infos[i] if infos[i] == infos[i] else None, k)
+    messages[closed] = np.array(_CLOSED_FORM_MESSAGES, dtype=object)[rules[closed]]
+    iterations[closed] = 0
+    for i in np.flatnonzero(~(solved | closed)):          # not finished in one call: solve_lcp's own answer
+        result = solve_lcp(Ms[i], qs[i], method=method, tol=float(tol), fast_paths=fast_paths)
+        Z[i], W[i], errs[i], iterations[i] = result.z, result.w, result.err, result.iterations
+        status[i], labels[i], messages[i] = result.status, result.method, result.message
+    return LCPBatch(Z, W, tuple(status.tolist()), errs, iterations, tuple(labels.tolist()), tuple(messages.tolist()))
