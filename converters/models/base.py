@@ -81,7 +81,7 @@ class Model(ABC):
     #: Every mode label the model's rule can produce.
     mode_labels: tuple[str, ...] = ("CCM-ON", "CCM-OFF", "DCM", "GDCM-ON")
     default_theta: float = 1.0
-    #: True when :mod:`.analytic` has the model's CCM/DCM closed forms (keyed by its name).
+    #: True when the model states its CCM/DCM closed forms (:class:`.analytic.SmallRipple`).
     closed_form: bool = False
     #: The state that carries the output voltage (what a bifurcation diagram shows by default).
     output_state: str = "vC"

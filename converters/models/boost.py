@@ -1,9 +1,29 @@
 """Boost (step-up) converter: Vin -> L -> switch to ground, diode to C || R."""
+import math
+
+from .analytic import SmallRipple, finite_ratio
 from .pwm2 import PWMTwoState
 
 
-class Boost(PWMTwoState):
+class Boost(SmallRipple, PWMTwoState):
     name = "boost"
     title = "boost (step-up)"
     netlist_file = "boost.cir"
     topology = "boost"
+
+    @staticmethod
+    def k_crit(D):
+        return D * (1.0 - D) ** 2
+
+    @staticmethod
+    def ccm_ratio(D):
+        finite_ratio("boost", D)
+        return 1.0 / (1.0 - D)
+
+    @staticmethod
+    def dcm_ratio(D, K):
+        return (1.0 + math.sqrt(1.0 + 4.0 * D ** 2 / K)) / 2.0
+
+    @staticmethod
+    def dcm_diode_fraction(D, M):
+        return D / (M - 1.0)

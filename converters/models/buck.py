@@ -1,9 +1,28 @@
 """Buck (step-down) converter: Vin -> switch -> L -> C || R, freewheeling diode to ground."""
+import math
+
+from .analytic import SmallRipple
 from .pwm2 import PWMTwoState
 
 
-class Buck(PWMTwoState):
+class Buck(SmallRipple, PWMTwoState):
     name = "buck"
     title = "buck (step-down)"
     netlist_file = "buck.cir"
     topology = "buck"
+
+    @staticmethod
+    def k_crit(D):
+        return 1.0 - D
+
+    @staticmethod
+    def ccm_ratio(D):
+        return D
+
+    @staticmethod
+    def dcm_ratio(D, K):
+        return 2.0 / (1.0 + math.sqrt(1.0 + 4.0 * K / D ** 2))
+
+    @staticmethod
+    def dcm_diode_fraction(D, M):
+        return D * (1.0 - M) / M

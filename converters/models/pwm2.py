@@ -53,7 +53,6 @@ class PWMTwoState(FromNetlist, Converter):
     state_names = ("iL", "vC")
     pair_names = ("diode",)
     netlist_states = ("i(l1)", "v(c1)")
-    closed_form = True
     signal_names = ("vout", "switch") + ELEMENT_SIGNALS
     signal_units = {"i_in": "A", "i_switch": "A", "v_switch": "V", "i_diode": "A", "v_diode": "V", "i_cap": "A"}
 
