@@ -10,6 +10,8 @@ here, and the functions below look a converter up by its name (the registry its 
 """
 from __future__ import annotations
 
+import math
+
 from ..errors import ParameterError
 
 #: The converters with closed forms, by name (filled as their classes are defined).
@@ -79,6 +81,27 @@ def finite_ratio(name: str, D: float) -> None:
     """A CCM ratio with 1 - D in its denominator needs D below 1."""
     if D >= 1.0:
         raise ParameterError(f"D must be below 1 for a finite {name} CCM ratio; got {D!r}")
+
+
+class InvertingRatios(SmallRipple):
+    """The inverting converters' relations (buck-boost; the Cuk's with its effective inductance in K)."""
+
+    @staticmethod
+    def k_crit(D):
+        return (1.0 - D) ** 2
+
+    @classmethod
+    def ccm_ratio(cls, D):
+        finite_ratio(cls.name, D)
+        return -D / (1.0 - D)
+
+    @staticmethod
+    def dcm_ratio(D, K):
+        return -D / math.sqrt(K)
+
+    @staticmethod
+    def dcm_diode_fraction(D, M):
+        return D / M
 
 
 def has_closed_form(topology: str) -> bool:

@@ -8,18 +8,16 @@ generalised DCM (GDCM-OFF); the ON pair held at v1 = 0 is GDCM-ON.
 """
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from ..params import Param, nonnegative, positive
-from .analytic import SmallRipple, finite_ratio
+from .analytic import InvertingRatios
 from .base import ON, Converter, power_balance
 from .netlist import FromNetlist
 from .pwm2 import STEPS
 
 
-class Cuk(SmallRipple, FromNetlist, Converter):
+class Cuk(InvertingRatios, FromNetlist, Converter):
     name = "cuk"
     title = "Cuk (inverting)"
     parameters = (
@@ -48,27 +46,10 @@ class Cuk(SmallRipple, FromNetlist, Converter):
     closed_form = True
     off_held_label = "GDCM-OFF"
 
-    # the closed forms: the buck-boost's, with the effective inductance Le = L1 L2 / (L1 + L2) in K
     @staticmethod
     def k_inductance(p):
+        """The closed forms' inductance: the effective Le = L1 L2 / (L1 + L2) (the relations are the buck-boost's)."""
         return p["L1"] * p["L2"] / (p["L1"] + p["L2"])
-
-    @staticmethod
-    def k_crit(D):
-        return (1.0 - D) ** 2
-
-    @staticmethod
-    def ccm_ratio(D):
-        finite_ratio("cuk", D)
-        return -D / (1.0 - D)
-
-    @staticmethod
-    def dcm_ratio(D, K):
-        return -D / math.sqrt(K)
-
-    @staticmethod
-    def dcm_diode_fraction(D, M):
-        return D / M
 
     def signal(self, name, samples, p):
         if name in ("i_in", "i_switch", "i_diode"):

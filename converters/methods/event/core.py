@@ -25,21 +25,11 @@ class PiecewiseSolution:
         """(time, kind, pair, config) of every event, in time order."""
         return list(self.events)
 
-    @property
-    def event_times(self) -> list:
-        return [e[0] for e in self.events]
-
-    @property
-    def event_kinds(self) -> list:
-        return [e[1] for e in self.events]
-
-    @property
-    def event_pairs(self) -> list:
-        return [e[2] for e in self.events]
-
-    @property
-    def event_configs(self) -> list:
-        return [e[3] for e in self.events]
+    # each field of the events on its own, in time order
+    event_times = property(lambda self: [e[0] for e in self.events])
+    event_kinds = property(lambda self: [e[1] for e in self.events])
+    event_pairs = property(lambda self: [e[2] for e in self.events])
+    event_configs = property(lambda self: [e[3] for e in self.events])
 
     def events_table(self, t: np.ndarray) -> dict:
         """The events as a Trajectory's event columns; ``step``: the last sample of ``t`` before each."""

@@ -4,7 +4,7 @@ from __future__ import annotations
 import math
 
 from ..base import PeriodMap
-from .machine import EventPeriodMap, _Machine  # noqa: F401 (EventPeriodMap: the LCS engine's)
+from .machine import _Machine
 
 
 class EventReturnMap(PeriodMap):
