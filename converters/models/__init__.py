@@ -1,5 +1,6 @@
-"""The model library: power converters (one module each, closed forms beside them), their control
-laws, and the Siconos circuits; looked up by name and control."""
+"""The model library: power converters (one module each, closed forms beside them), the controls that close
+loops around them (:mod:`.control`: a control composes with a converter), and the Siconos circuits; looked up by
+name and control."""
 from __future__ import annotations
 
 from ..errors import ParameterError
@@ -7,21 +8,23 @@ from .base import OFF, ON, Converter, Model, check_h
 from .boost import Boost
 from .buck import Buck
 from .buckboost import BuckBoost
+from .control import Control, Controlled, OpenLoop
 from .cuk import Cuk
 from .prc import PRC
-from .sliding import BoostSMC
+from .sliding import SlidingMode
 from .netlist import Circuit, is_netlist, load
-from .voltage_mode import BuckVoltageMode
+from .voltage_mode import VoltageMode
 
 CONVERTERS: dict[str, Converter] = {c.name: c for c in (Buck(), Boost(), BuckBoost(), Cuk(), PRC())}
+#: Every control by its --control name; ``pwm`` is open-loop PWM (the converter as it is).
+CONTROLS: dict[str, Control] = {c.key: c for c in (OpenLoop(), SlidingMode(implicit=False),
+                                                   SlidingMode(implicit=True), VoltageMode())}
 #: The control of a converter when none is named: open-loop PWM.
-DEFAULT_CONTROL = Model.control
-#: Every model by (converter name, control): ``pwm`` is the open-loop PWM converter.
-MODELS: dict[tuple[str, str], Model] = {**{(name, DEFAULT_CONTROL): c for name, c in CONVERTERS.items()},
-                                        ("boost", "smc"): BoostSMC(implicit=False),
-                                        ("boost", "smc-implicit"): BoostSMC(implicit=True),
-                                        ("buck", "voltage-mode"): BuckVoltageMode()}
-CONTROLS = tuple(dict.fromkeys(control for _, control in MODELS))
+DEFAULT_CONTROL = OpenLoop.key
+#: Every model by (converter name, control): each control on each converter it applies to (built once, so a
+#: model is one object).
+MODELS: dict[tuple[str, str], Model] = {(name, key): control.on(converter) for key, control in CONTROLS.items()
+                                        for name, converter in CONVERTERS.items() if control.applies_to(converter)}
 
 
 def get_converter(name: str) -> Converter:
@@ -40,9 +43,7 @@ def get_model(name: str, control: str = DEFAULT_CONTROL) -> Model:
                                  f"drives (got {str(name)!r})")
         return load(name)
     get_converter(name)
-    if not isinstance(control, str):
-        raise ParameterError(f"control must be one of {', '.join(CONTROLS)}; got {control!r}")
-    if control not in CONTROLS:
+    if not isinstance(control, str) or control not in CONTROLS:
         raise ParameterError(f"control must be one of {', '.join(CONTROLS)}; got {control!r}")
     try:
         return MODELS[(name, control)]
@@ -53,5 +54,5 @@ def get_model(name: str, control: str = DEFAULT_CONTROL) -> Model:
                              f"--control {takes}); got {name!r}") from None
 
 
-__all__ = ["Circuit", "is_netlist", "CONVERTERS", "MODELS", "CONTROLS", "get_converter", "get_model", "Converter", "Model", "ON", "OFF",
-           "check_h"]
+__all__ = ["Circuit", "is_netlist", "CONVERTERS", "MODELS", "CONTROLS", "get_converter", "get_model", "Converter", "Model",
+           "Control", "Controlled", "ON", "OFF", "check_h"]

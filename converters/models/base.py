@@ -232,7 +232,11 @@ class Converter(Model):
     # --- load and input steps (open loop) -------------------------------------------------------------------
 
     def resolve(self, given: dict | None = None) -> dict:
-        p = super().resolve(given)
+        return self.check_steps(super().resolve(given))
+
+    @staticmethod
+    def check_steps(p: dict) -> dict:
+        """``p``, or the error of a step without its instant or an instant without a step."""
         if "t_step" in p and not ({"R_step", "Vin_step"} & set(p)):
             raise ParameterError("t_step needs R_step (a load step) or Vin_step (an input step), or both")
         if ({"R_step", "Vin_step"} & set(p)) and "t_step" not in p:

@@ -115,6 +115,16 @@ class PWMTwoState(FromNetlist, Converter):
         on = np.asarray(samples.config) == ON
         return np.where(on, samples.u[:, 0], samples.x[:, 0])
 
+    def output_row(self, p) -> tuple | None:
+        """|vout| as an affine function of the state, (c, d) with |vout| = c . x + d, where it is one: the buck's
+        a vC + b iL (its ESR carries the inductor current); the others' vC without ESR. None where vout also
+        depends on the diode's current (a boost or buck-boost with ESR): a loop sensing vout is then refused."""
+        R, rC = p["R"], p.get("rC", 0.0)
+        a, b = R / (R + rC), R * rC / (R + rC)
+        if self.topology == "buck":
+            return np.array([b, a]), 0.0
+        return (np.array([0.0, 1.0]), 0.0) if not rC else None
+
     def vout(self, samples, p):
         R, rC = p["R"], p.get("rC", 0.0)
         a, b = R / (R + rC), R * rC / (R + rC)

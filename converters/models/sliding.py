@@ -1,7 +1,7 @@
 """Sliding-mode (indirect current) control of the boost converter (Sira-Ramirez 1987; Utkin 1992).
 
-The model is the boost LCS of :mod:`.pwm2` (ideal switch, ideal diode as a complementarity pair)
-plus a switching law on the sliding variable
+A control (:mod:`.control`) around the boost's own circuit (the LCS of :mod:`.pwm2`: ideal switch, ideal diode as
+a complementarity pair) with a switching law on the sliding variable
 
     sigma = iL - Iref,   Iref = Iref0 + Kp (Vref - vC) + Ki z,   z' = Vref - vC,   Iref0 = Vref^2 / (R Vin)
 
@@ -15,7 +15,8 @@ state, so both laws of :mod:`converters.problems.switching` apply as they are:
   imposed at each step's end: one LCP of size 3 per step; z settles at 1 - Vin / v.
 
 Sliding exists only for Vref > Vin (the equivalent control 1 - Vin / v must lie in (0, 1)).
-A load step (R -> R_step at t_step) splits the run in two phases; the switch state carries over.
+A load step (R -> R_step at t_step) splits the run in two phases; the switch state carries over, and the
+controller keeps its design values (Iref0 at the nominal R).
 """
 from __future__ import annotations
 
@@ -25,22 +26,16 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..params import nonnegative, positive
-from ..problems import Configuration, LCSProblem, Relay, StateSwitching, SwitchingFunction
+from ..problems import Configuration, Relay, StateSwitching, SwitchingFunction
 from ..trajectory import Samples
-from .base import OFF, ON, Model
-from .boost import Boost
+from .base import OFF, ON
+from .control import Control
 
 PARAMETERS = (
-    positive("Vin", 10.0, "V", "input voltage"),
-    positive("L", 1e-3, "H", "inductance"),
-    positive("C", 100e-6, "F", "output capacitance"),
-    positive("R", 40.0, "ohm", "load resistance"),
     positive("Vref", 20.0, "V", "output voltage reference (must exceed Vin)"),
     positive("band", 0.05, "A", "hysteresis half-band on the current error"),
     nonnegative("Kp", 0.0, "A/V", "outer PI loop: proportional gain"),
     nonnegative("Ki", 0.0, "A/(V s)", "outer PI loop: integral gain"),
-    positive("t_step", None, "s", "load-step instant (optional, with R_step)"),
-    positive("R_step", None, "ohm", "load resistance after t_step (optional)"),
 )
 
 
@@ -54,28 +49,27 @@ def predicted_frequency(p: dict, v: float | None = None) -> float:
     return p["Vin"] * (v - p["Vin"]) / (2.0 * p["band"] * p["L"] * v)
 
 
-class BoostSMC(Model):
-    """The boost under sliding-mode current control: hysteresis (``smc``) or the implicit relay."""
+class SlidingMode(Control):
+    """Sliding-mode current control: the hysteresis comparator (``smc``) or the implicit relay."""
 
-    name = "boost"
     parameters = PARAMETERS
-    state_names = ("iL", "vC")
-    pair_names = ("diode",)
-    signal_names = ("vout", "switch", "iref")
-    mode_labels = ("CCM-ON", "CCM-OFF", "DCM", "GDCM-ON")
+    plants = {"boost": {"Vin": positive("Vin", 10.0, "V", "input voltage"), "L": 1e-3, "C": 100e-6, "R": 40.0}}
+    keeps = ("Vin", "L", "C", "R", "t_step", "R_step")
+    sets = ("D", "f_sw")
+    signal_names = ("iref",)
+    signal_units = {"iref": "A"}
 
     def __init__(self, implicit: bool = False):
         self.implicit = implicit
-        self.control = "smc-implicit" if implicit else "smc"
-        self.title = ("boost, sliding-mode current control, implicit relay" if implicit
-                      else "boost, sliding-mode current control, hysteresis")
+        self.key = "smc-implicit" if implicit else "smc"
+        self.title = ("sliding-mode current control, implicit relay" if implicit
+                      else "sliding-mode current control, hysteresis")
 
-    def __reduce__(self):
-        return (BoostSMC, (self.implicit,))
+    def controller_states(self, p: dict) -> tuple:
+        return ("z",) if p["Ki"] > 0.0 else ()
 
-    def resolve(self, given: dict | None = None) -> dict:
-        """Validated parameters; a request where sliding cannot exist is refused."""
-        p = super().resolve(given)
+    def check(self, model, p: dict) -> None:
+        """A request where sliding cannot exist is refused."""
         if p["Vref"] <= p["Vin"]:
             raise ParameterError(f"Vref must be above Vin = {p['Vin']:g} V for a boost under sliding-mode control "
                                  f"(sliding on i = Iref needs the equivalent control 1 - Vin/v in (0, 1)); "
@@ -83,16 +77,15 @@ class BoostSMC(Model):
         if ("t_step" in p) != ("R_step" in p):
             raise ParameterError("t_step and R_step go together (the load steps from R to R_step at t_step); "
                                  f"got only {'t_step' if 't_step' in p else 'R_step'}")
-        return p
 
-    def period(self, p: dict) -> float:
+    def period(self, model, p: dict) -> float:
         """The predicted switching period 1/f at v = Vref (the law itself has no clock)."""
         return 1.0 / predicted_frequency(p)
 
     def periodic(self, p: dict) -> bool:
         return False
 
-    def default_h(self, p: dict) -> float:
+    def default_h(self, model, p: dict) -> float:
         """Hysteresis: 1/500 of the shorter of t_on = 2 band L / Vin, t_off = 2 band L / (Vref - Vin).
         Implicit: 1 us bounded by 1/200 of sqrt(L C) (no switching to resolve)."""
         if self.implicit:
@@ -101,57 +94,45 @@ class BoostSMC(Model):
         t_off = 2.0 * p["band"] * p["L"] / (p["Vref"] - p["Vin"])
         return min(t_on, t_off) / 500.0
 
-    def max_h(self, p: dict) -> float:
+    def max_h(self, model, p: dict) -> float:
         """Largest step accepted: 1/20 of the shorter switching interval (hysteresis), 200 default steps
         (implicit)."""
-        return self.default_h(p) * (200.0 if self.implicit else 25.0)
+        return self.default_h(model, p) * (200.0 if self.implicit else 25.0)
 
-    def step_times(self, p: dict) -> list[float]:
-        return [p["t_step"]] if "t_step" in p else []
-
-    def phase_options(self, p: dict, t: float) -> dict:
-        """The load in force from time t on (the controller keeps its nominal R)."""
-        return {"load": p["R_step"] if "t_step" in p and t >= p["t_step"] else p["R"]}
-
-    def configurations(self, p: dict, load: float | None = None) -> tuple[Configuration, ...]:
-        load = p["R"] if load is None else load
-        on, off = Boost().configurations(Boost().resolve({"Vin": p["Vin"], "L": p["L"], "C": p["C"], "R": load}))
+    def augment(self, configurations: tuple, p: dict, model) -> tuple:
+        """With Ki > 0 the PI integral z' = Vref - vout as a third state."""
         if p["Ki"] <= 0.0:
-            return on, off
-        # The PI integral z' = Vref - vC as a third state.
-        return tuple(_with_integrator(c, p["Vref"]) for c in (on, off))
+            return configurations
+        c, _ = self.sensed(model, p)
+        return tuple(_with_integrator(config, c[:config.n], p["Vref"]) for config in configurations)
 
-    def sliding_function(self, p: dict) -> SwitchingFunction:
-        """sigma = iL - Iref0 - Kp (Vref - vC) - Ki z, affine in the state."""
-        c = [1.0, p["Kp"]] + ([-p["Ki"]] if p["Ki"] > 0.0 else [])
-        return SwitchingFunction(c=c, d=-(iref0(p) + p["Kp"] * p["Vref"]))
+    def x0(self, model, p: dict) -> np.ndarray:
+        """iL = 0, vC = Vin: the state a boost reaches at power-up through its diode (z = 0)."""
+        return np.array([0.0, p["Vin"]] + [0.0] * (p["Ki"] > 0.0))
 
-    def problem(self, p: dict, t_end: float, x0=None, t_start: float = 0.0, initial: int | None = None,
-                load: float | None = None) -> LCSProblem:
-        """From x0 (default iL = 0, vC = Vin: the state a boost reaches at power-up through its diode);
-        ``load``: the load resistance in force (default R); ``initial``: the switch state at t_start."""
-        configs = self.configurations(p, load)
-        n = configs[0].n
-        if x0 is None:
-            x0 = [0.0, p["Vin"]] + [0.0] * (n - 2)
-        function = self.sliding_function(p)
-        law = (Relay(function, low=OFF, high=ON) if self.implicit
-               else StateSwitching(function, below=ON, above=OFF, band=p["band"], initial=initial))
-        states = self.state_names + (("z",) if n == 3 else ())
-        return LCSProblem(configs, law, x0=x0, t_span=(t_start, t_end), state_names=states,
-                          pair_names=self.pair_names, metadata={"converter": self.key, **p})
+    def sliding_function(self, model, p: dict, circuit: dict | None = None) -> SwitchingFunction:
+        """sigma = iL - Iref0 - Kp (Vref - vout) - Ki z, affine in the state (vout sensed on the circuit in
+        force; Iref0 at the design values)."""
+        c, d = self.sensed(model, p if circuit is None else circuit)
+        n = len(model.converter.state_names)
+        row = np.zeros(n)
+        row[0] = 1.0
+        row = row + p["Kp"] * c[:n]
+        if p["Ki"] > 0.0:
+            row = np.append(row, -p["Ki"])
+        return SwitchingFunction(c=list(row), d=-(iref0(p) + p["Kp"] * (p["Vref"] - d)))
 
-    def signal(self, name: str, samples: Samples, p: dict) -> np.ndarray:
-        if name == "iref":
-            x = samples.x
-            integral = p["Ki"] * x[:, 2] if x.shape[1] > 2 else 0.0
-            return iref0(p) + p["Kp"] * (p["Vref"] - x[:, 1]) + integral
-        return super().signal(name, samples, p)
+    def law(self, model, p: dict, initial: int | None = None, circuit: dict | None = None):
+        function = self.sliding_function(model, p, circuit)
+        return (Relay(function, low=OFF, high=ON) if self.implicit
+                else StateSwitching(function, below=ON, above=OFF, band=p["band"], initial=initial))
 
-    def vout(self, samples: Samples, p: dict) -> np.ndarray:
-        return samples.x[:, 1]
+    def signal(self, name: str, samples: Samples, p: dict, model) -> np.ndarray:
+        x = samples.x
+        integral = p["Ki"] * x[:, 2] if x.shape[1] > 2 else 0.0
+        return iref0(p) + p["Kp"] * (p["Vref"] - np.abs(model.vout(samples, p))) + integral
 
-    def window_start(self, p: dict, t_start: float, t_end: float, window_s: float | None = None) -> float:
+    def window_start(self, model, p: dict, t_start: float, t_end: float, window_s: float | None = None) -> float:
         """Where the summary's window begins: ``window_s`` (default min(a quarter of the run, 2 ms)) before the
         end, and not before a load step (standalone netlists measure over the same window)."""
         t0 = t_end - (window_s or min(0.25 * (t_end - t_start), 2e-3))
@@ -159,19 +140,20 @@ class BoostSMC(Model):
             t0 = max(t0, p["t_step"])
         return t0
 
-    def summary_from(self, p: dict, t_start: float, t_end: float) -> float:
+    def summary_from(self, model, p: dict, t_start: float, t_end: float) -> float:
         """The window, the window before it (the accuracy check's transient), and from the load step on (the
         recovery time)."""
-        window = t_end - self.window_start(p, t_start, t_end)
+        window = t_end - self.window_start(model, p, t_start, t_end)
         start = t_end - 2 * window
         return max(t_start, min(start, p["t_step"]) if "t_step" in p else start)
 
-    def summary(self, tr, p: dict, window_s: float | None = None) -> dict:
+    def summary(self, model, tr, p: dict, window_s: float | None = None) -> dict:
         """Measures over the last ``window_s`` (default min(T_end / 4, 2 ms), after the load step): mean vout
-        against Vref, every state's and signal's mean, RMS, min, max and ripple (``measurements``); hysteresis: the switching frequency against the prediction at the measured v;
-        implicit: the blend z against 1 - Vin / v and its spread; with a load step the recovery time."""
+        against Vref, every state's and signal's mean, RMS, min, max and ripple (``measurements``); hysteresis: the
+        switching frequency against the prediction at the measured v; implicit: the blend z against 1 - Vin / v
+        and its spread; with a load step the recovery time."""
         t_end = tr.t[-1]
-        t0 = self.window_start(p, tr.t[0], t_end, window_s)
+        t0 = self.window_start(model, p, tr.t[0], t_end, window_s)
         out = {"vout_mean": tr.mean("vout", t0=t0), "vref": p["Vref"], "window_s": [t0, t_end],
                "measurements": tr.measurement_rows(t0=t0, t1=t_end)}
         if self.implicit:
@@ -203,10 +185,12 @@ def switching_frequency(tr, t0: float, t1: float | None = None, config: int = ON
     return float((times.size - 1) / (times[-1] - times[0])) if times.size >= 2 else 0.0
 
 
-def _with_integrator(c: Configuration, vref: float) -> Configuration:
-    A = np.zeros((3, 3))
-    A[:2, :2] = c.A
-    A[2, 1] = -1.0
+def _with_integrator(c: Configuration, sensed: np.ndarray, vref: float) -> Configuration:
+    """The configuration with z' = Vref - vout appended, vout = sensed . x (the circuit's state)."""
+    n = c.n
+    A = np.zeros((n + 1, n + 1))
+    A[:n, :n] = c.A
+    A[n, :n] = -np.asarray(sensed)
     return replace(c, A=A, B=np.vstack([c.B, np.zeros((1, c.k))]), C=np.hstack([c.C, np.zeros((c.k, 1))]),
                    E=np.append(c.E, vref))
 

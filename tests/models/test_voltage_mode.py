@@ -124,7 +124,7 @@ def test_the_steppers_orbits_converge_to_the_event_methods():
 @pytest.mark.parametrize("given, message", [
     ({"VU": 3.0}, r"VU \(ramp high level\) must be above VL = 3.8 V; got VU = 3 V"),
     ({"VL": 8.2}, r"VU \(ramp high level\) must be above VL = 8.2 V; got VU = 8.2 V"),
-    ({"A": 0}, r"A \(amplifier gain of vcon = A \(vC - Vref\)\) must be in \(0, inf\); got 0"),
+    ({"A": 0}, r"A \(amplifier gain of vcon = A \(vout - Vref\)\) must be in \(0, inf\); got 0"),
     ({"latch": 0.5}, r"latch must be 0 or 1; got 0.5"),
     ({"Vin": -1}, r"Vin .* must be in \(0, inf\) V; got -1"),
 ])

@@ -71,7 +71,7 @@ def test_a_small_diagram_is_written_and_summarised(capsys, tmp_path):
 
 @pytest.mark.parametrize("argv, message", [
     (["--param", "Vin=20:36", "-p", "VU=3"], "VU (ramp high level) must be above VL = 3.8 V; got VU = 3 V"),
-    (["--param", "Vin=20:36", "-p", "A=0"], "A (amplifier gain of vcon = A (vC - Vref)) must be in (0, inf); got 0"),
+    (["--param", "Vin=20:36", "-p", "A=0"], "A (amplifier gain of vcon = A (vout - Vref)) must be in (0, inf); got 0"),
     (["--param", "Vin=-5:36"], "the path of Vin must lie in (0, inf); got -5:36"),
     (["--param", "Vin=20"], "--param takes NAME=START:STOP (e.g. --param Vin=20:36); got 'Vin=20'"),
     (["--param", "Vin=20:abc"], "Vin (path stop)"),

@@ -1,0 +1,251 @@
+"""Controls compose with converters: a :class:`Control` is a switching law (and the controller states it adds) that
+closes a loop around a :class:`~.base.Converter`; ``control.on(converter)`` is the closed-loop model
+(:class:`Controlled`).
+
+The converter keeps what is the circuit's: its configurations (compiled from its netlist), its parameters and
+parasitics, its load and input steps, its output voltage, element signals, losses and mode rules. The control
+says what is the loop's: the law that replaces the converter's PWM schedule, the parameters it adds (and the duty
+ratio it takes over), the controller states appended to the circuit's, its signals, the period of its clock or
+the one it predicts, and, where it has one, its own summary. A control names the converters it closes a loop
+around (``plants``), each with the plant's defaults of the circuit it is published with.
+
+A law reads the converter through what the converter states about itself: its output as an affine function of
+the state (:meth:`~.pwm2.PWMTwoState.output_row`), so a loop sensing vout is exact with the capacitor's ESR where
+vout is a function of the state alone (the buck), and refused where it is not.
+"""
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ..errors import ParameterError
+from ..params import Param
+from ..problems import LCSProblem
+from ..trajectory import Samples
+from .base import Converter, Labels, Model, SteppedLabels
+
+
+class Control(ABC):
+    """A closed-loop switching law, applicable to the converters named in ``plants``."""
+
+    #: The command line's ``--control``.
+    key: str
+    #: What the loop is, after the converter's title ("voltage-mode control (ramp comparator)").
+    title: str
+    #: The controller's own parameters.
+    parameters: tuple[Param, ...] = ()
+    #: Per converter name: the plant's defaults where the loop is published with other values than the converter's
+    #: (a number: the default; a Param: the parameter, where the loop narrows its range).
+    plants: dict[str, dict] = {}
+    #: The converter's parameters the loop sets itself (the duty ratio): not the user's.
+    sets: tuple[str, ...] = ("D",)
+    #: The converter's parameters the closed loop keeps (None: all but ``sets``).
+    keeps: tuple[str, ...] | None = None
+    #: The signals the loop adds.
+    signal_names: tuple[str, ...] = ()
+    signal_units: dict = {}
+
+    def applies_to(self, converter: Converter) -> bool:
+        return converter.name in self.plants
+
+    def on(self, converter: Converter):
+        """The model of ``converter`` under this control."""
+        if not self.applies_to(converter):
+            raise ParameterError(f"--control {self.key} is available for {', '.join(self.plants)} only; "
+                                 f"got {converter.name!r}")
+        return Controlled(converter, self)
+
+    def check(self, model: "Controlled", p: dict) -> None:
+        """Refuse parameter values the loop cannot run with (one line naming them)."""
+
+    @abstractmethod
+    def law(self, model: "Controlled", p: dict, initial: int | None = None, circuit: dict | None = None):
+        """The switching law (:mod:`converters.problems.switching`) at parameters ``p`` (the controller's design
+        values) sensing the circuit in force (``circuit``: ``p``, or after a load or input step); ``initial``: the
+        configuration in force at the start where the law keeps a memory."""
+
+    def augment(self, configurations: tuple, p: dict, model: "Controlled") -> tuple:
+        """The converter's configurations with the controller's states appended (none by default)."""
+        return configurations
+
+    def sensed(self, model: "Controlled", circuit: dict) -> tuple:
+        """The output voltage the loop senses as (c, d), |vout| = c . x + d over the converter's state; refused
+        where vout is not a function of the state."""
+        row = model.converter.output_row(model.plant(circuit))
+        if row is None:
+            raise ParameterError(f"--control {self.key} senses vout, which on {model.name} with rC > 0 depends on the "
+                                 f"diode's current as well as the state; give rC = 0 (got rC = {circuit.get('rC'):g})")
+        return row
+
+    def controller_states(self, p: dict) -> tuple[str, ...]:
+        """The names of the controller's states appended to the converter's at ``p`` (an integrator)."""
+        return ()
+
+    def x0(self, model: "Controlled", p: dict) -> np.ndarray:
+        """The start of a run when none is given: at rest."""
+        return np.zeros(len(model.converter.state_names) + len(self.controller_states(p)))
+
+    def period(self, model: "Controlled", p: dict) -> float:
+        """The clock's period (s); a law without a clock: the one it predicts."""
+        return model.converter.period(p)
+
+    def periodic(self, p: dict) -> bool:
+        return True
+
+    def default_h(self, model: "Controlled", p: dict) -> float:
+        return model.period(p) / 1000.0
+
+    def max_h(self, model: "Controlled", p: dict) -> float:
+        return model.period(p)
+
+    def signal(self, name: str, samples: Samples, p: dict, model: "Controlled") -> np.ndarray:
+        """A signal of ``signal_names`` (at the controller's design values: before and after a step)."""
+        raise NotImplementedError(name)
+
+    def summary(self, model: "Controlled", tr, p: dict, *options) -> dict | None:
+        """The loop's own summary of a run, or None: the converter's (every measurement over the last periods)."""
+        return None
+
+    def window_start(self, model: "Controlled", p: dict, t_start: float, t_end: float,
+                     window_s: float | None = None) -> float:
+        """Where the summary's window begins (s): the last ``SUMMARY_PERIODS`` periods (at most the run)."""
+        return max(t_start, t_end - model.SUMMARY_PERIODS * model.period(p))
+
+    def summary_from(self, model: "Controlled", p: dict, t_start: float, t_end: float) -> float | None:
+        """Where the loop's own summary reads from, or None: the converter's rule."""
+        return None
+
+
+class OpenLoop(Control):
+    """Open-loop PWM at the duty ratio D: the converter as it is."""
+
+    key = "pwm"
+    title = "open-loop PWM"
+    sets = ()
+
+    def applies_to(self, converter: Converter) -> bool:
+        return True
+
+    def on(self, converter: Converter):
+        return converter
+
+    def law(self, model, p, initial=None, circuit=None):
+        return model.schedule(p)
+
+
+@dataclass(frozen=True)
+class ControlledLabels(SteppedLabels):
+    """A closed loop's laws with a load or input step: the circuit's signals are read with the circuit in force,
+    the controller's with its design values (a step changes the plant, not the controller)."""
+
+    def signal(self, name: str, samples: Samples) -> np.ndarray:
+        if name in self.model.loop.signal_names:
+            return self.model.signal(name, samples, self.params)
+        return super().signal(name, samples)
+
+
+class Controlled(Converter):
+    """A converter under a control (module docstring): the circuit's knowledge from ``converter``, the loop's from
+    ``loop``. Pickled by name (a sweep's workers rebuild it from the registry)."""
+
+    def __init__(self, converter: Converter, loop: Control):
+        self.converter, self.loop = converter, loop
+        self.name, self.control = converter.name, loop.key
+        self.title = f"{converter.title.split(' (')[0]}, {loop.title}"
+        defaults = loop.plants.get(converter.name, {})
+        keeps = loop.keeps
+        plant = tuple(defaults[q.name] if isinstance(defaults.get(q.name), Param)
+                      else replace(q, default=defaults.get(q.name, q.default)) for q in converter.parameters
+                      if q.name not in loop.sets and (keeps is None or q.name in keeps))
+        self.parameters = plant + tuple(loop.parameters)
+        self.state_names = tuple(converter.state_names)
+        self.pair_names = converter.pair_names
+        self.signal_names = tuple(converter.signal_names) + tuple(loop.signal_names)
+        self.signal_units = {**getattr(converter, "signal_units", {}), **loop.signal_units}
+        for attribute in ("mode_labels", "output_state", "off_held_label", "turn_off_label", "pair_currents",
+                          "closed_form"):
+            setattr(self, attribute, getattr(converter, attribute))
+        self.closed_form = False             # the closed forms are the open-loop converter's at a given D
+
+    def __reduce__(self):
+        from . import get_model
+        return (get_model, (self.name, self.control))
+
+    def plant(self, p: dict) -> dict:
+        """The converter's parameters of ``p`` (what its configurations and signals read)."""
+        names = {q.name for q in self.converter.parameters}
+        return {k: v for k, v in p.items() if k in names}
+
+    def resolve(self, given: dict | None = None) -> dict:
+        """Validated parameters: the loop's refusals first (they name its own rules), then the converter's."""
+        p = Model.resolve(self, given)
+        self.loop.check(self, p)
+        return self.check_steps(p)
+
+    def period(self, p: dict) -> float:
+        return self.loop.period(self, p)
+
+    def periodic(self, p: dict) -> bool:
+        return self.loop.periodic(p)
+
+    def default_h(self, p: dict) -> float:
+        return self.loop.default_h(self, p)
+
+    def max_h(self, p: dict) -> float:
+        return self.loop.max_h(self, p)
+
+    def configurations(self, p: dict) -> tuple:
+        return self.loop.augment(self.converter.configurations(self.plant(p)), p, self)
+
+    def schedule(self, p: dict):
+        raise ParameterError(f"{self.key} has no PWM schedule: its switching law is the loop's")
+
+    def problem(self, p: dict, t_end: float, x0=None, t_start: float = 0.0, initial: int | None = None,
+                after_step: bool = False) -> LCSProblem:
+        """From x0 (default: the loop's start) over [t_start, t_end]; ``initial``: the switch state at t_start
+        (a law with a memory); ``after_step``: the circuit after the load or input step, under the same
+        controller."""
+        x0 = self.loop.x0(self, p) if x0 is None else x0
+        circuit = self.stepped(p) if after_step else p
+        return LCSProblem(self.configurations(circuit), self.loop.law(self, p, initial, circuit), x0=x0,
+                          t_span=(t_start, t_end), state_names=self.state_names + self.loop.controller_states(p),
+                          pair_names=self.pair_names,
+                          metadata={"converter": self.key, **p})
+
+    def labels(self, p: dict) -> Labels:
+        return ControlledLabels(self, p) if "t_step" in p else Labels(self, p)
+
+    def signal(self, name: str, samples: Samples, p: dict) -> np.ndarray:
+        if name in self.loop.signal_names:
+            return self.loop.signal(name, samples, p, self)
+        if name == "switch":
+            return self.switch(samples)
+        return self.converter.signal(name, samples, self.plant(p))
+
+    def vout(self, samples: Samples, p: dict) -> np.ndarray:
+        return self.converter.vout(samples, self.plant(p))
+
+    def output_node_current(self, samples: Samples) -> np.ndarray:
+        return self.converter.output_node_current(samples)
+
+    def power(self, tr, p: dict, t0: float, t1: float) -> dict:
+        return self.converter.power(tr, self.plant(p), t0, t1)
+
+    def window_start(self, p: dict, t_start: float, t_end: float, window_s: float | None = None) -> float:
+        """Where the summary's window begins (s): the loop's rule (a law without a clock has its own window)."""
+        return self.loop.window_start(self, p, t_start, t_end, window_s)
+
+    def summary_from(self, p: dict, t_start: float, t_end: float) -> float:
+        start = self.loop.summary_from(self, p, t_start, t_end)
+        return super().summary_from(p, t_start, t_end) if start is None else start
+
+    def summary(self, tr, p: dict, *options) -> dict:
+        """The loop's own summary where it has one (``options``: its own, the sliding mode's window), else the
+        converter's."""
+        own = self.loop.summary(self, tr, p, *options)
+        return super().summary(tr, p) if own is None else own
+
+
+__all__ = ["Control", "Controlled", "OpenLoop"]
