@@ -11,7 +11,7 @@ inductor and diode currents. The diode model sets the accuracy floor (about 1 mV
 """
 from __future__ import annotations
 
-from converters.circuits.netlist import Pulse
+from converters.circuits.netlist import Pulse, Pwl
 from converters.errors import ParameterError
 from converters.models import get_converter
 from converters.validate import parse_value
@@ -55,10 +55,9 @@ def _capacitor(a: str, b: str, p: dict, name="C1", value_key="C", esr_key="rC", 
 def build_netlist(converter: str, params: dict | None, t_end, options: SpiceOptions | None = None,
                   x0=None) -> Netlist:
     """The ngspice netlist of ``converter`` with validated ``params`` over [0, t_end]: the file the model compiles
-    (``netlists/circuits/NAME.cir``) as :func:`~netlists.circuit.circuit_netlist` writes it for ngspice (its ideal
-    devices near-ideal, sense sources on the diodes and inductors), its probes also under the model's names (the
-    states, ``vout``, ``switch``). The gate is the model's PWM at the options' edge (``edge_fraction`` of T, centred
-    on D T and T, the instants the LCS switches at); a duty ratio of 0 or 1 is a DC gate.
+    (``netlists/circuits/NAME.cir``) as :func:`converter_netlist` writes it, its gate the model's PWM at the options'
+    edge (``edge_fraction`` of T, centred on D T and T, the instants the LCS switches at); a duty ratio of 0 or 1 is
+    a DC gate.
 
     ``x0`` (the converter's state vector, default 0: from rest) becomes the inductor and capacitor
     initial conditions, so both simulators can start on the same periodic orbit.
@@ -66,6 +65,23 @@ def build_netlist(converter: str, params: dict | None, t_end, options: SpiceOpti
     conv = get_converter(converter)
     p = conv.resolve(params)
     options = options or SpiceOptions()
+    gate = {}
+    if "D" in conv.schedule_parameters:          # the model's PWM: on from t = 0 for D T, edges centred on D T and T
+        D, T = p["D"], conv.period(p)
+        edge = options.edge_fraction * T
+        gate[GATE] = (float(D >= 1.0) if not 0.0 < D < 1.0 else
+                      Pulse(1.0, 0.0, max(D * T - edge / 2, 0.0), edge, edge, max((1.0 - D) * T - edge, 0.0), T))
+    return converter_netlist(conv, p, t_end, options, x0, waveforms=gate)
+
+
+def converter_netlist(conv, p: dict, t_end, options: SpiceOptions, x0=None, waveforms: dict | None = None,
+                      drives: dict | None = None) -> Netlist:
+    """A built-in converter's own file at its parameters ``p`` as :func:`~netlists.circuit.circuit_netlist` writes it
+    for ngspice (its ideal devices near-ideal, sense sources on the diodes and inductors), its probes also under the
+    model's names (the states, ``vout``, ``switch``), with ``waveforms`` or ``drives`` in place of its sources (the
+    PWM gate, or a control's comparator) and its load and input steps: the input a PWL from Vin to Vin_step and the
+    load a conductance 1/R_step - 1/R switched in parallel by a PWL, each over the options' edge centred on t_step
+    (breakpoints of ngspice's step control, where the LCS steps exactly)."""
     t_end = parse_value("t_end", t_end)
     if t_end <= 0:
         raise ParameterError(f"t_end must be positive (> 0 s); got {t_end!r}")
@@ -77,17 +93,21 @@ def build_netlist(converter: str, params: dict | None, t_end, options: SpiceOpti
                                                                                     conv.netlist_states, x0)}
     circuit = conv.circuit
     values = dict(conv.circuit_values(p))
-    gate = {}
-    if "D" in conv.schedule_parameters:          # the model's PWM: on from t = 0 for D T, edges centred on D T and T
-        D, T = p["D"], conv.period(p)
+    if "D" in conv.schedule_parameters:
         values["d"] = 0.5                         # (the file's PULSE is written for 0 < D < 1; it is replaced)
-        edge = options.edge_fraction * T
-        gate[GATE] = (float(D >= 1.0) if not 0.0 < D < 1.0 else
-                      Pulse(1.0, 0.0, max(D * T - edge / 2, 0.0), edge, edge, max((1.0 - D) * T - edge, 0.0), T))
+    waveforms, extra = dict(waveforms or {}), []
+    if "t_step" in p:
+        t, half = p["t_step"], options.edge_fraction * conv.period(p) / 2
+        if "Vin_step" in p:
+            waveforms[INPUT] = Pwl(((0.0, p["Vin"]), (t - half, p["Vin"]), (t + half, p["Vin_step"])))
+        if "R_step" in p:
+            out = output_node(circuit)
+            extra = [f"Vstep step 0 PWL(0 0 {_num('t_step', t - half)} 0 {_num('t_step', t + half)} 1)",
+                     f"Bstep {out} 0 I=V({out})*V(step)*({_num('1/R_step - 1/R', 1 / p['R_step'] - 1 / p['R'])})"]
     circuit_p = circuit.resolve(values)
     compiled = circuit.compiled(circuit_p)
     written = circuit_netlist(circuit, circuit_p, t_end, options, x0=[state[name] for name in compiled.state_names],
-                              waveforms=gate)
+                              waveforms=waveforms, drives=drives, extra=tuple(extra))
     probes = dict(written.probes)
     for name, spice in zip(conv.state_names, conv.netlist_states):
         probes[name] = written.probes[spice]
@@ -95,8 +115,17 @@ def build_netlist(converter: str, params: dict | None, t_end, options: SpiceOpti
     return Netlist(written.text, conv.name, p, t_end, options, probes, written.pairs)
 
 
-#: The gate source of the built-in PWM converters' files (a duty of 0 or 1 writes it as DC).
-GATE = "vg"
+def output_node(circuit) -> str:
+    """The node of a built-in file's output ``v(NODE)``, its load R1 between it and ground."""
+    node = circuit.output[2:-1]
+    if "," in node:
+        raise ParameterError(f"{circuit.source}: a load step needs an output node against ground; the output is "
+                             f"{circuit.output}")
+    return node
+
+
+#: The gate source of the built-in PWM converters' files (a duty of 0 or 1 writes it as DC) and their input source.
+GATE, INPUT = "vg", "vin"
 
 
 def build_smc_netlist(params: dict | None, t_end, options: SpiceOptions | None = None, x0=None,

@@ -69,14 +69,17 @@ def file_spice_options(circuit, options: SpiceOptions | None = None) -> SpiceOpt
 
 
 def circuit_netlist(circuit, p: dict, t_end: float, options: SpiceOptions | None = None, x0=None,
-                    diode_currents: bool = True, waveforms: dict | None = None) -> Netlist:
+                    diode_currents: bool = True, waveforms: dict | None = None, drives: dict | None = None,
+                    extra: tuple = ()) -> Netlist:
     """The ngspice netlist of ``circuit`` (a :class:`converters.models.netlist.Circuit`) at parameters ``p`` over
     [0, t_end], started from ``x0`` (the circuit's state vector; default its own initial state). Without
     ``diode_currents`` the diodes have no sense source (their currents, and the modes, are not measured): in a
     capacitor-diode ladder or a capacitor-input bridge the 0 V sources in series with near-ideal diodes stop
     ngspice ("timestep too small" at the commutations), which runs the ladder without them. ``waveforms``:
     sources written with another waveform than the file's ({name: a number (DC) or a Pulse}: a built-in
-    converter's gate at the options' edge, or DC at a duty of 0 or 1). The probes: every state, node voltage and sensed current under its SPICE name, the file's output (a
+    converter's gate at the options' edge, or DC at a duty of 0 or 1). ``drives``: sources written as other lines
+    ({name: lines}, a control's comparator in place of a gate; the lines are the caller's, every value in them
+    formatted by :func:`~netlists.options._num`); ``extra``: lines added after the elements (a load step). The probes: every state, node voltage and sensed current under its SPICE name, the file's output (a
     difference of two nodes where it names one), and ``switch``: the first switch's control against its threshold,
     or in a circuit without switches the first PULSE source at the middle of its levels (on at its first level,
     as the compiled configuration 0)."""
@@ -114,6 +117,8 @@ def circuit_netlist(circuit, p: dict, t_end: float, options: SpiceOptions | None
         elif e.kind == "K":
             a, b = (f"L{_name(c)[1:]}" if _name(c)[0].upper() == "L" else "L_" + _name(c) for c in e.control)
             lines.append(f"{name} {a} {b} {_num(e.name, e.value)}")
+        elif e.name in (drives or {}):
+            lines += list(drives[e.name])
         elif e.kind in "VI":
             waveform = (waveforms or {}).get(e.name, e.waveform)
             lines.append(f"{name} {n[0]} {n[1]} {_waveform(e.name, waveform)}")
@@ -138,6 +143,7 @@ def circuit_netlist(circuit, p: dict, t_end: float, options: SpiceOptions | None
             control = f"wctl_{_name(e.name)}"   # stalled at the first diode it turned off (a hysteretic buck)
             lines += [f"H_{_name(e.name)} {control} 0 {_source(e.control[0])} 1",
                       f"S_{_name(e.name)} {n[0]} {n[1]} {control} 0 {_name(e.model)}"]
+    lines += list(extra)
     for model in netlist.models.values():
         lines.append(_model(model, options))
     for node in netlist.nodes:

@@ -105,3 +105,17 @@ def test_ngspices_capacitor_voltage_with_an_esr_is_the_lcps(name, ngspice, capsy
         ripples[method] = (measurements["vC"]["ripple"], measurements["vout"]["ripple"])
     assert ripples["spice"][0] == pytest.approx(ripples["lcp"][0], rel=0.05)
     assert ripples["spice"][1] == pytest.approx(ripples["lcp"][1], rel=0.05) and ripples["lcp"][1] > 4 * ripples["lcp"][0]
+
+
+@pytest.mark.parametrize("step", [{"R_step": 5}, {"Vin_step": 10}, {"R_step": 5, "Vin_step": 10}])
+def test_ngspice_runs_the_load_and_input_steps_the_model_runs(step, ngspice):
+    """A step at 1 ms on a CCM buck (L 100 uH, D 0.5): ngspice's vout over the 20 periods after it is the event
+    method's to 0.2 % (measured 0.09 %); the netlist had left the steps out, and ngspice had stayed at the 6.30 V
+    before them."""
+    from converters.run import run_converter
+    from validation import ngspice as spice_method        # noqa: F401 (registers the spice method)
+    params = {"t_step": "1m", "D": 0.5, "L": "100u", **step}
+    means = [run_converter("buck", params, method=m, t_end=1.5e-3).mean("vout", t0=1e-3, t1=1.2e-3)
+             for m in ("event", "spice")]
+    assert means[1] == pytest.approx(means[0], rel=2e-3)
+    assert means[0] < 5.6                                              # the step moves vout by more than 10 %
