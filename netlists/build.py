@@ -1,6 +1,7 @@
 """The ngspice netlists of the built-in models. A converter's is its own circuit file (``netlists/circuits/NAME.cir``,
-what the model compiles) written by :func:`~netlists.circuit.circuit_netlist`; the controlled ones (the
-sliding-mode boost, the voltage-mode buck) are written here with behavioural sources for their comparators.
+what the model compiles) written by :func:`~netlists.circuit.circuit_netlist`; a control's comparator, written here
+with behavioural sources, drives the converter's gate in place of its PWM source (the voltage-mode buck). The
+sliding-mode boost is its own circuit: its rectifier is a switch in antiphase (:func:`build_smc_netlist` says why).
 Nothing typed by a user reaches the text: node and element names are constants here, and every value passes
 :func:`_num` (a finite float, printed by us) before it is written. A parameter carrying netlist text
 (``R=1\\n.control\\nshell ...``) is refused while it is parsed.
@@ -11,6 +12,8 @@ inductor and diode currents. The diode model sets the accuracy floor (about 1 mV
 """
 from __future__ import annotations
 
+from dataclasses import replace
+
 from converters.circuits.netlist import Pulse, Pwl
 from converters.errors import ParameterError
 from converters.models import get_converter
@@ -18,38 +21,6 @@ from converters.validate import parse_value
 
 from .circuit import circuit_netlist
 from .options import Netlist, SpiceOptions, _num, diode_parameters, options_line
-
-
-def _diode(anode: str, cathode: str, p: dict) -> list[str]:
-    """Sense source, the diode, then the optional forward drop Vf and resistance Rd in series."""
-    lines = [f"Vsd {anode} da DC 0"]
-    node = "da"
-    if p.get("Vf"):
-        lines.append(f"Vfwd {node} db DC {_num('Vf', p['Vf'])}")   # potential falls by Vf along the diode
-        node = "db"
-    if p.get("Rd"):
-        lines.append(f"Rd {node} dc {_num('Rd', p['Rd'])}")
-        node = "dc"
-    lines.append(f"D1 {node} {cathode} DMOD")
-    return lines
-
-
-def _inductor(a: str, b: str, p: dict, name="L1", value_key="L", sense="Vsl", dcr_key="rL", ic=0.0) -> list[str]:
-    lines = [f"{sense} {a} {a}_s DC 0"]
-    node = f"{a}_s"
-    if p.get(dcr_key):
-        lines.append(f"R{name} {node} {a}_r {_num(dcr_key, p[dcr_key])}")
-        node = f"{a}_r"
-    lines.append(f"{name} {node} {b} {_num(value_key, p[value_key])} IC={_num(name + ' initial current', ic)}")
-    return lines
-
-
-def _capacitor(a: str, b: str, p: dict, name="C1", value_key="C", esr_key="rC", ic=0.0) -> list[str]:
-    ic_text = _num(name + " initial voltage", ic)
-    if p.get(esr_key):
-        return [f"R{name} {a} {a}_esr {_num(esr_key, p[esr_key])}",
-                f"{name} {a}_esr {b} {_num(value_key, p[value_key])} IC={ic_text}"]
-    return [f"{name} {a} {b} {_num(value_key, p[value_key])} IC={ic_text}"]
 
 
 def build_netlist(converter: str, params: dict | None, t_end, options: SpiceOptions | None = None,
@@ -198,56 +169,49 @@ RAMP_FALL_FRACTION = 1e-4
 
 def build_voltage_mode_netlist(params: dict | None, t_end, options: SpiceOptions | None = None,
                                x0=None) -> Netlist:
-    """The buck under voltage-mode control (``converters.models.voltage_mode``) as an ngspice netlist.
+    """The buck under voltage-mode control (``converters.models.voltage_mode``) as an ngspice netlist: the buck's own
+    file (:func:`converter_netlist`: its parasitics and steps as the open-loop buck's) with the comparator driving its
+    gate in place of the PWM source.
 
     The sawtooth is a PULSE source rising from VL to VU over T - edge and falling back over the edge
-    (edge = ``RAMP_FALL_FRACTION`` T, what the measurements below were made with); a behavioural source ctrl = tanh(G (ramp - A (v_out - Vref))), G =
-    ``COMPARATOR_GAIN``, a comparator's output saturating smoothly at +-1 V, drives an SW switch with VT = 0
-    and no hysteresis through an RC low-pass of time constant ``COMPARATOR_DELAY_FRACTION`` T, so the switch is
-    closed while vcon = A (v_out - Vref) is below the ramp: the comparator of the LCS model. Without the
-    saturation ngspice stops with "timestep too small" in the first period where the loop takes over (the
-    control voltage swings by tens of volts across the switch's threshold); with a hard clip at +-1 V
-    (min/max), or G = 1 to 10, it still stopped so at the defaults (Vin = 24 V, t = 3.6 ms). G = 100 runs at 20,
-    24, 28 and 36 V and settles on the event method's period-2 orbit at 28 V; G = 1000 runs at 33 V too but finds
-    period 6 at 28 V (measured). Without the low-pass, in the chaotic band (33 V) ngspice stopped at 0.18 s
-    (trouble with node ctrl, the source driving the switch directly). With it (measured, 300 periods from rest
-    against the event method's orbit): 1e-5 T runs 0.4 s at 33, 36 and 40 V, keeps period 2 at 28 V (1.8e-5,
-    2.7e-5 without) and at 31 V (1.7e-5); 1e-4 T read the 31 V orbit as period 8; 1e-6 T was 3e-5 and 5.5e-5.
-    The diode is
-    the D(N = 0.001) model (it may block: DCM). The comparator's switchings are not breakpoints of
-    ngspice's step control: TMAX = T/1000 keeps their timing error small (``pcsuite bifurcation`` uses it).
-    There is no latch in the netlist: ``latch = 1`` is refused. Every value is a validated number (``_num``).
+    (edge = ``RAMP_FALL_FRACTION`` T); a behavioural source 1/2 + tanh(G (ramp - A (v_out - Vref))) / 2, G =
+    ``COMPARATOR_GAIN``, a comparator's output saturating smoothly between 0 and 1 V, drives the gate (the switch's
+    threshold 1/2) through an RC low-pass of time constant ``COMPARATOR_DELAY_FRACTION`` T, so the switch is
+    closed while vcon = A (v_out - Vref) is below the ramp: the comparator of the LCS model, v_out the output node
+    (behind the ESR where there is one, as the model senses it). Without the saturation ngspice stops with
+    "timestep too small" in the first period where the loop takes over (the control voltage swings by tens of
+    volts across the switch's threshold); with a hard clip (min/max), or G = 1 to 10, it still stopped so at the
+    defaults (Vin = 24 V, t = 3.6 ms). G = 100 runs at 20, 24, 28 and 36 V and settles on the event method's
+    period-2 orbit at 28 V; G = 1000 runs at 33 V too but finds period 6 at 28 V (measured). Without the low-pass,
+    in the chaotic band (33 V) ngspice stopped at 0.18 s (trouble with the node driving the switch directly). With
+    it (measured, 300 periods from rest against the event method's orbit): 1e-5 T runs 0.4 s at 33, 36 and 40 V,
+    keeps period 2 at 28 V and at 31 V; 1e-4 T read the 31 V orbit as period 8. The comparator's switchings are not
+    breakpoints of ngspice's step control: TMAX = T/1000 keeps their timing error small (``pcsuite bifurcation``
+    uses it). There is no latch in the netlist: ``latch = 1`` is refused. Every value is a validated number
+    (``_num``).
     """
     from converters.models import get_model
-    p = get_model("buck", "voltage-mode").resolve(params)
+    model = get_model("buck", "voltage-mode")
+    p = model.resolve(params)
     if p["latch"]:
         raise ParameterError("latch must be 0 for the ngspice netlist (its comparator drives the switch directly); "
                              f"got latch = {p['latch']:g}")
     options = options or SpiceOptions()
-    t_end = parse_value("t_end", t_end)
-    if t_end <= 0:
-        raise ParameterError(f"t_end must be positive (> 0 s); got {t_end!r}")
-    iL0, v0 = (0.0, 0.0) if x0 is None else (parse_value("x0[iL]", x0[0]), parse_value("x0[vC]", x0[1]))
-    T = 1.0 / p["f_sw"]
+    buck = model.converter
+    T = model.period(p)
     edge = RAMP_FALL_FRACTION * T
-    tmax = options.tmax_fraction * T
-    body = [f"Vin in 0 DC {_num('Vin', p['Vin'])}",
-            f"Vramp ramp 0 PULSE({_num('VL', p['VL'])} {_num('VU', p['VU'])} 0 {_num('rise', T - edge)} "
-            f"{_num('edge', edge)} 0 {_num('T', T)})",
-            f"Bctrl craw 0 V=tanh({COMPARATOR_GAIN:g}*(V(ramp)-{_num('A', p['A'])}*(V(out)-{_num('Vref', p['Vref'])})))",
-            f"Rcf craw ctrl {_num('comparator R', COMPARATOR_R)}",
-            f"Ccf ctrl 0 {_num('comparator C', COMPARATOR_DELAY_FRACTION * T / COMPARATOR_R)}",
-            "S1 in sw ctrl 0 SWVM", *_diode("0", "sw", p), *_inductor("sw", "out", p, ic=iL0),
-            *_capacitor("out", "0", p, ic=v0), f"R1 out 0 {_num('R', p['R'])}",
-            f".model SWVM SW(VT=0 VH=0 RON={_num('switch_ron', options.switch_ron)} "
-            f"ROFF={_num('switch_roff', options.switch_roff)})",
-            f".model DMOD D({diode_parameters(options)})"]
-    lines = ["* pcsuite buck voltage-mode", *body,
-             options_line(options),
-             f".tran {_num('tstep', tmax)} {_num('t_end', t_end)} 0 {_num('tmax', tmax)} UIC", ".end"]
-    probes = {"switch": ({"ctrl": 1.0}, 0.0), "iL": ("vsl#branch", 1.0), "vC": ("out", 1.0), "vout": ("out", 1.0),
-              "i_D": ("vsd#branch", 1.0), "ramp": ("ramp", 1.0)}
-    return Netlist("\n".join(lines) + "\n", "buck-voltage-mode", p, t_end, options, probes)
+    gate = next(e for e in buck.circuit.netlist.elements if e.name == GATE).nodes[0]
+    out = output_node(buck.circuit)
+    drive = [f"Vramp ramp 0 PULSE({_num('VL', p['VL'])} {_num('VU', p['VU'])} 0 {_num('rise', T - edge)} "
+             f"{_num('edge', edge)} 0 {_num('T', T)})",
+             f"Bctrl craw 0 V=0.5+0.5*tanh({COMPARATOR_GAIN:g}*(V(ramp)-{_num('A', p['A'])}*(V({out})-"
+             f"{_num('Vref', p['Vref'])})))",
+             f"Rcf craw {gate} {_num('comparator R', COMPARATOR_R)}",
+             f"Ccf {gate} 0 {_num('comparator C', COMPARATOR_DELAY_FRACTION * T / COMPARATOR_R)}"]
+    written = converter_netlist(buck, model.plant(p), t_end, options, x0, drives={GATE: drive})
+    first, rest = written.text.split("\n", 1)
+    return replace(written, text=f"* pcsuite: {model.title}, on the built-in buck's circuit\n{rest}",
+                   converter="buck-voltage-mode", params=p, probes={**written.probes, "ramp": ("ramp", 1.0)})
 
 
 #: The netlist writer of each control (model, params, t_end, options, x0) -> Netlist; the implicit relay has none.

@@ -11,7 +11,8 @@ def add(sub) -> None:
     net = sub.add_parser("netlist", help="the ngspice netlist of a converter (runs alone: ngspice -b FILE.cir)")
     net.add_argument("converter")
     add_params(net)
-    net.add_argument("--control", default="pwm", choices=["pwm", "smc", "voltage-mode"],
+    from netlists.build import CONTROL_NETLISTS
+    net.add_argument("--control", default="pwm", choices=list(CONTROL_NETLISTS),
                      help="boost: smc (sliding-mode control); buck: voltage-mode (the ramp comparator)")
     net.add_argument("--t-end", default=None, help="duration in s (default 500 periods)")
     net.add_argument("--steady", action="store_true",
