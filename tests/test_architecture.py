@@ -193,6 +193,19 @@ def test_nothing_branches_on_a_control_name():
     assert _lines_matching(_CONTROL_BRANCH, PACKAGES) == []
 
 
+_PAIR_KEY = re.compile(r"""\(\s*["'](buck|boost|buck-boost|cuk|prc)["']\s*,\s*["']({_CONTROLS})["']\s*\)\s*:"""
+                       .replace("{_CONTROLS}", _CONTROLS))
+
+
+def test_controls_compose_with_converters_instead_of_a_model_per_pair():
+    """A control closes its loop around any converter it names (converters.models.control); no module keys a model
+    by a (converter, control) pair written out (the registry had ("boost", "smc"): BoostSMC(...), a model class per
+    pair that re-derived its converter's circuit)."""
+    assert _lines_matching(_PAIR_KEY, PACKAGES) == []
+    assert _PAIR_KEY.search('("boost", "smc"): BoostSMC(implicit=False),')
+    assert not _PAIR_KEY.search('get_model("boost", "smc")')
+
+
 def test_the_control_branch_pattern_does_catch_a_branch():
     assert _CONTROL_BRANCH.search('if model.control == "smc":') and _CONTROL_BRANCH.search("elif args.control != 'pwm':")
     assert _CONTROL_BRANCH.search('if scene.control in ("smc", "circuit"):')
