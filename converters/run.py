@@ -211,8 +211,9 @@ def check_no_step(model: Model, p: dict) -> None:
     """A periodic orbit (a steady state, a branch of orbits) is no answer for a run with a load or input step."""
     if model.step_times(p):
         raise ParameterError("a periodic steady state (--steady, gdcm, bifurcation, compare's start on the orbit) "
-                             "needs a periodic circuit; a run with a step (t_step, or a switch driven by a PWL or PULSE "
-                             "that does not repeat) is not periodic: run --periods N (or --t-end) from rest")
+                             "needs a periodic circuit; a run with a step (t_step, a switch driven by a PWL or PULSE "
+                             "that does not repeat, or a PWL source in the power circuit) is not periodic: run "
+                             "--periods N (or --t-end) from rest")
 
 
 def _accurate(model: Model, p: dict, rtol, start: float, *, method, h, t_end, periods, steady, x0, options) -> Trajectory:

@@ -143,6 +143,12 @@ def circuit_netlist(circuit, p: dict, t_end: float, options: SpiceOptions | None
             control = f"wctl_{_name(e.name)}"   # stalled at the first diode it turned off (a hysteretic buck)
             lines += [f"H_{_name(e.name)} {control} 0 {_source(e.control[0])} 1",
                       f"S_{_name(e.name)} {n[0]} {n[1]} {control} 0 {_name(e.model)}"]
+    for state in compiled.state_names:              # a ramp's state (a PWL in the power circuit) read on a copy of it
+        if state.startswith("pwl("):
+            e = next(e for e in netlist.elements if e.name == state[4:-1])
+            copy = f"pwl_{_name(e.name)}"
+            lines.append(f"V{copy} {copy} 0 {_waveform(e.name, (waveforms or {}).get(e.name, e.waveform))}")
+            probes[state] = (copy, 1.0)
     lines += list(extra)
     for model in netlist.models.values():
         lines.append(_model(model, options))

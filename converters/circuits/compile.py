@@ -129,6 +129,8 @@ class _Compiler:
         self.shorts = [r for r in self.by_kind["R"] if r.value == 0]
         self.switch_ron = {s.name: self.nl.models[s.model].params.get("RON", 0.0) for s in self.switches}
         self.mutual = self.inductance_matrix()
+        #: PWL sources in the power circuit: ramps, each a state of the LCS (its value), its slope per phase
+        self.ramps = [s for s in self.sources if isinstance(s.waveform, Pwl) and self.in_power_circuit(s)]
 
     def error(self, element: Element, what: str) -> NetlistError:
         return NetlistError(f"{self.path}:{element.line}: {what}")
@@ -159,29 +161,29 @@ class _Compiler:
             return self.run_state_driven(drives)
         period = self.period()
         power = [s for s in self.sources if isinstance(s.waveform, Pulse) and self.in_power_circuit(s)]
-        for s in self.sources:
-            if isinstance(s.waveform, Pwl) and self.in_power_circuit(s):
-                raise self.error(s, f"{s.title}: a PWL in the power circuit is not compiled yet (an LCS input here is "
-                                    "DC, PULSE or SIN); a PWL drives switches")
+        self.check_ramps()
         for s in power:
             if not math.isfinite(s.waveform.per):
                 raise self.error(s, f"{s.title}: a single pulse in the power circuit: give it a period (PER)")
         once = {name: d for name, d in drives.items() if d and any(_once(self.source(n).waveform) for n in d)}
-        phase_times, phase_states = self.phases(once)
+        corners = {t for r in self.ramps for t, _ in r.waveform.points if t > 0.0}
+        phase_times, phase_states = self.phases(once, corners)
         repeating = {name: d for name, d in drives.items() if name not in once}
         starts, periodic_keys = self.schedule_keys(period, repeating, power)
         names = [s.name for s in self.switches]
 
-        def full(key, state):          # a periodic key with the one-shot switches' states of a phase
+        def full(key, state, start):   # a periodic key with the one-shot switches' states and the ramps' slopes of a phase
             held = dict(zip(repeating, key[0]))
-            return tuple(held[n] if n in held else state[n] for n in names), key[1]
-        phase_keys = [[full(key, state) for key in periodic_keys] for state in phase_states]
+            return (tuple(held[n] if n in held else state[n] for n in names), key[1],
+                    tuple(_slope(r.waveform, start) for r in self.ramps))
+        phase_keys = [[full(key, state, start) for key in periodic_keys]
+                      for state, start in zip(phase_states, [0.0, *phase_times])]
         distinct = list(dict.fromkeys(key for keys_ in phase_keys for key in keys_))
         configs, pair_currents, closed, maps, per_config_sinusoids = [], [], [], [], []
         for key in distinct:
             switch_state = dict(zip([s.name for s in self.switches], key[0]))
             levels = dict(zip([s.name for s in power], key[1]))
-            config, forms, signals, sinusoids = self.configuration(switch_state, levels)
+            config, forms, signals, sinusoids = self.configuration(switch_state, levels, key[2])
             per_config_sinusoids.append(sinusoids)
             configs.append(config)
             pair_currents.append(tuple(f == CURRENT for f in forms))
@@ -197,7 +199,8 @@ class _Compiler:
             F_sin = np.array([f for _, f in per_config_sinusoids])
             inputs = (np.array([2 * math.pi * w.freq for w in sines]), np.array([math.radians(w.phase) for w in sines]),
                       E_sin, F_sin)
-        state_names = tuple(f"v({c.name})" for c in self.capacitors) + tuple(f"i({l.name})" for l in self.inductors)
+        state_names = (tuple(f"v({c.name})" for c in self.capacitors) + tuple(f"i({l.name})" for l in self.inductors)
+                       + tuple(f"pwl({r.name})" for r in self.ramps))
         return Compiled(tuple(configs), schedule, state_names,
                         tuple(d.name for d in self.diodes) or ("none",), tuple(pair_currents),
                         tuple(s.name for s in self.switches), tuple(closed), self.signal_names(), tuple(maps),
@@ -217,12 +220,27 @@ class _Compiler:
             return Schedule(period=period, starts=tuple(merged_starts), configs=tuple(merged))
         return Schedule.constant(merged[0])
 
+    def check_ramps(self) -> None:
+        """A PWL in the power circuit is compiled where it does not repeat and does not jump (each of its segments a
+        ramp the state follows exactly); refused otherwise, naming it."""
+        for r in self.ramps:
+            w = r.waveform
+            if not _once(w):
+                raise self.error(r, f"{r.title}: a PWL that repeats (r=) in the power circuit is not compiled (a ramp "
+                                    "here is a state of the LCS, which a periodic steady state cannot pin); a PWL "
+                                    "without r= is (a soft start, a load profile)")
+            jump = next((t0 for (t0, _), (t1, _) in zip(w.points, w.points[1:]) if t1 <= t0), None)
+            if jump is not None:
+                raise self.error(r, f"{r.title}: its PWL jumps at t = {jump:g} s (two points at one time); in the power "
+                                    "circuit give the step a rise time (a state cannot jump)")
+
     def source(self, name: str) -> Element:
         return next(x for x in self.sources if x.name == name)
 
-    def phases(self, once: dict) -> tuple:
-        """(the instants t > 0 where a switch driven by sources that do not repeat changes, the states of those
-        switches in each phase: before the first instant, then from each on)."""
+    def phases(self, once: dict, corners=()) -> tuple:
+        """(the instants t > 0 where a switch driven by sources that do not repeat changes, or a ramp in the power
+        circuit turns (``corners``), the states of those switches in each phase: before the first instant, then from
+        each on)."""
         changes = {}
         for name, coefficients in once.items():
             switch = next(x for x in self.switches if x.name == name)
@@ -232,7 +250,7 @@ class _Compiler:
                 raise self.error(switch, f"{switch.title}: its control adds a source that repeats ({repeating[0].upper()}) "
                                          "to one that does not: a gate is periodic or one-shot, not both")
             changes[name] = self.one_shot_events(switch, coefficients)
-        times = sorted({t for _, events in changes.values() for t, _ in events})
+        times = sorted({t for _, events in changes.values() for t, _ in events} | set(corners))
         states = []
         for start in [0.0, *times]:
             state = {}
@@ -277,9 +295,9 @@ class _Compiler:
             names = ", ".join(n.upper() for n in self.state_rows)
             raise NetlistError(f"{self.path}: {names} driven by the circuit's own quantities beside PULSE gates: a "
                                "comparator's switches with the others at DC is what is compiled yet")
-        if any(isinstance(x.waveform, (Pulse, Sin)) and self.in_power_circuit(x) for x in self.sources):
-            raise NetlistError(f"{self.path}: a state-driven switch with PULSE or SIN sources in the power circuit is "
-                               "not compiled yet")
+        if any(isinstance(x.waveform, (Pulse, Sin, Pwl)) and self.in_power_circuit(x) for x in self.sources):
+            raise NetlistError(f"{self.path}: a state-driven switch with PULSE, SIN or PWL sources in the power "
+                               "circuit is not compiled yet")
         (name, row0), *others = self.state_rows.items()
         switch = next(x for x in self.switches if x.name == name)
         followers = {other: self.follows(switch, row0, other, row) for other, row in others}
@@ -551,14 +569,17 @@ class _Compiler:
                 forms[i] = CURRENT
         return _Network(self, switch_state, levels, forms).solve(), forms
 
-    def configuration(self, switch_state: dict, levels: dict):
-        """(Configuration, port forms, signal maps, (E, F) of the SIN sources) of one configuration."""
+    def configuration(self, switch_state: dict, levels: dict, slopes: tuple = ()):
+        """(Configuration, port forms, signal maps, (E, F) of the SIN sources) of one configuration; ``slopes``: each
+        ramp's slope in it (V/s or A/s)."""
         solution, forms = self.network(switch_state, levels)
-        config, signals, sinusoids = self.lcs(solution, forms, switch_state)
+        config, signals, sinusoids = self.lcs(solution, forms, switch_state, slopes)
         self.check_unique_ports(config, switch_state)
         return config, forms, signals, sinusoids
 
-    def lcs(self, solution, forms, switch_state):
+    def lcs(self, solution, forms, switch_state, slopes: tuple = ()):
+        """The configuration's LCS and signal maps from a solved network. A ramp (a PWL in the power circuit) is a
+        state of its own, its value: its column of the network becomes a state's, and its slope its derivative."""
         n, k = self.n, self.k
         dx = solution.derivatives()                       # (n, n + k + sources)
         ports = solution.ports()                          # (k, n + k + sources)
@@ -586,9 +607,22 @@ class _Compiler:
         gates = self.gate_columns()
         static = s.copy()
         static[[c - n - k for c in gates]] = 0.0       # a gate's share is its waveform at each sample's time
-        signals = (rows[:, :n].copy(), rows[:, n:n + k].copy(), rows[:, n + k:] @ static, rows[:, columns] * amplitudes,
+        Sx = rows[:, :n]
+        E_sin, F_sin = E_sin.T, F_sin.T
+        if self.ramps:
+            ramps = [n + k + self.sources.index(r) for r in self.ramps]
+            r = len(ramps)
+            C_ramps = ports[:, ramps].copy()
+            C_ramps[self.shorted_diodes(switch_state, forms)] = 0.0        # pairs that never hold (above)
+            config = Configuration(A=np.block([[A, dx[:, ramps]], [np.zeros((r, n + r))]]),
+                                   B=np.vstack([config.B, np.zeros((r, k))]), C=np.hstack([config.C, C_ramps]),
+                                   D=config.D, E=np.concatenate([E, np.asarray(slopes, dtype=float)]), F=config.F,
+                                   name=name)
+            Sx = np.hstack([Sx, rows[:, ramps]])
+            E_sin = np.hstack([E_sin, np.zeros((E_sin.shape[0], r))])
+        signals = (Sx.copy(), rows[:, n:n + k].copy(), rows[:, n + k:] @ static, rows[:, columns] * amplitudes,
                    rows[:, gates].copy())
-        return config, signals, (E_sin.T.copy(), F_sin.T.copy())
+        return config, signals, (E_sin.copy(), F_sin.copy())
 
     def gate_waveforms(self) -> tuple:
         return tuple(self.sources[c - self.n - self.k].waveform for c in self.gate_columns())
@@ -659,6 +693,8 @@ class _Compiler:
             w = s.waveform
             if isinstance(w, Pulse):
                 values.append(w.v2 if levels.get(s.name, 0) else w.v1)
+            elif isinstance(w, Pwl) and s in self.ramps:
+                values.append(0.0)               # a ramp's value is a state (:meth:`lcs`)
             elif isinstance(w, Pwl):
                 values.append(w.points[0][1])    # a gate's: its crossings are the schedule (:meth:`switch_events`)
             elif isinstance(w, Sin):
@@ -687,7 +723,16 @@ class _Compiler:
                 vb = self.nl.ic.get(b, 0.0) if b != "0" else 0.0
                 x.append(va - vb)
         x += [l.ic or 0.0 for l in self.inductors]
+        x += [r.waveform.points[0][1] for r in self.ramps]          # a ramp holds its first value until its first time
         return np.array(x, dtype=float)
+
+
+def _slope(w: Pwl, t: float) -> float:
+    """The slope of a PWL on its segment from time t on (0 before its first point and after its last)."""
+    for (t0, v0), (t1, v1) in zip(w.points, w.points[1:]):
+        if t0 <= t < t1:
+            return (v1 - v0) / (t1 - t0)
+    return 0.0
 
 
 def _once(w) -> bool:

@@ -52,9 +52,9 @@ def _refuse_steps(model, params: dict) -> None:
                              "from rest), not a step response; simulate the step with pcsuite simulate -p t_step=.. "
                              "-p R_step=.. (or Vin_step)")
     steps = model.step_times(model.resolve(params))
-    if steps:                           # a netlist's switch on a gate that does not repeat
-        raise ParameterError(f"{model.key} has a step at {steps[0]:.6g} s (a switch on a gate that does not repeat): "
-                             "a sweep measures each point's steady state (or the last period from rest), not a step "
+    if steps:                           # a netlist's switch on a gate that does not repeat, or its ramp's corner
+        raise ParameterError(f"{model.key} has a step at {steps[0]:.6g} s (a switch on a gate that does not repeat, "
+                             "or a PWL source in the power circuit): a sweep measures each point's steady state (or the last period from rest), not a step "
                              "response; simulate the step with pcsuite simulate")
 
 @dataclass(frozen=True)

@@ -139,6 +139,7 @@ def test_an_orbit_of_a_stepped_run_is_refused_wherever_it_is_asked_for():
     from converters.run import steady_orbit
     stepped = {**BUCK, "t_step": "1m", "R_step": 2.5}
     for ask in (lambda: steady_orbit("buck", stepped), lambda: run_converter("buck", stepped, steady=True)):
-        with pytest.raises(ParameterError, match=r"a run with a step \(t_step, or a switch driven by a PWL or PULSE "
-                                                   r"that does not repeat\) is not periodic: run --periods N"):
+        with pytest.raises(ParameterError, match=r"a run with a step \(t_step, a switch driven by a PWL or PULSE "
+                                                   r"that does not repeat, or a PWL source in the power circuit\) is "
+                                                   r"not periodic: run --periods N"):
             ask()
