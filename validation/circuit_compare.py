@@ -90,15 +90,20 @@ def compare_circuit(circuit, params: dict | None = None, *, h=None, spice_option
         x0, rho = orbit.x0, orbit.spectral_radius
     lcp = run_converter(circuit, p, h=h, t_end=span, x0=x0)
     t0 = span - window * T
-    _modes_by_current(lcp, circuit, p, t0)
+    law = circuit.compiled(p).law
+    oscillating = getattr(law, "function", None) is not None and law.function.ramp is None
+    # a transient's modes are compared over the whole run: a diode conducts above a fraction of its peak over it (the
+    # last window's peak can be a blocked diode's leakage, 1e-11 A, read as conduction)
+    modes_from = t0 if periodic or oscillating else 0.0
+    _modes_by_current(lcp, circuit, p, modes_from)
     netlist, run, notes = run_spice_retrying(lambda o: circuit_netlist(circuit, p, span, o, x0=lcp.x[0]), spice_options)
     options = netlist.options                         # the TMAX it took, kept for the runs on
-    spice = circuit_trajectory(circuit, p, netlist, run, t0)
+    spice = circuit_trajectory(circuit, p, netlist, run, modes_from)
     spice_periods, settle = periods, spice_drift(spice, T, periods, window)
     while start == "steady" and settle > SPICE_SETTLE and spice_periods < MAX_SPICE_PERIODS:
         netlist, run, more = run_spice_retrying(lambda o: circuit_netlist(circuit, p, span, o, x0=spice.x[-1]), options)
         options, notes = netlist.options, notes + more
-        spice = circuit_trajectory(circuit, p, netlist, run, t0)
+        spice = circuit_trajectory(circuit, p, netlist, run, modes_from)
         spice_periods += periods
         settle = spice_drift(spice, T, periods, window)
     result = CircuitComparison(circuit.name, p, lcp, spice, (t0, span))
@@ -106,8 +111,7 @@ def compare_circuit(circuit, params: dict | None = None, *, h=None, spice_option
     th = {**THRESHOLDS["circuit"], **(thresholds or {})}
     m = result.metrics
     if not periodic:
-        law = circuit.compiled(p).law
-        if getattr(law, "function", None) is not None and law.function.ramp is None:
+        if oscillating:
             return _self_oscillating(result, circuit, th)
         return _transient(result, circuit, th)
     outputs = list(dict.fromkeys(["vout", *[v for v in circuit.netlist.outputs if v != circuit.output]]))

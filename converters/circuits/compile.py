@@ -93,9 +93,6 @@ class _Compiler:
             first = [e for e in els if e.name == duplicate][1]
             raise self.error(first, f"{first.title}: the name is used twice")
         for e in els:
-            if e.kind in "VI" and isinstance(e.waveform, Sin) and (e.waveform.td or e.waveform.theta):
-                raise self.error(e, f"{e.title}: a SIN with a delay or damping (TD, THETA) is not periodic from t = 0; "
-                                    "give SIN(VO VA FREQ 0 0 PHASE)")
             if e.kind in "FHW":
                 ctrl = next((v for v in self.by_kind["V"] if v.name == e.control[0]), None)
                 if ctrl is None:
@@ -131,6 +128,16 @@ class _Compiler:
         self.mutual = self.inductance_matrix()
         #: PWL sources in the power circuit: ramps, each a state of the LCS (its value), its slope per phase
         self.ramps = [s for s in self.sources if isinstance(s.waveform, Pwl) and self.in_power_circuit(s)]
+        #: SIN sources with a delay or damping: oscillators, each two states of the LCS (e^(-THETA t') sin and cos of
+        #: 2 pi FREQ t' + PHASE, t' = t - TD: the damped rotation they follow), frozen before TD
+        self.oscillators = [s for s in self.sources if isinstance(s.waveform, Sin) and (s.waveform.td or s.waveform.theta)]
+        for o in self.oscillators:
+            if not self.in_power_circuit(o):
+                raise self.error(o, f"{o.title}: a SIN with a delay or damping (TD, THETA) in a switch's control is not "
+                                    "compiled; in the power circuit it is")
+            if o.waveform.td < 0 or o.waveform.theta < 0:
+                raise self.error(o, f"{o.title}: its SIN delay TD and damping THETA must be >= 0; got TD = "
+                                    f"{o.waveform.td:g} s, THETA = {o.waveform.theta:g} 1/s")
 
     def error(self, element: Element, what: str) -> NetlistError:
         return NetlistError(f"{self.path}:{element.line}: {what}")
@@ -166,7 +173,8 @@ class _Compiler:
             if not math.isfinite(s.waveform.per):
                 raise self.error(s, f"{s.title}: a single pulse in the power circuit: give it a period (PER)")
         once = {name: d for name, d in drives.items() if d and any(_once(self.source(n).waveform) for n in d)}
-        corners = {t for r in self.ramps for t, _ in r.waveform.points if t > 0.0}
+        corners = ({t for r in self.ramps for t, _ in r.waveform.points if t > 0.0}
+                   | {o.waveform.td for o in self.oscillators if o.waveform.td > 0.0})
         phase_times, phase_states = self.phases(once, corners)
         repeating = {name: d for name, d in drives.items() if name not in once}
         starts, periodic_keys = self.schedule_keys(period, repeating, power)
@@ -175,7 +183,8 @@ class _Compiler:
         def full(key, state, start):   # a periodic key with the one-shot switches' states and the ramps' slopes of a phase
             held = dict(zip(repeating, key[0]))
             return (tuple(held[n] if n in held else state[n] for n in names), key[1],
-                    tuple(_slope(r.waveform, start) for r in self.ramps))
+                    tuple(_slope(r.waveform, start) for r in self.ramps),
+                    tuple(start >= o.waveform.td for o in self.oscillators))
         phase_keys = [[full(key, state, start) for key in periodic_keys]
                       for state, start in zip(phase_states, [0.0, *phase_times])]
         distinct = list(dict.fromkeys(key for keys_ in phase_keys for key in keys_))
@@ -183,13 +192,13 @@ class _Compiler:
         for key in distinct:
             switch_state = dict(zip([s.name for s in self.switches], key[0]))
             levels = dict(zip([s.name for s in power], key[1]))
-            config, forms, signals, sinusoids = self.configuration(switch_state, levels, key[2])
+            config, forms, signals, sinusoids = self.configuration(switch_state, levels, key[2], key[3])
             per_config_sinusoids.append(sinusoids)
             configs.append(config)
             pair_currents.append(tuple(f == CURRENT for f in forms))
             closed.append(tuple(key[0]))
             maps.append(signals)
-        sines = [src.waveform for src in self.sources if isinstance(src.waveform, Sin)]
+        sines = [src.waveform for src in self.sources if isinstance(src.waveform, Sin) and src not in self.oscillators]
         laws = [self.schedule(period, starts, [distinct.index(k) for k in keys_], bool(sines)) for keys_ in phase_keys]
         schedule = laws[0]
         periodic = math.isfinite(schedule.period)
@@ -200,7 +209,8 @@ class _Compiler:
             inputs = (np.array([2 * math.pi * w.freq for w in sines]), np.array([math.radians(w.phase) for w in sines]),
                       E_sin, F_sin)
         state_names = (tuple(f"v({c.name})" for c in self.capacitors) + tuple(f"i({l.name})" for l in self.inductors)
-                       + tuple(f"pwl({r.name})" for r in self.ramps))
+                       + tuple(f"pwl({r.name})" for r in self.ramps)
+                       + tuple(f"{f}({o.name})" for o in self.oscillators for f in ("sin", "cos")))
         return Compiled(tuple(configs), schedule, state_names,
                         tuple(d.name for d in self.diodes) or ("none",), tuple(pair_currents),
                         tuple(s.name for s in self.switches), tuple(closed), self.signal_names(), tuple(maps),
@@ -342,7 +352,8 @@ class _Compiler:
             if isinstance(w, Pulse) and math.isfinite(w.per) and w.td >= w.per:
                 raise self.error(s, f"{s.title}: a PULSE delay TD = {w.td:g} s of a whole period ({w.per:g} s) or "
                                     "more: the waveform is not periodic from t = 0")
-        periods += [1.0 / s.waveform.freq for s in self.sources if isinstance(s.waveform, Sin) and s.waveform.freq > 0]
+        periods += [1.0 / s.waveform.freq for s in self.sources if isinstance(s.waveform, Sin) and s.waveform.freq > 0
+                    and s not in self.oscillators]
         periods += [s.waveform.period for s in self.sources if isinstance(s.waveform, Pwl) and not _once(s.waveform)]
         if not periods:
             return math.inf
@@ -569,17 +580,19 @@ class _Compiler:
                 forms[i] = CURRENT
         return _Network(self, switch_state, levels, forms).solve(), forms
 
-    def configuration(self, switch_state: dict, levels: dict, slopes: tuple = ()):
+    def configuration(self, switch_state: dict, levels: dict, slopes: tuple = (), running: tuple = ()):
         """(Configuration, port forms, signal maps, (E, F) of the SIN sources) of one configuration; ``slopes``: each
-        ramp's slope in it (V/s or A/s)."""
+        ramp's slope in it (V/s or A/s); ``running``: each oscillator past its delay."""
         solution, forms = self.network(switch_state, levels)
-        config, signals, sinusoids = self.lcs(solution, forms, switch_state, slopes)
+        config, signals, sinusoids = self.lcs(solution, forms, switch_state, slopes, running)
         self.check_unique_ports(config, switch_state)
         return config, forms, signals, sinusoids
 
-    def lcs(self, solution, forms, switch_state, slopes: tuple = ()):
+    def lcs(self, solution, forms, switch_state, slopes: tuple = (), running: tuple = ()):
         """The configuration's LCS and signal maps from a solved network. A ramp (a PWL in the power circuit) is a
-        state of its own, its value: its column of the network becomes a state's, and its slope its derivative."""
+        state of its own, its value: its column of the network becomes a state's, and its slope its derivative. An
+        oscillator (a delayed or damped SIN) is two, its value VO + VA s: its column scaled by VA becomes s's, and
+        (s, c)' = [[-THETA, w], [-w, -THETA]] (s, c) once running (w = 2 pi FREQ), 0 before."""
         n, k = self.n, self.k
         dx = solution.derivatives()                       # (n, n + k + sources)
         ports = solution.ports()                          # (k, n + k + sources)
@@ -609,16 +622,27 @@ class _Compiler:
         static[[c - n - k for c in gates]] = 0.0       # a gate's share is its waveform at each sample's time
         Sx = rows[:, :n]
         E_sin, F_sin = E_sin.T, F_sin.T
-        if self.ramps:
-            ramps = [n + k + self.sources.index(r) for r in self.ramps]
-            r = len(ramps)
-            C_ramps = ports[:, ramps].copy()
-            C_ramps[self.shorted_diodes(switch_state, forms)] = 0.0        # pairs that never hold (above)
-            config = Configuration(A=np.block([[A, dx[:, ramps]], [np.zeros((r, n + r))]]),
-                                   B=np.vstack([config.B, np.zeros((r, k))]), C=np.hstack([config.C, C_ramps]),
-                                   D=config.D, E=np.concatenate([E, np.asarray(slopes, dtype=float)]), F=config.F,
-                                   name=name)
-            Sx = np.hstack([Sx, rows[:, ramps]])
+        extra = [(n + k + self.sources.index(x), 1.0) for x in self.ramps]
+        for o in self.oscillators:
+            extra += [(n + k + self.sources.index(o), o.waveform.va), (None, 0.0)]
+        if extra:
+            r = len(extra)
+            columns_of = lambda M: np.column_stack([M[:, c] * w if c is not None else np.zeros(M.shape[0])   # noqa: E731
+                                                    for c, w in extra])
+            block, rates = np.zeros((r, r)), np.zeros(r)
+            rates[:len(self.ramps)] = slopes
+            for j, (o, on) in enumerate(zip(self.oscillators, running)):
+                i, w, damping = len(self.ramps) + 2 * j, 2 * math.pi * o.waveform.freq, o.waveform.theta
+                if on:
+                    block[i:i + 2, i:i + 2] = [[-damping, w], [-w, -damping]]
+            C_extra = columns_of(ports)
+            C_extra[self.shorted_diodes(switch_state, forms)] = 0.0        # pairs that never hold (above)
+            if not self.diodes:
+                C_extra[:] = 0.0
+            config = Configuration(A=np.block([[A, columns_of(dx)], [np.zeros((r, n)), block]]),
+                                   B=np.vstack([config.B, np.zeros((r, k))]), C=np.hstack([config.C, C_extra]),
+                                   D=config.D, E=np.concatenate([E, rates]), F=config.F, name=name)
+            Sx = np.hstack([Sx, columns_of(rows)])
             E_sin = np.hstack([E_sin, np.zeros((E_sin.shape[0], r))])
         signals = (Sx.copy(), rows[:, n:n + k].copy(), rows[:, n + k:] @ static, rows[:, columns] * amplitudes,
                    rows[:, gates].copy())
@@ -635,7 +659,7 @@ class _Compiler:
 
     def sinusoid_columns(self):
         """(columns of the SIN sources among the MNA's input columns, their amplitudes VA)."""
-        sines = [i for i, src in enumerate(self.sources) if isinstance(src.waveform, Sin)]
+        sines = [i for i, src in enumerate(self.sources) if isinstance(src.waveform, Sin) and src not in self.oscillators]
         return ([self.n + self.k + i for i in sines],
                 np.array([self.sources[i].waveform.va for i in sines], dtype=float))
 
@@ -724,6 +748,8 @@ class _Compiler:
                 x.append(va - vb)
         x += [l.ic or 0.0 for l in self.inductors]
         x += [r.waveform.points[0][1] for r in self.ramps]          # a ramp holds its first value until its first time
+        for o in self.oscillators:                                  # VO + VA sin(PHASE) until TD (as ngspice's SIN)
+            x += [math.sin(math.radians(o.waveform.phase)), math.cos(math.radians(o.waveform.phase))]
         return np.array(x, dtype=float)
 
 
