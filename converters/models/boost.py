@@ -10,6 +10,8 @@ class Boost(SmallRipple, PWMTwoState):
     title = "boost (step-up)"
     netlist_file = "boost.cir"
     topology = "boost"
+    element_signals = {"i_in": "i(l1)", "i_switch": "i(s1)", "v_switch": "v(sw)", "i_diode": "i(d1)",
+                       "v_diode": "v(sw,out)", "i_cap": "i(c1)"}
 
     @staticmethod
     def k_crit(D):

@@ -10,6 +10,8 @@ class Buck(SmallRipple, PWMTwoState):
     title = "buck (step-down)"
     netlist_file = "buck.cir"
     topology = "buck"
+    element_signals = {"i_in": "i(s1)", "i_switch": "i(s1)", "v_switch": "v(in,sw)", "i_diode": "i(d1)",
+                       "v_diode": "v(0,sw)", "i_cap": "i(c1)"}
 
     @staticmethod
     def k_crit(D):

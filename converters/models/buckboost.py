@@ -11,3 +11,5 @@ class BuckBoost(InvertingRatios, PWMTwoState):
     title = "buck-boost (inverting)"
     netlist_file = "buck-boost.cir"
     topology = "buck-boost"
+    element_signals = {"i_in": "i(s1)", "i_switch": "i(s1)", "v_switch": "v(in,sw)", "i_diode": "i(d1)",
+                       "v_diode": "v(out,sw)", "i_cap": "i(c1)"}

@@ -8,11 +8,9 @@ generalised DCM (GDCM-OFF); the ON pair held at v1 = 0 is GDCM-ON.
 """
 from __future__ import annotations
 
-import numpy as np
-
 from ..params import Param, nonnegative, positive
 from .analytic import InvertingRatios
-from .base import ON, Converter, power_balance
+from .base import Converter, power_balance
 from .netlist import FromNetlist
 from .pwm2 import STEPS
 
@@ -51,16 +49,14 @@ class Cuk(InvertingRatios, FromNetlist, Converter):
         """The closed forms' inductance: the effective Le = L1 L2 / (L1 + L2) (the relations are the buck-boost's)."""
         return p["L1"] * p["L2"] / (p["L1"] + p["L2"])
 
+    #: The switch's and the diode's currents as the netlist names them (read on the compiled signal maps).
+    element_signals = {"i_switch": "i(s1)", "i_diode": "i(d1)"}
+
     def signal(self, name, samples, p):
-        if name in ("i_in", "i_switch", "i_diode"):
-            i1, i2 = samples.x[:, 0], samples.x[:, 2]
-            if name == "i_in":
-                return i1
-            if samples.u is None:                  # an ngspice run: no pair variables
-                return np.full(i1.shape, np.nan)
-            on = np.asarray(samples.config) == ON
-            u = samples.u[:, 0]
-            return np.where(on, i1 + i2 - u, 0.0) if name == "i_switch" else np.where(on, u, i1 + i2)
+        if name == "i_in":
+            return samples.x[:, 0]
+        if name in self.element_signals:
+            return self.netlist_signal(self.element_signals[name], samples, p)
         return super().signal(name, samples, p)
 
     def power(self, tr, p, t0: float, t1: float) -> dict:

@@ -11,7 +11,7 @@ mode of a point is the set of conducting diodes and closed switches (``S1+D2``; 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 from pathlib import Path
 
@@ -209,19 +209,18 @@ class Circuit(Model):
         except ValueError:
             raise SignalError(f"signal must be one of vout, switch, {', '.join(c.signal_names)}; got {name!r}") from None
         config = np.asarray(samples.config, dtype=np.int64)
-        out = np.empty(len(samples.t))
-        gate_values = (np.column_stack([waveform_at(w, np.asarray(samples.t, dtype=float)) for w in c.gates])
-                       if c.gates else None)
-        for index, (Sx, Su, s0, Ssin, Sgate) in enumerate(c.signal_maps):
-            rows = config == index
-            if rows.any():
-                u = samples.u[rows] if samples.u is not None else np.zeros((rows.sum(), Su.shape[1]))
-                out[rows] = samples.x[rows] @ Sx[row] + u @ Su[row] + s0[row]
-                if c.inputs is not None:          # the SIN sources' share at each point's time
-                    omega, phase = c.inputs[0], c.inputs[1]
-                    out[rows] += np.sin(np.multiply.outer(np.asarray(samples.t)[rows], omega) + phase) @ Ssin[row]
-                if gate_values is not None:       # a gate's node voltage follows its waveform
-                    out[rows] += gate_values[rows] @ Sgate[row]
+        Sx, Su, s0, Ssin, Sgate = _signal_rows(c, row)          # each configuration's row of each map
+        x = np.asarray(samples.x)
+        out = np.einsum("ij,ij->i", x, Sx[config]) + s0[config]
+        if samples.u is not None:
+            out += np.einsum("ij,ij->i", np.asarray(samples.u), Su[config])
+        t = np.asarray(samples.t, dtype=float)
+        if c.inputs is not None and Ssin.any():          # the SIN sources' share at each point's time
+            omega, phase = c.inputs[0], c.inputs[1]
+            out += np.einsum("ij,ij->i", np.sin(np.multiply.outer(t, omega) + phase), Ssin[config])
+        if c.gates and Sgate.any():                      # a gate's node voltage follows its waveform
+            gate_values = np.column_stack([waveform_at(w, t) for w in c.gates])
+            out += np.einsum("ij,ij->i", gate_values, Sgate[config])
         return out
 
     def vout(self, samples: Samples, p: dict) -> np.ndarray:
@@ -266,6 +265,23 @@ class Circuit(Model):
     turn_off_label = None
 
 
+def _signal_rows(compiled: Compiled, row: int) -> tuple:
+    """Row ``row`` of every configuration's signal maps, stacked by configuration: (Sx (configs, n), Su (configs, k),
+    s0 (configs,), Ssin (configs, m), Sgate (configs, g)), so a signal is one gather and one product per point."""
+    key = (id(compiled), row)
+    cached = _ROWS.get(key)
+    if cached is None or cached[0] is not compiled:
+        maps = compiled.signal_maps
+        stacked = tuple(np.array([m[i][row] for m in maps]) for i in range(5))
+        cached = _ROWS[key] = (compiled, stacked)
+        if len(_ROWS) > 4096:
+            _ROWS.pop(next(iter(_ROWS)))
+    return cached[1]
+
+
+_ROWS: dict = {}
+
+
 def _difference(name: str, names: tuple):
     """("v(a)", "v(b)") for "v(a,b)" when both are node voltages of the circuit (ground: 0)."""
     if not (name.startswith("v(") and name.endswith(")") and "," in name):
@@ -302,6 +318,19 @@ class FromNetlist:
         return _builtin_configurations(self.netlist_file, tuple(self.netlist_states), tuple(self.configuration_names),
                                        self.circuit_values(p))
 
+    def netlist_signal(self, name: str, samples: Samples, p: dict) -> np.ndarray:
+        """A signal of the model's netlist by its SPICE name (``i(d1)``, ``v(in,sw)``; ``-v(sw)`` its negative) at
+        the model's parameters ``p``: the compiled configuration's signal map, the model's states put in the
+        compiled order. NaN on a run without pair variables (ngspice's: no complementarity variables to read)."""
+        if samples.u is None:
+            return np.full(len(samples.t), np.nan)
+        circuit = self.circuit
+        values = _resolved(self.netlist_file, self.circuit_values(p))
+        compiled = circuit.compiled(values)
+        order = [self.netlist_states.index(state) for state in compiled.state_names]
+        sign, spice = (-1.0, name[1:]) if name.startswith("-") else (1.0, name)
+        return sign * circuit.signal(spice, replace(samples, x=np.asarray(samples.x)[:, order]), values)
+
     @property
     def circuit(self) -> Circuit:
         """The netlist the model compiles, as a :class:`Circuit`."""
@@ -329,6 +358,12 @@ def builtin(name: str) -> Circuit:
     read by path so the model library does not import it)."""
     path = Path(__file__).resolve().parents[2] / "netlists" / "circuits" / name
     return Circuit.from_netlist(path)
+
+
+@lru_cache(maxsize=256)
+def _resolved(name: str, values: tuple) -> dict:
+    """A built-in netlist's resolved parameters at the model's circuit values (read-only: shared by the callers)."""
+    return builtin(name).resolve(dict(values))
 
 
 @lru_cache(maxsize=256)

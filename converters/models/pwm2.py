@@ -8,8 +8,8 @@ OFF: u = -v_D, y = i_D = iL (the diode is in series with the inductor)
 Optional parasitics (0 in the netlist unless given): rL inductor DCR, Ron switch on-resistance, Vf and Rd diode
 forward drop and resistance, rC capacitor ESR. The ESR enters through the output node: vout = a vC + b i_in with
 a = R/(R + rC), b = R rC/(R + rC), where i_in is the current delivered to the output (iL for the buck, i_D
-otherwise): what :meth:`PWMTwoState.elements` and :meth:`PWMTwoState.vout` read.
-"""
+otherwise): what :meth:`PWMTwoState.vout` and :meth:`PWMTwoState.output_row` read. The element signals (switch,
+diode, capacitor, input) are the netlist's own (:attr:`PWMTwoState.element_signals`)."""
 from __future__ import annotations
 
 import numpy as np
@@ -56,44 +56,21 @@ class PWMTwoState(FromNetlist, Converter):
     signal_names = ("vout", "switch") + ELEMENT_SIGNALS
     signal_units = {"i_in": "A", "i_switch": "A", "v_switch": "V", "i_diode": "A", "v_diode": "V", "i_cap": "A"}
 
+    #: Each element signal as the netlist names it (devices' voltages anode-cathode and drain-source; the input
+    #: current the one the source delivers, the capacitor's the one charging it): set per topology.
+    element_signals: dict
+
     def signal(self, name, samples, p):
         if name in ELEMENT_SIGNALS:
-            return self.elements(samples, p)[name]
+            return self.netlist_signal(self.element_signals[name], samples, p)
         return super().signal(name, samples, p)
 
     def elements(self, samples, p) -> dict:
-        """Input, switch, diode and capacitor currents and the switch's and diode's voltages, from the state
-        and the pair (u = i_D in ON, u = -v_D in OFF; module docstring):
-
-        i_D = u (ON), iL (OFF); i_S = iL - i_D (ON), 0 (OFF); v_sw, the switch node:
-        buck       ON Vin - Ron i_S   OFF u - Vf - Rd iL
-        boost      ON Ron i_S         OFF Vf + (Rd + b) iL + a vC - u
-        buck-boost ON Vin - Ron i_S   OFF u - Vf - (Rd + b) iL - a vC
-        (the OFF forms are L iL' + rL iL rearranged: exact whether the diode conducts or blocks). An ngspice
-        run has no pair variables: its element signals are NaN (not measured), and summaries leave them out."""
-        Vin, R = p["Vin"], p["R"]
-        rL, Ron, Vf, Rd, rC = (p.get(k, 0.0) for k in ("rL", "Ron", "Vf", "Rd", "rC"))
-        a, b = R / (R + rC), R * rC / (R + rC)
-        iL, vC = samples.x[:, 0], samples.x[:, 1]
-        if samples.u is None:                      # an ngspice run: no complementarity variables to read
-            return {name: np.full(iL.shape, np.nan) for name in ELEMENT_SIGNALS}
-        u = samples.u[:, 0]
-        on = np.asarray(samples.config) == ON
-        i_d = np.where(on, u, iL)
-        i_s = np.where(on, iL - u, 0.0)
-        i_node = iL if self.topology == "buck" else i_d          # into the output node
-        v_node = a * vC + b * i_node                               # |vout|
-        if self.topology == "buck":
-            v_sw = np.where(on, Vin - Ron * i_s, u - Vf - Rd * iL)
-            v_s, v_d = Vin - v_sw, -v_sw
-        elif self.topology == "boost":
-            v_sw = np.where(on, Ron * i_s, Vf + (Rd + b) * iL + a * vC - u)
-            v_s, v_d = v_sw, v_sw - v_node
-        else:
-            v_sw = np.where(on, Vin - Ron * i_s, u - Vf - (Rd + b) * iL - a * vC)
-            v_s, v_d = Vin - v_sw, -v_node - v_sw
-        return {"i_in": iL if self.topology == "boost" else i_s, "i_switch": i_s, "v_switch": v_s,
-                "i_diode": i_d, "v_diode": v_d, "i_cap": i_node - v_node / R}
+        """Input, switch, diode and capacitor currents and the switch's and diode's voltages: the netlist's own
+        signals (:attr:`element_signals`, read on the compiled signal maps: exact with every parasitic, in every
+        mode). An ngspice run has no pair variables: its element signals are NaN (not measured), and summaries leave
+        them out."""
+        return {name: self.netlist_signal(spice, samples, p) for name, spice in self.element_signals.items()}
 
     def power(self, tr, p, t0: float, t1: float) -> dict:
         """Input and output power, each element's loss and the efficiency over [t0, t1] (W), by the run's own
