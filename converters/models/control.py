@@ -100,8 +100,9 @@ class Control(ABC):
     def max_h(self, model: "Controlled", p: dict) -> float:
         return model.period(p)
 
-    def signal(self, name: str, samples: Samples, p: dict, model: "Controlled") -> np.ndarray:
-        """A signal of ``signal_names`` (at the controller's design values: before and after a step)."""
+    def signal(self, name: str, samples: Samples, p: dict, model: "Controlled", circuit: dict | None = None) -> np.ndarray:
+        """A signal of ``signal_names`` at the controller's design values ``p``, sensing the circuit in force
+        (``circuit``: ``p``, or after a load or input step)."""
         raise NotImplementedError(name)
 
     def summary(self, model: "Controlled", tr, p: dict, *options) -> dict | None:
@@ -138,12 +139,18 @@ class OpenLoop(Control):
 @dataclass(frozen=True)
 class ControlledLabels(SteppedLabels):
     """A closed loop's laws with a load or input step: the circuit's signals are read with the circuit in force,
-    the controller's with its design values (a step changes the plant, not the controller)."""
+    the controller's with its design values sensing the circuit in force (a step changes the plant, not the
+    controller)."""
 
     def signal(self, name: str, samples: Samples) -> np.ndarray:
-        if name in self.model.loop.signal_names:
-            return self.model.signal(name, samples, self.params)
-        return super().signal(name, samples)
+        model, p = self.model, self.params
+        if name not in model.loop.signal_names:
+            return super().signal(name, samples)
+        before = model.loop.signal(name, samples, p, model, p)
+        after = np.asarray(samples.t) > p["t_step"]
+        if not after.any():
+            return before
+        return np.where(after, model.loop.signal(name, samples, p, model, model.stepped(p)), before)
 
 
 class Controlled(Converter):
@@ -164,8 +171,7 @@ class Controlled(Converter):
         self.pair_names = converter.pair_names
         self.signal_names = tuple(converter.signal_names) + tuple(loop.signal_names)
         self.signal_units = {**getattr(converter, "signal_units", {}), **loop.signal_units}
-        for attribute in ("mode_labels", "output_state", "off_held_label", "turn_off_label", "pair_currents",
-                          "closed_form"):
+        for attribute in ("mode_labels", "output_state", "off_held_label", "turn_off_label", "pair_currents"):
             setattr(self, attribute, getattr(converter, attribute))
         self.closed_form = False             # the closed forms are the open-loop converter's at a given D
 
@@ -219,7 +225,7 @@ class Controlled(Converter):
 
     def signal(self, name: str, samples: Samples, p: dict) -> np.ndarray:
         if name in self.loop.signal_names:
-            return self.loop.signal(name, samples, p, self)
+            return self.loop.signal(name, samples, p, self, p)
         if name == "switch":
             return self.switch(samples)
         return self.converter.signal(name, samples, self.plant(p))

@@ -127,10 +127,11 @@ class SlidingMode(Control):
         return (Relay(function, low=OFF, high=ON) if self.implicit
                 else StateSwitching(function, below=ON, above=OFF, band=p["band"], initial=initial))
 
-    def signal(self, name: str, samples: Samples, p: dict, model) -> np.ndarray:
+    def signal(self, name: str, samples: Samples, p: dict, model, circuit: dict | None = None) -> np.ndarray:
         x = samples.x
         integral = p["Ki"] * x[:, 2] if x.shape[1] > 2 else 0.0
-        return iref0(p) + p["Kp"] * (p["Vref"] - np.abs(model.vout(samples, p))) + integral
+        sensed = np.abs(model.vout(samples, p if circuit is None else circuit))
+        return iref0(p) + p["Kp"] * (p["Vref"] - sensed) + integral
 
     def window_start(self, model, p: dict, t_start: float, t_end: float, window_s: float | None = None) -> float:
         """Where the summary's window begins: ``window_s`` (default min(a quarter of the run, 2 ms)) before the

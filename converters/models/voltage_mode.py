@@ -65,7 +65,7 @@ class VoltageMode(Control):
         function = SwitchingFunction(c=p["A"] * c, d=p["A"] * (d - p["Vref"]), ramp=self.ramp(model, p))
         return StateSwitching(function, below=ON, above=OFF, latch=bool(p["latch"]), initial=initial)
 
-    def signal(self, name: str, samples: Samples, p: dict, model) -> np.ndarray:
+    def signal(self, name: str, samples: Samples, p: dict, model, circuit: dict | None = None) -> np.ndarray:
         if name == "vcon":
-            return p["A"] * (np.abs(model.vout(samples, p)) - p["Vref"])
+            return p["A"] * (np.abs(model.vout(samples, p if circuit is None else circuit)) - p["Vref"])
         return self.ramp(model, p)(samples.t)

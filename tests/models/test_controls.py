@@ -70,6 +70,20 @@ def test_voltage_mode_buck_takes_a_load_step_and_settles_on_the_closed_loops_orb
     assert abs(summary["power"]["balance"]) < 1e-6
 
 
+def test_the_comparators_input_senses_the_circuit_in_force_after_a_load_step():
+    """vcon = A (vout - Vref) at every point, vout read behind the ESR with the load in force: after the step (R 22 ->
+    11 ohm, rC 0.2 ohm) the ESR's divider is the stepped circuit's (vcon had read it with the nominal R: 0.95 V
+    apart, measured)."""
+    tr = run_converter("buck", {"Vin": 20, "rC": 0.2, "t_step": "8m", "R_step": 11}, control="voltage-mode",
+                       method="event", periods=40)
+    np.testing.assert_allclose(tr.signal("vcon"), 8.4 * (tr.signal("vout") - 11.3), rtol=0, atol=1e-12)
+    closings = tr.events.loc[(tr.events["kind"] == "switch") & (tr.events["config"] == 0), "time"].to_numpy()
+    after = closings[closings > 8e-3]
+    rows = np.searchsorted(tr.t, after)
+    assert len(after) > 10 and np.abs(tr.t[rows] - after).max() == 0.0          # the event instants are samples
+    assert np.abs((tr.signal("vcon") - tr.signal("ramp"))[rows]).max() < 1e-9     # the law switches on that vcon
+
+
 def test_a_control_names_where_it_applies_and_what_it_keeps():
     with pytest.raises(ParameterError, match=r"--control voltage-mode is available for buck only \(boost takes "
                                              r"--control pwm, smc, smc-implicit\); got 'boost'"):
