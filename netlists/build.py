@@ -209,7 +209,7 @@ def build_voltage_mode_netlist(params: dict | None, t_end, options: SpiceOptions
              f"Rcf craw {gate} {_num('comparator R', COMPARATOR_R)}",
              f"Ccf {gate} 0 {_num('comparator C', COMPARATOR_DELAY_FRACTION * T / COMPARATOR_R)}"]
     written = converter_netlist(buck, model.plant(p), t_end, options, x0, drives={GATE: drive})
-    first, rest = written.text.split("\n", 1)
+    _, rest = written.text.split("\n", 1)
     return replace(written, text=f"* pcsuite: {model.title}, on the built-in buck's circuit\n{rest}",
                    converter="buck-voltage-mode", params=p, probes={**written.probes, "ramp": ("ramp", 1.0)})
 

@@ -637,8 +637,6 @@ class _Compiler:
                     block[i:i + 2, i:i + 2] = [[-damping, w], [-w, -damping]]
             C_extra = columns_of(ports)
             C_extra[self.shorted_diodes(switch_state, forms)] = 0.0        # pairs that never hold (above)
-            if not self.diodes:
-                C_extra[:] = 0.0
             config = Configuration(A=np.block([[A, columns_of(dx)], [np.zeros((r, n)), block]]),
                                    B=np.vstack([config.B, np.zeros((r, k))]), C=np.hstack([config.C, C_extra]),
                                    D=config.D, E=np.concatenate([E, rates]), F=config.F, name=name)

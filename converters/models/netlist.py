@@ -209,7 +209,8 @@ class Circuit(Model):
         except ValueError:
             raise SignalError(f"signal must be one of vout, switch, {', '.join(c.signal_names)}; got {name!r}") from None
         config = np.asarray(samples.config, dtype=np.int64)
-        Sx, Su, s0, Ssin, Sgate = _signal_rows(c, row)          # each configuration's row of each map
+        # each configuration's row of each map, stacked by configuration: one gather and one product per point
+        Sx, Su, s0, Ssin, Sgate = (np.array([m[i][row] for m in c.signal_maps]) for i in range(5))
         x = np.asarray(samples.x)
         out = np.einsum("ij,ij->i", x, Sx[config]) + s0[config]
         if samples.u is not None:
@@ -265,23 +266,6 @@ class Circuit(Model):
     turn_off_label = None
 
 
-def _signal_rows(compiled: Compiled, row: int) -> tuple:
-    """Row ``row`` of every configuration's signal maps, stacked by configuration: (Sx (configs, n), Su (configs, k),
-    s0 (configs,), Ssin (configs, m), Sgate (configs, g)), so a signal is one gather and one product per point."""
-    key = (id(compiled), row)
-    cached = _ROWS.get(key)
-    if cached is None or cached[0] is not compiled:
-        maps = compiled.signal_maps
-        stacked = tuple(np.array([m[i][row] for m in maps]) for i in range(5))
-        cached = _ROWS[key] = (compiled, stacked)
-        if len(_ROWS) > 4096:
-            _ROWS.pop(next(iter(_ROWS)))
-    return cached[1]
-
-
-_ROWS: dict = {}
-
-
 def _difference(name: str, names: tuple):
     """("v(a)", "v(b)") for "v(a,b)" when both are node voltages of the circuit (ground: 0)."""
     if not (name.startswith("v(") and name.endswith(")") and "," in name):
@@ -319,8 +303,8 @@ class FromNetlist:
                                        self.circuit_values(p))
 
     def netlist_signal(self, name: str, samples: Samples, p: dict) -> np.ndarray:
-        """A signal of the model's netlist by its SPICE name (``i(d1)``, ``v(in,sw)``; ``-v(sw)`` its negative) at
-        the model's parameters ``p``: the compiled configuration's signal map, the model's states put in the
+        """A signal of the model's netlist by its SPICE name (``i(d1)``, ``v(in,sw)``) at the model's parameters
+        ``p``: the compiled configuration's signal map, the model's states put in the
         compiled order. NaN on a run without pair variables (ngspice's: no complementarity variables to read)."""
         if samples.u is None:
             return np.full(len(samples.t), np.nan)
@@ -328,8 +312,7 @@ class FromNetlist:
         values = _resolved(self.netlist_file, self.circuit_values(p))
         compiled = circuit.compiled(values)
         order = [self.netlist_states.index(state) for state in compiled.state_names]
-        sign, spice = (-1.0, name[1:]) if name.startswith("-") else (1.0, name)
-        return sign * circuit.signal(spice, replace(samples, x=np.asarray(samples.x)[:, order]), values)
+        return circuit.signal(name, replace(samples, x=np.asarray(samples.x)[:, order]), values)
 
     @property
     def circuit(self) -> Circuit:
