@@ -82,3 +82,46 @@ def mode_timeline_plot(t_lcp, modes_lcp, t_spice, modes_spice, period: float, ti
     ax.legend(handles, MODE_COLOURS.keys(), fontsize=7, ncol=5, loc="upper center", bbox_to_anchor=(0.5, -0.55))
     ax.set_title(f"{title}: conduction modes", fontsize=9)
     return png(fig)
+
+
+def bode_figure(response, check=None, margins=None, fmt: str = "png") -> bytes:
+    """Magnitude (dB) and phase (degrees) of a frequency response against frequency (Hz, log axis), the brute-force
+    injection's points over it where given, and a loop gain's crossover and margins; PNG or SVG bytes."""
+    fig, (top, bottom) = plt.subplots(2, 1, sharex=True, figsize=(8, 6.5))
+    f = response.frequency_hz
+    top.semilogx(f, response.magnitude_db, color="C0", label="exact small-signal model")
+    bottom.semilogx(f, response.phase_deg, color="C0")
+    if check is not None:
+        f_check, values = check
+        phase = np.degrees(np.angle(values))
+        # the check's phases on the exact curve's branch (the exact curve is unwrapped along the frequencies)
+        reference = np.interp(f_check, f, response.phase_deg)
+        phase = phase + 360.0 * np.round((reference - phase) / 360.0)
+        top.semilogx(f_check, 20 * np.log10(np.abs(values)), "o", color="C1", mfc="none",
+                     label="sinusoid injected (brute force)")
+        bottom.semilogx(f_check, phase, "o", color="C1", mfc="none")
+    fs = 1.0 / response.period
+    for ax in (top, bottom):
+        ax.axvline(fs / 2, color="grey", lw=0.8, ls=":")
+        ax.grid(True, which="both", lw=0.3)
+        ax.ticklabel_format(axis="y", useOffset=False, style="plain")
+    top.text(fs / 2, top.get_ylim()[1], " fs/2", va="top", fontsize=8, color="grey")
+    if margins is not None and math.isfinite(margins.crossover_hz):
+        top.axhline(0.0, color="grey", lw=0.8)
+        bottom.axhline(-180.0, color="grey", lw=0.8)
+        for ax in (top, bottom):
+            ax.axvline(margins.crossover_hz, color="C3", lw=0.8, ls="--")
+        bottom.set_title(f"crossover {margins.crossover_hz:.4g} Hz, phase margin {margins.phase_margin_deg:.3g} deg"
+                         + (f", gain margin {margins.gain_margin_db:.3g} dB" if math.isfinite(margins.gain_margin_db)
+                            else ""), fontsize=9)
+    unit = f" ({response.output_unit}/{response.input_unit})" if response.output_unit and response.input_unit else ""
+    what = "loop gain T" if response.kind == "loop gain" else f"{response.output} / {response.input}"
+    top.set_ylabel(f"|{what}| (dB{', ' + unit.strip(' ()') if unit else ''})")
+    bottom.set_ylabel("phase (deg)")
+    bottom.set_xlabel("frequency (Hz)")
+    top.legend(fontsize=8, loc="lower left")
+    fig.tight_layout()
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format=fmt, dpi=110)
+    plt.close(fig)
+    return buffer.getvalue()

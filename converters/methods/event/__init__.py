@@ -142,6 +142,15 @@ class EventDriven(Method, key="event"):
         self.supports(problem)
         return _engine(problem).period_map(problem, self)
 
+    def engine(self, problem: LCSProblem):
+        """The LCS engine of ``problem``: its modes' flows (``flow(config, held)``), its switching law's guard rows
+        (``switch_row``), Moreau's impulse (``enter``) and its runs (``run(x0, timeline=[])`` records what a
+        linearisation about the run needs: :mod:`converters.analysis.smallsignal`)."""
+        self.supports(problem)
+        if not isinstance(problem, LCSProblem):
+            raise ParameterError(f"the LCS engine takes an LCSProblem; got {type(problem).__name__}")
+        return _Machine(problem, self)
+
     def return_map(self, problem: LCSProblem, config: int, crossings: int = 1) -> PeriodMap:
         """For autonomous state-switched problems: x (at a switching into ``config``) -> x at the
         ``crossings``-th next switching into ``config``, with its exact Jacobian; ``period`` of the map is

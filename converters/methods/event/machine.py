@@ -274,10 +274,14 @@ class _Machine:
     # --- runs ---------------------------------------------------------------------------------------
 
     def run(self, x0, record: bool = True, jacobian: bool = False, stop_config: int | None = None,
-            stop_count: int = 0):
+            stop_count: int = 0, timeline: list | None = None):
         """Run over t_span from x0. ``jacobian``: also d x_end / d x0. ``stop_config``/``stop_count``: stop
         at the ``stop_count``-th switching into ``stop_config`` (a return map; the run may then end before
-        t_span[1], which must be long enough). Returns (EventSolution, jacobian or None, stop time or None)."""
+        t_span[1], which must be long enough). ``timeline``: a list that receives, in time order, what a
+        linearisation about the run needs (:mod:`converters.analysis.smallsignal`): ("flow", t0, t1, flow) per
+        segment; ("cross", t, guard row, d guard / dt, f before, f after, jump, pair (-1: the law), flow before,
+        latched before, x~ before the jump, configuration after, flow after, x~ after) per state event; ("edge", t, kind, configuration
+        after, jump, x~ before the jump, flow before, flow after, x~ after) per time-driven instant. Returns (EventSolution, jacobian or None, stop time or None)."""
         start_clock = time.perf_counter()
         problem, options = self.problem, self.options
         n = problem.n
@@ -316,6 +320,8 @@ class _Machine:
                 t_next = edge_t if tau is None else t + tau
                 if record and t_next > t:
                     segments.append(Segment(t, t_next, flow, xt, xt_end))
+                if timeline is not None and t_next > t:
+                    timeline.append(("flow", t, t_next, flow))
                 if jac is not None:
                     jac[:] = flow.transition(t_next - t) @ jac
                 if tau is None:
@@ -332,6 +338,7 @@ class _Machine:
                 grad = watch.rows[which, :n]
                 dgdt = watch.slopes[which]
                 f_before = flow.field(xt)
+                flow_before, latched_before, xt_before = flow, latched, xt
                 if pair < 0:                                     # the switching law fires
                     config = law.above if config == law.below else law.below
                     latched = law.latch
@@ -349,6 +356,10 @@ class _Machine:
                 else:
                     jump = None
                     new, xt_new = self.select(config, xt, t, flow.held ^ (1 << pair), f_before)
+                if timeline is not None:
+                    timeline.append(("cross", t, watch.rows[which].copy(), dgdt, f_before, new.field(xt_new),
+                                     np.eye(n) if jump is None else jump, pair, flow_before, latched_before, xt_before,
+                                     config, new, xt_new))
                 if jac is not None:
                     # Saltation through a jump x+ = Pi(x): S = DPi + (f+ - DPi f-) n^T / (n^T f- + dg/dt).
                     f_after = new.field(xt_new)
@@ -373,10 +384,14 @@ class _Machine:
                     log(t, "switch", -1, config)
             else:
                 config = edge_kind
+            xt_before = xt
             xt, jump = self.enter(config, xt, t, log)
             if jac is not None and jump is not None:
                 jac[:] = jump @ jac
             new, xt = self.select(config, xt, t, flow.held)
+            if timeline is not None:
+                timeline.append(("edge", t, edge_kind, config, np.eye(n) if jump is None else jump, xt_before, flow,
+                                 new, xt))
             for i in range(problem.k):
                 was, now = (flow.held >> i) & 1, (new.held >> i) & 1
                 if was != now:

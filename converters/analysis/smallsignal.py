@@ -1,0 +1,543 @@
+"""The exact small-signal model of a switched circuit about its periodic orbit: frequency responses and loop gains.
+
+A small sinusoidal perturbation of an input u (a source's value, the duty ratio, the comparator's input) drives
+the linearisation of the circuit about its periodic orbit, a linear T-periodic system: inside each segment of the
+orbit dx' = A_i dx + b_i du (b_i the derivative of the mode's field with respect to u), and at each event the
+saltation dx+ = S dx- + s_u du, where an event's time moves with the state and with u,
+
+    S = J + (f+ - J f-) n^T / (n^T f- + dg/dt),   s_u = (f+ - J f-) g_u / (n^T f- + dg/dt) + J_u
+
+(n the gradient of the event's guard g, g_u its derivative in u, J the jump of a Moreau impulse, f-/f+ the fields
+before and after; a time-driven edge whose instant t_e moves with u, as the duty ratio moves the turn-off, has
+n = 0, dg/dt = 1, g_u = -dt_e/du). For du = e^{jwt} the steady response is dx = e^{jwt} p(t) with p T-periodic:
+p' = (A_i - jw) p + b_i, p+ = S p- + s_u, and the output's component at w is the mean over one period of
+r_i p + r_u (its row in each mode), plus, where the output steps at an event (vout through a capacitor's ESR
+when a diode starts to carry), that step times the event's move. Per frequency that is one matrix exponential per segment of the augmented
+[p; integral; 1] and one linear solve for the periodic p: exact (no averaging), at every frequency up to and beyond
+fs/2. Its poles are the Floquet multipliers' (a response is infinite where e^{jwT} is one).
+
+Everything the linearisation needs is read from one event-method run over the orbit (its ``timeline``) and, for
+the input's derivatives, from the same modes' flows with the input moved by a finite amount: the circuit is affine
+in its sources and an edge's instant in the duty ratio, so that difference is exact to rounding. An input that
+changes a mode's matrix A (an inductance, a load resistance) is not a small-signal input here and is refused.
+
+The loop gain of a state-driven law s = c x + d - ramp is Middlebrook's injection (R. D. Middlebrook, "Measurement
+of loop gain in feedback systems", Int. J. Electronics 38, 1975), read on the exact model: a perturbation added
+to the comparator's input, Y the response of the sensed c x to it, T = -Y / (1 + Y).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ..errors import ParameterError, SimulationError
+from ..problems import Schedule, StateSwitching
+from ..trajectory import Samples
+
+#: The comparator's input of a state-driven law (a perturbation added to its switching function s).
+CONTROL = "control"
+#: Frequencies of a response by default: this many, log-spaced from fs/1000 to fs/2.
+POINTS = 200
+MAX_POINTS = 100_000
+#: The finite move of an input for its derivatives (relative to its value, at least this absolute amount): the
+#: circuit is affine in it, so the difference is exact to rounding.
+RELATIVE_MOVE = 1e-3
+
+
+@dataclass(frozen=True)
+class FrequencyResponse:
+    """A frequency response of the exact small-signal model.
+
+    Attributes
+    ----------
+    frequency_hz : ndarray
+        Frequencies (Hz).
+    response : ndarray (complex)
+        The output's phasor per unit input phasor at each frequency (output unit per input unit).
+    input, output : str
+        What was perturbed and what was read; ``kind`` is ``transfer`` or ``loop gain``.
+    period : float
+        The switching period T (s) of the orbit it is taken about.
+    multipliers : ndarray
+        The orbit's Floquet multipliers (the poles of every response).
+    """
+
+    frequency_hz: np.ndarray
+    response: np.ndarray
+    input: str
+    output: str
+    kind: str
+    period: float
+    multipliers: np.ndarray
+    input_unit: str = ""
+    output_unit: str = ""
+
+    @property
+    def magnitude_db(self) -> np.ndarray:
+        return 20.0 * np.log10(np.abs(self.response))
+
+    @property
+    def phase_deg(self) -> np.ndarray:
+        """Phase (degrees), unwrapped along the frequencies, the first in (-180, 180]."""
+        return np.degrees(np.unwrap(np.angle(self.response)))
+
+    def frd(self):
+        """The response as a python-control frequency-response data object (``control.FRD``, rad/s)."""
+        import control
+        return control.frd(self.response, 2.0 * np.pi * self.frequency_hz)
+
+    def as_dict(self) -> dict:
+        out = {"input": self.input, "output": self.output, "kind": self.kind, "period_s": self.period,
+               "input_unit": self.input_unit, "output_unit": self.output_unit,
+               "frequency_hz": self.frequency_hz.tolist(), "magnitude_db": self.magnitude_db.tolist(),
+               "phase_deg": self.phase_deg.tolist(),
+               "multipliers": [[float(m.real), float(m.imag)] for m in self.multipliers]}
+        return out
+
+
+@dataclass(frozen=True)
+class Margins:
+    """Stability margins of a loop gain: the gain crossover (|T| = 1) and phase margin 180 + angle T there, the
+    phase crossover (angle T = -180) and gain margin -20 log10 |T| there; NaN where the loop gain has none in the
+    frequencies searched."""
+
+    crossover_hz: float
+    phase_margin_deg: float
+    phase_crossover_hz: float
+    gain_margin_db: float
+
+    def as_dict(self) -> dict:
+        return {"crossover_hz": self.crossover_hz, "phase_margin_deg": self.phase_margin_deg,
+                "phase_crossover_hz": self.phase_crossover_hz, "gain_margin_db": self.gain_margin_db}
+
+
+class SmallSignalModel:
+    """The linearisation of a model about its periodic orbit for one input (module docstring).
+
+    ``response(f)`` evaluates it at any frequencies (Hz) for any output it was built with."""
+
+    def __init__(self, model, params: dict | None = None, *, input: str, outputs=("vout",), tol: float = 1e-11,
+                 orbit=None):
+        from ..methods import EventDriven
+        from .periodic import require, shoot
+        if isinstance(model, str):
+            from ..models import get_model
+            model = get_model(model)
+        self.model = model
+        self.params = p = model.resolve(params)
+        if not model.periodic(p):
+            raise ParameterError(f"{model.key} has no switching period (an autonomous law): the small-signal model "
+                                 "is taken about a periodic orbit of a clocked circuit")
+        if model.step_times(p):
+            raise ParameterError("a load or input step has no periodic orbit to linearise about; leave out t_step, "
+                                 "R_step and Vin_step (a step's response is simulate's)")
+        self.input = input
+        self.method = method = EventDriven()
+        self.T = T = model.period(p)
+        problem = model.problem(p, T)
+        if orbit is None:
+            orbit = require(shoot(problem, method, problem.x0, tol=tol), f"the periodic orbit of {model.key}")
+        self.orbit = orbit
+        problem = model.problem(p, T, orbit.x0)
+        self.n = problem.n
+        self.machine = method.engine(problem)
+        self.timeline: list = []
+        self.machine.run(self.orbit.x0, record=False, timeline=self.timeline)
+        self.moved, self.delta = self._moved(problem, method.engine)
+        self.law = problem.switching
+        self.outputs = tuple(outputs)
+        self.pieces = self._pieces()
+
+    # --- the input's derivatives ---------------------------------------------------------------------------
+
+    def _moved(self, problem, engine):
+        """(the machine of the problem with the input moved, the move)."""
+        model, p, name = self.model, self.params, self.input
+        law = problem.switching
+        if name == CONTROL:
+            if not isinstance(law, StateSwitching):
+                raise ParameterError(f"input {CONTROL!r} is the comparator's input of a state-driven law; "
+                                     f"{model.key} is driven by a schedule: use input 'D' (the duty ratio)")
+            ramp = law.function.ramp
+            delta = RELATIVE_MOVE * (abs(ramp.high - ramp.low) if ramp is not None and ramp.high != ramp.low
+                                     else max(abs(law.function.d), 1.0))
+            moved = replace(problem, switching=replace(law, function=replace(law.function, d=law.function.d + delta)))
+            return engine(moved), delta
+        key = model.parameter_name(name)
+        names = [q.name for q in model.parameters]
+        if key not in names:
+            raise ParameterError(f"input must be {CONTROL!r} (a state-driven law) or one of the parameters "
+                                 f"{', '.join(names)}; got {name!r}")
+        param = next(q for q in model.parameters if q.name == key)
+        value = p.get(key)
+        if value is None:
+            raise ParameterError(f"input {name!r} has no value here (an optional parameter that is not set); give "
+                                 f"it one with -p {name}=VALUE")
+        for delta in (RELATIVE_MOVE * max(abs(value), 1.0), -RELATIVE_MOVE * max(abs(value), 1.0)):
+            try:
+                moved_p = model.resolve({**{k: v for k, v in p.items() if v is not None}, key: value + delta})
+            except ParameterError:
+                continue
+            moved = model.problem(moved_p, self.T, self.orbit.x0)
+            return engine(moved), delta
+        raise ParameterError(f"input {name!r} = {value!r} cannot be moved inside its range {param.range_text()}")
+
+    def _affine_column(self, flow):
+        """b = d(field)/du of a mode, with a check that u moves the sources only."""
+        other = self.moved.flow(flow.config, flow.held)
+        n = self.n
+        A, A_moved = flow.Z[:n, :n], other.Z[:n, :n]
+        if not np.allclose(A, A_moved, rtol=1e-9, atol=1e-12 * np.abs(A).max(initial=1.0)):
+            raise ParameterError(f"input {self.input!r} changes the circuit's dynamics (its matrices), not only its "
+                                 "sources or a switching instant: a small-signal input here is a source's value, the "
+                                 "duty ratio or the comparator's input")
+        return (other.Z[:n, n] - flow.Z[:n, n]) / self.delta
+
+    def _output_rows(self, flow, t: float, name: str):
+        """(r, r_u, r0) of an output in a mode: y = r x + r0, r_u the derivative of r0 in u."""
+        n = self.n
+        if name == "sensed":                       # the comparator's sensed quantity c x
+            return np.asarray(self.law.function.c, dtype=float), 0.0, 0.0
+        if name in self.machine.problem.state_names:
+            return np.eye(n)[self.machine.problem.state_names.index(name)], 0.0, 0.0
+        values = []
+        for machine, params in ((self.machine, self.params), (self.moved, self._moved_params())):
+            f = machine.flow(flow.config, flow.held)
+            xt = np.vstack([np.eye(n + 1)[:n] + np.eye(n + 1)[n], np.eye(n + 1)[n]])     # e_i + "1", then "1"
+            samples = Samples(np.full(n + 1, t), xt[:, :n], xt @ f.u_rows.T, xt @ f.y_rows.T,
+                              np.full(n + 1, flow.config), held=np.broadcast_to(f.held_flags, (n + 1, f.held_flags.size)))
+            values.append(np.asarray(self.model.labels(params).signal(name, samples), dtype=float))
+        base, moved = values
+        return base[:n] - base[n], (moved[n] - base[n]) / self.delta, base[n]
+
+    def _rows(self, flow, t: float) -> dict:
+        key = (flow.config, flow.held)
+        rows = self._row_cache.get(key)
+        if rows is None:
+            rows = self._row_cache[key] = {name: self._output_rows(flow, t, name) for name in self.outputs}
+        return rows
+
+    def _step(self, flow_b, xt_b, flow_a, xt_a, t: float) -> dict:
+        """Per output, its jump y- - y+ at an event (what moving the event's instant adds to its integral)."""
+        before, after = self._rows(flow_b, t), self._rows(flow_a, t)
+        return {name: (before[name][0] @ xt_b[:-1] + before[name][2]) - (after[name][0] @ xt_a[:-1] + after[name][2])
+                for name in self.outputs}
+
+    def _moved_params(self) -> dict:
+        if self.input == CONTROL:
+            return self.params
+        key = self.model.parameter_name(self.input)
+        return {**self.params, key: self.params[key] + self.delta}
+
+    def _jump_offset(self, config: int, xt_before, t: float):
+        """d x+ / du of a Moreau impulse entering ``config`` (zero without one)."""
+        quiet = lambda *a: None          # noqa: E731
+        base = self.machine.enter(config, xt_before, t, quiet)[0]
+        moved = self.moved.enter(config, xt_before, t, quiet)[0]
+        return (moved[:-1] - base[:-1]) / self.delta
+
+    def _edge_shift(self, t: float, config: int) -> float:
+        """d t_e / du of a schedule's edge at t entering ``config`` (the duty ratio moves the turn-off)."""
+        law, moved = self.machine.problem.switching, self.moved.problem.switching
+        if not isinstance(law, Schedule):
+            return 0.0
+        if not isinstance(moved, Schedule) or len(moved.starts) != len(law.starts):
+            raise ParameterError(f"input {self.input!r} at this value changes the schedule's edges (a duty ratio of 0 "
+                                 "or 1): no small-signal model there")
+        phase = (t - self.machine.problem.t_span[0]) % law.period
+        candidates = [i for i, c in enumerate(law.configs) if c == config]
+        i = min(candidates, key=lambda i: min(abs(phase - law.starts[i]), law.period - abs(phase - law.starts[i])))
+        return (moved.starts[i] - law.starts[i]) / self.delta
+
+    def _pieces(self) -> list:
+        """The orbit's segments and events: ("flow", h, A, b, {output: (r, r_u, r0)}), and ("jump", S, s_u, dt_row,
+        dt_u, {output: y- - y+}) with the event's time moving by dt_row dx- + dt_u du."""
+        n, pieces = self.n, []
+        self._row_cache: dict = {}
+        for item in self.timeline:
+            if item[0] == "flow":
+                _, t0, t1, flow = item
+                pieces.append(("flow", t1 - t0, flow.Z[:n, :n], self._affine_column(flow), self._rows(flow, t0)))
+            elif item[0] == "cross":
+                _, t, row, dgdt, f_b, f_a, J, pair, flow_b, latched_b, xt_b, config, flow_a, xt_a = item
+                grad = row[:n]
+                denominator = grad @ f_b + dgdt
+                if abs(denominator) <= 1e-12 * (np.abs(grad) @ np.abs(f_b) + abs(dgdt)):
+                    raise SimulationError(f"the orbit grazes an event surface at t = {t:.9g} s (the crossing's speed "
+                                          "is zero): it has no small-signal model there")
+                if pair >= 0:
+                    moved_row, moved_slope = self.moved.flow(flow_b.config, flow_b.held).watch_rows[pair], 0.0
+                else:
+                    moved_row, moved_slope = self.moved.switch_row(flow_b.config, latched_b)
+                # a ramp's level and slope both move the guard g = row x~ + slope (t - the ramp's last reset)
+                phase = t - math.floor(t / self.T) * self.T if moved_slope != dgdt else 0.0
+                g_u = (moved_row[n] - row[n] + (moved_slope - dgdt) * phase) / self.delta
+                jumped = not np.array_equal(J, np.eye(n))
+                j_u = self._jump_offset(config, xt_b, t) if jumped and pair < 0 else np.zeros(n)
+                dt_row, dt_u = -grad / denominator, -g_u / denominator
+                pieces.append(self._jump(J, f_a - J @ f_b, j_u, dt_row, dt_u, self._step(flow_b, xt_b, flow_a, xt_a, t)))
+            else:
+                _, t, kind, config, J, xt_b, flow_b, flow_a, xt_a = item
+                shift = self._edge_shift(t, kind) if kind != "reset" else 0.0
+                kick = flow_a.field(xt_a) - J @ flow_b.field(xt_b)
+                j_u = self._jump_offset(config, xt_b, t) if not np.array_equal(J, np.eye(n)) else np.zeros(n)
+                pieces.append(self._jump(J, kick, j_u, np.zeros(n), shift, self._step(flow_b, xt_b, flow_a, xt_a, t)))
+        return pieces
+
+    @staticmethod
+    def _jump(J, kick, j_u, dt_row, dt_u, steps) -> tuple:
+        """An event's piece: dx+ = J dx- - kick dt + j_u du with dt = dt_row dx- + dt_u du (the saltation)."""
+        return ("jump", J - np.outer(kick, dt_row), -kick * dt_u + j_u, dt_row, dt_u, steps)
+
+    # --- responses -----------------------------------------------------------------------------------------
+
+    def response(self, frequency_hz, output: str = "vout") -> np.ndarray:
+        """The output's phasor per unit input phasor at each frequency (Hz)."""
+        from scipy.linalg import expm
+        if output not in self.outputs:
+            raise ParameterError(f"output must be one of {', '.join(self.outputs)} (this model was built for "
+                                 f"them); got {output!r}")
+        f = np.atleast_1d(np.asarray(frequency_hz, dtype=float))
+        n, m = self.n, self.n + 2
+        jw = 2j * np.pi * f
+        G = np.broadcast_to(np.eye(m, dtype=complex), (f.size, m, m)).copy()
+        for piece in self.pieces:
+            if piece[0] == "flow":
+                _, h, A, b, rows = piece
+                r, r_u, _ = rows[output]
+                M = np.zeros((f.size, m, m), dtype=complex)
+                M[:, :n, :n] = A
+                M[:, range(n), range(n)] -= jw[:, None]
+                M[:, :n, n + 1] = b
+                M[:, n, :n] = r
+                M[:, n, n + 1] = r_u
+                G = expm(M * h) @ G
+            else:
+                _, S, s_u, dt_row, dt_u, steps = piece
+                P = np.eye(m, dtype=complex)
+                P[:n, :n], P[:n, n + 1] = S, s_u
+                P[n, :n], P[n, n + 1] = steps[output] * dt_row, steps[output] * dt_u     # the output's step moves
+                G = P @ G
+        # the periodic p: p0 = G_pp p0 + G_p1; the integral of the output over the period at that p0
+        p0 = np.linalg.solve(np.eye(n) - G[:, :n, :n], G[:, :n, n + 1][..., None])[..., 0]
+        integral = np.einsum("fi,fi->f", G[:, n, :n], p0) + G[:, n, n + 1]
+        return integral / self.T
+
+
+def frequencies(model_period: float, fmin=None, fmax=None, points: int = POINTS) -> np.ndarray:
+    """Log-spaced frequencies (Hz), by default from fs/1000 to fs/2; each bound validated."""
+    fs = 1.0 / model_period
+    fmin = fs / 1000.0 if fmin is None else fmin
+    fmax = fs / 2.0 if fmax is None else fmax
+    for name, value in (("fmin", fmin), ("fmax", fmax)):
+        if not (isinstance(value, (int, float, np.floating)) and not isinstance(value, bool) and math.isfinite(value)
+                and value > 0):
+            raise ParameterError(f"{name} must be a frequency > 0 Hz; got {value!r}")
+    if not fmin < fmax:
+        raise ParameterError(f"fmin must be below fmax; got fmin = {fmin:g} Hz, fmax = {fmax:g} Hz")
+    if not (isinstance(points, (int, np.integer)) and not isinstance(points, bool) and 2 <= points <= MAX_POINTS):
+        raise ParameterError(f"points must be an integer in [2, {MAX_POINTS}]; got {points!r}")
+    return np.geomspace(fmin, fmax, int(points))
+
+
+def quantity_unit(model, params, name: str) -> str:
+    """The unit of an input or output of a response: a parameter's, a signal's, V for vout, none for the duty ratio
+    and a comparator's input."""
+    units = getattr(model, "signal_units", {})
+    if name in ("vout", "sensed"):
+        return "V" if name == "vout" else ""
+    if name == CONTROL:
+        return ""
+    key = model.parameter_name(name)
+    param = next((q for q in model.parameters if q.name == key), None)
+    return param.unit if param is not None else units.get(name, "")
+
+
+def frequency_response(model, params: dict | None = None, *, input: str, output: str = "vout", frequency_hz=None,
+                       fmin=None, fmax=None, points: int = POINTS) -> FrequencyResponse:
+    """The exact frequency response from ``input`` (a source's value or a parameter such as ``Vin``, the duty
+    ratio ``D``, or ``control``: the comparator's input of a state-driven law) to ``output`` (``vout``, a state,
+    or any signal of the model), about the model's periodic orbit at ``params``. Frequencies: ``frequency_hz``, or
+    ``points`` log-spaced in [fmin, fmax] (default fs/1000 to fs/2)."""
+    small = SmallSignalModel(model, params, input=input, outputs=(output,))
+    f = (frequencies(small.T, fmin, fmax, points) if frequency_hz is None
+         else np.atleast_1d(np.asarray(frequency_hz, dtype=float)))
+    units = (quantity_unit(small.model, small.params, input), quantity_unit(small.model, small.params, output))
+    return FrequencyResponse(f, small.response(f, output), input, output, "transfer", small.T, small.orbit.multipliers,
+                             *units)
+
+
+def loop_gain(model, params: dict | None = None, *, frequency_hz=None, fmin=None, fmax=None,
+              points: int = POINTS) -> tuple[FrequencyResponse, Margins]:
+    """The loop gain T of a state-driven law (Middlebrook's injection at the comparator's input, read on the exact
+    model: module docstring) and its margins (:func:`margins`)."""
+    small = SmallSignalModel(model, params, input=CONTROL, outputs=("sensed",))
+    f = (frequencies(small.T, fmin, fmax, points) if frequency_hz is None
+         else np.atleast_1d(np.asarray(frequency_hz, dtype=float)))
+
+    def gain(freq):
+        Y = small.response(freq, "sensed")
+        return -Y / (1.0 + Y)
+
+    response = FrequencyResponse(f, gain(f), CONTROL, "sensed", "loop gain", small.T, small.orbit.multipliers)
+    return response, margins(gain, f)
+
+
+def margins(gain, f: np.ndarray) -> Margins:
+    """The margins of a loop gain ``gain(f)`` (a function of frequency, Hz): each crossing bracketed on the grid
+    ``f`` and located on the function itself (Brent's method), the first of each kind."""
+    from scipy.optimize import brentq
+    f = np.asarray(f, dtype=float)
+    values = np.atleast_1d(gain(f))
+    at = lambda x: complex(np.atleast_1d(gain(np.array([x])))[0])      # noqa: E731
+    phase = np.unwrap(np.angle(values))
+
+    def first_root(samples, function):
+        change = np.flatnonzero(np.sign(samples[:-1]) * np.sign(samples[1:]) < 0)
+        if not change.size:
+            return math.nan
+        i = change[0]
+        return math.exp(brentq(lambda lf: function(math.exp(lf)), math.log(f[i]), math.log(f[i + 1]), xtol=1e-13,
+                               rtol=4 * np.finfo(float).eps))
+
+    fc = first_root(np.log(np.abs(values)), lambda x: math.log(abs(at(x))))
+    # the -180 degree line on the unwrapped branch the grid's phase starts on
+    target = -np.pi + 2 * np.pi * np.round((phase[0] + np.pi) / (2 * np.pi))
+    fp = first_root(phase - target, lambda x: (np.angle(at(x)) - target + np.pi) % (2 * np.pi) - np.pi)
+    pm = (math.degrees(np.angle(at(fc))) + 360.0) % 360.0 - 180.0 if math.isfinite(fc) else math.nan
+    gm = -20.0 * math.log10(abs(at(fp))) if math.isfinite(fp) else math.nan
+    return Margins(fc, pm, fp, gm)
+
+
+# --- the brute-force check: a sinusoid injected, the periodic steady state, its fundamental ------------------------
+
+#: The check's frequencies are moved to the nearest fraction b/N of fs with N at most this (or the periods one cycle
+#: of the sinusoid takes, when more): the perturbation and the switching then share a period of N switching periods,
+#: over which the fundamental is read.
+WINDOW = 50
+
+
+def _common(f: float, T: float):
+    """(the frequency used, the common period) for a check at ``f``."""
+    from fractions import Fraction
+    ratio = Fraction(f * T).limit_denominator(max(WINDOW, int(round(1.0 / (f * T)))))
+    if ratio == 0:
+        ratio = Fraction(1, max(WINDOW, int(round(1.0 / (f * T)))))
+    if (2 * ratio).denominator == 1:
+        # at a multiple of fs/2 the cosine's other half, e^{-jwt}, lands on w through the switching's sidebands
+        # (-w + k ws = w): the check then measures their sum, so it moves off by 1 / (2 WINDOW) of fs
+        ratio -= Fraction(1, 2 * WINDOW)
+    return float(ratio) / T, ratio.denominator * T
+
+
+@dataclass
+class _AugmentedMap:
+    """x -> x after the common period of the circuit with its perturbation's oscillator started at (1, 0): the
+    augmented problem's exact event-method map, restricted to the circuit's states (the oscillator's own
+    multipliers are on the unit circle and would stall Newton)."""
+
+    inner: object
+    n: int
+    period: float
+    evaluations: int = 0
+    jacobian_kind: str = "exact"
+
+    def _x(self, x):
+        return np.concatenate([np.asarray(x, dtype=float), [1.0, 0.0]])
+
+    def __call__(self, x):
+        self.evaluations += 1
+        px, jac = self.inner(self._x(x))
+        return px[:self.n], jac[:self.n, :self.n]
+
+    def end(self, x):
+        self.evaluations += 1
+        return self.inner.end(self._x(x))[:self.n]
+
+
+def _augmented(small: SmallSignalModel, omega: float, amplitude: float):
+    """The circuit with the input perturbed by ``amplitude`` cos(omega t): an oscillator's two states w' = [[0, -w],
+    [w, 0]] w beside the circuit's, entering where the input does (the sources' columns of E and F, the comparator's
+    function, or the duty ratio's comparison with a sawtooth)."""
+    from ..problems import Configuration, LCSProblem, Ramp, SwitchingFunction
+    problem, moved = small.machine.problem, small.moved.problem
+    n, k = problem.n, problem.k
+    configs = []
+    for c, m in zip(problem.configurations, moved.configurations):
+        A, B, C, D = (np.asarray(v, dtype=float) for v in (c.A, c.B, c.C, c.D))
+        E = np.zeros(n) if c.E is None else np.asarray(c.E, dtype=float)
+        F = np.zeros(k) if c.F is None else np.asarray(c.F, dtype=float)
+        E_u = ((np.zeros(n) if m.E is None else np.asarray(m.E)) - E) / small.delta
+        F_u = ((np.zeros(k) if m.F is None else np.asarray(m.F)) - F) / small.delta
+        Aa = np.zeros((n + 2, n + 2))
+        Aa[:n, :n], Aa[:n, n] = A, amplitude * E_u
+        Aa[n, n + 1], Aa[n + 1, n] = -omega, omega
+        Ca = np.hstack([C, (amplitude * F_u)[:, None], np.zeros((k, 1))])
+        configs.append(Configuration(A=Aa, B=np.vstack([B, np.zeros((2, k))]), C=Ca, D=D, E=np.append(E, [0.0, 0.0]),
+                                     F=F, name=c.name))
+    law = problem.switching
+    if small.input == CONTROL:
+        f = law.function
+        law = replace(law, function=SwitchingFunction(c=np.append(f.c, [amplitude, 0.0]), d=f.d, ramp=f.ramp))
+    elif isinstance(law, Schedule) and isinstance(moved.switching, Schedule) and law.starts != moved.switching.starts:
+        # a PWM whose turn-off the input moves: ON while a sawtooth 0 -> 1 over T lies below D + amplitude w1
+        if len(law.starts) != 2:
+            raise ParameterError(f"the injection check moves a two-edge PWM's turn-off; this schedule has "
+                                 f"{len(law.starts)} edges")
+        T = law.period
+        duty = law.starts[1] / T
+        slope = (moved.switching.starts[1] - law.starts[1]) / small.delta / T     # d(duty)/du
+        function = SwitchingFunction(c=np.append(np.zeros(n), [-amplitude * slope, 0.0]), d=-duty,
+                                     ramp=Ramp(low=0.0, high=-1.0, period=T))
+        law = StateSwitching(function, below=law.configs[0], above=law.configs[1], latch=True, initial=law.configs[0])
+    elif isinstance(law, StateSwitching):
+        # a parameter of the law (a reference, a ramp's level) moves s = c x + d - ramp by a constant
+        f, g = law.function, moved.switching.function
+        level = lambda h: h.ramp.low if h.ramp is not None else 0.0                  # noqa: E731
+        slope = lambda h: h.ramp.slope if h.ramp is not None else 0.0                # noqa: E731
+        if not np.isclose(slope(f), slope(g), rtol=1e-12, atol=0.0):
+            raise ParameterError(f"the injection check moves a law's reference or ramp level; {small.input!r} moves "
+                                 "its ramp's slope")
+        d_u = ((g.d - level(g)) - (f.d - level(f))) / small.delta
+        law = replace(law, function=replace(f, c=np.append(f.c, [amplitude * d_u, 0.0])))
+    return LCSProblem(tuple(configs), law, x0=np.append(problem.x0, [1.0, 0.0]), t_span=problem.t_span,
+                      state_names=problem.state_names + ("w1", "w2"), pair_names=problem.pair_names)
+
+
+def injection_response(small: SmallSignalModel, frequency_hz, output: str = "vout", amplitude: float | None = None,
+                       tol: float = 1e-11) -> tuple[np.ndarray, np.ndarray]:
+    """The brute-force response, the way an AC sweep measures it: at each frequency (moved to the nearest multiple
+    of fs / WINDOW, off the multiples of fs/2) the input perturbed by ``amplitude`` cos(2 pi f t) (default: 1e-5 of
+    the input's value, or of the comparator's ramp), the periodic steady state of the circuit with it (Newton shooting over the common
+    period, exact event method), and the output's fundamental over that period, per unit amplitude. Returns (the
+    frequencies used, the responses)."""
+    from .periodic import newton_orbit, require
+    T, n = small.T, small.n
+    plan = [_common(float(f), T) for f in np.atleast_1d(np.asarray(frequency_hz, dtype=float))]
+    amplitude = 0.01 * abs(small.delta) if amplitude is None else amplitude
+    out = np.empty(len(plan), dtype=complex)
+    for i, (f, span) in enumerate(plan):
+        omega = 2.0 * np.pi * f
+        problem = _augmented(small, omega, amplitude)
+        problem = replace(problem, t_span=(problem.t_span[0], problem.t_span[0] + span))
+        machine = small.method.engine(problem)
+        period_map = _AugmentedMap(small.method.period_map(problem), n, span)
+        orbit = require(newton_orbit(period_map, small.orbit.x0, tol=tol, max_iter=50), "the perturbed periodic orbit")
+        solution = machine.run(np.append(orbit.x0, [1.0, 0.0]), record=True)[0]
+        samples, weights = solution.quadrature()
+        values = _output_on(small, samples, output)
+        out[i] = 2.0 / span * np.sum(weights * values * np.exp(-1j * omega * samples.t)) / amplitude
+    return np.array([f for f, _ in plan]), out
+
+
+def _output_on(small: SmallSignalModel, samples, output: str) -> np.ndarray:
+    """The output at quadrature samples of the augmented run (the circuit's states and pairs)."""
+    n = small.n
+    plain = replace(samples, x=np.asarray(samples.x)[:, :n])
+    if output == "sensed":
+        return plain.x @ small.law.function.c
+    if output in small.machine.problem.state_names:
+        return plain.x[:, small.machine.problem.state_names.index(output)]
+    return np.asarray(small.model.labels(small.params).signal(output, plain), dtype=float)

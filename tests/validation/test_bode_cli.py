@@ -1,0 +1,57 @@
+"""pcsuite bode: the exact response as JSON and a plot, the brute-force check beside it, a loop gain's margins, and
+one clear line for bad input."""
+import json
+
+import numpy as np
+import pytest
+
+from validation.cli import main
+
+
+def run_cli(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_bode_prints_the_averaged_bucks_response_and_its_injection_check(capsys, tmp_path):
+    png = tmp_path / "bode.png"
+    code, out, _ = run_cli(capsys, "bode", "buck", "-p", "L=100u", "--input", "duty", "--points", "50", "--check",
+                           "--plot", str(png), "--json")
+    assert code == 0
+    summary = json.loads(out)
+    f = np.array(summary["frequency_hz"])
+    assert f.size == 50 and f[0] == pytest.approx(100.0) and f[-1] == pytest.approx(50e3)
+    s = 2j * np.pi * f
+    averaged = 12.0 / (1 + s * 100e-6 / 10.0 + s ** 2 * 100e-6 * 100e-6)
+    assert np.abs(np.array(summary["magnitude_db"]) - 20 * np.log10(np.abs(averaged))).max() < 1e-7
+    assert np.abs(np.array(summary["phase_deg"]) - np.degrees(np.unwrap(np.angle(averaged)))).max() < 1e-6
+    check = summary["check"]
+    assert len(check["frequency_hz"]) == 8 and max(check["frequency_hz"]) < 50e3
+    assert np.abs(check["difference_db"]).max() < 1e-3 and np.abs(check["difference_deg"]).max() < 1e-2
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_bode_gives_the_voltage_mode_bucks_loop_gain_with_its_margins(capsys):
+    code, out, _ = run_cli(capsys, "bode", "buck", "--control", "voltage-mode", "-p", "Vin=22", "--input", "loop")
+    assert code == 0
+    assert "loop gain T" in out and "phase margin" in out
+    code, out, _ = run_cli(capsys, "bode", "buck", "--control", "voltage-mode", "-p", "Vin=22", "--input", "loop",
+                           "--json")
+    margins = json.loads(out)["margins"]
+    assert 0 < margins["phase_margin_deg"] < 30 and 0 < margins["crossover_hz"] < 1250
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--input", "duty", "--plot", "x.txt"], "--plot must end in .png or .svg"),
+    (["--input", "Q"], "input must be 'control'"),
+    (["--input", "duty", "--fmin", "-3"], "fmin must be a frequency > 0 Hz"),
+    (["--input", "duty", "--fmin", "5k", "--fmax", "1k"], "fmin must be below fmax"),
+    (["--input", "loop"], "driven by a schedule"),
+    (["--input", "L"], "changes the circuit's dynamics"),
+    (["--input", "duty", "--output", "nope"], "signal must be one of"),
+])
+def test_bad_bode_input_is_one_line_naming_it(capsys, argv, message):
+    code, out, err = run_cli(capsys, "bode", "buck", *argv)
+    assert code == 2 and out == ""
+    assert err.count("\n") == 1 and message in err

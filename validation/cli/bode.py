@@ -1,0 +1,138 @@
+"""``pcsuite bode CONVERTER|FILE.cir --input D|Vin|control|loop --output vout``: the exact small-signal frequency
+response about the periodic orbit (:mod:`converters.analysis.smallsignal`), a loop gain's margins, and the
+brute-force injection beside it (``--check``)."""
+from __future__ import annotations
+
+import time
+
+from converters.errors import ParameterError
+
+from .common import add_params, given_path, integer, json_text
+
+#: What --input accepts beside a parameter's name: the duty ratio and the input voltage by their usual names.
+ALIASES = {"duty": "D", "vin": "Vin"}
+#: Frequencies the brute-force check measures (log-spaced over the response's range, the last below fs/2).
+CHECK_POINTS = 8
+
+
+def add(sub) -> None:
+    from converters.models import CONTROLS
+    bode = sub.add_parser("bode", help="exact small-signal frequency responses and loop gains about the periodic orbit")
+    bode.add_argument("converter")
+    add_params(bode)
+    bode.add_argument("--control", default="pwm", choices=list(CONTROLS),
+                      help="the control law around the converter (default pwm: open loop)")
+    bode.add_argument("--input", required=True,
+                      help="what is perturbed: duty (the duty ratio D), vin, any source's value or parameter the "
+                           "circuit is affine in (Vref, a netlist's V1), control (a comparator's input), or loop "
+                           "(the loop gain T of a state-driven law, with its margins)")
+    bode.add_argument("--output", default="vout", help="what is read: vout (default), a state (iL, vC) or a signal "
+                                                      "(v(NODE), i(ELEMENT) of a netlist)")
+    bode.add_argument("--fmin", default=None, help="lowest frequency in Hz (default fs/1000; SPICE suffixes: 10k)")
+    bode.add_argument("--fmax", default=None, help="highest frequency in Hz (default fs/2)")
+    bode.add_argument("--points", type=integer(2, 100_000), default=200, help="log-spaced frequencies (default 200)")
+    bode.add_argument("--check", action="store_true",
+                      help=f"also inject a sinusoid at {CHECK_POINTS} frequencies, simulate each to its periodic steady "
+                           "state (exact event method) and print its fundamental beside the exact response")
+    bode.add_argument("--plot", type=given_path, default=None, help="write the Bode plot to FILE.png or FILE.svg")
+    bode.add_argument("--json", action="store_true", help="print one JSON object (frequency_hz, magnitude_db, "
+                                                         "phase_deg, margins of a loop gain, the check)")
+    bode.set_defaults(run=run, no_time_limit=True)
+
+
+def run(args) -> int:
+    import numpy as np
+
+    from converters.analysis.smallsignal import (CONTROL, FrequencyResponse, SmallSignalModel, frequencies,
+                                                 injection_response, margins)
+    from converters.params import parse_assignments
+    from converters.run import resolve_model
+    from converters.validate import parse_value, quoted
+
+    from ..io import atomic_write_bytes, check_output_file
+    check_output_file("--plot", args.plot)
+    if args.plot is not None and args.plot.suffix.lower() not in (".png", ".svg"):
+        raise ParameterError(f"--plot must end in .png or .svg; got {str(args.plot)!r}")
+    model = resolve_model(args.converter, args.control)
+    params = parse_assignments(args.params)
+    loop = args.input.lower() == "loop"
+    if loop and args.output != "vout":
+        raise ParameterError(f"--input loop reads the loop's own sensed signal; --output does not apply (got "
+                             f"{args.output!r})")
+    name = CONTROL if loop else ALIASES.get(args.input.lower(), args.input)
+    output = "sensed" if loop else args.output
+    fmin = None if args.fmin is None else parse_value("--fmin", args.fmin)
+    fmax = None if args.fmax is None else parse_value("--fmax", args.fmax)
+    start = time.perf_counter()
+    small = SmallSignalModel(model, params, input=name, outputs=(output,))
+    f = frequencies(small.T, fmin, fmax, args.points)
+
+    def gain(freq):           # the loop gain from the closed loop's response Y at the comparator (Middlebrook)
+        Y = small.response(freq, output)
+        return -Y / (1.0 + Y)
+    values = gain(f) if loop else small.response(f, output)
+    response = FrequencyResponse(f, values, "loop" if loop else name, output, "loop gain" if loop else "transfer",
+                                 small.T, small.orbit.multipliers, *_units(model, small, name, output, loop))
+    exact_s = time.perf_counter() - start
+    summary = {"converter": model.key, "params": {k: v for k, v in small.params.items() if v is not None},
+               **response.as_dict(), "exact_s": exact_s}
+    found = margins(gain, f) if loop else None
+    if found is not None:
+        summary["margins"] = found.as_dict()
+    check = None
+    if args.check:
+        start = time.perf_counter()
+        f_check = np.geomspace(f[0], min(f[-1], 0.49 / small.T), CHECK_POINTS)
+        f_used, measured = injection_response(small, f_check, output)
+        if loop:
+            measured = -measured / (1.0 + measured)
+        exact = gain(f_used) if loop else small.response(f_used, output)
+        check = (f_used, measured)
+        summary["check"] = {"frequency_hz": f_used.tolist(), "exact_db": (20 * np.log10(np.abs(exact))).tolist(),
+                            "injected_db": (20 * np.log10(np.abs(measured))).tolist(),
+                            "difference_db": (20 * np.log10(np.abs(measured / exact))).tolist(),
+                            "difference_deg": np.degrees(np.angle(measured / exact)).tolist(),
+                            "check_s": time.perf_counter() - start}
+    if args.plot is not None:
+        from ..plots import bode_figure
+        atomic_write_bytes(args.plot, bode_figure(response, check, found, args.plot.suffix.lower().lstrip(".")))
+        summary["plot"] = str(args.plot)
+    if args.json:
+        print(json_text(summary))
+        return 0
+    _print(response, summary, found)
+    if args.plot is not None:
+        print(f"wrote {quoted(args.plot)}")
+    return 0
+
+
+def _units(model, small, name, output, loop) -> tuple:
+    from converters.analysis.smallsignal import quantity_unit
+    if loop:
+        return "", ""
+    return quantity_unit(model, small.params, name), quantity_unit(model, small.params, output)
+
+
+def _print(response, summary: dict, found) -> None:
+    import numpy as np
+    f, mag, phase = response.frequency_hz, response.magnitude_db, response.phase_deg
+    what = "loop gain T" if response.kind == "loop gain" else f"{response.output} / {response.input}"
+    unit = f" ({response.output_unit}/{response.input_unit})" if response.output_unit and response.input_unit else ""
+    rho = float(np.abs(response.multipliers).max())
+    print(f"{summary['converter']}: {what}{unit}, exact small-signal model about the periodic orbit (T = "
+          f"{response.period:.6g} s, spectral radius {rho:.4g}), {f.size} frequencies in {summary['exact_s'] * 1e3:.1f} ms")
+    rows = np.unique(np.round(np.linspace(0, f.size - 1, min(f.size, 11))).astype(int))
+    print(f"  {'f (Hz)':>12} {'|H| (dB)':>10} {'phase (deg)':>12}")
+    for i in rows:
+        print(f"  {f[i]:12.5g} {mag[i]:10.3f} {phase[i]:12.2f}")
+    if found is not None:
+        print(f"  crossover {found.crossover_hz:.6g} Hz, phase margin {found.phase_margin_deg:.4g} deg; phase crossover "
+              f"{found.phase_crossover_hz:.6g} Hz, gain margin {found.gain_margin_db:.4g} dB (nan: none in the range)")
+    check = summary.get("check")
+    if check:
+        print(f"check: a sinusoid injected at {len(check['frequency_hz'])} frequencies, each simulated to its periodic "
+              f"steady state (exact event method), in {check['check_s']:.2f} s:")
+        print(f"  {'f (Hz)':>12} {'exact (dB)':>11} {'injected (dB)':>14} {'diff (dB)':>10} {'diff (deg)':>11}")
+        for row in zip(check["frequency_hz"], check["exact_db"], check["injected_db"], check["difference_db"],
+                       check["difference_deg"]):
+            print(f"  {row[0]:12.5g} {row[1]:11.4f} {row[2]:14.4f} {row[3]:10.2e} {row[4]:11.2e}")
