@@ -10,6 +10,7 @@ from .buck import Buck
 from .buckboost import BuckBoost
 from .control import Control, Controlled, OpenLoop
 from .cuk import Cuk
+from .current_mode import PeakCurrent
 from .prc import PRC
 from .sliding import SlidingMode
 from .netlist import Circuit, is_netlist, load
@@ -18,7 +19,8 @@ from .voltage_mode import VoltageMode
 CONVERTERS: dict[str, Converter] = {c.name: c for c in (Buck(), Boost(), BuckBoost(), Cuk(), PRC())}
 #: Every control by its --control name; ``pwm`` is open-loop PWM (the converter as it is).
 CONTROLS: dict[str, Control] = {c.key: c for c in (OpenLoop(), SlidingMode(implicit=False),
-                                                   SlidingMode(implicit=True), VoltageMode())}
+                                                   SlidingMode(implicit=True), VoltageMode(),
+                                                   PeakCurrent())}
 #: The control of a converter when none is named: open-loop PWM.
 DEFAULT_CONTROL = OpenLoop.key
 #: Every model by (converter name, control): each control on each converter it applies to (built once, so a

@@ -1,0 +1,63 @@
+"""Peak current-mode control: a clock turns the switch on at every period start, the inductor current reaching
+the control current minus a compensation ramp turns it off (Ridley 1991, "A new, continuous-time model for
+current-mode control"; Deane and Hamill 1990 for its period doubling).
+
+A control (:mod:`.control`) around a two-state converter's circuit (its parasitics, load and input steps). With the
+command Iref (A) and the compensation ramp's slope ma (A/s) the switching function is
+
+    s(x, t) = iL - (Iref - ma (t mod T)),
+
+the switch ON below zero; latched (one switching per period): after the turn-off it stays off until the clock,
+and at the clock it turns on where iL is below Iref (a period whose current starts above the command is skipped).
+A period in which the current never reaches the command keeps the switch on throughout (duty ratio 1). Without
+compensation the period-1 orbit of the CCM buck loses stability near D = 0.5, where the off-slope m2 meets the
+on-slope m1 (an inductor-current perturbation is multiplied by -m2/m1 each period); a ramp of half the off-slope
+keeps it stable to any duty ratio. Exact in the event method (the crossings and saltation matrices with the
+ramp's slope), located inside the step in the stepper.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..params import nonnegative, positive
+from ..problems import Ramp, StateSwitching, SwitchingFunction
+from ..trajectory import Samples
+from .base import OFF, ON
+from .control import Control
+
+PARAMETERS = (
+    positive("Iref", 0.5, "A", "peak current command (the inductor current that turns the switch off)"),
+    nonnegative("ma", 0.0, "A/s", "slope compensation: the command falls by ma per second of each period"),
+)
+
+
+class PeakCurrent(Control):
+    """A clocked turn-on and a turn-off on the inductor current (module docstring)."""
+
+    key = "peak-current"
+    title = "peak current-mode control"
+    parameters = PARAMETERS
+    #: The two-state converters, with an inductance that keeps the default load in CCM (the buck: 100 uH).
+    plants = {"buck": {"L": 100e-6}, "boost": {"L": 100e-6}, "buck-boost": {"L": 100e-6}}
+    signal_names = ("icontrol",)
+    signal_units = {"icontrol": "A"}
+
+    def law(self, model, p: dict, initial: int | None = None, circuit: dict | None = None) -> StateSwitching:
+        c = np.zeros(len(model.converter.state_names))
+        c[model.converter.state_names.index("iL")] = 1.0
+        T = model.period(p)
+        # s = iL - Iref + ma (t mod T): the law's ramp (subtracted) falls from 0 to -ma T over each period
+        function = SwitchingFunction(c=c, d=-p["Iref"], ramp=Ramp(0.0, -p["ma"] * T, T))
+        return StateSwitching(function, below=ON, above=OFF, latch=True, initial=initial)
+
+    def x0(self, model, p: dict) -> np.ndarray:
+        """The start of a run when none is given: the capacitor discharged, the inductor current half the command
+        (from rest a boost's current may not reach a command above Vin T / L in the first period: the switch then
+        stays on, and the period map has a multiplier at 1 there, which Newton shooting cannot start from)."""
+        x0 = np.zeros(len(model.converter.state_names))
+        x0[model.converter.state_names.index("iL")] = 0.5 * p["Iref"]
+        return x0
+
+    def signal(self, name: str, samples: Samples, p: dict, model, circuit: dict | None = None) -> np.ndarray:
+        """``icontrol``: the command with its compensation ramp, Iref - ma (t mod T) (A)."""
+        return p["Iref"] - p["ma"] * np.mod(np.asarray(samples.t, dtype=float), model.period(p))
