@@ -184,7 +184,7 @@ def run_study(converter: str, control: str, params: dict | None, name: str, star
     path = ParameterPath(model, base, name)
     clock = time.perf_counter()
     family = OrbitFamily(path, EventDriven(), 1)
-    x_start = np.zeros(len(model.state_names))
+    x_start = np.array(path(start).x0, dtype=float)          # the model's own start (a current loop: iL at half the command)
     branches = cascade(family, start, stop, x_start, max_period=max_period, max_step=max_step)
     continuation_s = time.perf_counter() - clock
     attractors, diagram_s, label = None, 0.0, ""

@@ -76,3 +76,42 @@ def test_the_exact_model_has_ridleys_double_pole_at_half_the_switching_frequency
     mc_exact = 1 + ma / ((VIN - VIN * D) / L)
     Q = 1 / (np.pi * (mc_exact * (1 - D) - 0.5))
     assert abs(small.response([FS / 2], "iL")[0]) == pytest.approx(Q, rel=5e-3)
+
+
+def _boost_ccm_multiplier(iref: float, vin=10.0, L=1e-3, C=12e-6, R=20.0, T=100e-6) -> float:
+    """The most negative Floquet multiplier of the current-mode boost's period-1 orbit in CCM, from its own
+    stroboscopic map written here (ON: iL' = Vin/L, vC' = -vC/(RC) until iL = Iref; OFF: the LC with the load, by a
+    matrix exponential), the fixed point by fsolve and the Jacobian by central differences."""
+    from scipy.linalg import expm
+    from scipy.optimize import fsolve
+    off = np.array([[0.0, -1 / L, vin / L], [1 / C, -1 / (R * C), 0.0], [0.0, 0.0, 0.0]])     # [iL, vC, 1]
+
+    def step(x):
+        i0, v0 = x
+        t_on = (iref - i0) * L / vin
+        v_on = v0 * np.exp(-t_on / (R * C))
+        return (expm(off * (T - t_on)) @ np.array([iref, v_on, 1.0]))[:2]
+
+    x = fsolve(lambda x: step(x) - x, np.array([0.8 * iref, 15.0]), xtol=1e-12)
+    h = 1e-6
+    J = np.column_stack([(step(x + h * e) - step(x - h * e)) / (2 * h) for e in np.eye(2)])
+    return float(min(np.linalg.eigvals(J).real))
+
+
+def test_the_current_mode_boost_doubles_its_period_where_its_own_map_has_a_multiplier_at_minus_one(capsys):
+    """The current-mode boost of the bifurcation literature (Deane 1992; Banerjee and Chakrabarty 1998; Tse and di
+    Bernardo 2002: Vin 10 V, L 1 mH, C 12 uF, R 20 ohm, T 100 us, no compensation) along Iref: the continuation (event
+    method, exact Jacobians, det(J + I) by false position) locates the first doubling where an independent map of
+    the CCM circuit, written in this test, has its multiplier at -1. From rest the continuation had started on a
+    spurious branch and reported the doubling at 1.947552 A with the stabilities reversed."""
+    from scipy.optimize import brentq
+    assert main(["bifurcation", "boost", "--control", "peak-current", "-p", "Vin=10", "-p", "L=1m", "-p", "C=12u",
+                 "-p", "R=20", "-p", "f_sw=10k", "--param", "Iref=1:2.5", "--points", "0", "--max-period", "2",
+                 "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    first = summary["bifurcations"][0]
+    assert first["type"] == "period-doubling" and first["period"] == 1
+    assert first["stable_before"] and not first["stable_after"]
+    independent = brentq(lambda iref: _boost_ccm_multiplier(iref) + 1.0, 1.6, 1.8, xtol=1e-12)
+    assert first["value"] == pytest.approx(independent, abs=1e-6)
+    assert first["value"] == pytest.approx(1.705982, abs=1e-6)
