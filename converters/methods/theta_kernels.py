@@ -336,7 +336,7 @@ def _surface(c, d, x, phase, low, slope):
 
 @njit(cache=True)
 def run_state_switched(A, B, C, D, E, F, Phi, Gamma, H, M, t, h, theta, c, d, low, slope, ramp_period, band,
-                       below, above, latch, x, u, y, config, start, state, ev_time, ev_config, ev_step):
+                       below, above, latch, clocked, x, u, y, config, start, state, ev_time, ev_config, ev_step):
     """The theta stepper under a hysteresis or latched switching law (:class:`StateSwitching`).
 
     Step j runs in the configuration in force; when its end point carries s through the level that
@@ -344,7 +344,8 @@ def run_state_switched(A, B, C, D, E, F, Phi, Gamma, H, M, t, h, theta, c, d, lo
     linear interpolation of s over the step and the step is redone as two sub-steps (before the
     crossing in the old configuration, after it in the new one). Ramp resets are grid points: there
     the latch opens and the configuration is set by s against the band (a switch event when it changes;
-    not at the run's start, where the law's initial configuration holds). ``state`` = [config, latched,
+    not at the run's start, where the law's initial configuration holds); a ``clocked`` latch only leaves
+    ``below`` inside a period (its clock alone sets it). ``state`` = [config, latched,
     event count] carries the law's memory across calls. Stacks A..F and the uniform-step matrices
     Phi..M are indexed by configuration.
 
@@ -396,7 +397,7 @@ def run_state_switched(A, B, C, D, E, F, Phi, Gamma, H, M, t, h, theta, c, d, lo
         if mask < 0:
             state[0], state[1], state[2] = current, latched, count
             return NEEDS_GENERAL_SOLVER, j
-        if latched == 0:
+        if latched == 0 and not (clocked and current == above):
             s0 = _surface(c, d, x[j], phase0, low, slope)
             s1 = _surface(c, d, x[j + 1], phase1, low, slope)
             level = band if current == below else -band

@@ -48,7 +48,7 @@ class PeakCurrent(Control):
         T = model.period(p)
         # s = iL - Iref + ma (t mod T): the law's ramp (subtracted) falls from 0 to -ma T over each period
         function = SwitchingFunction(c=c, d=-p["Iref"], ramp=Ramp(0.0, -p["ma"] * T, T))
-        return StateSwitching(function, below=ON, above=OFF, latch=True, initial=initial)
+        return StateSwitching(function, below=ON, above=OFF, latch=True, clocked=True, initial=initial)
 
     def x0(self, model, p: dict) -> np.ndarray:
         """The start of a run when none is given: the capacitor discharged, the inductor current half the command

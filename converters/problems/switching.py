@@ -10,7 +10,9 @@ Two laws use it:
 * :class:`StateSwitching` (hysteresis or latch): configuration ``below`` is entered when s falls
   below -band, ``above`` when s rises above +band. With ``latch`` at most one switching happens per
   ramp period; at every period start (the ramp's reset, where s jumps) the configuration is set again by
-  s against the band (below -band: ``below``; above +band: ``above``; inside it holds).
+  s against the band (below -band: ``below``; above +band: ``above``; inside it holds). ``clocked`` latches
+  are set by the clock only (peak current mode's SR latch): inside a period the law switches from ``below``
+  to ``above``, never back.
 * :class:`Relay` (the implicit, chattering-free law): the configuration is a convex blend
   x' = f_low(x) + z (f_high(x) - f_low(x)) with z in [0, 1] and -s in N_[0,1](z) (s < 0 gives z = 1,
   s > 0 gives z = 0, s = 0 lets z take the value that keeps it there: the equivalent control).
@@ -103,6 +105,10 @@ class StateSwitching:
     latch : bool
         At most one switching per ramp period (needs a ramp); at every period start the configuration
         is set again by s against the band.
+    clocked : bool
+        With ``latch``: only the clock enters ``below`` (at a period start where s < -band); inside a period
+        the one switching is to ``above`` (a current-mode controller's comparator resets its latch, its clock
+        sets it: without this a current that falls back below the command mid-period would turn the switch on).
     initial : int or None
         Configuration at the start of a run; None: ``below`` if s(x0, t0) < 0, else ``above``.
     """
@@ -113,11 +119,15 @@ class StateSwitching:
     band: float = 0.0
     latch: bool = False
     initial: int | None = None
+    clocked: bool = False
 
     def __post_init__(self):
         _check_function(self.function)
-        if not isinstance(self.latch, (bool, np.bool_)):                   # a string ("no") is truthy
-            raise ParameterError(f"latch must be True or False; got {self.latch!r}")
+        for name in ("latch", "clocked"):
+            if not isinstance(getattr(self, name), (bool, np.bool_)):          # a string ("no") is truthy
+                raise ParameterError(f"{name} must be True or False; got {getattr(self, name)!r}")
+        if self.clocked and not self.latch:
+            raise ParameterError("clocked needs latch (the clock sets a latch the law resets); got latch=False")
         object.__setattr__(self, "below", _check_config("below", self.below))
         object.__setattr__(self, "above", _check_config("above", self.above))
         if self.below == self.above:

@@ -152,7 +152,7 @@ class _Machine:
     def switch_row(self, config: int, latched: bool):
         """(row, slope) of the switching law's watched quantity in ``config`` (None when it cannot switch)."""
         law = self.law
-        if law is None or latched:
+        if law is None or latched or (law.clocked and config == law.above):     # only the clock sets a clocked latch
             return None, 0.0
         f = law.function
         low, slope = (f.ramp.low, f.ramp.slope) if f.ramp is not None else (0.0, 0.0)
