@@ -6,9 +6,9 @@ magnitude (V). One diode, whose port the compiler chooses as one would by hand:
 ON:  u = i_D,  y = -v_D (reverse voltage across the ideal diode)
 OFF: u = -v_D, y = i_D = iL (the diode is in series with the inductor)
 Optional parasitics (0 in the netlist unless given): rL inductor DCR, Ron switch on-resistance, Vf and Rd diode
-forward drop and resistance, rC capacitor ESR. The ESR enters through the output node: vout = a vC + b i_in with
+forward drop and resistance, rC capacitor ESR. The ESR enters through the output node: vout = a vC + b (i_in - Io) with
 a = R/(R + rC), b = R rC/(R + rC), where i_in is the current delivered to the output (iL for the buck, i_D
-otherwise): what :meth:`PWMTwoState.vout` and :meth:`PWMTwoState.output_row` read. The element signals (switch,
+otherwise) and Io a current the load draws beside R (the netlist's Iload, 0 unless set): what :meth:`PWMTwoState.vout` and :meth:`PWMTwoState.output_row` read. The element signals (switch,
 diode, capacitor, input) are the netlist's own (:attr:`PWMTwoState.element_signals`)."""
 from __future__ import annotations
 
@@ -33,6 +33,8 @@ PARASITICS = (
     nonnegative("Rd", None, "ohm", "diode on-resistance"),
     nonnegative("rC", None, "ohm", "capacitor ESR"),
 )
+#: A current the load draws beside R (the netlist's Iload: the output impedance's small-signal input).
+LOAD = (Param("Io", None, "A", "load current drawn from the output beside R", low=-np.inf, low_open=False),)
 #: An open-loop step: the load R -> R_step and/or the input Vin -> Vin_step at t_step.
 STEPS = (
     positive("t_step", None, "s", "instant of a load or input step (with R_step and/or Vin_step)"),
@@ -49,7 +51,7 @@ class PWMTwoState(FromNetlist, Converter):
     """Shared model; subclasses set ``topology`` to 'buck', 'boost' or 'buck-boost' and their netlist."""
 
     topology: str
-    parameters = COMMON + PARASITICS + STEPS
+    parameters = COMMON + PARASITICS + LOAD + STEPS
     state_names = ("iL", "vC")
     pair_names = ("diode",)
     netlist_states = ("i(l1)", "v(c1)")
@@ -82,7 +84,7 @@ class PWMTwoState(FromNetlist, Converter):
                   "Rd": Rd * square("i_diode"), "rC": rC * square("i_cap")}
         losses = {k: v for k, v in losses.items() if p.get(k) is not None}
         p_in = p["Vin"] * mean("i_in")
-        p_out = square("vout") / p["R"]
+        p_out = square("vout") / p["R"] + p.get("Io", 0.0) * abs(mean("vout"))
         return power_balance(p_in, p_out, losses)
 
     def output_node_current(self, samples):
@@ -99,13 +101,13 @@ class PWMTwoState(FromNetlist, Converter):
         R, rC = p["R"], p.get("rC", 0.0)
         a, b = R / (R + rC), R * rC / (R + rC)
         if self.topology == "buck":
-            return np.array([b, a]), 0.0
+            return np.array([b, a]), -b * p.get("Io", 0.0)
         return (np.array([0.0, 1.0]), 0.0) if not rC else None
 
     def vout(self, samples, p):
         R, rC = p["R"], p.get("rC", 0.0)
         a, b = R / (R + rC), R * rC / (R + rC)
         magnitude = a * samples.x[:, 1]
-        if rC:
-            magnitude = magnitude + b * self.output_node_current(samples)
+        if rC:       # the capacitor's current through its ESR: what reaches the output node less what the loads draw
+            magnitude = magnitude + b * (self.output_node_current(samples) - p.get("Io", 0.0))
         return -magnitude if self.topology == "buck-boost" else magnitude

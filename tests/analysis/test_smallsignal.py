@@ -32,6 +32,16 @@ def test_the_ideal_ccm_bucks_control_to_output_is_the_averaged_model(params):
     assert np.abs(np.abs(ratio[below]) - 1).max() < 0.01 and np.degrees(np.abs(np.angle(ratio[below]))).max() < 1.0
 
 
+def test_the_ideal_ccm_bucks_output_impedance_is_its_filters():
+    """A load current Io drawn beside R: vout / Io = -(s L || 1 / (s C) || R) exactly (the switch node does not see
+    the load in CCM)."""
+    fr = frequency_response("buck", {**CCM_BUCK, "Io": 0.0}, input="Io", fmin=10.0, fmax=50e3, points=40)
+    s = 2j * np.pi * fr.frequency_hz
+    Z = 1 / (1 / (s * 100e-6) + s * 100e-6 + 1 / 10.0)
+    assert np.abs(fr.response / -Z - 1).max() < 1e-9
+    assert fr.input_unit == "A" and fr.output_unit == "V"
+
+
 def _mean_vout(params: dict) -> float:
     from converters.run import steady_orbit
     tr = steady_orbit("buck", params, method="event", tol=1e-13)

@@ -41,8 +41,12 @@ PARASITIC = {"rL": 0.05, "Ron": 0.02, "Vf": 0.4, "Rd": 0.01, "rC": 0.03}
 
 @pytest.mark.parametrize("name", ["buck", "boost", "buck-boost"])
 @pytest.mark.parametrize("load", [10, 200], ids=["ccm", "dcm"])
-def test_input_power_is_output_power_plus_the_element_losses_on_the_exact_orbit(name, load):
-    model, p, T, tr = _exact_period(name, {**PARASITIC, "R": load}, samples=1000)
+@pytest.mark.parametrize("io", [None, 0.2], ids=["R", "R+Io"])
+def test_input_power_is_output_power_plus_the_element_losses_on_the_exact_orbit(name, load, io):
+    """With a load current Io beside R too: vout through the ESR carries what reaches the output node less what both
+    loads draw, and the output power is vout^2 / R + Io vout."""
+    given = {**PARASITIC, "R": load} if io is None else {**PARASITIC, "R": load, "Io": io}
+    model, p, T, tr = _exact_period(name, given, samples=1000)
     power = model.power(tr, p, 0.0, T)
     assert abs(power["balance"]) <= 1e-6, power          # measured <= 4e-12
     assert set(power["losses_W"]) == set(PARASITIC) and all(v > 0 for v in power["losses_W"].values())

@@ -42,6 +42,17 @@ def test_bode_gives_the_voltage_mode_bucks_loop_gain_with_its_margins(capsys):
     assert 0 < margins["phase_margin_deg"] < 30 and 0 < margins["crossover_hz"] < 1250
 
 
+def test_bode_gives_the_output_impedance_from_the_load_current(capsys):
+    code, out, _ = run_cli(capsys, "bode", "buck", "-p", "L=100u", "--input", "iload", "--fmin", "1k", "--fmax", "2k",
+                           "--points", "2", "--json")
+    assert code == 0
+    summary = json.loads(out)
+    assert summary["input"] == "Io" and summary["input_unit"] == "A" and summary["params"]["Io"] == 0.0
+    s = 2j * np.pi * 1e3
+    Z = 1 / (1 / (s * 100e-6) + s * 100e-6 + 1 / 10.0)
+    assert summary["magnitude_db"][0] == pytest.approx(20 * np.log10(abs(Z)), abs=1e-9)
+
+
 @pytest.mark.parametrize("argv, message", [
     (["--input", "duty", "--plot", "x.txt"], "--plot must end in .png or .svg"),
     (["--input", "Q"], "input must be 'control'"),

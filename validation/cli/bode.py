@@ -9,8 +9,9 @@ from converters.errors import ParameterError
 
 from .common import add_params, given_path, integer, json_text
 
-#: What --input accepts beside a parameter's name: the duty ratio and the input voltage by their usual names.
-ALIASES = {"duty": "D", "vin": "Vin"}
+#: What --input accepts beside a parameter's name: the duty ratio, the input voltage and the load current (the
+#: output impedance's input, 0 A unless -p Io= says otherwise) by their usual names.
+ALIASES = {"duty": "D", "vin": "Vin", "iload": "Io"}
 #: Frequencies the brute-force check measures (log-spaced over the response's range, the last below fs/2).
 CHECK_POINTS = 8
 
@@ -23,9 +24,10 @@ def add(sub) -> None:
     bode.add_argument("--control", default="pwm", choices=list(CONTROLS),
                       help="the control law around the converter (default pwm: open loop)")
     bode.add_argument("--input", required=True,
-                      help="what is perturbed: duty (the duty ratio D), vin, any source's value or parameter the "
-                           "circuit is affine in (Vref, a netlist's V1), control (a comparator's input), or loop "
-                           "(the loop gain T of a state-driven law, with its margins)")
+                      help="what is perturbed: duty (the duty ratio D), vin, iload (a load current: -vout/iload is the "
+                           "output impedance), any source's value or parameter the circuit is affine in (Vref, a "
+                           "netlist's V1), control (a comparator's input), or loop (the loop gain T of a "
+                           "state-driven law, with its margins)")
     bode.add_argument("--output", default="vout", help="what is read: vout (default), a state (iL, vC) or a signal "
                                                       "(v(NODE), i(ELEMENT) of a netlist)")
     bode.add_argument("--fmin", default=None, help="lowest frequency in Hz (default fs/1000; SPICE suffixes: 10k)")
@@ -60,6 +62,8 @@ def run(args) -> int:
         raise ParameterError(f"--input loop reads the loop's own sensed signal; --output does not apply (got "
                              f"{args.output!r})")
     name = CONTROL if loop else ALIASES.get(args.input.lower(), args.input)
+    if name == "Io" and "Io" in {q.name for q in model.parameters}:
+        params.setdefault("Io", 0.0)          # the load current's operating point: none beside R
     output = "sensed" if loop else args.output
     fmin = None if args.fmin is None else parse_value("--fmin", args.fmin)
     fmax = None if args.fmax is None else parse_value("--fmax", args.fmax)
