@@ -84,13 +84,18 @@ def mode_timeline_plot(t_lcp, modes_lcp, t_spice, modes_spice, period: float, ti
     return png(fig)
 
 
-def bode_figure(response, check=None, margins=None, fmt: str = "png") -> bytes:
+def bode_figure(response, check=None, margins=None, fmt: str = "png", before=None) -> bytes:
     """Magnitude (dB) and phase (degrees) of a frequency response against frequency (Hz, log axis), the brute-force
-    injection's points over it where given, and a loop gain's crossover and margins; PNG or SVG bytes."""
+    injection's points over it where given, a loop gain's crossover and margins, and ``before`` (the plant's loop
+    gain Fm Gvd before a compensator) dashed; PNG or SVG bytes."""
     fig, (top, bottom) = plt.subplots(2, 1, sharex=True, figsize=(8, 6.5))
     f = response.frequency_hz
-    top.semilogx(f, response.magnitude_db, color="C0", label="exact small-signal model")
+    top.semilogx(f, response.magnitude_db, color="C0",
+                 label="loop gain with the compensator (exact)" if before is not None else "exact small-signal model")
     bottom.semilogx(f, response.phase_deg, color="C0")
+    if before is not None:
+        top.semilogx(before.frequency_hz, before.magnitude_db, color="C2", ls="--", label="plant Fm Gvd (exact)")
+        bottom.semilogx(before.frequency_hz, before.phase_deg, color="C2", ls="--")
     if check is not None:
         f_check, values = check
         phase = np.degrees(np.angle(values))

@@ -541,3 +541,101 @@ def _output_on(small: SmallSignalModel, samples, output: str) -> np.ndarray:
     if output in small.machine.problem.state_names:
         return plain.x[:, small.machine.problem.state_names.index(output)]
     return np.asarray(small.model.labels(small.params).signal(output, plain), dtype=float)
+
+
+# --- compensator design: the k-factor method on the exact control-to-output response -----------------------------
+
+def _mean_output(small: SmallSignalModel, output: str = "vout") -> float:
+    """The mean of an output over the orbit's period (the event method's exact pieces)."""
+    solution = small.machine.run(small.orbit.x0, record=True)[0]
+    samples, weights = solution.quadrature()
+    values = _output_on(small, samples, output)
+    return float(np.sum(weights * values) / small.T)
+
+
+def operating_duty(model, params: dict, vref: float, tol: float = 1e-12) -> tuple[float, SmallSignalModel]:
+    """The duty ratio at which the open-loop converter's exact periodic orbit has mean |vout| = vref, by Newton's
+    method on D with the exact model's response at zero frequency as the slope (its d mean(vout) / dD); and the
+    small-signal model (input D) there."""
+    if isinstance(model, str):
+        from ..models import get_model
+        model = get_model(model)
+    p = model.resolve({k: v for k, v in dict(params or {}).items() if k != "D"})
+    ratio = getattr(model, "ccm_ratio", None)
+    duty = 0.5
+    if ratio is not None and p["Vin"] > 0:
+        from scipy.optimize import brentq
+        g = lambda D: ratio(D) - vref / p["Vin"]            # noqa: E731
+        if g(1e-9) * g(1 - 1e-9) < 0:
+            duty = brentq(g, 1e-9, 1 - 1e-9)
+    for _ in range(30):
+        small = SmallSignalModel(model, {**p, "D": duty}, input="D", outputs=("vout",))
+        mean = abs(_mean_output(small))
+        slope = float(np.real(small.response([1e-6 / small.T], "vout")[0])) * np.sign(_mean_output(small))
+        step = (vref - mean) / slope
+        duty = float(np.clip(duty + step, 1e-6, 1 - 1e-6))
+        if abs(vref - mean) <= tol * vref:
+            return duty, small
+    raise SimulationError(f"no duty ratio gives a mean output of {vref:g} V on {model.key} (last D = {duty:.6g}, "
+                          f"mean {mean:.6g} V)")
+
+
+@dataclass(frozen=True)
+class Design:
+    """A compensator designed by the k-factor method, and what it was designed from."""
+
+    compensator: object
+    crossover_hz: float
+    phase_margin_deg: float
+    duty: float
+    plant_db: float             # |Fm Gvd| at the crossover (dB)
+    plant_deg: float            # its phase (degrees, unwrapped from low frequency)
+    boost_deg: float
+    k: float
+
+    def as_dict(self) -> dict:
+        return {"compensator": self.compensator.kind, **self.compensator.as_dict(), "crossover_hz": self.crossover_hz,
+                "phase_margin_deg": self.phase_margin_deg, "duty": self.duty, "plant_db": self.plant_db,
+                "plant_deg": self.plant_deg, "boost_deg": self.boost_deg, "k": self.k}
+
+
+def design_compensator(model, params: dict, *, crossover_hz: float, phase_margin_deg: float, vref: float,
+                       carrier: tuple = (0.0, 1.0), kind: str = "type3") -> Design:
+    """A type II or III compensator for the open-loop converter ``model`` at ``params`` regulated to ``vref`` with a
+    carrier from carrier[0] to carrier[1] (trailing edge: Fm = 1 / (VU - VL)), by the k-factor method (H. D.
+    Venable, "The k factor: a new mathematical tool for stability analysis and synthesis", Powercon 10, 1983) on the
+    exact control-to-output response at the operating point: the boost theta = PM - 90 - angle(Fm Gvd(fc)); type III
+    k = tan^2(theta/4 + 45 deg), a double zero at fc/sqrt(k) and a double pole at fc sqrt(k), wi = wc / (k |Fm Gvd|);
+    type II k = tan(theta/2 + 45 deg), one of each, wi = wc / (sqrt(k) |Fm Gvd|)."""
+    from ..models.compensator import Compensator
+    if kind not in ("type2", "type3"):
+        raise ParameterError(f"kind must be type2 or type3; got {kind!r}")
+    VL, VU = carrier
+    if not VU > VL:
+        raise ParameterError(f"the carrier's high level must be above its low level; got {VL:g} V to {VU:g} V")
+    if not 0.0 < phase_margin_deg < 90.0:
+        raise ParameterError(f"phase_margin_deg must be in (0, 90) degrees; got {phase_margin_deg!r}")
+    duty, small = operating_duty(model, params, vref)
+    fs = 1.0 / small.T
+    if not 0.0 < crossover_hz < fs / 2:
+        raise ParameterError(f"crossover_hz must be in (0, fs/2 = {fs / 2:g} Hz); got {crossover_hz!r}")
+    sweep = np.geomspace(crossover_hz / 1e3, crossover_hz, 400)
+    plant = small.response(sweep, "vout") / (VU - VL)
+    phase = float(np.degrees(np.unwrap(np.angle(plant)))[-1])
+    magnitude = float(np.abs(plant[-1]))
+    boost = phase_margin_deg - 90.0 - phase
+    limit = 180.0 if kind == "type3" else 90.0
+    if not 0.0 < boost < limit:
+        raise ParameterError(f"a {kind} compensator boosts the phase by less than {limit:g} degrees; this crossover "
+                             f"and margin need {boost:.1f} (the plant's phase at {crossover_hz:g} Hz is {phase:.1f} "
+                             "degrees): choose a lower crossover or margin" + (", or type3" if kind == "type2" else ""))
+    wc = 2 * math.pi * crossover_hz
+    if kind == "type3":
+        k = math.tan(math.radians(boost / 4 + 45.0)) ** 2
+        root = math.sqrt(k)
+        comp = Compensator(wc / (k * magnitude), (crossover_hz / root,) * 2, (crossover_hz * root,) * 2)
+    else:
+        k = math.tan(math.radians(boost / 2 + 45.0))
+        root = math.sqrt(k)
+        comp = Compensator(wc / (root * magnitude), (crossover_hz / root,), (crossover_hz * root,))
+    return Design(comp, crossover_hz, phase_margin_deg, duty, 20 * math.log10(magnitude), phase, boost, k)

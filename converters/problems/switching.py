@@ -154,9 +154,19 @@ class StateSwitching:
         return (self.below, self.above)
 
     def initial_config(self, x0, t0: float) -> int:
-        if self.initial is not None:
-            return self.initial
-        return self.below if float(self.function(x0, t0)) < 0.0 else self.above
+        """The configuration at a run's start: ``initial`` (a run that continues another: a load step), set again
+        by s against the band where the run starts on a ramp reset as any period start is; without ``initial``,
+        ``below`` where s(x0, t0) < 0."""
+        s = float(self.function(x0, t0))
+        if self.initial is None:
+            return self.below if s < 0.0 else self.above
+        if np.isfinite(self.period):
+            phase = np.mod(t0, self.period)
+            if min(phase, self.period - phase) <= 1e-9 * self.period:
+                f = self.function                            # the ramp at its foot (t0 mod T may round to T)
+                s = float(np.asarray(x0, dtype=float) @ f.c + f.d - f.ramp.low)
+                return self.below if s < -self.band else self.above if s > self.band else self.initial
+        return self.initial
 
     def breakpoints(self, t0: float, t1: float) -> np.ndarray:
         """Ramp resets in the open interval (t0, t1) (where s jumps and a latch opens again)."""

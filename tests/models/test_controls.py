@@ -13,15 +13,20 @@ from converters.run import run_converter, run_summary
 @pytest.mark.parametrize("key", [k for k in MODELS if k[1] != DEFAULT_CONTROL])
 def test_a_control_closes_its_loop_around_the_converters_own_circuit(key):
     """The closed loop's configurations are its converter's at the same circuit values (the circuit is stated once,
-    in the converter's netlist), its parameters the converter's but those the loop sets, then the loop's own."""
+    in the converter's netlist), with the controller's states after the circuit's (a compensator's), its parameters
+    the converter's but those the loop sets, then the loop's own."""
     name, control = key
     model, converter, loop = MODELS[key], CONVERTERS[name], CONTROLS[control]
     assert isinstance(model, Controlled) and model.converter is converter and model.loop is loop
     p = model.resolve({})
     circuit = converter.resolve({k: v for k, v in p.items() if k in {q.name for q in converter.parameters}})
+    n = len(converter.state_names)
     for ours, theirs in zip(model.configurations(p), converter.configurations(circuit), strict=True):
-        for m in "ABCDEF":
-            np.testing.assert_array_equal(getattr(ours, m), getattr(theirs, m))
+        assert ours.n == n + len(loop.controller_states(p))
+        for m, block in (("A", np.s_[:n, :n]), ("B", np.s_[:n]), ("C", np.s_[:, :n]), ("D", np.s_[:]),
+                         ("E", np.s_[:n]), ("F", np.s_[:])):
+            np.testing.assert_array_equal(np.asarray(getattr(ours, m))[block], getattr(theirs, m))
+        np.testing.assert_array_equal(np.asarray(ours.A)[:n, n:], 0.0)        # the controller does not act on the circuit
     names = [q.name for q in model.parameters]
     assert not set(loop.sets) & set(names)
     assert names[-len(loop.parameters):] == [q.name for q in loop.parameters]
@@ -86,7 +91,7 @@ def test_the_comparators_input_senses_the_circuit_in_force_after_a_load_step():
 
 def test_a_control_names_where_it_applies_and_what_it_keeps():
     with pytest.raises(ParameterError, match=r"--control voltage-mode is available for buck only \(boost takes "
-                                             r"--control pwm, smc, smc-implicit, peak-current\); got 'boost'"):
+                                             r"--control pwm, smc, smc-implicit, peak-current, voltage-loop\); got 'boost'"):
         get_model("boost", "voltage-mode")
     with pytest.raises(ParameterError, match="unknown parameter 'rC' for boost --control smc"):
         get_model("boost", "smc").resolve({"rC": 0.1})

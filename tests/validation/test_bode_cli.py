@@ -66,3 +66,42 @@ def test_bad_bode_input_is_one_line_naming_it(capsys, argv, message):
     code, out, err = run_cli(capsys, "bode", "buck", *argv)
     assert code == 2 and out == ""
     assert err.count("\n") == 1 and message in err
+
+
+def test_bode_designs_a_type_iii_compensator_and_gives_the_loop_it_closes(capsys, tmp_path):
+    png = tmp_path / "design.png"
+    code, out, _ = run_cli(capsys, "bode", "buck", "--control", "voltage-loop", "--design", "fc=10k,pm=60",
+                           "--plot", str(png), "--json")
+    assert code == 0
+    summary = json.loads(out)
+    design, margins = summary["design"], summary["margins"]
+    assert design["compensator"] == "type III" and design["fz1"] == design["fz2"] < 10e3 < design["fp1"]
+    assert margins["crossover_hz"] == pytest.approx(10e3, rel=0.05) and margins["phase_margin_deg"] == pytest.approx(
+        60, abs=3)
+    # the defaults are this design (rounded to 6 digits)
+    from converters.models import get_model
+    defaults = get_model("buck", "voltage-loop").resolve({})
+    for key in ("wi", "fz1", "fz2", "fp1", "fp2"):
+        assert defaults[key] == pytest.approx(design[key], rel=5e-6)          # 6 significant digits
+    assert png.read_bytes()[:4] == b"\x89PNG"
+    # a type II where the ESR's zero lifts the plant's phase; its own loop gain shows what the averaged modulator
+    # gain misses (the ESR carries the inductor's ripple into vc: 2.3 degrees of margin, not 30)
+    code, out, _ = run_cli(capsys, "bode", "buck", "--control", "voltage-loop", "--design", "fc=20k,pm=30,type=2",
+                           "-p", "rC=0.1")
+    assert code == 0 and "type II compensator" in out and "fz2=0" in out and "fp2=0" in out
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--design", "fc=10k"], "--design needs pm"),
+    (["--design", "fc=10k,pm=60,type=4"], "--design takes fc=HZ,pm=DEGREES"),
+    (["--design", "fc=10k,pm=60", "--input", "duty"], "--input and --check do not apply"),
+    (["--design", "fc=10k,pm=95"], "phase_margin_deg must be in (0, 90)"),
+])
+def test_bad_design_input_is_one_line(capsys, argv, message):
+    code, out, err = run_cli(capsys, "bode", "buck", "--control", "voltage-loop", *argv)
+    assert code == 2 and out == "" and err.count("\n") == 1 and message in err
+
+
+def test_design_needs_the_voltage_loop(capsys):
+    code, out, err = run_cli(capsys, "bode", "buck", "--design", "fc=10k,pm=60")
+    assert code == 2 and "--design designs the compensator of --control voltage-loop" in err

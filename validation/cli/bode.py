@@ -23,7 +23,7 @@ def add(sub) -> None:
     add_params(bode)
     bode.add_argument("--control", default="pwm", choices=list(CONTROLS),
                       help="the control law around the converter (default pwm: open loop)")
-    bode.add_argument("--input", required=True,
+    bode.add_argument("--input", default=None,
                       help="what is perturbed: duty (the duty ratio D), vin, iload (a load current: -vout/iload is the "
                            "output impedance), any source's value or parameter the circuit is affine in (Vref, a "
                            "netlist's V1), control (a comparator's input), or loop (the loop gain T of a "
@@ -33,6 +33,10 @@ def add(sub) -> None:
     bode.add_argument("--fmin", default=None, help="lowest frequency in Hz (default fs/1000; SPICE suffixes: 10k)")
     bode.add_argument("--fmax", default=None, help="highest frequency in Hz (default fs/2)")
     bode.add_argument("--points", type=integer(2, 100_000), default=200, help="log-spaced frequencies (default 200)")
+    bode.add_argument("--design", default=None, metavar="fc=F,pm=DEG[,type=3]",
+                      help="with --control voltage-loop: design its compensator (type III by default, or type=2) by the "
+                           "k-factor method on the exact control-to-output response for crossover F (Hz) and phase "
+                           "margin DEG, and give the loop gain it closes, with its margins, beside the plant's")
     bode.add_argument("--check", action="store_true",
                       help=f"also inject a sinusoid at {CHECK_POINTS} frequencies, simulate each to its periodic steady "
                            "state (exact event method) and print its fundamental beside the exact response")
@@ -57,6 +61,10 @@ def run(args) -> int:
         raise ParameterError(f"--plot must end in .png or .svg; got {str(args.plot)!r}")
     model = resolve_model(args.converter, args.control)
     params = parse_assignments(args.params)
+    if args.design is not None:
+        return _design(args, model, params)
+    if args.input is None:
+        raise ParameterError("--input is required (duty, vin, iload, a parameter, control or loop), or --design")
     loop = args.input.lower() == "loop"
     if loop and args.output != "vout":
         raise ParameterError(f"--input loop reads the loop's own sensed signal; --output does not apply (got "
@@ -143,3 +151,73 @@ def _print(response, summary: dict, found) -> None:
         for row in zip(check["frequency_hz"], check["exact_db"], check["injected_db"], check["difference_db"],
                        check["difference_deg"]):
             print(f"  {row[0]:12.5g} {row[1]:11.4f} {row[2]:14.4f} {row[3]:10.2e} {row[4]:11.2e}")
+
+
+def _design_options(text: str) -> dict:
+    """fc=F,pm=DEG[,type=2|3] as {"crossover_hz", "phase_margin_deg", "kind"}."""
+    from converters.validate import parse_value
+    out, names = {"kind": "type3"}, {"fc": "crossover_hz", "pm": "phase_margin_deg"}
+    for part in [x for x in text.split(",") if x.strip()]:
+        key, _, value = part.partition("=")
+        key = key.strip().lower()
+        if key == "type" and value.strip() in ("2", "3"):
+            out["kind"] = f"type{value.strip()}"
+        elif key in names and value.strip():
+            out[names[key]] = parse_value(f"--design {key}", value.strip())
+        else:
+            raise ParameterError(f"--design takes fc=HZ,pm=DEGREES[,type=2|3]; got {text!r}")
+    missing = [k for k, v in names.items() if v not in out]
+    if missing:
+        raise ParameterError(f"--design needs {' and '.join(missing)} (fc=HZ,pm=DEGREES); got {text!r}")
+    return out
+
+
+def _design(args, model, params: dict) -> int:
+    """--design: the compensator of a voltage loop for a crossover and a phase margin, and the loop it closes."""
+
+    from converters.analysis.smallsignal import (FrequencyResponse, SmallSignalModel, design_compensator, frequencies,
+                                                 loop_gain)
+    from converters.validate import parse_value, quoted
+
+    from ..io import atomic_write_bytes
+    if model.control != "voltage-loop":
+        raise ParameterError(f"--design designs the compensator of --control voltage-loop; got --control {model.control}")
+    if args.input is not None or args.check:
+        raise ParameterError("--design gives the loop gain it closes; --input and --check do not apply to it")
+    options = _design_options(args.design)
+    p = model.resolve(params)
+    design = design_compensator(model.converter, model.plant(p), vref=p["Vref"], carrier=(p["VL"], p["VU"]), **options)
+    closed = {**params, **design.compensator.as_dict()}
+    fmin = None if args.fmin is None else parse_value("--fmin", args.fmin)
+    fmax = None if args.fmax is None else parse_value("--fmax", args.fmax)
+    response, found = loop_gain(model, closed, fmin=fmin, fmax=fmax, points=args.points)
+    plant = SmallSignalModel(model.converter, {**model.plant(p), "D": design.duty}, input="D")
+    f = frequencies(plant.T, fmin, fmax, args.points)
+    before = FrequencyResponse(f, plant.response(f) / (p["VU"] - p["VL"]), "D", "vout", "loop gain", plant.T,
+                               plant.orbit.multipliers)
+    summary = {"converter": model.key, "design": design.as_dict(), "margins": found.as_dict(),
+               "loop_gain": response.as_dict(), "plant": before.as_dict()}
+    if args.plot is not None:
+        from ..plots import bode_figure
+        atomic_write_bytes(args.plot, bode_figure(response, None, found, args.plot.suffix.lower().lstrip("."),
+                                                  before=before))
+        summary["plot"] = str(args.plot)
+    if args.json:
+        from .common import json_text
+        print(json_text(summary))
+        return 0
+    d = design.as_dict()
+    values = ", ".join(f"{k} = {v:.6g} {'rad/s' if k == 'wi' else 'Hz'}" for k, v in design.compensator.as_dict().items()
+                       if v)
+    print(f"{model.key}: a {d['compensator']} compensator for a crossover of {design.crossover_hz:g} Hz and "
+          f"{design.phase_margin_deg:g} degrees of phase margin (k-factor {d['k']:.4g}, boost {d['boost_deg']:.1f} "
+          f"degrees), designed on the exact control-to-output at D = {design.duty:.6g} (|Fm Gvd| "
+          f"{d['plant_db']:.2f} dB, {d['plant_deg']:.1f} degrees at the crossover):")
+    print(f"  {values}")
+    print(f"  the loop it closes (exact loop gain): crossover {found.crossover_hz:.6g} Hz, phase margin "
+          f"{found.phase_margin_deg:.4g} degrees; gain margin {found.gain_margin_db:.4g} dB (nan: no phase crossover "
+          "below fs/2)")
+    print(f"  -p {' -p '.join(f'{k}={v:.6g}' for k, v in design.compensator.as_dict().items())}")
+    if args.plot is not None:
+        print(f"wrote {quoted(args.plot)}")
+    return 0
