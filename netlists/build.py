@@ -214,11 +214,118 @@ def build_voltage_mode_netlist(params: dict | None, t_end, options: SpiceOptions
                    converter="buck-voltage-mode", params=p, probes={**written.probes, "ramp": ("ramp", 1.0)})
 
 
+#: The clocked latch's clock pulse, as a fraction of T (its set input; the latch holds between pulses).
+CLOCK_FRACTION = 1e-3
+
+
+def _clocked_latch(gate: str, set_expression: str, reset_expression: str, T: float) -> list:
+    """A clocked SR latch in ngspice driving ``gate``: a switch with hysteresis (VT = 0, VH = 0.5: closed above
+    0.5 V, open below -0.5 V, holding in between) on c = clock - reset connects 1 V to the gate. The clock is a
+    pulse of CLOCK_FRACTION T at every period start (gated by ``set_expression``, 1 where the law may set the
+    latch); ``reset_expression`` rises to 1 where the comparator resets it (a behavioural tanh of gain
+    COMPARATOR_GAIN: the switch opens where it passes 1/2, the comparator's own threshold). At a clock edge with the
+    reset high, c = 0: the latch holds off (a skipped period), as the LCS's clocked latch."""
+    width = CLOCK_FRACTION * T
+    return [f"Vclk clk 0 PULSE(0 1 0 {_num('clock edge', width / 10)} {_num('clock edge', width / 10)} "
+            f"{_num('clock width', width)} {_num('T', T)})",
+            f"Bset lset 0 V=V(clk)*({set_expression})",
+            f"Brst lrst 0 V=0.5+0.5*tanh({reset_expression})",
+            "Blc lcr 0 V=V(lset)-V(lrst)",
+            f"Rlc lcr lc {_num('latch R', COMPARATOR_R)}",
+            f"Clc lc 0 {_num('latch C', COMPARATOR_DELAY_FRACTION * T / COMPARATOR_R)}",
+            "Vone lone 0 DC 1",
+            f"Slatch lone {gate} lc 0 LATCHMOD",
+            f"Rlatch {gate} 0 1e6",
+            ".model LATCHMOD SW(VT=0 VH=0.5 RON=1 ROFF=1e9)"]
+
+
+def build_voltage_loop_netlist(params: dict | None, t_end, options: SpiceOptions | None = None, x0=None,
+                               converter: str = "buck") -> Netlist:
+    """A two-state converter under voltage-mode control with a compensator (``converters.models.compensator``) as an
+    ngspice netlist: the converter's own file (:func:`converter_netlist`: its parasitics and steps) with the loop
+    driving its gate. Each compensator state is a 1 F capacitor charged by a behavioural current (its row of
+    xc' = Ac xc + Bc (Vref - v_out)), vc a behavioural voltage Cc xc + Dc (Vref - v_out), the carrier a PULSE from
+    VL to VU over T - edge (edge = ``RAMP_FALL_FRACTION`` T), and the gate a clocked latch (:func:`_clocked_latch`)
+    reset where the carrier passes vc. ``x0``: the converter's states then the compensator's."""
+    from converters.models import get_model
+    from converters.models.compensator import Compensator
+    model = get_model(converter, "voltage-loop")
+    p = model.resolve(params)
+    options = options or SpiceOptions()
+    conv = model.converter
+    T = model.period(p)
+    edge = RAMP_FALL_FRACTION * T
+    comp = Compensator.of(p)
+    Ac, Bc, Cc, Dc = comp.matrices()
+    n, m = len(conv.state_names), len(Bc)
+    x0 = list(model.loop.x0(model, p) if x0 is None else x0)
+    if len(x0) != n + m:
+        raise ParameterError(f"x0 must have {n + m} entries (the converter's states, then the compensator's); "
+                             f"got {len(x0)}")
+    gate = next(e for e in conv.circuit.netlist.elements if e.name == GATE).nodes[0]
+    out = output_node(conv.circuit)
+    error = f"({_num('Vref', p['Vref'])}-abs(V({out})))"
+    nodes = [f"xc{i}" for i in range(m)]
+
+    def combination(row, constant: str = "") -> str:
+        terms = [f"{_num('compensator', float(a))}*V({node})" for a, node in zip(row, nodes) if a != 0.0]
+        return "+".join(terms + ([constant] if constant else [])) or "0"
+
+    drive = []
+    for i in range(m):
+        source = _num("Bc", float(Bc[i])) + "*" + error
+        drive += [f"Bxc{i} 0 {nodes[i]} I={combination(Ac[i], source)}",
+                  f"Cxc{i} {nodes[i]} 0 1 IC={_num(f'x0[{n + i}]', x0[n + i])}"]
+    direct = _num("Dc", float(Dc)) + "*" + error
+    drive += [f"Bvc vc 0 V={combination(Cc, direct)}",
+              f"Vcarrier carrier 0 PULSE({_num('VL', p['VL'])} {_num('VU', p['VU'])} 0 {_num('rise', T - edge)} "
+              f"{_num('edge', edge)} 0 {_num('T', T)})"]
+    drive += _clocked_latch(gate, "1", f"{COMPARATOR_GAIN:g}*(V(carrier)-V(vc))", T)
+    written = converter_netlist(conv, model.plant(p), t_end, options, x0[:n], drives={GATE: drive})
+    _, rest = written.text.split("\n", 1)
+    probes = {**written.probes, "vc": ("vc", 1.0), "carrier": ("carrier", 1.0),
+              **{name: (node, 1.0) for name, node in zip(comp.states, nodes)}}
+    return replace(written, text=f"* pcsuite: {model.title}, on the built-in {converter}'s circuit\n{rest}",
+                   converter=f"{converter}-voltage-loop", params=p, probes=probes)
+
+
+def build_peak_current_netlist(params: dict | None, t_end, options: SpiceOptions | None = None, x0=None,
+                               converter: str = "buck") -> Netlist:
+    """A two-state converter under peak current-mode control (``converters.models.current_mode``) as an ngspice
+    netlist: the converter's own file with a clocked latch (:func:`_clocked_latch`) driving its gate, reset where the
+    inductor current (its sense source) passes the command, a PULSE falling from Iref to Iref - ma (T - edge) over
+    each period (edge = ``RAMP_FALL_FRACTION`` T)."""
+    from converters.models import get_model
+    model = get_model(converter, "peak-current")
+    p = model.resolve(params)
+    options = options or SpiceOptions()
+    conv = model.converter
+    T = model.period(p)
+    edge = RAMP_FALL_FRACTION * T
+    gate = next(e for e in conv.circuit.netlist.elements if e.name == GATE).nodes[0]
+    written = converter_netlist(conv, model.plant(p), t_end, options, x0)
+    sense, sign = written.probes["iL"]
+    if not sense.endswith("#branch"):
+        raise ParameterError(f"the inductor current of {converter} has no sense source in its netlist")
+    current = f"({_num('sign', sign)}*I({sense[:-len('#branch')]}))"
+    drive = [f"Vic icmd 0 PULSE({_num('Iref', p['Iref'])} {_num('Iref - ma T', p['Iref'] - p['ma'] * (T - edge))} 0 "
+             f"{_num('fall', T - edge)} {_num('edge', edge)} 0 {_num('T', T)})"]
+    drive += _clocked_latch(gate, "1", f"{COMPARATOR_GAIN:g}*({current}-V(icmd))", T)
+    written = converter_netlist(conv, model.plant(p), t_end, options, x0, drives={GATE: drive})
+    _, rest = written.text.split("\n", 1)
+    return replace(written, text=f"* pcsuite: {model.title}, on the built-in {converter}'s circuit\n{rest}",
+                   converter=f"{converter}-peak-current", params=p, probes={**written.probes, "icontrol": ("icmd", 1.0)})
+
+
 #: The netlist writer of each control (model, params, t_end, options, x0) -> Netlist; the implicit relay has none.
 CONTROL_NETLISTS = {
     "pwm": lambda model, p, t_end, options, x0: build_netlist(model.name, p, t_end, options, x0=x0),
     "smc": lambda model, p, t_end, options, x0: build_smc_netlist(p, t_end, options, x0=x0),
     "voltage-mode": lambda model, p, t_end, options, x0: build_voltage_mode_netlist(p, t_end, options, x0=x0),
+    "voltage-loop": lambda model, p, t_end, options, x0: build_voltage_loop_netlist(p, t_end, options, x0=x0,
+                                                                                     converter=model.name),
+    "peak-current": lambda model, p, t_end, options, x0: build_peak_current_netlist(p, t_end, options, x0=x0,
+                                                                                     converter=model.name),
 }
 
 

@@ -185,13 +185,16 @@ def spice_trajectory(model, params: dict, netlist: Netlist, result: SpiceResult,
     peak device current after ``window_start``; the modes then follow from the model's own rule."""
     from converters.trajectory import Trajectory
     t = result.time
-    x = np.column_stack([result.signal(netlist.probes[name]) for name in model.state_names])
+    # the circuit's states, then the controller's the netlist probes (a compensator's capacitors)
+    names = tuple(model.state_names) + tuple(name for name in model.problem(params, 1.0).state_names[
+        len(model.state_names):] if name in netlist.probes)
+    x = np.column_stack([result.signal(netlist.probes[name]) for name in names])
     currents = np.column_stack([result.signal(netlist.probes[name]) for name in netlist.pairs])
     in_window = t >= window_start
     conducting = currents > CURRENT_FRACTION * np.abs(currents[in_window]).max()
     measured = {"vout": result.signal(netlist.probes["vout"]), "switch": result.switch(netlist),
                 **{name: currents[:, i] for i, name in enumerate(netlist.pairs)}, "conducting": conducting}
-    return Trajectory(t=t, x=x, state_names=tuple(model.state_names), method="spice", steps=result.accepted_steps,
+    return Trajectory(t=t, x=x, state_names=names, method="spice", steps=result.accepted_steps,
                       wall_s=result.wall_s, rule="linear", labels=model.labels(params), measured=measured,
                       period=model.period(params),
                       metadata={"spice_options": result.options, "ngspice": result.ngspice_version,

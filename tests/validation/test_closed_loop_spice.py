@@ -1,0 +1,45 @@
+"""The closed loops in ngspice (each control's netlist: the converter's own file with the loop written as behavioural
+sources and a clocked latch) against the LCS on the same circuit, started on the event method's orbit."""
+import numpy as np
+import pytest
+
+import validation.ngspice  # noqa: F401  (registers --method spice)
+from converters.methods import EventDriven
+from converters.run import resolve_model, run_converter, steady_state
+
+pytestmark = pytest.mark.spice
+
+
+def _per_period(tr, t0: float, T: float, count: int) -> np.ndarray:
+    return np.array([tr.mean("vout", t0=t0 + j * T, t1=t0 + (j + 1) * T) for j in range(count)])
+
+
+def test_the_type_iii_compensated_buck_in_ngspice_regulates_and_recovers_from_a_load_step_as_the_lcs():
+    """The default voltage loop (the type III designed for 10 kHz and 60 degrees): from the orbit, 1 ms, then R 10 ->
+    5 ohm: the steady means agree to 4e-6 (issue: 0.1 %), the per-period undershoot 60.28 and 60.14 mV (0.24 % apart;
+    issue: 5 %)."""
+    model = resolve_model("buck", "voltage-loop")
+    orbit = steady_state(model, model.resolve({}), EventDriven())
+    T, step = 1e-5, {"t_step": "1m", "R_step": 5}
+    lcs = run_converter(model, step, method="event", t_end="2m", x0=orbit.x0)
+    spice = run_converter(model, step, method="spice", t_end="2m", x0=orbit.x0)
+    before = [tr.mean("vout", t0=0.9e-3, t1=1e-3) for tr in (lcs, spice)]
+    assert before[1] == pytest.approx(before[0], rel=1e-3)
+    undershoot = [5.0 - _per_period(tr, 1e-3, T, 100).min() for tr in (lcs, spice)]
+    assert undershoot[0] > 0.05
+    assert undershoot[1] == pytest.approx(undershoot[0], rel=0.05)
+    final = [_per_period(tr, 1.9e-3, T, 10).mean() for tr in (lcs, spice)]
+    assert final[1] == pytest.approx(final[0], rel=1e-3)
+
+
+@pytest.mark.parametrize("converter, params", [("buck", {"Iref": 0.6, "ma": 2e4}),
+                                               ("buck-boost", {"Iref": 2.0, "ma": 1e4})])
+def test_peak_current_mode_in_ngspice_stays_on_the_lcs_orbit(converter, params):
+    """30 periods from the event method's orbit: the means of vout over the last 10 agree to 1.4e-5 and 2.3e-5."""
+    model = resolve_model(converter, "peak-current")
+    p = model.resolve(params)
+    orbit = steady_state(model, p, EventDriven())
+    T = model.period(p)
+    lcs = run_converter(model, params, method="event", periods=30, x0=orbit.x0)
+    spice = run_converter(model, params, method="spice", periods=30, x0=orbit.x0)
+    assert spice.mean("vout", t0=20 * T) == pytest.approx(lcs.mean("vout", t0=20 * T), rel=1e-4)
