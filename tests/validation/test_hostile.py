@@ -306,7 +306,8 @@ IGNORED = [
      "--grid R: COUNT does not apply with --lhs (the hypercube draws its N points over START:STOP); give "
      "R=START:STOP[:log]; got 'R=5:200:40:log'"),
     (["bifurcation", "boost", "--param", "D=0.2:0.5", "--points", "0"],     # the default control, not given
-     "--control voltage-mode is available for buck only (boost takes --control pwm, smc, smc-implicit)"),
+     "--control voltage-mode is available for buck only (boost takes --control pwm, smc, smc-implicit, "
+     "peak-current, voltage-loop)"),
     (["report", ""], "TARGET must be a suite (bench, bifurcation, default, gdcm, lcp, mechanics), a scene file "
                      "FILE.toml or a directory of them; got ''"),                 # read as '.' before
     # the third audit: accepted and ignored before
@@ -336,6 +337,7 @@ UNPARSABLE = [
     (["bifurcation", "buck", "--param", "Vin=20:30", "--record", "x"], "argument --record: must be an integer >= 2; got 'x'"),
     (["bifurcation", "buck", "--param", "Vin=20:30", "--workers", "x"],
      "argument --workers: must be an integer in [1, 64]; got 'x'"),
+    (["bode", "buck", "--input", "duty", "--points", "x"], "argument --points: must be an integer in [2, 100,000]; got 'x'"),
     (["gdcm-map", "buck", "--size", "3", "x"], "argument --size: must be an integer in [2, 1,000]; got 'x'"),
     (["gdcm-map", "buck", "--workers", "2.0"], "argument --workers: must be an integer in [1, 64]; got '2.0'"),
     (["lcp", "solve", "x.dat", "--tol", "small"], "argument --tol: must be a number in [1e-16, 0.01]; got 'small'"),
@@ -362,6 +364,7 @@ UNPARSABLE = [
 #: An empty path (an unset variable in ``--out "$OUT"``) had been read as the current directory.
 EMPTY_PATHS = [
     ["bench", "--out", ""], ["bifurcation", "buck", "--param", "Vin=20:30", "--diagram", ""],
+    ["bode", "buck", "--input", "duty", "--plot", ""],
     ["compare", "buck", "--plot", ""], ["gdcm-map", "buck", "--out", ""], ["lcp", "solve", ""],
     ["mech", "simulate", "friction", "--out", ""], ["mech", "bifurcations", "friction", "--param", "omega=2.85:2.95",
                                                       "--diagram", ""],
@@ -399,7 +402,7 @@ def test_every_path_option_refuses_an_empty_path():
     walk(build_parser(), ())
     table = {(tuple(a[:2] if a[0] in ("lcp", "mech") else a[:1]), "file" if a[:2] == ["lcp", "solve"] else a[-2])
              for a in EMPTY_PATHS}
-    assert table == paths and len(paths) == 12
+    assert table == paths and len(paths) == 13
 
 
 @pytest.mark.parametrize("argv,message", UNPARSABLE, ids=[" ".join(a) for a, _ in UNPARSABLE])
@@ -444,7 +447,7 @@ def test_every_integer_and_real_option_names_its_range_when_its_value_does_not_p
     assert bare == set()
     table = {(tuple(argv[:2] if argv[0] in ("lcp", "mech") else argv[:1]), message.split()[1].rstrip(":"))
              for argv, message in UNPARSABLE}
-    assert table == typed and len(typed) == 22              # every such option has its row below
+    assert table == typed and len(typed) == 23              # every such option has its row below
 
 
 @pytest.mark.parametrize("argv,message", IGNORED, ids=[" ".join(a) for a, _ in IGNORED])
