@@ -112,3 +112,11 @@ def test_what_a_design_cannot_give_is_refused():
         design_compensator("buck", PLANT, crossover_hz=FS, phase_margin_deg=60, vref=5.0)
     with pytest.raises(ParameterError, match="as many zeros as poles"):
         Compensator(1e3, (), (1e3,))
+
+
+def test_the_report_section_shows_the_loop_before_and_after_and_passes():
+    from validation.sections import control_section
+    section = control_section()
+    assert section.ok and section.status == "pass"
+    assert section.metrics["crossover_hz"] == pytest.approx(9619.81, rel=1e-4)
+    assert section.files["loop_gain.png"][:4] == b"\x89PNG" and "before and after" in section.html
