@@ -218,19 +218,22 @@ def build_voltage_mode_netlist(params: dict | None, t_end, options: SpiceOptions
 CLOCK_FRACTION = 1e-3
 
 
-def _clocked_latch(gate: str, set_expression: str, reset_expression: str, T: float) -> list:
+def _clocked_latch(gate: str, set_expression: str, reset_expression: str, T: float, clock_sets: bool = True) -> list:
     """A clocked SR latch in ngspice driving ``gate``: a switch with hysteresis (VT = 0, VH = 0.5: closed above
     0.5 V, open below -0.5 V, holding in between) on c = clock - reset connects 1 V to the gate. The clock is a
     pulse of CLOCK_FRACTION T at every period start (gated by ``set_expression``, 1 where the law may set the
     latch); ``reset_expression`` rises to 1 where the comparator resets it (a behavioural tanh of gain
     COMPARATOR_GAIN: the switch opens where it passes 1/2, the comparator's own threshold). At a clock edge with the
-    reset high, c = 0: the latch holds off (a skipped period), as the LCS's clocked latch."""
+    reset high, c = 0: the latch holds off (a skipped period), as the LCS's clocked latch. ``clock_sets`` False:
+    the mirror image (valley current mode): the clock resets the latch and the comparator, written as
+    ``reset_expression`` rising to 1, sets it."""
     width = CLOCK_FRACTION * T
+    balance = "V(lset)-V(lrst)" if clock_sets else "V(lrst)-V(lset)"
     return [f"Vclk clk 0 PULSE(0 1 0 {_num('clock edge', width / 10)} {_num('clock edge', width / 10)} "
             f"{_num('clock width', width)} {_num('T', T)})",
             f"Bset lset 0 V=V(clk)*({set_expression})",
             f"Brst lrst 0 V=0.5+0.5*tanh({reset_expression})",
-            "Blc lcr 0 V=V(lset)-V(lrst)",
+            f"Blc lcr 0 V={balance}",
             f"Rlc lcr lc {_num('latch R', COMPARATOR_R)}",
             f"Clc lc 0 {_num('latch C', COMPARATOR_DELAY_FRACTION * T / COMPARATOR_R)}",
             "Vone lone 0 DC 1",
@@ -290,14 +293,16 @@ def build_voltage_loop_netlist(params: dict | None, t_end, options: SpiceOptions
 
 
 def build_peak_current_netlist(params: dict | None, t_end, options: SpiceOptions | None = None, x0=None,
-                               converter: str = "buck") -> Netlist:
-    """A two-state converter under peak current-mode control (``converters.models.current_mode``) as an ngspice
-    netlist: the converter's own file with a clocked latch (:func:`_clocked_latch`) driving its gate, reset where the
-    inductor current (its sense source) passes the command, a PULSE falling from Iref to Iref - ma (T - edge) over
-    each period (edge = ``RAMP_FALL_FRACTION`` T)."""
+                               converter: str = "buck", control: str = "peak-current") -> Netlist:
+    """A two-state converter under peak (or valley) current-mode control (``converters.models.current_mode``) as an
+    ngspice netlist: the converter's own file with a clocked latch (:func:`_clocked_latch`) driving its gate, reset
+    where the inductor current (its sense source) passes the command, a PULSE falling from Iref to Iref - ma
+    (T - edge) over each period (edge = ``RAMP_FALL_FRACTION`` T); valley: the clock resets the latch, the current
+    falling below Iv + ma t sets it."""
     from converters.models import get_model
-    model = get_model(converter, "peak-current")
+    model = get_model(converter, control)
     p = model.resolve(params)
+    valley = control == "valley-current"
     options = options or SpiceOptions()
     conv = model.converter
     T = model.period(p)
@@ -308,13 +313,15 @@ def build_peak_current_netlist(params: dict | None, t_end, options: SpiceOptions
     if not sense.endswith("#branch"):
         raise ParameterError(f"the inductor current of {converter} has no sense source in its netlist")
     current = f"({_num('sign', sign)}*I({sense[:-len('#branch')]}))"
-    drive = [f"Vic icmd 0 PULSE({_num('Iref', p['Iref'])} {_num('Iref - ma T', p['Iref'] - p['ma'] * (T - edge))} 0 "
+    command, slope = (p["Iv"], p["ma"]) if valley else (p["Iref"], -p["ma"])
+    drive = [f"Vic icmd 0 PULSE({_num('command', command)} {_num('command at T', command + slope * (T - edge))} 0 "
              f"{_num('fall', T - edge)} {_num('edge', edge)} 0 {_num('T', T)})"]
-    drive += _clocked_latch(gate, "1", f"{COMPARATOR_GAIN:g}*({current}-V(icmd))", T)
+    comparator = f"V(icmd)-{current}" if valley else f"{current}-V(icmd)"
+    drive += _clocked_latch(gate, "1", f"{COMPARATOR_GAIN:g}*({comparator})", T, clock_sets=not valley)
     written = converter_netlist(conv, model.plant(p), t_end, options, x0, drives={GATE: drive})
     _, rest = written.text.split("\n", 1)
     return replace(written, text=f"* pcsuite: {model.title}, on the built-in {converter}'s circuit\n{rest}",
-                   converter=f"{converter}-peak-current", params=p, probes={**written.probes, "icontrol": ("icmd", 1.0)})
+                   converter=f"{converter}-{control}", params=p, probes={**written.probes, "icontrol": ("icmd", 1.0)})
 
 
 #: The netlist writer of each control (model, params, t_end, options, x0) -> Netlist; the implicit relay has none.
@@ -326,6 +333,8 @@ CONTROL_NETLISTS = {
                                                                                      converter=model.name),
     "peak-current": lambda model, p, t_end, options, x0: build_peak_current_netlist(p, t_end, options, x0=x0,
                                                                                      converter=model.name),
+    "valley-current": lambda model, p, t_end, options, x0: build_peak_current_netlist(
+        p, t_end, options, x0=x0, converter=model.name, control="valley-current"),
 }
 
 

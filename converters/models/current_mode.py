@@ -1,6 +1,8 @@
-"""Peak current-mode control: a clock turns the switch on at every period start, the inductor current reaching
-the control current minus a compensation ramp turns it off (Ridley 1991, "A new, continuous-time model for
-current-mode control"; Deane and Hamill 1990 for its period doubling).
+"""Peak and valley current-mode control. Peak: a clock turns the switch on at every period start, the inductor
+current reaching the control current minus a compensation ramp turns it off (Ridley 1991, "A new, continuous-time
+model for current-mode control"; Deane and Hamill 1990 for its period doubling). Valley: the clock turns it off,
+the current falling to the command plus the ramp turns it on (the mirror image: unstable without compensation
+below D = 1/2).
 
 A control (:mod:`.control`) around a two-state converter's circuit (its parasitics, load and input steps). With the
 command Iref (A) and the compensation ramp's slope ma (A/s) the switching function is
@@ -61,3 +63,36 @@ class PeakCurrent(Control):
     def signal(self, name: str, samples: Samples, p: dict, model, circuit: dict | None = None) -> np.ndarray:
         """``icontrol``: the command with its compensation ramp, Iref - ma (t mod T) (A)."""
         return p["Iref"] - p["ma"] * np.mod(np.asarray(samples.t, dtype=float), model.period(p))
+
+
+VALLEY_PARAMETERS = (
+    positive("Iv", 0.3, "A", "valley current command (the inductor current that turns the switch on)"),
+    nonnegative("ma", 0.0, "A/s", "slope compensation: the command rises by ma per second of each period"),
+)
+
+
+class ValleyCurrent(PeakCurrent):
+    """A clocked turn-off and a turn-on where the inductor current falls to Iv + ma (t mod T): s = Iv + ma (t mod
+    T) - iL, the switch OFF below zero, the clocked latch's one switching per period to ON."""
+
+    key = "valley-current"
+    title = "valley current-mode control"
+    parameters = VALLEY_PARAMETERS
+
+    def law(self, model, p: dict, initial: int | None = None, circuit: dict | None = None) -> StateSwitching:
+        c = np.zeros(len(model.converter.state_names))
+        c[model.converter.state_names.index("iL")] = -1.0
+        T = model.period(p)
+        function = SwitchingFunction(c=c, d=p["Iv"], ramp=Ramp(0.0, -p["ma"] * T, T))
+        return StateSwitching(function, below=OFF, above=ON, latch=True, clocked=True, initial=initial)
+
+    def x0(self, model, p: dict) -> np.ndarray:
+        """The capacitor discharged, the inductor current twice the command (the clock's turn-off then the
+        comparator's turn-on within the first period)."""
+        x0 = np.zeros(len(model.converter.state_names))
+        x0[model.converter.state_names.index("iL")] = 2.0 * p["Iv"]
+        return x0
+
+    def signal(self, name: str, samples: Samples, p: dict, model, circuit: dict | None = None) -> np.ndarray:
+        """``icontrol``: the command with its compensation ramp, Iv + ma (t mod T) (A)."""
+        return p["Iv"] + p["ma"] * np.mod(np.asarray(samples.t, dtype=float), model.period(p))

@@ -130,3 +130,19 @@ def test_only_the_clock_turns_the_switch_on(method):
     assert switchings[0][1] == 0 and switchings[0][0] == pytest.approx(1e-4, abs=1e-12)      # on at the clock
     before = tr.t < 1e-4
     assert (tr.signal("switch")[before] == 0).all() and tr.state("iL")[before].min() < 1.9475523551577258 - 0.5
+
+
+def test_valley_current_mode_is_the_mirror_image_stable_above_one_half(capsys):
+    """The clock turns the switch off, the current falling to Iv turns it on: a perturbation is multiplied by -m1/m2
+    each period, so the period-1 orbit is stable for D > 1/2 and doubles below: at Iv = (Vin/2)/R - (Vin/2) T/(2 L)/2
+    = 0.45 A (small ripple), where the duty ratio is 1/2."""
+    assert main(["bifurcation", "buck", "--control", "valley-current", "--param", "Iv=0.2:0.7", "--points", "0",
+                 "--max-period", "2", "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    doubling = next(b for b in summary["bifurcations"] if b["type"] == "period-doubling" and b["period"] == 1)
+    assert doubling["value"] == pytest.approx(0.45, abs=1e-4)
+    assert not doubling["stable_before"] and doubling["stable_after"]
+    small = SmallSignalModel(resolve_model("buck", "valley-current"), {"Iv": doubling["value"] + 1e-5}, input="Iv",
+                             outputs=("iL",))
+    turn_on = [item[1] for item in small.timeline if item[0] == "cross"][0]
+    assert 1 - turn_on * FS == pytest.approx(0.5, abs=1e-3)          # on from the crossing to the period's end

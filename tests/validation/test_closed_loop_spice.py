@@ -43,3 +43,16 @@ def test_peak_current_mode_in_ngspice_stays_on_the_lcs_orbit(converter, params):
     lcs = run_converter(model, params, method="event", periods=30, x0=orbit.x0)
     spice = run_converter(model, params, method="spice", periods=30, x0=orbit.x0)
     assert spice.mean("vout", t0=20 * T) == pytest.approx(lcs.mean("vout", t0=20 * T), rel=1e-4)
+
+
+@pytest.mark.parametrize("params", [{"Iv": 0.5}, {"Iv": 0.3, "ma": 3e4}])
+def test_valley_current_mode_in_ngspice_stays_near_the_lcs_orbit(params):
+    """30 periods from the event method's orbit: 5.1e-4 and 7.7e-4 apart (measured; peak current mode's latch is
+    15 to 50 times closer: not yet explained)."""
+    model = resolve_model("buck", "valley-current")
+    p = model.resolve(params)
+    orbit = steady_state(model, p, EventDriven())
+    T = model.period(p)
+    lcs = run_converter(model, params, method="event", periods=30, x0=orbit.x0)
+    spice = run_converter(model, params, method="spice", periods=30, x0=orbit.x0)
+    assert spice.mean("vout", t0=20 * T) == pytest.approx(lcs.mean("vout", t0=20 * T), rel=1e-3)
