@@ -293,16 +293,15 @@ def build_voltage_loop_netlist(params: dict | None, t_end, options: SpiceOptions
 
 
 def build_peak_current_netlist(params: dict | None, t_end, options: SpiceOptions | None = None, x0=None,
-                               converter: str = "buck", control: str = "peak-current") -> Netlist:
+                               converter: str = "buck", valley: bool = False) -> Netlist:
     """A two-state converter under peak (or valley) current-mode control (``converters.models.current_mode``) as an
     ngspice netlist: the converter's own file with a clocked latch (:func:`_clocked_latch`) driving its gate, reset
     where the inductor current (its sense source) passes the command, a PULSE falling from Iref to Iref - ma
     (T - edge) over each period (edge = ``RAMP_FALL_FRACTION`` T); valley: the clock resets the latch, the current
     falling below Iv + ma t sets it."""
     from converters.models import get_model
-    model = get_model(converter, control)
+    model = get_model(converter, "valley-current" if valley else "peak-current")
     p = model.resolve(params)
-    valley = control == "valley-current"
     options = options or SpiceOptions()
     conv = model.converter
     T = model.period(p)
@@ -321,7 +320,7 @@ def build_peak_current_netlist(params: dict | None, t_end, options: SpiceOptions
     written = converter_netlist(conv, model.plant(p), t_end, options, x0, drives={GATE: drive})
     _, rest = written.text.split("\n", 1)
     return replace(written, text=f"* pcsuite: {model.title}, on the built-in {converter}'s circuit\n{rest}",
-                   converter=f"{converter}-{control}", params=p, probes={**written.probes, "icontrol": ("icmd", 1.0)})
+                   converter=f"{converter}-{model.control}", params=p, probes={**written.probes, "icontrol": ("icmd", 1.0)})
 
 
 #: The netlist writer of each control (model, params, t_end, options, x0) -> Netlist; the implicit relay has none.
@@ -334,7 +333,7 @@ CONTROL_NETLISTS = {
     "peak-current": lambda model, p, t_end, options, x0: build_peak_current_netlist(p, t_end, options, x0=x0,
                                                                                      converter=model.name),
     "valley-current": lambda model, p, t_end, options, x0: build_peak_current_netlist(
-        p, t_end, options, x0=x0, converter=model.name, control="valley-current"),
+        p, t_end, options, x0=x0, converter=model.name, valley=True),
 }
 
 

@@ -16,9 +16,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from converters.errors import ParameterError
-from converters.models import get_converter
+from converters.models import get_model
 from converters.run import make_method, run_converter, steady_state
-from netlists import SpiceOptions, build_netlist
+from netlists import SpiceOptions
+from netlists.build import model_netlist
 
 from .defaults import THRESHOLDS, passes
 from .modes import period_sequences
@@ -55,14 +56,17 @@ class Comparison:
 
 def compare(converter: str, params: dict | None = None, *, periods: int | None = None, window: int | None = None,
             h=None, theta=None, spice_options: SpiceOptions | None = None, start: str | None = None,
-            thresholds: dict | None = None, rtol=None) -> Comparison:
+            thresholds: dict | None = None, rtol=None, control: str = "pwm") -> Comparison:
     """Run both simulators on the same circuit and measure their agreement.
 
     ``start``: 'steady' (both start on the LCP's periodic orbit) or 'rest'; the default, ``periods`` and
     ``window`` come from the model (PWM converters: steady, 30 periods, metrics over the last 10; the
     PRC, whose ideal tank keeps a ~1e-4 V cycle-to-cycle jitter: the Siconos scene, 2 ms from rest, the
     last 1 ms)."""
-    model = get_converter(converter)
+    model = get_model(converter, control)          # a converter, or a converter under a clocked loop
+    if not model.periodic(model.resolve(params)):
+        raise ParameterError(f"compare starts both simulators on a periodic orbit; {model.key} has no clock (its "
+                             "comparison is --control smc's)")
     p = model.resolve(params)
     T = model.period(p)
     defaults = model.compare_defaults
@@ -83,7 +87,7 @@ def compare(converter: str, params: dict | None = None, *, periods: int | None =
             orbit = steady_state(model, p, make_method(model, p, "lcp", h, theta=theta), tol=1e-7)
             x_star, rho = orbit.x0, orbit.spectral_radius
         lcp = run_converter(model, p, h=h, theta=theta, periods=periods, x0=x_star)
-    netlist = build_netlist(model.name, p, periods * T, spice_options, x0=x_star)
+    netlist = model_netlist(model, p, periods * T, spice_options, x0=x_star)
     window_start = (periods - window) * T
     spice = spice_trajectory(model, p, netlist, run_spice(netlist), window_start)
     spice_periods, settle = periods, spice_drift(spice, T, periods, window)
@@ -91,11 +95,11 @@ def compare(converter: str, params: dict | None = None, *, periods: int | None =
     # orbit it drifts towards it, slowly where the circuit is lightly damped. Measure it only once it is
     # there: run on from where it ended until the window's mean moves less than SPICE_SETTLE.
     while start == "steady" and settle > SPICE_SETTLE and spice_periods < MAX_SPICE_PERIODS:
-        netlist = build_netlist(model.name, p, periods * T, spice_options, x0=spice.x[-1])
+        netlist = model_netlist(model, p, periods * T, spice_options, x0=spice.x[-1])
         spice = spice_trajectory(model, p, netlist, run_spice(netlist), window_start)
         spice_periods += periods
         settle = spice_drift(spice, T, periods, window)
-    result = Comparison(model.name, p, lcp, spice, netlist, window_start,
+    result = Comparison(model.key, p, lcp, spice, netlist, window_start,
                         thresholds={**THRESHOLDS["compare"], **(thresholds or {})})
     _metrics(result, model, T, periods, window)
     result.metrics["spice_settle"] = settle

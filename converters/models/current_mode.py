@@ -39,8 +39,10 @@ class PeakCurrent(Control):
     key = "peak-current"
     title = "peak current-mode control"
     parameters = PARAMETERS
-    #: The two-state converters, with an inductance that keeps the default load in CCM (the buck: 100 uH).
-    plants = {"buck": {"L": 100e-6}, "boost": {"L": 100e-6}, "buck-boost": {"L": 100e-6}}
+    #: The two-state converters, with an inductance that keeps the default load in CCM (100 uH) and, for the boost
+    #: and buck-boost, a load their default command can drive (40 ohm: at 10 ohm the boost's input current without
+    #: switching, Vin/R = 1.2 A, is above the 0.5 A command and every period is skipped).
+    plants = {"buck": {"L": 100e-6}, "boost": {"L": 100e-6, "R": 40.0}, "buck-boost": {"L": 100e-6, "R": 40.0}}
     signal_names = ("icontrol",)
     signal_units = {"icontrol": "A"}
 
@@ -66,7 +68,8 @@ class PeakCurrent(Control):
 
 
 VALLEY_PARAMETERS = (
-    positive("Iv", 0.3, "A", "valley current command (the inductor current that turns the switch on)"),
+    positive("Iv", 0.5, "A", "valley current command (the inductor current that turns the switch on; the default "
+                             "buck's orbit is stable above D = 1/2 without compensation: Iv > 0.45 A)"),
     nonnegative("ma", 0.0, "A/s", "slope compensation: the command rises by ma per second of each period"),
 )
 

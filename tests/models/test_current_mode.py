@@ -20,8 +20,8 @@ def bifurcation(capsys, *argv) -> dict:
 
 
 @pytest.mark.parametrize("method, tol", [("event", 1e-12), ("lcp", 1e-3)])
-@pytest.mark.parametrize("converter, params", [("buck", {"Iref": 0.6, "ma": 2e4}), ("boost", {"Iref": 2.0}),
-                                               ("buck-boost", {"Iref": 2.0, "ma": 1e4})])
+@pytest.mark.parametrize("converter, params", [("buck", {"Iref": 0.6, "ma": 2e4}), ("boost", {"Iref": 2.0, "R": 10}),
+                                               ("buck-boost", {"Iref": 2.0, "ma": 1e4, "R": 10})])
 def test_the_switch_turns_off_where_the_inductor_current_meets_the_compensated_command(converter, params, method, tol):
     """At every turn-off iL = Iref - ma (t mod T) (the event method exactly; the stepper locates the crossing inside
     its step at T/1000), and the clock turns the switch on once per period."""

@@ -180,7 +180,8 @@ def _design(args, model, params: dict) -> int:
     from converters.validate import parse_value, quoted
 
     from ..io import atomic_write_bytes
-    if model.control != "voltage-loop":
+    from converters.models.compensator import VoltageLoop
+    if not isinstance(getattr(model, "loop", None), VoltageLoop):
         raise ParameterError(f"--design designs the compensator of --control voltage-loop; got --control {model.control}")
     if args.input is not None or args.check:
         raise ParameterError("--design gives the loop gain it closes; --input and --check do not apply to it")
