@@ -8,6 +8,8 @@ from __future__ import annotations
 import numpy as np
 
 PERIODS = 3
+#: A run with a load or input step is drawn from this many periods before the step to its end.
+STEP_PERIODS_BEFORE = 10
 
 
 def time_unit(span: float) -> tuple[float, str]:
@@ -36,13 +38,18 @@ def held_pairs(tr, rows) -> np.ndarray:
 
 def plot(tr, periods: float | None = None, signals=None, title: str | None = None):
     """A matplotlib Figure: one panel per signal (default: the states and vout) over the last ``periods``
-    switching periods (default 3; the whole run without a period), then the mode timeline."""
+    switching periods (default 3; the whole run without a period; a run with a load or input step from
+    STEP_PERIODS_BEFORE periods before it to the end, the step marked), then the mode timeline."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    step = ((tr.metadata or {}).get("params") or {}).get("t_step")
+    stepped = periods is None and step is not None and tr.t[0] < step < tr.t[-1] and np.isfinite(tr.period)
     if periods is None:
         periods = PERIODS if np.isfinite(tr.period) else None
     t0, t1 = tr.window(periods) if periods else (tr.t[0], tr.t[-1])
+    if stepped:                   # a load or input step: the periods before it, the response, the end
+        t0 = max(tr.t[0], step - STEP_PERIODS_BEFORE * tr.period)
     rows = tr.rows_between(t0, t1)
     t = tr.t[rows]
     names = list(signals) if signals is not None else (
@@ -55,6 +62,8 @@ def plot(tr, periods: float | None = None, signals=None, title: str | None = Non
     axes = np.atleast_1d(axes)
     for ax, name in zip(axes, names):
         ax.plot((t - t0) * scale, tr.signal(name, rows), lw=1)
+        if stepped:
+            ax.axvline((step - t0) * scale, color="C3", lw=0.8, ls="--")
         quantity = "A" if name.startswith("i") else "V" if name.startswith("v") else ""
         ax.set_ylabel(f"{name} ({quantity})" if quantity else name)
         ax.ticklabel_format(axis="y", useOffset=False)

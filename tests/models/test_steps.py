@@ -1,6 +1,7 @@
 """Open-loop load and input steps: the buck's input step against the averaged second-order closed form."""
 import math
 
+import numpy as np
 import pytest
 
 from converters.errors import ParameterError
@@ -143,3 +144,19 @@ def test_an_orbit_of_a_stepped_run_is_refused_wherever_it_is_asked_for():
                                                    r"that does not repeat, or a PWL source in the power circuit\) is "
                                                    r"not periodic: run --periods N"):
             ask()
+
+
+def test_the_plot_of_a_run_with_a_step_shows_the_step_and_the_response():
+    """From ten periods before the step to the end of the run, the step marked (it had drawn the last three periods
+    only, long after the step)."""
+    from converters.run import run_converter
+    tr = run_converter("buck", {"t_step": "1m", "R_step": 5}, t_end="2m")
+    fig = tr.plot()
+    line = fig.axes[0].lines[0]
+    x = line.get_xdata()
+    scale = 1e6                                      # the window is 1.1 ms: microseconds
+    assert x.max() - x.min() == pytest.approx((2e-3 - (1e-3 - 10e-5)) * scale, rel=1e-3)
+    marks = [a for a in fig.axes[0].lines[1:] if np.allclose(a.get_xdata(), 10e-5 * scale)]
+    assert marks
+    import matplotlib.pyplot as plt
+    plt.close(fig)
