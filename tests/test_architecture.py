@@ -182,7 +182,7 @@ def test_nothing_branches_on_a_method_key_outside_the_registry():
     assert _lines_matching(_METHOD_BRANCH, PACKAGES, skip=("converters/methods/base.py",)) == []
 
 
-_CONTROLS = "pwm|smc|smc-implicit|voltage-mode|peak-current|valley-current|voltage-loop|circuit"
+_CONTROLS = "pwm|smc|smc-implicit|voltage-mode|peak-current|valley-current|current-loop|voltage-loop|circuit"
 _CONTROL_BRANCH = re.compile(rf"""\bcontrol\b\s*(==|!=)\s*["']({_CONTROLS})["']|["']({_CONTROLS})["']\s*(==|!=)|"""
                              rf"""\bcontrol\b\s*(not\s+)?in\s*[(\[{{]\s*["']({_CONTROLS})["']""")
 

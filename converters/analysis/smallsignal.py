@@ -369,20 +369,40 @@ def frequency_response(model, params: dict | None = None, *, input: str, output:
                              *units)
 
 
-def loop_gain(model, params: dict | None = None, *, frequency_hz=None, fmin=None, fmax=None,
+#: Where a loop is broken for its gain: at the comparator's input (every state-driven law), or at the reference of
+#: a voltage loop (its error amplifier's input: the outer loop of a current-mode controller).
+LOOP_POINTS = ("comparator", "reference")
+
+
+def loop_gain(model, params: dict | None = None, *, at: str = "comparator", frequency_hz=None, fmin=None, fmax=None,
               points: int = POINTS) -> tuple[FrequencyResponse, Margins]:
-    """The loop gain T of a state-driven law (Middlebrook's injection at the comparator's input, read on the exact
-    model: module docstring) and its margins (:func:`margins`)."""
-    small = SmallSignalModel(model, params, input=CONTROL, outputs=("sensed",))
-    f = (frequencies(small.T, fmin, fmax, points) if frequency_hz is None
-         else np.atleast_1d(np.asarray(frequency_hz, dtype=float)))
+    """The loop gain T of a closed loop and its margins (:func:`margins`), Middlebrook's injection read on the exact
+    model (module docstring). ``at="comparator"``: a perturbation added to the comparator's input, Y the sensed
+    quantity's response, T = -Y / (1 + Y). ``at="reference"``: the loop broken at the error amplifier's input, where
+    vout is subtracted from Vref: Y the response of vout to Vref, T = Y / (1 - Y); for a single loop the two are the
+    same T, for a current-mode controller the second is its outer (voltage) loop."""
+    name, output = loop_signals(at)
+    small = SmallSignalModel(model, params, input=name, outputs=(output,))
 
     def gain(freq):
-        Y = small.response(freq, "sensed")
-        return -Y / (1.0 + Y)
-
-    response = FrequencyResponse(f, gain(f), CONTROL, "sensed", "loop gain", small.T, small.orbit.multipliers)
+        return loop_from_closed(small.response(freq, output), at)
+    f = (frequencies(small.T, fmin, fmax, points) if frequency_hz is None
+         else np.atleast_1d(np.asarray(frequency_hz, dtype=float)))
+    response = FrequencyResponse(f, gain(f), name, output, "loop gain", small.T, small.orbit.multipliers)
     return response, margins(gain, f)
+
+
+def loop_signals(at: str) -> tuple[str, str]:
+    """(the input perturbed, the output read) of a loop broken ``at`` one of LOOP_POINTS."""
+    if at not in LOOP_POINTS:
+        raise ParameterError(f"at must be one of {', '.join(LOOP_POINTS)}; got {at!r}")
+    return (CONTROL, "sensed") if at == "comparator" else ("Vref", "vout")
+
+
+def loop_from_closed(Y, at: str):
+    """The loop gain from the closed loop's response Y at the break point: -Y / (1 + Y) at the comparator (the
+    perturbation adds to what it senses), Y / (1 - Y) at the reference (vout is subtracted from it)."""
+    return -Y / (1.0 + Y) if at == "comparator" else Y / (1.0 - Y)
 
 
 def margins(gain, f: np.ndarray) -> Margins:

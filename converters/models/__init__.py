@@ -11,7 +11,7 @@ from .buckboost import BuckBoost
 from .control import Control, Controlled, OpenLoop
 from .compensator import VoltageLoop
 from .cuk import Cuk
-from .current_mode import PeakCurrent, ValleyCurrent
+from .current_mode import PeakCurrent, PeakCurrentLoop, ValleyCurrent
 from .prc import PRC
 from .sliding import SlidingMode
 from .netlist import Circuit, is_netlist, load
@@ -22,7 +22,7 @@ CONVERTERS: dict[str, Converter] = {c.name: c for c in (Buck(), Boost(), BuckBoo
 CONTROLS: dict[str, Control] = {c.key: c for c in (OpenLoop(), SlidingMode(implicit=False),
                                                    SlidingMode(implicit=True), VoltageMode(),
                                                    PeakCurrent(), ValleyCurrent(),
-                                                   VoltageLoop())}
+                                                   PeakCurrentLoop(), VoltageLoop())}
 #: The control of a converter when none is named: open-loop PWM.
 DEFAULT_CONTROL = OpenLoop.key
 #: Every model by (converter name, control): each control on each converter it applies to (built once, so a

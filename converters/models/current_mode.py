@@ -19,6 +19,8 @@ ramp's slope), located inside the step in the stepper.
 """
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from ..params import nonnegative, positive
@@ -99,3 +101,80 @@ class ValleyCurrent(PeakCurrent):
     def signal(self, name: str, samples: Samples, p: dict, model, circuit: dict | None = None) -> np.ndarray:
         """``icontrol``: the command with its compensation ramp, Iv + ma (t mod T) (A)."""
         return p["Iv"] + p["ma"] * np.mod(np.asarray(samples.t, dtype=float), model.period(p))
+
+
+def _loop_parameters():
+    from .compensator import PARAMETERS as VOLTAGE_LOOP
+    kept = {q.name: q for q in VOLTAGE_LOOP}
+    return (kept["Vref"],
+            nonnegative("ma", 0.0, "A/s", "slope compensation: the command falls by ma per second of each period"),
+            replace(kept["wi"], default=2.0e4), replace(kept["fz1"], default=2.0e3), replace(kept["fz2"], default=0.0),
+            replace(kept["fp1"], default=0.0), replace(kept["fp2"], default=0.0))
+
+
+class PeakCurrentLoop(PeakCurrent):
+    """Peak current mode under an outer voltage loop: the command is a compensator's output (I, PI, type II or III
+    on Vref - vout, as :class:`~.compensator.VoltageLoop`'s, read as amperes: a current sense of 1 V/A), s = iL -
+    vc + ma (t mod T), the clocked latch of peak current mode."""
+
+    key = "current-loop"
+    title = "peak current-mode control under an outer voltage loop"
+
+    @property
+    def parameters(self):
+        return _loop_parameters()
+
+    def check(self, model, p: dict) -> None:
+        from .compensator import Compensator
+        Compensator.of(p)
+        self.sensed(model, p)
+
+    def controller_states(self, p: dict) -> tuple[str, ...]:
+        from .compensator import Compensator
+        return Compensator.of(p).states
+
+    def augment(self, configurations: tuple, p: dict, model) -> tuple:
+        from .compensator import Compensator, _with_compensator
+        c, d = self.sensed(model, p)
+        comp = Compensator.of(p)
+        return tuple(_with_compensator(config, c, d, p["Vref"], comp) for config in configurations)
+
+    def x0(self, model, p: dict) -> np.ndarray:
+        """The output capacitor at Vref, the inductor current 0, the compensator's states (the command) at the
+        inductor current the load needs at Vref in CCM: Vref / R for a buck, the input current P / Vin for a
+        boost, input and output current for a buck-boost (the converter's ``ccm_ratio`` tells which: its output
+        current over (1 - D) where it is not the buck's D)."""
+        from .compensator import Compensator
+        converter = model.converter
+        x = np.zeros(len(converter.state_names))
+        x[converter.state_names.index(converter.output_state)] = p["Vref"]
+        current = p["Vref"] / p["R"]
+        ratio = getattr(converter, "ccm_ratio", None)
+        if ratio is not None and abs(ratio(0.5) - 0.5) > 1e-12:       # not a buck: the inductor carries Iout/(1 - D)
+            from scipy.optimize import brentq
+            target = p["Vref"] / p["Vin"]
+            g = lambda D: ratio(D) - target                          # noqa: E731
+            if g(1e-9) * g(1 - 1e-9) < 0:
+                current = current / (1 - brentq(g, 1e-9, 1 - 1e-9))
+        return np.concatenate([x, np.full(len(Compensator.of(p).states), current)])
+
+    def law(self, model, p: dict, initial: int | None = None, circuit: dict | None = None) -> StateSwitching:
+        from .compensator import Compensator
+        sensed, offset = self.sensed(model, p if circuit is None else circuit)
+        _, _, Cc, Dc = Compensator.of(p).matrices()
+        n = len(model.converter.state_names)
+        c = np.zeros(n)
+        c[model.converter.state_names.index("iL")] = 1.0
+        c = np.concatenate([c + Dc * np.asarray(sensed, dtype=float), -Cc])
+        T = model.period(p)
+        function = SwitchingFunction(c=c, d=-Dc * (p["Vref"] - offset), ramp=Ramp(0.0, -p["ma"] * T, T))
+        return StateSwitching(function, below=ON, above=OFF, latch=True, clocked=True, initial=initial)
+
+    def signal(self, name: str, samples: Samples, p: dict, model, circuit: dict | None = None) -> np.ndarray:
+        """``icontrol``: the compensator's command less the compensation ramp (A)."""
+        from .compensator import Compensator
+        _, _, Cc, Dc = Compensator.of(p).matrices()
+        n = len(model.converter.state_names)
+        vout = np.abs(model.vout(samples, p if circuit is None else circuit))
+        command = np.asarray(samples.x)[:, n:] @ Cc + Dc * (p["Vref"] - vout)
+        return command - p["ma"] * np.mod(np.asarray(samples.t, dtype=float), model.period(p))

@@ -77,6 +77,9 @@ CASES = [
     ("buck", "voltage-mode", {}, "control", "vout"),
     ("buck", "voltage-mode", {}, "Vin", "vout"),
     ("buck", "voltage-mode", {"latch": 1, "Vin": 20}, "Vref", "vout"),
+    ("buck", "voltage-loop", {}, "Vref", "vout"),
+    ("buck", "current-loop", {}, "Vref", "vout"),
+    ("buck", "current-loop", {}, "control", "iL"),
 ]
 
 
@@ -134,3 +137,19 @@ def test_margins_are_located_on_the_function_not_the_grid():
 def test_what_the_small_signal_model_cannot_take_is_refused_naming_it(converter, control, params, name, message):
     with pytest.raises(ParameterError, match=message.replace("(", r"\(").replace(")", r"\)")):
         SmallSignalModel(resolve_model(converter, control), params, input=name)
+
+
+def test_a_single_loop_has_one_loop_gain_wherever_it_is_broken():
+    """The compensated voltage loop broken at its comparator (T = -Y / (1 + Y)) and at its reference (T = Y / (1 - Y))
+    is the same loop: the same T to 1e-9 at every frequency. Under peak current mode with an outer voltage loop the
+    two differ: the comparator's is the inner current loop's (crossing near fs/2), the reference's the outer one."""
+    from converters.models import get_model
+    single = get_model("buck", "voltage-loop")
+    at_comparator, m1 = loop_gain(single, {}, fmin=100.0, fmax=5e4, points=60)
+    at_reference, m2 = loop_gain(single, {}, at="reference", fmin=100.0, fmax=5e4, points=60)
+    assert np.abs(at_reference.response / at_comparator.response - 1).max() < 1e-9
+    assert m1.crossover_hz == pytest.approx(m2.crossover_hz, rel=1e-9)
+    double = get_model("buck", "current-loop")
+    _, inner = loop_gain(double, {})
+    _, outer = loop_gain(double, {}, at="reference")
+    assert outer.crossover_hz < 0.1 * inner.crossover_hz and 30 < outer.phase_margin_deg < 90

@@ -91,7 +91,7 @@ def test_the_comparators_input_senses_the_circuit_in_force_after_a_load_step():
 
 def test_a_control_names_where_it_applies_and_what_it_keeps():
     with pytest.raises(ParameterError, match=r"--control voltage-mode is available for buck only \(boost takes "
-                                             r"--control pwm, smc, smc-implicit, peak-current, valley-current, voltage-loop\); got 'boost'"):
+                                             r"--control pwm, smc, smc-implicit, peak-current, valley-current, current-loop, voltage-loop\); got 'boost'"):
         get_model("boost", "voltage-mode")
     with pytest.raises(ParameterError, match="unknown parameter 'rC' for boost --control smc"):
         get_model("boost", "smc").resolve({"rC": 0.1})

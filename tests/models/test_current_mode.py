@@ -146,3 +146,16 @@ def test_valley_current_mode_is_the_mirror_image_stable_above_one_half(capsys):
                              outputs=("iL",))
     turn_on = [item[1] for item in small.timeline if item[0] == "cross"][0]
     assert 1 - turn_on * FS == pytest.approx(0.5, abs=1e-3)          # on from the crossing to the period's end
+
+
+
+@pytest.mark.parametrize("method, tol", [("event", 1e-9), ("lcp", 1e-4)])
+def test_an_outer_voltage_loop_sets_the_peak_current_command_and_regulates_vout(method, tol):
+    """--control current-loop: the command is the compensator's output (a PI on Vref - vout by default), so the mean
+    output is Vref; the command at every turn-off is what the inductor current reached."""
+    tr = run_converter("buck", {}, control="current-loop", method=method, steady=True, periods=3)
+    assert tr.mean("vout") == pytest.approx(5.0, abs=tol * 5.0)
+    offs = tr.events.loc[(tr.events["kind"] == "switch") & (tr.events["config"] == 1), "time"].to_numpy()
+    gap = tr.state("iL") - tr.signal("icontrol")
+    rows = [int(np.searchsorted(tr.t, t)) for t in offs]
+    assert len(offs) == 3 and max(abs(gap[r]) for r in rows) < (1e-9 if method == "event" else 2e-2)

@@ -105,3 +105,11 @@ def test_bad_design_input_is_one_line(capsys, argv, message):
 def test_design_needs_the_voltage_loop(capsys):
     code, out, err = run_cli(capsys, "bode", "buck", "--design", "fc=10k,pm=60")
     assert code == 2 and "--design designs the compensator of --control voltage-loop" in err
+
+
+def test_bode_breaks_a_current_mode_controllers_outer_loop_at_its_reference(capsys):
+    code, out, _ = run_cli(capsys, "bode", "buck", "--control", "current-loop", "--input", "vloop", "--json")
+    assert code == 0
+    summary = json.loads(out)
+    assert summary["kind"] == "loop gain" and summary["input"] == "vloop"
+    assert 1e3 < summary["margins"]["crossover_hz"] < 1e4 and 30 < summary["margins"]["phase_margin_deg"] < 90

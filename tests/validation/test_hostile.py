@@ -307,7 +307,7 @@ IGNORED = [
      "R=START:STOP[:log]; got 'R=5:200:40:log'"),
     (["bifurcation", "boost", "--param", "D=0.2:0.5", "--points", "0"],     # the default control, not given
      "--control voltage-mode is available for buck only (boost takes --control pwm, smc, smc-implicit, "
-     "peak-current, valley-current, voltage-loop)"),
+     "peak-current, valley-current, current-loop, voltage-loop)"),
     (["report", ""], "TARGET must be a suite (bench, bifurcation, default, gdcm, lcp, mechanics), a scene file "
                      "FILE.toml or a directory of them; got ''"),                 # read as '.' before
     # the third audit: accepted and ignored before

@@ -12,6 +12,9 @@ from .common import add_params, given_path, integer, json_text
 #: What --input accepts beside a parameter's name: the duty ratio, the input voltage and the load current (the
 #: output impedance's input, 0 A unless -p Io= says otherwise) by their usual names.
 ALIASES = {"duty": "D", "vin": "Vin", "iload": "Io"}
+#: --input's loop gains by where the loop is broken: at the comparator, or at a voltage loop's reference (its
+#: outer loop under current-mode control).
+LOOPS = {"loop": "comparator", "vloop": "reference"}
 #: Frequencies the brute-force check measures (log-spaced over the response's range, the last below fs/2).
 CHECK_POINTS = 8
 
@@ -26,8 +29,9 @@ def add(sub) -> None:
     bode.add_argument("--input", default=None,
                       help="what is perturbed: duty (the duty ratio D), vin, iload (a load current: -vout/iload is the "
                            "output impedance), any source's value or parameter the circuit is affine in (Vref, a "
-                           "netlist's V1), control (a comparator's input), or loop (the loop gain T of a "
-                           "state-driven law, with its margins)")
+                           "netlist's V1), control (a comparator's input), loop (the loop gain T of a "
+                           "state-driven law broken at its comparator, with its margins) or vloop (a voltage loop's "
+                           "gain broken at its reference: the outer loop of --control current-loop)")
     bode.add_argument("--output", default="vout", help="what is read: vout (default), a state (iL, vC) or a signal "
                                                       "(v(NODE), i(ELEMENT) of a netlist)")
     bode.add_argument("--fmin", default=None, help="lowest frequency in Hz (default fs/1000; SPICE suffixes: 10k)")
@@ -49,8 +53,8 @@ def add(sub) -> None:
 def run(args) -> int:
     import numpy as np
 
-    from converters.analysis.smallsignal import (CONTROL, FrequencyResponse, SmallSignalModel, frequencies,
-                                                 injection_response, margins)
+    from converters.analysis.smallsignal import (FrequencyResponse, SmallSignalModel, frequencies, injection_response,
+                                                 loop_from_closed, loop_signals, margins)
     from converters.params import parse_assignments
     from converters.run import resolve_model
     from converters.validate import parse_value, quoted
@@ -65,14 +69,14 @@ def run(args) -> int:
         return _design(args, model, params)
     if args.input is None:
         raise ParameterError("--input is required (duty, vin, iload, a parameter, control or loop), or --design")
-    loop = args.input.lower() == "loop"
+    at = LOOPS.get(args.input.lower())
+    loop = at is not None
     if loop and args.output != "vout":
-        raise ParameterError(f"--input loop reads the loop's own sensed signal; --output does not apply (got "
+        raise ParameterError(f"--input {args.input} reads the loop's own signal; --output does not apply (got "
                              f"{args.output!r})")
-    name = CONTROL if loop else ALIASES.get(args.input.lower(), args.input)
+    name, output = loop_signals(at) if loop else (ALIASES.get(args.input.lower(), args.input), args.output)
     if name == "Io" and "Io" in {q.name for q in model.parameters}:
         params.setdefault("Io", 0.0)          # the load current's operating point: none beside R
-    output = "sensed" if loop else args.output
     fmin = None if args.fmin is None else parse_value("--fmin", args.fmin)
     fmax = None if args.fmax is None else parse_value("--fmax", args.fmax)
     start = time.perf_counter()
@@ -81,11 +85,11 @@ def run(args) -> int:
     start = time.perf_counter()
     f = frequencies(small.T, fmin, fmax, args.points)
 
-    def gain(freq):           # the loop gain from the closed loop's response Y at the comparator (Middlebrook)
-        Y = small.response(freq, output)
-        return -Y / (1.0 + Y)
+    def gain(freq):           # the loop gain from the closed loop's response at the break point (Middlebrook)
+        return loop_from_closed(small.response(freq, output), at)
     values = gain(f) if loop else small.response(f, output)
-    response = FrequencyResponse(f, values, "loop" if loop else name, output, "loop gain" if loop else "transfer",
+    response = FrequencyResponse(f, values, args.input.lower() if loop else name, output,
+                                 "loop gain" if loop else "transfer",
                                  small.T, small.orbit.multipliers, *_units(model, small, name, output, loop))
     exact_s = time.perf_counter() - start
     summary = {"converter": model.key, "params": {k: v for k, v in small.params.items() if v is not None},
@@ -99,7 +103,7 @@ def run(args) -> int:
         f_check = np.geomspace(f[0], min(f[-1], 0.49 / small.T), CHECK_POINTS)
         f_used, measured = injection_response(small, f_check, output)
         if loop:
-            measured = -measured / (1.0 + measured)
+            measured = loop_from_closed(measured, at)
         exact = gain(f_used) if loop else small.response(f_used, output)
         check = (f_used, measured)
         summary["check"] = {"frequency_hz": f_used.tolist(), "exact_db": (20 * np.log10(np.abs(exact))).tolist(),
