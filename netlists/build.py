@@ -280,10 +280,14 @@ def build_voltage_loop_netlist(params: dict | None, t_end, options: SpiceOptions
         drive += [f"Bxc{i} 0 {nodes[i]} I={combination(Ac[i], source)}",
                   f"Cxc{i} {nodes[i]} 0 1 IC={_num(f'x0[{n + i}]', x0[n + i])}"]
     direct = _num("Dc", float(Dc)) + "*" + error
+    start, end = (p["VU"], p["VL"]) if p["leading"] else (p["VL"], p["VU"])
     drive += [f"Bvc vc 0 V={combination(Cc, direct)}",
-              f"Vcarrier carrier 0 PULSE({_num('VL', p['VL'])} {_num('VU', p['VU'])} 0 {_num('rise', T - edge)} "
-              f"{_num('edge', edge)} 0 {_num('T', T)})"]
-    drive += _clocked_latch(gate, "1", f"{COMPARATOR_GAIN:g}*(V(carrier)-V(vc))", T)
+              f"Vcarrier carrier 0 PULSE({_num('carrier start', start)} {_num('carrier end', end)} 0 "
+              f"{_num('rise', T - edge)} {_num('edge', edge)} 0 {_num('T', T)})"]
+    # trailing edge: the clock sets, the carrier passing vc resets; leading edge: the clock resets, vc passing the
+    # falling carrier sets
+    comparator = "V(vc)-V(carrier)" if p["leading"] else "V(carrier)-V(vc)"
+    drive += _clocked_latch(gate, "1", f"{COMPARATOR_GAIN:g}*({comparator})", T, clock_sets=not p["leading"])
     written = converter_netlist(conv, model.plant(p), t_end, options, x0[:n], drives={GATE: drive})
     _, rest = written.text.split("\n", 1)
     probes = {**written.probes, "vc": ("vc", 1.0), "carrier": ("carrier", 1.0),

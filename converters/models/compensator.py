@@ -8,7 +8,9 @@ The error e = Vref - vout passes through
 (type III; type II without the second zero and pole, -p fz2=0 -p fp2=0; PI: wi (1 + s/wz1) / s; I: wi / s), and its
 output vc is
 compared with a carrier rising from VL to VU over each period: the switch turns on at the clock and off where the
-carrier reaches vc (a clocked latch: trailing-edge modulation, duty ratio (vc - VL) / (VU - VL)). The compensator
+carrier reaches vc (a clocked latch: trailing-edge modulation, duty ratio (vc - VL) / (VU - VL)); with -p leading=1
+the carrier falls from VU to VL, the clock turns the switch off and the carrier meeting vc turns it on (leading
+edge, the same duty ratio). The compensator
 is realised as an integrator and one first-order section per zero-pole pair, z' = wp (y - z), y+ = (wp/wz) y +
 (1 - wp/wz) z: every state is a voltage of the amplifier's scale (a companion form's would span wp^2/wi), so the
 event method's exact flows and Newton's tolerance see them alike. The design by the k-factor method (Venable 1983)
@@ -44,6 +46,9 @@ PARAMETERS = (
     _hz("fz2", 1358.07, "second zero (type III)"),
     _hz("fp1", 73633.7, "first pole (type II, type III)"),
     _hz("fp2", 73633.7, "second pole (type III)"),
+    Param("leading", 0.0, "", "1: leading-edge modulation (the clock turns the switch off, a carrier falling from VU "
+                              "to VL meets vc and turns it on); 0: trailing edge", low=0.0, high=1.0, low_open=False,
+          high_open=False),
 )
 
 
@@ -131,6 +136,8 @@ class VoltageLoop(Control):
     def check(self, model, p: dict) -> None:
         if not p["VU"] > p["VL"]:
             raise ParameterError(f"VU (carrier high level) must be above VL = {p['VL']:g} V; got VU = {p['VU']:g} V")
+        if p["leading"] not in (0.0, 1.0):
+            raise ParameterError(f"leading must be 0 (trailing edge) or 1 (leading edge); got {p['leading']!r}")
         Compensator.of(p)
         self.sensed(model, p)
 
@@ -161,20 +168,26 @@ class VoltageLoop(Control):
         return np.concatenate([x, np.full(len(Compensator.of(p).states), p["VL"] + duty * (p["VU"] - p["VL"]))])
 
     def law(self, model, p: dict, initial: int | None = None, circuit: dict | None = None) -> StateSwitching:
-        """s = carrier - vc, ON below zero: vc = Cc xc + Dc (Vref - vout), the carrier VL + (VU - VL) (t mod T) / T
-        (entering s = c x + d - ramp as a falling ramp -VL .. -VU)."""
+        """Trailing edge: s = carrier - vc, ON below zero, vc = Cc xc + Dc (Vref - vout), the carrier VL + (VU - VL)
+        (t mod T) / T (entering s = c x + d - ramp as a falling ramp -VL .. -VU). Leading edge: s = vc - carrier,
+        the carrier falling from VU to VL, OFF below zero (the clock turns the switch off, the crossing on)."""
         sensed, offset = self.sensed(model, p if circuit is None else circuit)
         _, _, Cc, Dc = Compensator.of(p).matrices()
         c = np.concatenate([Dc * np.asarray(sensed, dtype=float), -Cc])
-        function = SwitchingFunction(c=c, d=-Dc * (p["Vref"] - offset),
-                                     ramp=Ramp(-p["VL"], -p["VU"], model.period(p)))
+        d = -Dc * (p["Vref"] - offset)
+        T = model.period(p)
+        if p["leading"]:
+            function = SwitchingFunction(c=-c, d=-d - p["VU"], ramp=Ramp(0.0, -(p["VU"] - p["VL"]), T))
+            return StateSwitching(function, below=OFF, above=ON, latch=True, clocked=True, initial=initial)
+        function = SwitchingFunction(c=c, d=d, ramp=Ramp(-p["VL"], -p["VU"], T))
         return StateSwitching(function, below=ON, above=OFF, latch=True, clocked=True, initial=initial)
 
     def signal(self, name: str, samples: Samples, p: dict, model, circuit: dict | None = None) -> np.ndarray:
         """``vc``: the compensator's output (V); ``carrier``: the PWM carrier (V)."""
         t = np.asarray(samples.t, dtype=float)
         if name == "carrier":
-            return p["VL"] + (p["VU"] - p["VL"]) * np.mod(t, model.period(p)) / model.period(p)
+            rising = np.mod(t, model.period(p)) / model.period(p)
+            return p["VL"] + (p["VU"] - p["VL"]) * (1.0 - rising if p["leading"] else rising)
         _, _, Cc, Dc = Compensator.of(p).matrices()
         n = len(model.converter.state_names)
         vout = np.abs(model.vout(samples, p if circuit is None else circuit))

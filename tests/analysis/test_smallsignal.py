@@ -78,6 +78,7 @@ CASES = [
     ("buck", "voltage-mode", {}, "Vin", "vout"),
     ("buck", "voltage-mode", {"latch": 1, "Vin": 20}, "Vref", "vout"),
     ("buck", "voltage-loop", {}, "Vref", "vout"),
+    ("buck", "voltage-loop", {"leading": 1}, "control", "vout"),
     ("buck", "current-loop", {}, "Vref", "vout"),
     ("buck", "current-loop", {}, "control", "iL"),
 ]

@@ -69,3 +69,16 @@ def test_compare_runs_the_clocked_loops_against_ngspice(capsys, control):
     summary = json.loads(capsys.readouterr().out)
     assert summary["passed"] and summary["metrics"]["mode_agreement"] == 1.0
     assert summary["metrics"]["vout_mean_rel_error"] < 1e-4 and summary["metrics"]["turn_off_error_T"] < 1e-3
+
+
+def test_the_leading_edge_voltage_loop_in_ngspice_stays_near_the_lcs_orbit():
+    """-p leading=1: the clock turns the switch off, vc meeting the falling carrier turns it on (the latch reset by
+    the clock): 30 periods from the orbit, the means 1.5e-4 apart (trailing edge, the same run: 1.5e-4)."""
+    model = resolve_model("buck", "voltage-loop")
+    p = model.resolve({"leading": 1})
+    orbit = steady_state(model, p, EventDriven())
+    T = model.period(p)
+    lcs = run_converter(model, {"leading": 1}, method="event", periods=30, x0=orbit.x0)
+    spice = run_converter(model, {"leading": 1}, method="spice", periods=30, x0=orbit.x0)
+    assert spice.mean("vout", t0=20 * T) == pytest.approx(lcs.mean("vout", t0=20 * T), rel=1e-3)
+    assert lcs.mean("vout", t0=20 * T) == pytest.approx(5.0, rel=1e-9)
