@@ -118,7 +118,7 @@ class SmallSignalModel:
 
     ``response(f)`` evaluates it at any frequencies (Hz) for any output it was built with."""
 
-    def __init__(self, model, params: dict | None = None, *, input: str, outputs=("vout",), tol: float = 1e-11,
+    def __init__(self, model, params: dict | None = None, *, input: str, outputs=("vout",), tol: float = 1e-9,
                  orbit=None):
         from ..methods import EventDriven
         from .periodic import require, shoot
@@ -137,6 +137,9 @@ class SmallSignalModel:
         self.method = method = EventDriven()
         self.T = T = model.period(p)
         problem = model.problem(p, T)
+        if getattr(problem, "inputs", None) is not None:
+            raise ParameterError(f"{model.key} has sinusoidal sources (SIN): the small-signal model is taken about the "
+                                 "periodic orbit of a circuit with constant sources and a clock")
         if orbit is None:
             orbit = require(shoot(problem, method, problem.x0, tol=tol), f"the periodic orbit of {model.key}")
         self.orbit = orbit

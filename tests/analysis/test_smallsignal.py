@@ -4,6 +4,7 @@ to its periodic steady state at every frequency up to fs/2 (open and closed loop
 steps at the switching), the loop gain's -1 at fs/2 where the voltage-mode buck doubles its period, and one clear
 error for what it cannot take."""
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -13,6 +14,7 @@ from converters.analysis.smallsignal import (SmallSignalModel, frequency_respons
 from converters.errors import ParameterError
 from converters.run import resolve_model
 
+NETLISTS = Path(__file__).resolve().parents[2] / "netlists" / "circuits"
 CCM_BUCK = {"L": "100u", "C": "100u", "R": 10, "D": 0.4}          # K = 2 L / (R T) = 2 > 1 - D: CCM
 DCM_BUCK = {"L": "10u", "C": "100u", "R": 10, "D": 0.4}           # K = 0.2 < 0.6: DCM
 
@@ -81,6 +83,7 @@ CASES = [
     ("buck", "voltage-loop", {"leading": 1}, "control", "vout"),
     ("buck", "current-loop", {}, "Vref", "vout"),
     ("buck", "current-loop", {}, "control", "iL"),
+    (str(NETLISTS / "sepic.cir"), "pwm", {}, "d", "v(out)"),          # a netlist: its PULSE gate's duty ratio
 ]
 
 
@@ -134,6 +137,7 @@ def test_margins_are_located_on_the_function_not_the_grid():
     ("buck", "pwm", CCM_BUCK, "Vx", "input must be 'control' (a state-driven law) or one of the parameters"),
     ("buck", "pwm", CCM_BUCK, "rC", "has no value here"),
     ("boost", "smc", {}, "Iref", "has no switching period"),
+    (str(NETLISTS / "rectifier-1ph.cir"), "pwm", {}, "vin", "has sinusoidal sources"),
 ])
 def test_what_the_small_signal_model_cannot_take_is_refused_naming_it(converter, control, params, name, message):
     with pytest.raises(ParameterError, match=message.replace("(", r"\(").replace(")", r"\)")):
