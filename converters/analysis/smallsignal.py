@@ -184,6 +184,10 @@ class SmallSignalModel:
             except ParameterError:
                 continue
             moved = model.problem(moved_p, self.T, self.orbit.x0)
+            if moved.switching.period != problem.switching.period:
+                raise ParameterError(f"input {name!r} changes the switching period: the small-signal model is taken "
+                                     "about an orbit of one period; its inputs are sources, references, the duty ratio "
+                                     "or a comparator's input")
             return engine(moved), delta
         raise ParameterError(f"input {name!r} = {value!r} cannot be moved inside its range {param.range_text()}")
 

@@ -133,6 +133,7 @@ def test_margins_are_located_on_the_function_not_the_grid():
 
 @pytest.mark.parametrize("converter, control, params, name, message", [
     ("buck", "pwm", CCM_BUCK, "L", "changes the circuit's dynamics"),
+    ("buck", "pwm", CCM_BUCK, "f_sw", "changes the switching period"),
     ("buck", "pwm", CCM_BUCK, "control", "driven by a schedule: use input 'D'"),
     ("buck", "pwm", CCM_BUCK, "Vx", "input must be 'control' (a state-driven law) or one of the parameters"),
     ("buck", "pwm", CCM_BUCK, "rC", "has no value here"),
