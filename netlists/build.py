@@ -218,7 +218,8 @@ def build_voltage_mode_netlist(params: dict | None, t_end, options: SpiceOptions
 CLOCK_FRACTION = 1e-3
 
 
-def _clocked_latch(gate: str, set_expression: str, reset_expression: str, T: float, clock_sets: bool = True) -> list:
+def _clocked_latch(gate: str, set_expression: str, reset_expression: str, T: float, clock_sets: bool = True,
+                   limit: float | None = None) -> list:
     """A clocked SR latch in ngspice driving ``gate``: a switch with hysteresis (VT = 0, VH = 0.5: closed above
     0.5 V, open below -0.5 V, holding in between) on c = clock - reset connects 1 V to the gate. The clock is a
     pulse of CLOCK_FRACTION T at every period start (gated by ``set_expression``, 1 where the law may set the
@@ -226,13 +227,21 @@ def _clocked_latch(gate: str, set_expression: str, reset_expression: str, T: flo
     COMPARATOR_GAIN: the switch opens where it passes 1/2, the comparator's own threshold). At a clock edge with the
     reset high, c = 0: the latch holds off (a skipped period), as the LCS's clocked latch. ``clock_sets`` False:
     the mirror image (valley current mode): the clock resets the latch and the comparator, written as
-    ``reset_expression`` rising to 1, sets it."""
+    ``reset_expression`` rising to 1, sets it. ``limit``: a second pulse ``limit`` T into each period resets the
+    latch too (a maximum duty ratio)."""
     width = CLOCK_FRACTION * T
     balance = "V(lset)-V(lrst)" if clock_sets else "V(lrst)-V(lset)"
-    return [f"Vclk clk 0 PULSE(0 1 0 {_num('clock edge', width / 10)} {_num('clock edge', width / 10)} "
+    reset = f"0.5+0.5*tanh({reset_expression})"
+    lines = []
+    if limit is not None:
+        lines = [f"Vlim llim 0 PULSE(0 1 {_num('limit', limit * T)} {_num('clock edge', width / 10)} "
+                 f"{_num('clock edge', width / 10)} {_num('clock width', width)} {_num('T', T)})"]
+        reset = f"max({reset},V(llim))"
+    return lines + [
+            f"Vclk clk 0 PULSE(0 1 0 {_num('clock edge', width / 10)} {_num('clock edge', width / 10)} "
             f"{_num('clock width', width)} {_num('T', T)})",
             f"Bset lset 0 V=V(clk)*({set_expression})",
-            f"Brst lrst 0 V=0.5+0.5*tanh({reset_expression})",
+            f"Brst lrst 0 V={reset}",
             f"Blc lcr 0 V={balance}",
             f"Rlc lcr lc {_num('latch R', COMPARATOR_R)}",
             f"Clc lc 0 {_num('latch C', COMPARATOR_DELAY_FRACTION * T / COMPARATOR_R)}",
@@ -320,7 +329,8 @@ def build_peak_current_netlist(params: dict | None, t_end, options: SpiceOptions
     drive = [f"Vic icmd 0 PULSE({_num('command', command)} {_num('command at T', command + slope * (T - edge))} 0 "
              f"{_num('fall', T - edge)} {_num('edge', edge)} 0 {_num('T', T)})"]
     comparator = f"V(icmd)-{current}" if valley else f"{current}-V(icmd)"
-    drive += _clocked_latch(gate, "1", f"{COMPARATOR_GAIN:g}*({comparator})", T, clock_sets=not valley)
+    limit = p["Dmax"] if not valley and p["Dmax"] < 1.0 else None
+    drive += _clocked_latch(gate, "1", f"{COMPARATOR_GAIN:g}*({comparator})", T, clock_sets=not valley, limit=limit)
     written = converter_netlist(conv, model.plant(p), t_end, options, x0, drives={GATE: drive})
     _, rest = written.text.split("\n", 1)
     return replace(written, text=f"* pcsuite: {model.title}, on the built-in {converter}'s circuit\n{rest}",

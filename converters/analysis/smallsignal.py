@@ -248,6 +248,8 @@ class SmallSignalModel:
     def _edge_shift(self, t: float, config: int) -> float:
         """d t_e / du of a schedule's edge at t entering ``config`` (the duty ratio moves the turn-off)."""
         law, moved = self.machine.problem.switching, self.moved.problem.switching
+        if config == "limit":                 # a latched law's limit (a maximum duty ratio): moved by its own input
+            return ((moved.limit or 0.0) - (law.limit or 0.0)) * law.period / self.delta
         if not isinstance(law, Schedule):
             return 0.0
         if not isinstance(moved, Schedule) or len(moved.starts) != len(law.starts):

@@ -445,7 +445,8 @@ def _solve_state_switched(problem: LCSProblem, method: Theta, x0: np.ndarray, st
     while True:
         status, j = theta_kernels.run_state_switched(A, B, C, D, E, F, mats.Phi, mats.Gamma, mats.H, mats.M, t, method.h,
                                        method.theta, f.c, f.d, low, slope, ramp_period, law.band, law.below,
-                                       law.above, law.latch, law.clocked, x, u, y, config, j, state, ev_time,
+                                       law.above, law.latch, law.clocked,
+                                       -1.0 if law.limit is None else law.limit, x, u, y, config, j, state, ev_time,
                                        ev_config, ev_step)
         if status == OK:
             break

@@ -336,7 +336,8 @@ def _surface(c, d, x, phase, low, slope):
 
 @njit(cache=True)
 def run_state_switched(A, B, C, D, E, F, Phi, Gamma, H, M, t, h, theta, c, d, low, slope, ramp_period, band,
-                       below, above, latch, clocked, x, u, y, config, start, state, ev_time, ev_config, ev_step):
+                       below, above, latch, clocked, limit, x, u, y, config, start, state, ev_time, ev_config,
+                       ev_step):
     """The theta stepper under a hysteresis or latched switching law (:class:`StateSwitching`).
 
     Step j runs in the configuration in force; when its end point carries s through the level that
@@ -345,7 +346,8 @@ def run_state_switched(A, B, C, D, E, F, Phi, Gamma, H, M, t, h, theta, c, d, lo
     crossing in the old configuration, after it in the new one). Ramp resets are grid points: there
     the latch opens and the configuration is set by s against the band (a switch event when it changes;
     not at the run's start, where the law's initial configuration holds); a ``clocked`` latch only leaves
-    ``below`` inside a period (its clock alone sets it). ``state`` = [config, latched,
+    ``below`` inside a period (its clock alone sets it); at the phase ``limit`` T of each period (a grid point;
+    limit < 0: none) a law still in ``below`` switches to ``above`` and latches. ``state`` = [config, latched,
     event count] carries the law's memory across calls. Stacks A..F and the uniform-step matrices
     Phi..M are indexed by configuration.
 
@@ -385,6 +387,14 @@ def run_state_switched(A, B, C, D, E, F, Phi, Gamma, H, M, t, h, theta, c, d, lo
                         ev_config[count] = current
                         ev_step[count] = j
                         count += 1
+            if limit >= 0.0 and abs(phase0 - limit * ramp_period) < 1e-9 * ramp_period and j > 0:
+                latched = 1                      # the period's limit: leave below and latch
+                if current == below:
+                    current = above
+                    ev_time[count] = t0
+                    ev_config[count] = current
+                    ev_step[count] = j
+                    count += 1
             phase1 = phase0 + dt
         uniform = abs(dt - h) <= 1e-9 * h
         if uniform:

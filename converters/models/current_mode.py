@@ -23,16 +23,24 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..params import nonnegative, positive
+from ..params import Param, nonnegative, positive
 from ..problems import Ramp, StateSwitching, SwitchingFunction
 from ..trajectory import Samples
 from .base import OFF, ON
 from .control import Control
 
+#: The maximum duty ratio: the switch turns off at Dmax T where the current has not reached the command (1: none).
+DMAX = Param("Dmax", 1.0, "", "maximum duty ratio (the switch turns off at Dmax T at the latest; 1: no limit)",
+             low=0.0, high=1.0, low_open=True, high_open=False)
 PARAMETERS = (
     positive("Iref", 0.5, "A", "peak current command (the inductor current that turns the switch off)"),
     nonnegative("ma", 0.0, "A/s", "slope compensation: the command falls by ma per second of each period"),
+    DMAX,
 )
+
+
+def _limit(p: dict):
+    return p["Dmax"] if p.get("Dmax", 1.0) < 1.0 else None
 
 
 class PeakCurrent(Control):
@@ -54,7 +62,7 @@ class PeakCurrent(Control):
         T = model.period(p)
         # s = iL - Iref + ma (t mod T): the law's ramp (subtracted) falls from 0 to -ma T over each period
         function = SwitchingFunction(c=c, d=-p["Iref"], ramp=Ramp(0.0, -p["ma"] * T, T))
-        return StateSwitching(function, below=ON, above=OFF, latch=True, clocked=True, initial=initial)
+        return StateSwitching(function, below=ON, above=OFF, latch=True, clocked=True, initial=initial, limit=_limit(p))
 
     def x0(self, model, p: dict) -> np.ndarray:
         """The start of a run when none is given: the capacitor discharged, the inductor current half the command
@@ -108,6 +116,7 @@ def _loop_parameters():
     kept = {q.name: q for q in VOLTAGE_LOOP}
     return (kept["Vref"],
             nonnegative("ma", 0.0, "A/s", "slope compensation: the command falls by ma per second of each period"),
+            DMAX,
             replace(kept["wi"], default=2.0e4), replace(kept["fz1"], default=2.0e3), replace(kept["fz2"], default=0.0),
             replace(kept["fp1"], default=0.0), replace(kept["fp2"], default=0.0))
 
@@ -168,7 +177,7 @@ class PeakCurrentLoop(PeakCurrent):
         c = np.concatenate([c + Dc * np.asarray(sensed, dtype=float), -Cc])
         T = model.period(p)
         function = SwitchingFunction(c=c, d=-Dc * (p["Vref"] - offset), ramp=Ramp(0.0, -p["ma"] * T, T))
-        return StateSwitching(function, below=ON, above=OFF, latch=True, clocked=True, initial=initial)
+        return StateSwitching(function, below=ON, above=OFF, latch=True, clocked=True, initial=initial, limit=_limit(p))
 
     def signal(self, name: str, samples: Samples, p: dict, model, circuit: dict | None = None) -> np.ndarray:
         """``icontrol``: the compensator's command less the compensation ramp (A)."""

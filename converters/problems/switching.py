@@ -109,6 +109,9 @@ class StateSwitching:
         With ``latch``: only the clock enters ``below`` (at a period start where s < -band); inside a period
         the one switching is to ``above`` (a current-mode controller's comparator resets its latch, its clock
         sets it: without this a current that falls back below the command mid-period would turn the switch on).
+    limit : float or None
+        With ``latch``: at this fraction of every ramp period a law still in ``below`` switches to ``above`` and
+        latches (a current-mode controller's maximum duty ratio); None: no limit.
     initial : int or None
         Configuration at the start of a run; None: ``below`` if s(x0, t0) < 0, else ``above``.
     """
@@ -120,6 +123,7 @@ class StateSwitching:
     latch: bool = False
     initial: int | None = None
     clocked: bool = False
+    limit: float | None = None
 
     def __post_init__(self):
         _check_function(self.function)
@@ -128,6 +132,13 @@ class StateSwitching:
                 raise ParameterError(f"{name} must be True or False; got {getattr(self, name)!r}")
         if self.clocked and not self.latch:
             raise ParameterError("clocked needs latch (the clock sets a latch the law resets); got latch=False")
+        if self.limit is not None:
+            limit = parse_value("limit", self.limit)
+            if not (self.latch and 0.0 < limit < 1.0):
+                raise ParameterError(f"limit (the fraction of each ramp period after which the law leaves below) must "
+                                     f"be in (0, 1) on a latched law; got {limit!r}" + ("" if self.latch else
+                                                                                          " without latch"))
+            object.__setattr__(self, "limit", limit)
         object.__setattr__(self, "below", _check_config("below", self.below))
         object.__setattr__(self, "above", _check_config("above", self.above))
         if self.below == self.above:
@@ -169,11 +180,26 @@ class StateSwitching:
         return self.initial
 
     def breakpoints(self, t0: float, t1: float) -> np.ndarray:
-        """Ramp resets in the open interval (t0, t1) (where s jumps and a latch opens again)."""
+        """Ramp resets and limit instants in the open interval (t0, t1) (where s jumps and a latch opens again, or
+        the limit closes it), sorted."""
+        times = np.concatenate([self.resets(t0, t1), self.limits(t0, t1)])
+        times.sort()
+        return times
+
+    def resets(self, t0: float, t1: float) -> np.ndarray:
+        """Ramp resets in the open interval (t0, t1)."""
         if not np.isfinite(self.period):
             return np.empty(0)
         T = self.period
         times = np.arange(np.floor(t0 / T), np.ceil(t1 / T) + 1) * T
+        return times[(times > t0) & (times < t1)]
+
+    def limits(self, t0: float, t1: float) -> np.ndarray:
+        """The limit's instants (``limit`` T into each period) in the open interval (t0, t1)."""
+        if self.limit is None or not np.isfinite(self.period):
+            return np.empty(0)
+        T = self.period
+        times = (np.arange(np.floor(t0 / T), np.ceil(t1 / T) + 1) + self.limit) * T
         return times[(times > t0) & (times < t1)]
 
 

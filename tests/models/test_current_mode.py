@@ -159,3 +159,24 @@ def test_an_outer_voltage_loop_sets_the_peak_current_command_and_regulates_vout(
     gap = tr.state("iL") - tr.signal("icontrol")
     rows = [int(np.searchsorted(tr.t, t)) for t in offs]
     assert len(offs) == 3 and max(abs(gap[r]) for r in rows) < (1e-9 if method == "event" else 2e-2)
+
+
+@pytest.mark.parametrize("method, tol", [("event", 1e-12), ("lcp", 1e-9)])
+def test_the_maximum_duty_ratio_turns_the_switch_off_where_the_current_has_not(method, tol):
+    """A command the current never reaches (Iref = 5 A) with Dmax = 0.8: the switch turns off at 0.8 T every period,
+    the orbit the open-loop buck's at D = 0.8 (its mean to 1e-14 measured); with a command reached first (Iref =
+    0.6 A, D = 0.38) Dmax = 0.9 changes nothing. The small-signal response to Dmax is the open-loop one to D."""
+    limited = run_converter("buck", {"Iref": 5.0, "Dmax": 0.8}, control="peak-current", method=method, steady=True,
+                            periods=2)
+    open_loop = run_converter("buck", {"L": "100u", "D": 0.8}, method=method, steady=True, periods=2)
+    assert limited.mean("vout") == pytest.approx(open_loop.mean("vout"), rel=tol)
+    offs = limited.events.loc[(limited.events["kind"] == "switch") & (limited.events["config"] == 1), "time"]
+    assert np.allclose(np.mod(offs.to_numpy(), 1 / FS) * FS, 0.8, atol=1e-9)
+    free = run_converter("buck", {"Iref": 0.6}, control="peak-current", method=method, steady=True)
+    capped = run_converter("buck", {"Iref": 0.6, "Dmax": 0.9}, control="peak-current", method=method, steady=True)
+    assert capped.mean("vout") == pytest.approx(free.mean("vout"), rel=tol)
+    if method == "event":
+        f = [100.0, 1e3, 1e4]
+        by_dmax = SmallSignalModel(resolve_model("buck", "peak-current"), {"Iref": 5.0, "Dmax": 0.8}, input="Dmax")
+        by_d = SmallSignalModel(resolve_model("buck"), {"L": "100u", "D": 0.8}, input="D")
+        assert np.abs(by_dmax.response(f) / by_d.response(f) - 1).max() < 1e-9

@@ -82,3 +82,16 @@ def test_the_leading_edge_voltage_loop_in_ngspice_stays_near_the_lcs_orbit():
     spice = run_converter(model, {"leading": 1}, method="spice", periods=30, x0=orbit.x0)
     assert spice.mean("vout", t0=20 * T) == pytest.approx(lcs.mean("vout", t0=20 * T), rel=1e-3)
     assert lcs.mean("vout", t0=20 * T) == pytest.approx(5.0, rel=1e-9)
+
+
+def test_the_maximum_duty_ratio_in_ngspice():
+    """Peak current mode with a command never reached and Dmax = 0.8 (the latch reset by a second pulse at 0.8 T):
+    ngspice's mean 2e-4 from the LCS's (the open-loop buck's at D = 0.8) over 30 periods from the orbit."""
+    model = resolve_model("buck", "peak-current")
+    params = {"Iref": 5.0, "Dmax": 0.8}
+    p = model.resolve(params)
+    orbit = steady_state(model, p, EventDriven())
+    T = model.period(p)
+    lcs = run_converter(model, params, method="event", periods=30, x0=orbit.x0)
+    spice = run_converter(model, params, method="spice", periods=30, x0=orbit.x0)
+    assert spice.mean("vout", t0=20 * T) == pytest.approx(lcs.mean("vout", t0=20 * T), rel=1e-3)

@@ -173,7 +173,7 @@ class _Machine:
 
     def edges(self, t0: float, t1: float):
         """(time, kind) of every time-driven instant in (t0, t1), then (t1, 'end'). kind: a configuration
-        index (schedule), 'reset' (ramp reset)."""
+        index (schedule), 'reset' (ramp reset), 'limit' (a latched law's limit: a maximum duty ratio)."""
         law = self.problem.switching
         out = []
         if isinstance(law, Schedule) and np.isfinite(law.period):
@@ -184,7 +184,7 @@ class _Machine:
                     if t0 < t < t1 and not (out and out[-1][1] == config):
                         out.append((t, config))
         elif isinstance(law, StateSwitching):
-            out = [(t, "reset") for t in law.breakpoints(t0, t1)]
+            out = sorted([(t, "reset") for t in law.resets(t0, t1)] + [(t, "limit") for t in law.limits(t0, t1)])
         out.append((t1, "end"))
         return out
 
@@ -381,6 +381,11 @@ class _Machine:
                 new_config = self.law_config(xt, config)
                 if new_config != config:
                     config = new_config
+                    log(t, "switch", -1, config)
+            elif edge_kind == "limit":                       # the period's limit: leave below and latch
+                latched = True
+                if config == law.below:
+                    config = law.above
                     log(t, "switch", -1, config)
             else:
                 config = edge_kind
