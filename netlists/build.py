@@ -251,31 +251,17 @@ def _clocked_latch(gate: str, set_expression: str, reset_expression: str, T: flo
             ".model LATCHMOD SW(VT=0 VH=0.5 RON=1 ROFF=1e9)"]
 
 
-def build_voltage_loop_netlist(params: dict | None, t_end, options: SpiceOptions | None = None, x0=None,
-                               converter: str = "buck") -> Netlist:
-    """A two-state converter under voltage-mode control with a compensator (``converters.models.compensator``) as an
-    ngspice netlist: the converter's own file (:func:`converter_netlist`: its parasitics and steps) with the loop
-    driving its gate. Each compensator state is a 1 F capacitor charged by a behavioural current (its row of
-    xc' = Ac xc + Bc (Vref - v_out)), vc a behavioural voltage Cc xc + Dc (Vref - v_out), the carrier a PULSE from
-    VL to VU over T - edge (edge = ``RAMP_FALL_FRACTION`` T), and the gate a clocked latch (:func:`_clocked_latch`)
-    reset where the carrier passes vc. ``x0``: the converter's states then the compensator's."""
-    from converters.models import get_model
+def _compensator(model, p: dict, x0: list, out: str) -> tuple:
+    """The compensator of a voltage loop (``converters.models.compensator``) in ngspice: each state a 1 F capacitor
+    charged by a behavioural current (its row of xc' = Ac xc + Bc (Vref - v_out)), its output ``vc`` a behavioural
+    voltage Cc xc + Dc (Vref - v_out). Returns (lines, {state name: node})."""
     from converters.models.compensator import Compensator
-    model = get_model(converter, "voltage-loop")
-    p = model.resolve(params)
-    options = options or SpiceOptions()
-    conv = model.converter
-    T = model.period(p)
-    edge = RAMP_FALL_FRACTION * T
     comp = Compensator.of(p)
     Ac, Bc, Cc, Dc = comp.matrices()
-    n, m = len(conv.state_names), len(Bc)
-    x0 = list(model.loop.x0(model, p) if x0 is None else x0)
+    n, m = len(model.converter.state_names), len(Bc)
     if len(x0) != n + m:
         raise ParameterError(f"x0 must have {n + m} entries (the converter's states, then the compensator's); "
                              f"got {len(x0)}")
-    gate = next(e for e in conv.circuit.netlist.elements if e.name == GATE).nodes[0]
-    out = output_node(conv.circuit)
     error = f"({_num('Vref', p['Vref'])}-abs(V({out})))"
     nodes = [f"xc{i}" for i in range(m)]
 
@@ -283,16 +269,36 @@ def build_voltage_loop_netlist(params: dict | None, t_end, options: SpiceOptions
         terms = [f"{_num('compensator', float(a))}*V({node})" for a, node in zip(row, nodes) if a != 0.0]
         return "+".join(terms + ([constant] if constant else [])) or "0"
 
-    drive = []
+    lines = []
     for i in range(m):
         source = _num("Bc", float(Bc[i])) + "*" + error
-        drive += [f"Bxc{i} 0 {nodes[i]} I={combination(Ac[i], source)}",
+        lines += [f"Bxc{i} 0 {nodes[i]} I={combination(Ac[i], source)}",
                   f"Cxc{i} {nodes[i]} 0 1 IC={_num(f'x0[{n + i}]', x0[n + i])}"]
-    direct = _num("Dc", float(Dc)) + "*" + error
+    lines.append(f"Bvc vc 0 V={combination(Cc, _num('Dc', float(Dc)) + '*' + error)}")
+    return lines, dict(zip(comp.states, nodes))
+
+
+def build_voltage_loop_netlist(params: dict | None, t_end, options: SpiceOptions | None = None, x0=None,
+                               converter: str = "buck") -> Netlist:
+    """A two-state converter under voltage-mode control with a compensator (``converters.models.compensator``) as an
+    ngspice netlist: the converter's own file (:func:`converter_netlist`: its parasitics and steps) with the loop
+    driving its gate: the compensator (:func:`_compensator`), the carrier a PULSE from VL to VU over T - edge (edge =
+    ``RAMP_FALL_FRACTION`` T), and the gate a clocked latch (:func:`_clocked_latch`) reset where the carrier passes
+    vc. ``x0``: the converter's states then the compensator's."""
+    from converters.models import get_model
+    model = get_model(converter, "voltage-loop")
+    p = model.resolve(params)
+    options = options or SpiceOptions()
+    conv = model.converter
+    T = model.period(p)
+    edge = RAMP_FALL_FRACTION * T
+    n = len(conv.state_names)
+    x0 = list(model.loop.x0(model, p) if x0 is None else x0)
+    gate = next(e for e in conv.circuit.netlist.elements if e.name == GATE).nodes[0]
+    drive, states = _compensator(model, p, x0, output_node(conv.circuit))
     start, end = (p["VU"], p["VL"]) if p["leading"] else (p["VL"], p["VU"])
-    drive += [f"Bvc vc 0 V={combination(Cc, direct)}",
-              f"Vcarrier carrier 0 PULSE({_num('carrier start', start)} {_num('carrier end', end)} 0 "
-              f"{_num('rise', T - edge)} {_num('edge', edge)} 0 {_num('T', T)})"]
+    drive.append(f"Vcarrier carrier 0 PULSE({_num('carrier start', start)} {_num('carrier end', end)} 0 "
+                 f"{_num('rise', T - edge)} {_num('edge', edge)} 0 {_num('T', T)})")
     # trailing edge: the clock sets, the carrier passing vc resets; leading edge: the clock resets, vc passing the
     # falling carrier sets
     comparator = "V(vc)-V(carrier)" if p["leading"] else "V(carrier)-V(vc)"
@@ -300,9 +306,41 @@ def build_voltage_loop_netlist(params: dict | None, t_end, options: SpiceOptions
     written = converter_netlist(conv, model.plant(p), t_end, options, x0[:n], drives={GATE: drive})
     _, rest = written.text.split("\n", 1)
     probes = {**written.probes, "vc": ("vc", 1.0), "carrier": ("carrier", 1.0),
-              **{name: (node, 1.0) for name, node in zip(comp.states, nodes)}}
+              **{name: (node, 1.0) for name, node in states.items()}}
     return replace(written, text=f"* pcsuite: {model.title}, on the built-in {converter}'s circuit\n{rest}",
                    converter=f"{converter}-voltage-loop", params=p, probes=probes)
+
+
+def build_current_loop_netlist(params: dict | None, t_end, options: SpiceOptions | None = None, x0=None,
+                               converter: str = "buck") -> Netlist:
+    """Peak current mode under an outer voltage loop (``converters.models.current_mode.PeakCurrentLoop``) as an
+    ngspice netlist: the compensator (:func:`_compensator`) gives the command vc (read as amperes), less the
+    compensation ramp (a PULSE sawtooth from 0 to ma (T - edge)); a clocked latch reset where the inductor's sense
+    current passes it, and at Dmax T where Dmax < 1."""
+    from converters.models import get_model
+    model = get_model(converter, "current-loop")
+    p = model.resolve(params)
+    options = options or SpiceOptions()
+    conv = model.converter
+    T = model.period(p)
+    edge = RAMP_FALL_FRACTION * T
+    n = len(conv.state_names)
+    x0 = list(model.loop.x0(model, p) if x0 is None else x0)
+    gate = next(e for e in conv.circuit.netlist.elements if e.name == GATE).nodes[0]
+    drive, states = _compensator(model, p, x0, output_node(conv.circuit))
+    sense, sign = converter_netlist(conv, model.plant(p), t_end, options, x0[:n]).probes["iL"]
+    current = f"({_num('sign', sign)}*I({sense[:-len('#branch')]}))"
+    drive += [f"Vmramp mramp 0 PULSE(0 {_num('ma T', p['ma'] * (T - edge))} 0 {_num('rise', T - edge)} "
+              f"{_num('edge', edge)} 0 {_num('T', T)})",
+              "Bic icmd 0 V=V(vc)-V(mramp)"]
+    limit = p["Dmax"] if p["Dmax"] < 1.0 else None
+    drive += _clocked_latch(gate, "1", f"{COMPARATOR_GAIN:g}*({current}-V(icmd))", T, limit=limit)
+    written = converter_netlist(conv, model.plant(p), t_end, options, x0[:n], drives={GATE: drive})
+    _, rest = written.text.split("\n", 1)
+    probes = {**written.probes, "vc": ("vc", 1.0), "icontrol": ("icmd", 1.0),
+              **{name: (node, 1.0) for name, node in states.items()}}
+    return replace(written, text=f"* pcsuite: {model.title}, on the built-in {converter}'s circuit\n{rest}",
+                   converter=f"{converter}-current-loop", params=p, probes=probes)
 
 
 def build_peak_current_netlist(params: dict | None, t_end, options: SpiceOptions | None = None, x0=None,
@@ -348,6 +386,8 @@ CONTROL_NETLISTS = {
                                                                                      converter=model.name),
     "valley-current": lambda model, p, t_end, options, x0: build_peak_current_netlist(
         p, t_end, options, x0=x0, converter=model.name, valley=True),
+    "current-loop": lambda model, p, t_end, options, x0: build_current_loop_netlist(p, t_end, options, x0=x0,
+                                                                                     converter=model.name),
 }
 
 

@@ -58,7 +58,7 @@ def test_valley_current_mode_in_ngspice_stays_near_the_lcs_orbit(params):
     assert spice.mean("vout", t0=20 * T) == pytest.approx(lcs.mean("vout", t0=20 * T), rel=1e-3)
 
 
-@pytest.mark.parametrize("control", ["voltage-loop", "peak-current"])
+@pytest.mark.parametrize("control", ["voltage-loop", "peak-current", "current-loop"])
 def test_compare_runs_the_clocked_loops_against_ngspice(capsys, control):
     """pcsuite compare on a closed loop: both started on the LCS's orbit, every check passes (measured: the type III
     buck's mean 1e-5 apart, its turn-off 6.1e-5 T; peak current mode's 6.3e-5 T)."""

@@ -107,4 +107,5 @@ def _smc(args, params):
 #: starts on (the diode's turn-off inside it) on their orbit. The voltage-mode buck's and valley current mode's
 #: periods start off: the turn-off instant the comparison reads then falls on the period's edge, where it is not
 #: defined; their ngspice runs are checked in their tests (bifurcation, closed-loop spice).
-COMPARISONS = {"pwm": _clocked, "smc": _smc, "peak-current": _clocked, "voltage-loop": _clocked}
+COMPARISONS = {"pwm": _clocked, "smc": _smc, "peak-current": _clocked, "current-loop": _clocked,
+               "voltage-loop": _clocked}

@@ -14,7 +14,7 @@ def add(sub) -> None:
     from netlists.build import CONTROL_NETLISTS
     net.add_argument("--control", default="pwm", choices=list(CONTROL_NETLISTS),
                      help="the loop written with the circuit: boost smc (sliding mode), buck voltage-mode (the ramp "
-                          "comparator), peak-current, valley-current or voltage-loop (a clocked latch)")
+                          "comparator), peak-current, valley-current, current-loop or voltage-loop (a clocked latch)")
     net.add_argument("--t-end", default=None, help="duration in s (default 500 periods)")
     net.add_argument("--steady", action="store_true",
                      help="start on the periodic orbit (the LCP stepper's, by Newton shooting) instead of at rest")
