@@ -278,101 +278,94 @@ def _compensator(model, p: dict, x0: list, out: str) -> tuple:
     return lines, dict(zip(comp.states, nodes))
 
 
-def build_voltage_loop_netlist(params: dict | None, t_end, options: SpiceOptions | None = None, x0=None,
-                               converter: str = "buck") -> Netlist:
-    """A two-state converter under voltage-mode control with a compensator (``converters.models.compensator``) as an
-    ngspice netlist: the converter's own file (:func:`converter_netlist`: its parasitics and steps) with the loop
-    driving its gate: the compensator (:func:`_compensator`), the carrier a PULSE from VL to VU over T - edge (edge =
-    ``RAMP_FALL_FRACTION`` T), and the gate a clocked latch (:func:`_clocked_latch`) reset where the carrier passes
-    vc. ``x0``: the converter's states then the compensator's."""
-    from converters.models import get_model
-    model = get_model(converter, "voltage-loop")
-    p = model.resolve(params)
+def _gated(model, p: dict, t_end, options: SpiceOptions | None, x0, drive_of) -> Netlist:
+    """A two-state converter's own file (:func:`converter_netlist`: its parasitics and steps) with its gate driven
+    by a clocked loop: ``drive_of(gate, T, edge, current)`` returns (the loop's lines, its probes), ``current`` the
+    inductor's sense current as ngspice reads it, ``edge`` = ``RAMP_FALL_FRACTION`` T the fall of a PULSE sawtooth.
+    ``x0``: the converter's states, then the controller's (from the loop's start when None)."""
     options = options or SpiceOptions()
     conv = model.converter
     T = model.period(p)
-    edge = RAMP_FALL_FRACTION * T
     n = len(conv.state_names)
     x0 = list(model.loop.x0(model, p) if x0 is None else x0)
     gate = next(e for e in conv.circuit.netlist.elements if e.name == GATE).nodes[0]
-    drive, states = _compensator(model, p, x0, output_node(conv.circuit))
-    start, end = (p["VU"], p["VL"]) if p["leading"] else (p["VL"], p["VU"])
-    drive.append(f"Vcarrier carrier 0 PULSE({_num('carrier start', start)} {_num('carrier end', end)} 0 "
-                 f"{_num('rise', T - edge)} {_num('edge', edge)} 0 {_num('T', T)})")
-    # trailing edge: the clock sets, the carrier passing vc resets; leading edge: the clock resets, vc passing the
-    # falling carrier sets
-    comparator = "V(vc)-V(carrier)" if p["leading"] else "V(carrier)-V(vc)"
-    drive += _clocked_latch(gate, "1", f"{COMPARATOR_GAIN:g}*({comparator})", T, clock_sets=not p["leading"])
+    sense, sign = converter_netlist(conv, model.plant(p), t_end, options, x0[:n]).probes["iL"]
+    if not sense.endswith("#branch"):
+        raise ParameterError(f"the inductor current of {conv.name} has no sense source in its netlist")
+    current = f"({_num('sign', sign)}*I({sense[:-len('#branch')]}))"
+    drive, probes = drive_of(gate, T, RAMP_FALL_FRACTION * T, current, x0)
     written = converter_netlist(conv, model.plant(p), t_end, options, x0[:n], drives={GATE: drive})
     _, rest = written.text.split("\n", 1)
-    probes = {**written.probes, "vc": ("vc", 1.0), "carrier": ("carrier", 1.0),
-              **{name: (node, 1.0) for name, node in states.items()}}
-    return replace(written, text=f"* pcsuite: {model.title}, on the built-in {converter}'s circuit\n{rest}",
-                   converter=f"{converter}-voltage-loop", params=p, probes=probes)
+    return replace(written, text=f"* pcsuite: {model.title}, on the built-in {conv.name}'s circuit\n{rest}",
+                   converter=f"{conv.name}-{model.control}", params=p, probes={**written.probes, **probes})
+
+
+def _sawtooth(name: str, node: str, start: float, end: float, T: float, edge: float) -> str:
+    """A PULSE from ``start`` to ``end`` over T - edge, back over ``edge``, every T."""
+    return (f"{name} {node} 0 PULSE({_num(name + ' start', start)} {_num(name + ' end', end)} 0 "
+            f"{_num('rise', T - edge)} {_num('edge', edge)} 0 {_num('T', T)})")
+
+
+def build_voltage_loop_netlist(params: dict | None, t_end, options: SpiceOptions | None = None, x0=None,
+                               converter: str = "buck") -> Netlist:
+    """A two-state converter under voltage-mode control with a compensator (``converters.models.compensator``) as an
+    ngspice netlist (:func:`_gated`): the compensator (:func:`_compensator`), the carrier a sawtooth from VL to VU
+    (from VU to VL for a leading edge), and the gate a clocked latch (:func:`_clocked_latch`) reset where the
+    carrier passes vc (set there, and reset by the clock, for a leading edge)."""
+    from converters.models import get_model
+    model = get_model(converter, "voltage-loop")
+    p = model.resolve(params)
+
+    def drive_of(gate, T, edge, current, x0):
+        lines, states = _compensator(model, p, x0, output_node(model.converter.circuit))
+        start, end = (p["VU"], p["VL"]) if p["leading"] else (p["VL"], p["VU"])
+        lines.append(_sawtooth("Vcarrier", "carrier", start, end, T, edge))
+        comparator = "V(vc)-V(carrier)" if p["leading"] else "V(carrier)-V(vc)"
+        lines += _clocked_latch(gate, "1", f"{COMPARATOR_GAIN:g}*({comparator})", T, clock_sets=not p["leading"])
+        return lines, {"vc": ("vc", 1.0), "carrier": ("carrier", 1.0),
+                       **{name: (node, 1.0) for name, node in states.items()}}
+    return _gated(model, p, t_end, options, x0, drive_of)
 
 
 def build_current_loop_netlist(params: dict | None, t_end, options: SpiceOptions | None = None, x0=None,
                                converter: str = "buck") -> Netlist:
     """Peak current mode under an outer voltage loop (``converters.models.current_mode.PeakCurrentLoop``) as an
-    ngspice netlist: the compensator (:func:`_compensator`) gives the command vc (read as amperes), less the
-    compensation ramp (a PULSE sawtooth from 0 to ma (T - edge)); a clocked latch reset where the inductor's sense
-    current passes it, and at Dmax T where Dmax < 1."""
+    ngspice netlist (:func:`_gated`): the compensator (:func:`_compensator`) gives the command vc (read as amperes)
+    less the compensation ramp (a sawtooth from 0 to ma (T - edge)); a clocked latch reset where the inductor's
+    sense current passes it, and at Dmax T where Dmax < 1."""
     from converters.models import get_model
     model = get_model(converter, "current-loop")
     p = model.resolve(params)
-    options = options or SpiceOptions()
-    conv = model.converter
-    T = model.period(p)
-    edge = RAMP_FALL_FRACTION * T
-    n = len(conv.state_names)
-    x0 = list(model.loop.x0(model, p) if x0 is None else x0)
-    gate = next(e for e in conv.circuit.netlist.elements if e.name == GATE).nodes[0]
-    drive, states = _compensator(model, p, x0, output_node(conv.circuit))
-    sense, sign = converter_netlist(conv, model.plant(p), t_end, options, x0[:n]).probes["iL"]
-    current = f"({_num('sign', sign)}*I({sense[:-len('#branch')]}))"
-    drive += [f"Vmramp mramp 0 PULSE(0 {_num('ma T', p['ma'] * (T - edge))} 0 {_num('rise', T - edge)} "
-              f"{_num('edge', edge)} 0 {_num('T', T)})",
-              "Bic icmd 0 V=V(vc)-V(mramp)"]
-    limit = p["Dmax"] if p["Dmax"] < 1.0 else None
-    drive += _clocked_latch(gate, "1", f"{COMPARATOR_GAIN:g}*({current}-V(icmd))", T, limit=limit)
-    written = converter_netlist(conv, model.plant(p), t_end, options, x0[:n], drives={GATE: drive})
-    _, rest = written.text.split("\n", 1)
-    probes = {**written.probes, "vc": ("vc", 1.0), "icontrol": ("icmd", 1.0),
-              **{name: (node, 1.0) for name, node in states.items()}}
-    return replace(written, text=f"* pcsuite: {model.title}, on the built-in {converter}'s circuit\n{rest}",
-                   converter=f"{converter}-current-loop", params=p, probes=probes)
+
+    def drive_of(gate, T, edge, current, x0):
+        lines, states = _compensator(model, p, x0, output_node(model.converter.circuit))
+        lines += [_sawtooth("Vmramp", "mramp", 0.0, p["ma"] * (T - edge), T, edge), "Bic icmd 0 V=V(vc)-V(mramp)"]
+        lines += _clocked_latch(gate, "1", f"{COMPARATOR_GAIN:g}*({current}-V(icmd))", T,
+                                limit=p["Dmax"] if p["Dmax"] < 1.0 else None)
+        return lines, {"vc": ("vc", 1.0), "icontrol": ("icmd", 1.0),
+                       **{name: (node, 1.0) for name, node in states.items()}}
+    return _gated(model, p, t_end, options, x0, drive_of)
 
 
 def build_peak_current_netlist(params: dict | None, t_end, options: SpiceOptions | None = None, x0=None,
                                converter: str = "buck", valley: bool = False) -> Netlist:
     """A two-state converter under peak (or valley) current-mode control (``converters.models.current_mode``) as an
-    ngspice netlist: the converter's own file with a clocked latch (:func:`_clocked_latch`) driving its gate, reset
-    where the inductor current (its sense source) passes the command, a PULSE falling from Iref to Iref - ma
-    (T - edge) over each period (edge = ``RAMP_FALL_FRACTION`` T); valley: the clock resets the latch, the current
-    falling below Iv + ma t sets it."""
+    ngspice netlist (:func:`_gated`): a clocked latch (:func:`_clocked_latch`) reset where the inductor current
+    passes the command, a sawtooth falling from Iref to Iref - ma (T - edge), and at Dmax T where Dmax < 1; valley:
+    the clock resets the latch, the current falling below Iv + ma t sets it."""
     from converters.models import get_model
     model = get_model(converter, "valley-current" if valley else "peak-current")
     p = model.resolve(params)
-    options = options or SpiceOptions()
-    conv = model.converter
-    T = model.period(p)
-    edge = RAMP_FALL_FRACTION * T
-    gate = next(e for e in conv.circuit.netlist.elements if e.name == GATE).nodes[0]
-    written = converter_netlist(conv, model.plant(p), t_end, options, x0)
-    sense, sign = written.probes["iL"]
-    if not sense.endswith("#branch"):
-        raise ParameterError(f"the inductor current of {converter} has no sense source in its netlist")
-    current = f"({_num('sign', sign)}*I({sense[:-len('#branch')]}))"
-    command, slope = (p["Iv"], p["ma"]) if valley else (p["Iref"], -p["ma"])
-    drive = [f"Vic icmd 0 PULSE({_num('command', command)} {_num('command at T', command + slope * (T - edge))} 0 "
-             f"{_num('fall', T - edge)} {_num('edge', edge)} 0 {_num('T', T)})"]
-    comparator = f"V(icmd)-{current}" if valley else f"{current}-V(icmd)"
-    limit = p["Dmax"] if not valley and p["Dmax"] < 1.0 else None
-    drive += _clocked_latch(gate, "1", f"{COMPARATOR_GAIN:g}*({comparator})", T, clock_sets=not valley, limit=limit)
-    written = converter_netlist(conv, model.plant(p), t_end, options, x0, drives={GATE: drive})
-    _, rest = written.text.split("\n", 1)
-    return replace(written, text=f"* pcsuite: {model.title}, on the built-in {converter}'s circuit\n{rest}",
-                   converter=f"{converter}-{model.control}", params=p, probes={**written.probes, "icontrol": ("icmd", 1.0)})
+
+    def drive_of(gate, T, edge, current, x0):
+        command, slope = (p["Iv"], p["ma"]) if valley else (p["Iref"], -p["ma"])
+        comparator = f"V(icmd)-{current}" if valley else f"{current}-V(icmd)"
+        limit = p["Dmax"] if not valley and p["Dmax"] < 1.0 else None
+        lines = [_sawtooth("Vic", "icmd", command, command + slope * (T - edge), T, edge)]
+        lines += _clocked_latch(gate, "1", f"{COMPARATOR_GAIN:g}*({comparator})", T, clock_sets=not valley,
+                                limit=limit)
+        return lines, {"icontrol": ("icmd", 1.0)}
+    return _gated(model, p, t_end, options, x0, drive_of)
 
 
 #: The netlist writer of each control (model, params, t_end, options, x0) -> Netlist; the implicit relay has none.

@@ -589,14 +589,9 @@ def operating_duty(model, params: dict, vref: float, tol: float = 1e-12) -> tupl
     if isinstance(model, str):
         from ..models import get_model
         model = get_model(model)
+    from ..models.compensator import ccm_duty
     p = model.resolve({k: v for k, v in dict(params or {}).items() if k != "D"})
-    ratio = getattr(model, "ccm_ratio", None)
-    duty = 0.5
-    if ratio is not None and p["Vin"] > 0:
-        from scipy.optimize import brentq
-        g = lambda D: ratio(D) - vref / p["Vin"]            # noqa: E731
-        if g(1e-9) * g(1 - 1e-9) < 0:
-            duty = brentq(g, 1e-9, 1 - 1e-9)
+    duty = ccm_duty(model, vref, p["Vin"]) or 0.5
     for _ in range(30):
         small = SmallSignalModel(model, {**p, "D": duty}, input="D", outputs=("vout",))
         mean = abs(_mean_output(small))

@@ -42,6 +42,16 @@ class SmallRipple:
     def ccm_ratio(D: float) -> float:
         raise NotImplementedError
 
+    @classmethod
+    def ccm_duty(cls, ratio: float) -> float | None:
+        """The duty ratio whose CCM conversion ratio |M| is ``ratio`` (None where none in (0, 1) gives it): a
+        closed loop's starting guess for its operating point."""
+        g = lambda D: abs(cls.ccm_ratio(D)) - ratio           # noqa: E731
+        if not (math.isfinite(ratio) and g(1e-9) * g(1 - 1e-9) < 0):
+            return None
+        from scipy.optimize import brentq
+        return brentq(g, 1e-9, 1 - 1e-9)
+
     @staticmethod
     def dcm_ratio(D: float, K: float) -> float:
         raise NotImplementedError

@@ -122,7 +122,30 @@ def _with_compensator(c, sensed: np.ndarray, offset: float, vref: float, comp: C
     return replace(c, A=A, B=np.vstack([c.B, np.zeros((m, c.k))]), C=np.hstack([c.C, np.zeros((c.k, m))]), E=E)
 
 
-class VoltageLoop(Control):
+def ccm_duty(converter, vout: float, vin: float) -> float | None:
+    """The duty ratio that gives |vout| from vin in CCM by the converter's closed form (None without one)."""
+    closed = getattr(converter, "ccm_duty", None)
+    return closed(abs(vout) / vin) if closed is not None and vin > 0 else None
+
+
+class CompensatedLoop:
+    """What a compensator on Vref - vout (:class:`Compensator`, its parameters ``wi``, ``fz1``, ...) adds to a
+    control: its states, appended to the circuit's (a voltage loop's, or a current-mode controller's outer loop)."""
+
+    def check(self, model, p: dict) -> None:
+        Compensator.of(p)
+        self.sensed(model, p)
+
+    def controller_states(self, p: dict) -> tuple[str, ...]:
+        return Compensator.of(p).states
+
+    def augment(self, configurations: tuple, p: dict, model) -> tuple:
+        c, d = self.sensed(model, p)
+        comp = Compensator.of(p)
+        return tuple(_with_compensator(config, c, d, p["Vref"], comp) for config in configurations)
+
+
+class VoltageLoop(CompensatedLoop, Control):
     """Trailing-edge PWM of a compensator's output (module docstring)."""
 
     key = "voltage-loop"
@@ -138,31 +161,15 @@ class VoltageLoop(Control):
             raise ParameterError(f"VU (carrier high level) must be above VL = {p['VL']:g} V; got VU = {p['VU']:g} V")
         if p["leading"] not in (0.0, 1.0):
             raise ParameterError(f"leading must be 0 (trailing edge) or 1 (leading edge); got {p['leading']!r}")
-        Compensator.of(p)
-        self.sensed(model, p)
-
-    def controller_states(self, p: dict) -> tuple[str, ...]:
-        return Compensator.of(p).states
-
-    def augment(self, configurations: tuple, p: dict, model) -> tuple:
-        c, d = self.sensed(model, p)
-        comp = Compensator.of(p)
-        return tuple(_with_compensator(config, c, d, p["Vref"], comp) for config in configurations)
+        super().check(model, p)
 
     def x0(self, model, p: dict) -> np.ndarray:
         """The start of a run when none is given: the output capacitor at Vref, the inductor current 0, and the
         compensator's states at the carrier's level of the duty ratio that gives Vref in CCM (the converter's
         closed form where it has one, else 1/2). From rest the compensator would sit at the carrier's foot: no
         switching, and a period map whose integrator has its multiplier at 1, where Newton cannot start."""
-        from scipy.optimize import brentq
         converter = model.converter
-        target = p["Vref"] / p["Vin"] if p["Vin"] > 0 else math.nan
-        ratio = getattr(converter, "ccm_ratio", None)
-        duty = 0.5
-        if ratio is not None and math.isfinite(target):
-            g = lambda D: ratio(D) - target              # noqa: E731
-            if g(1e-9) * g(1 - 1e-9) < 0:
-                duty = brentq(g, 1e-9, 1 - 1e-9)
+        duty = ccm_duty(converter, p["Vref"], p["Vin"]) or 0.5
         x = np.zeros(len(converter.state_names))
         x[converter.state_names.index(converter.output_state)] = p["Vref"]
         return np.concatenate([x, np.full(len(Compensator.of(p).states), p["VL"] + duty * (p["VU"] - p["VL"]))])

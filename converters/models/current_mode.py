@@ -27,6 +27,7 @@ from ..params import Param, nonnegative, positive
 from ..problems import Ramp, StateSwitching, SwitchingFunction
 from ..trajectory import Samples
 from .base import OFF, ON
+from .compensator import PARAMETERS as VOLTAGE_LOOP, CompensatedLoop, Compensator, ccm_duty
 from .control import Control
 
 #: The maximum duty ratio: the switch turns off at Dmax T where the current has not reached the command (1: none).
@@ -112,7 +113,6 @@ class ValleyCurrent(PeakCurrent):
 
 
 def _loop_parameters():
-    from .compensator import PARAMETERS as VOLTAGE_LOOP
     kept = {q.name: q for q in VOLTAGE_LOOP}
     return (kept["Vref"],
             nonnegative("ma", 0.0, "A/s", "slope compensation: the command falls by ma per second of each period"),
@@ -121,7 +121,7 @@ def _loop_parameters():
             replace(kept["fp1"], default=0.0), replace(kept["fp2"], default=0.0))
 
 
-class PeakCurrentLoop(PeakCurrent):
+class PeakCurrentLoop(CompensatedLoop, PeakCurrent):
     """Peak current mode under an outer voltage loop: the command is a compensator's output (I, PI, type II or III
     on Vref - vout, as :class:`~.compensator.VoltageLoop`'s, read as amperes: a current sense of 1 V/A), s = iL -
     vc + ma (t mod T), the clocked latch of peak current mode."""
@@ -133,42 +133,22 @@ class PeakCurrentLoop(PeakCurrent):
     def parameters(self):
         return _loop_parameters()
 
-    def check(self, model, p: dict) -> None:
-        from .compensator import Compensator
-        Compensator.of(p)
-        self.sensed(model, p)
-
-    def controller_states(self, p: dict) -> tuple[str, ...]:
-        from .compensator import Compensator
-        return Compensator.of(p).states
-
-    def augment(self, configurations: tuple, p: dict, model) -> tuple:
-        from .compensator import Compensator, _with_compensator
-        c, d = self.sensed(model, p)
-        comp = Compensator.of(p)
-        return tuple(_with_compensator(config, c, d, p["Vref"], comp) for config in configurations)
-
     def x0(self, model, p: dict) -> np.ndarray:
         """The output capacitor at Vref, the inductor current 0, the compensator's states (the command) at the
         inductor current the load needs at Vref in CCM: Vref / R for a buck, the input current P / Vin for a
         boost, input and output current for a buck-boost (the converter's ``ccm_ratio`` tells which: its output
         current over (1 - D) where it is not the buck's D)."""
-        from .compensator import Compensator
         converter = model.converter
         x = np.zeros(len(converter.state_names))
         x[converter.state_names.index(converter.output_state)] = p["Vref"]
         current = p["Vref"] / p["R"]
         ratio = getattr(converter, "ccm_ratio", None)
-        if ratio is not None and abs(ratio(0.5) - 0.5) > 1e-12:       # not a buck: the inductor carries Iout/(1 - D)
-            from scipy.optimize import brentq
-            target = p["Vref"] / p["Vin"]
-            g = lambda D: ratio(D) - target                          # noqa: E731
-            if g(1e-9) * g(1 - 1e-9) < 0:
-                current = current / (1 - brentq(g, 1e-9, 1 - 1e-9))
+        duty = ccm_duty(converter, p["Vref"], p["Vin"])
+        if duty is not None and abs(ratio(0.5) - 0.5) > 1e-12:       # not a buck: the inductor carries Iout/(1 - D)
+            current = current / (1 - duty)
         return np.concatenate([x, np.full(len(Compensator.of(p).states), current)])
 
     def law(self, model, p: dict, initial: int | None = None, circuit: dict | None = None) -> StateSwitching:
-        from .compensator import Compensator
         sensed, offset = self.sensed(model, p if circuit is None else circuit)
         _, _, Cc, Dc = Compensator.of(p).matrices()
         n = len(model.converter.state_names)
@@ -181,7 +161,6 @@ class PeakCurrentLoop(PeakCurrent):
 
     def signal(self, name: str, samples: Samples, p: dict, model, circuit: dict | None = None) -> np.ndarray:
         """``icontrol``: the compensator's command less the compensation ramp (A)."""
-        from .compensator import Compensator
         _, _, Cc, Dc = Compensator.of(p).matrices()
         n = len(model.converter.state_names)
         vout = np.abs(model.vout(samples, p if circuit is None else circuit))

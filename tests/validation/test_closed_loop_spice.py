@@ -10,6 +10,14 @@ from converters.run import resolve_model, run_converter, steady_state
 pytestmark = pytest.mark.spice
 
 
+def _from_the_orbit(model, params: dict, periods: int = 30):
+    """(the event method's run, ngspice's, T): both ``periods`` periods from the event method's orbit."""
+    orbit = steady_state(model, model.resolve(params), EventDriven())
+    lcs = run_converter(model, params, method="event", periods=periods, x0=orbit.x0)
+    spice = run_converter(model, params, method="spice", periods=periods, x0=orbit.x0)
+    return lcs, spice, model.period(model.resolve(params))
+
+
 def _per_period(tr, t0: float, T: float, count: int) -> np.ndarray:
     return np.array([tr.mean("vout", t0=t0 + j * T, t1=t0 + (j + 1) * T) for j in range(count)])
 
@@ -37,11 +45,7 @@ def test_the_type_iii_compensated_buck_in_ngspice_regulates_and_recovers_from_a_
 def test_peak_current_mode_in_ngspice_stays_on_the_lcs_orbit(converter, params):
     """30 periods from the event method's orbit: the means of vout over the last 10 agree to 1.4e-5 and 2.3e-5."""
     model = resolve_model(converter, "peak-current")
-    p = model.resolve(params)
-    orbit = steady_state(model, p, EventDriven())
-    T = model.period(p)
-    lcs = run_converter(model, params, method="event", periods=30, x0=orbit.x0)
-    spice = run_converter(model, params, method="spice", periods=30, x0=orbit.x0)
+    lcs, spice, T = _from_the_orbit(model, params)
     assert spice.mean("vout", t0=20 * T) == pytest.approx(lcs.mean("vout", t0=20 * T), rel=1e-4)
 
 
@@ -50,11 +54,7 @@ def test_valley_current_mode_in_ngspice_stays_near_the_lcs_orbit(params):
     """30 periods from the event method's orbit: 5.1e-4 and 7.7e-4 apart (measured; peak current mode's latch is
     15 to 50 times closer: not yet explained)."""
     model = resolve_model("buck", "valley-current")
-    p = model.resolve(params)
-    orbit = steady_state(model, p, EventDriven())
-    T = model.period(p)
-    lcs = run_converter(model, params, method="event", periods=30, x0=orbit.x0)
-    spice = run_converter(model, params, method="spice", periods=30, x0=orbit.x0)
+    lcs, spice, T = _from_the_orbit(model, params)
     assert spice.mean("vout", t0=20 * T) == pytest.approx(lcs.mean("vout", t0=20 * T), rel=1e-3)
 
 
@@ -75,11 +75,7 @@ def test_the_leading_edge_voltage_loop_in_ngspice_stays_near_the_lcs_orbit():
     """-p leading=1: the clock turns the switch off, vc meeting the falling carrier turns it on (the latch reset by
     the clock): 30 periods from the orbit, the means 1.5e-4 apart (trailing edge, the same run: 1.5e-4)."""
     model = resolve_model("buck", "voltage-loop")
-    p = model.resolve({"leading": 1})
-    orbit = steady_state(model, p, EventDriven())
-    T = model.period(p)
-    lcs = run_converter(model, {"leading": 1}, method="event", periods=30, x0=orbit.x0)
-    spice = run_converter(model, {"leading": 1}, method="spice", periods=30, x0=orbit.x0)
+    lcs, spice, T = _from_the_orbit(model, {"leading": 1})
     assert spice.mean("vout", t0=20 * T) == pytest.approx(lcs.mean("vout", t0=20 * T), rel=1e-3)
     assert lcs.mean("vout", t0=20 * T) == pytest.approx(5.0, rel=1e-9)
 
@@ -89,9 +85,5 @@ def test_the_maximum_duty_ratio_in_ngspice():
     ngspice's mean 2e-4 from the LCS's (the open-loop buck's at D = 0.8) over 30 periods from the orbit."""
     model = resolve_model("buck", "peak-current")
     params = {"Iref": 5.0, "Dmax": 0.8}
-    p = model.resolve(params)
-    orbit = steady_state(model, p, EventDriven())
-    T = model.period(p)
-    lcs = run_converter(model, params, method="event", periods=30, x0=orbit.x0)
-    spice = run_converter(model, params, method="spice", periods=30, x0=orbit.x0)
+    lcs, spice, T = _from_the_orbit(model, params)
     assert spice.mean("vout", t0=20 * T) == pytest.approx(lcs.mean("vout", t0=20 * T), rel=1e-3)
