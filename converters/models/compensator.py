@@ -104,6 +104,34 @@ class Compensator:
             out = out / (1 + s / (2 * math.pi * fp))
         return out
 
+    def components(self, ri: float) -> dict:
+        """The op-amp circuit that realises Gc (ohm and farad), for an input resistor ``ri``: the amplifier inverting,
+        its non-inverting input at Vref, so that vc - Vref = (Zf/Zi) (Vref - vout) for an ideal amplifier. Zi: Ri from
+        vout to the inverting input, beside Rc + Cc in series (type III's second zero and pole); Zf: Ca + Rz in series
+        (the integrator and the first zero), beside Cb (the first pole), from the inverting input to the output.
+        Then wi = 1/(Ri (Ca + Cb)), wz1 = 1/(Rz Ca), wp1 = (Ca + Cb)/(Rz Ca Cb), wz2 = 1/((Ri + Rc) Cc) and
+        wp2 = 1/(Rc Cc) (H. D. Venable's type II and III amplifiers); a PI has no Cb, an integrator Ca alone.
+        ``netlists/circuits/voltage-loop-buck.cir`` writes these expressions in its ``.param`` lines."""
+        if not ri > 0.0:
+            raise ParameterError(f"ri (the compensator's input resistor) must be above 0 ohm; got {ri!r}")
+        for fz, fp in zip(self.zeros, self.poles):
+            if not fp > fz:
+                raise ParameterError(f"an op-amp type II or III places each pole above its zero; got a zero at {fz:g} "
+                                     f"Hz and a pole at {fp:g} Hz")
+        total = 1.0 / (self.wi * ri)                                  # Ca + Cb
+        out = {"Ri": ri, "Ca": total}
+        if self.zeros:
+            wz1 = 2 * math.pi * self.zeros[0]
+            if self.poles:
+                out["Cb"] = total * self.zeros[0] / self.poles[0]
+                out["Ca"] = total - out["Cb"]
+            out["Rz"] = 1.0 / (wz1 * out["Ca"])
+        if len(self.poles) == 2:
+            wz2, wp2 = 2 * math.pi * self.zeros[1], 2 * math.pi * self.poles[1]
+            out["Cc"] = (1.0 / wz2 - 1.0 / wp2) / ri
+            out["Rc"] = 1.0 / (wp2 * out["Cc"])
+        return out
+
     def as_dict(self) -> dict:
         """The control's parameters: wi, fz1, fz2, fp1, fp2 (0: a zero or pole it does not have)."""
         zeros, poles = list(self.zeros) + [0.0] * (2 - len(self.zeros)), list(self.poles) + [0.0] * (2 - len(self.poles))

@@ -39,7 +39,7 @@ def test_a_netlist_parameter_is_refused_by_name(capsys):
 @pytest.mark.spice
 @pytest.mark.parametrize("name", ["buck", "boost", "buck-boost", "cuk", "diode-bridge", "half-wave", "sync-buck",
                                   "sepic", "flyback", "interleaved-buck", "voltage-mode-buck", "voltage-mode-sync-buck",
-                                  "bridge-rectifier", "rectifier-1ph", "rectifier-3ph"])
+                                  "voltage-loop-buck", "bridge-rectifier", "rectifier-1ph", "rectifier-3ph"])
 def test_compare_runs_ngspice_on_the_same_netlist_and_passes(capsys, ngspice, name):
     code, out, err = run_cli(capsys, "compare", NETLISTS / f"{name}.cir", "--json")
     result = json.loads(out)

@@ -96,6 +96,7 @@ def test_bode_designs_a_type_iii_compensator_and_gives_the_loop_it_closes(capsys
     (["--design", "fc=10k,pm=60,type=4"], "--design takes fc=HZ,pm=DEGREES"),
     (["--design", "fc=10k,pm=60", "--input", "duty"], "--input and --check do not apply"),
     (["--design", "fc=10k,pm=95"], "phase_margin_deg must be in (0, 90)"),
+    (["--design", "fc=10k,pm=60,ri=0"], "--design ri (the op-amp circuit's input resistor) must be above 0 ohm; got 0.0"),
 ])
 def test_bad_design_input_is_one_line(capsys, argv, message):
     code, out, err = run_cli(capsys, "bode", "buck", "--control", "voltage-loop", *argv)

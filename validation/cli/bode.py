@@ -158,9 +158,10 @@ def _print(response, summary: dict, found) -> None:
 
 
 def _design_options(text: str) -> dict:
-    """fc=F,pm=DEG[,type=2|3] as {"crossover_hz", "phase_margin_deg", "kind"}."""
+    """fc=F,pm=DEG[,type=2|3][,ri=OHM] as {"crossover_hz", "phase_margin_deg", "kind", "ri"} (ri: the op-amp
+    circuit's input resistor, 10 kohm unless given)."""
     from converters.validate import parse_value
-    out, names = {"kind": "type3"}, {"fc": "crossover_hz", "pm": "phase_margin_deg"}
+    out, names = {"kind": "type3", "ri": 10e3}, {"fc": "crossover_hz", "pm": "phase_margin_deg"}
     for part in [x for x in text.split(",") if x.strip()]:
         key, _, value = part.partition("=")
         key = key.strip().lower()
@@ -168,8 +169,13 @@ def _design_options(text: str) -> dict:
             out["kind"] = f"type{value.strip()}"
         elif key in names and value.strip():
             out[names[key]] = parse_value(f"--design {key}", value.strip())
+        elif key == "ri" and value.strip():
+            out["ri"] = parse_value("--design ri", value.strip())
+            if not out["ri"] > 0.0:
+                raise ParameterError(f"--design ri (the op-amp circuit's input resistor) must be above 0 ohm; got "
+                                     f"{out['ri']!r}")
         else:
-            raise ParameterError(f"--design takes fc=HZ,pm=DEGREES[,type=2|3]; got {text!r}")
+            raise ParameterError(f"--design takes fc=HZ,pm=DEGREES[,type=2|3][,ri=OHM]; got {text!r}")
     missing = [k for k, v in names.items() if v not in out]
     if missing:
         raise ParameterError(f"--design needs {' and '.join(missing)} (fc=HZ,pm=DEGREES); got {text!r}")
@@ -190,6 +196,7 @@ def _design(args, model, params: dict) -> int:
     if args.input is not None or args.check:
         raise ParameterError("--design gives the loop gain it closes; --input and --check do not apply to it")
     options = _design_options(args.design)
+    ri = options.pop("ri")
     p = model.resolve(params)
     design = design_compensator(model.converter, model.plant(p), vref=p["Vref"], carrier=(p["VL"], p["VU"]), **options)
     closed = {**params, **design.compensator.as_dict()}
@@ -200,7 +207,8 @@ def _design(args, model, params: dict) -> int:
     f = frequencies(plant.T, fmin, fmax, args.points)
     before = FrequencyResponse(f, plant.response(f) / (p["VU"] - p["VL"]), "D", "vout", "loop gain", plant.T,
                                plant.orbit.multipliers)
-    summary = {"converter": model.key, "design": design.as_dict(), "margins": found.as_dict(),
+    parts = design.compensator.components(ri)
+    summary = {"converter": model.key, "design": design.as_dict(), "components": parts, "margins": found.as_dict(),
                "loop_gain": response.as_dict(), "plant": before.as_dict()}
     if args.plot is not None:
         from ..plots import bode_figure
@@ -223,6 +231,8 @@ def _design(args, model, params: dict) -> int:
           f"{found.phase_margin_deg:.4g} degrees; gain margin {found.gain_margin_db:.4g} dB (nan: no phase crossover "
           "below fs/2)")
     print(f"  -p {' -p '.join(f'{k}={v:.6g}' for k, v in design.compensator.as_dict().items())}")
+    print("  as an op-amp circuit (netlists/circuits/voltage-loop-buck.cir): "
+          + ", ".join(f"{k} = {v:.6g} {'F' if k.startswith('C') else 'ohm'}" for k, v in parts.items()))
     if args.plot is not None:
         print(f"wrote {quoted(args.plot)}")
     return 0
