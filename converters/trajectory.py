@@ -360,8 +360,7 @@ class Trajectory:
             values = np.asarray(self.signal(name, rows), dtype=float)
             if not np.isfinite(values).any():                 # not measured in this run (ngspice: no pairs)
                 continue
-            unit = units.get(name, {"vout": "V", "switch": "1", "iref": "A"}.get(
-                name, "A" if name.startswith("i") else "V" if name.startswith("v") else ""))
+            unit = signal_unit(units, name)
             out[name] = {"unit": unit, "mean": self.mean(name, t0=a, t1=b), "rms": self.rms(name, t0=a, t1=b),
                          "min": float(values.min()), "max": float(values.max()), "ripple": float(np.ptp(values))}
         return out
@@ -498,3 +497,10 @@ class JoinedExact:
                              else np.concatenate([getattr(q, name) for q, _ in pieces]))
         samples = Samples(join("t"), join("x"), join("u"), join("y"), join("config"), join("relay"), join("held"))
         return samples, np.concatenate([w for _, w in pieces])
+
+
+def signal_unit(units: dict, name: str) -> str:
+    """A signal's or state's unit: a model's ``signal_units`` where it says, else by the name (vout V, the switch
+    command 1, a current i... A, a voltage v... V)."""
+    return units.get(name, {"vout": "V", "switch": "1", "iref": "A"}.get(
+        name, "A" if name.startswith("i") else "V" if name.startswith("v") else ""))

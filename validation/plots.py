@@ -130,3 +130,29 @@ def bode_figure(response, check=None, margins=None, fmt: str = "png", before=Non
     fig.savefig(buffer, format=fmt, dpi=110)
     plt.close(fig)
     return buffer.getvalue()
+
+
+def tornado_figure(found, title: str, fmt: str = "png") -> bytes:
+    """A tornado chart: each parameter's normalised sensitivity (p/m) dm/dp of a steady-state mean as a horizontal
+    bar, the largest on top, its value printed at the bar's end; PNG or SVG bytes."""
+    rows = [r for r in found.rows if math.isfinite(r.normalised(found.metric_value))][::-1]
+    values = np.array([r.normalised(found.metric_value) for r in rows])
+    fig, ax = plt.subplots(figsize=(7.5, 1.2 + 0.38 * max(len(rows), 1)))
+    ax.barh(range(len(rows)), values, color=np.where(values >= 0, "C0", "C3"))
+    ax.set_yticks(range(len(rows)), [f"{r.parameter} = {r.value:.4g}{' ' + r.unit if r.unit else ''}" for r in rows])
+    ax.axvline(0.0, color="black", lw=0.8)
+    span = max(np.abs(values).max(initial=0.0), 1e-300)
+    for i, v in enumerate(values):
+        ax.text(v + (0.02 if v >= 0 else -0.02) * span, i, f"{v:.3g}", va="center", ha="left" if v >= 0 else "right",
+                fontsize=8)
+    ax.set_xlim(-1.25 * span if (values < 0).any() else 0.0, 1.25 * span if (values > 0).any() else 0.0)
+    ax.ticklabel_format(axis="x", useOffset=False, style="plain")
+    ax.set_xlabel(f"normalised sensitivity (p/m) dm/dp of mean({found.signal}) = {found.metric_value:.6g} "
+                  f"{found.metric_unit} (% per %)")
+    ax.set_title(f"{title}: exact steady-state sensitivities", fontsize=10)
+    ax.grid(True, axis="x", lw=0.3)
+    fig.tight_layout()
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format=fmt, dpi=110)
+    plt.close(fig)
+    return buffer.getvalue()

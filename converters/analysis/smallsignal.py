@@ -19,7 +19,10 @@ fs/2. Its poles are the Floquet multipliers' (a response is infinite where e^{jw
 Everything the linearisation needs is read from one event-method run over the orbit (its ``timeline``) and, for
 the input's derivatives, from the same modes' flows with the input moved by a finite amount: the circuit is affine
 in its sources and an edge's instant in the duty ratio, so that difference is exact to rounding. An input that
-changes a mode's matrix A (an inductance, a load resistance) is not a small-signal input here and is refused.
+changes a mode's matrices (an inductance, a load resistance) drives p' = (A_i - jw) p + dA_i x(t) + dE_i along the
+orbit's own x(t) (the augmented [p; integral; x~] per segment), its matrices' derivatives by a five-point
+difference; at w = 0 the periodic p is the implicit function theorem's dx*/dp, the steady state's exact
+sensitivity (:mod:`converters.analysis.sensitivity`).
 
 The loop gain of a state-driven law s = c x + d - ramp is Middlebrook's injection (R. D. Middlebrook, "Measurement
 of loop gain in feedback systems", Int. J. Electronics 38, 1975), read on the exact model: a perturbation added
@@ -44,6 +47,8 @@ MAX_POINTS = 100_000
 #: The finite move of an input for its derivatives (relative to its value, at least this absolute amount): the
 #: circuit is affine in it, so the difference is exact to rounding.
 RELATIVE_MOVE = 1e-3
+#: The move of a parameter of the dynamics (relative to its value) in its five-point difference.
+DYNAMIC_MOVE = 1e-5
 
 
 @dataclass(frozen=True)
@@ -148,15 +153,20 @@ class SmallSignalModel:
         self.machine = method.engine(problem)
         self.timeline: list = []
         self.machine.run(self.orbit.x0, record=False, timeline=self.timeline)
-        self.moved, self.delta = self._moved(problem, method.engine)
+        self.stencil, self.dynamic = self._stencil(problem, method.engine)
         self.law = problem.switching
         self.outputs = tuple(outputs)
         self.pieces = self._pieces()
 
     # --- the input's derivatives ---------------------------------------------------------------------------
 
-    def _moved(self, problem, engine):
-        """(the machine of the problem with the input moved, the move)."""
+    def _stencil(self, problem, engine) -> tuple:
+        """(stencil, dynamic): the machines of the problem at moved values of the input, as [(machine, params,
+        weight)] with the derivative of any quantity X read as sum(weight X(machine, params)), and whether the input
+        changes a mode's matrices. A source, a reference, the duty ratio or the comparator's input enters affinely:
+        one finite move, exact to rounding. A parameter of the dynamics (an inductance, a load, a capacitance) enters
+        smoothly, not affinely: a five-point central difference (error of order move^4, 1e-12 here), or a
+        three-point one-sided one at the edge of its range."""
         model, p, name = self.model, self.params, self.input
         law = problem.switching
         if name == CONTROL:
@@ -167,7 +177,7 @@ class SmallSignalModel:
             delta = RELATIVE_MOVE * (abs(ramp.high - ramp.low) if ramp is not None and ramp.high != ramp.low
                                      else max(abs(law.function.d), 1.0))
             moved = replace(problem, switching=replace(law, function=replace(law.function, d=law.function.d + delta)))
-            return engine(moved), delta
+            return [(engine(moved), p, 1.0 / delta), (self.machine, p, -1.0 / delta)], False
         key = model.parameter_name(name)
         names = [q.name for q in model.parameters]
         if key not in names:
@@ -178,46 +188,80 @@ class SmallSignalModel:
         if value is None:
             raise ParameterError(f"input {name!r} has no value here (an optional parameter that is not set); give "
                                  f"it one with -p {name}=VALUE")
-        for delta in (RELATIVE_MOVE * max(abs(value), 1.0), -RELATIVE_MOVE * max(abs(value), 1.0)):
+        given = {k: v for k, v in p.items() if v is not None}
+
+        def at(offset):
+            """(machine, params) with the input moved by ``offset``, None outside its range."""
             try:
-                moved_p = model.resolve({**{k: v for k, v in p.items() if v is not None}, key: value + delta})
+                moved_p = model.resolve({**given, key: value + offset})
             except ParameterError:
-                continue
+                return None
             moved = model.problem(moved_p, self.T, self.orbit.x0)
             if moved.switching.period != problem.switching.period:
                 raise ParameterError(f"input {name!r} changes the switching period: the small-signal model is taken "
-                                     "about an orbit of one period; its inputs are sources, references, the duty ratio "
-                                     "or a comparator's input")
-            return engine(moved), delta
-        raise ParameterError(f"input {name!r} = {value!r} cannot be moved inside its range {param.range_text()}")
+                                     "about an orbit of one period; its inputs are sources, references, the duty ratio, "
+                                     "element values or a comparator's input")
+            return engine(moved), moved_p, moved
 
-    def _affine_column(self, flow):
-        """b = d(field)/du of a mode, with a check that u moves the sources only."""
-        other = self.moved.flow(flow.config, flow.held)
+        scale = max(abs(value), 1.0)
+        for delta in (RELATIVE_MOVE * scale, -RELATIVE_MOVE * scale):
+            found = at(delta)
+            if found is not None:
+                break
+        else:
+            raise ParameterError(f"input {name!r} = {value!r} cannot be moved inside its range {param.range_text()}")
+        machine, moved_p, moved = found
+        if not _changes_matrices(problem, moved):
+            return [(machine, moved_p, 1.0 / delta), (self.machine, p, -1.0 / delta)], False
+        h = DYNAMIC_MOVE * move_scale(param, value)
+        for offsets, weights in (((-2, -1, 1, 2), (1, -8, 8, -1)), ((0, 1, 2), (-3, 4, -1)),
+                                 ((0, -1, -2), (3, -4, 1))):
+            points = [(self.machine, p, problem) if k == 0 else at(k * h) for k in offsets]
+            if all(point is not None for point in points):
+                denominator = (12.0 if len(offsets) == 4 else 2.0) * h
+                return [(m, q, w / denominator) for (m, q, _), w in zip(points, weights)], True
+        raise ParameterError(f"input {name!r} = {value!r} cannot be moved by +-{2 * h:g} inside its range "
+                             f"{param.range_text()}")
+
+    @property
+    def moved(self):
+        """The machine with the input moved by :attr:`delta`, for an input that moves sources only (what the
+        injection check perturbs)."""
+        if self.dynamic:
+            raise ParameterError(f"input {self.input!r} changes the circuit's matrices; the injection check perturbs a "
+                                 "source, a reference, the duty ratio or a comparator's input")
+        return self.stencil[0][0]
+
+    @property
+    def delta(self) -> float:
+        return 1.0 / self.stencil[0][2]
+
+    def _derivative(self, quantity):
+        """d quantity / d input: ``quantity(machine, params)`` read on the stencil."""
+        return sum(w * np.asarray(quantity(m, q), dtype=float) for m, q, w in self.stencil)
+
+    def _field_derivative(self, flow) -> np.ndarray:
+        """d[A E] / du of a mode (n x (n + 1)): its last column alone for an input that moves only the sources."""
         n = self.n
-        A, A_moved = flow.Z[:n, :n], other.Z[:n, :n]
-        if not np.allclose(A, A_moved, rtol=1e-9, atol=1e-12 * np.abs(A).max(initial=1.0)):
-            raise ParameterError(f"input {self.input!r} changes the circuit's dynamics (its matrices), not only its "
-                                 "sources or a switching instant: a small-signal input here is a source's value, the "
-                                 "duty ratio or the comparator's input")
-        return (other.Z[:n, n] - flow.Z[:n, n]) / self.delta
+        return self._derivative(lambda m, q: m.flow(flow.config, flow.held).Z[:n, :])
 
     def _output_rows(self, flow, t: float, name: str):
-        """(r, r_u, r0) of an output in a mode: y = r x + r0, r_u the derivative of r0 in u."""
+        """(r, dr, r0) of an output in a mode: y = r x + r0, dr = d[r r0]/du (its derivative's row on x~)."""
         n = self.n
         if name == "sensed":                       # the comparator's sensed quantity c x
-            return np.asarray(self.law.function.c, dtype=float), 0.0, 0.0
+            return np.asarray(self.law.function.c, dtype=float), np.zeros(n + 1), 0.0
         if name in self.machine.problem.state_names:
-            return np.eye(n)[self.machine.problem.state_names.index(name)], 0.0, 0.0
-        values = []
-        for machine, params in ((self.machine, self.params), (self.moved, self._moved_params())):
+            return np.eye(n)[self.machine.problem.state_names.index(name)], np.zeros(n + 1), 0.0
+        xt = np.vstack([np.eye(n + 1)[:n] + np.eye(n + 1)[n], np.eye(n + 1)[n]])     # e_i + "1", then "1"
+
+        def row(machine, params):
             f = machine.flow(flow.config, flow.held)
-            xt = np.vstack([np.eye(n + 1)[:n] + np.eye(n + 1)[n], np.eye(n + 1)[n]])     # e_i + "1", then "1"
             samples = Samples(np.full(n + 1, t), xt[:, :n], xt @ f.u_rows.T, xt @ f.y_rows.T,
                               np.full(n + 1, flow.config), held=np.broadcast_to(f.held_flags, (n + 1, f.held_flags.size)))
-            values.append(np.asarray(self.model.labels(params).signal(name, samples), dtype=float))
-        base, moved = values
-        return base[:n] - base[n], (moved[n] - base[n]) / self.delta, base[n]
+            values = np.asarray(self.model.labels(params).signal(name, samples), dtype=float)
+            return np.append(values[:n] - values[n], values[n])
+        base = row(self.machine, self.params)
+        return base[:n], self._derivative(row), base[n]
 
     def _rows(self, flow, t: float) -> dict:
         key = (flow.config, flow.held)
@@ -232,43 +276,37 @@ class SmallSignalModel:
         return {name: (before[name][0] @ xt_b[:-1] + before[name][2]) - (after[name][0] @ xt_a[:-1] + after[name][2])
                 for name in self.outputs}
 
-    def _moved_params(self) -> dict:
-        if self.input == CONTROL:
-            return self.params
-        key = self.model.parameter_name(self.input)
-        return {**self.params, key: self.params[key] + self.delta}
-
     def _jump_offset(self, config: int, xt_before, t: float):
         """d x+ / du of a Moreau impulse entering ``config`` (zero without one)."""
         quiet = lambda *a: None          # noqa: E731
-        base = self.machine.enter(config, xt_before, t, quiet)[0]
-        moved = self.moved.enter(config, xt_before, t, quiet)[0]
-        return (moved[:-1] - base[:-1]) / self.delta
+        return self._derivative(lambda m, q: m.enter(config, xt_before, t, quiet)[0][:-1])
 
     def _edge_shift(self, t: float, config: int) -> float:
         """d t_e / du of a schedule's edge at t entering ``config`` (the duty ratio moves the turn-off)."""
-        law, moved = self.machine.problem.switching, self.moved.problem.switching
+        law = self.machine.problem.switching
         if config == "limit":                 # a latched law's limit (a maximum duty ratio): moved by its own input
-            return ((moved.limit or 0.0) - (law.limit or 0.0)) * law.period / self.delta
+            return float(self._derivative(lambda m, q: (m.problem.switching.limit or 0.0) * law.period))
         if not isinstance(law, Schedule):
             return 0.0
-        if not isinstance(moved, Schedule) or len(moved.starts) != len(law.starts):
+        if any(not isinstance(m.problem.switching, Schedule) or len(m.problem.switching.starts) != len(law.starts)
+               for m, _, _ in self.stencil):
             raise ParameterError(f"input {self.input!r} at this value changes the schedule's edges (a duty ratio of 0 "
                                  "or 1): no small-signal model there")
         phase = (t - self.machine.problem.t_span[0]) % law.period
         candidates = [i for i, c in enumerate(law.configs) if c == config]
         i = min(candidates, key=lambda i: min(abs(phase - law.starts[i]), law.period - abs(phase - law.starts[i])))
-        return (moved.starts[i] - law.starts[i]) / self.delta
+        return float(self._derivative(lambda m, q: m.problem.switching.starts[i]))
 
     def _pieces(self) -> list:
-        """The orbit's segments and events: ("flow", h, A, b, {output: (r, r_u, r0)}), and ("jump", S, s_u, dt_row,
-        dt_u, {output: y- - y+}) with the event's time moving by dt_row dx- + dt_u du."""
+        """The orbit's segments and events: ("flow", h, A, dZ, {output: (r, dr, r0)}, x~ at its start, Z), and
+        ("jump", S, s_u, dt_row, dt_u, {output: y- - y+}) with the event's time moving by dt_row dx- + dt_u du."""
         n, pieces = self.n, []
         self._row_cache: dict = {}
         for item in self.timeline:
             if item[0] == "flow":
-                _, t0, t1, flow = item
-                pieces.append(("flow", t1 - t0, flow.Z[:n, :n], self._affine_column(flow), self._rows(flow, t0)))
+                _, t0, t1, flow, xt0 = item
+                pieces.append(("flow", t1 - t0, flow.Z[:n, :n], self._field_derivative(flow), self._rows(flow, t0),
+                               xt0, flow.Z))
             elif item[0] == "cross":
                 _, t, row, dgdt, f_b, f_a, J, pair, flow_b, latched_b, xt_b, config, flow_a, xt_a = item
                 grad = row[:n]
@@ -276,13 +314,16 @@ class SmallSignalModel:
                 if abs(denominator) <= 1e-12 * (np.abs(grad) @ np.abs(f_b) + abs(dgdt)):
                     raise SimulationError(f"the orbit grazes an event surface at t = {t:.9g} s (the crossing's speed "
                                           "is zero): it has no small-signal model there")
-                if pair >= 0:
-                    moved_row, moved_slope = self.moved.flow(flow_b.config, flow_b.held).watch_rows[pair], 0.0
-                else:
-                    moved_row, moved_slope = self.moved.switch_row(flow_b.config, latched_b)
-                # a ramp's level and slope both move the guard g = row x~ + slope (t - the ramp's last reset)
-                phase = t - math.floor(t / self.T) * self.T if moved_slope != dgdt else 0.0
-                g_u = (moved_row[n] - row[n] + (moved_slope - dgdt) * phase) / self.delta
+                # the guard g = row x~ + slope (t - the ramp's last reset): its row (the parameters of the dynamics
+                # move its state part too), a ramp's level and slope all move with the input
+                phase = t - math.floor(t / self.T) * self.T
+
+                def guard(m, q, config=flow_b.config, held=flow_b.held, latched=latched_b, pair=pair, xt=xt_b,
+                          phase=phase):
+                    row_m, slope = ((m.flow(config, held).watch_rows[pair], 0.0) if pair >= 0
+                                    else m.switch_row(config, latched))
+                    return row_m @ xt + slope * phase
+                g_u = float(self._derivative(guard))
                 jumped = not np.array_equal(J, np.eye(n))
                 j_u = self._jump_offset(config, xt_b, t) if jumped and pair < 0 else np.zeros(n)
                 dt_row, dt_u = -grad / denominator, -g_u / denominator
@@ -314,15 +355,30 @@ class SmallSignalModel:
         G = np.broadcast_to(np.eye(m, dtype=complex), (f.size, m, m)).copy()
         for piece in self.pieces:
             if piece[0] == "flow":
-                _, h, A, b, rows = piece
-                r, r_u, _ = rows[output]
-                M = np.zeros((f.size, m, m), dtype=complex)
+                _, h, A, dZ, rows, xt0, Z = piece
+                r, dr, _ = rows[output]
+                if not (np.any(dZ[:, :n]) or np.any(dr[:n])):        # the input moves sources only: p' = A p + b
+                    M = np.zeros((f.size, m, m), dtype=complex)
+                    M[:, :n, :n] = A
+                    M[:, range(n), range(n)] -= jw[:, None]
+                    M[:, :n, n + 1] = dZ[:, n]
+                    M[:, n, :n] = r
+                    M[:, n, n + 1] = dr[n]
+                    G = expm(M * h) @ G
+                    continue
+                # the input moves A (and the output's row): p' = A p + dZ x~(t), x~' = Z x~ from the orbit's x~0
+                M = np.zeros((f.size, 2 * n + 2, 2 * n + 2), dtype=complex)
                 M[:, :n, :n] = A
                 M[:, range(n), range(n)] -= jw[:, None]
-                M[:, :n, n + 1] = b
+                M[:, :n, n + 1:] = dZ
                 M[:, n, :n] = r
-                M[:, n, n + 1] = r_u
-                G = expm(M * h) @ G
+                M[:, n, n + 1:] = dr
+                M[:, n + 1:, n + 1:] = Z
+                E = expm(M * h)
+                P = np.broadcast_to(np.eye(m, dtype=complex), (f.size, m, m)).copy()
+                P[:, :n + 1, :n + 1] = E[:, :n + 1, :n + 1]
+                P[:, :n + 1, n + 1] = E[:, :n + 1, n + 1:] @ xt0
+                G = P @ G
             else:
                 _, S, s_u, dt_row, dt_u, steps = piece
                 P = np.eye(m, dtype=complex)
@@ -333,6 +389,27 @@ class SmallSignalModel:
         p0 = np.linalg.solve(np.eye(n) - G[:, :n, :n], G[:, :n, n + 1][..., None])[..., 0]
         integral = np.einsum("fi,fi->f", G[:, n, :n], p0) + G[:, n, n + 1]
         return integral / self.T
+
+
+def move_scale(param, value: float) -> float:
+    """The scale of a finite move of a parameter: its value, or its distance to the nearer end of its range where
+    that is smaller (a coupling k = 0.99 moves on the scale of 1 - k, where the circuit's dependence on it lives),
+    or 1 at 0."""
+    scale = abs(value) if value != 0.0 else 1.0
+    for bound in (param.low, param.high):
+        if math.isfinite(bound) and bound != value:
+            scale = min(scale, abs(value - bound))
+    return scale
+
+
+def _changes_matrices(problem, moved) -> bool:
+    """Whether a moved problem's modes differ from the problem's in A, B, C or D (not only in the sources' E, F)."""
+    for c, m in zip(problem.configurations, moved.configurations):
+        for a, b in ((c.A, m.A), (c.B, m.B), (c.C, m.C), (c.D, m.D)):
+            a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+            if not np.allclose(a, b, rtol=1e-12, atol=1e-14 * np.abs(a).max(initial=1.0)):
+                return True
+    return False
 
 
 def frequencies(model_period: float, fmin=None, fmax=None, points: int = POINTS) -> np.ndarray:
@@ -359,9 +436,10 @@ def quantity_unit(model, params, name: str) -> str:
         return "V" if name == "vout" else ""
     if name == CONTROL:
         return ""
+    from ..trajectory import signal_unit
     key = model.parameter_name(name)
     param = next((q for q in model.parameters if q.name == key), None)
-    return param.unit if param is not None else units.get(name, "")
+    return param.unit if param is not None else signal_unit(units, name)
 
 
 def frequency_response(model, params: dict | None = None, *, input: str, output: str = "vout", frequency_hz=None,
@@ -556,30 +634,50 @@ def injection_response(small: SmallSignalModel, frequency_hz, output: str = "vou
         orbit = require(newton_orbit(period_map, small.orbit.x0, tol=tol, max_iter=50), "the perturbed periodic orbit")
         solution = machine.run(np.append(orbit.x0, [1.0, 0.0]), record=True)[0]
         samples, weights = solution.quadrature()
-        values = _output_on(small, samples, output)
+        values = _output_on(small.model, small.params, small.machine.problem, samples, output)
         out[i] = 2.0 / span * np.sum(weights * values * np.exp(-1j * omega * samples.t)) / amplitude
     return np.array([f for f, _ in plan]), out
 
 
-def _output_on(small: SmallSignalModel, samples, output: str) -> np.ndarray:
-    """The output at quadrature samples of the augmented run (the circuit's states and pairs)."""
-    n = small.n
+def _output_on(model, params: dict, problem, samples, output: str) -> np.ndarray:
+    """The output at quadrature samples of a run of ``problem`` (its first n states the circuit's, then perhaps an
+    oscillator's)."""
+    n = problem.n
     plain = replace(samples, x=np.asarray(samples.x)[:, :n])
     if output == "sensed":
-        return plain.x @ small.law.function.c
-    if output in small.machine.problem.state_names:
-        return plain.x[:, small.machine.problem.state_names.index(output)]
-    return np.asarray(small.model.labels(small.params).signal(output, plain), dtype=float)
+        return plain.x @ problem.switching.function.c
+    if output in problem.state_names:
+        return plain.x[:, problem.state_names.index(output)]
+    return np.asarray(model.labels(params).signal(output, plain), dtype=float)
+
+
+def _orbit_mean(machine, x0, model, params: dict, output: str) -> float:
+    """The mean of an output over one period of a machine's run from x0 (the event method's exact pieces)."""
+    solution = machine.run(x0, record=True)[0]
+    samples, weights = solution.quadrature()
+    values = _output_on(model, params, machine.problem, samples, output)
+    return float(np.sum(weights * values) / (machine.problem.t_span[1] - machine.problem.t_span[0]))
+
+
+def _mean_output(small: SmallSignalModel, output: str = "vout") -> float:
+    """The mean of an output over the orbit's period."""
+    return _orbit_mean(small.machine, small.orbit.x0, small.model, small.params, output)
+
+
+def steady_mean(model, params: dict | None = None, output: str = "vout", tol: float = 1e-12) -> float:
+    """The mean of an output over the exact periodic orbit (Newton shooting on the event method's map to ``tol``):
+    what a finite difference of the steady state reads."""
+    from ..methods import EventDriven
+    from .periodic import require, shoot
+    p = model.resolve(params)
+    T = model.period(p)
+    method = EventDriven()
+    problem = model.problem(p, T)
+    orbit = require(shoot(problem, method, problem.x0, tol=tol), f"the periodic orbit of {model.key}")
+    return _orbit_mean(method.engine(model.problem(p, T, orbit.x0)), orbit.x0, model, p, output)
 
 
 # --- compensator design: the k-factor method on the exact control-to-output response -----------------------------
-
-def _mean_output(small: SmallSignalModel, output: str = "vout") -> float:
-    """The mean of an output over the orbit's period (the event method's exact pieces)."""
-    solution = small.machine.run(small.orbit.x0, record=True)[0]
-    samples, weights = solution.quadrature()
-    values = _output_on(small, samples, output)
-    return float(np.sum(weights * values) / small.T)
 
 
 def operating_duty(model, params: dict, vref: float, tol: float = 1e-12) -> tuple[float, SmallSignalModel]:

@@ -132,7 +132,6 @@ def test_margins_are_located_on_the_function_not_the_grid():
 
 
 @pytest.mark.parametrize("converter, control, params, name, message", [
-    ("buck", "pwm", CCM_BUCK, "L", "changes the circuit's dynamics"),
     ("buck", "pwm", CCM_BUCK, "f_sw", "changes the switching period"),
     ("buck", "pwm", CCM_BUCK, "control", "driven by a schedule: use input 'D'"),
     ("buck", "pwm", CCM_BUCK, "Vx", "input must be 'control' (a state-driven law) or one of the parameters"),
@@ -159,3 +158,12 @@ def test_a_single_loop_has_one_loop_gain_wherever_it_is_broken():
     _, inner = loop_gain(double, {})
     _, outer = loop_gain(double, {}, at="reference")
     assert outer.crossover_hz < 0.1 * inner.crossover_hz and 30 < outer.phase_margin_deg < 90
+
+
+def test_an_element_value_is_an_input_and_the_injection_check_refuses_it():
+    """An inductance changes the modes' matrices: the exact model takes it (its five-point difference of the
+    matrices), at zero frequency the derivative of the steady state's mean; the injection perturbs sources only."""
+    small = SmallSignalModel(resolve_model("boost"), {"L": "10u", "R": 100}, input="L")
+    assert small.dynamic and np.isfinite(small.response([0.0, 1e3, 4e4])).all()
+    with pytest.raises(ParameterError, match="input 'L' changes the circuit's matrices; the injection check perturbs"):
+        injection_response(small, [1e3])

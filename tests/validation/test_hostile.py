@@ -370,6 +370,7 @@ EMPTY_PATHS = [
                                                       "--diagram", ""],
     ["netlist", "buck", "--out", " "], ["report", "lcp", "--out", ""], ["simulate", "buck", "--out", ""],
     ["simulate", "buck", "--plot", ""], ["sweep", "buck", "--grid", "D=0.2:0.8:3", "--out", ""],
+    ["sensitivity", "buck", "--plot", ""],
 ]
 
 
@@ -402,7 +403,7 @@ def test_every_path_option_refuses_an_empty_path():
     walk(build_parser(), ())
     table = {(tuple(a[:2] if a[0] in ("lcp", "mech") else a[:1]), "file" if a[:2] == ["lcp", "solve"] else a[-2])
              for a in EMPTY_PATHS}
-    assert table == paths and len(paths) == 13
+    assert table == paths and len(paths) == 14
 
 
 @pytest.mark.parametrize("argv,message", UNPARSABLE, ids=[" ".join(a) for a, _ in UNPARSABLE])

@@ -278,8 +278,8 @@ class _Machine:
         """Run over t_span from x0. ``jacobian``: also d x_end / d x0. ``stop_config``/``stop_count``: stop
         at the ``stop_count``-th switching into ``stop_config`` (a return map; the run may then end before
         t_span[1], which must be long enough). ``timeline``: a list that receives, in time order, what a
-        linearisation about the run needs (:mod:`converters.analysis.smallsignal`): ("flow", t0, t1, flow) per
-        segment; ("cross", t, guard row, d guard / dt, f before, f after, jump, pair (-1: the law), flow before,
+        linearisation about the run needs (:mod:`converters.analysis.smallsignal`): ("flow", t0, t1, flow, x~ at t0)
+        per segment; ("cross", t, guard row, d guard / dt, f before, f after, jump, pair (-1: the law), flow before,
         latched before, x~ before the jump, configuration after, flow after, x~ after) per state event; ("edge", t, kind, configuration
         after, jump, x~ before the jump, flow before, flow after, x~ after) per time-driven instant. Returns (EventSolution, jacobian or None, stop time or None)."""
         start_clock = time.perf_counter()
@@ -321,7 +321,7 @@ class _Machine:
                 if record and t_next > t:
                     segments.append(Segment(t, t_next, flow, xt, xt_end))
                 if timeline is not None and t_next > t:
-                    timeline.append(("flow", t, t_next, flow))
+                    timeline.append(("flow", t, t_next, flow, xt))
                 if jac is not None:
                     jac[:] = flow.transition(t_next - t) @ jac
                 if tau is None:

@@ -1,0 +1,126 @@
+"""Exact steady-state sensitivities (the implicit function theorem on the period map, read as the exact small-signal
+model at zero frequency) against closed forms, exact scaling identities and finite differences of the steady state."""
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from converters.analysis.sensitivity import finite_difference, parse_metric, sensitivities
+from converters.errors import ParameterError
+from converters.run import resolve_model
+from validation.cli import main
+
+NETLISTS = Path(__file__).resolve().parents[2] / "netlists" / "circuits"
+CCM_BUCK = {"L": "100u", "C": "100u", "R": 10, "D": 0.4}
+DCM_BOOST = {"L": "10u", "R": 100, "D": 0.4}
+
+
+def by_name(found) -> dict:
+    return {row.parameter: row for row in found.rows}
+
+
+def test_the_ideal_ccm_bucks_output_is_d_vin_whatever_its_filter_and_load():
+    """vout = D Vin in CCM with ideal parts: d vout/dD = Vin, d vout/dVin = D, and L, C, R do not move the mean."""
+    found = sensitivities("buck", CCM_BUCK)
+    rows = by_name(found)
+    assert found.metric_value == pytest.approx(4.8, rel=1e-12)
+    assert rows["D"].derivative == pytest.approx(12.0, rel=1e-12)
+    assert rows["Vin"].derivative == pytest.approx(0.4, rel=1e-12)
+    for name in ("L", "C", "R"):
+        assert abs(rows[name].normalised(found.metric_value)) < 1e-10, (name, rows[name])
+    assert set(found.skipped) == {"f_sw"} and "changes the switching period" in found.skipped["f_sw"]
+    # with a winding resistance, vout = D Vin R / (R + rL) in CCM: S_R = -S_rL = rL / (R + rL)
+    found = sensitivities("buck", CCM_BUCK | {"rL": 0.1, "rC": 0.05})
+    s = {row.parameter: row.normalised(found.metric_value) for row in found.rows}
+    assert found.metric_value == pytest.approx(4.8 * 10 / 10.1, rel=1e-12)
+    assert s["R"] == pytest.approx(0.1 / 10.1, rel=1e-9) and s["rL"] == pytest.approx(-0.1 / 10.1, rel=1e-9)
+    assert abs(s["rC"]) < 1e-10 and abs(s["L"]) < 1e-10
+
+
+def test_the_dcm_boosts_sensitivities_obey_its_scaling_identity():
+    """Scaling L and R by a and C by 1/a (the inductor current by 1/a) leaves the boost's equations, so its mean
+    output, unchanged: S_L + S_R - S_C = 0 exactly; and vout is homogeneous of degree one in Vin: S_Vin = 1."""
+    found = sensitivities("boost", DCM_BOOST)
+    s = {row.parameter: row.normalised(found.metric_value) for row in found.rows}
+    from converters.run import run_converter
+    assert "DCM" in set(run_converter("boost", DCM_BOOST, method="event", steady=True, periods=1).modes())
+    assert abs(s["L"] + s["R"] - s["C"]) < 1e-9 and abs(s["L"]) > 0.4
+    assert s["Vin"] == pytest.approx(1.0, abs=1e-10)
+
+
+CASES = [("buck", CCM_BUCK | {"rL": 0.1, "rC": 0.05}, "vout", ("D", "L", "R", "rL", "rC")),
+         ("boost", DCM_BOOST, "vout", ("D", "L", "R", "C", "Vin")),
+         ("boost", DCM_BOOST, "iL", ("L", "R")),
+         (str(NETLISTS / "flyback.cir"), {}, "vout", ("k", "lp", "ls", "d", "r")),
+         (str(NETLISTS / "flyback.cir"), {}, "i(lp).mean", ("k", "rc"))]
+
+
+@pytest.mark.parametrize("converter, params, metric, names", CASES,
+                         ids=[f"{Path(c).name}-{m}" for c, _, m, _ in CASES])
+def test_exact_sensitivities_are_the_finite_differences_of_the_steady_state(converter, params, metric, names):
+    """Against a five-point central difference of the steady state (Newton to 1e-11, moves of 1e-4, four orbits per
+    parameter): to 1e-6 relative, or, where the metric hardly moves (the buck's mean does not see its ESR, S ~ 1e-12;
+    the DCM boost's C, S ~ 7e-8), to the difference's own resolution, 1e-11 / 1e-4 in the normalised sensitivity."""
+    model = resolve_model(converter)
+    found = sensitivities(model, params, metric=metric, parameters=names)
+    assert [row.parameter for row in found.rows] and len(found.rows) == len(names)
+    for row in found.rows:
+        fd = finite_difference(model, params, metric, row.parameter, relative=1e-4, tol=1e-11)
+        resolution = 1e-7 * abs(found.metric_value / row.value)
+        assert abs(row.derivative - fd) <= 1e-6 * abs(fd) + resolution, (row, fd)
+        if abs(row.normalised(found.metric_value)) > 1e-2:
+            assert row.derivative == pytest.approx(fd, rel=1e-6)
+
+
+def test_a_closed_loop_with_an_integrator_holds_its_mean_at_the_reference():
+    """The type III voltage loop's integrator makes mean(vout) = Vref on the orbit: S_Vref = 1 and every other
+    parameter (the filter, the load, the parasitics, the compensator, the carrier, Vin) has S = 0."""
+    found = sensitivities(resolve_model("buck", "voltage-loop"), {"rL": 0.05})
+    s = {row.parameter: row.normalised(found.metric_value) for row in found.rows}
+    assert s.pop("Vref") == pytest.approx(1.0, abs=1e-10)
+    assert len(s) >= 10 and max(abs(v) for v in s.values()) < 1e-10, s
+
+
+@pytest.mark.parametrize("text, expected", [("vout", ("vout", "mean")), ("v(out).mean", ("v(out)", "mean")),
+                                            ("iL", ("iL", "mean")), ("i(l1).mean", ("i(l1)", "mean"))])
+def test_a_metric_is_a_signal_with_an_optional_mean(text, expected):
+    assert parse_metric(text) == expected
+
+
+def test_what_has_no_exact_sensitivity_is_refused_naming_it():
+    with pytest.raises(ParameterError, match=r"metric 'vout.ripple': exact sensitivities are taken of a signal's mean"):
+        sensitivities("buck", CCM_BUCK, metric="vout.ripple")
+    with pytest.raises(ParameterError, match="input 'f_sw' changes the switching period"):
+        sensitivities("buck", CCM_BUCK, parameters=["f_sw"])
+    with pytest.raises(ParameterError, match="parameter must be one of Vin, L, C, R, f_sw, D"):
+        sensitivities("buck", CCM_BUCK, parameters=["Lx"])
+
+
+def test_the_command_ranks_the_sensitivities_checks_them_and_draws_a_tornado(capsys, tmp_path):
+    png = tmp_path / "tornado.png"
+    assert main(["sensitivity", "boost", "-p", "L=10u", "-p", "R=100", "--param", "L", "--param", "D",
+                 "--param", "C", "--check", "--plot", str(png), "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    rows = summary["sensitivities"]
+    assert [r["parameter"] for r in rows] == ["D", "L", "C"]             # ranked by |normalised|
+    assert summary["unit"] == "V" and rows[1]["unit"] == "H"
+    assert all(r["normalised_difference"] < 1e-8 for r in rows), rows
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert main(["sensitivity", "buck", "-p", "L=100u"]) == 0
+    out = capsys.readouterr().out
+    assert "mean(vout) = 4.8 V" in out and "not taken: f_sw" in out
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--metric", "vout.rms"], "exact sensitivities are taken of a signal's mean here"),
+    (["--param", "Lx"], "parameter must be one of"),
+    (["--metric", "vx"], "signal must be one of"),
+    (["--plot", "x.pdf"], "--plot must end in .png or .svg"),
+])
+def test_bad_sensitivity_input_is_one_line(capsys, tmp_path, monkeypatch, argv, message):
+    monkeypatch.chdir(tmp_path)
+    code = main(["sensitivity", "buck", *argv])
+    out, err = capsys.readouterr()
+    assert code == 2 and out == "" and err.count("\n") == 1 and message in err
+    assert list(tmp_path.iterdir()) == []
