@@ -3,7 +3,6 @@ model at zero frequency) against closed forms, exact scaling identities and fini
 import json
 from pathlib import Path
 
-import numpy as np
 import pytest
 
 from converters.analysis.sensitivity import finite_difference, parse_metric, sensitivities
