@@ -143,7 +143,8 @@ def schema(ensemble, names):
     fields = [("index", pa.int64()), *[(n, pa.float64()) for n in names], ("status", pa.string()),
               ("message", pa.string()), *[(k, kinds[t]) for k, t in ensemble.measures.items()],
               ("wall_s", pa.float64())]
-    return pa.schema(fields)
+    units = getattr(ensemble, "units", {}) or {}
+    return pa.schema(fields, metadata={b"units": json.dumps(units, sort_keys=True).encode()})
 
 
 def read_part(data: bytes, columns=None):
@@ -429,12 +430,11 @@ def run_sweep(ensemble, points, out, *, backend="local", workers: int | None = N
               progress: bool = True) -> SweepRun:
     """Compute the points of ``points`` not yet in ``out`` and stream their rows there (module docstring).
 
-    The axes' end values are checked against the model's ranges before anything is written. An interruption
+    The points' extremes are checked against the model's ranges before anything is written. An interruption
     (KeyboardInterrupt, SystemExit) stops the workers and leaves every finished chunk on disk; it propagates
     after the store is released."""
-    for axis in points.axes:
-        for value in (axis.start, axis.stop):
-            ensemble.validate({axis.name: value})
+    for point in points.extremes():
+        ensemble.validate(point)
     store = SweepStore(out, describe(ensemble, points), schema(ensemble, points.names))
     done = store.claim()
     try:
@@ -450,11 +450,70 @@ def run_sweep(ensemble, points, out, *, backend="local", workers: int | None = N
 
 # --- the summary plot ---------------------------------------------------------------------------------------
 
-def summary_plot(frame: pd.DataFrame, points, metric: str = "vout_mean", title: str = "") -> bytes:
+def _labelled(name: str, units: dict) -> str:
+    unit = units.get(name, "")
+    return f"{name} ({unit})" if unit not in ("", "1") else name
+
+
+def _engineering(axis, name: str, units: dict) -> None:
+    """An axis's ticks in engineering notation with the quantity's unit (90 uH, 12.5 mV), no offset; its label the
+    quantity's name."""
+    from matplotlib.ticker import EngFormatter
+    unit = units.get(name, "")
+    axis.set_major_formatter(EngFormatter(unit=unit if unit not in ("", "1") else "", places=None))
+
+
+def tolerance_plot(frame: pd.DataFrame, points, metric: str, specs=(), units=None, title: str = "") -> bytes:
+    """A tolerance study: the metric's histogram with each spec's bound on it and the yield, and the metric against
+    the parameter it follows most closely (the largest |rank correlation|); units on the axes."""
+    from converters.sweeps.specs import study_summary
+
+    from .plots import plt, png
+    units = units or {}
+    ok = (frame["status"] == "ok").to_numpy()
+    values = pd.to_numeric(frame[metric], errors="coerce").to_numpy() if metric in frame else np.full(len(frame), np.nan)
+    fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.2))
+    left.hist(values[ok & np.isfinite(values)], bins=min(60, max(10, int(np.sqrt(ok.sum())))), color="C0", alpha=0.8)
+    for spec in specs:
+        if spec.metric == metric:
+            left.axvline(spec.limit, color="C3", lw=1.5, ls="--", label=f"spec {spec.text()}")
+    left.set_xlabel(metric)
+    left.set_ylabel("samples")
+    _engineering(left.xaxis, metric, units)
+    if specs:
+        found = study_summary(frame, specs, points)
+        left.set_title(f"yield {100 * found['yield']:.2f} % (95 % CI {100 * found['yield_low']:.2f} to "
+                       f"{100 * found['yield_high']:.2f} %)", fontsize=9)
+        left.legend(fontsize=8)
+    correlations = {}
+    for name in points.names:
+        x = frame[name].to_numpy(dtype=float)
+        sel = ok & np.isfinite(values)
+        if sel.sum() > 2 and np.ptp(x[sel]) > 0 and np.ptp(values[sel]) > 0:
+            correlations[name] = pd.Series(x[sel]).corr(pd.Series(values[sel]), method="spearman")
+    if correlations:
+        name = max(correlations, key=lambda k: abs(correlations[k]))
+        right.plot(frame[name][ok], values[ok], ".", ms=3, alpha=0.5)
+        right.set_xlabel(name)
+        _engineering(right.xaxis, name, units)
+        right.set_title(f"against the parameter it follows most (Spearman {correlations[name]:+.2f})", fontsize=9)
+        for spec in specs:
+            if spec.metric == metric:
+                right.axhline(spec.limit, color="C3", lw=1.5, ls="--")
+    right.set_ylabel(metric)
+    _engineering(right.yaxis, metric, units)
+    failed = int((~ok).sum())
+    fig.suptitle(f"{title}  ({len(frame)} samples, {failed} failed)", fontsize=10)
+    fig.tight_layout()
+    return png(fig)
+
+
+def summary_plot(frame: pd.DataFrame, points, metric: str = "vout_mean", title: str = "", units=None) -> bytes:
     """``metric`` over the sweep: a line over one parameter, a map over a 2-D grid (failed points grey, the
     conduction-mode boundaries drawn over it), a scatter over the first two parameters otherwise; failed
-    points marked."""
+    points marked; units on the axes where ``units`` ({column: unit}) gives them."""
     from .plots import plt, png
+    units = units or {}
     names = points.names
     ok = frame["status"] == "ok"
     values = pd.to_numeric(frame[metric], errors="coerce") if metric in frame else pd.Series(np.nan, index=frame.index)
@@ -472,8 +531,9 @@ def summary_plot(frame: pd.DataFrame, points, metric: str = "vout_mean", title: 
             sel = ok & (frame["mode"] == mode)
             ax.plot(frame[names[0]][sel], values[sel], "o", ms=4, alpha=0.5, label=f"mode {mode}")
         ax.set_xscale("log" if axis.log else "linear")
-        ax.set_xlabel(names[0])
-        ax.set_ylabel(metric)
+        ax.set_xlabel(_labelled(names[0], units))
+        ax.set_ylabel(_labelled(metric, units))
+        ax.ticklabel_format(axis="y", useOffset=False, style="plain")
         ax.legend(fontsize=8)
     elif points.kind == "grid" and len(names) == 2:
         shape = points.shape
@@ -484,7 +544,7 @@ def summary_plot(frame: pd.DataFrame, points, metric: str = "vout_mean", title: 
         fig, ax = plt.subplots(figsize=(7, 5))
         ax.set_facecolor("#bbbbbb")                       # failed or missing points show through in grey
         mesh = ax.pcolormesh(xs, ys, np.ma.masked_invalid(grid), shading="nearest", cmap="viridis")
-        fig.colorbar(mesh, ax=ax, label=metric)
+        fig.colorbar(mesh, ax=ax, label=_labelled(metric, units))
         if "mode" in frame and frame["mode"][ok].nunique() > 1:
             codes = {m: k for k, m in enumerate(sorted(frame["mode"][ok].unique()))}
             code = np.full(points.size, np.nan)
@@ -499,27 +559,30 @@ def summary_plot(frame: pd.DataFrame, points, metric: str = "vout_mean", title: 
             ax.set_title("white lines: conduction-mode boundaries", fontsize=9)
         ax.set_xscale("log" if points.axes[1].log else "linear")
         ax.set_yscale("log" if points.axes[0].log else "linear")
-        ax.set_xlabel(names[1])
-        ax.set_ylabel(names[0])
+        ax.set_xlabel(_labelled(names[1], units))
+        ax.set_ylabel(_labelled(names[0], units))
     else:
         fig, ax = plt.subplots(figsize=(7, 5))
         second = names[1] if len(names) > 1 else names[0]
         sc = ax.scatter(frame[names[0]][ok], frame[second][ok], c=values[ok], s=12, cmap="viridis")
-        fig.colorbar(sc, ax=ax, label=metric)
+        fig.colorbar(sc, ax=ax, label=_labelled(metric, units))
         if (~ok).any():
             ax.plot(frame[names[0]][~ok], frame[second][~ok], "x", color="#c44e52", label="failed")
             ax.legend(fontsize=8)
-        ax.set_xlabel(names[0])
-        ax.set_ylabel(second)
+        ax.set_xlabel(_labelled(names[0], units))
+        ax.set_ylabel(_labelled(second, units))
     failed = int((~ok).sum())
     fig.suptitle(f"{title}  ({len(frame)} points, {failed} failed)", fontsize=10)
     return png(fig)
 
 
-def write_summary(out, points, metric: str = "vout_mean", title: str = "") -> pd.DataFrame:
-    """The summary plot of a complete sweep, written atomically beside its parts."""
+def write_summary(out, points, metric: str = "vout_mean", title: str = "", specs=(), units=None) -> pd.DataFrame:
+    """The summary plot of a complete sweep, written atomically beside its parts: a tolerance study's histogram and
+    scatter, or the metric over the sweep's points."""
     frame = load_sweep(out)
-    atomic_write_bytes(Path(out) / "summary.png", summary_plot(frame, points, metric, title))
+    figure = (tolerance_plot(frame, points, metric, specs, units, title) if points.kind == "tolerance"
+              else summary_plot(frame, points, metric, title, units))
+    atomic_write_bytes(Path(out) / "summary.png", figure)
     return frame
 
 

@@ -75,12 +75,28 @@ class ModelSweep:
     warm_up: int = 20
     periods: int = 50
     rtol: float | None = None
+    #: Measures on demand beside the standard ones (:mod:`.metrics`: SIGNAL.STAT, efficiency, losses.NAME, ...).
+    metrics: tuple = ()
 
     @property
     def measures(self) -> dict:
         """The row's measures and their types; with ``rtol`` also each point's error estimates and the step
-        chosen (accuracy on request)."""
-        return {**MEASURES, **ACCURACY_MEASURES} if self.rtol is not None else MEASURES
+        chosen (accuracy on request); then the metrics asked for."""
+        standard = {**MEASURES, **ACCURACY_MEASURES} if self.rtol is not None else MEASURES
+        return {**standard, **{name: float for name in self.metrics if name not in standard}}
+
+    @property
+    def units(self) -> dict:
+        """Each measure's unit ('' where it has none: a mode, a count)."""
+        from .metrics import check_metrics
+        model = self._model()
+        p = model.resolve(self.base)
+        state = model.state_names[0] if getattr(model, "state_names", None) else ""
+        from ..trajectory import signal_unit
+        out = {**{q.name: q.unit for q in model.parameters}, "vout_mean": "V", "vout_ripple": "V", "rms_state0": signal_unit({}, state), "held_fraction": "1",
+               "spectral_radius": "1", "orbit_distance": "1", "error_estimate": "1", "vout_mean_error_estimate": "1"}
+        return {**out, **check_metrics(model, p, [m for m in self.metrics if m not in MEASURES
+                                                  and m not in ACCURACY_MEASURES])}
 
     def __post_init__(self):
         from ..models import get_model
@@ -107,6 +123,10 @@ class ModelSweep:
                 raise ParameterError("rtol: accuracy on request gives the periodic steady state; add steady (--steady)")
             if not (isinstance(self.rtol, float) and RTOL_RANGE[0] <= self.rtol <= RTOL_RANGE[1]):
                 raise ParameterError(f"rtol must be in [{RTOL_RANGE[0]:g}, {RTOL_RANGE[1]:g}]; got {self.rtol!r}")
+        if not isinstance(self.metrics, tuple):
+            raise ParameterError(f"metrics must be a tuple of names; got {self.metrics!r}")
+        from .metrics import check_metrics
+        check_metrics(model, p, [m for m in self.metrics if m not in MEASURES and m not in ACCURACY_MEASURES])
 
     # --- one point ----------------------------------------------------------------------------------------
 
@@ -155,7 +175,7 @@ class ModelSweep:
                 long = simulate(model.problem(p, self.periods * T), method)
                 run = simulate(model.problem(p, T, long.x[-1]), method)
                 extra = {}
-            return {**out, "status": "ok", "message": "", **orbit_row(model, p, run), **extra,
+            return {**out, "status": "ok", "message": "", **orbit_row(model, p, run, self.metrics), **extra,
                     "wall_s": time.perf_counter() - clock}
         except (ValueError, RuntimeError, ArithmeticError) as exc:
             return failed_row(index, point, f"{type(exc).__name__}: {exc}", time.perf_counter() - clock)
@@ -166,7 +186,7 @@ class ModelSweep:
         from ..analysis.accuracy import accurate_steady
         result = accurate_steady(model, p, self.rtol)
         q = result.quantities
-        row = orbit_row(model, p, result.trajectory)
+        row = orbit_row(model, p, result.trajectory, self.metrics)
         row.update(vout_mean=q["vout_mean"].value, vout_ripple=q["vout_ripple"].value,
                    rms_state0=q[f"{model.state_names[0]}_rms"].value,
                    spectral_radius=float(np.abs(result.orbit.multipliers).max()), iterations=int(result.orbit.iterations),
@@ -255,7 +275,7 @@ class ModelSweep:
                 run = _stepper_trajectory(problem, method, t, xs[k, :count], us[k, :count, None], ys[k, :count, None],
                                           config)
                 multipliers = np.linalg.eigvals(jac[k])
-                rows[index] = {"index": int(index), **{key: _number(v) for key, v in point.items()}, "status": "ok", "message": "", **orbit_row(model, p, run),
+                rows[index] = {"index": int(index), **{key: _number(v) for key, v in point.items()}, "status": "ok", "message": "", **orbit_row(model, p, run, self.metrics),
                                "spectral_radius": float(np.abs(multipliers).max()), "iterations": int(iterations[k]),
                                "orbit_distance": float(distances[k]), "wall_s": time.perf_counter() - clock}
         return [rows[index] for index, _ in items]
@@ -285,17 +305,20 @@ def _stepper_trajectory(problem, method, t, x, u, y, config):
                       period=problem.period)
 
 
-def orbit_row(model, p: dict, run) -> dict:
-    """The measures of a one-period run on the orbit (the module docstring), through the model's labels."""
+def orbit_row(model, p: dict, run, metrics: tuple = ()) -> dict:
+    """The measures of a one-period run on the orbit (the module docstring), through the model's labels, and the
+    metrics asked for (:mod:`.metrics`)."""
     from dataclasses import replace
 
     from ..analysis.modes import held_fraction, mode_class, orbit_intervals
+    from .metrics import metric_value
     run = replace(run, labels=model.labels(p))
     t0, t1 = run.t[0], run.t[-1]
     intervals = orbit_intervals(run)
-    return {"vout_mean": float(run.mean("vout", t0=t0, t1=t1)), "vout_ripple": float(run.ripple("vout", t0=t0, t1=t1)),
-            "rms_state0": float(run.rms(run.state_names[0], t0=t0, t1=t1)), "mode": mode_class(intervals),
-            "held_fraction": held_fraction(intervals, 1.0)}
+    row = {"vout_mean": float(run.mean("vout", t0=t0, t1=t1)), "vout_ripple": float(run.ripple("vout", t0=t0, t1=t1)),
+           "rms_state0": float(run.rms(run.state_names[0], t0=t0, t1=t1)), "mode": mode_class(intervals),
+           "held_fraction": held_fraction(intervals, 1.0)}
+    return {**row, **{name: metric_value(model, p, run, name) for name in metrics if name not in row}}
 
 
 def _number(value):

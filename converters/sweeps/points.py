@@ -122,6 +122,10 @@ class Grid:
         return [(int(i), {a.name: float(self._values[k][where[k][j]]) for k, a in enumerate(self.axes)})
                 for j, i in enumerate(indices)]
 
+    def extremes(self) -> list[dict]:
+        """Each parameter at each end of its range (checked against the model's ranges before a sweep runs)."""
+        return [{a.name: value} for a in self.axes for value in (a.start, a.stop)]
+
     def describe(self) -> dict:
         return {"kind": "grid", "axes": [a.text() for a in self.axes]}
 
@@ -152,9 +156,145 @@ class LatinHypercube:
         return [(int(i), {a.name: float(self._samples[i, k]) for k, a in enumerate(self.axes)})
                 for i in check_indices("indices", indices, self.size)]
 
+    def extremes(self) -> list[dict]:
+        return [{a.name: value} for a in self.axes for value in (a.start, a.stop)]
+
     def describe(self) -> dict:
         return {"kind": "lhs", "axes": [f"{a.name}={a.start:g}:{a.stop:g}" + (":log" if a.log else "")
                                         for a in self.axes], "n": self.size, "seed": self.seed}
 
 
-__all__ = ["Axis", "Grid", "LatinHypercube", "MAX_POINTS"]
+#: A tolerance's distributions: normal (the tolerance is 3 sigma, truncated there), uniform (over +-tolerance),
+#: lognormal (median the nominal, the tolerance 3 sigma of its logarithm, truncated there).
+DISTRIBUTIONS = ("normal", "uniform", "lognormal")
+#: Samplers of a tolerance study's unit hypercube (scipy.stats.qmc, seeded).
+SAMPLERS = ("lhs", "sobol")
+#: How many sigma a tolerance is, and where a normal or lognormal sample is truncated.
+SIGMAS = 3.0
+
+
+@dataclass(frozen=True)
+class Tolerance:
+    """A parameter's spread about its nominal value: a relative tolerance (0 < tol < 1) and a distribution."""
+
+    name: str
+    nominal: float
+    tolerance: float
+    distribution: str = "normal"
+
+    def __post_init__(self):
+        if self.distribution not in DISTRIBUTIONS:
+            raise ParameterError(f"--tolerance {self.name}: the distribution must be one of {', '.join(DISTRIBUTIONS)}; "
+                                 f"got {self.distribution!r}")
+        if not (isinstance(self.tolerance, float) and 0.0 < self.tolerance < 1.0):
+            raise ParameterError(f"--tolerance {self.name}: the tolerance must be in (0, 100) %; got "
+                                 f"{100 * self.tolerance:g} %" if isinstance(self.tolerance, float) else
+                                 f"--tolerance {self.name}: the tolerance must be a number; got {self.tolerance!r}")
+        if not (isinstance(self.nominal, float) and math.isfinite(self.nominal) and self.nominal != 0.0):
+            raise ParameterError(f"--tolerance {self.name}: a relative tolerance needs a nonzero nominal value; got "
+                                 f"{self.nominal!r} (give it with -p {self.name}=VALUE)")
+        if self.distribution == "lognormal" and self.nominal < 0.0:
+            raise ParameterError(f"--tolerance {self.name}: a lognormal spread needs a positive nominal; got "
+                                 f"{self.nominal:g}")
+
+    @classmethod
+    def parse(cls, text: str, nominals: dict) -> "Tolerance":
+        """``NAME=TOL[%][:DIST]`` (``C=5%``, ``L=10%:uniform``, ``R=0.01:lognormal``); the nominal from ``nominals``
+        (the model's resolved parameters: -p or its default)."""
+        name, sep, spec = str(text).partition("=")
+        name = name.strip()
+        if not sep or not name or not spec.strip():
+            raise ParameterError(f"--tolerance takes NAME=TOL[%][:DIST] (e.g. C=5% or L=10%:uniform); got {text!r}")
+        tol_text, _, distribution = spec.partition(":")
+        tol_text = tol_text.strip()
+        percent = tol_text.endswith("%")
+        tolerance = parse_value(f"--tolerance {name}", tol_text[:-1] if percent else tol_text)
+        tolerance = tolerance / 100.0 if percent else tolerance
+        if name not in nominals:
+            raise ParameterError(f"--tolerance {name}: not a parameter of the model; valid names: "
+                                 f"{', '.join(nominals)}")
+        nominal = nominals[name]
+        if nominal is None:
+            raise ParameterError(f"--tolerance {name}: the parameter has no value to vary (an optional one that is "
+                                 f"not set): give it with -p {name}=VALUE")
+        return cls(name, float(nominal), float(tolerance), distribution.strip().lower() or "normal")
+
+    def values(self, unit: np.ndarray) -> np.ndarray:
+        """Samples at the unit hypercube's coordinates ``unit`` in (0, 1) (the inverse of the truncated CDF)."""
+        from scipy.stats import truncnorm
+        if self.distribution == "uniform":
+            return self.nominal * (1.0 + self.tolerance * (2.0 * unit - 1.0))
+        z = truncnorm.ppf(unit, -SIGMAS, SIGMAS)
+        if self.distribution == "normal":
+            return self.nominal * (1.0 + self.tolerance * z / SIGMAS)
+        return self.nominal * np.exp(math.log1p(self.tolerance) * z / SIGMAS)
+
+    def limits(self) -> tuple[float, float]:
+        """The extremes a sample can take (the worst-case corners' values)."""
+        if self.distribution == "lognormal":
+            ends = (self.nominal / (1.0 + self.tolerance), self.nominal * (1.0 + self.tolerance))
+        else:
+            ends = (self.nominal * (1.0 - self.tolerance), self.nominal * (1.0 + self.tolerance))
+        return min(ends), max(ends)
+
+    def text(self) -> str:
+        return f"{self.name}={100 * self.tolerance:g}%:{self.distribution}"
+
+
+class Tolerances:
+    """``n`` samples of parameters spread by their tolerances (a Monte Carlo study): the unit hypercube by a Latin
+    hypercube or a scrambled Sobol sequence (scipy.stats.qmc, seeded: the same samples on every run), mapped through
+    each distribution's inverse CDF."""
+
+    kind = "tolerance"
+
+    def __init__(self, tolerances, n: int, seed: int = 0, sampler: str = "lhs"):
+        self.tolerances = tuple(tolerances)
+        names = [t.name for t in self.tolerances]
+        if not names:
+            raise ParameterError("a tolerance study needs at least one --tolerance NAME=TOL[%][:DIST]")
+        if len(set(names)) != len(names):
+            raise ParameterError(f"--tolerance: each parameter once; got {', '.join(names)}")
+        if isinstance(n, bool) or not (isinstance(n, (int, np.integer)) and 1 <= n <= MAX_POINTS):
+            raise ParameterError(f"--samples must be an integer in [1, {MAX_POINTS:,}]; got {n!r}")
+        if not (isinstance(seed, (int, np.integer)) and not isinstance(seed, bool) and seed >= 0):
+            raise ParameterError(f"--seed must be an integer >= 0; got {seed!r}")
+        if sampler not in SAMPLERS:
+            raise ParameterError(f"--sampler must be one of {', '.join(SAMPLERS)}; got {sampler!r}")
+        import warnings
+
+        from scipy.stats import qmc
+        self.size, self.seed, self.sampler, self.shape = int(n), int(seed), sampler, (int(n),)
+        d = len(self.tolerances)
+        if sampler == "sobol":
+            with warnings.catch_warnings():        # a count that is not a power of two loses some balance: allowed
+                warnings.simplefilter("ignore", UserWarning)
+                unit = qmc.Sobol(d=d, scramble=True, seed=self.seed).random(self.size)
+        else:
+            unit = qmc.LatinHypercube(d=d, seed=self.seed).random(self.size)
+        unit = np.clip(unit, 1e-12, 1.0 - 1e-12)
+        self._samples = np.column_stack([t.values(unit[:, k]) for k, t in enumerate(self.tolerances)])
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return tuple(t.name for t in self.tolerances)
+
+    def points(self, indices) -> list[tuple[int, dict]]:
+        return [(int(i), {t.name: float(self._samples[i, k]) for k, t in enumerate(self.tolerances)})
+                for i in check_indices("indices", indices, self.size)]
+
+    def extremes(self) -> list[dict]:
+        return [{t.name: value} for t in self.tolerances for value in t.limits()]
+
+    def corners(self) -> list[dict]:
+        """The 2^k worst-case corners: every combination of each parameter's extremes."""
+        import itertools
+        return [dict(zip(self.names, combo)) for combo in itertools.product(*(t.limits() for t in self.tolerances))]
+
+    def describe(self) -> dict:
+        return {"kind": "tolerance", "tolerances": [t.text() for t in self.tolerances],
+                "nominals": {t.name: t.nominal for t in self.tolerances}, "n": self.size, "seed": self.seed,
+                "sampler": self.sampler}
+
+
+__all__ = ["Axis", "Grid", "LatinHypercube", "Tolerance", "Tolerances", "DISTRIBUTIONS", "SAMPLERS", "MAX_POINTS"]

@@ -352,6 +352,8 @@ UNPARSABLE = [
     (["simulate", "buck", "--periods", "nan"], "argument --periods: must be an integer >= 1; got 'nan'"),
     (["sweep", "buck", "--grid", "D=0.2:0.8", "--lhs", "x"], "argument --lhs: must be an integer in [1, 10,000,000]; got 'x'"),
     (["sweep", "buck", "--grid", "D=0.2:0.8", "--seed", "x"], "argument --seed: must be an integer >= 0; got 'x'"),
+    (["sweep", "buck", "--tolerance", "C=5%", "--samples", "x"],
+     "argument --samples: must be an integer in [1, 10,000,000]; got 'x'"),
     (["sweep", "buck", "--grid", "D=0.2:0.8:3", "--periods", "x"], "argument --periods: must be an integer >= 1; got 'x'"),
     (["sweep", "buck", "--grid", "D=0.2:0.8:3", "--h-fraction", "1/200"],
      "argument --h-fraction: must be a number in (0, 1); got '1/200'"),
@@ -448,7 +450,7 @@ def test_every_integer_and_real_option_names_its_range_when_its_value_does_not_p
     assert bare == set()
     table = {(tuple(argv[:2] if argv[0] in ("lcp", "mech") else argv[:1]), message.split()[1].rstrip(":"))
              for argv, message in UNPARSABLE}
-    assert table == typed and len(typed) == 23              # every such option has its row below
+    assert table == typed and len(typed) == 24              # every such option has its row below
 
 
 @pytest.mark.parametrize("argv,message", IGNORED, ids=[" ".join(a) for a, _ in IGNORED])

@@ -25,7 +25,24 @@ def add(sub) -> None:
     sw.add_argument("--lhs", type=integer(1, _max_points), default=None, metavar="N",
                     help="N Latin-hypercube points over the --grid ranges (NAME=START:STOP[:log], no COUNT) "
                          "instead of the full grid")
-    sw.add_argument("--seed", type=integer(0), default=None, help="the Latin hypercube's seed (default 0)")
+    sw.add_argument("--seed", type=integer(0), default=None,
+                    help="the Latin hypercube's or the tolerance study's seed (default 0)")
+    sw.add_argument("--tolerance", action="append", default=[], metavar="NAME=TOL[%][:DIST]",
+                    help="a tolerance study (repeatable, instead of --grid): NAME spread about its value (-p or its "
+                         "default) by TOL, normal (TOL = 3 sigma, truncated there; default), uniform or lognormal "
+                         "(e.g. C=5%%, L=10%%:uniform)")
+    sw.add_argument("--samples", type=integer(1, _max_points), default=None, metavar="N",
+                    help="the tolerance study's samples (default 1000)")
+    sw.add_argument("--sampler", default=None, choices=["lhs", "sobol"],
+                    help="the tolerance study's unit hypercube: a Latin hypercube (default) or a scrambled Sobol "
+                         "sequence")
+    sw.add_argument("--spec", action="append", default=[], metavar="METRIC<VALUE",
+                    help="a specification (repeatable; <, <=, >, >=; e.g. vout_ripple<50m, efficiency>0.95): the "
+                         "summary gives the fraction meeting each and the yield meeting all, with its 95 %% "
+                         "confidence interval, and the worst sample")
+    sw.add_argument("--corners", action="store_true",
+                    help="with --tolerance: also run the 2^k worst-case corners (each parameter at its extremes) and "
+                         "give each spec's worst corner")
     add_params(sw)
     sw.add_argument("--control", default="pwm", choices=list(CONTROLS), help="the control law (default pwm)")
     from converters.methods.base import DEFAULT_METHOD, METHODS
@@ -52,7 +69,10 @@ def add(sub) -> None:
     sw.add_argument("--chunk", type=integer(1), default=None, help="points per task (default: 500 batched, 2 ngspice)")
     sw.add_argument("--out", type=given_path, default=None,
                     help="the sweep directory (default sweep-MODEL); an interrupted sweep resumes from it")
-    sw.add_argument("--metric", default="vout_mean", help="the summary plot's metric (default vout_mean)")
+    sw.add_argument("--metric", action="append", default=None,
+                    help="a column on demand and the summary plot's metric (repeatable, the first plotted; default "
+                         "vout_mean): a standard measure, SIGNAL.STAT (STAT mean, rms, min, max, ripple: vout.max, "
+                         "v(out).ripple), efficiency, input_W, output_W, total_loss_W or losses.NAME")
     sw.add_argument("--no-progress", action="store_true", help="no progress bar")
     sw.add_argument("--json", action="store_true", help="print one JSON summary object")
     sw.set_defaults(run=run)
@@ -77,7 +97,24 @@ def build(args):
     from ..sweep import SpiceSweep
     base = {k: parse_value(k, v) for k, v in parse_assignments(args.params).items()}
     from converters.limits import check_memory
-    if args.lhs is not None:
+    from converters.sweeps.specs import Spec
+    specs = [Spec.parse(text) for text in args.spec]
+    metrics = list(dict.fromkeys([*(args.metric or ["vout_mean"]), *(s.metric for s in specs)]))
+    if args.tolerance:
+        if args.grid or args.lhs is not None:
+            raise ParameterError("--tolerance is a study of its own (samples about the nominal values); give either "
+                                 "--tolerance or --grid/--lhs")
+        from converters.models import get_model
+        from converters.sweeps.points import Tolerance, Tolerances
+        model = get_model(args.model, args.control)
+        nominals = model.resolve(base)
+        nominals = {**{q.name: nominals.get(q.name) for q in model.parameters}, **nominals}
+        n = 1000 if args.samples is None else args.samples
+        check_memory(f"sweep: --samples {n}", float(n) * (BYTES_PER_ROW + 8 * len(args.tolerance)),
+                     remedy="fewer --samples")
+        points = Tolerances([Tolerance.parse(t, nominals) for t in args.tolerance], n,
+                            0 if args.seed is None else args.seed, args.sampler or "lhs")
+    elif args.lhs is not None:
         check_memory(f"sweep: --lhs {args.lhs} points", float(args.lhs) * (BYTES_PER_ROW + 8 * len(args.grid)),
                      remedy="fewer --lhs points")
         points = LatinHypercube([Axis.parse(g, count_required=False) for g in args.grid], args.lhs,
@@ -86,26 +123,40 @@ def build(args):
         points = Grid([Axis.parse(g) for g in args.grid])
     check_memory(f"sweep: {points.size:,} points", float(points.size) * BYTES_PER_ROW, remedy="fewer points")
     clash = sorted(set(base) & set(points.names))
-    if clash:
+    if clash and points.kind != "tolerance":             # a tolerance's nominal may be given with -p
         raise ParameterError(f"{clash[0]} is both swept (--grid) and fixed (-p); give it once")
     if args.periods is not None and args.periods < 1:
         raise ParameterError(f"--periods must be an integer >= 1; got {args.periods}")
     _refuse_ignored(args)
     if _runs_circuits(args.method):
+        extra = [m for m in metrics if m not in SpiceSweep.measures]
+        if extra:
+            raise ParameterError(f"--metric {extra[0]}: an ngspice sweep's measures are "
+                                 f"{', '.join(k for k, t in SpiceSweep.measures.items() if t is not str)}")
         ensemble = SpiceSweep(args.model, args.control, base, steady=args.steady, periods=args.periods or 10)
     elif args.rtol is not None:
         from converters.methods.base import DEFAULT_METHOD
         if args.h_fraction is not None or args.method != DEFAULT_METHOD:
             raise ParameterError("--rtol chooses the method and its step; give either --rtol or "
                                  + ("--h-fraction" if args.h_fraction is not None else f"--method {args.method}"))
-        ensemble = ModelSweep(args.model, args.control, base, steady=args.steady, rtol=float(args.rtol))
+        ensemble = ModelSweep(args.model, args.control, base, steady=args.steady, rtol=float(args.rtol),
+                              metrics=_extra(metrics))
     else:
         ensemble = ModelSweep(args.model, args.control, base, method=args.method,
-                              h_fraction=1.0 / 200.0 if args.h_fraction is None else args.h_fraction, steady=args.steady, periods=args.periods or 50)
-    if args.metric not in ensemble.measures or ensemble.measures[args.metric] is str:
-        numeric = [k for k, t in ensemble.measures.items() if t is not str]
-        raise ParameterError(f"--metric must be one of {', '.join(numeric)}; got {args.metric!r}")
-    return ensemble, points
+                              h_fraction=1.0 / 200.0 if args.h_fraction is None else args.h_fraction, steady=args.steady,
+                              periods=args.periods or 50, metrics=_extra(metrics))
+    for metric in metrics:
+        if ensemble.measures.get(metric) is str:
+            numeric = [k for k, t in ensemble.measures.items() if t is not str]
+            raise ParameterError(f"--metric must be numeric: one of {', '.join(numeric)} or one on demand; got "
+                                 f"{metric!r}")
+    return ensemble, points, metrics, specs
+
+
+def _extra(metrics: list) -> tuple:
+    """The metrics that are not a standard measure (columns on demand)."""
+    from converters.sweeps.ensemble import ACCURACY_MEASURES, MEASURES
+    return tuple(m for m in metrics if m not in MEASURES and m not in ACCURACY_MEASURES)
 
 
 def _runs_circuits(key: str) -> bool:
@@ -116,8 +167,13 @@ def _runs_circuits(key: str) -> bool:
 
 def _refuse_ignored(args) -> None:
     """Every flag acts or is refused: the combinations in which one would be ignored."""
-    if args.lhs is None and args.seed is not None:          # --seed 0 too: it is given, and would be ignored
+    if args.lhs is None and not args.tolerance and args.seed is not None:   # --seed 0 too: given, and would be ignored
         raise ParameterError(f"--seed sets the Latin hypercube; it does not apply without --lhs (got --seed {args.seed})")
+    if not args.tolerance:
+        given = [f for f, v in (("--samples", args.samples), ("--sampler", args.sampler)) if v is not None]
+        given += ["--corners"] if args.corners else []
+        if given:
+            raise ParameterError(f"{given[0]} sets the tolerance study; it does not apply without --tolerance")
     from converters.methods.base import get_method
     if _runs_circuits(args.method):
         given = [f for f, v in (("--h-fraction", args.h_fraction), ("--rtol", args.rtol)) if v is not None]
@@ -145,7 +201,7 @@ def run(args) -> int:
     from converters.validate import quoted
 
     from ..sweep import run_sweep, write_summary
-    ensemble, points = build(args)
+    ensemble, points, metrics, specs = build(args)
     check_workers(args.workers)
     if args.chunk is not None and args.chunk < 1:
         raise ParameterError(f"--chunk must be an integer >= 1; got {args.chunk}")
@@ -166,14 +222,20 @@ def run(args) -> int:
         signal.signal(signal.SIGTERM, previous)
         if hasattr(backend, "close"):
             backend.close()
-    title = f"{ensemble.model} ({args.method}{', steady' if args.steady else ''}): {args.metric}"
-    frame = write_summary(out, points, args.metric, title)
+    title = f"{ensemble.model} ({args.method}{', steady' if args.steady else ''}): {metrics[0]}"
+    units = getattr(ensemble, "units", {})
+    frame = write_summary(out, points, metrics[0], title, specs=specs, units=units)
     failed = frame[frame["status"] != "ok"]
     summary = {"out": str(out), "points": points.size, "stored_before": result.on_disk_before,
                "computed": result.computed, "ok": int(len(frame) - len(failed)), "failed": int(len(failed)),
                "wall_s": result.wall_s, "points_per_s": result.rate,
                "failures": failed["message"].value_counts().head(5).to_dict(),
                "dataset": str(out / "parts"), "summary_plot": str(out / "summary.png")}
+    if specs or points.kind == "tolerance":
+        from converters.sweeps.specs import study_summary
+        summary["study"] = study_summary(frame, specs, points if points.kind == "tolerance" else None)
+        if args.corners:
+            summary["study"]["corners"] = _corners(ensemble, points, specs)
     # no point succeeded: say so in the exit code too (1, as a failed check), not only in the counts
     code = 1 if points.size and not summary["ok"] else 0
     if args.json:
@@ -184,11 +246,48 @@ def run(args) -> int:
           f"{result.rate:,.0f} points/s)")
     for message, count in summary["failures"].items():
         print(f"  failed x{count}: {message}")
+    if "study" in summary:
+        _print_study(summary["study"], units)
     print(f"  dataset: {quoted(summary['dataset'])}  (pandas.read_parquet)\n  plot:    {quoted(summary['summary_plot'])}")
     if code:
         print(f"pcsuite: no point of the sweep succeeded ({points.size:,} failed); the reasons are above",
               file=sys.stderr)
     return code
+
+
+#: The most corners --corners runs (2^10: ten toleranced parameters).
+MAX_CORNERS = 1024
+
+
+def _corners(ensemble, points, specs) -> dict:
+    """The 2^k corners' rows (this process) and, per spec, the worst corner and its value."""
+    import pandas as pd
+
+    from converters.sweeps.specs import study_summary
+    corners = points.corners()
+    if len(corners) > MAX_CORNERS:
+        raise ParameterError(f"--corners runs 2^k corners: at most {MAX_CORNERS:,} (10 tolerances); got "
+                             f"{len(corners):,}")
+    frame = pd.DataFrame(ensemble.rows(list(enumerate(corners))))
+    found = study_summary(frame, specs, points)
+    return {"count": len(corners), "passed": found["passed"], "specs": found["specs"]}
+
+
+def _print_study(study: dict, units: dict) -> None:
+    print(f"  yield {100 * study['yield']:.2f} % ({study['passed']:,} of {study['samples']:,} meet every spec; "
+          f"{100 * study['confidence']:g} % interval {100 * study['yield_low']:.2f} to {100 * study['yield_high']:.2f} %"
+          f"; {study['failed_points']:,} points failed to simulate)")
+    for row in study["specs"]:
+        unit = units.get(row["spec"].split("<")[0].split(">")[0], "")
+        worst = ", ".join(f"{k} = {v:.6g}" for k, v in row["worst_point"].items())
+        print(f"  {row['spec']}: {100 * row['fraction']:.2f} % meet it; worst {row['worst_value']:.6g}"
+              f"{' ' + unit if unit not in ('', '1') else ''} at {worst}")
+    if "corners" in study:
+        c = study["corners"]
+        print(f"  worst-case corners: {c['passed']} of {c['count']} meet every spec")
+        for row in c["specs"]:
+            worst = ", ".join(f"{k} = {v:.6g}" for k, v in row["worst_point"].items())
+            print(f"    {row['spec']}: worst corner {row['worst_value']:.6g} at {worst}")
 
 
 def _interrupt(signum, frame):

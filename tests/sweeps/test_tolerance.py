@@ -1,0 +1,163 @@
+"""Tolerance studies: parameters drawn from their distributions (seeded, Latin hypercube or Sobol), metrics on
+demand as columns (the same on every backend), specifications and the yield with its exact confidence interval."""
+import json
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from converters.errors import ParameterError
+from converters.parallel import run_ensemble
+from converters.sweeps import ModelSweep
+from converters.sweeps.points import Tolerance, Tolerances
+from converters.sweeps.specs import Spec, study_summary, yield_interval
+from validation.cli import main
+
+NOMINALS = {"C": 100e-6, "L": 10e-6, "R": 10.0, "rC": None, "Io": 0.0}
+
+
+@pytest.mark.parametrize("sampler", ["lhs", "sobol"])
+def test_each_distribution_keeps_its_samples_inside_the_tolerance_and_has_its_spread(sampler):
+    """normal: sigma = tol/3 truncated at +-3 sigma (std 0.9865 sigma); uniform: std tol/sqrt(3); lognormal: the
+    median at the nominal, log-sigma ln(1 + tol)/3 truncated at its own 3 sigma."""
+    study = Tolerances([Tolerance.parse("C=6%", NOMINALS), Tolerance.parse("L=10%:uniform", NOMINALS),
+                        Tolerance.parse("R=30%:lognormal", NOMINALS)], 4096, seed=3, sampler=sampler)
+    x = np.array([[p[n] for n in ("C", "L", "R")] for _, p in study.points(range(study.size))])
+    c, L, R = x[:, 0] / 100e-6 - 1, x[:, 1] / 10e-6 - 1, np.log(x[:, 2] / 10.0)
+    assert np.abs(c).max() <= 0.06 and np.abs(L).max() <= 0.10 and np.abs(R).max() <= math.log(1.3) / 3 * 3 + 1e-12
+    assert c.std() == pytest.approx(0.02 * 0.98658, rel=0.02)
+    assert L.std() == pytest.approx(0.10 / math.sqrt(3), rel=0.02)
+    assert np.median(R) == pytest.approx(0.0, abs=0.01) and R.std() == pytest.approx(math.log(1.3) / 3 * 0.98658, rel=0.02)
+    again = Tolerances(study.tolerances, 4096, seed=3, sampler=sampler)
+    assert again.points([0, 4095]) == study.points([0, 4095])                       # seeded: the same samples
+    expected = [(c, l, r) for c in (94e-6, 106e-6) for l in (9e-6, 11e-6) for r in (10 / 1.3, 13.0)]
+    corners = [tuple(p[n] for n in "CLR") for p in study.corners()]
+    np.testing.assert_allclose(corners, expected, rtol=1e-15)
+
+
+@pytest.mark.parametrize("text, message", [
+    ("C=150%", "--tolerance C: the tolerance must be in (0, 100) %; got 150 %"),
+    ("C=5%:weibull", "--tolerance C: the distribution must be one of normal, uniform, lognormal; got 'weibull'"),
+    ("Cx=5%", "--tolerance Cx: not a parameter of the model; valid names: C, L, R, rC, Io"),
+    ("rC=5%", "--tolerance rC: the parameter has no value to vary (an optional one that is not set): give it with "
+              "-p rC=VALUE"),
+    ("Io=5%", "--tolerance Io: a relative tolerance needs a nonzero nominal value; got 0.0"),
+    ("C", "--tolerance takes NAME=TOL[%][:DIST]"),
+])
+def test_a_bad_tolerance_is_refused_naming_it(text, message):
+    with pytest.raises(ParameterError) as error:
+        Tolerance.parse(text, NOMINALS)
+    assert message in str(error.value)
+
+
+def test_the_yield_interval_is_clopper_and_pearsons():
+    """Against the beta quantiles written out: [B(a/2; k, n-k+1), B(1-a/2; k+1, n-k)]."""
+    from scipy.stats import beta
+    for k, n in ((407, 500), (0, 100), (100, 100), (9731, 10000)):
+        value, low, high = yield_interval(k, n)
+        assert value == k / n
+        assert low == pytest.approx(beta.ppf(0.025, k, n - k + 1) if k else 0.0, abs=1e-12)
+        assert high == pytest.approx(beta.ppf(0.975, k + 1, n - k) if k < n else 1.0, abs=1e-12)
+
+
+def test_specs_count_failed_points_as_failures_and_find_the_worst_sample():
+    frame = pd.DataFrame({"index": range(5), "C": [1.0, 2.0, 3.0, 4.0, 5.0], "status": ["ok"] * 4 + ["failed"],
+                          "vout_ripple": [0.01, 0.03, 0.02, 0.049, np.nan], "efficiency": [0.99, 0.97, 0.96, 0.99, np.nan]})
+    specs = [Spec.parse("vout_ripple<50m"), Spec.parse("efficiency >= 0.97")]
+    found = study_summary(frame, specs, Tolerances([Tolerance.parse("C=5%", {"C": 3.0})], 5))
+    assert found["passed"] == 3 and found["yield"] == 0.6 and found["failed_points"] == 1
+    assert [s["passed"] for s in found["specs"]] == [4, 3]
+    assert found["specs"][0]["worst_value"] == 0.049 and found["specs"][0]["worst_point"] == {"C": 4.0}
+    assert found["specs"][1]["worst_value"] == 0.96 and found["specs"][1]["worst_point"] == {"C": 3.0}
+    with pytest.raises(ParameterError, match="--spec takes METRIC<VALUE or METRIC>VALUE"):
+        Spec.parse("vout_ripple=5m")
+
+
+def test_metrics_on_demand_are_the_power_balance_and_the_signals_statistics():
+    """On the event method's exact orbit the balance closes: input = output + every loss; efficiency = output /
+    input; vout.max - vout.min = vout_ripple."""
+    metrics = ("efficiency", "input_W", "output_W", "total_loss_W", "losses.Ron", "losses.rL", "vout.max", "vout.min",
+               "iL.rms")
+    sweep = ModelSweep("buck", "pwm", {"Vin": 48, "D": 0.25, "L": 100e-6, "Ron": 0.05, "rL": 0.02}, method="event",
+                       metrics=metrics)
+    row = sweep.rows([(0, {"R": 10.0})])[0]
+    assert row["status"] == "ok", row
+    assert row["input_W"] == pytest.approx(row["output_W"] + row["total_loss_W"], rel=1e-9)
+    assert row["total_loss_W"] == pytest.approx(row["losses.Ron"] + row["losses.rL"], rel=1e-12)
+    assert row["efficiency"] == pytest.approx(row["output_W"] / row["input_W"], rel=1e-12)
+    assert row["vout.max"] - row["vout.min"] == pytest.approx(row["vout_ripple"], rel=1e-12)
+    assert row["losses.rL"] == pytest.approx(0.02 * row["iL.rms"] ** 2, rel=1e-12)
+    assert sweep.units["efficiency"] == "1" and sweep.units["losses.Ron"] == "W" and sweep.units["iL.rms"] == "A"
+    with pytest.raises(ParameterError, match=r"metric 'losses.rC': the losses of buck here are losses.rL, losses.Ron"):
+        ModelSweep("buck", "pwm", {"Ron": 0.05, "rL": 0.02}, metrics=("losses.rC",))
+    with pytest.raises(ParameterError, match=r"metric 'vout.std': a sweep's metrics are SIGNAL.STAT"):
+        ModelSweep("buck", metrics=("vout.std",))
+
+
+@pytest.mark.parametrize("backend", ["local", "dask"])
+def test_metrics_on_demand_are_the_same_rows_on_every_backend(backend, request):
+    from converters.sweeps import Axis, Grid
+    grid = Grid([Axis.parse("R=2:40:6")])
+    sweep = ModelSweep("buck", "pwm", {"Ron": 0.05}, metrics=("efficiency", "losses.Ron", "i_switch.rms"))
+    serial = pd.DataFrame(run_ensemble(sweep, grid, backend="serial")).set_index("index").sort_index()
+    target = request.getfixturevalue("dask_client") if backend == "dask" else backend
+    other = pd.DataFrame(run_ensemble(sweep, grid, backend=target, workers=2, chunk=2)).set_index("index").sort_index()
+    columns = ["efficiency", "losses.Ron", "i_switch.rms", "vout_mean"]
+    assert (serial["status"] == "ok").all()
+    np.testing.assert_allclose(other[columns].to_numpy(float), serial[columns].to_numpy(float), rtol=1e-12, atol=0)
+
+
+def test_a_tolerance_study_on_the_command_line_gives_the_yield_the_worst_corner_and_units(capsys, tmp_path):
+    out = tmp_path / "study"
+    argv = ["sweep", "buck", "-p", "Vin=48", "-p", "D=0.25", "-p", "L=100u", "-p", "Ron=0.05", "--tolerance", "C=5%",
+            "--tolerance", "L=10%:uniform", "--tolerance", "R=1%", "--samples", "64", "--steady", "--spec",
+            "vout_ripple<12m", "--spec", "efficiency>0.98", "--metric", "vout_ripple", "--corners", "--out", str(out),
+            "--scheduler", "serial", "--no-progress", "--json"]
+    assert main(argv) == 0
+    summary = json.loads(capsys.readouterr().out)
+    study = summary["study"]
+    frame = pd.read_parquet(out / "parts")
+    assert len(frame) == 64 and {"C", "L", "R", "vout_ripple", "efficiency"} <= set(frame.columns)
+    meets = (frame["vout_ripple"] < 12e-3) & (frame["efficiency"] > 0.98)
+    assert study["passed"] == int(meets.sum()) and study["yield_low"] <= study["yield"] <= study["yield_high"]
+    assert 0 < study["passed"] < 64                                   # the ripple spec splits the samples
+    # the worst corner: the smallest L and C give the largest ripple
+    worst = study["corners"]["specs"][0]["worst_point"]
+    assert worst["L"] == pytest.approx(90e-6) and worst["C"] == pytest.approx(95e-6) and study["corners"]["count"] == 8
+    import pyarrow.parquet as pq
+    units = json.loads(pq.read_schema(next((out / "parts").iterdir())).metadata[b"units"])
+    assert units["vout_ripple"] == "V" and units["efficiency"] == "1" and units["L"] == "H"
+    assert (out / "summary.png").read_bytes()[:4] == b"\x89PNG"
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--tolerance", "C=150%"], "the tolerance must be in (0, 100) %; got 150 %"),
+    (["--tolerance", "C=5%", "--spec", "vout_rippel<5m"], "metric 'vout_rippel': a sweep's metrics are SIGNAL.STAT"),
+    (["--tolerance", "C=5%:gamma"], "the distribution must be one of normal, uniform, lognormal; got 'gamma'"),
+    (["--tolerance", "rC=5%"], "--tolerance rC: the parameter has no value to vary"),
+    (["--tolerance", "C=5%", "--grid", "R=1:2:2"], "give either --tolerance or --grid/--lhs"),
+    (["--grid", "R=1:2:2", "--samples", "10"], "--samples sets the tolerance study; it does not apply without"),
+    (["--metric", "efficiency", "--grid", "R=1:2:2", "--method", "spice"], "an ngspice sweep's measures are"),
+])
+def test_bad_study_input_is_one_line_and_nothing_runs(capsys, tmp_path, monkeypatch, argv, message):
+    monkeypatch.chdir(tmp_path)
+    code = main(["sweep", "buck", *argv, "--out", "x"])
+    out, err = capsys.readouterr()
+    assert code == 2 and out == "" and err.count("\n") == 1 and message in err, err
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.fixture(scope="module")
+def dask_client():
+    """A 2-worker Dask LocalCluster of processes (dask[distributed] is in the test extras: never skipped)."""
+    import sys
+
+    import cloudpickle
+    import distributed
+    cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None)
+    client = distributed.Client(cluster)
+    cloudpickle.register_pickle_by_value(sys.modules[__name__])
+    yield client
+    client.close()
+    cluster.close()
