@@ -474,9 +474,9 @@ def tolerance_plot(frame: pd.DataFrame, points, metric: str, specs=(), units=Non
     values = pd.to_numeric(frame[metric], errors="coerce").to_numpy() if metric in frame else np.full(len(frame), np.nan)
     fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.2))
     left.hist(values[ok & np.isfinite(values)], bins=min(60, max(10, int(np.sqrt(ok.sum())))), color="C0", alpha=0.8)
-    for spec in specs:
-        if spec.metric == metric:
-            left.axvline(spec.limit, color="C3", lw=1.5, ls="--", label=f"spec {spec.text()}")
+    drawn = [spec for spec in specs if spec.metric == metric]
+    for spec in drawn:
+        left.axvline(spec.limit, color="C3", lw=1.5, ls="--", label=f"spec {spec.text()}")
     left.set_xlabel(metric)
     left.set_ylabel("samples")
     _engineering(left.xaxis, metric, units)
@@ -484,6 +484,7 @@ def tolerance_plot(frame: pd.DataFrame, points, metric: str, specs=(), units=Non
         found = study_summary(frame, specs, points)
         left.set_title(f"yield {100 * found['yield']:.2f} % (95 % CI {100 * found['yield_low']:.2f} to "
                        f"{100 * found['yield_high']:.2f} %)", fontsize=9)
+    if drawn:
         left.legend(fontsize=8)
     correlations = {}
     for name in points.names:

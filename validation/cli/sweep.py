@@ -71,7 +71,7 @@ def add(sub) -> None:
                     help="the sweep directory (default sweep-MODEL); an interrupted sweep resumes from it")
     sw.add_argument("--metric", action="append", default=None,
                     help="a column on demand and the summary plot's metric (repeatable, the first plotted; default "
-                         "vout_mean): a standard measure, SIGNAL.STAT (STAT mean, rms, min, max, ripple: vout.max, "
+                         "the first --spec's, or vout_mean): a standard measure, SIGNAL.STAT (STAT mean, rms, min, max, ripple: vout.max, "
                          "v(out).ripple), efficiency, input_W, output_W, total_loss_W or losses.NAME")
     sw.add_argument("--no-progress", action="store_true", help="no progress bar")
     sw.add_argument("--json", action="store_true", help="print one JSON summary object")
@@ -99,7 +99,9 @@ def build(args):
     from converters.limits import check_memory
     from converters.sweeps.specs import Spec
     specs = [Spec.parse(text) for text in args.spec]
-    metrics = list(dict.fromkeys([*(args.metric or ["vout_mean"]), *(s.metric for s in specs)]))
+    # the plotted metric: the first --metric, else the first spec's, else vout_mean
+    metrics = list(dict.fromkeys([*(args.metric or ([specs[0].metric] if specs else ["vout_mean"])),
+                                  *(s.metric for s in specs)]))
     if args.tolerance:
         if args.grid or args.lhs is not None:
             raise ParameterError("--tolerance is a study of its own (samples about the nominal values); give either "
