@@ -2,7 +2,9 @@
 period (``v(out).ripple``, ``iL.rms``, ``vout.max``), the power balance (``efficiency``, ``input_W``, ``output_W``,
 ``total_loss_W``) and each element's loss (``losses.Ron``). Each is read on the same one-period run as the
 standard measures, by the run's own rule (exact quadrature for the event method), so every backend gives the same
-value; each has a unit (the Parquet dataset's metadata, the plots' axes)."""
+value; each has a unit (the Parquet dataset's metadata, the plots' axes). ``fraction.MODE`` is the fraction of the
+period spent in a mode (``fraction.DCM``, ``fraction.CCM-ON``; a netlist's ``fraction.S1``: 0 where the point never
+enters it)."""
 from __future__ import annotations
 
 import numpy as np
@@ -25,6 +27,9 @@ def check_metrics(model, p: dict, names) -> dict:
     for name in names:
         if not isinstance(name, str) or not name.strip():
             raise ParameterError(f"a metric must be a name (SIGNAL.STAT, efficiency, losses.NAME); got {name!r}")
+        if name.startswith("fraction.") and name[len("fraction."):].strip():
+            out[name] = "1"
+            continue
         if name in POWERS or name.startswith("losses."):
             if not hasattr(model, "power"):
                 raise ParameterError(f"metric {name!r}: {model.key} has no power balance (the built-in converters "
@@ -40,7 +45,7 @@ def check_metrics(model, p: dict, names) -> dict:
         if not dot or statistic not in STATISTICS or signal not in names_here:
             raise ParameterError(f"metric {name!r}: a sweep's metrics are SIGNAL.STAT with STAT one of "
                                  f"{', '.join(STATISTICS)} and SIGNAL one of {', '.join(names_here)}; or "
-                                 f"{', '.join(POWERS)}, losses.NAME")
+                                 f"{', '.join(POWERS)}, losses.NAME, fraction.MODE")
         out[name] = signal_unit(units, signal)
     return out
 
@@ -48,6 +53,8 @@ def check_metrics(model, p: dict, names) -> dict:
 def metric_value(model, p: dict, run, name: str) -> float:
     """The metric on a one-period run (labelled with the model's laws)."""
     t0, t1 = run.t[0], run.t[-1]
+    if name.startswith("fraction."):
+        return float(run.mode_fractions(None, t0=t0, t1=t1).get(name[len("fraction."):], 0.0))
     if name in POWERS or name.startswith("losses."):
         power = model.window_power(run, p, t0, t1)
         return float(power["losses_W"].get(name[len("losses."):], np.nan) if name.startswith("losses.")

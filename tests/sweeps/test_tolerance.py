@@ -78,7 +78,7 @@ def test_metrics_on_demand_are_the_power_balance_and_the_signals_statistics():
     """On the event method's exact orbit the balance closes: input = output + every loss; efficiency = output /
     input; vout.max - vout.min = vout_ripple."""
     metrics = ("efficiency", "input_W", "output_W", "total_loss_W", "losses.Ron", "losses.rL", "vout.max", "vout.min",
-               "iL.rms")
+               "iL.rms", "fraction.CCM-ON", "fraction.CCM-OFF", "fraction.DCM")
     sweep = ModelSweep("buck", "pwm", {"Vin": 48, "D": 0.25, "L": 100e-6, "Ron": 0.05, "rL": 0.02}, method="event",
                        metrics=metrics)
     row = sweep.rows([(0, {"R": 10.0})])[0]
@@ -88,6 +88,8 @@ def test_metrics_on_demand_are_the_power_balance_and_the_signals_statistics():
     assert row["efficiency"] == pytest.approx(row["output_W"] / row["input_W"], rel=1e-12)
     assert row["vout.max"] - row["vout.min"] == pytest.approx(row["vout_ripple"], rel=1e-12)
     assert row["losses.rL"] == pytest.approx(0.02 * row["iL.rms"] ** 2, rel=1e-12)
+    assert row["fraction.CCM-ON"] == pytest.approx(0.25, abs=1e-9) and row["fraction.DCM"] == 0.0      # CCM at D = 0.25
+    assert row["fraction.CCM-ON"] + row["fraction.CCM-OFF"] == pytest.approx(1.0, abs=1e-12)
     assert sweep.units["efficiency"] == "1" and sweep.units["losses.Ron"] == "W" and sweep.units["iL.rms"] == "A"
     with pytest.raises(ParameterError, match=r"metric 'losses.rC': the losses of buck here are losses.rL, losses.Ron"):
         ModelSweep("buck", "pwm", {"Ron": 0.05, "rL": 0.02}, metrics=("losses.rC",))
