@@ -97,16 +97,23 @@ def test_metrics_on_demand_are_the_power_balance_and_the_signals_statistics():
         ModelSweep("buck", metrics=("vout.std",))
 
 
+SEPIC = str(__import__("pathlib").Path(__file__).resolve().parents[2] / "netlists" / "circuits" / "sepic.cir")
+
+
 @pytest.mark.parametrize("backend", ["local", "dask"])
-def test_metrics_on_demand_are_the_same_rows_on_every_backend(backend, request):
+@pytest.mark.parametrize("model, base, axis, metrics", [
+    ("buck", {"Ron": 0.05}, "R=2:40:6", ("efficiency", "losses.Ron", "i_switch.rms")),
+    (SEPIC, {}, "r=5:40:6", ("v(out).ripple", "i(l1).rms", "fraction.S1")),
+], ids=["buck", "sepic.cir"])
+def test_metrics_on_demand_are_the_same_rows_on_every_backend(backend, model, base, axis, metrics, request):
     from converters.sweeps import Axis, Grid
-    grid = Grid([Axis.parse("R=2:40:6")])
-    sweep = ModelSweep("buck", "pwm", {"Ron": 0.05}, metrics=("efficiency", "losses.Ron", "i_switch.rms"))
+    grid = Grid([Axis.parse(axis)])
+    sweep = ModelSweep(model, "pwm", base, metrics=metrics)
     serial = pd.DataFrame(run_ensemble(sweep, grid, backend="serial")).set_index("index").sort_index()
     target = request.getfixturevalue("dask_client") if backend == "dask" else backend
     other = pd.DataFrame(run_ensemble(sweep, grid, backend=target, workers=2, chunk=2)).set_index("index").sort_index()
-    columns = ["efficiency", "losses.Ron", "i_switch.rms", "vout_mean"]
-    assert (serial["status"] == "ok").all()
+    columns = [*metrics, "vout_mean"]
+    assert (serial["status"] == "ok").all() and serial[list(metrics)].notna().all().all()
     np.testing.assert_allclose(other[columns].to_numpy(float), serial[columns].to_numpy(float), rtol=1e-12, atol=0)
 
 
