@@ -204,8 +204,9 @@ def test_a_scene_file_that_is_not_utf8_toml_or_too_large_is_refused(tmp_path):
 
 
 def test_every_scene_of_the_project_passes_the_strict_checks():
-    assert len(load_scenes(sorted(SCENE_DIR.glob("*.toml")))) == len(list(SCENE_DIR.glob("*.toml"))) == 18
-    assert {s.name for s in scenes_of("default")} >= {"buck-dcm", "prc", "boost-smc-implicit", "netlist-sepic"}
+    assert len(load_scenes(sorted(SCENE_DIR.glob("*.toml")))) == len(list(SCENE_DIR.glob("*.toml"))) == 19
+    assert {s.name for s in scenes_of("default")} >= {"buck-dcm", "prc", "boost-smc-implicit", "netlist-sepic",
+                                                      "netlist-voltage-loop-buck"}
 
 
 def test_a_circuit_scene_names_a_netlist_beside_it_or_a_shipped_one(tmp_path):
