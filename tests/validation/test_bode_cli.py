@@ -59,7 +59,7 @@ def test_bode_gives_the_output_impedance_from_the_load_current(capsys):
     (["--input", "duty", "--fmin", "-3"], "fmin must be a frequency > 0 Hz"),
     (["--input", "duty", "--fmin", "5k", "--fmax", "1k"], "fmin must be below fmax"),
     (["--input", "loop"], "driven by a schedule"),
-    (["--input", "L"], "changes the circuit's dynamics"),
+    (["--input", "L", "--check"], "input 'L' changes the circuit's matrices; the injection check perturbs"),
     (["--input", "duty", "--output", "nope"], "signal must be one of"),
 ])
 def test_bad_bode_input_is_one_line_naming_it(capsys, argv, message):
