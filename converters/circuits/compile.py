@@ -40,6 +40,9 @@ from .netlist import Element, Netlist, NetlistError, Pulse, Pwl, Sin, with_model
 
 #: The diode's port: a current source (u = i_D, y = -v_D) or a voltage source (u = -v_D, y = i_D).
 CURRENT, VOLTAGE = "current", "voltage"
+#: The port forms found per circuit structure and configuration (:meth:`_Compiler.network`), and how many are kept.
+_FORMS: dict = {}
+MAX_KEPT_FORMS = 4096
 
 
 @dataclass(frozen=True)
@@ -126,6 +129,8 @@ class _Compiler:
         self.shorts = [r for r in self.by_kind["R"] if r.value == 0]
         self.switch_ron = {s.name: self.nl.models[s.model].params.get("RON", 0.0) for s in self.switches}
         self.mutual = self.inductance_matrix()
+        #: The networks solved so far: (switch states, source levels) -> (network, port forms).
+        self.solved = {}
         #: PWL sources in the power circuit: ramps, each a state of the LCS (its value), its slope per phase
         self.ramps = [s for s in self.sources if isinstance(s.waveform, Pwl) and self.in_power_circuit(s)]
         #: SIN sources with a delay or damping: oscillators, each two states of the LCS (e^(-THETA t') sin and cos of
@@ -566,7 +571,24 @@ class _Compiler:
 
     def network(self, switch_state: dict, levels: dict):
         """(the solved network, the port forms) of one configuration: every diode a current port, but those the
-        network then cannot solve for (an inductor or another port fixes their current), which are voltage ports."""
+        network then cannot solve for (an inductor or another port fixes their current), which are voltage ports.
+
+        The forms found are kept per circuit structure (:data:`_FORMS`): a sweep compiles the same netlist with
+        new values at every point, and the search (a rank per trial) is the compile's largest cost. The kept forms
+        are used only where this configuration's network is solvable with them (a controlled source's gain can
+        make the rank depend on values); else the search runs again."""
+        here = (tuple(switch_state.items()), tuple(levels.items()))
+        if here in self.solved:            # the switches' drives and the configurations ask for the same ones
+            network, forms = self.solved[here]
+            return network, list(forms)
+        key = (self.nl.text, *here, tuple(s.name for s in self.shorts),
+               tuple(d for d, rs in self.diode_rs.items() if rs), tuple(s for s, r in self.switch_ron.items() if r))
+        kept = _FORMS.get(key)
+        if kept is not None:
+            network = _Network(self, switch_state, levels, list(kept))
+            if network.nullity() == 0:
+                self.solved[here] = (network.solve(checked=True), kept)
+                return network, list(kept)
         forms = [CURRENT] * len(self.diodes)
         nullity = _Network(self, switch_state, levels, forms).nullity()
         for i in range(len(self.diodes)):
@@ -578,7 +600,12 @@ class _Compiler:
                 nullity = trial
             else:
                 forms[i] = CURRENT
-        return _Network(self, switch_state, levels, forms).solve(), forms
+        network = _Network(self, switch_state, levels, forms).solve()
+        if len(_FORMS) >= MAX_KEPT_FORMS:
+            _FORMS.clear()
+        _FORMS[key] = tuple(forms)
+        self.solved[here] = (network, tuple(forms))
+        return network, forms
 
     def configuration(self, switch_state: dict, levels: dict, slopes: tuple = (), running: tuple = ()):
         """(Configuration, port forms, signal maps, (E, F) of the SIN sources) of one configuration; ``slopes``: each
@@ -910,8 +937,9 @@ class _Network:
             return 0
         return self.size - np.linalg.matrix_rank(self.G, tol=1e-12 * max(np.abs(self.G).max(), 1.0))
 
-    def solve(self):
-        if self.nullity():
+    def solve(self, checked: bool = False):
+        """The network solved (``checked``: its nullity is known to be 0)."""
+        if not checked and self.nullity():
             raise self.singular()
         self.Z = np.linalg.solve(self.G, self.R)
         return self

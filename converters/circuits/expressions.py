@@ -7,6 +7,7 @@ functions), so nothing in it can reach Python. Numbers take SPICE's magnitude su
 """
 from __future__ import annotations
 
+import functools
 import math
 import re
 from decimal import Decimal, InvalidOperation
@@ -64,17 +65,17 @@ def evaluate(text: str, names: dict, what: str = "value") -> float:
     """The value of ``text``: a number, or an expression over ``names`` (parameter name -> value, lower case).
 
     Raises ParameterError naming ``what`` and the problem (an unknown name, a syntax error, a result that is
-    not a finite number)."""
+    not a finite number). A text is parsed once (:func:`_tree`, cached): a sweep re-reads a netlist per point with
+    new values and the same expressions."""
     text = text.strip()
     if text.startswith("{") and text.endswith("}") or text.startswith("'") and text.endswith("'"):
         text = text[1:-1]
     if len(text) > MAX_LENGTH:
         raise ParameterError(f"{what}: an expression of {len(text)} characters (at most {MAX_LENGTH})")
-    parser = _Parser(text, names, what)
-    value = parser.expression()
-    parser.skip()
-    if parser.pos != len(text):
-        raise ParameterError(f"{what}: cannot read {_shown(text)} past {_shown(text[:parser.pos])}")
+    tree = _tree(text)
+    if isinstance(tree, _Failure):
+        raise tree.error(what, text)
+    value = _value(tree, names, what, text)
     if not isinstance(value, (int, float)) or not math.isfinite(value):
         raise ParameterError(f"{what}: {_shown(text)} is not a finite number (it gives {value!r})")
     return float(value)
@@ -87,13 +88,82 @@ def _shown(text: str, limit: int = 60) -> str:
     return repr(text)
 
 
+class _Failure(Exception):
+    """Why a text does not parse, and where (the message is completed with the value's name when raised)."""
+
+    def __init__(self, why: str, pos: int | None = None):
+        super().__init__(why)
+        self.why, self.pos = why, pos
+
+    def error(self, what: str, text: str) -> ParameterError:
+        if self.pos is None:
+            return ParameterError(f"{what}: {self.why}")
+        return ParameterError(f"{what}: {self.why} in {_shown(text)} at character {self.pos + 1}")
+
+
+@functools.lru_cache(maxsize=4096)
+def _tree(text: str):
+    """The parse tree of ``text`` (tuples: ``(NUMBER, value)``, ``(NAME, name, pos)``, ``(NEG, a)``,
+    ``(op, a, b, pos)`` for + - * / ^, ``(CALL, name, args, pos)``; ``pos`` where a failure is reported), or the
+    :class:`_Failure` of a text that does not parse."""
+    parser = _Parser(text)
+    try:
+        tree = parser.expression()
+        parser.skip()
+        if parser.pos != len(text):
+            return _Failure(f"cannot read {_shown(text)} past {_shown(text[:parser.pos])}")
+    except _Failure as failure:
+        return failure
+    return tree
+
+
+NUMBER, NAME, NEG, CALL = "n", "v", "neg", "call"
+
+
+def _value(node, names: dict, what: str, text: str) -> float:
+    kind = node[0]
+    if kind == NUMBER:
+        return node[1]
+    if kind == NAME:
+        name = node[1]
+        if name in names:
+            return names[name]
+        if name in CONSTANTS:
+            return CONSTANTS[name]
+        raise _Failure(f"{_shown(name)} is not a parameter defined before it (.param)", node[2]).error(what, text)
+    if kind == NEG:
+        return -_value(node[1], names, what, text)
+    if kind == CALL:
+        function, _ = FUNCTIONS[node[1]]
+        args = [_value(a, names, what, text) for a in node[2]]
+        try:
+            return float(function(*args))
+        except (ValueError, OverflowError):
+            raise _Failure(f"{node[1]}{tuple(args)} is not defined", node[3]).error(what, text) from None
+    a, b = _value(node[1], names, what, text), _value(node[2], names, what, text)
+    if kind == "+":
+        return a + b
+    if kind == "-":
+        return a - b
+    if kind == "*":
+        return a * b
+    if kind == "/":
+        if b == 0:
+            raise _Failure("division by zero", node[3]).error(what, text)
+        return a / b
+    try:                                                                   # "^"
+        return math.pow(a, b)
+    except (OverflowError, ValueError):
+        raise _Failure(f"{a!r} to the power {b!r} is not a finite number", node[3]).error(what, text) from None
+
+
 class _Parser:
     """expression := term (('+' | '-') term)*; term := power (('*' | '/') power)*;
     power := unary (('^' | '**') power)?; unary := ('-' | '+') unary | atom;
-    atom := number | name | name '(' args ')' | '(' expression ')'."""
+    atom := number | name | name '(' args ')' | '(' expression ')'. Builds the tree :func:`_value` evaluates."""
 
-    def __init__(self, text: str, names: dict, what: str):
-        self.text, self.names, self.what, self.pos, self.depth = text, names, what, 0, 0
+    def __init__(self, text: str):
+        self.text, self.pos, self.depth = text, 0, 0
 
     def skip(self):
         while self.pos < len(self.text) and self.text[self.pos] in " \t":
@@ -110,7 +180,7 @@ class _Parser:
         return False
 
     def fail(self, why: str):
-        raise ParameterError(f"{self.what}: {why} in {_shown(self.text)} at character {self.pos + 1}")
+        raise _Failure(why, self.pos)
 
     def nest(self, step: int):
         """Count the recursion (parentheses, signs, powers, calls): a formula deeper than MAX_DEPTH is refused
@@ -119,66 +189,61 @@ class _Parser:
         if self.depth > MAX_DEPTH:
             self.fail(f"expressions nested deeper than {MAX_DEPTH} (parentheses, calls or powers)")
 
-    def expression(self) -> float:
+    def expression(self):
         self.nest(1)
-        value = self.term()
+        node = self.term()
         while True:
             if self.take("+"):
-                value = value + self.term()
+                node = ("+", node, self.term())
             elif self.take("-"):
-                value = value - self.term()
+                node = ("-", node, self.term())
             else:
                 self.nest(-1)
-                return value
+                return node
 
-    def term(self) -> float:
-        value = self.power()
+    def term(self):
+        node = self.power()
         while True:
             if self.peek("**"):
-                return value
+                return node
             if self.take("*"):
-                value = value * self.power()
+                node = ("*", node, self.power())
             elif self.take("/"):
                 divisor = self.power()
-                if divisor == 0:
-                    self.fail("division by zero")
-                value = value / divisor
+                node = ("/", node, divisor, self.pos)
             else:
-                return value
+                return node
 
-    def power(self) -> float:
+    def power(self):
         base = self.unary()
         if self.take("**") or self.take("^"):
             self.nest(1)
             exponent = self.power()
             self.nest(-1)
-            try:
-                return math.pow(base, exponent)
-            except (OverflowError, ValueError):
-                self.fail(f"{base!r} to the power {exponent!r} is not a finite number")
+            return ("^", base, exponent, self.pos)
         return base
 
-    def unary(self) -> float:
+    def unary(self):
         sign = 1.0
         while True:                        # a run of signs is a loop, not a recursion
             if self.take("-"):
                 sign = -sign
             elif not self.take("+"):
                 break
-        value = self.atom()
-        return -value if sign < 0 else value
+        node = self.atom()
+        return (NEG, node) if sign < 0 else node
 
-    def atom(self) -> float:
+    def atom(self):
         self.skip()
         if self.take("("):
-            value = self.expression()
+            node = self.expression()
             if not self.take(")"):
                 self.fail("a ')' is missing")
-            return value
+            return node
         value, used = number(self.text[self.pos:])
         if used:
             self.pos += used
-            return value
+            return (NUMBER, value)
         match = _NAME.match(self.text, self.pos)
         if not match:
             self.fail("a number, a name or '(' expected")
@@ -188,7 +253,7 @@ class _Parser:
             if name not in FUNCTIONS:
                 self.fail(f"unknown function {_shown(name)} (known: {', '.join(sorted(FUNCTIONS))})")
             self.take("(")
-            function, arity = FUNCTIONS[name]
+            _, arity = FUNCTIONS[name]
             args = [self.expression()]
             while self.take(","):
                 args.append(self.expression())
@@ -196,12 +261,5 @@ class _Parser:
                 self.fail("a ')' is missing")
             if len(args) != arity:
                 self.fail(f"{name}() takes {arity} argument{'s' if arity > 1 else ''}; got {len(args)}")
-            try:
-                return float(function(*args))
-            except (ValueError, OverflowError):
-                self.fail(f"{name}{tuple(args)} is not defined")
-        if name in self.names:
-            return self.names[name]
-        if name in CONSTANTS:
-            return CONSTANTS[name]
-        self.fail(f"{_shown(name)} is not a parameter defined before it (.param)")
+            return (CALL, name, tuple(args), self.pos)
+        return (NAME, name, self.pos)

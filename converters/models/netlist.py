@@ -277,7 +277,12 @@ def _difference(name: str, names: tuple):
     return None
 
 
-@lru_cache(maxsize=64)
+#: Compiled parameter sets kept per process: more than a sweep chunk's points (ModelSweep.chunk_hint), so that a
+#: point's row reads the compile its problem made.
+COMPILED_KEPT = 1024
+
+
+@lru_cache(maxsize=COMPILED_KEPT)
 def _compile(text: str, source: str, values: tuple) -> Compiled:
     netlist = read_netlist(text, overrides=dict(values), name=source)
     return compile_netlist(netlist)
@@ -343,13 +348,13 @@ def builtin(name: str) -> Circuit:
     return Circuit.from_netlist(path)
 
 
-@lru_cache(maxsize=256)
+@lru_cache(maxsize=COMPILED_KEPT)
 def _resolved(name: str, values: tuple) -> dict:
     """A built-in netlist's resolved parameters at the model's circuit values (read-only: shared by the callers)."""
     return builtin(name).resolve(dict(values))
 
 
-@lru_cache(maxsize=256)
+@lru_cache(maxsize=COMPILED_KEPT)
 def _builtin_configurations(name: str, states: tuple, names: tuple, values: tuple) -> tuple:
     circuit = builtin(name)
     compiled = circuit.compiled(circuit.resolve(dict(values)))
