@@ -140,6 +140,23 @@ def test_a_tolerance_study_on_the_command_line_gives_the_yield_the_worst_corner_
     assert (out / "summary.png").read_bytes()[:4] == b"\x89PNG"
 
 
+def test_a_study_with_indices_shares_each_metrics_variance_among_its_parameters(capsys, tmp_path):
+    """The 48 V buck's ripple: L (10 %, uniform) explains most of its variance, R (1 %) none; the indices are
+    in the JSON with their confidence, and equal to the library's on the stored sample."""
+    out = tmp_path / "study"
+    argv = ["sweep", "buck", "-p", "Vin=48", "-p", "D=0.25", "-p", "L=100u", "--tolerance", "C=5%", "--tolerance",
+            "L=10%:uniform", "--tolerance", "R=1%", "--samples", "200", "--steady", "--metric", "vout_ripple",
+            "--indices", "--out", str(out), "--scheduler", "batched", "--no-progress", "--json"]
+    assert main(argv) == 0
+    found = json.loads(capsys.readouterr().out)["study"]["indices"]
+    assert found["method"].startswith("RBD-FAST")
+    ripple = found["metrics"]["vout_ripple"]
+    assert ripple["samples"] == 200 and ripple["S1"]["L"] > 0.8 and abs(ripple["S1"]["R"]) <= ripple["S1_conf"]["R"]
+    from converters.sweeps.indices import first_order
+    again = first_order(pd.read_parquet(out / "parts"), ["C", "L", "R"], ["vout_ripple"], seed=0)["vout_ripple"]
+    assert again["S1"] == pytest.approx(ripple["S1"], rel=1e-12)
+
+
 @pytest.mark.parametrize("argv, message", [
     (["--tolerance", "C=150%"], "the tolerance must be in (0, 100) %; got 150 %"),
     (["--tolerance", "C=5%", "--spec", "vout_rippel<5m"], "metric 'vout_rippel': a sweep's metrics are SIGNAL.STAT"),
@@ -148,6 +165,9 @@ def test_a_tolerance_study_on_the_command_line_gives_the_yield_the_worst_corner_
     (["--tolerance", "C=5%", "--grid", "R=1:2:2"], "give either --tolerance or --grid/--lhs"),
     (["--grid", "R=1:2:2", "--samples", "10"], "--samples sets the tolerance study; it does not apply without"),
     (["--metric", "efficiency", "--grid", "R=1:2:2", "--method", "spice"], "an ngspice sweep's measures are"),
+    (["--indices", "--grid", "R=1:2:2"], "--indices sets the tolerance study; it does not apply without --tolerance"),
+    (["--tolerance", "C=5%", "--samples", "50", "--indices"],
+     "--indices: first-order indices need at least 100 samples; got --samples 50"),
 ])
 def test_bad_study_input_is_one_line_and_nothing_runs(capsys, tmp_path, monkeypatch, argv, message):
     monkeypatch.chdir(tmp_path)

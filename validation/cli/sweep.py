@@ -43,6 +43,9 @@ def add(sub) -> None:
     sw.add_argument("--corners", action="store_true",
                     help="with --tolerance: also run the 2^k worst-case corners (each parameter at its extremes) and "
                          "give each spec's worst corner")
+    sw.add_argument("--indices", action="store_true",
+                    help="with --tolerance: each metric's first-order (variance-based) sensitivity indices from the "
+                         "study's own sample (RBD-FAST, SALib), with their 95 %% confidence; at least 100 samples")
     add_params(sw)
     sw.add_argument("--control", default="pwm", choices=list(CONTROLS), help="the control law (default pwm)")
     from converters.methods.base import DEFAULT_METHOD, METHODS
@@ -116,6 +119,9 @@ def build(args):
                      remedy="fewer --samples")
         points = Tolerances([Tolerance.parse(t, nominals) for t in args.tolerance], n,
                             0 if args.seed is None else args.seed, args.sampler or "lhs")
+        from converters.sweeps.indices import MIN_SAMPLES
+        if args.indices and n < MIN_SAMPLES:
+            raise ParameterError(f"--indices: first-order indices need at least {MIN_SAMPLES} samples; got --samples {n}")
     elif args.lhs is not None:
         check_memory(f"sweep: --lhs {args.lhs} points", float(args.lhs) * (BYTES_PER_ROW + 8 * len(args.grid)),
                      remedy="fewer --lhs points")
@@ -174,6 +180,7 @@ def _refuse_ignored(args) -> None:
     if not args.tolerance:
         given = [f for f, v in (("--samples", args.samples), ("--sampler", args.sampler)) if v is not None]
         given += ["--corners"] if args.corners else []
+        given += ["--indices"] if args.indices else []
         if given:
             raise ParameterError(f"{given[0]} sets the tolerance study; it does not apply without --tolerance")
     from converters.methods.base import get_method
@@ -238,6 +245,10 @@ def run(args) -> int:
         summary["study"] = study_summary(frame, specs, points if points.kind == "tolerance" else None)
         if args.corners:
             summary["study"]["corners"] = _corners(ensemble, points, specs)
+        if args.indices:
+            from converters.sweeps.indices import METHOD, first_order
+            summary["study"]["indices"] = {"method": METHOD, "metrics": first_order(frame, list(points.names), metrics,
+                                                                                   seed=points.seed)}
     # no point succeeded: say so in the exit code too (1, as a failed check), not only in the counts
     code = 1 if points.size and not summary["ok"] else 0
     if args.json:
@@ -284,6 +295,12 @@ def _print_study(study: dict, units: dict) -> None:
         worst = ", ".join(f"{k} = {v:.6g}" for k, v in row["worst_point"].items())
         print(f"  {row['spec']}: {100 * row['fraction']:.2f} % meet it; worst {row['worst_value']:.6g}"
               f"{' ' + unit if unit not in ('', '1') else ''} at {worst}")
+    if "indices" in study:
+        print(f"  first-order indices ({study['indices']['method']}; 95 % half-widths):")
+        for metric, found in study["indices"]["metrics"].items():
+            ranked = sorted(found["S1"], key=lambda k: -found["S1"][k])
+            shares = ", ".join(f"{k} {found['S1'][k]:.3f} +- {found['S1_conf'][k]:.3f}" for k in ranked)
+            print(f"    {metric}: {shares} (sum {found['sum']:.3f})")
     if "corners" in study:
         c = study["corners"]
         print(f"  worst-case corners: {c['passed']} of {c['count']} meet every spec")
