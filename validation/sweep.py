@@ -458,53 +458,66 @@ def _labelled(name: str, units: dict) -> str:
 def _engineering(axis, name: str, units: dict) -> None:
     """An axis's ticks in engineering notation with the quantity's unit (90 uH, 12.5 mV), no offset; its label the
     quantity's name."""
-    from matplotlib.ticker import EngFormatter
+    from matplotlib.ticker import EngFormatter, MaxNLocator, ScalarFormatter
     unit = units.get(name, "")
-    axis.set_major_formatter(EngFormatter(unit=unit if unit not in ("", "1") else "", places=None))
+    if unit in ("", "1"):             # a ratio (an efficiency) reads 0.985, not 985 m
+        formatter = ScalarFormatter(useOffset=False)
+        formatter.set_scientific(False)
+        axis.set_major_formatter(formatter)
+    else:
+        axis.set_major_formatter(EngFormatter(unit=unit, places=None))
+    axis.set_major_locator(MaxNLocator(6))          # labels with a unit need room: at most six
 
 
-def tolerance_plot(frame: pd.DataFrame, points, metric: str, specs=(), units=None, title: str = "") -> bytes:
-    """A tolerance study: the metric's histogram with each spec's bound on it and the yield, and the metric against
-    the parameter it follows most closely (the largest |rank correlation|); units on the axes."""
+def tolerance_plot(frame: pd.DataFrame, points, metrics, specs=(), units=None, title: str = "") -> bytes:
+    """A tolerance study, a row per metric (``metrics``: a name or several): its histogram with its specs' bounds
+    and the fraction meeting them, and the metric against the parameter it follows most closely (the largest |rank
+    correlation|); the yield over every spec in the title; units on the axes."""
     from converters.sweeps.specs import study_summary
 
     from .plots import plt, png
     units = units or {}
+    metrics = [metrics] if isinstance(metrics, str) else list(metrics)
     ok = (frame["status"] == "ok").to_numpy()
-    values = pd.to_numeric(frame[metric], errors="coerce").to_numpy() if metric in frame else np.full(len(frame), np.nan)
-    fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.2))
-    left.hist(values[ok & np.isfinite(values)], bins=min(60, max(10, int(np.sqrt(ok.sum())))), color="C0", alpha=0.8)
-    drawn = [spec for spec in specs if spec.metric == metric]
-    for spec in drawn:
-        left.axvline(spec.limit, color="C3", lw=1.5, ls="--", label=f"spec {spec.text()}")
-    left.set_xlabel(metric)
-    left.set_ylabel("samples")
-    _engineering(left.xaxis, metric, units)
-    if specs:
-        found = study_summary(frame, specs, points)
-        left.set_title(f"yield {100 * found['yield']:.2f} % (95 % CI {100 * found['yield_low']:.2f} to "
-                       f"{100 * found['yield_high']:.2f} %)", fontsize=9)
-    if drawn:
-        left.legend(fontsize=8)
-    correlations = {}
-    for name in points.names:
-        x = frame[name].to_numpy(dtype=float)
-        sel = ok & np.isfinite(values)
-        if sel.sum() > 2 and np.ptp(x[sel]) > 0 and np.ptp(values[sel]) > 0:
-            correlations[name] = pd.Series(x[sel]).corr(pd.Series(values[sel]), method="spearman")
-    if correlations:
-        name = max(correlations, key=lambda k: abs(correlations[k]))
-        right.plot(frame[name][ok], values[ok], ".", ms=3, alpha=0.5)
-        right.set_xlabel(name)
-        _engineering(right.xaxis, name, units)
-        right.set_title(f"against the parameter it follows most (Spearman {correlations[name]:+.2f})", fontsize=9)
-        for spec in specs:
-            if spec.metric == metric:
+    fig, axes = plt.subplots(len(metrics), 2, figsize=(11, 4.2 * len(metrics)), squeeze=False)
+    found = study_summary(frame, specs, points) if specs else None
+    for (left, right), metric in zip(axes, metrics):
+        values = (pd.to_numeric(frame[metric], errors="coerce").to_numpy() if metric in frame
+                  else np.full(len(frame), np.nan))
+        left.hist(values[ok & np.isfinite(values)], bins=min(60, max(10, int(np.sqrt(ok.sum())))), color="C0",
+                  alpha=0.8)
+        drawn = [(spec, row) for spec, row in zip(specs, found["specs"] if found else ()) if spec.metric == metric]
+        for spec, _ in drawn:
+            left.axvline(spec.limit, color="C3", lw=1.5, ls="--", label=f"spec {spec.text()}")
+        left.set_xlabel(metric)
+        left.set_ylabel("samples")
+        _engineering(left.xaxis, metric, units)
+        if drawn:
+            left.set_title("; ".join(f"{100 * row['fraction']:.2f} % meet {spec.text()}" for spec, row in drawn),
+                           fontsize=9)
+            left.legend(fontsize=8)
+        correlations = {}
+        for name in points.names:
+            x = frame[name].to_numpy(dtype=float)
+            sel = ok & np.isfinite(values)
+            if sel.sum() > 2 and np.ptp(x[sel]) > 0 and np.ptp(values[sel]) > 0:
+                correlations[name] = pd.Series(x[sel]).corr(pd.Series(values[sel]), method="spearman")
+        if correlations:
+            name = max(correlations, key=lambda k: abs(correlations[k]))
+            right.plot(frame[name][ok], values[ok], ".", ms=3, alpha=0.5)
+            right.set_xlabel(name)
+            _engineering(right.xaxis, name, units)
+            right.set_title(f"against the parameter it follows most (Spearman {correlations[name]:+.2f})", fontsize=9)
+            for spec, _ in drawn:
                 right.axhline(spec.limit, color="C3", lw=1.5, ls="--")
-    right.set_ylabel(metric)
-    _engineering(right.yaxis, metric, units)
+        right.set_ylabel(metric)
+        _engineering(right.yaxis, metric, units)
     failed = int((~ok).sum())
-    fig.suptitle(f"{title}  ({len(frame)} samples, {failed} failed)", fontsize=10)
+    heading = f"{title}  ({len(frame)} samples, {failed} failed)"
+    if found:
+        heading += (f"\nyield {100 * found['yield']:.2f} % (every spec; 95 % CI {100 * found['yield_low']:.2f} to "
+                    f"{100 * found['yield_high']:.2f} %)")
+    fig.suptitle(heading, fontsize=10)
     fig.tight_layout()
     return png(fig)
 
@@ -577,12 +590,13 @@ def summary_plot(frame: pd.DataFrame, points, metric: str = "vout_mean", title: 
     return png(fig)
 
 
-def write_summary(out, points, metric: str = "vout_mean", title: str = "", specs=(), units=None) -> pd.DataFrame:
+def write_summary(out, points, metrics="vout_mean", title: str = "", specs=(), units=None) -> pd.DataFrame:
     """The summary plot of a complete sweep, written atomically beside its parts: a tolerance study's histogram and
-    scatter, or the metric over the sweep's points."""
+    scatter per metric (``metrics``: a name or several), or the (first) metric over the sweep's points."""
     frame = load_sweep(out)
-    figure = (tolerance_plot(frame, points, metric, specs, units, title) if points.kind == "tolerance"
-              else summary_plot(frame, points, metric, title, units))
+    first = metrics if isinstance(metrics, str) else metrics[0]
+    figure = (tolerance_plot(frame, points, metrics, specs, units, title) if points.kind == "tolerance"
+              else summary_plot(frame, points, first, title, units))
     atomic_write_bytes(Path(out) / "summary.png", figure)
     return frame
 

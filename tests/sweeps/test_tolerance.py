@@ -137,7 +137,19 @@ def test_a_tolerance_study_on_the_command_line_gives_the_yield_the_worst_corner_
     import pyarrow.parquet as pq
     units = json.loads(pq.read_schema(next((out / "parts").iterdir())).metadata[b"units"])
     assert units["vout_ripple"] == "V" and units["efficiency"] == "1" and units["L"] == "H"
-    assert (out / "summary.png").read_bytes()[:4] == b"\x89PNG"
+    picture = (out / "summary.png").read_bytes()
+    assert picture[:4] == b"\x89PNG"
+    # a row per metric (vout_ripple, then the efficiency spec's): twice the height of one metric's
+    from validation.sweep import tolerance_plot
+    one = tolerance_plot(frame, _study_points(), "vout_ripple")
+    height = lambda png: int.from_bytes(png[20:24], "big")          # noqa: E731 (the IHDR chunk's height)
+    assert height(picture) == pytest.approx(2 * height(one), rel=0.02)
+
+
+def _study_points():
+    from converters.sweeps.points import Tolerance, Tolerances
+    nominal = {"C": 100e-6, "L": 100e-6, "R": 10.0}
+    return Tolerances([Tolerance.parse(t, nominal) for t in ("C=5%", "L=10%:uniform", "R=1%")], 64)
 
 
 def test_a_study_with_indices_shares_each_metrics_variance_among_its_parameters(capsys, tmp_path):

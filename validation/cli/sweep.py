@@ -73,7 +73,8 @@ def add(sub) -> None:
     sw.add_argument("--out", type=given_path, default=None,
                     help="the sweep directory (default sweep-MODEL); an interrupted sweep resumes from it")
     sw.add_argument("--metric", action="append", default=None,
-                    help="a column on demand and the summary plot's metric (repeatable, the first plotted; default "
+                    help="a column on demand and the summary plot's metric (repeatable, the first plotted, a tolerance study's "
+                         "every one and its specs'; default "
                          "the first --spec's, or vout_mean): a standard measure, SIGNAL.STAT (STAT mean, rms, min, max, ripple: vout.max, "
                          "v(out).ripple), efficiency, input_W, output_W, total_loss_W or losses.NAME")
     sw.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -231,9 +232,11 @@ def run(args) -> int:
         signal.signal(signal.SIGTERM, previous)
         if hasattr(backend, "close"):
             backend.close()
-    title = f"{ensemble.model} ({args.method}{', steady' if args.steady else ''}): {metrics[0]}"
+    plotted = metrics if points.kind == "tolerance" else metrics[0]
+    title = f"{ensemble.model} ({args.method}{', steady' if args.steady else ''})"
+    title += "" if points.kind == "tolerance" else f": {metrics[0]}"
     units = getattr(ensemble, "units", {})
-    frame = write_summary(out, points, metrics[0], title, specs=specs, units=units)
+    frame = write_summary(out, points, plotted, title, specs=specs, units=units)
     failed = frame[frame["status"] != "ok"]
     summary = {"out": str(out), "points": points.size, "stored_before": result.on_disk_before,
                "computed": result.computed, "ok": int(len(frame) - len(failed)), "failed": int(len(failed)),
