@@ -10,7 +10,8 @@ so v+ = v_free + W H^T P. The impulses obey the set-valued laws at velocity leve
 
 * friction i, a relay: P_i in [-h F_i, h F_i] with -s_i(+) in the normal cone there (s_i(+) = w_i . v+ - V_i);
   F_i is the law's magnitude at the step's starting velocity (the static value while stuck);
-* unilateral contact j, active when its gap predicted half a step ahead is <= 0: Newton's impact law
+* unilateral contact j, active when its gap predicted half a step ahead along the free motion (to second order:
+  the relative acceleration the step's free velocity gives included) is <= 0: Newton's impact law
   0 <= U_j(+) + e_j U_j <= ... _|_ P_j >= 0, U = n_j . v + c_j'(t).
 
 Both at once are one LCP of size c + 2 m (a relay is an LCP of twice its size, Acary and Brogliato 2008:

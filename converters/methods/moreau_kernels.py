@@ -58,11 +58,16 @@ def run_moreau(q, v, impulse, status, h, theta, M, W, K, C, f, WT, V, popp, WN, 
             bound = h * _popp(popp[i], abs(slip_now - V[i]))
             lb[i], ub[i] = -bound, bound
         for j in range(c):
-            gap, rate = c0[s, j], c1[s, j]
+            gap, rate, free = c0[s, j], c1[s, j], c1[s + 1, j]
             for l in range(n):
                 gap += WN[j, l] * q[s, l]
                 rate += WN[j, l] * v[s, l]
-            active[j] = gap + 0.5 * h * rate <= 0.0
+                free += WN[j, l] * vfree[l]
+            # the gap half a step ahead along the free motion, to second order: g + (h/2) U + (h/2)^2/2 a with the
+            # relative acceleration a = (U_free - U) / h. Siconos' rule (g + h U / 2 <= 0) leaves out a: a follower
+            # resting on a cam that starts to lift (U = 0, g = +1e-12 from the step's O(h^3) error) would fly
+            # free for a step, be caught up and bounce (e > 0) while it should ride the cam
+            active[j] = gap + 0.375 * h * rate + 0.125 * h * free <= 0.0
         # The LCP: rows 0..c-1 normal impulses, then the relays' two blocks (zeta = P - lb, mu).
         A[:, :] = 0.0
         for j in range(c):
