@@ -480,7 +480,8 @@ def two_block_section():
     text = ("<p>" + model.title + ": m1 = m2 = 1 kg, k1 = 1 N/m, k2 = 1.5 N/m, kc = 1 N/m, Popp friction with normal "
             "loads m g (the parameters are stated in <code>converters/models/mechanics/stickslip.py</code>; the seed "
             "gives none). The section: x2 each time block 1 starts to stick (the event method), after 60 time units "
-            "(2 pi sqrt(m / (k2 + kc))) of transient, over 60 more, against the belt velocity V.</p>"
+            f"of transient (the slower block's natural period, 2 pi max_i sqrt(m_i / (k_i + kc)): "
+            f"{model.time_scale(model.resolve({})):.4g} s here, block 1's), over 60 more, against the belt velocity V.</p>"
             "<img src='two_block.png' alt='two-block section'>"
             + "<p>Largest Lyapunov exponent of the flow (exact Jacobians of the event method, per time unit): "
             + ", ".join(f"V = {V:g}: {lam:+.4f}" for V, lam in exponents.items()) + ".</p>")

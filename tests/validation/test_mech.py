@@ -2,6 +2,7 @@
 report's cheaper sections; the two-block system's chaotic and periodic regimes."""
 import json
 
+import numpy as np
 import pandas as pd
 import pytest
 
@@ -91,3 +92,19 @@ def test_complete_chattering_at_175_rpm_and_incomplete_at_358():
     assert table.loc[100.0, "regime"] == "no impacts"
     assert table.loc[175.0, "regime"] == "complete chattering" and table.loc[175.0, "accumulations_per_revolution"] == 1
     assert table.loc[358.0, "regime"] == "incomplete chattering" and table.loc[358.0, "impacts_per_revolution"] > 1
+
+
+def test_the_two_block_sections_time_unit_is_the_one_the_code_uses(monkeypatch):
+    """The report states the time unit its runs are measured in: the slower block's period, 2 pi sqrt(m1 / (k1 +
+    kc)) = 4.443 s at k1 = 1 < k2 = 1.5 (it had read 2 pi sqrt(m / (k2 + kc)), block 2's 3.974 s). The diagram and
+    the exponents are replaced by stand-ins: the text is what is checked."""
+    import validation.mechanics as mech
+    from converters.models.mechanics import get_mechanical
+    monkeypatch.setattr(mech, "two_block_diagram", lambda *a, **k: [])
+    monkeypatch.setattr(mech, "lyapunov_of_flow", lambda *a, **k: 0.0)
+    monkeypatch.setattr("validation.mechanics_plots.diagram_figure", lambda *a, **k: b"")
+    model = get_mechanical("stick-slip")
+    unit = model.time_scale(model.resolve({}))
+    assert unit == pytest.approx(2 * np.pi * np.sqrt(1.0 / 2.0), rel=1e-15)
+    section = mech.two_block_section()
+    assert f"{unit:.4g} s here, block 1's" in section.html and "k2 + kc" not in section.html
