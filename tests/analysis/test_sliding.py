@@ -30,6 +30,52 @@ def test_grazing_and_adding_sliding_at_A_half():
     assert len(adding) == 1 and 2.9 < adding[0].value < 2.908
     assert grazing[0].period == adding[0].period == 4          # a period-4 orbit (in forcing periods)
     assert any("ends at the grazing-sliding" in note for note in study.notes)
+    # adding-sliding located to 1e-9 (the signature's bisection had left 3e-4 here), where an independent
+    # computation (4 T periodicity, the stick force touching the static limit tangentially) puts it
+    assert adding[0].width <= 1e-9 * (1 + adding[0].value) and "stick margin" in adding[0].located_by
+    assert adding[0].value == pytest.approx(2.904315908, abs=3e-9)
+    # the closed-form margin on the merged orbits (above it) 2 and 1 ppm away, extrapolated: zero at the located value
+    above = [adding[0].value + d for d in (2e-6, 1e-6)]
+    m1, m2 = (_closed_form_margin(w) for w in above)
+    assert 0 < m2 < m1
+    assert above[1] + m2 * (above[1] - above[0]) / (m1 - m2) == pytest.approx(adding[0].value, abs=1e-8)
+
+
+def _closed_form_margin(omega, A=0.5, k=1.0, m=1.0, g=10.0, Vdr=1.0, alpha=0.3, beta=0.1):
+    """The static friction less the stick force at its interior extremum, on the period-4 orbit at omega, in closed
+    form: while stuck x = x_s + Vdr (t - t_s) and the force that holds it is lambda = k x - A cos(omega t), whose
+    extrema are where lambda' = k Vdr + A omega sin(omega t) = 0. The orbit's stick segments (their start x_s, t_s
+    and end) are the event method's."""
+    import math
+
+    import numpy as np
+
+    from converters.methods import EventDriven
+    from converters.methods.event.mechanical import MechanicalMachine
+    from converters.models.mechanics import get_mechanical
+    from validation.mechanics import _mechanical_path, orbit_period
+    from converters.analysis.continuation import OrbitFamily
+    model = get_mechanical("friction")
+    path = _mechanical_path(model, {"A": A}, "omega", 2.85, 2.95)
+    family = OrbitFamily(path, EventDriven(), 4)
+    _, guess = orbit_period(path, 2.906, np.zeros(2))
+    x = guess
+    for value in (2.906, 2.905, 2.9045, 2.9044, 2.90435, 2.90433, 2.90432, omega):  # down the merged branch
+        x = family.orbit(value, x).x0
+    run = MechanicalMachine(family.problem(omega), EventDriven()).run(x)[0]
+    base = math.asin(-k * Vdr / (A * omega))
+    best = math.inf
+    for segment in run.segments:
+        if not segment.mode.stick:
+            continue
+        t0, t1, x_s = segment.t0, segment.t1, segment.x0[0]
+        for phase in (base, math.pi - base):
+            for turn in range(-1, 2 + int(t1 * omega / (2 * math.pi))):
+                t = (phase + 2 * math.pi * turn) / omega
+                if t0 < t < t1:
+                    force = k * (x_s + Vdr * (t - t0)) - A * math.cos(omega * t)
+                    best = min(best, m * g * (alpha + beta) - abs(force))
+    return best
 
 
 def _point(events, count):
