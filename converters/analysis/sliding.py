@@ -94,7 +94,7 @@ def stick_margin(family, value: float, x0) -> float:
             def margin(t, i=i):
                 return float(static[i] - abs(solution.sample([t]).u[0, i]))
             times = np.linspace(segment.t0, segment.t1, MARGIN_SAMPLES)
-            values = np.array([margin(t) for t in times])
+            values = static[i] - np.abs(solution.sample(times).u[:, i])
             for k in np.flatnonzero((values[1:-1] < values[:-2]) & (values[1:-1] <= values[2:])) + 1:
                 if k >= MARGIN_SAMPLES - 2:             # the end of the segment, where the margin reaches zero
                     continue
