@@ -181,6 +181,89 @@ def _refined(path, branch, bifurcation):
                                f"signature's bisection had left {bifurcation.width:.2g}"))
 
 
+@dataclass
+class DegenerateSwitching:
+    """The degenerate switching-sliding point (A, omega) of the friction oscillator, its :class:`Arrival`, and
+    the curve it was continued along as (A, Arrival) rows."""
+
+    A: float
+    omega: float
+    point: object
+    curve: list
+    params: dict
+    ode_rtol: float
+    wall_s: float
+
+    def to_dict(self) -> dict:
+        return {"A": self.A, "omega": self.omega, "margin": self.point.margin, "curvature": self.point.curvature,
+                "arrival_time": self.point.time, "arrival_state": self.point.state.tolist(), "ode_rtol": self.ode_rtol,
+                "curve": [{"A": a, "omega": p.value, "margin": p.margin, "curvature": p.curvature} for a, p in self.curve],
+                "wall_s": self.wall_s}
+
+
+def degenerate_switching(params: dict | None = None, progress: bool = False) -> DegenerateSwitching:
+    """The seed's switching-sliding point at A = A_start continued in A until the slip field's fold at the sliding
+    region's boundary turns from invisible to visible, that point located
+    (:func:`converters.analysis.sliding.degenerate_switching_sliding`; settings in defaults.toml,
+    ``[mechanics.degenerate]``)."""
+    from converters.analysis.sliding import degenerate_switching_sliding
+
+    from .defaults import MECHANICS
+    cfg = MECHANICS["degenerate"]
+    model = get_mechanical("friction")
+    base = dict(params or {})
+    method = EventDriven(ode_rtol=cfg["ode_rtol"])
+
+    def family_at(A):
+        return OrbitFamily(_mechanical_path(model, {**base, "A": A}, "omega", *cfg["omega"]), method)
+    clock = time.perf_counter()
+    start = family_at(cfg["A_start"])
+    _, x = orbit_period(start.problem_of, 0.5 * sum(cfg["omega"]), np.zeros(2))
+    import sys
+
+    from tqdm import tqdm
+    with tqdm(desc="switching-sliding curve in A", unit=" points", file=sys.stderr, disable=not progress) as bar:
+        point, A, curve = degenerate_switching_sliding(family_at, cfg["A_start"], cfg["A_stop"], cfg["A_step"],
+                                                       cfg["omega"], x, tol=cfg["tol"],
+                                                       on_point=lambda b, p: bar.update(1))
+    return DegenerateSwitching(A, point.value, point, curve, model.resolve({**base, "A": A}), cfg["ode_rtol"],
+                               time.perf_counter() - clock)
+
+
+def degenerate_portraits(study: DegenerateSwitching) -> list:
+    """The five orbits around the degenerate point the report draws, as (label, A, omega, trajectory, arrival):
+    on either side of the switching-sliding curve at A* + dA, the point itself, on either side of the
+    crossing-sliding curve at A* - dA (omega = the curve's +- domega; the arrival says which side is which)."""
+    from dataclasses import replace
+
+    from converters.analysis.sliding import arrival
+
+    from .defaults import MECHANICS
+    dA, dw = MECHANICS["degenerate"]["offsets"]
+    model = get_mechanical("friction")
+    method = EventDriven(ode_rtol=study.ode_rtol)
+    curve = dict(study.curve)
+    out = []
+
+    def on_curve(A):
+        # the curve's point at A by the secant through its two nearest continued points
+        (a1, p1), (a2, p2) = sorted(curve.items(), key=lambda c: abs(c[0] - A))[:2]
+        return p1.value + (p2.value - p1.value) * (A - a1) / (a2 - a1), p1.orbit
+    specs = [(study.A + dA, -dw), (study.A + dA, +dw), (study.A, 0.0), (study.A - dA, +dw), (study.A - dA, -dw)]
+    for k, (A, offset) in enumerate(specs, 1):
+        w0, guess = (study.omega, study.point.orbit) if offset == 0.0 else on_curve(A)
+        omega = w0 + offset
+        family = OrbitFamily(ParameterPath(model, {**study.params, "A": A}, "omega"), method)
+        orbit = family.orbit(omega, guess)
+        x0 = orbit.x0 if orbit.converged else orbit_period(family.problem_of, omega, guess)[1]
+        q = model.resolve({**study.params, "A": A, "omega": omega})
+        T = model.period(q)
+        run = simulate(model.problem(q, T, x0), EventDriven(ode_rtol=study.ode_rtol, output_step=T / 4000.0))
+        out.append((f"Point {k}", A, omega, replace(run, labels=model.labels(q)),
+                    arrival(family, omega, x0, side=study.point.side)))
+    return out
+
+
 # --- diagrams -------------------------------------------------------------------------------------------
 
 def friction_diagram(params: dict | None, name: str, values, *, h_fraction: float = 1e-3, transient: int = 150,
@@ -437,6 +520,50 @@ def sliding_section():
     return Section("Mechanics: the dry-friction oscillator's sliding bifurcations", text, files, ok=ok, metrics=metrics)
 
 
+def degenerate_section():
+    """The degenerate switching-sliding point: located on the continued curve, its two conditions, five orbits."""
+    import pandas as pd
+
+    from .defaults import MECHANICS
+    from .mechanics_plots import degenerate_curve_figure, degenerate_figure
+    from .report import Section, csv_bytes, table_html
+    cfg = MECHANICS["degenerate"]
+    study = degenerate_switching()
+    portraits = degenerate_portraits(study)
+    point, limit = study.point, cfg["conditions"]
+    ok = abs(point.margin) <= limit and abs(point.curvature) <= limit
+    curve = pd.DataFrame([{"A (N)": a, "omega (rad/s)": p.value, "arrival margin": p.margin,
+                           "fold curvature (m/s^3)": p.curvature,
+                           "kind": "switching-sliding" if p.curvature > 0 else "crossing-sliding"} for a, p in study.curve])
+    text = (f"<p>The switching-sliding point of the friction oscillator at A = {cfg['A_start']:g} (the seed's "
+            "2.7992) is continued in A. Along the curve the orbit arrives at the switching surface (v = Vdr) from "
+            "below exactly at the sliding region's boundary, where the stick force reaches the static limit: the first "
+            "test function is that <em>arrival margin</em>, |lambda| / F(0) - 1 (zero on the curve; each point located "
+            "as the end of the branch of orbits that arrive inside, approached by secant steps). The second is the "
+            "<em>fold curvature</em> there, -s'' along the slip field beyond the surface (s = v - Vdr; here "
+            "(k Vdr + A omega sin(omega t)) / m): positive where the fold is invisible, so that an orbit crossing just "
+            "outside the region comes back to it after a short excursion (switching-sliding), negative where it is "
+            "visible and an orbit arriving just inside sticks briefly, slips to the other side and returns "
+            "(crossing-sliding). The curvature changes sign along the curve at a cubic tangency, the codimension-two "
+            "point (a degenerate sliding bifurcation in the sense of Kowalczyk and di Bernardo, Physica D 204, 2005), "
+            f"located by Brent's method in A to {cfg['tol']:g} (the event method at ODE tolerance "
+            f"{study.ode_rtol:g}; {study.wall_s:.0f} s):</p>"
+            + table_html(pd.DataFrame([{"A (N)": f"{study.A:.9f}", "omega (rad/s)": f"{study.omega:.9f}",
+                                        "arrival margin": f"{point.margin:.2e}",
+                                        "fold curvature (m/s^3)": f"{point.curvature:.2e}", "limit": f"{limit:g}",
+                                        "result": "pass" if ok else "fail"}]), "result", good=("pass",))
+            + "<img src='degenerate_curve.png' alt='the curve in (A, omega)'>"
+            + f"<p>Five orbits around it: at A* + {cfg['offsets'][0]:g} on either side of the switching-sliding curve, "
+              f"the point itself, and at A* - {cfg['offsets'][0]:g} on either side of the crossing-sliding curve "
+              f"(omega {cfg['offsets'][1]:g} off the curve):</p><img src='degenerate_orbits.png' alt='five orbits'>"
+            + "<p>The continued curve:</p>" + table_html(curve))
+    files = {"degenerate_orbits.png": degenerate_figure(portraits, study, get_mechanical("friction")),
+             "degenerate_curve.png": degenerate_curve_figure(study, portraits),
+             "degenerate_curve.csv": csv_bytes(curve)}
+    return Section("Mechanics: the degenerate switching-sliding bifurcation", text, files, ok=ok,
+                   metrics=study.to_dict())
+
+
 def diagram_study_path(study) -> tuple[float, float]:
     return min(study.start, study.stop), max(study.start, study.stop)
 
@@ -527,5 +654,5 @@ def two_block_section():
                                                                "lyapunov": {str(k): v for k, v in exponents.items()}})
 
 
-__all__ = ["sliding_study", "friction_diagram", "two_block_diagram", "impact_phase_diagram", "ball_check",
-           "friction_agreement", "cam_checks", "sliding_section", "agreement_section", "cam_section", "two_block_section"]
+__all__ = ["sliding_study", "degenerate_switching", "degenerate_portraits", "DegenerateSwitching", "friction_diagram", "two_block_diagram", "impact_phase_diagram", "ball_check",
+           "friction_agreement", "cam_checks", "sliding_section", "degenerate_section", "agreement_section", "cam_section", "two_block_section"]

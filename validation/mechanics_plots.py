@@ -105,3 +105,71 @@ def phase_portraits(panels: list[tuple[str, object]], model, fmt: str = "png") -
     fig.suptitle(f"{model.title}: orbits on either side of each sliding bifurcation (stick thick)", fontsize=9)
     fig.tight_layout()
     return _save(fig, fmt)
+
+
+def degenerate_figure(portraits: list, study, model, fmt: str = "png") -> bytes:
+    """The five orbits around the degenerate switching-sliding point: each whole orbit (x, v), stick thick, and
+    below it the arrival at the sliding region magnified (x - x_a, v - Vdr over a fifth of the period around it)."""
+    fig, axes = plt.subplots(2, len(portraits), figsize=(3.0 * len(portraits), 5.6), squeeze=False)
+    belt = study.params["Vdr"]
+    for k, (label, A, omega, run, arrive) in enumerate(portraits):
+        top, bottom = axes[0, k], axes[1, k]
+        x, v = run.x[:, 0], run.x[:, 1]
+        held = run.held[:, 0] if run.held is not None else np.zeros(x.size, dtype=bool)
+        for ax, (xs, vs) in ((top, (x, v)), (bottom, (x - arrive.state[0], v - belt))):
+            ax.plot(xs, vs, lw=0.8, color="#4c72b0")
+            ax.plot(np.where(held, xs, np.nan), np.where(held, vs, np.nan), lw=2.5, color="#c44e52")
+            ax.tick_params(labelsize=7)
+            ax.grid(alpha=0.3)
+        top.plot([arrive.state[0]], [belt], "o", mfc="none", mec="k", ms=8)
+        where = "outside" if arrive.margin > 1e-9 else ("inside" if arrive.margin < -1e-9 else "on the boundary")
+        top.set_title(f"{label}: A = {A:.5g} N, omega = {omega:.6g} rad/s\narrives {where}: margin "
+                      f"{arrive.margin:+.1e}\nfold curvature {arrive.curvature:+.2g} m/s^3", fontsize=7)
+        top.set_xlabel("x (m)", fontsize=8)
+        top.set_ylabel("v (m/s)", fontsize=8)
+        T = 2.0 * np.pi / omega
+        after = (run.t - arrive.time + 0.5 * T) % T - 0.5 * T
+        near = (after >= -0.01 * T) & (after <= 0.04 * T)
+        rise = max(float(np.max(v[near] - belt)), 1e-6)          # the excursion past the surface, if any
+        bottom.set_ylim(-3.0 * rise, 1.5 * rise)
+        above = near & (v - belt > 1e-12)
+        reach = max(float(np.max(x[above] - arrive.state[0])) if above.any() else 0.0, 0.01) * 1.3
+        bottom.set_xlim(-0.1 * reach, reach)
+        bottom.ticklabel_format(useOffset=False, style="sci", scilimits=(-2, 2))
+        bottom.set_xlabel("x - x_arrival (m)", fontsize=8)
+        bottom.set_ylabel("v - Vdr (m/s)", fontsize=8)
+    fig.suptitle("Degenerate Switching-sliding Bifurcation (stick thick; below: the arrival at the sliding region, "
+                 "magnified)", fontsize=9)
+    fig.tight_layout()
+    return _save(fig, fmt)
+
+
+def _padded(values) -> tuple[float, float]:
+    low, high = float(np.min(values)), float(np.max(values))
+    pad = 0.08 * (high - low) or 1e-6
+    return low - pad, high + pad
+
+
+def degenerate_curve_figure(study, portraits: list, fmt: str = "png") -> bytes:
+    """The continued curve of switching-sliding points in (A, omega): solid where the fold is invisible
+    (switching-sliding), dashed where it is visible (crossing-sliding), the degenerate point and the portraits'."""
+    fig, ax = plt.subplots(figsize=(6.5, 4.5))
+    A = np.array([a for a, _ in study.curve])
+    omega = np.array([p.value for _, p in study.curve])
+    curvature = np.array([p.curvature for _, p in study.curve])
+    ax.plot(A, np.where(curvature > 0, omega, np.nan), "-o", ms=3, color=_MARKERS["switching-sliding"][1],
+            label="switching-sliding (fold invisible)")
+    ax.plot(A, np.where(curvature < 0, omega, np.nan), "--o", ms=3, color=_MARKERS["crossing-sliding"][1],
+            label="crossing-sliding (fold visible)")
+    ax.plot([study.A], [study.omega], "*", ms=14, color="k",
+            label=f"degenerate point A = {study.A:.8f} N, omega = {study.omega:.8f} rad/s")
+    for label, a, w, _, _ in portraits:
+        ax.plot([a], [w], "x", color="0.3")
+        ax.annotate(label.split()[-1], (a, w), textcoords="offset points", xytext=(4, 4), fontsize=8)
+    ax.set_xlabel("A (N)")
+    ax.set_ylabel("omega (rad/s)")
+    ax.ticklabel_format(useOffset=False, style="plain")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    ax.set_title("The switching-sliding point continued in A (event method)", fontsize=9)
+    return _save(fig, fmt)

@@ -21,6 +21,8 @@ Anything else is a plain border collision.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from ..errors import SimulationError
@@ -104,45 +106,226 @@ def stick_margin(family, value: float, x0) -> float:
     return best
 
 
-def refine_adding_sliding(family, merged, bound: float, tol: float = 1e-10, max_iter: int = 40):
-    """(value, width, orbits solved) of the adding-sliding point between the orbit ``merged`` (an OrbitPoint: the
-    sliding segment still whole) and the parameter value ``bound`` (where it is split, or no such orbit was found),
-    located as the end of the merged orbit's
-    branch: the zero of its :func:`stick_margin`, a smooth function there that reaches zero with a nonzero slope.
-    The secant's zero from the last two merged orbits is approached from the merged side (each trial 99 % of the
-    way to it, Newton shooting from the nearest merged orbit, inside the bracket): a trial whose orbit does not keep
-    the merged signature narrows the bracket from the other side. Stops where the secant's zero is within ``tol``
-    (relative) of the last merged orbit; ``width`` is that distance, or the bracket where it could not close."""
-    signature = merged.signature
-    points = [(merged.value, stick_margin(family, merged.value, merged.x0), merged.x0)]
-    solved = 0
+def approach_zero(evaluate, start: tuple, bound: float, tol: float, max_iter: int = 40, ftol: float = 0.0):
+    """The zero of a test function that exists on one side of it only (the end of a branch of orbits), approached
+    from that side: ``start`` = (value, f, payload) there, ``bound`` a value past the zero (no such orbit), and
+    ``evaluate(value)`` -> (f, payload), or None where the value is past the end (its orbit lost, or on the other
+    side). The secant's zero from the last two points is approached from the known side (each trial 99 % of the
+    way to it, inside the bracket; a tenth of the way to ``bound`` from a single point); a trial past the end
+    narrows the bracket from the other side. Stops where the secant's zero is within ``tol`` (relative) of the last
+    point, or the last point's |f| is at most ``ftol``. Returns (value, width, points, trials): the zero and that distance, or the bracket's middle and width
+    where it could not close, and the points on the known side in the order found."""
+    points, trials = [tuple(start)], 0
     for _ in range(max_iter):
-        v_last, f_last, x_last = points[-1]
+        v_last, f_last, _ = points[-1]
         if abs(bound - v_last) <= tol * (1.0 + abs(v_last)):      # the bracket itself is narrow enough
-            return 0.5 * (v_last + bound), abs(bound - v_last), solved
+            return 0.5 * (v_last + bound), abs(bound - v_last), points, trials
+        if abs(f_last) <= ftol:
+            return v_last, 0.0, points, trials
         if len(points) >= 2 and points[-2][1] != f_last:
             v_prev, f_prev, _ = points[-2]
             zero = v_last - f_last * (v_last - v_prev) / (f_last - f_prev)
             if abs(zero - v_last) <= tol * (1.0 + abs(v_last)):
-                return zero, abs(zero - v_last), solved
+                return zero, abs(zero - v_last), points, trials
             trial = v_last + 0.99 * (zero - v_last)
-        else:                                   # one point: a step a tenth of the way to the other side
+        else:
             trial = v_last + 0.1 * (bound - v_last)
         if not min(v_last, bound) < trial < max(v_last, bound):
             trial = 0.5 * (v_last + bound)
-        solved += 1
+        trials += 1
         try:
-            orbit = family.orbit(trial, x_last)
-            if orbit.converged and family.signature(trial, orbit.x0) == signature:
-                margin = stick_margin(family, trial, orbit.x0)
-                if np.isfinite(margin):
-                    points.append((trial, margin, orbit.x0))
-                    continue
+            found = evaluate(trial)
         except (SimulationError, ArithmeticError, ValueError):    # a run that cannot follow the orbit there
-            pass
-        bound = trial                           # past the end of the merged branch (or no orbit there)
+            found = None
+        if found is None:
+            bound = trial
+        else:
+            points.append((trial, *found))
     v_last = points[-1][0]
-    return 0.5 * (v_last + bound), abs(bound - v_last), solved
+    return 0.5 * (v_last + bound), abs(bound - v_last), points, trials
 
 
-__all__ = ["classify_sliding", "shortest_gap", "stick_margin", "refine_adding_sliding", "TYPES"]
+def refine_adding_sliding(family, merged, bound: float, tol: float = 1e-10, max_iter: int = 40):
+    """(value, width, orbits solved) of the adding-sliding point between the orbit ``merged`` (an OrbitPoint: the
+    sliding segment still whole) and the parameter value ``bound`` (where it is split, or no such orbit was found),
+    located as the end of the merged orbit's branch by :func:`approach_zero`: the zero of its :func:`stick_margin`,
+    a smooth function there that reaches zero with a nonzero slope. Each trial's orbit is solved by Newton shooting
+    from the last merged one and counts only if it keeps the merged signature."""
+    signature = merged.signature
+    last = [merged.x0]
+
+    def evaluate(trial):
+        orbit = family.orbit(trial, last[-1])
+        if not (orbit.converged and family.signature(trial, orbit.x0) == signature):
+            return None
+        margin = stick_margin(family, trial, orbit.x0)
+        if not np.isfinite(margin):
+            return None
+        last.append(orbit.x0)
+        return margin, orbit.x0
+    value, width, _, solved = approach_zero(evaluate, (merged.value, stick_margin(family, merged.value, merged.x0),
+                                                       merged.x0), bound, tol, max_iter)
+    return value, width, solved
+
+
+@dataclass(frozen=True)
+class Arrival:
+    """Where an orbit reaches a friction contact's surface before it sticks: at ``time`` in ``state``, coming from
+    slip direction -``side``; ``margin`` and ``curvature`` as :func:`~converters.methods.event.mechanical.sliding_boundary`
+    (the margin positive where it arrives outside the sliding region and crosses first), ``value`` the parameter."""
+
+    value: float
+    time: float
+    state: np.ndarray
+    side: float
+    margin: float
+    curvature: float
+    orbit: np.ndarray
+
+
+def arrival(family, value: float, x0, pair: int = 0, side: float | None = None) -> Arrival:
+    """The arrival of the orbit of ``family`` through x0 at ``value`` at its sliding region nearest the region's
+    boundary (the smallest |margin|; given ``side``, only arrivals from slip direction -side: the one followed
+    along a parameter, where another, after a short excursion to the other side, may come closer): each stick of ``pair`` preceded by a crossing of the same pair (a short
+    excursion past the surface) arrives at that crossing, any other at the stick itself."""
+    from ..methods.event.mechanical import SLIP_NEG, SLIP_POS, MechanicalMachine, sliding_boundary
+    problem = family.problem(value)
+    solution = MechanicalMachine(problem, family.method).run(np.asarray(x0, dtype=float))[0]
+    events = [e for e in solution.events if e[2] == pair]
+    moving = [seg for seg in solution.segments if seg.t1 > seg.t0]
+    best = None
+    for k, event in enumerate(events):
+        if event[1] != "stick":
+            continue
+        previous = events[k - 1] if events else None
+        t = float(previous[0] if previous is not None and previous[1] == "cross" else event[0])
+        before = [seg for seg in moving if seg.t1 <= t + 1e-12 * (1.0 + abs(t))]
+        states = (before[-1] if before else moving[-1]).mode.states
+        if states[pair] not in (SLIP_POS, SLIP_NEG):
+            continue
+        beyond = -1.0 if states[pair] == SLIP_POS else 1.0
+        if side is not None and beyond != side:
+            continue
+        state = solution.sample([t]).x[0]
+        margin, curvature = sliding_boundary(problem, states, pair, beyond, t, state)
+        if best is None or abs(margin) < abs(best.margin):
+            best = Arrival(float(value), t, state, beyond, margin, curvature, np.array(x0, dtype=float))
+    if best is None:
+        raise SimulationError(f"the orbit at {value:.10g} never arrives at the sliding region of pair {pair} from a "
+                              "slip: it has no switching-sliding point to follow")
+    return best
+
+
+#: Newton iterations for an orbit near a known one (it takes 2 to 4; near a degenerate point, where the map is not
+#: Lipschitz, it may not converge at all: that trial is then past the end of the branch).
+NEWTON_ITERATIONS = 10
+#: The switching-sliding point's margin (|lambda| / F(0) - 1 at the arrival) at which its location stops.
+MARGIN_TOL = 1e-10
+
+
+def switching_sliding_point(family, low: float, high: float, x_guess, pair: int = 0, tol: float = 1e-10,
+                            side: float | None = None) -> Arrival:
+    """The switching-sliding point between ``low`` and ``high``: the zero of the arrival's margin, approached from
+    the side where the orbit arrives inside the sliding region (margin < 0) by :func:`approach_zero` to ``tol``
+    (relative) or a margin within MARGIN_TOL of zero; each orbit by Newton shooting from the last one, the arrival
+    the one from slip direction -``side`` (default: whichever is nearest its boundary). Only that side is used: on
+    the other, close to a degenerate point, the orbit that crosses first may not exist (the map is not Lipschitz
+    there; a period-3 attractor was found 1e-9 from the friction oscillator's point). Returns the :class:`Arrival`
+    of the last orbit, nearest the point."""
+    last = [np.asarray(x_guess, dtype=float)]
+
+    def evaluate(value, max_iter=NEWTON_ITERATIONS):
+        orbit = family.orbit(value, last[-1], max_iter=max_iter)
+        x = orbit.x0 if orbit.converged else None
+        if x is None:
+            return None
+        found = arrival(family, value, x, pair, side)
+        if found.margin >= 0.0:
+            return None
+        last.append(x)
+        return found.margin, found
+    ends = {}
+    for value in (low, high):
+        last[:] = [np.asarray(x_guess, dtype=float)]
+        try:
+            ends[value] = evaluate(value, 30)
+        except (SimulationError, ArithmeticError, ValueError):
+            ends[value] = None
+    inside = [(v, e) for v, e in ends.items() if e is not None]
+    if len(inside) != 1:
+        raise SimulationError(f"no switching-sliding point between {low:.10g} and {high:.10g}: the orbit arrives "
+                              f"{'inside' if inside else 'outside'} the sliding region at both ends")
+    (start, found), = inside
+    bound = high if start == low else low
+    last[:] = [found[1].orbit]
+    _, _, points, _ = approach_zero(evaluate, (start, *found), bound, tol, ftol=MARGIN_TOL)
+    return points[-1][2]
+
+
+def degenerate_switching_sliding(family_at, start: float, stop: float, step: float, first: tuple[float, float],
+                                 x_guess, pair: int = 0, tol: float = 1e-10, on_point=None):
+    """The codimension-two point on a curve of switching-sliding points where the slip field's fold at the sliding
+    region's boundary turns from invisible to visible (the :class:`Arrival`'s curvature is zero: a cubic tangency);
+    past it the same curve is one of crossing-sliding points (the orbit that arrives inside the region sticks only
+    briefly, slips at once to the other side and comes back).
+
+    ``family_at(b)`` is the orbit family along the first parameter at the second's value b. The curve is continued
+    in the second parameter from ``start`` towards ``stop`` in steps of ``step`` (``first`` brackets its point at
+    ``start``; each next point is located by :func:`switching_sliding_point` in a bracket predicted by the secant
+    through the two nearest points, the second point a hundredth of a step from the first) until the curvature
+    changes sign, and its zero is then found by Brent's method to ``tol`` (relative). Returns (Arrival at the
+    point, its second parameter's value, the curve's points as (second, Arrival) in order of the second);
+    ``on_point(second, arrival)`` is called as each point is located."""
+    from scipy.optimize import brentq
+    curve: dict = {}
+
+    def located(b):
+        b = float(b)
+        if b in curve:
+            return curve[b]
+        nearest = sorted(curve.items(), key=lambda c: abs(c[0] - b))[:2]
+        if len(nearest) == 2:                   # the curve's secant through the two nearest points
+            (b1, a1), (b2, a2) = nearest
+            predicted = a1.value + (a2.value - a1.value) * (b - b1) / (b2 - b1)
+            width = max(abs(predicted - a1.value), 1e-6 * (1.0 + abs(predicted)))
+        elif nearest:
+            predicted, width = nearest[0][1].value, 0.5 * abs(first[1] - first[0])
+        else:
+            predicted, width = 0.5 * (first[0] + first[1]), 0.5 * abs(first[1] - first[0])
+        x, side = (nearest[0][1].orbit, nearest[0][1].side) if nearest else (np.asarray(x_guess, dtype=float), None)
+        family = family_at(b)
+        for _ in range(4):
+            try:
+                point = switching_sliding_point(family, predicted - width, predicted + width, x, pair, side=side)
+                break
+            except SimulationError:
+                width *= 2.0
+        else:
+            raise SimulationError(f"the switching-sliding curve is lost at {b:.10g}: no point found within "
+                                  f"{width:.3g} of {predicted:.10g}")
+        curve[b] = point
+        if on_point is not None:
+            on_point(b, point)
+        return point
+    step = abs(step) * (1.0 if stop > start else -1.0)
+    previous = located(start)
+    located(start + 0.01 * step)
+    b = start
+    while True:
+        following = b + step
+        if (following - stop) * step > 0.0:
+            following = stop
+        current = located(following)
+        if previous.curvature * current.curvature <= 0.0:
+            break
+        if following == stop:
+            raise SimulationError(f"the fold's curvature keeps its sign ({current.curvature:.3g}) along the "
+                                  f"switching-sliding curve from {start:.10g} to {stop:.10g}: no degenerate point")
+        b, previous = following, current
+    root = brentq(lambda v: located(v).curvature, b, following, xtol=tol * (1.0 + abs(b)),
+                  rtol=4.0 * np.finfo(float).eps)
+    return located(root), float(root), sorted(curve.items())
+
+
+__all__ = ["classify_sliding", "shortest_gap", "stick_margin", "refine_adding_sliding", "Arrival", "arrival",
+           "switching_sliding_point", "degenerate_switching_sliding", "TYPES"]

@@ -3,7 +3,7 @@ continuation on the event method's exact map and named from the orbit's events; 
 import pytest
 
 from converters.analysis.continuation import OrbitPoint
-from converters.analysis.sliding import classify_sliding
+from converters.analysis.sliding import TYPES, classify_sliding
 from validation.mechanics import sliding_study
 
 
@@ -97,3 +97,60 @@ def test_the_classifier_names_the_short_new_segment(more, fewer, kind):
     assert classify_sliding(_point(fewer, 0), _point(more, 0))[0] == kind
     assert classify_sliding(_point(more, 0), _point(fewer, 0))[0] == kind
     assert classify_sliding(_point(fewer, 0), _point(fewer, 0)) is None
+
+
+@pytest.mark.slow
+def test_degenerate_switching_sliding_point_satisfies_both_conditions():
+    """The switching-sliding point continued in A from (5, 2.7992): the slip field's fold at the arrival turns
+    visible at a codimension-two point. Both conditions hold there to 1e-8 as computed and in closed form (the
+    stick force k x - A cos(omega t) at the static limit 4 N, its rate k Vdr + A omega sin(omega t) zero); an
+    independent integration (closed-form stick, scipy's DOP853 slip) closes the orbit through the arrival in one
+    period; and the continuation's classifier names the curve switching-sliding above A* and crossing-sliding below."""
+    import math
+
+    import numpy as np
+    from scipy.integrate import solve_ivp
+    from scipy.optimize import brentq
+
+    from validation.mechanics import degenerate_section
+    section = degenerate_section()
+    metrics = section.metrics
+    A, omega, t_a = metrics["A"], metrics["omega"], metrics["arrival_time"]
+    x_a, v_a = metrics["arrival_state"]
+    assert section.ok and abs(metrics["margin"]) <= 1e-8 and abs(metrics["curvature"]) <= 1e-8
+    k, m, g, Vdr, Fs = 1.0, 1.0, 10.0, 1.0, 10.0 * (0.3 + 0.1)
+    assert v_a == pytest.approx(Vdr, abs=1e-12)
+    assert abs(abs(-k * x_a + A * math.cos(omega * t_a)) / Fs - 1.0) <= 1e-8
+    assert abs((k * Vdr + A * omega * math.sin(omega * t_a)) / m) <= 1e-8
+    assert A == pytest.approx(4.8356901, abs=1e-6) and omega == pytest.approx(2.5354292, abs=1e-6)
+    # one period from the arrival: stuck until the force reaches -Fs, then slipping back (s < 0) until v = Vdr
+    T = 2.0 * math.pi / omega
+
+    def force(t):
+        return -k * (x_a + Vdr * (t - t_a)) + A * math.cos(omega * t)
+    grid = t_a + np.linspace(0.0, T, 20001)
+    values = np.array([force(t) for t in grid])
+    assert values.max() <= Fs * (1.0 + 1e-8)                 # the cubic tangency: it stays stuck
+    first = int(np.argmax(values < -Fs))
+    t_s = brentq(lambda t: force(t) + Fs, grid[first - 1], grid[first], xtol=1e-15)
+
+    def slip(t, y):
+        s = y[1] - Vdr
+        mu = 0.3 / (1.0 + 1.42 * abs(s)) + 0.1 + 0.01 * s * s
+        return [y[1], (-k * y[0] + A * math.cos(omega * t) + m * g * mu) / m]
+
+    def back(t, y):
+        return y[1] - Vdr
+    back.terminal, back.direction = True, 1.0
+    run = solve_ivp(slip, (t_s, t_a + 1.5 * T), [x_a + Vdr * (t_s - t_a), Vdr - 1e-14], method="DOP853",
+                    rtol=1e-12, atol=1e-13, events=back)
+    t_r, (x_r, _) = run.t_events[0][0], run.y_events[0][0]
+    assert t_r == pytest.approx(t_a + T, abs=1e-7) and x_r == pytest.approx(x_a, abs=1e-7)
+    # the curve on either side: what the classifier (from the orbits' events alone) names it
+    curve = {row["A"]: row for row in metrics["curve"]}
+    for side, kind in ((+1, "switching-sliding"), (-1, "crossing-sliding")):
+        a = min(curve, key=lambda v: abs(v - (A + side * 0.05)) if side * (v - A) > 0 else np.inf)
+        w = curve[a]["omega"]
+        study = sliding_study("friction", {"A": a}, "omega", w - 0.01, w + 0.01, points=6)
+        found = [b for b in study.bifurcations if b.kind in TYPES]
+        assert [b.kind for b in found] == [kind] and found[0].value == pytest.approx(w, abs=1e-6)

@@ -686,6 +686,33 @@ def period_map(problem: MechanicalProblem, options) -> PeriodMap:
     return MechanicalPeriodMap(machine)
 
 
+def sliding_boundary(problem: MechanicalProblem, states: tuple, i: int, sigma: float, t: float, x) -> tuple[float, float]:
+    """(margin, curvature) of friction contact ``i`` at a state (t, x) on its surface s_i = 0, the other contacts
+    in ``states`` (a mode's states, one per contact).
+
+    margin = |lambda_i| / F_i(0) - 1 of the force that would hold the contact stuck there: negative inside the
+    sliding region, zero on its boundary, where the slip field of direction ``sigma`` (+1 or -1) is tangent to the
+    surface. curvature = -sigma s_i'' along that slip field: positive where its fold is invisible (its orbit
+    through the fold stays on the other side, so an orbit that crosses the surface just outside the sliding
+    region comes back to it), zero at a cubic tangency (the degeneracy of a switching-sliding point). s_i'' is
+    w_i . d/dt (v') along the slip field: its Jacobian times the field, and the explicit time derivative by a
+    central difference (1e-6 of the time scale: the forcing is smooth)."""
+    dyn = _Dynamics(problem)
+    x = np.asarray(x, dtype=float)
+    held = list(states)
+    held[i] = STICK
+    lam_t, _ = dyn.contact_forces(dyn.mode(tuple(held)), t, x)
+    margin = abs(lam_t[i]) / dyn.static[i] - 1.0
+    held[i] = SLIP_POS if sigma > 0 else SLIP_NEG
+    mode = dyn.mode(tuple(held))
+    n = dyn.n
+    field = dyn.field(mode, t, x)
+    dt = 1e-6 * time_scale(problem)
+    explicit = (dyn.field(mode, t + dt, x) - dyn.field(mode, t - dt, x))[n:] / (2.0 * dt)
+    jerk = (dyn.jacobian(mode, t, x) @ field)[n:] + explicit
+    return float(margin), float(-np.sign(sigma) * (dyn.WT[i] @ jerk))
+
+
 def supports(problem: MechanicalProblem, options) -> None:
     """Every mechanical problem (its own checks ran when it was built)."""
 
@@ -697,4 +724,4 @@ def solve(problem: MechanicalProblem, options, x0) -> Trajectory:
 
 
 __all__ = ["MechanicalMachine", "MechanicalSolution", "MechanicalPeriodMap", "supports", "solve", "period_map",
-           "STICK", "SLIP_POS", "SLIP_NEG", "CLOSED", "OPEN", "time_scale"]
+           "STICK", "SLIP_POS", "SLIP_NEG", "CLOSED", "OPEN", "time_scale", "sliding_boundary"]
