@@ -22,7 +22,7 @@ import numpy as np
 from converters.analysis.bifurcation import brute_force, detect_period, iterate, section_diagram
 from converters.analysis.continuation import OrbitFamily, check_path, follow
 from converters.analysis.sliding import TYPES, classify_sliding
-from converters.errors import ParameterError
+from converters.errors import ParameterError, SimulationError
 from converters.methods import EventDriven, MoreauJean
 from converters.models.mechanics import accumulation_time, get_mechanical
 from converters.run import ParameterPath
@@ -264,6 +264,167 @@ def degenerate_portraits(study: DegenerateSwitching) -> list:
     return out
 
 
+@dataclass(frozen=True)
+class _BasinChunk:
+    """The stroboscopic samples x(nT), n = transient .. transient + record - 1, from each initial state of a chunk
+    (Moreau-Jean at h = T h_fraction; picklable, for any backend)."""
+
+    params: dict
+    transient: int
+    record: int
+    h_fraction: float
+
+    def __call__(self, states) -> np.ndarray:
+        model = get_mechanical("friction")
+        p = model.resolve(self.params)
+        T = model.period(p)
+        out = np.empty((len(states), self.record, 2))
+        starts = np.arange(self.transient, self.transient + self.record) * T
+        for i, x0 in enumerate(states):
+            run = simulate(model.problem(p, (self.transient + self.record) * T, np.asarray(x0, dtype=float)),
+                           MoreauJean(h=T * self.h_fraction))
+            out[i] = run.x[np.minimum(np.searchsorted(run.t, starts - 1e-9 * T), run.t.size - 1)]
+        return out
+
+
+@dataclass
+class Basins:
+    """Initial states (x, v) at phase 0 on a grid, each labelled by the attractor it reaches (-1: none identified),
+    the attractors (converged periodic orbits of the event method), and the boundary's refinement."""
+
+    x: np.ndarray
+    v: np.ndarray
+    labels: np.ndarray                 # (len(v), len(x))
+    attractors: list
+    refined: list = field(default_factory=list)       # (x, v, label) of the refinement's initial states
+    params: dict = field(default_factory=dict)
+    wall_s: float = 0.0
+
+    def boundary(self) -> np.ndarray:
+        """Cells with a neighbour (of the 8 around) of another label."""
+        L = self.labels
+        padded = np.pad(L, 1, mode="edge")
+        edge = np.zeros(L.shape, dtype=bool)
+        rows, cols = L.shape
+        for di in (-1, 0, 1):
+            for dj in (-1, 0, 1):
+                edge |= padded[1 + di:1 + di + rows, 1 + dj:1 + dj + cols] != L
+        return edge
+
+    def to_dict(self) -> dict:
+        counts = {int(a): int((self.labels == a).sum()) for a in np.unique(self.labels)}
+        return {"params": self.params, "grid": [len(self.x), len(self.v)], "cells": counts,
+                "attractors": [{k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in a.items()}
+                               for a in self.attractors],
+                "boundary_cells": int(self.boundary().sum()), "refined": len(self.refined), "wall_s": self.wall_s}
+
+
+def _match(samples: np.ndarray, attractors: list, tol: float) -> int:
+    """The label of the attractor whose orbit's stroboscopic points are each within ``tol`` of the samples' last
+    period (-1: none)."""
+    for k, a in enumerate(attractors):
+        points = a["points"]
+        tail = samples[-len(points):]
+        if all(np.min(np.linalg.norm(points - s, axis=1)) <= tol for s in tail) and \
+                all(np.min(np.linalg.norm(tail - q, axis=1)) <= tol for q in points):
+            return k
+    return -1
+
+
+def basins(params: dict | None, x_range, v_range, n: int, *, transient: int = 80, record: int = 16,
+           h_fraction: float = 2e-3, match: float = 0.05, max_period: int = 8, refine: int = 3,
+           backend="local", workers: int | None = None, progress: bool = False) -> Basins:
+    """The friction oscillator's domains of attraction: an n x n grid of initial states (x, v) at phase 0, each
+    run ``transient`` periods (Moreau-Jean, the grid's rows in parallel on ``backend``: serial, local or a Dask
+    address), then labelled by the attractor its last ``record`` stroboscopic samples sit on (within ``match``).
+    Each attractor is a periodic orbit solved by Newton shooting on the event method's exact map from the first
+    state that reached it (period from the samples), kept only if its residual is below 1e-10; its event signature
+    and Floquet multipliers are reported. Each boundary cell (a neighbour of another label, of the 8 around) is then refined by
+    ``refine`` x ``refine`` initial states inside it, so the boundary is resolved by at least that many cells."""
+    from converters.analysis.bifurcation import detect_period
+    from converters.parallel import backend_for
+    model = get_mechanical("friction")
+    p = model.resolve(params)
+    clock = time.perf_counter()
+    xs, vs = np.linspace(*x_range, n), np.linspace(*v_range, n)
+    task = _BasinChunk(p, int(transient), int(record), float(h_fraction))
+
+    def run(states, label):
+        chunks = [states[i:i + n] for i in range(0, len(states), n)]
+        if backend == "serial":
+            parts = [task(c) for c in chunks]
+        else:
+            engine = backend_for(backend, workers=workers)
+            parts = [None] * len(chunks)
+            from tqdm import tqdm
+            with tqdm(total=len(chunks), desc=label, unit=" rows", disable=not progress) as bar:
+                for position, result in engine.map_chunks(task, chunks):
+                    if not isinstance(result, np.ndarray):
+                        raise SimulationError(f"a chunk of the basin grid was lost: {result.message}")
+                    parts[position] = result
+                    bar.update(1)
+        return np.concatenate(parts)
+    grid = [(x, v) for v in vs for x in xs]
+    samples = run(grid, "basins")
+    attractors: list = []
+    scale = 1.0 + np.max(np.abs(samples[:, -1]))
+    family_for = {}
+
+    def label_of(series, start):
+        k = _match(series, attractors, match * scale)
+        if k >= 0:
+            return k
+        period = detect_period(series, 1e-3)
+        if not 1 <= period <= max_period:
+            return -1
+        family = family_for.setdefault(period, OrbitFamily(ParameterPath(model, p, "omega"), EventDriven(), period))
+        orbit = family.orbit(p["omega"], series[-1])
+        if not orbit.converged or orbit.residual > 1e-10:
+            return -1
+        one = family.period_map(p["omega"], 1)
+        points = [orbit.x0]
+        for _ in range(period - 1):
+            points.append(one.end(points[-1]))
+        attractors.append({"label": len(attractors), "period": period, "points": np.array(points),
+                           "residual": float(orbit.residual), "multipliers": np.abs(orbit.multipliers).tolist(),
+                           "signature": [f"{kind}" for kind, _, _ in family.signature(p["omega"], orbit.x0)],
+                           "first_from": list(map(float, start))})
+        return _match(series, attractors, match * scale)
+    labels = np.array([label_of(series, start) for series, start in zip(samples, grid)]).reshape(n, n)
+    result = Basins(xs, vs, labels, attractors, params=p)
+    if refine > 1:
+        dx, dv = xs[1] - xs[0], vs[1] - vs[0]
+        offsets = (np.arange(refine) + 0.5) / refine - 0.5
+        inner = [(xs[j] + a * dx, vs[i] + b * dv) for i, j in zip(*np.nonzero(result.boundary()))
+                 for b in offsets for a in offsets]
+        if inner:
+            more = run(inner, "boundary refinement")
+            result.refined = [(x, v, label_of(series, (x, v))) for (x, v), series in zip(inner, more)]
+    result.wall_s = time.perf_counter() - clock
+    return result
+
+
+def resolution_check(coarse: Basins, fine: Basins) -> dict:
+    """A grid twice finer (2 n - 1 points over the same ranges: the coarse states and the midpoints between them)
+    against the coarse one: each coarse cell's 3 x 3 fine states around its centre should carry its label unless
+    the cell is on the boundary. Returns the cells changed off the boundary (0 wanted) and on it."""
+    n = len(coarse.x)
+    if len(fine.x) != 2 * n - 1 or not np.allclose(fine.x[::2], coarse.x) or not np.allclose(fine.v[::2], coarse.v):
+        raise ParameterError(f"the fine grid must have 2 n - 1 = {2 * n - 1} points over the coarse grid's ranges; "
+                             f"got {len(fine.x)}")
+    if len(fine.attractors) != len(coarse.attractors) or any(
+            _match(a["points"], coarse.attractors, 1e-8) != k for k, a in enumerate(fine.attractors)):
+        raise SimulationError("the two resolutions found different attractors")
+    edge = coarse.boundary()
+    changed = np.zeros(edge.shape, dtype=bool)
+    for i in range(n):
+        for j in range(n):
+            block = fine.labels[max(2 * i - 1, 0):2 * i + 2, max(2 * j - 1, 0):2 * j + 2]
+            changed[i, j] = bool(np.any(block != coarse.labels[i, j]))
+    return {"off_boundary": int((changed & ~edge).sum()), "on_boundary": int((changed & edge).sum()),
+            "boundary_cells": int(edge.sum()), "cells": n * n}
+
+
 # --- diagrams -------------------------------------------------------------------------------------------
 
 def friction_diagram(params: dict | None, name: str, values, *, h_fraction: float = 1e-3, transient: int = 150,
@@ -329,6 +490,61 @@ def chattering_table(params: dict | None, speeds, workers: int | None = None):
 
     from converters.parallel import parallel_map
     return pd.DataFrame(parallel_map(_Chattering(dict(params or {})), list(speeds), workers=workers))
+
+
+def _detachment(model, p: dict) -> float:
+    """The first instant of a revolution where k c + m c'' falls through zero: a follower riding the cam leaves it
+    there (the cam decelerates faster than the spring can follow)."""
+    from scipy.optimize import brentq
+    T = model.period(p)
+    grid = np.linspace(0.0, T, 20001)
+    margin = model.detachment_margin(p, grid)
+    k = int(np.flatnonzero((margin[:-1] >= 0) & (margin[1:] < 0))[0])
+    return brentq(lambda t: float(model.detachment_margin(p, t)), grid[k], grid[k + 1], xtol=1e-15)
+
+
+def ride_left(params: dict | None, rpm: float) -> dict:
+    """The period-one complete-chattering orbit at ``rpm``, if it exists: from the detachment the follower flies,
+    impacts the cam, and its impacts accumulate (the event method completes the sequence in closed form); it then
+    rides the cam to the next revolution's detachment, where its state is the cam's again. That orbit needs no
+    shooting (its state at the detachment is the cam's: it is periodic as soon as it rides again before the next
+    one, and every perturbation is erased at the accumulation). ``ride``: the fraction of the revolution left to
+    ride between the accumulation and the next detachment (None where the impacts have not accumulated by then)."""
+    model = get_mechanical("cam-follower")
+    p = model.resolve({**(params or {}), "rpm": rpm})
+    T = model.period(p)
+    t_d = _detachment(model, p)
+    c, c1, _ = model.offset(p).position(t_d)
+    run = simulate(model.problem(p, t_d + 1.5 * T, np.array([float(c), float(c1)]), t_start=t_d), EventDriven())
+    times, kinds = run.events["time"].to_numpy(), list(run.events["kind"])
+    accumulated = [t for t, kind in zip(times, kinds) if kind == "chatter"]
+    detached = [t for t, kind in zip(times, kinds) if kind == "detach" and t > t_d + 1e-9 * T]
+    periodic = bool(accumulated and detached and accumulated[0] < detached[0]
+                    and abs(detached[0] - (t_d + T)) <= 1e-9 * T)
+    impacts = sum(1 for t, kind in zip(times, kinds) if kind == "impact" and (not detached or t < detached[0]))
+    return {"rpm": rpm, "detachment": t_d / T, "impacts": impacts,
+            "ride": (detached[0] - accumulated[0]) / T if periodic else None}
+
+
+def chattering_transition(params: dict | None, low: float, high: float, tol: float = 1e-9) -> dict:
+    """The cam speed between ``low`` and ``high`` where the period-one complete-chattering orbit
+    (:func:`ride_left`) ends: its ride left reaches zero (the accumulation reaches the next detachment), located
+    from the side where it exists by :func:`converters.analysis.sliding.approach_zero` to ``tol`` (relative)."""
+    from converters.analysis.sliding import approach_zero
+    ends = [ride_left(params, low), ride_left(params, high)]
+    exists = [end["ride"] is not None for end in ends]
+    if exists[0] == exists[1]:
+        raise SimulationError(f"the period-one complete-chattering orbit {'exists' if exists[0] else 'is absent'} at "
+                              f"both {low:g} and {high:g} rpm: no transition between them to locate")
+    start, bound = (ends[0], high) if exists[0] else (ends[1], low)
+
+    def evaluate(rpm):
+        row = ride_left(params, rpm)
+        return None if row["ride"] is None else (row["ride"], row)
+    value, width, points, trials = approach_zero(evaluate, (start["rpm"], start["ride"], start), bound, tol)
+    last = points[-1][2]
+    return {"rpm": float(value), "width": float(width), "last": last, "runs": trials + 2,
+            "side": "below" if exists[0] else "above"}
 
 
 def lyapunov_of_flow(model_name: str, params: dict | None, *, span_units: float = 1.0, transient: int = 60,
@@ -564,6 +780,44 @@ def degenerate_section():
                    metrics=study.to_dict())
 
 
+def basins_section():
+    """The seed's domain of attraction at A = 3.6, omega = 1.067, with the check at a grid twice finer."""
+    import pandas as pd
+
+    from .defaults import MECHANICS
+    from .mechanics_plots import basin_figure
+    from .report import Section, table_html
+    cfg = MECHANICS["basins"]
+    box = dict(params={"A": cfg["A"], "omega": cfg["omega"]}, x_range=cfg["x"], v_range=cfg["v"])
+    coarse = basins(n=cfg["n"], refine=cfg["refine"], **box)
+    fine = basins(n=2 * cfg["n"] - 1, refine=1, **box)
+    check = resolution_check(coarse, fine)
+    model = get_mechanical("friction")
+    p = coarse.params
+    T = model.period(p)
+    orbits = [simulate(model.problem(p, a["period"] * T, a["points"][0]), EventDriven(output_step=T / 400.0))
+              for a in coarse.attractors]
+    ok = (check["off_boundary"] == 0 and (coarse.labels >= 0).all() and bool(coarse.attractors)
+          and all(a["residual"] < 1e-10 for a in coarse.attractors))
+    rows = pd.DataFrame([{"attractor": a["label"], "period (T)": a["period"], "events": ", ".join(a["signature"]),
+                          "x(0) (m)": f"{a['points'][0][0]:.6f}", "v(0) (m/s)": f"{a['points'][0][1]:.6f}",
+                          "Newton residual": f"{a['residual']:.1e}",
+                          "|Floquet multipliers|": ", ".join(f"{m:.3g}" for m in a["multipliers"]),
+                          "share of the grid": f"{(coarse.labels == a['label']).mean():.1%}"} for a in coarse.attractors])
+    text = (f"<p>Initial states (x, v) at phase 0 on a {cfg['n']} x {cfg['n']} grid, each run {80} forcing periods "
+            "(Moreau-Jean, h = T/500, the grid's rows in parallel on the local backend) and labelled by the attractor "
+            "its last 16 stroboscopic samples sit on; each attractor is the periodic orbit solved by Newton shooting "
+            "on the event method's exact map from the first state that reached it. Each boundary cell is refined by "
+            f"{cfg['refine']} x {cfg['refine']} more initial states (dots). A grid twice finer ({2 * cfg['n'] - 1} "
+            f"points a side) changes {check['off_boundary']} cells off the boundary ({check['on_boundary']} of its "
+            f"{check['boundary_cells']} cells on it); unlabelled cells: {int((coarse.labels < 0).sum())}; "
+            f"{coarse.wall_s + fine.wall_s:.0f} s.</p>" + table_html(rows)
+            + "<img src='basins.png' alt='domain of attraction'>")
+    return Section("Mechanics: the friction oscillator's domain of attraction", text,
+                   {"basins.png": basin_figure(coarse, orbits)}, ok=ok,
+                   metrics={**coarse.to_dict(), "resolution_check": check})
+
+
 def diagram_study_path(study) -> tuple[float, float]:
     return min(study.start, study.stop), max(study.start, study.stop)
 
@@ -604,19 +858,26 @@ def agreement_section():
 
 
 def cam_section():
-    """The cam-follower's impact phases against its speed."""
+    """The cam-follower's impact phases against its speed, its regimes, and where complete chattering ends."""
+    import pandas as pd
+
     from .defaults import MECHANICS
     from .mechanics_plots import diagram_figure
-    from .report import Section
+    from .report import Section, csv_bytes, table_html
     model = get_mechanical("cam-follower")
     values = np.linspace(*MECHANICS["cam_rpm"], MECHANICS["cam_points"])
     rows = impact_phase_diagram({}, values, h_fraction=2.5e-4, workers=1)
     counts = {f"{r.value:g}": int(r.times.size) for r in rows}
-    picture = diagram_figure(model, "rpm", rows, marks={"the seed's 175 rpm (chattering)": 175.0,
-                                                        "Siconos' example, 358 rpm": 358.0})
-    errors = sum(bool(r.error) for r in rows)
-    from .report import csv_bytes, table_html
     regimes = chattering_table({}, MECHANICS["cam_regime_rpm"], workers=1)
+    transitions = [chattering_transition({}, *bracket) for bracket in MECHANICS["cam_transitions"]]
+    marks = {"the seed's 175 rpm (chattering)": 175.0, "Siconos' example, 358 rpm": 358.0}
+    marks.update({f"complete chattering ends, {t['rpm']:.4f} rpm": t["rpm"] for t in transitions})
+    picture = diagram_figure(model, "rpm", rows, marks=marks)
+    errors = sum(bool(r.error) for r in rows)
+    located = pd.DataFrame([{"bracket (rpm)": f"{lo:g}..{hi:g}", "located (rpm)": f"{t['rpm']:.7f}",
+                             "width (rpm)": f"{t['width']:.1e}", "ride left at the last orbit (revolutions)":
+                             f"{t['last']['ride']:.1e}", "impacts before it accumulates": t["last"]["impacts"],
+                             "runs": t["runs"]} for (lo, hi), t in zip(MECHANICS["cam_transitions"], transitions)])
     text = ("<p>The cam-follower of Siconos' CamFollower example (after di Bernardo, Osorio and Santini; m = 1.221 kg, k = 1430.8 N/m, e = 0.8): the phase of every "
             "impact (Moreau-Jean, h = T/4000, 20 cam revolutions after 20 of transient) against the cam speed, "
             "over a range holding the seed's 175 rpm and Siconos' 358 rpm. At low speed the follower stays on the "
@@ -624,11 +885,22 @@ def cam_section():
             "it detaches and returns in impacts, in sequences that accumulate (complete chattering) or are cut "
             "short by the next lift (incomplete).</p><img src='cam_impacts.png' alt='impact phases'>"
             "<p>The regime at selected speeds (the event method, revolutions 10 to 20; an accumulation is a chattering "
-            "sequence completed in closed form, the follower then riding the cam):</p>" + table_html(regimes))
+            "sequence completed in closed form, the follower then riding the cam):</p>" + table_html(regimes)
+            + "<p>Transition from complete chattering to no-complete chattering, located: the period-one "
+              "complete-chattering orbit leaves the cam at its detachment (where k c + m c'' falls through zero), "
+              "impacts it, its impacts accumulate and it rides the cam to the next revolution's detachment, where "
+              "its state is the cam's again (periodic without shooting; every perturbation is erased at the "
+              "accumulation). Its test function is the ride left between the accumulation and the next detachment; "
+              "where it reaches zero the accumulation no longer completes within the revolution. Each end is "
+              "approached by secant steps from the side where the orbit exists (the event method):</p>"
+            + table_html(located))
     return Section("Mechanics: the cam-follower's impact phases", text,
-                   {"cam_impacts.png": picture, "cam_regimes.csv": csv_bytes(regimes)},
-                   ok=errors == 0 and sum(counts.values()) > 0,
-                   metrics={"impacts_per_rpm": counts, "errors": errors, "regimes": regimes.to_dict(orient="records")})
+                   {"cam_impacts.png": picture, "cam_regimes.csv": csv_bytes(regimes),
+                    "cam_transitions.csv": csv_bytes(located)},
+                   ok=errors == 0 and sum(counts.values()) > 0 and all(t["width"] <= 1e-6 * t["rpm"] for t in transitions),
+                   metrics={"impacts_per_rpm": counts, "errors": errors, "regimes": regimes.to_dict(orient="records"),
+                            "transitions": [{**{k: v for k, v in t.items() if k != "last"},
+                                             "ride": float(t["last"]["ride"])} for t in transitions]})
 
 
 def two_block_section():
@@ -654,5 +926,5 @@ def two_block_section():
                                                                "lyapunov": {str(k): v for k, v in exponents.items()}})
 
 
-__all__ = ["sliding_study", "degenerate_switching", "degenerate_portraits", "DegenerateSwitching", "friction_diagram", "two_block_diagram", "impact_phase_diagram", "ball_check",
-           "friction_agreement", "cam_checks", "sliding_section", "degenerate_section", "agreement_section", "cam_section", "two_block_section"]
+__all__ = ["basins", "Basins", "resolution_check", "sliding_study", "degenerate_switching", "degenerate_portraits", "DegenerateSwitching", "friction_diagram", "two_block_diagram", "impact_phase_diagram", "ball_check",
+           "friction_agreement", "cam_checks", "ride_left", "chattering_transition", "sliding_section", "degenerate_section", "basins_section", "agreement_section", "cam_section", "two_block_section"]

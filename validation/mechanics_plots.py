@@ -173,3 +173,38 @@ def degenerate_curve_figure(study, portraits: list, fmt: str = "png") -> bytes:
     ax.legend(fontsize=7)
     ax.set_title("The switching-sliding point continued in A (event method)", fontsize=9)
     return _save(fig, fmt)
+
+
+def basin_figure(result, orbits: list, fmt: str = "png") -> bytes:
+    """The domains of attraction: each grid cell coloured by the attractor its initial state reaches, the boundary's
+    refinement as dots, each attractor's orbit over one period drawn over it (its stroboscopic points marked)."""
+    from matplotlib.colors import ListedColormap
+    colours = ["#c7d7ea", "#f2c9a5", "#c9e3c4", "#e0c6e6", "#f3e3a8", "#d9d9d9"]
+    k = max(len(result.attractors), 1)
+    cmap = ListedColormap(["#ffffff"] + colours[:k])
+    fig, ax = plt.subplots(figsize=(7.5, 6.0))
+    dx, dv = result.x[1] - result.x[0], result.v[1] - result.v[0]
+    edges_x = np.append(result.x - 0.5 * dx, result.x[-1] + 0.5 * dx)
+    edges_v = np.append(result.v - 0.5 * dv, result.v[-1] + 0.5 * dv)
+    ax.pcolormesh(edges_x, edges_v, result.labels + 1, cmap=cmap, vmin=-0.5, vmax=k + 0.5, shading="flat")
+    if result.refined:
+        refined = np.array(result.refined)
+        darker = ["#4c72b0", "#dd8452", "#55a868", "#8172b2", "#ccb974", "#7f7f7f"]
+        for label in np.unique(refined[:, 2]).astype(int):
+            pick = refined[:, 2] == label
+            ax.plot(refined[pick, 0], refined[pick, 1], ".", ms=1.2, color=darker[label % 6] if label >= 0 else "k")
+    for a, run in zip(result.attractors, orbits):
+        ax.plot(run.x[:, 0], run.x[:, 1], "-", color="k", lw=1.2)
+        ax.plot(a["points"][:, 0], a["points"][:, 1], "o", color="k", mfc="w", ms=6)
+        share = (result.labels == a["label"]).mean()
+        ax.plot([], [], "s", color=colours[a["label"] % 6], ms=8,
+                label=f"attractor {a['label']}: period {a['period']} ({', '.join(a['signature'])}), "
+                      f"|mu| max {max(a['multipliers']):.3g}, {share:.0%} of the grid")
+    ax.set_xlabel("x (m) at phase 0")
+    ax.set_ylabel("v (m/s) at phase 0")
+    ax.set_xlim(edges_x[0], edges_x[-1])
+    ax.set_ylim(edges_v[0], edges_v[-1])
+    ax.legend(fontsize=7, loc="lower left")
+    ax.set_title(f"Domain of Attraction, A = {result.params['A']:g} N, W = {result.params['omega']:g} rad/s "
+                 f"({len(result.x)} x {len(result.v)} initial states; the orbits over one period in black)", fontsize=9)
+    return _save(fig, fmt)

@@ -390,6 +390,7 @@ def _mechanics(name: str):
 EXTRA_SECTIONS["mechanics"] = [
     ("Mechanics: the dry-friction oscillator's sliding bifurcations", partial(_mechanics, "sliding_section")),
     ("Mechanics: the degenerate switching-sliding bifurcation", partial(_mechanics, "degenerate_section")),
+    ("Mechanics: the friction oscillator's domain of attraction", partial(_mechanics, "basins_section")),
     ("Mechanics: event-driven against Moreau-Jean and the closed forms", partial(_mechanics, "agreement_section")),
     ("Mechanics: the cam-follower's impact phases", partial(_mechanics, "cam_section")),
     ("Mechanics: two blocks on a belt", partial(_mechanics, "two_block_section"))]

@@ -108,3 +108,42 @@ def test_the_two_block_sections_time_unit_is_the_one_the_code_uses(monkeypatch):
     assert unit == pytest.approx(2 * np.pi * np.sqrt(1.0 / 2.0), rel=1e-15)
     section = mech.two_block_section()
     assert f"{unit:.4g} s here, block 1's" in section.html and "k2 + kc" not in section.html
+
+
+@pytest.mark.slow
+def test_complete_chattering_ends_where_its_ride_left_reaches_zero():
+    """The period-one complete-chattering orbit (from the detachment, its impacts accumulate, it rides the cam to the
+    next detachment) ends near 253 rpm where the ride left reaches zero; located to 1e-6 rpm from the side where it
+    exists, the ride shrinking linearly into it; and the attractor from rest changes regime there: every revolution
+    accumulates 0.02 rpm below it, not every one 0.02 rpm above."""
+    from validation.mechanics import _Chattering, chattering_transition, ride_left
+    found = chattering_transition({}, 250.0, 254.0)
+    assert found["side"] == "below" and found["width"] <= 1e-6 and 0.0 < found["last"]["ride"] <= 1e-6
+    assert found["rpm"] == pytest.approx(252.99229, abs=2e-5)
+    r1, r2 = (ride_left({}, found["rpm"] - d)["ride"] for d in (0.02, 0.01))
+    assert r1 > r2 > 0.0
+    assert found["rpm"] - 0.01 + r2 * 0.01 / (r1 - r2) == pytest.approx(found["rpm"], abs=1e-3)
+    assert ride_left({}, found["rpm"] + 0.01)["ride"] is None
+    below, above = (_Chattering({}, transient=2, record=4)(found["rpm"] + d) for d in (-0.02, 0.02))
+    assert below["regime"] == "complete chattering" and below["accumulations_per_revolution"] == 1.0
+    assert above["accumulations_per_revolution"] < 1.0
+
+
+@pytest.mark.slow
+def test_domain_of_attraction_at_A_3_6_two_converged_orbits_and_a_resolved_boundary():
+    """The seed's domain of attraction (A = 3.6, omega = 1.067): every initial state of the grid reaches one of two
+    period-one orbits (converged by Newton on the event method's exact map, residual below 1e-10, stable), and a
+    grid twice finer changes no cell off the basin boundary."""
+    from validation.mechanics import basins, resolution_check
+    box = dict(params={"A": 3.6, "omega": 1.067}, x_range=(-4.0, 4.0), v_range=(-4.0, 4.0))
+    coarse = basins(n=20, refine=1, backend="local", workers=2, **box)
+    fine = basins(n=39, refine=1, backend="local", workers=2, **box)
+    serial = basins(n=5, refine=1, backend="serial", **box)     # the backends agree, state for state
+    assert (serial.labels == basins(n=5, refine=1, backend="local", workers=2, **box).labels).all()
+    assert len(coarse.attractors) == 2 and (coarse.labels >= 0).all() and (fine.labels >= 0).all()
+    for a in coarse.attractors:
+        assert a["period"] == 1 and a["residual"] < 1e-10 and max(a["multipliers"]) < 1.0
+    sticking = [a for a in coarse.attractors if a["points"][0][1] == pytest.approx(1.0, abs=1e-12)]
+    assert len(sticking) == 1                       # one of them starts each period stuck to the belt (v = Vdr)
+    check = resolution_check(coarse, fine)
+    assert check["off_boundary"] == 0 and 0 < check["boundary_cells"] < check["cells"]
