@@ -31,7 +31,7 @@ import os
 import stat
 import time
 import uuid
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 
 import numpy as np
@@ -132,19 +132,22 @@ class SpiceSweep:
 # --- the dataset --------------------------------------------------------------------------------------------
 
 def describe(ensemble, points) -> dict:
-    """The identity of a sweep: what is computed at which points (compared on resume)."""
-    return {"format": FORMAT, "ensemble": type(ensemble).__name__, **json.loads(json.dumps(asdict(ensemble))),
+    """The identity of a sweep: what is computed at which points (compared on resume; fields kept out of the
+    comparison, as what is derived from the others, are left out)."""
+    identity = {f.name for f in fields(ensemble) if f.compare}
+    settings = {k: v for k, v in asdict(ensemble).items() if k in identity}
+    return {"format": FORMAT, "ensemble": type(ensemble).__name__, **json.loads(json.dumps(settings)),
             "points": points.describe(), "size": int(points.size)}
 
 
 def schema(ensemble, names):
     import pyarrow as pa
     kinds = {float: pa.float64(), int: pa.int64(), str: pa.string(), bool: pa.bool_()}
-    fields = [("index", pa.int64()), *[(n, pa.float64()) for n in names], ("status", pa.string()),
+    columns = [("index", pa.int64()), *[(n, pa.float64()) for n in names], ("status", pa.string()),
               ("message", pa.string()), *[(k, kinds[t]) for k, t in ensemble.measures.items()],
               ("wall_s", pa.float64())]
     units = getattr(ensemble, "units", {}) or {}
-    return pa.schema(fields, metadata={b"units": json.dumps(units, sort_keys=True).encode()})
+    return pa.schema(columns, metadata={b"units": json.dumps(units, sort_keys=True).encode()})
 
 
 def read_part(data: bytes, columns=None):

@@ -134,7 +134,7 @@ def finite_difference(model, params: dict | None, metric: str, parameter: str, r
     +-h and +-2h (h = ``relative`` times its value, or its distance to its range's nearer end where smaller), a
     five-point central difference; a three-point one-sided one where the range ends. Four orbits per parameter: the
     check of :func:`sensitivities`, not its method."""
-    from .smallsignal import move_scale, steady_mean
+    from .smallsignal import STENCILS, move_scale, steady_mean
     if isinstance(model, str):
         from ..models import get_model
         model = get_model(model)
@@ -150,8 +150,7 @@ def finite_difference(model, params: dict | None, metric: str, parameter: str, r
             return steady_mean(model, {**given, key: value + k * h}, signal, tol)
         except ParameterError:
             return None
-    for offsets, weights, denominator in (((-2, -1, 1, 2), (1, -8, 8, -1), 12.0), ((0, 1, 2), (-3, 4, -1), 2.0),
-                                          ((0, -1, -2), (3, -4, 1), 2.0)):
+    for offsets, weights, denominator in STENCILS:
         values = [at(k) for k in offsets]
         if all(v is not None for v in values):
             return sum(w * v for w, v in zip(weights, values)) / (denominator * h)

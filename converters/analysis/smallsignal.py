@@ -214,12 +214,10 @@ class SmallSignalModel:
         if not _changes_matrices(problem, moved):
             return [(machine, moved_p, 1.0 / delta), (self.machine, p, -1.0 / delta)], False
         h = DYNAMIC_MOVE * move_scale(param, value)
-        for offsets, weights in (((-2, -1, 1, 2), (1, -8, 8, -1)), ((0, 1, 2), (-3, 4, -1)),
-                                 ((0, -1, -2), (3, -4, 1))):
+        for offsets, weights, denominator in STENCILS:
             points = [(self.machine, p, problem) if k == 0 else at(k * h) for k in offsets]
             if all(point is not None for point in points):
-                denominator = (12.0 if len(offsets) == 4 else 2.0) * h
-                return [(m, q, w / denominator) for (m, q, _), w in zip(points, weights)], True
+                return [(m, q, w / (denominator * h)) for (m, q, _), w in zip(points, weights)], True
         raise ParameterError(f"input {name!r} = {value!r} cannot be moved by +-{2 * h:g} inside its range "
                              f"{param.range_text()}")
 
@@ -389,6 +387,11 @@ class SmallSignalModel:
         p0 = np.linalg.solve(np.eye(n) - G[:, :n, :n], G[:, :n, n + 1][..., None])[..., 0]
         integral = np.einsum("fi,fi->f", G[:, n, :n], p0) + G[:, n, n + 1]
         return integral / self.T
+
+
+#: Derivative stencils, tried in order, as (offsets in steps h, weights, denominator in h): the five-point central
+#: difference (error of order h^4), then the three-point one-sided ones (order h^2) where a range ends on one side.
+STENCILS = (((-2, -1, 1, 2), (1, -8, 8, -1), 12.0), ((0, 1, 2), (-3, 4, -1), 2.0), ((0, -1, -2), (3, -4, 1), 2.0))
 
 
 def move_scale(param, value: float) -> float:

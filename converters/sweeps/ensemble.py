@@ -36,6 +36,11 @@ ACCURACY_MEASURES = {"error_estimate": float, "vout_mean_error_estimate": float,
                      "steps_per_period": int, "rtol_met": bool}
 
 
+def on_demand(metrics) -> list:
+    """The metrics that are not a standard measure (nor an accuracy one): columns computed on demand."""
+    return [m for m in metrics if m not in MEASURES and m not in ACCURACY_MEASURES]
+
+
 def failed_row(index: int, point: dict, message: str, wall_s: float = 0.0) -> dict:
     """The row of a point that gave no result: its parameters, status ``failed`` and the reason."""
     return {"index": int(index), **{k: _number(v) for k, v in point.items()}, "status": "failed",
@@ -77,6 +82,8 @@ class ModelSweep:
     rtol: float | None = None
     #: Measures on demand beside the standard ones (:mod:`.metrics`: SIGNAL.STAT, efficiency, losses.NAME, ...).
     metrics: tuple = ()
+    #: Their units, found when the sweep is built (checking a power metric runs a period).
+    metric_units: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @property
     def measures(self) -> dict:
@@ -88,15 +95,12 @@ class ModelSweep:
     @property
     def units(self) -> dict:
         """Each measure's unit ('' where it has none: a mode, a count)."""
-        from .metrics import check_metrics
         model = self._model()
-        p = model.resolve(self.base)
         state = model.state_names[0] if getattr(model, "state_names", None) else ""
         from ..trajectory import signal_unit
         out = {**{q.name: q.unit for q in model.parameters}, "vout_mean": "V", "vout_ripple": "V", "rms_state0": signal_unit({}, state), "held_fraction": "1",
                "spectral_radius": "1", "orbit_distance": "1", "error_estimate": "1", "vout_mean_error_estimate": "1"}
-        return {**out, **check_metrics(model, p, [m for m in self.metrics if m not in MEASURES
-                                                  and m not in ACCURACY_MEASURES])}
+        return {**out, **self.metric_units}
 
     def __post_init__(self):
         from ..models import get_model
@@ -126,7 +130,7 @@ class ModelSweep:
         if not isinstance(self.metrics, tuple):
             raise ParameterError(f"metrics must be a tuple of names; got {self.metrics!r}")
         from .metrics import check_metrics
-        check_metrics(model, p, [m for m in self.metrics if m not in MEASURES and m not in ACCURACY_MEASURES])
+        object.__setattr__(self, "metric_units", check_metrics(model, p, on_demand(self.metrics)))
 
     # --- one point ----------------------------------------------------------------------------------------
 
@@ -328,4 +332,4 @@ def _number(value):
         return value
 
 
-__all__ = ["ModelSweep", "orbit_row", "failed_row", "MEASURES", "STEADY_TOL"]
+__all__ = ["ModelSweep", "orbit_row", "failed_row", "on_demand", "MEASURES", "STEADY_TOL"]

@@ -130,6 +130,14 @@ class Grid:
         return {"kind": "grid", "axes": [a.text() for a in self.axes]}
 
 
+def _check_sampling(option: str, n, seed) -> None:
+    """A sample count in [1, MAX_POINTS] (given as ``option``) and a seed >= 0, integers (bool refused)."""
+    if isinstance(n, bool) or not (isinstance(n, (int, np.integer)) and 1 <= n <= MAX_POINTS):
+        raise ParameterError(f"{option} must be an integer in [1, {MAX_POINTS:,}]; got {n!r}")
+    if isinstance(seed, bool) or not (isinstance(seed, (int, np.integer)) and seed >= 0):
+        raise ParameterError(f"--seed must be an integer >= 0; got {seed!r}")
+
+
 class LatinHypercube:
     """``n`` points of a Latin hypercube over the axes' ranges (scipy.stats.qmc, seeded: the same points on
     every run)."""
@@ -139,10 +147,7 @@ class LatinHypercube:
     def __init__(self, axes, n: int, seed: int = 0):
         self.axes = tuple(axes)
         _check_names(self.axes)
-        if isinstance(n, bool) or not (isinstance(n, (int, np.integer)) and 1 <= n <= MAX_POINTS):
-            raise ParameterError(f"--lhs must be an integer in [1, {MAX_POINTS:,}]; got {n!r}")
-        if not (isinstance(seed, (int, np.integer)) and not isinstance(seed, bool) and seed >= 0):
-            raise ParameterError(f"--seed must be an integer >= 0; got {seed!r}")
+        _check_sampling("--lhs", n, seed)
         from scipy.stats import qmc
         self.size, self.seed, self.shape = int(n), int(seed), (int(n),)
         unit = qmc.LatinHypercube(d=len(self.axes), seed=self.seed).random(n)
@@ -255,10 +260,7 @@ class Tolerances:
             raise ParameterError("a tolerance study needs at least one --tolerance NAME=TOL[%][:DIST]")
         if len(set(names)) != len(names):
             raise ParameterError(f"--tolerance: each parameter once; got {', '.join(names)}")
-        if isinstance(n, bool) or not (isinstance(n, (int, np.integer)) and 1 <= n <= MAX_POINTS):
-            raise ParameterError(f"--samples must be an integer in [1, {MAX_POINTS:,}]; got {n!r}")
-        if not (isinstance(seed, (int, np.integer)) and not isinstance(seed, bool) and seed >= 0):
-            raise ParameterError(f"--seed must be an integer >= 0; got {seed!r}")
+        _check_sampling("--samples", n, seed)
         if sampler not in SAMPLERS:
             raise ParameterError(f"--sampler must be one of {', '.join(SAMPLERS)}; got {sampler!r}")
         import warnings

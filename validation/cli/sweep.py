@@ -164,8 +164,8 @@ def build(args):
 
 def _extra(metrics: list) -> tuple:
     """The metrics that are not a standard measure (columns on demand)."""
-    from converters.sweeps.ensemble import ACCURACY_MEASURES, MEASURES
-    return tuple(m for m in metrics if m not in MEASURES and m not in ACCURACY_MEASURES)
+    from converters.sweeps.ensemble import on_demand
+    return tuple(on_demand(metrics))
 
 
 def _runs_circuits(key: str) -> bool:
