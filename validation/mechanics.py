@@ -629,17 +629,13 @@ def friction_agreement(params: dict | None = None, steps=(500, 2000, 8000, 32000
 def cam_checks(params: dict | None = None, periods: int = 3) -> dict:
     """The cam-follower from rest on the cam: the first detachment against the first zero of k c + m c''
     (the cam's deceleration beyond the spring), and the first impacts of the event method against Moreau-Jean's."""
-    from scipy.optimize import brentq
     model = get_mechanical("cam-follower")
     p = model.resolve(params)
     T = model.period(p)
     run = simulate(model.problem(p, periods * T), EventDriven())
     events = run.events
     detach = events.loc[events["kind"] == "detach", "time"].to_numpy()
-    grid = np.linspace(0.0, T, 20001)
-    margin = model.detachment_margin(p, grid)
-    k = int(np.flatnonzero((margin[:-1] >= 0) & (margin[1:] < 0))[0])
-    zero = brentq(lambda t: float(model.detachment_margin(p, t)), grid[k], grid[k + 1], xtol=1e-15)
+    zero = _detachment(model, p)
     # The first impacts after the detachment, well apart (a chattering cluster follows them, whose bounces a
     # time-stepper merges at a coarse h): each against Moreau-Jean's nearest impact.
     impacts = events.loc[events["kind"] == "impact", "time"].to_numpy()[:3]

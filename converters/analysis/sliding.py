@@ -113,8 +113,9 @@ def approach_zero(evaluate, start: tuple, bound: float, tol: float, max_iter: in
     side). The secant's zero from the last two points is approached from the known side (each trial 99 % of the
     way to it, inside the bracket; a tenth of the way to ``bound`` from a single point); a trial past the end
     narrows the bracket from the other side. Stops where the secant's zero is within ``tol`` (relative) of the last
-    point, or the last point's |f| is at most ``ftol``. Returns (value, width, points, trials): the zero and that distance, or the bracket's middle and width
-    where it could not close, and the points on the known side in the order found."""
+    point, or the last point's |f| is at most ``ftol``. Returns (value, width, points, trials): the zero and that
+    distance, or the bracket's middle and width where it could not close, and the points on the known side in the
+    order found."""
     points, trials = [tuple(start)], 0
     for _ in range(max_iter):
         v_last, f_last, _ = points[-1]
@@ -186,8 +187,9 @@ class Arrival:
 def arrival(family, value: float, x0, pair: int = 0, side: float | None = None) -> Arrival:
     """The arrival of the orbit of ``family`` through x0 at ``value`` at its sliding region nearest the region's
     boundary (the smallest |margin|; given ``side``, only arrivals from slip direction -side: the one followed
-    along a parameter, where another, after a short excursion to the other side, may come closer): each stick of ``pair`` preceded by a crossing of the same pair (a short
-    excursion past the surface) arrives at that crossing, any other at the stick itself."""
+    along a parameter, where another, after a short excursion to the other side, may come closer): each stick of
+    ``pair`` preceded by a crossing of the same pair (a short excursion past the surface) arrives at that crossing,
+    any other at the stick itself."""
     from ..methods.event.mechanical import SLIP_NEG, SLIP_POS, MechanicalMachine, sliding_boundary
     problem = family.problem(value)
     solution = MechanicalMachine(problem, family.method).run(np.asarray(x0, dtype=float))[0]
@@ -197,8 +199,8 @@ def arrival(family, value: float, x0, pair: int = 0, side: float | None = None) 
     for k, event in enumerate(events):
         if event[1] != "stick":
             continue
-        previous = events[k - 1] if events else None
-        t = float(previous[0] if previous is not None and previous[1] == "cross" else event[0])
+        previous = events[k - 1]                # cyclically: the orbit's last event precedes its first
+        t = float(previous[0] if previous[1] == "cross" else event[0])
         before = [seg for seg in moving if seg.t1 <= t + 1e-12 * (1.0 + abs(t))]
         states = (before[-1] if before else moving[-1]).mode.states
         if states[pair] not in (SLIP_POS, SLIP_NEG):
@@ -236,13 +238,12 @@ def switching_sliding_point(family, low: float, high: float, x_guess, pair: int 
 
     def evaluate(value, max_iter=NEWTON_ITERATIONS):
         orbit = family.orbit(value, last[-1], max_iter=max_iter)
-        x = orbit.x0 if orbit.converged else None
-        if x is None:
+        if not orbit.converged:
             return None
-        found = arrival(family, value, x, pair, side)
+        found = arrival(family, value, orbit.x0, pair, side)
         if found.margin >= 0.0:
             return None
-        last.append(x)
+        last.append(orbit.x0)
         return found.margin, found
     ends = {}
     for value in (low, high):
