@@ -21,6 +21,7 @@ import numpy as np
 
 from converters.analysis.bifurcation import brute_force, detect_period, iterate, section_diagram
 from converters.analysis.continuation import OrbitFamily, check_path, follow
+from converters.analysis.periodic import multipliers_of
 from converters.analysis.sliding import TYPES, classify_sliding
 from converters.errors import ParameterError, SimulationError
 from converters.methods import EventDriven, MoreauJean
@@ -545,6 +546,130 @@ def chattering_transition(params: dict | None, low: float, high: float, tol: flo
     last = points[-1][2]
     return {"rpm": float(value), "width": float(width), "last": last, "runs": trials + 2,
             "side": "below" if exists[0] else "above"}
+
+
+def cam_family(params: dict | None, revolutions: int = 1) -> OrbitFamily:
+    """The cam-follower's orbits of ``revolutions`` cam revolutions as a family in the cam speed (rpm), on the event
+    method's map: its Jacobian the variational equations with each impact's saltation matrix (exact for orbits
+    whose impacts do not accumulate)."""
+    model = get_mechanical("cam-follower")
+    base = model.resolve(params)
+
+    def problem_of(rpm):
+        p = dict(base, rpm=float(rpm))
+        return model.problem(p, model.period(p))
+    return OrbitFamily(problem_of, EventDriven(), periods=revolutions)
+
+
+def impact_angles(family: OrbitFamily, rpm: float, x0) -> np.ndarray:
+    """The cam angle beta (rad, in [0, 2 pi)) of each impact of the orbit from x0 at ``rpm``, in time order."""
+    model = get_mechanical("cam-follower")
+    times = [t for t, kind, *_ in family.period_map(rpm).events(x0) if kind == "impact"]
+    return model.cam_angle({"rpm": rpm}, np.array(times, dtype=float))
+
+
+@dataclass(frozen=True)
+class CornerImpact:
+    """An impact of a continued orbit reaching a joint of the cam profile (where h_c'' jumps): the orbit there,
+    located as (x0, rpm) with the orbit's residual and the impact's angle off the joint, and the orbits either side
+    of the joint at ``offset`` rpm from it (their multipliers: a corner collision changes the map's Jacobian, not its
+    value)."""
+
+    joint: str
+    angle: float
+    impact: int
+    rpm: float
+    x0: np.ndarray
+    residual: float
+    off_joint: float
+    offset: float
+    #: [(rpm, x0, multipliers, impact angle)] of the orbits found at rpm +- offset.
+    sides: tuple
+    #: "nonsmooth fold" when two orbits lie on one side of the corner in rpm and none on the other (they meet at
+    #: the corner and vanish together), "persistence" when the orbit crosses it, else "undetermined".
+    kind: str
+
+
+def locate_corner(family: OrbitFamily, joint: float, impact: int, rpm: float, x0, tol: float = 1e-11,
+                  iterations: int = 20) -> tuple[float, np.ndarray, float, float]:
+    """(rpm, x0, residual, angle off the joint) of the orbit whose impact number ``impact`` hits the profile at
+    ``joint`` (rad): Newton on the orbit's equation P(x0) - x0 = 0 and beta_impact - joint = 0 in (x0, rpm)
+    together (the angle's derivatives and d P / d rpm by central differences; the map's own Jacobian exact). The
+    angle is a C1 function of (x0, rpm) through the corner (the impact time depends on the cam's position and
+    velocity, which are smooth there): the bordered Newton converges through it."""
+    x = np.array(x0, dtype=float)
+    n = x.size
+    angle = lambda value, state: float(impact_angles(family, value, state)[impact])        # noqa: E731
+    for _ in range(iterations):
+        end, jac = family.period_map(rpm)(x)
+        residual = end - x
+        off = angle(rpm, x) - joint
+        if np.abs(residual).max() <= tol * (1.0 + np.abs(x).max()) and abs(off) <= tol:
+            break
+        dp = 1e-7 * rpm
+        d_end = (family.period_map(rpm + dp).end(x) - family.period_map(rpm - dp).end(x)) / (2.0 * dp)
+        grad = np.empty(n)
+        for j in range(n):
+            dx = 1e-7 * (1.0 + abs(x[j]))
+            step = np.zeros(n)
+            step[j] = dx
+            grad[j] = (angle(rpm, x + step) - angle(rpm, x - step)) / (2.0 * dx)
+        bordered = np.zeros((n + 1, n + 1))
+        bordered[:n, :n] = jac - np.eye(n)
+        bordered[:n, n] = d_end
+        bordered[n, :n] = grad
+        bordered[n, n] = (angle(rpm + dp, x) - angle(rpm - dp, x)) / (2.0 * dp)
+        delta = np.linalg.solve(bordered, -np.concatenate([residual, [off]]))
+        x, rpm = x + delta[:n], rpm + float(delta[n])
+    end = family.period_map(rpm).end(x)
+    return rpm, x, float(np.abs(end - x).max()), angle(rpm, x) - joint
+
+
+def corner_impacts(family: OrbitFamily, branch, offset: float = 1e-3, near: float = 1e-3) -> list:
+    """Every corner impact on a continued branch: where an impact's angle passes a joint of the profile
+    (:data:`converters.models.mechanics.cam.JOINTS`) between consecutive orbits, or where the branch stopped with
+    an impact within ``near`` rad of one (the corrector cannot pass a corner where the branch turns), located by
+    :func:`locate_corner`. Its kind from the orbits at ``offset`` rpm either side of it (Newton from the corner
+    orbit, then from points beyond it on the line through the orbit found, for the other side of the joint): two
+    on one side and none on the other is a nonsmooth fold; one on each side, the orbit persisting through it."""
+    from converters.models.mechanics.cam import JOINTS
+    points = branch.points
+    angles = [impact_angles(family, pt.value, pt.x0) for pt in points]
+    starts = []
+    for a, angles_a, angles_b in zip(points, angles, angles[1:]):
+        for name, joint in JOINTS.items():
+            starts += [(name, joint, i, a) for i, (before, after) in enumerate(zip(angles_a, angles_b))
+                       if (before - joint) * (after - joint) < 0.0 and abs(after - before) < 0.5]
+    if branch.message and points:
+        for name, joint in JOINTS.items():
+            starts += [(name, joint, i, points[-1]) for i, angle in enumerate(angles[-1]) if abs(angle - joint) <= near]
+    out = []
+    for name, joint, i, start in starts:
+        rpm, x0, residual, off = locate_corner(family, joint, i, start.value, start.x0)
+        sides = []
+        scale = 1e-9 * (1.0 + np.abs(x0).max())
+        for value in (rpm + offset, rpm - offset):
+            found = family.orbit(value, x0)
+            if not found.converged:
+                continue
+            orbits = [found]
+            # the other side of the joint: along the line through the corner orbit, beyond it (the two orbits
+            # leave the corner at different rates)
+            for reach in (1.0, 3.0, 10.0, 30.0, 100.0):
+                other = family.orbit(value, x0 - reach * (found.x0 - x0))
+                if other.converged and np.abs(other.x0 - found.x0).max() > scale:
+                    orbits.append(other)
+                    break
+            for orbit in orbits:
+                jac = family.period_map(value)(orbit.x0)[1]
+                sides.append((value, orbit.x0, multipliers_of(jac), float(impact_angles(family, value, orbit.x0)[i])))
+        above = [side for side in sides if side[0] > rpm]
+        below = [side for side in sides if side[0] < rpm]
+        kind = ("nonsmooth fold" if sorted([len(above), len(below)]) == [0, 2] else
+                "persistence" if len(above) == len(below) == 1 else "undetermined")
+        out.append(CornerImpact(name, float(joint), i, float(rpm), x0, residual, float(off), offset, tuple(sides),
+                                kind))
+    return out
 
 
 def lyapunov_of_flow(model_name: str, params: dict | None, *, span_units: float = 1.0, transient: int = 60,

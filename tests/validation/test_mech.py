@@ -147,3 +147,76 @@ def test_domain_of_attraction_at_A_3_6_two_converged_orbits_and_a_resolved_bound
     assert len(sticking) == 1                       # one of them starts each period stuck to the belt (v = Vdr)
     check = resolution_check(coarse, fine)
     assert check["off_boundary"] == 0 and 0 < check["boundary_cells"] < check["cells"]
+
+
+def _cam_period_closed_form(rpm: float, x0, e: float = 0.8, m: float = 1.221, k: float = 1430.8):
+    """An independent period map of the cam-follower (no ODE solver, no event engine): the flight is m x'' + k x = 0 in
+    closed form, each impact the first sign change of the gap x - c(t) on a grid of T/20000 refined by Brent, Newton's
+    law v+ = c' - e (v- - c'). Returns (x(T), the impact times)."""
+    from scipy.optimize import brentq
+
+    from converters.models.mechanics.cam import CamOffset
+    cam = CamOffset(2 * np.pi * rpm / 60)
+    w, T = np.sqrt(k / m), 60 / rpm
+    t, (x, v), impacts = 0.0, map(float, x0), []
+
+    def flight(s):
+        return x * np.cos(w * (s - t)) + v / w * np.sin(w * (s - t))
+    while True:
+        grid = np.linspace(t, T, max(3, int((T - t) / T * 20000)))
+        gap = flight(grid) - cam.position(grid)[0]
+        below = np.flatnonzero(gap[1:] < 0)
+        if not below.size:
+            x, v = flight(T), -x * w * np.sin(w * (T - t)) + v * np.cos(w * (T - t))
+            return np.array([x, v]), impacts
+        j = below[0] + 1
+        hit = brentq(lambda s: flight(s) - cam.position(s)[0], grid[j - 1], grid[j], xtol=1e-15, rtol=1e-15)
+        x, v = flight(hit), -x * w * np.sin(w * (hit - t)) + v * np.cos(w * (hit - t))
+        c1 = float(cam.position(hit)[1])
+        v = c1 - e * (v - c1)
+        t = hit                                       # leaving the cam: the gap grows from zero (gap[1:] is tested)
+        impacts.append(hit)
+
+
+def test_the_cam_p21_orbit_ends_in_a_corner_impact_at_the_flank_nose_joint():
+    """The cam-follower's P(2, 1) orbit (two impacts a revolution), continued down in cam speed on the event method's
+    map with its exact Jacobian (impact saltation), turns at 355.15 rpm where its first impact reaches the joint of
+    the flank and the nose (beta = pi/2 + beta2, where h_c'' jumps): a corner-impact bifurcation, here a nonsmooth
+    fold. Checked: the map's Jacobian against central differences (1e-6); the located orbit periodic and its impact
+    on the joint to 1e-9, and again under an independent closed-form period map; above the corner a stable orbit
+    (complex multipliers inside the circle) and a saddle (one multiplier above 1) meet there, det(I - J) of opposite
+    signs (Feigin's condition for a nonsmooth fold), and no P(2, 1) orbit is found 0.01 rpm below it."""
+    from converters.analysis.continuation import follow
+    from converters.models.mechanics.cam import JOINTS
+    from validation.mechanics import cam_family, corner_impacts, impact_angles
+    family = cam_family({})
+    seed = family.orbit(380.0, np.array([0.70, -6.27]))
+    assert seed.converged
+    end, jac = family.period_map(380.0)(seed.x0)
+    central = np.column_stack([(family.period_map(380.0).end(seed.x0 + d) - family.period_map(380.0).end(seed.x0 - d))
+                               / (2 * d[j]) for j, d in enumerate(np.eye(2) * 1e-6)])
+    assert np.abs(jac - central).max() <= 1e-6 * np.abs(jac).max()
+    assert family.period_map(380.0).jacobian_kind == "exact"                      # saltation, not differences
+    branch = follow(family, 358.0, 354.0, seed.x0, warm_up=0, tol=1e-9, locate_tol=1e-7, fd_step=1e-6, max_step=0.5)
+    corners = corner_impacts(family, branch)
+    assert len(corners) == 1
+    corner = corners[0]
+    assert corner.joint == "flank | nose (rise)" and corner.kind == "nonsmooth fold" and corner.impact == 0
+    assert abs(corner.rpm - 355.15452) < 1e-4 and corner.residual <= 1e-9 and abs(corner.off_joint) <= 1e-9
+    assert "turns at a border collision" in branch.message                       # the corrector stopped there
+    assert abs(branch.points[-1].value - corner.rpm) <= 1e-5
+    end, impacts = _cam_period_closed_form(corner.rpm, corner.x0)
+    assert np.abs(end - corner.x0).max() <= 1e-8 * (1 + np.abs(corner.x0).max()) and len(impacts) == 2
+    beta = np.mod(2 * np.pi * corner.rpm / 60 * impacts[0] + np.pi / 2, 2 * np.pi)
+    assert abs(beta - JOINTS["flank | nose (rise)"]) <= 1e-8
+    assert len(corner.sides) == 2
+    (value_s, _, stable, angle_s), (value_u, _, saddle, angle_u) = sorted(corner.sides, key=lambda s: np.abs(s[2]).max())
+    assert value_s == value_u == corner.rpm + corner.offset
+    assert np.abs(stable).max() < 1 and abs(stable[0].imag) > 0.1
+    assert np.abs(saddle).max() > 1.05 and np.abs(saddle).min() < 1
+    dets = [np.prod(1 - mu).real for mu in (stable, saddle)]
+    assert dets[0] * dets[1] < 0
+    assert (angle_s - corner.angle) * (angle_u - corner.angle) < 0                  # either side of the joint
+    below = family.orbit(corner.rpm - 0.01, corner.x0)
+    assert not below.converged or np.abs(impact_angles(family, corner.rpm - 0.01, below.x0)[0]
+                                         - corner.angle) > 0.01

@@ -675,15 +675,24 @@ class MechanicalMachine:
 
 class MechanicalPeriodMap(EnginePeriodMap):
     """x(t0) -> x(t1) over a mechanical problem's span with the Jacobian of the variational equations and
-    saltation matrices; it keeps the events of its last run."""
+    saltation matrices (an impact's: Newton's law differentiated, its time through the gap's rate); it keeps the
+    events of its last run. A run through a completed chattering sequence (closed form: the accumulation erases
+    the approach, so no saltation matrix holds it) has its Jacobian by forward differences instead;
+    ``jacobian_kind`` says which the last Jacobian was."""
+
+    jacobian_kind = "exact"
+
+    def _solve(self, x0, jacobian):
+        solution, phi = self.machine.run(x0, record=False, jacobian=jacobian)
+        self.jacobian_kind = "exact"
+        if jacobian and (solution.chattered or phi is None):
+            phi = FiniteDifferenceMap(lambda x: self.machine.run(x, record=False)[0].x_end)(x0)[1]
+            self.jacobian_kind = "finite differences"
+        return solution, phi
 
 
 def period_map(problem: MechanicalProblem, options) -> PeriodMap:
-    machine = MechanicalMachine(problem, options)
-    if problem.contacts:
-        # Impacts complete chattering sequences in closed form: the Jacobian through them is by differences.
-        return FiniteDifferenceMap(lambda x0: machine.run(x0, record=False)[0].x_end)
-    return MechanicalPeriodMap(machine)
+    return MechanicalPeriodMap(MechanicalMachine(problem, options))
 
 
 def sliding_boundary(problem: MechanicalProblem, states: tuple, i: int, sigma: float, t: float, x) -> tuple[float, float]:

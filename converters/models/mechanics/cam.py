@@ -23,6 +23,12 @@ RB, K1, RHO1 = 0.40, 0.45, 0.85
 K2, RHO3, RHO2 = 0.40393320723821, 0.15, 0.55393320723821
 BETA2, BETA3 = 1.050328174371336, 1.22173047639603
 SHIFT = 0.3
+#: The profile's joints: the cam angles beta where one arc meets the next and h_c'' jumps (the base circle to the
+#: flank at pi/2, flank to nose at pi/2 + BETA2, nose to the top circle at pi/2 + BETA3, and their mirrors), with
+#: the names the corner-impact study gives them.
+JOINTS = {"base | flank (rise)": np.pi / 2, "flank | nose (rise)": np.pi / 2 + BETA2,
+          "nose | top (rise)": np.pi / 2 + BETA3, "top | nose (fall)": 1.5 * np.pi - BETA3,
+          "nose | flank (fall)": 1.5 * np.pi - BETA2, "flank | base (fall)": 1.5 * np.pi}
 
 
 def _circle_arc(A, A1, A2, u, u1, u2, rho):
@@ -105,6 +111,10 @@ class CamFollower(MechanicalModel):
                                  contacts=(UnilateralContact([1.0], p["e"], offset, name="cam"),), x0=x0,
                                  t_span=(t_start, t_end), period=self.period(p), state_names=self.state_names,
                                  metadata={"model": self.name, **p})
+
+    def cam_angle(self, p: dict, t):
+        """beta = (omega t + pi/2) mod 2 pi (rad): where on its profile the cam meets the follower at time t."""
+        return np.mod(2.0 * np.pi * p["rpm"] / 60.0 * np.asarray(t, dtype=float) + np.pi / 2.0, 2.0 * np.pi)
 
     def detachment_margin(self, p: dict, t):
         """k c + m c'' (N): the contact force the cam must supply to keep the follower on it; below zero the
