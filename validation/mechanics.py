@@ -1024,6 +1024,101 @@ def cam_section():
                                              "ride": float(t["last"]["ride"])} for t in transitions]})
 
 
+def cam_continuation(params: dict | None = None, progress: bool = False) -> dict:
+    """The cam-follower's P(2, 1) orbit (two impacts a revolution) continued in cam speed (the settings of
+    ``[mechanics.cam_continuation]``): started from the attractor after ``warm_up`` revolutions from rest at
+    ``start`` rpm, followed down to where it turns at a corner impact (:func:`corner_impacts`; the continuation
+    turns there and goes on as the saddle, or stops and the saddle is followed from the corner) and up over the
+    path; the P(4, 2) orbit from the period doubling. Returns the
+    family, the branches (name -> Branch), the corners and the bifurcations."""
+    from converters.analysis.continuation import switch_branch
+
+    from .defaults import MECHANICS
+    settings = MECHANICS["cam_continuation"]
+    model = get_mechanical("cam-follower")
+    family = cam_family(params)
+    low, high = settings["path"]
+    start = settings["start"]
+    options = {"tol": CONTINUATION["tol"], "locate_tol": CONTINUATION["locate_tol"], "fd_step": 1e-6,
+               "max_step": settings["max_step"]}
+    rest = model.problem(model.resolve({**(params or {}), "rpm": start}), 1.0).x0
+    down = follow(family, start, low, rest, warm_up=settings["warm_up"], **options)
+    if not down.points:
+        raise SimulationError(f"no P(2, 1) orbit at {start:g} rpm: {down.message}")
+    up = follow(family, start, high, down.points[0].x0, warm_up=0, **options)
+    corners = corner_impacts(family, down)
+    branches = {"P(2,1)": [down, up]}
+    for corner in corners:
+        if corner.kind == "nonsmooth fold" and down.message:        # the corrector stopped at it: leave on the saddle
+            saddle = max(corner.sides, key=lambda side: np.abs(side[2]).max())
+            branches.setdefault("P(2,1), born at the corner", []).append(
+                follow(family, saddle[0], high if saddle[0] > corner.rpm else low, saddle[1], warm_up=0, **options))
+    doublings = [b for branch in (down, up) for b in branch.bifurcations if b.kind == "period-doubling"]
+    for bifurcation in doublings:
+        branches.setdefault("P(4,2)", []).append(switch_branch(family, bifurcation, low, high,
+                                                               max_points=settings["max_points"], **options))
+    return {"family": family, "branches": branches, "corners": corners,
+            "bifurcations": [b for parts in branches.values() for branch in parts for b in branch.bifurcations]}
+
+
+def cam_continuation_section():
+    """The source's slides "Continuation of periodic orbits" and "Corner-impact bifurcation in a P(2,1:1)": the
+    cam-follower's impacting orbits continued in cam speed over the brute-force impact phases, and the corner impact
+    located on the P(2, 1) orbit."""
+    import pandas as pd
+
+    from .defaults import MECHANICS
+    from .mechanics_plots import cam_branches_figure, corner_figure
+    from .report import Section, csv_bytes, table_html
+    settings = MECHANICS["cam_continuation"]
+    study = cam_continuation()
+    family = study["family"]
+    values = np.linspace(*settings["path"], settings["points"])
+    rows = impact_phase_diagram({}, values, transient=settings["transient"], record=settings["record"],
+                                h_fraction=2.5e-4, workers=1)
+    branch_picture = cam_branches_figure(family, study, rows, "Moreau-Jean, h = T/4000")
+    corner_picture = corner_figure(family, study)
+    table = pd.DataFrame([{"bifurcation": b.kind, "cam speed (rpm)": f"{b.value:.7f}",
+                           "multipliers": ", ".join(f"{m:.4g}" for m in b.multipliers), "located by": b.located_by,
+                           "bracket (rpm)": f"{b.width:.1e}"} for b in study["bifurcations"] if b.kind != "fold"]
+                         + [{"bifurcation": f"corner impact ({c.kind}), impact {c.impact + 1} at the {c.joint} joint, "
+                                            f"beta = {c.angle:.7f} rad",
+                             "cam speed (rpm)": f"{c.rpm:.7f}",
+                             "multipliers": "; ".join(", ".join(f"{m:.4g}" for m in side[2]) for side in c.sides),
+                             "located by": f"bordered Newton: orbit residual {c.residual:.1e} m, impact "
+                                           f"{c.off_joint:.1e} rad off the joint", "bracket (rpm)": ""}
+                            for c in study["corners"]])
+    points = sum(len(branch.points) for parts in study["branches"].values() for branch in parts)
+    corner_ok = [c for c in study["corners"] if c.kind == "nonsmooth fold" and c.residual <= 1e-9
+                 and abs(c.off_joint) <= 1e-9]
+    text = ("<p>Periodic impacting orbits P(m, n) (m impacts in n revolutions) of the cam-follower, continued in cam "
+            "speed by pseudo-arclength continuation on the event method's period map, whose Jacobian is exact: the "
+            "variational equations between impacts and each impact's saltation matrix (Newton's law differentiated, "
+            "its instant moving with the gap's rate). The P(2, 1) orbit is started from the attractor "
+            f"{settings['warm_up']} revolutions after rest at {settings['start']:g} rpm; the P(4, 2) orbit from its "
+            f"period doubling (at most {settings['max_points']} orbits). Stable orbits solid, unstable dashed, over the "
+            "brute-force impact phases of the attractor from rest (Moreau-Jean, h = T/4000, "
+            f"{settings['record']:g} revolutions after {settings['transient']:g}).</p>"
+            "<img src='cam_continuation.png' alt='continued orbits'>"
+            "<p>Going down in speed the P(2, 1) orbit's first impact moves towards the joint of the cam's flank and "
+            "nose (beta = pi/2 + beta2), where the profile's curvature, and with it the cam's acceleration c'', "
+            "jumps. There the map stays continuous but its Jacobian jumps (the saltation matrix holds c''): a "
+            "corner-impact bifurcation (Osorio, di Bernardo and Santini 2008). It is located by Newton on the orbit "
+            "and the impact's angle together. Just above it the stable orbit (complex multipliers inside the unit "
+            "circle) and a saddle (one real multiplier above 1), each with its impact on one side of the joint, "
+            "meet at the corner; det(I - J) has opposite signs on the two (Feigin's condition): they vanish together "
+            "in a nonsmooth fold, not a smooth one (no multiplier passes through 1).</p>"
+            "<img src='cam_corner.png' alt='corner-impact bifurcation'>" + table_html(table))
+    return Section("Mechanics: continuation of periodic orbits and the corner-impact bifurcation", text,
+                   {"cam_continuation.png": branch_picture, "cam_corner.png": corner_picture,
+                    "cam_continuation.csv": csv_bytes(table)},
+                   ok=bool(corner_ok) and points > 10,
+                   metrics={"corners": [{"rpm": c.rpm, "joint": c.joint, "kind": c.kind, "residual": c.residual,
+                                         "off_joint": c.off_joint} for c in study["corners"]],
+                            "bifurcations": [{"kind": b.kind, "rpm": b.value} for b in study["bifurcations"]],
+                            "orbits": points})
+
+
 def two_block_section():
     """Two blocks on a belt: the section against the belt velocity, and Lyapunov exponents."""
     from .defaults import MECHANICS
@@ -1048,4 +1143,5 @@ def two_block_section():
 
 
 __all__ = ["basins", "Basins", "resolution_check", "sliding_study", "degenerate_switching", "degenerate_portraits", "DegenerateSwitching", "friction_diagram", "two_block_diagram", "impact_phase_diagram", "ball_check",
-           "friction_agreement", "cam_checks", "ride_left", "chattering_transition", "sliding_section", "degenerate_section", "basins_section", "agreement_section", "cam_section", "two_block_section"]
+           "friction_agreement", "cam_checks", "ride_left", "chattering_transition", "sliding_section", "degenerate_section", "basins_section", "agreement_section", "cam_section", "two_block_section", "cam_family", "impact_angles",
+           "locate_corner", "corner_impacts", "CornerImpact", "cam_continuation", "cam_continuation_section"]

@@ -208,3 +208,102 @@ def basin_figure(result, orbits: list, fmt: str = "png") -> bytes:
     ax.set_title(f"Domain of Attraction, A = {result.params['A']:g} N, W = {result.params['omega']:g} rad/s "
                  f"({len(result.x)} x {len(result.v)} initial states; the orbits over one period in black)", fontsize=9)
     return _save(fig, fmt)
+
+
+def _impact_phases(family, value: float, x0) -> np.ndarray:
+    """The impact instants of the orbit from x0 at ``value`` as fractions of the cam's revolution, in [0, 1)."""
+    T = family.problem_of(value).period
+    times = [t for t, kind, *_ in family.period_map(value).events(x0) if kind == "impact"]
+    return np.mod(np.array(times, dtype=float) / T, 1.0)
+
+
+def cam_branches_figure(family, study: dict, rows, brute_force: str, fmt: str = "png") -> bytes:
+    """The brute-force impact phases (grey; ``brute_force`` says how they were computed) with the continued orbits'
+    impact phases over them, stable solid, unstable dashed, one colour per orbit family; period doublings and corner
+    impacts marked."""
+    fig, ax = plt.subplots(figsize=(9, 5.5))
+    xs = np.concatenate([np.full(r.phases.size, r.value) for r in rows if r.phases.size])
+    ys = np.concatenate([r.phases for r in rows if r.phases.size])
+    ax.plot(xs, ys, ".", ms=2, color="0.6", label=f"impacts of the attractor from rest ({brute_force})")
+    colours = ["#4c72b0", "#c44e52", "#55a868", "#8172b2"]
+    for colour, (name, parts) in zip(colours, study["branches"].items()):
+        labelled = False
+        for branch in parts:
+            points = sorted(branch.points, key=lambda pt: pt.value) if len(parts) == 1 else branch.points
+            phases = [np.sort(_impact_phases(family, pt.value, pt.x0)) for pt in points]
+            width = max((p.size for p in phases), default=0)
+            if not width:
+                continue
+            values = np.array([pt.value for pt in points])
+            table = np.array([np.pad(p, (0, width - p.size), constant_values=np.nan) for p in phases])
+            stable = np.array([pt.stable for pt in points])
+            for m in range(width):
+                ax.plot(values, np.where(stable, table[:, m], np.nan), "-", color=colour, lw=1.6,
+                        label=None if labelled or m else f"{name} (stable)")
+                ax.plot(values, np.where(~stable, table[:, m], np.nan), "--", color=colour, lw=1.2,
+                        label=None if labelled or m else f"{name} (unstable)")
+            labelled = True
+    for b in study["bifurcations"]:
+        if b.kind == "period-doubling":
+            ax.axvline(b.value, color="#4c72b0", lw=0.8, ls=":")
+            ax.plot([], [], ":", color="#4c72b0", label=f"period doubling of a period-{b.period} orbit, {b.value:.4f} rpm")
+    for c in study["corners"]:
+        phase = np.mod((c.angle - np.pi / 2) / (2 * np.pi), 1.0)
+        ax.plot([c.rpm], [phase], "*", color="k", ms=12, zorder=6,
+                label=f"corner impact ({c.kind}), {c.rpm:.4f} rpm")
+    ax.set_xlabel("cam speed (rpm)")
+    ax.set_ylabel("impact phase (fraction of the cam's revolution)")
+    ax.set_ylim(0, 1)
+    ax.legend(fontsize=7, loc="upper right")
+    ax.set_title("Continuation of periodic orbits", fontsize=10)
+    return _save(fig, fmt)
+
+
+def corner_figure(family, study: dict, fmt: str = "png") -> bytes:
+    """At each corner impact: the impact's cam angle against the cam speed on the two orbits that meet there (the
+    joint's angle drawn), and their Floquet multipliers in the complex plane."""
+    corners = study["corners"]
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.6))
+    ax, plane = axes
+    span = 3.0
+    for c in corners[:1]:
+        for name, parts in study["branches"].items():
+            for branch in parts:
+                near = [pt for pt in branch.points if abs(pt.value - c.rpm) <= span]
+                if not near:
+                    continue
+                values = [pt.value for pt in near]
+                angles = [np.mod(2 * np.pi * pt.value / 60 * np.array(
+                    [t for t, kind, *_ in family.period_map(pt.value).events(pt.x0) if kind == "impact"])[c.impact]
+                    + np.pi / 2, 2 * np.pi) for pt in near]
+                stable = [pt.stable for pt in near]
+                flips = [k for k in range(1, len(near)) if stable[k] != stable[k - 1]
+                         and max(abs(values[k - 1] - c.rpm), abs(values[k] - c.rpm)) < 1.0]
+                for k in reversed(flips):                    # the corner between the two orbits, drawn in both styles
+                    values[k:k] = [c.rpm, c.rpm]
+                    angles[k:k] = [c.angle, c.angle]
+                    stable[k:k] = [stable[k - 1], stable[k]]
+                values, angles, stable = np.array(values), np.array(angles), np.array(stable)
+                ax.plot(values, np.where(stable, angles, np.nan), "-", color="#4c72b0", lw=1.6)
+                ax.plot(values, np.where(~stable, angles, np.nan), "--", color="#c44e52", lw=1.4)
+                for pt in near[::max(1, len(near) // 12)]:
+                    mu = pt.multipliers
+                    plane.plot(mu.real, mu.imag, "o" if pt.stable else "x", ms=4,
+                               color="#4c72b0" if pt.stable else "#c44e52")
+        ax.axhline(c.angle, color="k", lw=0.8, ls=":", label=f"the {c.joint} joint, beta = {c.angle:.5f} rad")
+        ax.plot([c.rpm], [c.angle], "*", color="k", ms=12, label=f"corner impact, {c.rpm:.6f} rpm")
+        ax.plot([], [], "-", color="#4c72b0", label="P(2,1), stable")
+        ax.plot([], [], "--", color="#c44e52", label="P(2,1), unstable")
+        ax.set_xlim(c.rpm - 0.2 * span, c.rpm + span)
+        ax.set_title(f"the cam angle of impact {c.impact + 1} (counted from the revolution's start)", fontsize=9)
+        fig.suptitle("Corner-impact bifurcation in a P(2,1:1)", fontsize=10)
+    ax.set_xlabel("cam speed (rpm)")
+    ax.set_ylabel("cam angle beta at the impact (rad)")
+    ax.legend(fontsize=7)
+    circle = np.linspace(0, 2 * np.pi, 200)
+    plane.plot(np.cos(circle), np.sin(circle), "-", color="0.5", lw=0.8)
+    plane.set_aspect("equal")
+    plane.set_xlabel("Re mu")
+    plane.set_ylabel("Im mu")
+    plane.set_title(f"Floquet multipliers within {span:g} rpm (o stable, x unstable)", fontsize=9)
+    return _save(fig, fmt)
