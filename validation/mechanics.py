@@ -832,7 +832,7 @@ def sliding_section():
             branch = next(br for br in study.branches if best in br.bifurcations)
             for label, point in zip(("below", "above"), _sides(branch, best.value)):
                 if point is not None:
-                    panels.append((f"{row['type']}, A = {row['A']:g}: omega = {point.value:.5g} ({label})",
+                    panels.append((f"{row['type'].capitalize()} Bifurcation, A = {row['A']:g}: W = {point.value:.5g} ({label})",
                                    _orbit_run(model, {"A": row["A"]}, "omega", point, branch.period)))
     table = pd.DataFrame(rows)
     A = MECHANICS["friction_diagram_A"]
@@ -851,7 +851,8 @@ def sliding_section():
             + f"<p>Brute force at A = {A:g} (Moreau-Jean, h = T/1000, x(nT) after 150 periods) with the located "
               "bifurcations and the continued orbit:</p><img src='friction_diagram.png' alt='friction diagram'>")
     files = {"friction_orbits.png": phase_portraits(panels, model),
-             "friction_diagram.png": diagram_figure(model, "omega", attractors, diagram_study),
+             "friction_diagram.png": diagram_figure(model, "omega", attractors, diagram_study,
+                                                    title="Sliding Bifurcations in a dry friction oscillator"),
              "sliding_bifurcations.csv": csv_bytes(table)}
     metrics = {f"A={a:g}": s.to_dict() for (a, _), s in studies.items()}
     return Section("Mechanics: the dry-friction oscillator's sliding bifurcations", text, files, ok=ok, metrics=metrics)
@@ -983,7 +984,7 @@ def cam_section():
     import pandas as pd
 
     from .defaults import MECHANICS
-    from .mechanics_plots import diagram_figure
+    from .mechanics_plots import cam_profile_figure, diagram_figure
     from .report import Section, csv_bytes, table_html
     model = get_mechanical("cam-follower")
     values = np.linspace(*MECHANICS["cam_rpm"], MECHANICS["cam_points"])
@@ -993,13 +994,16 @@ def cam_section():
     transitions = [chattering_transition({}, *bracket) for bracket in MECHANICS["cam_transitions"]]
     marks = {"the seed's 175 rpm (chattering)": 175.0, "Siconos' example, 358 rpm": 358.0}
     marks.update({f"complete chattering ends, {t['rpm']:.4f} rpm": t["rpm"] for t in transitions})
-    picture = diagram_figure(model, "rpm", rows, marks=marks)
+    picture = diagram_figure(model, "rpm", rows, marks=marks, title="Bifurcation Analysis - Chattering orbits "
+                             "(transition from complete chattering to no-complete chattering marked)")
     errors = sum(bool(r.error) for r in rows)
     located = pd.DataFrame([{"bracket (rpm)": f"{lo:g}..{hi:g}", "located (rpm)": f"{t['rpm']:.7f}",
                              "width (rpm)": f"{t['width']:.1e}", "ride left at the last orbit (revolutions)":
                              f"{t['last']['ride']:.1e}", "impacts before it accumulates": t["last"]["impacts"],
                              "runs": t["runs"]} for (lo, hi), t in zip(MECHANICS["cam_transitions"], transitions)])
-    text = ("<p>The cam-follower of Siconos' CamFollower example (after di Bernardo, Osorio and Santini; m = 1.221 kg, k = 1430.8 N/m, e = 0.8): the phase of every "
+    text = ("<p>The cam-follower of Siconos' CamFollower example (after di Bernardo, Osorio and Santini; m = 1.221 kg, k = 1430.8 N/m, e = 0.8). Its cam is piecewise smooth: "
+            "four arcs, mirrored, whose second derivative jumps at each joint (the follower's impacts are one "
+            "nonsmoothness, the profile the other):</p><img src='cam_profile.png' alt='cam profile'><p>The phase of every "
             "impact (Moreau-Jean, h = T/4000, 20 cam revolutions after 20 of transient) against the cam speed, "
             "over a range holding the seed's 175 rpm and Siconos' 358 rpm. At low speed the follower stays on the "
             "cam (no impacts); above the speed where the cam's deceleration first exceeds what the spring supplies "
@@ -1016,7 +1020,8 @@ def cam_section():
               "approached by secant steps from the side where the orbit exists (the event method):</p>"
             + table_html(located))
     return Section("Mechanics: the cam-follower's impact phases", text,
-                   {"cam_impacts.png": picture, "cam_regimes.csv": csv_bytes(regimes),
+                   {"cam_impacts.png": picture, "cam_profile.png": cam_profile_figure(),
+                    "cam_regimes.csv": csv_bytes(regimes),
                     "cam_transitions.csv": csv_bytes(located)},
                    ok=errors == 0 and sum(counts.values()) > 0 and all(t["width"] <= 1e-6 * t["rpm"] for t in transitions),
                    metrics={"impacts_per_rpm": counts, "errors": errors, "regimes": regimes.to_dict(orient="records"),
@@ -1137,7 +1142,8 @@ def two_block_section():
             "<img src='two_block.png' alt='two-block section'>"
             + "<p>Largest Lyapunov exponent of the flow (exact Jacobians of the event method, per time unit): "
             + ", ".join(f"V = {V:g}: {lam:+.4f}" for V, lam in exponents.items()) + ".</p>")
-    return Section("Mechanics: two blocks on a belt", text, {"two_block.png": diagram_figure(model, "V", rows)},
+    return Section("Mechanics: two blocks on a belt", text, {"two_block.png": diagram_figure(
+                       model, "V", rows, title="Bifurcations in a two-block stick-slip system (this project's model)")},
                    ok=all(not r.error for r in rows), metrics={"distinct_section_points": distinct,
                                                                "lyapunov": {str(k): v for k, v in exponents.items()}})
 

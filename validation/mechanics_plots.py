@@ -28,10 +28,11 @@ def _unit(model, name: str) -> str:
     return spec[name].unit if name in spec else ""
 
 
-def diagram_figure(model, name: str, rows, study=None, fmt: str = "png", marks: dict | None = None) -> bytes:
+def diagram_figure(model, name: str, rows, study=None, fmt: str = "png", marks: dict | None = None,
+                   title: str | None = None) -> bytes:
     """Stroboscopic attractors (x(nT) against the parameter), a section (a state at each section event), or the
     cam's impact phases; the study's bifurcations marked and listed in the legend; ``marks``: label -> value,
-    drawn as vertical lines (reference values)."""
+    drawn as vertical lines (reference values); ``title``: the source slide's (default the model's)."""
     fig, ax = plt.subplots(figsize=(9, 5))
     unit = _unit(model, name)
     if rows and hasattr(rows[0], "samples"):
@@ -77,15 +78,15 @@ def diagram_figure(model, name: str, rows, study=None, fmt: str = "png", marks: 
     ax.set_ylabel(ylabel)
     ax.ticklabel_format(useOffset=False, style="plain")
     ax.grid(alpha=0.3)
-    ax.set_title(model.title, fontsize=9)
+    ax.set_title(title or model.title, fontsize=9)
     handles, labels = ax.get_legend_handles_labels()
     if handles:
         ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     return _save(fig, fmt)
 
 
-def phase_portraits(panels: list[tuple[str, object]], model, fmt: str = "png") -> bytes:
-    """One phase portrait (x, v) per (title, trajectory), the stick segments drawn thick."""
+def phase_portraits(panels: list[tuple[str, object]], model, fmt: str = "png", title: str | None = None) -> bytes:
+    """One phase portrait (x, v) per (title, trajectory), the stick segments drawn thick; ``title`` the figure's."""
     cols = min(len(panels), 4)
     rows = int(np.ceil(len(panels) / cols))
     fig, axes = plt.subplots(rows, cols, figsize=(3.2 * cols, 3.0 * rows), squeeze=False)
@@ -102,7 +103,7 @@ def phase_portraits(panels: list[tuple[str, object]], model, fmt: str = "png") -
         ax.grid(alpha=0.3)
     for ax in axes.ravel()[len(panels):]:
         ax.axis("off")
-    fig.suptitle(f"{model.title}: orbits on either side of each sliding bifurcation (stick thick)", fontsize=9)
+    fig.suptitle(title or f"{model.title}: orbits on either side of each sliding bifurcation (stick thick)", fontsize=9)
     fig.tight_layout()
     return _save(fig, fmt)
 
@@ -306,4 +307,27 @@ def corner_figure(family, study: dict, fmt: str = "png") -> bytes:
     plane.set_xlabel("Re mu")
     plane.set_ylabel("Im mu")
     plane.set_title(f"Floquet multipliers within {span:g} rpm (o stable, x unstable)", fontsize=9)
+    return _save(fig, fmt)
+
+
+def cam_profile_figure(fmt: str = "png") -> bytes:
+    """The cam's lift h_c and its second derivative against the cam angle, the profile's joints marked: h_c'' jumps at
+    each (the cam-follower is piecewise smooth through its impacts and through its profile)."""
+    from converters.models.mechanics.cam import JOINTS, profile
+    beta = np.linspace(0.0, 2.0 * np.pi, 4001)
+    h, _, h2 = profile(np.where(beta > np.pi, 2.0 * np.pi - beta, beta))
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(8, 5.5), sharex=True)
+    top.plot(beta, h, color="#4c72b0")
+    bottom.plot(beta, h2, ".", ms=1.2, color="#c44e52")
+    for name, angle in JOINTS.items():
+        for ax in (top, bottom):
+            ax.axvline(angle, color="0.5", lw=0.7, ls=":")
+        top.text(angle, h.min() + 0.45 * (h.max() - h.min()), " " + name.split(" (")[0], rotation=90, fontsize=6,
+                 va="center", ha="right")
+    top.set_ylabel("lift h_c (m)")
+    bottom.set_ylabel("h_c'' (m/rad^2)")
+    bottom.set_xlabel("cam angle beta (rad)")
+    for ax in (top, bottom):
+        ax.grid(alpha=0.3)
+    fig.suptitle("Cam Profile (its joints dotted: h_c'' jumps there)", fontsize=10)
     return _save(fig, fmt)
