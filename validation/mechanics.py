@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from converters.analysis.bifurcation import brute_force, detect_period, iterate, section_diagram
-from converters.analysis.continuation import OrbitFamily, check_path, follow
+from converters.analysis.continuation import OrbitFamily, check_path, follow, locate_condition
 from converters.analysis.periodic import multipliers_of
 from converters.analysis.sliding import TYPES, classify_sliding
 from converters.errors import ParameterError, SimulationError
@@ -590,39 +590,14 @@ class CornerImpact:
     kind: str
 
 
-def locate_corner(family: OrbitFamily, joint: float, impact: int, rpm: float, x0, tol: float = 1e-11,
-                  iterations: int = 20) -> tuple[float, np.ndarray, float, float]:
+def locate_corner(family: OrbitFamily, joint: float, impact: int, rpm: float, x0,
+                  tol: float = 1e-11) -> tuple[float, np.ndarray, float, float]:
     """(rpm, x0, residual, angle off the joint) of the orbit whose impact number ``impact`` hits the profile at
-    ``joint`` (rad): Newton on the orbit's equation P(x0) - x0 = 0 and beta_impact - joint = 0 in (x0, rpm)
-    together (the angle's derivatives and d P / d rpm by central differences; the map's own Jacobian exact). The
-    angle is a C1 function of (x0, rpm) through the corner (the impact time depends on the cam's position and
-    velocity, which are smooth there): the bordered Newton converges through it."""
-    x = np.array(x0, dtype=float)
-    n = x.size
-    angle = lambda value, state: float(impact_angles(family, value, state)[impact])        # noqa: E731
-    for _ in range(iterations):
-        end, jac = family.period_map(rpm)(x)
-        residual = end - x
-        off = angle(rpm, x) - joint
-        if np.abs(residual).max() <= tol * (1.0 + np.abs(x).max()) and abs(off) <= tol:
-            break
-        dp = 1e-7 * rpm
-        d_end = (family.period_map(rpm + dp).end(x) - family.period_map(rpm - dp).end(x)) / (2.0 * dp)
-        grad = np.empty(n)
-        for j in range(n):
-            dx = 1e-7 * (1.0 + abs(x[j]))
-            step = np.zeros(n)
-            step[j] = dx
-            grad[j] = (angle(rpm, x + step) - angle(rpm, x - step)) / (2.0 * dx)
-        bordered = np.zeros((n + 1, n + 1))
-        bordered[:n, :n] = jac - np.eye(n)
-        bordered[:n, n] = d_end
-        bordered[n, :n] = grad
-        bordered[n, n] = (angle(rpm + dp, x) - angle(rpm - dp, x)) / (2.0 * dp)
-        delta = np.linalg.solve(bordered, -np.concatenate([residual, [off]]))
-        x, rpm = x + delta[:n], rpm + float(delta[n])
-    end = family.period_map(rpm).end(x)
-    return rpm, x, float(np.abs(end - x).max()), angle(rpm, x) - joint
+    ``joint`` (rad), from a nearby orbit: :func:`converters.analysis.continuation.locate_condition` with the impact's
+    angle minus the joint's. The angle is a C1 function of (x0, rpm) through the corner (the impact time depends on
+    the cam's position and velocity, which are smooth there)."""
+    return locate_condition(family, lambda value, x: float(impact_angles(family, value, x)[impact]) - joint, rpm, x0,
+                            tol=tol)
 
 
 def corner_impacts(family: OrbitFamily, branch, offset: float = 1e-3, near: float = 1e-3) -> list:

@@ -30,10 +30,14 @@ After a period doubling on which the period-k orbit loses stability, the period-
 the tangent (v, 0), v the eigenvector of the multiplier -1: the 2k-family has a pitchfork there. A
 pseudo-arclength step along (v, 0) lands on the new branch, which is then followed in turn
 (:func:`switch_branch`, :func:`cascade`).
+
+An orbit that meets one more condition c(p, x) = 0 (an impact at a corner of the constraint, where J jumps but
+the signature does not change) is solved with its parameter by Newton on [F; c] (:func:`locate_condition`).
 """
 from __future__ import annotations
 
 from .branching import cascade, switch_branch
+from .condition import locate_condition
 from .family import (KINDS, TEST_NAMES, Bifurcation, Branch, OrbitFamily, OrbitPoint, check_path,
                      test_functions)
 from .tracing import follow
