@@ -588,6 +588,8 @@ class CornerImpact:
     #: "nonsmooth fold" when two orbits lie on one side of the corner in rpm and none on the other (they meet at
     #: the corner and vanish together), "persistence" when the orbit crosses it, else "undetermined".
     kind: str
+    #: The orbit's period in cam revolutions (n of P(m, n)).
+    revolutions: int = 1
 
 
 def locate_corner(family: OrbitFamily, joint: float, impact: int, rpm: float, x0,
@@ -643,7 +645,7 @@ def corner_impacts(family: OrbitFamily, branch, offset: float = 1e-3, near: floa
         kind = ("nonsmooth fold" if sorted([len(above), len(below)]) == [0, 2] else
                 "persistence" if len(above) == len(below) == 1 else "undetermined")
         out.append(CornerImpact(name, float(joint), i, float(rpm), x0, residual, float(off), offset, tuple(sides),
-                                kind))
+                                kind, family.periods))
     return out
 
 
@@ -1004,13 +1006,14 @@ def cam_section():
                                              "ride": float(t["last"]["ride"])} for t in transitions]})
 
 
-def cam_continuation(params: dict | None = None, progress: bool = False) -> dict:
+def cam_continuation(params: dict | None = None) -> dict:
     """The cam-follower's P(2, 1) orbit (two impacts a revolution) continued in cam speed (the settings of
     ``[mechanics.cam_continuation]``): started from the attractor after ``warm_up`` revolutions from rest at
     ``start`` rpm, followed down to where it turns at a corner impact (:func:`corner_impacts`; the continuation
     turns there and goes on as the saddle, or stops and the saddle is followed from the corner) and up over the
-    path; the P(4, 2) orbit from the period doubling. Returns the
-    family, the branches (name -> Branch), the corners and the bifurcations."""
+    path; the P(4, 2) orbit from the period doubling. Returns the families and branches by name, the corner
+    impacts on every branch, and the other bifurcations: a multiplier test that changes sign where a corner impact
+    is located (its Jacobian jumps there: not a smooth fold or doubling) is reported as that corner impact."""
     from converters.analysis.continuation import switch_branch
 
     from .defaults import MECHANICS
@@ -1026,19 +1029,29 @@ def cam_continuation(params: dict | None = None, progress: bool = False) -> dict
     if not down.points:
         raise SimulationError(f"no P(2, 1) orbit at {start:g} rpm: {down.message}")
     up = follow(family, start, high, down.points[0].x0, warm_up=0, **options)
+    families, branches = {"P(2,1)": family}, {"P(2,1)": [down, up]}
     corners = corner_impacts(family, down)
-    branches = {"P(2,1)": [down, up]}
     for corner in corners:
         if corner.kind == "nonsmooth fold" and down.message:        # the corrector stopped at it: leave on the saddle
             saddle = max(corner.sides, key=lambda side: np.abs(side[2]).max())
-            branches.setdefault("P(2,1), born at the corner", []).append(
-                follow(family, saddle[0], high if saddle[0] > corner.rpm else low, saddle[1], warm_up=0, **options))
+            branches["P(2,1)"].append(follow(family, saddle[0], high if saddle[0] > corner.rpm else low, saddle[1],
+                                             warm_up=0, **options))
     doublings = [b for branch in (down, up) for b in branch.bifurcations if b.kind == "period-doubling"]
+    if doublings:
+        families["P(4,2)"] = family.doubled()
     for bifurcation in doublings:
-        branches.setdefault("P(4,2)", []).append(switch_branch(family, bifurcation, low, high,
-                                                               max_points=settings["max_points"], **options))
-    return {"family": family, "branches": branches, "corners": corners,
-            "bifurcations": [b for parts in branches.values() for branch in parts for b in branch.bifurcations]}
+        child = switch_branch(family, bifurcation, low, high, max_points=settings["max_points"], **options)
+        branches.setdefault("P(4,2)", []).append(child)
+        corners += corner_impacts(families["P(4,2)"], child)
+    others = []
+    for name, parts in branches.items():
+        for branch in parts:
+            for b in branch.bifurcations:
+                near = [c for c in corners if c.revolutions == families[name].periods
+                        and abs(c.rpm - b.value) <= max(10.0 * b.width, 1e-6 * c.rpm)]
+                if not near:
+                    others.append(b)
+    return {"families": families, "branches": branches, "corners": corners, "bifurcations": others}
 
 
 def cam_continuation_section():
@@ -1052,16 +1065,16 @@ def cam_continuation_section():
     from .report import Section, csv_bytes, table_html
     settings = MECHANICS["cam_continuation"]
     study = cam_continuation()
-    family = study["family"]
     values = np.linspace(*settings["path"], settings["points"])
     rows = impact_phase_diagram({}, values, transient=settings["transient"], record=settings["record"],
                                 h_fraction=2.5e-4, workers=1)
-    branch_picture = cam_branches_figure(family, study, rows, "Moreau-Jean, h = T/4000")
-    corner_picture = corner_figure(family, study)
+    branch_picture = cam_branches_figure(study, rows, "Moreau-Jean, h = T/4000")
+    corner_picture = corner_figure(study)
     table = pd.DataFrame([{"bifurcation": b.kind, "cam speed (rpm)": f"{b.value:.7f}",
                            "multipliers": ", ".join(f"{m:.4g}" for m in b.multipliers), "located by": b.located_by,
                            "bracket (rpm)": f"{b.width:.1e}"} for b in study["bifurcations"] if b.kind != "fold"]
-                         + [{"bifurcation": f"corner impact ({c.kind}), impact {c.impact + 1} at the {c.joint} joint, "
+                         + [{"bifurcation": f"corner impact ({c.kind}) of the P({2 * c.revolutions},{c.revolutions}) "
+                                            f"orbit, its impact {c.impact + 1} at the {c.joint} joint, "
                                             f"beta = {c.angle:.7f} rad",
                              "cam speed (rpm)": f"{c.rpm:.7f}",
                              "multipliers": "; ".join(", ".join(f"{m:.4g}" for m in side[2]) for side in c.sides),
@@ -1070,7 +1083,7 @@ def cam_continuation_section():
                             for c in study["corners"]])
     points = sum(len(branch.points) for parts in study["branches"].values() for branch in parts)
     corner_ok = [c for c in study["corners"] if c.kind == "nonsmooth fold" and c.residual <= 1e-9
-                 and abs(c.off_joint) <= 1e-9]
+                 and abs(c.off_joint) <= 1e-9 and c.revolutions == 1]
     text = ("<p>Periodic impacting orbits P(m, n) (m impacts in n revolutions) of the cam-follower, continued in cam "
             "speed by pseudo-arclength continuation on the event method's period map, whose Jacobian is exact: the "
             "variational equations between impacts and each impact's saltation matrix (Newton's law differentiated, "
@@ -1088,7 +1101,12 @@ def cam_continuation_section():
             "circle) and a saddle (one real multiplier above 1), each with its impact on one side of the joint, "
             "meet at the corner; det(I - J) has opposite signs on the two (Feigin's condition): they vanish together "
             "in a nonsmooth fold, not a smooth one (no multiplier passes through 1).</p>"
-            "<img src='cam_corner.png' alt='corner-impact bifurcation'>" + table_html(table))
+            "<img src='cam_corner.png' alt='corner-impact bifurcation'>"
+            + "".join(f"<p>The P({2 * c.revolutions}, {c.revolutions}) orbit born at the period doubling meets the "
+                      f"{c.joint} joint too, at {c.rpm:.7f} rpm ({c.kind}): there its multiplier test functions jump "
+                      "sign without a multiplier passing -1 or +1, so the continuation's fold and doubling next to it "
+                      "are this corner impact, reported once.</p>" for c in study["corners"] if c.revolutions > 1)
+            + table_html(table))
     return Section("Mechanics: continuation of periodic orbits and the corner-impact bifurcation", text,
                    {"cam_continuation.png": branch_picture, "cam_corner.png": corner_picture,
                     "cam_continuation.csv": csv_bytes(table)},

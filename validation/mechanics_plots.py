@@ -218,7 +218,7 @@ def _impact_phases(family, value: float, x0) -> np.ndarray:
     return np.mod(np.array(times, dtype=float) / T, 1.0)
 
 
-def cam_branches_figure(family, study: dict, rows, brute_force: str, fmt: str = "png") -> bytes:
+def cam_branches_figure(study: dict, rows, brute_force: str, fmt: str = "png") -> bytes:
     """The brute-force impact phases (grey; ``brute_force`` says how they were computed) with the continued orbits'
     impact phases over them, stable solid, unstable dashed, one colour per orbit family; period doublings and corner
     impacts marked."""
@@ -228,7 +228,8 @@ def cam_branches_figure(family, study: dict, rows, brute_force: str, fmt: str = 
     ax.plot(xs, ys, ".", ms=2, color="0.6", label=f"impacts of the attractor from rest ({brute_force})")
     colours = ["#4c72b0", "#c44e52", "#55a868", "#8172b2"]
     for colour, (name, parts) in zip(colours, study["branches"].items()):
-        labelled = False
+        family = study["families"][name]
+        labelled = set()
         for branch in parts:
             points = sorted(branch.points, key=lambda pt: pt.value) if len(parts) == 1 else branch.points
             phases = [np.sort(_impact_phases(family, pt.value, pt.x0)) for pt in points]
@@ -239,19 +240,20 @@ def cam_branches_figure(family, study: dict, rows, brute_force: str, fmt: str = 
             table = np.array([np.pad(p, (0, width - p.size), constant_values=np.nan) for p in phases])
             stable = np.array([pt.stable for pt in points])
             for m in range(width):
-                ax.plot(values, np.where(stable, table[:, m], np.nan), "-", color=colour, lw=1.6,
-                        label=None if labelled or m else f"{name} (stable)")
-                ax.plot(values, np.where(~stable, table[:, m], np.nan), "--", color=colour, lw=1.2,
-                        label=None if labelled or m else f"{name} (unstable)")
-            labelled = True
+                for style, which, word in (("-", stable, "stable"), ("--", ~stable, "unstable")):
+                    label = f"{name} ({word})" if which.any() and word not in labelled else None
+                    ax.plot(values, np.where(which, table[:, m], np.nan), style, color=colour,
+                            lw=1.6 if word == "stable" else 1.2, label=label)
+                    if label:
+                        labelled.add(word)
     for b in study["bifurcations"]:
         if b.kind == "period-doubling":
             ax.axvline(b.value, color="#4c72b0", lw=0.8, ls=":")
             ax.plot([], [], ":", color="#4c72b0", label=f"period doubling of a period-{b.period} orbit, {b.value:.4f} rpm")
     for c in study["corners"]:
         phase = np.mod((c.angle - np.pi / 2) / (2 * np.pi), 1.0)
-        ax.plot([c.rpm], [phase], "*", color="k", ms=12, zorder=6,
-                label=f"corner impact ({c.kind}), {c.rpm:.4f} rpm")
+        ax.plot([c.rpm], [phase], "*", color="k" if c.revolutions == 1 else "#c44e52", ms=12, zorder=6,
+                label=f"corner impact of P({2 * c.revolutions},{c.revolutions}) ({c.kind}), {c.rpm:.4f} rpm")
     ax.set_xlabel("cam speed (rpm)")
     ax.set_ylabel("impact phase (fraction of the cam's revolution)")
     ax.set_ylim(0, 1)
@@ -260,37 +262,37 @@ def cam_branches_figure(family, study: dict, rows, brute_force: str, fmt: str = 
     return _save(fig, fmt)
 
 
-def corner_figure(family, study: dict, fmt: str = "png") -> bytes:
+def corner_figure(study: dict, fmt: str = "png") -> bytes:
     """At each corner impact: the impact's cam angle against the cam speed on the two orbits that meet there (the
     joint's angle drawn), and their Floquet multipliers in the complex plane."""
-    corners = study["corners"]
+    corners = [c for c in study["corners"] if c.revolutions == 1]
+    family = study["families"]["P(2,1)"]
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.6))
     ax, plane = axes
     span = 3.0
     for c in corners[:1]:
-        for name, parts in study["branches"].items():
-            for branch in parts:
-                near = [pt for pt in branch.points if abs(pt.value - c.rpm) <= span]
-                if not near:
-                    continue
-                values = [pt.value for pt in near]
-                angles = [np.mod(2 * np.pi * pt.value / 60 * np.array(
-                    [t for t, kind, *_ in family.period_map(pt.value).events(pt.x0) if kind == "impact"])[c.impact]
-                    + np.pi / 2, 2 * np.pi) for pt in near]
-                stable = [pt.stable for pt in near]
-                flips = [k for k in range(1, len(near)) if stable[k] != stable[k - 1]
-                         and max(abs(values[k - 1] - c.rpm), abs(values[k] - c.rpm)) < 1.0]
-                for k in reversed(flips):                    # the corner between the two orbits, drawn in both styles
-                    values[k:k] = [c.rpm, c.rpm]
-                    angles[k:k] = [c.angle, c.angle]
-                    stable[k:k] = [stable[k - 1], stable[k]]
-                values, angles, stable = np.array(values), np.array(angles), np.array(stable)
-                ax.plot(values, np.where(stable, angles, np.nan), "-", color="#4c72b0", lw=1.6)
-                ax.plot(values, np.where(~stable, angles, np.nan), "--", color="#c44e52", lw=1.4)
-                for pt in near[::max(1, len(near) // 12)]:
-                    mu = pt.multipliers
-                    plane.plot(mu.real, mu.imag, "o" if pt.stable else "x", ms=4,
-                               color="#4c72b0" if pt.stable else "#c44e52")
+        for branch in study["branches"]["P(2,1)"]:
+            near = [pt for pt in branch.points if abs(pt.value - c.rpm) <= span]
+            if not near:
+                continue
+            values = [pt.value for pt in near]
+            angles = [np.mod(2 * np.pi * pt.value / 60 * np.array(
+                [t for t, kind, *_ in family.period_map(pt.value).events(pt.x0) if kind == "impact"])[c.impact]
+                + np.pi / 2, 2 * np.pi) for pt in near]
+            stable = [pt.stable for pt in near]
+            flips = [k for k in range(1, len(near)) if stable[k] != stable[k - 1]
+                     and max(abs(values[k - 1] - c.rpm), abs(values[k] - c.rpm)) < 1.0]
+            for k in reversed(flips):                    # the corner between the two orbits, drawn in both styles
+                values[k:k] = [c.rpm, c.rpm]
+                angles[k:k] = [c.angle, c.angle]
+                stable[k:k] = [stable[k - 1], stable[k]]
+            values, angles, stable = np.array(values), np.array(angles), np.array(stable)
+            ax.plot(values, np.where(stable, angles, np.nan), "-", color="#4c72b0", lw=1.6)
+            ax.plot(values, np.where(~stable, angles, np.nan), "--", color="#c44e52", lw=1.4)
+            for pt in near[::max(1, len(near) // 12)]:
+                mu = pt.multipliers
+                plane.plot(mu.real, mu.imag, "o" if pt.stable else "x", ms=4,
+                           color="#4c72b0" if pt.stable else "#c44e52")
         ax.axhline(c.angle, color="k", lw=0.8, ls=":", label=f"the {c.joint} joint, beta = {c.angle:.5f} rad")
         ax.plot([c.rpm], [c.angle], "*", color="k", ms=12, label=f"corner impact, {c.rpm:.6f} rpm")
         ax.plot([], [], "-", color="#4c72b0", label="P(2,1), stable")
