@@ -1081,7 +1081,14 @@ def cam_continuation_section():
                              "located by": f"bordered Newton: orbit residual {c.residual:.1e} m, impact "
                                            f"{c.off_joint:.1e} rad off the joint", "bracket (rpm)": ""}
                             for c in study["corners"]])
-    points = sum(len(branch.points) for parts in study["branches"].values() for branch in parts)
+    orbits = pd.DataFrame([{"orbit": name, "cam speed (rpm)": pt.value, "stable": pt.stable,
+                            "multipliers": ", ".join(f"{m:.6g}" for m in pt.multipliers),
+                            "impact phases (revolutions)": ", ".join(
+                                f"{t / family.problem_of(pt.value).period:.6f}" for t, kind, *_ in
+                                family.period_map(pt.value).events(pt.x0) if kind == "impact")}
+                           for name, parts in study["branches"].items() for branch in parts
+                           for family in [study["families"][name]] for pt in branch.points])
+    points = len(orbits)
     corner_ok = [c for c in study["corners"] if c.kind == "nonsmooth fold" and c.residual <= 1e-9
                  and abs(c.off_joint) <= 1e-9 and c.revolutions == 1]
     text = ("<p>Periodic impacting orbits P(m, n) (m impacts in n revolutions) of the cam-follower, continued in cam "
@@ -1092,7 +1099,8 @@ def cam_continuation_section():
             f"period doubling (at most {settings['max_points']} orbits). Stable orbits solid, unstable dashed, over the "
             "brute-force impact phases of the attractor from rest (Moreau-Jean, h = T/4000, "
             f"{settings['record']:g} revolutions after {settings['transient']:g}).</p>"
-            "<img src='cam_continuation.png' alt='continued orbits'>"
+            "<img src='cam_continuation.png' alt='continued orbits'><p>Every orbit with its multipliers and "
+            "impact phases: cam_orbits.csv.</p>"
             "<p>Going down in speed the P(2, 1) orbit's first impact moves towards the joint of the cam's flank and "
             "nose (beta = pi/2 + beta2), where the profile's curvature, and with it the cam's acceleration c'', "
             "jumps. There the map stays continuous but its Jacobian jumps (the saltation matrix holds c''): a "
@@ -1109,7 +1117,7 @@ def cam_continuation_section():
             + table_html(table))
     return Section("Mechanics: continuation of periodic orbits and the corner-impact bifurcation", text,
                    {"cam_continuation.png": branch_picture, "cam_corner.png": corner_picture,
-                    "cam_continuation.csv": csv_bytes(table)},
+                    "cam_continuation.csv": csv_bytes(table), "cam_orbits.csv": csv_bytes(orbits)},
                    ok=bool(corner_ok) and points > 10,
                    metrics={"corners": [{"rpm": c.rpm, "joint": c.joint, "kind": c.kind, "residual": c.residual,
                                          "off_joint": c.off_joint} for c in study["corners"]],
