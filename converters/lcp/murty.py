@@ -16,7 +16,7 @@ from numba import njit
 
 from . import state as S
 from .kernels import solve_augmented
-from .result import accepts, mark_done
+from .result import accepts_scaled, mark_done, max_abs, max_abs_matrix
 
 
 @njit(cache=True, _nrt=False)
@@ -28,6 +28,13 @@ def sizes(k):
 @njit(cache=True, _nrt=False)
 def run(M, q, z, fw, iw, st, tol, max_iter, budget):
     """Advance Murty by at most ``budget`` multiply-adds; True when finished (see ``lemke.run``)."""
+    return _run(M, q, z, fw, iw, st, tol, max_iter, budget, -1.0)
+
+
+@njit(cache=True, _nrt=False)
+def _run(M, q, z, fw, iw, st, tol, max_iter, budget, m_big):
+    """:func:`run` with max|M| given (``m_big`` >= 0: a step loop's M is one of a few, its scale known) or found
+    when the answer is checked (< 0)."""
     k = q.shape[0]
     aug = fw[:k * (k + 1)].reshape((k, k + 1))
     w = fw[k * (k + 1):k * (k + 1) + k]
@@ -63,8 +70,8 @@ def run(M, q, z, fw, iw, st, tol, max_iter, budget):
         negative = -1
         for i in range(k):
             s = 0.0
-            for j in range(k):
-                s += M[i, j] * z[j]
+            for r in range(m):          # z is 0 outside the basis: the sum of k terms, skipping exact zeros
+                s += M[i, idx[r]] * z[idx[r]]
             w[i] = q[i] + s
             basic = z[i] if in_basis[i] else w[i]
             if negative < 0 and basic < -scale:
@@ -73,7 +80,9 @@ def run(M, q, z, fw, iw, st, tol, max_iter, budget):
             for i in range(k):
                 z[i] = z[i] if z[i] > 0.0 else 0.0
             st[S.ITER] = iteration
-            if not accepts(M, q, z, w, tol):
+            if m_big < 0.0:
+                m_big = max_abs_matrix(M)
+            if not accepts_scaled(M, q, max_abs(q), m_big, z, w, tol):
                 return mark_done(st, S.FAILED, S.CHECK)
             return mark_done(st, S.SOLVED, S.OK)
         if iteration == max_iter:
@@ -93,18 +102,19 @@ WARM_TOL = 1e-10
 
 
 @njit(cache=True)
-def solve_warm(M, q, z, active, fw, iw, st, max_pivots):
+def solve_warm(M, q, z, active, fw, iw, st, max_pivots, m_big):
     """LCP(q, M) by :func:`run` started from the basis ``active`` (True where z_i > 0 is guessed), which is left
     holding the solution's basis; z in place; ``fw``, ``iw``, ``st`` its workspace (:func:`sizes`, ST_SIZE).
     Returns the number of flips, or -1 when a principal block is singular, the answer fails the check or
-    ``max_pivots`` flips did not end (the caller's general solver takes that LCP)."""
+    ``max_pivots`` flips did not end (the caller's general solver takes that LCP). ``m_big``: max|M| (the step
+    loop's matrices are a few, each scanned once, not at every step's check)."""
     k = q.shape[0]
     for i in range(st.shape[0]):
         st[i] = 0
     st[S.PHASE] = S.RUNNING
     for i in range(k):
         iw[i] = 1 if active[i] else 0
-    run(M, q, z, fw, iw, st, WARM_TOL, max_pivots, np.int64(1) << 62)
+    _run(M, q, z, fw, iw, st, WARM_TOL, max_pivots, np.int64(1) << 62, m_big)
     if st[S.STATUS] != S.SOLVED:
         return -1
     for i in range(k):

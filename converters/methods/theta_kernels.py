@@ -27,6 +27,7 @@ from ..lcp import state as LCP_STATE
 from ..lcp.kernels import masks_by_size, solve_augmented, solve_small_lcp
 from ..lcp.murty import sizes as pivoting_sizes
 from ..lcp.murty import solve_warm
+from ..lcp.result import max_abs_matrix
 
 
 def _size(state, x):
@@ -97,6 +98,24 @@ def branch_maps(Phi, Gamma, H, C, F, M, Phi_b, Gamma_b, CPhi, q0):
                 Phi_b[s, 1, i, l] = Phi[s, i, l] - H[s, i, 0] * CPhi[s, 0, l] / M[s, 0, 0] if held else Phi[s, i, l]
 
 
+@njit(cache=True, inline="always")
+def _dot4(a, b, n):
+    """sum a[l] b[l] over l < n in four interleaved partial sums: one running sum is a chain of dependent adds
+    (4 cycles each), four let them overlap; a fixed order, so every run gives the same bits."""
+    s0 = s1 = s2 = s3 = 0.0
+    l = 0
+    while l + 4 <= n:
+        s0 += a[l] * b[l]
+        s1 += a[l + 1] * b[l + 1]
+        s2 += a[l + 2] * b[l + 2]
+        s3 += a[l + 3] * b[l + 3]
+        l += 4
+    while l < n:
+        s0 += a[l] * b[l]
+        l += 1
+    return (s0 + s1) + (s2 + s3)
+
+
 @njit(cache=True)
 def run_steps(which, Phi, Gamma, H, C, F, M, Phi_b, Gamma_b, CPhi, q0, x, u, y, start, inline, state):
     """Advance x, u, y from row ``start`` to the end; step j uses the matrix set ``which[j]``.
@@ -118,6 +137,10 @@ def run_steps(which, Phi, Gamma, H, C, F, M, Phi_b, Gamma_b, CPhi, q0, x, u, y, 
     work = np.empty((k, k + 1))
     order = masks_by_size(k) if inline else np.empty(0, dtype=np.int64)
     active = np.empty(k, dtype=np.bool_)
+    nonzero = np.empty(k, dtype=np.int64)
+    m_bigs = np.empty(M.shape[0])            # max|M| of each set, for the pivoting's check of its answer
+    for s in range(M.shape[0]):
+        m_bigs[s] = max_abs_matrix(M[s])
     floats, ints = pivoting_sizes(k)
     fw, iw, st = np.empty(floats), np.empty(ints, dtype=np.int64), np.empty(LCP_STATE.ST_SIZE, dtype=np.int64)
     for i in range(k):
@@ -126,30 +149,31 @@ def run_steps(which, Phi, Gamma, H, C, F, M, Phi_b, Gamma_b, CPhi, q0, x, u, y, 
     for j in range(start, which.shape[0]):
         s = which[j]
         for i in range(n):
-            acc = Gamma[s, i]
-            for l in range(n):
-                acc += Phi[s, i, l] * x[j, l]
-            xf[i] = acc
+            xf[i] = Gamma[s, i] + _dot4(Phi[s, i], x[j], n)
         for i in range(k):
-            acc = F[s, i]
-            for l in range(n):
-                acc += C[s, i, l] * xf[l]
-            q[i] = acc
+            q[i] = F[s, i] + _dot4(C[s, i], xf, n)
         if inline:
             mask = solve_small_lcp(M[s], q, k, z, mask, order, work)
             if mask < 0:
                 return NEEDS_GENERAL_SOLVER, j
-        elif solve_warm(M[s], q, z, active, fw, iw, st, PIVOTS_PER_PAIR * k) < 0:
+        elif solve_warm(M[s], q, z, active, fw, iw, st, PIVOTS_PER_PAIR * k, m_bigs[s]) < 0:
             return NEEDS_GENERAL_SOLVER, j
+        # few pairs conduct at once (a rectifier's, a multiplier's diodes): the products with z over its nonzero
+        # entries only, the same sums in the same order
+        m = 0
+        for l in range(k):
+            if z[l] != 0.0:
+                nonzero[m] = l
+                m += 1
         for i in range(n):
             acc = xf[i]
-            for l in range(k):
-                acc += H[s, i, l] * z[l]
+            for r in range(m):
+                acc += H[s, i, nonzero[r]] * z[nonzero[r]]
             x[j + 1, i] = acc
         for i in range(k):
             acc = q[i]
-            for l in range(k):
-                acc += M[s, i, l] * z[l]
+            for r in range(m):
+                acc += M[s, i, nonzero[r]] * z[nonzero[r]]
             y[j + 1, i] = acc
             u[j + 1, i] = z[i]
     return OK, which.shape[0]

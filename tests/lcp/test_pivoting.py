@@ -30,7 +30,7 @@ def test_pivoting_finds_lemkes_solution_from_any_start(k):
     for trial in range(40):
         M, q = _p_matrix(rng, k), rng.normal(size=k)
         active = rng.random(k) < 0.5                   # a wrong guess: the solver must flip its way out
-        flips = solve_warm(M, q, z, active, fw, iw, st, 1000)
+        flips = solve_warm(M, q, z, active, fw, iw, st, 1000, np.abs(M).max())
         assert flips >= 0
         reference = solve_lcp(M, q, method="lemke")
         assert reference.solved
@@ -38,7 +38,7 @@ def test_pivoting_finds_lemkes_solution_from_any_start(k):
         w = q + M @ z
         assert z.min() >= 0 and w.min() >= -1e-10 and abs(z @ w) <= 1e-9
         assert np.array_equal(active, z > 0)              # the active set it leaves is the solution's
-        again = solve_warm(M, q, z, active, fw, iw, st, 1000)
+        again = solve_warm(M, q, z, active, fw, iw, st, 1000, np.abs(M).max())
         assert again == 0                                 # warm: the set still holds, no flip
 
 
@@ -47,7 +47,7 @@ def test_pivoting_gives_up_on_a_singular_block_instead_of_guessing():
     M = np.zeros((k, k))
     q = -np.ones(k)
     z, fw, iw, st = workspace(k)
-    assert solve_warm(M, q, z, np.ones(k, dtype=np.bool_), fw, iw, st, 100) == -1
+    assert solve_warm(M, q, z, np.ones(k, dtype=np.bool_), fw, iw, st, 100, 0.0) == -1
 
 
 def test_a_ladder_of_16_diodes_steps_without_the_general_solver_and_equals_lemke_step_by_step():
