@@ -227,14 +227,17 @@ class ModelSweep:
         from ..methods.theta import plan_arrays
         from .batch import CONVERGED, batch_steady
         model = self._model()
-        prepared, rows = [], {}
+        prepared, rows, plans = [], {}, {}
         for index, point in items:
             clock = time.perf_counter()
             try:
                 p = model.resolve({**self.base, **point})
                 method = self._method(model, p)
                 problem = model.problem(p, model.period(p))
-                plan = plan_arrays(problem, method.h)
+                # the grid and matrix sets follow from the schedule and the step alone: points that vary only
+                # the circuit's values (a tolerance study) share them
+                key = (problem.switching, problem.t_span, method.h, len(problem.configurations))
+                plan = plans.get(key) or plans.setdefault(key, plan_arrays(problem, method.h))
                 prepared.append((index, point, p, method, problem, plan, time.perf_counter() - clock))
             except (ValueError, RuntimeError, ArithmeticError) as exc:
                 rows[index] = failed_row(index, point, f"{type(exc).__name__}: {exc}", time.perf_counter() - clock)
