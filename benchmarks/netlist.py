@@ -10,12 +10,14 @@ cores: noisy, each the best of REPEATS):
    orbit: the stepper's time per simulated period against ngspice's on the same file at equal accuracy. Both do
    the same work, SPICE_PERIODS periods from the same state, and are judged on the same quantity, the mean vout
    over the last 10, against that run's own h -> 0 limit (the stepper's at two fine steps, extrapolated); each
-   side's step (the stepper's h from T/100, ngspice's TMAX from T/200) halved until that error is TARGET; the
-   growth of the cost with N; and Siconos 4.4's own time loop on the same LCS and steps (EulerMoreauOSI, its
-   Lemke; benchmarks/peers.py's script) where python3-siconos is installed (``make bench``), at N <= 8.
+   side's step (the stepper's h from T/100, ngspice's TMAX from T/200) halved until that error is TARGET; the same
+   for the stepper graded after each switching instant (Theta's grade GRADE and growth GROWTH: steps from GRADE h
+   growing to h, as SPICE grows its step back after a breakpoint; its h from T/20); the growth of the cost with N;
+   and Siconos 4.4's own time loop on the same LCS and steps (EulerMoreauOSI, its Lemke; benchmarks/peers.py's
+   script) where python3-siconos is installed (``make bench``), at N <= 8.
    Judging the stepper on its own periodic orbit instead (as this benchmark did) is not equal accuracy: the
-   ladder's slowest multiplier is within 1e-3 of 1 at N = 16, so an orbit's error is its per-period error
-   amplified about a thousand times, where a 100-period run accumulates it a hundred times.
+   ladder's slowest multiplier is 1 - 3e-3 at N = 16, so an orbit's error is its per-period error amplified about
+   330 times, where a 100-period run accumulates it at most a hundred times.
 """
 from __future__ import annotations
 
@@ -42,6 +44,10 @@ LCP_FRACTIONS = tuple(1 / (100 * 2 ** k) for k in range(7))
 REFERENCE_STEPS = 25600
 #: The orbit both sides start on: the stepper's at T/START_STEPS.
 START_STEPS = 1600
+#: The graded stepper (Theta's grade and growth: steps from GRADE h after each edge, growing by GROWTH to h), its h
+#: from T/20 halved like the uniform one's.
+GRADE, GROWTH = 0.01, 1.2
+GRADED_FRACTIONS = tuple(1 / (20 * 2 ** k) for k in range(9))
 #: ngspice is started on the orbit and run this many periods (its mean read over the last 10).
 SPICE_PERIODS = 100
 
@@ -181,8 +187,8 @@ def multiplier(stages: list, periods: int, siconos_periods: int) -> None:
           f"until the error is {TARGET:g} (compare's threshold). ngspice's near-ideal diodes leave it ~6e-5 from the "
           "ideal circuit (their ~1 mV drops). rho: the slowest Floquet multiplier (an orbit's error is its per-period "
           "error over 1 - rho). Siconos: its own loop on the same LCS and steps (the stepper's last h).")
-    print("   N    k   1 - rho    run's vout (V)  (+-)      step     stepper s/period   error     TMAX      ngspice "
-          "s/period   error     ngspice/stepper   Siconos/stepper (end states apart)")
+    print("   N    k   1 - rho    run's vout (V)  (+-)    | stepper: step  s/period   error | graded: step  s/period   "
+          "error | ngspice: TMAX  s/period   error | ngspice/stepper  ngspice/graded | Siconos/stepper (end states apart)")
     costs = []
     for n in stages:
         circuit = Circuit.from_netlist(cockcroft_walton(n))
@@ -193,8 +199,8 @@ def multiplier(stages: list, periods: int, siconos_periods: int) -> None:
         half = run_mean(circuit, p, x0, T / (REFERENCE_STEPS // 2), periods)
         reference, uncertainty = 2 * fine - half, abs(fine - half)
 
-        def lcp(fraction):
-            method = Theta(h=fraction * T, theta=0.5)
+        def lcp(fraction, grade=0.0):
+            method = Theta(h=fraction * T, theta=0.5, grade=grade, growth=GROWTH)
             problem = circuit.problem(p, periods * T, x0=x0)
             simulate(problem, method)                                   # its compiled loop loaded
             wall, tr = best(lambda: simulate(problem, method))
@@ -204,6 +210,7 @@ def multiplier(stages: list, periods: int, siconos_periods: int) -> None:
             wall, mean = spice_period(circuit, p, x0, periods, fraction)
             return wall / periods, mean
         stepper = refined(lcp, LCP_FRACTIONS, reference)
+        graded = refined(lambda fraction: lcp(fraction, GRADE), GRADED_FRACTIONS, reference)
         ngspice = refined(spice, SPICE_TMAX, reference)
         sic_text = "-"
         if n <= 8:
@@ -216,11 +223,13 @@ def multiplier(stages: list, periods: int, siconos_periods: int) -> None:
                 wall, tr = best(lambda: simulate(short, same_method))
                 apart = float(np.abs(sic[1] - tr.x[-1]).max() / np.abs(tr.x[-1]).max())
                 sic_text = f"{sic[0] / wall:8.1f} ({apart:.1e})"
-        (hs, ws, es), (ht, wt, et) = stepper[-1], ngspice[-1]
-        met = es <= TARGET and et <= TARGET
-        ratio = f"{wt / ws:8.1f}" if met else "not reached"
+        (hs, ws, es), (hg, wg, eg), (ht, wt, et) = stepper[-1], graded[-1], ngspice[-1]
+
+        def ratio(e, w):
+            return f"{wt / w:8.1f}" if e <= TARGET and et <= TARGET else "not reached"
         print(f"  {n:2d}  {2 * n:3d}   {1 - rho:.1e}   {reference:12.4f}  ({uncertainty / reference:.0e})   T/{1 / hs:<5.0f} "
-              f"{ws:12.3e}   {es:.1e}   T/{1 / ht:<6.0f} {wt:14.3e}   {et:.1e}   {ratio:>15}   {sic_text}", flush=True)
+              f"{ws:10.3e}  {es:.1e}   T/{1 / hg:<5.0f} {wg:10.3e}  {eg:.1e}   T/{1 / ht:<6.0f} {wt:10.3e}  {et:.1e}"
+              f"   {ratio(es, ws):>11}  {ratio(eg, wg):>11}   {sic_text}", flush=True)
         costs.append((n, ws * hs))
     if len(costs) > 1:
         growth = np.polyfit(np.log([c[0] for c in costs]), np.log([c[1] for c in costs]), 1)[0]

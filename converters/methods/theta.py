@@ -45,10 +45,19 @@ class Theta(Method, key="lcp"):
     theta : float
         In [0.5, 1]: 1 is backward Euler (order 1, L-stable), 0.5 the trapezoidal rule (order 2
         on smooth stretches; about 1 through the diode switchings, with a smaller constant).
+    grade : float
+        The first step after each switching instant of a time schedule as a fraction of h, in [0, 1): 0 (the
+        default) steps uniformly; otherwise the steps start at grade h and grow by ``growth`` a step until they
+        reach h, as SPICE cuts its step at a breakpoint and lets it grow back: fine where the transients a
+        switching starts (a diode's RS C charge transfer) are fast, h elsewhere.
+    growth : float
+        The ratio of consecutive graded steps, in (1, 10].
     """
 
     h: float
     theta: float = 0.5
+    grade: float = 0.0
+    growth: float = 1.2
     step_option = "h"
     batches = True
     bytes_per_value = 50.0
@@ -57,6 +66,36 @@ class Theta(Method, key="lcp"):
 
     def __post_init__(self):
         check_step_and_theta(self)
+        from ..validate import parse_value
+        grade, growth = parse_value("grade", self.grade), parse_value("growth", self.growth)
+        if not 0.0 <= grade < 1.0:
+            raise ParameterError(f"grade (the first step after a switching instant, as a fraction of h) must be in "
+                                 f"[0, 1); got {grade!r}")
+        if not 1.0 < growth <= 10.0:
+            raise ParameterError(f"growth (the ratio of consecutive graded steps) must be in (1, 10]; got {growth!r}")
+        object.__setattr__(self, "grade", grade)
+        object.__setattr__(self, "growth", growth)
+
+    @property
+    def graded(self) -> tuple:
+        """The grid's offsets after each switching instant (:attr:`grade`): grade h, then each step ``growth``
+        times the last, while it is shorter than h; () for uniform steps."""
+        if not self.grade:
+            return ()
+        offsets, step, at = [], self.grade * self.h, 0.0
+        while step < self.h:
+            at += step
+            offsets.append(at)
+            step *= self.growth
+        return tuple(offsets)
+
+    def samples(self, problem) -> float:
+        """The uniform run's samples and the graded steps after each switching instant."""
+        base = super().samples(problem)
+        law, (t0, t1) = problem.switching, problem.t_span
+        if not self.grade or not isinstance(law, Schedule) or not np.isfinite(law.period):
+            return base
+        return base + len(self.graded) * ((t1 - t0) / law.period + 1.0) * len(law.starts)
 
     @property
     def order(self) -> float:
@@ -68,6 +107,9 @@ class Theta(Method, key="lcp"):
         return "backward-euler" if self.theta == 1.0 else f"theta({self.theta:g})"
 
     def supports(self, problem: LCSProblem) -> None:
+        if self.grade and not isinstance(problem.switching, Schedule):
+            raise ParameterError("grade: graded steps follow a time schedule's switching instants; this problem "
+                                 "switches on its state (its instants are not known before the run)")
         if getattr(problem, "inputs", None) is not None and not isinstance(problem.switching, Schedule):
             raise ParameterError("sinusoidal inputs (SIN sources) need a time schedule in the stepper; a state-driven "
                                  "law with them is not supported")
@@ -101,8 +143,10 @@ def BackwardEuler(h: float) -> Theta:
 MAX_STEPS = 200_000_000
 
 
-def time_grid(problem: LCSProblem, h: float) -> np.ndarray:
-    """Uniform grid of step h over t_span, with every switching instant inserted.
+def time_grid(problem: LCSProblem, h: float, graded: tuple = ()) -> np.ndarray:
+    """Uniform grid of step h over t_span, with every switching instant inserted; ``graded``: offsets after each
+    switching instant (t0 among them where the schedule switches there) that replace the uniform points they span
+    (:attr:`Theta.graded`).
 
     Grid points closer than h/1000 to a switching instant are dropped (the instant replaces them).
     """
@@ -112,6 +156,8 @@ def time_grid(problem: LCSProblem, h: float) -> np.ndarray:
     uniform = t0 + h * np.arange(n_steps + 1)
     uniform[-1] = t1
     breaks = problem.switching.breakpoints(t0, t1)
+    if graded:
+        uniform, breaks = _graded(problem.switching, uniform, breaks, t0, t1, h, np.asarray(graded))
     if breaks.size == 0:
         return uniform
     nearest = np.searchsorted(breaks, uniform)         # breaks[nearest - 1] < uniform <= breaks[nearest]
@@ -122,6 +168,28 @@ def time_grid(problem: LCSProblem, h: float) -> np.ndarray:
     grid = np.concatenate((uniform[keep], breaks))
     grid.sort()
     return np.unique(grid) if (grid[1:] == grid[:-1]).any() else grid      # np.union1d, without its overhead
+
+
+def _graded(schedule, uniform: np.ndarray, breaks: np.ndarray, t0: float, t1: float, h: float, offsets: np.ndarray):
+    """(uniform, breaks) with the graded points after each switching instant: each instant's offsets (those before
+    the next instant and t1) join the breaks, and the uniform points they span (up to h/1000 past the last) go."""
+    phase = t0 % schedule.period
+    starts = np.asarray(schedule.starts)
+    at_start = bool(np.any(np.minimum(np.abs(starts - phase), schedule.period - np.abs(starts - phase))
+                           <= 1e-12 * schedule.period))
+    instants = np.concatenate(([t0] if at_start else [], breaks))
+    ends = np.concatenate((instants[1:], [t1]))
+    points, keep = [], np.ones(uniform.size, dtype=bool)
+    for start, end in zip(instants, ends):
+        inside = start + offsets
+        inside = inside[inside < end - 1e-3 * h]
+        if inside.size:
+            points.append(inside)
+            keep &= ~((uniform > start) & (uniform <= inside[-1] + 1e-3 * h))
+    keep[0] = keep[-1] = True
+    if not points:
+        return uniform, breaks
+    return uniform[keep], np.sort(np.concatenate([breaks, *points]))
 
 
 def _step_sets(dt: np.ndarray, step_config: np.ndarray, h: float, n_configs: int):
@@ -144,7 +212,7 @@ def _step_sets(dt: np.ndarray, step_config: np.ndarray, h: float, n_configs: int
     return which, set_configs, set_dts
 
 
-def _period_grid(problem: LCSProblem, h: float):
+def _period_grid(problem: LCSProblem, h: float, graded: tuple = ()):
     """One period of a run that repeats it, from a whole period m T: (local grid [0, T] with the switching
     instants, each step's configuration, each step's matrix set, set_configs, set_dts); None when the run does
     not repeat a period of whole steps (no period, T not a whole number of steps, a start other than m T: a run
@@ -158,7 +226,7 @@ def _period_grid(problem: LCSProblem, h: float):
             or t0 != round(t0 / T) * T):
         return None
     one = problem if problem.t_span == (0.0, T) else replace(problem, t_span=(0.0, T))
-    local = time_grid(one, h)                                            # [0, T] with the breakpoints
+    local = time_grid(one, h, graded)                                    # [0, T] with the breakpoints
     local_config = schedule.config_at(0.5 * (local[:-1] + local[1:]))
     if problem.inputs is not None:
         # sinusoidal inputs: every step of the period has its own E and F (the same in every period): one set per
@@ -211,11 +279,11 @@ def _repeat_period(period, T: float, t1: float, h: float, t0: float = 0.0):
     return t, config, which, set_configs, set_dts
 
 
-def _too_long(problem: LCSProblem, h: float) -> bool:
+def _too_long(problem: LCSProblem, h: float, graded: tuple = ()) -> bool:
     """More than MAX_STEPS steps in the repeated grid (the general grid then refuses the run)."""
     T, (t0, t1) = problem.switching.period, problem.t_span
     periods = int(np.ceil((t1 - t0) / T * (1.0 - 1e-12)))
-    return periods * (int(round(T / h)) + len(problem.switching.starts)) > MAX_STEPS
+    return periods * (int(round(T / h)) + len(problem.switching.starts) * (1 + len(graded))) > MAX_STEPS
 
 
 class GridPlan(NamedTuple):
@@ -232,13 +300,13 @@ class GridPlan(NamedTuple):
     set_dts: np.ndarray
 
 
-def plan_arrays(problem: LCSProblem, h: float) -> GridPlan:
+def plan_arrays(problem: LCSProblem, h: float, graded: tuple = ()) -> GridPlan:
     """The grid and matrix sets of a run of ``problem`` at step ``h`` (:func:`_plan`)."""
-    t, config, which, set_configs, set_dts = _plan(problem, h)
+    t, config, which, set_configs, set_dts = _plan(problem, h, graded=graded)
     return GridPlan(t, config[1:], which, set_configs, set_dts)
 
 
-def _plan(problem: LCSProblem, h: float, period=None):
+def _plan(problem: LCSProblem, h: float, period=None, graded: tuple = ()):
     """(t, config, which, set_configs, set_dts) of a run: config the configuration at each grid point (each
     step's, the first step's at t0), which each step's matrix set.
 
@@ -246,13 +314,13 @@ def _plan(problem: LCSProblem, h: float, period=None):
     (:func:`_period_grid`, or ``period`` when given) and repeated (the split steps at the switching instants
     are then the same in every period: one matrix set each); otherwise the whole grid is built and sorted by
     :func:`time_grid`."""
-    period = _period_grid(problem, h) if period is None else period
-    if problem.inputs is not None and (period is None or _too_long(problem, h)):
+    period = _period_grid(problem, h, graded) if period is None else period
+    if problem.inputs is not None and (period is None or _too_long(problem, h, graded)):
         raise ParameterError(f"sinusoidal inputs need a run on whole steps of whole periods from a period start: the "
                              f"period T = {problem.switching.period:g} s a whole number of steps h = {h:g} s, t_start a "
                              f"multiple of T (got t_start = {problem.t_span[0]:g} s)")
-    if period is None or _too_long(problem, h):
-        t = time_grid(problem, h)
+    if period is None or _too_long(problem, h, graded):
+        t = time_grid(problem, h, graded)
         config = np.empty(t.size, dtype=np.int64)
         config[1:] = problem.switching.config_at(0.5 * (t[:-1] + t[1:]))
         config[0] = config[1]
@@ -279,8 +347,8 @@ class StepPlan:
 
     @classmethod
     def build(cls, problem: LCSProblem, method: Theta) -> "StepPlan":
-        period = _period_grid(problem, method.h)
-        t, config, which, set_configs, set_dts = _plan(problem, method.h, period)
+        period = _period_grid(problem, method.h, method.graded)
+        t, config, which, set_configs, set_dts = _plan(problem, method.h, period, method.graded)
         mats = step_matrices([_set_configuration(problem, c, method.theta) for c in set_configs], set_dts,
                              method.theta)
         return cls(problem, method, t, config, which, mats, period)
@@ -298,7 +366,7 @@ class StepPlan:
         problem = replace(self.problem, t_span=(self.problem.t_span[0], t_end),
                           x0=self.problem.x0 if x0 is None else x0)
         self.method.check_memory(problem)
-        if self.period is None or _too_long(problem, self.method.h):
+        if self.period is None or _too_long(problem, self.method.h, self.method.graded):
             return StepPlan.build(problem, self.method)
         t, config, which, set_configs, set_dts = _repeat_period(self.period, problem.switching.period, t_end,
                                                                 self.method.h, problem.t_span[0])

@@ -236,8 +236,8 @@ class ModelSweep:
                 problem = model.problem(p, model.period(p))
                 # the grid and matrix sets follow from the schedule and the step alone: points that vary only
                 # the circuit's values (a tolerance study) share them
-                key = (problem.switching, problem.t_span, method.h, len(problem.configurations))
-                plan = plans.get(key) or plans.setdefault(key, plan_arrays(problem, method.h))
+                key = (problem.switching, problem.t_span, method, len(problem.configurations))
+                plan = plans.get(key) or plans.setdefault(key, plan_arrays(problem, method.h, method.graded))
                 prepared.append((index, point, p, method, problem, plan, time.perf_counter() - clock))
             except (ValueError, RuntimeError, ArithmeticError) as exc:
                 rows[index] = failed_row(index, point, f"{type(exc).__name__}: {exc}", time.perf_counter() - clock)

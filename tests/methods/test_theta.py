@@ -138,3 +138,54 @@ def test_simulate_rejects_a_foreign_method_and_bad_x0():
         simulate(problem, "euler")
     with pytest.raises(ParameterError, match=r"x0 must be 2 finite numbers"):
         simulate(problem, BackwardEuler(1e-6), x0=[np.nan, 0.0])
+
+
+def test_graded_steps_start_at_grade_h_after_each_switching_instant_and_grow_to_h():
+    from converters.methods.theta import time_grid
+    A = np.array([[-1.0]])
+    c = Configuration(A=A, B=np.zeros((1, 1)), C=np.zeros((1, 1)), D=np.ones((1, 1)), E=np.zeros(1), F=np.ones(1))
+    T, h = 1.0, 0.05
+    problem = LCSProblem([c, c], Schedule(period=T, starts=(0.0, 0.3), configs=(0, 1)), x0=np.zeros(1),
+                         t_span=(0.0, 2 * T))
+    method = Theta(h=h, grade=0.01, growth=1.5)
+    t = time_grid(problem, h, method.graded)
+    steps = np.diff(t)
+    for instant in (0.0, 0.3, 1.0, 1.3):
+        j = int(np.flatnonzero(np.isclose(t, instant, atol=1e-12))[0])
+        first = steps[j:j + len(method.graded)]
+        np.testing.assert_allclose(first[0], 0.01 * h, rtol=1e-12)
+        np.testing.assert_allclose(first[1:] / first[:-1], 1.5, rtol=1e-9)
+    assert steps.max() <= h * (1 + 1e-9) and steps.min() >= 1e-3 * h
+    assert len(method.graded) == 12                        # 0.01 h * 1.5^11 < h <= 0.01 h * 1.5^12
+    assert np.array_equal(np.diff(time_grid(problem, h, ())), np.diff(time_grid(problem, h)))
+
+
+@pytest.mark.parametrize("option, value", [("grade", 1.0), ("grade", -0.1), ("growth", 1.0), ("growth", 11.0)])
+def test_a_grading_outside_its_range_is_refused_naming_it(option, value):
+    with pytest.raises(ParameterError, match=rf"{option} .*must be in .*got {value}"):
+        Theta(h=1e-6, **{option: value})
+
+
+def test_graded_steps_reach_the_multipliers_exact_orbit_with_a_tenth_of_the_uniform_steps():
+    """The 4-stage Cockcroft-Walton multiplier (k = 8 diodes, each RS C = T/20 transfer at the square wave's
+    edges): against the event method's exact periodic orbit, the stepper graded after each edge (first step h/100,
+    growth 1.2) at h = T/20, 62 steps a period, is closer than the uniform stepper at T/160 (measured: 4.1e-5
+    against 8.3e-5; the uniform one needs T/640 for 2.9e-5)."""
+    from pathlib import Path
+    from tempfile import TemporaryDirectory
+
+    from converters.models import Circuit
+    from converters.run import steady_orbit
+    from netlists.generators import cockcroft_walton
+    with TemporaryDirectory() as tmp:
+        path = Path(tmp) / "cw4.cir"
+        path.write_text(cockcroft_walton(4))
+        circuit = Circuit.from_netlist(path)
+    p = circuit.resolve({})
+    T = circuit.period(p)
+    exact = steady_orbit(circuit, p, method="event").mean("vout")
+    graded = steady_orbit(circuit, p, method=Theta(h=T / 20, theta=0.5, grade=0.01))
+    uniform = steady_orbit(circuit, p, method=Theta(h=T / 160, theta=0.5))
+    assert graded.steps == 62 and uniform.steps == 160
+    assert abs(graded.mean("vout") / exact - 1) < 5e-5
+    assert abs(uniform.mean("vout") / exact - 1) > 6e-5

@@ -31,6 +31,10 @@ def add(sub) -> None:
     sim.add_argument("--solver-rtol", default=None, help="smooth: scipy's relative tolerance (default 1e-6; the "
                                                          "result's error is the smoothing's, O(eps))")
     sim.add_argument("--theta", default=None, help="theta in [0.5, 1] (default 1, PRC 0.5)")
+    sim.add_argument("--grade", default=None,
+                     help="lcp: the first step after each switching instant as a fraction of --h, in [0, 1) (default 0: "
+                          "uniform steps); the steps then grow by --growth until they reach --h")
+    sim.add_argument("--growth", default=None, help="lcp: the ratio of consecutive graded steps, in (1, 10] (default 1.2)")
     span = sim.add_mutually_exclusive_group()
     span.add_argument("--t-end", default=None, help="duration in s (with --steady: the span returned on the orbit)")
     span.add_argument("--periods", type=integer(1), default=None,
@@ -68,7 +72,7 @@ def run(args) -> int:
         raise ParameterError(f"--steady-tol applies with --steady only; got --steady-tol {args.steady_tol} without it")
     if args.rtol is not None:
         given = [flag for flag, value in (("--method", args.method), ("--h", args.h), ("--theta", args.theta),
-                                          ("--eps", args.eps), ("--solver-rtol", args.solver_rtol),
+                                          ("--grade", args.grade), ("--growth", args.growth), ("--eps", args.eps), ("--solver-rtol", args.solver_rtol),
                                           ("--steady-tol", args.steady_tol), ("--spice-tmax", args.spice_tmax),
                                           ("--spice-reltol", args.spice_reltol), ("--spice-method", args.spice_method))
                  if value is not None]
@@ -93,7 +97,8 @@ def run(args) -> int:
         elif args.output_step is not None and args.steady:
             raise ParameterError("--output-step applies to a run from rest (--steady returns its periods on the orbit "
                                  "at every step)")
-        options = method_options(method, {"theta": args.theta, "eps": args.eps, "solver_rtol": args.solver_rtol,
+        options = method_options(method, {"theta": args.theta, "grade": args.grade, "growth": args.growth,
+                                          "eps": args.eps, "solver_rtol": args.solver_rtol,
                                           "spice_tmax": args.spice_tmax, "spice_reltol": args.spice_reltol,
                                           "spice_method": args.spice_method})
         setup_s = _set_up(args.converter, params, args.control, method, args.steady, options) \
