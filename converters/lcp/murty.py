@@ -16,13 +16,24 @@ from numba import njit
 
 from . import state as S
 from .kernels import solve_augmented
-from .result import accepts_scaled, mark_done, max_abs, max_abs_matrix
+from .result import CHECK_OK, check_scaled, error, mark_done, max_abs, max_abs_matrix
 
 
 @njit(cache=True, _nrt=False)
 def sizes(k):
     """Doubles and integers of workspace: the augmented M_JJ | -q_J and w; the basis flags and J."""
     return k * (k + 1) + k, 2 * k
+
+
+@njit(cache=True, _nrt=False, inline="always")
+def _basis_affine(M, q, z, idx, m, w):
+    """w = q + M z with z zero outside the basis idx[:m]: :func:`.result.affine`'s sums (index order, q added
+    last) without the k - m zero terms (few pairs conduct at once in a rectifier or a multiplier)."""
+    for i in range(q.shape[0]):
+        s = 0.0
+        for r in range(m):
+            s += M[i, idx[r]] * z[idx[r]]
+        w[i] = q[i] + s
 
 
 @njit(cache=True, _nrt=False)
@@ -68,11 +79,8 @@ def _run(M, q, z, fw, iw, st, tol, max_iter, budget, m_big):
             for r in range(m):
                 z[idx[r]] = aug[r, m]
         negative = -1
+        _basis_affine(M, q, z, idx, m, w)
         for i in range(k):
-            s = 0.0
-            for r in range(m):          # z is 0 outside the basis: the sum of k terms, skipping exact zeros
-                s += M[i, idx[r]] * z[idx[r]]
-            w[i] = q[i] + s
             basic = z[i] if in_basis[i] else w[i]
             if negative < 0 and basic < -scale:
                 negative = i
@@ -80,9 +88,10 @@ def _run(M, q, z, fw, iw, st, tol, max_iter, budget, m_big):
             for i in range(k):
                 z[i] = z[i] if z[i] > 0.0 else 0.0
             st[S.ITER] = iteration
+            _basis_affine(M, q, z, idx, m, w)              # w of the clipped z
             if m_big < 0.0:
                 m_big = max_abs_matrix(M)
-            if not accepts_scaled(M, q, max_abs(q), m_big, z, w, tol):
+            if check_scaled(max_abs(q), m_big, z, w, error(q, z, w), tol)[0] != CHECK_OK:
                 return mark_done(st, S.FAILED, S.CHECK)
             return mark_done(st, S.SOLVED, S.OK)
         if iteration == max_iter:

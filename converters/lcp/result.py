@@ -38,8 +38,7 @@ def affine(M, q, z, w):
     for i in range(k):
         s = 0.0
         for j in range(k):
-            if z[j] != 0.0:             # a complementarity solution is sparse: the same sum, exact zeros skipped
-                s += M[i, j] * z[j]
+            s += M[i, j] * z[j]
         w[i] = q[i] + s
 
 
