@@ -180,7 +180,7 @@ def test_the_default_steady_run_warns_that_its_mean_is_1_percent_off(capsys):
     (["--rtol", "1e-4", "--method", "event"], "give either --rtol or --method"),
     (["--rtol", "0"], r"rtol must be in [1e-10, 0.1]; got 0"),
     (["--rtol", "abc"], "rtol"),
-    (["--solver-rtol", "1e-8"], "--solver-rtol does not apply to --method lcp (its options: --theta, and --h)"),
+    (["--solver-rtol", "1e-8"], "--solver-rtol does not apply to --method lcp (its options: --theta, --grade, --growth, and --h)"),
     (["--method", "event", "--theta", "1"], "--theta does not apply to --method event (its options: none, and --h)"),
     (["--method", "smooth", "--theta", "1", "--eps", "1e-3"],
      "--theta does not apply to --method smooth (its options: --eps, --solver-rtol, and --h)"),
@@ -205,7 +205,7 @@ def test_ngspice_options_on_simulate_and_compare(capsys, ngspice):
     code, out, _ = run_cli(capsys, "compare", "buck", "--spice-method", "trap", "--json")
     assert code == 0 and json.loads(out)["spice_options"]["method"] == "trap"
     code, _, err = run_cli(capsys, "simulate", "buck", "--spice-tmax", "20n")
-    assert code == 2 and "--spice-tmax does not apply to --method lcp (its options: --theta, and --h)" in err
+    assert code == 2 and "--spice-tmax does not apply to --method lcp (its options: --theta, --grade, --growth, and --h)" in err
     code, _, err = run_cli(capsys, "simulate", "buck", "--method", "spice", "--spice-tmax", "20u")
     assert code == 2 and "--spice-tmax must be in (0, 1e-05) s" in err
 
