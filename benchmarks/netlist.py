@@ -12,7 +12,7 @@ cores: noisy, each the best of REPEATS):
    over the last 10, against that run's own h -> 0 limit (the stepper's at two fine steps, extrapolated); each
    side's step (the stepper's h from T/100, ngspice's TMAX from T/200) halved until that error is TARGET; the same
    for the stepper graded after each switching instant (Theta's grade GRADE and growth GROWTH: steps from GRADE h
-   growing to h, as SPICE grows its step back after a breakpoint; its h from T/20); the growth of the cost with N;
+   growing to h, as SPICE grows its step back after a breakpoint; its h from T/10); the growth of the cost with N;
    and Siconos 4.4's own time loop on the same LCS and steps (EulerMoreauOSI, its Lemke; benchmarks/peers.py's
    script) where python3-siconos is installed (``make bench``), at N <= 8.
    Judging the stepper on its own periodic orbit instead (as this benchmark did) is not equal accuracy: the
@@ -45,9 +45,9 @@ REFERENCE_STEPS = 25600
 #: The orbit both sides start on: the stepper's at T/START_STEPS.
 START_STEPS = 1600
 #: The graded stepper (Theta's grade and growth: steps from GRADE h after each edge, growing by GROWTH to h), its h
-#: from T/20 halved like the uniform one's.
-GRADE, GROWTH = 0.01, 1.2
-GRADED_FRACTIONS = tuple(1 / (20 * 2 ** k) for k in range(9))
+#: from T/10 halved like the uniform one's (at N = 16: g = 0.01, r = 1.2 needed T/40, 82 steps a period; these T/10, 42).
+GRADE, GROWTH = 0.001, 1.5
+GRADED_FRACTIONS = tuple(1 / (10 * 2 ** k) for k in range(10))
 #: ngspice is started on the orbit and run this many periods (its mean read over the last 10).
 SPICE_PERIODS = 100
 

@@ -33,7 +33,7 @@ def kernel_cost(problem, h, steps, run_steps):
     y = np.empty((steps + 1, problem.k))
     x[0] = problem.x0
     args = (which, mats.Phi, mats.Gamma, mats.H, mats.C, mats.F, mats.M, mats.Phi_b, mats.Gamma_b, mats.CPhi, mats.q0,
-            x, u, y, 0, True, register_state(problem.n))
+            x, u, y, 0, True, 0, register_state(problem.n))
     run_steps(*args)
     best = np.inf
     for _ in range(REPEATS):

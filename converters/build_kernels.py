@@ -25,19 +25,19 @@ def _exports():
         return T.Array(dtype, ndim, "C")
 
     run_args = (a(1, T.int32), a(3), a(2), a(3), a(3), a(2), a(3), a(4), a(3), a(3), a(2), a(2), a(2), a(2),
-                T.int64, T.boolean)
+                T.int64, T.boolean, T.int64)
 
     def run_steps_with(state):
-        def run(which, Phi, Gamma, H, C, F, M, Phi_b, Gamma_b, CPhi, q0, x, u, y, start, inline):
+        def run(which, Phi, Gamma, H, C, F, M, Phi_b, Gamma_b, CPhi, q0, x, u, y, start, inline, period):
             return K.run_steps(which, Phi, Gamma, H, C, F, M, Phi_b, Gamma_b, CPhi, q0, x, u, y, start, inline,
-                               state)
+                               period, state)
         return run
 
     out = [(f"run_steps_r{n}", T.UniTuple(T.int64, 2)(*run_args), run_steps_with(register_state(n)))
            for n in range(1, MAX_REGISTER_STATES + 1)]
     out.append(("run_steps_rows", T.UniTuple(T.int64, 2)(*run_args), run_steps_with(None)))
-    out.append(("set_matrices", T.boolean(a(3), a(3), a(3), a(3), a(2), a(2), a(1), T.float64, a(3), a(2), a(3),
-                                          a(3), a(4), a(3), a(3), a(2)), K.set_matrices.py_func))
+    out.append(("set_matrices", T.boolean(a(3), a(3), a(3), a(3), a(2), a(2), a(1), T.float64, a(1, T.int32), a(3),
+                                          a(2), a(3), a(3), a(4), a(3), a(3), a(2)), K.set_matrices.py_func))
     out.append(("step_jacobian", T.none(a(1, T.int32), a(2), a(4), a(3), a(3), a(3), a(2)), K.step_jacobian.py_func))
     out.append(("newton_step", T.Tuple((T.float64, T.float64, T.float64, T.int64))(a(1), a(1), a(2), T.float64,
                                                                                     a(1), a(2), T.float64, T.int64,

@@ -253,8 +253,8 @@ def _run_steps_by_size(module):
 
     specs = _parsed(_record()["exports"]["run_steps_rows"])
 
-    def run_steps(which, Phi, Gamma, H, C, F, M, Phi_b, Gamma_b, CPhi, q0, x, u, y, start, inline, state):
-        args = (which, Phi, Gamma, H, C, F, M, Phi_b, Gamma_b, CPhi, q0, x, u, y, start, inline)
+    def run_steps(which, Phi, Gamma, H, C, F, M, Phi_b, Gamma_b, CPhi, q0, x, u, y, start, inline, period, state):
+        args = (which, Phi, Gamma, H, C, F, M, Phi_b, Gamma_b, CPhi, q0, x, u, y, start, inline, period)
         if not conforms(specs, args) or not (state is None or len(state) in by_size):
             return _jit("run_steps")(*args, state)
         return (rows if state is None else by_size[len(state)])(*args)

@@ -36,12 +36,16 @@ def solve_augmented(a, m, cols):
             if f != 0.0:
                 for c in range(col, m + cols):
                     a[r, c] -= f * a[col, c]
+    # back substitution row by row (the inner loop along a row: contiguous, vectorised), each entry's terms
+    # subtracted in the same order as a column-by-column loop would
     for r in range(m - 1, -1, -1):
+        for l in range(r + 1, m):
+            f = a[r, l]
+            for c in range(m, m + cols):
+                a[r, c] -= f * a[l, c]
+        d = a[r, r]
         for c in range(m, m + cols):
-            s = a[r, c]
-            for l in range(r + 1, m):
-                s -= a[r, l] * a[l, c]
-            a[r, c] = s / a[r, r]
+            a[r, c] /= d
     return True
 
 

@@ -85,10 +85,14 @@ def _run(M, q, z, fw, iw, st, tol, max_iter, budget, m_big):
             if negative < 0 and basic < -scale:
                 negative = i
         if negative < 0:
+            clipped = False
             for i in range(k):
-                z[i] = z[i] if z[i] > 0.0 else 0.0
+                if not z[i] > 0.0:
+                    clipped = clipped or z[i] != 0.0          # negative (or NaN): w changes
+                    z[i] = 0.0
             st[S.ITER] = iteration
-            _basis_affine(M, q, z, idx, m, w)              # w of the clipped z
+            if clipped:
+                _basis_affine(M, q, z, idx, m, w)          # w of the clipped z
             if m_big < 0.0:
                 m_big = max_abs_matrix(M)
             if check_scaled(max_abs(q), m_big, z, w, error(q, z, w), tol)[0] != CHECK_OK:

@@ -11,7 +11,8 @@ and the same step as affine maps of x_k (:func:`.theta_kernels.branch_maps`): q 
 CPhi = C Phi, q0 = C Gamma + F; for one pair, x_{k+1} = Phi_b[0] x_k + Gamma_b[0] when it is free (q >= 0)
 and Phi_b[1] x_k + Gamma_b[1] = (Phi - H CPhi / M) x_k + Gamma - H q0 / M when it is held (q < 0).
 
-The arithmetic is :func:`.theta_kernels.theta_matrices` (compiled, one elimination per set), the one the
+The arithmetic is :func:`.theta_kernels.theta_matrices` (compiled, one elimination per distinct A, B, C, D and
+step: sets that differ only in E, F share it), the one the
 state-driven loops and the batched steady states use too: a plan's matrices are the same to the last bit
 whichever path builds them.
 """
@@ -64,6 +65,24 @@ def step_matrices(configs: list[Configuration], dts: np.ndarray, theta: float) -
     Phi, Gamma, H, M = np.empty((sets, n, n)), np.empty((sets, n)), np.empty((sets, n, k)), np.empty((sets, k, k))
     Phi_b, Gamma_b = np.empty((sets, 2, n, n)), np.empty((sets, 2, n))
     CPhi, q0 = np.empty((sets, k, n)), np.empty((sets, k))
-    if not kernel("set_matrices")(A, B, C, D, E, F, dts, float(theta), Phi, Gamma, H, M, Phi_b, Gamma_b, CPhi, q0):
+    if not kernel("set_matrices")(A, B, C, D, E, F, dts, float(theta), _leaders(configs, dts), Phi, Gamma, H, M,
+                                  Phi_b, Gamma_b, CPhi, q0):
         raise np.linalg.LinAlgError("Singular matrix")
     return StepMatrices(Phi, Gamma, H, C, F, M, Phi_b, Gamma_b, CPhi, q0)
+
+
+def _leaders(configs: list[Configuration], dts: np.ndarray) -> np.ndarray:
+    """For each set, the first set with the same A, B, C, D (by value) and step: its eliminations are shared
+    (:func:`.theta_kernels.set_matrices`). A schedule's configurations often differ in E, F only (a PULSE
+    source's levels and edges), and a sinusoidal input gives every step a set of its own with the same A..D."""
+    values: dict = {}
+    firsts: dict = {}
+    leader = np.empty(len(configs), dtype=np.int32)
+    for s, (c, dt) in enumerate(zip(configs, dts.tolist())):
+        ident = (id(c.A), id(c.B), id(c.C), id(c.D))            # the configs are alive: ids are not reused
+        value = values.get(ident)
+        if value is None:
+            value = values[ident] = b"".join(np.ascontiguousarray(getattr(c, key), dtype=float).tobytes()
+                                             for key in "ABCD")
+        leader[s] = firsts.setdefault((value, dt), s)
+    return leader

@@ -208,7 +208,11 @@ def _step_sets(dt: np.ndarray, step_config: np.ndarray, h: float, n_configs: int
         _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
     which[split] = n_configs + inverse
     set_configs = list(range(n_configs)) + [int(c) for c in step_config[split][first]]
-    set_dts = np.concatenate([np.full(n_configs, h), dt[split][first]])
+    # each fraction's dt from its first step in any configuration: sets of configurations alike but for E, F then
+    # have equal steps and share their elimination (discretize.step_matrices)
+    fractions = np.round(dt[split] / h, 10)
+    _, first_of_fraction, which_fraction = np.unique(fractions, return_index=True, return_inverse=True)
+    set_dts = np.concatenate([np.full(n_configs, h), dt[split][first_of_fraction[which_fraction]][first]])
     return which, set_configs, set_dts
 
 
@@ -397,13 +401,14 @@ class StepPlan:
         inline = k <= MAX_INLINE_K
         state = register_state(self.problem.n)
         run_steps = kernel("run_steps")
+        period = self.period[0].size - 1 if self.period is not None else 0       # steps in a period: the guesses
         general_solves = 0
         j = 0
         while True:
             if j >= which.shape[0]:     # the run's last step was solved here
                 return general_solves
             status, j = run_steps(which, mats.Phi, mats.Gamma, mats.H, mats.C, mats.F, mats.M, mats.Phi_b,
-                                  mats.Gamma_b, mats.CPhi, mats.q0, x, u, y, j, inline, state)
+                                  mats.Gamma_b, mats.CPhi, mats.q0, x, u, y, j, inline, period, state)
             if status == OK:
                 return general_solves
             s = which[j]

@@ -122,7 +122,7 @@ def test_run_steps_serves_every_register_size_and_the_rows():
             x, u, y = np.zeros((N, n)), np.zeros((N, 1)), np.zeros((N, 1))
             x[0] = rng.standard_normal(n) if not results else results[0][0][0]
             status = function(which, m.Phi, m.Gamma, m.H, m.C, m.F, m.M, m.Phi_b, m.Gamma_b, m.CPhi, m.q0, x, u, y,
-                              0, True, compiled.register_state(n))
+                              0, True, 0, compiled.register_state(n))
             results.append((x, u, y, tuple(status)))
         assert results[0][3] == results[1][3] == (compiled.OK, N - 1)
         assert 0 < (results[0][1] > 0).sum() < N - 1, n      # both branches taken

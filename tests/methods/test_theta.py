@@ -189,3 +189,64 @@ def test_graded_steps_reach_the_multipliers_exact_orbit_with_a_tenth_of_the_unif
     assert graded.steps == 62 and uniform.steps == 160
     assert abs(graded.mean("vout") / exact - 1) < 5e-5
     assert abs(uniform.mean("vout") / exact - 1) > 6e-5
+
+
+def test_sets_alike_but_for_their_sources_share_one_elimination_to_the_bit():
+    """Configurations that differ only in E, F (a PULSE source's levels) share the elimination of I - dt theta A
+    (the first such set leads): every set's matrices are those it gets when built alone, to the last bit."""
+    from dataclasses import fields, replace
+
+    from converters.methods.discretize import _leaders, step_matrices
+    rng = np.random.default_rng(5)
+    n, k, h = 6, 3, 1e-2
+    A = -np.eye(n) + 0.3 * rng.standard_normal((n, n))
+    B, C, D = rng.standard_normal((n, k)), rng.standard_normal((k, n)), np.eye(k)
+    c0 = Configuration(A=A, B=B, C=C, D=D, E=rng.standard_normal(n), F=rng.standard_normal(k))
+    c1 = Configuration(A=A.copy(), B=B.copy(), C=C.copy(), D=D.copy(), E=rng.standard_normal(n),
+                       F=rng.standard_normal(k))                                # equal values, arrays of their own
+    c2 = replace(c0, A=A + 1e-3)
+    configs, dts = [c0, c1, c2, c1, c0], np.array([h, h, h, h / 2, h / 2])
+    assert _leaders(configs, dts).tolist() == [0, 0, 2, 3, 3]
+    together = step_matrices(configs, dts, 0.5)
+    for s, (c, dt) in enumerate(zip(configs, dts)):
+        alone = step_matrices([c], np.array([dt]), 0.5)
+        for field in fields(together):
+            assert np.array_equal(getattr(together, field.name)[s], getattr(alone, field.name)[0]), (s, field.name)
+
+
+@pytest.mark.parametrize("stages", [3, 5])
+def test_the_last_periods_active_sets_as_guesses_change_no_bit(stages):
+    """The step loop guesses each step's active set from the same step a period earlier (a graded multiplier:
+    1.6 flips a step from the last step's set, 0.003 from the last period's): the guess changes how many pivots
+    a step takes, never its answer (k = 6: the inline solver; k = 10: the pivoting). Its sets of one step size in
+    the two source levels share their eliminations."""
+    from pathlib import Path
+    from tempfile import TemporaryDirectory
+
+    from converters.compiled import kernel, register_state
+    from converters.methods.discretize import _leaders
+    from converters.methods.theta import StepPlan, _set_configuration
+    from converters.models import Circuit
+    from netlists.generators import cockcroft_walton
+    with TemporaryDirectory() as tmp:
+        path = Path(tmp) / "cw.cir"
+        path.write_text(cockcroft_walton(stages))
+        circuit = Circuit.from_netlist(path)
+    p = circuit.resolve({})
+    T = circuit.period(p)
+    plan = StepPlan.build(circuit.problem(p, 30 * T), Theta(h=T / 10, theta=0.5, grade=0.001, growth=1.5))
+    local, _, _, set_configs, set_dts = plan.period
+    period = local.size - 1
+    leaders = _leaders([_set_configuration(plan.problem, c, 0.5) for c in set_configs], set_dts)
+    assert period == 42 and len(set(leaders.tolist())) < 0.6 * len(set_dts)
+    runs = []
+    for guess in (0, period):
+        x, u, y, _ = plan.advance(plan.problem.x0)
+        m = plan.mats
+        status = kernel("run_steps")(plan.which, m.Phi, m.Gamma, m.H, m.C, m.F, m.M, m.Phi_b, m.Gamma_b, m.CPhi,
+                                     m.q0, x, u, y, 0, plan.problem.k <= 8, guess, register_state(plan.problem.n))
+        assert tuple(status) == (0, plan.which.size)
+        runs.append((x, u, y))
+    assert (runs[0][1][-period:] > 0).any(axis=0).sum() == plan.problem.k        # every diode conducts
+    for a, b in zip(*runs):
+        assert np.array_equal(a, b)
