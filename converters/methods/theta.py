@@ -197,23 +197,28 @@ def _step_sets(dt: np.ndarray, step_config: np.ndarray, h: float, n_configs: int
     distinct (configuration, shorter step) at the switching instants. Returns (which, set_configs, set_dts)."""
     which = step_config.astype(np.int32)
     split = np.flatnonzero(np.abs(dt - h) > 1e-9 * h)
+    fractions = np.round(dt[split] / h, 10)
     # key = configuration * 2 + fraction of h (in (0, 1.001]): one float per split step, unique by value
-    keys = step_config[split] * 2.0 + np.round(dt[split] / h, 10)
-    if keys.size <= 64:          # a period's few split steps: np.unique's sets (sorted keys), without its overhead
-        listed = keys.tolist()
-        distinct = sorted(set(listed))
-        first = [listed.index(key) for key in distinct]
-        inverse = np.array([distinct.index(key) for key in listed], dtype=np.int32)
-    else:
-        _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
+    first, inverse = _distinct(step_config[split] * 2.0 + fractions)
     which[split] = n_configs + inverse
     set_configs = list(range(n_configs)) + [int(c) for c in step_config[split][first]]
     # each fraction's dt from its first step in any configuration: sets of configurations alike but for E, F then
     # have equal steps and share their elimination (discretize.step_matrices)
-    fractions = np.round(dt[split] / h, 10)
-    _, first_of_fraction, which_fraction = np.unique(fractions, return_index=True, return_inverse=True)
+    first_of_fraction, which_fraction = _distinct(fractions)
     set_dts = np.concatenate([np.full(n_configs, h), dt[split][first_of_fraction[which_fraction]][first]])
     return which, set_configs, set_dts
+
+
+def _distinct(keys: np.ndarray):
+    """(first, inverse) of np.unique over ``keys``: the index of each distinct value's first occurrence (in sorted
+    order of the values) and each key's distinct value; a period's few split steps without np.unique's overhead."""
+    if keys.size > 64:
+        _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
+        return first, inverse
+    listed = keys.tolist()
+    distinct = sorted(set(listed))
+    return (np.array([listed.index(key) for key in distinct], dtype=np.int64),
+            np.array([distinct.index(key) for key in listed], dtype=np.int32))
 
 
 def _period_grid(problem: LCSProblem, h: float, graded: tuple = ()):

@@ -52,7 +52,16 @@ def same_path(method, M, q):
     else:
         assert new.iterations == old.iterations, (method, new.message)
     if new.status != "max_iterations" and same:
-        np.testing.assert_allclose(new.z, old.z, rtol=1e-9, atol=1e-12 * (1.0 + np.abs(old.z).max()))
+        tolerance = 1e-9 * np.abs(old.z) + 1e-12 * (1.0 + np.abs(old.z).max())
+        if method in ("newton", "pgs") and np.any(np.abs(new.z - old.z) > tolerance):
+            # the same iterations, yet z apart by more than rounding: only where the oracle itself moves as far
+            # on a one-ulp nudge (seen: Newton, integer k = 7, seed 23866: 27 iterations each, z 3.3e-9 apart,
+            # the oracle's own z 3.9e-8 apart on a nudged entry, its M has eigenvalues on both half-planes)
+            strays = max(np.abs(reference.REFERENCE[method](M_n, q_n, tol=1e-10, **kwargs).z - old.z).max()
+                         for M_n, q_n in _nudged(M, q))
+            assert np.abs(new.z - old.z).max() <= strays, (method, np.abs(new.z - old.z).max(), strays)
+        else:
+            np.testing.assert_allclose(new.z, old.z, rtol=1e-9, atol=1e-12 * (1.0 + np.abs(old.z).max()))
     if method == "enum":
         assert len(new.solutions) == len(old.solutions)
         for a, b in zip(new.solutions, old.solutions):
@@ -92,6 +101,7 @@ def test_compiled_methods_take_the_reference_path_on_the_peer_collection(peer, m
 @settings(max_examples=40, deadline=None)
 @example(k=7, seed=1, kind="integer")     # Newton's path decided by rounding (see same_path)
 @example(k=4, seed=113, kind="integer")   # the same, the oracle straying further on M nudged than on q
+@example(k=7, seed=23866, kind="integer")  # Newton's z decided by rounding at equal iterations
 @given(k=st.integers(1, 12), seed=st.integers(0, 2**32 - 1),
        kind=st.sampled_from(["pd", "spd", "triangular", "integer"]))
 def test_compiled_methods_take_the_reference_path_on_random_problems(k, seed, kind):
