@@ -281,7 +281,7 @@ class Trajectory:
                 values = np.asarray(self.labels.signal(name, nodes))
             return float(weights @ values ** power)
         rows = self.rows_between(t0, t1)
-        t, v = self.t[rows], self.signal(name, rows)
+        t, v = self.t[rows], self.signal(name, self._all_or(rows))
         dt = np.diff(t)
         if self.rule == "end":
             return float(dt @ v[1:] ** power)
@@ -329,7 +329,12 @@ class Trajectory:
     def ripple(self, name: str, periods: float | None = None, t0: float | None = None, t1: float | None = None) -> float:
         """Peak-to-peak value over the window (on the samples)."""
         a, b = self.window(periods, t0, t1)
-        return float(np.ptp(self.signal(name, self.rows_between(a, b))))
+        return float(np.ptp(self.signal(name, self._all_or(self.rows_between(a, b)))))
+
+    def _all_or(self, rows: np.ndarray):
+        """``rows`` (consecutive, from :meth:`rows_between`), or every row where they are: a signal of the whole
+        run is computed once (:meth:`signal`'s cache), however many measures read it."""
+        return slice(None) if rows.size == self.t.size else rows
 
     def plot(self, periods: float | None = None, signals=None, title: str | None = None):
         """The run's waveforms over the last periods and its mode timeline: a matplotlib Figure

@@ -28,9 +28,10 @@ over (a load step). A PULSE source in the power circuit switches between its two
 """
 from __future__ import annotations
 
+import copy
 import itertools
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from fractions import Fraction
 
 import numpy as np
@@ -84,6 +85,41 @@ def compile_netlist(netlist: Netlist) -> Compiled:
     return _Compiler(with_models(netlist)).run()
 
 
+def compile_points(netlists: list) -> list:
+    """The LCS of each netlist, those alike but for their values (a tolerance study's points: the same file with
+    other R, L, C, couplings, gains, DC sources, RS and RON) compiled together: the first of each group alone,
+    the others' networks stamped and solved as one stack with its port forms and schedule
+    (:meth:`_Compiler.rerun`): the same numbers as a compile of each, to the bit. A point the group cannot take
+    is None (compile it alone: :func:`compile_netlist` gives its own result or error); so is every point of a
+    group whose first fails."""
+    out: list = [None] * len(netlists)
+    groups: dict = {}
+    for i, netlist in enumerate(netlists):
+        groups.setdefault(_structure(netlist), []).append(i)
+    for indices in groups.values():
+        try:
+            first = _Compiler(with_models(netlists[indices[0]]))
+            out[indices[0]] = first.run()
+        except NetlistError:
+            continue
+        if len(indices) > 1 and first.batchable():
+            for i, compiled in zip(indices[1:], first.rerun([netlists[i] for i in indices[1:]], out[indices[0]])):
+                out[i] = compiled
+    return out
+
+
+def _structure(netlist: Netlist) -> tuple:
+    """What must be equal for two netlists to share a compile's structure: the file, every element but its value
+    (a resistor's being 0, a short, is structure; a DC source's value is not; other waveforms are), whether an
+    element has an IC, the models' parameters but RS and RON (their being 0 is structure), the .ic nodes."""
+    elements = tuple((e.name, e.kind, e.nodes, e.model, e.control, e.kind == "R" and e.value == 0,
+                      None if isinstance(e.waveform, float) else e.waveform, e.ic is None) for e in netlist.elements)
+    models = tuple((name, m.kind, tuple(sorted((key, value != 0 if key in ("RS", "RON") else value)
+                                               for key, value in m.params.items())))
+                   for name, m in netlist.models.items())
+    return netlist.text, netlist.path, elements, models, tuple(sorted(netlist.ic))
+
+
 class _Compiler:
     def __init__(self, netlist: Netlist):
         self.nl = netlist
@@ -129,6 +165,9 @@ class _Compiler:
         self.shorts = [r for r in self.by_kind["R"] if r.value == 0]
         self.switch_ron = {s.name: self.nl.models[s.model].params.get("RON", 0.0) for s in self.switches}
         self.mutual = self.inductance_matrix()
+        #: One circuit: (); a batch of P circuits alike but for their values: (P,), each value's P numbers in
+        #: ``batch`` (:meth:`rerun`)
+        self.lead, self.batch = (), {}
         #: The networks solved so far: (switch states, source levels) -> (network, port forms).
         self.solved = {}
         #: PWL sources in the power circuit: ramps, each a state of the LCS (its value), its slope per phase
@@ -146,6 +185,98 @@ class _Compiler:
 
     def error(self, element: Element, what: str) -> NetlistError:
         return NetlistError(f"{self.path}:{element.line}: {what}")
+
+    def batchable(self) -> bool:
+        """Whether :meth:`rerun` takes this circuit's other values: a schedule of PULSE or PWL gates (a comparator's
+        law depends on the values), no ramp or delayed SIN (states of their own)."""
+        return hasattr(self, "built") and not (self.state_rows or self.ramps or self.oscillators)
+
+    def rerun(self, netlists: list, compiled: Compiled) -> list:
+        """The compiles of ``netlists``, each this circuit (its :meth:`run` gave ``compiled``) with other values:
+        every configuration's networks stamped for all points at once (G per point, R shared), solved as one
+        stack, with this compile's port forms and schedule. None for a point that needs a compile of its own: a
+        gate's DC value that moves the schedule, coupled inductances not positive definite, a network its values
+        make singular with these forms, two diodes' ports alike."""
+        P = len(netlists)
+        numbers = np.array([[e.value if e.value is not None else float(e.waveform) if isinstance(e.waveform, float)
+                             else math.nan for e in netlist.elements] for netlist in netlists]).reshape(P, -1)
+        column = {e.name: j for j, e in enumerate(self.nl.elements)}
+        ok = np.ones(P, dtype=bool)
+        driving = {name for drive in self.drives.values() if drive for name in drive}
+        for source in self.sources:               # a DC level in a switch's control moves the schedule
+            if source.name in driving and isinstance(source.waveform, float):
+                ok &= numbers[:, column[source.name]] == float(source.waveform)
+        batch = {(e.name, None): numbers[:, column[e.name]] for e in self.nl.elements
+                 if e.kind in "RLCKEGFH" or (e.kind in "VI" and isinstance(e.waveform, float))}
+        for elements, key, kept in ((self.diodes, "RS", self.diode_rs), (self.switches, "RON", self.switch_ron)):
+            for e in elements:
+                if kept[e.name]:
+                    batch[(e.name, key)] = np.array([netlist.models[e.model].params.get(key, 0.0)
+                                                     for netlist in netlists])
+        m = len(self.inductors)
+        mutual = np.zeros((P, m, m))
+        index = {l.name: i for i, l in enumerate(self.inductors)}
+        for i, l in enumerate(self.inductors):
+            mutual[:, i, i] = batch[(l.name, None)]
+        for k in self.by_kind["K"]:
+            a, b = (index[name] for name in k.control)
+            mutual[:, a, b] = mutual[:, b, a] = batch[(k.name, None)] * np.sqrt(mutual[:, a, a] * mutual[:, b, b])
+        if m:
+            ok &= np.linalg.eigvalsh(mutual).min(axis=-1) > 1e-12 * np.abs(mutual).max(axis=(-2, -1))
+        while True:
+            if not ok.any():
+                return [None] * P
+            view = copy.copy(self)
+            view.lead, view.mutual = (int(ok.sum()),), mutual[ok]
+            view.batch = {key: values[ok] for key, values in batch.items()}
+            networks = []
+            for switch_state, levels, _, _ in self.built:
+                forms = list(self.solved[(tuple(switch_state.items()), tuple(levels.items()))][1])
+                networks.append((_Network(view, switch_state, levels, forms), forms))
+            singular = np.zeros(view.lead, dtype=bool)
+            for network, _ in networks:
+                singular |= network.nullity() > 0
+            if not singular.any():
+                break
+            ok[np.flatnonzero(ok)[singular]] = False
+        per_point = [[] for _ in range(view.lead[0])]
+        for (network, forms), (switch_state, _, slopes, running) in zip(networks, self.built):
+            for p, result in enumerate(view.lcs(network.solve(checked=True), forms, switch_state, slopes, running)):
+                per_point[p].append(result)
+        # the switches' controls (their sources' coefficients, which the schedule follows) must be this compile's
+        # to the bit: a divider or a gain in a gate's path changes them (its point is compiled alone)
+        first = self.solved[(tuple(self.built[0][0].items()), tuple(self.built[0][1].items()))][0]
+        same_drive = np.ones(view.lead, dtype=bool)
+        for switch in self.switches:
+            if self.drives.get(switch.name):
+                same_drive &= (view.control(networks[0][0], switch)[:, self.n + self.k:]
+                               == self.control(first, switch)[self.n + self.k:]).all(axis=-1)
+        out: list = [None] * P
+        for i, results, same in zip(np.flatnonzero(ok), per_point, same_drive):
+            if not same:
+                continue
+            try:
+                for config, (switch_state, _, _, _) in zip((r[0] for r in results), self.built):
+                    self.check_unique_ports(config, switch_state)
+            except NetlistError:
+                continue
+            inputs = compiled.inputs
+            if inputs is not None:
+                inputs = (inputs[0], inputs[1], np.array([r[2][0] for r in results]),
+                          np.array([r[2][1] for r in results]))
+            out[i] = replace(compiled, configurations=tuple(r[0] for r in results),
+                             signal_maps=tuple(r[1] for r in results), x0=self.initial_state(netlists[i]),
+                             inputs=inputs)
+        return out
+
+    def value(self, element: Element, model_key: str | None = None):
+        """An element's value (its model's RS or RON with ``model_key``): a number, or a batch's P numbers."""
+        key = (element.name, model_key)
+        if key in self.batch:
+            return self.batch[key]
+        if model_key is None:
+            return element.value if element.kind not in "VI" else float(element.waveform)
+        return (self.diode_rs if model_key == "RS" else self.switch_ron)[element.name]
 
     # --- the inductance matrix (K couplings) -------------------------------------------------------------------
 
@@ -169,6 +300,7 @@ class _Compiler:
     def run(self) -> Compiled:
         self.state_rows = {}
         drives = {s.name: self.switch_drive(s) for s in self.switches}
+        self.drives = drives
         if self.state_rows:
             return self.run_state_driven(drives)
         period = self.period()
@@ -194,9 +326,12 @@ class _Compiler:
                       for state, start in zip(phase_states, [0.0, *phase_times])]
         distinct = list(dict.fromkeys(key for keys_ in phase_keys for key in keys_))
         configs, pair_currents, closed, maps, per_config_sinusoids = [], [], [], [], []
+        #: each configuration's (switch states, source levels, slopes, running): what :meth:`rerun` solves again
+        self.built = []
         for key in distinct:
             switch_state = dict(zip([s.name for s in self.switches], key[0]))
             levels = dict(zip([s.name for s in power], key[1]))
+            self.built.append((switch_state, levels, key[2], key[3]))
             config, forms, signals, sinusoids = self.configuration(switch_state, levels, key[2], key[3])
             per_config_sinusoids.append(sinusoids)
             configs.append(config)
@@ -621,34 +756,42 @@ class _Compiler:
         oscillator (a delayed or damped SIN) is two, its value VO + VA s: its column scaled by VA becomes s's, and
         (s, c)' = [[-THETA, w], [-w, -THETA]] (s, c) once running (w = 2 pi FREQ), 0 before."""
         n, k = self.n, self.k
-        dx = solution.derivatives()                       # (n, n + k + sources)
-        ports = solution.ports()                          # (k, n + k + sources)
-        s = self.source_values(solution.levels)
-        A, B, E = dx[:, :n], dx[:, n:n + k], dx[:, n + k:] @ s
-        C, D, F = ports[:, :n], ports[:, n:n + k], ports[:, n + k:] @ s
+        dx = solution.derivatives()                       # (..., n, n + k + sources): ... a batch's points
+        ports = solution.ports()                          # (..., k, n + k + sources)
+        s = self.source_values(solution.levels)           # (..., sources)
+        A, B, E = dx[..., :n], dx[..., n:n + k], _times(dx[..., n + k:], s)
+        C, D, F = ports[..., :n], ports[..., n:n + k], _times(ports[..., n + k:], s)
         if not self.diodes:                   # no diode: a pair that never holds (y = u + 1: u = 0)
-            D, F = np.ones((1, 1)), np.ones(1)
-        for i in self.shorted_diodes(switch_state, forms):
+            D, F = np.ones(self.lead + (1, 1)), np.ones(self.lead + (1,))
+        shorted = self.shorted_diodes(switch_state, forms)
+        if shorted:
+            B, C, D, F = B.copy(), C.copy(), D.copy(), F.copy()
+        for i in shorted:
             # an ideal diode across closed ideal switches (a body diode): its voltage is 0 whatever its current, so
             # any current would do (0 <= u, y = 0); the switch carries it all: a pair that never holds (y = u + 1)
-            B, C, D, F = B.copy(), C.copy(), D.copy(), F.copy()
-            B[:, i], C[i], D[i], D[:, i], F[i] = 0.0, 0.0, 0.0, 0.0, 1.0
-            D[i, i] = 1.0
+            B[..., :, i], C[..., i, :], D[..., i, :], D[..., :, i], F[..., i] = 0.0, 0.0, 0.0, 0.0, 1.0
+            D[..., i, i] = 1.0
         name = ",".join(f"{sw}={'on' if on else 'off'}" for sw, on in switch_state.items()) or "circuit"
-        config = Configuration(A=A, B=B, C=C, D=D, E=E, F=F, name=name)
         rows = solution.signal_rows(self.signal_names())
         columns, amplitudes = self.sinusoid_columns()
-        E_sin, F_sin = dx[:, columns] * amplitudes, ports[:, columns] * amplitudes
+        E_sin, F_sin = dx[..., columns] * amplitudes, ports[..., columns] * amplitudes
         if not self.diodes:
             F_sin = np.zeros_like(F_sin)
-        for i in self.shorted_diodes(switch_state, forms):
+        if shorted:
             F_sin = F_sin.copy()
-            F_sin[i] = 0.0
+            F_sin[..., shorted, :] = 0.0
         gates = self.gate_columns()
         static = s.copy()
-        static[[c - n - k for c in gates]] = 0.0       # a gate's share is its waveform at each sample's time
-        Sx = rows[:, :n]
-        E_sin, F_sin = E_sin.T, F_sin.T
+        static[..., [c - n - k for c in gates]] = 0.0       # a gate's share is its waveform at each sample's time
+        Sx = rows[..., :n]
+        E_sin, F_sin = np.swapaxes(E_sin, -1, -2), np.swapaxes(F_sin, -1, -2)
+        signals = (Sx, rows[..., n:n + k], _times(rows[..., n + k:], static), rows[..., columns] * amplitudes,
+                   rows[..., gates])
+        if self.lead:                         # a batch (:meth:`rerun`): each point's configuration and maps
+            return [(Configuration(A=A[p], B=B[p], C=C[p], D=D[p], E=E[p], F=F[p], name=name),
+                     tuple(m[p].copy() for m in signals), (E_sin[p].copy(), F_sin[p].copy()))
+                    for p in range(self.lead[0])]
+        config = Configuration(A=A, B=B, C=C, D=D, E=E, F=F, name=name)
         extra = [(n + k + self.sources.index(x), 1.0) for x in self.ramps]
         for o in self.oscillators:
             extra += [(n + k + self.sources.index(o), o.waveform.va), (None, 0.0)]
@@ -663,14 +806,13 @@ class _Compiler:
                 if on:
                     block[i:i + 2, i:i + 2] = [[-damping, w], [-w, -damping]]
             C_extra = columns_of(ports)
-            C_extra[self.shorted_diodes(switch_state, forms)] = 0.0        # pairs that never hold (above)
+            C_extra[shorted] = 0.0        # pairs that never hold (above)
             config = Configuration(A=np.block([[A, columns_of(dx)], [np.zeros((r, n)), block]]),
                                    B=np.vstack([config.B, np.zeros((r, k))]), C=np.hstack([config.C, C_extra]),
                                    D=config.D, E=np.concatenate([E, rates]), F=config.F, name=name)
             Sx = np.hstack([Sx, columns_of(rows)])
             E_sin = np.hstack([E_sin, np.zeros((E_sin.shape[0], r))])
-        signals = (Sx.copy(), rows[:, n:n + k].copy(), rows[:, n + k:] @ static, rows[:, columns] * amplitudes,
-                   rows[:, gates].copy())
+        signals = (Sx.copy(), *(m.copy() for m in signals[1:]))
         return config, signals, (E_sin.copy(), F_sin.copy())
 
     def gate_waveforms(self) -> tuple:
@@ -749,7 +891,9 @@ class _Compiler:
             elif isinstance(w, Sin):
                 values.append(w.vo)              # its sinusoid is an input of its own (:meth:`sinusoid_columns`)
             else:
-                values.append(float(w))
+                values.append(self.value(s))     # DC: a number, or a batch's P numbers
+        if self.lead and values:
+            return np.stack(np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in values)), axis=-1)
         return np.array(values, dtype=float)
 
     def signal_names(self) -> tuple:
@@ -760,18 +904,22 @@ class _Compiler:
     def units(self) -> dict:
         return {name: ("V" if name.startswith("v(") else "A") for name in self.signal_names()}
 
-    def initial_state(self) -> np.ndarray:
-        """The states at t = 0: each element's IC=, or .ic v(node) across a capacitor, else 0 (UIC)."""
+    def initial_state(self, netlist: Netlist | None = None) -> np.ndarray:
+        """The states at t = 0: each element's IC=, or .ic v(node) across a capacitor, else 0 (UIC); of
+        ``netlist``, this circuit with other values (:meth:`rerun`), where given."""
+        nl = netlist or self.nl
+        own = {e.name: e for e in nl.elements} if netlist is not None else None
         x = []
         for c in self.capacitors:
+            c = own[c.name] if own else c
             if c.ic is not None:
                 x.append(c.ic)
             else:
                 a, b = c.nodes
-                va = self.nl.ic.get(a, 0.0) if a != "0" else 0.0
-                vb = self.nl.ic.get(b, 0.0) if b != "0" else 0.0
+                va = nl.ic.get(a, 0.0) if a != "0" else 0.0
+                vb = nl.ic.get(b, 0.0) if b != "0" else 0.0
                 x.append(va - vb)
-        x += [l.ic or 0.0 for l in self.inductors]
+        x += [(own[l.name] if own else l).ic or 0.0 for l in self.inductors]
         x += [r.waveform.points[0][1] for r in self.ramps]          # a ramp holds its first value until its first time
         for o in self.oscillators:                                  # VO + VA sin(PHASE) until TD (as ngspice's SIN)
             x += [math.sin(math.radians(o.waveform.phase)), math.cos(math.radians(o.waveform.phase))]
@@ -857,7 +1005,10 @@ class _Network:
         size = len(nodes) + len(branches)
         self.size = size
         cols = c.n + c.k + len(c.sources)
-        G = np.zeros((size, size))
+        #: () for one circuit, (P,) for a batch of P circuits alike but for their values (:meth:`_Compiler.rerun`):
+        #: G then holds each point's matrix; R (the inputs' columns) is the same for all
+        self.lead = c.lead
+        G = np.zeros(self.lead + (size, size))
         R = np.zeros((size, cols))
         idx = lambda node: None if node == "0" else nodes[node]          # noqa: E731
         self.idx = idx
@@ -865,7 +1016,7 @@ class _Network:
         def conductance(a, b, g):
             for p, q, sign in ((a, a, 1), (b, b, 1), (a, b, -1), (b, a, -1)):
                 if idx(p) is not None and idx(q) is not None:
-                    G[idx(p), idx(q)] += sign * g
+                    G[..., idx(p), idx(q)] += sign * g
 
         def inject(a, b, column, scale=1.0):
             """A current ``scale`` x column flowing from a through the element to b."""
@@ -876,13 +1027,13 @@ class _Network:
 
         for e in c.by_kind["R"]:
             if e.value:
-                conductance(e.nodes[0], e.nodes[1], 1.0 / e.value)
+                conductance(e.nodes[0], e.nodes[1], 1.0 / c.value(e))
         for e in c.switches:
             if switch_state.get(e.name) and c.switch_ron[e.name]:
-                conductance(e.nodes[0], e.nodes[1], 1.0 / c.switch_ron[e.name])
+                conductance(e.nodes[0], e.nodes[1], 1.0 / c.value(e, "RON"))
         for d in c.diodes:
             if c.diode_rs[d.name]:
-                conductance(d.nodes[0], f"{d.name}#a", 1.0 / c.diode_rs[d.name])
+                conductance(d.nodes[0], f"{d.name}#a", 1.0 / c.value(d, "RS"))
         for i, e in enumerate(c.inductors):
             inject(e.nodes[0], e.nodes[1], len(c.capacitors) + i)
         for j, (e, form) in enumerate(zip(c.diodes, forms)):
@@ -899,17 +1050,17 @@ class _Network:
                     continue
                 for ctrl, s2 in ((cp, 1.0), (cn, -1.0)):
                     if idx(ctrl) is not None:
-                        G[idx(node), idx(ctrl)] += sign * s2 * e.value
+                        G[..., idx(node), idx(ctrl)] += sign * s2 * c.value(e)
         branch_of = {}
         for j, (kind, e, a, b) in enumerate(branches):
             row = len(nodes) + j
             branch_of[e.name] = row
             if idx(a) is not None:
-                G[idx(a), row] += 1.0
-                G[row, idx(a)] += 1.0
+                G[..., idx(a), row] += 1.0
+                G[..., row, idx(a)] += 1.0
             if idx(b) is not None:
-                G[idx(b), row] -= 1.0
-                G[row, idx(b)] -= 1.0
+                G[..., idx(b), row] -= 1.0
+                G[..., row, idx(b)] -= 1.0
             if kind == "V":
                 R[row, c.n + c.k + [s.name for s in c.sources].index(e.name)] = 1.0
             elif kind == "C":
@@ -920,28 +1071,30 @@ class _Network:
                 cp, cn = e.nodes[2], e.nodes[3]
                 for ctrl, s2 in ((cp, 1.0), (cn, -1.0)):
                     if idx(ctrl) is not None:
-                        G[row, idx(ctrl)] -= s2 * e.value
+                        G[..., row, idx(ctrl)] -= s2 * c.value(e)
         for e in c.by_kind["H"]:
-            G[branch_of[e.name], branch_of[e.control[0]]] -= e.value
+            G[..., branch_of[e.name], branch_of[e.control[0]]] -= c.value(e)
         for e in c.by_kind["F"]:
             a, b = e.nodes
             col = branch_of[e.control[0]]
             if idx(a) is not None:
-                G[idx(a), col] += e.value
+                G[..., idx(a), col] += c.value(e)
             if idx(b) is not None:
-                G[idx(b), col] -= e.value
+                G[..., idx(b), col] -= c.value(e)
         self.G, self.R, self.branch_of = G, R, branch_of
 
-    def nullity(self) -> int:
+    def nullity(self):
+        """The dimension of G's null space (per point of a batch)."""
         if self.size == 0:
-            return 0
-        return self.size - np.linalg.matrix_rank(self.G, tol=1e-12 * max(np.abs(self.G).max(), 1.0))
+            return np.zeros(self.lead, dtype=int) if self.lead else 0
+        scale = np.maximum(np.abs(self.G).max(axis=(-2, -1)), 1.0)
+        return self.size - np.linalg.matrix_rank(self.G, tol=1e-12 * scale)
 
     def solve(self, checked: bool = False):
         """The network solved (``checked``: its nullity is known to be 0)."""
         if not checked and self.nullity():
             raise self.singular()
-        self.Z = np.linalg.solve(self.G, self.R)
+        self.Z = np.linalg.solve(self.G, np.broadcast_to(self.R, self.lead + self.R.shape))
         return self
 
     def singular(self) -> NetlistError:
@@ -963,27 +1116,33 @@ class _Network:
                             f"sources{where} ({', '.join(around)}): a current interrupted with no path, or a floating "
                             "node")
 
+    def unit(self, column: int | None = None) -> np.ndarray:
+        """A row of the MNA's input columns (per point of a batch): 0, or 1 in ``column``."""
+        row = np.zeros(self.lead + (self.R.shape[1],))
+        if column is not None:
+            row[..., column] = 1.0
+        return row
+
     def voltage(self, node: str) -> np.ndarray:
         i = self.idx(node)
-        return np.zeros(self.Z.shape[1]) if i is None else self.Z[i]
+        return self.unit() if i is None else self.Z[..., i, :]
 
     def branch(self, element: Element) -> np.ndarray:
-        return self.Z[self.branch_of[element.name]]
+        return self.Z[..., self.branch_of[element.name], :]
 
     def derivatives(self) -> np.ndarray:
         c = self.c
-        rows = [self.branch(e) / e.value for e in c.capacitors]
+        rows = [self.branch(e) / _column(c.value(e)) for e in c.capacitors]
         if c.inductors:
-            volts = np.array([self.voltage(e.nodes[0]) - self.voltage(e.nodes[1]) for e in c.inductors])
-            rows += list(np.linalg.solve(c.mutual, volts))
-        return np.array(rows)
+            volts = np.stack([self.voltage(e.nodes[0]) - self.voltage(e.nodes[1]) for e in c.inductors], axis=-2)
+            currents = np.linalg.solve(c.mutual, volts)
+            rows += [currents[..., i, :] for i in range(len(c.inductors))]
+        return np.stack(rows, axis=-2)
 
     def ports(self) -> np.ndarray:
         c = self.c
-        cols = self.Z.shape[1]
         if not c.diodes:                      # no diode: a pair that never holds (y = u + 1)
-            row = np.zeros(cols)
-            return row[None, :]
+            return self.unit()[..., None, :]
         rows = []
         for j, (e, form) in enumerate(zip(c.diodes, self.forms)):
             anode = f"{e.name}#a" if c.diode_rs[e.name] else e.nodes[0]
@@ -991,33 +1150,29 @@ class _Network:
                 rows.append(self.voltage(e.nodes[1]) - self.voltage(anode))         # y = -v_D
             else:
                 rows.append(self.branch(e))                                      # y = i_D
-        return np.array(rows)
+        return np.stack(rows, axis=-2)
 
     def current(self, e: Element) -> np.ndarray:
-        c, cols = self.c, self.Z.shape[1]
+        c = self.c
         if e.name in self.branch_of:
             return self.branch(e)
-        unit = np.zeros(cols)
         if e.kind == "R":
-            return (self.voltage(e.nodes[0]) - self.voltage(e.nodes[1])) / e.value
+            return (self.voltage(e.nodes[0]) - self.voltage(e.nodes[1])) / _column(c.value(e))
         if e.kind == "L":
-            unit[len(c.capacitors) + c.inductors.index(e)] = 1.0
-            return unit
+            return self.unit(len(c.capacitors) + c.inductors.index(e))
         if e.kind == "D":
-            unit[c.n + c.diodes.index(e)] = 1.0
-            return unit
+            return self.unit(c.n + c.diodes.index(e))
         if e.kind == "I":
-            unit[c.n + c.k + c.sources.index(e)] = 1.0
-            return unit
+            return self.unit(c.n + c.k + c.sources.index(e))
         if e.kind in "SW":
             if self.switch_state.get(e.name) and c.switch_ron[e.name]:
-                return (self.voltage(e.nodes[0]) - self.voltage(e.nodes[1])) / c.switch_ron[e.name]
-            return unit
+                return (self.voltage(e.nodes[0]) - self.voltage(e.nodes[1])) / _column(c.value(e, "RON"))
+            return self.unit()
         if e.kind == "G":
-            return e.value * (self.voltage(e.nodes[2]) - self.voltage(e.nodes[3]))
+            return _column(c.value(e)) * (self.voltage(e.nodes[2]) - self.voltage(e.nodes[3]))
         if e.kind == "F":
-            return e.value * self.Z[self.branch_of[e.control[0]]]
-        return unit
+            return _column(c.value(e)) * self.Z[..., self.branch_of[e.control[0]], :]
+        return self.unit()
 
     def signal_rows(self, names: tuple) -> np.ndarray:
         rows = []
@@ -1027,7 +1182,17 @@ class _Network:
                 rows.append(self.voltage(name[2:-1]))
             else:
                 rows.append(self.current(elements[name]))
-        return np.array(rows)
+        return np.stack(rows, axis=-2)
 
 
-__all__ = ["compile_netlist", "Compiled", "CURRENT", "VOLTAGE"]
+def _times(M: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """M v per point of a batch (``v`` one vector, or one per point); one circuit's M @ v."""
+    return M @ v if v.ndim == 1 else np.matmul(M, v[..., None])[..., 0]
+
+
+def _column(value):
+    """A value that divides or scales rows: a number, or a batch's values as a column (one per point)."""
+    return value[..., None] if isinstance(value, np.ndarray) else value
+
+
+__all__ = ["compile_netlist", "compile_points", "Compiled", "CURRENT", "VOLTAGE"]

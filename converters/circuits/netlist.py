@@ -22,6 +22,7 @@ Every problem is one :class:`NetlistError` naming the file, the line and the ele
 """
 from __future__ import annotations
 
+import functools
 import math
 import re
 from dataclasses import dataclass, field, replace
@@ -764,6 +765,65 @@ def check_overrides(netlist: Netlist, given: dict, parameters=()) -> None:
                 raise NetlistError(f"{netlist.where(name)}: -p {key}={value}: {e}") from None
 
 
+def with_values(netlist: Netlist, changed: dict) -> Netlist | None:
+    """``netlist`` as the reader gives it with ``changed`` ({name: number}) over the overrides it was read with,
+    without reading it again, where the change reaches element values alone: each name an element's own value or
+    a .param that only top-level element values name (not another .param, a model, a waveform, an IC, .tran nor
+    a subcircuit: its mentions in the file are its definition and those values). None otherwise, or where a
+    value is out of the reader's range (read the file: it gives the netlist or the error). A tolerance study's
+    points differ in R, L and C alone: this is its read per point (the reader's whole pass costs ten times more)."""
+    mentions = _mentions(netlist.text)
+    top = {key: text for key, text in netlist.expressions.items() if "." not in key}
+    elements = {e.name: e for e in netlist.elements}
+    params, direct, moved = dict(netlist.params), {}, set()
+    for key, value in changed.items():
+        name, value = str(key).lower(), float(value)
+        if name in netlist.params:
+            if name in netlist.derived:
+                return None
+            named = [element for element, text in top.items() if _mentioned(text, name)]
+            if mentions.get(name, 0) != 1 + sum(len(_WORD(name).findall(top[element])) for element in named):
+                return None
+            params[name] = value
+            moved.update(named)
+        elif name in elements and name not in netlist.expressions:
+            direct[name] = value
+        else:
+            return None
+    out = []
+    for e in netlist.elements:
+        if e.name in direct or e.name in moved:
+            value = direct[e.name] if e.name in direct else evaluate(top[e.name], params, e.title)
+            if e.kind in "VI":
+                e = replace(e, waveform=value)
+            else:
+                if not (0 < abs(value) <= 1 if e.kind == "K" else value > 0 or (e.kind == "R" and value == 0)
+                        if e.kind in "RLC" else True):
+                    return None
+                e = replace(e, value=value)
+        out.append(e)
+    return replace(netlist, elements=tuple(out), params=params)
+
+
+_WORD = functools.lru_cache(maxsize=256)(lambda name: re.compile(rf"(?i)(?<![\w.]){re.escape(name)}(?![\w.(])"))
+
+
+def _mentioned(text: str, name: str) -> bool:
+    """Whether an expression names the parameter ``name`` (as a word: not inside another name or a number)."""
+    return _WORD(name).search(text) is not None
+
+
+@functools.lru_cache(maxsize=64)
+def _mentions(text: str) -> dict:
+    """How many times each word is written in a netlist's lines (comments left out, continuations joined)."""
+    _, lines = _Reader(text, "", {}).lines()
+    counts: dict = {}
+    for line in lines:
+        for word in re.findall(r"(?<![\w.])[A-Za-z_][\w]*(?![\w.(])", line.text):
+            counts[word.lower()] = counts.get(word.lower(), 0) + 1
+    return counts
+
+
 def _inputs(netlist: Netlist, name: str) -> list[str]:
     """The .param names (not derived) the derived .param ``name`` follows, through the derived ones it names."""
     out, todo, seen = [], [name], set()
@@ -774,7 +834,7 @@ def _inputs(netlist: Netlist, name: str) -> list[str]:
         seen.add(current)
         text = netlist.param_lines.get(current, (None, ""))[1]
         for other in netlist.params:
-            if other not in seen and re.search(rf"(?i)(?<![\w.]){re.escape(other)}(?![\w.(])", text):
+            if other not in seen and _mentioned(text, other):
                 if other in netlist.derived:
                     todo.append(other)
                 elif other not in out:
@@ -799,6 +859,6 @@ def with_models(netlist: Netlist) -> Netlist:
     return netlist
 
 
-__all__ = ["read_netlist", "check_overrides", "Netlist",
+__all__ = ["read_netlist", "check_overrides", "with_values", "Netlist",
            "Element", "Model", "Pulse", "Sin", "Pwl", "Tran", "NetlistError",
            "with_models", "number", "replace"]

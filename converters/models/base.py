@@ -124,6 +124,10 @@ class Model(ABC):
         """Instants where the model's circuit changes (load or input steps): a run is split there."""
         return []
 
+    def prepare(self, points: list[dict]) -> None:
+        """Get ready for problems at many parameter sets (a sweep's chunk): a model compiled from a netlist
+        compiles them together (:meth:`Circuit.prepare`); the others have nothing to do."""
+
     def phase_options(self, p: dict, t: float) -> dict:
         """Keyword arguments of ``problem`` for the phase that starts at time t."""
         return {}

@@ -62,10 +62,10 @@ class Cuk(InvertingRatios, FromNetlist, Converter):
     def power(self, tr, p, t0: float, t1: float) -> dict:
         """Input and output power, each parasitic's loss and the efficiency over [t0, t1] (W)."""
         square = lambda name: tr.rms(name, t0=t0, t1=t1) ** 2     # noqa: E731
-        losses = {"rL1": p.get("rL1", 0.0) * square("i1"), "rL2": p.get("rL2", 0.0) * square("i2"),
-                  "Ron": p.get("Ron", 0.0) * square("i_switch"),
-                  "Vf": p.get("Vf", 0.0) * tr.mean("i_diode", t0=t0, t1=t1), "Rd": p.get("Rd", 0.0) * square("i_diode")}
-        losses = {k: v for k, v in losses.items() if p.get(k) is not None}
+        losses = {"rL1": lambda: p["rL1"] * square("i1"), "rL2": lambda: p["rL2"] * square("i2"),
+                  "Ron": lambda: p["Ron"] * square("i_switch"),
+                  "Vf": lambda: p["Vf"] * tr.mean("i_diode", t0=t0, t1=t1), "Rd": lambda: p["Rd"] * square("i_diode")}
+        losses = {k: loss() for k, loss in losses.items() if p.get(k) is not None}     # the parts that are set
         p_in = p["Vin"] * tr.mean("i1", t0=t0, t1=t1)
         return power_balance(p_in, square("vout") / p["R"], losses)
 

@@ -17,8 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..circuits.compile import Compiled, compile_netlist, waveform_at
-from ..circuits.netlist import Netlist, NetlistError, Pulse, check_overrides, read_netlist
+from ..circuits.compile import Compiled, compile_netlist, compile_points, waveform_at
+from ..circuits.netlist import Netlist, NetlistError, Pulse, check_overrides, read_netlist, with_values
 from ..errors import ParameterError, SignalError
 from ..params import Param
 from ..problems import Configuration, LCSProblem, Sinusoids
@@ -121,6 +121,32 @@ class Circuit(Model):
 
     def compiled(self, p: dict) -> Compiled:
         return _compile(self.netlist.text, self.source, tuple(sorted(p.items())))
+
+    def prepare(self, points: list[dict]) -> None:
+        """Compile the circuit at many resolved parameter sets together (:func:`compile_points`: one stamp and
+        solve for the sets that change values only), kept for :meth:`compiled` to take; a set the batch cannot
+        take (or that fails) is left to its own compile, which gives its result or its error."""
+        keys = [(self.netlist.text, self.source, tuple(sorted(p.items()))) for p in points]
+        keys = [key for key in dict.fromkeys(keys) if key not in _PREPARED]
+        netlists, kept, first = [], [], None
+        for key in keys:
+            given = dict(key[2])
+            netlist = None
+            if first is not None:          # a point that changes element values alone is the first's, rebound
+                if given.keys() == first[0].keys():
+                    netlist = with_values(first[1], {k: v for k, v in given.items() if first[0][k] != v})
+            try:
+                netlist = netlist or read_netlist(key[0], overrides=given, name=key[1])
+            except NetlistError:
+                continue
+            first = first or (given, netlist)
+            netlists.append(netlist)
+            kept.append(key)
+        if len(_PREPARED) + len(kept) > COMPILED_KEPT:
+            _PREPARED.clear()
+        for key, compiled in zip(kept, compile_points(netlists)):
+            if compiled is not None:
+                _PREPARED[key] = compiled
 
     # --- the problem -----------------------------------------------------------------------------------------
 
@@ -282,8 +308,15 @@ def _difference(name: str, names: tuple):
 COMPILED_KEPT = 1024
 
 
+#: Compiles made together ahead of their use (:meth:`Circuit.prepare`), each taken once by :func:`_compile`.
+_PREPARED: dict = {}
+
+
 @lru_cache(maxsize=COMPILED_KEPT)
 def _compile(text: str, source: str, values: tuple) -> Compiled:
+    prepared = _PREPARED.pop((text, source, values), None)
+    if prepared is not None:
+        return prepared
     netlist = read_netlist(text, overrides=dict(values), name=source)
     return compile_netlist(netlist)
 
@@ -306,6 +339,17 @@ class FromNetlist:
     def configurations(self, p: dict) -> tuple:
         return _builtin_configurations(self.netlist_file, tuple(self.netlist_states), tuple(self.configuration_names),
                                        self.circuit_values(p))
+
+    def prepare(self, points: list[dict]) -> None:
+        """The circuit compiled at every point's values together (:meth:`Circuit.prepare`)."""
+        circuit = self.circuit
+        resolved = []
+        for p in points:
+            try:
+                resolved.append(_resolved(self.netlist_file, self.circuit_values(p)))
+            except ParameterError:
+                continue
+        circuit.prepare(resolved)
 
     def netlist_signal(self, name: str, samples: Samples, p: dict) -> np.ndarray:
         """A signal of the model's netlist by its SPICE name (``i(d1)``, ``v(in,sw)``) at the model's parameters
@@ -356,8 +400,7 @@ def _resolved(name: str, values: tuple) -> dict:
 
 @lru_cache(maxsize=COMPILED_KEPT)
 def _builtin_configurations(name: str, states: tuple, names: tuple, values: tuple) -> tuple:
-    circuit = builtin(name)
-    compiled = circuit.compiled(circuit.resolve(dict(values)))
+    compiled = builtin(name).compiled(_resolved(name, values))
     order = [compiled.state_names.index(s) for s in states]
     return tuple(_permuted(c, order, label) for c, label in zip(compiled.configurations, names, strict=True))
 

@@ -80,11 +80,12 @@ class PWMTwoState(FromNetlist, Converter):
         rL, Ron, Vf, Rd, rC = (p.get(k, 0.0) for k in ("rL", "Ron", "Vf", "Rd", "rC"))
         mean = lambda name: tr.mean(name, t0=t0, t1=t1)          # noqa: E731
         square = lambda name: tr.rms(name, t0=t0, t1=t1) ** 2     # noqa: E731
-        losses = {"rL": rL * square("iL"), "Ron": Ron * square("i_switch"), "Vf": Vf * mean("i_diode"),
-                  "Rd": Rd * square("i_diode"), "rC": rC * square("i_cap")}
-        losses = {k: v for k, v in losses.items() if p.get(k) is not None}
+        losses = {"rL": lambda: rL * square("iL"), "Ron": lambda: Ron * square("i_switch"),
+                  "Vf": lambda: Vf * mean("i_diode"), "Rd": lambda: Rd * square("i_diode"),
+                  "rC": lambda: rC * square("i_cap")}
+        losses = {k: loss() for k, loss in losses.items() if p.get(k) is not None}     # the parts that are set
         p_in = p["Vin"] * mean("i_in")
-        p_out = square("vout") / p["R"] + p.get("Io", 0.0) * abs(mean("vout"))
+        p_out = square("vout") / p["R"] + (p["Io"] * abs(mean("vout")) if p.get("Io") else 0.0)
         return power_balance(p_in, p_out, losses)
 
     def output_node_current(self, samples):

@@ -227,11 +227,21 @@ class ModelSweep:
         from ..methods.theta import plan_arrays
         from .batch import CONVERGED, batch_steady
         model = self._model()
-        prepared, rows, plans = [], {}, {}
+        prepared, rows, plans, resolved = [], {}, {}, {}
+        clock = time.perf_counter()
         for index, point in items:
-            clock = time.perf_counter()
             try:
-                p = model.resolve({**self.base, **point})
+                resolved[index] = model.resolve({**self.base, **point})
+            except (ValueError, RuntimeError, ArithmeticError) as exc:
+                rows[index] = failed_row(index, point, f"{type(exc).__name__}: {exc}")
+        model.prepare(list(resolved.values()))        # a netlist's points compiled together
+        shared = (time.perf_counter() - clock) / max(len(items), 1)
+        for index, point in items:
+            if index in rows:
+                continue
+            clock = time.perf_counter() - shared
+            try:
+                p = resolved[index]
                 method = self._method(model, p)
                 problem = model.problem(p, model.period(p))
                 # the grid and matrix sets follow from the schedule and the step alone: points that vary only

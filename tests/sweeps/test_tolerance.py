@@ -117,6 +117,32 @@ def test_metrics_on_demand_are_the_same_rows_on_every_backend(backend, model, ba
     np.testing.assert_allclose(other[columns].to_numpy(float), serial[columns].to_numpy(float), rtol=1e-12, atol=0)
 
 
+@pytest.mark.parametrize("model, base, tolerances, metrics", [
+    ("buck", {"Vin": 48, "D": 0.25, "L": 100e-6, "Ron": 0.05, "rL": 0.02}, ["C=5%", "L=10%:uniform", "R=1%"],
+     ("efficiency", "losses.Ron", "i_switch.rms")),
+    (SEPIC, {}, ["l1=10%", "c2=5%", "r=1%"], ("v(out).ripple", "i(l1).rms")),
+], ids=["buck", "sepic.cir"])
+def test_a_chunk_compiled_together_gives_the_rows_of_its_points_compiled_alone(model, base, tolerances, metrics,
+                                                                              monkeypatch):
+    """ModelSweep.rows compiles a chunk's circuits together (Model.prepare: the netlist rebound to each point's
+    values and its networks solved as one stack); without that step every point reads and compiles its netlist
+    alone. The rows are the same, to the bit."""
+    from converters.models import get_model
+    from converters.models import netlist as netlist_models
+    sweep = ModelSweep(model, "pwm", base, metrics=metrics)
+    nominals = {**{q.name: q.default for q in get_model(model).parameters}, **get_model(model).resolve(base)}
+    study = Tolerances([Tolerance.parse(t, nominals) for t in tolerances], 40, seed=5)
+    items = study.points(range(40))
+    together = sweep.rows(items)
+    netlist_models._compile.cache_clear()
+    netlist_models._builtin_configurations.cache_clear()
+    monkeypatch.setattr(type(get_model(model)), "prepare", lambda self, points: None)
+    alone = sweep.rows(items)
+    columns = [c for c in together[0] if c != "wall_s"]
+    assert all(row["status"] == "ok" for row in together)
+    assert [[row[c] for c in columns] for row in together] == [[row[c] for c in columns] for row in alone]
+
+
 def test_a_tolerance_study_on_the_command_line_gives_the_yield_the_worst_corner_and_units(capsys, tmp_path):
     out = tmp_path / "study"
     argv = ["sweep", "buck", "-p", "Vin=48", "-p", "D=0.25", "-p", "L=100u", "-p", "Ron=0.05", "--tolerance", "C=5%",
