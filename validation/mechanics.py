@@ -504,27 +504,39 @@ def _detachment(model, p: dict) -> float:
     return brentq(lambda t: float(model.detachment_margin(p, t)), grid[k], grid[k + 1], xtol=1e-15)
 
 
-def ride_left(params: dict | None, rpm: float) -> dict:
-    """The period-one complete-chattering orbit at ``rpm``, if it exists: from the detachment the follower flies,
-    impacts the cam, and its impacts accumulate (the event method completes the sequence in closed form); it then
-    rides the cam to the next revolution's detachment, where its state is the cam's again. That orbit needs no
-    shooting (its state at the detachment is the cam's: it is periodic as soon as it rides again before the next
-    one, and every perturbation is erased at the accumulation). ``ride``: the fraction of the revolution left to
-    ride between the accumulation and the next detachment (None where the impacts have not accumulated by then)."""
+def chattering_orbit(params: dict | None, rpm: float, revolutions: int = 1) -> dict:
+    """The orbit through the cam's detachment that completes a chattering sequence within ``revolutions`` cam
+    revolutions, if it does: from the detachment (where k c + m c'' falls through zero, the follower riding the cam
+    leaves it) the follower flies and impacts the cam, in sequences cut short by the next lift (incomplete) until
+    one accumulates (the event method completes it in closed form); it then rides the cam to a detachment, where its
+    state is the cam's again. So it is periodic without shooting, of n revolutions (n the revolution whose
+    detachment ends that ride), and superstable: every perturbation is erased at the accumulation (its Floquet
+    multipliers are zero). Returns ``n`` (None where no sequence accumulates by the last revolution, or the ride ends
+    at another phase), ``impacts`` before the ride, ``ride``: the fraction of a revolution ridden between the
+    accumulation and that detachment (its test function: where it reaches zero the accumulation misses the
+    detachment and the orbit ends), ``detachment``: the detachment's phase."""
     model = get_mechanical("cam-follower")
     p = model.resolve({**(params or {}), "rpm": rpm})
     T = model.period(p)
     t_d = _detachment(model, p)
     c, c1, _ = model.offset(p).position(t_d)
-    run = simulate(model.problem(p, t_d + 1.5 * T, np.array([float(c), float(c1)]), t_start=t_d), EventDriven())
+    run = simulate(model.problem(p, t_d + (revolutions + 0.5) * T, np.array([float(c), float(c1)]), t_start=t_d),
+                   EventDriven())
     times, kinds = run.events["time"].to_numpy(), list(run.events["kind"])
-    accumulated = [t for t, kind in zip(times, kinds) if kind == "chatter"]
     detached = [t for t, kind in zip(times, kinds) if kind == "detach" and t > t_d + 1e-9 * T]
-    periodic = bool(accumulated and detached and accumulated[0] < detached[0]
-                    and abs(detached[0] - (t_d + T)) <= 1e-9 * T)
-    impacts = sum(1 for t, kind in zip(times, kinds) if kind == "impact" and (not detached or t < detached[0]))
-    return {"rpm": rpm, "detachment": t_d / T, "impacts": impacts,
-            "ride": (detached[0] - accumulated[0]) / T if periodic else None}
+    end = detached[0] if detached else np.inf
+    accumulated = [t for t, kind in zip(times, kinds) if kind == "chatter" and t < end]
+    n = round((end - t_d) / T) if detached else None
+    periodic = bool(accumulated and n and abs(end - (t_d + n * T)) <= 1e-9 * T)
+    impacts = sum(1 for t, kind in zip(times, kinds) if kind == "impact" and t < end)
+    return {"rpm": rpm, "detachment": t_d / T, "n": n if periodic else None, "impacts": impacts,
+            "ride": (end - accumulated[-1]) / T if periodic else None}
+
+
+def ride_left(params: dict | None, rpm: float) -> dict:
+    """The period-one complete-chattering orbit at ``rpm`` (:func:`chattering_orbit` of one revolution): ``ride``
+    None where its impacts have not accumulated before the next detachment."""
+    return chattering_orbit(params, rpm, revolutions=1)
 
 
 def chattering_transition(params: dict | None, low: float, high: float, tol: float = 1e-9) -> dict:
@@ -548,17 +560,84 @@ def chattering_transition(params: dict | None, low: float, high: float, tol: flo
             "side": "below" if exists[0] else "above"}
 
 
-def cam_family(params: dict | None, revolutions: int = 1) -> OrbitFamily:
+@dataclass(frozen=True)
+class _Accumulating:
+    """:func:`chattering_orbit` at one speed (picklable, for a process pool)."""
+
+    params: dict
+    revolutions: int
+
+    def __call__(self, rpm: float) -> dict:
+        return chattering_orbit(self.params, rpm, self.revolutions)
+
+
+def chattering_windows(params: dict | None, values, revolutions: int = 8, tol: float = 1e-9,
+                       workers: int | None = None) -> dict:
+    """The superstable orbits of :func:`chattering_orbit` (one accumulation per n revolutions) followed in cam
+    speed over ``values``, and the borders between their windows located. Past the end of complete chattering the
+    follower does not settle into incomplete chattering at once: a sequence cut by the lift leaves it nearly on the
+    cam and a later revolution's sequence completes, so orbits of n = 2, 3, ... revolutions per accumulation
+    follow, in windows. Where n changes between neighbours of the grid an end of each side's orbit is approached
+    from its grid speed by :func:`converters.analysis.sliding.approach_zero` on the orbit's ride (to ``tol``,
+    relative): where the ride falls to zero the orbit ends (its accumulation reaches a detachment); where it stays
+    finite the bracket still closes (the ride steep there, or the orbit ending otherwise: ``ride`` says which).
+    The ride is not monotone (its sequences gain and lose impacts as the speed changes), so the orbit need not
+    exist at every speed between its grid speed and the end found. ``rows``: each grid speed's orbit;
+    ``borders``: rpm, width, n, side (of the border the orbit lies on), ride, impacts."""
+    from converters.analysis.sliding import approach_zero
+    from converters.parallel import parallel_map
+    params = dict(params or {})
+    rows = parallel_map(_Accumulating(params, revolutions), [float(v) for v in values], workers=workers)
+    borders = []
+    for a, b in zip(rows, rows[1:]):
+        if a["n"] == b["n"]:
+            continue
+        for known, other in ((a, b), (b, a)):
+            if known["n"] is None:
+                continue
+
+            def evaluate(rpm, n=known["n"]):
+                row = chattering_orbit(params, rpm, n)
+                return None if row["n"] != n else (row["ride"], row)
+            value, width, points, _ = approach_zero(evaluate, (known["rpm"], known["ride"], known), other["rpm"], tol)
+            last = points[-1][2]
+            borders.append({"rpm": float(value), "width": float(width), "n": known["n"],
+                            "side": "below" if known is a else "above", "ride": float(last["ride"]),
+                            "impacts": last["impacts"]})
+    return {"rows": rows, "borders": borders}
+
+
+def cam_family(params: dict | None, revolutions: int = 1, phase: float = 0.0) -> OrbitFamily:
     """The cam-follower's orbits of ``revolutions`` cam revolutions as a family in the cam speed (rpm), on the event
-    method's map: its Jacobian the variational equations with each impact's saltation matrix (exact for orbits
-    whose impacts do not accumulate)."""
+    method's map from the instant ``phase`` (a fraction of a revolution: away from the orbit's impacts, so Newton's
+    trial states do not cross the cam at the map's start): its Jacobian the variational equations with each
+    impact's saltation matrix (exact for orbits whose impacts do not accumulate)."""
     model = get_mechanical("cam-follower")
     base = model.resolve(params)
 
     def problem_of(rpm):
         p = dict(base, rpm=float(rpm))
-        return model.problem(p, model.period(p))
+        T = model.period(p)
+        return model.problem(p, (1.0 + phase) * T, t_start=phase * T)
     return OrbitFamily(problem_of, EventDriven(), periods=revolutions)
+
+
+def incomplete_orbit(params: dict | None = None):
+    """The incomplete-chattering orbit of ``[mechanics.incomplete]`` (m impacts in n revolutions, none accumulating),
+    seeded from the attractor ``warm_up`` revolutions after rest at ``start`` rpm and continued down in cam speed
+    towards the end of complete chattering with its Floquet multipliers (exact: impact saltation matrices), until it
+    ends (``max_points`` orbits). Returns (family, branch)."""
+    from .defaults import MECHANICS
+    settings = MECHANICS["incomplete"]
+    model = get_mechanical("cam-follower")
+    family = cam_family(params, settings["revolutions"], settings["phase"])
+    p = model.resolve({**(params or {}), "rpm": settings["start"]})
+    T = model.period(p)
+    seed = simulate(model.problem(p, (settings["warm_up"] + settings["phase"]) * T), EventDriven()).x[-1]
+    branch = follow(family, settings["start"], settings["stop"], seed, warm_up=0, tol=CONTINUATION["tol"],
+                    locate_tol=CONTINUATION["locate_tol"], fd_step=1e-6, max_step=settings["max_step"],
+                    max_points=settings["max_points"])
+    return family, branch
 
 
 def impact_angles(family: OrbitFamily, rpm: float, x0) -> np.ndarray:
@@ -1125,6 +1204,78 @@ def cam_continuation_section():
                             "orbits": points})
 
 
+def chattering_windows_section():
+    """Past the end of complete chattering: the superstable orbits through the detachment (one accumulation per n
+    revolutions) followed in cam speed, and their windows' borders located (:func:`chattering_windows`)."""
+    import pandas as pd
+
+    from .defaults import MECHANICS
+    from .mechanics_plots import chattering_windows_figure, incomplete_figure
+    from .report import Section, csv_bytes, table_html
+    settings = MECHANICS["chattering_windows"]
+    values = np.linspace(*settings["path"], settings["points"])
+    study = chattering_windows({}, values, revolutions=settings["revolutions"])
+    picture = chattering_windows_figure(study, settings["revolutions"])
+    family, branch = incomplete_orbit()
+    other = MECHANICS["incomplete"]
+    impacts = sum(1 for _, kind, *_ in family.period_map(branch.points[0].value).events(branch.points[0].x0)
+                  if kind == "impact")
+    folds = [b for b in branch.bifurcations if b.kind == "fold"]
+    found = pd.DataFrame([{"bifurcation": b.kind, "cam speed (rpm)": f"{b.value:.7f}",
+                           "bracket (rpm)": f"{b.width:.1e}", "multipliers": ", ".join(f"{m:.4g}" for m in b.multipliers),
+                           "located by": b.located_by} for b in branch.bifurcations])
+    grid = pd.DataFrame([{"cam speed (rpm)": r["rpm"], "n (revolutions per accumulation)": r["n"],
+                          "impacts per orbit": r["impacts"] if r["n"] else None,
+                          "ride left (revolutions)": None if r["ride"] is None else float(r["ride"])}
+                         for r in study["rows"]])
+    borders = pd.DataFrame([{"border (rpm)": f"{b['rpm']:.7f}", "bracket (rpm)": f"{b['width']:.1e}",
+                             "orbit": f"n = {b['n']}, {b['side']} the border",
+                             "its ride at the last orbit (revolutions)": f"{b['ride']:.1e}",
+                             "at the border": "the orbit ends: its accumulation reaches the detachment"
+                             if b["ride"] <= 1e-5 else "bracketed, its ride not resolved to zero (steep there, or "
+                             "the orbit ends otherwise: an earlier sequence completing)"}
+                            for b in study["borders"]])
+    ends = [b for b in study["borders"] if b["ride"] <= 1e-5]
+    text = ("<p>Past the end of complete chattering the follower does not go over to incomplete chattering at "
+            "once. Its chattering sequence is cut by the next lift, but it leaves the cam nearly in the cam's own "
+            "state, and a later revolution's sequence completes: the orbit through the detachment then accumulates "
+            "once every n revolutions. Each such orbit is periodic without shooting (after the accumulation the "
+            "follower rides the cam to a detachment, where its state is the cam's) and superstable: every "
+            "perturbation is erased at the accumulation, its Floquet multipliers are zero. It is followed in cam "
+            "speed by running it from the detachment at each speed (the event method, which completes a sequence "
+            "in closed form), and each change of n between neighbours of the grid is approached from both sides "
+            "by secant steps on the orbit's ride left (the fraction of a revolution between the accumulation and "
+            "the detachment that ends the orbit): where the ride falls to zero the orbit ends, its accumulation "
+            "reaching the detachment. Where no sequence accumulates within "
+            f"{settings['revolutions']} revolutions the follower is in incomplete chattering (or in an orbit of "
+            "more revolutions); the incomplete P(m, n) orbits at higher speed are continued in the next section.</p>"
+            "<img src='cam_chattering_windows.png' alt='chattering windows'>"
+            "<p>The grid (cam_chattering_grid.csv):</p>" + table_html(grid)
+            + "<p>The borders located (an orbit between two grid speeds of other n is not seen; the windows are "
+              "many and narrow):</p>" + table_html(borders)
+            + f"<p>From the other side: the incomplete-chattering orbit P({impacts}, {other['revolutions']}) "
+              f"({impacts} impacts in {other['revolutions']} revolutions, none accumulating), seeded from the "
+              f"attractor {other['warm_up']} revolutions after rest at {other['start']:g} rpm, continued down in cam "
+              "speed by pseudo-arclength continuation on the event method's map (its Jacobian exact: each impact's "
+              f"saltation matrix; {len(branch.points)} orbits). "
+              + (f"It is stable down to a fold at {folds[0].value:.7f} rpm (a multiplier through +1), where it "
+                 "meets its unstable twin; below it the follower has no such orbit and its sequences begin to "
+                 "complete in some revolutions (the windows above)." if folds else
+                 f"No fold was found: {branch.message or 'it reaches the path end'}.")
+            + "</p><img src='cam_incomplete.png' alt='incomplete-chattering orbit'>" + table_html(found))
+    return Section("Mechanics: past the end of complete chattering", text,
+                   {"cam_chattering_windows.png": picture, "cam_chattering_grid.csv": csv_bytes(grid),
+                    "cam_chattering_borders.csv": csv_bytes(borders),
+                    "cam_incomplete.png": incomplete_figure(family, branch), "cam_incomplete.csv": csv_bytes(found)},
+                   ok=bool(ends) and all(b["width"] <= 1e-6 * b["rpm"] for b in study["borders"]) and bool(folds),
+                   metrics={"borders": study["borders"], "n": {f"{r['rpm']:g}": r["n"] for r in study["rows"]},
+                            "incomplete": {"impacts": impacts, "revolutions": other["revolutions"],
+                                           "orbits": len(branch.points),
+                                           "bifurcations": [{"kind": b.kind, "rpm": b.value,
+                                                             "multipliers": [complex(m) for m in b.multipliers]}
+                                                            for b in branch.bifurcations]}})
+
+
 def two_block_section():
     """Two blocks on a belt: the section against the belt velocity, and Lyapunov exponents."""
     from .defaults import MECHANICS
@@ -1150,5 +1301,5 @@ def two_block_section():
 
 
 __all__ = ["basins", "Basins", "resolution_check", "sliding_study", "degenerate_switching", "degenerate_portraits", "DegenerateSwitching", "friction_diagram", "two_block_diagram", "impact_phase_diagram", "ball_check",
-           "friction_agreement", "cam_checks", "ride_left", "chattering_transition", "sliding_section", "degenerate_section", "basins_section", "agreement_section", "cam_section", "two_block_section", "cam_family", "impact_angles",
+           "friction_agreement", "cam_checks", "ride_left", "chattering_orbit", "chattering_windows", "chattering_transition", "sliding_section", "degenerate_section", "basins_section", "agreement_section", "cam_section", "chattering_windows_section", "two_block_section", "cam_family", "incomplete_orbit", "impact_angles",
            "locate_corner", "corner_impacts", "CornerImpact", "cam_continuation", "cam_continuation_section"]

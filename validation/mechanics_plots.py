@@ -333,3 +333,78 @@ def cam_profile_figure(fmt: str = "png") -> bytes:
         ax.grid(alpha=0.3)
     fig.suptitle("Cam Profile (its joints dotted: h_c'' jumps there)", fontsize=10)
     return _save(fig, fmt)
+
+
+def chattering_windows_figure(study: dict, revolutions: int, fmt: str = "png") -> bytes:
+    """Past the end of complete chattering: n, the revolutions per accumulation of the superstable orbit through
+    the detachment, at each grid speed (none within ``revolutions``: x at n = 0), and the located ends between them
+    (an orbit's ride need not keep one sign between a grid speed and its end: windows are many and narrow); below,
+    the ride left at the grid's speeds and at the last orbit before each border (log scale: a ride that falls to
+    zero is an orbit's end)."""
+    rows, borders = study["rows"], study["borders"]
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(10, 7), sharex=True)
+    found = [r for r in rows if r["n"] is not None]
+    top.plot([r["rpm"] for r in found], [r["n"] for r in found], "o", color="#4c72b0", ms=5,
+             label="an orbit with one accumulation per n revolutions (multipliers 0)")
+    missing = [r for r in rows if r["n"] is None]
+    if missing:
+        top.plot([r["rpm"] for r in missing], [0] * len(missing), "x", color="#c44e52", ms=5,
+                 label=f"no accumulation within {revolutions} revolutions")
+    for b in borders:
+        top.plot([b["rpm"]], [b["n"]], "|", color="k" if b["ride"] <= 1e-5 else "0.55", ms=14, mew=1.5)
+    top.plot([], [], "|", color="k", ms=10, mew=1.5, label="border located, the orbit's ride falling to zero")
+    top.plot([], [], "|", color="0.55", ms=10, mew=1.5, label="border bracketed, its ride not resolved to zero")
+    top.set_ylabel("n (revolutions per accumulation)")
+    top.set_ylim(-0.5, max([r["n"] for r in found] + [1]) + 0.5)
+    top.set_title("Transition from complete chattering to no-complete chattering: the orbits through the detachment",
+                  fontsize=10)
+    bottom.semilogy([r["rpm"] for r in found], [r["ride"] for r in found], "o", color="#4c72b0", ms=4,
+                    label="ride left at the grid's speeds")
+    bottom.semilogy([b["rpm"] for b in borders], [b["ride"] for b in borders], "v", color="k", ms=6,
+                    label="at the last orbit before each border")
+    bottom.set_ylabel("ride left (revolutions)")
+    bottom.set_xlabel("cam speed (rpm)")
+    for ax in (top, bottom):
+        ax.ticklabel_format(axis="x", useOffset=False, style="plain")
+        ax.grid(alpha=0.3)
+    handles = [h for ax in (top, bottom) for h in ax.get_legend_handles_labels()[0]]
+    labels = [lab for ax in (top, bottom) for lab in ax.get_legend_handles_labels()[1]]
+    fig.legend(handles, labels, loc="lower center", ncol=2, fontsize=7, bbox_to_anchor=(0.5, -0.06))
+    return _save(fig, fmt)
+
+
+def incomplete_figure(family, branch, fmt: str = "png") -> bytes:
+    """An incomplete-chattering orbit continued in cam speed: its Floquet multipliers' largest modulus (stable
+    solid, unstable dashed) and the phases of its impacts in the cam's revolution, its bifurcations marked."""
+    fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.4))
+    points = branch.points
+    values = np.array([pt.value for pt in points])
+    radius = np.array([pt.spectral_radius for pt in points])
+    stable = np.array([pt.stable for pt in points])
+    left.plot(values, np.where(stable, radius, np.nan), "-", color="#4c72b0", lw=1.6, label="stable")
+    left.plot(values, np.where(~stable, radius, np.nan), "--", color="#c44e52", lw=1.4, label="unstable")
+    left.axhline(1.0, color="0.5", lw=0.8, ls=":")
+    for b in branch.bifurcations:
+        marker, color = _MARKERS.get(b.kind, ("o", "k"))
+        left.plot([b.value], [np.abs(b.multipliers).max()], marker, color=color, ms=8,
+                  label=f"{b.kind}, {b.value:.5f} rpm")
+    left.set_xlabel("cam speed (rpm)")
+    left.set_ylabel("largest |Floquet multiplier|")
+    left.legend(fontsize=7)
+    for pt in points[::max(1, len(points) // 80)]:
+        T = family.problem_of(pt.value).period
+        phases = np.mod([t / T for t, kind, *_ in family.period_map(pt.value).events(pt.x0) if kind == "impact"], 1.0)
+        right.plot([pt.value] * len(phases), phases, ".", ms=3, color="#4c72b0" if pt.stable else "#c44e52")
+    right.set_xlabel("cam speed (rpm)")
+    right.set_ylabel("impact phase (revolutions)")
+    right.set_title("impacts of the orbit (blue stable, red unstable)", fontsize=9)
+    for ax in (left, right):
+        ax.ticklabel_format(axis="x", useOffset=False, style="plain")
+        ax.grid(alpha=0.3)
+    fig.suptitle(f"Continuation of periodic orbits: incomplete chattering, P({_impacts(family, points[0])},"
+                 f"{family.periods})", fontsize=10)
+    return _save(fig, fmt)
+
+
+def _impacts(family, point) -> int:
+    return sum(1 for _, kind, *_ in family.period_map(point.value).events(point.x0) if kind == "impact")

@@ -393,6 +393,7 @@ EXTRA_SECTIONS["mechanics"] = [
     ("Mechanics: the friction oscillator's domain of attraction", partial(_mechanics, "basins_section")),
     ("Mechanics: event-driven against Moreau-Jean and the closed forms", partial(_mechanics, "agreement_section")),
     ("Mechanics: the cam-follower's impact phases", partial(_mechanics, "cam_section")),
+    ("Mechanics: past the end of complete chattering", partial(_mechanics, "chattering_windows_section")),
     ("Mechanics: continuation of periodic orbits and the corner-impact bifurcation",
      partial(_mechanics, "cam_continuation_section")),
     ("Mechanics: two blocks on a belt", partial(_mechanics, "two_block_section"))]

@@ -149,25 +149,27 @@ def test_domain_of_attraction_at_A_3_6_two_converged_orbits_and_a_resolved_bound
     assert check["off_boundary"] == 0 and 0 < check["boundary_cells"] < check["cells"]
 
 
-def _cam_period_closed_form(rpm: float, x0, e: float = 0.8, m: float = 1.221, k: float = 1430.8):
+def _cam_period_closed_form(rpm: float, x0, e: float = 0.8, m: float = 1.221, k: float = 1430.8, t0: float = 0.0,
+                            revolutions: int = 1):
     """An independent period map of the cam-follower (no ODE solver, no event engine): the flight is m x'' + k x = 0 in
     closed form, each impact the first sign change of the gap x - c(t) on a grid of T/20000 refined by Brent, Newton's
-    law v+ = c' - e (v- - c'). Returns (x(T), the impact times)."""
+    law v+ = c' - e (v- - c'). From x0 at t0 over ``revolutions``: returns (the end state, the impact times)."""
     from scipy.optimize import brentq
 
     from converters.models.mechanics.cam import CamOffset
     cam = CamOffset(2 * np.pi * rpm / 60)
     w, T = np.sqrt(k / m), 60 / rpm
-    t, (x, v), impacts = 0.0, map(float, x0), []
+    t, (x, v), impacts = t0, map(float, x0), []
+    end = t0 + revolutions * T
 
     def flight(s):
         return x * np.cos(w * (s - t)) + v / w * np.sin(w * (s - t))
     while True:
-        grid = np.linspace(t, T, max(3, int((T - t) / T * 20000)))
+        grid = np.linspace(t, end, max(3, int((end - t) / T * 20000)))
         gap = flight(grid) - cam.position(grid)[0]
         below = np.flatnonzero(gap[1:] < 0)
         if not below.size:
-            x, v = flight(T), -x * w * np.sin(w * (T - t)) + v * np.cos(w * (T - t))
+            x, v = flight(end), -x * w * np.sin(w * (end - t)) + v * np.cos(w * (end - t))
             return np.array([x, v]), impacts
         j = below[0] + 1
         hit = brentq(lambda s: flight(s) - cam.position(s)[0], grid[j - 1], grid[j], xtol=1e-15, rtol=1e-15)
@@ -220,3 +222,77 @@ def test_the_cam_p21_orbit_ends_in_a_corner_impact_at_the_flank_nose_joint():
     below = family.orbit(corner.rpm - 0.01, corner.x0)
     assert not below.converged or np.abs(impact_angles(family, corner.rpm - 0.01, below.x0)[0]
                                          - corner.angle) > 0.01
+
+
+@pytest.mark.slow
+def test_past_complete_chattering_an_orbit_of_two_revolutions_superstable_and_its_end_located():
+    """Past the end of complete chattering (252.99229 rpm) the follower's sequence is cut by the lift and a later
+    revolution's completes: at 256 and 257.3 rpm the orbit from the detachment accumulates once in n = 2
+    revolutions, at 257.5 in 3; the two-revolution orbit's end between them is located where its ride falls to zero
+    (its accumulation reaches the detachment two revolutions on). The orbit is superstable: a start 10 um and
+    1 mm/s off the detachment state differs by more than 1e-6 m a revolution later, and a quarter revolution after
+    the detachment two revolutions on is where the unperturbed orbit is, to 1e-9 m; its ride is the same, to 1e-8
+    of a revolution, with the ODE's tolerance 100 times finer."""
+    from converters.models.mechanics import get_mechanical
+    from converters.methods import EventDriven
+    from converters.simulate import simulate
+    from validation import mechanics
+    from validation.mechanics import _detachment, chattering_orbit, chattering_windows
+    found = chattering_windows({}, [257.3, 257.5], revolutions=3, workers=1)
+    assert [row["n"] for row in found["rows"]] == [2, 3]
+    end = next(b for b in found["borders"] if b["n"] == 2)
+    assert end["side"] == "below" and end["rpm"] == pytest.approx(257.39055, abs=1e-4)
+    assert end["width"] <= 1e-6 and 0.0 < end["ride"] <= 1e-5, end
+    coarse = chattering_orbit({}, 256.0, 2)
+    mechanics.EventDriven, default = (lambda: EventDriven(ode_rtol=1e-11)), mechanics.EventDriven
+    try:
+        fine = chattering_orbit({}, 256.0, 2)
+    finally:
+        mechanics.EventDriven = default
+    assert coarse["n"] == fine["n"] == 2 and coarse["ride"] > 0.1
+    assert abs(coarse["ride"] - fine["ride"]) <= 1e-8
+
+    model = get_mechanical("cam-follower")
+    p = model.resolve({"rpm": 256.0})
+    T, t_d = model.period(p), _detachment(model, p)
+    c, c1, _ = model.offset(p).position(t_d)
+
+    def state(start, t_end):
+        run = simulate(model.problem(p, t_end, np.array([c, c1]) + start, t_start=t_d), EventDriven())
+        assert run.t[-1] == t_end
+        return run.x[-1], run.events
+    quarter, _ = state(np.zeros(2), t_d + 0.25 * T)              # in flight, a quarter revolution after leaving
+    for start in (np.zeros(2), np.array([1e-5, 1e-3])):
+        again, events = state(start, t_d + 2.25 * T)
+        detach = events[(events["kind"] == "detach") & (events["time"] > t_d + 1e-9 * T)]["time"].to_numpy()
+        assert detach[0] == pytest.approx(t_d + 2 * T, abs=1e-9 * T)
+        np.testing.assert_allclose(again, quarter, atol=1e-9, rtol=0)
+    flights = [state(start, t_d + T)[0] for start in (np.zeros(2), np.array([1e-5, 1e-3]))]
+    assert abs(flights[0][0] - flights[1][0]) > 1e-6
+
+
+@pytest.mark.slow
+def test_an_incomplete_chattering_orbit_continued_down_in_speed_ends_in_a_fold():
+    """From the other side of the transition: the stable P(6, 2) orbit of incomplete chattering at 330 rpm (three
+    impacts a revolution, none accumulating; complex multipliers of modulus 0.26), continued down in cam speed on the
+    event method's map with its exact Jacobian, ends in a smooth fold at 321.4332 rpm (a multiplier through +1, the
+    other 0.069), where it meets its unstable twin. An independent closed-form map (harmonic flights, impacts by
+    Brent, Newton's law) closes the orbits near the fold to 1e-8 with their six impacts; no such orbit 0.05 rpm
+    below the fold."""
+    from validation.mechanics import cam_family, incomplete_orbit
+    family, branch = incomplete_orbit()
+    first = branch.points[0]
+    assert first.value == 330.0 and first.stable and abs(first.multipliers[0].imag) > 0.1
+    assert np.abs(first.multipliers).max() == pytest.approx(0.2621, abs=1e-3)
+    folds = [b for b in branch.bifurcations if b.kind == "fold"]
+    assert len(folds) == 1 and folds[0].value == pytest.approx(321.4332, abs=1e-3)
+    fold = folds[0]
+    assert np.abs(fold.multipliers).max() == pytest.approx(1.0, abs=1e-3)
+    assert abs(np.sort(np.abs(fold.multipliers))[0] - 0.069) < 0.005
+    assert fold.stable_before != fold.stable_after
+    near = min(branch.points, key=lambda pt: abs(pt.value - fold.value))
+    end, impacts = _cam_period_closed_form(near.value, near.x0, t0=0.78 * 60.0 / near.value, revolutions=2)
+    assert np.abs(end - near.x0).max() <= 1e-8 * (1 + np.abs(near.x0).max()) and len(impacts) == 6
+    below = cam_family({}, 2, 0.78).orbit(fold.value - 0.05, fold.x0)
+    assert not below.converged or len([1 for _, kind, *_ in cam_family({}, 2, 0.78).period_map(fold.value - 0.05)
+                                       .events(below.x0) if kind == "impact"]) != 6
