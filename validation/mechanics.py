@@ -640,11 +640,14 @@ def incomplete_orbit(params: dict | None = None):
     return family, branch
 
 
+def impact_times(family: OrbitFamily, rpm: float, x0) -> np.ndarray:
+    """The instants (s) of the impacts of the orbit from x0 at ``rpm`` over one of its periods, in time order."""
+    return np.array([t for t, kind, *_ in family.period_map(rpm).events(x0) if kind == "impact"], dtype=float)
+
+
 def impact_angles(family: OrbitFamily, rpm: float, x0) -> np.ndarray:
     """The cam angle beta (rad, in [0, 2 pi)) of each impact of the orbit from x0 at ``rpm``, in time order."""
-    model = get_mechanical("cam-follower")
-    times = [t for t, kind, *_ in family.period_map(rpm).events(x0) if kind == "impact"]
-    return model.cam_angle({"rpm": rpm}, np.array(times, dtype=float))
+    return get_mechanical("cam-follower").cam_angle({"rpm": rpm}, impact_times(family, rpm, x0))
 
 
 @dataclass(frozen=True)
@@ -1163,8 +1166,8 @@ def cam_continuation_section():
     orbits = pd.DataFrame([{"orbit": name, "cam speed (rpm)": pt.value, "stable": pt.stable,
                             "multipliers": ", ".join(f"{m:.6g}" for m in pt.multipliers),
                             "impact phases (revolutions)": ", ".join(
-                                f"{t / family.problem_of(pt.value).period:.6f}" for t, kind, *_ in
-                                family.period_map(pt.value).events(pt.x0) if kind == "impact")}
+                                f"{t / family.problem_of(pt.value).period:.6f}"
+                                for t in impact_times(family, pt.value, pt.x0))}
                            for name, parts in study["branches"].items() for branch in parts
                            for family in [study["families"][name]] for pt in branch.points])
     points = len(orbits)
@@ -1218,8 +1221,7 @@ def chattering_windows_section():
     picture = chattering_windows_figure(study, settings["revolutions"])
     family, branch = incomplete_orbit()
     other = MECHANICS["incomplete"]
-    impacts = sum(1 for _, kind, *_ in family.period_map(branch.points[0].value).events(branch.points[0].x0)
-                  if kind == "impact")
+    impacts = impact_times(family, branch.points[0].value, branch.points[0].x0).size
     folds = [b for b in branch.bifurcations if b.kind == "fold"]
     found = pd.DataFrame([{"bifurcation": b.kind, "cam speed (rpm)": f"{b.value:.7f}",
                            "bracket (rpm)": f"{b.width:.1e}", "multipliers": ", ".join(f"{m:.4g}" for m in b.multipliers),
@@ -1248,7 +1250,7 @@ def chattering_windows_section():
             "the detachment that ends the orbit): where the ride falls to zero the orbit ends, its accumulation "
             "reaching the detachment. Where no sequence accumulates within "
             f"{settings['revolutions']} revolutions the follower is in incomplete chattering (or in an orbit of "
-            "more revolutions); the incomplete P(m, n) orbits at higher speed are continued in the next section.</p>"
+            "more revolutions); incomplete P(m, n) orbits at higher speed are continued below and in the next section.</p>"
             "<img src='cam_chattering_windows.png' alt='chattering windows'>"
             "<p>The grid (cam_chattering_grid.csv):</p>" + table_html(grid)
             + "<p>The borders located (an orbit between two grid speeds of other n is not seen; the windows are "
@@ -1301,5 +1303,5 @@ def two_block_section():
 
 
 __all__ = ["basins", "Basins", "resolution_check", "sliding_study", "degenerate_switching", "degenerate_portraits", "DegenerateSwitching", "friction_diagram", "two_block_diagram", "impact_phase_diagram", "ball_check",
-           "friction_agreement", "cam_checks", "ride_left", "chattering_orbit", "chattering_windows", "chattering_transition", "sliding_section", "degenerate_section", "basins_section", "agreement_section", "cam_section", "chattering_windows_section", "two_block_section", "cam_family", "incomplete_orbit", "impact_angles",
+           "friction_agreement", "cam_checks", "ride_left", "chattering_orbit", "chattering_windows", "chattering_transition", "sliding_section", "degenerate_section", "basins_section", "agreement_section", "cam_section", "chattering_windows_section", "two_block_section", "cam_family", "incomplete_orbit", "impact_times", "impact_angles",
            "locate_corner", "corner_impacts", "CornerImpact", "cam_continuation", "cam_continuation_section"]

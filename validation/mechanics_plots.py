@@ -213,9 +213,8 @@ def basin_figure(result, orbits: list, fmt: str = "png") -> bytes:
 
 def _impact_phases(family, value: float, x0) -> np.ndarray:
     """The impact instants of the orbit from x0 at ``value`` as fractions of the cam's revolution, in [0, 1)."""
-    T = family.problem_of(value).period
-    times = [t for t, kind, *_ in family.period_map(value).events(x0) if kind == "impact"]
-    return np.mod(np.array(times, dtype=float) / T, 1.0)
+    from .mechanics import impact_times
+    return np.mod(impact_times(family, value, x0) / family.problem_of(value).period, 1.0)
 
 
 def cam_branches_figure(study: dict, rows, brute_force: str, fmt: str = "png") -> bytes:
@@ -265,6 +264,7 @@ def cam_branches_figure(study: dict, rows, brute_force: str, fmt: str = "png") -
 def corner_figure(study: dict, fmt: str = "png") -> bytes:
     """At each corner impact: the impact's cam angle against the cam speed on the two orbits that meet there (the
     joint's angle drawn), and their Floquet multipliers in the complex plane."""
+    from .mechanics import impact_angles
     corners = [c for c in study["corners"] if c.revolutions == 1]
     family = study["families"]["P(2,1)"]
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.6))
@@ -276,9 +276,7 @@ def corner_figure(study: dict, fmt: str = "png") -> bytes:
             if not near:
                 continue
             values = [pt.value for pt in near]
-            angles = [np.mod(2 * np.pi * pt.value / 60 * np.array(
-                [t for t, kind, *_ in family.period_map(pt.value).events(pt.x0) if kind == "impact"])[c.impact]
-                + np.pi / 2, 2 * np.pi) for pt in near]
+            angles = [impact_angles(family, pt.value, pt.x0)[c.impact] for pt in near]
             stable = [pt.stable for pt in near]
             flips = [k for k in range(1, len(near)) if stable[k] != stable[k - 1]
                      and max(abs(values[k - 1] - c.rpm), abs(values[k] - c.rpm)) < 1.0]
@@ -392,8 +390,7 @@ def incomplete_figure(family, branch, fmt: str = "png") -> bytes:
     left.set_ylabel("largest |Floquet multiplier|")
     left.legend(fontsize=7)
     for pt in points[::max(1, len(points) // 80)]:
-        T = family.problem_of(pt.value).period
-        phases = np.mod([t / T for t, kind, *_ in family.period_map(pt.value).events(pt.x0) if kind == "impact"], 1.0)
+        phases = _impact_phases(family, pt.value, pt.x0)
         right.plot([pt.value] * len(phases), phases, ".", ms=3, color="#4c72b0" if pt.stable else "#c44e52")
     right.set_xlabel("cam speed (rpm)")
     right.set_ylabel("impact phase (revolutions)")
@@ -401,10 +398,7 @@ def incomplete_figure(family, branch, fmt: str = "png") -> bytes:
     for ax in (left, right):
         ax.ticklabel_format(axis="x", useOffset=False, style="plain")
         ax.grid(alpha=0.3)
-    fig.suptitle(f"Continuation of periodic orbits: incomplete chattering, P({_impacts(family, points[0])},"
-                 f"{family.periods})", fontsize=10)
+    impacts = _impact_phases(family, points[0].value, points[0].x0).size
+    fig.suptitle(f"Continuation of periodic orbits: incomplete chattering, P({impacts},{family.periods})", fontsize=10)
     return _save(fig, fmt)
 
-
-def _impacts(family, point) -> int:
-    return sum(1 for _, kind, *_ in family.period_map(point.value).events(point.x0) if kind == "impact")
