@@ -640,14 +640,9 @@ def incomplete_orbit(params: dict | None = None):
     return family, branch
 
 
-def impact_times(family: OrbitFamily, rpm: float, x0) -> np.ndarray:
-    """The instants (s) of the impacts of the orbit from x0 at ``rpm`` over one of its periods, in time order."""
-    return np.array([t for t, kind, *_ in family.period_map(rpm).events(x0) if kind == "impact"], dtype=float)
-
-
 def impact_angles(family: OrbitFamily, rpm: float, x0) -> np.ndarray:
     """The cam angle beta (rad, in [0, 2 pi)) of each impact of the orbit from x0 at ``rpm``, in time order."""
-    return get_mechanical("cam-follower").cam_angle({"rpm": rpm}, impact_times(family, rpm, x0))
+    return get_mechanical("cam-follower").cam_angle({"rpm": rpm}, family.event_times(rpm, x0, "impact"))
 
 
 @dataclass(frozen=True)
@@ -1167,7 +1162,7 @@ def cam_continuation_section():
                             "multipliers": ", ".join(f"{m:.6g}" for m in pt.multipliers),
                             "impact phases (revolutions)": ", ".join(
                                 f"{t / family.problem_of(pt.value).period:.6f}"
-                                for t in impact_times(family, pt.value, pt.x0))}
+                                for t in family.event_times(pt.value, pt.x0, "impact"))}
                            for name, parts in study["branches"].items() for branch in parts
                            for family in [study["families"][name]] for pt in branch.points])
     points = len(orbits)
@@ -1221,7 +1216,7 @@ def chattering_windows_section():
     picture = chattering_windows_figure(study, settings["revolutions"])
     family, branch = incomplete_orbit()
     other = MECHANICS["incomplete"]
-    impacts = impact_times(family, branch.points[0].value, branch.points[0].x0).size
+    impacts = family.event_times(branch.points[0].value, branch.points[0].x0, "impact").size
     folds = [b for b in branch.bifurcations if b.kind == "fold"]
     found = pd.DataFrame([{"bifurcation": b.kind, "cam speed (rpm)": f"{b.value:.7f}",
                            "bracket (rpm)": f"{b.width:.1e}", "multipliers": ", ".join(f"{m:.4g}" for m in b.multipliers),
@@ -1303,5 +1298,5 @@ def two_block_section():
 
 
 __all__ = ["basins", "Basins", "resolution_check", "sliding_study", "degenerate_switching", "degenerate_portraits", "DegenerateSwitching", "friction_diagram", "two_block_diagram", "impact_phase_diagram", "ball_check",
-           "friction_agreement", "cam_checks", "ride_left", "chattering_orbit", "chattering_windows", "chattering_transition", "sliding_section", "degenerate_section", "basins_section", "agreement_section", "cam_section", "chattering_windows_section", "two_block_section", "cam_family", "incomplete_orbit", "impact_times", "impact_angles",
+           "friction_agreement", "cam_checks", "ride_left", "chattering_orbit", "chattering_windows", "chattering_transition", "sliding_section", "degenerate_section", "basins_section", "agreement_section", "cam_section", "chattering_windows_section", "two_block_section", "cam_family", "incomplete_orbit", "impact_angles",
            "locate_corner", "corner_impacts", "CornerImpact", "cam_continuation", "cam_continuation_section"]

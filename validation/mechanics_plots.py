@@ -213,8 +213,7 @@ def basin_figure(result, orbits: list, fmt: str = "png") -> bytes:
 
 def _impact_phases(family, value: float, x0) -> np.ndarray:
     """The impact instants of the orbit from x0 at ``value`` as fractions of the cam's revolution, in [0, 1)."""
-    from .mechanics import impact_times
-    return np.mod(impact_times(family, value, x0) / family.problem_of(value).period, 1.0)
+    return np.mod(family.event_times(value, x0, "impact") / family.problem_of(value).period, 1.0)
 
 
 def cam_branches_figure(study: dict, rows, brute_force: str, fmt: str = "png") -> bytes:
@@ -264,7 +263,8 @@ def cam_branches_figure(study: dict, rows, brute_force: str, fmt: str = "png") -
 def corner_figure(study: dict, fmt: str = "png") -> bytes:
     """At each corner impact: the impact's cam angle against the cam speed on the two orbits that meet there (the
     joint's angle drawn), and their Floquet multipliers in the complex plane."""
-    from .mechanics import impact_angles
+    from converters.models.mechanics import get_mechanical
+    cam = get_mechanical("cam-follower")
     corners = [c for c in study["corners"] if c.revolutions == 1]
     family = study["families"]["P(2,1)"]
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.6))
@@ -276,7 +276,8 @@ def corner_figure(study: dict, fmt: str = "png") -> bytes:
             if not near:
                 continue
             values = [pt.value for pt in near]
-            angles = [impact_angles(family, pt.value, pt.x0)[c.impact] for pt in near]
+            angles = [cam.cam_angle({"rpm": pt.value}, family.event_times(pt.value, pt.x0, "impact"))[c.impact]
+                      for pt in near]
             stable = [pt.stable for pt in near]
             flips = [k for k in range(1, len(near)) if stable[k] != stable[k - 1]
                      and max(abs(values[k - 1] - c.rpm), abs(values[k] - c.rpm)) < 1.0]

@@ -197,6 +197,10 @@ class OrbitFamily:
             events = list(zip(table["time"], table["kind"], table["pair"], config))
         return events
 
+    def event_times(self, value: float, x0, kind: str) -> np.ndarray:
+        """The instants of the events of ``kind`` ("impact", "detach", ...) of the orbit from x0, in time order."""
+        return np.array([e[0] for e in self._events(value, x0) if e[1] == kind], dtype=float)
+
     def signature(self, value: float, x0) -> tuple:
         """(kind, pair, config) of every event over one orbit, as a cyclic sequence (its smallest rotation)."""
         return self.timed_signature(value, x0)[0]
