@@ -640,6 +640,43 @@ def incomplete_orbit(params: dict | None = None):
     return family, branch
 
 
+def incomplete_across(params: dict | None = None):
+    """An incomplete-chattering orbit of one revolution continued through the end of complete chattering
+    (``[mechanics.across]``): seeded at ``start`` rpm by the flight that leaves the cam at the detachment (its state
+    one revolution on, at the map's start ``after_detachment`` revolutions past the detachment), Newton's shooting,
+    then pseudo-arclength continuation down to ``low`` and up until it ends at a border collision (the grazing where
+    an impact appears), with its exact multipliers (impact saltation). Its sequence is cut by the lift at the
+    detachment every revolution, on both sides of the end of complete chattering. Going down, its last impact
+    reaches the cam's flank-nose joint, where the cam lifts away (the detachment is at that joint): a corner impact,
+    located from the branch's last orbit by :func:`corner_impact` (the corrector creeps next to it). Returns (family, branch: its orbits in increasing speed, the bifurcations of
+    both directions, [CornerImpact])."""
+    from converters.analysis.continuation import Branch
+
+    from .defaults import MECHANICS
+    settings = MECHANICS["across"]
+    model = get_mechanical("cam-follower")
+    p = model.resolve({**(params or {}), "rpm": settings["start"]})
+    T = model.period(p)
+    t_d = _detachment(model, p)
+    phase = t_d / T + settings["after_detachment"]
+    family = cam_family(params, 1, phase)
+    c, c1, _ = model.offset(p).position(t_d)
+    seed = simulate(model.problem(p, (1.0 + phase) * T, np.array([float(c), float(c1)]), t_start=t_d),
+                    EventDriven()).x[-1]
+    options = {"warm_up": 0, "tol": CONTINUATION["tol"], "locate_tol": CONTINUATION["locate_tol"],
+               "fd_step": settings["fd_step"], "max_step": settings["max_step"], "max_points": settings["max_points"]}
+    down = follow(family, settings["start"], settings["low"], seed, **options)
+    up = follow(family, settings["start"], settings["high"], seed, stop_at=("border-collision",), **options)
+    branch = Branch(1, down.points[::-1] + up.points[1:], down.bifurcations + up.bifurcations,
+                    "; ".join(m for m in (down.message, up.message) if m))
+    from converters.models.mechanics.cam import JOINTS
+    last = down.points[-1]
+    angle = impact_angles(family, last.value, last.x0)[-1]
+    joint = min(JOINTS, key=lambda name: abs(JOINTS[name] - angle))
+    corners = [corner_impact(family, joint, len(impact_angles(family, last.value, last.x0)) - 1, last.value, last.x0)]
+    return family, branch, corners
+
+
 def impact_angles(family: OrbitFamily, rpm: float, x0) -> np.ndarray:
     """The cam angle beta (rad, in [0, 2 pi)) of each impact of the orbit from x0 at ``rpm``, in time order."""
     return get_mechanical("cam-follower").cam_angle({"rpm": rpm}, family.event_times(rpm, x0, "impact"))
@@ -660,7 +697,8 @@ class CornerImpact:
     residual: float
     off_joint: float
     offset: float
-    #: [(rpm, x0, multipliers, impact angle)] of the orbits found at rpm +- offset.
+    #: [(rpm, x0, multipliers, impact angle)] of the orbits found at rpm +- offset (the angle NaN where the orbit
+    #: has no such impact: it vanished past the joint).
     sides: tuple
     #: "nonsmooth fold" when two orbits lie on one side of the corner in rpm and none on the other (they meet at
     #: the corner and vanish together), "persistence" when the orbit crosses it, else "undetermined".
@@ -698,32 +736,51 @@ def corner_impacts(family: OrbitFamily, branch, offset: float = 1e-3, near: floa
         for name, joint in JOINTS.items():
             starts += [(name, joint, i, points[-1]) for i, angle in enumerate(angles[-1]) if abs(angle - joint) <= near]
     out = []
-    for name, joint, i, start in starts:
-        rpm, x0, residual, off = locate_corner(family, joint, i, start.value, start.x0)
-        sides = []
-        scale = 1e-9 * (1.0 + np.abs(x0).max())
-        for value in (rpm + offset, rpm - offset):
-            found = family.orbit(value, x0)
-            if not found.converged:
-                continue
-            orbits = [found]
-            # the other side of the joint: along the line through the corner orbit, beyond it (the two orbits
-            # leave the corner at different rates)
-            for reach in (1.0, 3.0, 10.0, 30.0, 100.0):
-                other = family.orbit(value, x0 - reach * (found.x0 - x0))
-                if other.converged and np.abs(other.x0 - found.x0).max() > scale:
-                    orbits.append(other)
-                    break
-            for orbit in orbits:
-                jac = family.period_map(value)(orbit.x0)[1]
-                sides.append((value, orbit.x0, multipliers_of(jac), float(impact_angles(family, value, orbit.x0)[i])))
-        above = [side for side in sides if side[0] > rpm]
-        below = [side for side in sides if side[0] < rpm]
-        kind = ("nonsmooth fold" if sorted([len(above), len(below)]) == [0, 2] else
-                "persistence" if len(above) == len(below) == 1 else "undetermined")
-        out.append(CornerImpact(name, float(joint), i, float(rpm), x0, residual, float(off), offset, tuple(sides),
-                                kind, family.periods))
+    for name, _, i, start in starts:
+        found = corner_impact(family, name, i, start.value, start.x0, offset)
+        # One corner reached from several starts (consecutive orbits and the branch's end): the best located.
+        same = [k for k, c in enumerate(out) if (c.joint, c.impact) == (name, i) and abs(c.rpm - found.rpm) <= offset]
+        if not same:
+            out.append(found)
+        elif found.residual < out[same[0]].residual:
+            out[same[0]] = found
     return out
+
+
+def corner_impact(family: OrbitFamily, name: str, impact: int, rpm: float, x0, offset: float = 1e-3) -> CornerImpact:
+    """The corner impact where impact number ``impact`` of the orbit near (rpm, x0) reaches the joint ``name`` of
+    :data:`converters.models.mechanics.cam.JOINTS`, located by :func:`locate_corner`; its kind from the orbits at
+    ``offset`` rpm either side of it (Newton from the corner orbit, then from points beyond it on the line through
+    the orbit found, for the other side of the joint): two on one side and none on the other is a nonsmooth fold;
+    one on each side, the orbit persisting through it."""
+    from converters.models.mechanics.cam import JOINTS
+    joint = JOINTS[name]
+    rpm, x0, residual, off = locate_corner(family, joint, impact, rpm, x0)
+    sides = []
+    scale = 1e-9 * (1.0 + np.abs(x0).max())
+    for value in (rpm + offset, rpm - offset):
+        found = family.orbit(value, x0)
+        if not found.converged:
+            continue
+        orbits = [found]
+        # the other side of the joint: along the line through the corner orbit, beyond it (the two orbits
+        # leave the corner at different rates)
+        for reach in (1.0, 3.0, 10.0, 30.0, 100.0):
+            other = family.orbit(value, x0 - reach * (found.x0 - x0))
+            if other.converged and np.abs(other.x0 - found.x0).max() > scale:
+                orbits.append(other)
+                break
+        for orbit in orbits:
+            jac = family.period_map(value)(orbit.x0)[1]
+            angles_there = impact_angles(family, value, orbit.x0)
+            sides.append((value, orbit.x0, multipliers_of(jac),
+                          float(angles_there[impact]) if impact < angles_there.size else np.nan))
+    above = [side for side in sides if side[0] > rpm]
+    below = [side for side in sides if side[0] < rpm]
+    kind = ("nonsmooth fold" if sorted([len(above), len(below)]) == [0, 2] else
+            "persistence" if len(above) == len(below) == 1 else "undetermined")
+    return CornerImpact(name, float(joint), impact, float(rpm), x0, residual, float(off), offset, tuple(sides), kind,
+                        family.periods)
 
 
 def lyapunov_of_flow(model_name: str, params: dict | None, *, span_units: float = 1.0, transient: int = 60,
@@ -1204,7 +1261,9 @@ def cam_continuation_section():
 
 def chattering_windows_section():
     """Past the end of complete chattering: the superstable orbits through the detachment (one accumulation per n
-    revolutions) followed in cam speed, and their windows' borders located (:func:`chattering_windows`)."""
+    revolutions) followed in cam speed, and their windows' borders located (:func:`chattering_windows`); an
+    incomplete orbit continued through the transition, from its corner impact to its grazing
+    (:func:`incomplete_across`); from above, the P(6,2) orbit down to its fold (:func:`incomplete_orbit`)."""
     import pandas as pd
 
     from .defaults import MECHANICS
@@ -1216,6 +1275,12 @@ def chattering_windows_section():
     picture = chattering_windows_figure(study, settings["revolutions"])
     family, branch = incomplete_orbit()
     other = MECHANICS["incomplete"]
+    across_family, across, corners = incomplete_across()
+    complete_end = next((b["rpm"] for b in study["borders"] if b["n"] == 1 and b["side"] == "below"), None)
+    grazings = [b for b in across.bifurcations if b.kind == "border-collision"]
+    m_across = {across_family.event_times(pt.value, pt.x0, "impact").size for pt in across.points}
+    radius = [pt.spectral_radius for pt in across.points]
+    crossed = complete_end is not None and across.values()[0] < complete_end < across.values()[-1]
     impacts = family.event_times(branch.points[0].value, branch.points[0].x0, "impact").size
     folds = [b for b in branch.bifurcations if b.kind == "fold"]
     found = pd.DataFrame([{"bifurcation": b.kind, "cam speed (rpm)": f"{b.value:.7f}",
@@ -1246,6 +1311,31 @@ def chattering_windows_section():
             "reaching the detachment. Where no sequence accumulates within "
             f"{settings['revolutions']} revolutions the follower is in incomplete chattering (or in an orbit of "
             "more revolutions); incomplete P(m, n) orbits at higher speed are continued below and in the next section.</p>"
+            "<p>Through the transition: an incomplete-chattering orbit of one revolution, P("
+            + "/".join(str(m) for m in sorted(m_across)) + ", 1), its sequence cut every revolution by the lift at the "
+            "detachment, seeded by the flight that leaves the cam there and continued both ways in cam speed with "
+            f"its exact multipliers ({len(across.points)} orbits, {across.values()[0]:.7g} to "
+            f"{across.values()[-1]:.7f} rpm). "
+            + (f"It passes the end of complete chattering ({complete_end:.7f} rpm) unchanged: below it, it coexists "
+               "with the superstable complete-chattering orbit; the transition is a bifurcation of the "
+               "complete-chattering orbit alone. " if crossed else "It does not reach the end of complete chattering. ")
+            + f"It is unstable all along (largest multiplier {min(radius):.1f} to {max(radius):.1f}, the other below "
+              f"{max(np.sort(np.abs(pt.multipliers))[0] for pt in across.points):.0e}), so a simulation does not settle "
+              "on it. "
+            + (f"It ends at {grazings[0].value:.6f} rpm (bracket {grazings[0].width:.1e} rpm), where the flight "
+               "leaving the cam at the lift grazes the cam and an impact appears: " + grazings[0].detail + ". "
+               if grazings else f"No end was located: {across.message}. ")
+            + "".join(f"Going down, its impact {c.impact + 1} reaches the {c.joint} joint of the cam profile (where "
+                      "the cam lifts away: the detachment is at that joint), a corner impact located at "
+                      f"{c.rpm:.7f} rpm (residual {c.residual:.1e}, {abs(c.off_joint):.1e} rad off the joint) from "
+                      f"the branch's orbit at {across.values()[0]:g} rpm: a {c.kind} (Newton from the corner orbit "
+                      f"and beyond it, {c.offset:g} rpm either side: "
+                      + "; ".join(f"at {side[0]:.6f} rpm an orbit of {np.abs(side[2]).max():.1f} largest multiplier, "
+                                  + ("its impact past the joint" if side[3] > c.angle else "its impact before the joint"
+                                     if side[3] < c.angle else "without that impact") for side in c.sides)
+                      + (", none below" if all(side[0] > c.rpm for side in c.sides) else "") + "). " for c in corners)
+            + "Settings <code>[mechanics.across]</code>.</p><img src='cam_across.png' alt='an orbit through the "
+              "transition'>"
             "<img src='cam_chattering_windows.png' alt='chattering windows'>"
             "<p>The grid (cam_chattering_grid.csv):</p>" + table_html(grid)
             + "<p>The borders located (an orbit between two grid speeds of other n is not seen; the windows are "
@@ -1263,14 +1353,25 @@ def chattering_windows_section():
     return Section("Mechanics: past the end of complete chattering", text,
                    {"cam_chattering_windows.png": picture, "cam_chattering_grid.csv": csv_bytes(grid),
                     "cam_chattering_borders.csv": csv_bytes(borders),
-                    "cam_incomplete.png": incomplete_figure(family, branch), "cam_incomplete.csv": csv_bytes(found)},
-                   ok=bool(ends) and all(b["width"] <= 1e-6 * b["rpm"] for b in study["borders"]) and bool(folds),
+                    "cam_incomplete.png": incomplete_figure(family, branch), "cam_incomplete.csv": csv_bytes(found),
+                    "cam_across.png": incomplete_figure(across_family, across, marks={
+                        **({"end of complete chattering": complete_end} if complete_end is not None else {}),
+                        **{f"corner impact ({c.kind})": c.rpm for c in corners}})},
+                   ok=bool(ends) and all(b["width"] <= 1e-6 * b["rpm"] for b in study["borders"]) and bool(folds)
+                   and crossed and bool(grazings) and min(radius) > 1.0
+                   and all(c.residual <= 1e-7 and abs(c.off_joint) <= 1e-9 for c in corners) and bool(corners),
                    metrics={"borders": study["borders"], "n": {f"{r['rpm']:g}": r["n"] for r in study["rows"]},
                             "incomplete": {"impacts": impacts, "revolutions": other["revolutions"],
                                            "orbits": len(branch.points),
                                            "bifurcations": [{"kind": b.kind, "rpm": b.value,
                                                              "multipliers": [complex(m) for m in b.multipliers]}
-                                                            for b in branch.bifurcations]}})
+                                                            for b in branch.bifurcations]},
+                            "across": {"impacts": sorted(m_across), "from": float(across.values()[0]),
+                                       "to": float(across.values()[-1]), "largest_multiplier": [min(radius), max(radius)],
+                                       "grazing": [{"rpm": b.value, "width": b.width, "detail": b.detail}
+                                                   for b in grazings],
+                                       "corner": [{"rpm": c.rpm, "joint": c.joint, "impact": c.impact, "kind": c.kind,
+                                                   "residual": c.residual} for c in corners]}})
 
 
 def two_block_section():
@@ -1298,5 +1399,5 @@ def two_block_section():
 
 
 __all__ = ["basins", "Basins", "resolution_check", "sliding_study", "degenerate_switching", "degenerate_portraits", "DegenerateSwitching", "friction_diagram", "two_block_diagram", "impact_phase_diagram", "ball_check",
-           "friction_agreement", "cam_checks", "ride_left", "chattering_orbit", "chattering_windows", "chattering_transition", "sliding_section", "degenerate_section", "basins_section", "agreement_section", "cam_section", "chattering_windows_section", "two_block_section", "cam_family", "incomplete_orbit", "impact_angles",
-           "locate_corner", "corner_impacts", "CornerImpact", "cam_continuation", "cam_continuation_section"]
+           "friction_agreement", "cam_checks", "ride_left", "chattering_orbit", "chattering_windows", "chattering_transition", "sliding_section", "degenerate_section", "basins_section", "agreement_section", "cam_section", "chattering_windows_section", "two_block_section", "cam_family", "incomplete_orbit", "incomplete_across", "impact_angles",
+           "locate_corner", "corner_impacts", "corner_impact", "CornerImpact", "cam_continuation", "cam_continuation_section"]

@@ -372,9 +372,10 @@ def chattering_windows_figure(study: dict, revolutions: int, fmt: str = "png") -
     return _save(fig, fmt)
 
 
-def incomplete_figure(family, branch, fmt: str = "png") -> bytes:
+def incomplete_figure(family, branch, fmt: str = "png", marks: dict | None = None) -> bytes:
     """An incomplete-chattering orbit continued in cam speed: its Floquet multipliers' largest modulus (stable
-    solid, unstable dashed) and the phases of its impacts in the cam's revolution, its bifurcations marked."""
+    solid, unstable dashed) and the phases of its impacts in the cam's revolution, its bifurcations marked;
+    ``marks``: {label: rpm} drawn as vertical lines (a transition the orbit passes through)."""
     fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.4))
     points = branch.points
     values = np.array([pt.value for pt in points])
@@ -387,6 +388,10 @@ def incomplete_figure(family, branch, fmt: str = "png") -> bytes:
         marker, color = _MARKERS.get(b.kind, ("o", "k"))
         left.plot([b.value], [np.abs(b.multipliers).max()], marker, color=color, ms=8,
                   label=f"{b.kind}, {b.value:.5f} rpm")
+    for (label, rpm), (color, style) in zip((marks or {}).items(), [("0.3", "-."), ("#8172b2", "--"), ("#55a868", ":")]
+                                            * 3):
+        for ax in (left, right):
+            ax.axvline(rpm, color=color, lw=1.0, ls=style, label=f"{label}, {rpm:.5f} rpm" if ax is left else None)
     left.set_xlabel("cam speed (rpm)")
     left.set_ylabel("largest |Floquet multiplier|")
     left.legend(fontsize=7)

@@ -88,6 +88,18 @@ def test_a_border_collision_is_located_with_the_jump_of_its_multiplier():
     assert "det(J + I) changes sign" in bc.detail and "switching to config1" in bc.detail
 
 
+def test_a_branch_can_end_at_the_first_bifurcation_of_a_kind():
+    """stop_at: the tent map's branch ends at its border collision (x = 0) instead of the path's end, the
+    collision located as without it; a kind that is not one is refused, naming the kinds."""
+    whole = follow(family("tent"), -1.0, 1.0, [-1.0], warm_up=0)
+    cut = follow(family("tent"), -1.0, 1.0, [-1.0], warm_up=0, stop_at=("border-collision",))
+    assert whole.values().max() == 1.0 and whole.complete
+    assert kinds(cut) == ["border-collision"] and cut.bifurcations[0].value == whole.bifurcations[0].value
+    assert 0.0 < cut.values().max() < 0.5 and cut.message.startswith("stopped at the border-collision at ")
+    with pytest.raises(ParameterError, match="stop_at must name bifurcation kinds .*; got 'grazing'"):
+        follow(family("tent"), -1.0, 1.0, [-1.0], stop_at=("grazing",))
+
+
 def test_branch_switching_needs_a_period_doubling_and_paths_are_checked():
     branch = follow(family("tent"), -1.0, 1.0, [-1.0], warm_up=0)
     with pytest.raises(ParameterError, match="starts at a period doubling; got a border-collision"):

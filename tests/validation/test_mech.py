@@ -1,6 +1,7 @@
 """pcsuite mech: list, simulate (files and JSON), bifurcations (types and values), one-line errors; the
 report's cheaper sections; the two-block system's chaotic and periodic regimes."""
 import json
+import warnings
 
 import numpy as np
 import pandas as pd
@@ -269,6 +270,93 @@ def test_past_complete_chattering_an_orbit_of_two_revolutions_superstable_and_it
         np.testing.assert_allclose(again, quarter, atol=1e-9, rtol=0)
     flights = [state(start, t_d + T)[0] for start in (np.zeros(2), np.array([1e-5, 1e-3]))]
     assert abs(flights[0][0] - flights[1][0]) > 1e-6
+
+
+@pytest.mark.slow
+def test_an_incomplete_orbit_is_continued_through_the_end_of_complete_chattering_from_a_corner_to_a_grazing():
+    """Through the transition: an incomplete-chattering orbit of one revolution (twelve impacts, its sequence cut by
+    the lift every revolution, none accumulating), continued in cam speed with its exact multipliers from 248 rpm,
+    below the end of complete chattering at 252.99229 rpm (where it coexists with the superstable complete-chattering
+    orbit), through it unchanged, to 259.1804 rpm, where the flight that leaves the cam at the lift grazes the cam and
+    a thirteenth impact appears (a border collision). Unstable all along: one multiplier 120-152, the other below
+    1e-4. Below 248 rpm its last impact reaches the flank-nose joint of the profile, where the cam lifts away:
+    a corner impact at 247.91494 rpm, a nonsmooth fold with an orbit whose last impact falls past the joint
+    (multiplier -505; det(I - J) of opposite signs), no such orbit 0.001 rpm below. Checked against an independent
+    closed-form map: at the end of complete chattering it closes the orbit to 5e-8 with twelve impacts and its
+    central differences give the same multiplier to 1e-6; the angle of its orbits' last impact reaches the joint at
+    the corner found, to 1e-6 rpm, with no orbit 0.001 rpm below; at the branch's last orbit, 2e-5 rpm before the grazing, its flight after the
+    last impact passes within 1e-8 m of the cam (at 253.5 rpm the gap only grows)."""
+    from converters.models.mechanics.cam import CamOffset
+    from validation.mechanics import chattering_orbit, incomplete_across
+    family, branch, (corner,) = incomplete_across()
+    values = branch.values()
+    end_of_complete = 252.9922856
+    assert values[0] == 248.0 and 259.18 < values[-1] < 259.1805 and np.all(np.diff(values) > 0)
+    assert chattering_orbit({}, 252.98, 1)["n"] == 1                        # complete chattering coexists below
+    for pt in branch.points:
+        events = family._events(pt.value, pt.x0)
+        assert [e[1] for e in events] == ["impact"] * 12                    # incomplete: no accumulation, no ride
+        radius = np.sort(np.abs(pt.multipliers))
+        assert 120.0 < radius[1] < 152.0 and radius[0] < 1e-4
+    (grazing,) = branch.bifurcations
+    assert grazing.kind == "border-collision" and "appear: cam impact" in grazing.detail
+    assert grazing.value == pytest.approx(259.1804, abs=1e-4)
+    assert branch.message.startswith("stopped at the border-collision")
+
+    near = min(branch.points, key=lambda pt: abs(pt.value - end_of_complete))
+    at = family.orbit(end_of_complete, near.x0)
+    assert at.converged
+    t0 = family.problem_of(end_of_complete).t_span[0]
+    end, impacts = _cam_period_closed_form(end_of_complete, at.x0, t0=t0)
+    assert np.abs(end - at.x0).max() <= 5e-8 and len(impacts) == 12
+    step = np.eye(2) * 1e-7
+    jac = np.column_stack([(_cam_period_closed_form(end_of_complete, at.x0 + d, t0=t0)[0]
+                            - _cam_period_closed_form(end_of_complete, at.x0 - d, t0=t0)[0]) / 2e-7 for d in step])
+    assert np.abs(np.linalg.eigvals(jac)).max() == pytest.approx(np.abs(at.multipliers).max(), rel=1e-6)
+
+    assert corner.joint == "flank | nose (rise)" and corner.impact == 11 and corner.kind == "nonsmooth fold"
+    assert corner.rpm == pytest.approx(247.91494, abs=1e-4) and corner.residual <= 1e-7
+    assert abs(corner.off_joint) <= 1e-9
+    assert all(side[0] > corner.rpm for side in corner.sides)              # nothing below the corner
+    past = [side for side in corner.sides if side[3] > corner.angle]        # its last impact past the joint
+    assert len(past) == 1 and np.abs(past[0][2]).max() > 100
+    assert np.prod(1 - branch.points[0].multipliers).real * np.prod(1 - past[0][2]).real < 0
+    # Independently, on the closed-form map (its start at the same phase of the revolution): the branch's orbits
+    # down to 0.001 rpm above the corner have their twelfth impact before the joint, its angle a straight line in
+    # the speed there whose zero is the corner found; 0.001 rpm below there is no orbit.
+    from scipy.optimize import fsolve
+    phase = family.problem_of(corner.rpm).t_span[0] * corner.rpm / 60.0
+
+    def closed(rpm, x):
+        return _cam_period_closed_form(rpm, x, t0=phase * 60.0 / rpm)
+    x, off = branch.points[0].x0, []
+    speeds = (247.95, 247.93, 247.92, 247.917, 247.916, 247.9155, 247.915)   # steps short enough to keep to it
+    with warnings.catch_warnings():         # fsolve's "not making good progress" at 1e-13: the residuals are asserted
+        warnings.simplefilter("ignore", RuntimeWarning)
+        for rpm in speeds:
+            x = fsolve(lambda y: closed(rpm, y)[0] - y, x, xtol=1e-13)
+            end, impacts = closed(rpm, x)
+            off.append(np.mod(2 * np.pi * rpm / 60 * impacts[-1] + np.pi / 2, 2 * np.pi) - corner.angle)
+            assert np.abs(end - x).max() <= 1e-10 and len(impacts) == 12 and off[-1] < 0.0
+        below = fsolve(lambda y: closed(corner.rpm - 1e-3, y)[0] - y, x, xtol=1e-13)
+    zero = speeds[-1] - off[-1] * (speeds[-2] - speeds[-1]) / (off[-2] - off[-1])
+    assert abs(zero - corner.rpm) <= 1e-6
+    assert np.abs(closed(corner.rpm - 1e-3, below)[0] - below).max() > 1e-7
+
+    def clearance(pt):
+        """The least local minimum of the gap (m) along the closed-form flight from the last impact to the map's end
+        (the lift); inf where the gap only grows."""
+        t_start = family.problem_of(pt.value).t_span[0]
+        (x, v), hits = _cam_period_closed_form(pt.value, pt.x0, t0=t_start)
+        t_end, w = t_start + 60.0 / pt.value, np.sqrt(1430.8 / 1.221)
+        s = np.linspace(hits[-1], t_end, 400001)
+        gap = x * np.cos(w * (s - t_end)) + v / w * np.sin(w * (s - t_end)) - CamOffset(2 * np.pi * pt.value / 60
+                                                                                          ).position(s)[0]
+        slope = np.diff(gap)
+        minima = np.flatnonzero((slope[:-1] < 0) & (slope[1:] >= 0)) + 1
+        return float(gap[minima].min()) if minima.size else np.inf
+    start = min(branch.points, key=lambda pt: abs(pt.value - 253.5))
+    assert clearance(start) == np.inf and 0.0 < clearance(branch.points[-1]) < 1e-8
 
 
 @pytest.mark.slow

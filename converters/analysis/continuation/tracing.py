@@ -8,12 +8,12 @@ from ...errors import ParameterError
 
 from .corrector import _correct, _extended_rows, _null_vector, _Scaling
 from .detection import _detect
-from .family import Branch, OrbitFamily, OrbitPoint
+from .family import KINDS, Branch, OrbitFamily, OrbitPoint
 
 
 def follow(family: OrbitFamily, start: float, stop: float, x_guess, *, max_step: float | None = None,
            tol: float = 1e-10, locate_tol: float = 1e-8, max_points: int = 2000, warm_up: int = 100,
-           fd_step: float = 1e-7, on_point=None) -> Branch:
+           fd_step: float = 1e-7, on_point=None, stop_at: tuple[str, ...] = ()) -> Branch:
     """Follow the family's orbit from ``start`` to ``stop`` by pseudo-arclength continuation, locating every
     bifurcation on the way (module docstring).
 
@@ -35,6 +35,9 @@ def follow(family: OrbitFamily, start: float, stop: float, x_guess, *, max_step:
         of the map's accuracy otherwise, with ``tol`` above that accuracy).
     on_point : callable, optional
         Called with each new orbit's parameter value (a progress bar).
+    stop_at : tuple of str
+        Bifurcation kinds (:data:`.family.KINDS`) that end the branch once located: a grazing, say, where the
+        map's Jacobian has a square-root singularity and beyond which the orbit is another one.
     """
     from ...validate import as_vector, check_integer, check_positive, check_range, parse_value
     start, stop = parse_value("start", start), parse_value("stop", stop)
@@ -48,6 +51,9 @@ def follow(family: OrbitFamily, start: float, stop: float, x_guess, *, max_step:
     check_range("fd_step", fd_step, 1e-15, 0.1)
     check_integer("max_points", max_points, 2, 10**6)
     check_integer("warm_up", warm_up, 0, 100_000)
+    unknown = [kind for kind in stop_at if kind not in KINDS]
+    if unknown:
+        raise ParameterError(f"stop_at must name bifurcation kinds ({', '.join(KINDS)}); got {unknown[0]!r}")
     branch = Branch(family.periods)
     x = as_vector("x_guess", x_guess, None)
     try:
@@ -77,12 +83,13 @@ def follow(family: OrbitFamily, start: float, stop: float, x_guess, *, max_step:
         tangent[-1] = 1.0
     tangent *= np.sign(span) * np.sign(tangent[-1])
     return _trace(family, branch, scaling, current, tangent, (min(start, stop), max(start, stop)), max_step or abs(span) / 60.0,
-                  tol, locate_tol, max_points, on_point=on_point)
+                  tol, locate_tol, max_points, on_point=on_point, stop_at=stop_at)
 
 
 def _trace(family, branch, scaling, current: OrbitPoint, tangent, bounds, max_step, tol, locate_tol, max_points,
-           first_step: float | None = None, on_point=None) -> Branch:
-    """Pseudo-arclength steps from ``current`` along ``tangent`` until the parameter leaves ``bounds``."""
+           first_step: float | None = None, on_point=None, stop_at: tuple[str, ...] = ()) -> Branch:
+    """Pseudo-arclength steps from ``current`` along ``tangent`` until the parameter leaves ``bounds`` (or a
+    bifurcation of a kind in ``stop_at`` is located)."""
     ds_max = max_step / scaling.p_scale
     ds = first_step if first_step is not None else ds_max
     ds_min = 1e-7 * ds_max
@@ -136,10 +143,15 @@ def _trace(family, branch, scaling, current: OrbitPoint, tangent, bounds, max_st
             branch.points.append(nxt)
             return branch
         nxt = nxt or family.point(solved.value, solved.x, solved.jacobian)
-        branch.bifurcations += _detect(family, scaling, current, nxt, tol, locate_tol)
+        found = _detect(family, scaling, current, nxt, tol, locate_tol)
+        branch.bifurcations += found
         branch.points.append(nxt)
         if on_point is not None:
             on_point(nxt.value)
+        ends = [b for b in found if b.kind in stop_at]
+        if ends:
+            branch.message = f"stopped at the {ends[0].kind} at {ends[0].value:.9g} (stop_at)"
+            return branch
         tangent = solved.tangent if solved.tangent @ tangent > 0 else -solved.tangent
         current = nxt
         ds = min(ds * (1.6 if solved.iterations <= 3 else 0.8 if solved.iterations >= 6 else 1.0), ds_max)
