@@ -225,6 +225,28 @@ def test_the_cam_p21_orbit_ends_in_a_corner_impact_at_the_flank_nose_joint():
                                          - corner.angle) > 0.01
 
 
+def test_a_corner_reached_from_several_starts_is_reported_once_the_best_located(monkeypatch):
+    """A branch whose impact passes a joint between two orbits and that stops next to it starts the location twice
+    (the pair, the end); the corner is one: the better located of the two is kept."""
+    from types import SimpleNamespace
+
+    from converters.models.mechanics.cam import JOINTS
+    from validation import mechanics
+    joint = JOINTS["flank | nose (rise)"]
+    angles = {1.0: [joint - 1e-2], 2.0: [joint + 1e-4], 3.0: [joint + 2e-4]}
+    monkeypatch.setattr(mechanics, "impact_angles", lambda family, value, x0: np.array(angles[value]))
+    located = iter([(1.99 + 1e-5, 1e-6), (1.99, 1e-9)])
+
+    def corner_impact(family, name, impact, rpm, x0, offset=1e-3):
+        value, residual = next(located)
+        return mechanics.CornerImpact(name, joint, impact, value, np.zeros(2), residual, 0.0, offset, (), "persistence")
+    monkeypatch.setattr(mechanics, "corner_impact", corner_impact)
+    branch = SimpleNamespace(points=[SimpleNamespace(value=v, x0=np.zeros(2)) for v in (1.0, 2.0, 3.0)],
+                             message="the corrector stopped")
+    (corner,) = mechanics.corner_impacts(None, branch)
+    assert corner.rpm == 1.99 and corner.residual == 1e-9
+
+
 @pytest.mark.slow
 def test_past_complete_chattering_an_orbit_of_two_revolutions_superstable_and_its_end_located():
     """Past the end of complete chattering (252.99229 rpm) the follower's sequence is cut by the lift and a later
