@@ -3,7 +3,8 @@ rows for any number of workers."""
 import numpy as np
 import pytest
 
-from converters.analysis.bifurcation import aperiodic_onset, brute_force, detect_period, period_windows
+from converters.analysis.bifurcation import (aperiodic_onset, brute_force, detect_period, lyapunov_interval,
+                                             period_windows)
 from converters.errors import ParameterError
 
 from .maps import MapFamily, MapMethod
@@ -41,6 +42,23 @@ def test_lyapunov_exponents_against_closed_forms():
     p = 3.2
     x1, x2 = ((p + 1) + np.array([-1, 1]) * np.sqrt((p - 3) * (p + 1))) / (2 * p)
     assert a32.lyapunov == pytest.approx(0.5 * np.log(abs(p * p * (1 - 2 * x1) * (1 - 2 * x2))), abs=1e-6)
+
+
+def test_the_lyapunov_interval_contains_the_closed_form_and_is_exact_on_an_orbit():
+    """Batch means with one tangent vector carried through: at p = 4 the 95 % interval over 40 blocks of 500 steps
+    contains ln 2 (its half-width 0.001); on the stable period-2 orbit (p = 3.2) every block of an even
+    number of steps is the closed form, so the interval collapses to it. Bad input: one line naming it."""
+    family, method = MapFamily("logistic"), MapMethod()
+    chaotic = method.period_map(family(4.0))
+    exponent, half, blocks = lyapunov_interval(chaotic, [0.3], 100, 40, 500)
+    assert blocks.shape == (40,) and 1e-4 < half < 0.01 and abs(exponent - np.log(2.0)) <= half
+    p = 3.2
+    x1, x2 = ((p + 1) + np.array([-1, 1]) * np.sqrt((p - 3) * (p + 1))) / (2 * p)
+    exact = 0.5 * np.log(abs(p * p * (1 - 2 * x1) * (1 - 2 * x2)))
+    exponent, half, _ = lyapunov_interval(method.period_map(family(p)), [0.3], 2000, 10, 50)
+    assert exponent == pytest.approx(exact, abs=1e-9) and half <= 1e-9
+    with pytest.raises(ParameterError, match="blocks"):
+        lyapunov_interval(chaotic, [0.3], 0, 1, 10)
 
 
 def test_workers_and_chunks_give_the_same_rows():
