@@ -96,6 +96,8 @@ def test_a_branch_can_end_at_the_first_bifurcation_of_a_kind():
     assert whole.values().max() == 1.0 and whole.complete
     assert kinds(cut) == ["border-collision"] and cut.bifurcations[0].value == whole.bifurcations[0].value
     assert 0.0 < cut.values().max() < 0.5 and cut.message.startswith("stopped at the border-collision at ")
+    alone = follow(family("tent"), -1.0, 1.0, [-1.0], warm_up=0, stop_at="border-collision")     # one kind, a str
+    assert alone.values().max() == cut.values().max()
     with pytest.raises(ParameterError, match="stop_at must name bifurcation kinds .*; got 'grazing'"):
         follow(family("tent"), -1.0, 1.0, [-1.0], stop_at=("grazing",))
 

@@ -35,7 +35,7 @@ def follow(family: OrbitFamily, start: float, stop: float, x_guess, *, max_step:
         of the map's accuracy otherwise, with ``tol`` above that accuracy).
     on_point : callable, optional
         Called with each new orbit's parameter value (a progress bar).
-    stop_at : tuple of str
+    stop_at : str or tuple of str
         Bifurcation kinds (:data:`.family.KINDS`) that end the branch once located: a grazing, say, where the
         map's Jacobian has a square-root singularity and beyond which the orbit is another one.
     """
@@ -51,6 +51,7 @@ def follow(family: OrbitFamily, start: float, stop: float, x_guess, *, max_step:
     check_range("fd_step", fd_step, 1e-15, 0.1)
     check_integer("max_points", max_points, 2, 10**6)
     check_integer("warm_up", warm_up, 0, 100_000)
+    stop_at = (stop_at,) if isinstance(stop_at, str) else tuple(stop_at)
     unknown = [kind for kind in stop_at if kind not in KINDS]
     if unknown:
         raise ParameterError(f"stop_at must name bifurcation kinds ({', '.join(KINDS)}); got {unknown[0]!r}")
