@@ -648,9 +648,10 @@ def incomplete_across(params: dict | None = None):
     an impact appears), with its exact multipliers (impact saltation). Its sequence is cut by the lift at the
     detachment every revolution, on both sides of the end of complete chattering. Going down, its last impact
     reaches the cam's flank-nose joint, where the cam lifts away (the detachment is at that joint): a corner impact,
-    located from the branch's last orbit by :func:`corner_impact` (the corrector creeps next to it). Returns (family, branch: its orbits in increasing speed, the bifurcations of
-    both directions, [CornerImpact])."""
+    located from the branch's last orbit by :func:`corner_impact` (the corrector creeps next to it). Returns
+    (family, branch: its orbits in increasing speed and the bifurcations of both directions, [CornerImpact])."""
     from converters.analysis.continuation import Branch
+    from converters.models.mechanics.cam import JOINTS
 
     from .defaults import MECHANICS
     settings = MECHANICS["across"]
@@ -666,15 +667,15 @@ def incomplete_across(params: dict | None = None):
     options = {"warm_up": 0, "tol": CONTINUATION["tol"], "locate_tol": CONTINUATION["locate_tol"],
                "fd_step": settings["fd_step"], "max_step": settings["max_step"], "max_points": settings["max_points"]}
     down = follow(family, settings["start"], settings["low"], seed, **options)
-    up = follow(family, settings["start"], settings["high"], seed, stop_at=("border-collision",), **options)
+    if not down.points:
+        raise SimulationError(f"no incomplete-chattering orbit at {settings['start']:g} rpm: {down.message}")
+    up = follow(family, settings["start"], settings["high"], seed, stop_at="border-collision", **options)
     branch = Branch(1, down.points[::-1] + up.points[1:], down.bifurcations + up.bifurcations,
                     "; ".join(m for m in (down.message, up.message) if m))
-    from converters.models.mechanics.cam import JOINTS
     last = down.points[-1]
-    angle = impact_angles(family, last.value, last.x0)[-1]
-    joint = min(JOINTS, key=lambda name: abs(JOINTS[name] - angle))
-    corners = [corner_impact(family, joint, len(impact_angles(family, last.value, last.x0)) - 1, last.value, last.x0)]
-    return family, branch, corners
+    angles = impact_angles(family, last.value, last.x0)
+    joint = min(JOINTS, key=lambda name: abs(JOINTS[name] - angles[-1]))
+    return family, branch, [corner_impact(family, joint, angles.size - 1, last.value, last.x0)]
 
 
 def impact_angles(family: OrbitFamily, rpm: float, x0) -> np.ndarray:

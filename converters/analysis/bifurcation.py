@@ -330,5 +330,5 @@ def period_windows(attractors: list[Attractor]) -> list[dict]:
     return windows
 
 
-__all__ = ["Attractor", "brute_force", "iterate", "lyapunov_interval", "detect_period", "aperiodic_onset", "period_windows", "SectionRow",
-           "section_diagram"]
+__all__ = ["Attractor", "brute_force", "iterate", "lyapunov_interval", "detect_period", "aperiodic_onset",
+           "period_windows", "SectionRow", "section_diagram"]

@@ -332,8 +332,8 @@ def test_an_incomplete_orbit_is_continued_through_the_end_of_complete_chattering
     (multiplier -505; det(I - J) of opposite signs), no such orbit 0.001 rpm below. Checked against an independent
     closed-form map: at the end of complete chattering it closes the orbit to 5e-8 with twelve impacts and its
     central differences give the same multiplier to 1e-6; the angle of its orbits' last impact reaches the joint at
-    the corner found, to 1e-6 rpm, with no orbit 0.001 rpm below; at the branch's last orbit, 2e-5 rpm before the grazing, its flight after the
-    last impact passes within 1e-8 m of the cam (at 253.5 rpm the gap only grows)."""
+    the corner found, to 1e-6 rpm, with no orbit 0.001 rpm below; at the branch's last orbit, 2e-5 rpm before the
+    grazing, its flight after the last impact passes within 1e-8 m of the cam (at 253.5 rpm the gap only grows)."""
     from converters.models.mechanics.cam import CamOffset
     from validation.mechanics import chattering_orbit, incomplete_across
     family, branch, (corner,) = incomplete_across()
