@@ -1429,8 +1429,9 @@ def two_block_section():
     transient = MECHANICS["two_block_transient"]
     rows = two_block_diagram({}, "V", values, transient=transient)
     regimes = parallel_map(_TwoBlockRegime({}), [float(V) for V in MECHANICS["two_block_regimes"]])
+    how = two_block_regime.__kwdefaults__                                # what _TwoBlockRegime ran with
     table = pd.DataFrame([{"V (m/s)": r["V"], "regime": r["regime"],
-                           "cycle (section points)": r["period"] or "none to 1e-9",
+                           "cycle (section points)": r["period"] or f"none to {how['tol']:g}",
                            "cycle closing: first, last period of the record": "" if r["closing"] is None else
                            f"{r['closing'][0]:.1e}, {r['closing'][1]:.1e}",
                            "largest Lyapunov exponent (per time unit, 95 %)": f"{r['lyapunov']:+.4f} +- {r['half_width']:.4f}",
@@ -1442,11 +1443,12 @@ def two_block_section():
             "units of transient (the slower block's natural period, 2 pi max_i sqrt(m_i / (k_i + kc)): "
             f"{model.time_scale(model.resolve({})):.4g} s here, block 1's), over 60 more, against the belt velocity V.</p>"
             "<img src='two_block.png' alt='two-block section'>"
-            "<p>The regime at chosen velocities, each by a test that can fail: after 500 time units the section's "
-            "states (x1, x2, v2) over 500 more close into a cycle of k points to 1e-9 (every point k on equal to it: a "
-            "transient still decaying would not), or they do not and the largest Lyapunov exponent of the flow (the "
-            "event method's exact Jacobians, one tangent vector over 20 batches of 25 time units from the run's end; "
-            "the interval Student's t over the batches) lies above zero. A periodic orbit of a flow has exponent "
+            f"<p>The regime at chosen velocities, each by a test that can fail: after {how['transient']:g} time units "
+            f"the section's states (x1, x2, v2) over {how['record']:g} more close into a cycle of k points to "
+            f"{how['tol']:g} (every point k on equal to it: a transient still decaying would not), or they do not and "
+            "the largest Lyapunov exponent of the flow (the event method's exact Jacobians, one tangent vector over "
+            f"{how['blocks']} batches of {how['block']} time units from the run's end; the interval Student's t over "
+            "the batches) lies above zero. A periodic orbit of a flow has exponent "
             "zero, so a cycle with an interval above zero, or neither test passing, is reported undetermined.</p>"
             + table_html(table))
     return Section("Mechanics: two blocks on a belt", text,
