@@ -55,6 +55,27 @@ def test_the_integrator_regulates_the_mean_output_to_vref(design, method, tol):
     assert tr.mean("vout") == pytest.approx(5.0, abs=tol * 5.0)
 
 
+
+@pytest.mark.parametrize("kind", ["type III", "PI"])
+def test_with_an_esr_and_a_load_current_the_loop_senses_the_output_node(design, kind):
+    """With rC > 0 the buck's output is a vC + b (iL - Io) (b = R rC / (R + rC)): the sensed offset -b Io enters
+    the integrator (the mean of vout is Vref exactly, not Vref - b Io = 4.975 V) and the comparator's direct term
+    (a PI's Dc = wi / wz1: the switch turns off where the compensator's output vc, computed from the output node's
+    voltage, meets the carrier; without the offset the two differ by Dc b Io = 24 mV). Exact flows (event method)."""
+    compensator = design.compensator if kind == "type III" else Compensator(3e3, (500.0,))
+    assert compensator.kind == kind
+    params = {**PLANT, "Vref": 5.0, **compensator.as_dict(), "rC": 0.05, "Io": 0.5}
+    tr = run_converter(resolve_model("buck", "voltage-loop"), params, method="event", steady=True, periods=2)
+    assert tr.metadata["orbit"]["spectral_radius"] < 1.0
+    assert tr.mean("vout") == pytest.approx(5.0, abs=5e-9)
+    T = 1 / FS
+    events = tr.events[tr.events["kind"] == "switch"]
+    crossings = events["time"][np.abs(np.remainder(events["time"] / T + 0.5, 1.0) - 0.5) > 1e-6].to_numpy()
+    waves = tr.waveforms()
+    at = np.flatnonzero(np.isin(waves["time"].to_numpy(), crossings))
+    assert len(crossings) == 2 and len(at) == 2                        # one crossing a period, sampled at its instant
+    np.testing.assert_allclose(waves["vc"].to_numpy()[at], waves["carrier"].to_numpy()[at], rtol=0, atol=1e-9)
+
 def test_a_load_steps_recovery_is_the_exact_models_prediction(design):
     """R 10 -> 5 ohm (a 0.5 A step) from the orbit: the per-period means of vout follow the exact model's closed-loop
     output impedance driven by a 0.5 A step (its Fourier synthesis): the undershoot 60.3 against 68.1 mV, the

@@ -2,10 +2,12 @@
 demand as columns (the same on every backend), specifications and the yield with its exact confidence interval."""
 import json
 import math
+import operator
 
 import numpy as np
 import pandas as pd
 import pytest
+from hypothesis import given, settings, strategies as st
 
 from converters.errors import ParameterError
 from converters.parallel import run_ensemble
@@ -72,6 +74,32 @@ def test_specs_count_failed_points_as_failures_and_find_the_worst_sample():
     assert found["specs"][1]["worst_value"] == 0.96 and found["specs"][1]["worst_point"] == {"C": 3.0}
     with pytest.raises(ParameterError, match="--spec takes METRIC<VALUE or METRIC>VALUE"):
         Spec.parse("vout_ripple=5m")
+
+
+OPERATORS = {"<": operator.lt, "<=": operator.le, ">": operator.gt, ">=": operator.ge}
+FINITE = st.floats(-1e6, 1e6, allow_nan=False)
+
+
+@settings(max_examples=300, deadline=None)
+@given(op=st.sampled_from(list(OPERATORS)), limit=FINITE, values=st.lists(FINITE, min_size=1, max_size=8),
+       on_the_limit=st.booleans())
+def test_every_spec_operator_holds_as_its_comparison_and_its_margin_is_the_signed_distance_inside(op, limit, values,
+                                                                                                 on_the_limit):
+    """For each of <, <=, >, >=: the spec holds exactly where Python's comparison does (a value on the limit too:
+    it meets <= and >=, never < or >); its margin is how far inside the bound a value lies (limit - v for an upper
+    bound, v - limit for a lower one), positive where a strict bound holds, at least 0 where an inclusive one does;
+    NaN (a failed point's value) meets none."""
+    if on_the_limit:
+        values = values + [limit]
+    spec = Spec.parse(f"vout_ripple {op} {limit!r}")
+    assert (spec.metric, spec.op, spec.limit) == ("vout_ripple", op, limit)
+    v = np.array(values)
+    expected = np.array([OPERATORS[op](x, limit) for x in values])
+    np.testing.assert_array_equal(spec.holds(v), expected)
+    margin = spec.margin(v)
+    np.testing.assert_array_equal(margin, limit - v if op in ("<", "<=") else v - limit)
+    np.testing.assert_array_equal(spec.holds(v), margin > 0 if op in ("<", ">") else margin >= 0)
+    assert not spec.holds([np.nan]).any()
 
 
 def test_metrics_on_demand_are_the_power_balance_and_the_signals_statistics():

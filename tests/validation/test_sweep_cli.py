@@ -290,6 +290,20 @@ def _tamper(kind: str, out: Path, tmp_path: Path) -> str:
         extra["index"] = [99, 100]
         _table(extra, out / "parts" / "part-outside.parquet", like=parts[0])
         return "part-outside.parquet"
+    if kind == "index one past the last point":        # the sweep has indices 0 .. 3
+        extra = first.iloc[:1].copy()
+        extra["index"] = [4]
+        _table(extra, out / "parts" / "part-past.parquet", like=parts[0])
+        return "part-past.parquet"
+    if kind == "changed, its size kept":               # only the SHA-256 tells: a value's 8 bytes replaced in place
+        import struct
+        data = parts[0].read_bytes()
+        value = float(first.loc[0, "vout_mean"])
+        edited = data.replace(struct.pack("<d", value), struct.pack("<d", value * (1 + 1e-9)))
+        assert len(edited) == len(data) and edited != data
+        parts[0].write_bytes(edited)
+        assert pd.read_parquet(parts[0]).loc[0, "vout_mean"] == value * (1 + 1e-9)     # still a readable part
+        return parts[0].name
     if kind == "changed after it was written":         # a value edited in a part pcsuite wrote
         changed = first.copy()
         changed.loc[0, "vout_mean"] = 1234.5
@@ -311,7 +325,9 @@ def _tamper(kind: str, out: Path, tmp_path: Path) -> str:
 
 TAMPERED = {"duplicate copy": "holds indices also stored in parts/", "duplicate under a part's name":
             "holds indices also stored in parts/", "bogus columns": "is not a part of this sweep (its columns: index, bogus",
-            "index outside the grid": "holds index 99, outside the sweep's 4 points", "changed after it was written":
+            "index outside the grid": "holds index 99, outside the sweep's 4 points",
+            "index one past the last point": "holds index 4, outside the sweep's 4 points [0, 3]",
+            "changed, its size kept": "was changed after pcsuite wrote it", "changed after it was written":
             "was changed after pcsuite wrote it", "symbolic link": "is a symbolic link, not a part pcsuite wrote",
             "not a parquet file": "is not a part of this sweep (not a .parquet file)",
             "FIFO": "is a FIFO (named pipe), not a part pcsuite wrote"}
