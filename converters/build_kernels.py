@@ -55,17 +55,13 @@ def _exports():
 
 
 def _sources() -> dict:
-    """Every source file of this package the build has imported, with its digest: the exported functions, what
-    they call, and every module whose constants they read are among them (compiled in: any of them changing
-    makes the module stale; a module the kernels do not read only costs a rebuild)."""
-    sources = {}
-    for name, module in list(sys.modules.items()):
-        path = getattr(module, "__file__", None)
-        if (name == "converters" or name.startswith("converters.")) and path and path.endswith(".py"):
-            relative = Path(path).resolve().relative_to(HERE).as_posix()
-            sources[relative] = digest(HERE / relative)
-    sources["build_kernels.py"] = digest(HERE / "build_kernels.py")      # the exports and their signatures
-    return dict(sorted(sources.items()))
+    """The files the kernels are compiled from, with their digests: the modules with compiled code and the modules
+    whose constants they read (:data:`converters.kernel_cache.SOURCES`, the list numba's own cache is kept by:
+    ``tests/test_kernel_cache.py`` checks that every name a compiled function reads is defined there) and this
+    file (the exports and their signatures). Any of them changing makes the module stale; an edit anywhere else
+    in the package (``errors.py``, ``trajectory.py``) leaves it in use."""
+    from .kernel_cache import SOURCES
+    return {relative: digest(HERE / relative) for relative in sorted(SOURCES + ("build_kernels.py",))}
 
 
 def _argument(numba_type) -> str:
@@ -91,7 +87,7 @@ def build() -> str:
         warnings.simplefilter("ignore")            # numba.pycc's pending deprecation (module docstring)
         from numba.pycc import CC
         exports = _exports()
-        sources = _sources()                       # as imported: what the compiler reads
+        sources = _sources()
         with tempfile.TemporaryDirectory(prefix=".kernels-build.", dir=HERE) as tmp:
             cc = CC(MODULE)
             cc.output_dir = tmp

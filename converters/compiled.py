@@ -5,8 +5,9 @@ The kernels are written once, in Python, for numba (:mod:`.methods.theta_kernels
 :mod:`.analysis.newton_kernel`, the LCP methods of :mod:`.lcp`). ``make setup`` (or ``python -m converters.build_kernels``) also compiles the ones a
 plain run needs with numba's ahead-of-time compiler (``numba.pycc``, the same front end and LLVM code as the
 JIT, for this machine's CPU) into the extension module ``converters/_kernels``; beside it, ``_kernels.json``
-records the SHA-256 of every source file of the package the build imported, the Python, numpy and CPU it was
-built for, and each export's argument types. A process whose sources (and Python, numpy, CPU) still match loads
+records the SHA-256 of every kernel source (:data:`converters.kernel_cache.SOURCES`: the modules with compiled code
+and those whose constants the kernels read, and the build script; an edit anywhere else leaves the module in use),
+the Python, numpy and CPU it was built for, and each export's argument types. A process whose sources (and Python, numpy, CPU) still match loads
 that module: it imports neither numba nor scipy (about 0.25 s) and compiles nothing (numba's first call of a cached
 kernel costs 0.05-0.1 s more each), so ``pcsuite simulate`` starts in about a tenth of a second. When the
 module is missing, stale (a kernel source edited since the build) or unloadable, :func:`kernel` returns the

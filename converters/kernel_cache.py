@@ -17,11 +17,11 @@ import os
 from pathlib import Path
 
 #: The modules with compiled code (paths under converters/; numba keeps a function's cache beside the module that
-#: defines it: periodic.py's spectral_radius is compiled by sweeps/batch.py): a test checks this is every one.
+#: defines it: floquet.py's spectral_radius is compiled by sweeps/batch.py): a test checks this is every one.
 COMPILED = ("lcp/result.py", "lcp/fastpaths.py", "lcp/lemke.py", "lcp/murty.py", "lcp/pgs.py", "lcp/newton.py",
             "lcp/enumeration.py", "lcp/dispatch.py", "lcp/auto.py", "lcp/engine.py", "lcp/kernels.py",
             "methods/theta_kernels.py", "methods/moreau_kernels.py", "analysis/newton_kernel.py", "sweeps/batch.py",
-            "analysis/periodic.py")
+            "analysis/floquet.py")
 #: Their sources: those modules and the constants they read at compile time.
 SOURCES = COMPILED + ("lcp/state.py", "compiled.py")
 STAMP = "kernel-sources.sha256"

@@ -24,7 +24,7 @@ def test_the_list_holds_every_module_with_compiled_code():
             for _ in range(len(source.group(1)) - 1):
                 base = base.parent
             compiled.add((base / (source.group(2).replace(".", "/") + ".py")).relative_to(PACKAGE).as_posix())
-    assert "analysis/periodic.py" in compiled                     # spectral_radius, compiled by sweeps/batch.py
+    assert "analysis/floquet.py" in compiled                      # spectral_radius, compiled by sweeps/batch.py
     assert compiled == set(kernel_cache.COMPILED)
 
 
@@ -64,3 +64,75 @@ def test_the_caches_in_numba_cache_dir_go_too(tmp_path, monkeypatch):
     where.mkdir(parents=True)
     (where / "lemke.run-40.py311.nbi").write_text("x")
     assert kernel_cache.refresh(root) and not (where / "lemke.run-40.py311.nbi").exists()
+
+
+def _names_read(code) -> set:
+    """The global and attribute names a function's code reads, its nested functions' too."""
+    import types
+    names = set(code.co_names)
+    for const in code.co_consts:
+        if isinstance(const, types.CodeType):
+            names |= _names_read(const)
+    return names
+
+
+def _defined_in(module_name: str, name: str) -> str:
+    """The module that defines ``name`` where ``module_name`` holds it: followed through ``from X import name``
+    (a constant carries no trace of where it came from)."""
+    import ast
+    import importlib.util
+    import sys
+    module = sys.modules[module_name]
+    for node in ast.walk(ast.parse(Path(module.__file__).read_text())):
+        if isinstance(node, ast.ImportFrom):
+            for alias in node.names:
+                if (alias.asname or alias.name) == name:
+                    base = (importlib.util.resolve_name("." * node.level + (node.module or ""), module.__package__)
+                            if node.level else node.module)
+                    if f"{base}.{alias.name}" in sys.modules:          # a submodule
+                        return f"{base}.{alias.name}"
+                    return _defined_in(base, alias.name) if base.split(".")[0] == "converters" else base
+    return module_name
+
+
+def _file_of(module_name: str) -> str:
+    import sys
+    return Path(sys.modules[module_name].__file__).resolve().relative_to(PACKAGE.resolve()).as_posix()
+
+
+def test_every_name_a_compiled_function_reads_is_defined_in_a_listed_source():
+    """numba compiles in what a kernel reads: the functions it calls and the values of the constants it names
+    (an edit to any of them must clear the JIT's cache and make the ahead-of-time module stale, which records
+    exactly kernel_cache.SOURCES). Walked from every compiled function of every listed module, through the
+    functions they call and the modules they read attributes of."""
+    import importlib
+    import types
+
+    from numba.core.dispatcher import Dispatcher
+    todo = []
+    for relative in kernel_cache.COMPILED:
+        module = importlib.import_module("converters." + relative[:-3].replace("/", "."))
+        todo += [value for value in vars(module).values() if isinstance(value, Dispatcher)]
+    assert len(todo) > 50
+    read, seen = set(), set()
+    while todo:
+        function = getattr(todo.pop(), "py_func", None)
+        if function is None or function in seen or not function.__module__.startswith("converters"):
+            continue
+        seen.add(function)
+        read.add(function.__module__)
+        names = _names_read(function.__code__)
+        for name in names & set(function.__globals__):
+            value = function.__globals__[name]
+            if isinstance(value, types.ModuleType):
+                if value.__name__.startswith("converters"):
+                    read.add(value.__name__)
+                    todo += [getattr(value, attribute) for attribute in names if callable(getattr(value, attribute,
+                                                                                                   None))]
+            elif isinstance(value, Dispatcher) or isinstance(value, types.FunctionType):
+                todo.append(value if isinstance(value, Dispatcher) else types.SimpleNamespace(py_func=value))
+            elif not isinstance(value, type):
+                read.add(_defined_in(function.__module__, name))
+    files = {_file_of(name) for name in read if name.startswith("converters")}
+    assert "lcp/state.py" in files and "compiled.py" in files and "methods/theta_kernels.py" in files
+    assert files <= set(kernel_cache.SOURCES), sorted(files - set(kernel_cache.SOURCES))

@@ -25,7 +25,7 @@ def newton_step(x, px, jac, rho, step, work, tol, iteration, max_iter):
     (:mod:`converters.sweeps.batch`), written once. Fills ``step`` with the Newton step dx,
     (jac - I) dx = -(P(x) - x) (Gaussian elimination with partial pivoting on ``work``, n x (n + 1)).
 
-    ``rho``: the spectral radius of jac (:func:`converters.analysis.periodic.spectral_radius`, computed by the
+    ``rho``: the spectral radius of jac (:func:`converters.analysis.floquet.spectral_radius`, computed by the
     caller: numpy's LAPACK in Python, numba's in compiled callers, so this kernel needs neither). Returns
     (residual, worst, distance, verdict): worst = max |P(x) - x|, residual = worst / scale with
     scale = 1 + max |x|; distance = max(max |dx|, worst / (1 - rho) when rho < 1) / scale, the estimated

@@ -25,6 +25,7 @@ from ..compiled import ROUNDING as _ROUNDING
 from ..errors import ParameterError, SimulationError
 from ..validate import as_vector, check_flag, check_integer
 from ..problems import LCSProblem
+from .floquet import multipliers_of, spectral_radius
 
 
 @dataclass(frozen=True)
@@ -84,18 +85,6 @@ class PeriodicOrbit:
 
 #: A residual below ROUNDING machine epsilons (relative) is rounding noise: iterating further cannot help.
 ROUNDING = _ROUNDING
-
-
-def multipliers_of(jacobian: np.ndarray) -> np.ndarray:
-    """Eigenvalues sorted by decreasing modulus."""
-    values = np.linalg.eigvals(jacobian)
-    return values[np.argsort(-np.abs(values), kind="stable")]
-
-
-def spectral_radius(jac: np.ndarray) -> float:
-    """max |eigenvalue| of jac, in complex arithmetic (a real matrix may have complex roots). Plain numpy, so
-    compiled callers can wrap it with numba's njit."""
-    return np.abs(np.linalg.eigvals(jac.astype(np.complex128))).max()
 
 
 #: Newton shooting's tolerance on the distance to the orbit (state units), its iterations, and the periods a

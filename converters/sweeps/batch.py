@@ -19,7 +19,7 @@ import numpy as np
 from numba import njit
 
 from ..analysis.newton_kernel import newton_advance
-from ..analysis.periodic import spectral_radius
+from ..analysis.floquet import spectral_radius
 from ..compiled import NEWTON_CONVERGED, NEWTON_EVALUATE, NEWTON_RADIUS, register_state
 from ..methods.theta_kernels import branch_maps, run_scalar, step_jacobian, theta_matrices
 

@@ -167,3 +167,20 @@ def test_a_problem_built_from_fortran_order_matrices_gives_the_same_numbers():
                        for c in problem.configurations)
     fortran = replace(problem, configurations=transposed)
     assert np.array_equal(simulate(problem, BackwardEuler(T / 200)).x, simulate(fortran, BackwardEuler(T / 200)).x)
+
+
+def test_an_edit_outside_the_kernel_sources_leaves_the_module_in_use_and_one_inside_makes_it_stale(tmp_path):
+    """The module records the kernels' own sources only: a copy of the package with one line added to errors.py
+    (which every command imports) still loads it in a fresh process; one line added to lcp/lemke.py makes the copy
+    fall back to the JIT, naming the file."""
+    import shutil
+    assert compiled.stale() == "", f"{compiled.stale()}: run make setup"
+    package = tmp_path / "converters"
+    shutil.copytree(ROOT / "converters", package, ignore=shutil.ignore_patterns("__pycache__"))
+    source = f"import sys; sys.path.insert(0, {str(tmp_path)!r}); from converters import compiled; print(compiled.source())"
+    with open(package / "errors.py", "a") as errors:
+        errors.write("# an unrelated edit\n")
+    assert _run(source).strip() == "ahead-of-time"
+    with open(package / "lcp" / "lemke.py", "a") as lemke:
+        lemke.write("# an edit to a kernel\n")
+    assert _run(source).strip() == "jit: lcp/lemke.py changed since the ahead-of-time build"
