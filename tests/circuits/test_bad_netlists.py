@@ -10,6 +10,7 @@ title as line 1, as SPICE does.
 from __future__ import annotations
 
 import time
+import tracemalloc
 from pathlib import Path
 
 import pytest
@@ -265,13 +266,13 @@ XFAIL = {
 def test_bad_netlist(case, tmp_path, capsys):
     spec, extra, fragments, line = CASES[case]
     path = _write(tmp_path, spec)
-    started = time.perf_counter()
+    started = time.process_time()            # CPU seconds: the work done, whatever else the machine runs
     message = _refused(path, extra, capsys)
     where = f"{quoted(path)}:{line}: " if line is not None else f"{quoted(path)}: "
     assert where in message, (where, message)
     for fragment in fragments:
         assert fragment in message, (fragment, message)
-    assert time.perf_counter() - started < 5.0
+    assert time.process_time() - started < 5.0
     assert not (tmp_path / "pwned").exists()
 
 
@@ -298,9 +299,13 @@ def test_control_refused_before_anything_runs(tmp_path, capsys):
 
 def test_ten_megabytes_refused_quickly(tmp_path, capsys):
     path = _write(tmp_path, huge)
-    started = time.perf_counter()
-    message = _refused(path, [], capsys)
-    assert time.perf_counter() - started < 1.0
+    tracemalloc.start()
+    try:
+        message = _refused(path, [], capsys)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 1 << 20                      # refused by its size: the file is never read into memory
     assert "bytes" in message
 
 

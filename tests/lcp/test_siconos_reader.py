@@ -1,7 +1,6 @@
 """The Siconos .dat reader refuses malformed files, naming the file and the position, and never allocates
 what a header claims before checking it."""
 import os
-import time
 import tracemalloc
 
 import numpy as np
@@ -146,10 +145,14 @@ def test_a_binary_file_is_refused_with_its_name_and_the_byte(tmp_path, data, byt
 def test_non_regular_files_are_refused_at_once(path, kind):
     if not os.path.exists(path):
         pytest.skip(f"{path} does not exist here")
-    start = time.perf_counter()
-    with pytest.raises(LCPError, match=f"^FILE must be a regular file; got '{path}', {kind}$"):
-        read_siconos_lcp(path)
-    assert time.perf_counter() - start < 0.1
+    tracemalloc.start()
+    try:
+        with pytest.raises(LCPError, match=f"^FILE must be a regular file; got '{path}', {kind}$"):
+            read_siconos_lcp(path)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 64 << 10                 # refused by its kind: nothing read (/dev/zero never ends)
 
 
 def test_a_pipe_is_refused_without_blocking(tmp_path):
@@ -169,17 +172,15 @@ def test_a_missing_file_is_refused(tmp_path):
 def test_a_header_too_large_for_memory_is_refused_before_allocating(tmp_path, n, needed):
     path = write(tmp_path, f"{n}\n0\n{n} {n}\n{n} {n}\n1 2 3\n")
     tracemalloc.start()
-    start = time.perf_counter()
     try:
         with pytest.raises(ResourceError, match=rf"^reading {str(path)}: n = {n} \(dense M of n\^2 doubles\) needs "
                                                 rf"about {needed}, above the memory limit of 1 GiB; use a smaller LCP"
                                                 r".*--max-memory"):
             read_siconos_lcp(path)
-        elapsed = time.perf_counter() - start
         peak = tracemalloc.get_traced_memory()[1]
     finally:
         tracemalloc.stop()
-    assert elapsed < 0.5 and peak < 1 << 20        # well under a second, and nothing near 8 n^2 bytes allocated
+    assert peak < 1 << 20                          # refused from the header: nothing near 8 n^2 bytes allocated
 
 
 def test_a_header_within_the_limit_but_a_short_file_ends_before_allocating_M(tmp_path):

@@ -113,7 +113,7 @@ def test_a_run_kept_in_chunks_is_still_bounded_in_length():
     """Memory no longer bounds a run kept at an output spacing: 1e9 s of the buck (1e17 steps) had built the list of
     its chunks (23 GB) before anything refused it; its length is refused in one line, before any chunk."""
     import time
-    start = time.perf_counter()
+    start = time.process_time()              # CPU seconds: the work done, whatever else the machine runs
     with pytest.raises(ParameterError, match=r"t_end: 1e\+09 s at h = 1e-08 s is 1e\+17 steps, more than a run takes"):
         run_converter("buck", {}, t_end=1e9)
-    assert time.perf_counter() - start < 5.0
+    assert time.process_time() - start < 5.0

