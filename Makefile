@@ -38,13 +38,11 @@ $(STAMP): pyproject.toml
 setup: system-deps $(STAMP)
 	-@$(PY) -m converters.build_kernels
 
-# numba's JIT compiles the kernels once per checkout (about 30 s, cached on disk beside the sources; the tests run
-# both it and the ahead-of-time module): pay it here, once, rather than inside the first tests that happen to call
-# them (some of which have time bounds)
+# numba's JIT compiles every kernel once per checkout (validation/warm.py: small runs of the commands users type, in a
+# process that forces the JIT; cached on disk beside the sources until a kernel source changes, and a stamp there says
+# it is done): pay it here, once, rather than inside whichever test or run first calls a kernel. A no-op when done.
 warm: setup
-	$(VENV)/bin/pcsuite simulate buck --periods 2 --json > /dev/null
-	PCSUITE_KERNELS=jit $(VENV)/bin/pcsuite simulate buck --periods 2 --steady --json > /dev/null
-	PCSUITE_KERNELS=jit $(PY) -c "import numpy as np; from converters.lcp import solve_lcp; solve_lcp(np.eye(3), -np.ones(3))"
+	$(PY) -m validation.warm
 
 test: setup warm
 	$(PY) -m pytest -q

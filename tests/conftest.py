@@ -5,6 +5,14 @@ import pytest
 from validation.peer import peer_directory
 
 
+@pytest.fixture(scope="session", autouse=True)
+def compiled_kernels():
+    """Every kernel compiled before the first test (validation.warm: once per checkout and kernel sources, a stamp
+    beside numba's cache saying so), so that no test pays a compile inside its own time or CPU bound."""
+    from validation.warm import ensure
+    ensure(progress=None)
+
+
 @pytest.fixture(scope="session")
 def peer():
     """The Siconos peer collection shipped in validation/data (never skipped: the data is in the project)."""
