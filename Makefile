@@ -7,7 +7,7 @@ STAMP := $(VENV)/.installed-stamp
 SUDO := $(shell [ "$$(id -u)" -eq 0 ] || echo sudo)
 SUITE ?= default
 
-.PHONY: all setup system-deps siconos warm test package-check report bench clean
+.PHONY: all setup system-deps siconos warm check test package-check report bench clean
 
 all: test
 
@@ -33,16 +33,25 @@ $(STAMP): pyproject.toml
 	$(PY) -m pip install -q -e '.[test]'
 	touch $(STAMP)
 
-# The compiled kernels ahead of time (numba.pycc, ~15 s; converters/compiled.py says why): rebuilt when a kernel
-# source changed, a no-op otherwise. A build that fails (no C compiler) leaves numba's JIT to do the same work.
+# The compiled kernels ahead of time (numba.pycc; converters/compiled.py says why): rebuilt when a kernel source
+# (converters/kernel_cache.py SOURCES) changed, a no-op otherwise; 101 s on an idle 2-core machine, 4 to 7 min on a
+# loaded one. A build that fails (no C compiler) leaves numba's JIT to do the same work.
 setup: system-deps $(STAMP)
 	-@$(PY) -m converters.build_kernels
 
 # numba's JIT compiles every kernel once per checkout (validation/warm.py: small runs of the commands users type, in a
 # process that forces the JIT; cached on disk beside the sources until a kernel source changes, and a stamp there says
-# it is done): pay it here, once, rather than inside whichever test or run first calls a kernel. A no-op when done.
+# it is done): pay it here, once, rather than inside whichever test or run first calls a kernel. 51 s on an idle 2-core
+# machine after the ahead-of-time build; a no-op when done.
 warm: setup
 	$(PY) -m validation.warm
+
+# The fast tier, for the edit-run loop: every test but those that need ngspice (spice), build the package (package) or
+# take more than 2 s (slow: report sections, bifurcation diagrams, fresh compiles, subprocess tables); FAST_TIER is the
+# one selection, tests/test_marks.py checks it holds at least 80 % of the tests.
+FAST_TIER := not slow and not spice and not package
+check: setup warm
+	$(PY) -m pytest -q -m "$(FAST_TIER)"
 
 test: setup warm
 	$(PY) -m pytest -q

@@ -53,3 +53,24 @@ def pytest_runtest_setup(item):
     """A spice-marked test runs only with ngspice there, whether or not it asks for the fixture."""
     if item.get_closest_marker("spice") is not None:
         _require_ngspice()
+
+
+#: A test over this many seconds (setup, call and teardown) belongs in the slow tier (the Makefile's FAST_TIER).
+SLOW_S = 2.0
+_durations: dict = {}
+
+
+def pytest_runtest_logreport(report):
+    _durations[report.nodeid] = _durations.get(report.nodeid, 0.0) + report.duration
+
+
+def pytest_terminal_summary(terminalreporter, config):
+    """In a run that leaves the slow tests out, name the tests that took longer than SLOW_S: mark them slow (a
+    loaded machine stretches every time: look twice before marking one)."""
+    if "not slow" not in (config.getoption("markexpr") or ""):
+        return
+    slow = sorted(((seconds, nodeid) for nodeid, seconds in _durations.items() if seconds > SLOW_S), reverse=True)
+    if slow:
+        terminalreporter.write_sep("-", f"{len(slow)} tests of the fast tier took more than {SLOW_S:g} s: mark them slow")
+        for seconds, nodeid in slow:
+            terminalreporter.write_line(f"{seconds:6.1f} s  {nodeid}")

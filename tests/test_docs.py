@@ -26,6 +26,7 @@ def _pages():
             yield pytest.param(blocks, id=str(page.relative_to(ROOT)), marks=marks)
 
 
+@pytest.mark.slow
 def test_the_site_builds_with_warnings_as_errors(tmp_path):
     done = subprocess.run([sys.executable, "-m", "mkdocs", "build", "--strict", "--site-dir", str(tmp_path / "site")],
                           cwd=ROOT, capture_output=True, text=True, timeout=300,

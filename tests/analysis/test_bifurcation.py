@@ -24,6 +24,7 @@ def test_periods_follow_the_logistic_cascade():
     assert periods == [1, 2, 4, 8, 0, 0, 3]          # 3.83: inside the period-3 window (from 1 + sqrt(8))
 
 
+@pytest.mark.slow
 def test_the_aperiodic_onset_is_the_feigenbaum_point_to_the_grid_spacing():
     values = np.linspace(3.55, 3.60, 51)            # spacing 1e-3
     attractors = logistic(values, record=256, transient=20000)

@@ -11,6 +11,7 @@ def _found(study, kind):
     return [b for b in study.bifurcations if b.kind == kind]
 
 
+@pytest.mark.slow
 def test_crossing_and_switching_sliding_at_A_5():
     """The seed: crossing-sliding at (5, 1.65768), switching-sliding at (5, 2.7992), each within 0.5 %."""
     crossing = _found(sliding_study("friction", {"A": 5.0}, "omega", 1.6, 1.72, points=12), "crossing-sliding")

@@ -79,7 +79,7 @@ CASES = [
     ("buck", "voltage-mode", {}, "control", "vout"),
     ("buck", "voltage-mode", {}, "Vin", "vout"),
     ("buck", "voltage-mode", {"latch": 1, "Vin": 20}, "Vref", "vout"),
-    ("buck", "voltage-loop", {}, "Vref", "vout"),
+    pytest.param("buck", "voltage-loop", {}, "Vref", "vout", marks=pytest.mark.slow),        # 2.3 s
     ("buck", "voltage-loop", {"leading": 1}, "control", "vout"),
     ("buck", "current-loop", {}, "Vref", "vout"),
     ("buck", "current-loop", {}, "control", "iL"),

@@ -135,6 +135,7 @@ def test_simulate_a_netlist_in_ngspice_reads_the_same_signals(capsys, ngspice):
     assert spice["measurements"]["i(l1)"]["mean"] == pytest.approx(lcp["measurements"]["i(l1)"]["mean"], rel=2e-3)
 
 
+@pytest.mark.slow
 def test_bifurcation_follows_a_netlists_orbits_and_finds_the_hand_models_border_collision(capsys):
     """The buck along R (case-insensitive, as SPICE names are): the CCM/DCM border collision (the diode's
     turn-off appears) at the R the hand-derived buck gives, 3.3267 ohm (the small-ripple 2 L / ((1 - D) T) = 3.333)."""

@@ -104,6 +104,7 @@ def test_compiled_methods_take_the_reference_path_on_the_peer_collection(peer, m
 @example(k=7, seed=23866, kind="integer")  # Newton's z decided by rounding at equal iterations
 @given(k=st.integers(1, 12), seed=st.integers(0, 2**32 - 1),
        kind=st.sampled_from(["pd", "spd", "triangular", "integer"]))
+@pytest.mark.slow
 def test_compiled_methods_take_the_reference_path_on_random_problems(k, seed, kind):
     rng = np.random.default_rng(seed)
     if kind == "integer":        # any matrix: rays, singular submatrices, degenerate ties, no solution
@@ -217,6 +218,7 @@ def test_options_act():
 
 # ------------------------------------------------------------------- compiled without reference counting
 
+@pytest.mark.slow
 def test_the_solve_path_below_the_allocation_does_no_reference_counting(tmp_path):
     # solve_once allocates the workspace; everything below it (solve_in and the methods it calls) is compiled
     # with _nrt=False: the atomic increments and decrements of array arguments were 3/4 of a small solve.

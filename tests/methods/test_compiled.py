@@ -54,6 +54,7 @@ CASES = [("buck", {}, False), ("buck", {"D": 0.7, "R": 2.0}, True), ("boost", {"
          ("cuk", {}, False), ("prc", {}, True), ("buck-boost", {"Vf": 0.7, "Rd": 0.05}, True)]
 
 
+@pytest.mark.slow
 def test_ahead_of_time_and_jit_kernels_give_identical_numbers():
     code = SUMMARY % repr(CASES)
     aot = json.loads(_run(code))

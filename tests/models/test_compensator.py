@@ -135,6 +135,7 @@ def test_what_a_design_cannot_give_is_refused():
         Compensator(1e3, (), (1e3,))
 
 
+@pytest.mark.slow
 def test_the_report_section_shows_the_loop_before_and_after_and_passes():
     from validation.sections import control_section
     section = control_section()

@@ -132,6 +132,7 @@ def test_only_the_clock_turns_the_switch_on(method):
     assert (tr.signal("switch")[before] == 0).all() and tr.state("iL")[before].min() < 1.9475523551577258 - 0.5
 
 
+@pytest.mark.slow
 def test_valley_current_mode_is_the_mirror_image_stable_above_one_half(capsys):
     """The clock turns the switch off, the current falling to Iv turns it on: a perturbation is multiplied by -m1/m2
     each period, so the period-1 orbit is stable for D > 1/2 and doubles below: at Iv = (Vin/2)/R - (Vin/2) T/(2 L)/2

@@ -66,7 +66,7 @@ def test_the_200_point_grid_spans_ccm_and_dcm_and_every_point_converges(serial_r
     np.testing.assert_allclose(dcm["vout_mean"], 24.0 / (1 + np.sqrt(1 + 4 * Kd / dcm["D"] ** 2)), rtol=2e-3)
 
 
-@pytest.mark.parametrize("backend", ["batched", "local", "dask"])
+@pytest.mark.parametrize("backend", ["batched", "local", pytest.param("dask", marks=pytest.mark.slow)])
 def test_every_backend_gives_the_serial_rows(backend, serial_rows, request):
     target = request.getfixturevalue("dask_client") if backend == "dask" else backend
     rows = run_ensemble(ModelSweep("buck"), GRID, backend=target, workers=2, chunk=37)
@@ -93,7 +93,7 @@ class KillingSweep(ModelSweep):
         return super().rows(items)
 
 
-@pytest.mark.parametrize("backend", ["local", "dask"])
+@pytest.mark.parametrize("backend", ["local", pytest.param("dask", marks=pytest.mark.slow)])
 def test_a_worker_killed_mid_sweep_costs_no_point_and_duplicates_none(backend, tmp_path, serial_rows, request):
     target = request.getfixturevalue("dask_client") if backend == "dask" else LocalBackend(2)
     flag = tmp_path / "killed"

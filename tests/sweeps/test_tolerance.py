@@ -128,7 +128,7 @@ def test_metrics_on_demand_are_the_power_balance_and_the_signals_statistics():
 SEPIC = str(__import__("pathlib").Path(__file__).resolve().parents[2] / "netlists" / "circuits" / "sepic.cir")
 
 
-@pytest.mark.parametrize("backend", ["local", "dask"])
+@pytest.mark.parametrize("backend", ["local", pytest.param("dask", marks=pytest.mark.slow)])
 @pytest.mark.parametrize("model, base, axis, metrics", [
     ("buck", {"Ron": 0.05}, "R=2:40:6", ("efficiency", "losses.Ron", "i_switch.rms")),
     (SEPIC, {}, "r=5:40:6", ("v(out).ripple", "i(l1).rms", "fraction.S1")),

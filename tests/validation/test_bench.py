@@ -16,6 +16,7 @@ def lcp_map():
     return stability.stability_table(("LCP theta=1", "LCP theta=0.5"), progress=False)
 
 
+@pytest.mark.slow
 def test_no_well_posed_extreme_case_gives_nan_or_inf_with_the_lcp_stepper(lcp_map):
     assert len(lcp_map) == 2 * len(stability.extreme_cases())
     assert (lcp_map["status"] == "ok").all(), lcp_map.loc[lcp_map["status"] != "ok", "error"].tolist()
@@ -95,6 +96,7 @@ def test_tradeoff_measures_every_method_against_the_exact_solution(ngspice):
     assert 1e-5 < smooth["error"] < 1e-2                                       # O(eps)
 
 
+@pytest.mark.slow
 def test_bench_cli_writes_its_files_and_the_report_shows_them(tmp_path, monkeypatch, capsys):
     from validation import bench, sections
     from validation.report import write_report

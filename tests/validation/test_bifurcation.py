@@ -20,6 +20,7 @@ def run_cli(capsys, *argv):
     return code, out, err
 
 
+@pytest.mark.slow
 def test_the_cascade_doubles_where_the_literature_says(capsys):
     """Period doublings of the period-1, -2 and -4 orbits (continuation only), each with a multiplier at -1."""
     code, out, _ = run_cli(capsys, "bifurcation", "buck", "--control", "voltage-mode", "--param", "Vin=20:36",
@@ -55,6 +56,7 @@ def test_the_ccm_dcm_border_collision_of_the_pwm_buck_is_where_the_exact_ccm_orb
     assert "vanish: diode held (y = 0) in OFF" in bifurcations[0]["detail"]
 
 
+@pytest.mark.slow
 def test_a_small_diagram_is_written_and_summarised(capsys, tmp_path):
     target = tmp_path / "diagram.svg"
     code, out, _ = run_cli(capsys, "bifurcation", "buck", "--param", "Vin=30:34", "--points", "60", "--max-period", "2",

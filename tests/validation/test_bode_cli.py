@@ -14,6 +14,7 @@ def run_cli(capsys, *argv):
     return code, out, err
 
 
+@pytest.mark.slow
 def test_bode_prints_the_averaged_bucks_response_and_its_injection_check(capsys, tmp_path):
     png = tmp_path / "bode.png"
     code, out, _ = run_cli(capsys, "bode", "buck", "-p", "L=100u", "--input", "duty", "--points", "50", "--check",

@@ -226,6 +226,7 @@ def fuzz_results(tmp_path_factory):
 
 
 @pytest.mark.parametrize("name,argv,files,expected", FUZZ, ids=[case[0] for case in FUZZ])
+@pytest.mark.slow
 def test_each_hostile_case_gets_one_clear_line_quickly_and_in_bounded_memory(fuzz_results, name, argv, files, expected):
     code, out, err, cpu, maxrss_kb, before, after, outer = fuzz_results[name]
     lines = [line for line in err.splitlines() if line.strip()]
@@ -239,6 +240,7 @@ def test_each_hostile_case_gets_one_clear_line_quickly_and_in_bounded_memory(fuz
     assert not (outer.parent / "escaped").exists() and not (outer / "escaped").exists()
 
 
+@pytest.mark.slow
 def test_no_file_is_written_outside_out_whatever_a_scene_contains(tmp_path):
     """A valid user scene whose strings carry quotes, brackets and ../ runs; everything it writes is under --out."""
     work = tmp_path / "a" / "b" / "work"
@@ -479,6 +481,7 @@ def test_pcsuite_alone_says_a_command_is_needed_on_stderr_with_the_usage(capsys)
     assert "simulate" in err and "pcsuite --help" in err
 
 
+@pytest.mark.slow
 def test_pcsuite_time_limit_stops_a_one_run_command_as_the_flag_does(tmp_path):
     """PCSUITE_TIME_LIMIT bounded ngspice runs and LCP solves only: a long event run went on past it."""
     argv = ["simulate", "buck", "--method", "event", "--t-end", "5", "--h", "9e-6"]
@@ -550,6 +553,7 @@ def test_sigkill_leaves_no_pcsuite_or_ngspice_process_behind(ngspice, tmp_path, 
     assert _alive(seen) == []
 
 
+@pytest.mark.slow
 def test_kill_9_at_random_instants_never_leaves_a_partial_output(tmp_path):
     """10 kills at random instants of `simulate --out`: the file is always the old one or a complete new one,
     and the next run leaves no temporary behind."""

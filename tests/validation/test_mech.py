@@ -23,6 +23,7 @@ def test_mech_list_names_every_model(capsys):
     assert models["cam-follower"]["parameters"]["rpm"]["default"] == 358.0
 
 
+@pytest.mark.slow
 def test_mech_simulate_writes_the_trajectory(capsys, tmp_path):
     target = tmp_path / "f.parquet"
     code, out, _ = run_cli(capsys, "mech", "simulate", "cam-follower", "-p", "rpm=358", "--out", str(target))
@@ -36,6 +37,7 @@ def test_mech_simulate_writes_the_trajectory(capsys, tmp_path):
     assert code == 0 and summary["method"] == "moreau" and summary["events"]["stick"] >= 19
 
 
+@pytest.mark.slow
 def test_mech_bifurcations_lists_the_sliding_bifurcations_with_type_and_value(capsys):
     code, out, _ = run_cli(capsys, "mech", "bifurcations", "friction", "-p", "A=5", "--param", "omega=2.75:2.85",
                            "--json")
@@ -207,6 +209,7 @@ def _cam_period_closed_form(rpm: float, x0, e: float = 0.8, m: float = 1.221, k:
         impacts.append(hit)
 
 
+@pytest.mark.slow
 def test_the_cam_p21_orbit_ends_in_a_corner_impact_at_the_flank_nose_joint():
     """The cam-follower's P(2, 1) orbit (two impacts a revolution), continued down in cam speed on the event method's
     map with its exact Jacobian (impact saltation), turns at 355.15 rpm where its first impact reaches the joint of

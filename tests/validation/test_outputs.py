@@ -494,6 +494,7 @@ print(marker, time.time(), flush=True)
 """
 
 
+@pytest.mark.slow
 def test_concurrent_report_processes_each_land_whole(tmp_path):
     """8 processes, 10 reports each, into one directory at once: every one lands (no traceback, no error), the
     directory ends as one complete report, and nothing else is left beside it."""

@@ -47,6 +47,7 @@ def uninterrupted(tmp_path_factory):
 
 
 @pytest.mark.parametrize("stop", ["SIGINT", "SIGKILL"])
+@pytest.mark.slow
 def test_an_interrupted_sweep_resumes_computing_only_the_missing_points(stop, tmp_path, capsys, uninterrupted):
     out = tmp_path / "sweep"
     child = subprocess.Popen([sys.executable, "-c", CHILD, *SWEEP, "--workers", "1", "--chunk", "250",
@@ -231,6 +232,7 @@ def test_an_ngspice_sweep_runs_in_workers_and_a_failed_run_is_a_row(ngspice, tmp
     assert mixed[1]["vout_mean"] == pytest.approx(rows.loc[1, "vout_mean"], rel=1e-9)
 
 
+@pytest.mark.slow
 def test_a_sweep_on_a_dask_scheduler_address_stores_the_local_rows(tmp_path, capsys):
     """--scheduler tcp://HOST:PORT: the same dataset as the local backend (a 2-worker LocalCluster here)."""
     import distributed
@@ -334,6 +336,7 @@ TAMPERED = {"duplicate copy": "holds indices also stored in parts/", "duplicate 
 
 
 @pytest.mark.parametrize("kind", list(TAMPERED))
+@pytest.mark.slow
 def test_resume_verifies_every_stored_part_and_refuses_one_it_did_not_write(kind, tmp_path):
     out = tmp_path / "s"
     env = {**__import__("os").environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])}
@@ -427,6 +430,7 @@ def test_a_lock_that_is_not_a_regular_file_is_refused_and_nothing_is_created_whe
     assert not target.exists() and _files(tmp_path) == before
 
 
+@pytest.mark.slow
 def test_a_scheduler_that_accepts_and_never_answers_is_refused_within_the_connect_timeout(tmp_path):
     """The handshake's read had no timeout: a server that accepts and stays silent held the sweep forever,
     --time-limit included. Now: 10 s, or --time-limit when shorter."""
