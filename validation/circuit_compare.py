@@ -36,7 +36,7 @@ class CircuitComparison:
     params: dict
     lcp: object
     spice: object
-    window: tuple
+    window: tuple                    # (t0, t1): the span the comparison measures
     metrics: dict = field(default_factory=dict)
     rows: list = field(default_factory=list)
     notes: list = field(default_factory=list)
@@ -165,6 +165,7 @@ def _transient(result: CircuitComparison, circuit, th: dict) -> CircuitCompariso
     whole run on a common grid (RMS of the difference over the RMS of the LCP's), and the fraction of the run
     in the same mode."""
     lcp, spice, m = result.lcp, result.spice, result.metrics
+    result.window = (float(lcp.t[0]), float(lcp.t[-1]))            # what is compared: the whole run
     grid = np.linspace(lcp.t[0], lcp.t[-1], 20001)
     worst = 0.0
     for name in dict.fromkeys(["vout", *circuit.netlist.outputs]):
@@ -200,6 +201,7 @@ def _self_oscillating(result: CircuitComparison, circuit, th: dict) -> CircuitCo
     lcp, spice, m = result.lcp, result.spice, result.metrics
     t1 = float(lcp.t[-1])
     t0 = t1 - circuit.WINDOW_FRACTION * (t1 - float(lcp.t[0]))
+    result.window = (t0, t1)
     cycles_l, cycles_s = _cycles(lcp, t0), _cycles(spice, t0)
     if min(cycles_l.size, cycles_s.size) < 3:
         result.notes.append(f"fewer than 2 cycles in the last tenth of the run ({cycles_l.size - 1} in the LCP's, "

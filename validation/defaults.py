@@ -30,8 +30,18 @@ BOUNDARY_BAND: float = _DATA["dk_maps"]["boundary_band"]
 BIFURCATION: dict = {key: value for key, value in _DATA["bifurcation"].items() if key != "published"}
 PUBLISHED_BIFURCATIONS: dict = dict(_DATA["bifurcation"]["published"])
 #: The mechanical module: the seed's sliding bifurcations and the report's ranges and thresholds.
-MECHANICS: dict = {key: value for key, value in _DATA["mechanics"].items() if key != "sliding"}
+MECHANICS: dict = {key: value for key, value in _DATA["mechanics"].items() if key not in ("sliding", "quick")}
 SEED_SLIDING: list[dict] = [dict(row) for row in _DATA["mechanics"]["sliding"]]
+#: What the report's quick form of the mechanics sections changes in MECHANICS (``[mechanics.quick]``).
+MECHANICS_QUICK: dict = dict(_DATA["mechanics"]["quick"])
+
+
+def mechanics_settings(full: bool = True) -> dict:
+    """MECHANICS, or its quick form (``[mechanics.quick]`` over it: a table's keys replaced one by one)."""
+    if full:
+        return MECHANICS
+    return {key: ({**value, **MECHANICS_QUICK[key]} if isinstance(value, dict) else MECHANICS_QUICK[key])
+            if key in MECHANICS_QUICK else value for key, value in MECHANICS.items()}
 
 
 def passes(check: str, value: float, threshold: float) -> bool:

@@ -186,6 +186,28 @@ def _probe(directory: Path, output: _Output) -> None:
         os.unlink(name)
 
 
+def parquet_bytes(frame, metadata: bytes | None = None) -> bytes:
+    """A table as Parquet bytes, as pcsuite writes every waveform (``simulate --out``, a report's scenes): zstd, the
+    float columns byte-stream-split (sampled waveforms compress to about half of Parquet's default, snappy: 131 MB
+    against 67 MB for the hysteretic buck's two runs), ``mode`` as text; ``metadata`` under the schema key
+    ``pcsuite``."""
+    import io
+
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+    if "mode" in frame:
+        frame = frame.assign(mode=frame["mode"].astype(str))
+    table = pa.Table.from_pandas(frame, preserve_index=False)
+    if metadata is not None:
+        table = table.replace_schema_metadata({**(table.schema.metadata or {}), b"pcsuite": metadata})
+    floats = [field.name for field in table.schema if pa.types.is_floating(field.type)]
+    others = [name for name in table.schema.names if name not in floats]      # a dictionary would take precedence
+    buffer = io.BytesIO()
+    pq.write_table(table, buffer, compression="zstd", use_dictionary=others or False,
+                   use_byte_stream_split=floats or False)
+    return buffer.getvalue()
+
+
 def atomic_write_bytes(path, data: bytes) -> Path:
     """Write ``data`` to a temporary file beside ``path`` (named with this process's id, flocked while written),
     then rename it into place (mode 0666 & ~umask). The target must be a new or regular file in an existing,

@@ -622,13 +622,13 @@ def cam_family(params: dict | None, revolutions: int = 1, phase: float = 0.0) ->
     return OrbitFamily(problem_of, EventDriven(), periods=revolutions)
 
 
-def incomplete_orbit(params: dict | None = None):
-    """The incomplete-chattering orbit of ``[mechanics.incomplete]`` (m impacts in n revolutions, none accumulating),
-    seeded from the attractor ``warm_up`` revolutions after rest at ``start`` rpm and continued down in cam speed
-    towards the end of complete chattering with its Floquet multipliers (exact: impact saltation matrices), until it
-    ends (``max_points`` orbits). Returns (family, branch)."""
+def incomplete_orbit(params: dict | None = None, settings: dict | None = None):
+    """The incomplete-chattering orbit of ``settings`` (default ``[mechanics.incomplete]``: m impacts in n
+    revolutions, none accumulating), seeded from the attractor ``warm_up`` revolutions after rest at ``start`` rpm
+    and continued down in cam speed towards the end of complete chattering with its Floquet multipliers (exact:
+    impact saltation matrices), until it ends (``max_points`` orbits). Returns (family, branch)."""
     from .defaults import MECHANICS
-    settings = MECHANICS["incomplete"]
+    settings = settings or MECHANICS["incomplete"]
     model = get_mechanical("cam-follower")
     family = cam_family(params, settings["revolutions"], settings["phase"])
     p = model.resolve({**(params or {}), "rpm": settings["start"]})
@@ -640,21 +640,23 @@ def incomplete_orbit(params: dict | None = None):
     return family, branch
 
 
-def incomplete_across(params: dict | None = None):
+def incomplete_across(params: dict | None = None, settings: dict | None = None):
     """An incomplete-chattering orbit of one revolution continued through the end of complete chattering
-    (``[mechanics.across]``): seeded at ``start`` rpm by the flight that leaves the cam at the detachment (its state
-    one revolution on, at the map's start ``after_detachment`` revolutions past the detachment), Newton's shooting,
-    then pseudo-arclength continuation down to ``low`` and up until it ends at a border collision (the grazing where
-    an impact appears), with its exact multipliers (impact saltation). Its sequence is cut by the lift at the
-    detachment every revolution, on both sides of the end of complete chattering. Going down, its last impact
-    reaches the cam's flank-nose joint, where the cam lifts away (the detachment is at that joint): a corner impact,
-    located from the branch's last orbit by :func:`corner_impact` (the corrector creeps next to it). Returns
-    (family, branch: its orbits in increasing speed and the bifurcations of both directions, [CornerImpact])."""
+    (``settings``, default ``[mechanics.across]``): seeded at ``start`` rpm by the flight that leaves the cam at the
+    detachment (its state one revolution on, at the map's start ``after_detachment`` revolutions past the
+    detachment), Newton's shooting, then pseudo-arclength continuation down to ``low`` and up until it ends at a
+    border collision (the grazing where an impact appears), with its exact multipliers (impact saltation). Its
+    sequence is cut by the lift at the detachment every revolution, on both sides of the end of complete chattering.
+    Going down, its last impact reaches the cam's flank-nose joint, where the cam lifts away (the detachment is at
+    that joint): a corner impact, located from the branch's last orbit by :func:`corner_impact` (the corrector
+    creeps next to it). Returns (family, branch: its orbits in increasing speed and the bifurcations of both
+    directions, [CornerImpact]).
+    """
     from converters.analysis.continuation import Branch
     from converters.models.mechanics.cam import JOINTS
 
     from .defaults import MECHANICS
-    settings = MECHANICS["across"]
+    settings = settings or MECHANICS["across"]
     model = get_mechanical("cam-follower")
     p = model.resolve({**(params or {}), "rpm": settings["start"]})
     T = model.period(p)
@@ -1152,7 +1154,8 @@ def cam_section():
                              "width (rpm)": f"{t['width']:.1e}", "ride left at the last orbit (revolutions)":
                              f"{t['last']['ride']:.1e}", "impacts before it accumulates": t["last"]["impacts"],
                              "runs": t["runs"]} for (lo, hi), t in zip(MECHANICS["cam_transitions"], transitions)])
-    text = ("<p>The cam-follower of Siconos' CamFollower example (after di Bernardo, Osorio and Santini; m = 1.221 kg, k = 1430.8 N/m, e = 0.8). Its cam is piecewise smooth: "
+    text = ("<p>The cam-follower of Siconos' CamFollower example (after di Bernardo, Osorio and Santini; "
+            "m = 1.221 kg, k = 1430.8 N/m, e = 0.8). Its cam is piecewise smooth: "
             "four arcs, mirrored, whose second derivative jumps at each joint (the follower's impacts are one "
             "nonsmoothness, the profile the other):</p><img src='cam_profile.png' alt='cam profile'><p>The phase of every "
             "impact (Moreau-Jean, h = T/4000, 20 cam revolutions after 20 of transient) against the cam speed, "
@@ -1299,23 +1302,41 @@ def cam_continuation_section():
                             "orbits": points})
 
 
-def chattering_windows_section():
+def quick_form_note(full: bool, what: str) -> str:
+    """The paragraph a section with a quick form opens with: which form ran, and what the full size covers."""
+    if full:
+        return ""
+    return (f"<p class='note'>Quick form: {what}. <code>pcsuite report mechanics --full</code> runs the full study "
+            "(the settings in <code>validation/data/defaults.toml</code>, <code>[mechanics]</code> against "
+            "<code>[mechanics.quick]</code>).</p>")
+
+
+def chattering_windows_section(full: bool = False):
     """Past the end of complete chattering: the superstable orbits through the detachment (one accumulation per n
     revolutions) followed in cam speed, and their windows' borders located (:func:`chattering_windows`); an
     incomplete orbit continued through the transition, from its corner impact to its grazing
-    (:func:`incomplete_across`); from above, the P(6,2) orbit down to its fold (:func:`incomplete_orbit`)."""
+    (:func:`incomplete_across`); from above, the P(6,2) orbit down to its fold (:func:`incomplete_orbit`). The quick
+    form (``full`` False) takes ``[mechanics.quick]``'s grid and continuation settings."""
     import pandas as pd
 
-    from .defaults import MECHANICS
+    from .defaults import MECHANICS, mechanics_settings
     from .mechanics_plots import chattering_windows_figure, incomplete_figure
     from .report import Section, csv_bytes, table_html
-    settings = MECHANICS["chattering_windows"]
+    form = mechanics_settings(full)
+    settings = form["chattering_windows"]
     values = np.linspace(*settings["path"], settings["points"])
     study = chattering_windows({}, values, revolutions=settings["revolutions"])
     picture = chattering_windows_figure(study, settings["revolutions"])
-    family, branch = incomplete_orbit()
-    other = MECHANICS["incomplete"]
-    across_family, across, corners = incomplete_across()
+    other = form["incomplete"]
+    family, branch = incomplete_orbit(settings=other)
+    across_family, across, corners = incomplete_across(settings=form["across"])
+    full_grid, full_other = MECHANICS["chattering_windows"], MECHANICS["incomplete"]
+    note = quick_form_note(full, f"the grid of {settings['points']} cam speeds over {settings['path'][0]:g}-"
+                                 f"{settings['path'][1]:g} rpm (full: {full_grid['points']} over "
+                                 f"{full_grid['path'][0]:g}-{full_grid['path'][1]:g} rpm, every window border between "
+                                 f"them located); the incomplete orbit continued from {other['start']:g} rpm in steps "
+                                 f"of at most {other['max_step']:g} rpm (full: from {full_other['start']:g} rpm, "
+                                 f"{full_other['max_step']:g} rpm)")
     complete_end = next((b["rpm"] for b in study["borders"] if b["n"] == 1 and b["side"] == "below"), None)
     grazings = [b for b in across.bifurcations if b.kind == "border-collision"]
     m_across = {across_family.event_times(pt.value, pt.x0, "impact").size for pt in across.points}
@@ -1338,7 +1359,7 @@ def chattering_windows_section():
                              "the orbit ends otherwise: an earlier sequence completing)"}
                             for b in study["borders"]])
     ends = [b for b in study["borders"] if b["ride"] <= 1e-5]
-    text = ("<p>Past the end of complete chattering the follower does not go over to incomplete chattering at "
+    text = (note + "<p>Past the end of complete chattering the follower does not go over to incomplete chattering at "
             "once. Its chattering sequence is cut by the next lift, but it leaves the cam nearly in the cam's own "
             "state, and a later revolution's sequence completes: the orbit through the detachment then accumulates "
             "once every n revolutions. Each such orbit is periodic without shooting (after the accumulation the "
@@ -1400,6 +1421,7 @@ def chattering_windows_section():
                    ok=bool(ends) and all(b["width"] <= 1e-6 * b["rpm"] for b in study["borders"]) and bool(folds)
                    and crossed and bool(grazings) and min(radius) > 1.0
                    and all(c.residual <= 1e-7 and abs(c.off_joint) <= 1e-9 for c in corners) and bool(corners),
+                   form="full" if full else "quick",
                    metrics={"borders": study["borders"], "n": {f"{r['rpm']:g}": r["n"] for r in study["rows"]},
                             "incomplete": {"impacts": impacts, "revolutions": other["revolutions"],
                                            "orbits": len(branch.points),
@@ -1414,21 +1436,27 @@ def chattering_windows_section():
                                                    "residual": c.residual} for c in corners]}})
 
 
-def two_block_section():
+def two_block_section(full: bool = False):
     """Two blocks on a belt: the section against the belt velocity, and the regime at chosen velocities by a cycle
-    closing on the section or a Lyapunov exponent above zero with its interval (:func:`two_block_regime`)."""
+    closing on the section or a Lyapunov exponent above zero with its interval (:func:`two_block_regime`). The quick
+    form (``full`` False) draws fewer velocities and tests the regime at fewer (``[mechanics.quick]``)."""
     import pandas as pd
 
     from converters.parallel import parallel_map
 
-    from .defaults import MECHANICS
+    from .defaults import MECHANICS, mechanics_settings
     from .mechanics_plots import diagram_figure
     from .report import Section, csv_bytes, table_html
     model = get_mechanical("stick-slip")
-    values = np.linspace(*MECHANICS["two_block_V"], MECHANICS["two_block_points"])
-    transient = MECHANICS["two_block_transient"]
+    settings = mechanics_settings(full)
+    values = np.linspace(*settings["two_block_V"], settings["two_block_points"])
+    transient = settings["two_block_transient"]
     rows = two_block_diagram({}, "V", values, transient=transient)
-    regimes = parallel_map(_TwoBlockRegime({}), [float(V) for V in MECHANICS["two_block_regimes"]])
+    regimes = parallel_map(_TwoBlockRegime({}), [float(V) for V in settings["two_block_regimes"]])
+    note = quick_form_note(full, f"the section at {len(values)} belt velocities and the regime tested at "
+                                 f"{', '.join(f'{V:g}' for V in settings['two_block_regimes'])} m/s (full: "
+                                 f"{MECHANICS['two_block_points']} velocities, the regime at "
+                                 f"{', '.join(f'{V:g}' for V in MECHANICS['two_block_regimes'])} m/s)")
     how = two_block_regime.__kwdefaults__                                # what _TwoBlockRegime ran with
     table = pd.DataFrame([{"V (m/s)": r["V"], "regime": r["regime"],
                            "cycle (section points)": r["period"] or f"none to {how['tol']:g}",
@@ -1436,7 +1464,8 @@ def two_block_section():
                            f"{r['closing'][0]:.1e}, {r['closing'][1]:.1e}",
                            "largest Lyapunov exponent (per time unit, 95 %)": f"{r['lyapunov']:+.4f} +- {r['half_width']:.4f}",
                            "section points recorded": r["sections"]} for r in regimes])
-    text = ("<p>" + model.title + ": m1 = m2 = 1 kg, k1 = 1 N/m, k2 = 1.5 N/m, kc = 1 N/m, Popp friction with normal "
+    text = (note + "<p>" + model.title + ": m1 = m2 = 1 kg, k1 = 1 N/m, k2 = 1.5 N/m, kc = 1 N/m, Popp friction "
+            "with normal "
             "loads m g (the parameters are stated in <code>converters/models/mechanics/stickslip.py</code>; the seed "
             "gives none, and the published configurations it cites could not be reached: this is the project's own "
             f"model). The section: x2 each time block 1 starts to stick (the event method), after {transient:g} time "
@@ -1456,6 +1485,7 @@ def two_block_section():
                                                     "system (this project's model)"),
                     "two_block_regimes.csv": csv_bytes(table)},
                    ok=all(not r.error for r in rows) and all(r["regime"] != "undetermined" for r in regimes),
+                   form="full" if full else "quick",
                    metrics={"distinct_section_points": {f"{r.value:.3g}": int(np.unique(np.round(r.states[:, 1], 4)).size)
                                                         for r in rows},
                             "regimes": regimes})

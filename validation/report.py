@@ -51,6 +51,7 @@ class Section:
     metrics: dict = field(default_factory=dict)
     skipped: bool = False
     reason: str = ""
+    form: str = ""              # "quick" or "full" for a section with a quick form (:func:`has_quick_form`)
 
     @property
     def status(self) -> str:
@@ -112,6 +113,14 @@ def runs_alone(builder):
     return builder
 
 
+def has_quick_form(builder):
+    """Mark a section builder that takes ``full`` (returns it): it runs in a quick form (fewer points, fewer
+    settings; the same checks on what it computes) unless the report is asked for the full size
+    (``pcsuite report --full``), and says which in its Section's ``form``."""
+    builder.quick_form = True
+    return builder
+
+
 def run_section(builder, title: str) -> Section:
     start = time.perf_counter()
     try:
@@ -130,7 +139,8 @@ def write_report(sections: list[Section], out_dir, suite: str, options: dict | N
     env = environment()
     header = "".join(f"<tr><td class='text'>{esc(k)}</td><td class='text'>{esc(v)}</td></tr>"
                      for k, v in env.items())
-    summary = pd.DataFrame([{"section": s.title, "result": s.status, "reason": s.why} for s in sections])
+    summary = pd.DataFrame([{"section": s.title, "result": s.status, "form": s.form, "reason": s.why}
+                            for s in sections])
     counts = {status: sum(s.status == status for s in sections) for status in STATUSES}
     failed = [s.title for s in sections if s.status == "fail"]
     verdict = ("FAIL: " + f"{counts['fail']} of {len(sections)} sections fail ({', '.join(failed)})" if failed else
@@ -139,12 +149,17 @@ def write_report(sections: list[Section], out_dir, suite: str, options: dict | N
     rows = "".join(
         f"<tr><td class='text'><a href='#{_anchor(s.title)}'>{esc(s.title)}</a></td>"
         f"<td class='text {'pass' if s.status == 'pass' else 'fail' if s.status == 'fail' else 'skip'}'>{s.status}</td>"
-        f"<td class='text'>{esc(s.why)}</td></tr>" for s in sections)
+        f"<td class='text'>{esc(s.form)}</td><td class='text'>{esc(s.why)}</td></tr>" for s in sections)
+    quick = [s.title for s in sections if s.form == "quick"]
+    forms = (f"<p id='forms'>Quick form ({len(quick)} of {len(sections)} sections: fewer points than the full study, "
+             f"the same checks; <code>pcsuite report {esc(suite)} --full</code> runs them at full size): "
+             f"{esc(', '.join(quick))}.</p>" if quick else "")
     body = [f"<h1>pcsuite validation report: {esc(suite)}</h1>",
             f"<p class='verdict {'fail' if failed else 'pass'}' id='verdict'>{esc(verdict)}</p>",
             f"<table>{header}</table>",
             f"<p>Options: <code>{esc(json.dumps(options or {}))}</code></p>",
-            "<h2>Summary</h2>", f"<table id='summary'><tr><th>section</th><th>result</th><th>reason</th></tr>{rows}</table>"]
+            "<h2>Summary</h2>", forms,
+            f"<table id='summary'><tr><th>section</th><th>result</th><th>form</th><th>reason</th></tr>{rows}</table>"]
     for section in sections:
         badge = "" if section.status == "pass" else f" <small>({section.status}: {esc(section.why)})</small>"
         body.append(f"<section class='section-{section.status}'><h2 id='{_anchor(section.title)}'>{esc(section.title)}"
@@ -159,7 +174,8 @@ def write_report(sections: list[Section], out_dir, suite: str, options: dict | N
             path.parent.mkdir(parents=True, exist_ok=True)
             path.write_bytes(data)
         metrics = {"suite": suite, "environment": env, "options": options or {}, "verdict": verdict,
-                   "sections": {s.title: {"ok": s.ok, "status": s.status, "reason": s.why, **s.metrics}
+                   "sections": {s.title: {"ok": s.ok, "status": s.status, "reason": s.why, "form": s.form,
+                                          **s.metrics}
                                 for s in sections}}
         (staging / "metrics.json").write_text(json.dumps(metrics, indent=2, default=_json_default))
         summary.to_csv(staging / "summary.csv", index=False)

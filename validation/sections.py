@@ -15,7 +15,7 @@ from converters.lcp.problems import problem_set  # noqa: E402
 from .defaults import K_RANGES  # noqa: E402
 from .core_checks import convergence_table, core_waveforms, observed_orders  # noqa: E402
 from .peer import METHODS, PEER_TOL, peer_directory, peer_table, solver_table  # noqa: E402
-from .report import Section, csv_bytes, esc, figure_png, runs_alone, table_html, url  # noqa: E402
+from .report import Section, csv_bytes, esc, figure_png, has_quick_form, runs_alone, table_html, url  # noqa: E402
 
 
 def _pivot(rows: pd.DataFrame) -> pd.DataFrame:
@@ -381,10 +381,10 @@ from .bifurcation import SECTION_TITLE as _BIFURCATION_TITLE, bifurcation_sectio
 EXTRA_SECTIONS["bifurcation"] = [(_BIFURCATION_TITLE, partial(bifurcation_section, workers=None))]
 
 
-def _mechanics(name: str):
+def _mechanics(name: str, **options):
     """A section of the mechanical module (imported when the section runs)."""
     from . import mechanics
-    return getattr(mechanics, name)()
+    return getattr(mechanics, name)(**options)
 
 
 EXTRA_SECTIONS["mechanics"] = [
@@ -393,10 +393,11 @@ EXTRA_SECTIONS["mechanics"] = [
     ("Mechanics: the friction oscillator's domain of attraction", partial(_mechanics, "basins_section")),
     ("Mechanics: event-driven against Moreau-Jean and the closed forms", partial(_mechanics, "agreement_section")),
     ("Mechanics: the cam-follower's impact phases", partial(_mechanics, "cam_section")),
-    ("Mechanics: past the end of complete chattering", partial(_mechanics, "chattering_windows_section")),
+    ("Mechanics: past the end of complete chattering",
+     has_quick_form(partial(_mechanics, "chattering_windows_section"))),
     ("Mechanics: continuation of periodic orbits and the corner-impact bifurcation",
      partial(_mechanics, "cam_continuation_section")),
-    ("Mechanics: two blocks on a belt", partial(_mechanics, "two_block_section"))]
+    ("Mechanics: two blocks on a belt", has_quick_form(partial(_mechanics, "two_block_section")))]
 EXTRA_SECTIONS["default"] += [(_BIFURCATION_TITLE, partial(bifurcation_section, workers=1))]
 EXTRA_SECTIONS["default"] += [("Speed-accuracy trade-off", runs_alone(partial(default_bench_section, "tradeoff"))),
                               ("Numerical stability at the extremes", partial(default_bench_section, "stability"))]

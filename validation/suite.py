@@ -3,11 +3,11 @@ a report section. A failing scene becomes a failed section with its reason; it n
 """
 from __future__ import annotations
 
-import io
 import math
 import time
 import traceback
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -80,8 +80,8 @@ def _run_pwm_scene(scene: Scene) -> SceneResult:
             rel = abs(m["vout_mean_lcp_V"] / expected - 1.0)
             m["closed_form_V"] = expected
             checks.append(_check("closed_form_rel", rel, scene))
-    files = {f"scenes/{scene.name}/lcp.parquet": _parquet(c.lcp.waveforms()),
-             f"scenes/{scene.name}/spice.parquet": _parquet(c.spice.waveforms()),
+    files = {f"scenes/{scene.name}/lcp.parquet": _window(c.lcp, c.window_start),
+             f"scenes/{scene.name}/spice.parquet": _window(c.spice, c.window_start),
              f"scenes/{scene.name}/overlay.png": comparison_plot(c),
              f"scenes/{scene.name}/modes.png": mode_timeline_plot(c.lcp.t, c.lcp.modes(), c.spice.t, c.spice.modes(),
                                                                   conv.period(c.params), scene.name)}
@@ -106,8 +106,8 @@ def _run_circuit_scene(scene: Scene) -> SceneResult:
     period = circuit.period(c.params)
     if not math.isfinite(period):                   # the timeline shows the last tenth of the run in 3 parts
         period = (c.lcp.t[-1] - c.lcp.t[0]) / 30
-    files = {f"scenes/{scene.name}/lcp.parquet": _parquet(c.lcp.waveforms()),
-             f"scenes/{scene.name}/spice.parquet": _parquet(c.spice.waveforms()),
+    files = {f"scenes/{scene.name}/lcp.parquet": _window(c.lcp, c.window[0]),
+             f"scenes/{scene.name}/spice.parquet": _window(c.spice, c.window[0]),
              f"scenes/{scene.name}/overlay.png": comparison_plot(c),
              f"scenes/{scene.name}/modes.png": mode_timeline_plot(c.lcp.t, c.lcp.modes(), c.spice.t, c.spice.modes(),
                                                                   period, scene.name)}
@@ -154,11 +154,13 @@ SCENE_RUNNERS = {"circuit": _run_circuit_scene, "smc": _run_smc_scene, "smc-impl
 
 
 def _parquet(frame: pd.DataFrame) -> bytes:
-    frame = frame.copy()
-    frame["mode"] = frame["mode"].astype(str)
-    buffer = io.BytesIO()
-    frame.to_parquet(buffer, index=False)
-    return buffer.getvalue()
+    from .io import parquet_bytes
+    return parquet_bytes(frame)
+
+
+def _window(tr, t0: float) -> bytes:
+    """A run's waveforms from ``t0`` on (the window its comparison measures) as Parquet."""
+    return _parquet(tr.waveforms().iloc[tr.rows_between(t0, tr.t[-1])])
 
 
 def scene_section(result: SceneResult) -> Section:
@@ -242,14 +244,17 @@ def _failed_job(item, message: str):
             else Section(payload[0], f"<p>{esc(reason)}</p>", ok=False))
 
 
-def run_suite(suite: str, sections=(), workers: int = 2, progress: bool = True, scenes=None):
+def run_suite(suite: str, sections=(), workers: int = 2, progress: bool = True, scenes=None, full: bool = False):
     """Run the suite's scenes (or ``scenes``, loaded by :func:`validation.scenes.load_scenes`: a user's files)
     and extra report sections in parallel processes (each job's ngspice worker shut down after it), then the
     sections marked :func:`validation.report.runs_alone` one at a time, each in its own process; results in
-    input order."""
+    input order. A section with a quick form (:func:`validation.report.has_quick_form`) runs it, or its full size
+    with ``full``."""
     scenes = scenes_of(suite) if scenes is None else list(scenes)
+    alone = [False] * len(scenes) + [getattr(builder, "runs_alone", False) for _, builder in sections]
+    sections = [(title, partial(builder, full=full) if getattr(builder, "quick_form", False) else builder)
+                for title, builder in sections]
     jobs = [("scene", s) for s in scenes] + [("section", sec) for sec in sections]
-    alone = [kind == "section" and getattr(payload[1], "runs_alone", False) for kind, payload in jobs]
     results: list = [None] * len(jobs)
     for last, options in ((False, {"workers": workers, "label": f"suite {suite}"}),
                           (True, {"workers": 1, "tasks_per_process": 1, "label": f"suite {suite}, timed alone"})):

@@ -3,6 +3,7 @@ browser (headless Chromium: every image loads)."""
 import os
 import re
 import shutil
+from functools import partial
 from html.parser import HTMLParser
 from pathlib import Path
 
@@ -41,6 +42,20 @@ def test_every_file_the_page_refers_to_exists(report):
         assert (report.parent / name).stat().st_size > 0
     assert sorted(p.name for p in (report.parent / "scenes" / "buck-dcm").iterdir()) == [
         "lcp.parquet", "modes.png", "overlay.png", "spice.parquet"]
+
+
+def test_the_default_report_is_under_50_mb_and_its_waveforms_are_the_compared_windows(report):
+    """Every scene's waveforms are those of the window its comparison measures (the buck's last 10 of 30 periods:
+    its 10 us period), compressed (zstd, floats byte-stream-split); the whole folder under 50 MB."""
+    import pyarrow.parquet as pq
+    size = sum(path.stat().st_size for path in report.parent.rglob("*") if path.is_file())
+    assert size < 50 << 20, size
+    for simulator in ("lcp", "spice"):
+        path = report.parent / "scenes" / "buck-ccm" / f"{simulator}.parquet"
+        time = pq.read_table(path, columns=["time"]).column(0).to_numpy()
+        assert time[-1] - time[0] == pytest.approx(10 / 100e3, rel=1e-3), (simulator, time[0], time[-1])
+        column = pq.ParquetFile(path).metadata.row_group(0).column(1)
+        assert column.compression == "ZSTD" and "BYTE_STREAM_SPLIT" in column.encodings
 
 
 def test_every_default_scene_passes_and_the_header_names_the_versions(report):
@@ -93,6 +108,54 @@ def test_a_section_timed_by_wall_clock_runs_after_the_others_alone(tmp_path):
     lines = log.read_text().splitlines()
     assert lines[-2:] == ["start timed", "end timed"] and sorted(lines[:-2]) == sorted(
         f"{when} {name}" for name in "abc" for when in ("start", "end"))
+
+
+def _quick(full: bool = False):
+    from validation.report import Section
+    return Section("q", "<p>q</p>", form="full" if full else "quick")
+
+
+def test_a_section_with_a_quick_form_runs_it_unless_the_report_asks_for_the_full_size(tmp_path):
+    """run_suite hands full to the builders marked has_quick_form only; the page's summary says which sections ran
+    quick and how to run them whole; metrics.json and summary.csv carry the form."""
+    import json
+
+    from validation.report import Section, has_quick_form, write_report
+    from validation.suite import run_suite
+    sections = [("q", has_quick_form(_quick)), ("one form", partial(Section, "one form", "<p>x</p>"))]
+    for full, form in ((False, "quick"), (True, "full")):
+        _, results = run_suite("t", sections, workers=1, progress=False, scenes=[], full=full)
+        assert [s.form for s in results] == [form, ""]
+    _, results = run_suite("t", sections, workers=1, progress=False, scenes=[])
+    index = write_report(results, tmp_path / "r", "mine")
+    page = index.read_text()
+    assert ("Quick form (1 of 2 sections: fewer points than the full study, the same checks; <code>pcsuite report "
+            "mine --full</code> runs them at full size): q.") in page
+    assert json.loads((tmp_path / "r" / "metrics.json").read_text())["sections"]["q"]["form"] == "quick"
+    assert (tmp_path / "r" / "summary.csv").read_text().splitlines()[1:] == ["q,pass,quick,", "one form,pass,,"]
+
+
+def test_the_quick_form_changes_only_settings_the_full_study_has():
+    """[mechanics.quick] replaces keys of [mechanics] (a misspelt key would be silently ignored): each exists there,
+    of the same kind, and each changes something."""
+    from validation.defaults import MECHANICS, MECHANICS_QUICK, mechanics_settings
+    quick = mechanics_settings(full=False)
+    assert mechanics_settings(full=True) is MECHANICS and set(quick) == set(MECHANICS)
+    for key, value in MECHANICS_QUICK.items():
+        assert key in MECHANICS and type(value) is type(MECHANICS[key]), key
+        if isinstance(value, dict):
+            assert set(value) <= set(MECHANICS[key]) and quick[key] == {**MECHANICS[key], **value}, key
+            assert any(MECHANICS[key][k] != v for k, v in value.items()), key
+        else:
+            assert quick[key] == value != MECHANICS[key], key
+
+
+def test_full_is_refused_for_a_suite_without_a_quick_form(capsys, tmp_path):
+    from validation.cli import main
+    assert main(["report", "lcp", "--full", "--out", str(tmp_path / "r")]) == 2
+    err = capsys.readouterr().err
+    assert err == ("pcsuite: error: --full runs the quick-form sections of a suite at full size; 'lcp' has none (the "
+                   "suites with some: mechanics)\n") and not (tmp_path / "r").exists()
 
 
 def _chromium():
@@ -204,5 +267,5 @@ def test_each_section_is_pass_fail_or_skipped_with_a_reason_and_a_failure_fails_
     assert "<a href='#boom'>Boom</a>" in page and "<section class='section-fail'>" in page and "<section class='section-skipped'>" in page
     import pandas as pd
     summary = pd.read_csv(out / "summary.csv")
-    assert list(summary.columns) == ["section", "result", "reason"]
+    assert list(summary.columns) == ["section", "result", "form", "reason"]
     assert set(summary["result"]) == {"pass", "fail", "skipped"}

@@ -121,26 +121,17 @@ def write_frame(frame, path: Path, meta: dict | None = None) -> None:
     ``meta`` (converter, parameters, method and its options) and the columns' units (default: a converter's,
     by :func:`column_units`) travel with it: in the
     Parquet schema's metadata (key ``pcsuite``), or in a JSON sidecar ``FILE.csv.json`` beside a CSV."""
-    from ..io import atomic_write_bytes
-    frame = frame.copy()
-    if "mode" in frame:
-        frame["mode"] = frame["mode"].astype(str)
+    from ..io import atomic_write_bytes, parquet_bytes
     meta = dict(meta or {})
     meta.setdefault("units", column_units(frame.columns))
     info = json_text(meta).encode()
     if path.suffix.lower() == ".csv":
+        if "mode" in frame:
+            frame = frame.assign(mode=frame["mode"].astype(str))
         atomic_write_bytes(path, frame.to_csv(index=False).encode())
         atomic_write_bytes(path.with_name(path.name + ".json"), info)
         return
-    import io
-
-    import pyarrow as pa
-    import pyarrow.parquet as pq
-    table = pa.Table.from_pandas(frame, preserve_index=False)
-    table = table.replace_schema_metadata({**(table.schema.metadata or {}), b"pcsuite": info})
-    buffer = io.BytesIO()
-    pq.write_table(table, buffer)
-    atomic_write_bytes(path, buffer.getvalue())
+    atomic_write_bytes(path, parquet_bytes(frame, info))
 
 
 def _plain(value):

@@ -12,6 +12,8 @@ from .common import MAX_WORKERS, check_workers, given_path, integer
 DESCRIPTION = """\
 Run the scenes of a named suite (and the suite's other sections), or your own scene files, and write the
 HTML validation report (index.html, metrics.json, summary.csv, scenes.csv, scenes/NAME/...) into --out.
+Sections with a quick form (fewer points than the full study, the same checks: the mechanics' chattering windows,
+continuations and two blocks) run it unless --full is given; the report's summary says which ran quick.
 
 TARGET is a suite name (default: "default"), a scene file FILE.toml, or a directory DIR whose *.toml files are
 all run (a name that is both a suite and a path is the suite: write ./NAME for the path). Scene files are
@@ -36,6 +38,9 @@ def add(sub) -> None:
                         help="output directory (default reports/SUITE or reports/STEM); new, empty, or an earlier "
                              "pcsuite report, which is replaced whole")
     report.add_argument("--workers", type=integer(1, MAX_WORKERS), default=2, help="parallel processes (default 2)")
+    report.add_argument("--full", action="store_true",
+                        help="run every section at full size: the sections with a quick form (the mechanics' "
+                             "chattering windows and two blocks, ...) run it by default, and the report says which")
     report.set_defaults(run=run)
 
 
@@ -51,7 +56,7 @@ def run(args) -> int:
         label, scenes, extra = args.suite, None, EXTRA_SECTIONS.get(args.suite, ())
         # the bench suite's report must not land on `pcsuite bench`'s own results (reports/bench), which it reads
         default_out = Path("reports") / ("bench-report" if args.suite == "bench" else args.suite)
-        options = {"suite": args.suite, "workers": args.workers}
+        options = {"suite": args.suite, "workers": args.workers, "full": args.full}
     else:
         if not args.suite.strip() or not Path(args.suite).exists():      # '' would be read as '.'
             raise ParameterError(f"TARGET must be a suite ({', '.join(suites)}), a scene file FILE.toml or a "
@@ -65,9 +70,14 @@ def run(args) -> int:
             stem = Path(args.suite).stem if Path(args.suite).is_file() else Path(args.suite).resolve().name
             default_out = Path("reports") / safe_name(f"the default --out reports/STEM (give --out): STEM of "
                                                       f"{args.suite!r}", stem)
+    if args.full and not any(getattr(builder, "quick_form", False) for _, builder in extra):
+        quick = sorted(name for name, sections in EXTRA_SECTIONS.items()
+                       if any(getattr(builder, "quick_form", False) for _, builder in sections))
+        raise ParameterError(f"--full runs the quick-form sections of a suite at full size; {args.suite!r} has none "
+                             f"(the suites with some: {', '.join(quick)})")
     out = args.out or default_out
     check_output_dir("--out", out, "report")             # before the run; write_report checks again
-    scene_results, extras = run_suite(label, extra, workers=args.workers, scenes=scenes)
+    scene_results, extras = run_suite(label, extra, workers=args.workers, scenes=scenes, full=args.full)
     sections = (([scenes_summary(scene_results)] if scene_results else []) + [scene_section(r) for r in scene_results]
                 + list(extras))
     index = write_report(sections, out, label, options=options)
