@@ -129,6 +129,56 @@ class Deadline:
                 f"(or {TIME_ENV})")
 
 
+# ------------------------------------------------------------------------------ the time spent compiling
+# A time limit measures the work it limits, never a compile. numba compiles a kernel (or loads it from its disk
+# cache) at its first call with new argument types, inside the first run that needs it: with an empty cache (a
+# fresh machine, a kernel source changed) tens of seconds, more than a limit a user sets for the run. The clock
+# below counts, per thread, the time spent in numba's compiler (whose lock spans every compile and cache load:
+# the "numba:compiler_lock" event), so that a limit can leave it out: an LCP solve's deadline
+# (:mod:`converters.lcp.solve`) and the command line's alarm for a one-run command (:mod:`validation.cli`).
+
+_compiled: dict = {}            # thread id -> seconds spent in numba's compiler, compiles that have ended
+_compiling: dict = {}           # thread id -> (lock depth, monotonic time of the outermost acquisition)
+_compile_clock: list = []
+
+
+def install_compile_clock() -> None:
+    """Start counting the time each thread spends in numba's compiler (imports numba; once per process)."""
+    if _compile_clock:
+        return
+    import threading
+
+    from numba.core import event
+    ident = threading.get_ident
+
+    class CompileClock(event.Listener):
+        def on_start(self, event):
+            depth, since = _compiling.get(ident(), (0, 0.0))      # the lock is re-entrant: its outermost hold
+            _compiling[ident()] = (depth + 1, since if depth else time.monotonic())
+
+        def on_end(self, event):
+            depth, since = _compiling.pop(ident(), (0, 0.0))
+            if depth > 1:
+                _compiling[ident()] = (depth - 1, since)
+            elif depth == 1:
+                _compiled[ident()] = _compiled.get(ident(), 0.0) + time.monotonic() - since
+            # depth 0: taken before the clock was installed, so before anything it times began
+
+    clock = CompileClock()
+    event.register("numba:compiler_lock", clock)
+    _compile_clock.append(clock)
+
+
+def compile_seconds(ident: int | None = None) -> float:
+    """Seconds thread ``ident`` (default: this one) has spent in numba's compiler since :func:`install_compile_clock`,
+    a compile under way included (0 before it)."""
+    if ident is None:
+        import threading
+        ident = threading.get_ident()
+    depth, since = _compiling.get(ident, (0, 0.0))
+    return _compiled.get(ident, 0.0) + (time.monotonic() - since if depth else 0.0)
+
+
 #: ``PCSUITE_MALLOC_PAD``: bytes of freed memory glibc's malloc keeps for the next run (0: leave malloc alone).
 MALLOC_PAD_ENV = "PCSUITE_MALLOC_PAD"
 DEFAULT_MALLOC_PAD = 64 << 20

@@ -251,27 +251,20 @@ def _deadline(seconds: float, started: float, setup: float | None = None) -> lim
 
 
 # ------------------------------------------------------------------------- the clock of the time limit
-# A time limit measures the solve, never the compile or the import of the code that runs it. numba compiles a
-# kernel, or loads it from its on-disk cache, at its first call with new argument types: inside the first solve
-# that needs it. With an empty cache (a fresh machine, a kernel source changed) the methods take tens of seconds
-# to compile, longer than the default limit of 20 s, and a first solve would end at its limit before its first
-# step. So a solve's clock does not run while its thread is in numba's compiler (whose lock spans every compile
-# and cache load: the "numba:compiler_lock" event) or imports the engine (numba with it), and the thin path reads
-# the clock once its kernel is loaded.
+# A time limit measures the solve, never the compile or the import of the code that runs it: with an empty cache
+# the methods take tens of seconds to compile, longer than the default limit of 20 s, and a first solve would end
+# at its limit before its first step. So a solve's clock does not run while its thread is in numba's compiler
+# (converters.limits' compile clock) or imports the engine (numba with it), and the thin path reads the clock once
+# its kernel is loaded.
 
-_setup: dict = {}         # thread id -> seconds that thread spent compiling kernels and importing the engine
+_imports: dict = {}       # thread id -> seconds that thread spent importing the engine
 _get_ident = threading.get_ident
 
 
 def _setup_seconds() -> float:
     """Seconds this thread has spent so far in numba's compiler and importing the engine (counted from the
     install of the compile clock, which comes before a solve can compile anything)."""
-    return _setup.get(_get_ident(), 0.0)
-
-
-def _add_setup(seconds: float) -> None:
-    ident = _get_ident()
-    _setup[ident] = _setup.get(ident, 0.0) + seconds
+    return limits.compile_seconds(_get_ident()) + _imports.get(_get_ident(), 0.0)
 
 
 class _SolveDeadline(limits.Deadline):
@@ -283,7 +276,7 @@ class _SolveDeadline(limits.Deadline):
         self.end = started - setup + self.seconds
 
     def expired(self) -> bool:
-        return _monotonic() - _setup.get(_get_ident(), 0.0) > self.end
+        return _monotonic() - _setup_seconds() > self.end
 
 
 def _engine():
@@ -293,41 +286,10 @@ def _engine():
     if engine is None:
         begun = _monotonic()
         from . import engine
-        _add_setup(_monotonic() - begun)
-    if not _compile_clock:
-        _install_compile_clock()
+        ident = _get_ident()
+        _imports[ident] = _imports.get(ident, 0.0) + _monotonic() - begun
+    limits.install_compile_clock()
     return engine
-
-
-_compile_clock: list = []
-
-
-def _install_compile_clock() -> None:
-    """Count, per thread, the time spent in numba's compiler: from the outermost acquisition of its lock to its
-    release (the lock is re-entrant; a compile takes it again for every function it compiles)."""
-    from numba.core import event
-
-    class CompileClock(event.Listener):
-        def __init__(self):
-            self.open: dict = {}          # thread id -> (depth, monotonic time of the outermost acquisition)
-
-        def on_start(self, event):
-            ident = _get_ident()
-            depth, since = self.open.get(ident, (0, 0.0))
-            self.open[ident] = (depth + 1, since if depth else _monotonic())
-
-        def on_end(self, event):
-            ident = _get_ident()
-            depth, since = self.open.pop(ident, (0, 0.0))
-            if depth > 1:
-                self.open[ident] = (depth - 1, since)
-            elif depth == 1:
-                _add_setup(_monotonic() - since)
-            # depth 0: taken before the clock was installed, so before any solve could be compiling
-
-    clock = CompileClock()
-    event.register("numba:compiler_lock", clock)
-    _compile_clock.append(clock)
 
 
 def check_lcp(M, q) -> tuple[np.ndarray, np.ndarray]:

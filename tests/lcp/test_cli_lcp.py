@@ -1,6 +1,7 @@
 """`pcsuite lcp solve`: tiny and huge scales solved, out-of-range flags refused, and the time and memory limits."""
 import contextlib
 import json
+import time
 import tracemalloc
 
 import numpy as np
@@ -120,3 +121,37 @@ def test_no_fast_paths_runs_the_method_itself(capsys, tmp_path):
     code, out, _ = run(capsys, "lcp", "solve", str(path), "--method", "murty", "--no-fast-paths", "--json")
     pivoted = json.loads(out)
     assert code == 0 and pivoted["iterations"] == 2**6 - 1 and pivoted["z"] == fast["z"] == [0, 0, 0, 0, 0, 1]
+
+
+def _hold(seconds: float, compiling: bool):
+    """engine.sizes after ``seconds`` of set-up: inside numba's compiler lock (as a kernel's first compile) or not."""
+    from converters.lcp import engine
+    sizes = engine.sizes
+
+    def slow(method, k):
+        if compiling:
+            from numba.core.compiler_lock import global_compiler_lock
+            with global_compiler_lock:
+                time.sleep(seconds)
+        else:
+            time.sleep(seconds)
+        return sizes(method, k)
+    return slow
+
+
+@pytest.mark.parametrize("compiling", [True, False], ids=["compiling", "working"])
+def test_a_compile_inside_a_one_run_command_does_not_count_against_its_time_limit(capsys, tmp_path, monkeypatch,
+                                                                                  compiling):
+    """--time-limit 0.1 arms an alarm at 0.605 s: 1 s in numba's compiler (a first solve on a cold cache) puts it off
+    by that second and the solve answers; 1 s of the run's own work still ends it there, in one line."""
+    from converters.lcp import engine
+    monkeypatch.setattr(engine, "sizes", _hold(1.0, compiling))
+    path = write_dense(tmp_path / "pair.dat", np.array([[2.0, 1.0], [1.0, 2.0]]), np.array([-3.0, -3.0]))
+    code, out, err = run(capsys, "lcp", "solve", str(path), "--method", "enum", "--no-fast-paths", "--time-limit",
+                         "0.1", "--json")
+    if compiling:
+        assert code == 0 and err == "" and json.loads(out)["status"] == "solved", err
+    else:
+        assert code == 2 and err == ("pcsuite: error: the run did not finish within the time limit of 0.1 s "
+                                     "(--time-limit); raise it, or ask for a shorter run (--t-end, --periods) or a "
+                                     "coarser one\n"), err
