@@ -20,6 +20,7 @@ from netlists import SpiceOptions
 
 from .compare import compare
 from .defaults import passes
+from .io import parquet_bytes
 from .plots import comparison_plot, mode_timeline_plot
 from .report import Section, esc, run_section, table_html, url
 from .scenes import Scene, scenes_of
@@ -131,7 +132,7 @@ def _run_smc_scene(scene: Scene) -> SceneResult:
     m = c.metrics
     checks = smc_checks(m, scene.checks, c.params, t_end)
     frame = c.lcp.waveforms()
-    files = {f"scenes/{scene.name}/lcp.parquet": _parquet(frame.iloc[::max(1, len(frame) // 200_000)]),
+    files = {f"scenes/{scene.name}/lcp.parquet": parquet_bytes(frame.iloc[::max(1, len(frame) // 200_000)]),
              f"scenes/{scene.name}/overlay.png": smc_plot(c)}
     failed = [name for name, _, _, ok in checks if not ok]
     return SceneResult(scene, ok=not failed, reason=("failed checks: " + ", ".join(failed)) if failed else "",
@@ -145,7 +146,7 @@ def _run_smc_implicit_scene(scene: Scene) -> SceneResult:
     failed = [name for name, _, _, ok in checks if not ok]
     from .plots import png
     return SceneResult(scene, ok=not failed, reason=("failed checks: " + ", ".join(failed)) if failed else "",
-                       checks=checks, metrics=m, files={f"scenes/{scene.name}/lcp.parquet": _parquet(run.waveforms()),
+                       checks=checks, metrics=m, files={f"scenes/{scene.name}/lcp.parquet": parquet_bytes(run.waveforms()),
                                                         f"scenes/{scene.name}/waveforms.png": png(run.plot())})
 
 
@@ -153,14 +154,9 @@ def _run_smc_implicit_scene(scene: Scene) -> SceneResult:
 SCENE_RUNNERS = {"circuit": _run_circuit_scene, "smc": _run_smc_scene, "smc-implicit": _run_smc_implicit_scene}
 
 
-def _parquet(frame: pd.DataFrame) -> bytes:
-    from .io import parquet_bytes
-    return parquet_bytes(frame)
-
-
 def _window(tr, t0: float) -> bytes:
     """A run's waveforms from ``t0`` on (the window its comparison measures) as Parquet."""
-    return _parquet(tr.waveforms().iloc[tr.rows_between(t0, tr.t[-1])])
+    return parquet_bytes(tr.waveforms().iloc[tr.rows_between(t0, tr.t[-1])])
 
 
 def scene_section(result: SceneResult) -> Section:
