@@ -145,9 +145,10 @@ def _run_smc_implicit_scene(scene: Scene) -> SceneResult:
     checks = implicit_checks(m, scene.checks)
     failed = [name for name, _, _, ok in checks if not ok]
     from .plots import png
+    files = {f"scenes/{scene.name}/lcp.parquet": parquet_bytes(run.waveforms()),
+             f"scenes/{scene.name}/waveforms.png": png(run.plot())}
     return SceneResult(scene, ok=not failed, reason=("failed checks: " + ", ".join(failed)) if failed else "",
-                       checks=checks, metrics=m, files={f"scenes/{scene.name}/lcp.parquet": parquet_bytes(run.waveforms()),
-                                                        f"scenes/{scene.name}/waveforms.png": png(run.plot())})
+                       checks=checks, metrics=m, files=files)
 
 
 #: The study of each scene kind other than a PWM converter's comparison: a netlist's, the sliding-mode boost's.
