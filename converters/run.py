@@ -51,8 +51,9 @@ def resolve_model(name_or_model, control: str = "pwm") -> Model:
 
 
 def make_method(model: Model, p: dict, method: str | Method | None = None, h=None, **options) -> Method:
-    """The method for a run of ``model``: h defaults to the model's (T/1000; PRC 50 ns), the stepper's theta
-    to the model's. ``h`` is the stepper's step or the output spacing of the other methods."""
+    """The method for a run of ``model``: h defaults to the model's (T/1000), the stepper's theta
+    to 0.5 where h resolves every time constant of the circuit, else 1 (:meth:`Model.default_theta`). ``h`` is
+    the stepper's step or the output spacing of the other methods."""
     if isinstance(method, Method):
         if h is not None or any(v is not None for v in options.values()):
             raise ParameterError("give either a Method object or h and method options, not both")
@@ -66,8 +67,11 @@ def make_method(model: Model, p: dict, method: str | Method | None = None, h=Non
     elif not 0.0 < h <= model.max_h(p):
         raise ParameterError(f"h must be in (0, {model.max_h(p):.3g}] s for {model.key} (at most 1/20 of the "
                              f"shorter switching interval); got {h:g}")
-    if options.get("theta") is None and "theta" in cls.option_names():     # the model's theta (PRC, netlists 0.5)
-        options["theta"] = model.default_theta
+    if options.get("theta") is None and "theta" in cls.option_names():     # 0.5 unless a mode is faster than h
+        options["theta"] = model.default_theta(p, h)
+    elif options.get("theta") is not None and "theta" in cls.option_names():
+        from .methods.theta import check_ringing
+        check_ringing(parse_value("theta", options["theta"]), model.fastest_rate(p), h)
     return cls.from_options(step=h, **options)
 
 

@@ -80,7 +80,6 @@ class Model(ABC):
     signal_names: tuple[str, ...] = ("vout", "switch")
     #: Every mode label the model's rule can produce.
     mode_labels: tuple[str, ...] = ("CCM-ON", "CCM-OFF", "DCM", "GDCM-ON")
-    default_theta: float = 1.0
     #: True when the model states its CCM/DCM closed forms (:class:`.analytic.SmallRipple`).
     closed_form: bool = False
     #: The state that carries the output voltage (what a bifurcation diagram shows by default).
@@ -115,6 +114,20 @@ class Model(ABC):
 
     def default_h(self, p: dict) -> float:
         return self.period(p) / 1000.0
+
+    def fastest_rate(self, p: dict) -> float:
+        """The largest |lambda| (1/s) of the circuit's configurations at ``p``
+        (:func:`~converters.methods.theta.fastest_rate`)."""
+        from ..methods.theta import fastest_rate
+        span = self.period(p) if self.periodic(p) else 1e-9
+        return fastest_rate(self.problem(p, span).configurations)
+
+    def default_theta(self, p: dict, h: float) -> float:
+        """The stepper's theta for steps of ``h`` s at ``p``: 0.5 where the step resolves every time constant of
+        the circuit's configurations, 1 where one is shorter (:func:`~converters.methods.theta.stable_theta`): the
+        same rule for a named converter and its netlist."""
+        from ..methods.theta import stable_theta
+        return stable_theta(self.fastest_rate(p), h)
 
     def periodic(self, p: dict) -> bool:
         """True when the problem's switching law has a fixed period (stroboscopic steady states)."""

@@ -43,9 +43,6 @@ class Circuit(Model):
     """A netlist as a model (module docstring)."""
 
     control = "pwm"
-    #: The trapezoidal rule: a netlist's LC tanks ring for many periods (backward Euler damps them: the diode
-    #: bridge's tank lost a quarter of its amplitude in 5 ms at the file's step).
-    default_theta = 0.5
 
     def __init__(self, netlist: Netlist, source: str):
         self.netlist = netlist

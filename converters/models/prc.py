@@ -39,10 +39,6 @@ class PRC(FromNetlist, Converter):
     netlist_states = ("i(lr)", "v(cr)", "i(lf)", "v(cf)")
     configuration_names = ("drive+", "drive-")
     schedule_parameters = frozenset()
-    default_theta = 0.5
-
-    def default_h(self, p):
-        return min(5e-8, self.period(p) / 200.0)
 
     def schedule(self, p):
         return Schedule.pwm(self.period(p), 0.5, on=0, off=1)

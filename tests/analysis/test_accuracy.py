@@ -117,24 +117,30 @@ def test_an_rtol_outside_its_range_is_refused(rtol):
         accurate_steady(model, model.resolve({}), rtol)
 
 
+@pytest.mark.parametrize("theta", [None, 1.0], ids=["default", "backward-euler"])
 @pytest.mark.parametrize("steady", [True, False], ids=["steady", "from-rest"])
 @pytest.mark.parametrize("key", list(POINTS))
-def test_default_settings_warn_on_exactly_the_points_whose_mean_misses_1e_3(key, steady, references):
-    """The defaults (h = T/1000, theta 1; 500 periods from rest, or --steady) at the 15 points: the summary
-    warns iff vout's mean is more than 1e-3 off the exact periodic value (measured: 6 of 15 steady runs and
-    12 of 15 from rest miss; each estimate within 43 % of the true error where the error is above 1e-6)."""
+def test_default_settings_warn_on_exactly_the_points_whose_mean_misses_1e_3(key, steady, theta, references):
+    """The default step (h = T/1000; 500 periods from rest, or --steady) at the 15 points, with the default theta
+    (0.5: the step resolves every time constant) and with backward Euler: the summary warns iff vout's mean is
+    more than 1e-3 off the exact periodic value. Backward Euler (measured: 6 of 15 steady runs and 12 of 15
+    from rest miss): each estimate within 43 % of the true error where the error is above 1e-6. Theta 0.5 (no
+    steady run misses; the worst 5.8e-4): Richardson's order drops to 1.5 through a diode event, so each
+    estimate is between 0.39x and 5.6x the true error (never more than 3x short)."""
     from converters.run import run_converter, run_summary
     from converters.analysis.accuracy import DEFAULT_RTOL
     name, params = POINTS[key]
     exact = references[key][2]["vout_mean"][0]
-    summary = run_summary(run_converter(name, params, steady=steady))
+    summary = run_summary(run_converter(name, params, steady=steady, theta=theta))
     true = abs(summary["vout_mean"] - exact) / abs(exact)
     estimate = summary["accuracy"]["vout_mean_error_estimate"]
     # (a warning about the efficiency, estimated on its own, may follow vout's in the same line)
     vout_warned = "warnings" in summary and summary["warnings"][0].startswith("vout mean may be")
     assert vout_warned == (true > DEFAULT_RTOL), (true, estimate, summary.get("warnings"))
-    if true > 1e-6:
+    if true > 1e-6 and theta == 1.0:
         assert estimate == pytest.approx(true, rel=0.5)
+    elif true > 1e-6:
+        assert true <= 3 * estimate and estimate <= 10 * true, (true, estimate)
     if vout_warned:
         (warning,) = summary["warnings"]
         assert warning.startswith(f"vout mean may be {estimate:.1e} off (more than 0.001)")
@@ -149,7 +155,7 @@ def test_the_power_summary_says_how_accurate_it_is(name, params):
     # read 0.9975 with no estimate and no warning; the estimate (Richardson at h and 2h, order 1) is measured
     # against the event method's exact quadrature
     from converters.run import run_converter, run_summary
-    lcp = run_summary(run_converter(name, params, steady=True))
+    lcp = run_summary(run_converter(name, params, steady=True, theta=1.0))      # backward Euler: first order
     exact = run_summary(run_converter(name, params, steady=True, method="event"))["power"]
     power = lcp["power"]
     error = abs(power["efficiency"] - exact["efficiency"])

@@ -60,7 +60,7 @@ def test_the_final_value_is_the_steady_state_after_the_step_not_the_runs_last_pe
     assert not short["settled"] and short["vout_end"] == pytest.approx(8.2035, abs=1e-3)
     full = run_summary(run_converter("buck", {"t_step": "4m", "R_step": 20}, t_end="20m"))["step"]
     assert full["settled"] and full["vout_final"] == pytest.approx(final, rel=1e-9)
-    assert full["overshoot_V"] == 0.0 and 1.70e-3 < full["settling_time_s"] < 1.80e-3
+    assert full["overshoot_V"] <= 1e-9 and 1.70e-3 < full["settling_time_s"] < 1.80e-3
     # the settling time is where the per-period means enter the band for good: a run twice as long agrees
     longer = run_summary(run_converter("buck", {"t_step": "4m", "R_step": 20}, t_end="40m"))["step"]
     assert longer["settling_time_s"] == pytest.approx(full["settling_time_s"], abs=1e-12)

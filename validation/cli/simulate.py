@@ -21,7 +21,7 @@ def add(sub) -> None:
     sim.add_argument("--method", default=None, choices=list(circuits),
                      help="; ".join(f"{key}: {cls.description}" for key, cls in circuits.items())
                      + " (default lcp; with --rtol pcsuite chooses)")
-    sim.add_argument("--h", default=None, help="step in s (default T/1000; PRC 50 ns); event and smooth: "
+    sim.add_argument("--h", default=None, help="step in s (default T/1000); event and smooth: "
                                               "output sample spacing")
     sim.add_argument("--eps", default=None, help="smooth: smoothing width eps (default 1e-4, units of y)")
     sim.add_argument("--rtol", default=None,
@@ -30,7 +30,8 @@ def add(sub) -> None:
                           "pcsuite chooses the method and step and reports them")
     sim.add_argument("--solver-rtol", default=None, help="smooth: scipy's relative tolerance (default 1e-6; the "
                                                          "result's error is the smoothing's, O(eps))")
-    sim.add_argument("--theta", default=None, help="theta in [0.5, 1] (default 1, PRC 0.5)")
+    sim.add_argument("--theta", default=None, help="theta in [0.5, 1] (default 0.5 where the step resolves every "
+                     "time constant of the circuit, else 1: backward Euler, which does not ring)")
     sim.add_argument("--grade", default=None,
                      help="lcp: the first step after each switching instant as a fraction of --h, in [0, 1) (default 0: "
                           "uniform steps); the steps then grow by --growth until they reach --h")

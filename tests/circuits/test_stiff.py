@@ -1,0 +1,93 @@
+"""The stepper's default theta stays stable at the extremes: the trapezoidal rule (second order) where the step
+resolves every time constant of the circuit, backward Euler (L-stable) where one is shorter; the same rule for a
+named converter and its netlist. A theta that rings on a mode faster than the step is refused in one line.
+
+The stiff node: a 10 V, 1 kHz square wave through R1 into C1 and an ideal diode into C2 = 1 uF, 1e12 ohm across
+each capacitor. The diode charges C2 to the wave's top; the 1e12 ohm bleeders leave it within 1e-9 of 10 V
+(R1 / 1e12 = 1e-11 at node a; a droop of T / (1e12 x 1 uF) = 1e-9 a period). With theta 0.5 at the file's 1 us
+step, R1 C1 = 100 ns (10 ohm, 10 nF) read 16.665 V, and 1 fs (1 mohm, 1 pF) 1,363,648 V ("stable").
+"""
+import json
+
+import numpy as np
+import pytest
+
+from converters.errors import ParameterError
+from converters.methods.theta import RESOLVED, check_ringing, fastest_rate, stable_theta
+from converters.models import get_model
+from converters.problems import Configuration
+from converters.run import run_converter, run_summary
+from validation.cli import main
+
+STIFF = """stiff node: a square wave through {r} into {c}, an ideal diode into 1 uF
+V1 in 0 PULSE(0 10 0 1n 1n 0.5m 1m)
+R1 in a {r}
+C1 a 0 {c}
+D1 a out DIDEAL
+C2 out 0 1u
+R2 a 0 1e12
+R3 out 0 1e12
+.model DIDEAL D
+.tran 1u 20m
+.end
+"""
+
+
+@pytest.mark.parametrize("r, c, tau", [("10", "10n", 1e-7), ("1m", "1p", 1e-15)])
+def test_a_stiff_node_charges_the_capacitor_to_the_source_voltage_not_beyond(r, c, tau, tmp_path, capsys):
+    path = tmp_path / "stiff.cir"
+    path.write_text(STIFF.format(r=r, c=c))
+    assert main(["simulate", str(path), "--steady", "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["options"]["theta"] == 1.0 and summary["orbit"]["stable"]
+    assert summary["vout_mean"] == pytest.approx(10.0, abs=1e-7)
+    assert summary["accuracy"]["vout_mean_error_estimate"] < 1e-9 and "warnings" not in summary
+    model = get_model(str(path))
+    assert model.fastest_rate(model.resolve({})) == pytest.approx(1 / tau, rel=1e-6)
+    # asked for by name, the trapezoidal rule is refused in one line, with the remedy
+    assert main(["simulate", str(path), "--steady", "--theta", "0.5"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert f"theta 0.5 rings on this circuit's fastest mode (time constant {tau:.3g} s" in err
+    assert "use theta 1 (backward Euler; the default here)" in err
+
+
+def _rc(tau, d=0.0):
+    """One RC pole of time constant ``tau`` with a complementarity pair whose held flow adds 1/d."""
+    return Configuration(A=[[-1.0 / tau]], B=[[1.0]], C=[[1.0]], D=[[d]], name="rc")
+
+
+def test_the_default_theta_is_the_trapezoidal_rule_only_where_the_step_resolves_every_time_constant():
+    assert fastest_rate([_rc(1e-6), _rc(1e-4)], held=False) == pytest.approx(1e6)
+    assert stable_theta(fastest_rate([_rc(1e-6)]), RESOLVED * 1e-6) == 0.5
+    assert stable_theta(fastest_rate([_rc(1e-6)]), 1.001 * RESOLVED * 1e-6) == 1.0
+    # a diode's series resistance in conduction: the held flow A - B D^-1 C decays at 1/tau + 1/d
+    slow_but_held_fast = [_rc(1e-3, d=1e-6)]
+    assert fastest_rate(slow_but_held_fast, held=False) == pytest.approx(1e3)
+    assert fastest_rate(slow_but_held_fast) == pytest.approx(1e3 + 1e6)
+    assert stable_theta(fastest_rate(slow_but_held_fast), 1e-5) == 1.0
+
+
+@pytest.mark.parametrize("theta, refused_from", [(0.5, 6.0), (0.6, 15.0), (0.75, np.inf), (1.0, np.inf)])
+def test_a_theta_is_refused_where_it_flips_a_mode_and_keeps_more_than_half_of_it(theta, refused_from):
+    """The amplification (1 + (1 - theta) z) / (1 - theta z) reaches -1/2 at z = -6 (theta 0.5), -15 (theta 0.6)
+    and never for theta >= 2/3 (its limit -(1 - theta) / theta)."""
+    for z in (0.5, 2.0, 5.99, 14.9, 1e3, 1e12):
+        if z > refused_from:
+            with pytest.raises(ParameterError, match=f"theta {theta:g} rings"):
+                check_ringing(theta, z / 1e-6, 1e-6)
+        else:
+            check_ringing(theta, z / 1e-6, 1e-6)
+
+
+@pytest.mark.parametrize("name", ["buck", "boost", "buck-boost", "cuk", "prc"])
+def test_a_named_converter_and_its_netlist_get_the_same_default_method_and_numbers(name):
+    """The built-in converters and their netlists (netlists/circuits/NAME.cir) at their defaults: the same step,
+    the same theta (0.5: every time constant resolved) and the same steady-state mean to 1e-10 (the netlist's
+    matrices come from modified nodal analysis, the model's from its equations: they agree to rounding). By name
+    the buck was stepped with theta 1 and its netlist with 0.5: 6.9624599 V and 6.9624784 V."""
+    named = run_converter(name, steady=True)
+    netlist = run_converter(f"netlists/circuits/{name}.cir", steady=True)
+    assert named.algorithm == netlist.algorithm and named.algorithm.theta == 0.5
+    a, b = run_summary(named)["vout_mean"], run_summary(netlist)["vout_mean"]
+    assert a == pytest.approx(b, rel=1e-10)
