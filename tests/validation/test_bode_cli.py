@@ -115,3 +115,24 @@ def test_bode_breaks_a_current_mode_controllers_outer_loop_at_its_reference(caps
     summary = json.loads(out)
     assert summary["kind"] == "loop gain" and summary["input"] == "vloop"
     assert 1e3 < summary["margins"]["crossover_hz"] < 1e4 and 30 < summary["margins"]["phase_margin_deg"] < 90
+
+
+VOLTAGE_MODE = "netlists/circuits/voltage-mode-buck.cir"
+
+
+@pytest.mark.parametrize("command", [["sensitivity"], ["bode", "--input", "vin"]], ids=["sensitivity", "bode"])
+def test_an_analysis_about_an_unstable_orbit_is_refused_or_says_so(capsys, command):
+    """At Vin = 33 V the voltage-mode buck's period-1 orbit has a multiplier at -2.006 (simulate --steady refuses
+    it): its sensitivities and responses were printed 'on the periodic steady state', exit 0, and bode's JSON had
+    no spectral radius. At 22 V the orbit is stable (|-0.7528 +- 0.3354j| = 0.82413)."""
+    code, out, err = run_cli(capsys, command[0], VOLTAGE_MODE, *command[1:], "-p", "Vin=33")
+    assert code == 2 and out == "" and len(err.strip().splitlines()) == 1
+    assert "is unstable (Floquet spectral radius 2.006" in err and "--unstable" in err
+    code, out, err = run_cli(capsys, command[0], VOLTAGE_MODE, *command[1:], "-p", "Vin=33", "--unstable", "--json")
+    summary = json.loads(out)
+    assert code == 0 and summary["stable"] is False and summary["spectral_radius"] == pytest.approx(2.006, abs=1e-3)
+    assert err.startswith("warning: the periodic orbit of voltage-mode-buck.cir is unstable")
+    code, out, err = run_cli(capsys, command[0], VOLTAGE_MODE, *command[1:], "--json")
+    summary = json.loads(out)
+    assert code == 0 and err == "" and summary["stable"] is True
+    assert summary["spectral_radius"] == pytest.approx(0.82413, abs=1e-5)

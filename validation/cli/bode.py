@@ -7,7 +7,7 @@ import time
 
 from converters.errors import ParameterError
 
-from .common import add_params, given_path, integer, json_text
+from .common import add_params, add_unstable_option, given_path, integer, json_text, orbit_stability
 
 #: What --input accepts beside a parameter's name: the duty ratio, the input voltage and the load current (the
 #: output impedance's input, 0 A unless -p Io= says otherwise) by their usual names.
@@ -44,6 +44,7 @@ def add(sub) -> None:
     bode.add_argument("--check", action="store_true",
                       help=f"also inject a sinusoid at {CHECK_POINTS} frequencies, simulate each to its periodic steady "
                            "state (exact event method) and print its fundamental beside the exact response")
+    add_unstable_option(bode)
     bode.add_argument("--plot", type=given_path, default=None, help="write the Bode plot to FILE.png or FILE.svg")
     bode.add_argument("--json", action="store_true", help="print one JSON object (frequency_hz, magnitude_db, "
                                                          "phase_deg, margins of a loop gain, the check)")
@@ -81,6 +82,7 @@ def run(args) -> int:
     fmax = None if args.fmax is None else parse_value("--fmax", args.fmax)
     start = time.perf_counter()
     small = SmallSignalModel(model, params, input=name, outputs=(output,))
+    stability = orbit_stability("frequency responses", model.key, small.orbit.multipliers, args.unstable)
     model_s = time.perf_counter() - start
     start = time.perf_counter()
     f = frequencies(small.T, fmin, fmax, args.points)
@@ -93,7 +95,7 @@ def run(args) -> int:
                                  small.T, small.orbit.multipliers, *_units(model, small, name, output, loop))
     exact_s = time.perf_counter() - start
     summary = {"converter": model.key, "params": {k: v for k, v in small.params.items() if v is not None},
-               **response.as_dict(), "model_s": model_s, "response_s": exact_s}
+               **response.as_dict(), **stability, "model_s": model_s, "response_s": exact_s}
     found = margins(gain, f) if loop else None
     if found is not None:
         summary["margins"] = found.as_dict()
@@ -203,13 +205,14 @@ def _design(args, model, params: dict) -> int:
     fmin = None if args.fmin is None else parse_value("--fmin", args.fmin)
     fmax = None if args.fmax is None else parse_value("--fmax", args.fmax)
     response, found = loop_gain(model, closed, fmin=fmin, fmax=fmax, points=args.points)
+    stability = orbit_stability("loop gain", model.key, response.multipliers, args.unstable)
     plant = SmallSignalModel(model.converter, {**model.plant(p), "D": design.duty}, input="D")
     f = frequencies(plant.T, fmin, fmax, args.points)
     before = FrequencyResponse(f, plant.response(f) / (p["VU"] - p["VL"]), "D", "vout", "loop gain", plant.T,
                                plant.orbit.multipliers)
     parts = design.compensator.components(ri)
     summary = {"converter": model.key, "design": design.as_dict(), "components": parts, "margins": found.as_dict(),
-               "loop_gain": response.as_dict(), "plant": before.as_dict()}
+               "loop_gain": response.as_dict(), "plant": before.as_dict(), **stability}
     if args.plot is not None:
         from ..plots import bode_figure
         atomic_write_bytes(args.plot, bode_figure(response, None, found, args.plot.suffix.lower().lstrip("."),

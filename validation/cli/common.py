@@ -81,6 +81,32 @@ def add_params(parser) -> None:
                         help="parameter value, SPICE suffixes allowed (repeatable)")
 
 
+def add_unstable_option(parser) -> None:
+    parser.add_argument("--unstable", action="store_true",
+                        help="analyse the periodic orbit even where it is unstable (a Floquet multiplier outside the "
+                             "unit circle: the circuit does not settle on it); the output says so")
+
+
+def orbit_stability(what: str, key: str, multipliers, allowed: bool) -> dict:
+    """``spectral_radius`` and ``stable`` of the orbit an analysis is about; an unstable orbit is refused in one
+    line unless ``allowed`` (--unstable), and then said in a warning."""
+    import sys
+
+    import numpy as np
+
+    from converters.errors import SimulationError
+    rho = float(np.abs(np.asarray(multipliers)).max(initial=0.0))
+    stable = bool(rho < 1.0)
+    if not stable:
+        how = (f"the periodic orbit of {key} is unstable (Floquet spectral radius {rho:.6g}): the circuit does not "
+               f"settle on it (a period-doubled orbit, or chaos)")
+        if not allowed:
+            raise SimulationError(f"{how}, so its {what} describe no steady state; run pcsuite bifurcation to see "
+                                  "where it settles, or pass --unstable to analyse the orbit all the same")
+        print(f"warning: {how}: its {what} are the unstable orbit's (--unstable)", file=sys.stderr)
+    return {"spectral_radius": rho, "stable": stable}
+
+
 def add_spice_options(parser) -> None:
     """ngspice's transient settings on a command that runs it."""
     parser.add_argument("--spice-tmax", default=None,

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import math
 
-from .common import add_params, given_path
+from .common import add_params, add_unstable_option, given_path, orbit_stability
 
 
 def add(sub) -> None:
@@ -25,6 +25,7 @@ def add(sub) -> None:
     cmd.add_argument("--check", action="store_true",
                      help="also take each derivative by a five-point central difference of the steady state (four "
                           "orbits per parameter, Newton to 1e-11) and print it and the difference beside")
+    add_unstable_option(cmd)
     cmd.add_argument("--plot", type=given_path, default=None,
                      help="write a tornado chart of the normalised sensitivities to FILE.png or FILE.svg")
     cmd.add_argument("--json", action="store_true",
@@ -47,7 +48,8 @@ def run(args) -> int:
     model = resolve_model(args.converter, args.control)
     params = parse_assignments(args.params)
     found = sensitivities(model, params, metric=args.metric, parameters=args.param)
-    summary = {"converter": model.key, **found.as_dict()}
+    summary = {"converter": model.key, **found.as_dict(),
+               **orbit_stability("sensitivities", model.key, found.multipliers, args.unstable)}
     checks = {}
     if args.check:
         for row in found.rows:
@@ -66,7 +68,8 @@ def run(args) -> int:
         return 0
     unit = found.metric_unit
     print(f"{model.key}: exact sensitivities of mean({found.signal}) = {found.metric_value:.9g} {unit} on the periodic "
-          f"steady state (event method; Floquet spectral radius {summary['spectral_radius']:.6g}), ranked by "
+          f"{'steady state' if summary['stable'] else 'orbit (unstable)'} (event method; Floquet spectral radius "
+          f"{summary['spectral_radius']:.6g}), ranked by "
           "|(p/m) dm/dp|")
     header = f"  {'parameter':<12} {'value':>12} {'unit':<5} {'dm/dp':>14} {'(p/m) dm/dp':>12}"
     if checks:
