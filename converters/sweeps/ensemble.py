@@ -41,6 +41,39 @@ def on_demand(metrics) -> list:
     return [m for m in metrics if m not in MEASURES and m not in ACCURACY_MEASURES]
 
 
+#: A run from rest diverges when the largest magnitude of its state grows by more than this a period over its
+#: last five periods without slowing (an exponential's constant ratio; a start-up's ratio falls period by period:
+#: a time constant of 50 T still grows 1.2 % a period at 50 periods, but 6 % slower each time).
+DIVERGING = 0.01
+
+
+def unstable(spectral_radius: float) -> str:
+    """Why a point whose orbit has this spectral radius has no steady state ('' when it is stable): the same
+    judgement as ``simulate --steady``'s."""
+    if spectral_radius < 1.0:
+        return ""
+    return (f"unstable orbit (Floquet spectral radius {spectral_radius:.6g}): the circuit does not settle on it "
+            "(a period-doubled orbit, or chaos)")
+
+
+def diverging(run, T: float) -> str:
+    """Why a run from rest has no measures worth keeping ('' when none): a state that is not finite, or whose
+    largest magnitude grows by more than :data:`DIVERGING` a period over the last five without slowing."""
+    x = np.abs(np.asarray(run.x))
+    if not np.isfinite(x).all():
+        return "diverged: the state is no longer finite"
+    end = run.t[-1]
+    peaks = np.array([x[(run.t >= end - (k + 1) * T * (1 + 1e-9)) & (run.t <= end - k * T * (1 - 1e-9))].max(initial=0.0)
+                      for k in range(5, -1, -1)])
+    if (peaks[:-1] <= 0.0).any():
+        return ""
+    growth = peaks[1:] / peaks[:-1] - 1.0
+    if growth.min() > DIVERGING and growth[-1] >= 0.99 * growth[0]:
+        return (f"diverging: the state's largest magnitude grows {100 * growth[-1]:.3g} % a period (to "
+                f"{peaks[-1]:.3g} at the end): no steady state")
+    return ""
+
+
 def failed_row(index: int, point: dict, message: str, wall_s: float = 0.0) -> dict:
     """The row of a point that gave no result: its parameters, status ``failed`` and the reason."""
     return {"index": int(index), **{k: _number(v) for k, v in point.items()}, "status": "failed",
@@ -162,8 +195,10 @@ class ModelSweep:
             model = self._model()
             p = model.resolve({**self.base, **point})
             if self.rtol is not None:
-                return {**out, "status": "ok", "message": "", **self._accurate_row(model, p),
-                        "wall_s": time.perf_counter() - clock}
+                row = self._accurate_row(model, p)
+                if unstable(row["spectral_radius"]):
+                    return failed_row(index, point, unstable(row["spectral_radius"]), time.perf_counter() - clock)
+                return {**out, "status": "ok", "message": "", **row, "wall_s": time.perf_counter() - clock}
             method = self._method(model, p)
             T = model.period(p)
             if self.steady:
@@ -172,11 +207,15 @@ class ModelSweep:
                               polish=True)
                 if not orbit.converged:
                     return failed_row(index, point, f"no steady state: {orbit.message}", time.perf_counter() - clock)
+                if unstable(orbit.spectral_radius):
+                    return failed_row(index, point, unstable(orbit.spectral_radius), time.perf_counter() - clock)
                 run = simulate(model.problem(p, T, orbit.x0), method)
                 extra = {"spectral_radius": orbit.spectral_radius, "iterations": orbit.iterations,
                          "orbit_distance": orbit.distance}
             else:
                 long = simulate(model.problem(p, self.periods * T), method)
+                if diverging(long, T):
+                    return failed_row(index, point, diverging(long, T), time.perf_counter() - clock)
                 run = simulate(model.problem(p, T, long.x[-1]), method)
                 extra = {}
             return {**out, "status": "ok", "message": "", **orbit_row(model, p, run, self.metrics), **extra,
@@ -292,8 +331,12 @@ class ModelSweep:
                 run = _stepper_trajectory(problem, method, t, xs[k, :count], us[k, :count, None], ys[k, :count, None],
                                           config)
                 multipliers = np.linalg.eigvals(jac[k])
+                rho = float(np.abs(multipliers).max())
+                if unstable(rho):
+                    rows[index] = failed_row(index, point, unstable(rho), time.perf_counter() - clock)
+                    continue
                 rows[index] = {"index": int(index), **{key: _number(v) for key, v in point.items()}, "status": "ok", "message": "", **orbit_row(model, p, run, self.metrics),
-                               "spectral_radius": float(np.abs(multipliers).max()), "iterations": int(iterations[k]),
+                               "spectral_radius": rho, "iterations": int(iterations[k]),
                                "orbit_distance": float(distances[k]), "wall_s": time.perf_counter() - clock}
         return [rows[index] for index, _ in items]
 

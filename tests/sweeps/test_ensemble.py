@@ -260,3 +260,43 @@ def test_a_lambda_is_refused_before_any_worker_starts_and_runs_in_process():
 
 def test_a_latin_hypercube_takes_a_numpy_integer():
     assert LatinHypercube([Axis("D", 0.2, 0.8)], np.int64(5)).size == 5      # "must be an integer" before
+
+
+NETLISTS = Path(__file__).resolve().parents[2] / "netlists" / "circuits"
+
+
+def test_a_point_on_an_unstable_orbit_or_diverging_from_rest_is_failed_not_ok(tmp_path):
+    """The same judgement as simulate --steady: the voltage-mode buck at Vin 33 V has its period-1 orbit at a
+    multiplier of -2.0 (at 22 V: stable, 0.82); the buck with a conductance of -1 S across its 10 ohm load grows
+    without bound from rest (by ~9 % a period: (1 - 0.1) S on 100 uF). Both were stored 'ok'."""
+    loop = str(NETLISTS / "voltage-mode-buck.cir")
+    rows = _frame(run_ensemble(ModelSweep(loop), Grid([Axis.parse("Vin=22:33:2")]), backend="serial"))
+    assert list(rows["status"]) == ["ok", "failed"]
+    assert 0.8 < rows.loc[0, "spectral_radius"] < 0.85
+    assert rows.loc[1, "message"].startswith("unstable orbit (Floquet spectral radius 2.00")
+    text = (NETLISTS / "buck.cir").read_text().replace(".param Io=0", ".param Io=0 Gneg=0").replace(
+        "Iload out 0 DC {Io}", "Iload out 0 DC {Io}\nG1 0 out out 0 {Gneg}")
+    (tmp_path / "grows.cir").write_text(text)
+    grows = ModelSweep(str(tmp_path / "grows.cir"), steady=False, periods=50)
+    rows = _frame(run_ensemble(grows, Grid([Axis.parse("Gneg=0:1:2")]), backend="serial"))
+    assert list(rows["status"]) == ["ok", "failed"] and rows.loc[0, "vout_mean"] < 12
+    assert rows.loc[1, "message"].startswith("diverging: the state's largest magnitude grows")
+
+
+@dataclass
+class _Run:
+    t: np.ndarray
+    x: np.ndarray
+
+
+@pytest.mark.parametrize("shape, verdict", [
+    (lambda s: np.exp(0.05 * s), "diverging"),                      # 5.1 % a period, constant
+    (lambda s: 1.0 - np.exp(-s / 50.0), ""),                        # a start-up with a time constant of 50 T
+    (lambda s: 1.0 - np.exp(-s / 5.0), ""),
+    (lambda s: np.where(s < 49, 1.0, np.inf), "diverged"),
+    (lambda s: 1.0 + 0.5 * np.sin(2 * np.pi * s), "")])             # a steady ripple
+def test_diverging_tells_an_exponential_from_a_start_up(shape, verdict):
+    from converters.sweeps.ensemble import diverging
+    t = np.linspace(0.0, 50.0, 50 * 200 + 1)
+    message = diverging(_Run(t, shape(t)[:, None]), 1.0)
+    assert message.startswith(verdict) and bool(message) == bool(verdict)
