@@ -615,7 +615,28 @@ def default_check(model, p: dict, method, tr, reported: float, power: dict | Non
         out["warning"] = (f"vout mean may be {error:.1e} off (more than {DEFAULT_RTOL:g}): " + "; ".join(reasons))
     if power_warning:
         out["warning"] = f"{out['warning']}; {power_warning}" if "warning" in out else power_warning
+    resonance = _overdamped(model, p, method)
+    if resonance:
+        out["trusted"] = False
+        out["warning"] = f"{out['warning']}; {resonance}" if "warning" in out else resonance
     return out
+
+
+def _overdamped(model, p: dict, method) -> str:
+    """Why the estimate cannot be trusted where the step damps one of the circuit's resonances more than the
+    circuit does (:func:`~converters.methods.theta.overdamped_resonance`): Richardson at h and 2h then compares two
+    runs that both erase the ring, and agrees with itself ('' when no resonance is)."""
+    theta = getattr(method, "theta", None)
+    if theta is None or not hasattr(model, "problem"):
+        return ""
+    from ..methods.theta import overdamped_resonance
+    found = overdamped_resonance(model.problem(p, model.period(p)).configurations, method.h, theta)
+    if found is None:
+        return ""
+    frequency, q, ratio = found
+    return (f"the step damps the circuit's {frequency:.3g} Hz resonance (Q {q:.3g}) {ratio:.3g}x faster than the "
+            f"circuit does (theta {theta:g}, h = {method.h:.3g} s): the values and their estimates may be off by "
+            "more than stated; use a smaller --h, or --theta 0.5 where every time constant is resolved")
 
 
 #: The measures of a run's summary that :func:`window_check` estimates (those the summary has).

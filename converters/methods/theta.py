@@ -165,6 +165,26 @@ def stable_theta(rate: float, h: float) -> float:
     return 0.5 if h * rate <= RESOLVED else 1.0
 
 
+def overdamped_resonance(configurations, h: float, theta: float) -> tuple | None:
+    """The resonance the theta method damps most beyond the circuit's own damping, as (frequency in Hz, Q, the
+    ratio of the scheme's extra decay rate to the mode's own), where that ratio exceeds 1; None where no
+    oscillatory mode is damped more by the step than by the circuit. The scheme's decay rate of a mode lambda is
+    -ln|r(h lambda)| / h, r(z) = (1 + (1 - theta) z) / (1 - theta z): backward Euler adds ~h omega^2 / 2 (a
+    100 pF snubber's 5 MHz ring with a 10 uH inductor, Q 316, decays 96x faster at h = 10 ns than it does)."""
+    worst = None
+    for config in configurations:
+        for lam in np.linalg.eigvals(config.A) if config.A.size and np.isfinite(config.A).all() else ():
+            sigma, omega = -lam.real, abs(lam.imag)
+            if omega <= 0.0 or sigma <= 0.0:
+                continue
+            z = h * lam
+            extra = -np.log(abs((1.0 + (1.0 - theta) * z) / (1.0 - theta * z))) / h - sigma
+            ratio = extra / sigma
+            if ratio > 1.0 and (worst is None or ratio > worst[2]):
+                worst = (omega / (2.0 * np.pi), abs(lam) / (2.0 * sigma), float(ratio))
+    return worst
+
+
 #: The most a mode may flip and keep of its amplitude in one step before a theta is refused for ringing.
 RINGS = 0.5
 

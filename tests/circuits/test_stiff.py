@@ -8,6 +8,7 @@ each capacitor. The diode charges C2 to the wave's top; the 1e12 ohm bleeders le
 step, R1 C1 = 100 ns (10 ohm, 10 nF) read 16.665 V, and 1 fs (1 mohm, 1 pF) 1,363,648 V ("stable").
 """
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -18,6 +19,8 @@ from converters.models import get_model
 from converters.problems import Configuration
 from converters.run import run_converter, run_summary
 from validation.cli import main
+
+NETLISTS = Path(__file__).resolve().parents[2] / "netlists" / "circuits"
 
 STIFF = """stiff node: a square wave through {r} into {c}, an ideal diode into 1 uF
 V1 in 0 PULSE(0 10 0 1n 1n 0.5m 1m)
@@ -91,3 +94,23 @@ def test_a_named_converter_and_its_netlist_get_the_same_default_method_and_numbe
     assert named.algorithm == netlist.algorithm and named.algorithm.theta == 0.5
     a, b = run_summary(named)["vout_mean"], run_summary(netlist)["vout_mean"]
     assert a == pytest.approx(b, rel=1e-10)
+
+
+def test_a_resonance_the_step_damps_more_than_the_circuit_does_says_the_estimate_cannot_be_trusted(tmp_path):
+    """The buck with an RC snubber (1 ohm, 100 pF) from its switch node: the snubber's 100 ps sets backward Euler
+    (h = 10 ns), which erases the 5 MHz ring of L1 (10 uH) with the snubber's capacitor after the diode turns off
+    (Q = sqrt(L/C)/R = 316.2; f = 1/(2 pi sqrt(L C)) = 5.033 MHz). Richardson at h and 2h compares two runs that both
+    erase it and stated 2e-6; at h/10 the mean moves 4e-4 and at h/40 3e-3: a warning says so."""
+    text = (NETLISTS / "buck.cir").read_text().replace("R1 out 0 {R}", "R1 out 0 {R}\nRsn sw sn 1\nCsn sn 0 100p")
+    path = tmp_path / "snubbed.cir"
+    path.write_text(text)
+    run = run_converter(str(path), steady=True)
+    summary = run_summary(run)
+    assert run.algorithm.theta == 1.0 and summary["accuracy"]["trusted"] is False
+    (warning,) = summary["warnings"]
+    assert warning.startswith("the step damps the circuit's 5.03e+06 Hz resonance (Q 316)")
+    finer = run_summary(run_converter(str(path), steady=True, h=1e-9))["vout_mean"]
+    moved = abs(finer - summary["vout_mean"]) / finer
+    assert moved > 100 * summary["accuracy"]["vout_mean_error_estimate"]
+    # the shipped buck has no such resonance: no warning, the estimate trusted
+    assert "trusted" not in run_summary(run_converter(str(NETLISTS / "buck.cir"), steady=True))["accuracy"]

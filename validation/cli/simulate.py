@@ -220,8 +220,9 @@ def _print(summary: dict, tr, args) -> None:
     elif accuracy.get("checked"):
         how = (f"the run's distance to its orbit; the {tr.method} method has no step error" if tr.algorithm.exact
                else "the run's distance to its orbit and Richardson at h and 2h")
+        trust = "" if accuracy.get("trusted", True) else "; not to be trusted here: see the warning"
         print(f"vout mean within ~{accuracy['vout_mean_error_estimate']:.1g} (relative) of the exact periodic value "
-              f"(estimated: {how})")
+              f"(estimated: {how}{trust})")
     for warning in summary.get("warnings", []):
         print(f"warning: {warning}", file=sys.stderr)
     if args.out is not None:
