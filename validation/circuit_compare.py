@@ -15,16 +15,22 @@ Thresholds: ``[thresholds.circuit]`` in ``validation/data/defaults.toml``.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from converters.run import make_method, run_converter, steady_state
 
-from .compare import MAX_SPICE_PERIODS, SPICE_SETTLE, spice_drift, unsettled_cause
+from .compare import SPICE_SETTLE, spice_drift, spice_steady, unsettled_cause
 from .defaults import THRESHOLDS, passes
 
 PERIODS, WINDOW = 30, 10
+#: A failed comparison runs ngspice again at a quarter of its TMAX, at most this many times, while that moves its
+#: mean by more than a tenth of the difference (ngspice under-resolved: a Dickson pump and a DCM flyback failed at
+#: 1.15e-3 and 2.8e-3 at the file's TMAX and passed at 8e-5 and 8.7e-6 with TMAX 5 ns).
+TMAX_REFINEMENTS = 2
+#: The tightest RELTOL a refinement asks of ngspice (each takes a tenth of the last).
+MIN_RELTOL = 1e-7
 #: A ripple below this fraction of the output's mean is no ripple (a square wave rectified into a capacitor): its
 #: relative error is measured against this floor, not against the LCP's ripple of 0 (ngspice's was 2.5e-9 of it).
 RIPPLE_FLOOR = 1e-6
@@ -66,7 +72,8 @@ def _record(m: dict, label: str, means: tuple, ripples: tuple, scale: float) -> 
     return m[f"{label}_mean_rel_error"], m[f"{label}_ripple_rel_error"]
 
 def compare_circuit(circuit, params: dict | None = None, *, h=None, spice_options=None, start: str | None = None,
-                    periods: int = PERIODS, window: int = WINDOW, thresholds: dict | None = None) -> CircuitComparison:
+                    periods: int = PERIODS, window: int = WINDOW, thresholds: dict | None = None,
+                    spice_start: str = "own") -> CircuitComparison:
     """Run a netlist's LCS and ngspice on the same file and measure their agreement (module docstring)."""
     from netlists.circuit import circuit_netlist, file_spice_options
 
@@ -96,24 +103,64 @@ def compare_circuit(circuit, params: dict | None = None, *, h=None, spice_option
     # last window's peak can be a blocked diode's leakage, 1e-11 A, read as conduction)
     modes_from = t0 if periodic or oscillating else 0.0
     _modes_by_current(lcp, circuit, p, modes_from)
-    netlist, run, notes = run_spice_retrying(lambda o: circuit_netlist(circuit, p, span, o, x0=lcp.x[0]), spice_options)
-    options = netlist.options                         # the TMAX it took, kept for the runs on
-    spice = circuit_trajectory(circuit, p, netlist, run, modes_from)
-    spice_periods, settle = periods, spice_drift(spice, T, periods, window)
-    while start == "steady" and settle > SPICE_SETTLE and spice_periods < MAX_SPICE_PERIODS:
-        netlist, run, more = run_spice_retrying(lambda o: circuit_netlist(circuit, p, span, o, x0=spice.x[-1]), options)
-        options, notes = netlist.options, notes + more
-        spice = circuit_trajectory(circuit, p, netlist, run, modes_from)
-        spice_periods += periods
-        settle = spice_drift(spice, T, periods, window)
+    state = {"options": spice_options, "notes": []}
+
+    def chunk(x0):
+        """``periods`` periods of ngspice from ``x0`` (None: the file's own start) at the last TMAX it took."""
+        netlist, run, notes = run_spice_retrying(lambda o: circuit_netlist(circuit, p, span, o, x0=x0),
+                                                 state["options"])
+        state["options"], state["notes"] = netlist.options, state["notes"] + notes
+        return circuit_trajectory(circuit, p, netlist, run, modes_from)
+
+    def settled(options, spice_start):
+        state["options"], state["notes"] = options, []
+        spice, n, drift, notes, independent = spice_steady(chunk, start == "steady", lcp.x[0], T, periods, window,
+                                                           spice_start, rho)
+        return spice, state["options"], state["notes"] + notes, n, drift, independent
+
+    spice, options, notes, spice_periods, settle, independent = settled(spice_options, spice_start)
+    th = {**THRESHOLDS["circuit"], **(thresholds or {})}
     result = CircuitComparison(circuit.name, p, lcp, spice, (t0, span))
     result.notes += notes
-    th = {**THRESHOLDS["circuit"], **(thresholds or {})}
-    m = result.metrics
     if not periodic:
         if oscillating:
             return _self_oscillating(result, circuit, th)
         return _transient(result, circuit, th)
+    _periodic(result, circuit, T, window, th, (settle, spice_periods, start, rho), independent)
+    # a difference ngspice's own resolution may make: its answer at a quarter of TMAX and a tenth of RELTOL, from the
+    # same start (a capacitor behind a blocked diode keeps what a coarse run put there), at most TMAX_REFINEMENTS
+    # times while the mean disagrees, the finest run compared
+    moved, refined = 0.0, []
+    for _ in range(TMAX_REFINEMENTS):
+        if dict((row[0], row[3]) for row in result.rows)["mean_rel"]:
+            break
+        finer = replace(options, tmax_fraction=options.tmax_fraction / 4, reltol=max(options.reltol / 10, MIN_RELTOL))
+        spice_f, options_f, notes_f, periods_f, settle_f, independent = settled(finer, spice_start)
+        before, after = spice.mean("vout", t0=t0, t1=span), spice_f.mean("vout", t0=t0, t1=span)
+        moved = abs(after - before) / max(abs(lcp.mean("vout", t0=t0, t1=span)), 1e-12)
+        refined.append(f"ngspice at TMAX = {finer.tmax_fraction:g} T, RELTOL {finer.reltol:g}: its mean of vout moved "
+                       f"{moved:.2g} (relative) from TMAX = {options.tmax_fraction:g} T, RELTOL {options.reltol:g}; "
+                       "compared there")
+        spice, options, spice_periods = spice_f, options_f, periods_f
+        result = CircuitComparison(circuit.name, p, lcp, spice, (t0, span))
+        result.notes += notes_f + refined
+        _periodic(result, circuit, T, window, th, (settle_f, spice_periods, start, rho), independent)
+    error = result.metrics[f"{circuit.output}_mean_rel_error"]
+    if moved > 0.1 * error and not dict((row[0], row[3]) for row in result.rows)["mean_rel"]:
+        result.notes.append(f"ngspice is under-resolved: its last refinement moved its mean {moved:.2g}, more than a "
+                            f"tenth of the difference ({error:.2g}); the difference may be ngspice's (--spice-tmax, "
+                            "--spice-reltol)")
+    return result
+
+
+def _periodic(result: CircuitComparison, circuit, T: float, window: int, th: dict, settling: tuple,
+              independent: bool | None = None) -> None:
+    """The periodic comparison's metrics and rows over the window (module docstring); ``settling``: ngspice's last
+    drift, its periods, the start and the LCP orbit's spectral radius; ``independent``: whether ngspice's own start
+    approaches its run from the orbit (:func:`~validation.compare.spice_steady`; None: it settled on its own)."""
+    settle, spice_periods, start, rho = settling
+    lcp, spice, m = result.lcp, result.spice, result.metrics
+    t0, span = result.window
     outputs = list(dict.fromkeys(["vout", *[v for v in circuit.netlist.outputs if v != circuit.output]]))
     worst_mean, worst_ripple = 0.0, 0.0
     for name in outputs:
@@ -135,6 +182,8 @@ def compare_circuit(circuit, params: dict | None = None, *, h=None, spice_option
     result.rows = [("mean_rel", worst_mean, th["mean_rel"], passes("mean_rel", worst_mean, th["mean_rel"])),
                    ("mode_agreement", agreement, th["mode_agreement"],
                     passes("mode_agreement", agreement, th["mode_agreement"]))]
+    if independent is not None:
+        result.rows.append(("spice_own_start", float(independent), 1.0, bool(independent)))
     if settle <= SPICE_SETTLE or start != "steady":
         result.rows.insert(1, ("ripple_rel", worst_ripple, th["ripple_rel"],
                                passes("ripple_rel", worst_ripple, th["ripple_rel"])))
@@ -142,7 +191,6 @@ def compare_circuit(circuit, params: dict | None = None, *, h=None, spice_option
         result.notes.append(f"the ripple agreement ({worst_ripple:.2g}) is not checked: ngspice has not settled after "
                             f"{spice_periods} periods (its window's mean moves {settle:.2g}; "
                             f"{unsettled_cause(rho, spice_periods)})")
-    return result
 
 
 def _modes_by_current(lcp, circuit, p: dict, t0: float) -> None:

@@ -156,7 +156,8 @@ def test_a_deep_ccm_buck_settles_in_ngspice_and_its_ripple_is_checked():
     compare blamed light damping or modes and skipped the ripple check; the edge is 1e-6 T now."""
     from validation.compare import compare
     result = compare("buck", DEEP_CCM_BUCK)
-    assert result.metrics["spice_settled"] and result.metrics["spice_periods"] <= 150
+    # from rest (ngspice's own start) until the orbit's slowest mode has decayed to 1e-3: 0.961^n, n >= 174
+    assert result.metrics["spice_settled"] and 174 <= result.metrics["spice_periods"] <= 360
     assert "vout_ripple_rel" in result.checks and result.passed
     assert not any("not settled" in note for note in result.notes)
 

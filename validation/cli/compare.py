@@ -12,7 +12,12 @@ def add(sub) -> None:
     add_params(cmp)
     cmp.add_argument("--h", default=None, help="LCP step in s (default T/1000)")
     cmp.add_argument("--start", choices=["steady", "rest"], default=None,
-                     help="start both on the periodic orbit (default) or from rest (default for prc)")
+                     help="steady (default): pcsuite on its periodic orbit, ngspice to its own steady state; rest: "
+                          "both from rest (default for prc)")
+    cmp.add_argument("--spice-start", choices=["own", "orbit"], default="own",
+                     help="with --start steady: ngspice from its own start, run until it settles (default: "
+                          "independent of pcsuite), or from pcsuite's orbit (faster; a wrong orbit of pcsuite's that "
+                          "ngspice does not damp stays wrong in both)")
     cmp.add_argument("--control", default="pwm", choices=list(COMPARISONS),
                      help="the control around the converter (default pwm: open loop; see simulate)")
     cmp.add_argument("--t-end", default=None, help="duration in s (sliding mode; default 30 ms)")
@@ -64,7 +69,8 @@ def _circuit(args, params):
     circuit = get_model(args.converter)
     p = circuit.resolve(params)
     period = circuit.period(p) if circuit.periodic(p) else circuit.default_duration(p)
-    result = compare_circuit(circuit, params, h=args.h, start=args.start, spice_options=spice_options(args, period))
+    result = compare_circuit(circuit, params, h=args.h, start=args.start, spice_options=spice_options(args, period),
+                             spice_start=args.spice_start)
     header = f"{result.circuit}: LCP against {result.spice.metadata['ngspice']} on the same netlist"
     return result.rows, result.metrics, header, (lambda: comparison_plot(result)), result.to_dict()
 
@@ -79,7 +85,8 @@ def _clocked(args, params):
         raise ParameterError("--t-end applies to --control smc; a clocked comparison runs the model's periods")
     model = get_model(args.converter, args.control)
     options = spice_options(args, model.period(model.resolve(params)))
-    result = compare(args.converter, params, h=args.h, start=args.start, spice_options=options, control=args.control)
+    result = compare(args.converter, params, h=args.h, start=args.start, spice_options=options, control=args.control,
+                     spice_start=args.spice_start)
     header = f"{result.converter}: LCP against {result.spice.metadata['ngspice']}"
     return result.rows, result.metrics, header, (lambda: comparison_plot(result)), result.to_dict()
 
