@@ -94,6 +94,9 @@ MAX_NEWTON_ITER = 10_000
 MAX_WARM_UP = 100_000
 
 
+#: How a message of an orbit resolved only to the rounding level of its map begins (a lightly damped circuit).
+ROUNDING_LIMITED = "the residual is at the rounding level of the map"
+
 def check_newton(tol, max_iter) -> None:
     """Refuse a tolerance or an iteration count Newton shooting cannot honour (tol = 1e308 had "converged" at
     any state)."""
@@ -135,7 +138,7 @@ def newton_orbit(period_map, x_guess, *, tol: float = 1e-10, max_iter: int = 50,
     message = {
         NEWTON_SINGULAR: "the period map's Jacobian has a multiplier at 1 (the orbit is not isolated: an undamped or "
                          "marginal circuit)",
-        NEWTON_ROUNDING: f"the residual is at the rounding level of the map and 1 - rho = {1.0 - rho:.3g} amplifies "
+        NEWTON_ROUNDING: f"{ROUNDING_LIMITED} and 1 - rho = {1.0 - rho:.3g} amplifies "
                          f"it: the orbit is resolved to ~{distance:.3g} in double precision, not to the tolerance "
                          "asked for",
         NEWTON_EXHAUSTED: f"no convergence in {max_iter} Newton iterations ({relaxations} of them plain periods where "

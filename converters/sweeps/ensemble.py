@@ -26,6 +26,10 @@ from ..errors import ParameterError
 #: (polished): on a fixed mode sequence the period map is affine and that step lands on the fixed point to
 #: rounding, so every backend gives the same orbit to ~1e-14 whatever the tolerance.
 STEADY_TOL = 1e-10
+#: A point whose orbit Newton can resolve only to the rounding level of its map (1 - rho ~ 1e-5 amplifies it: a
+#: lightly damped circuit, the SEPIC at 19 ohm stepped with theta 0.5 to 2.5e-10) is kept within this distance; its
+#: orbit_distance says how close.
+ROUNDED_TOL = 1e-8
 MAX_ITER = 50
 #: The measures of a row and their types (a failed row leaves them empty).
 MEASURES = {"vout_mean": float, "vout_ripple": float, "rms_state0": float, "mode": str, "held_fraction": float,
@@ -108,7 +112,8 @@ class ModelSweep:
     base: dict = field(default_factory=dict)
     method: str = "lcp"
     h_fraction: float = 1.0 / 200.0
-    theta: float = 1.0
+    #: None: each point's own default (0.5 where the step resolves every time constant, else 1), as simulate's.
+    theta: float | None = None
     steady: bool = True
     warm_up: int = 20
     periods: int = 50
@@ -150,7 +155,8 @@ class ModelSweep:
         check_flag("steady", self.steady)
         check_integer("warm_up", self.warm_up, 0, MAX_WARM_UP)
         check_integer("periods", self.periods, 1, MAX_WARM_UP)
-        check_range("theta", self.theta, 0.5, 1.0)
+        if self.theta is not None:
+            check_range("theta", self.theta, 0.5, 1.0)
         if not (isinstance(self.h_fraction, (float, int)) and not isinstance(self.h_fraction, bool)
                 and 0.0 < self.h_fraction < 1.0):
             raise ParameterError(f"h_fraction (h / T) must be in (0, 1); got {self.h_fraction!r}")
@@ -178,16 +184,20 @@ class ModelSweep:
         return get_model(self.model, self.control)
 
     def _method(self, model, p):
-        """A ``step`` method at h = T h_fraction (with ``theta`` where it takes one), an exact one sampled at T/1000."""
+        """A ``step`` method at h = T h_fraction (with ``theta`` where it takes one: the point's default unless the
+        sweep sets one), an exact one sampled at T/1000."""
         from ..methods.base import get_method
         cls = get_method(self.method)
         T = model.period(p)
-        options = {"theta": self.theta} if "theta" in cls.option_names() else {}
-        return cls.from_options(step=T * self.h_fraction if cls.error_kind == "step" else T / 1000, **options)
+        step = T * self.h_fraction if cls.error_kind == "step" else T / 1000
+        options = {}
+        if "theta" in cls.option_names():
+            options["theta"] = model.default_theta(p, step) if self.theta is None else self.theta
+        return cls.from_options(step=step, **options)
 
     def row(self, index: int, point: dict) -> dict:
         """The row of one point, by the per-point path (failures as rows)."""
-        from ..analysis.periodic import shoot
+        from ..analysis.periodic import ROUNDING_LIMITED, shoot
         from ..simulate import simulate
         clock = time.perf_counter()
         out = {"index": int(index), **{k: _number(v) for k, v in point.items()}}
@@ -205,7 +215,8 @@ class ModelSweep:
                 problem = model.problem(p, T)
                 orbit = shoot(problem, method, problem.x0, warm_up=self.warm_up, tol=STEADY_TOL, max_iter=MAX_ITER,
                               polish=True)
-                if not orbit.converged:
+                if not orbit.converged and not (orbit.message.startswith(ROUNDING_LIMITED) and
+                                                orbit.distance <= ROUNDED_TOL):
                     return failed_row(index, point, f"no steady state: {orbit.message}", time.perf_counter() - clock)
                 if unstable(orbit.spectral_radius):
                     return failed_row(index, point, unstable(orbit.spectral_radius), time.perf_counter() - clock)
@@ -222,6 +233,27 @@ class ModelSweep:
                     "wall_s": time.perf_counter() - clock}
         except (ValueError, RuntimeError, ArithmeticError) as exc:
             return failed_row(index, point, f"{type(exc).__name__}: {exc}", time.perf_counter() - clock)
+
+    def nominal_error(self, metrics) -> dict:
+        """How accurate each of ``metrics`` is, read at the nominal point (the base parameters): {metric: (absolute
+        error estimate, how)}. The stepper: |Q(h) - Q(h/2)| (a first-order bound on the error at h, whatever its
+        order); accuracy on request: rtol of the value; the event method: 0 (exact flows). Empty where the nominal
+        point does not give a row."""
+        from ..methods.base import get_method
+        at_h = self.row(0, {})
+        if at_h["status"] != "ok":
+            return {}
+        numeric = [m for m in metrics if isinstance(at_h.get(m), float)]
+        if self.rtol is not None:
+            return {m: (abs(at_h[m]) * self.rtol, f"accuracy on request (rtol {self.rtol:g})") for m in numeric}
+        if get_method(self.method).error_kind != "step":
+            return {m: (0.0, f"{self.method}: exact flows") for m in numeric}
+        from dataclasses import replace
+        at_half = replace(self, h_fraction=self.h_fraction / 2).row(0, {})
+        if at_half["status"] != "ok":
+            return {}
+        return {m: (abs(at_h[m] - at_half[m]), f"the nominal point at h = T/{1 / self.h_fraction:.4g} against "
+                    f"h/2") for m in numeric if isinstance(at_half.get(m), float)}
 
     def _accurate_row(self, model, p: dict) -> dict:
         """The measures of :func:`converters.analysis.accuracy.accurate_steady` (values its, mode and held
@@ -264,7 +296,6 @@ class ModelSweep:
         if not self.batchable():
             return [self.row(i, point) for i, point in items]
         from ..methods.theta import plan_arrays
-        from .batch import CONVERGED, batch_steady
         model = self._model()
         prepared, rows, plans, resolved = [], {}, {}, {}
         clock = time.perf_counter()
@@ -290,55 +321,63 @@ class ModelSweep:
                 prepared.append((index, point, p, method, problem, plan, time.perf_counter() - clock))
             except (ValueError, RuntimeError, ArithmeticError) as exc:
                 rows[index] = failed_row(index, point, f"{type(exc).__name__}: {exc}", time.perf_counter() - clock)
-        if prepared:
-            P = len(prepared)
-            n = prepared[0][4].n
-            configs = len(prepared[0][4].configurations)
-            S = max(len(item[5].which) for item in prepared)
-            sets = max(len(item[5].set_configs) for item in prepared)
-            A, B = np.zeros((P, configs, n, n)), np.zeros((P, configs, n, 1))
-            C, D = np.zeros((P, configs, 1, n)), np.zeros((P, configs, 1, 1))
-            E, F = np.zeros((P, configs, n)), np.zeros((P, configs, 1))
-            set_configs, set_dts = np.zeros((P, sets), dtype=np.int64), np.ones((P, sets))
-            counts, which, steps = np.zeros(P, dtype=np.int64), np.zeros((P, S), dtype=np.int64), np.zeros(P, dtype=np.int64)
-            x0 = np.zeros((P, n))
-            for k, (_, _, _, _, problem, plan, _) in enumerate(prepared):
-                for c, cfg in enumerate(problem.configurations):
-                    A[k, c], B[k, c], C[k, c], D[k, c], E[k, c], F[k, c] = cfg.A, cfg.B, cfg.C, cfg.D, cfg.E, cfg.F
-                counts[k] = len(plan.set_configs)
-                set_configs[k, :counts[k]], set_dts[k, :counts[k]] = plan.set_configs, plan.set_dts
-                steps[k] = len(plan.which)
-                which[k, :steps[k]] = plan.which
-                x0[k] = problem.x0
-            xs, us, ys = np.zeros((P, S + 1, n)), np.zeros((P, S + 1)), np.zeros((P, S + 1))
-            x_star, jac = np.zeros((P, n)), np.zeros((P, n, n))
-            status, iterations = np.zeros(P, dtype=np.int64), np.zeros(P, dtype=np.int64)
-            residuals, distances = np.full(P, np.inf), np.full(P, np.inf)
-            clock = time.perf_counter()
-            batch_steady(A, B, C, D, E, F, set_configs, set_dts, counts, which, steps, prepared[0][3].theta, x0,
-                         self.warm_up, STEADY_TOL, MAX_ITER, xs, us, ys, x_star, jac, status, iterations, residuals,
-                         distances)
-            share = (time.perf_counter() - clock) / P                # the compiled call's time, per point
-            for k, (index, point, p, method, problem, plan, prep) in enumerate(prepared):
-                clock = time.perf_counter() - prep - share
-                if status[k] != CONVERGED:
-                    rows[index] = failed_row(index, point, _batch_failure(status[k], residuals[k], distances[k]),
-                                             time.perf_counter() - clock)
-                    continue
-                t, step_config = plan.t, plan.step_config
-                count = steps[k] + 1
-                config = np.concatenate([step_config[:1], step_config])
-                run = _stepper_trajectory(problem, method, t, xs[k, :count], us[k, :count, None], ys[k, :count, None],
-                                          config)
-                multipliers = np.linalg.eigvals(jac[k])
-                rho = float(np.abs(multipliers).max())
-                if unstable(rho):
-                    rows[index] = failed_row(index, point, unstable(rho), time.perf_counter() - clock)
-                    continue
-                rows[index] = {"index": int(index), **{key: _number(v) for key, v in point.items()}, "status": "ok", "message": "", **orbit_row(model, p, run, self.metrics),
-                               "spectral_radius": rho, "iterations": int(iterations[k]),
-                               "orbit_distance": float(distances[k]), "wall_s": time.perf_counter() - clock}
+        for theta in sorted({item[3].theta for item in prepared}):       # one compiled call per theta
+            self._batched(model, [item for item in prepared if item[3].theta == theta], rows)
         return [rows[index] for index, _ in items]
+
+    def _batched(self, model, prepared: list, rows: dict) -> None:
+        """The rows of prepared points of one theta through one compiled call (:func:`.batch.batch_steady`)."""
+        from .batch import CONVERGED, ROUNDING, batch_steady
+        P = len(prepared)
+        n = prepared[0][4].n
+        configs = len(prepared[0][4].configurations)
+        S = max(len(item[5].which) for item in prepared)
+        sets = max(len(item[5].set_configs) for item in prepared)
+        A, B = np.zeros((P, configs, n, n)), np.zeros((P, configs, n, 1))
+        C, D = np.zeros((P, configs, 1, n)), np.zeros((P, configs, 1, 1))
+        E, F = np.zeros((P, configs, n)), np.zeros((P, configs, 1))
+        set_configs, set_dts = np.zeros((P, sets), dtype=np.int64), np.ones((P, sets))
+        counts, which, steps = np.zeros(P, dtype=np.int64), np.zeros((P, S), dtype=np.int64), np.zeros(P, dtype=np.int64)
+        x0 = np.zeros((P, n))
+        for k, (_, _, _, _, problem, plan, _) in enumerate(prepared):
+            for c, cfg in enumerate(problem.configurations):
+                A[k, c], B[k, c], C[k, c], D[k, c], E[k, c], F[k, c] = cfg.A, cfg.B, cfg.C, cfg.D, cfg.E, cfg.F
+            counts[k] = len(plan.set_configs)
+            set_configs[k, :counts[k]], set_dts[k, :counts[k]] = plan.set_configs, plan.set_dts
+            steps[k] = len(plan.which)
+            which[k, :steps[k]] = plan.which
+            x0[k] = problem.x0
+        xs, us, ys = np.zeros((P, S + 1, n)), np.zeros((P, S + 1)), np.zeros((P, S + 1))
+        x_star, jac = np.zeros((P, n)), np.zeros((P, n, n))
+        status, iterations = np.zeros(P, dtype=np.int64), np.zeros(P, dtype=np.int64)
+        residuals, distances = np.full(P, np.inf), np.full(P, np.inf)
+        clock = time.perf_counter()
+        batch_steady(A, B, C, D, E, F, set_configs, set_dts, counts, which, steps, prepared[0][3].theta, x0,
+                     self.warm_up, STEADY_TOL, MAX_ITER, xs, us, ys, x_star, jac, status, iterations, residuals,
+                     distances)
+        share = (time.perf_counter() - clock) / P                # the compiled call's time, per point
+        for k, (index, point, p, method, problem, plan, prep) in enumerate(prepared):
+            clock = time.perf_counter() - prep - share
+            if status[k] == ROUNDING and distances[k] <= ROUNDED_TOL:     # kept: the per-point path's orbit
+                rows[index] = self.row(index, point)
+                continue
+            if status[k] != CONVERGED:
+                rows[index] = failed_row(index, point, _batch_failure(status[k], residuals[k], distances[k]),
+                                         time.perf_counter() - clock)
+                continue
+            t, step_config = plan.t, plan.step_config
+            count = steps[k] + 1
+            config = np.concatenate([step_config[:1], step_config])
+            run = _stepper_trajectory(problem, method, t, xs[k, :count], us[k, :count, None], ys[k, :count, None],
+                                      config)
+            multipliers = np.linalg.eigvals(jac[k])
+            rho = float(np.abs(multipliers).max())
+            if unstable(rho):
+                rows[index] = failed_row(index, point, unstable(rho), time.perf_counter() - clock)
+                continue
+            rows[index] = {"index": int(index), **{key: _number(v) for key, v in point.items()}, "status": "ok", "message": "", **orbit_row(model, p, run, self.metrics),
+                           "spectral_radius": rho, "iterations": int(iterations[k]),
+                           "orbit_distance": float(distances[k]), "wall_s": time.perf_counter() - clock}
 
 
 def sweep_methods() -> list[str]:
