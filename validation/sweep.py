@@ -13,7 +13,9 @@ interrupted sweep (SIGINT, a killed process, a lost machine) computes only its m
 the dataset an uninterrupted run writes. A directory holding a different sweep, or anything else, is
 refused, never overwritten. Resume trusts no part blindly: a part listed in ``parts.jsonl`` must have the
 bytes listed there, and one that is not (a kill between a part's rename and its line) must have the sweep's
-columns; every part's indices must lie in the sweep and appear once. Anything else in ``parts/`` (a copied
+columns; every part must carry the sweep's digest (the SHA-256 of its identity, a netlist's content included, in
+the part's Parquet metadata: another sweep's part copied in, the journal edited to match, is refused); every
+part's indices must lie in the sweep and appear once. Anything else in ``parts/`` (a copied
 part, another table, a link, a FIFO) is refused with one line naming it, and nothing is changed. Read a sweep
 back with :func:`load_sweep` (or ``pandas.read_parquet(DIR / "parts")``).
 
@@ -48,7 +50,9 @@ MANIFEST = "sweep.json"
 PARTS = "parts"
 JOURNAL = "parts.jsonl"
 LOCK = ".lock"
-FORMAT = 1
+#: 2: every part carries its sweep's digest (SWEEP_KEY in its Parquet metadata); a netlist's content is hashed.
+FORMAT = 2
+SWEEP_KEY = b"pcsuite.sweep"
 #: A sweep.json is a few hundred bytes; a larger one is not a sweep's (and is not read whole).
 MANIFEST_MAX_BYTES = 1 << 20
 
@@ -134,10 +138,20 @@ class SpiceSweep:
 def describe(ensemble, points) -> dict:
     """The identity of a sweep: what is computed at which points (compared on resume; fields kept out of the
     comparison, as what is derived from the others, are left out)."""
+    from converters.models import is_netlist
     identity = {f.name for f in fields(ensemble) if f.compare}
     settings = {k: v for k, v in asdict(ensemble).items() if k in identity}
-    return {"format": FORMAT, "ensemble": type(ensemble).__name__, **json.loads(json.dumps(settings)),
-            "points": points.describe(), "size": int(points.size)}
+    out = {"format": FORMAT, "ensemble": type(ensemble).__name__, **json.loads(json.dumps(settings)),
+           "points": points.describe(), "size": int(points.size)}
+    if is_netlist(ensemble.model):            # the circuit itself, not only its file's name
+        out["model_sha256"] = hashlib.sha256(Path(ensemble.model).read_bytes()).hexdigest()
+    return out
+
+
+def digest(identity: dict) -> str:
+    """The SHA-256 of a sweep's identity: every part carries it (its Parquet metadata), and resume takes only the
+    parts that carry this sweep's."""
+    return hashlib.sha256(json.dumps(identity, sort_keys=True).encode()).hexdigest()
 
 
 def schema(ensemble, names):
@@ -167,7 +181,8 @@ class SweepStore:
 
     def __init__(self, out, identity: dict, arrow_schema):
         self.out = Path(out)
-        self.identity, self.schema = identity, arrow_schema
+        self.identity, self.digest = identity, digest(identity)
+        self.schema = arrow_schema.with_metadata({**(arrow_schema.metadata or {}), SWEEP_KEY: self.digest.encode()})
         self._lock = None
 
     @property
@@ -298,6 +313,7 @@ class SweepStore:
                 raise self._refuse(f"{where} was changed after pcsuite wrote it (its size or SHA-256 is not the one "
                                    f"{JOURNAL} lists)")
             indices = self._indices(data, where, check_schema=listed is None)
+            self._check_mark(data, where)
             outside = indices[(indices < 0) | (indices >= size)]
             if outside.size:
                 raise self._refuse(f"{where} holds index {int(outside[0])}, outside the sweep's {size:,} points "
@@ -316,6 +332,17 @@ class SweepStore:
             if listed is None:
                 adopt.append(_Journal.line(name, len(indices), data))
         return np.flatnonzero(seen).astype(np.int64), journal, adopt
+
+    def _check_mark(self, data: bytes, where: str) -> None:
+        """Refuse a part that does not carry this sweep's digest (another sweep's part, copied in with the journal
+        edited: its rows computed at other parameters)."""
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+        mark = (pq.ParquetFile(pa.BufferReader(data)).schema_arrow.metadata or {}).get(SWEEP_KEY, b"").decode()
+        if mark != self.digest:
+            held = f"another sweep's ({mark[:12]})" if mark else "no sweep's"
+            raise self._refuse(f"{where} was written by {held}, not this one's ({self.digest[:12]}: the model, its "
+                               "parameters, the points and the options in sweep.json)")
 
     def _indices(self, data: bytes, where: str, check_schema: bool) -> np.ndarray:
         """A part's index column; for a part the journal does not list, its columns are checked first."""

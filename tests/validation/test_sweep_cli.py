@@ -311,6 +311,17 @@ def _tamper(kind: str, out: Path, tmp_path: Path) -> str:
         changed.loc[0, "vout_mean"] = 1234.5
         _table(changed, parts[0], like=parts[0])
         return parts[0].name
+    if kind == "another sweep's part":                # its journal line dropped: '4 already stored', exit 0, before
+        other = tmp_path / "other"
+        assert main([*SMALL, "-p", "Vin=24", "--out", str(other)]) == 0
+        theirs = sorted((other / "parts").glob("*.parquet"))[1]
+        journal = out / "parts.jsonl"
+        journal.write_text("".join(line for line in journal.read_text().splitlines(keepends=True)
+                                   if parts[1].name not in line))
+        parts[1].unlink()
+        (out / "parts" / theirs.name).write_bytes(theirs.read_bytes())
+        assert sorted(pd.read_parquet(out / "parts")["index"]) == [0, 1, 2, 3]      # the same indices, Vin 24's rows
+        return theirs.name
     if kind == "symbolic link":
         elsewhere = tmp_path / "elsewhere.parquet"
         parts[1].rename(elsewhere)
@@ -332,6 +343,7 @@ TAMPERED = {"duplicate copy": "holds indices also stored in parts/", "duplicate 
             "changed, its size kept": "was changed after pcsuite wrote it", "changed after it was written":
             "was changed after pcsuite wrote it", "symbolic link": "is a symbolic link, not a part pcsuite wrote",
             "not a parquet file": "is not a part of this sweep (not a .parquet file)",
+            "another sweep's part": "was written by another sweep's (",
             "FIFO": "is a FIFO (named pipe), not a part pcsuite wrote"}
 
 
@@ -511,3 +523,17 @@ def test_a_grid_sweeps_worst_sample_of_a_spec_names_its_point(tmp_path, capsys):
                  "--no-progress"]) == 0
     (line,) = [line for line in capsys.readouterr().out.splitlines() if "meet it; worst" in line]
     assert line.strip().startswith("vout_mean<6: 33.33 % meet it; worst 9.8") and line.endswith(" V at D = 0.6")
+
+
+def test_resume_refuses_a_sweep_whose_netlist_changed_since(tmp_path, capsys):
+    """A netlist sweep is bound to the circuit itself: edit the file between the runs and resume is refused (its
+    identity held the path only, and the parts of the old circuit were taken as this one's)."""
+    circuit = tmp_path / "buck.cir"
+    circuit.write_text((Path(__file__).resolve().parents[2] / "netlists" / "circuits" / "buck.cir").read_text())
+    args = ["sweep", str(circuit), "--grid", "D=0.3:0.6:2", "--steady", "--no-progress", "--out", str(tmp_path / "s")]
+    assert main(args) == 0
+    circuit.write_text(circuit.read_text().replace(".param Vin=12", ".param Vin=24"))
+    capsys.readouterr()
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert "holds a different sweep (model_sha256:" in err and len(err.strip().splitlines()) == 1
