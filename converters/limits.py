@@ -91,6 +91,25 @@ def check_memory(what: str, nbytes: float, remedy: str = "") -> None:
                             + (f"use {remedy}; " if remedy else "") + raise_it)
 
 
+def memory_in_use() -> int:
+    """This process's resident memory in bytes (0 where /proc is not there)."""
+    try:
+        with open("/proc/self/statm") as statm:
+            return int(statm.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+    except (OSError, ValueError, IndexError):
+        return 0
+
+
+def check_in_use(what: str, remedy: str = "") -> None:
+    """Stop a run whose memory grows past the limit while it runs, where no estimate before it can bound it (the
+    event method's segments and events on a circuit that chatters)."""
+    limit, used = max_memory(), memory_in_use()
+    if used > limit:
+        raise ResourceError(f"{what} holds {human_bytes(used)}, above the memory limit of {human_bytes(limit)}; "
+                            + (f"use {remedy}; " if remedy else "") + f"raise the limit with --max-memory (or "
+                            f"{MEMORY_ENV})")
+
+
 def time_limit(default: float) -> float:
     """Seconds one ngspice run or one iterative solve may take (``--time-limit``, else ``default``)."""
     text = os.environ.get(TIME_ENV)

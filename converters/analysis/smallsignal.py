@@ -44,6 +44,12 @@ CONTROL = "control"
 #: Frequencies of a response by default: this many, log-spaced from fs/1000 to fs/2.
 POINTS = 200
 MAX_POINTS = 100_000
+#: The highest frequency a response is asked at, in switching frequencies (a switched circuit's small-signal
+#: response far above fs is its sidebands'; at 1e300 Hz the phase factors overflowed to NaN, printed with exit 0).
+MAX_FS_MULTIPLE = 1000.0
+#: The longest common period (in switching periods) a brute-force check simulates: a frequency below fs/this
+#: (1e-6 Hz under a 100 kHz switch asked for a 1e11-period run, 745 GiB) is refused.
+MAX_CHECK_PERIODS = 20_000
 #: The finite move of an input for its derivatives (relative to its value, at least this absolute amount): the
 #: circuit is affine in it, so the difference is exact to rounding.
 RELATIVE_MOVE = 1e-3
@@ -416,18 +422,26 @@ def _changes_matrices(problem, moved) -> bool:
 
 
 def frequencies(model_period: float, fmin=None, fmax=None, points: int = POINTS) -> np.ndarray:
-    """Log-spaced frequencies (Hz), by default from fs/1000 to fs/2; each bound validated."""
+    """Log-spaced frequencies (Hz), by default from fs/1000 to fs/2, each bound in (0, MAX_FS_MULTIPLE fs]; one
+    frequency with ``points`` = 1 and fmin = fmax."""
     fs = 1.0 / model_period
     fmin = fs / 1000.0 if fmin is None else fmin
     fmax = fs / 2.0 if fmax is None else fmax
+    top = MAX_FS_MULTIPLE * fs
     for name, value in (("fmin", fmin), ("fmax", fmax)):
         if not (isinstance(value, (int, float, np.floating)) and not isinstance(value, bool) and math.isfinite(value)
-                and value > 0):
-            raise ParameterError(f"{name} must be a frequency > 0 Hz; got {value!r}")
+                and 0 < value <= top):
+            raise ParameterError(f"{name} must be a frequency in (0, {top:g}] Hz ({MAX_FS_MULTIPLE:g} times the "
+                                 f"switching frequency); got {value!r}")
+    if not (isinstance(points, (int, np.integer)) and not isinstance(points, bool) and 1 <= points <= MAX_POINTS):
+        raise ParameterError(f"points must be an integer in [1, {MAX_POINTS}]; got {points!r}")
+    if points == 1 or fmin == fmax:
+        if not (points == 1 and fmin == fmax):
+            raise ParameterError(f"one frequency is --fmin F --fmax F --points 1; got fmin = {fmin:g} Hz, fmax = "
+                                 f"{fmax:g} Hz, points = {points}")
+        return np.array([float(fmin)])
     if not fmin < fmax:
         raise ParameterError(f"fmin must be below fmax; got fmin = {fmin:g} Hz, fmax = {fmax:g} Hz")
-    if not (isinstance(points, (int, np.integer)) and not isinstance(points, bool) and 2 <= points <= MAX_POINTS):
-        raise ParameterError(f"points must be an integer in [2, {MAX_POINTS}]; got {points!r}")
     return np.geomspace(fmin, fmax, int(points))
 
 
@@ -626,6 +640,12 @@ def injection_response(small: SmallSignalModel, frequency_hz, output: str = "vou
     from .periodic import newton_orbit, require
     T, n = small.T, small.n
     plan = [_common(float(f), T) for f in np.atleast_1d(np.asarray(frequency_hz, dtype=float))]
+    longest = max((span for _, span in plan), default=0.0)
+    if longest > MAX_CHECK_PERIODS * T * (1 + 1e-9):
+        lowest = min(f for f, _ in plan)
+        raise ParameterError(f"the check injects at frequencies down to fs/{MAX_CHECK_PERIODS:,} "
+                             f"({1 / (MAX_CHECK_PERIODS * T):.4g} Hz): at {lowest:.4g} Hz its common period spans "
+                             f"{longest / T:.3g} switching periods; raise --fmin (the exact response needs no check)")
     amplitude = 0.01 * abs(small.delta) if amplitude is None else amplitude
     out = np.empty(len(plan), dtype=complex)
     for i, (f, span) in enumerate(plan):

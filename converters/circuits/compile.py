@@ -80,6 +80,40 @@ class Compiled:
         return law
 
 
+
+#: A network with more unknowns than this has its factorisations run where a time limit can stop them.
+LARGE_NETWORK = 400
+#: The threads of factorisations a time limit stopped waiting for (:func:`interruptible`).
+ABANDONED: list = []
+
+
+def interruptible(function, matrix, *args, **kwargs):
+    """``function(matrix, ...)``, run for a large matrix in a thread the caller waits on in short slices, so that
+    the command's --time-limit alarm (a signal, handled between bytecodes) stops the compile while LAPACK works
+    (numpy lets go of the GIL there): a 3,000-stage RC ladder's SVDs ran 114 s past a 10 s limit. The thread is a
+    daemon: a run stopped by its limit leaves it to the process's exit."""
+    if np.shape(matrix)[-1] <= LARGE_NETWORK:
+        return function(matrix, *args, **kwargs)
+    import threading
+    box = {}
+
+    def work():
+        try:
+            box["value"] = function(matrix, *args, **kwargs)
+        except BaseException as exc:           # handed back to the caller's thread
+            box["error"] = exc
+    thread = threading.Thread(target=work, name="pcsuite-compile", daemon=True)
+    thread.start()
+    try:
+        while thread.is_alive():
+            thread.join(0.05)
+    except BaseException:
+        ABANDONED.append(thread)            # still in LAPACK: the command line ends the process without it
+        raise
+    if "error" in box:
+        raise box["error"]
+    return box["value"]
+
 def compile_netlist(netlist: Netlist) -> Compiled:
     """The LCS of ``netlist`` (its values already final: overrides applied by the reader)."""
     return _Compiler(with_models(netlist)).run()
@@ -1088,18 +1122,18 @@ class _Network:
         if self.size == 0:
             return np.zeros(self.lead, dtype=int) if self.lead else 0
         scale = np.maximum(np.abs(self.G).max(axis=(-2, -1)), 1.0)
-        return self.size - np.linalg.matrix_rank(self.G, tol=1e-12 * scale)
+        return self.size - interruptible(np.linalg.matrix_rank, self.G, tol=1e-12 * scale)
 
     def solve(self, checked: bool = False):
         """The network solved (``checked``: its nullity is known to be 0)."""
         if not checked and self.nullity():
             raise self.singular()
-        self.Z = np.linalg.solve(self.G, np.broadcast_to(self.R, self.lead + self.R.shape))
+        self.Z = interruptible(np.linalg.solve, self.G, np.broadcast_to(self.R, self.lead + self.R.shape))
         return self
 
     def singular(self) -> NetlistError:
         c = self.c
-        _, s, vt = np.linalg.svd(self.G)
+        _, s, vt = interruptible(np.linalg.svd, self.G)
         null = vt[-1]
         null = null / np.abs(null).max()
         where = ", ".join(f"{k}={'closed' if v else 'open'}" for k, v in self.switch_state.items())

@@ -204,3 +204,24 @@ def test_a_run_far_longer_than_the_fastest_time_constant_is_refused_not_hung(pro
                                             r"substeps \(at most 1e\+08\)"), np.errstate(all="ignore"):
         simulate(half_wave_rectifier(**{name: float(value)}), EventDriven())      # 1e-308: its series overflow
     assert time.process_time() - started < 5.0
+
+
+def test_the_event_method_stops_at_the_memory_limit_while_it_runs(monkeypatch, capsys):
+    """No estimate before the run bounds the event method's segments and events (a snubbered buck's run grew to
+    19.6 GB before the kernel killed it): the engine looks at the memory it holds every MEMORY_LOOK segments and
+    stops in one line above the limit. Here the look comes every 16 segments and reads 5 GiB against 4 GiB."""
+    from converters import limits
+    from converters.errors import ResourceError
+    from converters.methods.event import machine
+    from converters.run import run_converter
+    from validation.cli import main
+    looks = []
+    monkeypatch.setattr(machine, "MEMORY_LOOK", 16)
+    monkeypatch.setattr(limits, "memory_in_use", lambda: looks.append(1) or 5 << 30)
+    monkeypatch.delenv(limits.MEMORY_ENV, raising=False)
+    with pytest.raises(ResourceError, match=r"--method event at t = .* holds 5 GiB, above the memory limit of 4 GiB"):
+        run_converter("buck", method="event", periods=50)
+    assert len(looks) == 1
+    assert main(["simulate", "buck", "--method", "event", "--periods", "50"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "use --method lcp" in err

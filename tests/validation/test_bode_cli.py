@@ -57,7 +57,7 @@ def test_bode_gives_the_output_impedance_from_the_load_current(capsys):
 @pytest.mark.parametrize("argv, message", [
     (["--input", "duty", "--plot", "x.txt"], "--plot must end in .png or .svg"),
     (["--input", "Q"], "input must be 'control'"),
-    (["--input", "duty", "--fmin", "-3"], "fmin must be a frequency > 0 Hz"),
+    (["--input", "duty", "--fmin", "-3"], "fmin must be a frequency in (0, 1e+08] Hz"),
     (["--input", "duty", "--fmin", "5k", "--fmax", "1k"], "fmin must be below fmax"),
     (["--input", "loop"], "driven by a schedule"),
     (["--input", "L", "--check"], "input 'L' changes the circuit's matrices; the injection check perturbs"),
@@ -136,3 +136,31 @@ def test_an_analysis_about_an_unstable_orbit_is_refused_or_says_so(capsys, comma
     summary = json.loads(out)
     assert code == 0 and err == "" and summary["stable"] is True
     assert summary["spectral_radius"] == pytest.approx(0.82413, abs=1e-5)
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--fmax", "1e300"], "fmax must be a frequency in (0, 1e+08] Hz (1000 times the switching frequency); got 1e+300"),
+    (["--fmin", "1e-6", "--check"], "the check injects at frequencies down to fs/20,000 (5 Hz): at 1e-06 Hz its common "
+                                    "period spans 1e+11 switching periods"),
+    (["--fmin", "20k", "--fmax", "20k"], "one frequency is --fmin F --fmax F --points 1"),
+    (["--fmin", "10k", "--fmax", "20k", "--points", "1"], "one frequency is --fmin F --fmax F --points 1"),
+])
+def test_a_frequency_range_bode_cannot_answer_is_one_line(capsys, args, words):
+    """--fmax 1e300 printed a table of nan with exit 0; --fmin 1e-6 --check asked numpy for 745 GiB (a traceback)."""
+    code, out, err = run_cli(capsys, "bode", "buck", "--input", "duty", *args)
+    assert code == 2 and out == "" and len(err.strip().splitlines()) == 1 and words in err
+
+
+def test_one_frequency_and_a_time_limit(capsys):
+    """bode at one frequency (refused before: fmin must be below fmax), its value that of the same frequency in a
+    sweep; --time-limit, listed in its help, bounds the command (refused before)."""
+    code, out, _ = run_cli(capsys, "bode", "buck", "--input", "duty", "--fmin", "20k", "--fmax", "20k", "--points", "1",
+                           "--json", "--time-limit", "60")
+    one = json.loads(out)
+    assert code == 0 and one["frequency_hz"] == [20000.0]
+    code, out, _ = run_cli(capsys, "bode", "buck", "--input", "duty", "--fmin", "10k", "--fmax", "40k", "--points", "3",
+                           "--json")
+    three = json.loads(out)
+    assert three["frequency_hz"][1] == pytest.approx(20000.0, rel=1e-12)
+    assert one["magnitude_db"][0] == pytest.approx(three["magnitude_db"][1], abs=1e-9)
+    assert one["phase_deg"][0] == pytest.approx(three["phase_deg"][1], abs=1e-7)

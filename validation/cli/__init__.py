@@ -22,9 +22,18 @@ SUBCOMMANDS = (listing, simulate, lcp, compare, gdcm, gdcm_map, sweep, bifurcati
 def main(argv=None) -> int:
     import warnings
     warnings.formatwarning = _one_line          # a warning (a bad tuning variable, ...) is one line, like an error
+    code = 1
     try:
-        return _main(argv)
+        code = _main(argv)
+        return code
     finally:
+        compile_module = sys.modules.get("converters.circuits.compile")
+        if argv is None and compile_module is not None and compile_module.ABANDONED:
+            # a factorisation the time limit stopped waiting for ran on in LAPACK: the interpreter's exit then
+            # faulted (a segmentation fault after the one line, exit 139); end the process as it stands
+            import os
+            sys.stdout.flush(), sys.stderr.flush()
+            os._exit(code)
         import signal
         signal.setitimer(signal.ITIMER_REAL, 0.0)      # a --time-limit alarm ends with its command
         # the interpreter's last collection would walk every large result just to free it at exit (0.2-0.3 s
@@ -92,15 +101,16 @@ def _add_limits(parser) -> None:
                         help=f"refuse a run estimated to allocate more than SIZE (default {human_bytes(DEFAULT_MAX_MEMORY)}"
                              "; 512M, 4G, ...; workers inherit it)")
     parser.add_argument("--time-limit", default=None, metavar="S",
-                        help="seconds one run may take: the whole of simulate, mech simulate and lcp solve; each "
+                        help="seconds one run may take: the whole of simulate, mech simulate, lcp solve, bode and "
+                             "sensitivity; each "
                              "ngspice run and each iterative LCP solve of the other commands (defaults: ngspice 600 s, "
                              "an LCP solve 20 s)")
 
 
 def _apply_limits(args) -> None:
     """--max-memory and --time-limit, set in the environment so that every worker process sees them. A command
-    that is one run (simulate, mech simulate, lcp solve) also gets an alarm just after its --time-limit
-    (``ALARM_GRACE``): the run stops there with one line (a compiled loop is stopped when it returns; the memory
+    that is one run (simulate, mech simulate, lcp solve, bode, sensitivity) also gets an alarm just after its
+    --time-limit (``ALARM_GRACE``): the run stops there with one line (a compiled loop is stopped when it returns; the memory
     limit bounds its length)."""
     import os
 

@@ -36,7 +36,8 @@ def add(sub) -> None:
                                                       "(v(NODE), i(ELEMENT) of a netlist)")
     bode.add_argument("--fmin", default=None, help="lowest frequency in Hz (default fs/1000; SPICE suffixes: 10k)")
     bode.add_argument("--fmax", default=None, help="highest frequency in Hz (default fs/2)")
-    bode.add_argument("--points", type=integer(2, 100_000), default=200, help="log-spaced frequencies (default 200)")
+    bode.add_argument("--points", type=integer(1, 100_000), default=200,
+                      help="log-spaced frequencies (default 200; 1 with --fmin F --fmax F: that frequency alone)")
     bode.add_argument("--design", default=None, metavar="fc=F,pm=DEG[,type=3]",
                       help="with --control voltage-loop: design its compensator (type III by default, or type=2) by the "
                            "k-factor method on the exact control-to-output response for crossover F (Hz) and phase "
@@ -48,7 +49,7 @@ def add(sub) -> None:
     bode.add_argument("--plot", type=given_path, default=None, help="write the Bode plot to FILE.png or FILE.svg")
     bode.add_argument("--json", action="store_true", help="print one JSON object (frequency_hz, magnitude_db, "
                                                          "phase_deg, margins of a loop gain, the check)")
-    bode.set_defaults(run=run, no_time_limit=True)
+    bode.set_defaults(run=run, one_run=True)
 
 
 def run(args) -> int:

@@ -31,7 +31,7 @@ def add(sub) -> None:
     cmd.add_argument("--json", action="store_true",
                      help="print one JSON object (the metric, its value and unit, each parameter's derivative and "
                           "normalised sensitivity, the parameters not taken and why)")
-    cmd.set_defaults(run=run, no_time_limit=True)
+    cmd.set_defaults(run=run, one_run=True)
 
 
 def run(args) -> int:

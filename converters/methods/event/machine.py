@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ...errors import SimulationError
+from ...limits import check_in_use
 from ...problems import LCSProblem, Schedule, StateSwitching
 from .core import EnginePeriodMap
 from .flow import _CROSS_RTOL, _ON_SET_RTOL, _POWERS, MAX_SUBSTEPS, Flow, _time_scale, _Watch
@@ -23,6 +24,9 @@ def _held_sets_by_distance(k: int, reference: int) -> list[int]:
     masks = range(1 << k)
     return sorted(masks, key=lambda m: (bin(m ^ reference).count("1"), bin(m).count("1"), m))
 
+
+#: How often (in segments) the engine looks at the memory it holds against the limit (/proc: ~10 us a look).
+MEMORY_LOOK = 4096
 
 class _Machine:
     """The flows of one problem (built on demand, reused for every run from a new initial state)."""
@@ -303,10 +307,14 @@ class _Machine:
         if jac is not None and jump is not None:
             jac[:] = jump @ jac
         flow, xt = self.select(config, xt, t, 0)
-        same_time_events, events, crossings = 0, 0, 0
+        same_time_events, events, crossings, looks = 0, 0, 0, 0
         stop_time = None
         for edge_t, edge_kind in self.edges(t, t_end):
             while True:
+                looks += 1
+                if looks % MEMORY_LOOK == 0:
+                    check_in_use(f"--method event at t = {t:.6g} s ({events:,} events, {len(segments):,} segments)",
+                                 "--method lcp (its memory is known before the run), or a shorter --t-end")
                 watch = flow.watches.get(latched)
                 if watch is None:                        # the law's row depends on the configuration and the latch
                     watch = flow.watches[latched] = _Watch(flow, *self.switch_row(config, latched))
