@@ -682,7 +682,12 @@ class _Compiler:
     def waveform_value(self, coefficients: dict, t: np.ndarray) -> np.ndarray:
         total = np.zeros_like(t)
         for name, c in coefficients.items():
-            total += c * waveform_at(self.source(name).waveform, t)
+            waveform = self.source(name).waveform
+            if isinstance(waveform, Sin):               # a sine on a switch's drive: a comparator, not a schedule
+                raise NetlistError(f"{self.nl.where(name)}: {name}'s SIN drives a switch (its control is a sine, "
+                                   "crossed at instants a schedule does not know): drive switches with DC, PULSE or "
+                                   "PWL sources, or compare the sine with a ramp through a comparator (E) in the file")
+            total += c * waveform_at(waveform, t)
         return total
 
     def corners(self, coefficients: dict, period: float) -> np.ndarray:

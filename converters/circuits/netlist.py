@@ -276,6 +276,7 @@ class _Reader:
         tran = None
         spice: dict = {}
         outputs: list = []
+        named: list = []            # (line, vector, nodes, elements) of .ic and .meas: checked once the circuit is read
         expressions: dict = {}
         param_lines: dict = {}
         self.refuse_commands(lines)
@@ -322,6 +323,7 @@ class _Reader:
                     if not match:
                         raise self.error(line, f".ic takes v(NODE)=VALUE; got {key!r}")
                     ic[match.group(1)] = self.value(line, value, params, f".ic {key}")
+                    named.append((line, key, (match.group(1),), ()))
             elif word == ".tran":
                 tran = self.tran_line(line, params)
             elif word in (".options", ".option", ".opt"):
@@ -329,6 +331,9 @@ class _Reader:
             elif word in (".meas", ".measure"):
                 found = re.findall(r"\b([vi]\([^()]+\))", line.text.lower())
                 outputs.extend(v.replace(" ", "") for v in found if v not in outputs)
+                for vector in found:
+                    inside = [part.strip() for part in vector[2:-1].split(",")]
+                    named.append((line, vector, inside if vector[0] == "v" else (), inside if vector[0] == "i" else ()))
             elif word == ".end":
                 break
             elif word.startswith("."):
@@ -355,6 +360,13 @@ class _Reader:
                 raise self.error(e.line, f"{e.title}: the name is used twice (first on line {seen[e.name].line}): "
                                          "SPICE names an element by its name; rename one")
             seen[e.name] = e
+        nodes = {n for e in elements for n in e.nodes} | {"0"}
+        for line, vector, wanted_nodes, wanted_elements in named:     # a name that is nowhere: accepted silently before
+            missing = [n for n in wanted_nodes if n not in nodes] + [x for x in wanted_elements if x not in seen]
+            if missing:
+                what = "node" if missing[0] in wanted_nodes else "element"
+                raise self.error(line, f"{vector} names {what} {missing[0]!r}, which no element of the circuit "
+                                       f"{'connects' if what == 'node' else 'is'}")
         return Netlist(self.label, title, tuple(elements), models, params, ic, tran, tuple(outputs), self.text,
                        expressions, frozenset(self.derived), param_lines, spice)
 

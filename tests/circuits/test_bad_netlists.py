@@ -223,6 +223,15 @@ CASES = {
     "override-derived-param": (buck({6: "L1 sw out {L}"}, insert=[".param f=100k L={1e-1/f}"]), ["-p", "L=1u"],
                                ["-p L", ".param l = {1e-1/f}", "expression of other parameters", "set those (f)"],
                                11),
+    # --- the third audit: accepted silently, or a traceback, before ---------------------------------------------
+    "ic-on-no-node": (buck(insert=[".ic v(nosuch)=5"]), [], ["v(nosuch) names node 'nosuch'",
+                                                            "which no element of the circuit connects"], 11),
+    "meas-on-no-node": (buck(insert=[".meas tran vx AVG v(nosuch) FROM=0 TO=1u"]), [],
+                        ["v(nosuch) names node 'nosuch'"], 11),
+    "meas-on-no-element": (buck(insert=[".meas tran ix AVG i(l9) FROM=0 TO=1u"]), [],
+                           ["i(l9) names element 'l9', which no element of the circuit is"], 11),
+    "sin-gate": (buck({3: "Vg gate 0 SIN(0 1 100k)"}), [], ["vg's SIN drives a switch", "PULSE or PWL"], 3),
+    "esc-in-a-name": (rc("C\x1b[31mX out 0 1u"), [], ["C\\x1b[31MX", "loop of voltage sources, capacitors"], None),
 }
 
 

@@ -537,3 +537,15 @@ def test_resume_refuses_a_sweep_whose_netlist_changed_since(tmp_path, capsys):
     assert main(args) == 2
     err = capsys.readouterr().err
     assert "holds a different sweep (model_sha256:" in err and len(err.strip().splitlines()) == 1
+
+
+def test_a_netlist_tolerance_takes_a_parameter_name_as_p_and_grid_take_it(tmp_path, capsys):
+    """A netlist's parameter names are case-insensitive as SPICE's: -p C= and --grid C= took 'C', --tolerance C=10%
+    was refused ('not a parameter of the model; valid names: ..., c, ...')."""
+    netlist = str(Path(__file__).resolve().parents[2] / "netlists" / "circuits" / "buck.cir")
+    assert main(["sweep", netlist, "--tolerance", "C=10%", "--samples", "8", "--steady", "--no-progress", "--json",
+                 "--out", str(tmp_path / "t")]) == 0
+    study = json.loads(capsys.readouterr().out)
+    assert study["ok"] == 8
+    frame = load_sweep(tmp_path / "t")
+    assert frame["c"].min() >= 0.9 * 100e-6 and frame["c"].max() <= 1.1 * 100e-6 and frame["c"].std() > 0

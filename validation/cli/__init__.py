@@ -43,7 +43,13 @@ def main(argv=None) -> int:
 
 
 def _one_line(message, category, filename, lineno, line=None) -> str:
-    return f"pcsuite: warning: {message}\n"
+    return f"pcsuite: warning: {printable(str(message))}\n"
+
+
+def printable(text: str) -> str:
+    """``text`` with its control characters written as escapes (an ESC byte in an element's name reached the
+    terminal raw: a netlist could recolour or rewrite what the user reads)."""
+    return "".join(c if c.isprintable() or c == "\n" else repr(c)[1:-1] for c in text)
 
 
 def _main(argv=None) -> int:
@@ -60,7 +66,7 @@ def _main(argv=None) -> int:
         sys.stderr.close()
         return 0
     except (PcsuiteError, ValueError) as exc:
-        print(f"pcsuite: error: {exc}", file=sys.stderr)
+        print(f"pcsuite: error: {printable(str(exc))}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:   # Ctrl-C: one line, the shell's code for SIGINT (outputs are written atomically)
         print("pcsuite: interrupted", file=sys.stderr)

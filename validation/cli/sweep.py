@@ -118,7 +118,10 @@ def build(args):
         n = 1000 if args.samples is None else args.samples
         check_memory(f"sweep: --samples {n}", float(n) * (BYTES_PER_ROW + 8 * len(args.tolerance)),
                      remedy="fewer --samples")
-        points = Tolerances([Tolerance.parse(t, nominals) for t in args.tolerance], n,
+        # a name as -p and --grid take it (a netlist's are case-insensitive, as SPICE's)
+        named = [f"{model.parameter_name(t.partition('=')[0].strip())}={t.partition('=')[2]}" if "=" in t else t
+                 for t in args.tolerance]
+        points = Tolerances([Tolerance.parse(t, nominals) for t in named], n,
                             0 if args.seed is None else args.seed, args.sampler or "lhs")
         from converters.sweeps.indices import MIN_SAMPLES
         if args.indices and n < MIN_SAMPLES:
