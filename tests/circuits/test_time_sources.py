@@ -3,6 +3,7 @@ its derivative the PWL's slope on each segment; a SIN with a delay or damping is
 damped rotation frozen before its delay. Every method follows them as it follows the circuit: the event method
 exactly."""
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -146,3 +147,22 @@ def test_a_rectifier_on_a_damped_sine_compares_with_ngspice(tmp_path, ngspice, c
     assert main(["compare", str(path), "--json"]) == 0
     metrics = json.loads(capsys.readouterr().out)["metrics"]
     assert metrics["v(out)_waveform_rel_error"] < 1e-3 and metrics["mode_time_agreement"] > 0.99
+
+
+@pytest.mark.slow
+def test_accuracy_on_request_on_a_sin_source_gives_the_steppers_estimate_where_the_event_method_cannot_go(capsys):
+    """--rtol on the 50 Hz bridge rectifier (a SIN source): beyond what the stepper reaches within its steps a period
+    the exact event method took over and refused the circuit ('exact flows take constant inputs'), exit 2; now the
+    stepper's finest orbit is the answer, with its Richardson estimates and rtol said unmet."""
+    import json
+
+    from validation.cli import main
+    netlist = Path(__file__).resolve().parents[2] / "netlists" / "circuits" / "rectifier-1ph.cir"
+    assert main(["simulate", str(netlist), "--rtol", "1e-6", "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    accuracy = summary["accuracy"]
+    assert accuracy["method"] == "lcp" and not accuracy["met"]
+    assert accuracy["message"].startswith("the stepper's estimate at 51,200 steps a period is")
+    assert "the exact event method does not take this circuit" in accuracy["message"]
+    assert accuracy["quantities"]["vout_mean"]["relative_error_estimate"] < 1e-5
+    assert any(w.startswith("rtol 1e-06 not met") for w in summary["warnings"]), summary.get("warnings")
