@@ -680,6 +680,48 @@ def incomplete_across(params: dict | None = None, settings: dict | None = None):
     return family, branch, [corner_impact(family, joint, angles.size - 1, last.value, last.x0)]
 
 
+def least_clearance(family: OrbitFamily, rpm: float, x0) -> float:
+    """The least local minimum of the gap x - c(t) (m) along the flight after the orbit's last impact, to the
+    map's end (inf where the gap only grows): the event method's dense solution, sampled at T/20,000 and its
+    minimum refined by the parabola through the three samples around it."""
+    model = get_mechanical("cam-follower")
+    problem = family.problem_of(rpm)
+    t0, t1 = problem.t_span
+    impacts = family.event_times(rpm, x0, "impact")
+    start = impacts[-1] if impacts.size else t0
+    tr = simulate(problem, EventDriven(output_step=(t1 - t0) / 20_000), x0=x0)
+    rows = tr.t > start
+    t = tr.t[rows]
+    gap = tr.x[rows, 0] - model.offset(dict(model.resolve({}), rpm=float(rpm))).position(t)[0]
+    slope = np.diff(gap)
+    minima = np.flatnonzero((slope[:-1] < 0) & (slope[1:] >= 0)) + 1
+    if not minima.size:
+        return np.inf
+    i = minima[np.argmin(gap[minima])]
+    a, b, c = gap[i - 1], gap[i], gap[i + 1]
+    return float(b - 0.125 * (c - a) ** 2 / (a - 2 * b + c)) if a - 2 * b + c > 0 else float(b)
+
+
+def locate_grazing(family: OrbitFamily, branch, grazing, offsets=(2e-4, 1e-4)) -> tuple[float, list]:
+    """The grazing where the branch's border collision is, located as the cam speed where the least clearance of
+    the flight after the last impact reaches zero, extrapolated linearly (a smooth minimum's value moves linearly
+    with the parameter) from the orbits ``offsets`` rpm below the bracket's lower end. The bracket itself is where
+    the event method first sees the touch, which it does within its event tolerance of the cam (2e-5 rpm early
+    here, where the clearance is 2e-9 m). Returns (rpm, [(rpm, clearance in m)])."""
+    low = grazing.value - 0.5 * grazing.width
+    near = min(branch.points, key=lambda pt: abs(pt.value - low))
+    x, seen = near.x0, []
+    for offset in offsets:
+        rpm = low - offset
+        orbit = family.orbit(rpm, x)
+        if not orbit.converged:
+            raise SimulationError(f"the orbit at {rpm:.7f} rpm below the grazing was not found: {orbit.message}")
+        x = orbit.x0
+        seen.append((rpm, least_clearance(family, rpm, x)))
+    (r1, g1), (r2, g2) = seen[-2:]
+    return float(r2 - g2 * (r2 - r1) / (g2 - g1)), seen
+
+
 def impact_angles(family: OrbitFamily, rpm: float, x0) -> np.ndarray:
     """The cam angle beta (rad, in [0, 2 pi)) of each impact of the orbit from x0 at ``rpm``, in time order."""
     return get_mechanical("cam-follower").cam_angle({"rpm": rpm}, family.event_times(rpm, x0, "impact"))
@@ -1339,6 +1381,7 @@ def chattering_windows_section(full: bool = False):
                                  f"{full_other['max_step']:g} rpm)")
     complete_end = next((b["rpm"] for b in study["borders"] if b["n"] == 1 and b["side"] == "below"), None)
     grazings = [b for b in across.bifurcations if b.kind == "border-collision"]
+    located = locate_grazing(across_family, across, grazings[0]) if grazings else None
     m_across = {across_family.event_times(pt.value, pt.x0, "impact").size for pt in across.points}
     radius = [pt.spectral_radius for pt in across.points]
     crossed = complete_end is not None and across.values()[0] < complete_end < across.values()[-1]
@@ -1383,8 +1426,12 @@ def chattering_windows_section(full: bool = False):
             + f"It is unstable all along (largest multiplier {min(radius):.1f} to {max(radius):.1f}, the other below "
               f"{max(np.sort(np.abs(pt.multipliers))[0] for pt in across.points):.0e}), so a simulation does not settle "
               "on it. "
-            + (f"It ends at {grazings[0].value:.6f} rpm (bracket {grazings[0].width:.1e} rpm), where the flight "
-               "leaving the cam at the lift grazes the cam and an impact appears: " + grazings[0].detail + ". "
+            + (f"It ends at a grazing at {located[0]:.6f} rpm, where the flight leaving the cam at the lift touches "
+               f"the cam and an impact appears ({grazings[0].detail}): located where the flight's least clearance "
+               f"reaches zero, extrapolated from {located[1][0][1]:.2e} m and {located[1][1][1]:.2e} m at "
+               f"{located[1][0][0]:.6f} and {located[1][1][0]:.6f} rpm; the event method, which sees a touch within "
+               f"its event tolerance of the cam, brackets it at {grazings[0].value:.6f} rpm (width "
+               f"{grazings[0].width:.1e} rpm). "
                if grazings else f"No end was located: {across.message}. ")
             + "".join(f"Going down, its impact {c.impact + 1} reaches the {c.joint} joint of the cam profile (where "
                       "the cam lifts away: the detachment is at that joint), a corner impact located at "
@@ -1420,6 +1467,7 @@ def chattering_windows_section(full: bool = False):
                         **{f"corner impact ({c.kind})": c.rpm for c in corners}})},
                    ok=bool(ends) and all(b["width"] <= 1e-6 * b["rpm"] for b in study["borders"]) and bool(folds)
                    and crossed and bool(grazings) and min(radius) > 1.0
+                   and 0.0 <= located[0] - (grazings[0].value - 0.5 * grazings[0].width) <= 1e-3
                    and all(c.residual <= 1e-7 and abs(c.off_joint) <= 1e-9 for c in corners) and bool(corners),
                    form="full" if full else "quick",
                    metrics={"borders": study["borders"], "n": {f"{r['rpm']:g}": r["n"] for r in study["rows"]},
@@ -1430,8 +1478,8 @@ def chattering_windows_section(full: bool = False):
                                                             for b in branch.bifurcations]},
                             "across": {"impacts": sorted(m_across), "from": float(across.values()[0]),
                                        "to": float(across.values()[-1]), "largest_multiplier": [min(radius), max(radius)],
-                                       "grazing": [{"rpm": b.value, "width": b.width, "detail": b.detail}
-                                                   for b in grazings],
+                                       "grazing": [{"rpm": located[0], "detected_rpm": b.value, "width": b.width,
+                                                    "clearances": located[1], "detail": b.detail} for b in grazings],
                                        "corner": [{"rpm": c.rpm, "joint": c.joint, "impact": c.impact, "kind": c.kind,
                                                    "residual": c.residual} for c in corners]}})
 

@@ -126,8 +126,9 @@ class Model(ABC):
         """The stepper's theta for steps of ``h`` s at ``p``: 0.5 where the step resolves every time constant of
         the circuit's configurations, 1 where one is shorter (:func:`~converters.methods.theta.stable_theta`): the
         same rule for a named converter and its netlist."""
-        from ..methods.theta import stable_theta
-        return stable_theta(self.fastest_rate(p), h)
+        from ..methods.theta import RESOLVED, fastest_rate, stable_theta
+        span = self.period(p) if self.periodic(p) else 1e-9
+        return stable_theta(fastest_rate(self.problem(p, span).configurations, below=RESOLVED / h), h)
 
     def periodic(self, p: dict) -> bool:
         """True when the problem's switching law has a fixed period (stroboscopic steady states)."""

@@ -183,16 +183,23 @@ class ModelSweep:
         from ..models import get_model
         return get_model(self.model, self.control)
 
-    def _method(self, model, p):
+    def _method(self, model, p, problem=None):
         """A ``step`` method at h = T h_fraction (with ``theta`` where it takes one: the point's default unless the
-        sweep sets one), an exact one sampled at T/1000."""
+        sweep sets one, read from ``problem``'s configurations where the caller has built it), an exact one sampled
+        at T/1000."""
         from ..methods.base import get_method
+        from ..methods.theta import RESOLVED, fastest_rate, stable_theta
         cls = get_method(self.method)
         T = model.period(p)
         step = T * self.h_fraction if cls.error_kind == "step" else T / 1000
         options = {}
         if "theta" in cls.option_names():
-            options["theta"] = model.default_theta(p, step) if self.theta is None else self.theta
+            if self.theta is not None:
+                options["theta"] = self.theta
+            elif problem is not None:
+                options["theta"] = stable_theta(fastest_rate(problem.configurations, below=RESOLVED / step), step)
+            else:
+                options["theta"] = model.default_theta(p, step)
         return cls.from_options(step=step, **options)
 
     def row(self, index: int, point: dict) -> dict:
@@ -312,8 +319,8 @@ class ModelSweep:
             clock = time.perf_counter() - shared
             try:
                 p = resolved[index]
-                method = self._method(model, p)
                 problem = model.problem(p, model.period(p))
+                method = self._method(model, p, problem)
                 # the grid and matrix sets follow from the schedule and the step alone: points that vary only
                 # the circuit's values (a tolerance study) share them
                 key = (problem.switching, problem.t_span, method, len(problem.configurations))

@@ -352,6 +352,12 @@ def test_an_incomplete_orbit_is_continued_through_the_end_of_complete_chattering
     (grazing,) = branch.bifurcations
     assert grazing.kind == "border-collision" and "appear: cam impact" in grazing.detail
     assert grazing.value == pytest.approx(259.1804, abs=1e-4)
+    # located where the flight's least clearance reaches zero: 259.18040 rpm (the closed-form flights' clearance
+    # extrapolates there; the event method's bracket, where it sees the touch within its tolerance, is 2e-5 early)
+    from validation.mechanics import locate_grazing
+    located, clearances = locate_grazing(family, branch, grazing)
+    assert located == pytest.approx(259.18040, abs=5e-6) and located > grazing.value + 0.5 * grazing.width
+    assert all(0.0 < gap < 3e-8 for _, gap in clearances)
     assert branch.message.startswith("stopped at the border-collision")
 
     near = min(branch.points, key=lambda pt: abs(pt.value - end_of_complete))
