@@ -211,14 +211,26 @@ def accuracy_html(accuracy: dict) -> str:
             + table_html(pd.DataFrame(rows)))
 
 
+def _output_metric(metrics: dict, converter_key: str, suffix: str) -> float:
+    """A comparison's metric of its output: a converter's ``vout_...`` key, else a netlist's first ``..._suffix``
+    (its output's: the netlist comparison records vout first, under the file's output name, v(out))."""
+    if converter_key in metrics:
+        return metrics[converter_key]
+    return next((v for k, v in metrics.items() if k.endswith(suffix) and isinstance(v, float)), float("nan"))
+
+
 def scenes_summary(results: list[SceneResult]) -> Section:
+    def ratio(m):
+        if "runtime_ratio_spice_over_lcp" in m:
+            return m["runtime_ratio_spice_over_lcp"]
+        return m["spice_wall_s"] / m["lcp_wall_s"] if m.get("lcp_wall_s") and "spice_wall_s" in m else float("nan")
+    # (a netlist scene's numbers are under its output's name, v(out): its columns were left empty)
     rows = [{"scene": r.scene.name, "converter": r.scene.converter, "result": "pass" if r.ok else "fail",
-             "vout_lcp_V": r.metrics.get("vout_mean_lcp_V", float("nan")),
-             "vout_spice_V": r.metrics.get("vout_mean_spice_V", float("nan")),
-             "rel_error": r.metrics.get("vout_mean_rel_error", float("nan")),
+             "vout_lcp_V": _output_metric(r.metrics, "vout_mean_lcp_V", "_mean_lcp"),
+             "vout_spice_V": _output_metric(r.metrics, "vout_mean_spice_V", "_mean_spice"),
+             "rel_error": _output_metric(r.metrics, "vout_mean_rel_error", "_mean_rel_error"),
              "modes": r.metrics.get("mode_sequence_lcp", ""), "predicted": r.gdcm.get("predicted", ""),
-             "spice/lcp time": r.metrics.get("runtime_ratio_spice_over_lcp", float("nan")),
-             "wall_s": r.wall_s, "reason": r.reason} for r in results]
+             "spice/lcp time": ratio(r.metrics), "wall_s": r.wall_s, "reason": r.reason} for r in results]
     table = pd.DataFrame(rows)
     from .report import csv_bytes
     return Section("Scenes: LCP against ngspice", table_html(table, "result", good=("pass",)),

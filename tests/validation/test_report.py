@@ -269,3 +269,19 @@ def test_each_section_is_pass_fail_or_skipped_with_a_reason_and_a_failure_fails_
     summary = pd.read_csv(out / "summary.csv")
     assert list(summary.columns) == ["section", "result", "form", "reason"]
     assert set(summary["result"]) == {"pass", "fail", "skipped"}
+
+
+def test_the_scenes_summary_gives_a_netlist_scenes_numbers_under_its_outputs_name(tmp_path):
+    """A netlist scene's comparison keys its output as the file names it (v(out)_mean_lcp): the summary's numeric
+    columns were empty (NaN) for every netlist scene."""
+    from validation import suite
+    scene = load_scene(Path(suite.__file__).with_name("scenes") / "buck-dcm.toml")
+    metrics = {"v(out)_mean_lcp": 6.96, "v(out)_mean_spice": 6.9601, "v(out)_mean_rel_error": 1.4e-5,
+               "v(i)_mean_lcp": 1.0, "mode_sequence_lcp": "S1 > D1 > off", "lcp_wall_s": 0.01, "spice_wall_s": 0.5}
+    table = suite.scenes_summary([suite.SceneResult(scene, True, metrics=metrics)]).files["scenes.csv"].decode()
+    import io
+
+    import pandas as pd
+    row = pd.read_csv(io.StringIO(table)).iloc[0]
+    assert (row["vout_lcp_V"], row["vout_spice_V"], row["rel_error"]) == (6.96, 6.9601, 1.4e-5)
+    assert row["spice/lcp time"] == pytest.approx(50.0)
