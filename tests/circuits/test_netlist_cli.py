@@ -8,6 +8,8 @@ import pytest
 
 from validation.cli import main
 
+from .test_stiff import STIFF
+
 NETLISTS = Path(__file__).resolve().parents[2] / "netlists" / "circuits"
 
 
@@ -170,19 +172,6 @@ def test_gdcm_on_a_netlist_classifies_its_conduction_in_both_simulators(capsys, 
         assert result["lcp"]["D1"] == pytest.approx(0.4 * (12 - vout) / vout, abs=1e-3)        # h = T/1000
 
 
-STIFF_NODE = """a square wave through 10 ohm into 10 nF, an ideal diode into 1 uF (1e12 ohm across each)
-V1 in 0 PULSE(0 10 0 1n 1n 0.5m 1m)
-R1 in a 10
-C1 a 0 10n
-D1 a out DIDEAL
-C2 out 0 1u
-R2 a 0 1e12
-R3 out 0 1e12
-.model DIDEAL D
-.tran 1u 20m
-.end
-"""
-
 
 @pytest.mark.spice
 def test_compare_runs_ngspice_to_its_own_steady_state_so_a_wrong_orbit_is_not_passed(tmp_path, monkeypatch, ngspice):
@@ -196,7 +185,7 @@ def test_compare_runs_ngspice_to_its_own_steady_state_so_a_wrong_orbit_is_not_pa
     import validation.circuit_compare as cc
     from converters.models import Circuit
     path = tmp_path / "stiff.cir"
-    path.write_text(STIFF_NODE)
+    path.write_text(STIFF.format(r="10", c="10n"))
     circuit = Circuit.from_netlist(path)
     right = cc.steady_state
     wrong = lambda *args, **kwargs: replace(right(*args, **kwargs), x0=np.array([0.0, 1000.0]))  # noqa: E731
