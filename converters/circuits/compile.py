@@ -1015,6 +1015,11 @@ def waveform_at(w, t: np.ndarray) -> np.ndarray:
     return out
 
 
+#: The elements a loop of fixed voltages may hold, by branch kind, as a refusal names them.
+LOOP_KINDS = (("V", "voltage sources"), ("C", "capacitors"), ("S", "closed switches"), ("R", "0 ohm resistors"),
+              ("D", "conducting diodes"), ("E", "voltage-controlled voltage sources"),
+              ("H", "current-controlled voltage sources"))
+
 class _Network:
     """The resistive network of one configuration: MNA unknowns z = (node voltages, branch currents), each
     equation's right-hand side a linear function of (x, u, sources)."""
@@ -1143,12 +1148,16 @@ class _Network:
         null = null / np.abs(null).max()
         where = ", ".join(f"{k}={'closed' if v else 'open'}" for k, v in self.switch_state.items())
         where = f" (with {where})" if where else ""
-        loop = [e.name.upper() for j, (kind, e, a, b) in enumerate(self.branches)
-                if abs(null[len(self.nodes) + j]) > 1e-6]
+        members = [(kind, e) for j, (kind, e, a, b) in enumerate(self.branches) if abs(null[len(self.nodes) + j]) > 1e-6]
+        loop = [e.name.upper() for _, e in members]
         nodes = [n for n, i in self.nodes.items() if abs(null[i]) > 1e-6 and "#" not in n]
         if loop:
-            return NetlistError(f"{c.path}: {', '.join(loop)} form a loop of voltage sources, capacitors, closed "
-                                f"switches, 0 ohm resistors and conducting diodes{where}: their voltages are not independent")
+            # the kinds the loop holds, not every kind a loop may hold (a 1 pF capacitor with a source was said to
+            # loop through "0 ohm resistors" where there was none)
+            kinds = [name for letter, name in LOOP_KINDS if any(kind == letter for kind, _ in members)]
+            held = ", ".join(kinds[:-1]) + (" and " if len(kinds) > 1 else "") + kinds[-1]
+            return NetlistError(f"{c.path}: {', '.join(loop)} form a loop of {held}{where}: their voltages are not "
+                                "independent")
         around = [e.name.upper() for e in c.nl.elements if set(e.nodes) & set(nodes)]
         return NetlistError(f"{c.path}: node{'s' if len(nodes) > 1 else ''} {', '.join(nodes)} ha"
                             f"{'ve' if len(nodes) > 1 else 's'} no path to ground but through inductors and current "
