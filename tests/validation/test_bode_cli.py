@@ -151,9 +151,11 @@ def test_a_frequency_range_bode_cannot_answer_is_one_line(capsys, args, words):
     assert code == 2 and out == "" and len(err.strip().splitlines()) == 1 and words in err
 
 
-def test_one_frequency_and_a_time_limit(capsys):
+def test_one_frequency_and_a_time_limit(capsys, monkeypatch):
     """bode at one frequency (refused before: fmin must be below fmax), its value that of the same frequency in a
-    sweep; --time-limit, listed in its help, bounds the command (refused before)."""
+    sweep; --time-limit, listed in its help, bounds the command (refused before). (--time-limit sets the variable
+    every worker reads: put back afterwards, or later tests' subprocesses would inherit 60 s.)"""
+    monkeypatch.setenv("PCSUITE_TIME_LIMIT", "60")         # recorded, so restored (absent) after the test
     code, out, _ = run_cli(capsys, "bode", "buck", "--input", "duty", "--fmin", "20k", "--fmax", "20k", "--points", "1",
                            "--json", "--time-limit", "60")
     one = json.loads(out)
