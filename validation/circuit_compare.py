@@ -132,7 +132,7 @@ def compare_circuit(circuit, params: dict | None = None, *, h=None, spice_option
     # times while the mean disagrees, the finest run compared
     moved, refined = 0.0, []
     for _ in range(TMAX_REFINEMENTS):
-        if dict((row[0], row[3]) for row in result.rows)["mean_rel"]:
+        if _passed(result, "mean_rel"):
             break
         finer = replace(options, tmax_fraction=options.tmax_fraction / 4, reltol=max(options.reltol / 10, MIN_RELTOL))
         spice_f, options_f, notes_f, periods_f, settle_f, independent = settled(finer, spice_start)
@@ -146,11 +146,15 @@ def compare_circuit(circuit, params: dict | None = None, *, h=None, spice_option
         result.notes += notes_f + refined
         _periodic(result, circuit, T, window, th, (settle_f, spice_periods, start, rho), independent)
     error = result.metrics[f"{circuit.output}_mean_rel_error"]
-    if moved > 0.1 * error and not dict((row[0], row[3]) for row in result.rows)["mean_rel"]:
+    if moved > 0.1 * error and not _passed(result, "mean_rel"):
         result.notes.append(f"ngspice is under-resolved: its last refinement moved its mean {moved:.2g}, more than a "
                             f"tenth of the difference ({error:.2g}); the difference may be ngspice's (--spice-tmax, "
                             "--spice-reltol)")
     return result
+
+
+def _passed(result: CircuitComparison, check: str) -> bool:
+    return next(ok for name, _, _, ok in result.rows if name == check)
 
 
 def _periodic(result: CircuitComparison, circuit, T: float, window: int, th: dict, settling: tuple,

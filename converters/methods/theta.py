@@ -195,6 +195,12 @@ def overdamped_resonance(configurations, h: float, theta: float) -> tuple | None
     return worst
 
 
+def default_theta(configurations, h: float) -> float:
+    """:func:`stable_theta` for ``configurations`` stepped at ``h``, their flows decomposed only where a norm bound
+    leaves it open (the default of every run and every sweep point)."""
+    return stable_theta(fastest_rate(configurations, below=RESOLVED / h), h)
+
+
 #: The most a mode may flip and keep of its amplitude in one step before a theta is refused for ringing.
 RINGS = 0.5
 

@@ -115,20 +115,22 @@ class Model(ABC):
     def default_h(self, p: dict) -> float:
         return self.period(p) / 1000.0
 
+    def configurations(self, p: dict) -> tuple:
+        """The circuit's configurations at ``p`` (those of its problem over one period, or an instant)."""
+        return self.problem(p, self.period(p) if self.periodic(p) else 1e-9).configurations
+
     def fastest_rate(self, p: dict) -> float:
         """The largest |lambda| (1/s) of the circuit's configurations at ``p``
         (:func:`~converters.methods.theta.fastest_rate`)."""
         from ..methods.theta import fastest_rate
-        span = self.period(p) if self.periodic(p) else 1e-9
-        return fastest_rate(self.problem(p, span).configurations)
+        return fastest_rate(self.configurations(p))
 
     def default_theta(self, p: dict, h: float) -> float:
         """The stepper's theta for steps of ``h`` s at ``p``: 0.5 where the step resolves every time constant of
-        the circuit's configurations, 1 where one is shorter (:func:`~converters.methods.theta.stable_theta`): the
+        the circuit's configurations, 1 where one is shorter (:func:`~converters.methods.theta.default_theta`): the
         same rule for a named converter and its netlist."""
-        from ..methods.theta import RESOLVED, fastest_rate, stable_theta
-        span = self.period(p) if self.periodic(p) else 1e-9
-        return stable_theta(fastest_rate(self.problem(p, span).configurations, below=RESOLVED / h), h)
+        from ..methods.theta import default_theta
+        return default_theta(self.configurations(p), h)
 
     def periodic(self, p: dict) -> bool:
         """True when the problem's switching law has a fixed period (stroboscopic steady states)."""

@@ -183,23 +183,17 @@ class ModelSweep:
         from ..models import get_model
         return get_model(self.model, self.control)
 
-    def _method(self, model, p, problem=None):
-        """A ``step`` method at h = T h_fraction (with ``theta`` where it takes one: the point's default unless the
-        sweep sets one, read from ``problem``'s configurations where the caller has built it), an exact one sampled
-        at T/1000."""
+    def _method(self, model, p, problem):
+        """A ``step`` method at h = T h_fraction (with ``theta`` where it takes one: the sweep's, else the point's
+        default from ``problem``'s configurations), an exact one sampled at T/1000."""
         from ..methods.base import get_method
-        from ..methods.theta import RESOLVED, fastest_rate, stable_theta
+        from ..methods.theta import default_theta
         cls = get_method(self.method)
         T = model.period(p)
         step = T * self.h_fraction if cls.error_kind == "step" else T / 1000
         options = {}
         if "theta" in cls.option_names():
-            if self.theta is not None:
-                options["theta"] = self.theta
-            elif problem is not None:
-                options["theta"] = stable_theta(fastest_rate(problem.configurations, below=RESOLVED / step), step)
-            else:
-                options["theta"] = model.default_theta(p, step)
+            options["theta"] = self.theta if self.theta is not None else default_theta(problem.configurations, step)
         return cls.from_options(step=step, **options)
 
     def row(self, index: int, point: dict) -> dict:
@@ -216,10 +210,10 @@ class ModelSweep:
                 if unstable(row["spectral_radius"]):
                     return failed_row(index, point, unstable(row["spectral_radius"]), time.perf_counter() - clock)
                 return {**out, "status": "ok", "message": "", **row, "wall_s": time.perf_counter() - clock}
-            method = self._method(model, p)
             T = model.period(p)
+            problem = model.problem(p, T)
+            method = self._method(model, p, problem)
             if self.steady:
-                problem = model.problem(p, T)
                 orbit = shoot(problem, method, problem.x0, warm_up=self.warm_up, tol=STEADY_TOL, max_iter=MAX_ITER,
                               polish=True)
                 if not orbit.converged and not (orbit.message.startswith(ROUNDING_LIMITED) and
