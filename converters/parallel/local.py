@@ -56,6 +56,8 @@ def _worker_init(parent: int):
 
 
 _PARENT_POLL_S = 0.2
+#: Seconds a discarded pool's manager thread is given to wind down (it only notices its dead worker).
+MANAGER_JOIN_S = 5.0
 
 
 def _context():
@@ -125,8 +127,14 @@ class ProcessSlot:
 
     def discard(self):
         if self._pool is not None:
+            manager = getattr(self._pool, "_executor_manager_thread", None)
             self._pool.shutdown(wait=False, cancel_futures=True)
             self._pool = None
+            # CPython 3.11's exit hook wakes every pool's manager thread through a pipe that a manager still
+            # handling its dead worker may be closing at that moment ("Bad file descriptor" traceback at exit,
+            # fixed in 3.12 with a lock): let the manager finish first (bounded: a stuck one is left behind).
+            if manager is not None and manager.is_alive():
+                manager.join(MANAGER_JOIN_S)
 
     def close(self):
         self._forget_inherited()

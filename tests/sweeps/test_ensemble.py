@@ -216,6 +216,18 @@ def test_ctrl_c_while_waiting_for_a_worker_ends_the_worker_at_once():
     slot.close()                                             # nothing left to wait for
 
 
+def test_a_killed_slot_leaves_no_pool_thread_for_the_exit_hook_to_race():
+    """CPython 3.11's exit hook wakes each pool's manager thread through a pipe the manager closes when it finds
+    its worker dead; a manager still closing at exit printed a 'Bad file descriptor' traceback after a
+    Ctrl-C'd sweep. kill() waits for the manager to end."""
+    from converters.parallel.local import ProcessSlot
+    slot = ProcessSlot()
+    slot.submit(_sleep, 600.0)
+    manager = slot._pool._executor_manager_thread
+    slot.kill()
+    assert not manager.is_alive() and slot._pool is None
+
+
 @pytest.mark.parametrize("kwargs,message", [
     (dict(steady="no"), "steady must be True or False; got 'no'"),          # was read as True
     (dict(warm_up=10**9), "warm_up must be an integer in [0, 100,000]; got 1000000000"),   # hung
