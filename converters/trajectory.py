@@ -16,6 +16,8 @@ were produced (``rule``):
 """
 from __future__ import annotations
 
+import itertools
+
 from dataclasses import dataclass, field
 
 import math
@@ -73,7 +75,8 @@ class Trajectory:
     rule : str
         How integrals over the samples are taken (module docstring).
     exact : object or None
-        The exact piecewise solution (event method): ``quadrature(t0, t1) -> (Samples, weights)``.
+        The exact piecewise solution (event method): ``quadrature(t0, t1) -> (Samples, weights)`` and
+        ``quadrature_blocks(t0, t1)``, the same nodes a block at a time.
     events : pandas.DataFrame (property)
         Columns ``time``, ``step``, ``pair`` (-1 for switching-law events) and ``kind`` (``activate``,
         ``release``, ``impulse``, ``switch``); switching-law events also give ``config`` (the
@@ -272,14 +275,15 @@ class Trajectory:
                 raise SignalError(f"signal must be one of {', '.join(self.signal_names)}; got {name!r}")
             cache = self.__dict__.setdefault("_quadrature_cache", {})
             if (t0, t1) not in cache:
-                cache.clear()                    # one window at a time: the nodes of a long run are large
-                cache[(t0, t1)] = self.exact.quadrature(t0, t1)
-            nodes, weights = cache[(t0, t1)]
-            if name in self.state_names:
-                values = nodes.x[:, self.state_names.index(name)]
-            else:
-                values = np.asarray(self.labels.signal(name, nodes))
-            return float(weights @ values ** power)
+                cache.clear()                    # one window at a time, and only one that fits a block
+                blocks = self.exact.quadrature_blocks(t0, t1)
+                first = next(blocks)
+                rest = next(blocks, None)
+                if rest is None:
+                    cache[(t0, t1)] = (first,)
+                else:                            # a long window: read block by block at each measure
+                    return self._integrate_blocks(name, power, itertools.chain((first, rest), blocks))
+            return self._integrate_blocks(name, power, cache[(t0, t1)])
         rows = self.rows_between(t0, t1)
         t, v = self.t[rows], self.signal(name, self._all_or(rows))
         dt = np.diff(t)
@@ -289,6 +293,32 @@ class Trajectory:
         if power == 1:
             return float(dt @ (0.5 * (a + b)))
         return float(dt @ ((a * a + a * b + b * b) / 3.0))
+
+    def _integrate_blocks(self, name: str, power: int, blocks) -> float:
+        return self._integrals_of_blocks((name,), blocks)[name][power - 1]
+
+    def _integrals_of_blocks(self, names, blocks) -> dict:
+        """{name: (integral of the signal, of its square)} over quadrature blocks, each block read once."""
+        totals = {name: [0.0, 0.0] for name in names}
+        for nodes, weights in blocks:
+            for name in names:
+                if name in self.state_names:
+                    values = nodes.x[:, self.state_names.index(name)]
+                else:
+                    values = np.asarray(self.labels.signal(name, nodes), dtype=float)
+                totals[name][0] += float(weights @ values)
+                totals[name][1] += float(weights @ (values * values))
+        return totals
+
+    def _means_and_rms(self, names: list, t0: float, t1: float) -> dict:
+        """{name: (mean, rms)} over [t0, t1]: of an exact run, one pass over its quadrature for every name (a long
+        window's nodes are computed once, not once per measure)."""
+        if self.rule == "exact" and self.exact is not None and not any(n in self.measured for n in names):
+            span = self._span(t0, t1)
+            cached = self.__dict__.get("_quadrature_cache", {}).get((t0, t1))
+            totals = self._integrals_of_blocks(names, cached or self.exact.quadrature_blocks(t0, t1))
+            return {n: (one / span, float(np.sqrt(two / span))) for n, (one, two) in totals.items()}
+        return {n: (self.mean(n, t0=t0, t1=t1), self.rms(n, t0=t0, t1=t1)) for n in names}
 
     def _step_starts(self, name: str, rows: np.ndarray, starts: np.ndarray) -> np.ndarray:
         """The value each step of ``rows`` starts from, for the linear rule: a step that starts at a switching
@@ -358,17 +388,17 @@ class Trajectory:
         a, b = self.window(periods, t0, t1)
         rows = self.rows_between(a, b)
         units = dict(getattr(getattr(self.labels, "model", None), "signal_units", {}) or {})
-        out = {}
+        sampled = {}
         for name in self.signal_names:
             if name == "mode":
                 continue
             values = np.asarray(self.signal(name, rows), dtype=float)
-            if not np.isfinite(values).any():                 # not measured in this run (ngspice: no pairs)
-                continue
-            unit = signal_unit(units, name)
-            out[name] = {"unit": unit, "mean": self.mean(name, t0=a, t1=b), "rms": self.rms(name, t0=a, t1=b),
-                         "min": float(values.min()), "max": float(values.max()), "ripple": float(np.ptp(values))}
-        return out
+            if np.isfinite(values).any():                     # else not measured in this run (ngspice: no pairs)
+                sampled[name] = values
+        integrals = self._means_and_rms(list(sampled), a, b)
+        return {name: {"unit": signal_unit(units, name), "mean": integrals[name][0], "rms": integrals[name][1],
+                       "min": float(values.min()), "max": float(values.max()), "ripple": float(np.ptp(values))}
+                for name, values in sampled.items()}
 
     def mode_fractions(self, periods: float | None = 1, t0: float | None = None, t1: float | None = None) -> dict:
         """Fraction of the window spent in each mode (each step counted by the label of its end point)."""
@@ -491,6 +521,13 @@ class JoinedExact:
     the parts as within one (the linear rule on the samples had put 3.5e-4 into a buck's input power)."""
 
     parts: tuple     # (t0, t1, exact) per part, in time order
+
+    def quadrature_blocks(self, t0: float | None = None, t1: float | None = None):
+        t0 = self.parts[0][0] if t0 is None else t0
+        t1 = self.parts[-1][1] if t1 is None else t1
+        for a, b, exact in self.parts:
+            if min(b, t1) > max(a, t0):
+                yield from exact.quadrature_blocks(max(a, t0), min(b, t1))
 
     def quadrature(self, t0: float | None = None, t1: float | None = None) -> tuple[Samples, np.ndarray]:
         t0 = self.parts[0][0] if t0 is None else t0

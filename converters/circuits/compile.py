@@ -71,6 +71,14 @@ class Compiled:
     #: ((t, law), ...), the law in force from each instant t > 0 on (``law`` before the first).
     phases: tuple = ()
 
+    def signal_rows(self, row: int) -> tuple:
+        """Signal ``row``'s maps stacked over the configurations: (Sx (configs, n), Su, s0, Ssin, Sgate), built once
+        (a long exact run reads its signals block by block)."""
+        cache = self.__dict__.setdefault("_signal_rows", {})    # frozen: the cache is not a field
+        if row not in cache:
+            cache[row] = tuple(np.array([m[i][row] for m in self.signal_maps]) for i in range(5))
+        return cache[row]
+
     def law_at(self, t: float):
         """The switching law in force at time t."""
         law = self.law

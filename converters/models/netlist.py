@@ -233,7 +233,7 @@ class Circuit(Model):
             raise SignalError(f"signal must be one of vout, switch, {', '.join(c.signal_names)}; got {name!r}") from None
         config = np.asarray(samples.config, dtype=np.int64)
         # each configuration's row of each map, stacked by configuration: one gather and one product per point
-        Sx, Su, s0, Ssin, Sgate = (np.array([m[i][row] for m in c.signal_maps]) for i in range(5))
+        Sx, Su, s0, Ssin, Sgate = c.signal_rows(row)
         x = np.asarray(samples.x)
         out = np.einsum("ij,ij->i", x, Sx[config]) + s0[config]
         if samples.u is not None:

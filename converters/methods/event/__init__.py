@@ -32,8 +32,8 @@ expm(tau Z) restricted to x; at an event triggered by g(x, t) = 0 the saltation 
 S = I + (f+ - f-) n^T / (n^T f- + dg/dt) (n the gradient of g) carries the change of vector field;
 an impulse contributes I - B_K (C_K B_K)^-1 C_K.
 
-Integrals over a run (means, RMS) use 8-point Gauss-Legendre quadrature on pieces no longer than the
-sampling distance: exact to rounding for these exponential-polynomial pieces.
+Integrals over a run (means, RMS) use 8-point Gauss-Legendre quadrature on pieces no longer than 2 / |Z|
+(the flow's norm): exact to rounding for these exponential pieces, read a block of pieces at a time.
 """
 from __future__ import annotations
 

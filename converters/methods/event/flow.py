@@ -18,6 +18,11 @@ _GL_X, _GL_W = np.polynomial.legendre.leggauss(8)
 _TAYLOR_TERMS = 26     # (0.25)^26 / 26! < 1e-30: the series is exact to rounding on a sampling step
 _EXPONENTS = np.arange(_TAYLOR_TERMS)
 _POWERS = 64           # sampling steps per batched product
+#: A quadrature piece spans at most this over the flow's norm |Z| (row sums): 8-point Gauss-Legendre's error on
+#: e^{sZ} over a piece L is about L^17 |Z|^16 (8!)^4 / (17 (16!)^3) ~ 1e-18 L at L |Z| = 2, rounding; a sampling
+#: step (a quarter over the norm) would take eight times the nodes, and a snubber's 100 ps beside a 10 us period
+#: ran a machine out of memory.
+_PIECE_NORM = 2.0
 _ZERO_RTOL = 1e-10     # a derivative counts as zero below this fraction of its own scale
 _CROSS_RTOL = 1e-13    # a watched value counts as negative below -this fraction of its scale
 #: Most substeps (each a quarter of the mode's fastest time constant at most) one crossing search may take: about
@@ -64,6 +69,9 @@ class Flow:
         self.watches: dict = {}                  # _Watch per latch state (built by the machine that owns the flow)
         norm = float(np.abs(Z).sum(axis=1).max())
         self.delta = min(delta, 0.25 / norm) if norm > 0.0 else delta
+        #: Sampling steps per quadrature piece (:data:`_PIECE_NORM`; at most a batched product's).
+        self.piece_steps = max(1, min(_POWERS, int(_PIECE_NORM / (norm * self.delta)))) if norm > 0.0 else _POWERS
+        self.piece = self.piece_steps * self.delta
 
     @property
     def n(self) -> int:
@@ -117,10 +125,14 @@ class Flow:
         return _power_stack(expm(self.delta * self.Z), _POWERS)
 
     @cached_property
+    def piece_powers(self) -> np.ndarray:
+        """expm(piece Z)^j, j = 0.._POWERS: the starts of a segment's quadrature pieces in one batched product."""
+        return _power_stack(self.powers[self.piece_steps], _POWERS)
+
+    @cached_property
     def node_maps(self) -> np.ndarray:
-        """expm(s_k Z) at the Gauss-Legendre nodes s_k of [0, delta], shape (8, n+1, n+1)."""
-        weights = (0.5 * (_GL_X + 1.0) * self.delta)[:, None] ** _EXPONENTS[None, :]
-        return np.tensordot(weights, self.taylor, axes=([1], [0]))
+        """expm(s_k Z) at the Gauss-Legendre nodes s_k of [0, piece], shape (8, n+1, n+1)."""
+        return np.stack([expm(s * self.Z) for s in 0.5 * (_GL_X + 1.0) * self.piece])
 
     def propagate(self, xt: np.ndarray, s: float) -> np.ndarray:
         """x~ after s in [0, delta]."""
@@ -142,14 +154,15 @@ class Flow:
         """The state-transition matrix over tau: d x(tau) / d x(0), shape (n, n)."""
         return expm(tau * self.Z)[:-1, :-1]
 
-    def sample_states(self, xt: np.ndarray, count: int) -> np.ndarray:
-        """x~ at 0, delta, ..., count delta: shape (count + 1, n+1)."""
+    def sample_states(self, xt: np.ndarray, count: int, powers: np.ndarray | None = None) -> np.ndarray:
+        """x~ at 0, delta, ..., count delta (with ``piece_powers``: 0, piece, ...): shape (count + 1, n+1)."""
+        powers = self.powers if powers is None else powers
         if count <= _POWERS:
-            return self.powers[:count + 1] @ xt
+            return powers[:count + 1] @ xt
         blocks, state = [], xt
         while count >= 0:
             m = min(count, _POWERS)
-            block = self.powers[:m + 1] @ state
+            block = powers[:m + 1] @ state
             blocks.append(block[:-1] if count > m else block)
             state, count = block[-1], count - m if count > m else -1
         return np.vstack(blocks)

@@ -7,11 +7,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...errors import ParameterError
+from ...limits import check_memory
 from ...trajectory import Samples, Trajectory
 from .core import PiecewiseSolution
 from .flow import _EXPONENTS, _GL_W, _GL_X, Flow, _power_stack, expm
 
 _BLOCK = 1024
+#: Gauss-Legendre pieces a measure reads at a time (8 nodes each): a one-state circuit's block peaks at ~30 MB.
+QUADRATURE_BLOCK = 1 << 14
 
 
 @dataclass
@@ -37,50 +40,72 @@ class EventSolution(PiecewiseSolution):
             if seg.t1 > t0 and seg.t0 < t1:
                 yield seg, max(seg.t0, t0), min(seg.t1, t1)
 
-    def quadrature(self, t0: float | None = None, t1: float | None = None) -> tuple[Samples, np.ndarray]:
-        """Gauss-Legendre nodes over [t0, t1] (default: the whole run) as Samples, and their weights.
+    def quadrature_pieces(self, t0: float, t1: float) -> int:
+        """Gauss-Legendre pieces over [t0, t1] (8 nodes each): what :meth:`quadrature` would hold."""
+        return sum(int((b - a) / seg.flow.piece) + 1 for seg, a, b in self._segments_in(t0, t1) if b > a)
 
-        Pieces follow the segments (no node straddles an event), each at most the flow's sampling
-        distance long, 8 nodes per piece."""
+    def quadrature_blocks(self, t0: float | None = None, t1: float | None = None, pieces: int = QUADRATURE_BLOCK):
+        """Gauss-Legendre nodes over [t0, t1] (default: the whole run) as (Samples, weights), in blocks of about
+        ``pieces`` pieces: a sum over the blocks is the integral, and no more than a block's nodes are held.
+
+        Pieces follow the segments (no node straddles an event), each at most the flow's quadrature piece long
+        (:data:`.flow._PIECE_NORM`), 8 nodes per piece."""
         t0 = self.problem.t_span[0] if t0 is None else t0
         t1 = self.problem.t_span[1] if t1 is None else t1
-        ts, ws, xs, us, ys, cs, hs = [], [], [], [], [], [], []
-        half = 0.5 * (_GL_X + 1.0)
+        parts: list = []                           # (t, w, x~ nodes, flow) of the block being gathered
+        held_pieces, half, any_part = 0, 0.5 * (_GL_X + 1.0), False
         for seg, a, b in self._segments_in(t0, t1):
             flow, length = seg.flow, b - a
             if length <= 0.0:
                 continue
-            # Whole pieces of the sampling step delta: their starts S^q x~ in batched products, their
-            # nodes by the precomputed node maps; then the rest of the segment by the series.
-            full = int(np.floor(length / flow.delta * (1.0 - 1e-12)))
+            # Whole pieces: their starts in batched products (a block's worth at a time), their nodes by the
+            # node maps; then the rest of the segment by the series.
+            full = int(np.floor(length / flow.piece * (1.0 - 1e-12)))
             xt = seg.xt0 if a == seg.t0 else flow.advance(seg.xt0, a - seg.t0)
-            starts = flow.sample_states(xt, full)                              # (full + 1, n+1)
-            rest = length - full * flow.delta
-            parts_t, parts_w, parts_x = [], [], []
-            if full:
-                parts_x.append(np.tensordot(starts[:full], flow.node_maps, axes=([1], [2])).reshape(-1, starts.shape[1]))
-                parts_t.append((a + flow.delta * np.arange(full)[:, None] + flow.delta * half[None, :]).ravel())
-                parts_w.append(np.tile(0.5 * flow.delta * _GL_W, full))
+            done = 0
+            while done < full:
+                m = min(full - done, max(pieces - held_pieces, 1))
+                starts = flow.sample_states(xt, m, flow.piece_powers)                # (m + 1, n+1)
+                nodes = np.tensordot(starts[:m], flow.node_maps, axes=([1], [2])).reshape(-1, starts.shape[1])
+                times = (a + flow.piece * (done + np.arange(m))[:, None] + flow.piece * half[None, :]).ravel()
+                parts.append((times, np.tile(0.5 * flow.piece * _GL_W, m), nodes, flow))
+                xt, done, held_pieces = starts[m], done + m, held_pieces + m
+                if held_pieces >= pieces:
+                    yield self._block(parts)
+                    parts, held_pieces, any_part = [], 0, True
+            rest = length - full * flow.piece
             if rest > 1e-15 * length:
                 offsets = rest * half
-                parts_x.append((offsets[:, None] ** _EXPONENTS[None, :]) @ (flow.taylor @ starts[full]))
-                parts_t.append(a + full * flow.delta + offsets)
-                parts_w.append(0.5 * rest * _GL_W)
-            if not parts_x:
-                continue
-            nodes = parts_x[0] if len(parts_x) == 1 else np.vstack(parts_x)
-            ts.extend(parts_t)
-            ws.extend(parts_w)
-            xs.append(nodes[:, :-1])
-            us.append(nodes @ flow.u_rows.T)
-            ys.append(nodes @ flow.y_rows.T)
-            cs.append(np.full(nodes.shape[0], flow.config))
-            hs.append(np.broadcast_to(flow.held_flags, (nodes.shape[0], flow.held_flags.size)))
-        if not ts:
+                parts.append((a + full * flow.piece + offsets, 0.5 * rest * _GL_W,
+                              (offsets[:, None] ** _EXPONENTS[None, :]) @ (flow.taylor @ xt), flow))
+                held_pieces += 1
+        if parts:
+            yield self._block(parts)
+        elif not any_part:
             raise ParameterError(f"quadrature interval [{t0:g}, {t1:g}] s lies outside the run")
-        samples = Samples(np.concatenate(ts), np.vstack(xs), np.vstack(us), np.vstack(ys), np.concatenate(cs),
-                          held=np.vstack(hs))
-        return samples, np.concatenate(ws)
+
+    @staticmethod
+    def _block(parts: list) -> tuple[Samples, np.ndarray]:
+        xs = [nodes for _, _, nodes, _ in parts]
+        samples = Samples(np.concatenate([t for t, _, _, _ in parts]), np.vstack([x[:, :-1] for x in xs]),
+                          np.vstack([x @ f.u_rows.T for x, (_, _, _, f) in zip(xs, parts)]),
+                          np.vstack([x @ f.y_rows.T for x, (_, _, _, f) in zip(xs, parts)]),
+                          np.concatenate([np.full(x.shape[0], f.config) for x, (_, _, _, f) in zip(xs, parts)]),
+                          held=np.vstack([np.broadcast_to(f.held_flags, (x.shape[0], f.held_flags.size))
+                                          for x, (_, _, _, f) in zip(xs, parts)]))
+        return samples, np.concatenate([w for _, w, _, _ in parts])
+
+    def quadrature(self, t0: float | None = None, t1: float | None = None) -> tuple[Samples, np.ndarray]:
+        """Every Gauss-Legendre node over [t0, t1] at once (:meth:`quadrature_blocks`), after a check that they fit
+        the memory limit."""
+        a = self.problem.t_span[0] if t0 is None else t0
+        b = self.problem.t_span[1] if t1 is None else t1
+        n, k = self.problem.n, self.problem.k
+        check_memory(f"the event method's quadrature over [{a:.6g}, {b:.6g}] s",
+                     8 * self.quadrature_pieces(a, b) * (8 * (n + 2 * k + 3) + k),
+                     "--method lcp (its samples are its steps), or a shorter window")
+        blocks = list(self.quadrature_blocks(a, b, pieces=2**62))
+        return blocks[0]
 
     def sample(self, times) -> Samples:
         """Exact states, pairs and configuration at the given times (a point on an event takes the
