@@ -138,7 +138,8 @@ def measure_lcp(ref: Reference, steps: int, theta: float, periods: int = PERIODS
     mean, rms = _measures(_labelled(conv, ref.params, tr), conv.state_names[0])
     events = tr.events
     timing = _timing_error(ref, events.loc[events["kind"] == "activate", "time"])
-    return _row(ref, f"LCP theta={theta:g}", f"h=T/{steps}", wall, mean, rms, timing, steps=int(tr.steps))
+    return _row(ref, f"LCP theta={theta:g}", f"h=T/{steps}", wall, mean, rms, timing, steps=int(tr.steps),
+                default=bool(theta == conv.default_theta(ref.params, ref.period / steps)))
 
 
 def measure_event(ref: Reference, event_tol: float, periods: int = PERIODS) -> dict:
@@ -274,6 +275,32 @@ def acceptance(runs: pd.DataFrame) -> pd.DataFrame:
         ok = row.get("lcp_speedup", 0.0) >= 100.0 and row.get("event_wall_s", np.inf) < wall_d
         row["result"] = "pass" if ok else "fail"
         out.append(row)
+    return pd.DataFrame(out)
+
+
+def default_trade(runs: pd.DataFrame) -> pd.DataFrame:
+    """The stepper's default at each step of the sweep (``default``: the theta the circuit's rule picks at that h,
+    :meth:`converters.models.base.Model.default_theta`) beside the other theta at the same step: per case and h,
+    the default's theta, error and wall time, the other's error and time, and their ratios (> 1: the default is
+    the more accurate, or the slower). Empty where the runs carry no ``default`` column (a file from before it)."""
+    if "default" not in runs:
+        return pd.DataFrame()
+    lcp = runs[runs["family"].astype(str).str.startswith("LCP")]
+    out = []
+    for (case, setting), group in lcp.groupby(["case", "setting"], sort=False):
+        chosen = group[group["default"].astype(bool)]
+        others = group[~group["default"].astype(bool)]
+        if chosen.empty:
+            continue
+        row = chosen.iloc[0]
+        entry = {"case": case, "setting": setting, "default_theta": float(row["family"].split("=")[1]),
+                 "error": row["error"], "wall_s": row["wall_s"]}
+        if not others.empty:
+            other = others.iloc[0]
+            entry.update(other_theta=float(other["family"].split("=")[1]), other_error=other["error"],
+                         other_wall_s=other["wall_s"], error_gain=other["error"] / row["error"],
+                         time_cost=row["wall_s"] / other["wall_s"])
+        out.append(entry)
     return pd.DataFrame(out)
 
 

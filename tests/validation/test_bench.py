@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from validation import stability, tradeoff
+from validation import sections, stability, tradeoff
 from validation.cli import main
 
 
@@ -74,6 +74,22 @@ def test_acceptance_takes_the_fastest_run_at_least_as_accurate_as_the_ngspice_de
     assert table.loc["b", "lcp_speedup"] == pytest.approx(0.2 / 0.0021) and table.loc["b", "result"] == "fail"
 
 
+def test_the_default_trade_sets_the_default_theta_beside_the_other_at_each_step():
+    runs = pd.DataFrame([("a", "LCP theta=1", "h=T/100", 0.002, 8e-5, False), ("a", "LCP theta=0.5", "h=T/100", 0.001, 4e-6, True),
+                         ("a", "LCP theta=1", "h=T/10", 0.001, 1e-2, True), ("a", "LCP theta=0.5", "h=T/10", 0.001, 5e-1, False),
+                         ("a", "event", "tol=1e-13T", 0.1, 1e-14, np.nan)],
+                        columns=["case", "family", "setting", "wall_s", "error", "default"])
+    trade = tradeoff.default_trade(runs).set_index("setting")
+    assert list(trade.index) == ["h=T/100", "h=T/10"]
+    assert trade.loc["h=T/100", "default_theta"] == 0.5 and trade.loc["h=T/100", "other_theta"] == 1.0
+    assert trade.loc["h=T/100", "error_gain"] == pytest.approx(20.0) and trade.loc["h=T/100", "time_cost"] == 0.5
+    assert trade.loc["h=T/10", "default_theta"] == 1.0 and trade.loc["h=T/10", "error_gain"] == pytest.approx(50.0)
+    html = sections._default_trade_html(tradeoff.default_trade(runs))
+    assert "picked theta 0.5 at 1, theta 1 at 1 of the steps; at each step it is 20 to 50 times as accurate" in html
+    assert "in 0.50 to 1.00 times its time" in html
+    assert "not in these runs" in sections._default_trade_html(tradeoff.default_trade(runs.drop(columns="default")))
+
+
 def test_tradeoff_measures_every_method_against_the_exact_solution(ngspice):
     sweep = {"lcp_steps": (100, 1000), "thetas": (1.0, 0.5), "event_tols": (1e-13,), "smooth": ((1e-3, 1e-6),),
              "spice": (tradeoff.SPICE_DEFAULT,)}
@@ -88,6 +104,8 @@ def test_tradeoff_measures_every_method_against_the_exact_solution(ngspice):
     e100, e1000 = runs.loc[("LCP theta=1", "h=T/100"), "error"], runs.loc[("LCP theta=1", "h=T/1000"), "error"]
     assert 5 < e100 / e1000 < 20
     assert runs.loc[("LCP theta=0.5", "h=T/1000"), "error"] < e1000 / 10
+    # the default at every step here: theta 0.5 (no mode of the ideal DCM buck is faster than T/100)
+    assert list(runs["default"].dropna()) == [False, False, True, True]
     # The diode's turn-off instant: within a step for the stepper.
     assert runs.loc[("LCP theta=1", "h=T/1000"), "err_event_T"] <= 1e-3 + 1e-12
     spice_default = runs.loc[("ngspice trap", "TMAX=T/100 RELTOL=0.001 trap")]
