@@ -152,7 +152,8 @@ class SmallSignalModel:
             raise ParameterError(f"{model.key} has sinusoidal sources (SIN): the small-signal model is taken about the "
                                  "periodic orbit of a circuit with constant sources and a clock")
         if orbit is None:
-            orbit = require(shoot(problem, method, problem.x0, tol=tol), f"the periodic orbit of {model.key}")
+            orbit = require(shoot(problem, method, problem.x0, tol=tol), f"the periodic orbit of {model.key}",
+                            model.conserved(p))
         self.orbit = orbit
         problem = model.problem(p, T, orbit.x0)
         self.n = problem.n
@@ -696,7 +697,8 @@ def steady_mean(model, params: dict | None = None, output: str = "vout", tol: fl
     T = model.period(p)
     method = EventDriven()
     problem = model.problem(p, T)
-    orbit = require(shoot(problem, method, problem.x0, tol=tol), f"the periodic orbit of {model.key}")
+    orbit = require(shoot(problem, method, problem.x0, tol=tol), f"the periodic orbit of {model.key}",
+                    model.conserved(p))
     return _orbit_mean(method.engine(model.problem(p, T, orbit.x0)), orbit.x0, model, p, output)
 
 

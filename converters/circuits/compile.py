@@ -162,6 +162,52 @@ def _structure(netlist: Netlist) -> tuple:
     return netlist.text, netlist.path, elements, models, tuple(sorted(netlist.ic))
 
 
+#: Elements that join their first two nodes by a branch whose current the circuit decides (a voltage, a resistance,
+#: a switch or diode that may conduct); capacitors join them too, but conserve the charge they move.
+_JOINING = "RLVEHDSW"
+
+
+def charge_islands(netlist: Netlist) -> list:
+    """Sets of nodes joined to the rest of the circuit (ground included) only through capacitors, whatever the
+    switches and diodes do: each set's net charge is conserved (the capacitors' currents into it sum to zero),
+    so its voltage is where the run started it and a periodic orbit is not isolated (a multiplier at 1).
+    [(nodes, capacitors)], names upper case; a set touched by a current source is left out (its charge is
+    driven, not conserved)."""
+    parent: dict = {}
+
+    def find(n):
+        while parent.setdefault(n, n) != n:
+            parent[n] = parent[parent[n]]
+            n = parent[n]
+        return n
+
+    driven = set()
+    for e in netlist.elements:
+        if e.kind in _JOINING and len(e.nodes) >= 2:
+            parent[find(e.nodes[0])] = find(e.nodes[1])
+        elif e.kind in "IGF":
+            driven.update(e.nodes[:2])
+        for n in e.nodes:
+            find(n)
+    groups: dict = {}
+    for n in parent:
+        groups.setdefault(find(n), []).append(n)
+    ground = find("0")
+    out = []
+    for root, nodes in groups.items():
+        capacitors = [e.name.upper() for e in netlist.elements if e.kind == "C" and
+                      (find(e.nodes[0]) == root) != (find(e.nodes[1]) == root)]
+        if root != ground and capacitors and not driven & set(nodes):
+            out.append((tuple(nodes), tuple(capacitors)))
+    return out
+
+
+def describe_islands(islands: list) -> str:
+    """The conserved charges of :func:`charge_islands`, for a message."""
+    return "; ".join(f"the charge of node{'s' if len(nodes) > 1 else ''} {', '.join(nodes)} (joined to the rest only "
+                     f"through {', '.join(caps)}) is conserved" for nodes, caps in islands)
+
+
 class _Compiler:
     def __init__(self, netlist: Netlist):
         self.nl = netlist
@@ -188,6 +234,13 @@ class _Compiler:
         nodes = [n for n in netlist.nodes if n != "0"]
         if "0" not in netlist.nodes:
             raise NetlistError(f"{self.path}: no ground node (0)")
+        for island, capacitors in charge_islands(netlist):
+            if len(capacitors) == 1 and all(len([e for e in els if n in e.nodes]) == 1 for n in island):
+                cap = next(e for e in els if e.name.upper() == capacitors[0])
+                raise self.error(cap, f"{cap.title}: node{'s' if len(island) > 1 else ''} {', '.join(island)} "
+                                      f"connect{'' if len(island) > 1 else 's'} to nothing but this capacitor: it keeps "
+                                      "its initial charge forever (no current can reach it); connect the node, or "
+                                      "remove the capacitor")
         self.nodes = nodes
         self.node_index = {n: i for i, n in enumerate(nodes)}
         self.capacitors, self.inductors = self.by_kind["C"], self.by_kind["L"]

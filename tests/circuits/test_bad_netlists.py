@@ -231,6 +231,9 @@ CASES = {
     "meas-on-no-element": (buck(insert=[".meas tran ix AVG i(l9) FROM=0 TO=1u"]), [],
                            ["i(l9) names element 'l9', which no element of the circuit is"], 11),
     "sin-gate": (buck({3: "Vg gate 0 SIN(0 1 100k)"}), [], ["vg's SIN drives a switch", "PULSE or PWL"], 3),
+    # accepted, then "a multiplier at 1" naming no element
+    "dangling-capacitor": (buck(insert=["C9 fa 0 1n"]), [], ["capacitor C9: node fa connects to nothing but this "
+                                                             "capacitor", "keeps its initial charge"], 11),
     "esc-in-a-name": (rc("C\x1b[31mX out 0 1u"), [], ["C\\x1b[31MX", "form a loop of capacitors:"], None),
     # a loop named by what it holds: it listed "0 ohm resistors" and switches where there were none
     "loop-of-a-source-and-a-capacitor": (rc("C9 in 0 1p"), [], ["VIN, C9 form a loop of voltage sources and "

@@ -160,3 +160,47 @@ def test_ngspice_runs_the_repeated_pwl_gate_and_agrees(tmp_path, capsys, ngspice
     assert main(["compare", str(path), "--json"]) == 0
     result = json.loads(capsys.readouterr().out)
     assert result["passed"] and result["metrics"]["v(out)_mean_rel_error"] < 1e-3
+
+
+SERIES = """a boost whose output is two 100 uF in series: node fa is joined to the rest only through them
+Vin in 0 DC 12
+Vg g 0 PULSE(0 1 0 1n 1n 5u 10u)
+L1 in sw 100u
+S1 sw 0 g 0 SMOD
+D1 sw out DIDEAL
+C1 out fa 100u
+C2 fa 0 100u
+R1 out 0 50
+{extra}
+.model SMOD SW(VT=0.5)
+.model DIDEAL D
+.tran 10n 2m
+.end
+"""
+
+
+@pytest.mark.parametrize("extra, islands", [
+    ("", [(("fa",), ("C1", "C2"))]),
+    ("R2 fa 0 1meg", []),                     # a path: the charge leaks
+    ("I2 0 fa DC 1m", []),                    # a driven charge, not a conserved one
+    ("S2 fa 0 g 0 SMOD", []),                 # a switch that may close joins the node
+])
+def test_a_node_joined_to_the_rest_only_through_capacitors_conserves_its_charge(extra, islands):
+    from converters.circuits.compile import charge_islands
+    from converters.circuits.netlist import read_netlist
+    assert charge_islands(read_netlist(SERIES.format(extra=extra), name="series.cir")) == islands
+
+
+def test_a_steady_state_that_fails_on_a_conserved_charge_names_it(tmp_path, capsys):
+    """Two capacitors in series: each start keeps its midpoint's charge, so the period map has a multiplier at 1
+    and Newton cannot converge; the refusal said only 'a multiplier at 1' or 'rounding', naming no element."""
+    from validation.cli import main
+    path = tmp_path / "series.cir"
+    path.write_text(SERIES.format(extra=""))
+    assert main(["simulate", str(path), "--steady"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert ("the charge of node fa (joined to the rest only through C1, C2) is conserved, so every start has an "
+            "orbit of its own" in err) and "a large resistor across a capacitor" in err
+    # the transient runs: the midpoint holds its start (0 V) and C1 carries the whole output
+    assert main(["simulate", str(path), "--json", "--t-end", "200u"]) == 0
