@@ -362,7 +362,7 @@ def _orbit_and_map(model: Model, p: dict, method: Method, *, x0=None, warm_up: i
     problem = model.problem(p, periods * model.period(p), x0)
     period_map = method.period_map(problem)
     orbit = shoot(problem, method, problem.x0, periods=periods, warm_up=warm_up, tol=tol, period_map=period_map)
-    return require(orbit, f"the periodic orbit of {model.key}", model.conserved(p)), period_map
+    return require(orbit, f"the periodic orbit of {model.key}"), period_map
 
 
 def _on_orbit(model: Model, p: dict, method: Method, period_map, x0, span: float) -> Trajectory:

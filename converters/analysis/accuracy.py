@@ -303,8 +303,7 @@ def _orbit(model, p, method, x_guess, warm_up, tol):
     x = np.array(problem.x0, dtype=float)
     for _ in range(warm_up):
         x = period_map.end(x)
-    orbit = require(newton_orbit(period_map, x, tol=tol, period=T, polish=True), f"the periodic orbit of {model.key}",
-                    model.conserved(p))
+    orbit = require(newton_orbit(period_map, x, tol=tol, period=T, polish=True), f"the periodic orbit of {model.key}")
     plan = getattr(period_map, "plan", None)
     if plan is not None and hasattr(plan, "trajectory"):
         tr = plan.trajectory(orbit.x0)

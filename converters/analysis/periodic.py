@@ -194,15 +194,9 @@ def autonomous_orbit(problem: LCSProblem, method, x_guess, *, config: int, cross
     return newton_orbit(period_map, x, tol=tol, max_iter=max_iter)
 
 
-def require(orbit: PeriodicOrbit, what: str = "the periodic orbit", conserved: str = "") -> PeriodicOrbit:
-    """The orbit when converged; otherwise a SimulationError with the reason and a remedy (``conserved``: what the
-    circuit conserves, :meth:`~converters.models.base.Model.conserved`, the cause of a multiplier at 1)."""
+def require(orbit: PeriodicOrbit, what: str = "the periodic orbit") -> PeriodicOrbit:
+    """The orbit when converged; otherwise a SimulationError with the reason and a remedy."""
     if not orbit.converged:
-        if conserved:
-            raise SimulationError(f"Newton shooting did not find {what}: {orbit.message}; {conserved}, so every "
-                                  "start has an orbit of its own: pcsuite does not reduce such invariants yet; give "
-                                  "the node a path (a large resistor across a capacitor, as SPICE's RSHUNT), or run "
-                                  "--periods N without --steady")
         raise SimulationError(f"Newton shooting did not find {what}: {orbit.message}; try a looser --steady-tol, "
                               "or --periods N without --steady to see the transient")
     return orbit

@@ -152,8 +152,7 @@ class SmallSignalModel:
             raise ParameterError(f"{model.key} has sinusoidal sources (SIN): the small-signal model is taken about the "
                                  "periodic orbit of a circuit with constant sources and a clock")
         if orbit is None:
-            orbit = require(shoot(problem, method, problem.x0, tol=tol), f"the periodic orbit of {model.key}",
-                            model.conserved(p))
+            orbit = require(shoot(problem, method, problem.x0, tol=tol), f"the periodic orbit of {model.key}")
         self.orbit = orbit
         problem = model.problem(p, T, orbit.x0)
         self.n = problem.n
@@ -697,8 +696,7 @@ def steady_mean(model, params: dict | None = None, output: str = "vout", tol: fl
     T = model.period(p)
     method = EventDriven()
     problem = model.problem(p, T)
-    orbit = require(shoot(problem, method, problem.x0, tol=tol), f"the periodic orbit of {model.key}",
-                    model.conserved(p))
+    orbit = require(shoot(problem, method, problem.x0, tol=tol), f"the periodic orbit of {model.key}")
     return _orbit_mean(method.engine(model.problem(p, T, orbit.x0)), orbit.x0, model, p, output)
 
 

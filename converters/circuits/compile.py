@@ -169,10 +169,10 @@ _JOINING = "RLVEHDSW"
 
 def charge_islands(netlist: Netlist) -> list:
     """Sets of nodes joined to the rest of the circuit (ground included) only through capacitors, whatever the
-    switches and diodes do: each set's net charge is conserved (the capacitors' currents into it sum to zero),
-    so its voltage is where the run started it and a periodic orbit is not isolated (a multiplier at 1).
-    [(nodes, capacitors)], names upper case; a set touched by a current source is left out (its charge is
-    driven, not conserved)."""
+    switches and diodes do: each set's net charge is conserved (the capacitors' currents into it sum to zero), so
+    it is where the run started it, and without a hold every start would have a periodic orbit of its own (a
+    multiplier at 1; :meth:`_Compiler.hold_islands`). [(nodes, capacitors)], names upper case; a set touched by a
+    current source is left out (its charge is driven, not conserved)."""
     parent: dict = {}
 
     def find(n):
@@ -202,12 +202,6 @@ def charge_islands(netlist: Netlist) -> list:
     return out
 
 
-def describe_islands(islands: list) -> str:
-    """The conserved charges of :func:`charge_islands`, for a message."""
-    return "; ".join(f"the charge of node{'s' if len(nodes) > 1 else ''} {', '.join(nodes)} (joined to the rest only "
-                     f"through {', '.join(caps)}) is conserved" for nodes, caps in islands)
-
-
 class _Compiler:
     def __init__(self, netlist: Netlist):
         self.nl = netlist
@@ -234,7 +228,13 @@ class _Compiler:
         nodes = [n for n in netlist.nodes if n != "0"]
         if "0" not in netlist.nodes:
             raise NetlistError(f"{self.path}: no ground node (0)")
+        #: Nodes joined to the rest only through capacitors: (sign per capacitor, +1 where its first node is in the
+        #: island, -1 where its second is), their charge sum(sign C v) held where the run starts (:meth:`lcs`)
+        self.islands = []
         for island, capacitors in charge_islands(netlist):
+            inside = set(island)
+            self.islands.append(np.array([(e.nodes[0] in inside) - (e.nodes[1] in inside) if e.name.upper() in
+                                          capacitors else 0 for e in self.by_kind["C"]], dtype=float))
             if len(capacitors) == 1 and all(len([e for e in els if n in e.nodes]) == 1 for n in island):
                 cap = next(e for e in els if e.name.upper() == capacitors[0])
                 raise self.error(cap, f"{cap.title}: node{'s' if len(island) > 1 else ''} {', '.join(island)} "
@@ -284,7 +284,7 @@ class _Compiler:
     def batchable(self) -> bool:
         """Whether :meth:`rerun` takes this circuit's other values: a schedule of PULSE or PWL gates (a comparator's
         law depends on the values), no ramp or delayed SIN (states of their own)."""
-        return hasattr(self, "built") and not (self.state_rows or self.ramps or self.oscillators)
+        return hasattr(self, "built") and not (self.state_rows or self.ramps or self.oscillators or self.islands)
 
     def rerun(self, netlists: list, compiled: Compiled) -> list:
         """The compiles of ``netlists``, each this circuit (its :meth:`run` gave ``compiled``) with other values:
@@ -860,6 +860,8 @@ class _Compiler:
         ports = solution.ports()                          # (..., k, n + k + sources)
         s = self.source_values(solution.levels)           # (..., sources)
         A, B, E = dx[..., :n], dx[..., n:n + k], _times(dx[..., n + k:], s)
+        if self.islands and not self.lead:
+            A, E = self.hold_islands(A, E)
         C, D, F = ports[..., :n], ports[..., n:n + k], _times(ports[..., n + k:], s)
         if not self.diodes:                   # no diode: a pair that never holds (y = u + 1: u = 0)
             D, F = np.ones(self.lead + (1, 1)), np.ones(self.lead + (1,))
@@ -1004,6 +1006,47 @@ class _Compiler:
     def units(self) -> dict:
         return {name: ("V" if name.startswith("v(") else "A") for name in self.signal_names()}
 
+    def hold_islands(self, A: np.ndarray, E: np.ndarray) -> tuple:
+        """A and E with each island's charge q = sum(sign C v) held at its value where the run starts (q0, from the
+        .ic or from rest): q' = -gamma (q - q0), which the circuit's own q' = 0 meets on its states; a start with
+        another charge relaxes to q0 at gamma = LOOP_RATE / T instead of keeping an orbit of its own (a multiplier at
+        1). The correction moves the island's potential as a whole: every loop's voltages stay tied."""
+        A, E = A.copy(), E.copy()
+        n_c = len(self.capacitors)
+        capacitance = np.array([self.value(e) for e in self.capacitors])
+        x0 = self.initial_state()
+        gamma = LOOP_RATE / self.loop_time()
+        for sign in self.islands:
+            weight = sign * capacitance
+            total = capacitance[sign != 0].sum()
+            A[:n_c, :n_c] -= gamma * np.outer(sign, weight) / total
+            E[:n_c] += gamma * sign * (weight @ x0[:n_c]) / total
+        return A, E
+
+    def loop_time(self) -> float:
+        """The time over which a loop of capacitors is held to its constraint: the period, or the run."""
+        period = self.period()
+        return period if math.isfinite(period) else self.nl.tran.tstop
+
+    def consistent(self, x: np.ndarray) -> np.ndarray:
+        """``x`` with its capacitors' voltages moved onto their loops' constraints as a closing loop moves charge
+        (the smallest change in the capacitances' metric: x - C^-1 K^T (K C^-1 K^T)^-1 (K x - b)); x itself
+        without a loop."""
+        K_w = getattr(self, "loops", None)
+        if K_w is None:
+            return x
+        n_c = len(self.capacitors)
+        w = np.zeros(K_w.shape[1])
+        w[:n_c] = x[:n_c]
+        s = self.source_values({})
+        w[self.n + self.k:] = s
+        residual = K_w @ w
+        K = K_w[:, :n_c]
+        inverse = np.array([1.0 / self.value(e) for e in self.capacitors])
+        x = np.array(x, dtype=float)
+        x[:n_c] -= inverse * (K.T @ np.linalg.solve((K * inverse) @ K.T, residual))
+        return x
+
     def initial_state(self, netlist: Netlist | None = None) -> np.ndarray:
         """The states at t = 0: each element's IC=, or .ic v(node) across a capacitor, else 0 (UIC); of
         ``netlist``, this circuit with other values (:meth:`rerun`), where given."""
@@ -1023,7 +1066,7 @@ class _Compiler:
         x += [r.waveform.points[0][1] for r in self.ramps]          # a ramp holds its first value until its first time
         for o in self.oscillators:                                  # VO + VA sin(PHASE) until TD (as ngspice's SIN)
             x += [math.sin(math.radians(o.waveform.phase)), math.cos(math.radians(o.waveform.phase))]
-        return np.array(x, dtype=float)
+        return self.consistent(np.array(x, dtype=float)) if netlist is None else np.array(x, dtype=float)
 
 
 def _slope(w: Pwl, t: float) -> float:
@@ -1077,6 +1120,10 @@ def waveform_at(w, t: np.ndarray) -> np.ndarray:
 
 
 #: The elements a loop of fixed voltages may hold, by branch kind, as a refusal names them.
+#: A loop of capacitors holds its constraint at this rate over the period (:meth:`_Network.solve_loops`): a start off
+#: it decays by e^-10 a period, and the rate is far below a step's (h = T/1000: 0.01).
+LOOP_RATE = 10.0
+
 LOOP_KINDS = (("V", "voltage sources"), ("C", "capacitors"), ("S", "closed switches"), ("R", "0 ohm resistors"),
               ("D", "conducting diodes"), ("E", "voltage-controlled voltage sources"),
               ("H", "current-controlled voltage sources"))
@@ -1196,11 +1243,57 @@ class _Network:
         return self.size - interruptible(np.linalg.matrix_rank, self.G, tol=1e-12 * scale)
 
     def solve(self, checked: bool = False):
-        """The network solved (``checked``: its nullity is known to be 0)."""
+        """The network solved (``checked``: its nullity is known to be 0). Loops of capacitors and DC voltage
+        sources (capacitors in series across another or across a source: a split DC link) are solved by
+        :meth:`solve_loops`; any other dependent loop or cutset is refused naming its elements."""
         if not checked and self.nullity():
-            raise self.singular()
+            if self.lead or not self.solve_loops():
+                raise self.singular()
+            return self
         self.Z = interruptible(np.linalg.solve, self.G, np.broadcast_to(self.R, self.lead + self.R.shape))
         return self
+
+    def solve_loops(self) -> bool:
+        """Solve a network whose only dependence is loops of capacitors, DC voltage sources and 0 ohm resistors
+        (False where it has another). Such a loop holds in every configuration: it ties its capacitors' voltages
+        (K x = b, K and b from the left null space of the MNA matrix), and the current circulating in it is what
+        keeps them tied: z = z0 + N j, z0 the least-squares solution and N the loop currents (its null space), j
+        such that d/dt (K x - b) = -gamma (K x - b). On the circuit's states (K x = b, where the run starts: the
+        charges redistributed as SPICE's operating point would) the term is zero and the dynamics are the
+        circuit's; off them it decays at gamma = LOOP_RATE / T, so a start off the loop's constraint is not a
+        multiplier at 1 of the period map (Baumgarte's stabilisation of a constraint)."""
+        c = self.c
+        u, sv, vt = np.linalg.svd(self.G)
+        scale = max(sv[0], 1.0)
+        m = int(np.sum(sv <= 1e-12 * scale))
+        N, L = vt[-m:].T, u[:, -m:]                     # loop currents (right), the loop's KVL (left null space)
+        allowed = {j for j, (kind, e, _, _) in enumerate(self.branches)
+                   if kind == "C" or (kind == "V" and isinstance(e.waveform, float)) or kind == "R"}
+        rows = len(self.nodes)
+        support = np.flatnonzero(np.abs(N).max(axis=1) > 1e-9)
+        if any(r < rows or (r - rows) not in allowed for r in support):
+            return False
+        caps = [self.branch_of[e.name] for e in c.capacitors]
+        if not caps or np.linalg.matrix_rank(N[caps], tol=1e-9) < m:
+            return False                                # a loop of sources and shorts alone: no capacitor to give
+        K_w = L.T @ self.R                              # (m, cols): K_w w = 0 on consistent inputs
+        n_c = len(c.capacitors)
+        if np.abs(K_w[:, n_c:c.n + c.k]).max(initial=0.0) > 1e-9 * np.abs(K_w).max():
+            return False                                # the loop holds an inductor's or a diode's quantity
+        inverse = np.array([1.0 / c.value(e) for e in c.capacitors])
+        D_N = inverse[:, None] * N[caps]                # (n_c, m): the capacitors' dv/dt per unit loop current
+        M = K_w[:, :n_c] @ D_N
+        Z0 = np.linalg.lstsq(self.G, self.R, rcond=None)[0]
+        gamma = LOOP_RATE / c.loop_time()
+        J = np.linalg.solve(M, -gamma * K_w - K_w[:, :n_c] @ (inverse[:, None] * Z0[caps]))
+        Z = Z0 + N @ J
+        # the least-squares solution and the SVD spread rounding (1e-17..1e-16 of a row) over coefficients a solve
+        # leaves exactly 0: an ideal diode's D of 3e-16 made its held flow a 1e19 1/s mode. Below 1e-12 of its row's
+        # largest, a coefficient is that noise.
+        Z[np.abs(Z) < 1e-12 * np.abs(Z).max(axis=1, keepdims=True)] = 0.0
+        self.Z = Z
+        c.loops = K_w
+        return True
 
     def singular(self) -> NetlistError:
         c = self.c

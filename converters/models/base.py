@@ -136,11 +136,6 @@ class Model(ABC):
         """True when the problem's switching law has a fixed period (stroboscopic steady states)."""
         return True
 
-    def conserved(self, p: dict) -> str:
-        """What the circuit conserves whatever it does (a charge no current can change), in words; "" for none.
-        A conserved quantity makes every start's orbit its own: the period map's multiplier at 1."""
-        return ""
-
     def step_times(self, p: dict) -> list[float]:
         """Instants where the model's circuit changes (load or input steps): a run is split there."""
         return []

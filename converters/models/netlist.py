@@ -185,10 +185,6 @@ class Circuit(Model):
     #: A circuit without a period is summarised over the last tenth of its run.
     WINDOW_FRACTION = 0.1
 
-    def conserved(self, p: dict) -> str:
-        from ..circuits.compile import charge_islands, describe_islands
-        return describe_islands(charge_islands(self.netlist))
-
     def summary(self, tr, p: dict) -> dict:
         """The model's summary (:meth:`Model.summary`); without a period, over the last tenth of the run
         (``window_s``)."""

@@ -180,7 +180,6 @@ CASES = {
     "switch-too-few-nodes": (buck({4: "S1 in sw SWMOD"}), [], ["voltage-controlled switch S1", "4 nodes"], 4),
     "negative-resistor": (buck({8: "R1 out 0 -5"}), [], ["resistor R1", "non-negative", "-5"], 8),
     # a 0 ohm resistor is a short (a parasitic set to zero): across the capacitor it makes a loop
-    "zero-resistor-across-capacitor": (buck({8: "R1 out 0 0"}), [], ["C1, R1 form a loop", "0 ohm resistors"], None),
     "zero-inductor": (buck({6: "L1 sw out 0"}), [], ["inductor L1", "positive", "got 0"], 6),
     "zero-capacitor-param": (buck({7: "C1 out 0 {c}"}, insert=[".param c=0"]), [], ["capacitor C1", "positive"], 7),
     "duplicate-names": (buck(insert=["r1 out 0 20"]), [], ["resistor R1", "used twice", "first on line 8"], 11),
@@ -194,8 +193,6 @@ CASES = {
     # --- ill-posed circuits --------------------------------------------------------------------------------
     "voltage-source-loop": (buck(insert=["V2 in 0 DC 5"]), [], ["VIN, V2", "form a loop"], None),
     "voltage-source-loop-rc": (rc("V2 in 0 DC 5"), [], ["VIN, V2", "form a loop"], None),
-    "capacitor-across-source": (buck(insert=["C2 in 0 1u"]), [], ["VIN, C2", "form a loop"], None),
-    "capacitor-across-source-rc": (rc("C2 in 0 1u"), [], ["VIN, C2", "form a loop"], None),
     "inductor-current-source-cutset": (buck(insert=["I1 0 a DC 1", "L2 a b 1u", "R2 b 0 1"]), [],
                                        ["node a", "I1", "L2", "no path to ground"], None),
     "inductor-current-source-cutset-rc": (rc("I1 0 a DC 1", "L2 a b 1u", "R2 b 0 1"), [],
@@ -234,10 +231,10 @@ CASES = {
     # accepted, then "a multiplier at 1" naming no element
     "dangling-capacitor": (buck(insert=["C9 fa 0 1n"]), [], ["capacitor C9: node fa connects to nothing but this "
                                                              "capacitor", "keeps its initial charge"], 11),
-    "esc-in-a-name": (rc("C\x1b[31mX out 0 1u"), [], ["C\\x1b[31MX", "form a loop of capacitors:"], None),
+    "esc-in-a-name": (rc("V\x1b[31mX in 0 DC 5"), [], ["V\\x1b[31MX", "form a loop of voltage sources:"], None),
     # a loop named by what it holds: it listed "0 ohm resistors" and switches where there were none
-    "loop-of-a-source-and-a-capacitor": (rc("C9 in 0 1p"), [], ["VIN, C9 form a loop of voltage sources and "
-                                                                "capacitors: their voltages"], None),
+    "loop-of-a-source-and-a-short": (rc("R9 in 0 0"), [], ["VIN, R9 form a loop of voltage sources and "
+                                                          "0 ohm resistors: their voltages"], None),
 }
 
 

@@ -191,16 +191,65 @@ def test_a_node_joined_to_the_rest_only_through_capacitors_conserves_its_charge(
     assert charge_islands(read_netlist(SERIES.format(extra=extra), name="series.cir")) == islands
 
 
-def test_a_steady_state_that_fails_on_a_conserved_charge_names_it(tmp_path, capsys):
-    """Two capacitors in series: each start keeps its midpoint's charge, so the period map has a multiplier at 1
-    and Newton cannot converge; the refusal said only 'a multiplier at 1' or 'rounding', naming no element."""
-    from validation.cli import main
-    path = tmp_path / "series.cir"
-    path.write_text(SERIES.format(extra=""))
-    assert main(["simulate", str(path), "--steady"]) == 2
-    err = capsys.readouterr().err.strip()
-    assert len(err.splitlines()) == 1
-    assert ("the charge of node fa (joined to the rest only through C1, C2) is conserved, so every start has an "
-            "orbit of its own" in err) and "a large resistor across a capacitor" in err
-    # the transient runs: the midpoint holds its start (0 V) and C1 carries the whole output
-    assert main(["simulate", str(path), "--json", "--t-end", "200u"]) == 0
+def test_capacitors_in_series_across_a_boosts_output_reach_its_steady_state_as_their_series_capacitance(tmp_path):
+    """C1 and C2 (100 uF each) in series beside Co, a loop of capacitors: refused before. Their midpoint's charge is
+    held where the run starts (0, from rest: v(c1) = v(c2)) and the loop ties v(c1) + v(c2) = v(co), so the circuit
+    is Co with 50 uF beside it: the same orbit, mean and ripple as that circuit's, exactly (the event method), and
+    to the stepper's own accuracy; no multiplier at 1 (the slowest is R (Co + C1 C2 / (C1 + C2))'s)."""
+    series = tmp_path / "series.cir"
+    series.write_text(SERIES.format(extra="Co out 0 100u"))
+    single = tmp_path / "single.cir"
+    single.write_text(SERIES.format(extra="Co out 0 150u").replace("C1 out fa 100u\n", "").replace("C2 fa 0 100u\n", ""))
+    for method, rel in (("event", 1e-11), ("lcp", 1e-7)):
+        a = run_summary(run_converter(Circuit.from_netlist(series), method=method, steady=True))
+        b = run_summary(run_converter(Circuit.from_netlist(single), method=method, steady=True))
+        assert a["vout_mean"] == pytest.approx(b["vout_mean"], rel=rel)
+        m = a["measurements"]
+        assert m["v(c1)"]["mean"] == pytest.approx(m["v(c2)"]["mean"], rel=1e-9)
+        assert m["v(c1)"]["mean"] + m["v(c2)"]["mean"] == pytest.approx(m["v(co)"]["mean"], rel=1e-9)
+        assert a["orbit"]["spectral_radius"] == pytest.approx(b["orbit"]["spectral_radius"], abs=1e-9)
+
+
+SPLIT = """two capacitors in series across a source{title}
+V1 a 0 DC 10
+C1 a m 1u
+C2 m 0 3u
+{extra}
+.tran 1u 20m
+.end
+"""
+
+
+@pytest.mark.parametrize("method, tol", [("event", 1e-12), ("lcp", 1e-6)])
+def test_capacitors_in_series_across_a_source_share_its_voltage_by_charge_and_decay_through_a_resistor(tmp_path,
+                                                                                                     method, tol):
+    """V1 = 10 V across C1 = 1 uF and C2 = 3 uF in series, from rest: the start moves the charge as closing the loop
+    would (q = C1 v1 = C2 v2, v1 + v2 = 10: 7.5 V and 2.5 V); the midpoint then holds 2.5 V, and with R2 = 1 kohm
+    across C2 it decays as 2.5 e^(-t / (R2 (C1 + C2))) (tau = 4 ms) while C1 takes the whole 10 V."""
+    t = np.array([0.0, 1e-3, 4e-3, 1e-2, 2e-2])
+    for extra, expected in (("", 2.5 * np.ones(t.size)), ("R2 m 0 1k", 2.5 * np.exp(-t / 4e-3))):
+        path = tmp_path / "split.cir"
+        path.write_text(SPLIT.format(title=", " + extra if extra else "", extra=extra))
+        model = Circuit.from_netlist(path)
+        np.testing.assert_allclose(model.compiled(model.resolve({})).x0, [7.5, 2.5], rtol=1e-15)
+        tr = run_converter(model, method=method)
+        vm = np.interp(t, tr.t, tr.signal("v(m)"))
+        np.testing.assert_allclose(vm, expected, rtol=tol, atol=tol * 2.5)
+        np.testing.assert_allclose(np.interp(t, tr.t, tr.signal("v(c1)")) + vm, 10.0, rtol=1e-12)
+
+
+@pytest.mark.parametrize("method, tol", [("event", 1e-12), ("lcp", 1e-5)])
+def test_capacitors_in_parallel_and_across_a_source_are_the_circuit_spice_solves(tmp_path, method, tol):
+    """Refused before as loops of capacitors (and sources): C1 and C2 in parallel charge through R1 as one 2 uF,
+    v = 12 (1 - e^(-t / 20 us)), each at the same voltage; C3 across the 12 V source holds 12 V and changes
+    nothing else."""
+    path = tmp_path / "parallel.cir"
+    path.write_text("RC with two capacitors in parallel and one across the source\nVin in 0 DC 12\nR1 in out 10\n"
+                    "C1 out 0 1u\nC2 out 0 1u\nC3 in 0 1u\n.tran 0.1u 100u\n.end\n")
+    tr = run_converter(Circuit.from_netlist(path), method=method)
+    t = np.linspace(0.0, 1e-4, 11)
+    expected = 12.0 * (1.0 - np.exp(-t / 2e-5))
+    for name in ("v(c1)", "v(c2)"):
+        np.testing.assert_allclose(np.interp(t, tr.t, tr.signal(name)), expected, rtol=tol, atol=12 * tol)
+    np.testing.assert_allclose(tr.signal("v(c3)"), 12.0, rtol=1e-13)
+    np.testing.assert_allclose(tr.signal("i(c1)"), tr.signal("i(c2)"), rtol=1e-9, atol=1e-12)
