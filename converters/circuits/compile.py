@@ -1310,8 +1310,13 @@ class _Network:
             # loop through "0 ohm resistors" where there was none)
             kinds = [name for letter, name in LOOP_KINDS if any(kind == letter for kind, _ in members)]
             held = ", ".join(kinds[:-1]) + (" and " if len(kinds) > 1 else "") + kinds[-1]
+            remedy = ""
+            if any(kind == "C" for kind, _ in members) and any(kind == "S" for kind, _ in members):
+                # a capacitance across a closing switch: its charge would jump (an impulse) when the switch closes
+                remedy = ("; a capacitance across an ideal switch is not compiled yet: give the switch an "
+                          "on-resistance (.model ... SW(RON=10m)), which discharges it")
             return NetlistError(f"{c.path}: {', '.join(loop)} form a loop of {held}{where}: their voltages are not "
-                                "independent")
+                                "independent" + remedy)
         around = [e.name.upper() for e in c.nl.elements if set(e.nodes) & set(nodes)]
         return NetlistError(f"{c.path}: node{'s' if len(nodes) > 1 else ''} {', '.join(nodes)} ha"
                             f"{'ve' if len(nodes) > 1 else 's'} no path to ground but through inductors and current "

@@ -231,6 +231,9 @@ CASES = {
     # accepted, then "a multiplier at 1" naming no element
     "dangling-capacitor": (buck(insert=["C9 fa 0 1n"]), [], ["capacitor C9: node fa connects to nothing but this "
                                                              "capacitor", "keeps its initial charge"], 11),
+    "capacitance-across-a-switch": (buck(insert=["Coss in sw 100p"]), [], ["COSS, S1 form a loop of capacitors and "
+                                    "closed switches", "give the switch an on-resistance (.model ... SW(RON=10m))"],
+                                    None),
     "esc-in-a-name": (rc("V\x1b[31mX in 0 DC 5"), [], ["V\\x1b[31MX", "form a loop of voltage sources:"], None),
     # a loop named by what it holds: it listed "0 ohm resistors" and switches where there were none
     "loop-of-a-source-and-a-short": (rc("R9 in 0 0"), [], ["VIN, R9 form a loop of voltage sources and "
