@@ -283,8 +283,10 @@ class _Compiler:
 
     def batchable(self) -> bool:
         """Whether :meth:`rerun` takes this circuit's other values: a schedule of PULSE or PWL gates (a comparator's
-        law depends on the values), no ramp or delayed SIN (states of their own)."""
-        return hasattr(self, "built") and not (self.state_rows or self.ramps or self.oscillators or self.islands)
+        law depends on the values), no ramp or delayed SIN (states of their own), no loop of capacitors or node
+        held by its charge (:meth:`_Network.solve_loops`, :meth:`hold_islands`: solved one circuit at a time)."""
+        return hasattr(self, "built") and not (self.state_rows or self.ramps or self.oscillators or self.islands
+                                               or getattr(self, "loops", None) is not None)
 
     def rerun(self, netlists: list, compiled: Compiled) -> list:
         """The compiles of ``netlists``, each this circuit (its :meth:`run` gave ``compiled``) with other values:
