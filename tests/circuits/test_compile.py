@@ -253,3 +253,14 @@ def test_capacitors_in_parallel_and_across_a_source_are_the_circuit_spice_solves
         np.testing.assert_allclose(np.interp(t, tr.t, tr.signal(name)), expected, rtol=tol, atol=12 * tol)
     np.testing.assert_allclose(tr.signal("v(c3)"), 12.0, rtol=1e-13)
     np.testing.assert_allclose(tr.signal("i(c1)"), tr.signal("i(c2)"), rtol=1e-9, atol=1e-12)
+
+
+def test_the_charge_a_node_keeps_is_the_one_its_ic_gives(tmp_path):
+    """Two 100 uF in series across the boost's output, .ic v(fa) = 3 V from rest elsewhere: the midpoint's charge
+    q = C2 v2 - C1 v1 = 100u (3 + 3) = 6e-4 C is kept, so on the orbit v2 - v1 = 6 V and v1 + v2 = vout."""
+    path = tmp_path / "series.cir"
+    path.write_text(SERIES.format(extra=".ic v(fa)=3"))
+    summary = run_summary(run_converter(Circuit.from_netlist(path), method="event", steady=True))
+    m = summary["measurements"]
+    assert m["v(c2)"]["mean"] - m["v(c1)"]["mean"] == pytest.approx(6.0, rel=1e-9)
+    assert m["v(c1)"]["mean"] + m["v(c2)"]["mean"] == pytest.approx(summary["vout_mean"], rel=1e-12)
