@@ -1121,11 +1121,11 @@ def waveform_at(w, t: np.ndarray) -> np.ndarray:
     return out
 
 
-#: The elements a loop of fixed voltages may hold, by branch kind, as a refusal names them.
 #: A loop of capacitors holds its constraint at this rate over the period (:meth:`_Network.solve_loops`): a start off
 #: it decays by e^-10 a period, and the rate is far below a step's (h = T/1000: 0.01).
 LOOP_RATE = 10.0
 
+#: The elements a loop of fixed voltages may hold, by branch kind, as a refusal names them.
 LOOP_KINDS = (("V", "voltage sources"), ("C", "capacitors"), ("S", "closed switches"), ("R", "0 ohm resistors"),
               ("D", "conducting diodes"), ("E", "voltage-controlled voltage sources"),
               ("H", "current-controlled voltage sources"))
