@@ -79,7 +79,7 @@ class Trajectory:
         ``quadrature_blocks(t0, t1)``, the same nodes a block at a time.
     events : pandas.DataFrame (property)
         Columns ``time``, ``step``, ``pair`` (-1 for switching-law events) and ``kind`` (``activate``,
-        ``release``, ``impulse``, ``switch``); switching-law events also give ``config`` (the
+        ``release``, ``impulse``, ``switch``, ``jump``); switching-law events also give ``config`` (the
         configuration entered).
         Built on first access from ``event_columns`` (data, or a function giving it: computed when first read).
     labels : object or None
@@ -134,6 +134,10 @@ class Trajectory:
     problem: object = field(default=None, compare=False, repr=False)
     algorithm: object = field(default=None, compare=False, repr=False)
     retcode: str = "success"
+    #: The jumps of the state (a switch closing across charged capacitances, :class:`~converters.problems.Jump`):
+    #: ((time, energy lost in J), ...) in time order, as the method took them (a run's start among them where its
+    #: state is not on the first configuration's loops).
+    jumps: tuple = ()
 
     def __post_init__(self):
         if self.retcode not in RETCODES:
@@ -400,6 +404,17 @@ class Trajectory:
                        "min": float(values.min()), "max": float(values.max()), "ripple": float(np.ptp(values))}
                 for name, values in sampled.items()}
 
+    def jump_losses(self, periods: float | None = None, t0: float | None = None, t1: float | None = None) -> tuple:
+        """(jumps, energy in J) of the charge redistributions in the window [t0, t1) (default: the run):
+        :attr:`jumps` (each entry of a configuration whose closed switches tie charged capacitors loses
+        1/2 dv^T C dv)."""
+        if not self.jumps:
+            return 0, 0.0
+        a, b = self.window(periods, t0, t1)
+        slack = 1e-9 * (b - a)              # a window of whole periods meets a jump at its start, not at its end
+        inside = [energy for t, energy in self.jumps if a - slack <= t < b - slack]
+        return len(inside), float(sum(inside))
+
     def mode_fractions(self, periods: float | None = 1, t0: float | None = None, t1: float | None = None) -> dict:
         """Fraction of the window spent in each mode (each step counted by the label of its end point)."""
         a, b = self.window(periods, t0, t1)
@@ -510,7 +525,7 @@ def concatenate(parts: list[Trajectory]) -> Trajectory:
                    relay=stack("relay"), held=stack("held"), steps=sum(p.steps for p in parts), wall_s=sum(p.wall_s for p in parts),
                    event_columns=pd.concat(events, ignore_index=True), exact=exact,
                    rule="linear" if first.rule == "exact" and exact is None else first.rule,
-                   general_solves=sum(p.general_solves for p in parts),
+                   general_solves=sum(p.general_solves for p in parts), jumps=sum((p.jumps for p in parts), ()),
                    resolved_from=max(p.resolved_from for p in parts))
 
 

@@ -9,10 +9,13 @@ voltages give x' = A x + B u + E, the ports y = C x + D u + F, and every other q
 
 The port of each diode is chosen per configuration: u = i_D (a current source; y = -v_D) where the network
 leaves its current free, u = -v_D (a voltage source; y = i_D) where an inductor or another port fixes it
-(the choice made by hand for the built-in converters). A configuration the network cannot solve is refused
-naming the elements: a loop of voltage sources, capacitors and closed switches (their voltages are not
-independent), a cutset of inductors and current sources (a current interrupted with no path), a node with
-no path to ground. Ideal diodes whose ports are the same (in parallel, or in series with nothing between)
+(the choice made by hand for the built-in converters). Capacitors in a loop with DC voltage sources, 0 ohm
+resistors and closed ideal switches have voltages that are not independent: the loop's constraint is kept by the
+current circulating in it (:meth:`_Network.solve_loops`), and a configuration whose closed switches make such a
+loop is entered by a jump of the charges onto it (:meth:`_Compiler.jump`; a capacitance across a switch that
+closes, the energy 1/2 C dv^2 lost). A configuration the network cannot solve otherwise is refused naming the
+elements: a loop of voltage sources and closed switches with no capacitor, a cutset of inductors and current
+sources (a current interrupted with no path), a node with no path to ground. Ideal diodes whose ports are the same (in parallel, or in series with nothing between)
 give an LCP without a unique solution and are refused too, unless sources alone reverse-bias them (both
 blocked: u = 0 is unique). An ideal diode whose terminals closed ideal switches join (a MOSFET's body diode
 while the switch conducts) has 0 V whatever its current: the switch carries it all, the diode's pair never holds.
@@ -36,7 +39,7 @@ from fractions import Fraction
 
 import numpy as np
 
-from ..problems import Configuration, Schedule
+from ..problems import Configuration, Jump, Schedule
 from .netlist import Element, Netlist, NetlistError, Pulse, Pwl, Sin, with_models
 
 #: The diode's port: a current source (u = i_D, y = -v_D) or a voltage source (u = -v_D, y = i_D).
@@ -256,6 +259,8 @@ class _Compiler:
             if self.diode_rs[d.name] < 0:
                 raise self.error(d, f"{d.title}: model {d.model} RS must be >= 0")
             self.node_index.setdefault(f"{d.name}#a", len(self.node_index)) if self.diode_rs[d.name] else None
+        #: Whether a configuration closes a switch across capacitors (:meth:`jump`)
+        self.switch_loops = False
         #: 0 ohm resistors (a parasitic set to zero): 0 V branches, as closed ideal switches
         self.shorts = [r for r in self.by_kind["R"] if r.value == 0]
         self.switch_ron = {s.name: self.nl.models[s.model].params.get("RON", 0.0) for s in self.switches}
@@ -286,7 +291,7 @@ class _Compiler:
         law depends on the values), no ramp or delayed SIN (states of their own), no loop of capacitors or node
         held by its charge (:meth:`_Network.solve_loops`, :meth:`hold_islands`: solved one circuit at a time)."""
         return hasattr(self, "built") and not (self.state_rows or self.ramps or self.oscillators or self.islands
-                                               or getattr(self, "loops", None) is not None)
+                                               or getattr(self, "loops", None) is not None or self.switch_loops)
 
     def rerun(self, netlists: list, compiled: Compiled) -> list:
         """The compiles of ``netlists``, each this circuit (its :meth:`run` gave ``compiled``) with other values:
@@ -916,6 +921,9 @@ class _Compiler:
                                    D=config.D, E=np.concatenate([E, rates]), F=config.F, name=name)
             Sx = np.hstack([Sx, columns_of(rows)])
             E_sin = np.hstack([E_sin, np.zeros((E_sin.shape[0], r))])
+        jump = self.jump(solution.K_w, s, n + len(extra))
+        if jump is not None:
+            config = replace(config, jump=jump)
         signals = (Sx.copy(), *(m.copy() for m in signals[1:]))
         return config, signals, (E_sin.copy(), F_sin.copy())
 
@@ -1049,6 +1057,28 @@ class _Compiler:
         x[:n_c] -= inverse * (K.T @ np.linalg.solve((K * inverse) @ K.T, residual))
         return x
 
+    def jump(self, K_w, sources: np.ndarray, size: int) -> Jump | None:
+        """The state's jump entering a configuration whose closed switches make loops with capacitors (``K_w``: the
+        loops' constraints from :meth:`_Network.solve_loops`, None without): the capacitors' voltages projected
+        onto K x = b in the capacitances' metric (charge conservation, :class:`~converters.problems.Jump`) on the
+        ``size`` states (the ramps' and oscillators' among them, which do not jump)."""
+        if K_w is None:
+            return None
+        n_c = len(self.capacitors)
+        capacitance = np.array([self.value(e) for e in self.capacitors])
+        K = K_w[:, :n_c]
+        b = -K_w[:, self.n + self.k:] @ sources
+        inverse = K.T / capacitance[:, None]                                  # W^-1 K^T
+        gain = inverse @ np.linalg.inv(K @ inverse)                           # W^-1 K^T (K W^-1 K^T)^-1
+        P, q, W = np.eye(size), np.zeros(size), np.zeros((size, size))
+        P[:n_c, :n_c] -= gain @ K
+        q[:n_c] = gain @ b
+        W[:n_c, :n_c] = np.diag(capacitance)
+        # rounding of the SVD's bases (1e-17 of a coefficient) is not a coupling: kept, a state that should not
+        # move would drift by it at every step
+        P[np.abs(P) < 1e-13] = 0.0
+        return Jump(P=P, q=q, W=W)
+
     def initial_state(self, netlist: Netlist | None = None) -> np.ndarray:
         """The states at t = 0: each element's IC=, or .ic v(node) across a capacitor, else 0 (UIC); of
         ``netlist``, this circuit with other values (:meth:`rerun`), where given."""
@@ -1133,6 +1163,9 @@ LOOP_KINDS = (("V", "voltage sources"), ("C", "capacitors"), ("S", "closed switc
 class _Network:
     """The resistive network of one configuration: MNA unknowns z = (node voltages, branch currents), each
     equation's right-hand side a linear function of (x, u, sources)."""
+
+    #: The constraints (K_w w = 0, w = (x, u, sources)) of loops through closed switches (:meth:`solve_loops`).
+    K_w = None
 
     def __init__(self, compiler: _Compiler, switch_state: dict, levels: dict, forms: list):
         self.c, self.levels, self.forms = compiler, levels, forms
@@ -1256,8 +1289,8 @@ class _Network:
         return self
 
     def solve_loops(self) -> bool:
-        """Solve a network whose only dependence is loops of capacitors, DC voltage sources and 0 ohm resistors
-        (False where it has another). Such a loop holds in every configuration: it ties its capacitors' voltages
+        """Solve a network whose only dependence is loops of capacitors, DC voltage sources, 0 ohm resistors and
+        closed ideal switches (False where it has another). Such a loop ties its capacitors' voltages
         (K x = b, K and b from the left null space of the MNA matrix), and the current circulating in it is what
         keeps them tied: z = z0 + N j, z0 the least-squares solution and N the loop currents (its null space), j
         such that d/dt (K x - b) = -gamma (K x - b). On the circuit's states (K x = b, where the run starts: the
@@ -1270,7 +1303,7 @@ class _Network:
         m = int(np.sum(sv <= 1e-12 * scale))
         N, L = vt[-m:].T, u[:, -m:]                     # loop currents (right), the loop's KVL (left null space)
         allowed = {j for j, (kind, e, _, _) in enumerate(self.branches)
-                   if kind == "C" or (kind == "V" and isinstance(e.waveform, float)) or kind == "R"}
+                   if kind in "CRS" or (kind == "V" and isinstance(e.waveform, float))}
         rows = len(self.nodes)
         support = np.flatnonzero(np.abs(N).max(axis=1) > 1e-9)
         if any(r < rows or (r - rows) not in allowed for r in support):
@@ -1294,7 +1327,19 @@ class _Network:
         # largest, a coefficient is that noise.
         Z[np.abs(Z) < 1e-12 * np.abs(Z).max(axis=1, keepdims=True)] = 0.0
         self.Z = Z
-        c.loops = K_w
+        # a loop through a closed switch holds in this configuration only: entering it, the charges jump onto it
+        # (:meth:`_Compiler.jump`); the loops through none hold in every one, where a run starts too (consistent)
+        switch_rows = [rows + j for j, (kind, _, _, _) in enumerate(self.branches) if kind == "S"]
+        through = L[switch_rows]
+        if switch_rows and np.abs(through).max() > 1e-9:
+            _, s_t, v_t = np.linalg.svd(through)
+            static = v_t[int(np.sum(s_t > 1e-9)):].T              # combinations of the loops free of the switches
+            self.K_w = K_w
+            c.switch_loops = True
+        else:
+            static = np.eye(m)
+        if static.shape[1]:
+            c.loops = static.T @ K_w
         return True
 
     def singular(self) -> NetlistError:
@@ -1312,13 +1357,8 @@ class _Network:
             # loop through "0 ohm resistors" where there was none)
             kinds = [name for letter, name in LOOP_KINDS if any(kind == letter for kind, _ in members)]
             held = ", ".join(kinds[:-1]) + (" and " if len(kinds) > 1 else "") + kinds[-1]
-            remedy = ""
-            if any(kind == "C" for kind, _ in members) and any(kind == "S" for kind, _ in members):
-                # a capacitance across a closing switch: its charge would jump (an impulse) when the switch closes
-                remedy = ("; a capacitance across an ideal switch is not compiled yet: give the switch an "
-                          "on-resistance (.model ... SW(RON=10m)), which discharges it")
             return NetlistError(f"{c.path}: {', '.join(loop)} form a loop of {held}{where}: their voltages are not "
-                                "independent" + remedy)
+                                "independent")
         around = [e.name.upper() for e in c.nl.elements if set(e.nodes) & set(nodes)]
         return NetlistError(f"{c.path}: node{'s' if len(nodes) > 1 else ''} {', '.join(nodes)} ha"
                             f"{'ve' if len(nodes) > 1 else 's'} no path to ground but through inductors and current "

@@ -68,7 +68,27 @@ def step_matrices(configs: list[Configuration], dts: np.ndarray, theta: float) -
     if not kernel("set_matrices")(A, B, C, D, E, F, dts, float(theta), _leaders(configs, dts), Phi, Gamma, H, M,
                                   Phi_b, Gamma_b, CPhi, q0):
         raise np.linalg.LinAlgError("Singular matrix")
+    for s, c in enumerate(configs):
+        if c.jump is not None:
+            _fold_jump(s, c.jump, Phi, Gamma, H, C, F, M, Phi_b, Gamma_b, CPhi, q0)
     return StepMatrices(Phi, Gamma, H, C, F, M, Phi_b, Gamma_b, CPhi, q0)
+
+
+def _fold_jump(s: int, jump, Phi, Gamma, H, C, F, M, Phi_b, Gamma_b, CPhi, q0) -> None:
+    """Set s's step taken from the jumped state P x + q (:class:`~converters.problems.Jump`): Phi P and
+    Gamma + Phi q, and its affine maps again (:func:`.theta_kernels.branch_maps`'s formulas). The jump is a
+    projection, so every step of the configuration may take it: on a state already on its loops it is the
+    identity, and the step keeps the loops (their constraint is linear and the scheme is), so the state moves only
+    where the configuration is entered; the exact Jacobian of the period map then holds it too."""
+    Gamma[s] = Gamma[s] + Phi[s] @ jump.q
+    Phi[s] = Phi[s] @ jump.P
+    CPhi[s] = C[s] @ Phi[s]
+    q0[s] = C[s] @ Gamma[s] + F[s]
+    Phi_b[s] = Phi[s]
+    Gamma_b[s] = Gamma[s]
+    if M.shape[1] == 1 and M[s, 0, 0] > 0.0:              # one pair: its held branch, u = -q / M
+        Phi_b[s, 1] = Phi[s] - np.outer(H[s, :, 0], CPhi[s, 0]) / M[s, 0, 0]
+        Gamma_b[s, 1] = Gamma[s] - H[s, :, 0] * q0[s, 0] / M[s, 0, 0]
 
 
 def _leaders(configs: list[Configuration], dts: np.ndarray) -> np.ndarray:

@@ -209,6 +209,7 @@ class Model(ABC):
         out = {"vout_mean": tr.mean("vout", t0=t0, t1=t1), "window_periods": window,
                "mode_fractions": tr.mode_fractions(1)}
         out["measurements"] = tr.measurement_rows(t0=t0, t1=t1)
+        out.update(jump_losses(tr, t0, t1))
         if hasattr(self, "power"):
             power = self.window_power(tr, p, t0, t1)
             if np.isfinite(power["input_W"]):          # an ngspice run of a two-state converter: not measured
@@ -384,3 +385,13 @@ def check_h(h: float, period: float) -> float:
     if not 0.0 < h < period:
         raise ParameterError(f"h must be positive and below the switching period ({period:g} s); got {h:g}")
     return h
+
+
+def jump_losses(tr, t0: float, t1: float) -> dict:
+    """{"losses": {"redistribution_W", "redistribution_J", "jumps"}} of a run whose switches close across charged
+    capacitances (:meth:`~converters.trajectory.Trajectory.jump_losses` over [t0, t1): the energy of the jumps and
+    its mean power); {} for a run without."""
+    if not getattr(tr.problem, "jumps", False):
+        return {}
+    jumps, energy = tr.jump_losses(t0=t0, t1=t1)
+    return {"losses": {"redistribution_W": energy / (t1 - t0), "redistribution_J": energy, "jumps": jumps}}

@@ -24,7 +24,7 @@ from ..params import Param
 from ..problems import Configuration, LCSProblem, Sinusoids
 from ..trajectory import Samples
 from ..validate import quoted
-from .base import Labels, Model
+from .base import Labels, Model, jump_losses
 
 #: Units of the element values by letter.
 UNITS = {"R": "ohm", "L": "H", "C": "F", "V": "V", "I": "A", "K": "", "E": "", "G": "S", "F": "", "H": "ohm"}
@@ -194,7 +194,7 @@ class Circuit(Model):
         t0 = t1 - self.WINDOW_FRACTION * (t1 - float(tr.t[0]))
         return {"vout_mean": tr.mean("vout", t0=t0, t1=t1), "window_s": [t0, t1],
                 "mode_fractions": tr.mode_fractions(None, t0=t0, t1=t1),
-                "measurements": tr.measurement_rows(t0=t0, t1=t1)}
+                "measurements": tr.measurement_rows(t0=t0, t1=t1), **jump_losses(tr, t0, t1)}
 
     def summary_from(self, p: dict, t_start: float, t_end: float) -> float:
         if self.periodic(p):
@@ -405,7 +405,8 @@ def _builtin_configurations(name: str, states: tuple, names: tuple, values: tupl
 def _permuted(c, order: list, name: str) -> Configuration:
     """A configuration with its states in ``order`` (x_model = x_compiled[order]), named ``name``."""
     A, B, C, E = np.asarray(c.A), np.asarray(c.B), np.asarray(c.C), np.asarray(c.E)
-    return Configuration(A=A[np.ix_(order, order)], B=B[order], C=C[:, order], D=c.D, E=E[order], F=c.F, name=name)
+    return Configuration(A=A[np.ix_(order, order)], B=B[order], C=C[:, order], D=c.D, E=E[order], F=c.F, name=name,
+                         jump=None if c.jump is None else c.jump.permuted(order))
 
 
 def _rebuild(text: str, source: str) -> Circuit:

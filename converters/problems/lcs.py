@@ -6,6 +6,12 @@ with one (A, B, C, D, E, F) per switch configuration and a switching law saying 
 configuration holds when (:mod:`converters.problems.schedule`, :mod:`converters.problems.switching`).
 Problems are immutable; variants come from ``dataclasses.replace``.
 Shapes: x has n entries, u and y have k (the same n and k in every configuration).
+
+A configuration may carry a :class:`Jump`: closing a switch across a charged capacitance ties capacitor voltages
+that were free, and an ideal switch moves the charge at once (an impulse of current: Acary, Bonnefon and
+Brogliato 2011, sec. 2.5 and ch. 4, the circuit's counterpart of an impact). Entering the configuration, the state
+is projected onto the loops' constraints by charge conservation, and the energy 1/2 C dv^2 of the redistribution is
+lost (in the switch that closed; with a small on-resistance SPICE dissipates the same in it).
 """
 from __future__ import annotations
 
@@ -20,10 +26,49 @@ from .switching import Relay, StateSwitching
 
 
 @dataclass(frozen=True)
+class Jump:
+    """The state's jump entering a configuration whose loops of capacitors (through closed switches and DC
+    sources) tie voltages: x+ = P x + q, the smallest change in the capacitances' metric W that meets the loops'
+    K x = b (P = I - W^-1 K^T (K W^-1 K^T)^-1 K on the capacitors' voltages, identity on the other states): the
+    charge each loop moves is conserved. P is a projection (P P = P, P q = 0): a state already on the loops does
+    not move, so a method may apply it at every step of the configuration. The energy lost is
+    1/2 (x+ - x)^T W (x+ - x): the loops' sources deliver b^T lambda and the capacitors store b^T lambda minus it.
+
+    Shapes: P (n, n), q (n,), W (n, n) (W: the capacitances on the capacitors' voltages, 0 elsewhere)."""
+
+    P: np.ndarray
+    q: np.ndarray
+    W: np.ndarray
+
+    def __post_init__(self):
+        P = as_matrix("jump P", self.P, (None, None))
+        n = P.shape[0]
+        q, W = as_vector("jump q", self.q, n), as_matrix("jump W", self.W, (n, n))
+        for key, value in (("P", P), ("q", q), ("W", W)):
+            value.setflags(write=False)
+            object.__setattr__(self, key, value)
+
+    def __call__(self, x: np.ndarray) -> np.ndarray:
+        """The state after the jump from ``x`` (shape (n,) or (N, n))."""
+        return np.asarray(x, dtype=float) @ self.P.T + self.q
+
+    def loss(self, x: np.ndarray) -> np.ndarray:
+        """The energy (J) the jump from ``x`` dissipates (per row of a (N, n) array)."""
+        d = self(x) - np.asarray(x, dtype=float)
+        return 0.5 * np.einsum("...i,ij,...j->...", d, self.W, d)
+
+    def permuted(self, order: list) -> "Jump":
+        """The jump on states reordered (x_new = x[order])."""
+        ix = np.ix_(order, order)
+        return Jump(P=self.P[ix], q=self.q[order], W=self.W[ix])
+
+
+@dataclass(frozen=True)
 class Configuration:
     """One switch configuration: the matrices of x' = A x + B u + E, y = C x + D u + F.
 
-    Shapes: A (n, n), B (n, k), C (k, n), D (k, k), E (n,), F (k,). E and F default to zero.
+    Shapes: A (n, n), B (n, k), C (k, n), D (k, k), E (n,), F (k,). E and F default to zero. ``jump``: the
+    state's jump entering it (:class:`Jump`), or None.
     """
 
     A: np.ndarray
@@ -33,6 +78,7 @@ class Configuration:
     E: np.ndarray | None = None
     F: np.ndarray | None = None
     name: str = ""
+    jump: Jump | None = None
 
     def __post_init__(self):
         label = f"configuration {self.name!r}: " if self.name else ""
@@ -51,6 +97,8 @@ class Configuration:
         for key, value in zip("ABCDEF", (A, B, C, D, E, F)):
             value.setflags(write=False)
             object.__setattr__(self, key, value)
+        if self.jump is not None and (not isinstance(self.jump, Jump) or self.jump.P.shape != (n, n)):
+            raise ParameterError(f"{label}jump must be a Jump on the n = {n} states or None; got {self.jump!r}")
 
     @property
     def n(self) -> int:
@@ -169,6 +217,11 @@ class LCSProblem:
     @property
     def k(self) -> int:
         return self.configurations[0].k
+
+    @property
+    def jumps(self) -> bool:
+        """Whether a configuration's entry jumps the state (:class:`Jump`)."""
+        return any(c.jump is not None for c in self.configurations)
 
     def configuration_at(self, index: int, t_e: float, t_f: float | None = None) -> Configuration:
         """Configuration ``index`` with its sinusoidal inputs evaluated: E at t_e, F at t_f (default t_e)."""

@@ -314,6 +314,9 @@ class ModelSweep:
             try:
                 p = resolved[index]
                 problem = model.problem(p, model.period(p))
+                if problem.jumps:              # the batched steps take no jump: the point's own run does
+                    rows[index] = self.row(index, point)
+                    continue
                 method = self._method(model, p, problem)
                 # the grid and matrix sets follow from the schedule and the step alone: points that vary only
                 # the circuit's values (a tolerance study) share them

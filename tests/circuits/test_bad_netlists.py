@@ -231,9 +231,11 @@ CASES = {
     # accepted, then "a multiplier at 1" naming no element
     "dangling-capacitor": (buck(insert=["C9 fa 0 1n"]), [], ["capacitor C9: node fa connects to nothing but this "
                                                              "capacitor", "keeps its initial charge"], 11),
-    "capacitance-across-a-switch": (buck(insert=["Coss in sw 100p"]), [], ["COSS, S1 form a loop of capacitors and "
-                                    "closed switches", "give the switch an on-resistance (.model ... SW(RON=10m))"],
-                                    None),
+    # a switch closing across a capacitance is a jump of the charges (tests/circuits/test_jumps.py); across a source
+    # with nothing to take up the difference it is a short
+    "switch-across-a-source": (buck(insert=["S9 in 0 gate 0 SWMOD"]), [], ["VIN, S9 form a loop of voltage sources "
+                               "and closed switches (with s1=closed, s9=closed): their voltages are not independent"],
+                               None),
     "esc-in-a-name": (rc("V\x1b[31mX in 0 DC 5"), [], ["V\\x1b[31MX", "form a loop of voltage sources:"], None),
     # a loop named by what it holds: it listed "0 ohm resistors" and switches where there were none
     "loop-of-a-source-and-a-short": (rc("R9 in 0 0"), [], ["VIN, R9 form a loop of voltage sources and "

@@ -39,6 +39,8 @@ class _Machine:
         self.orders: dict = {}
         law = problem.switching
         self.law = law if isinstance(law, StateSwitching) else None
+        #: The last run's jumps: ((time, energy lost), ...) (:meth:`enter`)
+        self.jumps: list = []
         self.index2 = [i for i in range(problem.k)
                        if all(not np.any(c.D[i, :]) and not np.any(c.D[:, i]) for c in problem.configurations)]
         K = self.index2
@@ -121,13 +123,27 @@ class _Machine:
                               "(no set of held pairs keeps every pair complementary); the LCS is not well posed there")
 
     def enter(self, config: int, xt: np.ndarray, t: float, log) -> tuple[np.ndarray, np.ndarray | None]:
-        """Moreau's impulse when configuration ``config`` is entered with y_K < 0 on the pairs K whose y is
-        a function of the state: x+ = x + B_K lambda, 0 <= lambda _|_ C_K x+ + F_K >= 0. Returns x~+ and
-        the jump's Jacobian d x+ / d x = I - B_J (C_J B_J)^-1 C_J on the pairs J that jumped (None: no jump)."""
+        """The state's jumps when configuration ``config`` is entered: first the charges its closed switches
+        redistribute (:class:`~converters.problems.Jump`: x+ = P x + q, Jacobian P), then Moreau's impulse where
+        y_K < 0 on the pairs K whose y is a function of the state: x+ = x + B_K lambda,
+        0 <= lambda _|_ C_K x+ + F_K >= 0. Returns x~+ and the jumps' Jacobian d x+ / d x (the impulse's
+        I - B_J (C_J B_J)^-1 C_J on the pairs J that jumped; None: no jump)."""
+        c = self.problem.configurations[config]
+        if c.jump is not None:
+            x = xt[:-1]
+            moved = c.jump(x)
+            if np.abs(moved - x).max() > _CROSS_RTOL * max(np.abs(x).max(), np.abs(moved).max()):
+                log(t, "jump", -1, config)
+                self.jumps.append((t, float(c.jump.loss(x))))
+            xt = np.append(moved, 1.0)
+            xt, impulse = self._impulse(c, config, xt, t, log)
+            return xt, c.jump.P if impulse is None else impulse @ c.jump.P
+        return self._impulse(c, config, xt, t, log)
+
+    def _impulse(self, c, config: int, xt: np.ndarray, t: float, log) -> tuple[np.ndarray, np.ndarray | None]:
         K = self.index2
         if not K:
             return xt, None
-        c = self.problem.configurations[config]
         CK, FK, BK, row_scale = self.impulse_data[config]
         y = CK @ xt[:-1] + FK
         if np.all(y >= -_CROSS_RTOL * np.abs(xt).max() * row_scale):
@@ -292,6 +308,7 @@ class _Machine:
         t, t_end = problem.t_span
         xt = np.append(np.asarray(x0, dtype=float), 1.0)
         times, kinds, pairs, configs, segments = [], [], [], [], []
+        self.jumps = []
         jac = np.eye(n) if jacobian else None
 
         def log(time_, kind, pair, config_):
@@ -414,7 +431,7 @@ class _Machine:
             raise SimulationError(f"the return map found {crossings} of {stop_count} switchings into configuration "
                                   f"{stop_config} before t = {t_end:g} s; lengthen the problem's t_span")
         solution = EventSolution(problem, segments, zip(times, kinds, pairs, configs), xt[:-1].copy(),
-                                 time.perf_counter() - start_clock, options, config)
+                                 time.perf_counter() - start_clock, options, config, tuple(self.jumps))
         return solution, jac, stop_time
 
     def period_run(self, x0, jacobian: bool):

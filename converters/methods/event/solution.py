@@ -31,9 +31,11 @@ class EventSolution(PiecewiseSolution):
     (:class:`.core.PiecewiseSolution`; kinds 'activate', 'release', 'impulse', 'switch'); ``end_config`` the
     configuration in force at the end."""
 
-    def __init__(self, problem, segments, events, x_end, wall_s, options, end_config):
+    def __init__(self, problem, segments, events, x_end, wall_s, options, end_config, jumps: tuple = ()):
         super().__init__(problem, segments, events, x_end, wall_s, options)
         self.end_config = end_config
+        #: ((time, energy lost), ...) of the state's jumps (:meth:`._Machine.enter`)
+        self.jumps = jumps
 
     def _segments_in(self, t0: float, t1: float):
         for seg in self.segments:
@@ -149,7 +151,7 @@ class EventSolution(PiecewiseSolution):
                           pair_names=problem.pair_names,
                           config_names=tuple(c.name or f"config{i}" for i, c in enumerate(problem.configurations)),
                           event_columns=self.events_table(t), method="event", steps=len(self.segments),
-                          wall_s=self.wall_s, rule="exact", exact=self, period=problem.switching.period,
+                          wall_s=self.wall_s, rule="exact", exact=self, period=problem.switching.period, jumps=self.jumps,
                           metadata=dict(problem.metadata, event_tol=self.options.event_tol, label="event"))
 
     def _sample_sorted(self, t: np.ndarray, step: float):
