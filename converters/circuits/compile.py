@@ -985,10 +985,23 @@ class _Compiler:
                             and not self.diode_rs[d2.name])
                 same = (np.abs(a - b).max() <= 1e-12 * scale
                         and np.abs(config.D[i, j] - config.D[i, i]) <= 1e-12 * scale)
+                if same and not parallel and self.in_series(config, i, j):
+                    continue
                 if parallel or same:
                     raise self.error(d2, f"{d2.title} and {d1.title} are ideal diodes in parallel (or in series with "
                                          "nothing between): the split of their current or voltage is not unique; put a "
                                          "resistance (RS in their .model) on one")
+
+    @staticmethod
+    def in_series(config: Configuration, i: int, j: int) -> bool:
+        """Ports i and j are the same port twice over: their rows (y) and their columns (what u does to x and to
+        every y) are equal, as two diodes in series through a winding (a two-switch forward's clamp: one current,
+        the winding's). The LCP's solution set then holds every split of u_i + u_j, and the state, which sees only
+        the sum, is unique: while they conduct (y = the winding's current > 0) u is too, and blocked at zero current
+        the node between them floats (its voltage is the split the solver picks; SPICE's is set by leakages)."""
+        columns = np.vstack([config.B, config.D])
+        scale = max(np.abs(columns[:, [i, j]]).max(), 1e-300)
+        return bool(np.abs(columns[:, i] - columns[:, j]).max() <= 1e-12 * scale)
 
     def source_values(self, levels: dict) -> np.ndarray:
         values = []
