@@ -54,6 +54,8 @@ class PeriodicOrbit:
         ``exact`` or ``finite differences``.
     message : str
         Why it did not converge (with a remedy), or empty.
+    transient : int
+        Plain periods simulated before the Newton iteration that converged (:func:`shoot`'s settling rounds).
     """
 
     x0: np.ndarray
@@ -67,6 +69,7 @@ class PeriodicOrbit:
     converged: bool
     jacobian_kind: str
     message: str = ""
+    transient: int = 0
 
     @property
     def spectral_radius(self) -> float:
@@ -78,7 +81,8 @@ class PeriodicOrbit:
 
     def summary(self) -> dict:
         return {"period_s": self.period, "residual": self.residual, "distance": self.distance,
-                "iterations": self.iterations, "evaluations": self.evaluations, "converged": self.converged,
+                "iterations": self.iterations, "evaluations": self.evaluations, "transient": self.transient,
+                "converged": self.converged,
                 "spectral_radius": self.spectral_radius, "stable": self.stable, "jacobian": self.jacobian_kind,
                 "multipliers": [[float(m.real), float(m.imag)] for m in self.multipliers]}   # [re, im] pairs
 
@@ -170,7 +174,22 @@ def shoot(problem: LCSProblem, method, x_guess=None, *, periods: int = 1, warm_u
     x = as_vector("x_guess", problem.x0 if x_guess is None else x_guess, problem.n)
     for _ in range(warm_up):
         x = period_map.end(x)
-    return newton_orbit(period_map, x, tol=tol, max_iter=max_iter, period=periods * T, polish=polish)
+    orbit = newton_orbit(period_map, x, tol=tol, max_iter=max_iter, period=periods * T, polish=polish)
+    # Far from the orbit the map may not be the orbit's: a loop's integrator saturates the duty ratio (0 or 1), the
+    # loop is open there and its integrator a multiplier at 1, and Newton's steps leave for worse states. The
+    # transient itself settles (a type II voltage loop's in ~500 periods): plain periods in rounds of doubling
+    # length, Newton again from where each ends, as far as the transient goes within SETTLE_PERIODS.
+    done, rounds = 0, SETTLE_FIRST
+    while not orbit.converged and orbit.message.startswith(SETTLE_AFTER) and done < SETTLE_PERIODS:
+        for _ in range(min(rounds, SETTLE_PERIODS - done)):
+            x = period_map.end(x)
+            if not np.all(np.isfinite(x)):
+                return orbit
+        done, rounds = done + rounds, 2 * rounds
+        retry = newton_orbit(period_map, x, tol=tol, max_iter=min(max_iter, SETTLE_NEWTON), period=periods * T,
+                             polish=polish)
+        orbit = replace(retry, transient=done, evaluations=period_map.evaluations)
+    return orbit
 
 
 def autonomous_orbit(problem: LCSProblem, method, x_guess, *, config: int, crossings: int = 1,
@@ -192,6 +211,15 @@ def autonomous_orbit(problem: LCSProblem, method, x_guess, *, config: int, cross
     for _ in range(warm_up + 1):             # the first return puts x on the section
         x = period_map.end(x)
     return newton_orbit(period_map, x, tol=tol, max_iter=max_iter)
+
+
+#: :func:`shoot`'s settling rounds: the first round's plain periods (each round doubles), and their total.
+SETTLE_FIRST, SETTLE_PERIODS = 32, 2048
+#: Newton's iterations after a settling round: from a settled state it converges in a few (2 on a type II loop).
+SETTLE_NEWTON = 10
+#: The failures a longer transient can help (not the map leaving the finite numbers, nor an orbit resolved to the
+#: rounding of its map).
+SETTLE_AFTER = ("no convergence", "the period map's Jacobian has a multiplier at 1")
 
 
 def require(orbit: PeriodicOrbit, what: str = "the periodic orbit") -> PeriodicOrbit:
