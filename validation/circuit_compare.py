@@ -169,7 +169,7 @@ def _periodic(result: CircuitComparison, circuit, T: float, window: int, th: dic
     worst_mean, worst_ripple = 0.0, 0.0
     for name in outputs:
         mean_l, mean_s = lcp.mean(name, t0=t0, t1=span), spice.mean(name, t0=t0, t1=span)
-        scale = max(abs(mean_l), 1e-12)
+        scale = max(abs(mean_l), lcp.rms(name, t0=t0, t1=span), 1e-12)     # an AC output's mean is ~0: its RMS
         rip_l = _period_ripple(lcp, name, t0, T, window)
         rip_s = _period_ripple(spice, name, t0, T, window)
         label = circuit.output if name == "vout" else name

@@ -204,11 +204,13 @@ def _period_ripple(tr, t0: float, T: float, window: int) -> float:
 
 
 def spice_drift(spice, T: float, periods: int, window: int) -> float:
-    """|mean vout over the last window - over the window before| / |mean| (the run's drift)."""
+    """|mean vout over the last window - over the window before| / its RMS over the last window (the run's drift;
+    the RMS is the mean's size for a DC output, and the size of an AC one, whose mean is ~0 and never "settles"
+    relative to itself: an inverter's load current ran ngspice its 600 periods)."""
     end = periods * T
     last = spice.mean("vout", t0=end - window * T, t1=end)
     before = spice.mean("vout", t0=end - 2 * window * T, t1=end - window * T)
-    return abs(last - before) / max(abs(last), 1e-12)
+    return abs(last - before) / max(abs(last), spice.rms("vout", t0=end - window * T, t1=end), 1e-12)
 
 
 def _metrics(c: Comparison, model, T, periods, window):

@@ -440,7 +440,7 @@ class _Compiler:
             pair_currents.append(tuple(f == CURRENT for f in forms))
             closed.append(tuple(key[0]))
             maps.append(signals)
-        sines = [src.waveform for src in self.sources if isinstance(src.waveform, Sin) and src not in self.oscillators]
+        sines = [self.sources[c - self.n - self.k].waveform for c in self.sinusoid_columns()[0]]
         laws = [self.schedule(period, starts, [distinct.index(k) for k in keys_], bool(sines)) for keys_ in phase_keys]
         schedule = laws[0]
         periodic = math.isfinite(schedule.period)
@@ -750,12 +750,7 @@ class _Compiler:
     def waveform_value(self, coefficients: dict, t: np.ndarray) -> np.ndarray:
         total = np.zeros_like(t)
         for name, c in coefficients.items():
-            waveform = self.source(name).waveform
-            if isinstance(waveform, Sin):               # a sine on a switch's drive: a comparator, not a schedule
-                raise NetlistError(f"{self.nl.where(name)}: {name}'s SIN drives a switch (its control is a sine, "
-                                   "crossed at instants a schedule does not know): drive switches with DC, PULSE or "
-                                   "PWL sources, or compare the sine with a ramp through a comparator (E) in the file")
-            total += c * waveform_at(waveform, t)
+            total += c * waveform_at(self.source(name).waveform, t)
         return total
 
     def corners(self, coefficients: dict, period: float) -> np.ndarray:
@@ -770,6 +765,10 @@ class _Compiler:
             elif isinstance(w, Pwl):
                 for m in range(int(math.ceil(2 * period / w.period)) + 1):
                     points += [m * w.period + t for t, _ in w.points]
+            elif isinstance(w, Sin) and w.freq > 0:
+                # a sine between the corners: pieces of at most 1/SINE_PIECES of its period, on each of which a
+                # crossing of the sum (a line plus slow sines) is one sign change
+                points += list(np.linspace(0.0, 2 * period, int(math.ceil(2 * period * w.freq * SINE_PIECES)) + 1))
         points = np.unique(np.array([p for p in points if 0.0 <= p <= 2 * period]))
         return points
 
@@ -787,7 +786,9 @@ class _Compiler:
             return value > vt, []
         corners = self.corners(coefficients, period)
         values = self.waveform_value(coefficients, corners)
-        changes = _crossings(corners, values, vt + vh, vt - vh, values[0] > vt)
+        smooth = any(isinstance(self.source(name).waveform, Sin) for name in coefficients)
+        changes = _crossings(corners, values, vt + vh, vt - vh, values[0] > vt,
+                             (lambda t: float(self.waveform_value(coefficients, np.array([t]))[0])) if smooth else None)
         # the state at the start of the second period is the periodic one
         initial = next((s for t, s in reversed(changes) if t <= period * (1 + 1e-12)), values[0] > vt)
         inside = [(t - period, s) for t, s in changes if period * (1 - 1e-12) < t < 2 * period * (1 - 1e-12)]
@@ -931,14 +932,15 @@ class _Compiler:
         return tuple(self.sources[c - self.n - self.k].waveform for c in self.gate_columns())
 
     def gate_columns(self) -> list:
-        """The MNA input columns of the gate sources: a PULSE or PWL that reaches only switch controls (its value
-        decides when switches close; in the power circuit a PULSE is a level of the configuration)."""
+        """The MNA input columns of the gate sources: a PULSE, PWL or SIN that reaches only switch controls (its value
+        decides when switches close; in the power circuit a PULSE is a level of the configuration, a SIN an input)."""
         return [self.n + self.k + i for i, src in enumerate(self.sources)
-                if isinstance(src.waveform, (Pulse, Pwl)) and not self.in_power_circuit(src)]
+                if isinstance(src.waveform, (Pulse, Pwl, Sin)) and not self.in_power_circuit(src)]
 
     def sinusoid_columns(self):
         """(columns of the SIN sources among the MNA's input columns, their amplitudes VA)."""
-        sines = [i for i, src in enumerate(self.sources) if isinstance(src.waveform, Sin) and src not in self.oscillators]
+        sines = [i for i, src in enumerate(self.sources) if isinstance(src.waveform, Sin) and src not in self.oscillators
+                 and self.in_power_circuit(src)]
         return ([self.n + self.k + i for i in sines],
                 np.array([self.sources[i].waveform.va for i in sines], dtype=float))
 
@@ -970,7 +972,8 @@ class _Compiler:
         (its u = 0 is unique) and passes."""
         if len(self.diodes) < 2:
             return
-        rows = np.hstack([config.C, config.D, config.F[:, None]])
+        C, F = self.on_loops(config.C, config.F)
+        rows = np.hstack([C, config.D, F[:, None]])
         root = self.joined(switch_state)
         ends = [(root(d.nodes[0]), root(d.nodes[1])) for d in self.diodes]
         for i in range(len(self.diodes)):
@@ -991,6 +994,22 @@ class _Compiler:
                     raise self.error(d2, f"{d2.title} and {d1.title} are ideal diodes in parallel (or in series with "
                                          "nothing between): the split of their current or voltage is not unique; put a "
                                          "resistance (RS in their .model) on one")
+
+    def on_loops(self, C: np.ndarray, F: np.ndarray) -> tuple:
+        """(C, F) of the ports on the states the loops of capacitors allow (K x = b: :meth:`_Network.solve_loops`'s
+        solution writes a node's voltage through the loop's capacitors, v(p) = (v(c1) + v(c2) + 2 Vdc)/3 for a
+        split link, which is Vdc there): C on the free directions, F with the constraint's share. A diode across
+        the link reads as reverse-biased by the source alone, as it is."""
+        K_w = getattr(self, "loops", None)
+        if K_w is None:
+            return C, F
+        n_c, size = len(self.capacitors), C.shape[1]
+        K = np.zeros((K_w.shape[0], size))
+        K[:, :n_c] = K_w[:, :n_c]
+        b = -K_w[:, self.n + self.k:] @ self.source_values({})
+        pinv = np.linalg.pinv(K)
+        free = np.eye(size) - pinv @ K                      # the projector onto K's null space
+        return C @ free, F + C @ (pinv @ b)
 
     @staticmethod
     def in_series(config: Configuration, i: int, j: int) -> bool:
@@ -1129,25 +1148,33 @@ def _once(w) -> bool:
                                                          and w.td + w.tr + w.pw + w.tf < math.inf)
 
 
-def _crossings(corners: np.ndarray, values: np.ndarray, on: float, off: float, state: bool) -> list:
-    """[(t, closed)] where a piecewise-linear control (``values`` at ``corners``) starting in ``state`` rises above
-    ``on`` (closing) or falls below ``off`` (opening), located on its segments."""
+def _crossings(corners: np.ndarray, values: np.ndarray, on: float, off: float, state: bool, exact=None) -> list:
+    """[(t, closed)] where a control (``values`` at ``corners``) starting in ``state`` rises above ``on`` (closing)
+    or falls below ``off`` (opening): piecewise linear, located on its segments; with ``exact`` (the control as a
+    function of t: a sine in it), located by Brent's method on the segment whose end has crossed."""
     changes = []
     for (t0, v0), (t1, v1) in zip(zip(corners[:-1], values[:-1]), zip(corners[1:], values[1:])):
         target = off if state else on
         if (v1 < off) if state else (v1 > on):
-            t = t0 + (target - v0) / (v1 - v0) * (t1 - t0) if v1 != v0 else t1
+            if exact is not None and (v0 - target) * (v1 - target) < 0:
+                from scipy.optimize import brentq
+                t = brentq(lambda s: exact(s) - target, t0, t1, xtol=1e-15 * max(t1, 1e-300), rtol=1e-15)
+            else:
+                t = t0 + (target - v0) / (v1 - v0) * (t1 - t0) if v1 != v0 else t1
             state = not state
             changes.append((float(t), state))
     return changes
 
 
 def waveform_at(w, t: np.ndarray) -> np.ndarray:
-    """A source's waveform at times t (DC, PULSE, or a PWL: repeated with r=0, else holding its last value)."""
+    """A source's waveform at times t (DC, PULSE, SIN without delay or damping, or a PWL: repeated with r=0, else
+    holding its last value)."""
     t = np.asarray(t, dtype=float)
     if isinstance(w, Pwl):
         times, values = np.array(w.points).T
         return np.interp(np.mod(t, w.period), times, values)
+    if isinstance(w, Sin):                      # a gate's sine (no delay or damping: those are refused in a gate)
+        return w.vo + w.va * np.sin(2 * math.pi * w.freq * t + math.radians(w.phase))
     if not isinstance(w, Pulse):
         return np.full_like(t, float(w))
     per = w.per if math.isfinite(w.per) else math.inf
@@ -1163,6 +1190,10 @@ def waveform_at(w, t: np.ndarray) -> np.ndarray:
     out[fall] = w.v2 + (w.v1 - w.v2) * (local[fall] - w.tr - w.pw) / w.tf if w.tf > 0 else w.v1
     return out
 
+
+#: A SIN in a switch's control is crossed on pieces of at most 1/SINE_PIECES of its period between the other
+#: waveforms' corners (a sine-triangle modulator: the carrier's corners are far denser).
+SINE_PIECES = 64
 
 #: A loop of capacitors holds its constraint at this rate over the period (:meth:`_Network.solve_loops`): a start off
 #: it decays by e^-10 a period, and the rate is far below a step's (h = T/1000: 0.01).

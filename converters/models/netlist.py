@@ -56,8 +56,9 @@ class Circuit(Model):
         self.output = self._output(compiled)
         extra = (self.output,) if self.output not in compiled.signal_names else ()
         self.signal_names = ("vout", "switch") + compiled.signal_names + extra
-        compiled.units.setdefault(self.output, "V")
-        self.signal_units = {"vout": "V", "switch": "1", **compiled.units}
+        compiled.units.setdefault(self.output, "A" if self.output.startswith("i(") else "V")
+        # vout is the file's output: a current where its .meas reads one (an inverter's load current)
+        self.signal_units = {"vout": compiled.units[self.output], "switch": "1", **compiled.units}
         self.output_state = next((s for s in compiled.state_names if s.startswith("v(")), compiled.state_names[0])
 
     @classmethod

@@ -15,6 +15,10 @@ from converters.errors import ParameterError
 from converters.models import Circuit
 
 NETLISTS = Path(__file__).resolve().parents[2] / "netlists" / "circuits"
+#: The inverters' 20 ms periods hold ~1,600 switchings: seconds to compile twice (the slow tier).
+SLOW = {"full-bridge", "three-phase-inverter"}
+FILES = [pytest.param(path, marks=pytest.mark.slow) if path.stem in SLOW else path
+         for path in sorted(NETLISTS.glob("*.cir"))]
 
 
 def _same(a, b):
@@ -27,7 +31,7 @@ def _same(a, b):
             np.testing.assert_array_equal(m, n)
 
 
-@pytest.mark.parametrize("path", sorted(NETLISTS.glob("*.cir")), ids=lambda p: p.stem)
+@pytest.mark.parametrize("path", FILES, ids=lambda p: p.stem)
 def test_a_compile_at_moved_values_with_the_kept_forms_equals_a_fresh_one(path):
     """Every shipped netlist, compiled at its values (the forms kept), then with each R, L and C parameter moved by
     7 %: the same LCS as a compile with nothing kept."""
@@ -88,7 +92,7 @@ def _varied(circuit, rng, count: int) -> list[dict]:
     return [{**p, **{name: p[name] * (1 + 0.05 * rng.standard_normal()) for name in names}} for _ in range(count)]
 
 
-@pytest.mark.parametrize("path", sorted(NETLISTS.glob("*.cir")), ids=lambda p: p.stem)
+@pytest.mark.parametrize("path", FILES, ids=lambda p: p.stem)
 def test_netlists_compiled_together_equal_each_compiled_alone_to_the_bit(path):
     """Every shipped netlist at five sets of R, L, C values: compile_points stamps and solves them as one stack
     (each circuit's G per point, its R shared); every matrix and signal map, x0 and the schedule equal a compile
@@ -159,7 +163,7 @@ def test_a_gate_level_that_moves_the_schedule_is_not_stamped_with_another_points
     _same(together[2], compile_netlist(netlists[2]))
 
 
-@pytest.mark.parametrize("path", sorted(NETLISTS.glob("*.cir")), ids=lambda p: p.stem)
+@pytest.mark.parametrize("path", FILES, ids=lambda p: p.stem)
 def test_a_netlist_rebound_to_new_values_equals_the_reader_s_or_is_refused(path):
     """with_values on every parameter of every shipped netlist (moved 3 %, a coupling moved down): where it takes
     the change (a .param that only element values name, or an element's own value) the netlist equals the reader's
