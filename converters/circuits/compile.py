@@ -1075,23 +1075,13 @@ class _Compiler:
         (the smallest change in the capacitances' metric: x - C^-1 K^T (K C^-1 K^T)^-1 (K x - b)); x itself
         without a loop."""
         K_w = getattr(self, "loops", None)
-        if K_w is None:
-            return x
-        n_c = len(self.capacitors)
-        w = np.zeros(K_w.shape[1])
-        w[:n_c] = x[:n_c]
-        s = self.source_values({})
-        w[self.n + self.k:] = s
-        residual = K_w @ w
-        K = K_w[:, :n_c]
-        inverse = np.array([1.0 / self.value(e) for e in self.capacitors])
-        x = np.array(x, dtype=float)
-        x[:n_c] -= inverse * (K.T @ np.linalg.solve((K * inverse) @ K.T, residual))
-        return x
+        x = np.asarray(x, dtype=float)
+        return x if K_w is None else self.jump(K_w, self.source_values({}), x.size)(x)
 
     def jump(self, K_w, sources: np.ndarray, size: int) -> Jump | None:
         """The state's jump entering a configuration whose closed switches make loops with capacitors (``K_w``: the
-        loops' constraints from :meth:`_Network.solve_loops`, None without): the capacitors' voltages projected
+        loops' constraints from :meth:`_Network.solve_loops`, None without; :meth:`consistent`'s projection of a
+        run's start onto the loops that hold always is the same): the capacitors' voltages projected
         onto K x = b in the capacitances' metric (charge conservation, :class:`~converters.problems.Jump`) on the
         ``size`` states (the ramps' and oscillators' among them, which do not jump)."""
         if K_w is None:
