@@ -321,6 +321,22 @@ def test_cockcroft_walton_no_load_output_is_2_n_vpk_and_every_diode_carries_the_
         assert mean(tr, f"i(d{k})", 0, T) == pytest.approx(load, rel=1e-6)
 
 
+@pytest.mark.slow
+@pytest.mark.parametrize("R", ["100k", "1meg"])
+def test_the_event_method_takes_a_48_diode_ladder_to_its_closed_form(tmp_path, R):
+    """k = 48 (24 stages): the mode at each event from the mode-selection LCP, not 2^48 held sets (the enumeration
+    stopped at k = 12). On the orbit the capacitors carry no mean current, so each of the 48 diodes carries the
+    load's, vout/R, as for N = 4 above; the output lies between half and all of its no-load 2 N Vpk = 480 V."""
+    N = 24
+    p, tr, _ = _cw(N, {"R": R}, tmp_path)
+    T = 1 / p["f"]
+    assert tr.problem.k == 2 * N == 48
+    vout = mean(tr, "vout", 0, T)
+    assert N * p["vpk"] < vout < 2 * N * p["vpk"]
+    for k in range(1, 2 * N + 1):
+        assert mean(tr, f"i(d{k})", 0, T) == pytest.approx(vout / p["r"], rel=1e-6)
+
+
 @pytest.mark.parametrize("rs", ["10m", "30m"])
 def test_cockcroft_walton_square_wave_doubler_droop(tmp_path, rs):
     """N = 1 (a clamp D1, Cx1 and a peak detector D2, Cs1), square wave +-V, load current I, c = I T/C.

@@ -25,6 +25,21 @@ def _held_sets_by_distance(k: int, reference: int) -> list[int]:
     return sorted(masks, key=lambda m: (bin(m ^ reference).count("1"), bin(m).count("1"), m))
 
 
+def _neighbours(k: int, held: int) -> list[int]:
+    """The held sets one pair away from ``held``."""
+    return [held ^ (1 << i) for i in range(k)]
+
+
+#: The mode-selection LCP's step over the configuration's fastest rate (:meth:`_Machine.lcp_held`): small enough
+#: that each further derivative of the watched quantities weighs 1e3 times less than the one before it (the
+#: rational complementarity problem's ordering, :meth:`_Machine.lcp_held`), large enough that three of them stay
+#: above rounding.
+SELECT_STEP = 1e-3
+#: Up to this many pairs, a held set is also sought among all 2^k (nearest to the reference first) when the LCP's
+#: candidate and its neighbours fail the exact test (a degenerate LCP: several pairs at zero to three derivatives).
+ENUMERATE_PAIRS = 12
+
+
 #: How often (in segments) the engine looks at the memory it holds against the limit (/proc: ~10 us a look).
 MEMORY_LOOK = 4096
 
@@ -37,6 +52,7 @@ class _Machine:
         self.scale = _time_scale(problem)
         self.flows: dict = {}
         self.orders: dict = {}
+        self.select_data: dict = {}                 # per configuration: the mode-selection LCP's matrices
         law = problem.switching
         self.law = law if isinstance(law, StateSwitching) else None
         #: The last run's jumps: ((time, energy lost), ...) (:meth:`enter`)
@@ -104,23 +120,87 @@ class _Machine:
         return True, out
 
     def select(self, config: int, xt: np.ndarray, t: float, reference: int, rate_field=None) -> tuple[Flow, np.ndarray]:
-        """The mode-selection LCP at (t, x): the held set nearest to ``reference`` whose flow keeps every
-        watched quantity lexicographically non-negative; x~ projected onto its manifold. ``rate_field``:
+        """The mode at (t, x): a held set whose flow keeps every watched quantity lexicographically non-negative,
+        x~ projected onto its manifold. Tried in turn: ``reference`` (the held set before the event with the pair
+        that crossed flipped), the mode-selection LCP's candidate (:meth:`lcp_held`) and the sets one pair from
+        it; then, for at most :data:`ENUMERATE_PAIRS` pairs, every set nearest ``reference`` first. ``rate_field``:
         the vector field before an event (its location error may leave a held pair's y slightly off zero)."""
         k = self.problem.k
-        order = self.orders.get(reference)
-        if order is None:
-            order = self.orders[reference] = _held_sets_by_distance(k, reference)
         slack = 4.0 * self.options.event_tol * self.scale
         size = np.abs(xt).max()
-        for held in order:
+        tried: set = set()
+
+        def valid(held, small_positive=False):
+            if held in tried and not small_positive:
+                return None
+            tried.add(held)
             flow = self.flow(config, held)
             ok, projected = self._on_set(flow, xt, size, rate_field, slack)
-            if ok and flow.lexicographic_ok(projected):
-                return flow, projected
+            return (flow, projected) if ok and flow.lexicographic_ok(projected, small_positive) else None
+
+        found = valid(reference)
+        if found is not None:
+            return found
+        candidate = self.lcp_held(config, xt)
+        for held in [candidate, *_neighbours(k, candidate)]:
+            found = valid(held)
+            if found is not None:
+                return found
+        if k <= ENUMERATE_PAIRS:
+            order = self.orders.get(reference)
+            if order is None:
+                order = self.orders[reference] = _held_sets_by_distance(k, reference)
+            for held in order:
+                found = valid(held)
+                if found is not None:
+                    return found
+        # Currents or voltages positive but below the zero band (1e-7 A in a 48-diode ladder at no load, falling):
+        # the LCP's mode holds at this instant, and its flow crosses them as any other.
+        for held in (candidate, reference):
+            found = valid(held, small_positive=True)
+            if found is not None:
+                return found
         name = self.problem.configurations[config].name
+        searched = "every set of held pairs" if k <= ENUMERATE_PAIRS else "the LCP's held set and its neighbours"
         raise SimulationError(f"the mode-selection LCP at t = {t:.9g} s in configuration {name!r} has no solution "
-                              "(no set of held pairs keeps every pair complementary); the LCS is not well posed there")
+                              f"({searched} leave a pair non-complementary); the LCS is not well posed there")
+
+    def lcp_held(self, config: int, xt: np.ndarray) -> int:
+        """The held set (bit mask) of the backward-Euler LCP over a step h = :data:`SELECT_STEP` / |A|:
+        0 <= u _|_ (D + C (I - hA)^-1 h B) u + C (I - hA)^-1 (x + h E) + F >= 0. It is the rational complementarity
+        problem at sigma = 1/h, whose solution for large sigma is the mode the LCS leaves x in: the watched
+        quantities' derivatives ordered lexicographically (Heemels, Schumacher and Weiland, SIAM J. Appl. Math. 60
+        (2000) 1234-1269, Thm. 4.8; Camlibel, Heemels and Schumacher, IEEE TCAS-I 49 (2002) 349-357, for passive
+        circuits). One k-by-k LCP (Lemke) instead of 2^k flows; the exact test in :meth:`select` still decides."""
+        data = self.select_data.get(config)
+        if data is None:
+            c = self.problem.configurations[config]
+            # The fastest rate: A's, and where a pair has a resistance (D_ii > 0) the rate its conduction adds,
+            # |C||B| over D_ii (a 48-diode ladder's RS C chain: |h C B| reached D at h = 1e-3 / |A| and the LCP
+            # chose another mode than D's own).
+            coupling = (np.abs(c.C) @ np.abs(c.B)).sum(axis=1)
+            d = np.diag(c.D)
+            resistive = d > 0.0
+            rate = max(float(np.abs(c.A).sum(axis=1).max(initial=0.0)), 1.0 / self.scale,
+                       float((coupling[resistive] / d[resistive]).max(initial=0.0)))
+            h = SELECT_STEP / rate
+            import scipy.linalg
+            lu = scipy.linalg.lu_factor(np.eye(c.n) - h * c.A)
+            W = c.D + c.C @ scipy.linalg.lu_solve(lu, h * c.B)
+            data = self.select_data[config] = (lu, W, h)
+        lu, W, h = data
+        c = self.problem.configurations[config]
+        import scipy.linalg
+        q = c.C @ scipy.linalg.lu_solve(lu, xt[:-1] + h * c.E) + c.F
+        from ...lcp import solve_lcp                 # imported here: a run that never needs it starts faster
+        result = solve_lcp(W, q, method="lemke")
+        if not result.solved:
+            return 0
+        z = result.z
+        held = 0
+        for i in np.flatnonzero(z > 1e-12 * max(float(np.abs(z).max()), 1e-300)):
+            held |= 1 << int(i)
+        return held
 
     def enter(self, config: int, xt: np.ndarray, t: float, log) -> tuple[np.ndarray, np.ndarray | None]:
         """The state's jumps when configuration ``config`` is entered: first the charges its closed switches
@@ -227,7 +307,7 @@ class _Machine:
         tau, state = 0.0, xt
         while full > 0:
             m = min(full, _POWERS)
-            states = flow.powers[1:m + 1] @ state
+            states = flow.steps(state, m)
             values = states @ watch.rows_T
             if watch.timed:
                 values += (phase0 + tau + flow.delta * np.arange(1, m + 1))[:, None] * watch.slopes[None, :]
@@ -250,7 +330,7 @@ class _Machine:
     def _locate(self, flow: Flow, watch: _Watch, xt_a, tau_a, width, g_scale, phase0):
         """The earliest crossing inside [tau_a, tau_a + width] (width <= delta): Brent's method on each
         watched quantity's Taylor polynomial, exact to rounding there. Returns (tau, row)."""
-        V = flow.taylor @ xt_a                                   # x~(s) = sum_j s^j V_j
+        V = flow.series(xt_a)                                   # x~(s) = sum_j s^j V_j
         coefficients = V @ watch.rows.T                          # (terms, rows)
         coefficients[0] += (phase0 + tau_a) * watch.slopes
         coefficients[1] += watch.slopes
@@ -444,10 +524,6 @@ class _Machine:
 
 # --- the engine's entry points (converters.methods.event.ENGINES) ----------------------------------------------
 
-#: Largest number of complementarity pairs (the mode selection visits up to 2^k held sets).
-MAX_PAIRS = 12
-
-
 def supports(problem, options) -> None:
     from ...errors import ParameterError
     from ...problems import Relay
@@ -457,9 +533,6 @@ def supports(problem, options) -> None:
     if isinstance(problem.switching, Relay):
         raise ParameterError("the event-driven method follows a hysteresis or latched law (StateSwitching) "
                              "exactly; the implicit relay is a time-stepping scheme: use --method lcp")
-    if problem.k > MAX_PAIRS:
-        raise ParameterError(f"the event-driven method selects modes among 2^k held sets: k must be <= "
-                             f"{MAX_PAIRS}; this problem has k = {problem.k}: use --method lcp")
 
 
 def solve(problem, options, x0):

@@ -15,6 +15,9 @@ from .flow import _EXPONENTS, _GL_W, _GL_X, Flow, _power_stack, expm
 _BLOCK = 1024
 #: Gauss-Legendre pieces a measure reads at a time (8 nodes each): a one-state circuit's block peaks at ~30 MB.
 QUADRATURE_BLOCK = 1 << 14
+#: Bytes of the flows' power stacks :meth:`EventSolution._sample_sorted` keeps at once (a 48-diode ladder's 1,200
+#: modes at 38 MB each held 4 GB); past it they are dropped and rebuilt when a flow returns.
+STACKS_HELD = 1 << 27
 
 
 @dataclass
@@ -67,7 +70,7 @@ class EventSolution(PiecewiseSolution):
             done = 0
             while done < full:
                 m = min(full - done, max(pieces - held_pieces, 1))
-                starts = flow.sample_states(xt, m, flow.piece_powers)                # (m + 1, n+1)
+                starts = flow.sample_states(xt, m, pieces=True)                # (m + 1, n+1)
                 nodes = np.tensordot(starts[:m], flow.node_maps, axes=([1], [2])).reshape(-1, starts.shape[1])
                 times = (a + flow.piece * (done + np.arange(m))[:, None] + flow.piece * half[None, :]).ravel()
                 parts.append((times, np.tile(0.5 * flow.piece * _GL_W, m), nodes, flow))
@@ -79,7 +82,7 @@ class EventSolution(PiecewiseSolution):
             if rest > 1e-15 * length:
                 offsets = rest * half
                 parts.append((a + full * flow.piece + offsets, 0.5 * rest * _GL_W,
-                              (offsets[:, None] ** _EXPONENTS[None, :]) @ (flow.taylor @ xt), flow))
+                              (offsets[:, None] ** _EXPONENTS[None, :]) @ flow.series(xt), flow))
                 held_pieces += 1
         if parts:
             yield self._block(parts)
@@ -176,6 +179,8 @@ class EventSolution(PiecewiseSolution):
             stack = powers.get(id(flow))
             if stack is None:
                 count = min(_BLOCK, int(longest[id(flow)] / step) + 2)
+                if sum(p.nbytes for p in powers.values()) > STACKS_HELD:
+                    powers.clear()
                 stack = powers[id(flow)] = _power_stack(expm(step * flow.Z), count)
             offsets = t[lo:hi] - seg.t0
             q = np.floor(offsets / step * (1 + 1e-12)).astype(np.int64)
