@@ -14,8 +14,10 @@ resistors and closed ideal switches have voltages that are not independent: the 
 current circulating in it (:meth:`_Network.solve_loops`), and a configuration whose closed switches make such a
 loop is entered by a jump of the charges onto it (:meth:`_Compiler.jump`; a capacitance across a switch that
 closes, the energy 1/2 C dv^2 lost). A configuration the network cannot solve otherwise is refused naming the
-elements: a loop of voltage sources and closed switches with no capacitor, a cutset of inductors and current
-sources (a current interrupted with no path), a node with no path to ground. Ideal diodes whose ports are the same (in parallel, or in series with nothing between)
+elements: a loop of voltage sources and closed switches with no capacitor, an inductor whose only path is cut (a
+current interrupted), a node with no path to ground. Inductors in a cutset with DC current sources (in series) are
+the dual of a loop of capacitors: their currents tied, the cutset's potential keeping them so, a switch that opens
+onto such a cutset a jump of the fluxes. Ideal diodes whose ports are the same (in parallel, or in series with nothing between)
 give an LCP without a unique solution and are refused too, unless sources alone reverse-bias them (both
 blocked: u = 0 is unique). An ideal diode whose terminals closed ideal switches join (a MOSFET's body diode
 while the switch conducts) has 0 V whatever its current: the switch carries it all, the diode's pair never holds.
@@ -1003,9 +1005,9 @@ class _Compiler:
         K_w = getattr(self, "loops", None)
         if K_w is None:
             return C, F
-        n_c, size = len(self.capacitors), C.shape[1]
+        size = C.shape[1]
         K = np.zeros((K_w.shape[0], size))
-        K[:, :n_c] = K_w[:, :n_c]
+        K[:, :self.n] = K_w[:, :self.n]
         b = -K_w[:, self.n + self.k:] @ self.source_values({})
         pinv = np.linalg.pinv(K)
         free = np.eye(size) - pinv @ K                      # the projector onto K's null space
@@ -1086,16 +1088,21 @@ class _Compiler:
         ``size`` states (the ramps' and oscillators' among them, which do not jump)."""
         if K_w is None:
             return None
-        n_c = len(self.capacitors)
-        capacitance = np.array([self.value(e) for e in self.capacitors])
-        K = K_w[:, :n_c]
+        n_c, n = len(self.capacitors), self.n
+        K = K_w[:, :n]
         b = -K_w[:, self.n + self.k:] @ sources
-        inverse = K.T / capacitance[:, None]                                  # W^-1 K^T
+        # the energy's metric: the capacitances, and the inductances with their mutual ones (flux conserved)
+        metric = np.zeros((n, n))
+        metric[:n_c, :n_c] = np.diag([self.value(e) for e in self.capacitors])
+        # (the inductances only where a cutset holds their currents: a loop of capacitors leaves them, and a
+        # coupling of 1 would make them singular)
+        metric[n_c:, n_c:] = self.mutual if np.abs(K[:, n_c:]).max(initial=0.0) > 0.0 else np.eye(n - n_c)
+        inverse = np.linalg.solve(metric, K.T)                                # W^-1 K^T
         gain = inverse @ np.linalg.inv(K @ inverse)                           # W^-1 K^T (K W^-1 K^T)^-1
         P, q, W = np.eye(size), np.zeros(size), np.zeros((size, size))
-        P[:n_c, :n_c] -= gain @ K
-        q[:n_c] = gain @ b
-        W[:n_c, :n_c] = np.diag(capacitance)
+        P[:n, :n] -= gain @ K
+        q[:n] = gain @ b
+        W[:n, :n] = metric
         # rounding of the SVD's bases (1e-17 of a coefficient) is not a coupling: kept, a state that should not
         # move would drift by it at every step
         P[np.abs(P) < 1e-13] = 0.0
@@ -1324,50 +1331,75 @@ class _Network:
 
     def solve_loops(self) -> bool:
         """Solve a network whose only dependence is loops of capacitors, DC voltage sources, 0 ohm resistors and
-        closed ideal switches (False where it has another). Such a loop ties its capacitors' voltages
-        (K x = b, K and b from the left null space of the MNA matrix), and the current circulating in it is what
-        keeps them tied: z = z0 + N j, z0 the least-squares solution and N the loop currents (its null space), j
-        such that d/dt (K x - b) = -gamma (K x - b). On the circuit's states (K x = b, where the run starts: the
-        charges redistributed as SPICE's operating point would) the term is zero and the dynamics are the
-        circuit's; off them it decays at gamma = LOOP_RATE / T, so a start off the loop's constraint is not a
-        multiplier at 1 of the period map (Baumgarte's stabilisation of a constraint)."""
+        closed ideal switches, and cutsets of inductors and DC current sources (inductors in series, an inductor in
+        series with a current source; False where it has another). A loop ties its capacitors' voltages, a cutset
+        its inductors' currents (K x = b, K and b from the left null space of the MNA matrix), and what keeps them
+        tied is the current circulating in the loop or the potential of the cutset's nodes: z = z0 + N j, z0 the
+        least-squares solution and N the loop currents and node potentials (its null space), j such that
+        d/dt (K x - b) = -gamma (K x - b). On the circuit's states (K x = b, where the run starts: the charges and
+        fluxes redistributed as SPICE's operating point would) the term is zero and the dynamics are the
+        circuit's; off them it decays at gamma = LOOP_RATE / T, so a start off the constraint is not a multiplier
+        at 1 of the period map (Baumgarte's stabilisation of a constraint)."""
         c = self.c
         u, sv, vt = np.linalg.svd(self.G)
         scale = max(sv[0], 1.0)
         m = int(np.sum(sv <= 1e-12 * scale))
-        N, L = vt[-m:].T, u[:, -m:]                     # loop currents (right), the loop's KVL (left null space)
+        N, L = vt[-m:].T, u[:, -m:]                     # loop currents and node potentials (right), the KVL/KCL (left)
+        rows = len(self.nodes)
+        # the null space is the loops' (branch rows alone) beside the cutsets' (node rows alone): split it so
+        loops = N @ _null(N[:rows])
+        cuts = N @ _null(N[rows:])
+        if loops.shape[1] + cuts.shape[1] != m:
+            return False
         allowed = {j for j, (kind, e, _, _) in enumerate(self.branches)
                    if kind in "CRS" or (kind == "V" and isinstance(e.waveform, float))}
-        rows = len(self.nodes)
-        support = np.flatnonzero(np.abs(N).max(axis=1) > 1e-9)
+        support = np.flatnonzero(np.abs(loops).max(axis=1, initial=0.0) > 1e-9)
         if any(r < rows or (r - rows) not in allowed for r in support):
             return False
         caps = [self.branch_of[e.name] for e in c.capacitors]
-        if not caps or np.linalg.matrix_rank(N[caps], tol=1e-9) < m:
+        if loops.shape[1] and (not caps or np.linalg.matrix_rank(loops[caps], tol=1e-9) < loops.shape[1]):
             return False                                # a loop of sources and shorts alone: no capacitor to give
         K_w = L.T @ self.R                              # (m, cols): K_w w = 0 on consistent inputs
-        n_c = len(c.capacitors)
-        if np.abs(K_w[:, n_c:c.n + c.k]).max(initial=0.0) > 1e-9 * np.abs(K_w).max():
-            return False                                # the loop holds an inductor's or a diode's quantity
-        inverse = np.array([1.0 / c.value(e) for e in c.capacitors])
-        D_N = inverse[:, None] * N[caps]                # (n_c, m): the capacitors' dv/dt per unit loop current
-        M = K_w[:, :n_c] @ D_N
+        if np.linalg.matrix_rank(K_w, tol=1e-9 * max(np.abs(self.R).max(), 1e-300)) < m:
+            return False                                # a node that floats: nothing ties it (no constraint)
+        if np.linalg.matrix_rank(K_w[:, :c.n], tol=1e-9 * np.abs(K_w).max()) < m:
+            return False                                # sources alone (a current source into a node, two sources
+                                                        # in parallel): no state to give
+        if np.abs(K_w[:, c.n:c.n + c.k]).max(initial=0.0) > 1e-9 * np.abs(K_w).max():
+            return False                                # it holds a diode's quantity
+        sources = K_w[:, c.n + c.k:]
+        varying = [j for j, e in enumerate(c.sources) if not isinstance(e.waveform, float)]
+        if varying and np.abs(sources[:, varying]).max() > 1e-9 * np.abs(K_w).max():
+            return False                                # a loop or cutset through a source that varies
+        if cuts.shape[1] and self.interrupted(K_w):
+            return False
+        N = np.hstack([loops, cuts])
+        M = K_w[:, :c.n] @ self.rates(N)
+        if np.linalg.matrix_rank(M, tol=1e-9 * max(np.abs(M).max(), 1e-300)) < m:
+            return False
         Z0 = np.linalg.lstsq(self.G, self.R, rcond=None)[0]
         gamma = LOOP_RATE / c.loop_time()
-        J = np.linalg.solve(M, -gamma * K_w - K_w[:, :n_c] @ (inverse[:, None] * Z0[caps]))
+        J = np.linalg.solve(M, -gamma * K_w - K_w[:, :c.n] @ self.rates(Z0))
         Z = Z0 + N @ J
         # the least-squares solution and the SVD spread rounding (1e-17..1e-16 of a row) over coefficients a solve
         # leaves exactly 0: an ideal diode's D of 3e-16 made its held flow a 1e19 1/s mode. Below 1e-12 of its row's
         # largest, a coefficient is that noise.
         Z[np.abs(Z) < 1e-12 * np.abs(Z).max(axis=1, keepdims=True)] = 0.0
         self.Z = Z
-        # a loop through a closed switch holds in this configuration only: entering it, the charges jump onto it
-        # (:meth:`_Compiler.jump`); the loops through none hold in every one, where a run starts too (consistent)
+        # a loop through a closed switch holds in this configuration only, and so does a cutset that an open switch
+        # borders: entering it, the charges or fluxes jump onto it (:meth:`_Compiler.jump`); the others hold in every
+        # configuration, where a run starts too (consistent)
         switch_rows = [rows + j for j, (kind, _, _, _) in enumerate(self.branches) if kind == "S"]
-        through = L[switch_rows]
-        if switch_rows and np.abs(through).max() > 1e-9:
+        through = [L[switch_rows]] if switch_rows else []
+        island = {node for node, i in self.nodes.items() if np.abs(cuts[i]).max(initial=0.0) > 1e-9}
+        for e in c.switches:
+            if not self.switch_state.get(e.name) and len({e.nodes[0], e.nodes[1]} & island) == 1:
+                # a cutset bordered by this open switch: its KCL rows
+                through.append(L[[self.nodes[n] for n in (e.nodes[0], e.nodes[1]) if n in island]])
+        through = np.vstack(through) if through else np.zeros((0, m))
+        if through.size and np.abs(through).max() > 1e-9:
             _, s_t, v_t = np.linalg.svd(through)
-            static = v_t[int(np.sum(s_t > 1e-9)):].T              # combinations of the loops free of the switches
+            static = v_t[int(np.sum(s_t > 1e-9)):].T              # combinations free of the switches
             self.K_w = K_w
             c.switch_loops = True
         else:
@@ -1375,6 +1407,32 @@ class _Network:
         if static.shape[1]:
             c.loops = static.T @ K_w
         return True
+
+    def rates(self, Z: np.ndarray) -> np.ndarray:
+        """The states' derivatives (capacitors' dv/dt, inductors' di/dt) per column of network unknowns ``Z``."""
+        c = self.c
+        out = [Z[self.branch_of[e.name]] / c.value(e) for e in c.capacitors]
+        if c.inductors:
+            potential = lambda node: np.zeros(Z.shape[1]) if node == "0" else Z[self.nodes[node]]   # noqa: E731
+            volts = np.stack([potential(e.nodes[0]) - potential(e.nodes[1]) for e in c.inductors])
+            out += list(np.linalg.solve(c.mutual, volts))
+        return np.stack(out)
+
+    def interrupted(self, K_w: np.ndarray) -> bool:
+        """A cutset that fixes an inductor's current with no source in it (an inductor whose only path an open
+        switch or diode cuts): refused, as SPICE's spike would be, not jumped to zero."""
+        c = self.c
+        n_c = len(c.capacitors)
+        K = K_w[:, n_c:c.n]
+        if np.abs(K_w[:, c.n + c.k:]).max(initial=0.0) > 1e-9 * np.abs(K_w).max():
+            return False
+        rank = np.linalg.matrix_rank(K, tol=1e-9) if K.size else 0
+        for i in range(K.shape[1]):
+            unit = np.zeros(K.shape[1])
+            unit[i] = 1.0
+            if rank and np.linalg.matrix_rank(np.vstack([K, unit]), tol=1e-9) == rank:
+                return True
+        return False
 
     def singular(self) -> NetlistError:
         c = self.c
@@ -1471,6 +1529,15 @@ class _Network:
 def _times(M: np.ndarray, v: np.ndarray) -> np.ndarray:
     """M v per point of a batch (``v`` one vector, or one per point); one circuit's M @ v."""
     return M @ v if v.ndim == 1 else np.matmul(M, v[..., None])[..., 0]
+
+
+def _null(A: np.ndarray) -> np.ndarray:
+    """An orthonormal basis of the null space (columns) of A, rows of an orthonormal basis (singular values below
+    1e-9 are its rounding)."""
+    if A.shape[0] == 0:
+        return np.eye(A.shape[1])
+    _, sv, vt = np.linalg.svd(A)
+    return vt[int(np.sum(sv > 1e-9)):].T
 
 
 def _column(value):

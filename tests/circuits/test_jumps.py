@@ -6,12 +6,16 @@ and lose 1/2 C1 C2/(C1 + C2) (v1 - v2)^2 (what the capacitors held minus what th
 loses all of 1/2 C v^2. The stepper folds the jump into the steps of the configuration it enters (a projection:
 the steps inside it leave the state where it is), the event method applies it where the configuration is entered."""
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
 
+from converters.circuits.netlist import NetlistError
 from converters.models import Circuit
 from converters.run import run_converter, run_summary
+
+NETLISTS = Path(__file__).resolve().parents[2] / "netlists" / "circuits"
 
 SHARE = """two capacitors joined by a switch at t = {ts}
 R1 a 0 1meg
@@ -81,3 +85,77 @@ def test_a_capacitor_shorted_by_a_switch_every_period_loses_half_c_v_squared_eac
     mean = 10.0 * (d - 1e-3 * (1.0 - math.exp(-d / 1e-3))) / 1e-3
     assert m["v(c)"]["mean"] == pytest.approx(mean, rel=tol)
     assert summary["orbit"]["spectral_radius"] < 1e-9
+
+
+# --- inductor cutsets: the dual (Acary, Bonnefon and Brogliato 2011, ch. 2: opening a switch that cuts an
+# inductor's path through another inductor is an impulse of voltage) -------------------------------------------
+
+FLUX = """two inductors joined in series when a switch opens
+V1 in 0 DC 10
+R1 in a 1
+L1 a b 1m
+S1 b 0 g 0 SMOD
+L2 b c 3m
+R2 c 0 1
+Vg g 0 PWL(0 1 10m 1 10.001m 0)
+.model SMOD SW(VT=0.5)
+.tran 1u 20m
+.end
+"""
+
+
+# the stepper: the trapezoidal rule's (h/tau)^2/12 = 8e-8 at its h = 1 us (the file's TSTEP) against tau = 1 ms,
+# twice that on the energy (i1^2)
+@pytest.mark.parametrize("method, tol", [("event", 1e-12), ("lcp", 2e-7)])
+def test_a_switch_opening_joins_two_inductors_which_share_their_flux_and_lose_the_closed_form_energy(tmp_path, method,
+                                                                                                      tol):
+    """L1 = 1 mH charges through 1 ohm from 10 V into the closed switch (tau 1 ms), L2 = 3 mH beside it carries
+    nothing. The gate crosses 0.5 V at ts = 10.0005 ms: the switch opens and L1's only path is through L2, so both
+    carry i+ = L1 i1/(L1 + L2) (the flux L1 i1 + L2 i2 conserved) and 1/2 L1 L2/(L1 + L2) i1^2 is lost; then
+    (L1 + L2) di/dt = 10 - 2 i: i -> 5 A with tau 2 ms. A refusal before ("node b has no path to ground but
+    through inductors")."""
+    ts = 10e-3 + 0.5e-6
+    path = tmp_path / "flux.cir"
+    path.write_text(FLUX)
+    tr = run_converter(Circuit.from_netlist(path), method=method)
+    i1 = 10.0 * (1.0 - math.exp(-ts / 1e-3))
+    joined, lost = i1 / 4.0, 0.5 * 0.75e-3 * i1 ** 2
+    jumps, energy = tr.jump_losses()
+    assert jumps == 1 and energy == pytest.approx(lost, rel=tol)
+    after = tr.t > ts + 1e-9
+    expected = 5.0 + (joined - 5.0) * np.exp(-(tr.t[after] - ts) / 2e-3)
+    np.testing.assert_allclose(tr.signal("i(l1)")[after], expected, rtol=tol)
+    np.testing.assert_allclose(tr.signal("i(l2)")[after], expected, rtol=tol)
+    before = tr.t < ts - 1e-9
+    np.testing.assert_allclose(tr.signal("i(l1)")[before], 10.0 * (1.0 - np.exp(-tr.t[before] / 1e-3)), rtol=tol,
+                               atol=1e-12)
+
+
+@pytest.mark.parametrize("method", ["event", "lcp"])
+def test_two_inductors_in_series_are_one_inductor_of_their_sum(tmp_path, method):
+    """The shipped buck with its 10 uH split into 5 + 5 uH in series (a node joined only through inductors, refused
+    before as "a current interrupted"): the same periodic orbit as the buck (the stepper's to the last bits, the
+    event method's to 1e-9) and the same slowest multiplier: the constraint i(L1) = i(L2) is no multiplier at 1."""
+    text = (NETLISTS / "buck.cir").read_text().replace("L1 sw lr {L}", "L1 sw mid {L/2}\nL2 mid lr {L/2}")
+    path = tmp_path / "split.cir"
+    path.write_text(text)
+    split = run_summary(run_converter(Circuit.from_netlist(path), steady=True, method=method))
+    whole = run_summary(run_converter(Circuit.from_netlist(NETLISTS / "buck.cir"), steady=True, method=method))
+    assert split["vout_mean"] == pytest.approx(whole["vout_mean"], rel=1e-9 if method == "event" else 1e-12)
+    assert split["orbit"]["spectral_radius"] == pytest.approx(whole["orbit"]["spectral_radius"], rel=1e-6)
+
+
+def test_an_inductor_in_series_with_a_current_source_carries_its_current_from_the_start(tmp_path):
+    """I1 = 2 A through L1 into 5 ohm: L1's current is the source's from t = 0 (a run from rest starts on the
+    cutset's constraint, as SPICE's operating point would put it), 10 V across the resistor; and an inductor whose
+    only path a switch opens is still refused (its current would be interrupted: SPICE's spike, not a jump to 0)."""
+    path = tmp_path / "series.cir"
+    path.write_text("an inductor in series with a current source\nI1 0 a DC 2\nL1 a b 1m\nR1 b 0 5\n.tran 1u 1m\n.end\n")
+    for method in ("event", "lcp"):
+        tr = run_converter(Circuit.from_netlist(path), method=method)
+        np.testing.assert_allclose(tr.signal("i(l1)"), 2.0, rtol=1e-12)
+        np.testing.assert_allclose(tr.signal("v(b)"), 10.0, rtol=1e-12)
+    cut = tmp_path / "cut.cir"
+    cut.write_text(FLUX.replace("L2 b c 3m\n", ""))
+    with pytest.raises(NetlistError, match="node b has no path to ground but through inductors"):
+        Circuit.from_netlist(cut)
