@@ -447,7 +447,7 @@ def run_summary(tr: Trajectory, *, check: bool = True) -> dict:
                                  if k.startswith("fraction_")}
         out["accuracy"] = accuracy
         if not accuracy["met"]:
-            out["warnings"] = [f"rtol {accuracy['rtol']:g} not met: {accuracy['message']}"]
+            out["warnings"] = [*out.get("warnings", []), f"rtol {accuracy['rtol']:g} not met: {accuracy['message']}"]
         quantities = accuracy["quantities"]
         if "power" in out and "input_W" in quantities:      # the rtol covers the power summary too
             from .analysis.accuracy import efficiency_estimate
@@ -498,7 +498,7 @@ def check_accuracy(tr: Trajectory, summary: dict) -> dict:
         return out
     out["accuracy"] = check
     if "warning" in check:
-        out["warnings"] = [check["warning"]]
+        out["warnings"] = [*out.get("warnings", []), check["warning"]]
     return out
 
 

@@ -75,6 +75,10 @@ class Compiled:
     #: Switches driven by sources that do not repeat (a PWL without r=, a PULSE without PER: a load step's switch):
     #: ((t, law), ...), the law in force from each instant t > 0 on (``law`` before the first).
     phases: tuple = ()
+    #: What the circuit holds fixed (:meth:`_Compiler.invariants`): ({"kind", "constraint", "value", "unit"}, ...).
+    invariants: tuple = ()
+    #: What the file asks for that the circuit cannot hold, said as a warning with every run (:meth:`_Compiler.moved`).
+    notes: tuple = ()
 
     def signal_rows(self, row: int) -> tuple:
         """Signal ``row``'s maps stacked over the configurations: (Sx (configs, n), Su, s0, Ssin, Sgate), built once
@@ -459,7 +463,8 @@ class _Compiler:
                         tuple(d.name for d in self.diodes) or ("none",), tuple(pair_currents),
                         tuple(s.name for s in self.switches), tuple(closed), self.signal_names(), tuple(maps),
                         period if periodic else math.inf, self.initial_state(), self.units(), inputs,
-                        self.gate_waveforms(), tuple(zip(phase_times, laws[1:])))
+                        self.gate_waveforms(), tuple(zip(phase_times, laws[1:])), self.invariants(state_names),
+                        self.moved(state_names))
 
     @staticmethod
     def schedule(period: float, starts: list, index: list, sines: bool) -> Schedule:
@@ -586,7 +591,8 @@ class _Compiler:
         return Compiled(tuple(configs), law, state_names, tuple(d.name for d in self.diodes) or ("none",),
                         tuple(pair_currents), tuple(x.name for x in self.switches), tuple(closed), self.signal_names(),
                         tuple(maps), ramp.period if ramp is not None else math.inf, self.initial_state(), self.units(),
-                        gates=self.gate_waveforms())
+                        gates=self.gate_waveforms(), invariants=self.invariants(state_names),
+                        notes=self.moved(state_names))
 
     def period(self) -> float:
         """The common period of the PULSE sources (their least common multiple), inf without one."""
@@ -1067,6 +1073,55 @@ class _Compiler:
             E[:n_c] += gamma * sign * (weight @ x0[:n_c]) / total
         return A, E
 
+    def invariants(self, state_names: tuple) -> tuple:
+        """What every configuration holds, as the summary reports it: each loop of capacitors' and cutset of
+        inductors' constraint (sum of coefficient x state = value, its largest coefficient 1; from the sources), and
+        each charge island's sum(sign C v) (from the .ic, or 0 from rest). A loop or cutset through a switch holds in
+        its configurations only (a jump enters them) and is not listed."""
+        out = []
+        K_w = getattr(self, "loops", None)
+        if K_w is not None:
+            sources = self.source_values({})
+            b = -K_w[:, self.n + self.k:] @ sources
+            n_c = len(self.capacitors)
+            for row, value in zip(K_w[:, :self.n], b):
+                big = row[np.argmax(np.abs(row))]
+                row = np.where(np.abs(row) > 1e-9 * abs(big), row / big, 0.0)      # the SVD's rounding is no term
+                value = value / big
+                if abs(value) < 1e-12 * max(np.abs(sources).max(initial=0.0), 1.0):
+                    value = 0.0
+                terms = [(coefficient, name) for coefficient, name in zip(row, state_names) if coefficient]
+                kind = "loop" if np.abs(row[:n_c]).max(initial=0.0) > 0.0 else "cutset"
+                out.append({"kind": kind, "constraint": _sum_text(terms), "value": float(value),
+                            "unit": "V" if kind == "loop" else "A"})
+        if self.islands:
+            capacitance = np.array([self.value(e) for e in self.capacitors])
+            x0 = self.initial_state()
+            for sign in self.islands:
+                terms = [(float(s_ * c_), name) for s_, c_, name in zip(sign, capacitance, state_names) if s_]
+                weight, v = sign * capacitance, x0[:len(capacitance)]
+                charge = float(weight @ v)
+                if abs(charge) <= 1e-12 * float(np.abs(weight) @ np.abs(v)):      # rounding of a zero charge
+                    charge = 0.0
+                out.append({"kind": "charge", "constraint": _sum_text(terms), "value": charge, "unit": "C"})
+        return tuple(out)
+
+    def moved(self, state_names: tuple) -> tuple:
+        """A warning where the file's initial conditions (IC=, .ic) contradict a loop of capacitors or a cutset of
+        inductors, which the run's start is moved onto (:meth:`consistent`)."""
+        if not self.nl.ic and all(e.ic is None for e in self.capacitors + self.inductors):
+            return ()                                   # from rest: moved onto the constraints as SPICE's start is
+        given = self.initial_state(self.nl)
+        start = self.initial_state()
+        if not given.size or np.abs(start - given).max() <= 1e-9 * max(np.abs(given).max(), np.abs(start).max(), 1e-300):
+            return ()
+        changed = np.flatnonzero(np.abs(start - given) > 1e-9 * max(np.abs(given).max(), np.abs(start).max()))
+        held = "; ".join(f"{i['constraint']} = {i['value']:.6g} {i['unit']}" for i in self.invariants(state_names)
+                         if i["kind"] != "charge")
+        return (f"the initial conditions contradict what the circuit holds ({held}): the run starts from "
+                + ", ".join(f"{state_names[i]} = {start[i]:.6g} (not {given[i]:.6g})" for i in changed)
+                + ", the charges and fluxes redistributed as the circuit would at its start",)
+
     def loop_time(self) -> float:
         """The time over which a loop of capacitors is held to its constraint: the period, or the run."""
         period = self.period()
@@ -1529,6 +1584,17 @@ class _Network:
 def _times(M: np.ndarray, v: np.ndarray) -> np.ndarray:
     """M v per point of a batch (``v`` one vector, or one per point); one circuit's M @ v."""
     return M @ v if v.ndim == 1 else np.matmul(M, v[..., None])[..., 0]
+
+
+def _sum_text(terms: list) -> str:
+    """'v(c1) + v(c2)', '1e-06 v(c1) - 3e-06 v(c2)': a linear combination of states as text."""
+    out = ""
+    for coefficient, name in terms:
+        sign = "-" if coefficient < 0 else "+"
+        size = abs(coefficient)
+        term = name if abs(size - 1.0) < 1e-12 else f"{size:.6g} {name}"
+        out = (f"-{term}" if sign == "-" else term) if not out else f"{out} {sign} {term}"
+    return out
 
 
 def _null(A: np.ndarray) -> np.ndarray:

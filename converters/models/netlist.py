@@ -188,14 +188,19 @@ class Circuit(Model):
 
     def summary(self, tr, p: dict) -> dict:
         """The model's summary (:meth:`Model.summary`); without a period, over the last tenth of the run
-        (``window_s``)."""
+        (``window_s``); with what the circuit holds fixed (``invariants``: its loops of capacitors, cutsets of
+        inductors and charge islands), where it has any."""
+        compiled = self.compiled(p)
+        held = {"invariants": [dict(i) for i in compiled.invariants]} if compiled.invariants else {}
+        if compiled.notes:
+            held["warnings"] = list(compiled.notes)
         if self.periodic(p):
-            return super().summary(tr, p)
+            return {**super().summary(tr, p), **held}
         t1 = float(tr.t[-1])
         t0 = t1 - self.WINDOW_FRACTION * (t1 - float(tr.t[0]))
         return {"vout_mean": tr.mean("vout", t0=t0, t1=t1), "window_s": [t0, t1],
                 "mode_fractions": tr.mode_fractions(None, t0=t0, t1=t1),
-                "measurements": tr.measurement_rows(t0=t0, t1=t1), **jump_losses(tr, t0, t1)}
+                "measurements": tr.measurement_rows(t0=t0, t1=t1), **jump_losses(tr, t0, t1), **held}
 
     def summary_from(self, p: dict, t_start: float, t_end: float) -> float:
         if self.periodic(p):

@@ -264,3 +264,28 @@ def test_the_charge_a_node_keeps_is_the_one_its_ic_gives(tmp_path):
     m = summary["measurements"]
     assert m["v(c2)"]["mean"] - m["v(c1)"]["mean"] == pytest.approx(6.0, rel=1e-9)
     assert m["v(c1)"]["mean"] + m["v(c2)"]["mean"] == pytest.approx(summary["vout_mean"], rel=1e-12)
+
+
+def test_what_a_circuit_holds_is_reported_and_an_ic_that_contradicts_it_is_said(tmp_path):
+    """The summary lists each loop's and cutset's constraint and each charge island's charge, with its value: V1 =
+    10 V across C1 and C2 in series holds v(c1) + v(c2) = 10 V and their midpoint's charge (0 from rest); the boost's series pair with .ic v(fa) = 3 V holds
+    the midpoint's charge C2 v2 - C1 v1 = 6e-4 C. An .ic giving 4 V and 4 V on the first contradicts its loop: the
+    run starts from 5.5 V and 4.5 V (the loop's 2 V shortfall made up by one charge through both, 1.5 uC: the
+    midpoint keeps its 8 uC) and a warning says so; from rest, none."""
+    path = tmp_path / "split.cir"
+    path.write_text(SPLIT.format(title="", extra=""))
+    summary = run_summary(run_converter(Circuit.from_netlist(path), method="event", t_end=1e-3))
+    assert summary["invariants"] == [
+        {"kind": "loop", "constraint": "v(c1) + v(c2)", "value": pytest.approx(10.0), "unit": "V"},
+        {"kind": "charge", "constraint": "-1e-06 v(c1) + 3e-06 v(c2)", "value": 0.0, "unit": "C"}]
+    assert "warnings" not in summary
+    path.write_text(SPLIT.format(title="", extra=".ic v(a)=8 v(m)=4"))
+    tr = run_converter(Circuit.from_netlist(path), method="event", t_end=1e-3)
+    np.testing.assert_allclose(tr.x[0], [5.5, 4.5], rtol=1e-14)
+    (warning,) = run_summary(tr)["warnings"]
+    assert warning.startswith("the initial conditions contradict what the circuit holds (v(c1) + v(c2) = 10 V): the "
+                              "run starts from v(c1) = 5.5 (not 4), v(c2) = 4.5 (not 4)")
+    series = tmp_path / "series.cir"
+    series.write_text(SERIES.format(extra=".ic v(fa)=3"))
+    (held,) = run_summary(run_converter(Circuit.from_netlist(series), method="event", t_end=1e-4))["invariants"]
+    assert held["kind"] == "charge" and held["unit"] == "C" and held["value"] == pytest.approx(6e-4, rel=1e-12)

@@ -177,6 +177,8 @@ def _print(summary: dict, tr, args) -> None:
         print(f"periodic steady state after {summary['steady_periods']} periods (Newton: {orbit['iterations']} "
               f"iterations, distance to the orbit {orbit['distance']:.2g}, Floquet spectral radius "
               f"{orbit['spectral_radius']:.6g})")
+    for held in summary.get("invariants", ()):     # what the loops, cutsets and charge islands hold fixed
+        print(f"held ({held['kind']}): {held['constraint']} = {held['value']:.6g} {held['unit']}")
     power = summary.get("power")
     if power:                 # every converter with a power balance: a warning about it names what is printed
         losses = ", ".join(f"{k} {v * 1e3:.4g} mW" for k, v in power["losses_W"].items()) or "none: ideal parts"
