@@ -79,6 +79,9 @@ class Compiled:
     invariants: tuple = ()
     #: What the file asks for that the circuit cannot hold, said as a warning with every run (:meth:`_Compiler.moved`).
     notes: tuple = ()
+    #: The stored energy's weights, (capacitances (n_c,), inductance matrix (n_L, n_L)) in the states' order, for the
+    #: energy balance (:func:`converters.analysis.accuracy.energy_balance`); () where not known (a batch's points).
+    energy: tuple = ()
 
     def signal_rows(self, row: int) -> tuple:
         """Signal ``row``'s maps stacked over the configurations: (Sx (configs, n), Su, s0, Ssin, Sgate), built once
@@ -374,7 +377,7 @@ class _Compiler:
                           np.array([r[2][1] for r in results]))
             out[i] = replace(compiled, configurations=tuple(r[0] for r in results),
                              signal_maps=tuple(r[1] for r in results), x0=self.initial_state(netlists[i]),
-                             inputs=inputs)
+                             inputs=inputs, energy=())
         return out
 
     def value(self, element: Element, model_key: str | None = None):
@@ -464,7 +467,7 @@ class _Compiler:
                         tuple(s.name for s in self.switches), tuple(closed), self.signal_names(), tuple(maps),
                         period if periodic else math.inf, self.initial_state(), self.units(), inputs,
                         self.gate_waveforms(), tuple(zip(phase_times, laws[1:])), self.invariants(state_names),
-                        self.moved(state_names))
+                        self.moved(state_names), self.energy())
 
     @staticmethod
     def schedule(period: float, starts: list, index: list, sines: bool) -> Schedule:
@@ -592,7 +595,7 @@ class _Compiler:
                         tuple(pair_currents), tuple(x.name for x in self.switches), tuple(closed), self.signal_names(),
                         tuple(maps), ramp.period if ramp is not None else math.inf, self.initial_state(), self.units(),
                         gates=self.gate_waveforms(), invariants=self.invariants(state_names),
-                        notes=self.moved(state_names))
+                        notes=self.moved(state_names), energy=self.energy())
 
     def period(self) -> float:
         """The common period of the PULSE sources (their least common multiple), inf without one."""
@@ -1105,6 +1108,10 @@ class _Compiler:
                     charge = 0.0
                 out.append({"kind": "charge", "constraint": _sum_text(terms), "value": charge, "unit": "C"})
         return tuple(out)
+
+    def energy(self) -> tuple:
+        """(capacitances, inductance matrix) of the states (:attr:`Compiled.energy`)."""
+        return (np.array([float(self.value(e)) for e in self.capacitors]), np.array(self.mutual, dtype=float))
 
     def moved(self, state_names: tuple) -> tuple:
         """A warning where the file's initial conditions (IC=, .ic) contradict a loop of capacitors or a cutset of

@@ -253,6 +253,45 @@ class Circuit(Model):
             out += np.einsum("ij,ij->i", gate_values, Sgate[config])
         return out
 
+    def storage_power(self, samples: Samples, p: dict) -> np.ndarray:
+        """The power the capacitors and inductors absorb at each point, sum of v i (W): d/dt of their stored
+        energy between jumps (:func:`converters.analysis.accuracy.energy_balance`)."""
+        c = self.compiled(p)
+        out = np.zeros(len(samples.t))
+        for name in c.state_names:
+            kind, element = name[0], name[2:-1]
+            if kind not in "vi" or not name.endswith(")"):
+                continue                                    # a ramp's or an oscillator's state
+            if kind == "v":
+                out += samples.x[:, c.state_names.index(name)] * self.signal(f"i({element})", samples, p)
+            else:
+                a, b = next(e.nodes[:2] for e in self.netlist.elements if e.name == element)
+                out += samples.x[:, c.state_names.index(name)] * (self.signal(f"v({a})", samples, p)
+                                                                   - self.signal(f"v({b})", samples, p))
+        return out
+
+    def source_power(self, samples: Samples, p: dict) -> np.ndarray:
+        """The power the independent sources (V, I) exchange at each point, sum of |v i| (W): the scale of the
+        energy balance."""
+        c = self.compiled(p)
+        out = np.zeros(len(samples.t))
+        for e in self.netlist.elements:
+            if e.kind in "VI" and f"i({e.name})" in c.signal_names:
+                a, b = e.nodes[:2]
+                out += np.abs((self.signal(f"v({a})", samples, p) - self.signal(f"v({b})", samples, p))
+                              * self.signal(f"i({e.name})", samples, p))
+        return out
+
+    def stored_energy(self, x: np.ndarray, p: dict) -> float | None:
+        """1/2 C v^2 + 1/2 i^T L i at the states ``x`` (J); None where the weights are not known."""
+        c = self.compiled(p)
+        if not c.energy:
+            return None
+        capacitance, inductance = c.energy
+        n_c, n_l = capacitance.size, inductance.shape[0]
+        v, i = np.asarray(x[:n_c], float), np.asarray(x[n_c:n_c + n_l], float)
+        return float(0.5 * capacitance @ (v * v) + 0.5 * i @ inductance @ i)
+
     def vout(self, samples: Samples, p: dict) -> np.ndarray:
         return self.signal("vout", samples, p)
 
