@@ -32,8 +32,7 @@ def _neighbours(k: int, held: int) -> list[int]:
 
 #: The mode-selection LCP's step over the configuration's fastest rate (:meth:`_Machine.lcp_held`): small enough
 #: that each further derivative of the watched quantities weighs 1e3 times less than the one before it (the
-#: rational complementarity problem's ordering, :meth:`_Machine.lcp_held`), large enough that three of them stay
-#: above rounding.
+#: rational complementarity problem's ordering), large enough that three of them stay above rounding.
 SELECT_STEP = 1e-3
 #: Up to this many pairs, a held set is also sought among all 2^k (nearest to the reference first) when the LCP's
 #: candidate and its neighbours fail the exact test (a degenerate LCP: several pairs at zero to three derivatives).
@@ -166,12 +165,14 @@ class _Machine:
                               f"({searched} leave a pair non-complementary); the LCS is not well posed there")
 
     def lcp_held(self, config: int, xt: np.ndarray) -> int:
-        """The held set (bit mask) of the backward-Euler LCP over a step h = :data:`SELECT_STEP` / |A|:
-        0 <= u _|_ (D + C (I - hA)^-1 h B) u + C (I - hA)^-1 (x + h E) + F >= 0. It is the rational complementarity
-        problem at sigma = 1/h, whose solution for large sigma is the mode the LCS leaves x in: the watched
-        quantities' derivatives ordered lexicographically (Heemels, Schumacher and Weiland, SIAM J. Appl. Math. 60
-        (2000) 1234-1269, Thm. 4.8; Camlibel, Heemels and Schumacher, IEEE TCAS-I 49 (2002) 349-357, for passive
-        circuits). One k-by-k LCP (Lemke) instead of 2^k flows; the exact test in :meth:`select` still decides."""
+        """The held set (bit mask) of the backward-Euler LCP over a step h = :data:`SELECT_STEP` over the
+        configuration's fastest rate: 0 <= u _|_ (D + C (I - hA)^-1 h B) u + C (I - hA)^-1 (x + h E) + F >= 0. It is
+        the rational complementarity problem at sigma = 1/h, whose solution for large sigma gives the mode the LCS
+        leaves x in, the watched quantities' derivatives ordered lexicographically (Heemels, Schumacher and Weiland,
+        "Linear complementarity systems", SIAM J. Appl. Math. 60 (2000); for passive networks the backward-Euler
+        LCP's consistency: Camlibel, Heemels and Schumacher, IEEE Trans. Circuits Syst. I 49 (2002)). One k-by-k LCP
+        (Lemke) instead of 2^k flows; the exact test in :meth:`select` still decides."""
+        import scipy.linalg
         data = self.select_data.get(config)
         if data is None:
             c = self.problem.configurations[config]
@@ -184,13 +185,11 @@ class _Machine:
             rate = max(float(np.abs(c.A).sum(axis=1).max(initial=0.0)), 1.0 / self.scale,
                        float((coupling[resistive] / d[resistive]).max(initial=0.0)))
             h = SELECT_STEP / rate
-            import scipy.linalg
             lu = scipy.linalg.lu_factor(np.eye(c.n) - h * c.A)
             W = c.D + c.C @ scipy.linalg.lu_solve(lu, h * c.B)
             data = self.select_data[config] = (lu, W, h)
         lu, W, h = data
         c = self.problem.configurations[config]
-        import scipy.linalg
         q = c.C @ scipy.linalg.lu_solve(lu, xt[:-1] + h * c.E) + c.F
         from ...lcp import solve_lcp                 # imported here: a run that never needs it starts faster
         result = solve_lcp(W, q, method="lemke")
