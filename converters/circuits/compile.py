@@ -1433,7 +1433,10 @@ class _Network:
         varying = [j for j, e in enumerate(c.sources) if not isinstance(e.waveform, float)]
         if varying and np.abs(sources[:, varying]).max() > 1e-9 * np.abs(K_w).max():
             return False                                # a loop or cutset through a source that varies
-        if cuts.shape[1] and self.interrupted(K_w):
+        island = {node for node, i in self.nodes.items() if np.abs(cuts[i]).max(initial=0.0) > 1e-9}
+        bordered = [e for e in c.switches
+                    if not self.switch_state.get(e.name) and len({e.nodes[0], e.nodes[1]} & island) == 1]
+        if cuts.shape[1] and self.interrupted(K_w, bool(bordered)):
             return False
         N = np.hstack([loops, cuts])
         M = K_w[:, :c.n] @ self.rates(N)
@@ -1453,11 +1456,8 @@ class _Network:
         # configuration, where a run starts too (consistent)
         switch_rows = [rows + j for j, (kind, _, _, _) in enumerate(self.branches) if kind == "S"]
         through = [L[switch_rows]] if switch_rows else []
-        island = {node for node, i in self.nodes.items() if np.abs(cuts[i]).max(initial=0.0) > 1e-9}
-        for e in c.switches:
-            if not self.switch_state.get(e.name) and len({e.nodes[0], e.nodes[1]} & island) == 1:
-                # a cutset bordered by this open switch: its KCL rows
-                through.append(L[[self.nodes[n] for n in (e.nodes[0], e.nodes[1]) if n in island]])
+        for e in bordered:                              # a cutset bordered by an open switch: its KCL rows
+            through.append(L[[self.nodes[n] for n in (e.nodes[0], e.nodes[1]) if n in island]])
         through = np.vstack(through) if through else np.zeros((0, m))
         if through.size and np.abs(through).max() > 1e-9:
             _, s_t, v_t = np.linalg.svd(through)
@@ -1480,9 +1480,11 @@ class _Network:
             out += list(np.linalg.solve(c.mutual, volts))
         return np.stack(out)
 
-    def interrupted(self, K_w: np.ndarray) -> bool:
-        """A cutset that fixes an inductor's current with no source in it (an inductor whose only path an open
-        switch or diode cuts): refused, as SPICE's spike would be, not jumped to zero."""
+    def interrupted(self, K_w: np.ndarray, bordered: bool) -> bool:
+        """A cutset that fixes an inductor's current to 0 with no source in it: refused where an open switch
+        borders it (the switch interrupts the inductor's current, as SPICE's spike would say, not a jump to zero)
+        or the inductor is coupled to nothing (an inductor dangling from a node); a coupled winding left open (a
+        sense winding) carries nothing and is accepted, its voltage the others' mutual share."""
         c = self.c
         n_c = len(c.capacitors)
         K = K_w[:, n_c:c.n]
@@ -1493,7 +1495,9 @@ class _Network:
             unit = np.zeros(K.shape[1])
             unit[i] = 1.0
             if rank and np.linalg.matrix_rank(np.vstack([K, unit]), tol=1e-9) == rank:
-                return True
+                coupled = np.abs(np.delete(c.mutual[i], i)).max(initial=0.0) > 0.0
+                if bordered or not coupled:
+                    return True
         return False
 
     def singular(self) -> NetlistError:

@@ -159,3 +159,28 @@ def test_an_inductor_in_series_with_a_current_source_carries_its_current_from_th
     cut.write_text(FLUX.replace("L2 b c 3m\n", ""))
     with pytest.raises(NetlistError, match="node b has no path to ground but through inductors"):
         Circuit.from_netlist(cut)
+
+
+# the stepper's node voltages come from its step's rates: theta 0.5 at T/1000 reads v(xa) 3e-7 off
+@pytest.mark.parametrize("method, tol", [("event", 1e-9), ("lcp", 1e-6)])
+def test_a_coupled_winding_left_open_carries_nothing_and_reads_its_mutual_voltage(tmp_path, method, tol):
+    """The shipped flyback with a third winding Lx = 50 uH, coupled 0.9 to both, its node xa touching nothing else
+    (a sense winding; refused before as "a current interrupted"): its current is 0, the flyback's orbit is the
+    flyback's, and while S1 alone conducts (dip/dt = Vin/Lp, the secondary blocked) v(xa) = -0.9 sqrt(Lx Lp) Vin/Lp
+    (Lx runs from ground to xa). An inductor dangling uncoupled is still refused."""
+    text = (NETLISTS / "flyback.cir").read_text().replace(
+        "Kps Lp Ls {k}", "Lx 0 xa 50u\nKps Lp Ls {k}\nKpx Lp Lx 0.9\nKsx Ls Lx 0.9")
+    path = tmp_path / "sense.cir"
+    path.write_text(text)
+    model = Circuit.from_netlist(path)
+    tr = run_converter(model, steady=True, method=method, periods=1)
+    plain = run_converter(Circuit.from_netlist(NETLISTS / "flyback.cir"), steady=True, method=method, periods=1)
+    assert tr.mean("vout") == pytest.approx(plain.mean("vout"), rel=tol)
+    np.testing.assert_allclose(tr.signal("i(lx)"), 0.0, atol=1e-12)
+    modes = np.asarray(tr.modes(np.arange(tr.t.size)))
+    alone = (modes == "S1") & np.roll(modes == "S1", 1) & np.roll(modes == "S1", -1)     # inside the mode
+    assert alone.sum() > 10
+    np.testing.assert_allclose(tr.signal("v(xa)")[alone], -0.9 * math.sqrt(50e-6 * 100e-6) * 12.0 / 100e-6, rtol=tol)
+    path.write_text(text.replace("Kpx Lp Lx 0.9\nKsx Ls Lx 0.9", ""))
+    with pytest.raises(NetlistError, match="node xa has no path to ground but through inductors"):
+        Circuit.from_netlist(path)
