@@ -14,8 +14,8 @@ resistors and closed ideal switches have voltages that are not independent: the 
 current circulating in it (:meth:`_Network.solve_loops`), and a configuration whose closed switches make such a
 loop is entered by a jump of the charges onto it (:meth:`_Compiler.jump`; a capacitance across a switch that
 closes, the energy 1/2 C dv^2 lost). A configuration the network cannot solve otherwise is refused naming the
-elements: a loop of voltage sources and closed switches with no capacitor, an inductor whose only path is cut (a
-current interrupted), a node with no path to ground. Inductors in a cutset with DC current sources (in series) are
+elements: a loop of voltage sources and closed switches with no capacitor, an uncoupled inductor whose only path is
+cut (a current interrupted), a node with no path to ground. Inductors in a cutset with DC current sources (in series) are
 the dual of a loop of capacitors: their currents tied, the cutset's potential keeping them so, a switch that opens
 onto such a cutset a jump of the fluxes. Ideal diodes whose ports are the same (in parallel, or in series with nothing between)
 give an LCP without a unique solution and are refused too, unless sources alone reverse-bias them (both
@@ -1436,7 +1436,7 @@ class _Network:
         island = {node for node, i in self.nodes.items() if np.abs(cuts[i]).max(initial=0.0) > 1e-9}
         bordered = [e for e in c.switches
                     if not self.switch_state.get(e.name) and len({e.nodes[0], e.nodes[1]} & island) == 1]
-        if cuts.shape[1] and self.interrupted(K_w, bool(bordered)):
+        if cuts.shape[1] and self.interrupted(K_w):
             return False
         N = np.hstack([loops, cuts])
         M = K_w[:, :c.n] @ self.rates(N)
@@ -1480,25 +1480,29 @@ class _Network:
             out += list(np.linalg.solve(c.mutual, volts))
         return np.stack(out)
 
-    def interrupted(self, K_w: np.ndarray, bordered: bool) -> bool:
-        """A cutset that fixes an inductor's current to 0 with no source in it: refused where an open switch
-        borders it (the switch interrupts the inductor's current, as SPICE's spike would say, not a jump to zero)
-        or the inductor is coupled to nothing (an inductor dangling from a node); a coupled winding left open (a
-        sense winding) carries nothing and is accepted, its voltage the others' mutual share."""
+    def interrupted(self, K_w: np.ndarray) -> bool:
+        """A cutset that fixes inductors' currents to 0 with no source in it, where one of them is coupled to no
+        winding left free: its energy would have nowhere to go (an inductor whose only path a switch opens, one
+        dangling from a node: SPICE's spike, not a jump to zero), refused. A coupled winding whose path opens (a
+        forward converter's primary at turn-off) hands its flux to the windings left free, the leakage's energy
+        lost (the jump's projection in the inductances' metric keeps every other winding's flux linkage); one left
+        open (a sense winding) carries nothing, its voltage the others' mutual share."""
         c = self.c
         n_c = len(c.capacitors)
         K = K_w[:, n_c:c.n]
         if np.abs(K_w[:, c.n + c.k:]).max(initial=0.0) > 1e-9 * np.abs(K_w).max():
             return False
         rank = np.linalg.matrix_rank(K, tol=1e-9) if K.size else 0
+        if not rank:
+            return False
+        fixed = []
         for i in range(K.shape[1]):
             unit = np.zeros(K.shape[1])
             unit[i] = 1.0
-            if rank and np.linalg.matrix_rank(np.vstack([K, unit]), tol=1e-9) == rank:
-                coupled = np.abs(np.delete(c.mutual[i], i)).max(initial=0.0) > 0.0
-                if bordered or not coupled:
-                    return True
-        return False
+            if np.linalg.matrix_rank(np.vstack([K, unit]), tol=1e-9) == rank:
+                fixed.append(i)
+        free = [j for j in range(K.shape[1]) if j not in fixed]
+        return any(not (np.abs(c.mutual[i, free]) > 0.0).any() for i in fixed)
 
     def singular(self) -> NetlistError:
         c = self.c
