@@ -14,15 +14,16 @@ Beyond k = 12 the enumeration is not run: 2^k sets.
 from __future__ import annotations
 
 import argparse
-import math
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+from netlist import REPEATS, best  # noqa: E402
 
 from converters.methods import EventDriven  # noqa: E402
 from converters.methods.event import machine  # noqa: E402
@@ -30,20 +31,10 @@ from converters.models import Circuit  # noqa: E402
 from converters.run import run_converter  # noqa: E402
 from converters.simulate import simulate  # noqa: E402
 
-REPEATS = 3
 PERIODS = 20
 STAGES = (2, 4, 6, 8, 12, 16, 24)
 QUICK_STAGES = (2, 4, 8, 24)
 LOAD = "100k"
-
-
-def best(function, repeats: int = REPEATS):
-    out, fastest = None, math.inf
-    for _ in range(repeats):
-        start = time.perf_counter()
-        out = function()
-        fastest = min(fastest, time.perf_counter() - start)
-    return fastest, out
 
 
 def ladder(stages: int) -> Circuit:
