@@ -36,6 +36,8 @@ from pathlib import Path
 OK, NEEDS_GENERAL_SOLVER, NO_SOLUTION = 0, 1, 2
 #: Extra status of the state-switched loop: the event buffers are full (the caller grows them, resumes).
 EVENTS_FULL = 3
+#: Extra status of the state-switched loop: the channels entered a combination of states with no configuration.
+FORBIDDEN = 4
 #: The verdicts of one Newton-shooting iteration (:func:`.analysis.newton_kernel.newton_step`: the one stopping
 #: rule of the serial and the batched drivers): go on; converged (the estimated distance to the orbit within the
 #: tolerance); the residual at the rounding level (ROUNDING machine epsilons, relative: iterating cannot help);

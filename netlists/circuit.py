@@ -13,6 +13,7 @@ keep their flattened names with ``.`` written as ``_``.
 from __future__ import annotations
 
 import math
+import re
 
 from converters.circuits.netlist import Pulse, Pwl, Sin
 from converters.errors import ParameterError
@@ -93,7 +94,9 @@ def circuit_netlist(circuit, p: dict, t_end: float, options: SpiceOptions | None
         raise ParameterError(f"x0 must have {len(compiled.state_names)} entries ({', '.join(compiled.state_names)}); "
                              f"got {len(x)}")
     ic = dict(zip(compiled.state_names, (_num(f"x0[{n}]", v) for n, v in zip(compiled.state_names, x))))
-    lines = [f"* pcsuite: {circuit.title}"]
+    # PySpice stops a run at any line ngspice prints with "error" in it, and ngspice echoes the title ("Circuit:
+    # ..."): a title such as "one error amplifier" failed every comparison
+    lines = [f"* pcsuite: {re.sub('(?i)error', 'err', circuit.title)}"]
     probes, pairs = {}, []
     shorts = _shorts(netlist, prefer={part.strip() for part in circuit.output[2:-1].split(",")})
     node_of = lambda flat: _node(shorts.get(flat, flat))          # noqa: E731

@@ -118,8 +118,10 @@ def sensitivities(model, params: dict | None = None, *, metric: str = "vout", pa
         derivative = float(np.real(small.response([0.0], signal)[0]))
         rows.append(Sensitivity(name, float(p[name]), units.get(name, ""), derivative))
     if base is None:
+        reasons = set(skipped.values())
         raise SimulationError(f"no parameter of {model.key} has a sensitivity here: " +
-                              "; ".join(f"{k}: {v}" for k, v in skipped.items()))
+                              (reasons.pop() if len(reasons) == 1       # one reason for all (the law): said once
+                               else "; ".join(f"{k}: {v}" for k, v in skipped.items())))
     value = _mean_output(base, signal)
     ranked = sorted(rows, key=lambda s: (-abs(s.normalised(value)) if math.isfinite(s.normalised(value)) else 0.0,
                                          -abs(s.derivative)))

@@ -36,7 +36,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..errors import ParameterError, SimulationError
-from ..problems import Schedule, StateSwitching
+from ..problems import Comparators, Schedule, StateSwitching
 from ..trajectory import Samples
 
 #: The comparator's input of a state-driven law (a perturbation added to its switching function s).
@@ -151,6 +151,9 @@ class SmallSignalModel:
         if getattr(problem, "inputs", None) is not None:
             raise ParameterError(f"{model.key} has sinusoidal sources (SIN): the small-signal model is taken about the "
                                  "periodic orbit of a circuit with constant sources and a clock")
+        if isinstance(problem.switching, Comparators):
+            raise ParameterError(f"{model.key} switches on {len(problem.switching.channels)} comparators: the "
+                                 "small-signal model is built for one comparator or a schedule")
         if orbit is None:
             orbit = require(shoot(problem, method, problem.x0, tol=tol), f"the periodic orbit of {model.key}")
         self.orbit = orbit
@@ -320,7 +323,8 @@ class SmallSignalModel:
                                           "is zero): it has no small-signal model there")
                 # the guard g = row x~ + slope (t - the ramp's last reset): its row (the parameters of the dynamics
                 # move its state part too), a ramp's level and slope all move with the input
-                phase = t - math.floor(t / self.T) * self.T
+                ramp = self.law.function.ramp if isinstance(self.law, StateSwitching) else None
+                phase = float(ramp.phase(t)) if ramp is not None else t - math.floor(t / self.T) * self.T
 
                 def guard(m, q, config=flow_b.config, held=flow_b.held, latched=latched_b, pair=pair, xt=xt_b,
                           phase=phase):

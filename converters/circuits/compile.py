@@ -37,10 +37,10 @@ import copy
 import itertools
 import math
 from dataclasses import dataclass, field, replace
-from fractions import Fraction
 
 import numpy as np
 
+from ..errors import ParameterError
 from ..problems import Configuration, Jump, Schedule
 from .netlist import Element, Netlist, NetlistError, Pulse, Pwl, Sin, with_models
 
@@ -548,53 +548,88 @@ class _Compiler:
         return initial, [(t, closed) for t, closed in events if t > 0.0]
 
     def run_state_driven(self, drives: dict) -> Compiled:
-        """One switch driven by the circuit's own quantities (a comparator), with switches that follow it or its
-        complement (a synchronous rectifier's gate on the same comparator), the others by DC: two configurations
-        and a :class:`~converters.problems.StateSwitching` law (its ramp's period, or none: an autonomous circuit)."""
-        from ..problems import StateSwitching, SwitchingFunction
+        """Switches driven by the circuit's own quantities (comparators), with switches that follow one of them or
+        its complement (a synchronous rectifier's gate on the same comparator), the others by DC: one configuration
+        per combination of the comparators' states, configuration sum(closed_j << j), and a
+        :class:`~converters.problems.StateSwitching` law (one comparator) or a
+        :class:`~converters.problems.Comparators` law (several: interleaved phases), each channel's ramp its own
+        (none: an autonomous circuit)."""
+        from ..problems import Comparators, StateSwitching, SwitchingFunction
+        from ..problems.switching import MAX_CHANNELS, common_period
         if any(d for d in drives.values() if d is not None and any(
                 isinstance(self.source(name).waveform, (Pulse, Pwl)) for name in d)):
             names = ", ".join(n.upper() for n in self.state_rows)
-            raise NetlistError(f"{self.path}: {names} driven by the circuit's own quantities beside PULSE gates: a "
-                               "comparator's switches with the others at DC is what is compiled yet")
+            raise NetlistError(f"{self.path}: {names} driven by the circuit's own quantities beside PULSE gates: "
+                               "comparators' switches with the others at DC is what is compiled yet")
         if any(isinstance(x.waveform, (Pulse, Sin, Pwl)) and self.in_power_circuit(x) for x in self.sources):
             raise NetlistError(f"{self.path}: a state-driven switch with PULSE, SIN or PWL sources in the power "
                                "circuit is not compiled yet")
-        (name, row0), *others = self.state_rows.items()
-        switch = next(x for x in self.switches if x.name == name)
-        followers = {other: self.follows(switch, row0, other, row) for other, row in others}
+        leaders, followers = [], {}              # followers: name -> (leader index, same, scale)
+        for name, row in self.state_rows.items():
+            switch = next(x for x in self.switches if x.name == name)
+            found = next(((j, *following) for j, (leader, row0) in enumerate(leaders)
+                          if (following := self.follows(leader, row0, switch, row)) is not None), None)
+            if found is None:
+                leaders.append((switch, row))
+            else:
+                followers[name] = found
+        m = len(leaders)
+        if m > MAX_CHANNELS:
+            raise NetlistError(f"{self.path}: {m} comparators (switches driven by the circuit's own quantities that "
+                               f"follow no other); at most {MAX_CHANNELS} are compiled")
         fixed = {}
         for other in self.switches:
             if other.name not in self.state_rows:
                 value = sum(c * float(self.source(src).waveform)
                             for src, c in (drives[other.name] or {}).items())
                 fixed[other.name] = value > self.threshold(other)[0]
-        pieces, configs, pair_currents, closed, maps = [], [], [], [], []
-        for on in (False, True):
-            state = {**fixed, name: on, **{f: on == same for f, (same, _) in followers.items()}}
-            config, forms, signals, _ = self.configuration(state, {})
+        pieces, configs, pair_currents, closed, maps, index_of = [], [], [], [], [], []
+        for index in range(2 ** m):
+            on = [bool(index >> j & 1) for j in range(m)]
+            state = {**fixed, **{leader.name: on[j] for j, (leader, _) in enumerate(leaders)},
+                     **{f: on[j] == same for f, (j, same, _) in followers.items()}}
+            try:
+                config, forms, signals, _ = self.configuration(state, {})
+            except NetlistError:
+                if m == 1:
+                    raise
+                index_of.append(-1)    # the comparators' switches together short a source: a run that gets there stops
+                continue
+            index_of.append(len(configs))
             configs.append(config)
             pair_currents.append(tuple(f == CURRENT for f in forms))
             closed.append(tuple(state[x.name] for x in self.switches))
             maps.append(signals)
             solution = self.network(state, {})[0]
-            pieces.append(self.control(solution, switch))
-            for f, (_, scale) in followers.items():
+            pieces.append([self.control(solution, leader) for leader, _ in leaders])
+            for f, (j, _, scale) in followers.items():
                 other = next(x for x in self.switches if x.name == f)
-                if np.abs(self.control(solution, other) - scale * pieces[-1]).max() > 1e-9 * np.abs(pieces[-1]).max():
-                    raise self.error(other, f"{other.title}: its control is {scale:g} x {switch.title}'s in one "
+                if np.abs(self.control(solution, other) - scale * pieces[-1][j]).max() > 1e-9 * np.abs(pieces[-1][j]).max():
+                    raise self.error(other, f"{other.title}: its control is {scale:g} x {leaders[j][0].title}'s in one "
                                             "configuration, not in another: it does not follow that comparator")
-        if np.abs(pieces[0] - pieces[1]).max() > 1e-9 * max(np.abs(pieces[0]).max(), 1e-300):
-            raise self.error(switch, f"{switch.title}: its control changes with its own state: a comparator "
-                                     "whose input the switch itself moves is not compiled")
-        c, d, ramp = self.state_law(switch, pieces[0])
-        band = self.threshold(switch)[1]
-        law = StateSwitching(SwitchingFunction(c=c, d=d, ramp=ramp), below=1, above=0, band=band)
+        channels = []
+        for j, (leader, _) in enumerate(leaders):
+            rows = [piece[j] for piece in pieces]
+            if any(np.abs(r - rows[0]).max() > 1e-9 * max(np.abs(rows[0]).max(), 1e-300) for r in rows[1:]):
+                raise self.error(leader, f"{leader.title}: its control changes with a switch's state (its own or "
+                                         "another comparator's): a comparator whose input a switch moves is not "
+                                         "compiled")
+            c, d, ramp = self.state_law(leader, rows[0])
+            channels.append(StateSwitching(SwitchingFunction(c=c, d=d, ramp=ramp), below=0, above=1,
+                                           band=self.threshold(leader)[1]))
+        # channel j below (its s = VT - V under -VH) closes its switch: bit j of the law's states set is open
+        table = tuple(index_of[(2 ** m - 1) ^ bits] for bits in range(2 ** m))
+        if not configs:
+            self.configuration({**fixed, **{leader.name: True for leader, _ in leaders}}, {})     # its refusal
+        law = (StateSwitching(channels[0].function, below=table[0], above=table[1], band=channels[0].band) if m == 1
+               else Comparators(tuple(channels), table, names=tuple(leader.name for leader, _ in leaders),
+                                words=("closed", "open")))
+        periods = [ch.period for ch in channels if math.isfinite(ch.period)]
         state_names = tuple(f"v({x.name})" for x in self.capacitors) + tuple(f"i({x.name})" for x in self.inductors)
         return Compiled(tuple(configs), law, state_names, tuple(d.name for d in self.diodes) or ("none",),
                         tuple(pair_currents), tuple(x.name for x in self.switches), tuple(closed), self.signal_names(),
-                        tuple(maps), ramp.period if ramp is not None else math.inf, self.initial_state(), self.units(),
-                        gates=self.gate_waveforms(), invariants=self.invariants(state_names),
+                        tuple(maps), common_period(periods) if periods else math.inf, self.initial_state(),
+                        self.units(), gates=self.gate_waveforms(), invariants=self.invariants(state_names),
                         notes=self.moved(state_names), energy=self.energy())
 
     def period(self) -> float:
@@ -610,15 +645,11 @@ class _Compiler:
         periods += [s.waveform.period for s in self.sources if isinstance(s.waveform, Pwl) and not _once(s.waveform)]
         if not periods:
             return math.inf
-        base = max(periods)
-        fractions = [Fraction(p / base).limit_denominator(1000) for p in periods]
-        for p, f in zip(periods, fractions):
-            if abs(float(f) * base - p) > 1e-9 * p:
-                raise NetlistError(f"{self.path}: the PULSE periods {sorted(set(periods))} s have no common period")
-        lcm_denominator = math.lcm(*[f.denominator for f in fractions])
-        numerators = [f.numerator * lcm_denominator // f.denominator for f in fractions]
-        common = math.lcm(*numerators) / lcm_denominator
-        return base * common
+        from ..problems.switching import common_period
+        try:
+            return common_period(periods, "the PULSE periods")
+        except ParameterError as error:
+            raise NetlistError(f"{self.path}: {error}") from None
 
     def in_power_circuit(self, source: Element) -> bool:
         """False for a gate driver: a source whose nodes reach, through resistors and other sources, only switch
@@ -638,12 +669,11 @@ class _Compiler:
                     todo += [m for m in e.nodes if m != "0" and m not in seen]
         return False
 
-    def follows(self, switch: Element, row0: np.ndarray, name: str, row: np.ndarray) -> tuple:
+    def follows(self, switch: Element, row0: np.ndarray, other: Element, row: np.ndarray) -> tuple | None:
         """(same, scale) of a second state-driven switch whose control is ``scale`` times the first's: closed with
         it (same: scale > 0 and the same thresholds) or exactly when it is open (its complement: scale < 0 and the
-        thresholds swapped: S2 on v(vcon) - v(ramp) beside S1 on v(ramp) - v(vcon), both VT = 0). Anything else
-        is refused naming both."""
-        other = next(x for x in self.switches if x.name == name)
+        thresholds swapped: S2 on v(vcon) - v(ramp) beside S1 on v(ramp) - v(vcon), both VT = 0); None otherwise
+        (a comparator of its own)."""
         scale = float(row @ row0 / (row0 @ row0))
         near = lambda a, b: abs(a - b) <= 1e-9 * max(1.0, abs(a), abs(b))       # noqa: E731
         if np.abs(row - scale * row0).max() <= 1e-9 * np.abs(row).max():
@@ -653,10 +683,7 @@ class _Compiler:
                 return True, scale
             if scale < 0 and near(closes, vt0 - vh0) and near(opens, vt0 + vh0):
                 return False, scale
-        raise self.error(other, f"{other.title} and {switch.title} are both driven by the circuit's own quantities "
-                                f"and {other.name.upper()} neither follows {switch.name.upper()} nor its complement (the same "
-                                "control, or its negative, at matching thresholds): one comparator is what is "
-                                "compiled yet")
+        return None
 
     def threshold(self, switch: Element) -> tuple:
         """(threshold, hysteresis) of a switch's model: VT, VH (V) of an S switch's SW, IT, IH (A) of a W's CSW."""
@@ -713,10 +740,13 @@ class _Compiler:
                 continue
             w = src.waveform
             if isinstance(w, Pulse):
-                if ramp is not None or not math.isfinite(w.per) or w.td != 0.0 or w.tf + w.pw > 1e-3 * w.per:
+                if ramp is not None or not math.isfinite(w.per) or w.tf + w.pw > 1e-3 * w.per or w.td >= w.per:
                     raise self.error(src, f"{src.title}: in {switch.title}'s control a PULSE must be one sawtooth "
-                                          "ramp: PULSE(V1 V2 0 TR TF PW PER) with TF + PW at most PER/1000")
-                ramp = Ramp(low=a * w.v1, high=a * w.v2, period=w.per)      # s = VT - V: the ramp enters as -a pulse
+                                          "ramp: PULSE(V1 V2 TD TR TF PW PER) with TF + PW at most PER/1000 and TD "
+                                          "under PER")
+                # s = VT - V: the ramp enters as -a pulse. A delayed ramp (TD > 0: a second phase) is periodic from
+                # t = 0, where SPICE holds V1 until TD: a run from rest differs over its first TD seconds only
+                ramp = Ramp(low=a * w.v1, high=a * w.v2, period=w.per, delay=w.td)
             elif isinstance(w, (Sin, Pwl)):
                 raise self.error(src, f"{src.title}: a {type(w).__name__.upper()} in {switch.title}'s control is not "
                                       "compiled")

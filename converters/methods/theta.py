@@ -6,9 +6,9 @@ that every step lies inside one configuration; the one-step matrices are compute
 compiled loop (:func:`.theta_kernels.run_steps`) advances the state, solving each step's small LCP
 inline; any step it cannot solve inline is solved here by Lemke and the loop resumes.
 
-State-driven laws: a hysteresis or latched :class:`StateSwitching` runs in
-:func:`.theta_kernels.run_state_switched` (the crossing located inside the step, the step redone as
-two sub-steps); the implicit :class:`Relay` in :func:`.theta_kernels.run_relay` (one LCP of size
+State-driven laws: a hysteresis or latched :class:`StateSwitching`, or several at once (:class:`Comparators`),
+runs in :func:`.theta_kernels.run_state_switched` (each crossing located inside the step, the step redone from
+it); the implicit :class:`Relay` in :func:`.theta_kernels.run_relay` (one LCP of size
 k + 2 per step).
 
 The period map of a scheduled run has an exact Jacobian: the product of the one-step derivatives
@@ -24,8 +24,9 @@ from typing import NamedTuple
 import numpy as np
 
 from ..errors import ParameterError, SimulationError
-from ..compiled import EVENTS_FULL, MAX_INLINE_K, NO_SOLUTION, OK, kernel, register_state
-from ..problems import LCSProblem, Relay, Schedule, StateSwitching
+from ..compiled import EVENTS_FULL, FORBIDDEN, MAX_INLINE_K, NO_SOLUTION, OK, kernel, register_state
+from ..problems import Comparators, LCSProblem, Relay, Schedule, StateSwitching
+from ..problems.switching import initial_bits, law_channels
 from ..trajectory import Trajectory
 from .base import Method, PeriodMap, check_step_and_theta
 from .discretize import step_matrices
@@ -126,7 +127,7 @@ class Theta(Method, key="lcp"):
         if isinstance(law, Schedule):
             plan = StepPlan.build(problem, self)
             return plan.trajectory(x0, wall_s=time.perf_counter() - start)
-        if isinstance(law, StateSwitching):
+        if isinstance(law, (StateSwitching, Comparators)):
             return _solve_state_switched(problem, self, x0, start)
         return _solve_relay(problem, self, x0, start)
 
@@ -616,9 +617,26 @@ def _config_stacks(problem: LCSProblem):
                  for key in "ABCDEF")
 
 
+def law_arrays(law) -> tuple:
+    """A state-driven law (:class:`StateSwitching` or :class:`Comparators`) as the compiled loop's per-channel
+    arrays: (c, d, low, slope, ramp_period, delay, band, latch, clocked, limit, table)."""
+    channels, table = law_channels(law)
+    ramps = [ch.function.ramp for ch in channels]
+    column = lambda values, dtype=float: np.array(values, dtype=dtype)         # noqa: E731
+    return (np.ascontiguousarray(np.stack([ch.function.c for ch in channels])),
+            column([ch.function.d for ch in channels]),
+            column([r.low if r is not None else 0.0 for r in ramps]),
+            column([r.slope if r is not None else 0.0 for r in ramps]),
+            column([r.period if r is not None else np.inf for r in ramps]),
+            column([r.delay if r is not None else 0.0 for r in ramps]),
+            column([ch.band for ch in channels]),
+            column([ch.latch for ch in channels], np.int64), column([ch.clocked for ch in channels], np.int64),
+            column([-1.0 if ch.limit is None else ch.limit for ch in channels]), column(table, np.int64))
+
+
 def _solve_state_switched(problem: LCSProblem, method: Theta, x0: np.ndarray, start: float) -> Trajectory:
     from . import theta_kernels                 # numba's JIT (the ahead-of-time module holds the scheduled loop)
-    law: StateSwitching = problem.switching
+    law = problem.switching
     A, B, C, D, E, F = _config_stacks(problem)
     n_configs = len(problem.configurations)
     mats = step_matrices(list(problem.configurations), np.full(n_configs, method.h), method.theta)
@@ -626,29 +644,28 @@ def _solve_state_switched(problem: LCSProblem, method: Theta, x0: np.ndarray, st
     N, n, k = t.size, problem.n, problem.k
     x, u, y = np.empty((N, n)), np.zeros((N, k)), np.empty((N, k))
     config = np.empty(N, dtype=np.int64)
-    current = law.initial_config(x0, problem.t_span[0])
+    bits = initial_bits(law, x0, problem.t_span[0])
+    arrays = law_arrays(law)
+    current = int(arrays[-1][bits])
     x[0] = x0
     u[0], y[0] = _initial_pair(problem, current, x0)
     config[0] = current
-    f = law.function
-    ramp = f.ramp
-    low, slope, ramp_period = (ramp.low, ramp.slope, ramp.period) if ramp is not None else (0.0, 0.0, np.inf)
-    state = np.array([current, 0, 0], dtype=np.int64)
+    state = np.array([bits, 0, 0], dtype=np.int64)
     capacity = 1024
     ev_time, ev_config, ev_step = np.empty(capacity), np.empty(capacity, dtype=np.int64), np.empty(capacity, dtype=np.int64)
     j = 0
     while True:
         status, j = theta_kernels.run_state_switched(A, B, C, D, E, F, mats.Phi, mats.Gamma, mats.H, mats.M, t, method.h,
-                                       method.theta, f.c, f.d, low, slope, ramp_period, law.band, law.below,
-                                       law.above, law.latch, law.clocked,
-                                       -1.0 if law.limit is None else law.limit, x, u, y, config, j, state, ev_time,
-                                       ev_config, ev_step)
+                                                     method.theta, *arrays, x, u, y, config, j, state, ev_time,
+                                                     ev_config, ev_step)
         if status == OK:
             break
         if status == EVENTS_FULL:
             capacity *= 4
             ev_time, ev_config, ev_step = (np.resize(a, capacity) for a in (ev_time, ev_config, ev_step))
             continue
+        if status == FORBIDDEN:
+            law.config(int(state[0]), float(ev_time[state[2]]))        # raises, naming the channels' states
         raise SimulationError(f"the step LCP at t = {t[j]:.6g} s could not be solved inline (k = {k}); the "
                               "state-driven laws need LCPs the inline solver takes: try a smaller h")
     count = int(state[2])

@@ -21,8 +21,8 @@ from numba import njit, types
 from numba.cpython.unsafe.tuple import tuple_setitem
 from numba.extending import overload
 
-from ..compiled import (EVENTS_FULL, NEEDS_GENERAL_SOLVER, NO_SOLUTION, OK,  # noqa: F401 (shared with the callers)
-                        PIVOTS_PER_PAIR)
+from ..compiled import (EVENTS_FULL, FORBIDDEN, NEEDS_GENERAL_SOLVER, NO_SOLUTION,  # noqa: F401 (the callers')
+                        OK, PIVOTS_PER_PAIR)
 from ..lcp import state as LCP_STATE
 from ..lcp.kernels import masks_by_size, solve_augmented, solve_small_lcp
 from ..lcp.murty import sizes as pivoting_sizes
@@ -404,68 +404,81 @@ def _surface(c, d, x, phase, low, slope):
     return acc
 
 
+@njit(cache=True, inline="always")
+def _log_switch(ev_time, ev_config, ev_step, count, time, config, j):
+    ev_time[count] = time
+    ev_config[count] = config
+    ev_step[count] = j
+    return count + 1
+
+
 @njit(cache=True)
-def run_state_switched(A, B, C, D, E, F, Phi, Gamma, H, M, t, h, theta, c, d, low, slope, ramp_period, band,
-                       below, above, latch, clocked, limit, x, u, y, config, start, state, ev_time, ev_config,
-                       ev_step):
-    """The theta stepper under a hysteresis or latched switching law (:class:`StateSwitching`).
+def run_state_switched(A, B, C, D, E, F, Phi, Gamma, H, M, t, h, theta, c, d, low, slope, ramp_period, delay, band,
+                       latch, clocked, limit, table, x, u, y, config, start, state, ev_time, ev_config, ev_step):
+    """The theta stepper under state-driven laws (:class:`StateSwitching`, :class:`Comparators`): m channels,
+    channel ch with s_ch = c[ch] . x + d[ch] - ramp_ch, its state bit ch of ``bits`` (0: below, 1: above), the
+    configuration ``table[bits]``.
 
-    Step j runs in the configuration in force; when its end point carries s through the level that
-    ends that configuration (+band for ``below``, -band for ``above``), the crossing is placed by
-    linear interpolation of s over the step and the step is redone as two sub-steps (before the
-    crossing in the old configuration, after it in the new one). Ramp resets are grid points: there
-    the latch opens and the configuration is set by s against the band (a switch event when it changes;
-    not at the run's start, where the law's initial configuration holds); a ``clocked`` latch only leaves
-    ``below`` inside a period (its clock alone sets it); at the phase ``limit`` T of each period (a grid point;
-    limit < 0: none) a law still in ``below`` switches to ``above`` and latches. ``state`` = [config, latched,
-    event count] carries the law's memory across calls. Stacks A..F and the uniform-step matrices
-    Phi..M are indexed by configuration.
+    Step j runs in the configuration in force; when its end point carries a channel's s through the level that
+    ends that channel's state (+band for below, -band for above), the crossing is placed by linear interpolation
+    of s over the step and the step is redone from there in the new configuration; the earliest of the channels'
+    crossings goes first, and each channel switches at most once per step. A channel's ramp resets (at
+    delay + m period) are grid points: there its latch opens and its state is set by s against the band (a switch
+    event when it changes; not at the run's start, where the law's initial states hold); a ``clocked`` latch only
+    leaves below inside a period (its clock alone sets it); at the phase ``limit`` T of each period (a grid point;
+    limit < 0: none) a channel still below switches above and latches. ``state`` = [bits, latched bits, event
+    count] carries the law's memory across calls. Stacks A..F and the uniform-step matrices Phi..M are indexed by
+    configuration.
 
-    Returns (status, j): OK, NEEDS_GENERAL_SOLVER (an LCP the inline solver cannot take), or
-    EVENTS_FULL (the event buffers are full at step j: grow them and resume at j).
+    Returns (status, j): OK, NEEDS_GENERAL_SOLVER (an LCP the inline solver cannot take), EVENTS_FULL (the event
+    buffers are full at step j: grow them and resume at j) or FORBIDDEN (the channels' states ``state[0]`` have no
+    configuration, ``table`` -1 there: from ``ev_time[state[2]]`` on).
     """
     n, k = x.shape[1], u.shape[1]
+    m = c.shape[0]
     order = masks_by_size(k)
     work = np.empty((k, k + 1))
     xf, q, z = np.empty(n), np.empty(k), np.empty(k)
     Phi_s, Gamma_s, H_s, M_s, W_s = np.empty((n, n)), np.empty(n), np.empty((n, k)), np.empty((k, k)), np.empty((n, n))
-    xm, um, ym = np.empty(n), np.empty(k), np.empty(k)
-    current, latched, count = state[0], state[1], state[2]
+    xs, xm, um, ym = np.empty(n), np.empty(n), np.empty(k), np.empty(k)
+    phase0 = np.zeros(m)
+    bits, latched, count = state[0], state[1], state[2]
     mask = 0
-    has_ramp = ramp_period < np.inf
     for j in range(start, t.shape[0] - 1):
         t0, t1 = t[j], t[j + 1]
         dt = t1 - t0
-        phase0, phase1 = 0.0, 0.0
-        if count + 2 > ev_time.shape[0]:         # room for a reset and a crossing in this step
-            state[0], state[1], state[2] = current, latched, count
+        if count + 3 * m > ev_time.shape[0]:     # room for each channel's reset, limit and crossing in this step
+            state[0], state[1], state[2] = bits, latched, count
             return EVENTS_FULL, j
-        if has_ramp:
-            phase0 = t0 - np.floor(t0 / ramp_period + 1e-9) * ramp_period
-            if phase0 < 1e-9 * ramp_period:      # a ramp reset (s jumps): the latch opens, s decides
-                phase0 = 0.0
-                if j > 0:                        # at the run's start the law's initial configuration holds
-                    latched = 0
-                    s_reset = _surface(c, d, x[j], 0.0, low, slope)
-                    previous = current
-                    if s_reset < -band:
-                        current = below
-                    elif s_reset > band:
-                        current = above
-                    if current != previous:
-                        ev_time[count] = t0
-                        ev_config[count] = current
-                        ev_step[count] = j
-                        count += 1
-            if limit >= 0.0 and abs(phase0 - limit * ramp_period) < 1e-9 * ramp_period and j > 0:
-                latched = 1                      # the period's limit: leave below and latch
-                if current == below:
-                    current = above
-                    ev_time[count] = t0
-                    ev_config[count] = current
-                    ev_step[count] = j
-                    count += 1
-            phase1 = phase0 + dt
+        for ch in range(m):
+            phase0[ch] = 0.0
+            if ramp_period[ch] == np.inf:
+                continue
+            T = ramp_period[ch]
+            since = t0 - delay[ch]
+            phase = since - np.floor(since / T + 1e-9) * T
+            bit = (bits >> ch) & 1
+            if phase < 1e-9 * T:                 # a ramp reset (s jumps): the latch opens, s decides
+                phase = 0.0
+                if j > 0:                        # at the run's start the law's initial states hold
+                    latched &= ~(1 << ch)
+                    s_reset = _surface(c[ch], d[ch], x[j], 0.0, low[ch], slope[ch])
+                    new = 0 if s_reset < -band[ch] else 1 if s_reset > band[ch] else bit
+                    if new != bit:
+                        bits ^= 1 << ch
+                        bit = new
+                        count = _log_switch(ev_time, ev_config, ev_step, count, t0, table[bits], j)
+            if limit[ch] >= 0.0 and abs(phase - limit[ch] * T) < 1e-9 * T and j > 0:
+                latched |= 1 << ch               # the period's limit: leave below and latch
+                if bit == 0:
+                    bits |= 1 << ch
+                    count = _log_switch(ev_time, ev_config, ev_step, count, t0, table[bits], j)
+            phase0[ch] = phase
+        current = table[bits]
+        if current < 0:                          # a combination of states with no configuration: where, unlogged
+            ev_time[count] = t0
+            state[0], state[1], state[2] = bits, latched, count
+            return FORBIDDEN, j
         uniform = abs(dt - h) <= 1e-9 * h
         if uniform:
             mask = _uniform_step(Phi, Gamma, H, C, F, M, current, x, u, y, j, mask, order, work, xf, q, z)
@@ -475,49 +488,67 @@ def run_state_switched(A, B, C, D, E, F, Phi, Gamma, H, M, t, h, theta, c, d, lo
             mask = _lcp_step(Phi_s, Gamma_s, H_s, C[current], F[current], M_s, x[j], x[j + 1], u[j + 1], y[j + 1],
                              mask, order, work, xf, q, z)
         if mask < 0:
-            state[0], state[1], state[2] = current, latched, count
+            state[0], state[1], state[2] = bits, latched, count
             return NEEDS_GENERAL_SOLVER, j
-        if latched == 0 and not (clocked and current == above):
-            s0 = _surface(c, d, x[j], phase0, low, slope)
-            s1 = _surface(c, d, x[j + 1], phase1, low, slope)
-            level = band if current == below else -band
-            crossed = s1 > level if current == below else s1 < level
-            if crossed:
-                frac = 0.0
-                if (s0 - level) * (s1 - level) < 0.0:
-                    frac = (level - s0) / (s1 - s0)
-                frac = min(max(frac, 0.0), 1.0)
-                dt1 = frac * dt
+        for i in range(n):
+            xs[i] = x[j, i]
+        ts = t0                                  # the piece [ts, t1] from xs was just stepped into x[j + 1]
+        switched = 0                             # the channels that switched in this step
+        for _ in range(m):
+            first, best = -1, 2.0
+            for ch in range(m):
+                bit = (bits >> ch) & 1
+                if (switched >> ch) & 1 or (latched >> ch) & 1 or (clocked[ch] != 0 and bit == 1):
+                    continue
+                s0 = _surface(c[ch], d[ch], xs, phase0[ch] + (ts - t0), low[ch], slope[ch])
+                s1 = _surface(c[ch], d[ch], x[j + 1], phase0[ch] + dt, low[ch], slope[ch])
+                level = band[ch] if bit == 0 else -band[ch]
+                if (s1 > level) if bit == 0 else (s1 < level):
+                    frac = 0.0
+                    if (s0 - level) * (s1 - level) < 0.0:
+                        frac = (level - s0) / (s1 - s0)
+                    frac = min(max(frac, 0.0), 1.0)
+                    if frac < best:
+                        first, best = ch, frac
+            if first < 0:
+                break
+            piece = t1 - ts
+            dt1 = best * piece
+            if dt1 > 1e-12 * dt:
+                theta_matrices(A[current], B[current], C[current], D[current], E[current], F[current], dt1,
+                               theta, Phi_s, Gamma_s, H_s, M_s, W_s)
+                mask = _lcp_step(Phi_s, Gamma_s, H_s, C[current], F[current], M_s, xs, xm, um, ym, mask,
+                                 order, work, xf, q, z)
+                if mask < 0:
+                    state[0], state[1], state[2] = bits, latched, count
+                    return NEEDS_GENERAL_SOLVER, j
                 for i in range(n):
-                    xm[i] = x[j, i]
-                if dt1 > 1e-12 * dt:
-                    theta_matrices(A[current], B[current], C[current], D[current], E[current], F[current], dt1,
-                                   theta, Phi_s, Gamma_s, H_s, M_s, W_s)
-                    mask = _lcp_step(Phi_s, Gamma_s, H_s, C[current], F[current], M_s, x[j], xm, um, ym, mask,
-                                     order, work, xf, q, z)
-                    if mask < 0:
-                        state[0], state[1], state[2] = current, latched, count
-                        return NEEDS_GENERAL_SOLVER, j
-                current = above if current == below else below
-                latched = 1 if latch else 0
-                ev_time[count] = t0 + dt1
-                ev_config[count] = current
-                ev_step[count] = j
-                count += 1
-                dt2 = dt - dt1
-                if dt2 > 1e-12 * dt:
-                    theta_matrices(A[current], B[current], C[current], D[current], E[current], F[current], dt2,
-                                   theta, Phi_s, Gamma_s, H_s, M_s, W_s)
-                    mask = _lcp_step(Phi_s, Gamma_s, H_s, C[current], F[current], M_s, xm, x[j + 1], u[j + 1],
-                                     y[j + 1], mask, order, work, xf, q, z)
-                    if mask < 0:
-                        state[0], state[1], state[2] = current, latched, count
-                        return NEEDS_GENERAL_SOLVER, j
-                else:
-                    for i in range(n):
-                        x[j + 1, i] = xm[i]
+                    xs[i] = xm[i]
+            ts += dt1
+            bits ^= 1 << first
+            switched |= 1 << first
+            if latch[first] != 0:
+                latched |= 1 << first
+            current = table[bits]
+            if current < 0:
+                ev_time[count] = ts
+                state[0], state[1], state[2] = bits, latched, count
+                return FORBIDDEN, j
+            count = _log_switch(ev_time, ev_config, ev_step, count, ts, current, j)
+            if t1 - ts > 1e-12 * dt:
+                theta_matrices(A[current], B[current], C[current], D[current], E[current], F[current], t1 - ts,
+                               theta, Phi_s, Gamma_s, H_s, M_s, W_s)
+                mask = _lcp_step(Phi_s, Gamma_s, H_s, C[current], F[current], M_s, xs, x[j + 1], u[j + 1],
+                                 y[j + 1], mask, order, work, xf, q, z)
+                if mask < 0:
+                    state[0], state[1], state[2] = bits, latched, count
+                    return NEEDS_GENERAL_SOLVER, j
+            else:
+                for i in range(n):
+                    x[j + 1, i] = xs[i]
+                break
         config[j + 1] = current
-    state[0], state[1], state[2] = current, latched, count
+    state[0], state[1], state[2] = bits, latched, count
     return OK, t.shape[0] - 1
 
 

@@ -22,7 +22,7 @@ import numpy as np
 from ..errors import ParameterError
 from ..validate import as_matrix, as_vector, parse_value
 from .schedule import Schedule
-from .switching import Relay, StateSwitching
+from .switching import Comparators, Relay, StateSwitching
 
 
 @dataclass(frozen=True)
@@ -150,11 +150,12 @@ class LCSProblem:
 
     Only the mathematics: no step size, no solver. ``switching`` is a :class:`Schedule` (time-driven),
     a :class:`~converters.problems.switching.StateSwitching` (hysteresis or latch on a switching
-    function of the state) or a :class:`~converters.problems.switching.Relay` (the implicit relay).
+    function of the state), a :class:`~converters.problems.switching.Comparators` (several of them) or a
+    :class:`~converters.problems.switching.Relay` (the implicit relay).
     """
 
     configurations: tuple[Configuration, ...]
-    switching: Schedule | StateSwitching | Relay
+    switching: Schedule | StateSwitching | Comparators | Relay
     x0: np.ndarray
     t_span: tuple[float, float]
     state_names: tuple[str, ...] = ()
@@ -172,15 +173,17 @@ class LCSProblem:
             if (c.n, c.k) != (n, k):
                 raise ParameterError(f"every configuration must have the same n and k; configuration "
                                      f"{c.name!r} has n = {c.n}, k = {c.k}, the first n = {n}, k = {k}")
-        if not isinstance(self.switching, (Schedule, StateSwitching, Relay)):
-            raise ParameterError(f"switching must be a Schedule, StateSwitching or Relay; got {self.switching!r}")
+        if not isinstance(self.switching, (Schedule, StateSwitching, Comparators, Relay)):
+            raise ParameterError(f"switching must be a Schedule, StateSwitching, Comparators or Relay; got "
+                                 f"{self.switching!r}")
         bad = [c for c in self.switching.configs if not 0 <= c < len(configs)]
         if bad:
             raise ParameterError(f"switching configs must be indices in [0, {len(configs) - 1}]; got {bad[0]}")
-        function = getattr(self.switching, "function", None)
-        if function is not None and function.n != n:
-            raise ParameterError(f"the switching function must have one coefficient per state (n = {n}); "
-                                 f"got {function.n}")
+        laws = self.switching.channels if isinstance(self.switching, Comparators) else (self.switching,)
+        for function in (getattr(law, "function", None) for law in laws):
+            if function is not None and function.n != n:
+                raise ParameterError(f"the switching function must have one coefficient per state (n = {n}); "
+                                     f"got {function.n}")
         x0 = as_vector("x0", self.x0, n)
         x0.setflags(write=False)
         if isinstance(self.t_span, (str, bytes)) or not hasattr(self.t_span, "__len__") or len(self.t_span) != 2:

@@ -2,7 +2,7 @@
 
 A switching function is affine in the state, with an optional periodic sawtooth ramp:
 
-    s(x, t) = c . x + d - ramp(t),      ramp(t) = low + (high - low) frac(t / period)
+    s(x, t) = c . x + d - ramp(t),      ramp(t) = low + (high - low) frac((t - delay) / period)
 
 (sliding-mode current control: s = iL - Iref; voltage-mode PWM: s = A (vC - Vref) - ramp(t)).
 Two laws use it:
@@ -13,6 +13,9 @@ Two laws use it:
   s against the band (below -band: ``below``; above +band: ``above``; inside it holds). ``clocked`` latches
   are set by the clock only (peak current mode's SR latch): inside a period the law switches from ``below``
   to ``above``, never back.
+* :class:`Comparators`: several such laws at once (interleaved phases, one comparator per phase), each a channel
+  with its own function, ramp (its ``delay`` shifts its phase), band and latch; the configuration in force is
+  looked up from the channels' states.
 * :class:`Relay` (the implicit, chattering-free law): the configuration is a convex blend
   x' = f_low(x) + z (f_high(x) - f_low(x)) with z in [0, 1] and -s in N_[0,1](z) (s < 0 gives z = 1,
   s > 0 gives z = 0, s = 0 lets z take the value that keeps it there: the equivalent control).
@@ -33,16 +36,22 @@ from ..validate import as_vector, check_positive, parse_value
 
 @dataclass(frozen=True)
 class Ramp:
-    """A periodic sawtooth: ``low`` at t = m period, rising linearly to ``high`` at the period's end."""
+    """A periodic sawtooth: ``low`` at t = delay + m period, rising linearly to ``high`` at the period's end."""
 
     low: float
     high: float
     period: float
+    #: Where the first period starts (s), in [0, period): a second phase's ramp delayed by period / 2.
+    delay: float = 0.0
 
     def __post_init__(self):
         object.__setattr__(self, "low", parse_value("ramp low", self.low))
         object.__setattr__(self, "high", parse_value("ramp high", self.high))
         object.__setattr__(self, "period", check_positive("ramp period", self.period, "s"))
+        delay = parse_value("ramp delay", self.delay)
+        if not 0.0 <= delay < self.period:
+            raise ParameterError(f"ramp delay must be in [0, period = {self.period:g}) s; got {delay!r}")
+        object.__setattr__(self, "delay", delay)
 
     @property
     def slope(self) -> float:
@@ -50,8 +59,14 @@ class Ramp:
         return (self.high - self.low) / self.period
 
     def __call__(self, t) -> np.ndarray:
-        phase = np.mod(np.asarray(t, dtype=float), self.period)
-        return self.low + self.slope * phase
+        return self.low + self.slope * self.phase(t)
+
+    def phase(self, t) -> np.ndarray:
+        """Time since the ramp's last reset (s), in [0, period); within 1e-9 period of a reset it is that reset's 0
+        (t = 100 T may be 100 T less one rounding, whose remainder would read a whole period), as the stepper's
+        compiled loop rounds it."""
+        since = np.asarray(t, dtype=float) - self.delay
+        return np.maximum(since - np.floor(since / self.period + 1e-9) * self.period, 0.0)
 
 
 @dataclass(frozen=True)
@@ -172,7 +187,7 @@ class StateSwitching:
         if self.initial is None:
             return self.below if s < 0.0 else self.above
         if np.isfinite(self.period):
-            phase = np.mod(t0, self.period)
+            phase = float(self.function.ramp.phase(t0))
             if min(phase, self.period - phase) <= 1e-9 * self.period:
                 f = self.function                            # the ramp at its foot (t0 mod T may round to T)
                 s = float(np.asarray(x0, dtype=float) @ f.c + f.d - f.ramp.low)
@@ -190,17 +205,128 @@ class StateSwitching:
         """Ramp resets in the open interval (t0, t1)."""
         if not np.isfinite(self.period):
             return np.empty(0)
-        T = self.period
-        times = np.arange(np.floor(t0 / T), np.ceil(t1 / T) + 1) * T
+        T, delay = self.period, self.function.ramp.delay
+        times = np.arange(np.floor((t0 - delay) / T), np.ceil((t1 - delay) / T) + 1) * T + delay
         return times[(times > t0) & (times < t1)]
 
     def limits(self, t0: float, t1: float) -> np.ndarray:
         """The limit's instants (``limit`` T into each period) in the open interval (t0, t1)."""
         if self.limit is None or not np.isfinite(self.period):
             return np.empty(0)
-        T = self.period
-        times = (np.arange(np.floor(t0 / T), np.ceil(t1 / T) + 1) + self.limit) * T
+        T, delay = self.period, self.function.ramp.delay
+        times = (np.arange(np.floor((t0 - delay) / T), np.ceil((t1 - delay) / T) + 1) + self.limit) * T + delay
         return times[(times > t0) & (times < t1)]
+
+
+#: At most this many channels in one :class:`Comparators` (2^m configurations in its table).
+MAX_CHANNELS = 8
+
+
+@dataclass(frozen=True)
+class Comparators:
+    """Several state-driven switchings at once: interleaved phases, each with its own comparator.
+
+    Parameters
+    ----------
+    channels : tuple of StateSwitching
+        Channel j switches between its states 0 (``below``, entered when its s_j falls below -band_j) and 1
+        (``above``): each channel is a :class:`StateSwitching` with ``below=0, above=1`` (and ``initial`` 0, 1 or
+        None), its own ramp (a ``delay`` for its phase), band, latch, ``clocked`` and ``limit``.
+    table : tuple of int
+        The configuration in force for each combination of the channels' states: ``table[sum(state_j << j)]``
+        (2^m entries for m channels); -1 where the system has none (two comparators whose switches would short a
+        source together): a run that reaches it stops naming it.
+    names : tuple of str
+        A label per channel for messages (a netlist's switch names); default ``comparator0``, ...
+    words : (str, str)
+        What a channel's states 0 and 1 are called in messages (a netlist's switch: closed, open).
+    """
+
+    channels: tuple
+    table: tuple
+    names: tuple = ()
+    words: tuple = ("below", "above")
+
+    def __post_init__(self):
+        channels = tuple(self.channels)
+        if not 2 <= len(channels) <= MAX_CHANNELS:
+            raise ParameterError(f"channels must hold 2 to {MAX_CHANNELS} StateSwitching laws (one is a "
+                                 f"StateSwitching itself); got {len(channels)}")
+        for j, channel in enumerate(channels):
+            if not isinstance(channel, StateSwitching) or (channel.below, channel.above) != (0, 1):
+                raise ParameterError(f"channels[{j}] must be a StateSwitching with below=0, above=1 (the channel's "
+                                     f"own states); got {channel!r}")
+        table = tuple(-1 if isinstance(c, (int, np.integer)) and c == -1 else _check_config(f"table[{i}]", c)
+                      for i, c in enumerate(self.table))
+        if len(table) != 2 ** len(channels):
+            raise ParameterError(f"table must have 2^{len(channels)} = {2 ** len(channels)} entries (one per "
+                                 f"combination of the channels' states); got {len(table)}")
+        if all(c < 0 for c in table):
+            raise ParameterError("table must name a configuration for at least one combination; got only -1")
+        names = tuple(str(x) for x in self.names) or tuple(f"comparator{j}" for j in range(len(channels)))
+        if len(names) != len(channels):
+            raise ParameterError(f"names must have one entry per channel ({len(channels)}); got {len(names)}")
+        object.__setattr__(self, "channels", channels)
+        object.__setattr__(self, "table", table)
+        object.__setattr__(self, "names", names)
+        periods = [c.period for c in channels if np.isfinite(c.period)]
+        object.__setattr__(self, "_period", common_period(periods) if periods else np.inf)
+
+    @property
+    def period(self) -> float:
+        """The channels' ramps' common period (inf when none has a ramp)."""
+        return self._period
+
+    @property
+    def configs(self) -> tuple[int, ...]:
+        return tuple(sorted(set(self.table) - {-1}))
+
+    def initial_bits(self, x0, t0: float) -> int:
+        """The channels' states at a run's start, bit j channel j's (each channel's own rule)."""
+        return sum(channel.initial_config(x0, t0) << j for j, channel in enumerate(self.channels))
+
+    def initial_config(self, x0, t0: float) -> int:
+        return self.config(self.initial_bits(x0, t0), t0)
+
+    def config(self, bits: int, t: float) -> int:
+        """The configuration of the channels' states ``bits``; a SimulationError naming them where there is none."""
+        config = self.table[bits]
+        if config < 0:
+            from ..errors import SimulationError
+            states = ", ".join(f"{name} {self.words[bits >> j & 1]}" for j, name in enumerate(self.names))
+            raise SimulationError(f"at t = {t:.9g} s the comparators reach a combination of states the system has no "
+                                  f"configuration for ({states})")
+        return config
+
+    def breakpoints(self, t0: float, t1: float) -> np.ndarray:
+        return np.unique(np.concatenate([c.breakpoints(t0, t1) for c in self.channels]))
+
+
+def common_period(periods, what: str = "the ramps' periods") -> float:
+    """The least common multiple of periods (s) whose ratios are rational with denominators up to 1000."""
+    from fractions import Fraction
+    import math
+    base = max(periods)
+    fractions = [Fraction(p / base).limit_denominator(1000) for p in periods]
+    for p, f in zip(periods, fractions):
+        if abs(float(f) * base - p) > 1e-9 * p:
+            raise ParameterError(f"{what} {sorted(set(periods))} s have no common period")
+    denominator = math.lcm(*[f.denominator for f in fractions])
+    return base * math.lcm(*[f.numerator * denominator // f.denominator for f in fractions]) / denominator
+
+
+def law_channels(law) -> tuple[tuple[StateSwitching, ...], tuple[int, ...]]:
+    """(channels, table) of a state-driven law: one channel (its table ``(below, above)``) for a StateSwitching."""
+    if isinstance(law, Comparators):
+        return law.channels, law.table
+    return (law,), (law.below, law.above)
+
+
+def initial_bits(law, x0, t0: float) -> int:
+    """The channels' states (bit j: channel j above) at a run's start, for a StateSwitching or Comparators."""
+    if isinstance(law, Comparators):
+        return law.initial_bits(x0, t0)
+    return int(law.initial_config(x0, t0) == law.above)
 
 
 @dataclass(frozen=True)

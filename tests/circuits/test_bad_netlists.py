@@ -205,12 +205,12 @@ CASES = {
     "current-source-into-node": (buck(insert=["I2 0 nc DC 1m"]), [], ["node nc", "I2", "no path to ground"], None),
     "current-source-into-node-rc": (rc("I2 0 nc DC 1m"), [], ["node nc", "I2", "no path to ground"], None),
     "diodes-in-parallel": (buck(insert=["D2 0 sw DMOD"]), [], ["diode D2", "diode D1", "in parallel"], 11),
-    # one comparator on the circuit's own voltages is compiled (tests/circuits/test_compile.py); two are not yet
-    # (S2 on the same control at the same VT would follow S1: compiled; at another VT it is a second comparator)
-    "two-state-driven-switches": (buck({4: "S1 in sw out 0 SWMOD"},
-                                       insert=["S2 out x out 0 SW2", "R2 x 0 1k", ".model SW2 SW(VT=1)"]), [],
-                                  ["S2 and voltage-controlled switch S1 are both driven by the circuit's own quantities",
-                                   "S2 neither follows S1 nor its complement", "compiled yet"], 11),
+    # comparators on the circuit's own quantities are compiled, several of them (tests/circuits/test_compile.py); one
+    # whose input its own switch moves (S2 reads v(out) - v(x), zero once it closes) is not
+    "comparator-moved-by-its-switch": (buck({4: "S1 in sw out 0 SWMOD"},
+                                            insert=["S2 out x out x SW2", "R2 x 0 1k", ".model SW2 SW(VT=1)"]), [],
+                                       ["voltage-controlled switch S2", "its control changes with a switch's state",
+                                        "not compiled"], 11),
     "no-state": (text("Resistive", "Vin in 0 DC 1", "R1 in 0 1", ".tran 1u 1m"), [],
                  ["no capacitor or inductor"], None),
     "no-ground": (text("Floating", "Vin in x DC 12", "R1 in x 10", "C1 in x 1u", ".tran 1u 1m"), [],

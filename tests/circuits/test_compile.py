@@ -107,15 +107,6 @@ def test_a_low_side_switch_on_the_same_comparator_is_its_complement(R):
         assert "off" in set(other.modes()) and current.min() < -0.04
 
 
-def test_a_second_comparator_switch_at_other_thresholds_is_refused_naming_both():
-    """S2 on the complement's control but at VT = 1 would switch at other instants than S1: not one comparator."""
-    from converters.circuits.netlist import NetlistError
-    text = SYNC.read_text().replace("S2 0 sw vcon ramp SWMOD", "S2 0 sw vcon ramp SW2\n.model SW2 SW(VT=1)")
-    with pytest.raises(NetlistError, match=r"sync.cir:\d+: voltage-controlled switch S2 and voltage-controlled switch "
-                                           r"S1 are both driven by the circuit's own quantities and S2 neither follows"):
-        Circuit.from_netlist("sync.cir", text=text)
-
-
 def test_a_param_and_an_element_of_the_same_name_are_refused():
     """-p R1=7 had silently set one of them (.param r1 and the resistor R1: SPICE names ignore case)."""
     from converters.circuits.netlist import NetlistError

@@ -23,6 +23,8 @@ method, Newton shooting) against its closed form, the modes it must show, and `p
   fundamental is m Vdc / (R + j w L) exactly (times 1 - 2 e/Tc, the carrier's flats).
 - three-phase-inverter: each leg's voltage against the split link's midpoint has the fundamental m Vdc/2 and the
   filter and load are linear: each load current's fundamental is that through Lf into Cf beside R + Ll.
+- interleaved-vm-buck: two comparators, the second ramp delayed by T/2: vout = D Vin / (1 + RL/(2R)) exactly in
+  CCM, and the phase currents' difference decays by exp(-RL T/L) per period, a Floquet multiplier exactly.
 """
 import json
 import math
@@ -39,8 +41,10 @@ from netlists.generators import cockcroft_walton
 from validation.cli import main
 
 NETLISTS = Path(__file__).resolve().parents[2] / "netlists" / "circuits"
+SYNC = NETLISTS / "voltage-mode-sync-buck.cir"
 NEW = ("sync-buck", "sepic", "flyback", "interleaved-buck", "cockcroft-walton", "bridge-rectifier", "half-bridge",
-       "boost-coss", "two-switch-forward", "type2-loop-buck", "full-bridge", "three-phase-inverter")
+       "boost-coss", "two-switch-forward", "type2-loop-buck", "full-bridge", "three-phase-inverter",
+       "interleaved-vm-buck")
 
 
 def orbit(circuit, params=None, method="event", tol=1e-9, summary=True):
@@ -284,6 +288,63 @@ def test_interleaved_buck_output_and_its_ripple_cancellation(D, method):
         assert summary["mode_fractions"] == pytest.approx(want, abs=1e-9)
 
 
+@pytest.mark.parametrize("method", ["event", "lcp"])
+def test_interleaved_voltage_mode_buck_two_comparators_share_the_current_by_the_winding_resistance(method):
+    """Two comparators on one error amplifier, the second's ramp delayed by T/2 (PULSE's TD). Each phase's switch
+    node averages D Vin in CCM, so (as for the scheduled interleaved buck) vout = D Vin / (1 + RL/(2R)) exactly, D
+    the on-time fraction of S1 (the event method's exact mode fractions). L (i1 - i2)' = v(sw1) - v(sw2) - RL
+    (i1 - i2), and no switching instant depends on i1 - i2 (the comparators read vout): a perturbation of it decays
+    by exp(-RL T/L) per period, a Floquet multiplier of the orbit exactly (the others, the loop's, are smaller). The
+    phases are the same orbit half a period apart: S2 closes T/2 after S1."""
+    p, tr, summary = orbit("interleaved-vm-buck", method=method, tol=1e-11)
+    T, Vin, L, R, RL = p["t"], p["vin"], p["l"], p["r"], p["rl"]
+    rho = summary["orbit"]["spectral_radius"]
+    assert rho == pytest.approx(math.exp(-RL * T / L), rel=1e-12 if method == "event" else 1e-6)
+    vout = mean(tr, "vout", 0, T)
+    assert mean(tr, "i(l1)", 0, T) == pytest.approx(mean(tr, "i(l2)", 0, T), rel=1e-9 if method == "event" else 1e-5)
+    if method == "event":
+        fractions = summary["mode_fractions"]
+        assert set(fractions) == {"S1+D2", "S1+S2", "S2+D1"}
+        D = fractions["S1+D2"] + fractions["S1+S2"]
+        assert fractions["S2+D1"] + fractions["S1+S2"] == pytest.approx(D, abs=1e-12)
+        assert vout == pytest.approx(D * Vin / (1 + RL / (2 * R)), rel=1e-10)
+        closes = tr.events[(tr.events["kind"] == "switch")]
+        s1 = closes.loc[closes["config"].isin([1, 3]) & (closes["time"] < T / 2), "time"].to_numpy()
+        s2 = closes.loc[closes["config"].isin([2, 3]) & (closes["time"] >= T / 2), "time"].to_numpy()
+        assert s1.size == 1 and s2.size == 1 and s2[0] - s1[0] == pytest.approx(T / 2, abs=1e-12 * T)
+    else:
+        exact = orbit("interleaved-vm-buck", method="event", tol=1e-11, summary=False)[1]
+        assert vout == pytest.approx(mean(exact, "vout", 0, T), rel=1e-7)
+
+
+def test_two_comparators_whose_switches_never_close_together_leave_a_dead_time():
+    """The synchronous buck with S2 at VT = 1 on the complement's control is a second comparator (it closes 1 V
+    after S1 opens, not at once): both closed would short Vin, a combination the law has no configuration for,
+    and the orbit never reaches it; while both are open D1 carries the inductor current (a dead time)."""
+    text = SYNC.read_text().replace("S2 0 sw vcon ramp SWMOD", "S2 0 sw vcon ramp SW2\n.model SW2 SW(VT=1)")
+    circuit = Circuit.from_netlist("sync.cir", text=text)
+    law = circuit.compiled(circuit.resolve({})).law
+    # table[bits], bit j set: switch j open; configurations sum(closed_j << j) with both closed left out
+    assert law.names == ("s1", "s2") and law.table == (-1, 2, 1, 0)
+    event = orbit(circuit, tol=1e-11)[1]
+    stepped = orbit(circuit, method="lcp", tol=1e-11, summary=False)[1]
+    T = 400e-6
+    assert set(event.modes()) == {"S1", "S2", "D1"}
+    assert mean(stepped, "vout", 0, T) == pytest.approx(mean(event, "vout", 0, T), rel=1e-6)
+
+
+@pytest.mark.parametrize("method", ["event", "lcp"])
+def test_two_comparators_that_would_close_together_across_the_source_stop_naming_both(method):
+    """S2 at VT = -1 closes 1 V before S1 opens: the law reaches both closed, which shorts Vin; the run stops there
+    in one line naming the switches' states."""
+    from converters.errors import SimulationError
+    text = SYNC.read_text().replace("S2 0 sw vcon ramp SWMOD", "S2 0 sw vcon ramp SW2\n.model SW2 SW(VT=-1)")
+    circuit = Circuit.from_netlist("sync.cir", text=text)
+    with pytest.raises(SimulationError, match=r"at t = [0-9.e-]+ s the comparators reach a combination of states the "
+                                              r"system has no configuration for \(s1 closed, s2 closed\)"):
+        run_converter(circuit, {}, method=method, periods=200)
+
+
 def test_ideal_diodes_in_parallel_only_when_sources_reverse_bias_them_are_accepted():
     """With both switches of the interleaved buck closed (D > 0.5), D1 and D2 are in parallel (ground to Vin) and
     reverse-biased by Vin alone: u = 0 is the unique solution, the compiler accepts them. Two ideal diodes on the
@@ -417,6 +478,47 @@ def test_hysteretic_buck_holds_its_inductor_current_in_the_band(method):
     assert low == pytest.approx(iref - ih, abs=slack) and high == pytest.approx(iref + ih, abs=slack)
 
 
+def _phase_cycles(tr, name: str, level: float, t0: float):
+    """(mean period between the upward crossings of ``level`` by the current ``name`` after t0, its min and max)."""
+    current = np.asarray(tr.signal(name, np.arange(tr.t.size)))
+    after = tr.t > t0
+    t, i = tr.t[after], current[after]
+    up = np.flatnonzero((i[:-1] < level) & (i[1:] >= level))
+    crossings = t[up] + (level - i[up]) / (i[up + 1] - i[up]) * (t[up + 1] - t[up])
+    return (crossings[-1] - crossings[0]) / (len(crossings) - 1), i.min(), i.max()
+
+
+@pytest.mark.parametrize("method", [pytest.param("event", marks=pytest.mark.slow), "lcp"])   # event: 2.4 s
+def test_two_hysteretic_phases_each_hold_their_current_in_the_band(method):
+    """Two comparators, each phase's W switch on its own inductor current (L1 = 10 uH, L2 = 12 uH: the phases do not
+    lock). Each current's extremes are the band's edges Iref +- Ih (exact on the event method; the stepper within
+    a step of the steepest slope), each mean Iref with straight ramps, so vout = 2 Iref R (the output ripple bends
+    the ramps by ~1e-4 of Vin - vout: 1e-5 bounds the mean over 1 ms) and each phase cycles with the period
+    2 Ih L_k (1/(Vin - vout) + 1/vout) (its first order in the ripple: 2e-4)."""
+    circuit = Circuit.from_netlist(NETLISTS / "two-phase-hysteretic-buck.cir")
+    p = circuit.resolve({})
+    tr = run_converter(circuit, p, method=method)
+    vin, iref, ih, R = p["vin"], p["iref"], p["ih"], p["r"]
+    vout = tr.mean("vout", t0=3e-3, t1=4e-3)
+    assert vout == pytest.approx(2 * iref * R, rel=1e-5)
+    for name, L in (("i(l1)", p["l1"]), ("i(l2)", p["l2"])):
+        period, low, high = _phase_cycles(tr, name, iref, 3e-3)
+        assert period == pytest.approx(2 * ih * L * (1 / (vin - vout) + 1 / vout), rel=2e-4)
+        slack = 1e-9 if method == "event" else (vin - vout) / L * 5e-9
+        assert low == pytest.approx(iref - ih, abs=slack) and high == pytest.approx(iref + ih, abs=slack)
+
+
+def test_a_law_of_several_comparators_is_refused_by_the_small_signal_analyses_in_one_line(capsys):
+    """bode and sensitivity linearise about one comparator's or a schedule's orbit: two comparators are refused
+    once, naming the reason (not once per parameter)."""
+    path = str(NETLISTS / "interleaved-vm-buck.cir")
+    reason = "interleaved-vm-buck.cir switches on 2 comparators: the small-signal model is built for one comparator"
+    for argv in (["bode", path, "--input", "vin"], ["sensitivity", path]):
+        assert main(argv) != 0
+        err = capsys.readouterr().err
+        assert len(err.strip().splitlines()) == 1 and err.count(reason) == 1
+
+
 def test_a_w_switch_is_an_s_switch_on_an_h_transducer_of_its_current():
     """The same buck with S1 reading a CCVS H1 = 1 V/A x i(Vsense) against VT = -Iref, VH = Ih: the same law
     (the compiled switching functions equal), the same run to 1e-12."""
@@ -451,6 +553,24 @@ def test_hysteretic_buck_in_ngspice_cycles_in_the_same_band(ngspice):
     assert spice.mean("vout", t0=3e-3, t1=4e-3) == pytest.approx(exact.mean("vout", t0=3e-3, t1=4e-3), rel=1e-3)
 
 
+@pytest.mark.spice
+def test_two_hysteretic_phases_in_ngspice_cycle_in_the_same_bands(ngspice):
+    """ngspice on the same file (TMAX 5 ns from the file): each phase's band edges to 1 mA, its cycle to 5e-3 of the
+    event method's and vout to 1e-3, as for the one-phase hysteretic buck."""
+    from netlists.circuit import circuit_netlist, file_spice_options
+    from validation.spice import circuit_trajectory, run_spice
+    circuit = Circuit.from_netlist(NETLISTS / "two-phase-hysteretic-buck.cir")
+    p = circuit.resolve({})
+    netlist = circuit_netlist(circuit, p, 4e-3, file_spice_options(circuit))
+    spice = circuit_trajectory(circuit, p, netlist, run_spice(netlist), 3e-3)
+    exact = run_converter(circuit, p, method="event")
+    for name in ("i(l1)", "i(l2)"):
+        (period, low, high), (reference, _, _) = _phase_cycles(spice, name, 1.0, 3e-3), _phase_cycles(exact, name, 1.0, 3e-3)
+        assert period == pytest.approx(reference, rel=5e-3)
+        assert low == pytest.approx(0.8, abs=1e-3) and high == pytest.approx(1.2, abs=1e-3)
+    assert spice.mean("vout", t0=3e-3, t1=4e-3) == pytest.approx(exact.mean("vout", t0=3e-3, t1=4e-3), rel=1e-3)
+
+
 # --- half-bridge inverter on a split DC link ---------------------------------------------------------------------
 
 @pytest.mark.parametrize("method, tol", [("event", 1e-5), ("lcp", 1e-5)])
@@ -476,6 +596,17 @@ def test_half_bridge_compare_passes_against_ngspice(capsys, ngspice):
     metrics = result["metrics"]
     assert result["passed"] and metrics["v(m)_mean_rel_error"] < 1e-4 and metrics["v(m)_ripple_rel_error"] < 1e-3
     assert metrics["v(m)_mean_lcp"] == pytest.approx(200.0, rel=1e-8)
+
+
+def test_interleaved_voltage_mode_buck_compare_passes_against_ngspice(capsys, ngspice):
+    """ngspice on the same file (its title says "error amplifier", a word PySpice took for ngspice failing): the
+    output's mean agrees (measured 1.1e-5) and the mode sequence; its comparators' switching instants move with
+    its time points, which the loop's multipliers at -0.80 +- 0.13j carry from period to period, so its ripple is
+    not settled and not checked (the note says so)."""
+    assert main(["compare", str(NETLISTS / "interleaved-vm-buck.cir"), "--json"]) == 0
+    result = json.loads(capsys.readouterr().out)
+    metrics = result["metrics"]
+    assert result["passed"] and metrics["v(out)_mean_rel_error"] < 1e-4 and metrics["mode_agreement"] == 1
 
 
 # --- boost with its switch's output capacitance --------------------------------------------------------------------
@@ -582,7 +713,7 @@ def fundamental(tr, name: str, frequency: float, t0: float, t1: float) -> comple
     return complex(2 * np.mean(x[:-1] * np.exp(-1j * w * samples_t[:-1])))
 
 
-@pytest.mark.parametrize("method", ["event", "lcp"])
+@pytest.mark.parametrize("method", [pytest.param("event", marks=pytest.mark.slow), "lcp"])    # event: 2.6-3.3 s
 def test_full_bridge_load_current_fundamental_is_m_vdc_over_the_load_impedance(method):
     """A SIN gate beside a triangular carrier was a traceback ("SIN drives a switch"): each switch's instants are now
     the crossings of its sine with the carrier, located by Brent's method to rounding. The load current's
@@ -598,7 +729,7 @@ def test_full_bridge_load_current_fundamental_is_m_vdc_over_the_load_impedance(m
 
 # --- three-phase two-level inverter ----------------------------------------------------------------------------------
 
-@pytest.mark.parametrize("method", ["event", "lcp"])
+@pytest.mark.parametrize("method", [pytest.param("event", marks=pytest.mark.slow), "lcp"])    # event: 2.6-3.3 s
 def test_three_phase_inverter_load_currents_are_the_phase_circuits_closed_form(method):
     """Six switches on three sine-triangle comparators, six antiparallel diodes, an LC filter and an RL load, on a
     split DC link whose midpoint is the star point (diodes across the link read as reverse-biased through the

@@ -5,7 +5,8 @@ import pytest
 
 from converters.errors import ParameterError
 from converters.methods import EventDriven, Smoothing, Theta
-from converters.problems import Configuration, LCSProblem, Ramp, Relay, StateSwitching, SwitchingFunction
+from converters.problems import (Comparators, Configuration, LCSProblem, Ramp, Relay, StateSwitching,
+                                 SwitchingFunction)
 from converters.simulate import simulate
 
 #: A complementarity pair that never acts (y = 1 > 0, so u = 0): these problems are switched, not complementary.
@@ -67,6 +68,63 @@ def test_the_ramp_phase_counts_from_t_zero_whatever_the_start(method):
     np.testing.assert_allclose(switches["time"].to_numpy()[:4], [1.0, 1.3, 2.0, 2.3], atol=1e-9)
 
 
+IDLE3 = dict(B=[[0.0]] * 3, C=[[0.0] * 3], D=[[0.0]], F=[1.0])
+
+
+def two_oscillators(t_end=2.0):
+    """Two relaxation oscillators on one law: x' = +-1 switched by channel 0 at x = -+0.25, w' = +-2 by channel 1
+    at w = -+0.1; z' = 1 while both are up (the table's one configuration of both channels below). Closed form:
+    x turns at 0.25 + 0.5 m, w at 0.05 + 0.1 m."""
+    configs = []
+    for bits in range(4):
+        up0, up1 = not bits & 1, not bits & 2
+        configs.append(Configuration(A=np.zeros((3, 3)), E=[1.0 if up0 else -1.0, 2.0 if up1 else -2.0,
+                                                            float(up0 and up1)], name=f"c{bits}", **IDLE3))
+    channels = (StateSwitching(SwitchingFunction(c=[1.0, 0.0, 0.0]), below=0, above=1, band=0.25),
+                StateSwitching(SwitchingFunction(c=[0.0, 1.0, 0.0]), below=0, above=1, band=0.1))
+    return LCSProblem(tuple(configs), Comparators(channels, table=(0, 1, 2, 3)), x0=[0.0, 0.0, 0.0],
+                      t_span=(0.0, t_end), state_names=("x", "w", "z"))
+
+
+@pytest.mark.parametrize("method", [Theta(0.01, 1.0), Theta(0.003, 0.5), EventDriven()], ids=["BE", "theta", "event"])
+def test_several_comparators_switch_each_at_its_own_band(method):
+    tr = simulate(two_oscillators(), method)
+    switches = tr.events[tr.events["kind"] == "switch"]
+    times = np.sort(switches["time"].to_numpy())
+    expected = np.sort(np.concatenate([0.25 + 0.5 * np.arange(4), 0.05 + 0.1 * np.arange(20)]))
+    np.testing.assert_allclose(times, expected, atol=1e-12)
+    assert np.abs(tr.state("x")).max() <= 0.25 + 1e-12 and np.abs(tr.state("w")).max() <= 0.1 + 1e-12
+    # z: x rises on [0.25, 0.75] and [1.25, 1.75], w on [0.05, 0.15] + 0.2 m: both on three 0.1-long pieces of
+    # each, 0.6 in all (piecewise-linear states: exact to rounding)
+    assert tr.state("z")[-1] == pytest.approx(0.6, abs=1e-12)
+
+
+def two_phase_ramps(level=0.3, periods=4):
+    """Two latched ramp comparators on one level, the second's ramp delayed by half a period: z1' = 1 while
+    channel 0 is below (after its ramp passes the level), z2' = 1 while channel 1 is. Closed form: channel 0
+    enters below at 0.3 + m, channel 1 at 0.8 + m; channel 1 starts below (its ramp at 0.5 > 0.3)."""
+    configs = [Configuration(A=np.zeros((3, 3)), E=[0.0, float(not bits & 1), float(not bits & 2)],
+                             name=f"c{bits}", **IDLE3) for bits in range(4)]
+    channels = tuple(StateSwitching(SwitchingFunction(c=[1.0, 0.0, 0.0], ramp=Ramp(0.0, 1.0, 1.0, delay=delay)),
+                                    below=0, above=1, latch=True) for delay in (0.0, 0.5))
+    return LCSProblem(tuple(configs), Comparators(channels, table=(0, 1, 2, 3)), x0=[level, 0.0, 0.0],
+                      t_span=(0.0, float(periods)), state_names=("c", "z1", "z2"))
+
+
+@pytest.mark.parametrize("method", [Theta(1e-3, 1.0), EventDriven()], ids=["BE", "event"])
+def test_interleaved_ramps_each_reset_at_their_own_delay(method):
+    problem = two_phase_ramps()
+    assert problem.switching.period == 1.0
+    tr = simulate(problem, method)
+    assert tr.state("z1")[-1] == pytest.approx(4 * 0.7, abs=1e-9)
+    assert tr.state("z2")[-1] == pytest.approx(0.5 + 3 * 0.7 + 0.2, abs=1e-9)
+    switches = tr.events[tr.events["kind"] == "switch"]
+    times = np.sort(switches["time"].to_numpy())
+    # channel 0: below at 0.3 + m, reset above at 1, 2, 3; channel 1: reset above at 0.5 + m, below at 0.8 + m
+    expected = np.sort(np.concatenate([0.3 + np.arange(4), np.arange(1, 4), 0.5 + np.arange(4), 0.8 + np.arange(4)]))
+    np.testing.assert_allclose(times, expected, atol=1e-9)
+
+
 def test_the_relay_holds_the_sliding_surface_without_chatter():
     """x' = -1 + 2 z, z in [0, 1], -(x - 1/2) in N_[0,1](z): x rises at +1 to 1/2 and stays there with the
     equivalent control z = 1/2 (no switching)."""
@@ -100,6 +158,15 @@ def test_the_relay_holds_the_sliding_surface_without_chatter():
     (lambda: StateSwitching(SwitchingFunction([1.0]), below=0, above=1, initial=2), r"initial must be below \(0\) or above \(1\)"),
     (lambda: Relay(SwitchingFunction([1.0], ramp=Ramp(0, 1, 1)), low=0, high=1), "without a ramp"),
     (lambda: Ramp(0.0, 1.0, 0.0), r"ramp period must be positive"),
+    (lambda: Ramp(0.0, 1.0, 1.0, delay=1.0), r"ramp delay must be in \[0, period = 1\) s; got 1.0"),
+    (lambda: Comparators((StateSwitching(SwitchingFunction([1.0]), below=0, above=1),), table=(0, 1)),
+     "channels must hold 2 to 8"),
+    (lambda: Comparators((StateSwitching(SwitchingFunction([1.0]), below=1, above=0),) * 2, table=(0, 1, 2, 3)),
+     r"channels\[0\] must be a StateSwitching with below=0, above=1"),
+    (lambda: Comparators((StateSwitching(SwitchingFunction([1.0]), below=0, above=1),) * 2, table=(0, 1, 2)),
+     r"table must have 2\^2 = 4 entries"),
+    (lambda: Comparators(tuple(StateSwitching(SwitchingFunction([1.0], ramp=Ramp(0, 1, p)), below=0, above=1)
+                               for p in (1.0, np.pi)), table=(0, 1, 2, 3)), "have no common period"),
     (lambda: SwitchingFunction([np.nan]), "must contain only finite numbers"),
     (lambda: StateSwitching(SwitchingFunction([1.0]), below=-1, above=1), r"below must be a configuration index"),
 ])

@@ -157,7 +157,9 @@ class EventDriven(Method, key="event"):
         the return time of its last call (a Poincare map: the section is the switching surface)."""
         self.supports(problem)
         if not isinstance(problem.switching, StateSwitching):
-            raise ParameterError("a return map needs a state-driven switching law (StateSwitching)")
+            raise ParameterError("a return map needs one state-driven switching law (a StateSwitching); several "
+                                 "comparators without a clock each cycle on their own, with no common section: "
+                                 "run a transient")
         return EventReturnMap(_Machine(problem, self), config, crossings)
 
 

@@ -84,7 +84,7 @@ class Flow:
         self.held_flags = held_pairs
         self.constraint_rows, self.project = constraint_rows, project
         self.constraint_scales = np.abs(constraint_rows).sum(axis=1)
-        self.watches: dict = {}                  # _Watch per latch state (built by the machine that owns the flow)
+        self.watches: dict = {}                  # _Watch per law state (built by the machine that owns the flow)
         norm = float(np.abs(Z).sum(axis=1).max())
         self.delta = min(delta, 0.25 / norm) if norm > 0.0 else delta
         #: Sampling steps per quadrature piece (:data:`_PIECE_NORM`; at most a batched product's).
@@ -227,20 +227,24 @@ class Flow:
 
 
 class _Watch:
-    """What ends a segment: rows g = rows x~ + slopes (phase0 + tau), with the pair (or -1: the
-    switching law) each row belongs to."""
+    """What ends a segment: rows g = rows x~ + slopes (phase0 + tau), with the pair each row belongs to (or
+    -1 - j: channel j of the switching law) and, in ``channels``, the law's channel of each row (``m``, one past
+    the last channel, for a pair: its phase is never read, its slope is 0)."""
 
-    def __init__(self, flow: Flow, switch_row=None, switch_slope=0.0):
-        rows, slopes, pairs = [flow.watch_rows], [np.zeros(flow.watch_rows.shape[0])], [np.arange(flow.watch_rows.shape[0])]
-        if switch_row is not None:
-            rows.append(switch_row[None, :])
-            slopes.append(np.array([switch_slope]))
-            pairs.append(np.array([-1]))
+    def __init__(self, flow: Flow, switch_rows=None, switch_slopes=None, channels=None, m: int = 1):
+        count = flow.watch_rows.shape[0]
+        rows, slopes, pairs, owners = [flow.watch_rows], [np.zeros(count)], [np.arange(count)], [np.full(count, m)]
+        if switch_rows is not None:
+            rows.append(np.atleast_2d(switch_rows))
+            slopes.append(np.asarray(switch_slopes, dtype=float))
+            pairs.append(-1 - np.asarray(channels))
+            owners.append(np.asarray(channels))
         self.rows = np.vstack(rows)
         self.rows_T = np.ascontiguousarray(self.rows.T)
         self.slopes = np.concatenate(slopes)
         self.timed = bool(np.any(self.slopes))
         self.pairs = np.concatenate(pairs)
+        self.channels = np.concatenate(owners)
         self.row_scales = np.abs(self.rows).sum(axis=1)
 
 

@@ -10,7 +10,8 @@ import numpy as np
 
 from ...errors import SimulationError
 from ...limits import check_in_use
-from ...problems import LCSProblem, Schedule, StateSwitching
+from ...problems import Comparators, LCSProblem, Schedule, StateSwitching
+from ...problems.switching import initial_bits, law_channels
 from .core import EnginePeriodMap
 from .flow import _CROSS_RTOL, _ON_SET_RTOL, _POWERS, MAX_SUBSTEPS, Flow, _time_scale, _Watch
 from .solution import EventSolution, Segment
@@ -53,7 +54,9 @@ class _Machine:
         self.orders: dict = {}
         self.select_data: dict = {}                 # per configuration: the mode-selection LCP's matrices
         law = problem.switching
-        self.law = law if isinstance(law, StateSwitching) else None
+        self.law = law if isinstance(law, (StateSwitching, Comparators)) else None
+        #: The law's channels (one per comparator) and the configuration of each combination of their states.
+        self.channels, self.table = law_channels(law) if self.law is not None else ((), ())
         #: The last run's jumps: ((time, energy lost), ...) (:meth:`enter`)
         self.jumps: list = []
         self.index2 = [i for i in range(problem.k)
@@ -248,31 +251,54 @@ class _Machine:
 
     # --- switching law ------------------------------------------------------------------------------
 
-    def switch_row(self, config: int, latched: bool):
-        """(row, slope) of the switching law's watched quantity in ``config`` (None when it cannot switch)."""
-        law = self.law
-        if law is None or latched or (law.clocked and config == law.above):     # only the clock sets a clocked latch
-            return None, 0.0
-        f = law.function
-        low, slope = (f.ramp.low, f.ramp.slope) if f.ramp is not None else (0.0, 0.0)
-        if config == law.below:      # ends when s = c x + d - ramp rises above +band: watch band - s
-            return np.append(-f.c, law.band - f.d + low), slope
-        return np.append(f.c, f.d - low + law.band), -slope       # ends when s falls below -band: s + band
+    def law_rows(self, bits: int, latched: int):
+        """(rows, slopes, channels) of the quantities whose zero ends the channels' states ``bits`` (bit j: channel
+        j above), the latched channels (``latched`` bits) and a clocked channel above (only its clock sets it) left
+        out: channel j below ends when s_j = c x + d - ramp rises above +band (watch band - s_j), above when it falls
+        below -band (watch s_j + band)."""
+        rows, slopes, channels = [], [], []
+        for j, channel in enumerate(self.channels):
+            above = (bits >> j) & 1
+            if (latched >> j) & 1 or (channel.clocked and above):
+                continue
+            f = channel.function
+            low, slope = (f.ramp.low, f.ramp.slope) if f.ramp is not None else (0.0, 0.0)
+            if above:
+                rows.append(np.append(f.c, f.d - low + channel.band)), slopes.append(-slope)
+            else:
+                rows.append(np.append(-f.c, channel.band - f.d + low)), slopes.append(slope)
+            channels.append(j)
+        if not rows:
+            return None, None, None
+        return np.array(rows), np.array(slopes), np.array(channels, dtype=int)
 
-    def law_config(self, xt: np.ndarray, config: int) -> int:
-        """At a ramp reset: the configuration set by s against the band (inside the band it holds)."""
-        law = self.law
-        f = law.function
+    def switch_row(self, config: int, latched):
+        """(row, slope) of a one-comparator law's watched quantity in ``config`` (None when it cannot switch)."""
+        if self.law is None:
+            return None, 0.0
+        rows, slopes, _ = self.law_rows(int(config == self.table[1]), int(bool(latched)))
+        return (rows[0], slopes[0]) if rows is not None else (None, 0.0)
+
+    def config_of(self, bits: int, t: float) -> int:
+        """The configuration of the channels' states ``bits`` (a SimulationError where the law has none)."""
+        config = self.table[bits]
+        return config if config >= 0 else self.law.config(bits, t)
+
+    def reset_bits(self, xt: np.ndarray, bits: int, j: int) -> int:
+        """At channel j's ramp reset: its state set by s_j against its band (inside the band it holds)."""
+        channel = self.channels[j]
+        f = channel.function
         s = float(f.c @ xt[:-1] + f.d - (f.ramp.low if f.ramp is not None else 0.0))
-        if s < -law.band:
-            return law.below
-        if s > law.band:
-            return law.above
-        return config
+        if s < -channel.band:
+            return bits & ~(1 << j)
+        if s > channel.band:
+            return bits | (1 << j)
+        return bits
 
     def edges(self, t0: float, t1: float):
-        """(time, kind) of every time-driven instant in (t0, t1), then (t1, 'end'). kind: a configuration
-        index (schedule), 'reset' (ramp reset), 'limit' (a latched law's limit: a maximum duty ratio)."""
+        """(time, kind, channel) of every time-driven instant in (t0, t1), then (t1, 'end', -1). kind: a
+        configuration index (schedule), 'reset' (channel's ramp reset), 'limit' (a latched channel's limit: a
+        maximum duty ratio)."""
         law = self.problem.switching
         out = []
         if isinstance(law, Schedule) and np.isfinite(law.period):
@@ -281,17 +307,19 @@ class _Machine:
                 for start, config in zip(law.starts, law.configs):
                     t = m * T + start
                     if t0 < t < t1 and not (out and out[-1][1] == config):
-                        out.append((t, config))
-        elif isinstance(law, StateSwitching):
-            out = sorted([(t, "reset") for t in law.resets(t0, t1)] + [(t, "limit") for t in law.limits(t0, t1)])
-        out.append((t1, "end"))
+                        out.append((t, config, -1))
+        elif self.law is not None:
+            out = sorted([(t, "reset", j) for j, c in enumerate(self.channels) for t in c.resets(t0, t1)]
+                         + [(t, "limit", j) for j, c in enumerate(self.channels) for t in c.limits(t0, t1)])
+        out.append((t1, "end", -1))
         return out
 
     # --- crossings ----------------------------------------------------------------------------------
 
-    def cross(self, flow: Flow, watch: _Watch, xt: np.ndarray, tau_max: float, phase0: float):
+    def cross(self, flow: Flow, watch: _Watch, xt: np.ndarray, tau_max: float, phase0):
         """First downward zero crossing of a watched quantity in (0, tau_max]: (tau, row) or (None, None),
-        and x~ at tau_max when there is none."""
+        and x~ at tau_max when there is none. ``phase0``: each row's ramp phase at the segment's start (a scalar
+        or one per row)."""
         g_scale = watch.row_scales * np.abs(xt).max()
         if watch.timed:
             g_scale = g_scale + np.abs(watch.slopes) * self.scale
@@ -309,7 +337,7 @@ class _Machine:
             states = flow.steps(state, m)
             values = states @ watch.rows_T
             if watch.timed:
-                values += (phase0 + tau + flow.delta * np.arange(1, m + 1))[:, None] * watch.slopes[None, :]
+                values += (phase0 + (tau + flow.delta * np.arange(1, m + 1))[:, None]) * watch.slopes
             below = np.flatnonzero(values[:, 0] < threshold[0] if values.shape[1] == 1
                                    else (values < threshold).any(axis=1))
             if below.size:
@@ -395,26 +423,32 @@ class _Machine:
 
         law = self.law
         config = problem.switching.initial_config(xt[:-1], t)
-        latched = False
-        ramp_period = law.period if law is not None else np.inf
-        # The ramp's phase counts from t = 0 (ramp(t) = low + slope * (t mod T)), as in the stepper.
-        phase_start = np.floor(t / ramp_period) * ramp_period if np.isfinite(ramp_period) else t
+        bits = initial_bits(law, xt[:-1], t) if law is not None else 0      # bit j: channel j above
+        latched = 0                                                          # bit j: channel j latched
+        # Each channel's ramp phase counts from its delay (ramp(t) = low + slope ((t - delay) mod T)), as in the
+        # stepper; the last entry is the pairs' rows' (their slope is 0).
+        phase_start = np.full(len(self.channels) + 1, t)
+        for j, channel in enumerate(self.channels):
+            ramp = channel.function.ramp
+            if ramp is not None:
+                phase_start[j] = t - float(ramp.phase(t))
         xt, jump = self.enter(config, xt, t, log)
         if jac is not None and jump is not None:
             jac[:] = jump @ jac
         flow, xt = self.select(config, xt, t, 0)
         same_time_events, events, crossings, looks = 0, 0, 0, 0
         stop_time = None
-        for edge_t, edge_kind in self.edges(t, t_end):
+        for edge_t, edge_kind, channel in self.edges(t, t_end):
             while True:
                 looks += 1
                 if looks % MEMORY_LOOK == 0:
                     check_in_use(f"--method event at t = {t:.6g} s ({events:,} events, {len(segments):,} segments)",
                                  "--method lcp (its memory is known before the run), or a shorter --t-end")
-                watch = flow.watches.get(latched)
-                if watch is None:                        # the law's row depends on the configuration and the latch
-                    watch = flow.watches[latched] = _Watch(flow, *self.switch_row(config, latched))
-                phase0 = t - phase_start
+                watch = flow.watches.get((bits, latched))
+                if watch is None:                        # the law's rows depend on its channels' states and latches
+                    watch = flow.watches[bits, latched] = _Watch(flow, *self.law_rows(bits, latched),
+                                                                 m=len(self.channels))
+                phase0 = t - phase_start[watch.channels] if watch.timed else 0.0
                 (tau, which), xt_end = self.cross(flow, watch, xt, edge_t - t, phase0)
                 if tau is not None and t + tau >= edge_t - options.event_tol * self.scale:
                     tau = None                                   # a crossing on the edge itself: the edge handles it
@@ -443,9 +477,11 @@ class _Machine:
                 dgdt = watch.slopes[which]
                 f_before = flow.field(xt)
                 flow_before, latched_before, xt_before = flow, latched, xt
-                if pair < 0:                                     # the switching law fires
-                    config = law.above if config == law.below else law.below
-                    latched = law.latch
+                if pair < 0:                                     # channel -1 - pair of the law switches
+                    j = -1 - pair
+                    bits ^= 1 << j
+                    latched |= int(self.channels[j].latch) << j
+                    config = self.config_of(bits, t)
                     log(t, "switch", -1, config)
                     if stop_config is not None and config == stop_config:
                         crossings += 1
@@ -481,15 +517,17 @@ class _Machine:
             if stop_time is not None or edge_kind == "end":
                 break
             if edge_kind == "reset":
-                phase_start, latched = t, False
-                new_config = self.law_config(xt, config)
-                if new_config != config:
-                    config = new_config
+                phase_start[channel] = t
+                latched &= ~(1 << channel)
+                new_bits = self.reset_bits(xt, bits, channel)
+                if new_bits != bits:
+                    bits, config = new_bits, self.config_of(new_bits, t)
                     log(t, "switch", -1, config)
             elif edge_kind == "limit":                       # the period's limit: leave below and latch
-                latched = True
-                if config == law.below:
-                    config = law.above
+                latched |= 1 << channel
+                if not (bits >> channel) & 1:
+                    bits |= 1 << channel
+                    config = self.config_of(bits, t)
                     log(t, "switch", -1, config)
             else:
                 config = edge_kind
