@@ -86,6 +86,42 @@ _NEW, _STEP, _TRIAL, _PLAIN = 0, 1, 2, 3
 
 
 @njit(cache=True)
+def _simplified_correction(jac, trial, p_trial, work):
+    """max |s| of the simplified Newton correction at the trial, (jac - I) s = -(P(trial) - trial) with the current
+    iterate's Jacobian (Deuflhard's natural monotonicity test reads it: a measure of the distance to the orbit in
+    the state's own units, where the residual's max-norm mixes volts and amperes); inf where jac - I is singular.
+    Uses ``work`` (n x (n + 1)), free between iterations."""
+    n = trial.shape[0]
+    for i in range(n):
+        for l in range(n):
+            work[i, l] = jac[i, l] - (1.0 if i == l else 0.0)
+        work[i, n] = trial[i] - p_trial[i]
+    for col in range(n):
+        pivot = col
+        for row in range(col + 1, n):
+            if abs(work[row, col]) > abs(work[pivot, col]):
+                pivot = row
+        for cc in range(n + 1):
+            tmp = work[col, cc]
+            work[col, cc] = work[pivot, cc]
+            work[pivot, cc] = tmp
+        if work[col, col] == 0.0:
+            return np.inf
+        for row in range(col + 1, n):
+            f = work[row, col] / work[col, col]
+            for cc in range(col, n + 1):
+                work[row, cc] -= f * work[col, cc]
+    largest = 0.0
+    for row in range(n - 1, -1, -1):
+        acc = work[row, n]
+        for l in range(row + 1, n):
+            acc -= work[row, l] * work[l, n]
+        work[row, n] = acc / work[row, row]
+        largest = max(largest, abs(work[row, n]))
+    return largest
+
+
+@njit(cache=True)
 def _accept(x, px, jac, trial, p_trial, jac_trial, istate):
     n = x.shape[0]
     for i in range(n):
@@ -112,9 +148,10 @@ def newton_advance(x, px, jac, dx, work, trial, p_trial, jac_trial, ok, istate, 
     orbit), NEWTON_ROUNDING, NEWTON_EXHAUSTED, NEWTON_SINGULAR (:func:`newton_step`), NEWTON_NO_SOLUTION or
     NEWTON_NONFINITE (a plain period the map could not take, or that left the finite numbers).
 
-    Each iteration: the Newton step; halved while the residual does not fall, up to ``HALVINGS`` times (the map is
-    piecewise affine: the Jacobian of one piece can point past a change of mode sequence); where no fraction helps
-    (a start-up transient), one plain period of the map."""
+    Each iteration: the Newton step; halved while neither the residual falls nor the simplified Newton correction
+    passes Deuflhard's restricted monotonicity test, up to ``HALVINGS`` times (the map is piecewise affine: the
+    Jacobian of one piece can point past a change of mode sequence); where no fraction helps (a start-up
+    transient), one plain period of the map."""
     n = x.shape[0]
     phase = istate[0]
     if phase == _NEW:
@@ -142,6 +179,18 @@ def newton_advance(x, px, jac, dx, work, trial, p_trial, jac_trial, ok, istate, 
     if phase == _TRIAL:
         if ok and finite and gap < rstate[0]:
             return _accept(x, px, jac, trial, p_trial, jac_trial, istate)
+        if ok and finite:
+            # Deuflhard's restricted monotonicity test: the step of fraction lam brings the simplified correction
+            # below (1 - lam/2) of the full Newton step. It accepts what the residual's max-norm refuses when the
+            # residual is in one unit and the distance in another (a DCM buck into a 1 F output: its inductor's
+            # residual rises while vout's distance falls 2-4x a step).
+            lam = 0.5 ** istate[2]
+            full = 0.0
+            for i in range(n):
+                full = max(full, abs(dx[i]))
+            full /= lam
+            if _simplified_correction(jac, trial, p_trial, work) < (1.0 - 0.5 * lam) * full:
+                return _accept(x, px, jac, trial, p_trial, jac_trial, istate)
         istate[2] += 1
         if istate[2] < HALVINGS:
             for i in range(n):

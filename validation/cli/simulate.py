@@ -176,7 +176,7 @@ def _print(summary: dict, tr, args) -> None:
         orbit = summary["orbit"]
         print(f"periodic steady state after {summary['steady_periods']} periods (Newton: {orbit['iterations']} "
               f"iterations, distance to the orbit {orbit['distance']:.2g}, Floquet spectral radius "
-              f"{orbit['spectral_radius']:.6g})")
+              f"{_radius(orbit['spectral_radius'])})")
     for held in summary.get("invariants", ()):     # what the loops, cutsets and charge islands hold fixed
         print(f"held ({held['kind']}): {held['constraint']} = {held['value']:.6g} {held['unit']}")
     power = summary.get("power")
@@ -230,3 +230,8 @@ def _print(summary: dict, tr, args) -> None:
     if args.out is not None:
         from converters.validate import quoted
         print(f"wrote {quoted(args.out)}")
+
+
+def _radius(rho: float) -> str:
+    """A spectral radius as read: within 1e-5 of 1 as 1 less its distance (0.99999985 printed "1" looked marginal)."""
+    return f"1 - {1.0 - rho:.2g}" if 0.0 < 1.0 - rho < 1e-5 else f"{rho:.6g}"

@@ -13,7 +13,7 @@ from ...limits import check_in_use
 from ...problems import Comparators, LCSProblem, Schedule, StateSwitching
 from ...problems.switching import initial_bits, law_channels
 from .core import EnginePeriodMap
-from .flow import _CROSS_RTOL, _ON_SET_RTOL, _POWERS, MAX_SUBSTEPS, Flow, _time_scale, _Watch
+from .flow import _CROSS_RTOL, _ON_SET_RTOL, _POWERS, MAX_SERIES_NORM, MAX_SUBSTEPS, Flow, _time_scale, _Watch
 from .solution import EventSolution, Segment
 
 if TYPE_CHECKING:
@@ -330,6 +330,11 @@ class _Machine:
                                 f"so crossing {tau_max:.3g} s takes {tau_max / flow.delta if flow.delta > 0 else np.inf:.3g}"
                                 f" substeps (at most {MAX_SUBSTEPS:.0e}): a run far longer than the circuit's fastest time "
                                 "constant (a tiny C, L or R, or a long --t-end); use --method lcp, or a shorter --t-end")
+        if flow.norm > MAX_SERIES_NORM:                      # a flow too fast for its series (Z^j / j! overflows)
+            from ...errors import ResourceError
+            raise ResourceError(f"--method event: the stiffest mode's time constant is about {4.0 * flow.delta:.3g} s, "
+                                f"shorter than the exact flows represent in double precision (about "
+                                f"{1.0 / MAX_SERIES_NORM:.1g} s: a tiny C, L or R); use --method lcp")
         full = int(np.floor(tau_max / flow.delta * (1.0 - 1e-12)))
         tau, state = 0.0, xt
         while full > 0:

@@ -1,0 +1,145 @@
+"""A corpus of stiff and ill-conditioned netlists at default settings (issue: never a confident wrong answer): each
+`simulate FILE --steady` that exits 0 is within 1 % of its reference and, where it states a trusted estimate,
+within three times that estimate (a floor of 1e-8: the references' own precision); or it refuses in one line.
+
+References are independent of the default run: closed forms where there are, else the event method's exact flows
+on its orbit at a 1e-11 tolerance (the default run is the stepper, whose error the estimate states). The entries:
+a stiff node stepped far beyond its time constant (100 ns and 1 fs at a 1 us step), a buck with an RC snubber
+(a 1.6 MHz resonance at Q 1,000 across a 10 ns step), a buck's electrolytic beside a ceramic (a 10 ps mode), a boost
+deep in DCM (1 uH), a buck into 1 F (its slowest multiplier 1 - 1.5e-7: Newton's residual mixes volts and amperes
+there), a boost with its switch's Coss (hard switching), a flyback at coupling 0.999, the parallel resonant
+converter, a two-switch forward, a Cockcroft-Walton ladder, a type II loop (A = 1e5), two comparators, and an
+unstable voltage-mode orbit (refused)."""
+import json
+from pathlib import Path
+
+import pytest
+
+from converters.models import Circuit
+from converters.run import run_converter
+from validation.cli import main
+
+NETLISTS = Path(__file__).resolve().parents[2] / "netlists" / "circuits"
+
+STIFF = """stiff node: a square wave through {r} into {c}, an ideal diode into 1 uF
+V1 in 0 PULSE(0 10 0 1n 1n 0.5m 1m)
+R1 in a {r}
+C1 a 0 {c}
+D1 a out DIDEAL
+C2 out 0 1u
+R2 a 0 1e12
+R3 out 0 1e12
+.model DIDEAL D
+.tran 1u 20m
+.end
+"""
+
+BUCK = """{title}
+Vin in 0 DC {vin}
+Vg g 0 PULSE(0 1 0 1n 1n {on} 10u)
+S1 in sw g 0 SWMOD
+D1 0 sw DMOD
+{parts}
+.model SWMOD SW(VT=0.5)
+.model DMOD D
+.tran 10n 2m
+.end
+"""
+
+CORPUS = {
+    "stiff-100ns": (STIFF.format(r="10", c="10n"), 10.0),
+    "stiff-1fs": (STIFF.format(r="1m", c="1p"), 10.0),
+    "snubbered-buck": (BUCK.format(title="buck with an RC snubber across the diode", vin=24, on="4.99u",
+                                   parts="Rs sw sn 1\nCs sn 0 100p\nL1 sw out 100u\nC1 out 0 10u\nR1 out 0 5"), None),
+    "esr-buck": (BUCK.format(title="buck: an electrolytic (ESR 1 mohm) beside a 10 nF ceramic", vin=12, on="3.99u",
+                             parts="L1 sw out 22u\nRb out b 1m\nC1 b 0 100u\nC2 out 0 10n\nR1 out 0 2"), None),
+    "buck-into-1F": (BUCK.format(title="buck into 1 F and 1 kohm: a multiplier at 1 - 1.5e-7", vin=12, on="4.99u",
+                                 parts="L1 sw out 100u\nC1 out 0 1\nR1 out 0 1k"), None),
+    "dcm-boost-1uH": ("""boost deep in DCM: 1 uH at 100 kHz into a light load
+Vin in 0 DC 5
+Vg g 0 PULSE(0 1 0 1n 1n 2.99u 10u)
+L1 in sw 1u
+S1 sw 0 g 0 SWMOD
+D1 sw out DMOD
+C1 out 0 10u
+R1 out 0 50
+.model SWMOD SW(VT=0.5)
+.model DMOD D
+.tran 10n 2m
+.end
+""", None),
+    "boost-coss": ("boost-coss.cir", None),
+    "flyback-k0.999": ("flyback.cir -p k=0.999", None),
+    "prc": ("prc.cir", None),
+    "two-switch-forward": ("two-switch-forward.cir", None),
+    "cockcroft-walton": ("cockcroft-walton.cir", None),
+    "type2-loop-buck": ("type2-loop-buck.cir", None),
+    "interleaved-vm-buck": ("interleaved-vm-buck.cir", None),
+    "voltage-mode-buck-unstable": ("voltage-mode-buck.cir -p Vin=33", "refused"),
+}
+
+
+def _file(name: str, tmp_path: Path) -> tuple[Path, list]:
+    text, _ = CORPUS[name]
+    if text.endswith(".cir") or ".cir " in text:
+        file, *extra = text.split()
+        return NETLISTS / file, extra
+    path = tmp_path / f"{name}.cir"
+    path.write_text(text)
+    return path, []
+
+
+def _estimate(accuracy: dict) -> float:
+    if "vout_mean_error_estimate" in accuracy:
+        return accuracy["vout_mean_error_estimate"]
+    return accuracy["estimates"]["vout_mean"]["error_estimate"]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", list(CORPUS))
+def test_every_default_answer_on_the_corpus_is_within_one_percent_and_its_estimate_or_refused(name, tmp_path, capsys):
+    path, extra = _file(name, tmp_path)
+    code = main(["simulate", str(path), "--steady", "--json", *extra])
+    out, err = capsys.readouterr()
+    reference = CORPUS[name][1]
+    if reference == "refused":
+        assert code == 2 and out == "" and len(err.strip().splitlines()) == 1 and err.startswith("pcsuite: error:")
+        return
+    assert code == 0, err
+    summary = json.loads(out)
+    if reference is None:
+        params = dict(item.split("=") for item in extra[1::2])
+        exact = run_converter(Circuit.from_netlist(path), params, method="event", steady=True, steady_tol=1e-11,
+                              periods=1)
+        reference = exact.mean("vout", t0=exact.t[0], t1=exact.t[-1])
+    error = abs(summary["vout_mean"] - reference) / abs(reference)
+    assert error <= 1e-2
+    accuracy = summary["accuracy"]
+    assert accuracy["checked"]
+    if accuracy.get("trusted", True) and "warnings" not in summary:
+        assert error <= max(3 * _estimate(accuracy), 1e-8), (error, _estimate(accuracy))
+
+
+def test_the_event_method_refuses_a_flow_faster_than_its_series_represents(tmp_path, capsys):
+    """1 mohm with 1 pF: a 1 fs time constant, whose Taylor terms Z^j / j! overflow double precision (the run went on
+    with NaN until an LCP refused it: "q must contain only finite numbers"). Refused by name, in one line."""
+    path, _ = _file("stiff-1fs", tmp_path)
+    assert main(["simulate", str(path), "--steady", "--method", "event"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert "--method event: the stiffest mode's time constant is about 1e-15 s, shorter than the exact flows " \
+           "represent in double precision (about 1e-13 s: a tiny C, L or R); use --method lcp" in err
+
+
+def test_newton_reaches_a_dcm_buck_into_one_farad_where_the_residual_rises_as_the_distance_falls(tmp_path, capsys):
+    """The buck into 1 F: from rest Newton's full steps take the inductor current through -0.14 and -0.28 A (its
+    residual rising 0.14 -> 0.28 A) while vout's distance falls 6 -> 2.8 -> 1.9 -> 0.46 V; the residual test alone
+    halved every step and gave up. Deuflhard's monotonicity test on the simplified correction takes them: the
+    orbit in 7 iterations, its vout the DCM buck's M = 2/(1 + sqrt(1 + 4K/D^2)) with K = 2L/(R T), D = 0.4991 the
+    gate above VT (measured 3e-5 apart; the exact method's value to 1e-6, the stepper's estimate 7e-7)."""
+    path, _ = _file("buck-into-1F", tmp_path)
+    assert main(["simulate", str(path), "--steady", "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["orbit"]["converged"] and summary["orbit"]["iterations"] <= 10
+    D, K = 0.4991, 2 * 100e-6 / (1e3 * 10e-6)
+    assert summary["vout_mean"] == pytest.approx(12 * 2 / (1 + (1 + 4 * K / D ** 2) ** 0.5), rel=1e-4)
