@@ -348,13 +348,15 @@ def _chunks(a: float, b: float, method: Method, spacing: float | None, period: f
 
 
 def steady_state(model: Model, p: dict, method: Method, *, x0=None, warm_up: int = WARM_UP_PERIODS,
-                 tol: float = 1e-10, periods: int = 1) -> PeriodicOrbit:
-    """The method's own periodic orbit of ``model`` at ``p`` (raises SimulationError when Newton fails)."""
-    return _orbit_and_map(model, p, method, x0=x0, warm_up=warm_up, tol=tol, periods=periods)[0]
+                 tol: float = 1e-10, periods: int = 1, rounding_bound: float = 0.0) -> PeriodicOrbit:
+    """The method's own periodic orbit of ``model`` at ``p`` (raises SimulationError when Newton fails; with
+    ``rounding_bound``, an orbit rounding resolves to it serves: :func:`.analysis.periodic.require`)."""
+    return _orbit_and_map(model, p, method, x0=x0, warm_up=warm_up, tol=tol, periods=periods,
+                          rounding_bound=rounding_bound)[0]
 
 
 def _orbit_and_map(model: Model, p: dict, method: Method, *, x0=None, warm_up: int = WARM_UP_PERIODS, tol: float = 1e-10,
-           periods: int = 1):
+           periods: int = 1, rounding_bound: float = 0.0):
     """(orbit, period map): :func:`steady_state` and the map it shot on (its step plan, for the stepper,
     serves the run on the orbit too: :func:`_on_orbit`). Every orbit goes through here, so a step (no steady
     state: its problem over one period would be the circuit before the step) is refused here for all of them."""
@@ -362,7 +364,7 @@ def _orbit_and_map(model: Model, p: dict, method: Method, *, x0=None, warm_up: i
     problem = model.problem(p, periods * model.period(p), x0)
     period_map = method.period_map(problem)
     orbit = shoot(problem, method, problem.x0, periods=periods, warm_up=warm_up, tol=tol, period_map=period_map)
-    return require(orbit, f"the periodic orbit of {model.key}"), period_map
+    return require(orbit, f"the periodic orbit of {model.key}", rounding_bound), period_map
 
 
 def _on_orbit(model: Model, p: dict, method: Method, period_map, x0, span: float) -> Trajectory:

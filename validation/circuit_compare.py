@@ -19,6 +19,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from converters.analysis.periodic import ROUNDING_RESOLVED
 from converters.run import make_method, run_converter, steady_state
 
 from .compare import SPICE_SETTLE, spice_drift, spice_steady, unsettled_cause
@@ -93,7 +94,7 @@ def compare_circuit(circuit, params: dict | None = None, *, h=None, spice_option
     x0 = None
     rho = None
     if start == "steady":
-        orbit = steady_state(circuit, p, make_method(circuit, p, "lcp", h), tol=1e-9)
+        orbit = steady_state(circuit, p, make_method(circuit, p, "lcp", h), tol=1e-9, rounding_bound=ROUNDING_RESOLVED)
         x0, rho = orbit.x0, orbit.spectral_radius
     lcp = run_converter(circuit, p, h=h, t_end=span, x0=x0)
     t0 = span - window * T

@@ -17,6 +17,7 @@ import numpy as np
 
 from converters.errors import ParameterError
 from converters.models import get_model
+from converters.analysis.periodic import ROUNDING_RESOLVED
 from converters.run import make_method, run_converter, steady_state
 from netlists import SpiceOptions
 from netlists.build import model_netlist
@@ -85,7 +86,8 @@ def compare(converter: str, params: dict | None = None, *, periods: int | None =
         x_star, rho = lcp.x[0], lcp.metadata["orbit"]["spectral_radius"]
     else:
         if start == "steady":
-            orbit = steady_state(model, p, make_method(model, p, "lcp", h, theta=theta), tol=1e-7)
+            orbit = steady_state(model, p, make_method(model, p, "lcp", h, theta=theta), tol=1e-7,
+                                 rounding_bound=ROUNDING_RESOLVED)
             x_star, rho = orbit.x0, orbit.spectral_radius
         lcp = run_converter(model, p, h=h, theta=theta, periods=periods, x0=x_star)
     window_start = (periods - window) * T

@@ -507,10 +507,10 @@ def _orbit_runs(model, p: dict, method, x_guess):
     """One period on the method's periodic orbit, and for the stepper also on its orbit at 2h (None for the
     event method, exact); or a string saying which orbit was not found."""
     from ..simulate import simulate
-    from .periodic import shoot
+    from .periodic import resolved, shoot        # resolved: an orbit rounding stops short of 1e-8 serves here
     T = model.period(p)
     orbit = shoot(model.problem(p, T, x_guess), method, x_guess, tol=1e-8, polish=True)
-    if not _resolved(orbit):
+    if not resolved(orbit):
         return f"the method's periodic orbit was not found ({orbit.message})"
 
     def run(m, x0):
@@ -519,19 +519,9 @@ def _orbit_runs(model, p: dict, method, x_guess):
         return run(method, orbit.x0), None
     coarse = method.coarsened()
     orbit_2h = shoot(model.problem(p, T, orbit.x0), coarse, orbit.x0, tol=1e-8, polish=True)
-    if not _resolved(orbit_2h):
+    if not resolved(orbit_2h):
         return f"the orbit at 2h was not found ({orbit_2h.message})"
     return run(method, orbit.x0), run(coarse, orbit_2h.x0)
-
-
-#: An orbit Newton resolves to this (relative) as far as double precision goes, short of the 1e-8 asked for, serves
-#: the check of a 1e-3 estimate: a multiplier at 1 - 1.5e-7 (a DCM buck into 1 F) resolves it to ~1.4e-8.
-ROUNDING_RESOLVED = 1e-6
-
-
-def _resolved(orbit) -> bool:
-    from .periodic import ROUNDING_LIMITED
-    return orbit.converged or (orbit.message.startswith(ROUNDING_LIMITED) and orbit.distance <= ROUNDING_RESOLVED)
 
 
 def _richardson_factor(method, fine, T: float) -> float:

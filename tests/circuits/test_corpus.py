@@ -143,3 +143,31 @@ def test_newton_reaches_a_dcm_buck_into_one_farad_where_the_residual_rises_as_th
     assert summary["orbit"]["converged"] and summary["orbit"]["iterations"] <= 10
     D, K = 0.4991, 2 * 100e-6 / (1e3 * 10e-6)
     assert summary["vout_mean"] == pytest.approx(12 * 2 / (1 + (1 + 4 * K / D ** 2) ** 0.5), rel=1e-4)
+
+
+def test_a_default_answer_whose_error_cannot_be_estimated_says_so(monkeypatch, capsys):
+    """Where the accuracy check's own orbits are not found, the number still printed carries a warning (before: the
+    summary's accuracy read "checked": false and the text said nothing)."""
+    from converters.analysis import accuracy
+    monkeypatch.setattr(accuracy, "_orbit_runs", lambda *a, **k: "the orbit at 2h was not found (a test's reason)")
+    assert main(["simulate", str(NETLISTS / "buck.cir"), "--steady"]) == 0
+    err = capsys.readouterr().err
+    assert "warning: vout mean's error could not be estimated: the orbit at 2h was not found (a test's reason)" in err
+
+
+@pytest.mark.spice
+@pytest.mark.parametrize("name", ["stiff-100ns", "esr-buck", "buck-into-1F", "snubbered-buck", "dcm-boost-1uH"])
+def test_compare_never_passes_a_value_more_than_one_percent_off(name, tmp_path, capsys, ngspice):
+    """`compare` at default settings on the corpus: where it passes, pcsuite's value is within 1 % of the reference
+    (the stiff node and the 1 uH boost fail: ngspice reads 10.0087 V where the node holds 10 V, and its switch and
+    diode models leave the boost 1.3e-3 lower; the buck into 1 F passes from pcsuite's orbit, which its check
+    could not find before: Newton there is resolved to 1.4e-8 by rounding, short of the 1e-9 asked)."""
+    path, _ = _file(name, tmp_path)
+    code = main(["compare", str(path), "--json"])
+    result = json.loads(capsys.readouterr().out)
+    exact = run_converter(Circuit.from_netlist(path), {}, method="event", steady=True, steady_tol=1e-11, periods=1)
+    reference = exact.mean("vout", t0=exact.t[0], t1=exact.t[-1]) if CORPUS[name][1] is None else CORPUS[name][1]
+    if result["passed"]:
+        assert code == 0 and abs(result["metrics"]["v(out)_mean_lcp"] / reference - 1) <= 1e-2
+    if name in ("buck-into-1F", "esr-buck", "snubbered-buck"):
+        assert result["passed"]
