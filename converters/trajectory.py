@@ -46,6 +46,10 @@ class Samples:
 RETCODES = ("success", "not_converged")
 
 
+#: Measured tables that are no signal: per point and device (a mode label, each diode conducting, each switch closed).
+PER_DEVICE = ("conducting", "mode", "closed")
+
+
 @dataclass(frozen=True)
 class Trajectory:
     """Time series of one run.
@@ -199,7 +203,7 @@ class Trajectory:
         names = list(self.state_names)
         if self.labels is not None:
             names += [s for s in self.labels.signal_names if s not in names]
-        names += [s for s in self.measured if s not in names and s not in ("conducting", "mode")]
+        names += [s for s in self.measured if s not in names and s not in PER_DEVICE]
         return tuple(names)
 
     def signal(self, name: str, rows=slice(None)) -> np.ndarray:

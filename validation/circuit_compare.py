@@ -20,6 +20,8 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from converters.analysis.periodic import ROUNDING_RESOLVED
+from converters.problems import Comparators, StateSwitching
+from converters.problems.switching import law_channels
 from converters.run import make_method, run_converter, steady_state
 
 from .compare import SPICE_SETTLE, spice_drift, spice_steady, unsettled_cause
@@ -99,7 +101,9 @@ def compare_circuit(circuit, params: dict | None = None, *, h=None, spice_option
     lcp = run_converter(circuit, p, h=h, t_end=span, x0=x0)
     t0 = span - window * T
     law = circuit.compiled(p).law
-    oscillating = getattr(law, "function", None) is not None and law.function.ramp is None
+    # a comparator without a clock (each of several: hysteretic phases) switches the circuit by its own cycles
+    oscillating = isinstance(law, (StateSwitching, Comparators)) and all(
+        channel.function.ramp is None for channel in law_channels(law)[0])
     # a transient's modes are compared over the whole run: a diode conducts above a fraction of its peak over it (the
     # last window's peak can be a blocked diode's leakage, 1e-11 A, read as conduction)
     modes_from = t0 if periodic or oscillating else 0.0
@@ -239,30 +243,57 @@ def _transient(result: CircuitComparison, circuit, th: dict) -> CircuitCompariso
     return result
 
 
-def _cycles(tr, t0: float) -> np.ndarray:
-    """The instants after t0 where the (first) switch closes."""
+def _cycles(tr, t0: float, closed=None) -> np.ndarray:
+    """The instants after t0 where a switch closes: the first (``switch``), or the one whose state per point is
+    ``closed``."""
     rows = tr.rows_between(t0, tr.t[-1])
-    closed = np.asarray(tr.signal("switch", rows)).astype(int)
-    return tr.t[rows][1:][np.diff(closed) > 0]
+    state = np.asarray(tr.signal("switch", rows) if closed is None else closed[rows]).astype(int)
+    return tr.t[rows][1:][np.diff(state) > 0]
+
+
+def _closed(tr, compiled) -> np.ndarray:
+    """Per point and switch, closed: ngspice's from its control voltages (``measured``), the LCP's from its
+    configurations."""
+    if "closed" in tr.measured:
+        return np.asarray(tr.measured["closed"], dtype=bool)
+    return np.asarray(compiled.closed, dtype=bool)[np.asarray(tr.config, dtype=np.int64)]
 
 
 def _self_oscillating(result: CircuitComparison, circuit, th: dict) -> CircuitComparison:
     """A circuit that switches itself (a comparator without a clock: a hysteretic controller): two oscillators
     whose cycles differ by a fraction drift apart in phase over a run, so their waveforms are not compared point
     by point. Over the last tenth of the run: each named output's mean, and its peak-to-peak averaged over the
-    cycles (from one closing of the switch to the next), the mean cycle, and the fraction of time in each mode."""
+    cycles (from one closing of the switch to the next), the mean cycle, and the fraction of time in each mode.
+    With several comparators (hysteretic phases, each its own oscillator) each one's cycle, and the fraction of
+    time each switch is closed: the phases' relative phase drifts, so their combined modes are not compared."""
     lcp, spice, m = result.lcp, result.spice, result.metrics
     t1 = float(lcp.t[-1])
     t0 = t1 - circuit.WINDOW_FRACTION * (t1 - float(lcp.t[0]))
     result.window = (t0, t1)
-    cycles_l, cycles_s = _cycles(lcp, t0), _cycles(spice, t0)
+    compiled = circuit.compiled(result.params)
+    leaders = compiled.law.names if isinstance(compiled.law, Comparators) else ()
+    closed_l, closed_s = (_closed(lcp, compiled), _closed(spice, compiled)) if leaders else (None, None)
+    columns = [compiled.switch_names.index(name) for name in leaders]
+    first = None if not columns else columns[0]
+    cycles_l = _cycles(lcp, t0, None if first is None else closed_l[:, first])
+    cycles_s = _cycles(spice, t0, None if first is None else closed_s[:, first])
     if min(cycles_l.size, cycles_s.size) < 3:
         result.notes.append(f"fewer than 2 cycles in the last tenth of the run ({cycles_l.size - 1} in the LCP's, "
                             f"{cycles_s.size - 1} in ngspice's): compared as a transient")
         return _transient(result, circuit, th)
     cycle_l, cycle_s = np.diff(cycles_l).mean(), np.diff(cycles_s).mean()
     m["cycle_lcp_s"], m["cycle_spice_s"] = float(cycle_l), float(cycle_s)
-    m["cycle_rel_error"] = cycle_rel = float(abs(cycle_s / cycle_l - 1))
+    cycle_rel = float(abs(cycle_s / cycle_l - 1))
+    for name, column in zip(leaders[1:], columns[1:]):
+        own_l, own_s = _cycles(lcp, t0, closed_l[:, column]), _cycles(spice, t0, closed_s[:, column])
+        if min(own_l.size, own_s.size) < 3:
+            result.notes.append(f"{name.upper()} closes fewer than 3 times in the last tenth of the run: its cycle is "
+                                "not compared")
+            continue
+        a, b = np.diff(own_l).mean(), np.diff(own_s).mean()
+        m[f"cycle_{name}_lcp_s"], m[f"cycle_{name}_spice_s"] = float(a), float(b)
+        cycle_rel = max(cycle_rel, float(abs(b / a - 1)))
+    m["cycle_rel_error"] = cycle_rel
     worst_mean, worst_ripple = 0.0, 0.0
     for name in dict.fromkeys(["vout", *circuit.netlist.outputs]):
         label = circuit.output if name == "vout" else name
@@ -271,8 +302,12 @@ def _self_oscillating(result: CircuitComparison, circuit, th: dict) -> CircuitCo
         rip_l, rip_s = _cycle_ripple(lcp, name, cycles_l), _cycle_ripple(spice, name, cycles_s)
         mean_error, ripple_error = _record(m, label, (mean_l, mean_s), (rip_l, rip_s), scale)
         worst_mean, worst_ripple = max(worst_mean, mean_error), max(worst_ripple, ripple_error)
-    fractions_l = lcp.mode_fractions(None, t0=t0, t1=t1)
-    fractions_s = spice.mode_fractions(None, t0=t0, t1=t1)
+    if leaders:                 # each switch's closed fraction (time-weighted over the window)
+        fractions_l = {n: _closed_fraction(lcp, closed_l[:, c], t0, t1) for c, n in enumerate(compiled.switch_names)}
+        fractions_s = {n: _closed_fraction(spice, closed_s[:, c], t0, t1) for c, n in enumerate(compiled.switch_names)}
+    else:
+        fractions_l = lcp.mode_fractions(None, t0=t0, t1=t1)
+        fractions_s = spice.mode_fractions(None, t0=t0, t1=t1)
     apart = max(abs(fractions_l.get(k, 0.0) - fractions_s.get(k, 0.0)) for k in set(fractions_l) | set(fractions_s))
     m["mode_fractions_lcp"], m["mode_fractions_spice"] = fractions_l, fractions_s
     m["mode_fraction_apart"] = apart
@@ -282,6 +317,13 @@ def _self_oscillating(result: CircuitComparison, circuit, th: dict) -> CircuitCo
                    (("mean_rel", worst_mean), ("ripple_rel", worst_ripple), ("cycle_rel", cycle_rel),
                     ("mode_fraction_apart", apart))]
     return result
+
+
+def _closed_fraction(tr, closed: np.ndarray, t0: float, t1: float) -> float:
+    """The fraction of [t0, t1] a switch is closed, each sample holding until the next."""
+    rows = tr.rows_between(t0, t1)
+    t = tr.t[rows]
+    return float(np.sum(np.diff(t) * closed[rows][:-1]) / (t[-1] - t[0]))
 
 
 def _cycle_ripple(tr, name: str, closings: np.ndarray) -> float:
