@@ -155,7 +155,41 @@ def compare_circuit(circuit, params: dict | None = None, *, h=None, spice_option
         result.notes.append(f"ngspice is under-resolved: its last refinement moved its mean {moved:.2g}, more than a "
                             f"tenth of the difference ({error:.2g}); the difference may be ngspice's (--spice-tmax, "
                             "--spice-reltol)")
+    if not _passed(result, "mean_rel"):
+        losses = model_losses(circuit, p, lcp, options, t0, span)
+        if losses is not None and losses > 0.3 * error:
+            result.notes.append(f"ngspice's switch and diode models (RON = {options.switch_ron:g} ohm, N = "
+                                f"{options.diode_n:g}) dissipate about {losses:.2g} of the input power on pcsuite's "
+                                f"orbit, where its ideal ones dissipate none: a difference of that order "
+                                f"({error:.2g}) is the models', not the methods'")
     return result
+
+
+#: The thermal voltage ngspice's diode model uses at its default 27 C (V).
+THERMAL_VOLTAGE = 0.025865
+
+
+def model_losses(circuit, p: dict, lcp, options, t0: float, t1: float) -> float | None:
+    """What ngspice's near-ideal switch and diode models dissipate on pcsuite's own orbit over [t0, t1], relative
+    to the power the DC sources deliver: RON times each switch's mean square current, and each diode's mean current
+    times its drop N Vt ln(I_peak / IS) at its peak (an upper bound); None where the currents or the sources'
+    power are not among the signals."""
+    names = set(lcp.signal_names)
+    try:
+        loss = sum(options.switch_ron * lcp.rms(f"i({name})", t0=t0, t1=t1) ** 2
+                   for name in circuit.compiled(p).switch_names
+                   if f"i({name})" in names)
+        for e in circuit.netlist.elements:
+            if e.kind == "D" and f"i({e.name})" in names:
+                current = np.abs(np.asarray(lcp.signal(f"i({e.name})", lcp.rows_between(t0, t1)), dtype=float))
+                if current.max() > options.diode_is:
+                    drop = options.diode_n * THERMAL_VOLTAGE * np.log(current.max() / options.diode_is)
+                    loss += drop * lcp.mean(f"i({e.name})", t0=t0, t1=t1)
+        power = sum(abs(float(e.waveform) * lcp.mean(f"i({e.name})", t0=t0, t1=t1)) for e in circuit.netlist.elements
+                    if e.kind == "V" and isinstance(e.waveform, (int, float)) and f"i({e.name})" in names)
+    except (KeyError, ValueError):
+        return None
+    return abs(loss) / power if power > 0.0 else None
 
 
 def _passed(result: CircuitComparison, check: str) -> bool:

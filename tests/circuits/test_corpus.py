@@ -171,3 +171,6 @@ def test_compare_never_passes_a_value_more_than_one_percent_off(name, tmp_path, 
         assert code == 0 and abs(result["metrics"]["v(out)_mean_lcp"] / reference - 1) <= 1e-2
     if name in ("buck-into-1F", "esr-buck", "snubbered-buck"):
         assert result["passed"]
+    if name == "dcm-boost-1uH":      # 15 A peaks through RON = 1 mohm: 1.6e-3 of the input power, the 1.3e-3 apart
+        assert not result["passed"] and any("ngspice's switch and diode models (RON = 0.001 ohm, N = 0.001) "
+                                            "dissipate about 0.0016 of the input power" in n for n in result["notes"])
