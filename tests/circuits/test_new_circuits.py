@@ -708,6 +708,18 @@ def test_type2_loop_buck_finds_its_orbit_from_rest_where_its_transient_settles(m
     assert vcon == pytest.approx(5.0 / 12.0, rel=1e-3)          # the duty ratio vout/Vin on a 1 V ramp
 
 
+@pytest.mark.parametrize("method, tol", [("event", 1e-10), ("lcp", 2e-8)])
+def test_type2_loop_buck_at_an_open_loop_gain_of_a_million_reaches_its_orbit(method, tol):
+    """Aol = 1e6 (issue: integrating loops at high gains): the integrator saturates longer from rest (307 plain
+    periods before Newton with the event method, 1,659 with the stepper, within the 2,048 the settling rounds allow),
+    then 2 Newton iterations; the same closed form, Vref - mean v(vcon)/Aol."""
+    p, tr, summary = orbit("type2-loop-buck", {"Aol": "1e6"}, method=method)
+    o = summary["orbit"]
+    assert o["converged"] and o["stable"] and o["transient"] <= 2048 and o["iterations"] <= 5
+    vcon = summary["measurements"]["v(vcon)"]["mean"]
+    assert summary["vout_mean"] == pytest.approx(p["vref"] - vcon / p["aol"], rel=tol)
+
+
 def test_type2_loop_buck_compare_passes_against_ngspice(capsys, ngspice):
     """ngspice from rest over its own settling (480 periods): mean 2.6e-5 apart, ripple 3.2e-4, modes agree."""
     assert main(["compare", str(NETLISTS / "type2-loop-buck.cir"), "--json"]) == 0
