@@ -19,8 +19,8 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
-from ..compiled import (NEWTON_CONVERGED, NEWTON_EVALUATE, NEWTON_EXHAUSTED, NEWTON_NONFINITE, NEWTON_RADIUS,
-                        NEWTON_ROUNDING, NEWTON_SINGULAR, kernel)
+from ..compiled import (NEWTON_CONVERGED, NEWTON_EVALUATE, NEWTON_EXHAUSTED, NEWTON_NO_SOLUTION, NEWTON_NONFINITE,
+                        NEWTON_RADIUS, NEWTON_ROUNDING, NEWTON_SINGULAR, kernel)
 from ..compiled import ROUNDING as _ROUNDING
 from ..errors import ParameterError, SimulationError
 from ..validate import as_vector, check_flag, check_integer
@@ -125,12 +125,20 @@ def newton_orbit(period_map, x_guess, *, tol: float = 1e-10, max_iter: int = 50,
     dx, work, trial, p_trial, jac_trial = np.empty(n), np.empty((n, n + 1)), np.empty(n), np.empty(n), np.empty((n, n))
     istate, rstate = np.zeros(4, dtype=np.int64), np.array([np.inf, np.inf, np.inf, 0.0])
     advance = kernel("newton_advance")
+    ok = True
     while True:
-        verdict = advance(x, px, jac, dx, work, trial, p_trial, jac_trial, True, istate, rstate, float(tol), max_iter)
+        verdict = advance(x, px, jac, dx, work, trial, p_trial, jac_trial, ok, istate, rstate, float(tol), max_iter)
         if verdict == NEWTON_RADIUS:
             rstate[3] = spectral_radius(jac)
-        elif verdict == NEWTON_EVALUATE:            # a map that cannot be taken raises, with its own reason
-            p_trial[:], jac_trial[:, :] = period_map(trial)
+        elif verdict == NEWTON_EVALUATE:
+            # A trial outside the map's domain (a cam's follower below its surface: a negative gap) is a step too
+            # long, halved like one that does not lower the residual (a plain period the map refuses ends Newton:
+            # NEWTON_NO_SOLUTION); any other failure of the map raises with its own reason.
+            try:
+                p_trial[:], jac_trial[:, :] = period_map(trial)
+                ok = True
+            except ParameterError:
+                ok = False
         else:
             break
     iteration, relaxations = int(istate[1]), int(istate[3])
@@ -147,7 +155,8 @@ def newton_orbit(period_map, x_guess, *, tol: float = 1e-10, max_iter: int = 50,
                          "asked for",
         NEWTON_EXHAUSTED: f"no convergence in {max_iter} Newton iterations ({relaxations} of them plain periods where "
                           "no Newton step reduced the residual)",
-        NEWTON_NONFINITE: "the period map left the finite numbers"}[verdict]
+        NEWTON_NONFINITE: "the period map left the finite numbers",
+        NEWTON_NO_SOLUTION: "a plain period the map could not take (its state outside the map's domain)"}[verdict]
     return PeriodicOrbit(x, span, jac, multipliers_of(jac), residual, distance, iteration, period_map.evaluations,
                          False, period_map.jacobian_kind,
                          f"{message}; residual {residual:.3g}, estimated distance {distance:.3g} > tol {tol:.3g}")
