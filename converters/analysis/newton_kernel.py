@@ -19,83 +19,14 @@ EPS = 2.220446049250313e-16
 
 
 @njit(cache=True)
-def newton_step(x, px, jac, rho, step, work, tol, iteration, max_iter):
-    """One Newton iteration on P(x) - x = 0 and the verdict on it: the arithmetic and the stopping rule of the
-    serial engine (:func:`converters.analysis.periodic.newton_orbit`) and the batched steady states
-    (:mod:`converters.sweeps.batch`), written once. Fills ``step`` with the Newton step dx,
-    (jac - I) dx = -(P(x) - x) (Gaussian elimination with partial pivoting on ``work``, n x (n + 1)).
-
-    ``rho``: the spectral radius of jac (:func:`converters.analysis.floquet.spectral_radius`, computed by the
-    caller: numpy's LAPACK in Python, numba's in compiled callers, so this kernel needs neither). Returns
-    (residual, worst, distance, verdict): worst = max |P(x) - x|, residual = worst / scale with
-    scale = 1 + max |x|; distance = max(max |dx|, worst / (1 - rho) when rho < 1) / scale, the estimated
-    distance to the orbit; the verdict (``converters.compiled``): NEWTON_CONVERGED when distance <= tol, else
-    NEWTON_ROUNDING when the residual is at most ROUNDING machine epsilons, else NEWTON_EXHAUSTED at
-    iteration >= max_iter, else NEWTON_CONTINUE; NEWTON_SINGULAR when jac - I is singular (a pivot exactly 0: a
-    multiplier at 1), step and distance then undefined."""
+def _solve_shifted(jac, x, px, work):
+    """(jac - I) s = -(P(x) - x) by Gaussian elimination with partial pivoting on ``work`` (n x (n + 1)), s left in
+    its last column; returns max |s|, inf where jac - I is singular (a pivot exactly 0: a multiplier at 1)."""
     n = x.shape[0]
-    scale = 1.0
-    worst = 0.0
-    for i in range(n):
-        scale = max(scale, 1.0 + abs(x[i]))
-        worst = max(worst, abs(px[i] - x[i]))
     for i in range(n):
         for l in range(n):
             work[i, l] = jac[i, l] - (1.0 if i == l else 0.0)
         work[i, n] = x[i] - px[i]
-    for col in range(n):
-        pivot = col
-        for row in range(col + 1, n):
-            if abs(work[row, col]) > abs(work[pivot, col]):
-                pivot = row
-        for cc in range(n + 1):
-            tmp = work[col, cc]
-            work[col, cc] = work[pivot, cc]
-            work[pivot, cc] = tmp
-        if work[col, col] == 0.0:
-            return worst / scale, worst, np.inf, NEWTON_SINGULAR
-        for row in range(col + 1, n):
-            f = work[row, col] / work[col, col]
-            for cc in range(col, n + 1):
-                work[row, cc] -= f * work[col, cc]
-    largest = 0.0
-    for row in range(n - 1, -1, -1):
-        acc = work[row, n]
-        for l in range(row + 1, n):
-            acc -= work[row, l] * step[l]
-        step[row] = acc / work[row, row]
-        largest = max(largest, abs(step[row]))
-    distance = largest / scale
-    if rho < 1.0:
-        distance = max(distance, worst / (1.0 - rho) / scale)
-    residual = worst / scale
-    if distance <= tol:
-        return residual, worst, distance, NEWTON_CONVERGED
-    if residual <= ROUNDING * EPS:
-        return residual, worst, distance, NEWTON_ROUNDING
-    if iteration >= max_iter:
-        return residual, worst, distance, NEWTON_EXHAUSTED
-    return residual, worst, distance, NEWTON_CONTINUE
-
-
-#: Halvings of a Newton step that does not lower the residual before a plain period of the map is taken instead.
-HALVINGS = 8
-#: The driver's phases (``istate[0]``): at a new iterate, its radius known, a trial step evaluated, a plain
-#: period evaluated.
-_NEW, _STEP, _TRIAL, _PLAIN = 0, 1, 2, 3
-
-
-@njit(cache=True)
-def _simplified_correction(jac, trial, p_trial, work):
-    """max |s| of the simplified Newton correction at the trial, (jac - I) s = -(P(trial) - trial) with the current
-    iterate's Jacobian (Deuflhard's natural monotonicity test reads it: a measure of the distance to the orbit in
-    the state's own units, where the residual's max-norm mixes volts and amperes); inf where jac - I is singular.
-    Uses ``work`` (n x (n + 1)), free between iterations."""
-    n = trial.shape[0]
-    for i in range(n):
-        for l in range(n):
-            work[i, l] = jac[i, l] - (1.0 if i == l else 0.0)
-        work[i, n] = trial[i] - p_trial[i]
     for col in range(n):
         pivot = col
         for row in range(col + 1, n):
@@ -119,6 +50,52 @@ def _simplified_correction(jac, trial, p_trial, work):
         work[row, n] = acc / work[row, row]
         largest = max(largest, abs(work[row, n]))
     return largest
+
+
+@njit(cache=True)
+def newton_step(x, px, jac, rho, step, work, tol, iteration, max_iter):
+    """One Newton iteration on P(x) - x = 0 and the verdict on it: the arithmetic and the stopping rule of the
+    serial engine (:func:`converters.analysis.periodic.newton_orbit`) and the batched steady states
+    (:mod:`converters.sweeps.batch`), written once. Fills ``step`` with the Newton step dx,
+    (jac - I) dx = -(P(x) - x) (Gaussian elimination with partial pivoting on ``work``, n x (n + 1)).
+
+    ``rho``: the spectral radius of jac (:func:`converters.analysis.floquet.spectral_radius`, computed by the
+    caller: numpy's LAPACK in Python, numba's in compiled callers, so this kernel needs neither). Returns
+    (residual, worst, distance, verdict): worst = max |P(x) - x|, residual = worst / scale with
+    scale = 1 + max |x|; distance = max(max |dx|, worst / (1 - rho) when rho < 1) / scale, the estimated
+    distance to the orbit; the verdict (``converters.compiled``): NEWTON_CONVERGED when distance <= tol, else
+    NEWTON_ROUNDING when the residual is at most ROUNDING machine epsilons, else NEWTON_EXHAUSTED at
+    iteration >= max_iter, else NEWTON_CONTINUE; NEWTON_SINGULAR when jac - I is singular (a pivot exactly 0: a
+    multiplier at 1), step and distance then undefined."""
+    n = x.shape[0]
+    scale = 1.0
+    worst = 0.0
+    for i in range(n):
+        scale = max(scale, 1.0 + abs(x[i]))
+        worst = max(worst, abs(px[i] - x[i]))
+    largest = _solve_shifted(jac, x, px, work)
+    if largest == np.inf:
+        return worst / scale, worst, np.inf, NEWTON_SINGULAR
+    for i in range(n):
+        step[i] = work[i, n]
+    distance = largest / scale
+    if rho < 1.0:
+        distance = max(distance, worst / (1.0 - rho) / scale)
+    residual = worst / scale
+    if distance <= tol:
+        return residual, worst, distance, NEWTON_CONVERGED
+    if residual <= ROUNDING * EPS:
+        return residual, worst, distance, NEWTON_ROUNDING
+    if iteration >= max_iter:
+        return residual, worst, distance, NEWTON_EXHAUSTED
+    return residual, worst, distance, NEWTON_CONTINUE
+
+
+#: Halvings of a Newton step that does not lower the residual before a plain period of the map is taken instead.
+HALVINGS = 8
+#: The driver's phases (``istate[0]``): at a new iterate, its radius known, a trial step evaluated, a plain
+#: period evaluated.
+_NEW, _STEP, _TRIAL, _PLAIN = 0, 1, 2, 3
 
 
 @njit(cache=True)
@@ -189,7 +166,8 @@ def newton_advance(x, px, jac, dx, work, trial, p_trial, jac_trial, ok, istate, 
             for i in range(n):
                 full = max(full, abs(dx[i]))
             full /= lam
-            if _simplified_correction(jac, trial, p_trial, work) < (1.0 - 0.5 * lam) * full:
+            # the simplified Newton correction at the trial, with the iterate's Jacobian
+            if _solve_shifted(jac, trial, p_trial, work) < (1.0 - 0.5 * lam) * full:
                 return _accept(x, px, jac, trial, p_trial, jac_trial, istate)
         istate[2] += 1
         if istate[2] < HALVINGS:

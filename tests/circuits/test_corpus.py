@@ -19,20 +19,9 @@ from converters.models import Circuit
 from converters.run import run_converter
 from validation.cli import main
 
-NETLISTS = Path(__file__).resolve().parents[2] / "netlists" / "circuits"
+from .test_stiff import STIFF
 
-STIFF = """stiff node: a square wave through {r} into {c}, an ideal diode into 1 uF
-V1 in 0 PULSE(0 10 0 1n 1n 0.5m 1m)
-R1 in a {r}
-C1 a 0 {c}
-D1 a out DIDEAL
-C2 out 0 1u
-R2 a 0 1e12
-R3 out 0 1e12
-.model DIDEAL D
-.tran 1u 20m
-.end
-"""
+NETLISTS = Path(__file__).resolve().parents[2] / "netlists" / "circuits"
 
 BUCK = """{title}
 Vin in 0 DC {vin}
