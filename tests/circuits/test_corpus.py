@@ -8,8 +8,9 @@ a stiff node stepped far beyond its time constant (100 ns and 1 fs at a 1 us ste
 (a 1.6 MHz resonance at Q 1,000 across a 10 ns step), a buck's electrolytic beside a ceramic (a 10 ps mode), a boost
 deep in DCM (1 uH), a buck into 1 F (its slowest multiplier 1 - 1.5e-7: Newton's residual mixes volts and amperes
 there), a boost with its switch's Coss (hard switching), a flyback at coupling 0.999, the parallel resonant
-converter, a two-switch forward, a Cockcroft-Walton ladder, a type II loop (A = 1e5), two comparators, and an
-unstable voltage-mode orbit (refused)."""
+converter, a two-switch forward, a Cockcroft-Walton ladder, a type II loop (A = 1e5), two comparators, an
+unstable voltage-mode orbit (refused); and an engineer's everyday netlists: capacitors in series, a split DC link, a
+two-switch forward with bleeders."""
 import json
 from pathlib import Path
 
@@ -65,6 +66,27 @@ R1 out 0 50
     "type2-loop-buck": ("type2-loop-buck.cir", None),
     "interleaved-vm-buck": ("interleaved-vm-buck.cir", None),
     "voltage-mode-buck-unstable": ("voltage-mode-buck.cir -p Vin=33", "refused"),
+    # An engineer's everyday netlists (issue: everyday circuits): two capacitors in series across a boost's output,
+    # a split DC link (its midpoint at Vdc/2), the two-switch forward with 100 kohm bleeders across its clamp
+    # diodes (the stepper stopped on it: "step LCP ... could not be solved (no_solution)").
+    "series-caps-boost": ("""boost with two 1 nF in series across its output beside the 10 uF
+Vin in 0 DC 12
+Vg g 0 PULSE(0 1 0 1n 1n 4.99u 10u)
+L1 in sw 100u
+S1 sw 0 g 0 SWMOD
+D1 sw out DMOD
+C1 out fa 1n
+C2 fa 0 1n
+C3 out 0 10u
+R1 out 0 20
+.model SWMOD SW(VT=0.5)
+.model DMOD D
+.tran 10n 2m
+.end
+""", None),
+    "split-dc-link": ("half-bridge.cir", 200.0),
+    "forward-bleeders": ((NETLISTS / "two-switch-forward.cir").read_text().replace(
+        "Lpri pa pb {Lm}\n", "Lpri pa pb {Lm}\nRb1 pa 0 100k\nRb2 pb 0 100k\n"), None),
 }
 
 
