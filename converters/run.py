@@ -21,7 +21,7 @@ from .methods.base import DEFAULT_METHOD, Method, get_method
 from .methods.theta import StepPlanMap
 from .models import Model, check_h, get_model
 from .simulate import simulate
-from .trajectory import Trajectory, concatenate
+from .trajectory import ReturnCode, Trajectory, concatenate
 from .validate import check_flag, check_integer, parse_value
 
 #: Periods simulated from x0 before Newton shooting starts: none. With the exact Jacobian Newton starts from x0
@@ -240,7 +240,7 @@ def _accurate(model: Model, p: dict, rtol, start: float, *, method, h, t_end, pe
             "orbit": result.orbit.summary(), "accuracy": result.summary(),
             "steady_periods": int(round(simulated)), "periods": int(round(span / T))}
     return replace(tr, labels=model.labels(p), wall_s=time.perf_counter() - start, metadata={**tr.metadata, **meta},
-                   retcode="success" if result.met else "not_converged")
+                   retcode=ReturnCode.SUCCESS if result.met else ReturnCode.NOT_CONVERGED)
 
 
 def _step_target(model: Model, p: dict, method: Method) -> float | None:
@@ -431,7 +431,7 @@ def run_summary(tr: Trajectory, *, check: bool = True) -> dict:
     accurate they are (:func:`check_accuracy`: re-runs at twice the step or on the method's orbit)."""
     meta = tr.metadata
     out = {"converter": meta["model"], "method": tr.method, "options": {**meta["method_options"], "params": meta["params"]},
-           "steps": int(tr.steps), "wall_s": tr.wall_s, "retcode": tr.retcode}
+           "steps": int(tr.steps), "wall_s": tr.wall_s, "retcode": tr.retcode.value}
     model, p = tr.labels.model, meta["params"]
     if model.control != Model.control:
         out["control"] = model.control
@@ -494,7 +494,7 @@ def check_accuracy(tr: Trajectory, summary: dict) -> dict:
         from .analysis.accuracy import window_check
         window = out.get("window_s") or (float(tr.t[-1]) - out["window_periods"] * model.period(p), float(tr.t[-1]))
         coarse = (run_converter(model, p, method=method.coarsened(), t_end=float(tr.t[-1] - tr.t[0]), x0=tr.x[0])
-                  if method.error_kind == "step" else None)      # the same run at twice the step
+                  if method.fixed_step else None)      # the same run at twice the step
         check = window_check(model, p, method, tr, out, window, coarse)
     else:
         return out

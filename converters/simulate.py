@@ -6,7 +6,7 @@ from dataclasses import replace
 import numpy as np
 
 from .errors import ParameterError, SimulationError
-from .methods.base import METHODS, Method
+from .methods.base import Method, load_methods
 from .problems import LCSProblem
 from .trajectory import Trajectory
 
@@ -29,7 +29,7 @@ def simulate(problem: LCSProblem, method: Method, *, x0=None) -> Trajectory:
     Trajectory
     """
     if not isinstance(method, Method):
-        raise ParameterError(f"method must be a pcsuite method ({', '.join(f'{k}: {c.__name__}' for k, c in METHODS.items())}"
+        raise ParameterError(f"method must be a pcsuite method ({', '.join(f'{k}: {c.__name__}' for k, c in load_methods().items())}"
                              f"); got {method!r}")
     if not isinstance(problem, LCSProblem) and not hasattr(problem, "t_span"):
         raise ParameterError(f"problem must be an LCSProblem (or a mechanical problem); got {problem!r}")

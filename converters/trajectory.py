@@ -17,14 +17,18 @@ were produced (``rule``):
 from __future__ import annotations
 
 import itertools
-
-from dataclasses import dataclass, field
-
 import math
+from dataclasses import dataclass, field
+from enum import Enum
+from typing import TYPE_CHECKING, ClassVar, Protocol
 
 import numpy as np
 
 from .errors import SignalError
+
+if TYPE_CHECKING:
+    from .problems import LCSProblem
+    from .problems.mechanical import MechanicalProblem
 
 RULES = ("end", "linear", "exact")
 
@@ -42,8 +46,57 @@ class Samples:
     held: np.ndarray | None = None
 
 
-#: How a run can end without raising (:attr:`Trajectory.retcode`).
-RETCODES = ("success", "not_converged")
+class ReturnCode(str, Enum):
+    """How a run ended without raising (:attr:`Trajectory.retcode`), as DifferentialEquations.jl's ``sol.retcode``:
+    ``SUCCESS``, or ``NOT_CONVERGED`` where the run returns what it reached short of what was asked. A ``str``
+    enum: it compares equal to its value (``tr.retcode == "success"``) and writes as it into JSON."""
+
+    SUCCESS = "success"
+    NOT_CONVERGED = "not_converged"
+
+    def __str__(self) -> str:
+        return self.value
+
+
+#: The return codes' values (:class:`ReturnCode`).
+RETCODES = tuple(code.value for code in ReturnCode)
+
+
+class Algorithm(Protocol):
+    """What a trajectory and its readers know of the method that made it (:class:`converters.methods.base.Method`
+    gives it; the trajectory sits below the methods, which return it)."""
+
+    key: ClassVar[str]
+    counts: ClassVar[str]
+    exact: ClassVar[bool]
+    fixed_step: ClassVar[bool]
+
+    @property
+    def order(self) -> float: ...
+
+    def options(self) -> dict[str, object]: ...
+
+
+@dataclass(frozen=True)
+class Stats:
+    """What a run cost (:attr:`Trajectory.stats`): ``steps`` in its method's unit (``unit``: steps, segments,
+    factorisations), the wall seconds, the events, and the steps whose LCP went to the general solver.
+    ``stats["steps"]`` reads as ``stats.steps`` (the mapping form of earlier releases)."""
+
+    steps: int
+    unit: str
+    wall_s: float
+    events: int
+    general_solves: int
+
+    def __getitem__(self, name: str) -> int | float | str:
+        if name not in self.__dataclass_fields__:
+            raise KeyError(name)
+        value: int | float | str = getattr(self, name)
+        return value
+
+    def as_dict(self) -> dict[str, int | float | str]:
+        return {name: getattr(self, name) for name in self.__dataclass_fields__}
 
 
 #: Measured tables that are no signal: per point and device (a mode label, each diode conducting, each switch closed).
@@ -103,10 +156,10 @@ class Trajectory:
     algorithm : Method or None
         The method object that solved it, with its options (``method`` is its registry name): what a check of the
         run's accuracy re-runs at another step.
-    stats : dict (property)
+    stats : Stats (property)
         What the run cost: ``steps`` (the method's unit: ``counts``), ``wall_s``, ``events``, ``general_solves``.
-    retcode : str
-        How the run ended (``RETCODES``): ``success``, or ``not_converged`` where it returns what it reached short
+    retcode : ReturnCode
+        How the run ended: ``success``, or ``not_converged`` where it returns what it reached short
         of what was asked (accuracy on request whose rtol was not met; ngspice's steady state not settled within
         its periods): the summary's warnings say by how much. A run that cannot give an answer raises instead
         (SimulationError, LCPError, ResourceError, ParameterError).
@@ -135,25 +188,27 @@ class Trajectory:
     metadata: dict = field(default_factory=dict, compare=False)
     #: Rows before this time were kept at an output spacing only (:meth:`thinned`): measures need every step.
     resolved_from: float = float("-inf")
-    problem: object = field(default=None, compare=False, repr=False)
-    algorithm: object = field(default=None, compare=False, repr=False)
-    retcode: str = "success"
+    problem: "LCSProblem | MechanicalProblem | None" = field(default=None, compare=False, repr=False)
+    algorithm: Algorithm | None = field(default=None, compare=False, repr=False)
+    retcode: ReturnCode = ReturnCode.SUCCESS
     #: The jumps of the state (a switch closing across charged capacitances, :class:`~converters.problems.Jump`):
     #: ((time, energy lost in J), ...) in time order, as the method took them (a run's start among them where its
     #: state is not on the first configuration's loops).
     jumps: tuple = ()
 
-    def __post_init__(self):
-        if self.retcode not in RETCODES:
-            raise ValueError(f"retcode must be one of {', '.join(RETCODES)}; got {self.retcode!r}")
+    def __post_init__(self) -> None:
+        if not isinstance(self.retcode, ReturnCode):
+            if self.retcode not in RETCODES:
+                raise ValueError(f"retcode must be one of {', '.join(RETCODES)}; got {self.retcode!r}")
+            object.__setattr__(self, "retcode", ReturnCode(self.retcode))
 
     @property
-    def stats(self) -> dict:
+    def stats(self) -> Stats:
         """What the run cost: steps (in the unit of its method's ``counts``), wall seconds, events, and the steps
         whose LCP went to the general solver."""
-        unit = getattr(self.algorithm, "counts", "steps") if self.algorithm is not None else "steps"
-        return {"steps": int(self.steps), "unit": unit, "wall_s": float(self.wall_s), "events": len(self.events),
-                "general_solves": int(self.general_solves)}
+        unit = self.algorithm.counts if self.algorithm is not None else "steps"
+        return Stats(steps=int(self.steps), unit=unit, wall_s=float(self.wall_s), events=len(self.events),
+                     general_solves=int(self.general_solves))
 
     # --- raw views -----------------------------------------------------------------------------------
 

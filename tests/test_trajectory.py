@@ -1,11 +1,13 @@
 """The one Trajectory type: its measures by rule (end point, linear, exact), windows, measured signals,
 mode fractions and concatenation."""
+import json
+
 import numpy as np
 import pytest
 
 from converters.methods import EventDriven, Theta
 from converters.simulate import simulate
-from converters.trajectory import Samples, Trajectory, concatenate
+from converters.trajectory import ReturnCode, Samples, Stats, Trajectory, concatenate
 
 
 class _Labels:
@@ -129,8 +131,17 @@ def test_a_solution_carries_its_problem_its_method_and_what_it_cost(method):
     algorithm = Theta(h=1e-6, theta=0.5) if method == "lcp" else EventDriven()
     tr = simulate(problem, algorithm)
     assert tr.problem is problem and tr.algorithm is algorithm and tr.method == method
-    stats = tr.stats
-    assert stats["steps"] == tr.steps > 0 and stats["unit"] == ("steps" if method == "lcp" else "segments")
-    assert stats["events"] == len(tr.events) > 0 and stats["wall_s"] == tr.wall_s
+    stats = tr.stats                              # a typed record; its mapping form reads the same
+    assert isinstance(stats, Stats) and stats.steps == stats["steps"] == tr.steps > 0
+    assert stats.unit == ("steps" if method == "lcp" else "segments") and stats.general_solves == 0
+    assert stats.events == len(tr.events) > 0 and stats.wall_s == tr.wall_s and tr.retcode is ReturnCode.SUCCESS
+    with pytest.raises(KeyError):
+        stats["nfev"]
     steady = run_converter("buck", {}, steady=True, method=method)
     assert steady.algorithm is not None and steady.algorithm.key == method and steady.problem is not None
+
+
+def test_a_return_code_given_by_its_value_is_the_typed_code_and_writes_as_its_value():
+    tr = Trajectory(t=np.zeros(1), x=np.zeros((1, 1)), state_names=("x",), retcode="not_converged")
+    assert tr.retcode is ReturnCode.NOT_CONVERGED and tr.retcode == "not_converged"
+    assert json.dumps({"retcode": tr.retcode}) == '{"retcode": "not_converged"}' and str(tr.retcode) == "not_converged"

@@ -140,7 +140,7 @@ def diagram_method(model: Model, params: dict, theta: float | None = None, steps
     from converters.methods.base import get_method
     cls = get_method(key)
     T = model.period(params)
-    if cls.error_kind != "step":
+    if not cls.fixed_step:
         return cls.from_options(step=T)
     options = {"theta": theta or BIFURCATION["diagram_theta"]} if "theta" in cls.option_names() else {}
     return cls.from_options(step=T / (steps or BIFURCATION["diagram_steps"]), **options)

@@ -9,8 +9,9 @@ is whether its 10-period mean has settled. A steady state has no period map to s
 LCP stepper's orbit and runs on, from where it ended, until its own 10-period mean moves less than
 ``SPICE_SETTLE`` (at most ``MAX_SPICE_PERIODS`` periods).
 
-Importing this module registers the method (``--method spice``); :mod:`converters` does not import it (ngspice
-lives above the core's layers).
+It is registered as an entry point (``pcsuite.methods``, in pyproject.toml): ``get_method("spice")`` and the
+command line load it on first use, as any backend; :mod:`converters` never imports it (ngspice lives above the
+core's layers).
 """
 from __future__ import annotations
 
@@ -18,7 +19,8 @@ import time
 from dataclasses import dataclass
 
 from converters.errors import ParameterError
-from converters.methods.base import Method
+from converters.methods.base import ErrorKind, Method
+from converters.trajectory import ReturnCode
 from converters.validate import parse_value
 
 #: RELTOL ngspice is allowed (its own default is 1e-3).
@@ -64,7 +66,7 @@ class Spice(Method, key="spice"):
     spice_reltol: float | str | None = None
     spice_method: str | None = None
     domains = ("circuit",)
-    error_kind = "model"
+    error_kind = ErrorKind.MODEL
     model_error = "its near-ideal devices' and its own time-step control's"
     counts = "accepted steps"
     description = ("the same circuit in ngspice, its ideal devices near-ideal (--spice-tmax, --spice-reltol, "
@@ -146,4 +148,4 @@ class Spice(Method, key="spice"):
                     "method_options": {**result.options, "ngspice": result.ngspice_version}, "notes": notes,
                     "warnings": warnings}
         return replace(tr, algorithm=self, wall_s=time.perf_counter() - start, metadata=metadata,
-                       retcode="success" if notes.get("spice_settled", True) else "not_converged")
+                       retcode=ReturnCode.SUCCESS if notes.get("spice_settled", True) else ReturnCode.NOT_CONVERGED)

@@ -36,6 +36,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..errors import ParameterError, SimulationError
+from ..methods.base import ErrorKind
 
 #: Estimates must fall below rtol / SAFETY (the stepper's effective order through a diode event is ~1.3-1.5,
 #: not its declared 2, so Richardson with p = 2 can underestimate by up to ~3x).
@@ -515,7 +516,7 @@ def _orbit_runs(model, p: dict, method, x_guess):
 
     def run(m, x0):
         return replace(simulate(model.problem(p, T, x0), m), labels=model.labels(p))
-    if method.error_kind != "step":
+    if not method.fixed_step:
         return run(method, orbit.x0), None
     coarse = method.coarsened()
     orbit_2h = shoot(model.problem(p, T, orbit.x0), coarse, orbit.x0, tol=1e-8, polish=True)
@@ -568,7 +569,7 @@ def _power_warning(check: dict, method) -> str:
         remedy = "the run has not settled (its power balance still carries the transient): use --steady"
     else:
         remedy = ("the step is too coarse: use --method event (exact at the switchings), a smaller --h, or --rtol"
-                  if method.error_kind == "step" else "use --steady")
+                  if method.fixed_step else "use --steady")
     return (f"efficiency may be {error:.1e} off (more than {DEFAULT_RTOL:g}; input power "
             f"{check['input_W_error_estimate']:.1e}): {remedy}")
 
@@ -584,7 +585,7 @@ def default_check(model, p: dict, method, tr, reported: float, power: dict | Non
     input power's estimates (:func:`_power_check`), and a warning when the efficiency's exceeds it."""
     T = model.period(p)
     out = {"target": DEFAULT_RTOL}
-    if method.error_kind == "model":
+    if method.error_kind is ErrorKind.MODEL:
         reason = _model_error(method)
         end = float(tr.t[-1])
         if end - float(tr.t[0]) < 20 * T * (1 - 1e-4):      # (ngspice starts its samples at ~5e-5 T)
@@ -663,7 +664,7 @@ def _energy_check(model, p: dict, method, fine, coarse, out: dict) -> str:
     out["energy_residual"] = residual
     if coarse is not None:
         out["energy_residual_2h"] = energy_balance(model, p, coarse, 0.0, T)["residual"]
-    if method.error_kind == "exact" and residual > ENERGY_EXACT_RTOL:
+    if method.exact and residual > ENERGY_EXACT_RTOL:
         return (f"the run's energy balance does not close ({residual:.1e} of the energy its sources deliver): "
                 "the exact method's values are not to be trusted here")
     return ""
@@ -794,11 +795,11 @@ def window_check(model, p: dict, method, tr, summary: dict, window: tuple, coars
     Each relative estimate is the sum of its parts; a warning names the larger part when one exceeds
     ``DEFAULT_RTOL``."""
     out = {"target": DEFAULT_RTOL}
-    if method.error_kind == "model":
+    if method.error_kind is ErrorKind.MODEL:
         return {**out, "checked": False, "reason": _model_error(method)}
     names = [name for name in WINDOW_MEASURES if isinstance(summary.get(name), float)]
     t0, t1 = (float(t) for t in window)
-    if method.error_kind == "step" and coarse is None:
+    if method.fixed_step and coarse is None:
         raise ValueError("window_check: the stepper's run needs its coarse twin at 2h")
     coarse_summary = model.summary(coarse, p) if coarse is not None else None
     a = 2.0 * t0 - t1

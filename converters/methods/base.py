@@ -6,9 +6,9 @@ holds only its options, validated when it is made, and declares
 * ``key``: its name in :data:`METHODS` (``lcp``, ``event``, ``smooth``; the command line's ``--method``);
 * ``order``: its declared order of convergence in its step (``inf`` for an exact method); the tests
   check the measured order against it;
-* ``error_kind``: how its error is estimated (``step``: Richardson's from a twin at twice the step,
-  :meth:`Method.coarsened`; ``exact``; ``model``: its model's, not a step's): the accuracy checks read this,
-  never the key;
+* ``error_kind`` (an :class:`ErrorKind`): how its error is estimated (``step``: Richardson's from a twin at twice
+  the step, :meth:`Method.coarsened`; ``exact``; ``model``: its model's, not a step's), and the traits it gives,
+  ``fixed_step`` and ``exact``: the accuracy checks read these, never the key;
 * ``supports(problem)``: the problems it can solve (a clear error otherwise, before any step);
 * ``solve(problem, x0) -> Trajectory``;
 * ``period_map(problem)``: the map x(t0) -> x(t0 + span) over ``problem.t_span`` with its Jacobian,
@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import dataclasses
 from abc import ABC, abstractmethod
+from enum import Enum
 from typing import ClassVar
 
 import numpy as np
@@ -35,6 +36,20 @@ SEGMENTS_PER_PERIOD = 64
 METHODS: dict[str, type["Method"]] = {}
 #: The method a run takes when none is named (the LCP time-stepper).
 DEFAULT_METHOD = "lcp"
+
+
+class ErrorKind(str, Enum):
+    """How a method's error is estimated (:attr:`Method.error_kind`); a ``str`` enum, equal to its value."""
+
+    #: A fixed step whose error falls as step^order: Richardson's estimate from the same run at twice the step.
+    STEP = "step"
+    #: Exact flows with events at their instants: rounding only.
+    EXACT = "exact"
+    #: The error is the method's model of the circuit (a smoothing's O(eps), ngspice's devices): no step twin.
+    MODEL = "model"
+
+    def __str__(self) -> str:
+        return self.value
 
 
 class Method(ABC):
@@ -53,7 +68,10 @@ class Method(ABC):
     #: whose error falls as step^order (Richardson's estimate from the same run at twice the step,
     #: :meth:`coarsened`); ``exact`` exact flows with events at their instants (rounding only); ``model`` the
     #: error is the method's model of the circuit (a smoothing's O(eps)), which no step twin measures.
-    error_kind: ClassVar[str] = "step"
+    error_kind: ClassVar[ErrorKind] = ErrorKind.STEP
+    #: Traits from ``error_kind`` (set for each subclass): a fixed step that :meth:`coarsened` doubles; exact flows.
+    fixed_step: ClassVar[bool] = True
+    exact: ClassVar[bool] = False
     #: What a ``model`` method's error is (the summary's reason for not estimating it).
     model_error: ClassVar[str] = ""
     #: Steady states of many parameter points advance in one compiled call (:mod:`converters.sweeps.batch`).
@@ -61,6 +79,9 @@ class Method(ABC):
 
     def __init_subclass__(cls, key: str = "", **kwargs):
         super().__init_subclass__(**kwargs)
+        cls.error_kind = ErrorKind(cls.error_kind)
+        cls.fixed_step = cls.error_kind is ErrorKind.STEP
+        cls.exact = cls.error_kind is ErrorKind.EXACT
         if key:
             cls.key = key
             METHODS[key] = cls
@@ -87,18 +108,13 @@ class Method(ABC):
         return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
 
     @property
-    def exact(self) -> bool:
-        """Exact flows and event instants (``error_kind`` ``exact``)."""
-        return self.error_kind == "exact"
-
-    @property
     def step(self) -> float | None:
         """The fixed step in s of a ``step`` method (its ``step_option``), else None."""
-        return float(getattr(self, self.step_option)) if self.error_kind == "step" else None
+        return float(getattr(self, self.step_option)) if self.fixed_step else None
 
     def coarsened(self, factor: float = 2.0) -> "Method":
         """The same method at ``factor`` times its step: the twin of Richardson's estimate (``step`` methods)."""
-        if self.error_kind != "step":
+        if not self.fixed_step:
             raise ValueError(f"the {self.key} method has no fixed step to coarsen (its error_kind is {self.error_kind})")
         return dataclasses.replace(self, **{self.step_option: factor * self.step})
 
@@ -159,7 +175,23 @@ class Method(ABC):
         return cls(**values)
 
 
+#: The entry-point group of methods registered by other packages (pyproject's ``[project.entry-points]``).
+ENTRY_POINTS = "pcsuite.methods"
+
+
+def load_methods() -> dict[str, type[Method]]:
+    """Every method: the built-in ones and those registered under :data:`ENTRY_POINTS` (ngspice, ``spice``),
+    imported on first use (importing one registers it in :data:`METHODS`)."""
+    from importlib.metadata import entry_points
+    for point in entry_points(group=ENTRY_POINTS):
+        if point.name not in METHODS:
+            point.load()
+    return METHODS
+
+
 def get_method(key: str) -> type[Method]:
+    if key not in METHODS:
+        load_methods()
     try:
         return METHODS[key]
     except KeyError:

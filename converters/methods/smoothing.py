@@ -25,7 +25,7 @@ from ..errors import ParameterError, SimulationError
 from ..validate import check_positive, check_range, parse_value
 from ..problems import LCSProblem, Schedule
 from ..trajectory import Trajectory
-from .base import Method
+from .base import ErrorKind, Method
 
 #: Accepted eps (V or A): the error is O(eps), so above 0.1 the answer is the smoothing's, not the circuit's; below
 #: 1e-8 the stiffness (~1/eps) and the corner's width eps^2 leave double precision and the solver nothing to resolve.
@@ -56,7 +56,7 @@ class Smoothing(Method, key="smooth"):
     """
 
     counts = "LU factorisations"
-    error_kind = "model"
+    error_kind = ErrorKind.MODEL
     model_error = "the smoothing's, O(eps)"
 
     eps: float = 1e-4

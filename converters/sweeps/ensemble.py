@@ -190,7 +190,7 @@ class ModelSweep:
         from ..methods.theta import default_theta
         cls = get_method(self.method)
         T = model.period(p)
-        step = T * self.h_fraction if cls.error_kind == "step" else T / 1000
+        step = T * self.h_fraction if cls.fixed_step else T / 1000
         options = {}
         if "theta" in cls.option_names():
             options["theta"] = self.theta if self.theta is not None else default_theta(problem.configurations, step)
@@ -247,7 +247,7 @@ class ModelSweep:
         numeric = [m for m in metrics if isinstance(at_h.get(m), float)]
         if self.rtol is not None:
             return {m: (abs(at_h[m]) * self.rtol, f"accuracy on request (rtol {self.rtol:g})") for m in numeric}
-        if get_method(self.method).error_kind != "step":
+        if not get_method(self.method).fixed_step:
             return {m: (0.0, f"{self.method}: exact flows") for m in numeric}
         from dataclasses import replace
         at_half = replace(self, h_fraction=self.h_fraction / 2).row(0, {})
@@ -278,7 +278,7 @@ class ModelSweep:
     def chunk_hint(self) -> int:
         """Points per chunk: enough that a chunk of cheap points outweighs its round trip to a worker."""
         from ..methods.base import get_method
-        stepped = get_method(self.method).error_kind == "step"
+        stepped = get_method(self.method).fixed_step
         return 500 if self.batchable() else (100 if stepped and self.rtol is None else 10)
 
     def failed(self, index: int, point: dict, message: str) -> dict:
@@ -387,7 +387,7 @@ class ModelSweep:
 def sweep_methods() -> list[str]:
     """The methods a sweep takes: a converter's, with an error a step twin or exact flows can state."""
     from ..methods.base import METHODS
-    return [key for key, cls in METHODS.items() if "lcs" in cls.domains and cls.error_kind in ("step", "exact")]
+    return [key for key, cls in METHODS.items() if "lcs" in cls.domains and (cls.fixed_step or cls.exact)]
 
 
 def _batch_failure(code: int, residual: float, distance: float) -> str:

@@ -1,12 +1,15 @@
 """The method contract: every registered method validates its options, declares its order, solves the
 closed-form reference problems into Trajectories, and converges at the order it declares."""
 import math
+import subprocess
+import sys
 
 import numpy as np
 import pytest
 
 from converters.errors import ParameterError
 from converters.methods import METHODS, EventDriven, Method, Smoothing, Theta
+from converters.methods.base import ErrorKind, load_methods
 from converters.problems import Configuration, LCSProblem, Schedule
 from converters.simulate import simulate
 from converters.trajectory import Trajectory
@@ -40,8 +43,8 @@ RC_EXACT = (1 - math.exp(-0.5)) * math.exp(-0.5)
 
 
 def test_the_registry_holds_every_method_by_its_command_line_name():
-    from validation.ngspice import Spice            # ngspice registers itself from above the core
-    assert list(METHODS) == ["lcp", "event", "smooth", "moreau", "spice"] and METHODS["spice"] is Spice
+    from validation.ngspice import Spice            # ngspice: an entry point above the core
+    assert list(load_methods()) == ["lcp", "event", "smooth", "moreau", "spice"] and METHODS["spice"] is Spice
     assert [cls.key for cls in METHODS.values()] == list(METHODS)
     assert all(issubclass(cls, Method) and cls.description for cls in METHODS.values())
     assert Theta(1e-6, 1.0).order == 1 and Theta(1e-6, 0.5).order == 2
@@ -49,12 +52,26 @@ def test_the_registry_holds_every_method_by_its_command_line_name():
     assert {key: cls.domains for key, cls in METHODS.items()} == {
         "lcp": ("lcs",), "event": ("lcs", "mechanical"), "smooth": ("lcs",), "moreau": ("mechanical",),
         "spice": ("circuit",)}
-    # how each one's error is estimated: what the accuracy checks read instead of a key
+    # how each one's error is estimated: what the accuracy checks read instead of a key (typed, and its traits)
     assert {key: cls.error_kind for key, cls in METHODS.items()} == {
-        "lcp": "step", "event": "exact", "smooth": "model", "moreau": "step", "spice": "model"}
+        "lcp": ErrorKind.STEP, "event": ErrorKind.EXACT, "smooth": ErrorKind.MODEL, "moreau": ErrorKind.STEP,
+        "spice": ErrorKind.MODEL}
+    assert {key: (cls.fixed_step, cls.exact) for key, cls in METHODS.items()} == {
+        "lcp": (True, False), "event": (False, True), "smooth": (False, False), "moreau": (True, False),
+        "spice": (False, False)}
     assert Theta(1e-6, 0.5).coarsened() == Theta(2e-6, 0.5) and Theta(1e-6, 1.0).step == 1e-6
     with pytest.raises(ValueError, match="no fixed step"):
         EventDriven().coarsened()
+
+
+def test_a_backend_registered_as_an_entry_point_loads_on_first_use_by_name():
+    """ngspice is a method like the others: get_method("spice") in a process that never imported validation loads
+    it from the package's entry points (before, it existed only once validation.ngspice had been imported)."""
+    code = ("import sys; from converters.methods.base import METHODS, get_method; "
+            "assert 'spice' not in METHODS and 'validation.ngspice' not in sys.modules; "
+            "print(get_method('spice').__module__, list(METHODS))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "validation.ngspice ['lcp', 'event', 'smooth', 'moreau', 'spice']"
 
 
 @pytest.mark.parametrize("key,options,match", [

@@ -131,7 +131,6 @@ def test_a_step_lcp_without_solution_is_a_clear_error():
 
 
 def test_simulate_rejects_a_foreign_method_and_bad_x0():
-    import validation.ngspice  # noqa: F401 (the registry as the command line has it)
     problem = half_wave_rectifier(t_end=1e-4)
     with pytest.raises(ParameterError, match=r"method must be a pcsuite method \(lcp: Theta, event: EventDriven, "
                                              r"smooth: Smoothing, moreau: MoreauJean, spice: Spice\); got 'euler'"):

@@ -3,7 +3,6 @@ sources and a clocked latch) against the LCS on the same circuit, started on the
 import numpy as np
 import pytest
 
-import validation.ngspice  # noqa: F401  (registers --method spice)
 from converters.methods import EventDriven
 from converters.run import resolve_model, run_converter, steady_state
 

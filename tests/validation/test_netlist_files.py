@@ -113,7 +113,6 @@ def test_ngspice_runs_the_load_and_input_steps_the_model_runs(step, ngspice):
     method's to 0.2 % (measured 0.09 %); the netlist had left the steps out, and ngspice had stayed at the 6.30 V
     before them."""
     from converters.run import run_converter
-    from validation import ngspice as spice_method        # noqa: F401 (registers the spice method)
     params = {"t_step": "1m", "D": 0.5, "L": "100u", **step}
     means = [run_converter("buck", params, method=m, t_end=1.5e-3).mean("vout", t0=1e-3, t1=1.2e-3)
              for m in ("event", "spice")]
@@ -127,7 +126,6 @@ def test_the_voltage_mode_netlist_is_the_bucks_own_with_its_parasitics_and_load_
     before and after the step are the event method's to 1e-4 (measured 8e-6 and 1.3e-7), its ripple to 3 %
     (measured 1.2 %)."""
     from converters.run import run_converter
-    from validation import ngspice as spice_method        # noqa: F401 (registers the spice method)
     params = {"Vin": 20, "rC": 0.05, "rL": 0.2, "Ron": 0.1, "t_step": "40m", "R_step": 11}
     runs = {m: run_converter("buck", params, control="voltage-mode", method=m, t_end=0.08) for m in ("event", "spice")}
     for t0, t1 in ((0.036, 0.04), (0.076, 0.08)):

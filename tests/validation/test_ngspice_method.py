@@ -48,3 +48,4 @@ def test_a_steady_state_that_does_not_settle_returns_not_converged_with_its_warn
 def test_a_trajectory_refuses_a_return_code_it_does_not_know():
     with pytest.raises(ValueError, match="retcode must be one of success, not_converged; got 'ok'"):
         Trajectory(t=np.zeros(1), x=np.zeros((1, 1)), state_names=("x",), retcode="ok")
+

@@ -16,10 +16,10 @@ def _parameters(model) -> list[dict]:
 
 
 def run(args) -> int:
-    from converters.methods.base import METHODS
+    from converters.methods.base import load_methods
     from converters.models import CONVERTERS, DEFAULT_CONTROL, MODELS
 
-    from .. import ngspice  # noqa: F401 (registers the spice method)
+    METHODS = load_methods()
 
     from ..scenes import SCENE_DIR, all_suites, load_scene
     info = {"converters": {name: {"title": c.title, "states": list(c.state_names), "parameters": _parameters(c)}

@@ -19,7 +19,8 @@ def add(sub) -> None:
     sim = mech_sub.add_parser("simulate", help="simulate a mechanical model and write its trajectory")
     sim.add_argument("model")
     add_params(sim)
-    from converters.methods.base import METHODS
+    from converters.methods.base import load_methods
+    METHODS = load_methods()
     mechanical = {key: cls for key, cls in METHODS.items() if "mechanical" in cls.domains}
     sim.add_argument("--method", default="event", choices=list(mechanical),
                      help="; ".join(f"{key}: {cls.description}" for key, cls in mechanical.items()))
@@ -92,7 +93,7 @@ def run_simulate(args) -> int:
     if h is not None and not 0.0 < h <= 0.05 * scale:
         raise ParameterError(f"h must be in (0, {0.05 * scale:.3g}] s (at most 1/20 of the model's time scale); got {h:g}")
     cls = get_method(args.method)
-    method = cls.from_options(step=h or (model.default_h(p) if cls.error_kind == "step" else None))
+    method = cls.from_options(step=h or (model.default_h(p) if cls.fixed_step else None))
     run = simulate(model.problem(p, t_end), method)
     run = replace(run, labels=model.labels(p))
     summary = {"model": model.name, "method": args.method, "options": {**method.options(), "params": p},

@@ -10,10 +10,10 @@ from .common import add_params, add_spice_options, check_out, given_path, intege
 
 
 def add(sub) -> None:
-    from converters.methods.base import METHODS
+    from converters.methods.base import load_methods
     from converters.models import CONTROLS
 
-    from .. import ngspice  # noqa: F401 (registers --method spice)
+    METHODS = load_methods()
     sim = sub.add_parser("simulate", help="simulate a converter and write its waveforms")
     sim.add_argument("converter")
     add_params(sim)

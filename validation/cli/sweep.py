@@ -48,10 +48,10 @@ def add(sub) -> None:
                          "study's own sample (RBD-FAST, SALib), with their 95 %% confidence; at least 100 samples")
     add_params(sw)
     sw.add_argument("--control", default="pwm", choices=list(CONTROLS), help="the control law (default pwm)")
-    from converters.methods.base import DEFAULT_METHOD, METHODS
+    from converters.methods.base import DEFAULT_METHOD, load_methods
     from converters.sweeps.ensemble import sweep_methods
 
-    from .. import ngspice  # noqa: F401 (registers --method spice)
+    METHODS = load_methods()
     circuits = [key for key, cls in METHODS.items() if "circuit" in cls.domains]
     sw.add_argument("--method", default=DEFAULT_METHOD, choices=[*sweep_methods(), *circuits],
                     help="lcp: the stepper, h = T/200 (default; batched); event: exact switching; spice: ngspice")
@@ -193,7 +193,7 @@ def _refuse_ignored(args) -> None:
         if given:
             raise ParameterError(f"{', '.join(given)} do{'es' if len(given) == 1 else ''} not apply to --method "
                                  f"{args.method} (ngspice's own transient)")
-    elif get_method(args.method).error_kind != "step" and args.h_fraction is not None:
+    elif not get_method(args.method).fixed_step and args.h_fraction is not None:
         raise ParameterError(f"--h-fraction sets the lcp stepper's step; it does not apply to --method {args.method} "
                              f"(exact switching; got --h-fraction {args.h_fraction})")
     if args.rtol is not None and args.periods is not None:

@@ -49,7 +49,7 @@ from ...trajectory import Trajectory
 from ...validate import check_positive, parse_value
 from . import machine as lcs_engine
 from . import mechanical as event_mechanical
-from ..base import Method, PeriodMap
+from ..base import ErrorKind, Method, PeriodMap
 from .machine import _Machine
 from .maps import EventReturnMap
 
@@ -95,7 +95,7 @@ class EventDriven(Method, key="event"):
     """
 
     counts = "segments"
-    error_kind = "exact"
+    error_kind = ErrorKind.EXACT
 
     event_tol: float = 1e-13
     sample_fraction: float = 1.0 / 32.0
