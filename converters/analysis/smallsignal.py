@@ -37,6 +37,7 @@ import numpy as np
 
 from ..errors import ParameterError, SimulationError
 from ..problems import Comparators, Schedule, StateSwitching
+from ..methods.event.timeline import Crossing, FlowSpan
 from ..trajectory import Samples
 
 #: The comparator's input of a state-driven law (a perturbation added to its switching function s).
@@ -160,8 +161,7 @@ class SmallSignalModel:
         problem = model.problem(p, T, orbit.x0)
         self.n = problem.n
         self.machine = method.engine(problem)
-        self.timeline: list = []
-        self.machine.run(self.orbit.x0, record=False, timeline=self.timeline)
+        self.timeline = self.machine.timeline(self.orbit.x0)
         self.stencil, self.dynamic = self._stencil(problem, method.engine)
         self.law = problem.switching
         self.outputs = tuple(outputs)
@@ -310,13 +310,15 @@ class SmallSignalModel:
         n, pieces = self.n, []
         self._row_cache: dict = {}
         for item in self.timeline:
-            if item[0] == "flow":
-                _, t0, t1, flow, xt0 = item
-                pieces.append(("flow", t1 - t0, flow.Z[:n, :n], self._field_derivative(flow), self._rows(flow, t0),
-                               xt0, flow.Z))
-            elif item[0] == "cross":
-                _, t, row, dgdt, f_b, f_a, J, pair, flow_b, latched_b, xt_b, config, flow_a, xt_a = item
-                grad = row[:n]
+            if isinstance(item, FlowSpan):
+                flow, t0 = item.flow, item.t0
+                pieces.append(("flow", item.t1 - t0, flow.Z[:n, :n], self._field_derivative(flow),
+                               self._rows(flow, t0), item.xt0, flow.Z))
+            elif isinstance(item, Crossing):
+                t, dgdt, f_b, f_a, J, pair = item.t, item.dgdt, item.f_before, item.f_after, item.jump, item.pair
+                flow_b, latched_b, xt_b, config = item.flow_before, item.latched_before, item.xt_before, item.config
+                flow_a, xt_a = item.flow_after, item.xt_after
+                grad = item.row[:n]
                 denominator = grad @ f_b + dgdt
                 if abs(denominator) <= 1e-12 * (np.abs(grad) @ np.abs(f_b) + abs(dgdt)):
                     raise SimulationError(f"the orbit grazes an event surface at t = {t:.9g} s (the crossing's speed "
@@ -337,7 +339,8 @@ class SmallSignalModel:
                 dt_row, dt_u = -grad / denominator, -g_u / denominator
                 pieces.append(self._jump(J, f_a - J @ f_b, j_u, dt_row, dt_u, self._step(flow_b, xt_b, flow_a, xt_a, t)))
             else:
-                _, t, kind, config, J, xt_b, flow_b, flow_a, xt_a = item
+                t, kind, config, J = item.t, item.kind, item.config, item.jump
+                xt_b, flow_b, flow_a, xt_a = item.xt_before, item.flow_before, item.flow_after, item.xt_after
                 shift = self._edge_shift(t, kind) if kind != "reset" else 0.0
                 kick = flow_a.field(xt_a) - J @ flow_b.field(xt_b)
                 j_u = self._jump_offset(config, xt_b, t) if not np.array_equal(J, np.eye(n)) else np.zeros(n)

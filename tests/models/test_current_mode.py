@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from converters.analysis.smallsignal import SmallSignalModel
+from converters.methods.event.timeline import Crossing
 from converters.run import resolve_model, run_converter
 from validation.cli import main
 
@@ -46,7 +47,7 @@ def test_without_compensation_the_buck_doubles_its_period_where_its_duty_ratio_i
     assert doubling["multipliers"][0] == pytest.approx([-1.0, 0.0], abs=1e-6)
     small = SmallSignalModel(resolve_model("buck", "peak-current"), {"Iref": doubling["value"] - 1e-5}, input="Iref",
                              outputs=("iL",))
-    turn_off = [item[1] for item in small.timeline if item[0] == "cross"]
+    turn_off = [item.t for item in small.timeline if isinstance(item, Crossing)]
     assert turn_off[0] * FS == pytest.approx(0.5, abs=1e-3)
 
 
@@ -58,7 +59,7 @@ def test_half_the_off_slope_keeps_the_buck_period_one_to_a_duty_ratio_of_0_9(cap
     assert branch["period"] == 1 and branch["stable"] == [[0.4, 1.63]]
     end = SmallSignalModel(resolve_model("buck", "peak-current"), {"Iref": 1.63, "ma": ma}, input="Iref",
                            outputs=("iL",))
-    assert [item[1] for item in end.timeline if item[0] == "cross"][0] * FS > 0.9
+    assert [item.t for item in end.timeline if isinstance(item, Crossing)][0] * FS > 0.9
 
 
 @pytest.mark.parametrize("mc", [1.2, 1.5, 2.0, 3.0])
@@ -71,7 +72,7 @@ def test_the_exact_model_has_ridleys_double_pole_at_half_the_switching_frequency
     iref = vout / R + m1 * 0.4 / FS / 2 + ma * 0.4 / FS        # D = 0.4 with small ripple
     small = SmallSignalModel(resolve_model("buck", "peak-current"), {"Iref": iref, "ma": ma}, input="Iref",
                              outputs=("iL",))
-    D = [item[1] for item in small.timeline if item[0] == "cross"][0] * FS
+    D = [item.t for item in small.timeline if isinstance(item, Crossing)][0] * FS
     assert D == pytest.approx(0.4, abs=2e-3)
     mc_exact = 1 + ma / ((VIN - VIN * D) / L)
     Q = 1 / (np.pi * (mc_exact * (1 - D) - 0.5))
@@ -145,7 +146,7 @@ def test_valley_current_mode_is_the_mirror_image_stable_above_one_half(capsys):
     assert not doubling["stable_before"] and doubling["stable_after"]
     small = SmallSignalModel(resolve_model("buck", "valley-current"), {"Iv": doubling["value"] + 1e-5}, input="Iv",
                              outputs=("iL",))
-    turn_on = [item[1] for item in small.timeline if item[0] == "cross"][0]
+    turn_on = [item.t for item in small.timeline if isinstance(item, Crossing)][0]
     assert 1 - turn_on * FS == pytest.approx(0.5, abs=1e-3)          # on from the crossing to the period's end
 
 

@@ -144,8 +144,8 @@ class EventDriven(Method, key="event"):
 
     def engine(self, problem: LCSProblem):
         """The LCS engine of ``problem``: its modes' flows (``flow(config, held)``), its switching law's guard rows
-        (``switch_row``), Moreau's impulse (``enter``) and its runs (``run(x0, timeline=[])`` records what a
-        linearisation about the run needs: :mod:`converters.analysis.smallsignal`)."""
+        (``switch_row``), Moreau's impulse (``enter``), its runs (``run``) and ``timeline(x0)``: the run as typed
+        records (:mod:`.timeline`), what a linearisation about it reads (:mod:`converters.analysis.smallsignal`)."""
         self.supports(problem)
         if not isinstance(problem, LCSProblem):
             raise ParameterError(f"the LCS engine takes an LCSProblem; got {type(problem).__name__}")

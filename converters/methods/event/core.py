@@ -7,21 +7,34 @@ An engine is a class built from (problem, options) whose ``period_run(x0, jacobi
 Jacobian of the span's end state or None) and whose ``run(x0)`` returns the recorded solution first."""
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from ..base import RecordingPeriodMap
 
 
+class Event(NamedTuple):
+    """One event of a run: its ``time`` (s), ``kind`` (``activate``, ``release``, ``impulse``, ``switch``, ``jump``,
+    and the mechanical ``stick``, ``slip``, ...), the ``pair`` (-1 for a switching-law event) and ``config`` (the
+    configuration or mode code in force after it). A tuple: (time, kind, pair, config) unpacks as before."""
+
+    time: float
+    kind: str
+    pair: int
+    config: int
+
+
 class PiecewiseSolution:
-    """An engine's run: ``segments`` (each with t0 and t1), ``events`` as (time, kind, pair, config) tuples in time
-    order (kind ``activate``, ``release``, ``impulse``, ``switch``, and the mechanical ``stick``, ``slip``, ...;
-    pair -1 for a switching-law event; config the configuration or mode code in force after it), ``x_end``."""
+    """An engine's run: ``segments`` (each with t0 and t1), ``events`` (:class:`Event` records in time order),
+    ``x_end``."""
 
     def __init__(self, problem, segments, events, x_end, wall_s, options):
-        self.problem, self.segments, self.events = problem, segments, list(events)
+        self.problem, self.segments = problem, segments
+        self.events = [Event(*event) for event in events]
         self.x_end, self.wall_s, self.options = x_end, wall_s, options
 
-    def event_list(self) -> list:
+    def event_list(self) -> list[Event]:
         """(time, kind, pair, config) of every event, in time order."""
         return list(self.events)
 

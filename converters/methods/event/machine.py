@@ -15,6 +15,7 @@ from ...problems.switching import initial_bits, law_channels
 from .core import EnginePeriodMap
 from .flow import _CROSS_RTOL, _ON_SET_RTOL, _POWERS, MAX_SERIES_NORM, MAX_SUBSTEPS, Flow, _time_scale, _Watch
 from .solution import EventSolution, Segment
+from .timeline import Crossing, Edge, FlowSpan, TimelineEntry
 
 if TYPE_CHECKING:
     from . import EventDriven
@@ -406,14 +407,12 @@ class _Machine:
     # --- runs ---------------------------------------------------------------------------------------
 
     def run(self, x0, record: bool = True, jacobian: bool = False, stop_config: int | None = None,
-            stop_count: int = 0, timeline: list | None = None):
+            stop_count: int = 0, timeline: list[TimelineEntry] | None = None):
         """Run over t_span from x0. ``jacobian``: also d x_end / d x0. ``stop_config``/``stop_count``: stop
         at the ``stop_count``-th switching into ``stop_config`` (a return map; the run may then end before
         t_span[1], which must be long enough). ``timeline``: a list that receives, in time order, what a
-        linearisation about the run needs (:mod:`converters.analysis.smallsignal`): ("flow", t0, t1, flow, x~ at t0)
-        per segment; ("cross", t, guard row, d guard / dt, f before, f after, jump, pair (-1: the law), flow before,
-        latched before, x~ before the jump, configuration after, flow after, x~ after) per state event; ("edge", t, kind, configuration
-        after, jump, x~ before the jump, flow before, flow after, x~ after) per time-driven instant. Returns (EventSolution, jacobian or None, stop time or None)."""
+        linearisation about the run needs (:meth:`timeline`). Returns (EventSolution, jacobian or None, stop time
+        or None)."""
         start_clock = time.perf_counter()
         problem, options = self.problem, self.options
         n = problem.n
@@ -464,7 +463,7 @@ class _Machine:
                 if record and t_next > t:
                     segments.append(Segment(t, t_next, flow, xt, xt_end))
                 if timeline is not None and t_next > t:
-                    timeline.append(("flow", t, t_next, flow, xt))
+                    timeline.append(FlowSpan(t, t_next, flow, xt))
                 if jac is not None:
                     jac[:] = flow.transition(t_next - t) @ jac
                 if tau is None:
@@ -502,9 +501,9 @@ class _Machine:
                     jump = None
                     new, xt_new = self.select(config, xt, t, flow.held ^ (1 << pair), f_before)
                 if timeline is not None:
-                    timeline.append(("cross", t, watch.rows[which].copy(), dgdt, f_before, new.field(xt_new),
-                                     np.eye(n) if jump is None else jump, pair, flow_before, latched_before, xt_before,
-                                     config, new, xt_new))
+                    timeline.append(Crossing(t, watch.rows[which].copy(), dgdt, f_before, new.field(xt_new),
+                                             np.eye(n) if jump is None else jump, pair, flow_before, latched_before,
+                                             xt_before, config, new, xt_new))
                 if jac is not None:
                     # Saltation through a jump x+ = Pi(x): S = DPi + (f+ - DPi f-) n^T / (n^T f- + dg/dt).
                     f_after = new.field(xt_new)
@@ -542,8 +541,8 @@ class _Machine:
                 jac[:] = jump @ jac
             new, xt = self.select(config, xt, t, flow.held)
             if timeline is not None:
-                timeline.append(("edge", t, edge_kind, config, np.eye(n) if jump is None else jump, xt_before, flow,
-                                 new, xt))
+                timeline.append(Edge(t, edge_kind, config, np.eye(n) if jump is None else jump, xt_before, flow,
+                                     new, xt))
             for i in range(problem.k):
                 was, now = (flow.held >> i) & 1, (new.held >> i) & 1
                 if was != now:
@@ -555,6 +554,14 @@ class _Machine:
         solution = EventSolution(problem, segments, zip(times, kinds, pairs, configs), xt[:-1].copy(),
                                  time.perf_counter() - start_clock, options, config, tuple(self.jumps))
         return solution, jac, stop_time
+
+    def timeline(self, x0) -> list[TimelineEntry]:
+        """The run from x0 over the span as typed records in time order (:mod:`.timeline`): a :class:`FlowSpan` per
+        segment, a :class:`Crossing` per state event, an :class:`Edge` per time-driven instant: what a
+        linearisation about the run reads (:mod:`converters.analysis.smallsignal`)."""
+        entries: list[TimelineEntry] = []
+        self.run(x0, record=False, timeline=entries)
+        return entries
 
     def period_run(self, x0, jacobian: bool):
         """(solution, Jacobian or None) of one span from x0, unrecorded (:class:`.core.EnginePeriodMap`)."""
