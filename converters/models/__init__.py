@@ -15,6 +15,7 @@ from .current_mode import PeakCurrent, PeakCurrentLoop, ValleyCurrent
 from .prc import PRC
 from .sliding import SlidingMode
 from .netlist import Circuit, is_netlist, load
+from .plant import NetlistPlant
 from .voltage_mode import VoltageMode
 
 CONVERTERS: dict[str, Converter] = {c.name: c for c in (Buck(), Boost(), BuckBoost(), Cuk(), PRC())}
@@ -42,10 +43,17 @@ def get_model(name: str, control: str = DEFAULT_CONTROL) -> Model:
     """The model of converter ``name`` under ``control``, or of the netlist file ``name`` names (``FILE.cir``:
     :class:`converters.circuits.Circuit`); errors name the valid choices."""
     if is_netlist(name):
-        if control != DEFAULT_CONTROL:
-            raise ParameterError(f"--control {control} applies to the built-in converters; a netlist states its own "
-                                 f"drives (got {str(name)!r})")
-        return load(name)
+        if control == DEFAULT_CONTROL:
+            return load(name)
+        if not isinstance(control, str) or control not in CONTROLS:
+            raise ParameterError(f"control must be one of {', '.join(CONTROLS)}; got {control!r}")
+        loop = CONTROLS[control]
+        if not loop.output_only:
+            takes = ", ".join(key for key, c in CONTROLS.items() if c.output_only)
+            raise ParameterError(f"--control {control} closes its loop around the built-in converters it names; a "
+                                 f"netlist takes --control {takes} (a loop that senses its output and drives its "
+                                 f"first switch), or states its own loop (got {str(name)!r})")
+        return loop.on(NetlistPlant(load(name)))
     get_converter(name)
     if not isinstance(control, str) or control not in CONTROLS:
         raise ParameterError(f"control must be one of {', '.join(CONTROLS)}; got {control!r}")

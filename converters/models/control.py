@@ -46,9 +46,12 @@ class Control(ABC):
     #: The signals the loop adds.
     signal_names: tuple[str, ...] = ()
     signal_units: dict = {}
+    #: The loop reads only the output (:meth:`sensed`) and drives only the switch: it closes around any plant that
+    #: states them (a netlist's, :class:`~.plant.NetlistPlant`), not only the converters of ``plants``.
+    output_only: bool = False
 
     def applies_to(self, converter: Converter) -> bool:
-        return converter.name in self.plants
+        return converter.name in self.plants or (self.output_only and getattr(converter, "drives_one_switch", False))
 
     def on(self, converter: Converter):
         """The model of ``converter`` under this control."""
@@ -74,6 +77,10 @@ class Control(ABC):
         """The output voltage the loop senses as (c, d), |vout| = c . x + d over the converter's state; refused
         where vout is not a function of the state."""
         row = model.converter.output_row(model.plant(circuit))
+        if row is None and "rC" not in circuit:
+            raise ParameterError(f"--control {self.key} senses the output, which on {model.name} depends on more than "
+                                 "the circuit's state (a diode's current through an ESR, a source) or differs between "
+                                 "the switch's configurations; sense a capacitor's voltage behind no resistance")
         if row is None:
             raise ParameterError(f"--control {self.key} senses vout, which on {model.name} with rC > 0 depends on the "
                                  f"diode's current as well as the state; give rC = 0 (got rC = {circuit.get('rC'):g})")
@@ -176,8 +183,17 @@ class Controlled(Converter):
         self.closed_form = False             # the closed forms are the open-loop converter's at a given D
 
     def __reduce__(self):
-        from . import get_model
-        return (get_model, (self.name, self.control))
+        from . import CONVERTERS, get_model
+        if CONVERTERS.get(self.name) is self.converter:
+            return (get_model, (self.name, self.control))
+        return (_closed, (self.converter, self.control))       # a netlist's plant pickles itself
+
+    def parameter_name(self, name: str) -> str:
+        """The plant's parameters as it names them (a netlist's case-insensitively), the loop's as the loop does."""
+        if any(q.name == name for q in self.parameters):
+            return name
+        plant = self.converter.parameter_name(name)
+        return plant if any(q.name == plant for q in self.parameters) else name
 
     def plant(self, p: dict) -> dict:
         """The converter's parameters of ``p`` (what its configurations and signals read)."""
@@ -186,7 +202,7 @@ class Controlled(Converter):
 
     def resolve(self, given: dict | None = None) -> dict:
         """Validated parameters: the loop's refusals first (they name its own rules), then the converter's."""
-        p = Model.resolve(self, given)
+        p = Model.resolve(self, {self.parameter_name(k): v for k, v in dict(given or {}).items()})
         self.loop.check(self, p)
         return self.check_steps(p)
 
@@ -233,6 +249,9 @@ class Controlled(Converter):
     def vout(self, samples: Samples, p: dict) -> np.ndarray:
         return self.converter.vout(samples, self.plant(p))
 
+    def modes(self, conducting: np.ndarray, switch: np.ndarray, x: np.ndarray) -> np.ndarray:
+        return self.converter.modes(conducting, switch, x)
+
     def output_node_current(self, samples: Samples) -> np.ndarray:
         return self.converter.output_node_current(samples)
 
@@ -252,6 +271,12 @@ class Controlled(Converter):
         converter's."""
         own = self.loop.summary(self, tr, p, *options)
         return super().summary(tr, p) if own is None else own
+
+
+def _closed(converter: Converter, control: str) -> "Controlled":
+    """A closed loop rebuilt from its plant (a worker process's copy of a netlist's loop)."""
+    from . import CONTROLS
+    return Controlled(converter, CONTROLS[control])
 
 
 __all__ = ["Control", "Controlled", "OpenLoop"]

@@ -48,6 +48,7 @@ class VoltageMode(Control):
                        "L": 20e-3, "C": 47e-6, "R": 22.0, "f_sw": 2.5e3}}
     signal_names = ("vcon", "ramp")
     signal_units = {"vcon": "V", "ramp": "V"}
+    output_only = True
 
     def check(self, model, p: dict) -> None:
         """A ramp that does not rise, or a latch that is not 0 or 1, is refused."""
