@@ -9,11 +9,23 @@ import json
 import os
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from .compiled import (HERE, MAX_REGISTER_STATES, MODULE, RECORD, cpu_signature, digest,
                        file_stat, register_state, stale)
 
-def _exports():
+if TYPE_CHECKING:
+    from collections.abc import Callable
+
+    import numpy as np
+    import numpy.typing as npt
+    from numba.core.types import Array as NumbaArray
+    from numba.core.types import Type as NumbaType
+    from numba.core.typing.templates import Signature
+
+    FloatArray = npt.NDArray[np.float64]
+
+def _exports() -> list[tuple[str, Signature, Callable[..., Any]]]:
     """(exported name, numba signature, Python function) of every function the module holds."""
     from numba import types as T
 
@@ -21,14 +33,17 @@ def _exports():
     from .lcp import dispatch, engine
     from .methods import theta_kernels as K
 
-    def a(ndim, dtype=T.float64):
+    def a(ndim: int, dtype: NumbaType = T.float64) -> NumbaArray:
         return T.Array(dtype, ndim, "C")
 
     run_args = (a(1, T.int32), a(3), a(2), a(3), a(3), a(2), a(3), a(4), a(3), a(3), a(2), a(2), a(2), a(2),
                 T.int64, T.boolean, T.int64)
 
-    def run_steps_with(state):
-        def run(which, Phi, Gamma, H, C, F, M, Phi_b, Gamma_b, CPhi, q0, x, u, y, start, inline, period):
+    def run_steps_with(state: tuple[float, ...] | None) -> Callable[..., Any]:
+        def run(which: npt.NDArray[np.int32], Phi: FloatArray, Gamma: FloatArray, H: FloatArray, C: FloatArray,
+                F: FloatArray, M: FloatArray, Phi_b: FloatArray, Gamma_b: FloatArray, CPhi: FloatArray, q0: FloatArray,
+                x: FloatArray, u: FloatArray, y: FloatArray, start: int, inline: bool,
+                period: int) -> tuple[int, int]:
             return K.run_steps(which, Phi, Gamma, H, C, F, M, Phi_b, Gamma_b, CPhi, q0, x, u, y, start, inline,
                                period, state)
         return run
@@ -64,7 +79,7 @@ def _sources() -> dict:
     return {relative: digest(HERE / relative) for relative in sorted(SOURCES + ("build_kernels.py",))}
 
 
-def _argument(numba_type) -> str:
+def _argument(numba_type: NumbaType) -> str:
     """An argument's spec as :func:`converters.compiled.conforms` reads it: ``f8:2`` (a C-contiguous float64
     array of 2 dimensions), ``i4:1``, or a scalar: ``f8``, ``i8``, ``b1``."""
     from numba import types as T
@@ -72,7 +87,7 @@ def _argument(numba_type) -> str:
     if isinstance(numba_type, T.Array):
         assert numba_type.layout == "C", numba_type
         return f"{codes[numba_type.dtype]}:{numba_type.ndim}"
-    return codes[numba_type]
+    return codes[numba_type]  # type: ignore[index]  # numba's stubs key the dict by its scalar types
 
 
 def build() -> str:
@@ -112,7 +127,7 @@ def build() -> str:
             f"{len(record['sources'])} sources in {time.perf_counter() - start:.0f} s")
 
 
-def main(argv=None) -> int:
+def main(argv: list[str] | None = None) -> int:
     """``python -m converters.build_kernels [--check] [--force]``: build the module when it is missing or stale (``--check``:
     only say whether it is current)."""
     args = sys.argv[1:] if argv is None else argv

@@ -31,6 +31,14 @@ import json
 import os
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Sequence
+    from types import ModuleType
+
+    import numpy as np
+    import numpy.typing as npt
 
 #: Status codes of the compiled step loops (:func:`.methods.theta_kernels.run_steps` and the state-driven ones).
 OK, NEEDS_GENERAL_SOLVER, NO_SOLUTION = 0, 1, 2
@@ -60,7 +68,7 @@ PIVOTS_PER_PAIR = 4
 MAX_REGISTER_STATES = 6
 
 
-def register_state(n: int):
+def register_state(n: int) -> tuple[float, ...] | None:
     """The ``state`` argument of the one-pair loop: n zeros (the state in registers) or None (in x)."""
     return (0.0,) * n if n <= MAX_REGISTER_STATES else None
 
@@ -89,7 +97,7 @@ _decided: list = []     # [the ahead-of-time module or None, "ahead-of-time" or 
 KERNEL_SOURCES = ("auto", "jit")
 
 
-def kernel(name: str):
+def kernel(name: str) -> Callable[..., Any]:
     """The compiled function ``name`` of :data:`KERNELS`: from the ahead-of-time module when it is built from the
     current sources (and ``PCSUITE_KERNELS`` is not ``jit``), else numba's dispatcher."""
     if name not in _loaded:
@@ -103,7 +111,7 @@ def kernel(name: str):
     return _loaded[name]
 
 
-def _jit(name: str):
+def _jit(name: str) -> Callable[..., Any]:
     """numba's dispatcher of kernel ``name`` (its module imported on first use)."""
     where, function = KERNELS[name]
     return getattr(importlib.import_module(where), function)
@@ -114,14 +122,14 @@ def source() -> str:
     return _ahead_of_time()[1]
 
 
-def _ahead_of_time():
+def _ahead_of_time() -> list[Any]:
     """(module or None, source), decided once per process."""
     if not _decided:
         _decided.extend(_decide())
     return _decided
 
 
-def _decide():
+def _decide() -> tuple[ModuleType | None, str]:
     choice = os.environ.get("PCSUITE_KERNELS", "").strip().lower() or "auto"
     if choice not in KERNEL_SOURCES:
         import warnings
@@ -148,7 +156,7 @@ def digest(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
-def _record(_read={}) -> dict:
+def _record(_read: dict[Path, Any] = {}) -> dict:
     """The build's record (read once per path)."""
     if RECORD not in _read:
         _read[RECORD] = json.loads(RECORD.read_text())
@@ -202,7 +210,7 @@ def cpu_signature() -> str:
 _DTYPES = {"f8": "float64", "i4": "int32", "i8": "int64"}
 
 
-def _parsed(specs) -> tuple:
+def _parsed(specs: Sequence[str]) -> tuple:
     """(numpy dtype or scalar code, ndim) per argument spec (``f8:2``: a float64 array of 2 dimensions)."""
     import numpy as np
     out = []
@@ -212,7 +220,7 @@ def _parsed(specs) -> tuple:
     return tuple(out)
 
 
-def conforms(specs, args) -> bool:
+def conforms(specs: Sequence[Any], args: Sequence[Any]) -> bool:
     """True when ``args`` are exactly what the ahead-of-time export takes (``specs`` from its record, or parsed
     by :func:`_parsed`): numpy's ndarray of that dtype and ndim, C-contiguous, or a Python float / int / bool.
     numba.pycc's wrappers check only that an array is an ndarray: anything else would be read wrongly."""
@@ -235,12 +243,12 @@ def conforms(specs, args) -> bool:
     return True
 
 
-def _checked(name, function, specs):
+def _checked(name: str, function: Callable[..., Any], specs: Sequence[str]) -> Callable[..., Any]:
     """The export behind a check of its arguments (:func:`conforms`); arguments of any other kind go to numba's
     JIT of the same function, which compiles a version for them."""
     parsed = _parsed(specs)
 
-    def call(*args):
+    def call(*args: Any) -> Any:
         if conforms(parsed, args):
             return function(*args)
         return _jit(name)(*args)
@@ -249,14 +257,19 @@ def _checked(name, function, specs):
     return call
 
 
-def _run_steps_by_size(module):
+def _run_steps_by_size(module: ModuleType) -> Callable[..., tuple[int, int]]:
     """run_steps with numba's signature: the ahead-of-time module has one export per register size."""
     by_size = {n: getattr(module, f"run_steps_r{n}") for n in range(1, MAX_REGISTER_STATES + 1)}
     rows = module.run_steps_rows
 
     specs = _parsed(_record()["exports"]["run_steps_rows"])
 
-    def run_steps(which, Phi, Gamma, H, C, F, M, Phi_b, Gamma_b, CPhi, q0, x, u, y, start, inline, period, state):
+    def run_steps(which: npt.NDArray[np.int32], Phi: npt.NDArray[np.float64], Gamma: npt.NDArray[np.float64],
+                  H: npt.NDArray[np.float64], C: npt.NDArray[np.float64], F: npt.NDArray[np.float64],
+                  M: npt.NDArray[np.float64], Phi_b: npt.NDArray[np.float64], Gamma_b: npt.NDArray[np.float64],
+                  CPhi: npt.NDArray[np.float64], q0: npt.NDArray[np.float64], x: npt.NDArray[np.float64],
+                  u: npt.NDArray[np.float64], y: npt.NDArray[np.float64], start: int, inline: bool, period: int,
+                  state: tuple[float, ...] | None) -> tuple[int, int]:
         args = (which, Phi, Gamma, H, C, F, M, Phi_b, Gamma_b, CPhi, q0, x, u, y, start, inline, period)
         if not conforms(specs, args) or not (state is None or len(state) in by_size):
             return _jit("run_steps")(*args, state)

@@ -17,6 +17,7 @@ import os
 import re
 import sys
 import time
+from typing import Any
 
 from .errors import ResourceError
 
@@ -31,7 +32,7 @@ _BYTES = re.compile(r"^\s*(\d+(?:\.\d*)?|\.\d+)(?:[eE]([+-]?\d+))?\s*([kKmMgGtT]
 _FACTOR = {"": 1, "b": 1, "k": 1 << 10, "m": 1 << 20, "g": 1 << 30, "t": 1 << 40}
 
 
-def parse_bytes(name: str, text, bounds: tuple = MEMORY_RANGE) -> int:
+def parse_bytes(name: str, text: object, bounds: tuple[float, float] = MEMORY_RANGE) -> int:
     """Bytes from ``4G``, ``512MiB``, ``1e9`` (binary multiples: K, M, G, T = 2^10 .. 2^40), within ``bounds``."""
     from .validate import shown
     if isinstance(text, (int, float)) and not isinstance(text, bool):
@@ -66,7 +67,7 @@ def max_memory() -> int:
     return DEFAULT_MAX_MEMORY if not text else parse_bytes(MEMORY_ENV, text)
 
 
-def set_max_memory(text) -> int:
+def set_max_memory(text: object) -> int:
     """Set the limit for this process and every worker it starts (``--max-memory``)."""
     value = parse_bytes("--max-memory", text)
     os.environ[MEMORY_ENV] = str(value)
@@ -116,7 +117,7 @@ def time_limit(default: float) -> float:
     return default if not text else parse_seconds(TIME_ENV, text)
 
 
-def parse_seconds(name: str, text) -> float:
+def parse_seconds(name: str, text: str | float) -> float:
     try:
         value = float(text)
     except (TypeError, ValueError):
@@ -127,7 +128,7 @@ def parse_seconds(name: str, text) -> float:
     return value
 
 
-def set_time_limit(text) -> float:
+def set_time_limit(text: str | float) -> float:
     value = parse_seconds("--time-limit", text)
     os.environ[TIME_ENV] = repr(value)
     return value
@@ -136,7 +137,7 @@ def set_time_limit(text) -> float:
 class Deadline:
     """A wall-clock limit checked inside long loops: ``deadline.expired()`` is cheap (one clock read)."""
 
-    def __init__(self, seconds: float):
+    def __init__(self, seconds: float) -> None:
         self.seconds = float(seconds)
         self.end = time.monotonic() + self.seconds
 
@@ -171,11 +172,11 @@ def install_compile_clock() -> None:
     ident = threading.get_ident
 
     class CompileClock(event.Listener):
-        def on_start(self, event):
+        def on_start(self, event: Any) -> None:
             depth, since = _compiling.get(ident(), (0, 0.0))      # the lock is re-entrant: its outermost hold
             _compiling[ident()] = (depth + 1, since if depth else time.monotonic())
 
-        def on_end(self, event):
+        def on_end(self, event: Any) -> None:
             depth, since = _compiling.pop(ident(), (0, 0.0))
             if depth > 1:
                 _compiling[ident()] = (depth - 1, since)

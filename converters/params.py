@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 from .errors import ParameterError
 from .validate import parse_value
@@ -31,7 +32,7 @@ class Param:
     low_open: bool = True      # (low, ...] by default: strictly positive
     high_open: bool = True
 
-    def check(self, value) -> float:
+    def check(self, value: object) -> float:
         value = parse_value(self.name, value, self.unit)
         below = value <= self.low if self.low_open else value < self.low
         above = value >= self.high if self.high_open else value > self.high
@@ -51,15 +52,15 @@ class Param:
         return f"{lb}{self.low:g}, {high}{rb}"
 
 
-def positive(name, default, unit, doc) -> Param:
+def positive(name: str, default: float | None, unit: str, doc: str) -> Param:
     return Param(name, default, unit, doc)
 
 
-def nonnegative(name, default, unit, doc) -> Param:
+def nonnegative(name: str, default: float | None, unit: str, doc: str) -> Param:
     return Param(name, default, unit, doc, low=0.0, low_open=False)
 
 
-def resolve(params: tuple[Param, ...], given: dict, owner: str) -> dict:
+def resolve(params: tuple[Param, ...], given: dict[str, Any], owner: str) -> dict[str, Any]:
     """Defaults overlaid with ``given``; optional parameters appear only when given."""
     known = {p.name: p for p in params}
     unknown = [name for name in given if name not in known]
@@ -71,9 +72,9 @@ def resolve(params: tuple[Param, ...], given: dict, owner: str) -> dict:
     return values
 
 
-def parse_assignments(items: list[str]) -> dict:
+def parse_assignments(items: list[str] | None) -> dict[str, str]:
     """``["L=10u", "R=5"]`` -> {"L": "10u", "R": "5"} (values are checked later, against the spec)."""
-    out = {}
+    out: dict[str, str] = {}
     for item in items or []:
         name, sep, value = item.partition("=")
         if not sep or not name.strip():

@@ -5,7 +5,14 @@ operating point in the title, no offset notation on the axes. matplotlib is impo
 """
 from __future__ import annotations
 
+from collections.abc import Iterable
+from typing import TYPE_CHECKING, Any
+
 import numpy as np
+import numpy.typing as npt
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 PERIODS = 3
 #: A run with a load or input step is drawn from this many periods before the step to its end.
@@ -29,14 +36,16 @@ def eng(value: float) -> str:
     return f"{value:.3g}"
 
 
-def held_pairs(tr, rows) -> np.ndarray:
+# ``tr`` is a Trajectory: typed Any, as converters.trajectory imports this module (the layering keeps it below).
+def held_pairs(tr: Any, rows: npt.NDArray[np.integer[Any]]) -> np.ndarray:
     """Per row, the names of the complementarity pairs that hold (u carries the pair), joined by '+'; 'none'."""
     active = np.asarray(tr.active[rows], dtype=bool)
     names = np.asarray(tr.pair_names, dtype=object)
     return np.array(["+".join(names[row]) or "none" for row in active])
 
 
-def plot(tr, periods: float | None = None, signals=None, title: str | None = None):
+def plot(tr: Any, periods: float | None = None, signals: Iterable[str] | None = None,
+         title: str | None = None) -> Figure:
     """A matplotlib Figure: one panel per signal (default: the states and vout) over the last ``periods``
     switching periods (default 3; the whole run without a period; a run with a load or input step from
     STEP_PERIODS_BEFORE periods before it to the end, the step marked), then the mode timeline."""

@@ -11,18 +11,25 @@ metadata: model, control, params, method options, periods, and the orbit's stati
 from __future__ import annotations
 
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
+import numpy.typing as npt
 
 from .analysis.periodic import PeriodicOrbit, require, shoot
 from .errors import ParameterError, SimulationError
-from .methods.base import DEFAULT_METHOD, Method, get_method
+from .methods.base import DEFAULT_METHOD, Method, PeriodMap, get_method
 from .methods.theta import StepPlanMap
 from .models import Model, check_h, get_model
 from .simulate import simulate
 from .trajectory import ReturnCode, Trajectory, concatenate
 from .validate import check_flag, check_integer, parse_value
+
+if TYPE_CHECKING:
+    from .problems import LCSProblem
+    from .problems.mechanical import MechanicalProblem
 
 #: Periods simulated from x0 before Newton shooting starts: none. With the exact Jacobian Newton starts from x0
 #: itself; where no fraction of its step lowers the residual (far from the orbit, off its mode sequence) it takes
@@ -37,7 +44,7 @@ DEFAULT_PERIODS = 500
 DEFAULT_AUTONOMOUS_T_END = 30e-3
 
 
-def resolve_model(name_or_model, control: str = "pwm") -> Model:
+def resolve_model(name_or_model: str | Model, control: str = "pwm") -> Model:
     if isinstance(name_or_model, str):
         return get_model(name_or_model, control)
     if not isinstance(name_or_model, Model):
@@ -50,7 +57,8 @@ def resolve_model(name_or_model, control: str = "pwm") -> Model:
     return name_or_model
 
 
-def make_method(model: Model, p: dict, method: str | Method | None = None, h=None, **options) -> Method:
+def make_method(model: Model, p: dict, method: str | Method | None = None, h: float | str | None = None,
+                **options: Any) -> Method:
     """The method for a run of ``model``: h defaults to the model's (T/1000), the stepper's theta
     to 0.5 where h resolves every time constant of the circuit, else 1 (:meth:`Model.default_theta`). ``h`` is
     the stepper's step or the output spacing of the other methods."""
@@ -75,7 +83,7 @@ def make_method(model: Model, p: dict, method: str | Method | None = None, h=Non
     return cls.from_options(step=h, **options)
 
 
-def duration(model: Model, p: dict, t_end=None, periods=None) -> float:
+def duration(model: Model, p: dict, t_end: float | str | None = None, periods: int | None = None) -> float:
     """The run's length in s from t_end or a number of switching periods (default 500 periods, or 30 ms
     for a model without a fixed period)."""
     if t_end is not None and periods is not None:
@@ -96,9 +104,11 @@ def duration(model: Model, p: dict, t_end=None, periods=None) -> float:
     return DEFAULT_PERIODS * model.period(p) if model.periodic(p) else DEFAULT_AUTONOMOUS_T_END
 
 
-def run_converter(name_or_model, params: dict | None = None, *, control: str = "pwm", method: str | Method | None = None,
-                  h=None, t_end=None, periods=None, steady: bool = False, steady_tol: float = 1e-6, x0=None,
-                  rtol=None, output_step=None, **options) -> Trajectory:
+def run_converter(name_or_model: str | Model, params: dict | None = None, *, control: str = "pwm",
+                  method: str | Method | None = None, h: float | str | None = None, t_end: float | str | None = None,
+                  periods: int | None = None, steady: bool = False, steady_tol: float = 1e-6,
+                  x0: npt.NDArray[np.float64] | None = None, rtol: float | str | None = None,
+                  output_step: float | str | None = None, **options: Any) -> Trajectory:
     """Simulate a model (a converter under ``control``) with any method; returns a labelled Trajectory.
 
     Parameters
@@ -172,7 +182,8 @@ def run_converter(name_or_model, params: dict | None = None, *, control: str = "
     steady_tol = parse_value("steady_tol", steady_tol)
     if not 0.0 < steady_tol < 1.0:
         raise ParameterError(f"steady_tol must be in (0, 1); got {steady_tol!r}")
-    meta = {"model": model.name, "control": model.control, "params": p, "method_options": method.options()}
+    meta: dict[str, Any] = {"model": model.name, "control": model.control, "params": p,
+                            "method_options": method.options()}
     if steady:
         orbit, period_map = _orbit_and_map(model, p, method, x0=x0, tol=0.1 * steady_tol)
         if not orbit.stable:
@@ -220,7 +231,9 @@ def check_no_step(model: Model, p: dict) -> None:
                              "--periods N (or --t-end) from rest")
 
 
-def _accurate(model: Model, p: dict, rtol, start: float, *, method, h, t_end, periods, steady, x0, options) -> Trajectory:
+def _accurate(model: Model, p: dict, rtol: float | str, start: float, *, method: str | Method | None,
+              h: float | str | None, t_end: float | str | None, periods: int | None, steady: bool,
+              x0: npt.NDArray[np.float64] | None, options: dict[str, Any]) -> Trajectory:
     from .analysis.accuracy import accurate_steady
     rtol = parse_value("rtol", rtol)
     given = [name for name, value in (("method", method), ("h", h),
@@ -267,7 +280,8 @@ MAX_RUN_STEPS = 2e9
 CHUNK_STEPS = 500_000
 
 
-def output_plan(model: Model, p: dict, method: Method, span: float, x0, output_step=None) -> tuple:
+def output_plan(model: Model, p: dict, method: Method, span: float, x0: npt.NDArray[np.float64] | None,
+                output_step: float | str | None = None) -> tuple:
     """(spacing, resolved_from) of a run from rest over [0, span]: the output spacing (s; None: every step) and
     where every step is kept from (the model's ``summary_from``). Default spacing: none while the whole run fits
     in the memory limit, else the finest multiple of the step whose samples fit in half of it. Refuses, before
@@ -307,8 +321,8 @@ def output_plan(model: Model, p: dict, method: Method, span: float, x0, output_s
     return spacing, resolved
 
 
-def _simulate_phases(model: Model, p: dict, method: Method, t_end: float, x0, spacing: float | None = None,
-                     resolved: float = 0.0) -> Trajectory:
+def _simulate_phases(model: Model, p: dict, method: Method, t_end: float, x0: npt.NDArray[np.float64] | None,
+                     spacing: float | None = None, resolved: float = 0.0) -> Trajectory:
     """One simulation per phase between the model's step times (a load step), the state and the switching
     law's memory carried across; with an output ``spacing``, each phase in chunks of ``CHUNK_STEPS`` steps, the
     rows before ``resolved`` thinned to it as each chunk ends."""
@@ -323,7 +337,7 @@ def _simulate_phases(model: Model, p: dict, method: Method, t_end: float, x0, sp
     return concatenate(parts)
 
 
-def _chunks(a: float, b: float, method: Method, spacing: float | None, period: float):
+def _chunks(a: float, b: float, method: Method, spacing: float | None, period: float) -> Iterator[tuple[float, float]]:
     """[a, b] whole, or, for a run kept at an output spacing, in pieces of about CHUNK_STEPS of the method's steps:
     whole periods where the run has a period and a starts on one (each chunk then starts on the grid of the run
     whole, bit for bit), else a multiple of the step."""
@@ -347,16 +361,18 @@ def _chunks(a: float, b: float, method: Method, spacing: float | None, period: f
         start, k = end, k + 1
 
 
-def steady_state(model: Model, p: dict, method: Method, *, x0=None, warm_up: int = WARM_UP_PERIODS,
-                 tol: float = 1e-10, periods: int = 1, rounding_bound: float = 0.0) -> PeriodicOrbit:
+def steady_state(model: Model, p: dict, method: Method, *, x0: npt.NDArray[np.float64] | None = None,
+                 warm_up: int = WARM_UP_PERIODS, tol: float = 1e-10, periods: int = 1,
+                 rounding_bound: float = 0.0) -> PeriodicOrbit:
     """The method's own periodic orbit of ``model`` at ``p`` (raises SimulationError when Newton fails; with
     ``rounding_bound``, an orbit rounding resolves to it serves: :func:`.analysis.periodic.require`)."""
     return _orbit_and_map(model, p, method, x0=x0, warm_up=warm_up, tol=tol, periods=periods,
                           rounding_bound=rounding_bound)[0]
 
 
-def _orbit_and_map(model: Model, p: dict, method: Method, *, x0=None, warm_up: int = WARM_UP_PERIODS, tol: float = 1e-10,
-           periods: int = 1, rounding_bound: float = 0.0):
+def _orbit_and_map(model: Model, p: dict, method: Method, *, x0: npt.NDArray[np.float64] | None = None,
+                   warm_up: int = WARM_UP_PERIODS, tol: float = 1e-10, periods: int = 1,
+                   rounding_bound: float = 0.0) -> tuple[PeriodicOrbit, PeriodMap]:
     """(orbit, period map): :func:`steady_state` and the map it shot on (its step plan, for the stepper,
     serves the run on the orbit too: :func:`_on_orbit`). Every orbit goes through here, so a step (no steady
     state: its problem over one period would be the circuit before the step) is refused here for all of them."""
@@ -367,7 +383,8 @@ def _orbit_and_map(model: Model, p: dict, method: Method, *, x0=None, warm_up: i
     return require(orbit, f"the periodic orbit of {model.key}", rounding_bound), period_map
 
 
-def _on_orbit(model: Model, p: dict, method: Method, period_map, x0, span: float) -> Trajectory:
+def _on_orbit(model: Model, p: dict, method: Method, period_map: PeriodMap, x0: npt.NDArray[np.float64],
+              span: float) -> Trajectory:
     """The run over [0, span] from x0 (on the orbit): the stepper repeats the step plan of its period map (grid
     and matrices built once per operating point); any other method simulates the model's problem."""
     if isinstance(period_map, StepPlanMap):
@@ -375,8 +392,9 @@ def _on_orbit(model: Model, p: dict, method: Method, period_map, x0, span: float
     return simulate(model.problem(p, span, x0), method)
 
 
-def steady_orbit(name_or_model, params: dict | None = None, *, method: str | Method | None = None, h=None,
-                 tol: float = 1e-8, warm_up: int = WARM_UP_PERIODS, **options) -> Trajectory:
+def steady_orbit(name_or_model: str | Model, params: dict | None = None, *, method: str | Method | None = None,
+                 h: float | str | None = None, tol: float = 1e-8, warm_up: int = WARM_UP_PERIODS,
+                 **options: Any) -> Trajectory:
     """One period of the method's periodic orbit, labelled (conduction modes, maps, GDCM): Newton shooting
     from rest (after ``warm_up`` plain periods), one step plan for Newton and the period returned.
     ``metadata['orbit']`` holds the orbit's statistics (residual, distance, multipliers)."""
@@ -401,7 +419,7 @@ class ParameterPath:
     params: dict
     name: str
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         # a netlist's names are case-insensitive (Model.parameter_name); a mechanical model's are as typed
         object.__setattr__(self, "name", getattr(self.model, "parameter_name", str)(self.name))
         known = [p.name for p in self.model.parameters]
@@ -410,14 +428,14 @@ class ParameterPath:
         if getattr(self.model, "step_times", None) is not None:       # the path's orbits are periodic ones
             check_no_step(self.model, self.model.resolve(self.params))
 
-    def resolve(self, value) -> dict:
+    def resolve(self, value: float | str) -> dict:
         return self.model.resolve({**self.params, self.name: value})
 
-    def __call__(self, value):
+    def __call__(self, value: float | str) -> LCSProblem | MechanicalProblem:
         p = self.resolve(value)
         span = self.model.period(p)
         if not np.isfinite(span):                     # an autonomous model: one of its own time units
-            span = self.model.time_scale(p)
+            span = self.model.time_scale(p)      # type: ignore[attr-defined]  # a netlist's, a mechanical model's
         return self.model.problem(p, span)
 
 
@@ -480,7 +498,7 @@ def check_accuracy(tr: Trajectory, summary: dict) -> dict:
     model, p, out = tr.labels.model, tr.metadata["params"], summary
     if tr.algorithm is None:
         return out
-    method = tr.algorithm
+    method = cast(Method, tr.algorithm)           # a run's Algorithm is the Method that made it
     if model.periodic(p) and not model.step_times(p) and _schedule_driven(model, p):
         from .analysis.accuracy import default_check, last_period
         period = last_period(model, p, tr)

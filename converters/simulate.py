@@ -4,6 +4,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
+import numpy.typing as npt
 
 from .errors import ParameterError, SimulationError
 from .methods.base import Method, load_methods
@@ -11,7 +12,7 @@ from .problems import LCSProblem
 from .trajectory import Trajectory
 
 
-def simulate(problem: LCSProblem, method: Method, *, x0=None) -> Trajectory:
+def simulate(problem: LCSProblem, method: Method, *, x0: npt.ArrayLike | None = None) -> Trajectory:
     """Solve ``problem`` over its t_span with ``method``.
 
     Parameters
@@ -46,7 +47,7 @@ def simulate(problem: LCSProblem, method: Method, *, x0=None) -> Trajectory:
     return replace(trajectory, problem=problem, algorithm=method)
 
 
-def check_x0(problem: LCSProblem, x0=None) -> np.ndarray:
+def check_x0(problem: LCSProblem, x0: npt.ArrayLike | None = None) -> np.ndarray:
     """``problem.x0`` when x0 is None, else x0 checked to be n finite numbers."""
     if x0 is None:
         return np.array(problem.x0, dtype=float)

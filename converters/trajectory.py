@@ -18,15 +18,20 @@ from __future__ import annotations
 
 import itertools
 import math
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 from enum import Enum
-from typing import TYPE_CHECKING, ClassVar, Protocol
+from typing import TYPE_CHECKING, Any, ClassVar, Protocol, TypeAlias, Union, cast
 
 import numpy as np
+import numpy.typing as npt
 
 from .errors import SignalError
 
 if TYPE_CHECKING:
+    import pandas as pd
+    from matplotlib.figure import Figure
+
     from .problems import LCSProblem
     from .problems.mechanical import MechanicalProblem
 
@@ -44,6 +49,44 @@ class Samples:
     config: np.ndarray | None
     relay: np.ndarray | None = None
     held: np.ndarray | None = None
+
+
+#: Which rows a view of a trajectory reads: a slice, or an index array (positions, or a mask).
+Rows: TypeAlias = Union[slice, npt.NDArray[np.integer[Any]], npt.NDArray[np.bool_]]
+#: One block of a quadrature: its nodes and their weights.
+QuadratureBlock: TypeAlias = tuple[Samples, npt.NDArray[np.float64]]
+#: A run's events as data: columns ``time``, ``step``, ``pair``, ``kind`` (and ``config``), or a DataFrame of them.
+EventColumns: TypeAlias = "Mapping[str, npt.NDArray[Any]] | pd.DataFrame"
+
+
+class ExactSolution(Protocol):
+    """The exact pieces of an event-driven run (:attr:`Trajectory.exact`): the Gauss-Legendre nodes and weights of
+    a window, at once or a block at a time (a long window's nodes are not all held at once)."""
+
+    def quadrature(self, t0: float, t1: float) -> QuadratureBlock: ...
+
+    def quadrature_blocks(self, t0: float, t1: float) -> Iterator[QuadratureBlock]: ...
+
+
+class SignalLabels(Protocol):
+    """Any model's laws bound to its parameters (:attr:`Trajectory.labels`): the signals it names and their values
+    at a :class:`Samples`' points. What some models give beside is read where present: ``model`` (its
+    ``signal_units``), ``mode_labels_of(samples)`` (modes from the run's state: mechanical models, circuits)."""
+
+    @property
+    def signal_names(self) -> tuple[str, ...]: ...
+
+    def signal(self, name: str, samples: Samples) -> npt.NDArray[Any]: ...
+
+
+class Labels(SignalLabels, Protocol):
+    """A converter model's labels: also which device of each pair conducts, and its conduction-mode rule (what
+    :meth:`Trajectory.conducting` and :meth:`Trajectory.modes` read; a mechanical model's labels have neither)."""
+
+    def conducting(self, samples: Samples) -> npt.NDArray[np.bool_]: ...
+
+    def modes(self, conducting: npt.NDArray[np.bool_], switch: npt.NDArray[Any],
+              x: npt.NDArray[np.float64]) -> npt.NDArray[Any]: ...
 
 
 class ReturnCode(str, Enum):
@@ -179,13 +222,13 @@ class Trajectory:
     steps: int = 0
     wall_s: float = 0.0
     rule: str = "linear"
-    exact: object = None
-    event_columns: object = None
-    labels: object = None
-    measured: dict = field(default_factory=dict)
+    exact: ExactSolution | None = None
+    event_columns: EventColumns | Callable[[], EventColumns | None] | None = None
+    labels: SignalLabels | None = None
+    measured: dict[str, npt.NDArray[Any]] = field(default_factory=dict)
     period: float = float("inf")
     general_solves: int = 0
-    metadata: dict = field(default_factory=dict, compare=False)
+    metadata: dict[str, Any] = field(default_factory=dict, compare=False)
     #: Rows before this time were kept at an output spacing only (:meth:`thinned`): measures need every step.
     resolved_from: float = float("-inf")
     problem: "LCSProblem | MechanicalProblem | None" = field(default=None, compare=False, repr=False)
@@ -194,7 +237,7 @@ class Trajectory:
     #: The jumps of the state (a switch closing across charged capacitances, :class:`~converters.problems.Jump`):
     #: ((time, energy lost in J), ...) in time order, as the method took them (a run's start among them where its
     #: state is not on the first configuration's loops).
-    jumps: tuple = ()
+    jumps: tuple[tuple[float, float], ...] = ()
 
     def __post_init__(self) -> None:
         if not isinstance(self.retcode, ReturnCode):
@@ -212,13 +255,14 @@ class Trajectory:
 
     # --- raw views -----------------------------------------------------------------------------------
 
-    def samples(self, rows=slice(None)) -> Samples:
-        pick = (lambda a: None if a is None else a[rows])
+    def samples(self, rows: Rows = slice(None)) -> Samples:
+        pick: Callable[[npt.NDArray[Any] | None], npt.NDArray[Any] | None] = (
+            lambda a: None if a is None else a[rows])
         return Samples(self.t[rows], self.x[rows], pick(self.u), pick(self.y), pick(self.config), pick(self.relay),
                        pick(self.held))
 
     @property
-    def events(self):
+    def events(self) -> pd.DataFrame:
         import pandas as pd
         frame = self.__dict__.get("_events_frame")
         if frame is None:
@@ -230,7 +274,7 @@ class Trajectory:
             object.__setattr__(self, "_events_frame", frame)
         return frame
 
-    def event_table(self):
+    def event_table(self) -> EventColumns | None:
         """The event columns as data: ``event_columns``, or what it gives when it is a function (a method may
         defer locating its events until they are read; computed once)."""
         columns = self.event_columns
@@ -242,7 +286,10 @@ class Trajectory:
     @property
     def active(self) -> np.ndarray:
         """Complementarity mode flags, shape (N, k): the held pairs (u carries the pair; u > y)."""
-        return self.held if self.held is not None else self.u > self.y
+        if self.held is not None:
+            return self.held
+        assert self.u is not None and self.y is not None        # an LCS run's flags: it has its pairs
+        return self.u > self.y
 
     def state(self, name: str) -> np.ndarray:
         try:
@@ -261,7 +308,7 @@ class Trajectory:
         names += [s for s in self.measured if s not in names and s not in PER_DEVICE]
         return tuple(names)
 
-    def signal(self, name: str, rows=slice(None)) -> np.ndarray:
+    def signal(self, name: str, rows: Rows = slice(None)) -> np.ndarray:
         """A named signal (a state, a model signal such as ``vout`` or ``switch``, or a measured one)."""
         if name in self.measured:
             return np.asarray(self.measured[name])[rows]
@@ -270,7 +317,7 @@ class Trajectory:
         if self.labels is None or name not in self.labels.signal_names:
             raise SignalError(f"signal must be one of {', '.join(self.signal_names)}; got {name!r}")
         whole = isinstance(rows, slice) and rows == slice(None)
-        cache = self.__dict__.setdefault("_signal_cache", {})
+        cache: dict[str, npt.NDArray[Any]] = self.__dict__.setdefault("_signal_cache", {})
         if whole and name in cache:
             return cache[name]
         value = np.asarray(self.labels.signal(name, self.samples(rows)))
@@ -278,25 +325,26 @@ class Trajectory:
             cache[name] = value
         return value
 
-    def conducting(self, rows=slice(None)) -> np.ndarray:
+    def conducting(self, rows: Rows = slice(None)) -> np.ndarray:
         """Per point and pair: True where the pair's device conducts (shape (N, k))."""
         if "conducting" in self.measured:
             return np.asarray(self.measured["conducting"])[rows]
-        return np.asarray(self.labels.conducting(self.samples(rows)))
+        return np.asarray(cast("Labels", self.labels).conducting(self.samples(rows)))
 
-    def modes(self, rows=slice(None)) -> np.ndarray:
+    def modes(self, rows: Rows = slice(None)) -> np.ndarray:
         """Conduction-mode label per point (e.g. CCM-ON, CCM-OFF, DCM, GDCM-OFF), from the model's rule."""
         if "mode" in self.measured:
             return np.asarray(self.measured["mode"])[rows]
         if self.labels is None:
             raise SignalError("modes need a model's labels (this trajectory has none)")
         if hasattr(self.labels, "mode_labels_of"):             # mechanical models read the mode from the run's state
-            return self.labels.mode_labels_of(self.samples(rows))
-        return self.labels.modes(self.conducting(rows), self.signal("switch", rows), self.x[rows])
+            return cast("npt.NDArray[Any]", self.labels.mode_labels_of(self.samples(rows)))
+        return cast("Labels", self.labels).modes(self.conducting(rows), self.signal("switch", rows), self.x[rows])
 
     # --- windows and measures ------------------------------------------------------------------------
 
-    def window(self, periods: float | None = None, t0: float | None = None, t1: float | None = None) -> tuple:
+    def window(self, periods: float | None = None, t0: float | None = None,
+               t1: float | None = None) -> tuple[float, float]:
         """(t0, t1) of the last ``periods`` switching periods, or of the given times (default: the run)."""
         for label, value in (("periods", periods), ("t0", t0), ("t1", t1)):     # NaN had meant the whole run
             if value is not None and (isinstance(value, (bool, str)) or not isinstance(value, (int, float, np.number))
@@ -336,7 +384,8 @@ class Trajectory:
         if self.rule == "exact" and self.exact is not None and name not in self.measured:
             if name not in self.state_names and (self.labels is None or name not in self.labels.signal_names):
                 raise SignalError(f"signal must be one of {', '.join(self.signal_names)}; got {name!r}")
-            cache = self.__dict__.setdefault("_quadrature_cache", {})
+            cache: dict[tuple[float, float], tuple[QuadratureBlock, ...]] = self.__dict__.setdefault(
+                "_quadrature_cache", {})
             if (t0, t1) not in cache:
                 cache.clear()                    # one window at a time, and only one that fits a block
                 blocks = self.exact.quadrature_blocks(t0, t1)
@@ -354,15 +403,15 @@ class Trajectory:
             return float(dt @ v[1:] ** power)
         a, b = v[:-1], v[1:]
         if name not in self.state_names and name not in self.measured:
-            a = self._step_starts(lambda samples: self.labels.signal(name, samples), rows, a)
+            a = self._step_starts(lambda samples: cast("SignalLabels", self.labels).signal(name, samples), rows, a)
         if power == 1:
             return float(dt @ (0.5 * (a + b)))
         return float(dt @ ((a * a + a * b + b * b) / 3.0))
 
-    def _integrate_blocks(self, name: str, power: int, blocks) -> float:
+    def _integrate_blocks(self, name: str, power: int, blocks: Iterable[QuadratureBlock]) -> float:
         return self._integrals_of_blocks((name,), blocks)[name][power - 1]
 
-    def _integrals_of_blocks(self, names, blocks) -> dict:
+    def _integrals_of_blocks(self, names: Iterable[str], blocks: Iterable[QuadratureBlock]) -> dict[str, list[float]]:
         """{name: (integral of the signal, of its square)} over quadrature blocks, each block read once."""
         totals = {name: [0.0, 0.0] for name in names}
         for nodes, weights in blocks:
@@ -370,12 +419,12 @@ class Trajectory:
                 if name in self.state_names:
                     values = nodes.x[:, self.state_names.index(name)]
                 else:
-                    values = np.asarray(self.labels.signal(name, nodes), dtype=float)
+                    values = np.asarray(cast("SignalLabels", self.labels).signal(name, nodes), dtype=float)
                 totals[name][0] += float(weights @ values)
                 totals[name][1] += float(weights @ (values * values))
         return totals
 
-    def _means_and_rms(self, names: list, t0: float, t1: float) -> dict:
+    def _means_and_rms(self, names: list[str], t0: float, t1: float) -> dict[str, tuple[float, float]]:
         """{name: (mean, rms)} over [t0, t1]: of an exact run, one pass over its quadrature for every name (a long
         window's nodes are computed once, not once per measure)."""
         if self.rule == "exact" and self.exact is not None and not any(n in self.measured for n in names):
@@ -385,7 +434,7 @@ class Trajectory:
             return {n: (one / span, float(np.sqrt(two / span))) for n, (one, two) in totals.items()}
         return {n: (self.mean(n, t0=t0, t1=t1), self.rms(n, t0=t0, t1=t1)) for n in names}
 
-    def integral(self, function, t0: float, t1: float) -> float:
+    def integral(self, function: Callable[[Samples], npt.ArrayLike], t0: float, t1: float) -> float:
         """The integral over [t0, t1] of ``function(samples)`` (values at a :class:`Samples`' points: a product of
         signals, an element's power) by the trajectory's own rule, as :meth:`mean` integrates a signal: the exact
         method's quadrature on its exact pieces, the end-point rule, or the linear rule with each step that starts
@@ -400,7 +449,8 @@ class Trajectory:
             return float(dt @ v[1:])
         return float(dt @ (0.5 * (self._step_starts(function, rows, v[:-1]) + v[1:])))
 
-    def _step_starts(self, function, rows: np.ndarray, starts: np.ndarray) -> np.ndarray:
+    def _step_starts(self, function: Callable[[Samples], npt.ArrayLike], rows: np.ndarray,
+                     starts: np.ndarray) -> np.ndarray:
         """The value each step of ``rows`` starts from, for the linear rule: a step that starts at a switching
         edge reads its first point in its own configuration (with its own pair, the one it ends with), not in
         the one the point ended: a switch current that jumps to zero there would otherwise be integrated over
@@ -412,8 +462,10 @@ class Trajectory:
         edges = np.flatnonzero(config[1:] != config[:-1])
         if edges.size == 0:
             return starts
+        assert self.y is not None                    # a run with pairs has both u and y
         left, right = rows[edges], rows[edges + 1]
-        pick = (lambda a: None if a is None else a[right])
+        pick: Callable[[npt.NDArray[Any] | None], npt.NDArray[Any] | None] = (
+            lambda a: None if a is None else a[right])
         first = Samples(self.t[left], self.x[left], self.u[right], self.y[right], self.config[right],
                         pick(self.relay), pick(self.held))
         starts = np.array(starts, dtype=float)
@@ -440,18 +492,21 @@ class Trajectory:
         a, b = self.window(periods, t0, t1)
         return float(np.ptp(self.signal(name, self._all_or(self.rows_between(a, b)))))
 
-    def _all_or(self, rows: np.ndarray):
+    def _all_or(self, rows: np.ndarray) -> Rows:
         """``rows`` (consecutive, from :meth:`rows_between`), or every row where they are: a signal of the whole
         run is computed once (:meth:`signal`'s cache), however many measures read it."""
         return slice(None) if rows.size == self.t.size else rows
 
-    def plot(self, periods: float | None = None, signals=None, title: str | None = None):
+    def plot(self, periods: float | None = None, signals: Iterable[str] | None = None,
+             title: str | None = None) -> Figure:
         """The run's waveforms over the last periods and its mode timeline: a matplotlib Figure
         (:func:`converters.plotting.plot`)."""
         from .plotting import plot
-        return plot(self, periods, signals, title)
+        figure: Figure = plot(self, periods, signals, title)
+        return figure
 
-    def measurements(self, periods: float | None = None, t0: float | None = None, t1: float | None = None):
+    def measurements(self, periods: float | None = None, t0: float | None = None,
+                     t1: float | None = None) -> pd.DataFrame:
         """Every state and signal over the window (default: the whole run): mean, RMS, min, max and
         peak-to-peak ripple, with its unit (A, V, s; 1 for the switch command), as a DataFrame indexed by
         signal. Means and RMS by the run's own rule (exact quadrature for the event method); min, max and
@@ -461,13 +516,13 @@ class Trajectory:
         return pd.DataFrame([{"signal": name, **row} for name, row in rows.items()]).set_index("signal")
 
     def measurement_rows(self, periods: float | None = None, t0: float | None = None,
-                         t1: float | None = None) -> dict:
+                         t1: float | None = None) -> dict[str, dict[str, str | float]]:
         """:meth:`measurements` as plain data, {signal: {unit, mean, rms, min, max, ripple}} (no pandas: the JSON
         summary of a fresh process does not pay for importing it)."""
         a, b = self.window(periods, t0, t1)
         rows = self.rows_between(a, b)
         units = dict(getattr(getattr(self.labels, "model", None), "signal_units", {}) or {})
-        sampled = {}
+        sampled: dict[str, npt.NDArray[np.float64]] = {}
         for name in self.signal_names:
             if name == "mode":
                 continue
@@ -479,7 +534,8 @@ class Trajectory:
                        "min": float(values.min()), "max": float(values.max()), "ripple": float(np.ptp(values))}
                 for name, values in sampled.items()}
 
-    def jump_losses(self, periods: float | None = None, t0: float | None = None, t1: float | None = None) -> tuple:
+    def jump_losses(self, periods: float | None = None, t0: float | None = None,
+                    t1: float | None = None) -> tuple[int, float]:
         """(jumps, energy in J) of the charge redistributions in the window [t0, t1) (default: the run):
         :attr:`jumps` (each entry of a configuration whose closed switches tie charged capacitors loses
         1/2 dv^T C dv)."""
@@ -490,7 +546,8 @@ class Trajectory:
         inside = [energy for t, energy in self.jumps if a - slack <= t < b - slack]
         return len(inside), float(sum(inside))
 
-    def mode_fractions(self, periods: float | None = 1, t0: float | None = None, t1: float | None = None) -> dict:
+    def mode_fractions(self, periods: float | None = 1, t0: float | None = None,
+                       t1: float | None = None) -> dict[str, float]:
         """Fraction of the window spent in each mode (each step counted by the label of its end point)."""
         a, b = self.window(periods, t0, t1)
         rows = self.rows_between(a, b)
@@ -518,7 +575,8 @@ class Trajectory:
             keep[heads - 1] = True
             resolved = max(resolved, float(t[heads - 1]))
         rows = np.flatnonzero(keep)
-        pick = (lambda a: None if a is None else a[rows])
+        pick: Callable[[npt.NDArray[Any] | None], npt.NDArray[Any] | None] = (
+            lambda a: None if a is None else a[rows])
         columns = self.event_table()
         if columns is not None:
             import pandas as pd
@@ -533,7 +591,7 @@ class Trajectory:
 
     # --- tables --------------------------------------------------------------------------------------
 
-    def to_pandas(self, columns=None):
+    def to_pandas(self, columns: str | Iterable[str] | None = None) -> pd.DataFrame:
         """Columns: time, one per state, the model's signals, ``switch`` and ``mode`` (labelled runs),
         then u_<pair>, y_<pair>, active_<pair> and ``config`` (LCS runs). ``columns`` picks a subset."""
         import pandas as pd
@@ -546,6 +604,7 @@ class Trajectory:
                     data[name] = self.signal(name)
             data["mode"] = np.asarray(self.modes()).astype(str)
         if self.u is not None:
+            assert self.y is not None                # a run with pairs has both u and y
             active = self.active
             for i, name in enumerate(self.pair_names):
                 data[f"u_{name}"] = self.u[:, i]
@@ -562,7 +621,7 @@ class Trajectory:
             raise SignalError(f"columns must be among {', '.join(frame.columns)}; got {unknown[0]!r}")
         return frame[[columns] if isinstance(columns, str) else list(columns)]
 
-    def waveforms(self):
+    def waveforms(self) -> pd.DataFrame:
         """The waveform table of the command line: time, states, the model's signals, mode (a signal the run
         does not measure, all NaN, is left out: an ngspice run has no pair variables to read element signals
         from)."""
@@ -583,20 +642,22 @@ def concatenate(parts: list[Trajectory]) -> Trajectory:
 
     import pandas as pd
 
-    def stack(name):
+    def stack(name: str) -> npt.NDArray[Any] | None:
         arrays = [getattr(p, name) for p in parts]
         if any(a is None for a in arrays):
             return None
         return np.concatenate([arrays[0]] + [a[1:] for a in arrays[1:]])
     offsets = np.cumsum([0] + [p.t.size - 1 for p in parts[:-1]])
-    events = []
+    events: list[pd.DataFrame] = []
     for part, offset in zip(parts, offsets):
         frame = part.events.copy()
         frame["step"] = frame["step"] + offset
         events.append(frame)
-    exact = (JoinedExact(tuple((float(p.t[0]), float(p.t[-1]), p.exact) for p in parts))
+    exact = (JoinedExact(tuple((float(p.t[0]), float(p.t[-1]), cast(ExactSolution, p.exact)) for p in parts))
              if all(p.rule == "exact" and p.exact is not None for p in parts) else None)
-    return replace(first, t=stack("t"), x=stack("x"), u=stack("u"), y=stack("y"), config=stack("config"),
+    # every part has times and states: only the optional columns stack to None
+    return replace(first, t=cast(np.ndarray, stack("t")), x=cast(np.ndarray, stack("x")), u=stack("u"),
+                   y=stack("y"), config=stack("config"),
                    relay=stack("relay"), held=stack("held"), steps=sum(p.steps for p in parts), wall_s=sum(p.wall_s for p in parts),
                    event_columns=pd.concat(events, ignore_index=True), exact=exact,
                    rule="linear" if first.rule == "exact" and exact is None else first.rule,
@@ -610,28 +671,29 @@ class JoinedExact:
     each part's over its share, so a current that jumps at a switching instant is integrated as exactly across
     the parts as within one (the linear rule on the samples had put 3.5e-4 into a buck's input power)."""
 
-    parts: tuple     # (t0, t1, exact) per part, in time order
+    parts: tuple[tuple[float, float, ExactSolution], ...]     # (t0, t1, exact) per part, in time order
 
-    def quadrature_blocks(self, t0: float | None = None, t1: float | None = None):
+    def quadrature_blocks(self, t0: float | None = None, t1: float | None = None) -> Iterator[QuadratureBlock]:
         t0 = self.parts[0][0] if t0 is None else t0
         t1 = self.parts[-1][1] if t1 is None else t1
         for a, b, exact in self.parts:
             if min(b, t1) > max(a, t0):
                 yield from exact.quadrature_blocks(max(a, t0), min(b, t1))
 
-    def quadrature(self, t0: float | None = None, t1: float | None = None) -> tuple[Samples, np.ndarray]:
+    def quadrature(self, t0: float | None = None, t1: float | None = None) -> QuadratureBlock:
         t0 = self.parts[0][0] if t0 is None else t0
         t1 = self.parts[-1][1] if t1 is None else t1
         pieces = [exact.quadrature(max(a, t0), min(b, t1)) for a, b, exact in self.parts if min(b, t1) > max(a, t0)]
         if len(pieces) == 1:
             return pieces[0]
-        join = lambda name: (None if getattr(pieces[0][0], name) is None      # noqa: E731
-                             else np.concatenate([getattr(q, name) for q, _ in pieces]))
-        samples = Samples(join("t"), join("x"), join("u"), join("y"), join("config"), join("relay"), join("held"))
+        join: Callable[[str], npt.NDArray[Any] | None] = lambda name: (      # noqa: E731
+            None if getattr(pieces[0][0], name) is None else np.concatenate([getattr(q, name) for q, _ in pieces]))
+        samples = Samples(cast(np.ndarray, join("t")), cast(np.ndarray, join("x")), join("u"), join("y"),
+                          join("config"), join("relay"), join("held"))
         return samples, np.concatenate([w for _, w in pieces])
 
 
-def signal_unit(units: dict, name: str) -> str:
+def signal_unit(units: Mapping[str, str], name: str) -> str:
     """A signal's or state's unit: a model's ``signal_units`` where it says, else by the name (vout V, the switch
     command 1, a current i... A, a voltage v... V)."""
     return units.get(name, {"vout": "V", "switch": "1", "iref": "A"}.get(

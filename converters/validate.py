@@ -9,7 +9,10 @@ import math
 import re
 from decimal import Decimal, InvalidOperation
 
+from typing import Any
+
 import numpy as np
+import numpy.typing as npt
 
 from .errors import ParameterError
 
@@ -27,7 +30,7 @@ INT64_MAX = 2 ** 63 - 1
 _LOG10_2 = math.log10(2.0)
 
 
-def digits(value: int) -> int:
+def digits(value: int | np.integer[Any]) -> int:
     """The number of decimal digits of an integer, without its text (str() refuses beyond 4300 digits)."""
     n = abs(int(value))
     count = max(1, int(n.bit_length() * _LOG10_2))
@@ -38,7 +41,7 @@ def digits(value: int) -> int:
     return count
 
 
-def shown(value, limit: int = 40) -> str:
+def shown(value: object, limit: int = 40) -> str:
     """``repr(value)`` for a one-line message, shortened: an integer of more than ``limit`` digits by its number
     of digits (repr raises beyond 4300), a text longer than ``limit`` by its ends and its length."""
     if isinstance(value, (int, np.integer)) and not isinstance(value, bool) and abs(int(value)) >= 10 ** limit:
@@ -48,14 +51,14 @@ def shown(value, limit: int = 40) -> str:
     return repr(value)
 
 
-def quoted(path) -> str:
+def quoted(path: object) -> str:
     """A path as a one-line message shows it: as typed when every character prints, else quoted as repr does (a
     newline or an ESC in a file name never reaches the terminal raw, nor splits the line)."""
     text = str(path)
     return text if text.isprintable() else repr(text)
 
 
-def _to_float(name: str, value) -> float:
+def _to_float(name: str, value: float | np.number[Any]) -> float:
     """float(value) for a number given as a Python or numpy number; an int beyond a double is refused by name."""
     try:
         return float(value)
@@ -64,7 +67,7 @@ def _to_float(name: str, value) -> float:
                              f"got {shown(value)}") from None
 
 
-def parse_value(name: str, text, unit: str | None = None) -> float:
+def parse_value(name: str, text: object, unit: str | None = None) -> float:
     """Parse a number as SPICE users type it: a magnitude suffix (``10u``, ``100k``, ``2.2n``, ``1meg``) and,
     when the parameter's ``unit`` is known, that unit after it (``10uH``, ``250kHz``, ``48V``, ``2.2nF``).
 
@@ -127,14 +130,15 @@ def _starts_with_suffix(word: str) -> bool:
     return False
 
 
-def check_positive(name: str, value, unit: str = "") -> float:
+def check_positive(name: str, value: object, unit: str = "") -> float:
     value = parse_value(name, value)
     if value <= 0.0:
         raise ParameterError(f"{name} must be positive (> 0{(' ' + unit) if unit else ''}); got {value!r}")
     return value
 
 
-def check_range(name: str, value, low: float, high: float, *, low_open=False, high_open=False) -> float:
+def check_range(name: str, value: object, low: float, high: float, *, low_open: bool = False,
+                high_open: bool = False) -> float:
     value = parse_value(name, value)
     below = value <= low if low_open else value < low
     above = value >= high if high_open else value > high
@@ -145,7 +149,7 @@ def check_range(name: str, value, low: float, high: float, *, low_open=False, hi
     return value
 
 
-def check_integer(name: str, value, low: int, high: int | None = None) -> int:
+def check_integer(name: str, value: object, low: int, high: int | None = None) -> int:
     """An integer (int or numpy integer, not bool) in [low, high] (high None: >= low, and at most 2^63 - 1, where
     every count ends up: a larger one would overflow later, far from its name)."""
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low \
@@ -156,7 +160,7 @@ def check_integer(name: str, value, low: int, high: int | None = None) -> int:
     return int(value)
 
 
-def check_indices(name: str, indices, size: int) -> np.ndarray:
+def check_indices(name: str, indices: npt.ArrayLike, size: int) -> np.ndarray:
     """Integer indices in [0, size) as int64 (0.7 is refused, not truncated to 0; -1 is refused, not the last)."""
     given = np.asarray(indices)
     if given.ndim != 1 or (given.size and (given.dtype.kind not in "iu" or given.min() < 0 or given.max() >= size)):
@@ -164,14 +168,14 @@ def check_indices(name: str, indices, size: int) -> np.ndarray:
     return given.astype(np.int64)
 
 
-def check_flag(name: str, value) -> bool:
+def check_flag(name: str, value: object) -> bool:
     """A bool (or numpy bool): a string such as "no" is refused, not read as True."""
     if not isinstance(value, (bool, np.bool_)):
         raise ParameterError(f"{name} must be True or False; got {value!r}")
     return bool(value)
 
 
-def as_matrix(name: str, value, shape: tuple[int | None, int | None]) -> np.ndarray:
+def as_matrix(name: str, value: object, shape: tuple[int | None, int | None]) -> np.ndarray:
     """A finite float matrix of the given shape (``None`` leaves a dimension free)."""
     _check_real(name, value, "matrix")
     try:
@@ -188,7 +192,7 @@ def as_matrix(name: str, value, shape: tuple[int | None, int | None]) -> np.ndar
     return arr
 
 
-def as_vector(name: str, value, size: int | None) -> np.ndarray:
+def as_vector(name: str, value: object, size: int | None) -> np.ndarray:
     """A finite float vector of the given size (``None`` leaves it free)."""
     _check_real(name, value, "vector")
     try:
@@ -207,7 +211,7 @@ def as_vector(name: str, value, size: int | None) -> np.ndarray:
     return arr
 
 
-def _check_real(name: str, value, what: str) -> None:
+def _check_real(name: str, value: object, what: str) -> None:
     """Refuse what float() would quietly mangle: complex numbers (the imaginary part dropped), booleans (read as
     0/1), dates, strings and records. A list or an object array is left to the conversion."""
     if value is None:
@@ -227,7 +231,7 @@ def _check_real(name: str, value, what: str) -> None:
         raise ParameterError(f"{name} must be a {what} of real numbers; got {names.get(kind, kind)} values")
 
 
-def shortened(value) -> str:
+def shortened(value: object) -> str:
     text = repr(value)
     return text if len(text) <= 80 else text[:77] + "..."
 

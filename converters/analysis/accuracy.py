@@ -31,12 +31,21 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
+import numpy.typing as npt
 
 from ..errors import ParameterError, SimulationError
 from ..methods.base import ErrorKind
+
+if TYPE_CHECKING:
+    from ..methods.base import Method
+    from ..models.base import Model
+    from ..trajectory import Trajectory
+    from .periodic import PeriodicOrbit
 
 #: Estimates must fall below rtol / SAFETY (the stepper's effective order through a diode event is ~1.3-1.5,
 #: not its declared 2, so Richardson with p = 2 can underestimate by up to ~3x).
@@ -90,10 +99,10 @@ class AccurateSteady:
     quantities: dict
     events: list
     rtol: float
-    method: object
+    method: Method
     steps_per_period: int | None
-    trajectory: object
-    orbit: object
+    trajectory: Trajectory
+    orbit: PeriodicOrbit
     met: bool
     message: str = ""
     runs: list = field(default_factory=list)
@@ -120,32 +129,35 @@ class AccurateSteady:
 
 # --- measures of one period ------------------------------------------------------------------------------
 
-def _exact(tr) -> bool:
+def _exact(tr: Trajectory) -> bool:
     """The run's events sit at their exact instants (its method declares exact flows)."""
     return tr.algorithm is not None and tr.algorithm.exact
 
 
-def _model_error(method) -> str:
+def _model_error(method: Method) -> str:
     return f"the {method.key} method's error is {method.model_error}, not estimated here"
 
 
-def _inductor_currents(model) -> list[str]:
+def _inductor_currents(model: Model) -> list[str]:
     return [name for name in model.state_names if name.startswith("i")]
 
 
-def substep_events(tr, T: float, t0: float = 0.0) -> list[tuple[str, str, float]]:
+def substep_events(tr: Trajectory, T: float, t0: float = 0.0) -> list[tuple[str, str, float]]:
     """(pair, kind, (time - t0) / T) of each pair event in [t0, t0 + T): exact for the event method; for the
     stepper located inside its step from the quantity that vanishes there (module docstring)."""
     columns = tr.event_table()
     columns = columns if columns is not None else {}
     times = np.asarray(columns.get("time", ()), dtype=float)
-    out = []
+    out: list[tuple[str, str, float]] = []
     if times.size == 0:
         return out
     steps, pairs = np.asarray(columns["step"]), np.asarray(columns["pair"])
     kinds = np.asarray(columns["kind"]).astype(str)
     exact = _exact(tr)
-    t, u, y, config = tr.t, tr.u, tr.y, tr.config
+    # an LCS run's (its pairs and configurations are recorded)
+    u, y, config = cast("tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.int_]]",
+                        (tr.u, tr.y, tr.config))
+    t = tr.t
     for k in np.flatnonzero((times >= t0 - 2 * T / max(t.size, 1)) & (times <= t0 + T)):
         pair, j = int(pairs[k]), int(steps[k])
         kind = "held" if kinds[k].startswith("act") else "released"
@@ -158,7 +170,8 @@ def substep_events(tr, T: float, t0: float = 0.0) -> list[tuple[str, str, float]
     return out
 
 
-def _locate(t, u, y, config, j, kind) -> float:
+def _locate(t: npt.NDArray[np.float64], u: npt.NDArray[np.float64], y: npt.NDArray[np.float64],
+            config: npt.NDArray[np.int_], j: int, kind: str) -> float:
     """The instant in (t[j], t[j+1]] where the pair changed (``j``: the event's step, its last sample before
     the change): the vanishing quantity (y before it is held, u before it is released) extrapolated to zero
     from samples j-1, j (same configuration as the step); else the newly growing one (u after, y after)
@@ -176,7 +189,8 @@ def _locate(t, u, y, config, j, kind) -> float:
     return float(b)
 
 
-def mode_fractions(tr, T: float, events, edges, t0: float = 0.0) -> dict:
+def mode_fractions(tr: Trajectory, T: float, events: Sequence[tuple[str, str, float]], edges: npt.ArrayLike,
+                   t0: float = 0.0) -> dict:
     """Fraction of [t0, t0 + T] in each mode, its boundaries the switching edges (absolute times) and the
     event instants (in units of T from t0)."""
     bounds = np.unique(np.concatenate([[t0, t0 + T], np.asarray(edges, float), [t0 + e[2] * T for e in events]]))
@@ -198,7 +212,8 @@ def mode_fractions(tr, T: float, events, edges, t0: float = 0.0) -> dict:
     return out
 
 
-def extremum(t, v, config, sign: float, at_events=()) -> float:
+def extremum(t: npt.NDArray[np.float64], v: npt.ArrayLike, config: npt.NDArray[np.int_] | None, sign: float,
+             at_events: Iterable[float] = ()) -> float:
     """sign x the largest of sign * v between samples: at a smooth extremum inside one configuration the
     vertex of the parabola through the three samples around the largest (the sampled value is O(h^2) short of
     it); at a switching edge (a kink) the sample itself; at a pair event inside a step (a kink between
@@ -220,7 +235,7 @@ def extremum(t, v, config, sign: float, at_events=()) -> float:
     return float(sign * best)
 
 
-def event_values(tr, v, instants) -> list[float]:
+def event_values(tr: Trajectory, v: npt.NDArray[np.float64], instants: Iterable[float]) -> list[float]:
     """v at each event instant inside a step, extrapolated from the two samples before it (same configuration:
     O(h^2)); an instant on a sample takes the sample."""
     out = []
@@ -234,7 +249,7 @@ def event_values(tr, v, instants) -> list[float]:
     return out
 
 
-def measures(model, p: dict, tr, T: float) -> tuple[dict, list]:
+def measures(model: Model, p: dict, tr: Trajectory, T: float) -> tuple[dict, list]:
     """({name: (value, scale)}, events) of one period of ``tr`` starting at 0."""
     values = {}
     edges = np.asarray(model.problem(p, T).switching.breakpoints(0.0, T), dtype=float)
@@ -262,7 +277,7 @@ def measures(model, p: dict, tr, T: float) -> tuple[dict, list]:
     return values, events
 
 
-def power_measures(model, p: dict, tr, T: float) -> dict:
+def power_measures(model: Model, p: dict, tr: Trajectory, T: float) -> dict:
     """The power summary over one period as measures ({name: (value, scale)}): ``input_W`` and ``output_W`` (each
     relative to itself) and ``loss_<element>`` (relative to the input power, as the summary's
     ``losses_W_error_estimate``: a loss of 1 mW beside 60 W need not be known to rtol of itself); {} for a model
@@ -294,7 +309,8 @@ def efficiency_estimate(quantities: dict) -> float | None:
 
 # --- the search ---------------------------------------------------------------------------------------------
 
-def _orbit(model, p, method, x_guess, warm_up, tol):
+def _orbit(model: Model, p: dict, method: Method, x_guess: npt.NDArray[np.float64] | None, warm_up: int,
+           tol: float) -> tuple[PeriodicOrbit, Trajectory]:
     """The method's orbit (Newton on its period map, after ``warm_up`` periods) and one period on it, the
     stepper's from the same step plan (built once)."""
     from .periodic import newton_orbit, require
@@ -314,17 +330,18 @@ def _orbit(model, p, method, x_guess, warm_up, tol):
     return orbit, replace(tr, labels=model.labels(p))
 
 
-def _sampled(model, tr, T: float) -> dict:
+def _sampled(model: Model, tr: Trajectory, T: float) -> dict:
     """Ripple and peaks read on every other output sample (event instants kept): {name: value}."""
     keep = np.zeros(tr.t.size, dtype=bool)
     keep[::2] = True
     keep[-1] = True
     if len(tr.events):
         keep[np.clip(tr.events["step"].to_numpy(dtype=int), 0, tr.t.size - 1)] = True
-    edges = np.flatnonzero(np.diff(tr.config) != 0)        # the samples either side of a switching edge
+    configs = cast("npt.NDArray[np.int_]", tr.config)     # an LCS run's (its configurations are recorded)
+    edges = np.flatnonzero(np.diff(configs) != 0)        # the samples either side of a switching edge
     keep[edges] = keep[edges + 1] = True
     rows = np.flatnonzero(keep & (tr.t <= T))
-    t, config = tr.t[rows], tr.config[rows]
+    t, config = tr.t[rows], configs[rows]
     vout = np.asarray(tr.signal("vout", rows), dtype=float)
     out = {"vout_ripple": extremum(t, vout, config, 1.0) - extremum(t, vout, config, -1.0)}
     for name in _inductor_currents(model):
@@ -333,7 +350,7 @@ def _sampled(model, tr, T: float) -> dict:
     return out
 
 
-def _rounding(orbit, operations: int) -> float:
+def _rounding(orbit: PeriodicOrbit, operations: int) -> float:
     """The orbit's relative error floor: its Newton distance, and the rounding of a period map of
     ``operations`` steps amplified by 1 / (1 - rho): the step matrices' own rounding repeats at every step,
     so it adds up over a period and the fixed point moves by it / (1 - rho). Calibrated on the DCM
@@ -349,7 +366,9 @@ def same_events(a: list, b: list) -> bool:
     return len(a) == len(b) and all(x[:2] == y[:2] for x, y in zip(a, b))
 
 
-def _estimates(fine: dict, coarse: dict, fine_events, coarse_events, order: float, floor: float, ratio: float = 2.0):
+def _estimates(fine: dict, coarse: dict, fine_events: list[tuple[str, str, float]],
+               coarse_events: list[tuple[str, str, float]], order: float, floor: float,
+               ratio: float = 2.0) -> tuple[dict[str, Estimate], list[tuple[str, str, Estimate]]]:
     """Richardson's estimates of the fine values from a coarse run with ``ratio`` times the step."""
     factor = ratio ** order - 1.0
     out = {}
@@ -370,7 +389,9 @@ def _estimates(fine: dict, coarse: dict, fine_events, coarse_events, order: floa
     return out, events
 
 
-def _guarded(quantities: dict, events: list, history, n: int, order: float):
+def _guarded(quantities: dict[str, Estimate], events: list[tuple[str, str, Estimate]],
+             history: tuple[int, dict[str, Estimate], list[tuple[str, str, Estimate]]] | None, n: int,
+             order: float) -> tuple[dict[str, Estimate], list[tuple[str, str, Estimate]]]:
     """Each estimate at least ``GUARD`` x what the previous one predicts at n steps (its value x (n_prev /
     n)^order): two runs whose values meet by chance (the stepper's error through diode events is irregular
     in h) must not pass for converged (buck DCM at 1e-7: 3.4e-10 estimated against 1.9e-8 true without this
@@ -391,7 +412,8 @@ def _guarded(quantities: dict, events: list, history, n: int, order: float):
     return out, events
 
 
-def accurate_steady(model, p: dict, rtol: float, *, x0=None, progress=None) -> AccurateSteady:
+def accurate_steady(model: Model, p: dict, rtol: float, *, x0: npt.NDArray[np.float64] | None = None,
+                    progress: Any = None) -> AccurateSteady:
     """The periodic steady state of ``model`` at ``p`` with every measure's error estimate below ``rtol``
     (module docstring). Raises ParameterError for an rtol outside [1e-10, 0.1] or a model without a fixed
     period, SimulationError when no orbit is found."""
@@ -408,7 +430,7 @@ def accurate_steady(model, p: dict, rtol: float, *, x0=None, progress=None) -> A
     target = rtol / SAFETY
     runs = []
 
-    def run(method, guess, warm_up):
+    def run(method: Method, guess: npt.NDArray[np.float64] | None, warm_up: int) -> tuple[PeriodicOrbit, Trajectory]:
         start = time.perf_counter()
         orbit, tr = _orbit(model, p, method, guess, warm_up, tol)
         runs.append({"method": method.key, "steps_per_period": int(round(T / method.step)) if method.step else None,
@@ -424,6 +446,7 @@ def accurate_steady(model, p: dict, rtol: float, *, x0=None, progress=None) -> A
         previous = None
     fine_n = 2 * coarse_n
     history, best = None, None
+    events: list            # (pair, kind, Estimate) of the stepper's runs; (pair, kind, time) of the event method's
     while previous is not None and fine_n <= MAX_STEPS:
         fine_method = Theta(h=T / fine_n, theta=THETA)
         orbit, tr = run(fine_method, previous[1].x0, 0)
@@ -490,7 +513,7 @@ DEFAULT_RTOL = 1e-3
 FEW_STEPS = 20
 
 
-def last_period(model, p: dict, tr) -> dict:
+def last_period(model: Model, p: dict, tr: Trajectory) -> dict:
     """The last period's mode fractions and event instants read inside the step (not on the output grid)."""
     T = model.period(p)
     t0 = float(tr.t[-1]) - T
@@ -504,7 +527,8 @@ def last_period(model, p: dict, tr) -> dict:
             "shortest_interval_T": float(np.diff(bounds)[np.diff(bounds) > 1e-12 * T].min() / T)}
 
 
-def _orbit_runs(model, p: dict, method, x_guess):
+def _orbit_runs(model: Model, p: dict, method: Method,
+                x_guess: npt.NDArray[np.float64]) -> tuple[Trajectory, Trajectory | None] | str:
     """One period on the method's periodic orbit, and for the stepper also on its orbit at 2h (None for the
     event method, exact); or a string saying which orbit was not found."""
     from ..simulate import simulate
@@ -514,7 +538,7 @@ def _orbit_runs(model, p: dict, method, x_guess):
     if not resolved(orbit):
         return f"the method's periodic orbit was not found ({orbit.message})"
 
-    def run(m, x0):
+    def run(m: Method, x0: npt.NDArray[np.float64]) -> Trajectory:
         return replace(simulate(model.problem(p, T, x0), m), labels=model.labels(p))
     if not method.fixed_step:
         return run(method, orbit.x0), None
@@ -525,7 +549,7 @@ def _orbit_runs(model, p: dict, method, x_guess):
     return run(method, orbit.x0), run(coarse, orbit_2h.x0)
 
 
-def _richardson_factor(method, fine, T: float) -> float:
+def _richardson_factor(method: Method, fine: Trajectory, T: float) -> float:
     """2^p - 1 for Richardson at h and 2h: p the method's declared order, or :data:`ORDER_THROUGH_EVENTS` where it
     is higher and the orbit ``fine`` has a diode event inside a step (its order falls there)."""
     order = method.order
@@ -534,7 +558,8 @@ def _richardson_factor(method, fine, T: float) -> float:
     return 2.0 ** order - 1.0
 
 
-def _power_check(model, p: dict, method, fine, coarse, reported: dict | None) -> dict:
+def _power_check(model: Model, p: dict, method: Method, fine: Trajectory, coarse: Trajectory | None,
+                 reported: dict | None) -> dict:
     """How far the reported efficiency (absolute), input power and each loss (relative to the input power) may
     be from the exact periodic ones: the reported values' distance to the orbit's plus Richardson's estimate
     from the orbits at h and 2h, by the method's order (the switched currents' jumps at the switching edges are
@@ -561,7 +586,7 @@ def _power_check(model, p: dict, method, fine, coarse, reported: dict | None) ->
             "efficiency_discretization": abs(at_h["efficiency"] - exact["efficiency"])}
 
 
-def _power_warning(check: dict, method) -> str:
+def _power_warning(check: dict, method: Method) -> str:
     error = check.get("efficiency_error_estimate", 0.0)
     if not error > DEFAULT_RTOL:
         return ""
@@ -574,7 +599,8 @@ def _power_warning(check: dict, method) -> str:
             f"{check['input_W_error_estimate']:.1e}): {remedy}")
 
 
-def default_check(model, p: dict, method, tr, reported: float, power: dict | None = None) -> dict:
+def default_check(model: Model, p: dict, method: Method, tr: Trajectory, reported: float,
+                  power: dict | None = None) -> dict:
     """How far the reported mean (vout over the run's last 10 periods) may be from the exact periodic one, relative
     to vout's RMS over the period (its mean for a DC output; the size of an AC one, whose mean is ~0):
     the run's distance to the method's own orbit (a transient not settled) plus the method's discretization
@@ -584,7 +610,7 @@ def default_check(model, p: dict, method, tr, reported: float, power: dict | Non
     the estimate exceeds ``DEFAULT_RTOL``; with the run's ``power`` summary, also the efficiency's and the
     input power's estimates (:func:`_power_check`), and a warning when the efficiency's exceeds it."""
     T = model.period(p)
-    out = {"target": DEFAULT_RTOL}
+    out: dict[str, Any] = {"target": DEFAULT_RTOL}
     if method.error_kind is ErrorKind.MODEL:
         reason = _model_error(method)
         end = float(tr.t[-1])
@@ -648,7 +674,8 @@ def default_check(model, p: dict, method, tr, reported: float, power: dict | Non
 
 #: The exact method's energy balance closes to rounding (1e-11 on the shipped netlists): past this it is a fault.
 ENERGY_EXACT_RTOL = 1e-8
-def _energy_check(model, p: dict, method, fine, coarse, out: dict) -> str:
+def _energy_check(model: Model, p: dict, method: Method, fine: Trajectory, coarse: Trajectory | None,
+                  out: dict) -> str:
     """The orbit's energy balance over its period (:func:`energy_balance`) into ``out`` (``energy_residual``, and
     ``energy_residual_2h`` for a stepper), and why the values cannot be trusted where the exact flows do not close
     it beyond rounding. A stepper's residual is reported, not judged: it is the power's quadrature on the samples as
@@ -670,7 +697,8 @@ def _energy_check(model, p: dict, method, fine, coarse, out: dict) -> str:
     return ""
 
 
-def energy_balance(model, p: dict, tr, t0: float, t1: float) -> dict | None:
+def energy_balance(model: Any,  # a Model, read by duck typing: a Circuit's stored_energy, storage_power, source_power
+                   p: dict, tr: Trajectory, t0: float, t1: float) -> dict | None:
     """The run's energy balance over [t0, t1]: what its capacitors and inductors absorbed, sum of v i integrated by
     the run's own rule (:meth:`~converters.trajectory.Trajectory.integral`), less what its jumps lost, against the
     change of their stored energy 1/2 C v^2 + 1/2 i^T L i between the window's ends; relative to the energy the
@@ -722,7 +750,7 @@ def energy_balance(model, p: dict, tr, t0: float, t1: float) -> dict | None:
 ONSET_RTOL = 1e-6
 
 
-def _unresolved_onset(model, p: dict, fine) -> str:
+def _unresolved_onset(model: Model, p: dict, fine: Trajectory) -> str:
     """Why the stepper's estimate cannot be trusted where a pair starts conducting inside the first step after a
     switching while it blocks at the switching itself in the configuration entered (a switch's Coss charging in
     6 ns at a turn-off inside a 10 ns step): the instant then lies inside the step at h and at 2h alike, its error
@@ -732,7 +760,9 @@ def _unresolved_onset(model, p: dict, fine) -> str:
     from ..lcp import solve_lcp                 # imported here: the solvers load numba, which most checks never need
     T = model.period(p)
     problem = model.problem(p, T)
-    t, x, u, config = fine.t, fine.x, fine.u, fine.config
+    t, x = fine.t, fine.x
+    # an LCS run's (its pairs and configurations are recorded)
+    u, config = cast("tuple[npt.NDArray[np.float64], npt.NDArray[np.int_]]", (fine.u, fine.config))
     for edge in problem.switching.breakpoints(-1e-9 * T, T):
         j = int(np.searchsorted(t, edge + 1e-9 * T, side="right")) - 1      # the last sample at the edge (after a jump)
         if j < 0 or j + 1 >= t.size or abs(t[j] - edge) > 1e-9 * T:
@@ -759,7 +789,7 @@ def _unresolved_onset(model, p: dict, fine) -> str:
     return ""
 
 
-def _overdamped(model, p: dict, method) -> str:
+def _overdamped(model: Model, p: dict, method: Any) -> str:     # (method: a Method; one with a theta has its step h)
     """Why the estimate cannot be trusted where the step damps one of the circuit's resonances more than the
     circuit does (:func:`~converters.methods.theta.overdamped_resonance`): Richardson at h and 2h then compares two
     runs that both erase the ring, and agrees with itself ('' when no resonance is)."""
@@ -780,7 +810,8 @@ def _overdamped(model, p: dict, method) -> str:
 WINDOW_MEASURES = ("vout_mean", "switching_frequency_Hz", "lambda_mean")
 
 
-def window_check(model, p: dict, method, tr, summary: dict, window: tuple, coarse=None) -> dict:
+def window_check(model: Model, p: dict, method: Method, tr: Trajectory, summary: dict, window: Sequence[float],
+                 coarse: Trajectory | None = None) -> dict:
     """How far the measures of a run with no periodic orbit to compare with (a model without a fixed period, the
     sliding-mode boost; or a run with a load or input step) may be off, over the ``window`` (t0, t1) its summary
     read:
@@ -794,7 +825,7 @@ def window_check(model, p: dict, method, tr, summary: dict, window: tuple, coars
     ``coarse``: that run at 2h (the caller's, from the same x0 over the same span; None for the event method).
     Each relative estimate is the sum of its parts; a warning names the larger part when one exceeds
     ``DEFAULT_RTOL``."""
-    out = {"target": DEFAULT_RTOL}
+    out: dict[str, Any] = {"target": DEFAULT_RTOL}
     if method.error_kind is ErrorKind.MODEL:
         return {**out, "checked": False, "reason": _model_error(method)}
     names = [name for name in WINDOW_MEASURES if isinstance(summary.get(name), float)]

@@ -18,13 +18,22 @@ result does not depend on the number of workers.
 """
 from __future__ import annotations
 
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
+import numpy.typing as npt
 
 from ..errors import ParameterError
 from ..validate import shortened, as_matrix, as_vector, check_integer, check_range
 from ..parallel import parallel_map
+
+if TYPE_CHECKING:
+    from ..methods.base import Method, PeriodMap
+
+#: What :func:`_chained` collects per value (an Attractor, a SectionRow).
+_Row = TypeVar("_Row")
 
 
 @dataclass(frozen=True)
@@ -70,7 +79,8 @@ def detect_period(samples: np.ndarray, rtol: float = 1e-6) -> int:
     return 0
 
 
-def iterate(period_map, x0, transient: int, record: int, lyapunov: bool = True) -> tuple[np.ndarray, float]:
+def iterate(period_map: PeriodMap, x0: npt.ArrayLike, transient: int, record: int,
+            lyapunov: bool = True) -> tuple[np.ndarray, float]:
     """Samples x(t0 + m T), m = transient .. transient + record - 1, of the one-period map, and the largest
     Lyapunov exponent over the recorded periods (nan without ``lyapunov``)."""
     x = np.array(x0, dtype=float)
@@ -83,7 +93,7 @@ def iterate(period_map, x0, transient: int, record: int, lyapunov: bool = True) 
     return samples, (float(growth.sum()) / record if lyapunov else float("nan"))
 
 
-def lyapunov_interval(period_map, x0, transient: int, blocks: int, block: int,
+def lyapunov_interval(period_map: PeriodMap, x0: npt.ArrayLike, transient: int, blocks: int, block: int,
                       confidence: float = 0.95) -> tuple[float, float, np.ndarray]:
     """The largest Lyapunov exponent per period of the map, with its confidence interval by batch means: one
     tangent vector carried over ``blocks`` consecutive blocks of ``block`` periods (after ``transient``), each
@@ -104,7 +114,8 @@ def lyapunov_interval(period_map, x0, transient: int, blocks: int, block: int,
     return float(means.mean()), half, means
 
 
-def _tangent_growth(period_map, x, steps: int, lyapunov: bool):
+def _tangent_growth(period_map: PeriodMap, x: npt.NDArray[np.float64], steps: int,
+                    lyapunov: bool) -> Iterator[tuple[npt.NDArray[np.float64], float]]:
     """(x before each step, log of the tangent vector's growth over it: 0 without ``lyapunov``) for ``steps``
     steps of the map from x, the tangent vector renormalised each step."""
     w = np.ones(x.size) / np.sqrt(x.size)
@@ -124,7 +135,9 @@ def _tangent_growth(period_map, x, steps: int, lyapunov: bool):
         yield before, np.log(size)
 
 
-def _chained(values, x0, one, failed) -> list:
+def _chained(values: Iterable[float], x0: npt.NDArray[np.float64],
+             one: Callable[[float, npt.NDArray[np.float64], bool], tuple[_Row, npt.NDArray[np.float64]]],
+             failed: Callable[[float, str], _Row]) -> list[_Row]:
     """``one(value, x, first) -> (row, final state)`` along ``values``, each value from the previous one's final
     state (the first from x0); a value the model or method refuses becomes ``failed(value, message)`` and the
     chain starts again from x0."""
@@ -145,24 +158,24 @@ def _chained(values, x0, one, failed) -> list:
 class _Chunk:
     """One worker task: a run of consecutive values (picklable)."""
 
-    problem_of: object
-    method: object
+    problem_of: Callable[[float], Any]
+    method: Method
     x0: np.ndarray
     transient: int
     record: int
     lyapunov: bool
     period_rtol: float
 
-    def __call__(self, values) -> list[Attractor]:
-        def one(value, x, first):
+    def __call__(self, values: Iterable[float]) -> list[Attractor]:
+        def one(value: float, x: npt.NDArray[np.float64], first: bool) -> tuple[Attractor, npt.NDArray[np.float64]]:
             samples, x_end, lyap = self.one(value, x, self.transient * (2 if first else 1))
             return Attractor(value, samples, detect_period(samples, self.period_rtol), lyap), x_end
 
-        def failed(value, message):
+        def failed(value: float, message: str) -> Attractor:
             return Attractor(value, np.empty((0, self.x0.size)), 0, float("nan"), message)
         return _chained(values, self.x0, one, failed)
 
-    def one(self, value: float, x, transient: int):
+    def one(self, value: float, x: npt.NDArray[np.float64], transient: int) -> tuple[np.ndarray, np.ndarray, float]:
         """(samples at the period starts, the state at the end, Lyapunov exponent or nan) of one value."""
         from ..simulate import simulate
         problem = self.problem_of(value)
@@ -185,7 +198,7 @@ class _Chunk:
         return samples, x_end, lyap
 
 
-def _path_values(values) -> np.ndarray:
+def _path_values(values: npt.ArrayLike) -> np.ndarray:
     """The diagram's parameter values: finite numbers, at least one ("abc": numpy's words had named no parameter)."""
     try:
         out = np.asarray(values, dtype=float).ravel()
@@ -196,9 +209,9 @@ def _path_values(values) -> np.ndarray:
     return out
 
 
-def brute_force(problem_of, method, values, x0, *, transient: int = 200, record: int = 64, lyapunov: bool = False,
-                period_rtol: float = 1e-6, chunk: int = 20, workers: int | None = None,
-                progress: bool = False) -> list[Attractor]:
+def brute_force(problem_of: Callable[[float], Any], method: Method, values: npt.ArrayLike, x0: npt.ArrayLike, *,
+                transient: int = 200, record: int = 64, lyapunov: bool = False, period_rtol: float = 1e-6,
+                chunk: int = 20, workers: int | None = None, progress: bool = False) -> list[Attractor]:
     """The brute-force diagram over ``values`` (module docstring).
 
     Parameters
@@ -252,8 +265,8 @@ class SectionRow:
 
 @dataclass(frozen=True)
 class _SectionChunk:
-    problem_of: object
-    method: object
+    problem_of: Callable[[float], Any]
+    method: Method
     x0: np.ndarray
     transient: float
     record: float
@@ -261,10 +274,10 @@ class _SectionChunk:
     kind: str
     pair: int
 
-    def __call__(self, values) -> list[SectionRow]:
+    def __call__(self, values: Iterable[float]) -> list[SectionRow]:
         from ..simulate import simulate
 
-        def one(value, x, first):
+        def one(value: float, x: npt.NDArray[np.float64], first: bool) -> tuple[SectionRow, npt.NDArray[np.float64]]:
             transient = self.transient * (2 if first else 1)
             problem = self.problem_of(value)
             t0 = problem.t_span[0]
@@ -278,14 +291,14 @@ class _SectionChunk:
                 if times.size else np.empty((0, run.x.shape[1]))
             return SectionRow(value, times, np.mod(times - t0, unit) / unit, states), run.x[-1]
 
-        def failed(value, message):
+        def failed(value: float, message: str) -> SectionRow:
             return SectionRow(value, np.empty(0), np.empty(0), np.empty((0, self.x0.size)), message)
         return _chained(values, self.x0, one, failed)
 
 
-def section_diagram(problem_of, method, values, x0, *, kind: str, pair: int, transient: float = 50.0,
-                    record: float = 50.0, unit: float | None = None, chunk: int = 10, workers: int | None = None,
-                    progress: bool = False) -> list[SectionRow]:
+def section_diagram(problem_of: Callable[[float], Any], method: Method, values: npt.ArrayLike, x0: npt.ArrayLike, *,
+                    kind: str, pair: int, transient: float = 50.0, record: float = 50.0, unit: float | None = None,
+                    chunk: int = 10, workers: int | None = None, progress: bool = False) -> list[SectionRow]:
     """A brute-force diagram on a Poincare section: at each value, the events of ``kind`` on ``pair`` after
     ``transient`` time units, over ``record`` more (the unit: the forcing period, or ``unit`` for an
     autonomous problem); chunks seeded along the path and run in parallel as in :func:`brute_force`."""
@@ -312,7 +325,7 @@ def aperiodic_onset(attractors: list[Attractor], run: int = 3) -> float | None:
     return None
 
 
-def _check_attractors(attractors) -> None:
+def _check_attractors(attractors: object) -> None:
     if not (isinstance(attractors, (list, tuple)) and all(isinstance(a, Attractor) for a in attractors)):
         raise ParameterError(f"attractors must be a list of Attractor (from brute_force); got {shortened(attractors)}")
 

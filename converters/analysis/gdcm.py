@@ -17,12 +17,17 @@ switch-on configuration).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
+import numpy.typing as npt
 from scipy.linalg import expm
 
 from ..errors import ParameterError
 from ..problems import Configuration, LCSProblem
+
+if TYPE_CHECKING:
+    from ..models.base import Model
 
 
 @dataclass(frozen=True)
@@ -38,21 +43,21 @@ class GDCMCondition:
     E_red: np.ndarray      # P E
     config: Configuration
 
-    def on_set(self, x) -> np.ndarray:
+    def on_set(self, x: npt.ArrayLike) -> np.ndarray:
         """C x + F at each state (rows of x): zero on the GDCM set."""
         c = self.config
         return np.atleast_2d(x) @ c.C[0] + c.F[0]
 
-    def drift(self, x) -> np.ndarray:
+    def drift(self, x: npt.ArrayLike) -> np.ndarray:
         """C (A x + E): non-positive while the GDCM persists; positive means exit."""
         c = self.config
         return (np.atleast_2d(x) @ c.A.T + c.E) @ c.C[0]
 
-    def multiplier(self, x) -> np.ndarray:
+    def multiplier(self, x: npt.ArrayLike) -> np.ndarray:
         """u = -C (A x + E) / (C B), the pair's multiplier on the GDCM set."""
         return -self.drift(x) / self.CB
 
-    def reduced_rhs(self, x) -> np.ndarray:
+    def reduced_rhs(self, x: npt.ArrayLike) -> np.ndarray:
         return np.atleast_2d(x) @ self.A_red.T + self.E_red
 
     @property
@@ -121,6 +126,7 @@ def ccm_orbit(problem: LCSProblem, samples_per_phase: int = 100) -> CCMOrbit:
     if abs(np.linalg.det(lhs)) < 1e-14:
         raise ParameterError("the CCM period map has a unit eigenvalue: no unique CCM orbit (undamped circuit)")
     x0 = np.linalg.solve(lhs, total[:n, n])
+    min_y: dict[str, float]
     ts, xs, ys, cs, min_y = [], [], [], [], {}
     state, t0 = np.append(x0, 1.0), 0.0
     for (config, index, tau), step in zip(phases, steps):
@@ -138,7 +144,7 @@ def ccm_orbit(problem: LCSProblem, samples_per_phase: int = 100) -> CCMOrbit:
     return CCMOrbit(x0, np.concatenate(ts), np.vstack(xs), np.vstack(ys), np.concatenate(cs), min_y)
 
 
-def exact_mode(converter, params: dict) -> dict:
+def exact_mode(converter: Model, params: dict) -> dict:
     """Predicted conduction mode of a PWM converter from its matrices: CCM when the exact CCM orbit keeps
     every y >= 0; otherwise the pair holds in each configuration where y would go negative."""
     p = converter.resolve(params)
@@ -151,7 +157,7 @@ def exact_mode(converter, params: dict) -> dict:
     return {"mode": mode, "min_y": orbit.min_y, "y_scale": scale}
 
 
-def describe(converter, params: dict) -> list[dict]:
+def describe(converter: Model, params: dict) -> list[dict]:
     """Per configuration: the GDCM condition in words and numbers (for reports and `pcsuite gdcm`)."""
     p = converter.resolve(params)
     out = []

@@ -6,7 +6,12 @@ when no held label occurs, else the held labels joined by '+'.
 """
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
+
+if TYPE_CHECKING:
+    from ..trajectory import Trajectory
 
 #: Mode labels in which a held pair constrains the state.
 HELD = ("DCM", "GDCM-OFF", "GDCM-ON")
@@ -57,7 +62,7 @@ def held_fraction(intervals: list[dict], periods: float) -> float:
     return float(sum(iv["fraction"] for iv in intervals if iv["mode"] in HELD) / periods)
 
 
-def orbit_intervals(orbit) -> list[dict]:
+def orbit_intervals(orbit: Trajectory) -> list[dict]:
     """Mode intervals over one period of a labelled orbit Trajectory (each point carries the label of the
     step that ends there)."""
     t = orbit.t

@@ -9,17 +9,25 @@ its matrix-vector products), so the same compiled code serves a map written in P
 one compiled into the batch, and numba compiles and caches it without functions passed as values."""
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 from numba import njit
 
 from ..compiled import (NEWTON_CONTINUE, NEWTON_CONVERGED, NEWTON_EVALUATE, NEWTON_EXHAUSTED, NEWTON_NO_SOLUTION,
                         NEWTON_NONFINITE, NEWTON_RADIUS, NEWTON_ROUNDING, NEWTON_SINGULAR, ROUNDING)
 
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    FloatArray = npt.NDArray[np.float64]
+    IntArray = npt.NDArray[np.int64]
+
 EPS = 2.220446049250313e-16
 
 
 @njit(cache=True)
-def _solve_shifted(jac, x, px, work):
+def _solve_shifted(jac: FloatArray, x: FloatArray, px: FloatArray, work: FloatArray) -> float:
     """(jac - I) s = -(P(x) - x) by Gaussian elimination with partial pivoting on ``work`` (n x (n + 1)), s left in
     its last column; returns max |s|, inf where jac - I is singular (a pivot exactly 0: a multiplier at 1)."""
     n = x.shape[0]
@@ -53,7 +61,8 @@ def _solve_shifted(jac, x, px, work):
 
 
 @njit(cache=True)
-def newton_step(x, px, jac, rho, step, work, tol, iteration, max_iter):
+def newton_step(x: FloatArray, px: FloatArray, jac: FloatArray, rho: float, step: FloatArray, work: FloatArray,
+                tol: float, iteration: int, max_iter: int) -> tuple[float, float, float, int]:
     """One Newton iteration on P(x) - x = 0 and the verdict on it: the arithmetic and the stopping rule of the
     serial engine (:func:`converters.analysis.periodic.newton_orbit`) and the batched steady states
     (:mod:`converters.sweeps.batch`), written once. Fills ``step`` with the Newton step dx,
@@ -99,7 +108,8 @@ _NEW, _STEP, _TRIAL, _PLAIN = 0, 1, 2, 3
 
 
 @njit(cache=True)
-def _accept(x, px, jac, trial, p_trial, jac_trial, istate):
+def _accept(x: FloatArray, px: FloatArray, jac: FloatArray, trial: FloatArray, p_trial: FloatArray,
+            jac_trial: FloatArray, istate: IntArray) -> int:
     n = x.shape[0]
     for i in range(n):
         x[i] = trial[i]
@@ -112,7 +122,9 @@ def _accept(x, px, jac, trial, p_trial, jac_trial, istate):
 
 
 @njit(cache=True)
-def newton_advance(x, px, jac, dx, work, trial, p_trial, jac_trial, ok, istate, rstate, tol, max_iter):
+def newton_advance(x: FloatArray, px: FloatArray, jac: FloatArray, dx: FloatArray, work: FloatArray,
+                   trial: FloatArray, p_trial: FloatArray, jac_trial: FloatArray, ok: bool, istate: IntArray,
+                   rstate: FloatArray, tol: float, max_iter: int) -> int:
     """Advance Newton's method on P(x) - x = 0 to its next request or its verdict (module docstring).
 
     In place: x, px = P(x), jac = P'(x) the iterate (the caller fills px and jac for the start), dx its Newton

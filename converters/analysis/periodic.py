@@ -17,8 +17,11 @@ tolerance; a run that cannot get there is reported as not converged, never repla
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
+import numpy.typing as npt
+
 from ..compiled import (NEWTON_CONVERGED, NEWTON_EVALUATE, NEWTON_EXHAUSTED, NEWTON_NO_SOLUTION, NEWTON_NONFINITE,
                         NEWTON_RADIUS, NEWTON_ROUNDING, NEWTON_SINGULAR, kernel)
 from ..compiled import ROUNDING as _ROUNDING
@@ -26,6 +29,19 @@ from ..errors import ParameterError, SimulationError
 from ..validate import as_vector, check_flag, check_integer
 from ..problems import LCSProblem
 from .floquet import multipliers_of, spectral_radius
+
+if TYPE_CHECKING:
+    from ..methods.base import Method, PeriodMap
+
+
+class NewtonMap(Protocol):
+    """What Newton shooting calls and reads of a period map: a :class:`~converters.methods.base.PeriodMap`, or a
+    map that wraps one without being one (:mod:`.smallsignal`'s map restricted to the circuit's states)."""
+
+    evaluations: int
+    jacobian_kind: str
+
+    def __call__(self, x0: npt.NDArray[np.float64], /) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]: ...
 
 
 @dataclass(frozen=True)
@@ -101,7 +117,7 @@ MAX_WARM_UP = 100_000
 #: How a message of an orbit resolved only to the rounding level of its map begins (a lightly damped circuit).
 ROUNDING_LIMITED = "the residual is at the rounding level of the map"
 
-def check_newton(tol, max_iter) -> None:
+def check_newton(tol: float, max_iter: int) -> None:
     """Refuse a tolerance or an iteration count Newton shooting cannot honour (tol = 1e308 had "converged" at
     any state)."""
     if not (isinstance(tol, (int, float, np.integer, np.floating)) and not isinstance(tol, bool)
@@ -111,8 +127,8 @@ def check_newton(tol, max_iter) -> None:
     check_integer("max_iter", max_iter, 1, MAX_NEWTON_ITER)
 
 
-def newton_orbit(period_map, x_guess, *, tol: float = 1e-10, max_iter: int = 50, period: float = np.nan,
-                 polish: bool = False) -> PeriodicOrbit:
+def newton_orbit(period_map: NewtonMap, x_guess: npt.ArrayLike, *, tol: float = 1e-10, max_iter: int = 50,
+                 period: float = np.nan, polish: bool = False) -> PeriodicOrbit:
     """Newton's method on P(x) - x = 0 for a :class:`~converters.methods.base.PeriodMap` ``period_map``: the
     compiled driver (:func:`converters.analysis.newton_kernel.newton_advance`, the batched steady states' too),
     answered here with the map's values and numpy's spectral radius. ``polish``: return x + the last Newton step
@@ -162,8 +178,9 @@ def newton_orbit(period_map, x_guess, *, tol: float = 1e-10, max_iter: int = 50,
                          f"{message}; residual {residual:.3g}, estimated distance {distance:.3g} > tol {tol:.3g}")
 
 
-def shoot(problem: LCSProblem, method, x_guess=None, *, periods: int = 1, warm_up: int = 0, tol: float = 1e-10,
-          max_iter: int = 50, polish: bool = False, period_map=None) -> PeriodicOrbit:
+def shoot(problem: LCSProblem, method: Method, x_guess: npt.ArrayLike | None = None, *, periods: int = 1,
+          warm_up: int = 0, tol: float = 1e-10, max_iter: int = 50, polish: bool = False,
+          period_map: PeriodMap | None = None) -> PeriodicOrbit:
     """The method's periodic orbit of a periodically switched problem (period T of its switching law).
 
     ``periods``: the orbit's period in switching periods (a period-m orbit); ``warm_up``: periods simulated
@@ -201,7 +218,7 @@ def shoot(problem: LCSProblem, method, x_guess=None, *, periods: int = 1, warm_u
     return orbit
 
 
-def autonomous_orbit(problem: LCSProblem, method, x_guess, *, config: int, crossings: int = 1,
+def autonomous_orbit(problem: LCSProblem, method: Method, x_guess: npt.ArrayLike, *, config: int, crossings: int = 1,
                      warm_up: int = 0, tol: float = 1e-10, max_iter: int = 50) -> PeriodicOrbit:
     """The periodic orbit of an autonomous state-switched problem through its return map to the switching
     into ``config`` (``crossings`` switchings per orbit); the period is the return time. The problem's

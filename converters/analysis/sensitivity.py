@@ -16,12 +16,17 @@ The normalised sensitivity S = (p / m) dm/dp is the percentage change of the met
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
 from ..errors import ParameterError, SignalError, SimulationError
 from .smallsignal import SmallSignalModel, _mean_output, quantity_unit
+
+if TYPE_CHECKING:
+    from ..models.base import Model
 
 #: The statistics of a signal that have exact sensitivities here (a metric is SIGNAL or SIGNAL.mean).
 STATISTICS = ("mean",)
@@ -78,8 +83,8 @@ def parse_metric(text: str) -> tuple[str, str]:
 _KNOWN = ("mean", "rms", "min", "max", "ripple")
 
 
-def sensitivities(model, params: dict | None = None, *, metric: str = "vout", parameters=None,
-                  tol: float = 1e-10) -> Sensitivities:
+def sensitivities(model: Model | str, params: dict | None = None, *, metric: str = "vout",
+                  parameters: Iterable[str] | None = None, tol: float = 1e-10) -> Sensitivities:
     """The exact sensitivities of ``metric`` (a signal's mean over the period of the steady state) to each of
     ``parameters`` (default: every parameter with a value that keeps the period: element values, sources, the duty
     ratio, a reference...). A parameter named explicitly that cannot be taken raises; by default it is listed in
@@ -90,7 +95,7 @@ def sensitivities(model, params: dict | None = None, *, metric: str = "vout", pa
     signal, statistic = parse_metric(metric)
     p = model.resolve(params)
     explicit = parameters is not None
-    if explicit:
+    if parameters is not None:
         names = []
         for name in parameters:
             key = model.parameter_name(name)
@@ -130,7 +135,7 @@ def sensitivities(model, params: dict | None = None, *, metric: str = "vout", pa
 
 
 
-def finite_difference(model, params: dict | None, metric: str, parameter: str, relative: float = 1e-4,
+def finite_difference(model: Model | str, params: dict | None, metric: str, parameter: str, relative: float = 1e-4,
                       tol: float = 1e-12) -> float:
     """The same derivative by brute force: the steady state (Newton shooting to ``tol``) at the parameter moved by
     +-h and +-2h (h = ``relative`` times its value, or its distance to its range's nearer end where smaller), a
@@ -147,7 +152,7 @@ def finite_difference(model, params: dict | None, metric: str, parameter: str, r
     h = relative * move_scale(next(q for q in model.parameters if q.name == key), value)
     given = {k: v for k, v in p.items() if v is not None}
 
-    def at(k):
+    def at(k: int) -> float | None:
         try:
             return steady_mean(model, {**given, key: value + k * h}, signal, tol)
         except ParameterError:
@@ -155,5 +160,6 @@ def finite_difference(model, params: dict | None, metric: str, parameter: str, r
     for offsets, weights, denominator in STENCILS:
         values = [at(k) for k in offsets]
         if all(v is not None for v in values):
-            return sum(w * v for w, v in zip(weights, values)) / (denominator * h)
+            found = cast("list[float]", values)          # every one (all() does not narrow the list's type)
+            return sum(w * v for w, v in zip(weights, found)) / (denominator * h)
     raise ParameterError(f"{parameter} = {value!r} cannot be moved by +-{2 * h:g} inside its range")

@@ -21,16 +21,22 @@ Anything else is a plain border collision.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import numpy.typing as npt
 
 from ..errors import SimulationError
+
+if TYPE_CHECKING:
+    from .continuation.family import OrbitFamily, OrbitPoint
 
 TYPES = ("grazing-sliding", "adding-sliding", "crossing-sliding", "switching-sliding")
 
 
-def shortest_gap(timed: tuple):
+def shortest_gap(timed: tuple) -> tuple[tuple, tuple, float] | None:
     """(first event, next event, gap) of the two consecutive events closest in time (cyclically, in fractions
     of the orbit's period)."""
     best = None
@@ -42,14 +48,16 @@ def shortest_gap(timed: tuple):
     return best
 
 
-def classify_sliding(below, above):
+def classify_sliding(below: OrbitPoint, above: OrbitPoint) -> tuple[str, str] | None:
     """(type, explanation) of the border collision between the orbits ``below`` and ``above`` (OrbitPoints on
     either side, their ``timed_events`` (fraction, kind, pair, config)), or None when it is none of the four."""
     fewer, more = (below, above) if len(below.signature) < len(above.signature) else (above, below)
     change = len(more.signature) - len(fewer.signature)
     if change not in (1, 2) or len(more.timed_events) < 2:
         return None
-    first, second, gap = shortest_gap(more.timed_events)
+    found = shortest_gap(more.timed_events)
+    assert found is not None                    # two events at least: a gap between them
+    first, second, gap = found
     pair = first[2]
     if second[2] != pair:
         return None
@@ -76,7 +84,7 @@ def classify_sliding(below, above):
 MARGIN_SAMPLES = 100
 
 
-def stick_margin(family, value: float, x0) -> float:
+def stick_margin(family: OrbitFamily, value: float, x0: npt.ArrayLike) -> float:
     """The smallest interior minimum of a sliding segment's margin, F_s - |lambda(t)| (the static friction less the
     force that keeps the contact stuck), over the orbit of ``family`` through x0 at ``value``: the test function of
     adding-sliding, zero where the stick force touches the static limit tangentially inside a sliding segment.
@@ -93,7 +101,7 @@ def stick_margin(family, value: float, x0) -> float:
         if not segment.mode.stick or segment.t1 - segment.t0 <= 0.0:
             continue
         for i in segment.mode.stick:
-            def margin(t, i=i):
+            def margin(t: float, i: int = i) -> float:
                 return float(static[i] - abs(solution.sample([t]).u[0, i]))
             times = np.linspace(segment.t0, segment.t1, MARGIN_SAMPLES)
             values = static[i] - np.abs(solution.sample(times).u[:, i])
@@ -106,7 +114,9 @@ def stick_margin(family, value: float, x0) -> float:
     return best
 
 
-def approach_zero(evaluate, start: tuple, bound: float, tol: float, max_iter: int = 40, ftol: float = 0.0):
+def approach_zero(evaluate: Callable[[float], tuple[float, Any] | None], start: tuple[float, float, Any], bound: float,
+                  tol: float, max_iter: int = 40,
+                  ftol: float = 0.0) -> tuple[float, float, list[tuple[float, float, Any]], int]:
     """The zero of a test function that exists on one side of it only (the end of a branch of orbits), approached
     from that side: ``start`` = (value, f, payload) there, ``bound`` a value past the zero (no such orbit), and
     ``evaluate(value)`` -> (f, payload), or None where the value is past the end (its orbit lost, or on the other
@@ -146,7 +156,8 @@ def approach_zero(evaluate, start: tuple, bound: float, tol: float, max_iter: in
     return 0.5 * (v_last + bound), abs(bound - v_last), points, trials
 
 
-def refine_adding_sliding(family, merged, bound: float, tol: float = 1e-10, max_iter: int = 40):
+def refine_adding_sliding(family: OrbitFamily, merged: OrbitPoint, bound: float, tol: float = 1e-10,
+                          max_iter: int = 40) -> tuple[float, float, int]:
     """(value, width, orbits solved) of the adding-sliding point between the orbit ``merged`` (an OrbitPoint: the
     sliding segment still whole) and the parameter value ``bound`` (where it is split, or no such orbit was found),
     located as the end of the merged orbit's branch by :func:`approach_zero`: the zero of its :func:`stick_margin`,
@@ -155,7 +166,7 @@ def refine_adding_sliding(family, merged, bound: float, tol: float = 1e-10, max_
     signature = merged.signature
     last = [merged.x0]
 
-    def evaluate(trial):
+    def evaluate(trial: float) -> tuple[float, np.ndarray] | None:
         orbit = family.orbit(trial, last[-1])
         if not (orbit.converged and family.signature(trial, orbit.x0) == signature):
             return None
@@ -184,7 +195,7 @@ class Arrival:
     orbit: np.ndarray
 
 
-def arrival(family, value: float, x0, pair: int = 0, side: float | None = None) -> Arrival:
+def arrival(family: OrbitFamily, value: float, x0: npt.ArrayLike, pair: int = 0, side: float | None = None) -> Arrival:
     """The arrival of the orbit of ``family`` through x0 at ``value`` at its sliding region nearest the region's
     boundary (the smallest |margin|; given ``side``, only arrivals from slip direction -side: the one followed
     along a parameter, where another, after a short excursion to the other side, may come closer): each stick of
@@ -225,8 +236,8 @@ NEWTON_ITERATIONS = 10
 MARGIN_TOL = 1e-10
 
 
-def switching_sliding_point(family, low: float, high: float, x_guess, pair: int = 0, tol: float = 1e-10,
-                            side: float | None = None) -> Arrival:
+def switching_sliding_point(family: OrbitFamily, low: float, high: float, x_guess: npt.ArrayLike, pair: int = 0,
+                            tol: float = 1e-10, side: float | None = None) -> Arrival:
     """The switching-sliding point between ``low`` and ``high``: the zero of the arrival's margin, approached from
     the side where the orbit arrives inside the sliding region (margin < 0) by :func:`approach_zero` to ``tol``
     (relative) or a margin within MARGIN_TOL of zero; each orbit by Newton shooting from the last one, the arrival
@@ -236,7 +247,7 @@ def switching_sliding_point(family, low: float, high: float, x_guess, pair: int 
     of the last orbit, nearest the point."""
     last = [np.asarray(x_guess, dtype=float)]
 
-    def evaluate(value, max_iter=NEWTON_ITERATIONS):
+    def evaluate(value: float, max_iter: int = NEWTON_ITERATIONS) -> tuple[float, Arrival] | None:
         orbit = family.orbit(value, last[-1], max_iter=max_iter)
         if not orbit.converged:
             return None
@@ -263,8 +274,10 @@ def switching_sliding_point(family, low: float, high: float, x_guess, pair: int 
     return points[-1][2]
 
 
-def degenerate_switching_sliding(family_at, start: float, stop: float, step: float, first: tuple[float, float],
-                                 x_guess, pair: int = 0, tol: float = 1e-10, on_point=None):
+def degenerate_switching_sliding(family_at: Callable[[float], OrbitFamily], start: float, stop: float, step: float,
+                                 first: tuple[float, float], x_guess: npt.ArrayLike, pair: int = 0, tol: float = 1e-10,
+                                 on_point: Callable[[float, Arrival], object] | None = None
+                                 ) -> tuple[Arrival, float, list[tuple[float, Arrival]]]:
     """The codimension-two point on a curve of switching-sliding points where the slip field's fold at the sliding
     region's boundary turns from invisible to visible (the :class:`Arrival`'s curvature is zero: a cubic tangency);
     past it the same curve is one of crossing-sliding points (the orbit that arrives inside the region sticks only
@@ -278,9 +291,9 @@ def degenerate_switching_sliding(family_at, start: float, stop: float, step: flo
     point, its second parameter's value, the curve's points as (second, Arrival) in order of the second);
     ``on_point(second, arrival)`` is called as each point is located."""
     from scipy.optimize import brentq
-    curve: dict = {}
+    curve: dict[float, Arrival] = {}
 
-    def located(b):
+    def located(b: float) -> Arrival:
         b = float(b)
         if b in curve:
             return curve[b]

@@ -31,14 +31,32 @@ to the comparator's input, Y the response of the sensed c x to it, T = -Y / (1 +
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
+import numpy.typing as npt
 
 from ..errors import ParameterError, SimulationError
 from ..problems import Comparators, Schedule, StateSwitching
 from ..methods.event.timeline import Crossing, FlowSpan
 from ..trajectory import Samples
+
+if TYPE_CHECKING:
+    import control
+
+    from ..methods.base import PeriodMap
+    from ..methods.event.flow import Flow
+    from ..models.base import Model
+    from ..models.compensator import Compensator
+    from ..params import Param
+    from ..problems import LCSProblem
+    from .periodic import PeriodicOrbit
+
+    #: The event method's LCS engine of a problem (EventDriven.engine's: a private class of the method, read here
+    #: through its flows, guard rows, impulses and runs).
+    Machine = Any
 
 #: The comparator's input of a state-driven law (a perturbation added to its switching function s).
 CONTROL = "control"
@@ -95,7 +113,7 @@ class FrequencyResponse:
         """Phase (degrees), unwrapped along the frequencies, the first in (-180, 180]."""
         return np.degrees(np.unwrap(np.angle(self.response)))
 
-    def frd(self):
+    def frd(self) -> control.FrequencyResponseData:
         """The response as a python-control frequency-response data object (``control.FRD``, rad/s)."""
         import control
         return control.frd(self.response, 2.0 * np.pi * self.frequency_hz)
@@ -130,8 +148,8 @@ class SmallSignalModel:
 
     ``response(f)`` evaluates it at any frequencies (Hz) for any output it was built with."""
 
-    def __init__(self, model, params: dict | None = None, *, input: str, outputs=("vout",), tol: float = 1e-9,
-                 orbit=None):
+    def __init__(self, model: Model | str, params: dict | None = None, *, input: str,
+                 outputs: Iterable[str] = ("vout",), tol: float = 1e-9, orbit: PeriodicOrbit | None = None):
         from ..methods import EventDriven
         from .periodic import require, shoot
         if isinstance(model, str):
@@ -169,7 +187,7 @@ class SmallSignalModel:
 
     # --- the input's derivatives ---------------------------------------------------------------------------
 
-    def _stencil(self, problem, engine) -> tuple:
+    def _stencil(self, problem: LCSProblem, engine: Callable[[LCSProblem], Machine]) -> tuple:
         """(stencil, dynamic): the machines of the problem at moved values of the input, as [(machine, params,
         weight)] with the derivative of any quantity X read as sum(weight X(machine, params)), and whether the input
         changes a mode's matrices. A source, a reference, the duty ratio or the comparator's input enters affinely:
@@ -199,7 +217,7 @@ class SmallSignalModel:
                                  f"it one with -p {name}=VALUE")
         given = {k: v for k, v in p.items() if v is not None}
 
-        def at(offset):
+        def at(offset: float) -> tuple[Machine, dict, LCSProblem] | None:
             """(machine, params) with the input moved by ``offset``, None outside its range."""
             try:
                 moved_p = model.resolve({**given, key: value + offset})
@@ -226,12 +244,13 @@ class SmallSignalModel:
         for offsets, weights, denominator in STENCILS:
             points = [(self.machine, p, problem) if k == 0 else at(k * h) for k in offsets]
             if all(point is not None for point in points):
-                return [(m, q, w / (denominator * h)) for (m, q, _), w in zip(points, weights)], True
+                found_all = cast("list[tuple[Machine, dict, LCSProblem]]", points)      # (all() does not narrow)
+                return [(m, q, w / (denominator * h)) for (m, q, _), w in zip(found_all, weights)], True
         raise ParameterError(f"input {name!r} = {value!r} cannot be moved by +-{2 * h:g} inside its range "
                              f"{param.range_text()}")
 
     @property
-    def moved(self):
+    def moved(self) -> Machine:
         """The machine with the input moved by :attr:`delta`, for an input that moves sources only (what the
         injection check perturbs)."""
         if self.dynamic:
@@ -243,25 +262,25 @@ class SmallSignalModel:
     def delta(self) -> float:
         return 1.0 / self.stencil[0][2]
 
-    def _derivative(self, quantity):
+    def _derivative(self, quantity: Callable[[Machine, dict], npt.ArrayLike]) -> np.ndarray:
         """d quantity / d input: ``quantity(machine, params)`` read on the stencil."""
         return sum(w * np.asarray(quantity(m, q), dtype=float) for m, q, w in self.stencil)
 
-    def _field_derivative(self, flow) -> np.ndarray:
+    def _field_derivative(self, flow: Flow) -> np.ndarray:
         """d[A E] / du of a mode (n x (n + 1)): its last column alone for an input that moves only the sources."""
         n = self.n
         return self._derivative(lambda m, q: m.flow(flow.config, flow.held).Z[:n, :])
 
-    def _output_rows(self, flow, t: float, name: str):
+    def _output_rows(self, flow: Flow, t: float, name: str) -> tuple[np.ndarray, np.ndarray, float]:
         """(r, dr, r0) of an output in a mode: y = r x + r0, dr = d[r r0]/du (its derivative's row on x~)."""
         n = self.n
-        if name == "sensed":                       # the comparator's sensed quantity c x
-            return np.asarray(self.law.function.c, dtype=float), np.zeros(n + 1), 0.0
+        if name == "sensed":                       # the comparator's sensed quantity c x (a state-driven law's)
+            return np.asarray(cast(StateSwitching, self.law).function.c, dtype=float), np.zeros(n + 1), 0.0
         if name in self.machine.problem.state_names:
             return np.eye(n)[self.machine.problem.state_names.index(name)], np.zeros(n + 1), 0.0
         xt = np.vstack([np.eye(n + 1)[:n] + np.eye(n + 1)[n], np.eye(n + 1)[n]])     # e_i + "1", then "1"
 
-        def row(machine, params):
+        def row(machine: Machine, params: dict) -> np.ndarray:
             f = machine.flow(flow.config, flow.held)
             samples = Samples(np.full(n + 1, t), xt[:, :n], xt @ f.u_rows.T, xt @ f.y_rows.T,
                               np.full(n + 1, flow.config), held=np.broadcast_to(f.held_flags, (n + 1, f.held_flags.size)))
@@ -270,25 +289,26 @@ class SmallSignalModel:
         base = row(self.machine, self.params)
         return base[:n], self._derivative(row), base[n]
 
-    def _rows(self, flow, t: float) -> dict:
+    def _rows(self, flow: Flow, t: float) -> dict:
         key = (flow.config, flow.held)
         rows = self._row_cache.get(key)
         if rows is None:
             rows = self._row_cache[key] = {name: self._output_rows(flow, t, name) for name in self.outputs}
         return rows
 
-    def _step(self, flow_b, xt_b, flow_a, xt_a, t: float) -> dict:
+    def _step(self, flow_b: Flow, xt_b: npt.NDArray[np.float64], flow_a: Flow, xt_a: npt.NDArray[np.float64],
+              t: float) -> dict:
         """Per output, its jump y- - y+ at an event (what moving the event's instant adds to its integral)."""
         before, after = self._rows(flow_b, t), self._rows(flow_a, t)
         return {name: (before[name][0] @ xt_b[:-1] + before[name][2]) - (after[name][0] @ xt_a[:-1] + after[name][2])
                 for name in self.outputs}
 
-    def _jump_offset(self, config: int, xt_before, t: float):
+    def _jump_offset(self, config: int, xt_before: npt.NDArray[np.float64], t: float) -> np.ndarray:
         """d x+ / du of a Moreau impulse entering ``config`` (zero without one)."""
         quiet = lambda *a: None          # noqa: E731
         return self._derivative(lambda m, q: m.enter(config, xt_before, t, quiet)[0][:-1])
 
-    def _edge_shift(self, t: float, config: int) -> float:
+    def _edge_shift(self, t: float, config: int | str) -> float:
         """d t_e / du of a schedule's edge at t entering ``config`` (the duty ratio moves the turn-off)."""
         law = self.machine.problem.switching
         if config == "limit":                 # a latched law's limit (a maximum duty ratio): moved by its own input
@@ -328,8 +348,9 @@ class SmallSignalModel:
                 ramp = self.law.function.ramp if isinstance(self.law, StateSwitching) else None
                 phase = float(ramp.phase(t)) if ramp is not None else t - math.floor(t / self.T) * self.T
 
-                def guard(m, q, config=flow_b.config, held=flow_b.held, latched=latched_b, pair=pair, xt=xt_b,
-                          phase=phase):
+                def guard(m: Machine, q: dict, config: int = flow_b.config, held: int = flow_b.held,
+                          latched: int = latched_b, pair: int = pair, xt: npt.NDArray[np.float64] = xt_b,
+                          phase: float = phase) -> float:
                     row_m, slope = ((m.flow(config, held).watch_rows[pair], 0.0) if pair >= 0
                                     else m.switch_row(config, latched))
                     return row_m @ xt + slope * phase
@@ -348,13 +369,14 @@ class SmallSignalModel:
         return pieces
 
     @staticmethod
-    def _jump(J, kick, j_u, dt_row, dt_u, steps) -> tuple:
+    def _jump(J: npt.NDArray[np.float64], kick: npt.NDArray[np.float64], j_u: npt.NDArray[np.float64],
+              dt_row: npt.NDArray[np.float64], dt_u: float | npt.NDArray[np.float64], steps: dict) -> tuple:
         """An event's piece: dx+ = J dx- - kick dt + j_u du with dt = dt_row dx- + dt_u du (the saltation)."""
         return ("jump", J - np.outer(kick, dt_row), -kick * dt_u + j_u, dt_row, dt_u, steps)
 
     # --- responses -----------------------------------------------------------------------------------------
 
-    def response(self, frequency_hz, output: str = "vout") -> np.ndarray:
+    def response(self, frequency_hz: npt.ArrayLike, output: str = "vout") -> np.ndarray:
         """The output's phasor per unit input phasor at each frequency (Hz)."""
         from scipy.linalg import expm
         if output not in self.outputs:
@@ -407,7 +429,7 @@ class SmallSignalModel:
 STENCILS = (((-2, -1, 1, 2), (1, -8, 8, -1), 12.0), ((0, 1, 2), (-3, 4, -1), 2.0), ((0, -1, -2), (3, -4, 1), 2.0))
 
 
-def move_scale(param, value: float) -> float:
+def move_scale(param: Param, value: float) -> float:
     """The scale of a finite move of a parameter: its value, or its distance to the nearer end of its range where
     that is smaller (a coupling k = 0.99 moves on the scale of 1 - k, where the circuit's dependence on it lives),
     or 1 at 0."""
@@ -418,7 +440,7 @@ def move_scale(param, value: float) -> float:
     return scale
 
 
-def _changes_matrices(problem, moved) -> bool:
+def _changes_matrices(problem: LCSProblem, moved: LCSProblem) -> bool:
     """Whether a moved problem's modes differ from the problem's in A, B, C or D (not only in the sources' E, F)."""
     for c, m in zip(problem.configurations, moved.configurations):
         for a, b in ((c.A, m.A), (c.B, m.B), (c.C, m.C), (c.D, m.D)):
@@ -428,7 +450,8 @@ def _changes_matrices(problem, moved) -> bool:
     return False
 
 
-def frequencies(model_period: float, fmin=None, fmax=None, points: int = POINTS) -> np.ndarray:
+def frequencies(model_period: float, fmin: float | None = None, fmax: float | None = None,
+                points: int = POINTS) -> np.ndarray:
     """Log-spaced frequencies (Hz), by default from fs/1000 to fs/2, each bound in (0, MAX_FS_MULTIPLE fs]; one
     frequency with ``points`` = 1 and fmin = fmax."""
     fs = 1.0 / model_period
@@ -452,7 +475,7 @@ def frequencies(model_period: float, fmin=None, fmax=None, points: int = POINTS)
     return np.geomspace(fmin, fmax, int(points))
 
 
-def quantity_unit(model, params, name: str) -> str:
+def quantity_unit(model: Model, params: dict, name: str) -> str:
     """The unit of an input or output of a response: a parameter's, a signal's, V for vout, none for the duty ratio
     and a comparator's input."""
     units = getattr(model, "signal_units", {})
@@ -466,8 +489,9 @@ def quantity_unit(model, params, name: str) -> str:
     return param.unit if param is not None else signal_unit(units, name)
 
 
-def frequency_response(model, params: dict | None = None, *, input: str, output: str = "vout", frequency_hz=None,
-                       fmin=None, fmax=None, points: int = POINTS) -> FrequencyResponse:
+def frequency_response(model: Model | str, params: dict | None = None, *, input: str, output: str = "vout",
+                       frequency_hz: npt.ArrayLike | None = None, fmin: float | None = None, fmax: float | None = None,
+                       points: int = POINTS) -> FrequencyResponse:
     """The exact frequency response from ``input`` (a source's value or a parameter such as ``Vin``, the duty
     ratio ``D``, or ``control``: the comparator's input of a state-driven law) to ``output`` (``vout``, a state,
     or any signal of the model), about the model's periodic orbit at ``params``. Frequencies: ``frequency_hz``, or
@@ -485,7 +509,8 @@ def frequency_response(model, params: dict | None = None, *, input: str, output:
 LOOP_POINTS = ("comparator", "reference")
 
 
-def loop_gain(model, params: dict | None = None, *, at: str = "comparator", frequency_hz=None, fmin=None, fmax=None,
+def loop_gain(model: Model | str, params: dict | None = None, *, at: str = "comparator",
+              frequency_hz: npt.ArrayLike | None = None, fmin: float | None = None, fmax: float | None = None,
               points: int = POINTS) -> tuple[FrequencyResponse, Margins]:
     """The loop gain T of a closed loop and its margins (:func:`margins`), Middlebrook's injection read on the exact
     model (module docstring). ``at="comparator"``: a perturbation added to the comparator's input, Y the sensed
@@ -495,7 +520,7 @@ def loop_gain(model, params: dict | None = None, *, at: str = "comparator", freq
     name, output = loop_signals(at)
     small = SmallSignalModel(model, params, input=name, outputs=(output,))
 
-    def gain(freq):
+    def gain(freq: npt.ArrayLike) -> npt.NDArray[np.complex128]:
         return loop_from_closed(small.response(freq, output), at)
     f = (frequencies(small.T, fmin, fmax, points) if frequency_hz is None
          else np.atleast_1d(np.asarray(frequency_hz, dtype=float)))
@@ -510,13 +535,13 @@ def loop_signals(at: str) -> tuple[str, str]:
     return (CONTROL, "sensed") if at == "comparator" else ("Vref", "vout")
 
 
-def loop_from_closed(Y, at: str):
+def loop_from_closed(Y: npt.NDArray[np.complex128], at: str) -> npt.NDArray[np.complex128]:
     """The loop gain from the closed loop's response Y at the break point: -Y / (1 + Y) at the comparator (the
     perturbation adds to what it senses), Y / (1 - Y) at the reference (vout is subtracted from it)."""
     return -Y / (1.0 + Y) if at == "comparator" else Y / (1.0 - Y)
 
 
-def margins(gain, f: np.ndarray) -> Margins:
+def margins(gain: Callable[[npt.NDArray[np.float64]], npt.NDArray[np.complex128]], f: np.ndarray) -> Margins:
     """The margins of a loop gain ``gain(f)`` (a function of frequency, Hz): each crossing bracketed on the grid
     ``f`` and located on the function itself (Brent's method), the first of each kind."""
     from scipy.optimize import brentq
@@ -525,7 +550,7 @@ def margins(gain, f: np.ndarray) -> Margins:
     at = lambda x: complex(np.atleast_1d(gain(np.array([x])))[0])      # noqa: E731
     phase = np.unwrap(np.angle(values))
 
-    def first_root(samples, function):
+    def first_root(samples: npt.NDArray[np.float64], function: Callable[[float], float]) -> float:
         change = np.flatnonzero(np.sign(samples[:-1]) * np.sign(samples[1:]) < 0)
         if not change.size:
             return math.nan
@@ -550,7 +575,7 @@ def margins(gain, f: np.ndarray) -> Margins:
 WINDOW = 50
 
 
-def _common(f: float, T: float):
+def _common(f: float, T: float) -> tuple[float, float]:
     """(the frequency used, the common period) for a check at ``f``."""
     from fractions import Fraction
     ratio = Fraction(f * T).limit_denominator(max(WINDOW, int(round(1.0 / (f * T)))))
@@ -569,26 +594,26 @@ class _AugmentedMap:
     augmented problem's exact event-method map, restricted to the circuit's states (the oscillator's own
     multipliers are on the unit circle and would stall Newton)."""
 
-    inner: object
+    inner: PeriodMap
     n: int
     period: float
     evaluations: int = 0
     jacobian_kind: str = "exact"
 
-    def _x(self, x):
+    def _x(self, x: npt.ArrayLike) -> npt.NDArray[np.float64]:
         return np.concatenate([np.asarray(x, dtype=float), [1.0, 0.0]])
 
-    def __call__(self, x):
+    def __call__(self, x: npt.NDArray[np.float64]) -> tuple[np.ndarray, np.ndarray]:
         self.evaluations += 1
         px, jac = self.inner(self._x(x))
         return px[:self.n], jac[:self.n, :self.n]
 
-    def end(self, x):
+    def end(self, x: npt.NDArray[np.float64]) -> np.ndarray:
         self.evaluations += 1
         return self.inner.end(self._x(x))[:self.n]
 
 
-def _augmented(small: SmallSignalModel, omega: float, amplitude: float):
+def _augmented(small: SmallSignalModel, omega: float, amplitude: float) -> LCSProblem:
     """The circuit with the input perturbed by ``amplitude`` cos(omega t): an oscillator's two states w' = [[0, -w],
     [w, 0]] w beside the circuit's, entering where the input does (the sources' columns of E and F, the comparator's
     function, or the duty ratio's comparison with a sawtooth)."""
@@ -637,8 +662,8 @@ def _augmented(small: SmallSignalModel, omega: float, amplitude: float):
                       state_names=problem.state_names + ("w1", "w2"), pair_names=problem.pair_names)
 
 
-def injection_response(small: SmallSignalModel, frequency_hz, output: str = "vout", amplitude: float | None = None,
-                       tol: float = 1e-11) -> tuple[np.ndarray, np.ndarray]:
+def injection_response(small: SmallSignalModel, frequency_hz: npt.ArrayLike, output: str = "vout",
+                       amplitude: float | None = None, tol: float = 1e-11) -> tuple[np.ndarray, np.ndarray]:
     """The brute-force response, the way an AC sweep measures it: at each frequency (moved to the nearest multiple
     of fs / WINDOW, off the multiples of fs/2) the input perturbed by ``amplitude`` cos(2 pi f t) (default: 1e-5 of
     the input's value, or of the comparator's ramp), the periodic steady state of the circuit with it (Newton shooting over the common
@@ -669,19 +694,19 @@ def injection_response(small: SmallSignalModel, frequency_hz, output: str = "vou
     return np.array([f for f, _ in plan]), out
 
 
-def _output_on(model, params: dict, problem, samples, output: str) -> np.ndarray:
+def _output_on(model: Model, params: dict, problem: LCSProblem, samples: Samples, output: str) -> np.ndarray:
     """The output at quadrature samples of a run of ``problem`` (its first n states the circuit's, then perhaps an
     oscillator's)."""
     n = problem.n
     plain = replace(samples, x=np.asarray(samples.x)[:, :n])
     if output == "sensed":
-        return plain.x @ problem.switching.function.c
+        return plain.x @ cast(StateSwitching, problem.switching).function.c       # (a state-driven law's)
     if output in problem.state_names:
         return plain.x[:, problem.state_names.index(output)]
     return np.asarray(model.labels(params).signal(output, plain), dtype=float)
 
 
-def _orbit_mean(machine, x0, model, params: dict, output: str) -> float:
+def _orbit_mean(machine: Machine, x0: npt.NDArray[np.float64], model: Model, params: dict, output: str) -> float:
     """The mean of an output over one period of a machine's run from x0 (the event method's exact pieces)."""
     solution = machine.run(x0, record=True)[0]
     samples, weights = solution.quadrature()
@@ -694,7 +719,7 @@ def _mean_output(small: SmallSignalModel, output: str = "vout") -> float:
     return _orbit_mean(small.machine, small.orbit.x0, small.model, small.params, output)
 
 
-def steady_mean(model, params: dict | None = None, output: str = "vout", tol: float = 1e-12) -> float:
+def steady_mean(model: Model, params: dict | None = None, output: str = "vout", tol: float = 1e-12) -> float:
     """The mean of an output over the exact periodic orbit (Newton shooting on the event method's map to ``tol``):
     what a finite difference of the steady state reads."""
     from ..methods import EventDriven
@@ -710,7 +735,7 @@ def steady_mean(model, params: dict | None = None, output: str = "vout", tol: fl
 # --- compensator design: the k-factor method on the exact control-to-output response -----------------------------
 
 
-def operating_duty(model, params: dict, vref: float, tol: float = 1e-12) -> tuple[float, SmallSignalModel]:
+def operating_duty(model: Model | str, params: dict, vref: float, tol: float = 1e-12) -> tuple[float, SmallSignalModel]:
     """The duty ratio at which the open-loop converter's exact periodic orbit has mean |vout| = vref, by Newton's
     method on D with the exact model's response at zero frequency as the slope (its d mean(vout) / dD); and the
     small-signal model (input D) there."""
@@ -736,7 +761,7 @@ def operating_duty(model, params: dict, vref: float, tol: float = 1e-12) -> tupl
 class Design:
     """A compensator designed by the k-factor method, and what it was designed from."""
 
-    compensator: object
+    compensator: Compensator
     crossover_hz: float
     phase_margin_deg: float
     duty: float
@@ -751,7 +776,7 @@ class Design:
                 "plant_deg": self.plant_deg, "boost_deg": self.boost_deg, "k": self.k}
 
 
-def design_compensator(model, params: dict, *, crossover_hz: float, phase_margin_deg: float, vref: float,
+def design_compensator(model: Model | str, params: dict, *, crossover_hz: float, phase_margin_deg: float, vref: float,
                        carrier: tuple = (0.0, 1.0), kind: str = "type3") -> Design:
     """A type II or III compensator for the open-loop converter ``model`` at ``params`` regulated to ``vref`` with a
     carrier from carrier[0] to carrier[1] (trailing edge: Fm = 1 / (VU - VL)), by the k-factor method (H. D.

@@ -36,18 +36,52 @@ from __future__ import annotations
 import copy
 import itertools
 import math
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING, Any, TypedDict, TypeVar, cast
 
 import numpy as np
+import numpy.typing as npt
 
 from ..errors import ParameterError
 from ..problems import Configuration, Jump, Schedule
-from .netlist import Element, Netlist, NetlistError, Pulse, Pwl, Sin, with_models
+from .netlist import Element, Netlist, NetlistError, Pulse, Pwl, Sin, Waveform, with_models
+
+if TYPE_CHECKING:
+    import threading
+
+    from ..problems import Comparators, Ramp, StateSwitching
+
+    #: A switching law: a Schedule (time-driven), a StateSwitching (a comparator) or Comparators (several).
+    Law = Schedule | StateSwitching | Comparators
+
+#: Arrays of numbers: one circuit's, or a batch's with a leading axis per point.
+_Array = npt.NDArray[np.float64]
+#: A configuration's signal maps: (Sx, Su, s0, Ssin, Sgate) (:attr:`Compiled.signal_maps`).
+_Maps = tuple[_Array, ...]
+#: What :meth:`_Compiler.lcs` gives per circuit: (configuration, signal maps, (E, F) of the SIN sources).
+_Lcs = tuple[Configuration, _Maps, tuple[_Array, _Array]]
+#: A configuration's switch states and source levels, as :meth:`_Compiler.network` keys them.
+_Here = tuple[tuple[tuple[str, bool], ...], tuple[tuple[str, int], ...]]
+#: A configuration as :meth:`_Compiler.run` keys it: (switches closed, source levels, ramps' slopes, oscillators
+#: running).
+_Key = tuple[tuple[bool, ...], tuple[int, ...], tuple[float, ...], tuple[bool, ...]]
+_T = TypeVar("_T")
+
+
+class Invariant(TypedDict):
+    """What a circuit holds fixed (:meth:`_Compiler.invariants`)."""
+
+    kind: str                        # "loop", "cutset" or "charge"
+    constraint: str
+    value: float
+    unit: str
+
 
 #: The diode's port: a current source (u = i_D, y = -v_D) or a voltage source (u = -v_D, y = i_D).
 CURRENT, VOLTAGE = "current", "voltage"
 #: The port forms found per circuit structure and configuration (:meth:`_Compiler.network`), and how many are kept.
-_FORMS: dict = {}
+_FORMS: dict[tuple[object, ...], tuple[str, ...]] = {}
 MAX_KEPT_FORMS = 4096
 
 
@@ -55,43 +89,44 @@ MAX_KEPT_FORMS = 4096
 class Compiled:
     """The LCS of a netlist: configurations, the switching law, names, and each configuration's signal maps."""
 
-    configurations: tuple
-    law: object                      # the switching law: a Schedule (time-driven) or a StateSwitching (a comparator)
-    state_names: tuple               # "v(c1)", "i(l1)" (capacitor voltages and inductor currents)
-    pair_names: tuple                # diode names ("d1"); "none" for a circuit without diodes
-    pair_currents: tuple             # per configuration, per pair: u is the diode current
-    switch_names: tuple
-    closed: tuple                    # per configuration: which switches are closed
-    signal_names: tuple              # "v(node)", "i(element)"
-    signal_maps: tuple               # per configuration: (Sx (S, n), Su (S, k), s0 (S,), Ssin (S, m), Sgate (S, g))
+    configurations: tuple[Configuration, ...]
+    law: Law                         # the switching law: a Schedule (time-driven) or a StateSwitching (a comparator)
+    state_names: tuple[str, ...]     # "v(c1)", "i(l1)" (capacitor voltages and inductor currents)
+    pair_names: tuple[str, ...]      # diode names ("d1"); "none" for a circuit without diodes
+    pair_currents: tuple[tuple[bool, ...], ...]     # per configuration, per pair: u is the diode current
+    switch_names: tuple[str, ...]
+    closed: tuple[tuple[bool, ...], ...]            # per configuration: which switches are closed
+    signal_names: tuple[str, ...]    # "v(node)", "i(element)"
+    signal_maps: tuple[_Maps, ...]   # per configuration: (Sx (S, n), Su (S, k), s0 (S,), Ssin (S, m), Sgate (S, g))
     period: float
-    x0: np.ndarray
-    units: dict = field(default_factory=dict)
+    x0: _Array
+    units: dict[str, str] = field(default_factory=dict)
     #: The SIN sources as sinusoidal inputs: (omega (m,), phase (m,), E (configs, m, n), F (configs, m, k)), or None.
-    inputs: tuple | None = None
+    inputs: tuple[_Array, _Array, _Array, _Array] | None = None
     #: The gate sources (PULSE or PWL reaching only switch controls) whose waveforms the Sgate columns of the signal
     #: maps multiply at each sample's time: a gate's node voltage follows its waveform, not a level.
-    gates: tuple = ()
+    gates: tuple[Waveform, ...] = ()
     #: Switches driven by sources that do not repeat (a PWL without r=, a PULSE without PER: a load step's switch):
     #: ((t, law), ...), the law in force from each instant t > 0 on (``law`` before the first).
-    phases: tuple = ()
+    phases: tuple[tuple[float, Law], ...] = ()
     #: What the circuit holds fixed (:meth:`_Compiler.invariants`): ({"kind", "constraint", "value", "unit"}, ...).
-    invariants: tuple = ()
+    invariants: tuple[Invariant, ...] = ()
     #: What the file asks for that the circuit cannot hold, said as a warning with every run (:meth:`_Compiler.moved`).
-    notes: tuple = ()
+    notes: tuple[str, ...] = ()
     #: The stored energy's weights, (capacitances (n_c,), inductance matrix (n_L, n_L)) in the states' order, for the
     #: energy balance (:func:`converters.analysis.accuracy.energy_balance`); () where not known (a batch's points).
-    energy: tuple = ()
+    energy: tuple[_Array, ...] = ()
 
-    def signal_rows(self, row: int) -> tuple:
+    def signal_rows(self, row: int) -> tuple[_Array, ...]:
         """Signal ``row``'s maps stacked over the configurations: (Sx (configs, n), Su, s0, Ssin, Sgate), built once
         (a long exact run reads its signals block by block)."""
-        cache = self.__dict__.setdefault("_signal_rows", {})    # frozen: the cache is not a field
+        # frozen: the cache is not a field
+        cache: dict[int, tuple[_Array, ...]] = self.__dict__.setdefault("_signal_rows", {})
         if row not in cache:
             cache[row] = tuple(np.array([m[i][row] for m in self.signal_maps]) for i in range(5))
         return cache[row]
 
-    def law_at(self, t: float):
+    def law_at(self, t: float) -> Law:
         """The switching law in force at time t."""
         law = self.law
         for start, later in self.phases:
@@ -104,10 +139,10 @@ class Compiled:
 #: A network with more unknowns than this has its factorisations run where a time limit can stop them.
 LARGE_NETWORK = 400
 #: The threads of factorisations a time limit stopped waiting for (:func:`interruptible`).
-ABANDONED: list = []
+ABANDONED: list[threading.Thread] = []
 
 
-def interruptible(function, matrix, *args, **kwargs):
+def interruptible(function: Callable[..., _T], matrix: npt.NDArray[Any], *args: Any, **kwargs: Any) -> _T:
     """``function(matrix, ...)``, run for a large matrix in a thread the caller waits on in short slices, so that
     the command's --time-limit alarm (a signal, handled between bytecodes) stops the compile while LAPACK works
     (numpy lets go of the GIL there): a 3,000-stage RC ladder's SVDs ran 114 s past a 10 s limit. The thread is a
@@ -115,9 +150,9 @@ def interruptible(function, matrix, *args, **kwargs):
     if np.shape(matrix)[-1] <= LARGE_NETWORK:
         return function(matrix, *args, **kwargs)
     import threading
-    box = {}
+    box: dict[str, Any] = {}
 
-    def work():
+    def work() -> None:
         try:
             box["value"] = function(matrix, *args, **kwargs)
         except BaseException as exc:           # handed back to the caller's thread
@@ -132,22 +167,22 @@ def interruptible(function, matrix, *args, **kwargs):
         raise
     if "error" in box:
         raise box["error"]
-    return box["value"]
+    return cast(_T, box["value"])
 
 def compile_netlist(netlist: Netlist) -> Compiled:
     """The LCS of ``netlist`` (its values already final: overrides applied by the reader)."""
     return _Compiler(with_models(netlist)).run()
 
 
-def compile_points(netlists: list) -> list:
+def compile_points(netlists: list[Netlist]) -> list[Compiled | None]:
     """The LCS of each netlist, those alike but for their values (a tolerance study's points: the same file with
     other R, L, C, couplings, gains, DC sources, RS and RON) compiled together: the first of each group alone,
     the others' networks stamped and solved as one stack with its port forms and schedule
     (:meth:`_Compiler.rerun`): the same numbers as a compile of each, to the bit. A point the group cannot take
     is None (compile it alone: :func:`compile_netlist` gives its own result or error); so is every point of a
     group whose first fails."""
-    out: list = [None] * len(netlists)
-    groups: dict = {}
+    out: list[Compiled | None] = [None] * len(netlists)
+    groups: dict[tuple[object, ...], list[int]] = {}
     for i, netlist in enumerate(netlists):
         groups.setdefault(_structure(netlist), []).append(i)
     for indices in groups.values():
@@ -157,12 +192,13 @@ def compile_points(netlists: list) -> list:
         except NetlistError:
             continue
         if len(indices) > 1 and first.batchable():
-            for i, compiled in zip(indices[1:], first.rerun([netlists[i] for i in indices[1:]], out[indices[0]])):
+            for i, compiled in zip(indices[1:], first.rerun([netlists[i] for i in indices[1:]],
+                                                            cast(Compiled, out[indices[0]]))):
                 out[i] = compiled
     return out
 
 
-def _structure(netlist: Netlist) -> tuple:
+def _structure(netlist: Netlist) -> tuple[object, ...]:
     """What must be equal for two netlists to share a compile's structure: the file, every element but its value
     (a resistor's being 0, a short, is structure; a DC source's value is not; other waveforms are), whether an
     element has an IC, the models' parameters but RS and RON (their being 0 is structure), the .ic nodes."""
@@ -179,21 +215,21 @@ def _structure(netlist: Netlist) -> tuple:
 _JOINING = "RLVEHDSW"
 
 
-def charge_islands(netlist: Netlist) -> list:
+def charge_islands(netlist: Netlist) -> list[tuple[tuple[str, ...], tuple[str, ...]]]:
     """Sets of nodes joined to the rest of the circuit (ground included) only through capacitors, whatever the
     switches and diodes do: each set's net charge is conserved (the capacitors' currents into it sum to zero), so
     it is where the run started it, and without a hold every start would have a periodic orbit of its own (a
     multiplier at 1; :meth:`_Compiler.hold_islands`). [(nodes, capacitors)], names upper case; a set touched by a
     current source is left out (its charge is driven, not conserved)."""
-    parent: dict = {}
+    parent: dict[str, str] = {}
 
-    def find(n):
+    def find(n: str) -> str:
         while parent.setdefault(n, n) != n:
             parent[n] = parent[parent[n]]
             n = parent[n]
         return n
 
-    driven = set()
+    driven: set[str] = set()
     for e in netlist.elements:
         if e.kind in _JOINING and len(e.nodes) >= 2:
             parent[find(e.nodes[0])] = find(e.nodes[1])
@@ -201,7 +237,7 @@ def charge_islands(netlist: Netlist) -> list:
             driven.update(e.nodes[:2])
         for n in e.nodes:
             find(n)
-    groups: dict = {}
+    groups: dict[str, list[str]] = {}
     for n in parent:
         groups.setdefault(find(n), []).append(n)
     ground = find("0")
@@ -215,6 +251,10 @@ def charge_islands(netlist: Netlist) -> list:
 
 
 class _Compiler:
+    #: The constraints of the loops of capacitors and cutsets of inductors that hold in every configuration, where
+    #: the circuit has some (:meth:`_Network.solve_loops` sets it; read with getattr, unset without)
+    loops: _Array
+
     def __init__(self, netlist: Netlist):
         self.nl = netlist
         self.path = netlist.path
@@ -242,7 +282,7 @@ class _Compiler:
             raise NetlistError(f"{self.path}: no ground node (0)")
         #: Nodes joined to the rest only through capacitors: (sign per capacitor, +1 where its first node is in the
         #: island, -1 where its second is), their charge sum(sign C v) held where the run starts (:meth:`lcs`)
-        self.islands = []
+        self.islands: list[_Array] = []
         for island, capacitors in charge_islands(netlist):
             inside = set(island)
             self.islands.append(np.array([(e.nodes[0] in inside) - (e.nodes[1] in inside) if e.name.upper() in
@@ -263,7 +303,7 @@ class _Compiler:
             raise NetlistError(f"{self.path}: no capacitor or inductor: the circuit has no state")
         self.k = max(1, len(self.diodes))
         # every diode's series resistance as an inner node and a resistor
-        self.diode_rs = {d.name: self.nl.models[d.model].params.get("RS", 0.0) for d in self.diodes}
+        self.diode_rs = {d.name: self.nl.models[cast(str, d.model)].params.get("RS", 0.0) for d in self.diodes}
         for d in self.diodes:
             if self.diode_rs[d.name] < 0:
                 raise self.error(d, f"{d.title}: model {d.model} RS must be >= 0")
@@ -272,13 +312,15 @@ class _Compiler:
         self.switch_loops = False
         #: 0 ohm resistors (a parasitic set to zero): 0 V branches, as closed ideal switches
         self.shorts = [r for r in self.by_kind["R"] if r.value == 0]
-        self.switch_ron = {s.name: self.nl.models[s.model].params.get("RON", 0.0) for s in self.switches}
+        self.switch_ron = {s.name: self.nl.models[cast(str, s.model)].params.get("RON", 0.0) for s in self.switches}
         self.mutual = self.inductance_matrix()
         #: One circuit: (); a batch of P circuits alike but for their values: (P,), each value's P numbers in
         #: ``batch`` (:meth:`rerun`)
+        self.lead: tuple[int, ...]
+        self.batch: dict[tuple[str, str | None], _Array]
         self.lead, self.batch = (), {}
         #: The networks solved so far: (switch states, source levels) -> (network, port forms).
-        self.solved = {}
+        self.solved: dict[_Here, tuple[_Network, tuple[str, ...]]] = {}
         #: PWL sources in the power circuit: ramps, each a state of the LCS (its value), its slope per phase
         self.ramps = [s for s in self.sources if isinstance(s.waveform, Pwl) and self.in_power_circuit(s)]
         #: SIN sources with a delay or damping: oscillators, each two states of the LCS (e^(-THETA t') sin and cos of
@@ -288,9 +330,9 @@ class _Compiler:
             if not self.in_power_circuit(o):
                 raise self.error(o, f"{o.title}: a SIN with a delay or damping (TD, THETA) in a switch's control is not "
                                     "compiled; in the power circuit it is")
-            if o.waveform.td < 0 or o.waveform.theta < 0:
+            if cast(Sin, o.waveform).td < 0 or cast(Sin, o.waveform).theta < 0:
                 raise self.error(o, f"{o.title}: its SIN delay TD and damping THETA must be >= 0; got TD = "
-                                    f"{o.waveform.td:g} s, THETA = {o.waveform.theta:g} 1/s")
+                                    f"{cast(Sin, o.waveform).td:g} s, THETA = {cast(Sin, o.waveform).theta:g} 1/s")
 
     def error(self, element: Element, what: str) -> NetlistError:
         return NetlistError(f"{self.path}:{element.line}: {what}")
@@ -302,7 +344,7 @@ class _Compiler:
         return hasattr(self, "built") and not (self.state_rows or self.ramps or self.oscillators or self.islands
                                                or getattr(self, "loops", None) is not None or self.switch_loops)
 
-    def rerun(self, netlists: list, compiled: Compiled) -> list:
+    def rerun(self, netlists: list[Netlist], compiled: Compiled) -> list[Compiled | None]:
         """The compiles of ``netlists``, each this circuit (its :meth:`run` gave ``compiled``) with other values:
         every configuration's networks stamped for all points at once (G per point, R shared), solved as one
         stack, with this compile's port forms and schedule. None for a point that needs a compile of its own: a
@@ -317,16 +359,18 @@ class _Compiler:
         for source in self.sources:               # a DC level in a switch's control moves the schedule
             if source.name in driving and isinstance(source.waveform, float):
                 ok &= numbers[:, column[source.name]] == float(source.waveform)
-        batch = {(e.name, None): numbers[:, column[e.name]] for e in self.nl.elements
-                 if e.kind in "RLCKEGFH" or (e.kind in "VI" and isinstance(e.waveform, float))}
+        batch: dict[tuple[str, str | None], _Array] = {
+            (e.name, None): numbers[:, column[e.name]] for e in self.nl.elements
+            if e.kind in "RLCKEGFH" or (e.kind in "VI" and isinstance(e.waveform, float))}
         for elements, key, kept in ((self.diodes, "RS", self.diode_rs), (self.switches, "RON", self.switch_ron)):
             for e in elements:
                 if kept[e.name]:
-                    batch[(e.name, key)] = np.array([netlist.models[e.model].params.get(key, 0.0)
+                    batch[(e.name, key)] = np.array([netlist.models[cast(str, e.model)].params.get(key, 0.0)
                                                      for netlist in netlists])
         m = len(self.inductors)
         mutual = np.zeros((P, m, m))
         index = {l.name: i for i, l in enumerate(self.inductors)}
+        i: int | np.signedinteger[Any]              # an inductor's index here, a point's below
         for i, l in enumerate(self.inductors):
             mutual[:, i, i] = batch[(l.name, None)]
         for k in self.by_kind["K"]:
@@ -350,9 +394,10 @@ class _Compiler:
             if not singular.any():
                 break
             ok[np.flatnonzero(ok)[singular]] = False
-        per_point = [[] for _ in range(view.lead[0])]
+        per_point: list[list[_Lcs]] = [[] for _ in range(view.lead[0])]
         for (network, forms), (switch_state, _, slopes, running) in zip(networks, self.built):
-            for p, result in enumerate(view.lcs(network.solve(checked=True), forms, switch_state, slopes, running)):
+            for p, result in enumerate(cast(list[_Lcs], view.lcs(network.solve(checked=True), forms, switch_state,
+                                                                 slopes, running))):
                 per_point[p].append(result)
         # the switches' controls (their sources' coefficients, which the schedule follows) must be this compile's
         # to the bit: a divider or a gain in a gate's path changes them (its point is compiled alone)
@@ -362,7 +407,7 @@ class _Compiler:
             if self.drives.get(switch.name):
                 same_drive &= (view.control(networks[0][0], switch)[:, self.n + self.k:]
                                == self.control(first, switch)[self.n + self.k:]).all(axis=-1)
-        out: list = [None] * P
+        out: list[Compiled | None] = [None] * P
         for i, results, same in zip(np.flatnonzero(ok), per_point, same_drive):
             if not same:
                 continue
@@ -380,18 +425,18 @@ class _Compiler:
                              inputs=inputs, energy=())
         return out
 
-    def value(self, element: Element, model_key: str | None = None):
+    def value(self, element: Element, model_key: str | None = None) -> float | _Array:
         """An element's value (its model's RS or RON with ``model_key``): a number, or a batch's P numbers."""
         key = (element.name, model_key)
         if key in self.batch:
             return self.batch[key]
         if model_key is None:
-            return element.value if element.kind not in "VI" else float(element.waveform)
+            return cast(float, element.value) if element.kind not in "VI" else float(cast(float, element.waveform))
         return (self.diode_rs if model_key == "RS" else self.switch_ron)[element.name]
 
     # --- the inductance matrix (K couplings) -------------------------------------------------------------------
 
-    def inductance_matrix(self) -> np.ndarray:
+    def inductance_matrix(self) -> _Array:
         m = len(self.inductors)
         L = np.diag([l.value for l in self.inductors]).astype(float)
         index = {l.name: i for i, l in enumerate(self.inductors)}
@@ -399,7 +444,7 @@ class _Compiler:
             a, b = (index[name] for name in k.control)
             if a == b:
                 raise self.error(k, f"{k.title}: couples {k.control[0].upper()} with itself")
-            L[a, b] = L[b, a] = k.value * math.sqrt(L[a, a] * L[b, b])
+            L[a, b] = L[b, a] = cast(float, k.value) * math.sqrt(L[a, a] * L[b, b])
         if m and np.linalg.eigvalsh(L).min() <= 1e-12 * np.abs(L).max():
             couplings = ", ".join(k.name.upper() for k in self.by_kind["K"])
             raise NetlistError(f"{self.path}: the coupled inductances ({couplings}) are not positive definite (a "
@@ -409,7 +454,7 @@ class _Compiler:
     # --- drives and the schedule -------------------------------------------------------------------------------
 
     def run(self) -> Compiled:
-        self.state_rows = {}
+        self.state_rows: dict[str, _Array] = {}
         drives = {s.name: self.switch_drive(s) for s in self.switches}
         self.drives = drives
         if self.state_rows:
@@ -418,27 +463,33 @@ class _Compiler:
         power = [s for s in self.sources if isinstance(s.waveform, Pulse) and self.in_power_circuit(s)]
         self.check_ramps()
         for s in power:
-            if not math.isfinite(s.waveform.per):
+            if not math.isfinite(cast(Pulse, s.waveform).per):
                 raise self.error(s, f"{s.title}: a single pulse in the power circuit: give it a period (PER)")
         once = {name: d for name, d in drives.items() if d and any(_once(self.source(n).waveform) for n in d)}
-        corners = ({t for r in self.ramps for t, _ in r.waveform.points if t > 0.0}
-                   | {o.waveform.td for o in self.oscillators if o.waveform.td > 0.0})
+        corners = ({t for r in self.ramps for t, _ in cast(Pwl, r.waveform).points if t > 0.0}
+                   | {cast(Sin, o.waveform).td for o in self.oscillators if cast(Sin, o.waveform).td > 0.0})
         phase_times, phase_states = self.phases(once, corners)
         repeating = {name: d for name, d in drives.items() if name not in once}
         starts, periodic_keys = self.schedule_keys(period, repeating, power)
         names = [s.name for s in self.switches]
 
-        def full(key, state, start):   # a periodic key with the one-shot switches' states and the ramps' slopes of a phase
+        # a periodic key with the one-shot switches' states and the ramps' slopes of a phase
+        def full(key: tuple[tuple[bool, ...], tuple[int, ...]], state: dict[str, bool], start: float) -> _Key:
             held = dict(zip(repeating, key[0]))
             return (tuple(held[n] if n in held else state[n] for n in names), key[1],
-                    tuple(_slope(r.waveform, start) for r in self.ramps),
-                    tuple(start >= o.waveform.td for o in self.oscillators))
+                    tuple(_slope(cast(Pwl, r.waveform), start) for r in self.ramps),
+                    tuple(start >= cast(Sin, o.waveform).td for o in self.oscillators))
         phase_keys = [[full(key, state, start) for key in periodic_keys]
                       for state, start in zip(phase_states, [0.0, *phase_times])]
         distinct = list(dict.fromkeys(key for keys_ in phase_keys for key in keys_))
+        configs: list[Configuration]
+        pair_currents: list[tuple[bool, ...]]
+        closed: list[tuple[bool, ...]]
+        maps: list[_Maps]
+        per_config_sinusoids: list[tuple[_Array, _Array]]
         configs, pair_currents, closed, maps, per_config_sinusoids = [], [], [], [], []
         #: each configuration's (switch states, source levels, slopes, running): what :meth:`rerun` solves again
-        self.built = []
+        self.built: list[tuple[dict[str, bool], dict[str, int], tuple[float, ...], tuple[bool, ...]]] = []
         for key in distinct:
             switch_state = dict(zip([s.name for s in self.switches], key[0]))
             levels = dict(zip([s.name for s in power], key[1]))
@@ -449,11 +500,11 @@ class _Compiler:
             pair_currents.append(tuple(f == CURRENT for f in forms))
             closed.append(tuple(key[0]))
             maps.append(signals)
-        sines = [self.sources[c - self.n - self.k].waveform for c in self.sinusoid_columns()[0]]
+        sines = [cast(Sin, self.sources[c - self.n - self.k].waveform) for c in self.sinusoid_columns()[0]]
         laws = [self.schedule(period, starts, [distinct.index(k) for k in keys_], bool(sines)) for keys_ in phase_keys]
         schedule = laws[0]
         periodic = math.isfinite(schedule.period)
-        inputs = None
+        inputs: tuple[_Array, _Array, _Array, _Array] | None = None
         if sines:
             E_sin = np.array([e for e, _ in per_config_sinusoids])
             F_sin = np.array([f for _, f in per_config_sinusoids])
@@ -462,17 +513,20 @@ class _Compiler:
         state_names = (tuple(f"v({c.name})" for c in self.capacitors) + tuple(f"i({l.name})" for l in self.inductors)
                        + tuple(f"pwl({r.name})" for r in self.ramps)
                        + tuple(f"{f}({o.name})" for o in self.oscillators for f in ("sin", "cos")))
-        return Compiled(tuple(configs), schedule, state_names,
-                        tuple(d.name for d in self.diodes) or ("none",), tuple(pair_currents),
-                        tuple(s.name for s in self.switches), tuple(closed), self.signal_names(), tuple(maps),
-                        period if periodic else math.inf, self.initial_state(), self.units(), inputs,
-                        self.gate_waveforms(), tuple(zip(phase_times, laws[1:])), self.invariants(state_names),
-                        self.moved(state_names), self.energy())
+        return Compiled(configurations=tuple(configs), law=schedule, state_names=state_names,
+                        pair_names=tuple(d.name for d in self.diodes) or ("none",), pair_currents=tuple(pair_currents),
+                        switch_names=tuple(s.name for s in self.switches), closed=tuple(closed),
+                        signal_names=self.signal_names(), signal_maps=tuple(maps),
+                        period=period if periodic else math.inf, x0=self.initial_state(), units=self.units(),
+                        inputs=inputs, gates=self.gate_waveforms(), phases=tuple(zip(phase_times, laws[1:])),
+                        invariants=self.invariants(state_names), notes=self.moved(state_names), energy=self.energy())
 
     @staticmethod
-    def schedule(period: float, starts: list, index: list, sines: bool) -> Schedule:
+    def schedule(period: float, starts: list[float], index: list[int], sines: bool) -> Schedule:
         """The schedule of configurations ``index`` from ``starts`` (consecutive repeats merged): periodic where the
         configuration changes within the period or a SIN source runs, else constant."""
+        merged_starts: list[float]
+        merged: list[int]
         merged_starts, merged = [], []
         for t, c in zip(starts, index):
             if not merged or merged[-1] != c:
@@ -486,7 +540,7 @@ class _Compiler:
         """A PWL in the power circuit is compiled where it does not repeat and does not jump (each of its segments a
         ramp the state follows exactly); refused otherwise, naming it."""
         for r in self.ramps:
-            w = r.waveform
+            w = cast(Pwl, r.waveform)
             if not _once(w):
                 raise self.error(r, f"{r.title}: a PWL that repeats (r=) in the power circuit is not compiled (a ramp "
                                     "here is a state of the LCS, which a periodic steady state cannot pin); a PWL "
@@ -499,11 +553,12 @@ class _Compiler:
     def source(self, name: str) -> Element:
         return next(x for x in self.sources if x.name == name)
 
-    def phases(self, once: dict, corners=()) -> tuple:
+    def phases(self, once: dict[str, dict[str, float]],
+               corners: Iterable[float] = ()) -> tuple[tuple[float, ...], list[dict[str, bool]]]:
         """(the instants t > 0 where a switch driven by sources that do not repeat changes, or a ramp in the power
         circuit turns (``corners``), the states of those switches in each phase: before the first instant, then from
         each on)."""
-        changes = {}
+        changes: dict[str, tuple[bool, list[tuple[float, bool]]]] = {}
         for name, coefficients in once.items():
             switch = next(x for x in self.switches if x.name == name)
             repeating = [n for n in coefficients if not _once(self.source(n).waveform)
@@ -513,9 +568,9 @@ class _Compiler:
                                          "to one that does not: a gate is periodic or one-shot, not both")
             changes[name] = self.one_shot_events(switch, coefficients)
         times = sorted({t for _, events in changes.values() for t, _ in events} | set(corners))
-        states = []
+        states: list[dict[str, bool]] = []
         for start in [0.0, *times]:
-            state = {}
+            state: dict[str, bool] = {}
             for name, (initial, events) in changes.items():
                 state[name] = initial
                 for t, closed in events:
@@ -524,11 +579,12 @@ class _Compiler:
             states.append(state)
         return tuple(times), states
 
-    def one_shot_events(self, switch: Element, coefficients: dict):
+    def one_shot_events(self, switch: Element, coefficients: dict[str, float]) -> tuple[bool, list[tuple[float, bool]]]:
         """(state at t = 0, [(t > 0, closed)]) of a switch whose control is made of sources that do not repeat: its
         crossings of VT + VH (closing) and VT - VH (opening) over the whole run (after its last corner the control
         holds)."""
         vt, vh = self.threshold(switch)
+        corners: set[float] | _Array
         corners = {0.0}
         for name in coefficients:
             w = self.source(name).waveform
@@ -547,7 +603,7 @@ class _Compiler:
         events = _crossings(corners, values, vt + vh, vt - vh, initial)
         return initial, [(t, closed) for t, closed in events if t > 0.0]
 
-    def run_state_driven(self, drives: dict) -> Compiled:
+    def run_state_driven(self, drives: dict[str, dict[str, float] | None]) -> Compiled:
         """Switches driven by the circuit's own quantities (comparators), with switches that follow one of them or
         its complement (a synchronous rectifier's gate on the same comparator), the others by DC: one configuration
         per combination of the comparators' states, configuration sum(closed_j << j), and a
@@ -564,6 +620,8 @@ class _Compiler:
         if any(isinstance(x.waveform, (Pulse, Sin, Pwl)) and self.in_power_circuit(x) for x in self.sources):
             raise NetlistError(f"{self.path}: a state-driven switch with PULSE, SIN or PWL sources in the power "
                                "circuit is not compiled yet")
+        leaders: list[tuple[Element, _Array]]
+        followers: dict[str, tuple[int, bool, float]]
         leaders, followers = [], {}              # followers: name -> (leader index, same, scale)
         for name, row in self.state_rows.items():
             switch = next(x for x in self.switches if x.name == name)
@@ -580,9 +638,15 @@ class _Compiler:
         fixed = {}
         for other in self.switches:
             if other.name not in self.state_rows:
-                value = sum(c * float(self.source(src).waveform)
+                value = sum(c * float(cast(float, self.source(src).waveform))
                             for src, c in (drives[other.name] or {}).items())
                 fixed[other.name] = value > self.threshold(other)[0]
+        pieces: list[list[_Array]]
+        configs: list[Configuration]
+        pair_currents: list[tuple[bool, ...]]
+        closed: list[tuple[bool, ...]]
+        maps: list[_Maps]
+        index_of: list[int]
         pieces, configs, pair_currents, closed, maps, index_of = [], [], [], [], [], []
         for index in range(2 ** m):
             on = [bool(index >> j & 1) for j in range(m)]
@@ -607,7 +671,7 @@ class _Compiler:
                 if np.abs(self.control(solution, other) - scale * pieces[-1][j]).max() > 1e-9 * np.abs(pieces[-1][j]).max():
                     raise self.error(other, f"{other.title}: its control is {scale:g} x {leaders[j][0].title}'s in one "
                                             "configuration, not in another: it does not follow that comparator")
-        channels = []
+        channels: list[StateSwitching] = []
         for j, (leader, _) in enumerate(leaders):
             rows = [piece[j] for piece in pieces]
             if any(np.abs(r - rows[0]).max() > 1e-9 * max(np.abs(rows[0]).max(), 1e-300) for r in rows[1:]):
@@ -621,6 +685,7 @@ class _Compiler:
         table = tuple(index_of[(2 ** m - 1) ^ bits] for bits in range(2 ** m))
         if not configs:
             self.configuration({**fixed, **{leader.name: True for leader, _ in leaders}}, {})     # its refusal
+        law: Law
         law = (StateSwitching(channels[0].function, below=table[0], above=table[1], band=channels[0].band) if m == 1
                else Comparators(tuple(channels), table, names=tuple(leader.name for leader, _ in leaders),
                                 words=("closed", "open")))
@@ -669,12 +734,13 @@ class _Compiler:
                     todo += [m for m in e.nodes if m != "0" and m not in seen]
         return False
 
-    def follows(self, switch: Element, row0: np.ndarray, other: Element, row: np.ndarray) -> tuple | None:
+    def follows(self, switch: Element, row0: _Array, other: Element, row: _Array) -> tuple[bool, float] | None:
         """(same, scale) of a second state-driven switch whose control is ``scale`` times the first's: closed with
         it (same: scale > 0 and the same thresholds) or exactly when it is open (its complement: scale < 0 and the
         thresholds swapped: S2 on v(vcon) - v(ramp) beside S1 on v(ramp) - v(vcon), both VT = 0); None otherwise
         (a comparator of its own)."""
         scale = float(row @ row0 / (row0 @ row0))
+        near: Callable[[float, float], bool]
         near = lambda a, b: abs(a - b) <= 1e-9 * max(1.0, abs(a), abs(b))       # noqa: E731
         if np.abs(row - scale * row0).max() <= 1e-9 * np.abs(row).max():
             (vt0, vh0), (vt, vh) = self.threshold(switch), self.threshold(other)
@@ -685,20 +751,20 @@ class _Compiler:
                 return False, scale
         return None
 
-    def threshold(self, switch: Element) -> tuple:
+    def threshold(self, switch: Element) -> tuple[float, float]:
         """(threshold, hysteresis) of a switch's model: VT, VH (V) of an S switch's SW, IT, IH (A) of a W's CSW."""
-        params = self.nl.models[switch.model].params
+        params = self.nl.models[cast(str, switch.model)].params
         keys = ("VT", "VH") if switch.kind == "S" else ("IT", "IH")
         return params.get(keys[0], 0.0), abs(params.get(keys[1], 0.0))
 
-    def control(self, solution, switch: Element) -> np.ndarray:
+    def control(self, solution: _Network, switch: Element) -> _Array:
         """The row of a switch's control quantity in a solved network: V(nc+) - V(nc-) of an S switch, the current
         through the controlling V source of a W switch."""
         if switch.kind == "W":
             return solution.current(next(v for v in self.by_kind["V"] if v.name == switch.control[0]))
         return solution.voltage(switch.nodes[2]) - solution.voltage(switch.nodes[3])
 
-    def switch_drive(self, switch: Element) -> dict:
+    def switch_drive(self, switch: Element) -> dict[str, float] | None:
         """The switch's control (:meth:`control`) as {source name: coefficient} where sources alone fix it; None
         (and its row in ``state_rows``) where it depends on the states: a comparator."""
         # any configuration the network can be solved in will do (a switch's control terminals draw no current): the
@@ -707,6 +773,8 @@ class _Compiler:
         names = [s.name for s in self.switches]
         states = (itertools.product((False, True), repeat=len(names)) if len(names) <= 10
                   else [(False,) * len(names), (True,) * len(names)])
+        solution: _Network | None
+        failure: NetlistError | None
         solution, failure = None, None
         for state in states:
             try:
@@ -715,6 +783,7 @@ class _Compiler:
             except NetlistError as error:
                 failure = failure or error
         if solution is None:
+            assert failure is not None          # every state was tried: each refusal kept the first
             raise failure
         row = self.control(solution, switch)
         scale = max(np.abs(row).max(initial=0.0), 1e-300)
@@ -723,7 +792,7 @@ class _Compiler:
             return None
         return {s.name: row[self.n + self.k + i] for i, s in enumerate(self.sources) if row[self.n + self.k + i] != 0.0}
 
-    def state_law(self, switch: Element, row: np.ndarray):
+    def state_law(self, switch: Element, row: _Array) -> tuple[_Array, float, Ramp | None]:
         """The StateSwitching of a switch whose control voltage V = c.x + (sources) depends on the states: with
         s = VT - V the switch closes when s falls below -VH and opens when it rises above +VH (SW's thresholds VT
         +- VH); a sawtooth PULSE in its control (TF and PW a thousandth of its period at most) is the law's ramp.
@@ -733,6 +802,7 @@ class _Compiler:
         if np.abs(row[n:n + k]).max(initial=0.0) > 1e-12 * max(np.abs(row).max(), 1e-300):
             raise self.error(switch, f"{switch.title}: its control voltage depends on a diode's current or voltage; a "
                                      "comparator here reads node voltages and branch currents of the states only")
+        ramp: Ramp | None
         d, ramp = self.threshold(switch)[0], None
         for i, src in enumerate(self.sources):
             a = row[n + k + i]
@@ -751,26 +821,28 @@ class _Compiler:
                 raise self.error(src, f"{src.title}: a {type(w).__name__.upper()} in {switch.title}'s control is not "
                                       "compiled")
             else:
-                d -= a * float(w)
+                d -= a * float(cast(float, w))
         return -row[:n], d, ramp
 
-    def schedule_keys(self, period: float, drives: dict, power: list):
+    def schedule_keys(self, period: float, drives: dict[str, dict[str, float] | None],
+                      power: list[Element]) -> tuple[list[float], list[tuple[tuple[bool, ...], tuple[int, ...]]]]:
         """The instants in [0, T) where a switch or a power source changes, and the key of each interval:
         ((switch closed...), (source level index...))."""
         span = period if math.isfinite(period) else 1.0
         times = {0.0}
-        waveforms = {}
+        waveforms: dict[str, tuple[Any, ...]] = {}     # ("switch", coefficients, vt, vh) or ("level", waveform)
         for name, coefficients in drives.items():
             vt, vh = self.threshold(next(s for s in self.switches if s.name == name))
             waveforms[name] = ("switch", coefficients, vt, vh)
         for s in power:
             waveforms[s.name] = ("level", s.waveform)
-        events = []
+        events: list[tuple[int, Sequence[tuple[float, int]]]] = []
         for name, spec in waveforms.items():
             if spec[0] == "switch":
                 events.append(self.switch_events(name, spec[1], spec[2], spec[3], period))
             else:
                 events.append(self.level_events(spec[1], period))
+        changes: tuple[int, Sequence[tuple[float, int]]] | Sequence[tuple[float, int]]   # an event, then its changes
         for changes in events:
             times.update(t for t, _ in changes[1])
         starts = sorted(t for t in times if 0.0 <= t < span * (1 - 1e-12))
@@ -788,13 +860,14 @@ class _Compiler:
             keys.append((switches, levels))
         return starts, keys
 
-    def waveform_value(self, coefficients: dict, t: np.ndarray) -> np.ndarray:
+    def waveform_value(self, coefficients: dict[str, float], t: _Array) -> _Array:
         total = np.zeros_like(t)
         for name, c in coefficients.items():
-            total += c * waveform_at(self.source(name).waveform, t)
+            total += c * waveform_at(cast(Waveform, self.source(name).waveform), t)
         return total
 
-    def corners(self, coefficients: dict, period: float) -> np.ndarray:
+    def corners(self, coefficients: dict[str, float], period: float) -> _Array:
+        points: list[float] | _Array
         points = [0.0]
         for name in coefficients:
             w = self.source(name).waveform
@@ -813,7 +886,8 @@ class _Compiler:
         points = np.unique(np.array([p for p in points if 0.0 <= p <= 2 * period]))
         return points
 
-    def switch_events(self, name: str, coefficients: dict, vt: float, vh: float, period: float):
+    def switch_events(self, name: str, coefficients: dict[str, float], vt: float, vh: float,
+                      period: float) -> tuple[bool, list[tuple[float, bool]]]:
         """(state at t = 0 on the periodic orbit, [(t in [0, T), closed)]) from the crossings of the control
         voltage with VT + VH (closing) and VT - VH (opening)."""
         switch = next(s for s in self.switches if s.name == name)
@@ -839,12 +913,13 @@ class _Compiler:
                 raise self.error(switch, f"{switch.title}: its control never leaves the hysteresis band")
         return initial, [(max(t, 0.0), s) for t, s in inside]
 
-    def level_events(self, w: Pulse, period: float):
+    def level_events(self, w: Pulse, period: float) -> tuple[int, list[tuple[float, int]]]:
         """(level at t = 0 on the periodic orbit, [(t in [0, T), level)]): a power PULSE holds v1 (level 0) or v2
         (level 1), changing at the middle of its edges."""
         per = w.per
         # an edge whose middle falls on the period's end (T/2 - e/2 + e + T/2 - e + e/2) is at 0, not at the
         # 1e-21 s that rounding leaves of it (a step of 1e-21 s at every period)
+        snap: Callable[[float], float]
         snap = lambda t: 0.0 if min(t % per, per - t % per) <= 1e-12 * per else t % per      # noqa: E731
         one = sorted([(snap(w.td + w.tr / 2), 1), (snap(w.td + w.tr + w.pw + w.tf / 2), 0)])
         initial = one[-1][1]                        # the level the period ends with holds through t = 0
@@ -853,7 +928,7 @@ class _Compiler:
 
     # --- one configuration ---------------------------------------------------------------------------------
 
-    def network(self, switch_state: dict, levels: dict):
+    def network(self, switch_state: dict[str, bool], levels: dict[str, int]) -> tuple[_Network, list[str]]:
         """(the solved network, the port forms) of one configuration: every diode a current port, but those the
         network then cannot solve for (an inductor or another port fixes their current), which are voltage ports.
 
@@ -862,6 +937,7 @@ class _Compiler:
         are used only where this configuration's network is solvable with them (a controlled source's gain can
         make the rank depend on values); else the search runs again."""
         here = (tuple(switch_state.items()), tuple(levels.items()))
+        forms: tuple[str, ...] | list[str]
         if here in self.solved:            # the switches' drives and the configurations ask for the same ones
             network, forms = self.solved[here]
             return network, list(forms)
@@ -891,15 +967,17 @@ class _Compiler:
         self.solved[here] = (network, tuple(forms))
         return network, forms
 
-    def configuration(self, switch_state: dict, levels: dict, slopes: tuple = (), running: tuple = ()):
+    def configuration(self, switch_state: dict[str, bool], levels: dict[str, int], slopes: tuple[float, ...] = (),
+                      running: tuple[bool, ...] = ()) -> tuple[Configuration, list[str], _Maps, tuple[_Array, _Array]]:
         """(Configuration, port forms, signal maps, (E, F) of the SIN sources) of one configuration; ``slopes``: each
         ramp's slope in it (V/s or A/s); ``running``: each oscillator past its delay."""
         solution, forms = self.network(switch_state, levels)
-        config, signals, sinusoids = self.lcs(solution, forms, switch_state, slopes, running)
+        config, signals, sinusoids = cast(_Lcs, self.lcs(solution, forms, switch_state, slopes, running))
         self.check_unique_ports(config, switch_state)
         return config, forms, signals, sinusoids
 
-    def lcs(self, solution, forms, switch_state, slopes: tuple = (), running: tuple = ()):
+    def lcs(self, solution: _Network, forms: Sequence[str], switch_state: dict[str, bool],
+            slopes: tuple[float, ...] = (), running: tuple[bool, ...] = ()) -> _Lcs | list[_Lcs]:
         """The configuration's LCS and signal maps from a solved network. A ramp (a PWL in the power circuit) is a
         state of its own, its value: its column of the network becomes a state's, and its slope its derivative. An
         oscillator (a delayed or damped SIN) is two, its value VO + VA s: its column scaled by VA becomes s's, and
@@ -936,24 +1014,26 @@ class _Compiler:
         static[..., [c - n - k for c in gates]] = 0.0       # a gate's share is its waveform at each sample's time
         Sx = rows[..., :n]
         E_sin, F_sin = np.swapaxes(E_sin, -1, -2), np.swapaxes(F_sin, -1, -2)
-        signals = (Sx, rows[..., n:n + k], _times(rows[..., n + k:], static), rows[..., columns] * amplitudes,
-                   rows[..., gates])
+        signals: _Maps = (Sx, rows[..., n:n + k], _times(rows[..., n + k:], static), rows[..., columns] * amplitudes,
+                          rows[..., gates])
         if self.lead:                         # a batch (:meth:`rerun`): each point's configuration and maps
             return [(Configuration(A=A[p], B=B[p], C=C[p], D=D[p], E=E[p], F=F[p], name=name),
                      tuple(m[p].copy() for m in signals), (E_sin[p].copy(), F_sin[p].copy()))
                     for p in range(self.lead[0])]
         config = Configuration(A=A, B=B, C=C, D=D, E=E, F=F, name=name)
-        extra = [(n + k + self.sources.index(x), 1.0) for x in self.ramps]
+        extra: list[tuple[int | None, float]] = [(n + k + self.sources.index(x), 1.0) for x in self.ramps]
         for o in self.oscillators:
-            extra += [(n + k + self.sources.index(o), o.waveform.va), (None, 0.0)]
+            extra += [(n + k + self.sources.index(o), cast(Sin, o.waveform).va), (None, 0.0)]
         if extra:
             r = len(extra)
+            columns_of: Callable[[_Array], _Array]
             columns_of = lambda M: np.column_stack([M[:, c] * w if c is not None else np.zeros(M.shape[0])   # noqa: E731
                                                     for c, w in extra])
             block, rates = np.zeros((r, r)), np.zeros(r)
             rates[:len(self.ramps)] = slopes
             for j, (o, on) in enumerate(zip(self.oscillators, running)):
-                i, w, damping = len(self.ramps) + 2 * j, 2 * math.pi * o.waveform.freq, o.waveform.theta
+                i, w, damping = (len(self.ramps) + 2 * j, 2 * math.pi * cast(Sin, o.waveform).freq,
+                                 cast(Sin, o.waveform).theta)
                 if on:
                     block[i:i + 2, i:i + 2] = [[-damping, w], [-w, -damping]]
             C_extra = columns_of(ports)
@@ -969,27 +1049,27 @@ class _Compiler:
         signals = (Sx.copy(), *(m.copy() for m in signals[1:]))
         return config, signals, (E_sin.copy(), F_sin.copy())
 
-    def gate_waveforms(self) -> tuple:
-        return tuple(self.sources[c - self.n - self.k].waveform for c in self.gate_columns())
+    def gate_waveforms(self) -> tuple[Waveform, ...]:
+        return tuple(cast(Waveform, self.sources[c - self.n - self.k].waveform) for c in self.gate_columns())
 
-    def gate_columns(self) -> list:
+    def gate_columns(self) -> list[int]:
         """The MNA input columns of the gate sources: a PULSE, PWL or SIN that reaches only switch controls (its value
         decides when switches close; in the power circuit a PULSE is a level of the configuration, a SIN an input)."""
         return [self.n + self.k + i for i, src in enumerate(self.sources)
                 if isinstance(src.waveform, (Pulse, Pwl, Sin)) and not self.in_power_circuit(src)]
 
-    def sinusoid_columns(self):
+    def sinusoid_columns(self) -> tuple[list[int], _Array]:
         """(columns of the SIN sources among the MNA's input columns, their amplitudes VA)."""
         sines = [i for i, src in enumerate(self.sources) if isinstance(src.waveform, Sin) and src not in self.oscillators
                  and self.in_power_circuit(src)]
         return ([self.n + self.k + i for i in sines],
-                np.array([self.sources[i].waveform.va for i in sines], dtype=float))
+                np.array([cast(Sin, self.sources[i].waveform).va for i in sines], dtype=float))
 
-    def joined(self, switch_state: dict):
+    def joined(self, switch_state: dict[str, bool]) -> Callable[[str], str]:
         """The node a node is joined to by closed ideal switches (a representative of its class)."""
-        parent = {}
+        parent: dict[str, str] = {}
 
-        def root(node):
+        def root(node: str) -> str:
             while parent.get(node, node) != node:
                 node = parent[node]
             return node
@@ -1001,18 +1081,19 @@ class _Compiler:
                     parent[a] = b
         return root
 
-    def shorted_diodes(self, switch_state: dict, forms) -> list:
+    def shorted_diodes(self, switch_state: dict[str, bool], forms: Sequence[str]) -> list[int]:
         """The ideal diodes (no RS, current ports) whose two terminals closed ideal switches join."""
         root = self.joined(switch_state)
         return [i for i, (d, form) in enumerate(zip(self.diodes, forms))
                 if form == CURRENT and not self.diode_rs[d.name] and root(d.nodes[0]) == root(d.nodes[1])]
 
-    def check_unique_ports(self, config: Configuration, switch_state: dict):
+    def check_unique_ports(self, config: Configuration, switch_state: dict[str, bool]) -> None:
         """Refuse two ideal diodes in parallel (the same two nodes, closed ideal switches joining nodes) or whose
         ports are the same; a diode reverse-biased by sources alone (y = F > 0 whatever x and u) never conducts
         (its u = 0 is unique) and passes."""
         if len(self.diodes) < 2:
             return
+        assert config.F is not None                     # a Configuration fills in its F
         C, F = self.on_loops(config.C, config.F)
         rows = np.hstack([C, config.D, F[:, None]])
         root = self.joined(switch_state)
@@ -1036,7 +1117,7 @@ class _Compiler:
                                          "nothing between): the split of their current or voltage is not unique; put a "
                                          "resistance (RS in their .model) on one")
 
-    def on_loops(self, C: np.ndarray, F: np.ndarray) -> tuple:
+    def on_loops(self, C: _Array, F: _Array) -> tuple[_Array, _Array]:
         """(C, F) of the ports on the states the loops of capacitors allow (K x = b: :meth:`_Network.solve_loops`'s
         solution writes a node's voltage through the loop's capacitors, v(p) = (v(c1) + v(c2) + 2 Vdc)/3 for a
         split link, which is Vdc there): C on the free directions, F with the constraint's share. A diode across
@@ -1063,8 +1144,8 @@ class _Compiler:
         scale = max(np.abs(columns[:, [i, j]]).max(), 1e-300)
         return bool(np.abs(columns[:, i] - columns[:, j]).max() <= 1e-12 * scale)
 
-    def source_values(self, levels: dict) -> np.ndarray:
-        values = []
+    def source_values(self, levels: dict[str, int]) -> _Array:
+        values: list[float | _Array] = []
         for s in self.sources:
             w = s.waveform
             if isinstance(w, Pulse):
@@ -1081,15 +1162,15 @@ class _Compiler:
             return np.stack(np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in values)), axis=-1)
         return np.array(values, dtype=float)
 
-    def signal_names(self) -> tuple:
+    def signal_names(self) -> tuple[str, ...]:
         nodes = tuple(f"v({n})" for n in self.nodes)
         elements = tuple(f"i({e.name})" for e in self.nl.elements if e.kind not in "K")
         return nodes + elements
 
-    def units(self) -> dict:
+    def units(self) -> dict[str, str]:
         return {name: ("V" if name.startswith("v(") else "A") for name in self.signal_names()}
 
-    def hold_islands(self, A: np.ndarray, E: np.ndarray) -> tuple:
+    def hold_islands(self, A: _Array, E: _Array) -> tuple[_Array, _Array]:
         """A and E with each island's charge q = sum(sign C v) held at its value where the run starts (q0, from the
         .ic or from rest): q' = -gamma (q - q0), which the circuit's own q' = 0 meets on its states; a start with
         another charge relaxes to q0 at gamma = LOOP_RATE / T instead of keeping an orbit of its own (a multiplier at
@@ -1106,12 +1187,12 @@ class _Compiler:
             E[:n_c] += gamma * sign * (weight @ x0[:n_c]) / total
         return A, E
 
-    def invariants(self, state_names: tuple) -> tuple:
+    def invariants(self, state_names: tuple[str, ...]) -> tuple[Invariant, ...]:
         """What every configuration holds, as the summary reports it: each loop of capacitors' and cutset of
         inductors' constraint (sum of coefficient x state = value, its largest coefficient 1; from the sources), and
         each charge island's sum(sign C v) (from the .ic, or 0 from rest). A loop or cutset through a switch holds in
         its configurations only (a jump enters them) and is not listed."""
-        out = []
+        out: list[Invariant] = []
         K_w = getattr(self, "loops", None)
         if K_w is not None:
             sources = self.source_values({})
@@ -1139,11 +1220,11 @@ class _Compiler:
                 out.append({"kind": "charge", "constraint": _sum_text(terms), "value": charge, "unit": "C"})
         return tuple(out)
 
-    def energy(self) -> tuple:
+    def energy(self) -> tuple[_Array, _Array]:
         """(capacitances, inductance matrix) of the states (:attr:`Compiled.energy`)."""
         return (np.array([float(self.value(e)) for e in self.capacitors]), np.array(self.mutual, dtype=float))
 
-    def moved(self, state_names: tuple) -> tuple:
+    def moved(self, state_names: tuple[str, ...]) -> tuple[str, ...]:
         """A warning where the file's initial conditions (IC=, .ic) contradict a loop of capacitors or a cutset of
         inductors, which the run's start is moved onto (:meth:`consistent`)."""
         if not self.nl.ic and all(e.ic is None for e in self.capacitors + self.inductors):
@@ -1162,17 +1243,18 @@ class _Compiler:
     def loop_time(self) -> float:
         """The time over which a loop of capacitors is held to its constraint: the period, or the run."""
         period = self.period()
+        assert self.nl.tran is not None                 # a netlist without .tran is refused (:meth:`__init__`)
         return period if math.isfinite(period) else self.nl.tran.tstop
 
-    def consistent(self, x: np.ndarray) -> np.ndarray:
+    def consistent(self, x: _Array) -> _Array:
         """``x`` with its capacitors' voltages moved onto their loops' constraints as a closing loop moves charge
         (the smallest change in the capacitances' metric: x - C^-1 K^T (K C^-1 K^T)^-1 (K x - b)); x itself
         without a loop."""
         K_w = getattr(self, "loops", None)
         x = np.asarray(x, dtype=float)
-        return x if K_w is None else self.jump(K_w, self.source_values({}), x.size)(x)
+        return x if K_w is None else cast(Jump, self.jump(K_w, self.source_values({}), x.size))(x)
 
-    def jump(self, K_w, sources: np.ndarray, size: int) -> Jump | None:
+    def jump(self, K_w: _Array | None, sources: _Array, size: int) -> Jump | None:
         """The state's jump entering a configuration whose closed switches make loops with capacitors (``K_w``: the
         loops' constraints from :meth:`_Network.solve_loops`, None without; :meth:`consistent`'s projection of a
         run's start onto the loops that hold always is the same): the capacitors' voltages projected
@@ -1200,7 +1282,7 @@ class _Compiler:
         P[np.abs(P) < 1e-13] = 0.0
         return Jump(P=P, q=q, W=W)
 
-    def initial_state(self, netlist: Netlist | None = None) -> np.ndarray:
+    def initial_state(self, netlist: Netlist | None = None) -> _Array:
         """The states at t = 0: each element's IC=, or .ic v(node) across a capacitor, else 0 (UIC); of
         ``netlist``, this circuit with other values (:meth:`rerun`), where given."""
         nl = netlist or self.nl
@@ -1216,9 +1298,11 @@ class _Compiler:
                 vb = nl.ic.get(b, 0.0) if b != "0" else 0.0
                 x.append(va - vb)
         x += [(own[l.name] if own else l).ic or 0.0 for l in self.inductors]
-        x += [r.waveform.points[0][1] for r in self.ramps]          # a ramp holds its first value until its first time
+        # a ramp holds its first value until its first time
+        x += [cast(Pwl, r.waveform).points[0][1] for r in self.ramps]
         for o in self.oscillators:                                  # VO + VA sin(PHASE) until TD (as ngspice's SIN)
-            x += [math.sin(math.radians(o.waveform.phase)), math.cos(math.radians(o.waveform.phase))]
+            x += [math.sin(math.radians(cast(Sin, o.waveform).phase)),
+                  math.cos(math.radians(cast(Sin, o.waveform).phase))]
         return self.consistent(np.array(x, dtype=float)) if netlist is None else np.array(x, dtype=float)
 
 
@@ -1230,18 +1314,19 @@ def _slope(w: Pwl, t: float) -> float:
     return 0.0
 
 
-def _once(w) -> bool:
+def _once(w: Waveform | None) -> bool:
     """A waveform that does not repeat: a PWL without r=, a PULSE without PER (its level changes a few times, then
     holds)."""
     return (isinstance(w, Pwl) and w.repeat is None) or (isinstance(w, Pulse) and not math.isfinite(w.per)
                                                          and w.td + w.tr + w.pw + w.tf < math.inf)
 
 
-def _crossings(corners: np.ndarray, values: np.ndarray, on: float, off: float, state: bool, exact=None) -> list:
+def _crossings(corners: _Array, values: _Array, on: float, off: float, state: bool,
+               exact: Callable[[float], float] | None = None) -> list[tuple[float, bool]]:
     """[(t, closed)] where a control (``values`` at ``corners``) starting in ``state`` rises above ``on`` (closing)
     or falls below ``off`` (opening): piecewise linear, located on its segments; with ``exact`` (the control as a
     function of t: a sine in it), located by Brent's method on the segment whose end has crossed."""
-    changes = []
+    changes: list[tuple[float, bool]] = []
     for (t0, v0), (t1, v1) in zip(zip(corners[:-1], values[:-1]), zip(corners[1:], values[1:])):
         target = off if state else on
         if (v1 < off) if state else (v1 > on):
@@ -1255,13 +1340,13 @@ def _crossings(corners: np.ndarray, values: np.ndarray, on: float, off: float, s
     return changes
 
 
-def waveform_at(w, t: np.ndarray) -> np.ndarray:
+def waveform_at(w: Waveform, t: _Array) -> _Array:
     """A source's waveform at times t (DC, PULSE, SIN without delay or damping, or a PWL: repeated with r=0, else
     holding its last value)."""
     t = np.asarray(t, dtype=float)
     if isinstance(w, Pwl):
         times, values = np.array(w.points).T
-        return np.interp(np.mod(t, w.period), times, values)
+        return cast(_Array, np.interp(np.mod(t, w.period), times, values))
     if isinstance(w, Sin):                      # a gate's sine (no delay or damping: those are refused in a gate)
         return w.vo + w.va * np.sin(2 * math.pi * w.freq * t + math.radians(w.phase))
     if not isinstance(w, Pulse):
@@ -1298,12 +1383,15 @@ class _Network:
     equation's right-hand side a linear function of (x, u, sources)."""
 
     #: The constraints (K_w w = 0, w = (x, u, sources)) of loops through closed switches (:meth:`solve_loops`).
-    K_w = None
+    K_w: _Array | None = None
+    #: The network solved: each unknown (row) as a linear function of (x, u, sources) (:meth:`solve`).
+    Z: _Array
 
-    def __init__(self, compiler: _Compiler, switch_state: dict, levels: dict, forms: list):
+    def __init__(self, compiler: _Compiler, switch_state: dict[str, bool], levels: dict[str, int],
+                 forms: Sequence[str]):
         self.c, self.levels, self.forms = compiler, levels, forms
         nodes = dict(compiler.node_index)
-        branches = []                 # (kind, element, a, b)
+        branches: list[tuple[str, Element, str, str]] = []                 # (kind, element, a, b)
         c = compiler
         for e in c.by_kind["V"]:
             branches.append(("V", e, e.nodes[0], e.nodes[1]))
@@ -1330,15 +1418,16 @@ class _Network:
         self.lead = c.lead
         G = np.zeros(self.lead + (size, size))
         R = np.zeros((size, cols))
+        idx: Callable[[str], int | None]
         idx = lambda node: None if node == "0" else nodes[node]          # noqa: E731
         self.idx = idx
 
-        def conductance(a, b, g):
+        def conductance(a: str, b: str, g: float | _Array) -> None:
             for p, q, sign in ((a, a, 1), (b, b, 1), (a, b, -1), (b, a, -1)):
                 if idx(p) is not None and idx(q) is not None:
                     G[..., idx(p), idx(q)] += sign * g
 
-        def inject(a, b, column, scale=1.0):
+        def inject(a: str, b: str, column: int, scale: float = 1.0) -> None:
             """A current ``scale`` x column flowing from a through the element to b."""
             if idx(a) is not None:
                 R[idx(a), column] -= scale
@@ -1403,14 +1492,15 @@ class _Network:
                 G[..., idx(b), col] -= c.value(e)
         self.G, self.R, self.branch_of = G, R, branch_of
 
-    def nullity(self):
+    def nullity(self) -> int | npt.NDArray[np.intp]:
         """The dimension of G's null space (per point of a batch)."""
         if self.size == 0:
             return np.zeros(self.lead, dtype=int) if self.lead else 0
         scale = np.maximum(np.abs(self.G).max(axis=(-2, -1)), 1.0)
-        return self.size - interruptible(np.linalg.matrix_rank, self.G, tol=1e-12 * scale)
+        return self.size - cast(int | npt.NDArray[np.intp],             # matrix_rank's stub gives Any
+                                interruptible(np.linalg.matrix_rank, self.G, tol=1e-12 * scale))
 
-    def solve(self, checked: bool = False):
+    def solve(self, checked: bool = False) -> _Network:
         """The network solved (``checked``: its nullity is known to be 0). Loops of capacitors and DC voltage
         sources (capacitors in series across another or across a source: a split DC link) are solved by
         :meth:`solve_loops`; any other dependent loop or cutset is refused naming its elements."""
@@ -1472,7 +1562,7 @@ class _Network:
         M = K_w[:, :c.n] @ self.rates(N)
         if np.linalg.matrix_rank(M, tol=1e-9 * max(np.abs(M).max(), 1e-300)) < m:
             return False
-        Z0 = np.linalg.lstsq(self.G, self.R, rcond=None)[0]
+        Z0 = cast(_Array, np.linalg.lstsq(self.G, self.R, rcond=None)[0])     # float64 (the stub says floating)
         gamma = LOOP_RATE / c.loop_time()
         J = np.linalg.solve(M, -gamma * K_w - K_w[:, :c.n] @ self.rates(Z0))
         Z = Z0 + N @ J
@@ -1485,6 +1575,7 @@ class _Network:
         # borders: entering it, the charges or fluxes jump onto it (:meth:`_Compiler.jump`); the others hold in every
         # configuration, where a run starts too (consistent)
         switch_rows = [rows + j for j, (kind, _, _, _) in enumerate(self.branches) if kind == "S"]
+        through: list[_Array] | _Array
         through = [L[switch_rows]] if switch_rows else []
         for e in bordered:                              # a cutset bordered by an open switch: its KCL rows
             through.append(L[[self.nodes[n] for n in (e.nodes[0], e.nodes[1]) if n in island]])
@@ -1500,17 +1591,18 @@ class _Network:
             c.loops = static.T @ K_w
         return True
 
-    def rates(self, Z: np.ndarray) -> np.ndarray:
+    def rates(self, Z: _Array) -> _Array:
         """The states' derivatives (capacitors' dv/dt, inductors' di/dt) per column of network unknowns ``Z``."""
         c = self.c
         out = [Z[self.branch_of[e.name]] / c.value(e) for e in c.capacitors]
         if c.inductors:
+            potential: Callable[[str], _Array]
             potential = lambda node: np.zeros(Z.shape[1]) if node == "0" else Z[self.nodes[node]]   # noqa: E731
             volts = np.stack([potential(e.nodes[0]) - potential(e.nodes[1]) for e in c.inductors])
             out += list(np.linalg.solve(c.mutual, volts))
         return np.stack(out)
 
-    def interrupted(self, K_w: np.ndarray) -> bool:
+    def interrupted(self, K_w: _Array) -> bool:
         """A cutset that fixes inductors' currents to 0 with no source in it, where one of them is coupled to no
         winding left free: its energy would have nowhere to go (an inductor whose only path a switch opens, one
         dangling from a node: SPICE's spike, not a jump to zero), refused. A coupled winding whose path opens (a
@@ -1557,30 +1649,30 @@ class _Network:
                             f"sources{where} ({', '.join(around)}): a current interrupted with no path, or a floating "
                             "node")
 
-    def unit(self, column: int | None = None) -> np.ndarray:
+    def unit(self, column: int | None = None) -> _Array:
         """A row of the MNA's input columns (per point of a batch): 0, or 1 in ``column``."""
         row = np.zeros(self.lead + (self.R.shape[1],))
         if column is not None:
             row[..., column] = 1.0
         return row
 
-    def voltage(self, node: str) -> np.ndarray:
+    def voltage(self, node: str) -> _Array:
         i = self.idx(node)
         return self.unit() if i is None else self.Z[..., i, :]
 
-    def branch(self, element: Element) -> np.ndarray:
+    def branch(self, element: Element) -> _Array:
         return self.Z[..., self.branch_of[element.name], :]
 
-    def derivatives(self) -> np.ndarray:
+    def derivatives(self) -> _Array:
         c = self.c
         rows = [self.branch(e) / _column(c.value(e)) for e in c.capacitors]
         if c.inductors:
             volts = np.stack([self.voltage(e.nodes[0]) - self.voltage(e.nodes[1]) for e in c.inductors], axis=-2)
-            currents = np.linalg.solve(c.mutual, volts)
+            currents = cast(_Array, np.linalg.solve(c.mutual, volts))        # float64 (the stub says floating)
             rows += [currents[..., i, :] for i in range(len(c.inductors))]
         return np.stack(rows, axis=-2)
 
-    def ports(self) -> np.ndarray:
+    def ports(self) -> _Array:
         c = self.c
         if not c.diodes:                      # no diode: a pair that never holds (y = u + 1)
             return self.unit()[..., None, :]
@@ -1593,7 +1685,7 @@ class _Network:
                 rows.append(self.branch(e))                                      # y = i_D
         return np.stack(rows, axis=-2)
 
-    def current(self, e: Element) -> np.ndarray:
+    def current(self, e: Element) -> _Array:
         c = self.c
         if e.name in self.branch_of:
             return self.branch(e)
@@ -1615,7 +1707,7 @@ class _Network:
             return _column(c.value(e)) * self.Z[..., self.branch_of[e.control[0]], :]
         return self.unit()
 
-    def signal_rows(self, names: tuple) -> np.ndarray:
+    def signal_rows(self, names: tuple[str, ...]) -> _Array:
         rows = []
         elements = {f"i({e.name})": e for e in self.c.nl.elements}
         for name in names:
@@ -1626,12 +1718,12 @@ class _Network:
         return np.stack(rows, axis=-2)
 
 
-def _times(M: np.ndarray, v: np.ndarray) -> np.ndarray:
+def _times(M: _Array, v: _Array) -> _Array:
     """M v per point of a batch (``v`` one vector, or one per point); one circuit's M @ v."""
     return M @ v if v.ndim == 1 else np.matmul(M, v[..., None])[..., 0]
 
 
-def _sum_text(terms: list) -> str:
+def _sum_text(terms: Sequence[tuple[float, str]]) -> str:
     """'v(c1) + v(c2)', '1e-06 v(c1) - 3e-06 v(c2)': a linear combination of states as text."""
     out = ""
     for coefficient, name in terms:
@@ -1642,7 +1734,7 @@ def _sum_text(terms: list) -> str:
     return out
 
 
-def _null(A: np.ndarray) -> np.ndarray:
+def _null(A: _Array) -> _Array:
     """An orthonormal basis of the null space (columns) of A, rows of an orthonormal basis (singular values below
     1e-9 are its rounding)."""
     if A.shape[0] == 0:
@@ -1651,7 +1743,7 @@ def _null(A: np.ndarray) -> np.ndarray:
     return vt[int(np.sum(sv > 1e-9)):].T
 
 
-def _column(value):
+def _column(value: float | _Array) -> float | _Array:
     """A value that divides or scales rows: a number, or a batch's values as a column (one per point)."""
     return value[..., None] if isinstance(value, np.ndarray) else value
 

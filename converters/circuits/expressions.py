@@ -10,7 +10,9 @@ from __future__ import annotations
 import functools
 import math
 import re
+from collections.abc import Callable
 from decimal import Decimal, InvalidOperation
+from typing import Any, NoReturn, cast
 
 from ..errors import ParameterError
 
@@ -20,6 +22,7 @@ SUFFIXES = {"t": 1e12, "g": 1e9, "meg": 1e6, "k": 1e3, "mil": 25.4e-6, "m": 1e-3
 _EXPONENTS = {"t": 12, "g": 9, "meg": 6, "k": 3, "m": -3, "u": -6, "n": -9, "p": -12, "f": -15}
 _NUMBER = re.compile(r"(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?", re.ASCII)
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_.]*", re.ASCII)
+FUNCTIONS: dict[str, tuple[Callable[..., float], int]]    # name -> (function, arity)
 FUNCTIONS = {"sqrt": (math.sqrt, 1), "exp": (math.exp, 1), "ln": (math.log, 1), "log": (math.log, 1),
              "log10": (math.log10, 1), "abs": (abs, 1), "sin": (math.sin, 1), "cos": (math.cos, 1),
              "tan": (math.tan, 1), "atan": (math.atan, 1), "sinh": (math.sinh, 1), "cosh": (math.cosh, 1),
@@ -61,7 +64,7 @@ def _skip_letters(text: str, end: int) -> int:
     return end
 
 
-def evaluate(text: str, names: dict, what: str = "value") -> float:
+def evaluate(text: str, names: dict[str, float], what: str = "value") -> float:
     """The value of ``text``: a number, or an expression over ``names`` (parameter name -> value, lower case).
 
     Raises ParameterError naming ``what`` and the problem (an unknown name, a syntax error, a result that is
@@ -91,7 +94,7 @@ def _shown(text: str, limit: int = 60) -> str:
 class _Failure(Exception):
     """Why a text does not parse, and where (the message is completed with the value's name when raised)."""
 
-    def __init__(self, why: str, pos: int | None = None):
+    def __init__(self, why: str, pos: int | None = None) -> None:
         super().__init__(why)
         self.why, self.pos = why, pos
 
@@ -101,8 +104,12 @@ class _Failure(Exception):
         return ParameterError(f"{what}: {self.why} in {_shown(text)} at character {self.pos + 1}")
 
 
+#: A node of the parse tree (:func:`_tree`): a tuple whose first item is its kind.
+_Node = tuple[Any, ...]
+
+
 @functools.lru_cache(maxsize=4096)
-def _tree(text: str):
+def _tree(text: str) -> _Node | _Failure:
     """The parse tree of ``text`` (tuples: ``(NUMBER, value)``, ``(NAME, name, pos)``, ``(NEG, a)``,
     ``(op, a, b, pos)`` for + - * / ^, ``(CALL, name, args, pos)``; ``pos`` where a failure is reported), or the
     :class:`_Failure` of a text that does not parse."""
@@ -120,10 +127,10 @@ def _tree(text: str):
 NUMBER, NAME, NEG, CALL = "n", "v", "neg", "call"
 
 
-def _value(node, names: dict, what: str, text: str) -> float:
+def _value(node: _Node, names: dict[str, float], what: str, text: str) -> float:
     kind = node[0]
     if kind == NUMBER:
-        return node[1]
+        return cast(float, node[1])
     if kind == NAME:
         name = node[1]
         if name in names:
@@ -162,10 +169,10 @@ class _Parser:
     power := unary (('^' | '**') power)?; unary := ('-' | '+') unary | atom;
     atom := number | name | name '(' args ')' | '(' expression ')'. Builds the tree :func:`_value` evaluates."""
 
-    def __init__(self, text: str):
+    def __init__(self, text: str) -> None:
         self.text, self.pos, self.depth = text, 0, 0
 
-    def skip(self):
+    def skip(self) -> None:
         while self.pos < len(self.text) and self.text[self.pos] in " \t":
             self.pos += 1
 
@@ -179,17 +186,17 @@ class _Parser:
             return True
         return False
 
-    def fail(self, why: str):
+    def fail(self, why: str) -> NoReturn:
         raise _Failure(why, self.pos)
 
-    def nest(self, step: int):
+    def nest(self, step: int) -> None:
         """Count the recursion (parentheses, signs, powers, calls): a formula deeper than MAX_DEPTH is refused
         before Python's own recursion limit is reached (a RecursionError would be a traceback)."""
         self.depth += step
         if self.depth > MAX_DEPTH:
             self.fail(f"expressions nested deeper than {MAX_DEPTH} (parentheses, calls or powers)")
 
-    def expression(self):
+    def expression(self) -> _Node:
         self.nest(1)
         node = self.term()
         while True:
@@ -201,7 +208,7 @@ class _Parser:
                 self.nest(-1)
                 return node
 
-    def term(self):
+    def term(self) -> _Node:
         node = self.power()
         while True:
             if self.peek("**"):
@@ -214,7 +221,7 @@ class _Parser:
             else:
                 return node
 
-    def power(self):
+    def power(self) -> _Node:
         base = self.unary()
         if self.take("**") or self.take("^"):
             self.nest(1)
@@ -223,7 +230,7 @@ class _Parser:
             return ("^", base, exponent, self.pos)
         return base
 
-    def unary(self):
+    def unary(self) -> _Node:
         sign = 1.0
         while True:                        # a run of signs is a loop, not a recursion
             if self.take("-"):
@@ -233,7 +240,7 @@ class _Parser:
         node = self.atom()
         return (NEG, node) if sign < 0 else node
 
-    def atom(self):
+    def atom(self) -> _Node:
         self.skip()
         if self.take("("):
             node = self.expression()

@@ -25,12 +25,17 @@ from __future__ import annotations
 import functools
 import math
 import re
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import TYPE_CHECKING, AnyStr, cast
 
 from ..errors import ParameterError
 from ..validate import quoted
 from .expressions import evaluate, number
+
+if TYPE_CHECKING:
+    from ..params import Param
 
 #: Largest netlist read (bytes): a circuit, not a data file.
 MAX_BYTES = 1 << 20
@@ -87,7 +92,7 @@ class Sin:
 class Pwl:
     """PWL(t1 v1 t2 v2 ...) [r=0], times non-decreasing; ``repeat`` 0 (r=0) repeats the whole list, with the
     last time its period (None: it holds its last value)."""
-    points: tuple
+    points: tuple[tuple[float, float], ...]
     repeat: float | None = None
 
     @property
@@ -95,15 +100,19 @@ class Pwl:
         return self.points[-1][0] - self.repeat if self.repeat is not None else math.inf
 
 
+#: What a V or I source holds: a DC value or a waveform.
+Waveform = float | Pulse | Sin | Pwl
+
+
 @dataclass(frozen=True)
 class Element:
     name: str                  # lower case; inside a subcircuit instance: "x1.l1"
     kind: str                  # the element letter, upper case
-    nodes: tuple               # node names, lower case ("0" is ground; inside an instance "x1.n")
+    nodes: tuple[str, ...]     # node names, lower case ("0" is ground; inside an instance "x1.n")
     value: float | None = None
-    waveform: object = None    # V and I sources: a float (DC), Pulse, Sin or Pwl
+    waveform: Waveform | None = None    # V and I sources: a float (DC), Pulse, Sin or Pwl
     model: str | None = None
-    control: tuple = ()        # F, H, W: the controlling V source; K: the inductors
+    control: tuple[str, ...] = ()    # F, H, W: the controlling V source; K: the inductors
     ic: float | None = None
     line: int = 0
 
@@ -116,7 +125,7 @@ class Element:
 class Model:
     name: str
     kind: str          # D, SW, CSW
-    params: dict
+    params: dict[str, float]
     line: int = 0
 
 
@@ -135,21 +144,21 @@ class Netlist:
 
     path: str
     title: str
-    elements: tuple
-    models: dict
-    params: dict                                    # .param name -> value (lower case names)
-    ic: dict = field(default_factory=dict)          # node -> initial voltage (.ic v(node)=value)
+    elements: tuple[Element, ...]
+    models: dict[str, Model]
+    params: dict[str, float]                        # .param name -> value (lower case names)
+    ic: dict[str, float] = field(default_factory=dict)    # node -> initial voltage (.ic v(node)=value)
     tran: Tran | None = None
-    outputs: tuple = ()                             # vectors named by .meas (v(out), i(l1), ...)
+    outputs: tuple[str, ...] = ()                   # vectors named by .meas (v(out), i(l1), ...)
     text: str = ""
     #: Element name -> the parameter expression its value came from (an element given by a .param follows it).
-    expressions: dict = field(default_factory=dict)
+    expressions: dict[str, str] = field(default_factory=dict)
     #: The .param names defined by expressions of others (they follow them; not parameters of their own).
-    derived: frozenset = frozenset()
+    derived: frozenset[str] = frozenset()
     #: .param name -> (its line, the text of its value) (the first definition at the top level).
-    param_lines: dict = field(default_factory=dict)
+    param_lines: dict[str, tuple[int, str]] = field(default_factory=dict)
     #: The .options ngspice's run takes from the file (reltol, abstol in A, method); the others are pcsuite's.
-    spice_options: dict = field(default_factory=dict)
+    spice_options: dict[str, float | str] = field(default_factory=dict)
 
     def where(self, name: str | None = None) -> str:
         """``FILE:LINE`` of the .param or element ``name`` (case-insensitive), ``FILE`` when it names neither:
@@ -167,8 +176,8 @@ class Netlist:
         raise NetlistError(f"{quoted(self.path)}: no element {name!r}")
 
     @property
-    def nodes(self) -> tuple:
-        seen = []
+    def nodes(self) -> tuple[str, ...]:
+        seen: list[str] = []
         for e in self.elements:
             for n in e.nodes:
                 if n not in seen:
@@ -182,7 +191,11 @@ class _Line:
     text: str
 
 
-def read_netlist(source, overrides: dict | None = None, name: str | None = None) -> Netlist:
+#: A .subckt as read: its header line and its body's lines.
+_Subckt = tuple[_Line, list[_Line]]
+
+
+def read_netlist(source: str | Path, overrides: dict[str, float] | None = None, name: str | None = None) -> Netlist:
     """Read a netlist file (a path) or text (with ``name`` for the messages), with ``overrides`` of its
     ``.param`` values and element values ({name: number}, names case-insensitive)."""
     if isinstance(source, Path) or (isinstance(source, str) and "\n" not in source and name is None):
@@ -215,7 +228,7 @@ def read_netlist(source, overrides: dict | None = None, name: str | None = None)
     return _Reader(text, label, overrides or {}).read()
 
 
-def _position(text, offset: int) -> tuple[int, int]:
+def _position(text: AnyStr, offset: int) -> tuple[int, int]:
     """(line, column) of ``offset`` in ``text`` (str or bytes), lines counted as the reader counts them (CR LF,
     CR and LF each end one)."""
     head = text[:offset]
@@ -225,16 +238,16 @@ def _position(text, offset: int) -> tuple[int, int]:
 
 
 class _Reader:
-    def __init__(self, text: str, label: str, overrides: dict):
+    def __init__(self, text: str, label: str, overrides: dict[str, float]) -> None:
         self.text, self.label = text, label
-        self.overrides = {}
+        self.overrides: dict[str, float] = {}
         for key, value in overrides.items():
             try:
                 self.overrides[str(key).lower()] = float(value)
             except (TypeError, ValueError):
                 raise NetlistError(f"{label}: -p {key} must be a number; got {value!r}") from None
-        self.used = set()
-        self.derived = set()
+        self.used: set[str] = set()
+        self.derived: set[str] = set()
 
     def error(self, line: _Line | int, what: str) -> NetlistError:
         number_ = line.number if isinstance(line, _Line) else line
@@ -268,17 +281,18 @@ class _Reader:
 
     def read(self) -> Netlist:
         title, lines = self.lines()
-        params: dict = {}
-        models: dict = {}
-        subckts: dict = {}
+        params: dict[str, float] = {}
+        models: dict[str, Model] = {}
+        subckts: dict[str, _Subckt] = {}
         top: list[_Line] = []
-        ic: dict = {}
+        ic: dict[str, float] = {}
         tran = None
-        spice: dict = {}
-        outputs: list = []
-        named: list = []            # (line, vector, nodes, elements) of .ic and .meas: checked once the circuit is read
-        expressions: dict = {}
-        param_lines: dict = {}
+        spice: dict[str, float | str] = {}
+        outputs: list[str] = []
+        # (line, vector, nodes, elements) of .ic and .meas: checked once the circuit is read
+        named: list[tuple[_Line, str, Sequence[str], Sequence[str]]] = []
+        expressions: dict[str, str] = {}
+        param_lines: dict[str, tuple[int, str]] = {}
         self.refuse_commands(lines)
         i = 0
         while i < len(lines):
@@ -354,7 +368,7 @@ class _Reader:
             names = sorted(set(params) | {e.name for e in elements if e.value is not None})
             raise NetlistError(f"{self.label}: -p {unknown[0]}: no .param or element of that name (valid: "
                                f"{', '.join(names)})")
-        seen: dict = {}
+        seen: dict[str, Element] = {}
         for e in elements:
             if e.name in seen:
                 raise self.error(e.line, f"{e.title}: the name is used twice (first on line {seen[e.name].line}): "
@@ -372,7 +386,7 @@ class _Reader:
 
     # --- directives --------------------------------------------------------------------------------------------
 
-    def refuse_commands(self, lines: list[_Line]):
+    def refuse_commands(self, lines: list[_Line]) -> None:
         """A .control block or a .include/.lib anywhere (inside a .subckt, after .end) is refused before any
         other line is read: nothing the file says is evaluated first."""
         for line in lines:
@@ -386,7 +400,7 @@ class _Reader:
 
     def assignments(self, line: _Line, text: str) -> list[tuple[str, str]]:
         """NAME=VALUE pairs; a value may be {expr}, 'expr' or a bare expression without spaces."""
-        out = []
+        out: list[tuple[str, str]] = []
         text = re.sub(r"\s*=\s*", "=", text.strip())
         pos = 0
         while pos < len(text):
@@ -417,7 +431,7 @@ class _Reader:
             out.append((key, value))
         return out
 
-    def param_line(self, line: _Line, params: dict, scope: bool):
+    def param_line(self, line: _Line, params: dict[str, float], scope: bool) -> None:
         body = line.text.split(None, 1)
         if len(body) < 2:
             raise self.error(line, ".param needs NAME=VALUE")
@@ -437,13 +451,13 @@ class _Reader:
             else:
                 params[key] = self.value(line, value, params, f".param {key}")
 
-    def value(self, line: _Line, text: str, params: dict, what: str) -> float:
+    def value(self, line: _Line, text: str, params: dict[str, float], what: str) -> float:
         try:
             return evaluate(text, params, what)
         except ParameterError as e:
             raise self.error(line, str(e)) from None
 
-    def model_line(self, line: _Line, params: dict) -> Model:
+    def model_line(self, line: _Line, params: dict[str, float]) -> Model:
         match = re.match(r"\.model\s+(\S+)\s+([A-Za-z]+)\s*(?:\((.*)\)|(.*))$", line.text, re.IGNORECASE | re.DOTALL)
         if not match:
             raise self.error(line, ".model NAME TYPE(PARAMS) expected")
@@ -460,9 +474,9 @@ class _Reader:
     #: The .options a run of the file keeps: its transient's tolerances and integration method.
     OPTIONS = ("reltol", "abstol", "method")
 
-    def options_line(self, line: _Line, params: dict) -> dict:
+    def options_line(self, line: _Line, params: dict[str, float]) -> dict[str, float | str]:
         """RELTOL, ABSTOL and METHOD of a .options line (flags and other options are ngspice's own business)."""
-        out = {}
+        out: dict[str, float | str] = {}
         for key, value in re.findall(r"(\w+)\s*=\s*(\{[^}]*\}|\S+)", line.text.split(None, 1)[1] if " " in line.text
                                      else ""):
             key = key.lower()
@@ -477,7 +491,7 @@ class _Reader:
                 out[key] = number
         return out
 
-    def tran_line(self, line: _Line, params: dict) -> Tran:
+    def tran_line(self, line: _Line, params: dict[str, float]) -> Tran:
         words = self.words(line.text)[1:]
         uic = any(w.lower() == "uic" for w in words)
         numbers = [self.value(line, w, params, ".tran") for w in words if w.lower() != "uic"]
@@ -498,7 +512,9 @@ class _Reader:
 
     # --- elements ----------------------------------------------------------------------------------------------
 
-    def expand(self, lines, params, models, subckts, prefix, nodemap, out, depth, expressions, chain=()):
+    def expand(self, lines: list[_Line], params: dict[str, float], models: dict[str, Model],
+               subckts: dict[str, _Subckt], prefix: str, nodemap: dict[str, str], out: list[Element], depth: int,
+               expressions: dict[str, str], chain: tuple[str, ...] = ()) -> None:
         if depth > MAX_DEPTH:
             raise self.error(lines[0] if lines else 0, f"subcircuits nested deeper than {MAX_DEPTH}")
         for line in lines:
@@ -520,7 +536,7 @@ class _Reader:
             if len(out) > MAX_ELEMENTS:
                 raise self.error(line, f"more than {MAX_ELEMENTS:,} elements")
 
-    def node(self, name: str, prefix: str, nodemap: dict) -> str:
+    def node(self, name: str, prefix: str, nodemap: dict[str, str]) -> str:
         name = name.lower()
         if name in ("0", "gnd"):
             return "0"
@@ -528,7 +544,8 @@ class _Reader:
             return nodemap[name]
         return prefix + name
 
-    def element(self, line: _Line, params: dict, prefix: str, nodemap: dict, expressions: dict) -> Element:
+    def element(self, line: _Line, params: dict[str, float], prefix: str, nodemap: dict[str, str],
+                expressions: dict[str, str]) -> Element:
         words = line.text.split()
         raw_name = words[0]
         name = prefix + raw_name.lower()
@@ -602,7 +619,8 @@ class _Reader:
         return Element(name, letter, nodes, model=tokens[1].lower(), control=(prefix + tokens[0].lower(),),
                        line=line.number)
 
-    def element_value(self, line, own, prefix, text, params, what, expressions) -> float:
+    def element_value(self, line: _Line, own: str, prefix: str, text: str, params: dict[str, float], what: str,
+                      expressions: dict[str, str]) -> float:
         key = prefix + own
         if key in self.overrides:
             self.used.add(key)
@@ -616,7 +634,8 @@ class _Reader:
             expressions[key] = stripped
         return self.value(line, text, params, what)
 
-    def waveform(self, line, own, prefix, text, params, title, expressions):
+    def waveform(self, line: _Line, own: str, prefix: str, text: str, params: dict[str, float], title: str,
+                 expressions: dict[str, str]) -> Waveform:
         key = prefix + own
         text = text.strip()
         if re.match(r"(?i)dc\b", text):
@@ -639,6 +658,7 @@ class _Reader:
         if key in self.overrides:
             raise self.error(line, f"-p {own}: {title} is a {kind} source; change its parameters with .param")
         values = [self.value(line, w, params, f"{title} {kind}") for w in self.words(body)]
+        value: float | str                      # a PULSE's time below, an r= assignment's text after
         if kind == "PULSE":
             if not 2 <= len(values) <= 7:
                 raise self.error(line, f"{title}: PULSE(V1 V2 TD TR TF PW PER) takes 2 to 7 numbers; got {len(values)}")
@@ -702,7 +722,9 @@ class _Reader:
             out.append(current)
         return out
 
-    def instance(self, line, params, models, subckts, prefix, nodemap, out, depth, expressions, chain):
+    def instance(self, line: _Line, params: dict[str, float], models: dict[str, Model], subckts: dict[str, _Subckt],
+                 prefix: str, nodemap: dict[str, str], out: list[Element], depth: int, expressions: dict[str, str],
+                 chain: tuple[str, ...]) -> None:
         text = line.text
         parts = re.split(r"(?i)\s+params:\s*", text, maxsplit=1)
         words = parts[0].split()
@@ -752,7 +774,7 @@ class _Reader:
                     chain + (sub,))
 
 
-def check_overrides(netlist: Netlist, given: dict, parameters=()) -> None:
+def check_overrides(netlist: Netlist, given: dict[str, float], parameters: Iterable[Param] = ()) -> None:
     """Refuse a ``-p NAME=VALUE`` on ``netlist`` with one line naming the file, the line of the .param or element
     and the problem: a derived .param (an expression of others: set those), a name that is neither a parameter
     nor an element (the valid names listed), a value outside the parameter's range. ``parameters``: the model's
@@ -777,7 +799,7 @@ def check_overrides(netlist: Netlist, given: dict, parameters=()) -> None:
                 raise NetlistError(f"{netlist.where(name)}: -p {key}={value}: {e}") from None
 
 
-def with_values(netlist: Netlist, changed: dict) -> Netlist | None:
+def with_values(netlist: Netlist, changed: dict[str, float]) -> Netlist | None:
     """``netlist`` as the reader gives it with ``changed`` ({name: number}) over the overrides it was read with,
     without reading it again, where the change reaches element values alone: each name an element's own value or
     a .param that only top-level element values name (not another .param, a model, a waveform, an IC, .tran nor
@@ -787,6 +809,8 @@ def with_values(netlist: Netlist, changed: dict) -> Netlist | None:
     mentions = _mentions(netlist.text)
     top = {key: text for key, text in netlist.expressions.items() if "." not in key}
     elements = {e.name: e for e in netlist.elements}
+    direct: dict[str, float]
+    moved: set[str]
     params, direct, moved = dict(netlist.params), {}, set()
     for key, value in changed.items():
         name, value = str(key).lower(), float(value)
@@ -826,10 +850,10 @@ def _mentioned(text: str, name: str) -> bool:
 
 
 @functools.lru_cache(maxsize=64)
-def _mentions(text: str) -> dict:
+def _mentions(text: str) -> dict[str, int]:
     """How many times each word is written in a netlist's lines (comments left out, continuations joined)."""
     _, lines = _Reader(text, "", {}).lines()
-    counts: dict = {}
+    counts: dict[str, int] = {}
     for line in lines:
         for word in re.findall(r"(?<![\w.])[A-Za-z_][\w]*(?![\w.(])", line.text):
             counts[word.lower()] = counts.get(word.lower(), 0) + 1
@@ -861,7 +885,7 @@ def with_models(netlist: Netlist) -> Netlist:
     """Check every element's model exists and has the element's type."""
     for e in netlist.elements:
         if e.kind in MODEL_TYPES:
-            model = netlist.models.get(e.model)
+            model = netlist.models.get(cast(str, e.model))      # D, S and W elements name their model
             if model is None:
                 raise NetlistError(f"{netlist.path}:{e.line}: {e.title} names model {e.model!r}, which no .model "
                                    "defines")

@@ -6,6 +6,7 @@ that imports this package without solving an LCP (``pcsuite simulate`` of a conv
 loop solves inline) does not pay numba's import.
 """
 import importlib
+from typing import Any
 
 from .state import METHOD_NAMES
 
@@ -15,11 +16,11 @@ _WHERE = {"solve_lcp": "solve", "solve_lcp_many": "solve", "LCPBatch": "solve", 
           "FAILED": "answer", "STATUSES": "answer", "read_siconos_lcp": "siconos", "LCPFile": "siconos"}
 
 
-def __dir__():
+def __dir__() -> list[str]:
     return sorted(set(globals()) | set(_WHERE))
 
 
-def __getattr__(name):
+def __getattr__(name: str) -> Any:
     if name not in _WHERE:
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
     value = getattr(importlib.import_module(f".{_WHERE[name]}", __name__), name)

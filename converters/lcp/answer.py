@@ -3,8 +3,12 @@ compiled solve path can build its answer without importing the compiled modules.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
 
 SOLVED = "solved"
 NO_SOLUTION = "no_solution"
@@ -69,7 +73,9 @@ _SLOTS = tuple(LCPResult.__dict__[name].__set__ for name in ("z", "w", "status",
 _Z, _W, _STATUS, _ERR, _ITERATIONS, _METHOD, _MESSAGE, _SOLUTIONS = _SLOTS
 
 
-def make_result(z, w, status, err, iterations, method, message="", solutions=None) -> LCPResult:
+def make_result(z: npt.NDArray[np.float64], w: npt.NDArray[np.float64], status: str, err: float, iterations: int,
+                method: str, message: str = "",
+                solutions: list[npt.NDArray[np.float64]] | None = None) -> LCPResult:
     """An LCPResult built without the frozen dataclass's per-field ``object.__setattr__`` (a quarter of the
     cost of a small solve); the same object as ``LCPResult(...)``."""
     result = _new(LCPResult)

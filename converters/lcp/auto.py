@@ -30,12 +30,20 @@ has its default otherwise).
 """
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 from numba import njit
 
 from . import state as S
 from .dispatch import DEFAULT_MAX_ITER, advance_method, method_sizes
 from .enumeration import MAX_K as ENUM_MAX_K
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    FloatArray = npt.NDArray[np.float64]
+    IntArray = npt.NDArray[np.int64]
 
 #: PGS's sweeps in the plan: max(PGS_MIN_SWEEPS, k // 2).
 PGS_MIN_SWEEPS = 8
@@ -46,7 +54,7 @@ PSD_MAX_K = 1000
 
 
 @njit(cache=True, _nrt=False)
-def first_stage(M):
+def first_stage(M: FloatArray) -> int:
     """PGS when M is symmetric with a positive diagonal, else Lemke."""
     k = M.shape[0]
     for i in range(k):
@@ -59,7 +67,7 @@ def first_stage(M):
 
 
 @njit(cache=True, _nrt=False)
-def stage_max_iter(stage, max_iter, k):
+def stage_max_iter(stage: int, max_iter: int, k: int) -> int:
     """max_iter of a method of the plan: the caller's (> 0) or the method's default; PGS at most max(8, k/2)."""
     limit = max_iter if max_iter > 0 else DEFAULT_MAX_ITER[stage]
     if stage == S.PGS:
@@ -68,7 +76,7 @@ def stage_max_iter(stage, max_iter, k):
 
 
 @njit(cache=True, _nrt=False)
-def next_stage(stage, k):
+def next_stage(stage: int, k: int) -> int:
     if stage == S.PGS:
         return S.LEMKE
     if stage == S.LEMKE:
@@ -79,7 +87,7 @@ def next_stage(stage, k):
 
 
 @njit(cache=True, _nrt=False)
-def sizes(k):
+def sizes(k: int) -> tuple[int, int]:
     """The workspace of the largest method of the plan (they run one after another in it)."""
     nf, ni = method_sizes(S.LEMKE, k, True)
     for method in (S.NEWTON, S.PGS, S.ENUM):
@@ -91,7 +99,7 @@ def sizes(k):
 
 
 @njit(cache=True, _nrt=False)
-def infeasible_row(M, q):
+def infeasible_row(M: FloatArray, q: FloatArray) -> int:
     """A row i with q_i < 0 and M_ij <= 0 for every j (w_i < 0 for every z >= 0), or -1."""
     k = q.shape[0]
     for i in range(k):
@@ -107,7 +115,7 @@ def infeasible_row(M, q):
 
 
 @njit(cache=True, _nrt=False)
-def semidefinite_by_minors(M, st, sf):
+def semidefinite_by_minors(M: FloatArray, st: IntArray, sf: FloatArray) -> int:
     """Whether (M + M^T)/2 is positive semidefinite to ``PSD_TOL`` k max|M|, as far as the cheap tests tell:
     -1 disproved (a 2 x 2 principal submatrix's least eigenvalue bounds the whole matrix's from above) or
     not tested (k above PSD_MAX_K); 1 proven (M = 0); 0 when only the least eigenvalue can tell (the caller
@@ -139,14 +147,14 @@ def semidefinite_by_minors(M, st, sf):
 
 
 @njit(cache=True, _nrt=False)
-def proves_psd(eig, k):
+def proves_psd(eig: float, k: int) -> bool:
     """Whether the least eigenvalue of (M + M^T)/2 over max|M| shows M positive semidefinite (to PSD_TOL k,
     relative to max|M|, as the minors' bound): the proof after Lemke's ray."""
     return eig >= -PSD_TOL * k
 
 
 @njit(cache=True)
-def least_symmetric_eigenvalue(M):
+def least_symmetric_eigenvalue(M: FloatArray) -> float:
     """The least eigenvalue of (M + M^T)/2 divided by max|M| (0 for M = 0)."""
     k = M.shape[0]
     sym = np.empty((k, k))
@@ -161,7 +169,8 @@ def least_symmetric_eigenvalue(M):
 
 
 @njit(cache=True, _nrt=False)
-def run(M, q, z, fw, iw, st, sf, tol, max_iter, budget, opts):
+def run(M: FloatArray, q: FloatArray, z: FloatArray, fw: FloatArray, iw: IntArray, st: IntArray, sf: FloatArray,
+        tol: float, max_iter: int, budget: int, opts: FloatArray) -> bool:
     """Advance the plan by slices of at most ``budget`` multiply-adds per method; True when it ended, with
     st[STATUS], st[OUTCOME] (OK, PROOF_ROW, PROOF_PSD or EXHAUSTED), st[USED] (the method that produced the
     answer, or the last one run), st[ITER] (its iterations), st[STAGE_OUTCOME + m] and st[STAGE_ITER + m]
@@ -214,7 +223,7 @@ def run(M, q, z, fw, iw, st, sf, tol, max_iter, budget, opts):
 
 
 @njit(cache=True, _nrt=False)
-def _no_solution_psd(st):
+def _no_solution_psd(st: IntArray) -> bool:
     st[S.PHASE] = S.DONE
     st[S.STATUS] = S.NO_SOLUTION
     st[S.OUTCOME] = S.PROOF_PSD
@@ -222,7 +231,7 @@ def _no_solution_psd(st):
 
 
 @njit(cache=True, _nrt=False)
-def _next(st, k):
+def _next(st: IntArray, k: int) -> bool:
     """Move the plan to its next method; False (with status failed) when none is left."""
     following = next_stage(st[S.STAGE], k)
     if following == S.AUTO:

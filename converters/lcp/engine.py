@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import functools
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numba import njit
@@ -35,6 +36,17 @@ from .enumeration import MAX_K as ENUM_MAX_K
 from .enumeration import solutions as enum_solutions
 from .fastpaths import closed_form
 from .result import STATUSES, check, check_message, check_scaled, max_abs_finite, max_abs_matrix_finite, residual
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    from ..limits import Deadline
+    from .answer import LCPResult
+
+    FloatArray = npt.NDArray[np.float64]
+    IntArray = npt.NDArray[np.int64]
+    #: solve_once's answer: (answer, iterations, err, used, rule, stages, info_x)
+    Once = tuple[int, int, float, int, int, int, float]
 
 #: Method names, indexed by the compiled code's method numbers (``state.AUTO`` .. ``state.NEWTON``).
 METHODS = S.METHOD_NAMES
@@ -55,14 +67,14 @@ MAX_PIVOT_TOL = 1e-6
 # ----------------------------------------------------------------------------------------------- compiled
 
 @njit(cache=True, _nrt=False)
-def exponents(M, q):
+def exponents(M: FloatArray, q: FloatArray) -> tuple[int, int, bool]:
     """(es, em, finite): 2^es ~ max|q|, 2^em ~ max|M| (frexp exponents; 0 for a zero vector or matrix)."""
     es, em, finite, _, _ = magnitudes(M, q)
     return es, em, finite
 
 
 @njit(cache=True, _nrt=False, inline='always')
-def magnitudes(M, q):
+def magnitudes(M: FloatArray, q: FloatArray) -> tuple[int, int, bool, float, float]:
     """(es, em, finite, max|q|, max|M|) (see :func:`exponents`)."""
     qbig, q_finite = max_abs_finite(q)
     mbig, m_finite = max_abs_matrix_finite(M)
@@ -76,7 +88,7 @@ POW2 = np.ldexp(1.0, np.arange(-1022, 1024))
 
 
 @njit(cache=True, _nrt=False, inline='always')
-def scale_pow2(x, e, out):
+def scale_pow2(x: FloatArray, e: int, out: FloatArray) -> None:
     """out = x * 2^e, exactly as ldexp (a multiplication by the power of two when it is a normal number:
     the same correctly rounded result)."""
     if -1022 <= e <= 1023:
@@ -89,7 +101,7 @@ def scale_pow2(x, e, out):
 
 
 @njit(cache=True)
-def normalised(M, q):
+def normalised(M: FloatArray, q: FloatArray) -> tuple[FloatArray, FloatArray, int, bool]:
     """(M / 2^em, q / 2^es, es - em, finite) with 2^es ~ max|q|, 2^em ~ max|M| (exact: powers of two); a zero M
     or q is left as it is. z = z' 2^(es - em) maps solutions of the normalised problem back."""
     es, em, finite = exponents(M, q)
@@ -105,14 +117,15 @@ def normalised(M, q):
 
 
 @njit(cache=True, _nrt=False)
-def sizes(method, k):
+def sizes(method: int, k: int) -> tuple[int, int]:
     if method == S.AUTO:
         return auto.sizes(k)
     return method_sizes(method, k, False)
 
 
 @njit(cache=True, _nrt=False, inline='always')
-def advance(method, M, q, z, fw, iw, st, sf, tol, max_iter, budget, opts):
+def advance(method: int, M: FloatArray, q: FloatArray, z: FloatArray, fw: FloatArray, iw: IntArray, st: IntArray,
+            sf: FloatArray, tol: float, max_iter: int, budget: int, opts: FloatArray) -> bool:
     """Advance ``method`` (auto included) by a slice of at most ``budget`` multiply-adds; True when it ended.
     False also when auto waits for the least eigenvalue (st[PHASE] == EIGENVALUE): the caller puts
     :func:`converters.lcp.auto.least_symmetric_eigenvalue` in sf[INFO_X] and calls again (:class:`Run`)."""
@@ -122,14 +135,15 @@ def advance(method, M, q, z, fw, iw, st, sf, tol, max_iter, budget, opts):
 
 
 @njit(cache=True, _nrt=False, inline='always')
-def scale_pow2_matrix(A, e, out):
+def scale_pow2_matrix(A: FloatArray, e: int, out: FloatArray) -> None:
     """:func:`scale_pow2` of a matrix, row by row (a row is a view; a reshape would call numba's helper library)."""
     for i in range(A.shape[0]):
         scale_pow2(A[i], e, out[i])
 
 
 @njit(cache=True)
-def solve_once(M, q, z, w, method, tol, max_iter, fast_paths, opts, budget):
+def solve_once(M: FloatArray, q: FloatArray, z: FloatArray, w: FloatArray, method: int, tol: float, max_iter: int,
+               fast_paths: bool, opts: FloatArray, budget: int) -> Once:
     """The whole solve in one compiled call, when it succeeds within ``budget``.
 
     Returns (answer, iterations, err, used, rule, stages, info_x). ``answer`` ONCE_SOLVED: z, w = q + M z
@@ -153,7 +167,9 @@ def solve_once(M, q, z, w, method, tol, max_iter, fast_paths, opts, budget):
 
 
 @njit(cache=True, _nrt=False)
-def solve_in(M, q, z, w, method, tol, max_iter, fast_paths, opts, budget, mbuf, buf, ibuf):
+def solve_in(M: FloatArray, q: FloatArray, z: FloatArray, w: FloatArray, method: int, tol: float, max_iter: int,
+             fast_paths: bool, opts: FloatArray, budget: int, mbuf: FloatArray, buf: FloatArray,
+             ibuf: IntArray) -> Once:
     """:func:`solve_once` in the caller's workspace: ``mbuf`` (k x k, for M'), ``buf`` (2k + SF_SIZE + the
     method's doubles) and ``ibuf`` (ST_SIZE + its integers: st is zeroed here, the methods set up their own). (M'
     has its own 2-D buffer: a reshape costs a call into numba's helper library, a fifth of a small solve.)"""
@@ -203,8 +219,9 @@ def solve_in(M, q, z, w, method, tol, max_iter, fast_paths, opts, budget, mbuf, 
 
 
 @njit(cache=True)
-def solve_many(Ms, qs, Z, W, method, tol, max_iter, fast_paths, opts, budget, answers, iterations, errs, used, rules,
-               stages, infos):
+def solve_many(Ms: FloatArray, qs: FloatArray, Z: FloatArray, W: FloatArray, method: int, tol: float, max_iter: int,
+               fast_paths: bool, opts: FloatArray, budget: int, answers: IntArray, iterations: IntArray,
+               errs: FloatArray, used: IntArray, rules: IntArray, stages: IntArray, infos: FloatArray) -> None:
     """:func:`solve_once` on each of P problems of one size (Ms (P, k, k), qs (P, k); answers into Z, W (P, k) and
     the per-problem arrays), the workspace allocated once for all of them: the compiled half of
     :func:`converters.lcp.solve_lcp_many`."""
@@ -217,8 +234,10 @@ def solve_many(Ms, qs, Z, W, method, tol, max_iter, fast_paths, opts, budget, an
 
 
 @njit(cache=True, _nrt=False)
-def _solve_many_in(Ms, qs, Z, W, method, tol, max_iter, fast_paths, opts, budget, answers, iterations, errs, used,
-                   rules, stages, infos, mbuf, buf, ibuf):
+def _solve_many_in(Ms: FloatArray, qs: FloatArray, Z: FloatArray, W: FloatArray, method: int, tol: float,
+                   max_iter: int, fast_paths: bool, opts: FloatArray, budget: int, answers: IntArray,
+                   iterations: IntArray, errs: FloatArray, used: IntArray, rules: IntArray, stages: IntArray,
+                   infos: FloatArray, mbuf: FloatArray, buf: FloatArray, ibuf: IntArray) -> None:
     """:func:`solve_many`'s loop in its workspace, without reference counting (each problem's rows are views: with
     it, every view's atomic increment and decrement cost more than a small solve)."""
     for p in range(qs.shape[0]):
@@ -257,7 +276,8 @@ def options_array(method: str, options: dict) -> np.ndarray:
 class Run:
     """A method's run on LCP(q, M) advanced slice by slice until it ends or ``deadline`` expires."""
 
-    def __init__(self, code: int, M: np.ndarray, q: np.ndarray, *, tol: float, max_iter: int, deadline, opts):
+    def __init__(self, code: int, M: np.ndarray, q: np.ndarray, *, tol: float, max_iter: int,
+                 deadline: Deadline | None, opts: FloatArray):
         self.code, self.M, self.q, self.tol, self.max_iter, self.deadline = code, M, q, tol, max_iter, deadline
         k = q.shape[0]
         nf, ni = sizes(code, k)
@@ -288,7 +308,7 @@ class Run:
                 what = "auto (before its first method)" if stage == S.AUTO else f"auto: {what}"
             else:
                 label = name
-            return "failed", self.deadline.message(what), label, int(st[S.ITER])
+            return "failed", self.deadline.message(what), label, int(st[S.ITER])  # type: ignore[union-attr]
         status = STATUSES[int(st[S.STATUS])]
         if self.code == S.AUTO:
             outcomes = tuple(int(st[S.STAGE_OUTCOME + m]) for m in range(S.N_METHODS))
@@ -411,7 +431,7 @@ def _stage_report(method: int, outcome: int, psd: int, eig: float | None, max_it
     return f"{name} ended with outcome {outcome}"
 
 
-def known(x) -> float | None:
+def known(x: float) -> float | None:
     """A float, None for NaN (not computed)."""
     x = float(x)
     return None if x != x else x
@@ -422,7 +442,8 @@ def unpack_stages(stages: int) -> tuple:
     return tuple(((stages >> (4 * m)) & 15) - 1 for m in range(S.N_METHODS)) + ((stages >> (4 * S.N_METHODS)) & 15,)
 
 
-def run_method(name: str, M, q, *, tol: float, max_iter, deadline=None, **options):
+def run_method(name: str, M: npt.ArrayLike, q: npt.ArrayLike, *, tol: float, max_iter: int | None,
+               deadline: Deadline | None = None, **options: float) -> LCPResult:
     """``name`` on LCP(q, M) exactly as given (no normalisation, no closed forms), sliced under ``deadline``;
     the answer is checked on (q, M). This is what ``lemke()``, ``murty()``, ... are."""
     from .result import finish
@@ -439,31 +460,33 @@ def run_method(name: str, M, q, *, tol: float, max_iter, deadline=None, **option
 # ------------------------------------------------------------------------------- each method on a problem as given
 
 def lemke(M: np.ndarray, q: np.ndarray, *, tol: float, max_iter: int, pivot_tol: float = lemke_module.PIVOT_TOL,
-          deadline=None):
+          deadline: Deadline | None = None) -> LCPResult:
     """Lemke (:mod:`converters.lcp.lemke`) on LCP(q, M) as given: no normalisation, no closed forms; the
     compiled loop in slices with ``deadline`` checked between them; the answer checked on (q, M)."""
     return run_method("lemke", M, q, tol=tol, max_iter=max_iter, deadline=deadline, pivot_tol=pivot_tol)
 
 
-def murty(M: np.ndarray, q: np.ndarray, *, tol: float, max_iter: int, deadline=None):
+def murty(M: np.ndarray, q: np.ndarray, *, tol: float, max_iter: int, deadline: Deadline | None = None) -> LCPResult:
     """Murty (:mod:`converters.lcp.murty`) on LCP(q, M) as given (see :func:`lemke`)."""
     return run_method("murty", M, q, tol=tol, max_iter=max_iter, deadline=deadline)
 
 
-def pgs(M: np.ndarray, q: np.ndarray, *, tol: float, max_iter: int, omega: float = 1.0, deadline=None):
+def pgs(M: np.ndarray, q: np.ndarray, *, tol: float, max_iter: int, omega: float = 1.0,
+        deadline: Deadline | None = None) -> LCPResult:
     """Projected Gauss-Seidel (:mod:`converters.lcp.pgs`) on LCP(q, M) as given (see :func:`lemke`)."""
     return run_method("pgs", M, q, tol=tol, max_iter=max_iter, deadline=deadline, omega=omega)
 
 
 def newton_fb(M: np.ndarray, q: np.ndarray, *, tol: float, max_iter: int, rho: float = newton_module.RHO,
               p: float = newton_module.P, beta: float = newton_module.BETA, sigma: float = newton_module.SIGMA,
-              deadline=None):
+              deadline: Deadline | None = None) -> LCPResult:
     """Newton-FB (:mod:`converters.lcp.newton`) on LCP(q, M) as given (see :func:`lemke`)."""
     return run_method("newton", M, q, tol=tol, max_iter=max_iter, deadline=deadline, rho=rho, p=p, beta=beta,
                       sigma=sigma)
 
 
-def enumerate_bases(M: np.ndarray, q: np.ndarray, *, tol: float, max_iter: int | None = None, deadline=None):
+def enumerate_bases(M: np.ndarray, q: np.ndarray, *, tol: float, max_iter: int | None = None,
+                    deadline: Deadline | None = None) -> LCPResult:
     """Every basic solution of LCP(q, M) as given (``solutions``), the least-norm one as z
     (:mod:`converters.lcp.enumeration`); k <= 12."""
     k = np.shape(q)[0]
@@ -473,7 +496,8 @@ def enumerate_bases(M: np.ndarray, q: np.ndarray, *, tol: float, max_iter: int |
     return run_method("enum", M, q, tol=tol, max_iter=None, deadline=deadline)
 
 
-def auto_plan(M: np.ndarray, q: np.ndarray, *, tol: float, max_iter: int | None = None, deadline=None):
+def auto_plan(M: np.ndarray, q: np.ndarray, *, tol: float, max_iter: int | None = None,
+              deadline: Deadline | None = None) -> LCPResult:
     """The ``auto`` plan (:mod:`converters.lcp.auto`) on LCP(q, M) as given (see :func:`lemke`)."""
     return run_method("auto", M, q, tol=tol, max_iter=max_iter, deadline=deadline)
 

@@ -12,6 +12,7 @@ answers with the least-norm one (the most accurate one when that fails the check
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numba import njit
@@ -20,18 +21,24 @@ from . import state as S
 from .kernels import solve_augmented
 from .result import accepts, accepts_scaled, copy_into, mark_done, max_abs, max_abs_matrix, residual
 
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    FloatArray = npt.NDArray[np.float64]
+    IntArray = npt.NDArray[np.int64]
+
 MAX_K = S.ENUM_MAX_K
 
 
 @njit(cache=True, _nrt=False)
-def sizes(k, listing):
+def sizes(k: int, listing: bool) -> tuple[int, int]:
     """Doubles and integers of workspace: the augmented M_JJ | -q_J, M_JJ, two vectors, max|q| and max|M| and,
     when ``listing`` (every basic solution is kept), up to 2^k solutions; the index set J."""
     return _solutions_offset(k) + ((1 << k) * k if listing else 0), k
 
 
 @njit(cache=True, _nrt=False)
-def _solutions_offset(k):
+def _solutions_offset(k: int) -> int:
     return k * (k + 1) + k * k + 2 * k + 2
 
 
@@ -42,7 +49,8 @@ def solutions(fw: np.ndarray, st: np.ndarray, k: int) -> list:
 
 
 @njit(cache=True, _nrt=False)
-def run(M, q, z, fw, iw, st, tol, budget, first):
+def run(M: FloatArray, q: FloatArray, z: FloatArray, fw: FloatArray, iw: IntArray, st: IntArray, tol: float,
+        budget: int, first: bool) -> bool:
     """Advance the enumeration by at most ``budget`` multiply-adds; True when finished (see ``lemke.run``).
     st[ITER] counts the visited bases, st[INFO] the solutions found."""
     k = q.shape[0]
@@ -137,7 +145,8 @@ def run(M, q, z, fw, iw, st, tol, budget, first):
 
 
 @njit(cache=True, _nrt=False, inline='always')
-def _basic_solution(M, q, J, m, z, w, aug, sub_buf, qscale, conditioned):
+def _basic_solution(M: FloatArray, q: FloatArray, J: IntArray, m: int, z: FloatArray, w: FloatArray, aug: FloatArray,
+                    sub_buf: FloatArray, qscale: float, conditioned: bool) -> bool:
     """z with z_J = -M_JJ^-1 q_J (zero elsewhere); True when it is feasible (z, w >= -1e-9 scale), then
     clipped at 0. False too when M_JJ is singular, or, with ``conditioned``, ill-conditioned (2-norm
     condition number above 1e12: an SVD per basis, :func:`condition_number`; auto's first-solution search
@@ -182,7 +191,7 @@ def _basic_solution(M, q, J, m, z, w, aug, sub_buf, qscale, conditioned):
 
 
 @njit(cache=True, _nrt=False)
-def condition_number(a, m):
+def condition_number(a: FloatArray, m: int) -> float:
     """The 2-norm condition number sigma_max / sigma_min of the m x m matrix ``a`` (overwritten; inf when
     singular), by one-sided Jacobi (Hestenes): rotate pairs of columns until they are orthogonal, then the
     singular values are the column norms, each to high relative accuracy (the smallest included, which
@@ -222,7 +231,7 @@ def condition_number(a, m):
 
 
 @njit(cache=True, _nrt=False, inline='always')
-def _next_subset(J, m, k):
+def _next_subset(J: IntArray, m: int, k: int) -> int:
     """Advance J (of size m) to the next index set: lexicographic within a size, then the next size.
     Returns the new size (k + 1 when every set was visited)."""
     i = m - 1

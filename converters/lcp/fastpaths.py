@@ -6,17 +6,24 @@ check on the original problem still judges the answer.
 """
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 from numba import njit
 
 from . import state as S
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    FloatArray = npt.NDArray[np.float64]
 
 #: The rules in the order they are tried; :func:`closed_form` takes the index.
 RULES = S.CLOSED_FORM_RULES
 
 
 @njit(cache=True, _nrt=False, inline='always')
-def closed_form(M, q, rule, z):
+def closed_form(M: FloatArray, q: FloatArray, rule: int, z: FloatArray) -> bool:
     """Rule 0 (trivial): q >= 0, z = 0 (the least-norm solution); 1 (scalar): k = 1 with M > 0,
     z = max(0, -q/M); 2 (pair): k = 2, the four complementary bases in order of size, the least-norm
     feasible one; 3 (triangular): k > 2, M triangular with a positive diagonal, by substitution
@@ -42,7 +49,7 @@ def closed_form(M, q, rule, z):
 
 
 @njit(cache=True, _nrt=False)
-def _triangular(M, q, z):
+def _triangular(M: FloatArray, q: FloatArray, z: FloatArray) -> bool:
     """Rule 3: M upper or lower triangular (diagonal included) with a positive diagonal, hence a P-matrix and
     one solution, found by substitution: from the row with a single unknown on, w_i = r_i + M_ii z_i with
     r_i the row's known part, so z_i = max(0, -r_i / M_ii) (z_i = 0 when r_i >= 0, else w_i = 0). Exact in
@@ -81,7 +88,7 @@ def _triangular(M, q, z):
 
 
 @njit(cache=True, _nrt=False)
-def _pair(M, q, z):
+def _pair(M: FloatArray, q: FloatArray, z: FloatArray) -> bool:
     scale = 1e-12 * (1.0 + max(abs(q[0]), abs(q[1])))
     m_big = max(max(abs(M[0, 0]), abs(M[0, 1])), max(abs(M[1, 0]), abs(M[1, 1])))
     det = M[0, 0] * M[1, 1] - M[0, 1] * M[1, 0]
@@ -116,28 +123,28 @@ def _pair(M, q, z):
     return found
 
 
-def trivial(M: np.ndarray, q: np.ndarray):
+def trivial(M: np.ndarray, q: np.ndarray) -> FloatArray | None:
     """q >= 0: z = 0 (None when the rule does not apply)."""
     return _apply(M, q, 0)
 
 
-def scalar(M: np.ndarray, q: np.ndarray):
+def scalar(M: np.ndarray, q: np.ndarray) -> FloatArray | None:
     """k = 1 with M > 0: z = max(0, -q/M) (None when the rule does not apply)."""
     return _apply(M, q, 1)
 
 
-def pair(M: np.ndarray, q: np.ndarray):
+def pair(M: np.ndarray, q: np.ndarray) -> FloatArray | None:
     """k = 2: the least-norm feasible complementary basis (None when none is feasible or k != 2)."""
     return _apply(M, q, 2)
 
 
-def triangular(M: np.ndarray, q: np.ndarray):
+def triangular(M: np.ndarray, q: np.ndarray) -> FloatArray | None:
     """k > 2, M upper or lower triangular with a positive diagonal: the one solution, by substitution (None when
     the rule does not apply)."""
     return _apply(M, q, 3)
 
 
-def _apply(M, q, rule):
+def _apply(M: npt.ArrayLike, q: npt.ArrayLike, rule: int) -> FloatArray | None:
     M, q = np.ascontiguousarray(M, dtype=float), np.ascontiguousarray(q, dtype=float)
     z = np.zeros(q.shape[0])
     return z if closed_form(M, q, rule, z) else None

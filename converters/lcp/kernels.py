@@ -7,14 +7,22 @@ MAX_INLINE_K (a Cockcroft-Walton ladder's 2N diodes) the step loops pivot from t
 """
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 from numba import njit
 
 from ..compiled import MAX_INLINE_K  # noqa: F401 (largest k solved inline; the callers read it there)
 
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    FloatArray = npt.NDArray[np.float64]
+    IntArray = npt.NDArray[np.int64]
+
 
 @njit(cache=True, _nrt=False, inline='always')
-def solve_augmented(a, m, cols):
+def solve_augmented(a: FloatArray, m: int, cols: int) -> bool:
     """Gaussian elimination with partial pivoting on the m x (m + cols) augmented matrix ``a`` in place;
     the solution is left in a[:m, m:m + cols]. Returns False when the left block is (numerically) singular."""
     for col in range(m):
@@ -50,7 +58,7 @@ def solve_augmented(a, m, cols):
 
 
 @njit(cache=True)
-def _solve_subset(M, q, mask, k, z, work):
+def _solve_subset(M: FloatArray, q: FloatArray, mask: int, k: int, z: FloatArray, work: FloatArray) -> bool:
     """Solve M_JJ z_J = -q_J for J = bits of mask; writes z (zeros outside J); False when M_JJ is singular."""
     idx = np.empty(k, dtype=np.int64)
     m = 0
@@ -71,7 +79,7 @@ def _solve_subset(M, q, mask, k, z, work):
 
 
 @njit(cache=True)
-def _feasible(M, q, z, k, eps):
+def _feasible(M: FloatArray, q: FloatArray, z: FloatArray, k: int, eps: float) -> bool:
     for i in range(k):
         if z[i] < -eps:
             return False
@@ -84,7 +92,8 @@ def _feasible(M, q, z, k, eps):
 
 
 @njit(cache=True)
-def solve_small_lcp(M, q, k, z, mask_prev, order, work):
+def solve_small_lcp(M: FloatArray, q: FloatArray, k: int, z: FloatArray, mask_prev: int, order: IntArray,
+                    work: FloatArray) -> int:
     """Solve LCP(q, M) for small k in place of z; returns the active-set mask or -1 (no basis found).
 
     k = 1 in closed form; otherwise the previous step's active set is tried first (it almost
@@ -119,7 +128,7 @@ def solve_small_lcp(M, q, k, z, mask_prev, order, work):
 
 
 @njit(cache=True)
-def masks_by_size(k):
+def masks_by_size(k: int) -> IntArray:
     total = 1 << k
     order = np.empty(total, dtype=np.int64)
     m = 0

@@ -14,17 +14,25 @@ checks a time limit between slices.
 """
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 from numba import njit
 
 from . import state as S
 from .result import accepts_scaled, mark_done, max_abs, max_abs_finite, max_abs_matrix
 
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    FloatArray = npt.NDArray[np.float64]
+    IntArray = npt.NDArray[np.int64]
+
 PIVOT_TOL = 1e-13
 
 
 @njit(cache=True, _nrt=False)
-def sizes(k):
+def sizes(k: int) -> tuple[int, int]:
     """Doubles and integers of workspace: the k x (k + 2) condensed tableau, w, the pivot row and max|q|, max|M|
     (for the check at the end); the basis, the nonbasic variables, every variable's place, candidate rows and
     lexicographic scratch."""
@@ -32,7 +40,8 @@ def sizes(k):
 
 
 @njit(cache=True, _nrt=False)
-def run(M, q, z, fw, iw, st, tol, max_iter, budget, pivot_tol):
+def run(M: FloatArray, q: FloatArray, z: FloatArray, fw: FloatArray, iw: IntArray, st: IntArray, tol: float,
+        max_iter: int, budget: int, pivot_tol: float) -> bool:
     """Advance Lemke on LCP(q, M) by at most ``budget`` multiply-adds; returns True when finished (status,
     outcome and iterations in ``st``), False when the budget is spent (z then holds the current iterate).
 
@@ -161,7 +170,8 @@ def run(M, q, z, fw, iw, st, tol, max_iter, budget, pivot_tol):
 
 
 @njit(cache=True, _nrt=False, inline='always')
-def _done(M, q, z, w, big, st, tol, status, outcome):
+def _done(M: FloatArray, q: FloatArray, z: FloatArray, w: FloatArray, big: FloatArray, st: IntArray, tol: float,
+          status: int, outcome: int) -> bool:
     """Record the end; a claimed solution must pass the check on this (normalised) problem (max|q| and max|M| in
     ``big``, read while setting up), unless the caller checks it on the original one (st[CALLER_CHECKS]: the
     one-call solve, which hands a failure to the sliced solve, where Lemke checks and auto goes on)."""
@@ -171,7 +181,7 @@ def _done(M, q, z, w, big, st, tol, status, outcome):
 
 
 @njit(cache=True, _nrt=False, inline='always')
-def _inverse_entry(C, place, r, j):
+def _inverse_entry(C: FloatArray, place: IntArray, r: int, j: int) -> float:
     """Entry (r, j) of B^-1: the column of w_j, a unit vector while w_j is basic."""
     p = place[j]
     if p >= 0:
@@ -180,7 +190,8 @@ def _inverse_entry(C, place, r, j):
 
 
 @njit(cache=True, _nrt=False)
-def _lexmin_rows(C, place, rows, nrows, col, k, sign, rem):
+def _lexmin_rows(C: FloatArray, place: IntArray, rows: IntArray, nrows: int, col: int, k: int, sign: float,
+                 rem: IntArray) -> int:
     """Row of rows[:nrows] whose vector (rhs, B^-1 row) / (sign * entry) is lexicographically smallest."""
     rhs = k + 1
     for t in range(nrows):
@@ -208,7 +219,7 @@ def _lexmin_rows(C, place, rows, nrows, col, k, sign, rem):
 
 
 @njit(cache=True, _nrt=False)
-def _pivot(C, row, col, prow):
+def _pivot(C: FloatArray, row: int, col: int, prow: FloatArray) -> None:
     """Exchange the basic variable of ``row`` with the nonbasic one of ``col``: the leaving variable takes
     the column, which becomes B^-1's new column (the full tableau's numbers, operation for operation).
 
@@ -233,7 +244,7 @@ def _pivot(C, row, col, prow):
 
 
 @njit(cache=True, _nrt=False, inline='always')
-def _z_from_basis(C, place, k, z, clip):
+def _z_from_basis(C: FloatArray, place: IntArray, k: int, z: FloatArray, clip: bool) -> None:
     """z from the tableau: z_i is the rhs of its row when basic (place[k + i] = -1 - row), else 0. Each entry
     written once, by value (zeroing z first compiles to a call to memset, whose masked stores the loads of z
     just after, in the check, cannot be forwarded from: they wait for the stores to reach the cache)."""

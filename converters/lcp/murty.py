@@ -11,6 +11,8 @@ solving the complementarity problem", Opsearch 11, 1974).
 """
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 from numba import njit
 
@@ -18,15 +20,22 @@ from . import state as S
 from .kernels import solve_augmented
 from .result import CHECK_OK, check_scaled, error, mark_done, max_abs, max_abs_matrix
 
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    FloatArray = npt.NDArray[np.float64]
+    IntArray = npt.NDArray[np.int64]
+    BoolArray = npt.NDArray[np.bool_]
+
 
 @njit(cache=True, _nrt=False)
-def sizes(k):
+def sizes(k: int) -> tuple[int, int]:
     """Doubles and integers of workspace: the augmented M_JJ | -q_J and w; the basis flags and J."""
     return k * (k + 1) + k, 2 * k
 
 
 @njit(cache=True, _nrt=False, inline="always")
-def _basis_affine(M, q, z, idx, m, w):
+def _basis_affine(M: FloatArray, q: FloatArray, z: FloatArray, idx: IntArray, m: int, w: FloatArray) -> None:
     """w = q + M z with z zero outside the basis idx[:m]: :func:`.result.affine`'s sums (index order, q added
     last) without the k - m zero terms (few pairs conduct at once in a rectifier or a multiplier)."""
     for i in range(q.shape[0]):
@@ -37,13 +46,15 @@ def _basis_affine(M, q, z, idx, m, w):
 
 
 @njit(cache=True, _nrt=False)
-def run(M, q, z, fw, iw, st, tol, max_iter, budget):
+def run(M: FloatArray, q: FloatArray, z: FloatArray, fw: FloatArray, iw: IntArray, st: IntArray, tol: float,
+        max_iter: int, budget: int) -> bool:
     """Advance Murty by at most ``budget`` multiply-adds; True when finished (see ``lemke.run``)."""
     return _run(M, q, z, fw, iw, st, tol, max_iter, budget, -1.0)
 
 
 @njit(cache=True, _nrt=False)
-def _run(M, q, z, fw, iw, st, tol, max_iter, budget, m_big):
+def _run(M: FloatArray, q: FloatArray, z: FloatArray, fw: FloatArray, iw: IntArray, st: IntArray, tol: float,
+         max_iter: int, budget: int, m_big: float) -> bool:
     """:func:`run` with max|M| given (``m_big`` >= 0: a step loop's M is one of a few, its scale known) or found
     when the answer is checked (< 0)."""
     k = q.shape[0]
@@ -115,7 +126,8 @@ WARM_TOL = 1e-10
 
 
 @njit(cache=True)
-def solve_warm(M, q, z, active, fw, iw, st, max_pivots, m_big):
+def solve_warm(M: FloatArray, q: FloatArray, z: FloatArray, active: BoolArray, fw: FloatArray, iw: IntArray,
+               st: IntArray, max_pivots: int, m_big: float) -> int:
     """LCP(q, M) by :func:`run` started from the basis ``active`` (True where z_i > 0 is guessed), which is left
     holding the solution's basis; z in place; ``fw``, ``iw``, ``st`` its workspace (:func:`sizes`, ST_SIZE).
     Returns the number of flips, or -1 when a principal block is singular, the answer fails the check or

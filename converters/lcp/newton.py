@@ -9,6 +9,7 @@ deadline is checked between slices of work. :func:`run` is resumable (see :mod:`
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 from numba import njit
 
@@ -16,18 +17,26 @@ from . import state as S
 from .kernels import solve_augmented
 from .result import accepts_scaled, affine, copy_into, mark_done, max_abs, max_abs_matrix
 
+if TYPE_CHECKING:
+    import numpy as np
+    import numpy.typing as npt
+
+    FloatArray = npt.NDArray[np.float64]
+    IntArray = npt.NDArray[np.int64]
+
 #: Defaults of the options rho, p (descent test), beta (step reduction) and sigma (Armijo constant).
 RHO, P, BETA, SIGMA = 1e-10, 2.1, 0.5, 1e-4
 
 
 @njit(cache=True, _nrt=False)
-def sizes(k):
+def sizes(k: int) -> tuple[int, int]:
     """Doubles of workspace: the Jacobian, its augmented copy, and 7 vectors."""
     return k * k + k * (k + 1) + 7 * k, 0
 
 
 @njit(cache=True, _nrt=False)
-def run(M, q, z, fw, iw, st, tol, max_iter, budget, rho, p, beta, sigma):
+def run(M: FloatArray, q: FloatArray, z: FloatArray, fw: FloatArray, iw: IntArray, st: IntArray, tol: float,
+        max_iter: int, budget: int, rho: float, p: float, beta: float, sigma: float) -> bool:
     """Advance Newton by at most ``budget`` multiply-adds; True when finished (see ``lemke.run``).
     The iterate x lives in the workspace; z holds max(x, 0)."""
     k = q.shape[0]
@@ -97,7 +106,7 @@ def run(M, q, z, fw, iw, st, tol, max_iter, budget, rho, p, beta, sigma):
 
 
 @njit(cache=True, _nrt=False)
-def _dot(a, b):
+def _dot(a: FloatArray, b: FloatArray) -> float:
     s = 0.0
     for i in range(a.shape[0]):
         s += a[i] * b[i]
@@ -105,20 +114,21 @@ def _dot(a, b):
 
 
 @njit(cache=True, _nrt=False)
-def _clip(x, z):
+def _clip(x: FloatArray, z: FloatArray) -> None:
     for i in range(x.shape[0]):
         z[i] = x[i] if x[i] > 0.0 else 0.0
 
 
 @njit(cache=True, _nrt=False)
-def _fb(M, q, x, w, phi):
+def _fb(M: FloatArray, q: FloatArray, x: FloatArray, w: FloatArray, phi: FloatArray) -> None:
     affine(M, q, x, w)
     for i in range(q.shape[0]):
         phi[i] = math.sqrt(x[i] * x[i] + w[i] * w[i]) - x[i] - w[i]
 
 
 @njit(cache=True, _nrt=False)
-def _fb_and_jacobian(M, q, x, w, phi, jac):
+def _fb_and_jacobian(M: FloatArray, q: FloatArray, x: FloatArray, w: FloatArray, phi: FloatArray,
+                     jac: FloatArray) -> None:
     """Phi and a generalized Jacobian element diag(da) + diag(db) M; at (0, 0) the limit along (1, 1)."""
     k = q.shape[0]
     _fb(M, q, x, w, phi)

@@ -8,21 +8,30 @@ divergence (a non-finite z) is detected and reported. :func:`run` is resumable (
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 from numba import njit
 
 from . import state as S
 from .result import check_scaled, error, mark_done, max_abs, max_abs_matrix, residual
 
+if TYPE_CHECKING:
+    import numpy as np
+    import numpy.typing as npt
+
+    FloatArray = npt.NDArray[np.float64]
+    IntArray = npt.NDArray[np.int64]
+
 
 @njit(cache=True, _nrt=False)
-def sizes(k):
+def sizes(k: int) -> tuple[int, int]:
     """Doubles and integers of workspace: w."""
     return k, 0
 
 
 @njit(cache=True, _nrt=False)
-def run(M, q, z, fw, iw, st, sf, tol, max_iter, budget, omega, probe):
+def run(M: FloatArray, q: FloatArray, z: FloatArray, fw: FloatArray, iw: IntArray, st: IntArray, sf: FloatArray,
+        tol: float, max_iter: int, budget: int, omega: float, probe: bool) -> bool:
     """Advance PGS by at most ``budget`` multiply-adds; True when finished (see ``lemke.run``).
 
     With ``probe`` (auto's use) it also stops, with outcome SLOW, as soon as the residual does not shrink or

@@ -8,12 +8,21 @@ functions; :func:`check_message` turns the check's code into the sentence a user
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numba import njit
 
 from . import state as S
 from .answer import FAILED, MAX_ITERATIONS, NO_SOLUTION, SOLVED, STATUSES, LCPResult, make_result  # noqa: F401
+
+if TYPE_CHECKING:
+    from collections.abc import Iterable
+
+    import numpy.typing as npt
+
+    FloatArray = npt.NDArray[np.float64]
+    IntArray = npt.NDArray[np.int64]
 
 #: The largest finite double: |x| <= _MAX_FLOAT is false for inf and NaN.
 _MAX_FLOAT = 1.7976931348623157e308
@@ -23,7 +32,7 @@ CHECK_OK, CHECK_NOT_FINITE, CHECK_W_NEGATIVE, CHECK_Z_NEGATIVE, CHECK_NOT_COMPLE
 
 
 @njit(cache=True, _nrt=False, inline='always')
-def mark_done(st, status, outcome):
+def mark_done(st: IntArray, status: int, outcome: int) -> bool:
     """End a compiled method's run in its state array (``state`` layout): done, with its status and why."""
     st[S.PHASE] = S.DONE
     st[S.STATUS] = status
@@ -32,7 +41,7 @@ def mark_done(st, status, outcome):
 
 
 @njit(cache=True, _nrt=False, inline='always')
-def affine(M, q, z, w):
+def affine(M: FloatArray, q: FloatArray, z: FloatArray, w: FloatArray) -> None:
     """w = q + M z (each sum_j M_ij z_j accumulated in index order, then q_i added)."""
     k = q.shape[0]
     for i in range(k):
@@ -43,7 +52,7 @@ def affine(M, q, z, w):
 
 
 @njit(cache=True, _nrt=False)
-def copy_into(src, out):
+def copy_into(src: FloatArray, out: FloatArray) -> None:
     """out[:] = src, element by element (an array-to-array slice assignment may allocate a temporary, which
     the allocation-free kernels cannot)."""
     for i in range(out.shape[0]):
@@ -51,14 +60,14 @@ def copy_into(src, out):
 
 
 @njit(cache=True, _nrt=False, inline='always')
-def residual(M, q, z, w):
+def residual(M: FloatArray, q: FloatArray, z: FloatArray, w: FloatArray) -> float:
     """w = q + M z (:func:`affine`); returns err of (z, w)."""
     affine(M, q, z, w)
     return error(q, z, w)
 
 
 @njit(cache=True, _nrt=False, inline='always')
-def error(q, z, w):
+def error(q: FloatArray, z: FloatArray, w: FloatArray) -> float:
     """Siconos' accuracy measure err = ||z - max(0, z - w)||_2 / ||q||_2 of the pair (z, w).
 
     z - max(0, z - w) is evaluated as min(z, w) (the same number, without the cancellation of z - (z - w)),
@@ -98,7 +107,8 @@ def error(q, z, w):
 
 
 @njit(cache=True, _nrt=False, inline='always')
-def check(M, q, z, w, err, tol):
+def check(M: FloatArray, q: FloatArray, z: FloatArray, w: FloatArray, err: float,
+          tol: float) -> tuple[int, int, float, float, float, float]:
     """(code, i, a, b, c, d): code 0 when (z, w) solves LCP(q, M) to ``tol``, else which condition fails
     (``CHECK_*``) with the index and the numbers :func:`check_message` prints.
 
@@ -109,7 +119,8 @@ def check(M, q, z, w, err, tol):
 
 
 @njit(cache=True, _nrt=False, inline='always')
-def largest(x, n, acc):
+def largest(x: FloatArray, n: int,
+            acc: tuple[float, float, float, float]) -> tuple[tuple[float, float, float, float], bool]:
     """Fold |x[0:n]| into the four running maxima ``acc`` (a 4-tuple; NaN passed over, as ``a > m`` is false);
     also whether every entry is finite. Four maxima, not one: a single running maximum is a chain of dependent
     vmaxsd, 4 cycles an entry (110 ns over a 9 x 9 M, a tenth of its solve); the largest of the four is the same
@@ -134,14 +145,14 @@ def largest(x, n, acc):
 
 
 @njit(cache=True, _nrt=False, inline='always')
-def max_abs_finite(v):
+def max_abs_finite(v: FloatArray) -> tuple[float, bool]:
     """(max|v|, whether every entry is finite)."""
     acc, finite = largest(v, v.shape[0], (0.0, 0.0, 0.0, 0.0))
     return max(max(acc[0], acc[1]), max(acc[2], acc[3])), finite
 
 
 @njit(cache=True, _nrt=False, inline='always')
-def max_abs_matrix_finite(M):
+def max_abs_matrix_finite(M: FloatArray) -> tuple[float, bool]:
     """(max|M|, whether every entry is finite), row by row."""
     acc = (0.0, 0.0, 0.0, 0.0)
     finite = True
@@ -152,19 +163,20 @@ def max_abs_matrix_finite(M):
 
 
 @njit(cache=True, _nrt=False)
-def max_abs(v):
+def max_abs(v: FloatArray) -> float:
     """max|v| (NaN passed over)."""
     return max_abs_finite(v)[0]
 
 
 @njit(cache=True, _nrt=False)
-def max_abs_matrix(M):
+def max_abs_matrix(M: FloatArray) -> float:
     """max|M| (NaN passed over)."""
     return max_abs_matrix_finite(M)[0]
 
 
 @njit(cache=True, _nrt=False)
-def check_scaled(q_big, m_big, z, w, err, tol):
+def check_scaled(q_big: float, m_big: float, z: FloatArray, w: FloatArray, err: float,
+                 tol: float) -> tuple[int, int, float, float, float, float]:
     """:func:`check` with q_big = max|q| and m_big = max|M| known (the iterative methods check every sweep)."""
     k = z.shape[0]
     z_scale = 0.0
@@ -223,20 +235,21 @@ def check_scaled(q_big, m_big, z, w, err, tol):
 
 
 @njit(cache=True, _nrt=False, inline='always')
-def accepts(M, q, z, w, tol):
+def accepts(M: FloatArray, q: FloatArray, z: FloatArray, w: FloatArray, tol: float) -> bool:
     """True when (z, q + M z) passes :func:`check` (the stopping test of the iterative methods); fills w."""
     err = residual(M, q, z, w)
     return check(M, q, z, w, err, tol)[0] == CHECK_OK
 
 
 @njit(cache=True, _nrt=False, inline='always')
-def accepts_scaled(M, q, q_big, m_big, z, w, tol):
+def accepts_scaled(M: FloatArray, q: FloatArray, q_big: float, m_big: float, z: FloatArray, w: FloatArray,
+                   tol: float) -> bool:
     """:func:`accepts` with max|q| and max|M| known."""
     err = residual(M, q, z, w)
     return check_scaled(q_big, m_big, z, w, err, tol)[0] == CHECK_OK
 
 
-def check_message(code, i, a, b, c, d, tol) -> str:
+def check_message(code: int, i: int, a: float, b: float, c: float, d: float, tol: float) -> str:
     """The sentence for a :func:`check` code ('' for CHECK_OK)."""
     if code == CHECK_OK:
         return ""
@@ -255,7 +268,7 @@ def check_message(code, i, a, b, c, d, tol) -> str:
             f"(ill-conditioned principal submatrix?); try method='lemke' or 'enum'")
 
 
-def _floats(M, q, z):
+def _floats(M: npt.ArrayLike, q: npt.ArrayLike, z: npt.ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray]:
     return (np.ascontiguousarray(M, dtype=float), np.ascontiguousarray(q, dtype=float),
             np.ascontiguousarray(z, dtype=float))
 
@@ -266,13 +279,15 @@ def lcp_error(M: np.ndarray, q: np.ndarray, z: np.ndarray) -> float:
     return float(residual(M, q, z, np.empty_like(q)))
 
 
-def check_solution(M, q, z, w, err, tol) -> str:
+def check_solution(M: npt.ArrayLike, q: npt.ArrayLike, z: npt.ArrayLike, w: npt.ArrayLike, err: float,
+                   tol: float) -> str:
     """'' when (z, w) solves LCP(q, M) to ``tol`` (scale-relative, see :func:`check`), else which condition fails."""
     M, q, z = _floats(M, q, z)
     return check_message(*check(M, q, z, np.ascontiguousarray(w, dtype=float), float(err), float(tol)), tol)
 
 
-def finish(M, q, z, *, status, iterations, method, tol, message="", solutions=()):
+def finish(M: npt.ArrayLike, q: npt.ArrayLike, z: npt.ArrayLike, *, status: str, iterations: int, method: str,
+           tol: float, message: str = "", solutions: Iterable[FloatArray] = ()) -> LCPResult:
     """Build the result, checking a claimed solution: it becomes ``failed`` (the message says which condition
     failed) unless z >= 0, w = q + M z >= 0 and min(z_i, w_i) = 0 hold to ``tol`` relative to the problem's
     own magnitudes (z against max(max|z|, max|q| / max|M|), w against max(max|q|, max|M| max|z|)) and
@@ -281,7 +296,7 @@ def finish(M, q, z, *, status, iterations, method, tol, message="", solutions=()
     w = np.empty_like(q)
     err = float(residual(M, q, z, w))
     if status == SOLVED:
-        problem = check_message(*check(M, q, z, w, err, float(tol)), tol)
+        problem = check_message(*check(M, q, z, w, err, float(tol)), tol)  # type: ignore[call-arg]
         if problem:
             status, message = FAILED, f"{method}: {problem}"
     return make_result(z, w, status, err, int(iterations), method, message, list(solutions))

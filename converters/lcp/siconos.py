@@ -19,6 +19,7 @@ import re
 import stat
 from dataclasses import dataclass
 from pathlib import Path
+from typing import NoReturn
 
 import numpy as np
 
@@ -46,7 +47,7 @@ class LCPFile:
     comment: str
 
 
-def read_siconos_lcp(path, *, context: str = "reading") -> LCPFile:
+def read_siconos_lcp(path: str | os.PathLike[str], *, context: str = "reading") -> LCPFile:
     """Read a Siconos .dat LCP file. ``context`` starts the memory-limit message (the CLI passes ``lcp solve``)."""
     path = Path(path)
     text = _read_text(path)
@@ -174,7 +175,7 @@ class _Tokens:
     def _where(self) -> str:
         return f"token {self.index}, line {self.text.count(chr(10), 0, self._start) + 1}"
 
-    def fail(self, message: str):
+    def fail(self, message: str) -> NoReturn:
         raise LCPError(f"{self.name}: {message} ({self._where()})")
 
     def _next(self, what: str) -> str:
@@ -185,7 +186,7 @@ class _Tokens:
         self._start, self.offset = match.start(), match.end()
         return match.group()
 
-    def _bad(self, token: str, what: str, kind: str):
+    def _bad(self, token: str, what: str, kind: str) -> NoReturn:
         line = self.text.count("\n", 0, self._start) + 1
         raise LCPError(f"{self.name}: token {token!r} at position {self.index} (line {line}) is not {kind} "
                        f"(reading {what})")

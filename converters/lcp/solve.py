@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import sys
 import threading
 import time
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -21,6 +22,12 @@ from ..errors import LCPError
 from ..validate import as_matrix, as_vector
 from . import state as S
 from .answer import SOLVED, LCPResult, make_result
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Iterator
+    from types import ModuleType
+
+    import numpy.typing as npt
 
 ENUM_MAX_K = S.ENUM_MAX_K
 DEFAULT_MAX_ITER = {"auto": None, "lemke": 10_000, "murty": 100_000, "enum": None, "pgs": 10_000, "newton": 1000}
@@ -52,8 +59,9 @@ _CLOSED_FORM_MESSAGES = tuple(f"closed form ({rule})" for rule in S.CLOSED_FORM_
 _PGS_GAVE_WAY = tuple((1 << (4 * m)) | ((S.SLOW + 1) << (4 * S.PGS)) for m in range(S.N_METHODS))
 
 
-def solve_lcp(M, q, method: str = "auto", tol: float = DEFAULT_TOL, max_iter: int | None = None,
-              fast_paths: bool = True, time_limit: float | None = None, **options) -> LCPResult:
+def solve_lcp(M: npt.ArrayLike, q: npt.ArrayLike, method: str = "auto", tol: float = DEFAULT_TOL,
+              max_iter: int | None = None, fast_paths: bool = True, time_limit: float | None = None,
+              **options: float) -> LCPResult:
     """Solve LCP(q, M): find z >= 0 with w = q + M z >= 0 and z . w = 0.
 
     The solvers work on the normalised problem q' = q / s, M' = M / m (s ~ max|q|, m ~ max|M|, rounded to
@@ -147,7 +155,7 @@ def solve_lcp(M, q, method: str = "auto", tol: float = DEFAULT_TOL, max_iter: in
                                    _CLOSED_FORM_MESSAGES[rule])
             if answer == _ONCE_OTHER:
                 return _solve_sliced(M, q, code, tol, DEFAULT_MAX_ITER[method], fast_paths,
-                                     _deadline(seconds, started), _OPTIONS)
+                                     _deadline(seconds, started), _OPTIONS)  # type: ignore[arg-type]
             # NaN or inf: the full path raises the validation error
     # The full path.
     started = _monotonic()
@@ -187,7 +195,8 @@ def _solved_message(used: int, stages: int, eig: float | None, k: int) -> str:
     return engine.auto_message(S.OK, used, engine.unpack_stages(stages), -1, eig, -1, k)
 
 
-def _solve_sliced(M, q, code, tol, max_iter, fast_paths, deadline, opts) -> LCPResult:
+def _solve_sliced(M: npt.NDArray[np.float64], q: npt.NDArray[np.float64], code: int, tol: float, max_iter: int | None,
+                  fast_paths: bool, deadline: limits.Deadline, opts: npt.NDArray[np.float64]) -> LCPResult:
     """The full path on a validated problem: normalise, closed forms, the method in slices with the deadline
     looked at between them, then scale back and check on the original problem."""
     engine = _engine()
@@ -233,7 +242,7 @@ def normalise(M: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, int
     return Ms, qs, int(shift)
 
 
-def check_time_limit(time_limit) -> float:
+def check_time_limit(time_limit: float | None) -> float:
     """Seconds for one solve: ``time_limit`` when given (checked), else --time-limit / PCSUITE_TIME_LIMIT, else 20 s."""
     if time_limit is None:
         return _environment_time_limit()
@@ -279,7 +288,7 @@ class _SolveDeadline(limits.Deadline):
         return _monotonic() - _setup_seconds() > self.end
 
 
-def _engine():
+def _engine() -> ModuleType:
     """converters.lcp.engine, imported at its first use (numba with it) with the time that takes counted as
     set-up, and numba's compile clock installed."""
     engine = sys.modules.get(f"{__package__}.engine")
@@ -289,10 +298,10 @@ def _engine():
         ident = _get_ident()
         _imports[ident] = _imports.get(ident, 0.0) + _monotonic() - begun
     limits.install_compile_clock()
-    return engine
+    return engine  # type: ignore[return-value]
 
 
-def check_lcp(M, q) -> tuple[np.ndarray, np.ndarray]:
+def check_lcp(M: npt.ArrayLike, q: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """Validate shapes and finiteness; returns float arrays (M is k x k, q has length k)."""
     try:
         M = as_matrix("M", M, (None, None))
@@ -317,7 +326,7 @@ def check_lcp(M, q) -> tuple[np.ndarray, np.ndarray]:
 _ENVIRON = getattr(os.environ, "_data", None)
 
 
-def _environ_key(name: str):
+def _environ_key(name: str) -> str | bytes | None:
     try:
         return os.environ.encodekey(name)
     except AttributeError:   # not CPython's os.environ: read it the ordinary way
@@ -373,7 +382,7 @@ _OPTIONS = None
 _once = None
 
 
-def _load_once():
+def _load_once() -> Callable[..., Any]:
     global _once, _OPTIONS
     _OPTIONS = compiled.kernel("lcp_default_options")()
     once = compiled.kernel("solve_once")
@@ -422,11 +431,12 @@ class LCPBatch:
         return make_result(self.z[i], self.w[i], self.status[i], float(self.err[i]), int(self.iterations[i]),
                            self.method[i], self.message[i])
 
-    def __iter__(self):
+    def __iter__(self) -> Iterator[LCPResult]:
         return (self[i] for i in range(len(self)))
 
 
-def solve_lcp_many(Ms, qs, method: str = "auto", tol: float = DEFAULT_TOL, fast_paths: bool = True) -> LCPBatch:
+def solve_lcp_many(Ms: npt.ArrayLike, qs: npt.ArrayLike, method: str = "auto", tol: float = DEFAULT_TOL,
+                   fast_paths: bool = True) -> LCPBatch:
     """Solve P problems LCP(qs[i], Ms[i]) of one size k, as :func:`solve_lcp` with its defaults would, in one
     compiled call: for loops of small problems (a parameter study, a Monte Carlo of a switched network), where
     calling :func:`solve_lcp` once per problem costs more in the call than in the solve. A problem the compiled

@@ -21,12 +21,19 @@ from __future__ import annotations
 
 import dataclasses
 from abc import ABC, abstractmethod
+from collections.abc import Callable, Sequence
 from enum import Enum
-from typing import ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar, Protocol, cast
 
 import numpy as np
+import numpy.typing as npt
 
 from ..errors import ParameterError
+
+if TYPE_CHECKING:
+    from _typeshed import DataclassInstance
+
+    from ..trajectory import Trajectory
 
 #: Segments (events and integrator pieces) a run stores per forcing or switching period, generously: the
 #: size estimate of a run without an output grid (the converters have 2-6, the friction oscillator ~40).
@@ -53,7 +60,10 @@ class ErrorKind(str, Enum):
 
 
 class Method(ABC):
-    """Base class of every method (subclasses are frozen dataclasses)."""
+    """Base class of every method (subclasses are frozen dataclasses).
+
+    Its ``problem`` arguments are typed Any: each method narrows them to the problems of its ``domains`` (an
+    LCSProblem, a MechanicalProblem), which no one type of the base could admit for all of them."""
 
     key: ClassVar[str] = ""
     #: One line for ``pcsuite list``.
@@ -61,7 +71,7 @@ class Method(ABC):
     #: Name of the option that receives a run's step (``h``, or an output spacing), or "" for none.
     step_option: ClassVar[str] = ""
     #: The problems it takes: ``lcs`` (converters), ``mechanical`` (friction and impacts).
-    domains: ClassVar[tuple] = ("lcs",)
+    domains: ClassVar[tuple[str, ...]] = ("lcs",)
     #: What a run's ``steps`` counts (the one-line summary's unit).
     counts: ClassVar[str] = "steps"
     #: How the accuracy checks (:mod:`converters.analysis.accuracy`) estimate the error: ``step`` a fixed step
@@ -77,7 +87,7 @@ class Method(ABC):
     #: Steady states of many parameter points advance in one compiled call (:mod:`converters.sweeps.batch`).
     batches: ClassVar[bool] = False
 
-    def __init_subclass__(cls, key: str = "", **kwargs):
+    def __init_subclass__(cls, key: str = "", **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
         cls.error_kind = ErrorKind(cls.error_kind)
         cls.fixed_step = cls.error_kind is ErrorKind.STEP
@@ -92,10 +102,10 @@ class Method(ABC):
         """Declared order of convergence of the method's error in its step (inf: exact)."""
 
     @abstractmethod
-    def solve(self, problem, x0: np.ndarray):
+    def solve(self, problem: Any, x0: np.ndarray) -> Trajectory:
         """Solve ``problem`` over its t_span from ``x0`` (already validated) into a Trajectory."""
 
-    def supports(self, problem) -> None:
+    def supports(self, problem: Any) -> None:
         """Raise ParameterError (naming the method and the remedy) if the problem is out of reach."""
 
     @property
@@ -103,9 +113,9 @@ class Method(ABC):
         """A short human-readable name with the main option (e.g. ``theta(0.5)``)."""
         return self.key
 
-    def options(self) -> dict:
+    def options(self) -> dict[str, object]:
         """The method's options as plain data (for JSON summaries and reports)."""
-        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(cast("DataclassInstance", self))}
 
     @property
     def step(self) -> float | None:
@@ -116,13 +126,15 @@ class Method(ABC):
         """The same method at ``factor`` times its step: the twin of Richardson's estimate (``step`` methods)."""
         if not self.fixed_step:
             raise ValueError(f"the {self.key} method has no fixed step to coarsen (its error_kind is {self.error_kind})")
-        return dataclasses.replace(self, **{self.step_option: factor * self.step})
+        step = self.step
+        assert step is not None                  # a fixed-step method has its step
+        return cast(Method, dataclasses.replace(cast("DataclassInstance", self), **{self.step_option: factor * step}))
 
     #: Measured peak bytes per stored sample and per value of it (states, pairs, time, labels), the run and its
     #: labelled waveform table (what ``--out`` writes) included: ``benchmarks/memory.py`` calibrates them.
     bytes_per_value: ClassVar[float] = 60.0
 
-    def samples(self, problem) -> float:
+    def samples(self, problem: Any) -> float:
         """How many samples a run of ``problem`` stores (before it starts): the span over the step or output
         spacing, plus every switching instant of the law; inf where it cannot be bounded."""
         t0, t1 = problem.t_span
@@ -133,14 +145,15 @@ class Method(ABC):
             # bounded by the method's own event cap
             return (t1 - t0) / period * SEGMENTS_PER_PERIOD if np.isfinite(period) and period > 0 else 0.0
         breaks = (t1 - t0) / period * len(getattr(law, "starts", (0,))) if np.isfinite(period) and period > 0 else 0.0
-        return (t1 - t0) / float(step) + breaks + 1.0
+        count: float = (t1 - t0) / float(step) + breaks + 1.0
+        return count
 
-    def memory_estimate(self, problem) -> float:
+    def memory_estimate(self, problem: Any) -> float:
         """Bytes a run of ``problem`` will allocate at its peak (estimate from :meth:`samples`)."""
         values = getattr(problem, "n", 2) + 2 * getattr(problem, "k", 0) + 8
         return self.samples(problem) * values * self.bytes_per_value
 
-    def check_memory(self, problem, remedy: str = "a larger --h, or a shorter --t-end / fewer --periods") -> None:
+    def check_memory(self, problem: Any, remedy: str = "a larger --h, or a shorter --t-end / fewer --periods") -> None:
         """Refuse, before the first step, a run above the memory limit (:mod:`converters.limits`)."""
         from ..limits import check_memory
         t0, t1 = problem.t_span
@@ -150,17 +163,17 @@ class Method(ABC):
                      self.memory_estimate(problem),
                      remedy=remedy)
 
-    def period_map(self, problem) -> "PeriodMap":
+    def period_map(self, problem: Any) -> "PeriodMap":
         """x(t0) -> x(t1) over ``problem.t_span`` by repeated solves, Jacobian by finite differences."""
         self.supports(problem)
         return FiniteDifferenceMap(lambda x0: self.solve(problem, x0).x[-1])
 
     @classmethod
     def option_names(cls) -> list[str]:
-        return [f.name for f in dataclasses.fields(cls)]
+        return [f.name for f in dataclasses.fields(cast("type[DataclassInstance]", cls))]
 
     @classmethod
-    def from_options(cls, step: float | None = None, **options) -> "Method":
+    def from_options(cls, step: float | None = None, **options: Any) -> "Method":
         """Build from command-line style options; ``step`` goes to the method's ``step_option``.
 
         Unknown options are refused with the list of valid ones; None values take the defaults."""
@@ -206,7 +219,7 @@ class PeriodMap:
 
     jacobian_kind = "exact"
 
-    def __init__(self):
+    def __init__(self) -> None:
         self.evaluations = 0
 
     def __call__(self, x0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -216,11 +229,21 @@ class PeriodMap:
         """The end state only (no Jacobian)."""
         return self(x0)[0]
 
-    def events(self, x0: np.ndarray) -> list | None:
+    def events(self, x0: np.ndarray) -> Sequence[tuple[float, str, int, int]] | None:
         """The events of the span from x0 as (time, kind, pair, config) tuples in time order (``kind`` as in
         a Trajectory's events; ``pair`` -1 and ``config`` the configuration entered for a switching-law
         event), or None where the map does not record them (callers then simulate)."""
         return None
+
+
+class RecordedSolution(Protocol):
+    """A :class:`RecordingPeriodMap`'s run: the state at the end of its span, and its events as
+    :meth:`PeriodMap.events` gives them."""
+
+    @property
+    def x_end(self) -> npt.NDArray[np.float64]: ...
+
+    def event_list(self) -> Sequence[tuple[float, str, int, int]]: ...
 
 
 class RecordingPeriodMap(PeriodMap):
@@ -228,35 +251,48 @@ class RecordingPeriodMap(PeriodMap):
     Subclasses give ``_solve(x0, jacobian) -> (solution, jacobian or None)``, the solution with ``x_end`` and
     ``event_list()``."""
 
-    def __init__(self):
+    def __init__(self) -> None:
         super().__init__()
-        self._last = (None, None)
+        self._last: tuple[np.ndarray | None, RecordedSolution | None] = (None, None)
 
-    def _solve(self, x0, jacobian):
+    def _solve(self, x0: npt.NDArray[np.float64],
+               jacobian: bool) -> tuple[RecordedSolution, npt.NDArray[np.float64] | None]:
         raise NotImplementedError
 
-    def _run(self, x0, jacobian):
+    def _run(self, x0: np.ndarray, jacobian: bool) -> tuple[RecordedSolution, npt.NDArray[np.float64] | None]:
         self.evaluations += 1
         x0 = np.array(x0, dtype=float)
         solution, jac = self._solve(x0, jacobian)
         self._last = (x0, solution)
         return solution, jac
 
-    def end(self, x0):
+    def end(self, x0: np.ndarray) -> np.ndarray:
         return self._run(x0, False)[0].x_end
 
-    def __call__(self, x0):
+    def __call__(self, x0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         solution, jac = self._run(x0, True)
+        assert jac is not None                   # asked for: every _solve gives it
         return solution.x_end, jac
 
-    def events(self, x0):
+    def events(self, x0: np.ndarray) -> Sequence[tuple[float, str, int, int]] | None:
         last_x0, solution = self._last
         if last_x0 is None or not np.array_equal(last_x0, np.asarray(x0, dtype=float)):
             solution = self._run(x0, False)[0]
+        assert solution is not None              # kept with the x0 it started from
         return solution.event_list()
 
 
-def check_step_and_theta(method) -> None:
+class _SteppedMethod(Protocol):
+    """A theta stepper's options (:func:`check_step_and_theta`)."""
+
+    @property
+    def h(self) -> float: ...
+
+    @property
+    def theta(self) -> float: ...
+
+
+def check_step_and_theta(method: _SteppedMethod) -> None:
     """Validate a stepper's ``h`` (positive) and ``theta`` (in [0.5, 1]) in place (frozen dataclasses)."""
     from ..validate import check_positive, parse_value
     object.__setattr__(method, "h", check_positive("h", method.h, "s"))
@@ -271,15 +307,15 @@ class FiniteDifferenceMap(PeriodMap):
 
     jacobian_kind = "finite differences"
 
-    def __init__(self, end):
+    def __init__(self, end: Callable[[npt.NDArray[np.float64]], npt.ArrayLike]) -> None:
         super().__init__()
         self._end = end
 
-    def end(self, x0):
+    def end(self, x0: np.ndarray) -> np.ndarray:
         self.evaluations += 1
         return np.asarray(self._end(np.asarray(x0, dtype=float)), dtype=float)
 
-    def __call__(self, x0):
+    def __call__(self, x0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         x0 = np.asarray(x0, dtype=float)
         base = self.end(x0)
         jac = np.empty((x0.size, x0.size))

@@ -21,8 +21,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import numpy.typing as npt
 
-from ..problems import Configuration
+from ..problems import Configuration, Jump
 from ..compiled import kernel
 
 
@@ -47,7 +48,8 @@ class StepMatrices:
     q0: np.ndarray
 
     def __len__(self) -> int:
-        return self.Phi.shape[0]
+        sets: int = self.Phi.shape[0]
+        return sets
 
     def concatenate(self, other: "StepMatrices") -> "StepMatrices":
         """These sets followed by ``other``'s."""
@@ -74,7 +76,10 @@ def step_matrices(configs: list[Configuration], dts: np.ndarray, theta: float) -
     return StepMatrices(Phi, Gamma, H, C, F, M, Phi_b, Gamma_b, CPhi, q0)
 
 
-def _fold_jump(s: int, jump, Phi, Gamma, H, C, F, M, Phi_b, Gamma_b, CPhi, q0) -> None:
+def _fold_jump(s: int, jump: Jump, Phi: npt.NDArray[np.float64], Gamma: npt.NDArray[np.float64],
+               H: npt.NDArray[np.float64], C: npt.NDArray[np.float64], F: npt.NDArray[np.float64],
+               M: npt.NDArray[np.float64], Phi_b: npt.NDArray[np.float64], Gamma_b: npt.NDArray[np.float64],
+               CPhi: npt.NDArray[np.float64], q0: npt.NDArray[np.float64]) -> None:
     """Set s's step taken from the jumped state P x + q (:class:`~converters.problems.Jump`): Phi P and
     Gamma + Phi q, and its affine maps again (:func:`.theta_kernels.branch_maps`'s formulas). The jump is a
     projection, so every step of the configuration may take it: on a state already on its loops it is the
@@ -95,8 +100,8 @@ def _leaders(configs: list[Configuration], dts: np.ndarray) -> np.ndarray:
     """For each set, the first set with the same A, B, C, D (by value) and step: its eliminations are shared
     (:func:`.theta_kernels.set_matrices`). A schedule's configurations often differ in E, F only (a PULSE
     source's levels and edges), and a sinusoidal input gives every step a set of its own with the same A..D."""
-    values: dict = {}
-    firsts: dict = {}
+    values: dict[tuple[int, int, int, int], bytes] = {}
+    firsts: dict[tuple[bytes, float], int] = {}
     leader = np.empty(len(configs), dtype=np.int32)
     for s, (c, dt) in enumerate(zip(configs, dts.tolist())):
         ident = (id(c.A), id(c.B), id(c.C), id(c.D))            # the configs are alive: ids are not reused

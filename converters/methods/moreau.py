@@ -23,8 +23,10 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
+from typing import Any, cast
 
 import numpy as np
+import numpy.typing as npt
 
 from ..errors import ParameterError, SimulationError
 from ..compiled import MAX_INLINE_K
@@ -54,14 +56,14 @@ class MoreauJean(Method, key="moreau"):
     description = "Moreau-Jean time-stepper for mechanical problems: one LCP per step (friction relays, impacts)"
     domains = ("mechanical",)
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         check_step_and_theta(self)
 
     @property
     def order(self) -> float:
         return 1.0
 
-    def supports(self, problem) -> None:
+    def supports(self, problem: object) -> None:
         if not isinstance(problem, MechanicalProblem):
             raise ParameterError("the Moreau-Jean method takes mechanical problems (MechanicalProblem); for a linear "
                                  "complementarity system use the LCP stepper (--method lcp)")
@@ -81,7 +83,8 @@ class MoreauJean(Method, key="moreau"):
             count = int(np.ceil(span / self.h * (1.0 - 1e-12)))
         if count > MAX_STEPS:
             raise ParameterError(f"h gives {count} steps over t_span; h must be >= {span / MAX_STEPS:.3g} s; got {self.h:g}")
-        return t0 + span * np.arange(count + 1) / count
+        grid: np.ndarray = t0 + span * np.arange(count + 1) / count
+        return grid
 
     def solve(self, problem: MechanicalProblem, x0: np.ndarray) -> Trajectory:
         clock = time.perf_counter()
@@ -135,12 +138,17 @@ class MoreauJean(Method, key="moreau"):
         return f"moreau-jean(theta {self.theta:g})"
 
 
-def _events(t, status, slips, rates, m, c) -> dict:
+def _events(t: npt.NDArray[np.float64], status: npt.NDArray[np.int64], slips: npt.NDArray[np.float64],
+            rates: npt.NDArray[np.float64], m: int, c: int) -> dict[str, npt.NDArray[Any]]:
     """Events from the step statuses: a friction contact entering stick (``stick``), leaving it (``slip``), or
     changing slip direction without sticking (``cross``, at the interpolated zero of s); a contact closing while
     it approaches (``impact``: its gap's rate before the step below -1e-3 of the largest rate) or opening
     (``detach``). Times are step ends, crossings interpolated."""
-    times, kinds, pairs, configs, steps = [], [], [], [], []
+    times: list[float] = []
+    kinds: list[str] = []
+    pairs: list[int] = []
+    configs: list[int] = []
+    steps: list[np.integer[Any]] = []                 # rows from np.flatnonzero: numpy's integers
     for i in range(m):
         st = status[:, i].copy()
         # A crossing inside a step shows as one step held at s = 0 between opposite slips (the relay clips the
@@ -156,10 +164,14 @@ def _events(t, status, slips, rates, m, c) -> dict:
                 kind, time_ = "slip", t[k - 1]
             else:
                 a, b = slips[k - 1, i], slips[k + 1 if k + 1 < len(t) else k, i]
-                span = t[min(k + 1, len(t) - 1)] - t[k - 1]
+                span = t[cast(int, min(k + 1, len(t) - 1))] - t[k - 1]
                 time_ = t[k - 1] + span * (a / (a - b) if a != b else 0.5)
                 kind = "cross"
-            times.append(time_), kinds.append(kind), pairs.append(i), configs.append(int(after)), steps.append(k - 1)
+            times.append(time_)
+            kinds.append(kind)
+            pairs.append(i)
+            configs.append(int(after))
+            steps.append(k - 1)
     for j in range(c):
         st = status[:, m + j]
         # Moreau-Jean with e > 0 bounces a contact pressed by an accelerating surface in micro-steps (active, then
@@ -170,8 +182,11 @@ def _events(t, status, slips, rates, m, c) -> dict:
             closing = st[k] == CLOSED
             if closing and rates[k - 1, j] >= -threshold:
                 continue                                  # a resting contact's flicker, not an impact
-            times.append(t[k]), kinds.append("impact" if closing else "detach"), pairs.append(m + j)
-            configs.append(int(st[k])), steps.append(k - 1)
+            times.append(t[k])
+            kinds.append("impact" if closing else "detach")
+            pairs.append(m + j)
+            configs.append(int(st[k]))
+            steps.append(k - 1)
     order = np.argsort(times, kind="stable")
     return {"time": np.array(times)[order], "step": np.array(steps, dtype=np.int64)[order],
             "pair": np.array(pairs, dtype=np.int64)[order], "kind": np.array(kinds, dtype=object)[order],

@@ -3,19 +3,25 @@
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
 from numba import njit
 
 from ..lcp.kernels import masks_by_size, solve_small_lcp
 
+Array = npt.NDArray[np.float64]
+
 
 @njit(cache=True)
-def _popp(p, a):
+def _popp(p: npt.NDArray[np.float64], a: float) -> float:
     """Popp's magnitude N (alpha / (1 + gamma a) + beta + eta a^2) at a = |s|; p = (N, alpha, gamma, beta, eta)."""
-    return p[0] * (p[1] / (1.0 + p[2] * a) + p[3] + p[4] * a * a)
+    magnitude: float = p[0] * (p[1] / (1.0 + p[2] * a) + p[3] + p[4] * a * a)
+    return magnitude
 
 
 @njit(cache=True)
-def run_moreau(q, v, impulse, status, h, theta, M, W, K, C, f, WT, V, popp, WN, c0, c1, e, start):
+def run_moreau(q: Array, v: Array, impulse: Array, status: npt.NDArray[np.int64], h: float, theta: float, M: Array,
+               W: Array, K: Array, C: Array, f: Array, WT: Array, V: Array, popp: Array, WN: Array, c0: Array,
+               c1: Array, e: Array, start: int) -> int:
     """Steps start .. N-1 of the Moreau-Jean scheme (module docstring), in place. Per step: ``impulse`` (m + c)
     and ``status`` (m + c: 0 stick / 1 slip+ / 2 slip- for friction, 3 closed / 4 open for contacts).
     Returns the step that failed (an LCP with no solution) or -1."""

@@ -18,8 +18,10 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
+from typing import Any, NotRequired, TypedDict, cast
 
 import numpy as np
+import numpy.typing as npt
 
 from ..errors import ParameterError, SimulationError
 from ..validate import check_positive, check_range, parse_value
@@ -30,6 +32,9 @@ from .base import ErrorKind, Method
 #: Accepted eps (V or A): the error is O(eps), so above 0.1 the answer is the smoothing's, not the circuit's; below
 #: 1e-8 the stiffness (~1/eps) and the corner's width eps^2 leave double precision and the solver nothing to resolve.
 EPS_RANGE = (1e-8, 0.1)
+
+Vector = npt.NDArray[np.float64]
+Matrix = npt.NDArray[np.float64]
 
 
 @dataclass(frozen=True)
@@ -68,7 +73,7 @@ class Smoothing(Method, key="smooth"):
     bytes_per_value = 200.0
     description = "pairs smoothed by u = eps log(1 + exp(-y / eps^2)) (--eps), scipy Radau (--solver-rtol)"
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         object.__setattr__(self, "eps", check_range("eps", self.eps, *EPS_RANGE))
         rtol = parse_value("solver_rtol", self.solver_rtol)
         if not 1e-13 <= rtol <= 0.1:
@@ -108,34 +113,48 @@ class Smoothing(Method, key="smooth"):
         return _integrate(problem, self, np.array(x0, dtype=float))
 
 
-def _pair_law(y, eps):
+def _pair_law(y: npt.NDArray[np.float64], eps: float) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
     """u(y) and du/dy of the softplus law u = eps log(1 + exp(-y / eps^2))."""
     z = -y / (eps * eps)
     from scipy.special import expit
     return eps * np.logaddexp(0.0, z), -expit(z) / eps
 
 
+class _SolverStats(TypedDict):
+    """``metadata['stats']`` of a smoothing run (module docstring)."""
+
+    points: int
+    nfev: int
+    njev: int
+    nlu: int
+    max_rho_T: float
+    wall_s: NotRequired[float]
+
+
 def _integrate(problem: LCSProblem, method: Smoothing, x: np.ndarray) -> Trajectory:
     from scipy.integrate import solve_ivp
     start_clock = time.perf_counter()
     t0, t1 = problem.t_span
+    assert isinstance(problem.switching, Schedule)          # supports() admits schedules only
     edges = np.concatenate([[t0], problem.switching.breakpoints(t0, t1), [t1]])
     eps, atol = method.eps, method.atol if method.atol is not None else 1e-3 * method.solver_rtol
     ts, xs, cs = [np.array([t0])], [x[None, :]], []
-    stats = {"points": 0, "nfev": 0, "njev": 0, "nlu": 0, "max_rho_T": 0.0}
+    stats: _SolverStats = {"points": 0, "nfev": 0, "njev": 0, "nlu": 0, "max_rho_T": 0.0}
     scale_T = problem.switching.period if np.isfinite(problem.switching.period) else (t1 - t0)
     first_config = int(problem.switching.config_at(np.array([0.5 * (edges[0] + edges[1])]))[0])
     cs.append(np.array([first_config]))
     for a, b in zip(edges[:-1], edges[1:]):
         config_index = int(problem.switching.config_at(np.array([0.5 * (a + b)]))[0])
         c = problem.configurations[config_index]
+        assert c.E is not None and c.F is not None          # a Configuration fills them in (zero by default)
         A, B, C, E, F = c.A, c.B, c.C, c.E, c.F
 
-        def rhs(t, state, A=A, B=B, C=C, E=E, F=F):
+        def rhs(t: float, state: Vector, A: Matrix = A, B: Matrix = B, C: Matrix = C, E: Vector = E,
+                F: Vector = F) -> Vector:
             u, _ = _pair_law(C @ state + F, eps)
             return A @ state + E + B @ u
 
-        def jac(t, state, A=A, B=B, C=C, F=F):
+        def jac(t: float, state: Vector, A: Matrix = A, B: Matrix = B, C: Matrix = C, F: Vector = F) -> Matrix:
             _, du = _pair_law(C @ state + F, eps)
             return A + (B * du) @ C
 
@@ -165,7 +184,7 @@ def _integrate(problem: LCSProblem, method: Smoothing, x: np.ndarray) -> Traject
         x = pts[-1].copy()
     t, xx, config = np.concatenate(ts), np.vstack(xs), np.concatenate(cs)
     Cs = np.stack([c.C for c in problem.configurations])[config]
-    Fs = np.stack([c.F for c in problem.configurations])[config]
+    Fs = np.stack([cast(np.ndarray, c.F) for c in problem.configurations])[config]       # F filled in (zero by default)
     y = np.einsum("nkj,nj->nk", Cs, xx) + Fs
     u, _ = _pair_law(y, eps)
     stats["wall_s"] = time.perf_counter() - start_clock
@@ -178,7 +197,8 @@ def _integrate(problem: LCSProblem, method: Smoothing, x: np.ndarray) -> Traject
                                     label=method.label))
 
 
-def _events(t, u, y, config) -> dict:
+def _events(t: npt.NDArray[np.float64], u: npt.NDArray[np.float64], y: npt.NDArray[np.float64],
+            config: npt.NDArray[np.int64]) -> dict[str, npt.NDArray[Any]]:
     """Pair switches where sign(u - y) changes inside a configuration, placed by linear interpolation."""
     d = u - y
     steps, pairs = np.nonzero(np.sign(d[1:]) != np.sign(d[:-1]))

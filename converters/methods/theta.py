@@ -18,10 +18,12 @@ own affine map).
 from __future__ import annotations
 
 import time
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, replace
-from typing import NamedTuple
+from typing import TYPE_CHECKING, Any, NamedTuple, cast
 
 import numpy as np
+import numpy.typing as npt
 
 from ..errors import ParameterError, SimulationError
 from ..compiled import EVENTS_FULL, FORBIDDEN, MAX_INLINE_K, NO_SOLUTION, OK, kernel, register_state
@@ -29,7 +31,24 @@ from ..problems import Comparators, LCSProblem, Relay, Schedule, StateSwitching
 from ..problems.switching import initial_bits, law_channels
 from ..trajectory import Trajectory
 from .base import Method, PeriodMap, check_step_and_theta
-from .discretize import step_matrices
+from .discretize import StepMatrices, step_matrices
+
+if TYPE_CHECKING:
+    from ..problems.lcs import Configuration
+
+FloatArray = npt.NDArray[np.float64]
+#: Configurations and matrix sets by index (int32 for the compiled loops' ``which``, int64 elsewhere).
+IndexArray = npt.NDArray[np.integer[Any]]
+#: A matrix set's key: a configuration index, or (index, step start, dt) under sinusoidal inputs.
+SetKey = int | tuple[int, float, float]
+#: A run's grid and sets (:func:`_plan`): (t, config at each grid point, each step's set, set_configs, set_dts).
+Plan = tuple[FloatArray, IndexArray, npt.NDArray[np.int32], list[SetKey], FloatArray]
+#: A run's event columns (time, step, pair, kind, config), or what locates them when first read.
+EventTable = dict[str, npt.NDArray[Any]]
+Events = EventTable | Callable[[], EventTable]
+#: A state-driven law as the compiled loop's per-channel arrays (:func:`law_arrays`).
+LawArrays = tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray,
+                  npt.NDArray[np.int64], npt.NDArray[np.int64], FloatArray, npt.NDArray[np.int64]]
 
 
 @dataclass(frozen=True)
@@ -65,7 +84,7 @@ class Theta(Method, key="lcp"):
     description = ("LCP time-stepper: theta method (--theta in [0.5, 1], 1 = backward Euler; default 0.5 where the "
                    "step resolves every time constant of the circuit, else 1), one LCP per step")
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         check_step_and_theta(self)
         from ..validate import parse_value
         grade, growth = parse_value("grade", self.grade), parse_value("growth", self.growth)
@@ -78,7 +97,7 @@ class Theta(Method, key="lcp"):
         object.__setattr__(self, "growth", growth)
 
     @property
-    def graded(self) -> tuple:
+    def graded(self) -> tuple[float, ...]:
         """The grid's offsets after each switching instant (:attr:`grade`): grade h, then each step ``growth``
         times the last, while it is shorter than h; () for uniform steps."""
         if not self.grade:
@@ -90,7 +109,7 @@ class Theta(Method, key="lcp"):
             step *= self.growth
         return tuple(offsets)
 
-    def samples(self, problem) -> float:
+    def samples(self, problem: LCSProblem) -> float:
         """The uniform run's samples and the graded steps after each switching instant."""
         base = super().samples(problem)
         law, (t0, t1) = problem.switching, problem.t_span
@@ -145,7 +164,7 @@ class Theta(Method, key="lcp"):
 RESOLVED = 1.0
 
 
-def _flows(configurations, held: bool = True):
+def _flows(configurations: Iterable[Configuration], held: bool = True) -> Iterator[FloatArray]:
     """Each configuration's A and, with ``held``, A - B_j D_jj^-1 C_j for each pair j with D_jj > 0 (a diode's series
     resistance in conduction: a time constant the free flow does not show)."""
     for config in configurations:
@@ -156,7 +175,7 @@ def _flows(configurations, held: bool = True):
                     yield config.A - np.outer(config.B[:, j], config.C[j]) / config.D[j, j]
 
 
-def fastest_rate(configurations, *, held: bool = True, below: float = 0.0) -> float:
+def fastest_rate(configurations: Iterable[Configuration], *, held: bool = True, below: float = 0.0) -> float:
     """The largest |lambda| (1/s) of the configurations' flows (:func:`_flows`). With ``below`` > 0 a flow whose
     row-sum norm (a bound on its |lambda|) is at most ``below`` is not decomposed: the answer is then exact where it
     is above ``below``, and at most ``below`` otherwise (enough to compare with it, at a fraction of the cost on a
@@ -179,7 +198,8 @@ def stable_theta(rate: float, h: float) -> float:
     return 0.5 if h * rate <= RESOLVED else 1.0
 
 
-def overdamped_resonance(configurations, h: float, theta: float) -> tuple | None:
+def overdamped_resonance(configurations: Iterable[Configuration], h: float,
+                         theta: float) -> tuple[float, float, float] | None:
     """The resonance the theta method damps most beyond the circuit's own damping, as (frequency in Hz, Q, the
     ratio of the scheme's extra decay rate to the mode's own), where that ratio exceeds 1; None where no
     oscillatory mode is damped more by the step than by the circuit. The scheme's decay rate of a mode lambda is
@@ -199,7 +219,7 @@ def overdamped_resonance(configurations, h: float, theta: float) -> tuple | None
     return worst
 
 
-def default_theta(configurations, h: float) -> float:
+def default_theta(configurations: Iterable[Configuration], h: float) -> float:
     """:func:`stable_theta` for ``configurations`` stepped at ``h``, their flows decomposed only where a norm bound
     leaves it open (the default of every run and every sweep point)."""
     return stable_theta(fastest_rate(configurations, below=RESOLVED / h), h)
@@ -228,7 +248,7 @@ def BackwardEuler(h: float) -> Theta:
 MAX_STEPS = 200_000_000
 
 
-def time_grid(problem: LCSProblem, h: float, graded: tuple = ()) -> np.ndarray:
+def time_grid(problem: LCSProblem, h: float, graded: tuple[float, ...] = ()) -> np.ndarray:
     """Uniform grid of step h over t_span, with every switching instant inserted; ``graded``: offsets after each
     switching instant (t0 among them where the schedule switches there) that replace the uniform points they span
     (:attr:`Theta.graded`).
@@ -242,7 +262,8 @@ def time_grid(problem: LCSProblem, h: float, graded: tuple = ()) -> np.ndarray:
     uniform[-1] = t1
     breaks = problem.switching.breakpoints(t0, t1)
     if graded:
-        uniform, breaks = _graded(problem.switching, uniform, breaks, t0, t1, h, np.asarray(graded))
+        # graded steps follow a schedule's instants (Theta.supports)
+        uniform, breaks = _graded(cast(Schedule, problem.switching), uniform, breaks, t0, t1, h, np.asarray(graded))
     if breaks.size == 0:
         return uniform
     nearest = np.searchsorted(breaks, uniform)         # breaks[nearest - 1] < uniform <= breaks[nearest]
@@ -255,7 +276,8 @@ def time_grid(problem: LCSProblem, h: float, graded: tuple = ()) -> np.ndarray:
     return np.unique(grid) if (grid[1:] == grid[:-1]).any() else grid      # np.union1d, without its overhead
 
 
-def _graded(schedule, uniform: np.ndarray, breaks: np.ndarray, t0: float, t1: float, h: float, offsets: np.ndarray):
+def _graded(schedule: Schedule, uniform: np.ndarray, breaks: np.ndarray, t0: float, t1: float, h: float,
+            offsets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(uniform, breaks) with the graded points after each switching instant: each instant's offsets (those before
     the next instant and t1) join the breaks, and the uniform points they span (up to h/1000 past the last) go."""
     phase = t0 % schedule.period
@@ -277,7 +299,8 @@ def _graded(schedule, uniform: np.ndarray, breaks: np.ndarray, t0: float, t1: fl
     return uniform[keep], np.sort(np.concatenate([breaks, *points]))
 
 
-def _step_sets(dt: np.ndarray, step_config: np.ndarray, h: float, n_configs: int):
+def _step_sets(dt: np.ndarray, step_config: np.ndarray, h: float,
+               n_configs: int) -> tuple[npt.NDArray[np.int32], list[SetKey], FloatArray]:
     """Matrix set of each step: sets 0..m-1 are the uniform step h in each configuration, then one per
     distinct (configuration, shorter step) at the switching instants. Returns (which, set_configs, set_dts)."""
     which = step_config.astype(np.int32)
@@ -291,10 +314,10 @@ def _step_sets(dt: np.ndarray, step_config: np.ndarray, h: float, n_configs: int
     # have equal steps and share their elimination (discretize.step_matrices)
     first_of_fraction, which_fraction = _distinct(fractions)
     set_dts = np.concatenate([np.full(n_configs, h), dt[split][first_of_fraction[which_fraction]][first]])
-    return which, set_configs, set_dts
+    return which, cast("list[SetKey]", set_configs), set_dts          # its ints (a list's type is invariant)
 
 
-def _distinct(keys: np.ndarray):
+def _distinct(keys: np.ndarray) -> tuple[IndexArray, IndexArray]:
     """(first, inverse) of np.unique over ``keys``: the index of each distinct value's first occurrence (in sorted
     order of the values) and each key's distinct value; a period's few split steps without np.unique's overhead."""
     if keys.size > 64:
@@ -306,12 +329,12 @@ def _distinct(keys: np.ndarray):
             np.array([distinct.index(key) for key in listed], dtype=np.int32))
 
 
-def _period_grid(problem: LCSProblem, h: float, graded: tuple = ()):
+def _period_grid(problem: LCSProblem, h: float, graded: tuple[float, ...] = ()) -> Plan | None:
     """One period of a run that repeats it, from a whole period m T: (local grid [0, T] with the switching
     instants, each step's configuration, each step's matrix set, set_configs, set_dts); None when the run does
     not repeat a period of whole steps (no period, T not a whole number of steps, a start other than m T: a run
     kept in chunks of whole periods starts each on the same grid as the run whole)."""
-    schedule = problem.switching
+    schedule = cast(Schedule, problem.switching)          # a plan's problem switches on a schedule
     T, n_configs = schedule.period, len(problem.configurations)
     per_period = T / h if np.isfinite(T) else 0.0
     steps = int(round(per_period))
@@ -326,13 +349,13 @@ def _period_grid(problem: LCSProblem, h: float, graded: tuple = ()):
         # sinusoidal inputs: every step of the period has its own E and F (the same in every period): one set per
         # step, named (configuration, start, dt) for :func:`_set_configuration`
         dts = np.diff(local)
-        set_configs = [(int(c), float(t), float(dt)) for c, t, dt in zip(local_config, local[:-1], dts)]
+        set_configs: list[SetKey] = [(int(c), float(t), float(dt)) for c, t, dt in zip(local_config, local[:-1], dts)]
         return local, local_config, np.arange(dts.size, dtype=np.int32), set_configs, dts
     local_which, set_configs, set_dts = _step_sets(np.diff(local), local_config, h, n_configs)
     return local, local_config, local_which, set_configs, set_dts
 
 
-def _set_configuration(problem: LCSProblem, key, theta: float):
+def _set_configuration(problem: LCSProblem, key: SetKey, theta: float) -> Configuration:
     """The Configuration of a matrix set: a configuration index, or (index, step start, dt) under sinusoidal
     inputs (E at the step's theta point, F at its end, where the step's LCP holds)."""
     if isinstance(key, tuple):
@@ -341,7 +364,7 @@ def _set_configuration(problem: LCSProblem, key, theta: float):
     return problem.configurations[key]
 
 
-def _repeat_period(period, T: float, t1: float, h: float, t0: float = 0.0):
+def _repeat_period(period: Plan, T: float, t1: float, h: float, t0: float = 0.0) -> Plan:
     """(t, config, which, set_configs, set_dts) of the run over [t0, t1] (t0 a whole number of periods) made of
     the period repeated (config: the configuration at each grid point, :attr:`StepPlan.config`); a run that
     ends inside a step gets that step's own matrix set (the last one). Each array is written once, in place
@@ -373,11 +396,12 @@ def _repeat_period(period, T: float, t1: float, h: float, t0: float = 0.0):
     return t, config, which, set_configs, set_dts
 
 
-def _too_long(problem: LCSProblem, h: float, graded: tuple = ()) -> bool:
+def _too_long(problem: LCSProblem, h: float, graded: tuple[float, ...] = ()) -> bool:
     """More than MAX_STEPS steps in the repeated grid (the general grid then refuses the run)."""
     T, (t0, t1) = problem.switching.period, problem.t_span
     periods = int(np.ceil((t1 - t0) / T * (1.0 - 1e-12)))
-    return periods * (int(round(T / h)) + len(problem.switching.starts) * (1 + len(graded))) > MAX_STEPS
+    starts = cast(Schedule, problem.switching).starts                  # asked of a schedule's runs only
+    return periods * (int(round(T / h)) + len(starts) * (1 + len(graded))) > MAX_STEPS
 
 
 class GridPlan(NamedTuple):
@@ -389,18 +413,18 @@ class GridPlan(NamedTuple):
     step_config: np.ndarray
     #: Each step's matrix set.
     which: np.ndarray
-    #: Each matrix set's configuration and step.
-    set_configs: np.ndarray
+    #: Each matrix set's configuration (:data:`SetKey`) and step.
+    set_configs: list[SetKey]
     set_dts: np.ndarray
 
 
-def plan_arrays(problem: LCSProblem, h: float, graded: tuple = ()) -> GridPlan:
+def plan_arrays(problem: LCSProblem, h: float, graded: tuple[float, ...] = ()) -> GridPlan:
     """The grid and matrix sets of a run of ``problem`` at step ``h`` (:func:`_plan`)."""
     t, config, which, set_configs, set_dts = _plan(problem, h, graded=graded)
     return GridPlan(t, config[1:], which, set_configs, set_dts)
 
 
-def _plan(problem: LCSProblem, h: float, period=None, graded: tuple = ()):
+def _plan(problem: LCSProblem, h: float, period: Plan | None = None, graded: tuple[float, ...] = ()) -> Plan:
     """(t, config, which, set_configs, set_dts) of a run: config the configuration at each grid point (each
     step's, the first step's at t0), which each step's matrix set.
 
@@ -416,7 +440,7 @@ def _plan(problem: LCSProblem, h: float, period=None, graded: tuple = ()):
     if period is None or _too_long(problem, h, graded):
         t = time_grid(problem, h, graded)
         config = np.empty(t.size, dtype=np.int64)
-        config[1:] = problem.switching.config_at(0.5 * (t[:-1] + t[1:]))
+        config[1:] = cast(Schedule, problem.switching).config_at(0.5 * (t[:-1] + t[1:]))
         config[0] = config[1]
         return (t, config, *_step_sets(np.diff(t), config[1:], h, len(problem.configurations)))
     return _repeat_period(period, problem.switching.period, problem.t_span[1], h, problem.t_span[0])
@@ -435,9 +459,9 @@ class StepPlan:
     #: The configuration at each grid point: each step's (step j at config[j + 1]), the first step's at t0.
     config: np.ndarray
     which: np.ndarray
-    mats: object
+    mats: StepMatrices
     #: The period the grid repeats (:func:`_period_grid`), or None.
-    period: tuple | None = None
+    period: Plan | None = None
 
     @classmethod
     def build(cls, problem: LCSProblem, method: Theta) -> "StepPlan":
@@ -452,7 +476,7 @@ class StepPlan:
         """Each step's configuration."""
         return self.config[1:]
 
-    def spanning(self, t_end: float, x0=None) -> "StepPlan":
+    def spanning(self, t_end: float, x0: np.ndarray | None = None) -> "StepPlan":
         """The plan of the same problem over [t0, t_end] (from x0, default the problem's): the period's grid
         and matrix sets repeated when the plan has a period (one more set when the run ends inside a
         step), otherwise built anew. The run's memory is checked first, as
@@ -471,7 +495,7 @@ class StepPlan:
             mats = mats.concatenate(extra)
         return StepPlan(problem, self.method, t, config, which, mats, self.period)
 
-    def advance(self, x0):
+    def advance(self, x0: npt.ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray, int]:
         """Run every step from x0: (x, u, y, general_solves), arrays of shape (N, n), (N, k), (N, k)."""
         problem = self.problem
         x_init = _checked_start(problem, x0)
@@ -483,7 +507,7 @@ class StepPlan:
         u[0], y[0] = _initial_pair(problem, int(self.config[0]), x_init, problem.t_span[0])
         return x, u, y, self.steps(x, u, y)
 
-    def steps(self, x, u, y) -> int:
+    def steps(self, x: FloatArray, u: FloatArray, y: FloatArray) -> int:
         """Every step from x[0], in place of rows 1.. of x, u, y (u[0], y[0] are not read); returns the
         number of steps solved by the general LCP solver."""
         mats, which, t = self.mats, self.which, self.t
@@ -525,19 +549,21 @@ class StepPlan:
         kernel("step_jacobian")(self.which, u, self.mats.Phi_b, self.mats.H, self.mats.CPhi, self.mats.M, jac)
         return jac
 
-    def trajectory(self, x0, wall_s: float = 0.0) -> Trajectory:
+    def trajectory(self, x0: npt.ArrayLike, wall_s: float = 0.0) -> Trajectory:
         start_clock = time.perf_counter()
         x, u, y, general_solves = self.advance(x0)
         t, config, M, which = self.t, self.config, self.mats.M, self.which
-        events = (lambda: _events(t, u, y, config, M, which))        # located when first read
-        jumps = ()
+        events: Events = (lambda: _events(t, u, y, config, M, which))        # located when first read
+        jumps: tuple[tuple[float, float], ...] = ()
         if self.problem.jumps:
             t, x, u, y, config, events, jumps = _with_jumps(self.problem, t, x, u, y, config, events)
         return _trajectory(self.problem, self.method, t, x, u, y, config, events,
                            wall_s + time.perf_counter() - start_clock, general_solves=general_solves, jumps=jumps)
 
 
-def _with_jumps(problem: LCSProblem, t, x, u, y, config, events):
+def _with_jumps(problem: LCSProblem, t: FloatArray, x: FloatArray, u: FloatArray, y: FloatArray, config: IndexArray,
+                events: Events) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, IndexArray, Events,
+                                         tuple[tuple[float, float], ...]]:
     """The run with a sample after each jump (:class:`~converters.problems.Jump`), at the same time: the state
     the step took from (P x + q) beside the one before it. The steps fold the jump into the step they take from a
     switching instant; without this row the samples would join the state before the jump to the one a step after
@@ -557,17 +583,18 @@ def _with_jumps(problem: LCSProblem, t, x, u, y, config, events):
     jumps = tuple((float(t[j]), float(problem.configurations[config[j + 1]].jump.loss(x[j]))) for j, _ in jumped)
     rows = np.array([j for j, _ in jumped])
     at = rows + 1                                        # inserted before the sample after each jump
-    t, u, y, config = (np.insert(a, at, a[at], axis=0) for a in (t, u, y, config))
+    t, u, y = (np.insert(a, at, a[at], axis=0) for a in (t, u, y))
+    config = np.insert(config, at, config[at], axis=0)
     t[at + np.arange(at.size)] = t[rows + np.arange(at.size)]
     x = np.insert(x, at, np.array([after for _, after in jumped]), axis=0)
 
-    def moved():
+    def moved() -> EventTable:
         table = events() if callable(events) else events
         return dict(table, step=table["step"] + np.searchsorted(rows, table["step"], side="right"))
     return t, x, u, y, config, moved, jumps
 
 
-def _checked_start(problem: LCSProblem, x0) -> np.ndarray:
+def _checked_start(problem: LCSProblem, x0: npt.ArrayLike) -> np.ndarray:
     x_init = np.asarray(x0, dtype=float)
     if x_init.shape != (problem.n,) or not np.isfinite(x_init).all():
         raise ParameterError(f"x0 must be {problem.n} finite numbers; got {x0!r}")
@@ -578,29 +605,31 @@ class StepPlanMap(PeriodMap):
     """The stepper's map over a scheduled problem's span, with the exact Jacobian of the discrete map.
     One plan and one set of run buffers serve every evaluation."""
 
-    def __init__(self, plan: StepPlan):
+    def __init__(self, plan: StepPlan) -> None:
         super().__init__()
         self.plan = plan
         N, n, k = plan.t.shape[0], plan.problem.n, plan.problem.k
         self._x, self._u, self._y = np.empty((N, n)), np.zeros((N, k)), np.empty((N, k))
 
-    def _run(self, x0) -> np.ndarray:
+    def _run(self, x0: npt.ArrayLike) -> np.ndarray:
         self._x[0] = _checked_start(self.plan.problem, x0)
         self.plan.steps(self._x, self._u, self._y)
-        return self._x[-1].copy()
+        end: np.ndarray = self._x[-1].copy()
+        return end
 
-    def end(self, x0):
+    def end(self, x0: np.ndarray) -> np.ndarray:
         self.evaluations += 1
         return self._run(x0)
 
-    def __call__(self, x0):
+    def __call__(self, x0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         self.evaluations += 1
         end = self._run(x0)
         return end, self.plan.jacobian(self._u)
 
 
-def _trajectory(problem: LCSProblem, method: Theta, t, x, u, y, config, events, wall_s, relay=None,
-                general_solves=0, jumps: tuple = ()) -> Trajectory:
+def _trajectory(problem: LCSProblem, method: Theta, t: FloatArray, x: FloatArray, u: FloatArray, y: FloatArray,
+                config: IndexArray, events: Events, wall_s: float, relay: FloatArray | None = None,
+                general_solves: int = 0, jumps: tuple[tuple[float, float], ...] = ()) -> Trajectory:
     """The stepper's Trajectory: backward Euler's samples are integrated by its own end-point rule,
     theta < 1 by the trapezoidal rule (the scheme's own quadrature)."""
     return Trajectory(t=t, x=x, u=u, y=y, config=config, state_names=problem.state_names,
@@ -612,17 +641,17 @@ def _trajectory(problem: LCSProblem, method: Theta, t, x, u, y, config, events, 
                       metadata=dict(problem.metadata, h=method.h, theta=method.theta, label=method.label))
 
 
-def _config_stacks(problem: LCSProblem):
+def _config_stacks(problem: LCSProblem) -> tuple[FloatArray, ...]:
     return tuple(np.ascontiguousarray(np.stack([getattr(c, key) for c in problem.configurations]))
                  for key in "ABCDEF")
 
 
-def law_arrays(law) -> tuple:
+def law_arrays(law: StateSwitching | Comparators) -> LawArrays:
     """A state-driven law (:class:`StateSwitching` or :class:`Comparators`) as the compiled loop's per-channel
     arrays: (c, d, low, slope, ramp_period, delay, band, latch, clocked, limit, table)."""
     channels, table = law_channels(law)
     ramps = [ch.function.ramp for ch in channels]
-    column = lambda values, dtype=float: np.array(values, dtype=dtype)         # noqa: E731
+    column: Callable[..., npt.NDArray[Any]] = lambda values, dtype=float: np.array(values, dtype=dtype)  # noqa: E731
     return (np.ascontiguousarray(np.stack([ch.function.c for ch in channels])),
             column([ch.function.d for ch in channels]),
             column([r.low if r is not None else 0.0 for r in ramps]),
@@ -636,7 +665,7 @@ def law_arrays(law) -> tuple:
 
 def _solve_state_switched(problem: LCSProblem, method: Theta, x0: np.ndarray, start: float) -> Trajectory:
     from . import theta_kernels                 # numba's JIT (the ahead-of-time module holds the scheduled loop)
-    law = problem.switching
+    law = cast("StateSwitching | Comparators", problem.switching)         # Theta.solve's state-driven laws
     A, B, C, D, E, F = _config_stacks(problem)
     n_configs = len(problem.configurations)
     mats = step_matrices(list(problem.configurations), np.full(n_configs, method.h), method.theta)
@@ -662,10 +691,12 @@ def _solve_state_switched(problem: LCSProblem, method: Theta, x0: np.ndarray, st
             break
         if status == EVENTS_FULL:
             capacity *= 4
-            ev_time, ev_config, ev_step = (np.resize(a, capacity) for a in (ev_time, ev_config, ev_step))
+            ev_time, ev_config, ev_step = (np.resize(ev_time, capacity), np.resize(ev_config, capacity),
+                                           np.resize(ev_step, capacity))
             continue
         if status == FORBIDDEN:
-            law.config(int(state[0]), float(ev_time[state[2]]))        # raises, naming the channels' states
+            # raises, naming the channels' states (only a Comparators' table holds -1)
+            cast(Comparators, law).config(int(state[0]), float(ev_time[state[2]]))
         raise SimulationError(f"the step LCP at t = {t[j]:.6g} s could not be solved inline (k = {k}); the "
                               "state-driven laws need LCPs the inline solver takes: try a smaller h")
     count = int(state[2])
@@ -676,7 +707,7 @@ def _solve_state_switched(problem: LCSProblem, method: Theta, x0: np.ndarray, st
 
 def _solve_relay(problem: LCSProblem, method: Theta, x0: np.ndarray, start: float) -> Trajectory:
     from . import theta_kernels                 # numba's JIT (the ahead-of-time module holds the scheduled loop)
-    law: Relay = problem.switching
+    law = cast(Relay, problem.switching)                 # Theta.solve's remaining law
     A, B, C, D, E, F = _config_stacks(problem)
     t = time_grid(problem, method.h)   # step h, with the ramp resets inserted
     N, n, k = t.size, problem.n, problem.k
@@ -696,7 +727,8 @@ def _solve_relay(problem: LCSProblem, method: Theta, x0: np.ndarray, start: floa
     return _trajectory(problem, method, t, x, u, y, config, events, time.perf_counter() - start, relay=blend)
 
 
-def _merge_events(pair_events: dict, times, steps, configs) -> dict:
+def _merge_events(pair_events: EventTable, times: FloatArray, steps: npt.NDArray[np.int64],
+                  configs: npt.NDArray[np.int64]) -> EventTable:
     """Pair events and switching-law events in one table, sorted by time."""
     n_pairs = len(pair_events["time"])
     out = {"time": np.concatenate([pair_events["time"], times]),
@@ -708,7 +740,8 @@ def _merge_events(pair_events: dict, times, steps, configs) -> dict:
     return {key: value[order] for key, value in out.items()}
 
 
-def _initial_pair(problem: LCSProblem, config: int, x0: np.ndarray, t0: float = 0.0):
+def _initial_pair(problem: LCSProblem, config: int, x0: np.ndarray,
+                  t0: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """The consistent pair at t0: LCP(C x0 + F, D); when D is singular and no solution exists, u = 0."""
     c = problem.configuration_at(config, t0)
     q = c.C @ x0 + c.F
@@ -720,13 +753,14 @@ def _initial_pair(problem: LCSProblem, config: int, x0: np.ndarray, t0: float = 
     return np.zeros(problem.k), q
 
 
-def _no_solution_message(t, M, q) -> str:
+def _no_solution_message(t: float, M: FloatArray, q: FloatArray) -> str:
     return (f"the step LCP at t = {t:.6g} s has no solution (M = {M[0, 0]:.4g} <= 0 with q = {q[0]:.4g} < 0): "
             "the circuit forces a current into a blocking diode or an inductor into an open switch; "
             "check the model or add the missing parasitic path")
 
 
-def _events(t, u, y, config, M_stack, which) -> dict:
+def _events(t: FloatArray, u: FloatArray, y: FloatArray, config: IndexArray, M_stack: FloatArray,
+            which: IndexArray) -> EventTable:
     """Sub-step estimate of each complementarity switch from the step's own LCP data.
 
     Activation (y falls through 0): with u_i held at 0 the step would end at y_i = -M_ii u_{j+1,i};

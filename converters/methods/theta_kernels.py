@@ -16,7 +16,11 @@ for u, so a step's dependency chain is one affine map.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import Any
+
 import numpy as np
+import numpy.typing as npt
 from numba import njit, types
 from numba.cpython.unsafe.tuple import tuple_setitem
 from numba.extending import overload
@@ -29,49 +33,66 @@ from ..lcp.murty import sizes as pivoting_sizes
 from ..lcp.murty import solve_warm
 from ..lcp.result import max_abs_matrix
 
+#: The kernels' arrays: float64; index arrays of any integer width (the ahead-of-time module's are int32, numba's
+#: JIT compiles a version for each); the int64 arrays the callers allocate.
+Floats = npt.NDArray[np.float64]
+Indices = npt.NDArray[np.integer[Any]]
+Ints = npt.NDArray[np.int64]
+#: The one-pair loop's ``state``: n zeros (the state in registers) or None (in x).
+Registers = tuple[float, ...] | None
 
-def _size(state, x):
+# _size, _get and _put are numba's keys for the overloads after them: their bodies never run, and their values are
+# those of the implementation numba picks for the argument types (Any here). numba checks an overload's parameters,
+# annotations included, against those of the implementation it returns: the lambdas of _size_impl and _get_impl
+# take no annotations, so neither do they; _put_impl and its two functions share one (Any: numba's types in the
+# overload, the values in its implementations).
+
+
+def _size(state: Registers, x: Floats) -> Any:
     """n: the length of the register tuple (a compile-time constant) or the width of x."""
 
 
+# numba matches an overload's parameters, annotations included, against those of the lambdas it returns, which cannot
+# carry annotations: these two stay bare
 @overload(_size)
-def _size_impl(state, x):
+def _size_impl(state, x) -> Callable[..., int]:  # type: ignore[no-untyped-def]
     if isinstance(state, types.UniTuple):
         return lambda state, x: len(state)
     return lambda state, x: x.shape[1]
 
 
-def _get(current, x, j, l):
+def _get(current: Registers, x: Floats, j: int, l: int) -> Any:
     """Component l of the state of row j: from the registers, or from x."""
 
 
 @overload(_get)
-def _get_impl(current, x, j, l):
+def _get_impl(current, x, j, l) -> Callable[..., float]:  # type: ignore[no-untyped-def]
     if isinstance(current, types.UniTuple):
         return lambda current, x, j, l: current[l]
     return lambda current, x, j, l: x[j, l]
 
 
-def _put(state, x, j, i, value):
+def _put(state: Registers, x: Floats, j: int, i: int, value: float) -> Any:
     """Component i of the state of row j set to value, in x and (when it is a tuple) in the returned state."""
 
 
 @overload(_put)
-def _put_impl(state, x, j, i, value):
+def _put_impl(state: Any, x: Any, j: Any, i: Any, value: Any) -> Callable[..., Registers]:
     if isinstance(state, types.UniTuple):
-        def into_registers(state, x, j, i, value):
+        def into_registers(state: Any, x: Any, j: Any, i: Any, value: Any) -> tuple[float, ...]:
             x[j, i] = value
-            return tuple_setitem(state, i, value)
+            return tuple_setitem(state, i, value)  # type: ignore[call-arg]  # numba's stub lists its typing context
         return into_registers
 
-    def into_rows(state, x, j, i, value):
+    def into_rows(state: Any, x: Any, j: Any, i: Any, value: Any) -> Any:
         x[j, i] = value
         return state
     return into_rows
 
 
 @njit(cache=True)
-def branch_maps(Phi, Gamma, H, C, F, M, Phi_b, Gamma_b, CPhi, q0):
+def branch_maps(Phi: Floats, Gamma: Floats, H: Floats, C: Floats, F: Floats, M: Floats, Phi_b: Floats,
+                Gamma_b: Floats, CPhi: Floats, q0: Floats) -> None:
     """The step as affine maps of its start state (module docstring), for every matrix set s, in place:
     CPhi = C Phi (k, n) and q0 = C Gamma + F (k): the step LCP's q = CPhi x + q0; Phi_b[s, 0] = Phi,
     Gamma_b[s, 0] = Gamma: every pair free; for one pair with M > 0, Phi_b[s, 1] = Phi - H CPhi / M and
@@ -100,7 +121,9 @@ def branch_maps(Phi, Gamma, H, C, F, M, Phi_b, Gamma_b, CPhi, q0):
 
 
 @njit(cache=True)
-def run_steps(which, Phi, Gamma, H, C, F, M, Phi_b, Gamma_b, CPhi, q0, x, u, y, start, inline, period, state):
+def run_steps(which: Indices, Phi: Floats, Gamma: Floats, H: Floats, C: Floats, F: Floats, M: Floats, Phi_b: Floats,
+              Gamma_b: Floats, CPhi: Floats, q0: Floats, x: Floats, u: Floats, y: Floats, start: int, inline: bool,
+              period: int, state: Registers) -> tuple[int, int]:
     """Advance x, u, y from row ``start`` to the end; step j uses the matrix set ``which[j]``.
 
     Returns (status, j): OK when every step is done, NEEDS_GENERAL_SOLVER at the first step j
@@ -197,7 +220,8 @@ def run_steps(which, Phi, Gamma, H, C, F, M, Phi_b, Gamma_b, CPhi, q0, x, u, y, 
 
 
 @njit(cache=True)
-def run_scalar(which, Phi_b, Gamma_b, CPhi, q0, M, x, u, y, start, state):
+def run_scalar(which: Indices, Phi_b: Floats, Gamma_b: Floats, CPhi: Floats, q0: Floats, M: Floats, x: Floats,
+               u: Floats, y: Floats, start: int, state: Registers) -> tuple[int, int]:
     """k = 1: the step as the affine map of its branch (module docstring): q = CPhi x + q0; q >= 0 frees the
     pair (u = 0), q < 0 holds it (u = -q / M > 0) or, when M <= 0, has no solution (NO_SOLUTION at that step).
     ``state``: n zeros to carry the state in registers, or None to read it from x
@@ -234,7 +258,8 @@ def run_scalar(which, Phi_b, Gamma_b, CPhi, q0, M, x, u, y, start, state):
 
 
 @njit(cache=True)
-def theta_matrices(A, B, C, D, E, F, dt, theta, Phi, Gamma, H, M, W):
+def theta_matrices(A: Floats, B: Floats, C: Floats, D: Floats, E: Floats, F: Floats, dt: float, theta: float,
+                   Phi: Floats, Gamma: Floats, H: Floats, M: Floats, W: Floats) -> bool:
     """One-step matrices of one configuration over dt (the formulas of :mod:`.discretize`), in place:
     W = (I - dt theta A)^-1, Phi = W (I + dt (1 - theta) A), Gamma = dt W E, H = dt W B, M = D + C H.
     Returns False when I - dt theta A is singular. Every plan's matrices come from here
@@ -273,7 +298,7 @@ def theta_matrices(A, B, C, D, E, F, dt, theta, Phi, Gamma, H, M, W):
 
 
 @njit(cache=True, inline="always")
-def _gamma(W, E, dt, Gamma):
+def _gamma(W: Floats, E: Floats, dt: float, Gamma: Floats) -> None:
     """Gamma = W (dt E)."""
     n = W.shape[0]
     for i in range(n):
@@ -284,7 +309,9 @@ def _gamma(W, E, dt, Gamma):
 
 
 @njit(cache=True)
-def set_matrices(A, B, C, D, E, F, dts, theta, leader, Phi, Gamma, H, M, Phi_b, Gamma_b, CPhi, q0):
+def set_matrices(A: Floats, B: Floats, C: Floats, D: Floats, E: Floats, F: Floats, dts: Floats, theta: float,
+                 leader: Indices, Phi: Floats, Gamma: Floats, H: Floats, M: Floats, Phi_b: Floats, Gamma_b: Floats,
+                 CPhi: Floats, q0: Floats) -> bool:
     """Every matrix set s (configuration matrices A[s]..F[s], step dts[s]) in place: :func:`theta_matrices` and
     :func:`branch_maps`. ``leader[s]`` <= s: the first set with the same A, B, C, D and step (s itself when
     none): a set that differs from its leader only in E, F (a source's levels and ramps, a sinusoidal input's
@@ -314,7 +341,9 @@ def set_matrices(A, B, C, D, E, F, dts, theta, leader, Phi, Gamma, H, M, Phi_b, 
 
 
 @njit(cache=True)
-def _lcp_step(Phi, Gamma, H, C, F, M, x_from, x_to, u_to, y_to, mask, order, work, xf, q, z):
+def _lcp_step(Phi: Floats, Gamma: Floats, H: Floats, C: Floats, F: Floats, M: Floats, x_from: Floats, x_to: Floats,
+              u_to: Floats, y_to: Floats, mask: int, order: Ints, work: Floats, xf: Floats, q: Floats,
+              z: Floats) -> int:
     """One theta step from x_from with given matrices: x_free, the step LCP, x_to, u_to, y_to.
     Returns the new active-set mask (or -1 when the inline solver finds no basis)."""
     n, k = H.shape[0], H.shape[1]
@@ -346,7 +375,9 @@ def _lcp_step(Phi, Gamma, H, C, F, M, x_from, x_to, u_to, y_to, mask, order, wor
 
 
 @njit(cache=True, inline="always")
-def _uniform_step(Phi, Gamma, H, C, F, M, s, x, u, y, j, mask, order, work, xf, q, z):
+def _uniform_step(Phi: Floats, Gamma: Floats, H: Floats, C: Floats, F: Floats, M: Floats, s: int, x: Floats,
+                  u: Floats, y: Floats, j: int, mask: int, order: Ints, work: Floats, xf: Floats, q: Floats,
+                  z: Floats) -> int:
     """Step j -> j + 1 with the stacked uniform-step matrices of set s (no slicing: indices only); k = 1 in
     closed form. Returns the active-set mask, or -1 (no solution the inline solver finds).
 
@@ -396,7 +427,7 @@ def _uniform_step(Phi, Gamma, H, C, F, M, s, x, u, y, j, mask, order, work, xf, 
 
 
 @njit(cache=True, inline="always")
-def _surface(c, d, x, phase, low, slope):
+def _surface(c: Floats, d: float, x: Floats, phase: float, low: float, slope: float) -> float:
     """s = c . x + d - ramp at the given phase of the ramp period (no ramp: slope = low = 0)."""
     acc = d - low - slope * phase
     for i in range(c.shape[0]):
@@ -405,7 +436,7 @@ def _surface(c, d, x, phase, low, slope):
 
 
 @njit(cache=True, inline="always")
-def _log_switch(ev_time, ev_config, ev_step, count, time, config, j):
+def _log_switch(ev_time: Floats, ev_config: Ints, ev_step: Ints, count: int, time: float, config: int, j: int) -> int:
     ev_time[count] = time
     ev_config[count] = config
     ev_step[count] = j
@@ -413,8 +444,11 @@ def _log_switch(ev_time, ev_config, ev_step, count, time, config, j):
 
 
 @njit(cache=True)
-def run_state_switched(A, B, C, D, E, F, Phi, Gamma, H, M, t, h, theta, c, d, low, slope, ramp_period, delay, band,
-                       latch, clocked, limit, table, x, u, y, config, start, state, ev_time, ev_config, ev_step):
+def run_state_switched(A: Floats, B: Floats, C: Floats, D: Floats, E: Floats, F: Floats, Phi: Floats, Gamma: Floats,
+                       H: Floats, M: Floats, t: Floats, h: float, theta: float, c: Floats, d: Floats, low: Floats,
+                       slope: Floats, ramp_period: Floats, delay: Floats, band: Floats, latch: Ints, clocked: Ints,
+                       limit: Floats, table: Ints, x: Floats, u: Floats, y: Floats, config: Ints, start: int,
+                       state: Ints, ev_time: Floats, ev_config: Ints, ev_step: Ints) -> tuple[int, int]:
     """The theta stepper under state-driven laws (:class:`StateSwitching`, :class:`Comparators`): m channels,
     channel ch with s_ch = c[ch] . x + d[ch] - ramp_ch, its state bit ch of ``bits`` (0: below, 1: above), the
     configuration ``table[bits]``.
@@ -553,7 +587,9 @@ def run_state_switched(A, B, C, D, E, F, Phi, Gamma, H, M, t, h, theta, c, d, lo
 
 
 @njit(cache=True)
-def run_relay(A, B, C, D, E, F, low, high, t, h, theta, c, d, x, u, y, blend, start):
+def run_relay(A: Floats, B: Floats, C: Floats, D: Floats, E: Floats, F: Floats, low: int, high: int, t: Floats,
+              h: float, theta: float, c: Floats, d: float, x: Floats, u: Floats, y: Floats, blend: Floats,
+              start: int) -> tuple[int, int]:
     """The theta stepper under the implicit relay (:class:`Relay`): configuration ``low`` blended
     towards ``high`` by z in [0, 1], with f_high - f_low frozen at the step start and -s(x_end) in
     N_[0,1](z). Each step is one LCP of size k + 2: the pairs of ``low`` and the relay written as
@@ -630,12 +666,12 @@ def run_relay(A, B, C, D, E, F, low, high, t, h, theta, c, d, x, u, y, blend, st
                 acc += M[i, l] * zb[l]
             y[j + 1, i] = acc
             u[j + 1, i] = zb[i]
-        blend[j + 1] = zr
+        blend[j + 1] = zr  # type: ignore[assignment]  # numpy's stubs read an element of zb as Any: zr is a float
     return OK, t.shape[0] - 1
 
 
 @njit(cache=True)
-def _left_multiply(left, right, work):
+def _left_multiply(left: Floats, right: Floats, work: Floats) -> None:
     """right <- left right (n x n; ``work`` n x n scratch; left may be right)."""
     n = right.shape[0]
     for r in range(n):
@@ -650,7 +686,8 @@ def _left_multiply(left, right, work):
 
 
 @njit(cache=True)
-def step_jacobian(which, u, Phi_b, H, CPhi, M, jac):
+def step_jacobian(which: Indices, u: Floats, Phi_b: Floats, H: Floats, CPhi: Floats, M: Floats,
+                  jac: Floats) -> None:
     """d x_N / d x_0 of a run of the scheduled stepper, in place of ``jac`` (n x n, identity on entry).
 
     Each step is x_{j+1} = x_free + H z with x_free = Phi x_j + Gamma and, on the step's active set

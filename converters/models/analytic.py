@@ -11,11 +11,12 @@ here, and the functions below look a converter up by its name (the registry its 
 from __future__ import annotations
 
 import math
+from typing import Any
 
 from ..errors import ParameterError
 
 #: The converters with closed forms, by name (filled as their classes are defined).
-CLOSED_FORMS: dict[str, type] = {}
+CLOSED_FORMS: dict[str, type[SmallRipple]] = {}
 
 
 class SmallRipple:
@@ -24,7 +25,7 @@ class SmallRipple:
     name: str = ""
     closed_form = True
 
-    def __init_subclass__(cls, **kwargs):
+    def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
         if cls.__dict__.get("name"):
             CLOSED_FORMS[cls.name] = cls
@@ -97,20 +98,20 @@ class InvertingRatios(SmallRipple):
     """The inverting converters' relations (buck-boost; the Cuk's with its effective inductance in K)."""
 
     @staticmethod
-    def k_crit(D):
+    def k_crit(D: float) -> float:
         return (1.0 - D) ** 2
 
     @classmethod
-    def ccm_ratio(cls, D):
+    def ccm_ratio(cls, D: float) -> float:
         finite_ratio(cls.name, D)
         return -D / (1.0 - D)
 
     @staticmethod
-    def dcm_ratio(D, K):
+    def dcm_ratio(D: float, K: float) -> float:
         return -D / math.sqrt(K)
 
     @staticmethod
-    def dcm_diode_fraction(D, M):
+    def dcm_diode_fraction(D: float, M: float) -> float:
         return D / M
 
 
@@ -119,7 +120,7 @@ def has_closed_form(topology: str) -> bool:
     return topology in CLOSED_FORMS
 
 
-def _forms(topology) -> type:
+def _forms(topology: str) -> type[SmallRipple]:
     if topology not in CLOSED_FORMS:
         raise ParameterError(f"converter must be one of {', '.join(CLOSED_FORMS)} for the CCM/DCM formulas; "
                              f"got {topology!r}")

@@ -15,13 +15,18 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
+import numpy.typing as npt
 
 from ..errors import ParameterError, SignalError
 from ..problems import Configuration, LCSProblem, Schedule
 from ..params import Param, resolve
 from ..trajectory import Samples
+
+if TYPE_CHECKING:
+    from ..trajectory import Trajectory
 
 ON, OFF = 0, 1
 
@@ -101,7 +106,8 @@ class Model(ABC):
         return self.name if self.control == Model.control else f"{self.name} --control {self.control}"
 
     @abstractmethod
-    def problem(self, p: dict, t_end: float, x0=None, t_start: float = 0.0, initial: int | None = None) -> LCSProblem:
+    def problem(self, p: dict, t_end: float, x0: npt.NDArray[np.float64] | None = None,
+                t_start: float = 0.0, initial: int | None = None) -> LCSProblem:
         """The problem over [t_start, t_end] from x0 (default: the model's start, e.g. at rest);
         ``initial``: the configuration in force at t_start where the switching law keeps a memory."""
 
@@ -197,7 +203,7 @@ class Model(ABC):
             return t_start
         return max(t_start, t_end - 2 * self.SUMMARY_PERIODS * self.period(p))
 
-    def summary(self, tr, p: dict) -> dict:
+    def summary(self, tr: Trajectory, p: dict) -> dict:
         """The model's measures of a run for its JSON summary, over its last min(10, all) periods
         (``window_periods``): the mean output, every signal's mean, RMS, min, max and ripple
         (``measurements``), the power balance where the model has one (``power``), and the mode fractions of
@@ -216,7 +222,7 @@ class Model(ABC):
                 out["power"] = power
         return out
 
-    def window_power(self, tr, p: dict, t0: float, t1: float) -> dict:
+    def window_power(self, tr: Trajectory, p: dict, t0: float, t1: float) -> dict:
         """The power summary over [t0, t1] (a model with a step measures each side with its own circuit)."""
         return self.power(tr, p, t0, t1)
 
@@ -240,7 +246,8 @@ class Converter(Model):
     def schedule(self, p: dict) -> Schedule:
         return Schedule.pwm(self.period(p), p["D"], on=ON, off=OFF)
 
-    def problem(self, p: dict, t_end: float, x0=None, t_start: float = 0.0, initial: int | None = None,
+    def problem(self, p: dict, t_end: float, x0: npt.NDArray[np.float64] | None = None,
+                t_start: float = 0.0, initial: int | None = None,
                 after_step: bool = False) -> LCSProblem:
         """From x0 (default: at rest) over [t_start, t_end]; ``initial`` is the schedule's business;
         ``after_step``: the circuit after the load or input step (``R_step``, ``Vin_step``)."""
@@ -282,7 +289,7 @@ class Converter(Model):
         start = super().summary_from(p, t_start, t_end)        # the step response reads every period after it
         return max(t_start, min(start, p["t_step"] - self.SUMMARY_PERIODS * self.period(p))) if "t_step" in p else start
 
-    def window_power(self, tr, p: dict, t0: float, t1: float) -> dict:
+    def window_power(self, tr: Trajectory, p: dict, t0: float, t1: float) -> dict:
         """:meth:`power` over [t0, t1] with the circuit in force: a window across the step is the energy-weighted
         sum of its two parts (each measured with its own R and Vin)."""
         if "t_step" not in p or t1 <= p["t_step"]:
@@ -296,7 +303,7 @@ class Converter(Model):
         losses = {k: sum(part["losses_W"][k] * span for part, span in parts) / (t1 - t0) for k in parts[0][0]["losses_W"]}
         return power_balance(energy("input_W"), energy("output_W"), losses)
 
-    def summary(self, tr, p: dict) -> dict:
+    def summary(self, tr: Trajectory, p: dict) -> dict:
         out = super().summary(tr, p)
         if "t_step" in p and tr.t[0] < p["t_step"] < tr.t[-1]:
             out["step"] = step_response(tr, p["t_step"], self.period(p), tr.metadata.get("step_target"))
@@ -326,7 +333,7 @@ def power_balance(p_in: float, p_out: float, losses: dict) -> dict:
             "balance": (p_in - p_out - total) / p_in if p_in > 0 else float("nan")}
 
 
-def step_response(tr, t_step: float, T: float, target: float | None = None) -> dict:
+def step_response(tr: Trajectory, t_step: float, T: float, target: float | None = None) -> dict:
     """vout's response to a step at t_step, read on its per-period means (the switching ripple averaged out).
 
     Parameters
@@ -387,7 +394,7 @@ def check_h(h: float, period: float) -> float:
     return h
 
 
-def jump_losses(tr, t0: float, t1: float) -> dict:
+def jump_losses(tr: Trajectory, t0: float, t1: float) -> dict:
     """{"losses": {"redistribution_W", "redistribution_J", "jumps"}} of a run whose switches close across charged
     capacitances (:meth:`~converters.trajectory.Trajectory.jump_losses` over [t0, t1): the energy of the jumps and
     its mean power); {} for a run without."""

@@ -1,4 +1,6 @@
 """Buck (step-down) converter: Vin -> switch -> L -> C || R, freewheeling diode to ground."""
+from __future__ import annotations
+
 import math
 
 from .analytic import SmallRipple
@@ -14,17 +16,17 @@ class Buck(SmallRipple, PWMTwoState):
                        "v_diode": "v(0,sw)", "i_cap": "i(c1)"}
 
     @staticmethod
-    def k_crit(D):
+    def k_crit(D: float) -> float:
         return 1.0 - D
 
     @staticmethod
-    def ccm_ratio(D):
+    def ccm_ratio(D: float) -> float:
         return D
 
     @staticmethod
-    def dcm_ratio(D, K):
+    def dcm_ratio(D: float, K: float) -> float:
         return 2.0 / (1.0 + math.sqrt(1.0 + 4.0 * K / D ** 2))
 
     @staticmethod
-    def dcm_diode_fraction(D, M):
+    def dcm_diode_fraction(D: float, M: float) -> float:
         return D * (1.0 - M) / M

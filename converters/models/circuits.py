@@ -10,16 +10,18 @@ State x = (vC, iL) in V and A; C vC' = -iL - i_load, L iL' = vC.
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
 
 from ..problems import Configuration, LCSProblem, Schedule
 from ..validate import check_positive, parse_value
 
 
-def _tank(L, C):
+def _tank(L: float, C: float) -> npt.NDArray[np.float64]:
     return np.array([[0.0, -1.0 / C], [1.0 / L, 0.0]])
 
 
-def half_wave_rectifier(L=1e-2, C=1e-6, R=1e3, V0=10.0, t_end=5e-3) -> LCSProblem:
+def half_wave_rectifier(L: float | str = 1e-2, C: float | str = 1e-6, R: float | str = 1e3, V0: float | str = 10.0,
+                        t_end: float = 5e-3) -> LCSProblem:
     """Tank with R + diode across it. Pair: u = i_D (diode current), y = -v_D = R i_D - vC (k = 1, D = R)."""
     L, C, R = (check_positive(n, v, u) for n, v, u in (("L", L, "H"), ("C", C, "F"), ("R", R, "ohm")))
     V0 = parse_value("V0", V0)
@@ -29,7 +31,8 @@ def half_wave_rectifier(L=1e-2, C=1e-6, R=1e3, V0=10.0, t_end=5e-3) -> LCSProble
                       metadata={"circuit": "half-wave rectifier (CircuitRLCD)", "L": L, "C": C, "R": R})
 
 
-def diode_bridge(L=1e-2, C=1e-6, R=1e3, V0=10.0, t_end=5e-3) -> LCSProblem:
+def diode_bridge(L: float | str = 1e-2, C: float | str = 1e-6, R: float | str = 1e3, V0: float | str = 10.0,
+                 t_end: float = 5e-3) -> LCSProblem:
     """Tank feeding R through a diode bridge (Siconos DiodeBridge), k = 4.
 
     Bridge: D1 from the tank's top node to the load's + node, D3 from the tank's bottom node to it;
@@ -51,7 +54,8 @@ def diode_bridge(L=1e-2, C=1e-6, R=1e3, V0=10.0, t_end=5e-3) -> LCSProblem:
                       metadata={"circuit": "diode bridge (DiodeBridge)", "L": L, "C": C, "R": R})
 
 
-def parallel_rlc_exact(t, L=1e-2, C=1e-6, R=1e3, V0=10.0, iL0=0.0) -> np.ndarray:
+def parallel_rlc_exact(t: npt.ArrayLike, L: float = 1e-2, C: float = 1e-6, R: float = 1e3, V0: float = 10.0,
+                       iL0: float = 0.0) -> np.ndarray:
     """Exact (vC, iL) of the parallel RLC tank, shape (len(t), 2): the diode bridge's closed form."""
     A = np.array([[-1.0 / (R * C), -1.0 / C], [1.0 / L, 0.0]])
     t = np.asarray(t, dtype=float)

@@ -22,13 +22,14 @@ import math
 from dataclasses import dataclass, replace
 
 import numpy as np
+import numpy.typing as npt
 
 from ..errors import ParameterError
 from ..params import Param, positive
-from ..problems import Ramp, StateSwitching, SwitchingFunction
+from ..problems import Configuration, Ramp, StateSwitching, SwitchingFunction
 from ..trajectory import Samples
-from .base import OFF, ON
-from .control import Control
+from .base import OFF, ON, Converter
+from .control import Control, Controlled
 
 
 def _hz(name: str, default: float, doc: str) -> Param:
@@ -60,7 +61,7 @@ class Compensator:
     zeros: tuple = ()
     poles: tuple = ()
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if len(self.zeros) not in (len(self.poles), len(self.poles) + 1) or (len(self.zeros) > len(self.poles)
                                                                               and self.poles):
             raise ParameterError(f"a compensator has as many zeros as poles (type II, III) or one zero and no pole "
@@ -94,7 +95,7 @@ class Compensator:
         direct = self.wi / (2 * math.pi * self.zeros[0]) if len(self.zeros) > len(self.poles) else 0.0
         return Ac, Bc, row, direct
 
-    def transfer(self, f) -> np.ndarray:
+    def transfer(self, f: npt.ArrayLike) -> np.ndarray:
         """Gc at frequencies f (Hz)."""
         s = 2j * math.pi * np.asarray(f, dtype=float)
         out = self.wi / s
@@ -138,7 +139,8 @@ class Compensator:
         return {"wi": self.wi, "fz1": zeros[0], "fz2": zeros[1], "fp1": poles[0], "fp2": poles[1]}
 
 
-def _with_compensator(c, sensed: np.ndarray, offset: float, vref: float, comp: Compensator):
+def _with_compensator(c: Configuration, sensed: np.ndarray, offset: float, vref: float,
+                      comp: Compensator) -> Configuration:
     """The configuration with the compensator's states appended: xc' = Ac xc + Bc (Vref - vout), vout = sensed . x +
     offset."""
     Ac, Bc, _, _ = comp.matrices()
@@ -150,7 +152,7 @@ def _with_compensator(c, sensed: np.ndarray, offset: float, vref: float, comp: C
     return replace(c, A=A, B=np.vstack([c.B, np.zeros((m, c.k))]), C=np.hstack([c.C, np.zeros((c.k, m))]), E=E)
 
 
-def ccm_duty(converter, vout: float, vin: float) -> float | None:
+def ccm_duty(converter: Converter, vout: float, vin: float) -> float | None:
     """The duty ratio that gives |vout| from vin in CCM by the converter's closed form (None without one)."""
     closed = getattr(converter, "ccm_duty", None)
     return closed(abs(vout) / vin) if closed is not None and vin > 0 else None
@@ -160,14 +162,14 @@ class CompensatedLoop:
     """What a compensator on Vref - vout (:class:`Compensator`, its parameters ``wi``, ``fz1``, ...) adds to a
     control: its states, appended to the circuit's (a voltage loop's, or a current-mode controller's outer loop)."""
 
-    def check(self, model, p: dict) -> None:
+    def check(self, model: Controlled, p: dict) -> None:
         Compensator.of(p)
         self.sensed(model, p)
 
     def controller_states(self, p: dict) -> tuple[str, ...]:
         return Compensator.of(p).states
 
-    def augment(self, configurations: tuple, p: dict, model) -> tuple:
+    def augment(self, configurations: tuple, p: dict, model: Controlled) -> tuple:
         c, d = self.sensed(model, p)
         comp = Compensator.of(p)
         return tuple(_with_compensator(config, c, d, p["Vref"], comp) for config in configurations)
@@ -184,14 +186,14 @@ class VoltageLoop(CompensatedLoop, Control):
     signal_names = ("vc", "carrier")
     signal_units = {"vc": "V", "carrier": "V"}
 
-    def check(self, model, p: dict) -> None:
+    def check(self, model: Controlled, p: dict) -> None:
         if not p["VU"] > p["VL"]:
             raise ParameterError(f"VU (carrier high level) must be above VL = {p['VL']:g} V; got VU = {p['VU']:g} V")
         if p["leading"] not in (0.0, 1.0):
             raise ParameterError(f"leading must be 0 (trailing edge) or 1 (leading edge); got {p['leading']!r}")
         super().check(model, p)
 
-    def x0(self, model, p: dict) -> np.ndarray:
+    def x0(self, model: Controlled, p: dict) -> np.ndarray:
         """The start of a run when none is given: the output capacitor at Vref, the inductor current 0, and the
         compensator's states at the carrier's level of the duty ratio that gives Vref in CCM (the converter's
         closed form where it has one, else 1/2). From rest the compensator would sit at the carrier's foot: no
@@ -202,7 +204,8 @@ class VoltageLoop(CompensatedLoop, Control):
         x[converter.state_names.index(converter.output_state)] = p["Vref"]
         return np.concatenate([x, np.full(len(Compensator.of(p).states), p["VL"] + duty * (p["VU"] - p["VL"]))])
 
-    def law(self, model, p: dict, initial: int | None = None, circuit: dict | None = None) -> StateSwitching:
+    def law(self, model: Controlled, p: dict, initial: int | None = None,
+            circuit: dict | None = None) -> StateSwitching:
         """Trailing edge: s = carrier - vc, ON below zero, vc = Cc xc + Dc (Vref - vout), the carrier VL + (VU - VL)
         (t mod T) / T (entering s = c x + d - ramp as a falling ramp -VL .. -VU). Leading edge: s = vc - carrier,
         the carrier falling from VU to VL, OFF below zero (the clock turns the switch off, the crossing on)."""
@@ -217,7 +220,8 @@ class VoltageLoop(CompensatedLoop, Control):
         function = SwitchingFunction(c=c, d=d, ramp=Ramp(-p["VL"], -p["VU"], T))
         return StateSwitching(function, below=ON, above=OFF, latch=True, clocked=True, initial=initial)
 
-    def signal(self, name: str, samples: Samples, p: dict, model, circuit: dict | None = None) -> np.ndarray:
+    def signal(self, name: str, samples: Samples, p: dict, model: Controlled,
+               circuit: dict | None = None) -> np.ndarray:
         """``vc``: the compensator's output (V); ``carrier``: the PWM carrier (V)."""
         t = np.asarray(samples.t, dtype=float)
         if name == "carrier":

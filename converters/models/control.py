@@ -17,14 +17,21 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import numpy.typing as npt
 
 from ..errors import ParameterError
 from ..params import Param
 from ..problems import LCSProblem
 from ..trajectory import Samples
 from .base import Converter, Labels, Model, SteppedLabels
+
+if TYPE_CHECKING:
+    from ..problems import Schedule
+    from ..problems.lcs import SwitchingLaw
+    from ..trajectory import Trajectory
 
 
 class Control(ABC):
@@ -53,7 +60,7 @@ class Control(ABC):
     def applies_to(self, converter: Converter) -> bool:
         return converter.name in self.plants or (self.output_only and getattr(converter, "drives_one_switch", False))
 
-    def on(self, converter: Converter):
+    def on(self, converter: Converter) -> Converter:
         """The model of ``converter`` under this control."""
         if not self.applies_to(converter):
             raise ParameterError(f"--control {self.key} is available for {', '.join(self.plants)} only; "
@@ -64,7 +71,8 @@ class Control(ABC):
         """Refuse parameter values the loop cannot run with (one line naming them)."""
 
     @abstractmethod
-    def law(self, model: "Controlled", p: dict, initial: int | None = None, circuit: dict | None = None):
+    def law(self, model: "Controlled", p: dict, initial: int | None = None,
+            circuit: dict | None = None) -> SwitchingLaw:
         """The switching law (:mod:`converters.problems.switching`) at parameters ``p`` (the controller's design
         values) sensing the circuit in force (``circuit``: ``p``, or after a load or input step); ``initial``: the
         configuration in force at the start where the law keeps a memory."""
@@ -112,7 +120,7 @@ class Control(ABC):
         (``circuit``: ``p``, or after a load or input step)."""
         raise NotImplementedError(name)
 
-    def summary(self, model: "Controlled", tr, p: dict, *options) -> dict | None:
+    def summary(self, model: "Controlled", tr: Trajectory, p: dict, *options: Any) -> dict | None:
         """The loop's own summary of a run, or None: the converter's (every measurement over the last periods)."""
         return None
 
@@ -136,10 +144,11 @@ class OpenLoop(Control):
     def applies_to(self, converter: Converter) -> bool:
         return True
 
-    def on(self, converter: Converter):
+    def on(self, converter: Converter) -> Converter:
         return converter
 
-    def law(self, model, p, initial=None, circuit=None):
+    def law(self, model: Controlled, p: dict, initial: int | None = None,
+            circuit: dict | None = None) -> Schedule:
         return model.schedule(p)
 
 
@@ -162,9 +171,9 @@ class ControlledLabels(SteppedLabels):
 
 class Controlled(Converter):
     """A converter under a control (module docstring): the circuit's knowledge from ``converter``, the loop's from
-    ``loop``. Pickled by name (a sweep's workers rebuild it from the registry)."""
+    ``loop``. Pickled as its plant and its loop (a sweep's workers rebuild it from them)."""
 
-    def __init__(self, converter: Converter, loop: Control):
+    def __init__(self, converter: Converter, loop: Control) -> None:
         self.converter, self.loop = converter, loop
         self.name, self.control = converter.name, loop.key
         self.title = f"{converter.title.split(' (')[0]}, {loop.title}"
@@ -182,11 +191,10 @@ class Controlled(Converter):
             setattr(self, attribute, getattr(converter, attribute))
         self.closed_form = False             # the closed forms are the open-loop converter's at a given D
 
-    def __reduce__(self):
-        from . import CONVERTERS, get_model
-        if CONVERTERS.get(self.name) is self.converter:
-            return (get_model, (self.name, self.control))
-        return (_closed, (self.converter, self.control))       # a netlist's plant pickles itself
+    def __reduce__(self) -> tuple[Any, ...]:
+        # rebuilt from its plant and its loop, each pickled as itself (a built-in converter by its class, a
+        # netlist's plant by its file's text): the registry (converters.models) sits above this module
+        return (Controlled, (self.converter, self.loop))
 
     def parameter_name(self, name: str) -> str:
         """The plant's parameters as it names them (a netlist's case-insensitively), the loop's as the loop does."""
@@ -221,11 +229,11 @@ class Controlled(Converter):
     def configurations(self, p: dict) -> tuple:
         return self.loop.augment(self.converter.configurations(self.plant(p)), p, self)
 
-    def schedule(self, p: dict):
+    def schedule(self, p: dict) -> Schedule:
         raise ParameterError(f"{self.key} has no PWM schedule: its switching law is the loop's")
 
-    def problem(self, p: dict, t_end: float, x0=None, t_start: float = 0.0, initial: int | None = None,
-                after_step: bool = False) -> LCSProblem:
+    def problem(self, p: dict, t_end: float, x0: npt.NDArray[np.float64] | None = None, t_start: float = 0.0,
+                initial: int | None = None, after_step: bool = False) -> LCSProblem:
         """From x0 (default: the loop's start) over [t_start, t_end]; ``initial``: the switch state at t_start
         (a law with a memory); ``after_step``: the circuit after the load or input step, under the same
         controller."""
@@ -255,7 +263,7 @@ class Controlled(Converter):
     def output_node_current(self, samples: Samples) -> np.ndarray:
         return self.converter.output_node_current(samples)
 
-    def power(self, tr, p: dict, t0: float, t1: float) -> dict:
+    def power(self, tr: Trajectory, p: dict, t0: float, t1: float) -> dict:
         return self.converter.power(tr, self.plant(p), t0, t1)
 
     def window_start(self, p: dict, t_start: float, t_end: float, window_s: float | None = None) -> float:
@@ -266,17 +274,11 @@ class Controlled(Converter):
         start = self.loop.summary_from(self, p, t_start, t_end)
         return super().summary_from(p, t_start, t_end) if start is None else start
 
-    def summary(self, tr, p: dict, *options) -> dict:
+    def summary(self, tr: Trajectory, p: dict, *options: Any) -> dict:
         """The loop's own summary where it has one (``options``: its own, the sliding mode's window), else the
         converter's."""
         own = self.loop.summary(self, tr, p, *options)
         return super().summary(tr, p) if own is None else own
-
-
-def _closed(converter: Converter, control: str) -> "Controlled":
-    """A closed loop rebuilt from its plant (a worker process's copy of a netlist's loop)."""
-    from . import CONTROLS
-    return Controlled(converter, CONTROLS[control])
 
 
 __all__ = ["Control", "Controlled", "OpenLoop"]

@@ -8,11 +8,18 @@ generalised DCM (GDCM-OFF); the ON pair held at v1 = 0 is GDCM-ON.
 """
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
+import numpy as np
+
 from ..params import Param, nonnegative, positive
 from .analytic import InvertingRatios
 from .base import Converter, power_balance
 from .netlist import FromNetlist
 from .pwm2 import STEPS
+
+if TYPE_CHECKING:
+    from ..trajectory import Samples, Trajectory
 
 
 class Cuk(InvertingRatios, FromNetlist, Converter):
@@ -45,21 +52,21 @@ class Cuk(InvertingRatios, FromNetlist, Converter):
     off_held_label = "GDCM-OFF"
 
     @staticmethod
-    def k_inductance(p):
+    def k_inductance(p: dict) -> float:
         """The closed forms' inductance: the effective Le = L1 L2 / (L1 + L2) (the relations are the buck-boost's)."""
         return p["L1"] * p["L2"] / (p["L1"] + p["L2"])
 
     #: The switch's and the diode's currents as the netlist names them (read on the compiled signal maps).
     element_signals = {"i_switch": "i(s1)", "i_diode": "i(d1)"}
 
-    def signal(self, name, samples, p):
+    def signal(self, name: str, samples: Samples, p: dict) -> np.ndarray:
         if name == "i_in":
             return samples.x[:, 0]
         if name in self.element_signals:
             return self.netlist_signal(self.element_signals[name], samples, p)
         return super().signal(name, samples, p)
 
-    def power(self, tr, p, t0: float, t1: float) -> dict:
+    def power(self, tr: Trajectory, p: dict, t0: float, t1: float) -> dict:
         """Input and output power, each parasitic's loss and the efficiency over [t0, t1] (W)."""
         square = lambda name: tr.rms(name, t0=t0, t1=t1) ** 2     # noqa: E731
         losses = {"rL1": lambda: p["rL1"] * square("i1"), "rL2": lambda: p["rL2"] * square("i2"),
@@ -69,12 +76,12 @@ class Cuk(InvertingRatios, FromNetlist, Converter):
         p_in = p["Vin"] * tr.mean("i1", t0=t0, t1=t1)
         return power_balance(p_in, square("vout") / p["R"], losses)
 
-    def output_node_current(self, samples):
+    def output_node_current(self, samples: Samples) -> np.ndarray:
         return samples.x[:, 2]
 
-    def vout(self, samples, p):
+    def vout(self, samples: Samples, p: dict) -> np.ndarray:
         return -samples.x[:, 3]
 
     @staticmethod
-    def effective_inductance(p) -> float:
+    def effective_inductance(p: dict) -> float:
         return p["L1"] * p["L2"] / (p["L1"] + p["L2"])

@@ -28,7 +28,7 @@ from ..problems import Ramp, StateSwitching, SwitchingFunction
 from ..trajectory import Samples
 from .base import OFF, ON
 from .compensator import PARAMETERS as VOLTAGE_LOOP, CompensatedLoop, Compensator, ccm_duty
-from .control import Control
+from .control import Control, Controlled
 
 #: The maximum duty ratio: the switch turns off at Dmax T where the current has not reached the command (1: none).
 DMAX = Param("Dmax", 1.0, "", "maximum duty ratio (the switch turns off at Dmax T at the latest; 1: no limit)",
@@ -40,7 +40,7 @@ PARAMETERS = (
 )
 
 
-def _limit(p: dict):
+def _limit(p: dict) -> float | None:
     return p["Dmax"] if p.get("Dmax", 1.0) < 1.0 else None
 
 
@@ -57,7 +57,8 @@ class PeakCurrent(Control):
     signal_names = ("icontrol",)
     signal_units = {"icontrol": "A"}
 
-    def law(self, model, p: dict, initial: int | None = None, circuit: dict | None = None) -> StateSwitching:
+    def law(self, model: Controlled, p: dict, initial: int | None = None,
+            circuit: dict | None = None) -> StateSwitching:
         c = np.zeros(len(model.converter.state_names))
         c[model.converter.state_names.index("iL")] = 1.0
         T = model.period(p)
@@ -65,7 +66,7 @@ class PeakCurrent(Control):
         function = SwitchingFunction(c=c, d=-p["Iref"], ramp=Ramp(0.0, -p["ma"] * T, T))
         return StateSwitching(function, below=ON, above=OFF, latch=True, clocked=True, initial=initial, limit=_limit(p))
 
-    def x0(self, model, p: dict) -> np.ndarray:
+    def x0(self, model: Controlled, p: dict) -> np.ndarray:
         """The start of a run when none is given: the capacitor discharged, the inductor current half the command
         (from rest a boost's current may not reach a command above Vin T / L in the first period: the switch then
         stays on, and the period map has a multiplier at 1 there, which Newton shooting cannot start from)."""
@@ -73,7 +74,8 @@ class PeakCurrent(Control):
         x0[model.converter.state_names.index("iL")] = 0.5 * p["Iref"]
         return x0
 
-    def signal(self, name: str, samples: Samples, p: dict, model, circuit: dict | None = None) -> np.ndarray:
+    def signal(self, name: str, samples: Samples, p: dict, model: Controlled,
+               circuit: dict | None = None) -> np.ndarray:
         """``icontrol``: the command with its compensation ramp, Iref - ma (t mod T) (A)."""
         return p["Iref"] - p["ma"] * np.mod(np.asarray(samples.t, dtype=float), model.period(p))
 
@@ -93,26 +95,28 @@ class ValleyCurrent(PeakCurrent):
     title = "valley current-mode control"
     parameters = VALLEY_PARAMETERS
 
-    def law(self, model, p: dict, initial: int | None = None, circuit: dict | None = None) -> StateSwitching:
+    def law(self, model: Controlled, p: dict, initial: int | None = None,
+            circuit: dict | None = None) -> StateSwitching:
         c = np.zeros(len(model.converter.state_names))
         c[model.converter.state_names.index("iL")] = -1.0
         T = model.period(p)
         function = SwitchingFunction(c=c, d=p["Iv"], ramp=Ramp(0.0, -p["ma"] * T, T))
         return StateSwitching(function, below=OFF, above=ON, latch=True, clocked=True, initial=initial)
 
-    def x0(self, model, p: dict) -> np.ndarray:
+    def x0(self, model: Controlled, p: dict) -> np.ndarray:
         """The capacitor discharged, the inductor current twice the command (the clock's turn-off then the
         comparator's turn-on within the first period)."""
         x0 = np.zeros(len(model.converter.state_names))
         x0[model.converter.state_names.index("iL")] = 2.0 * p["Iv"]
         return x0
 
-    def signal(self, name: str, samples: Samples, p: dict, model, circuit: dict | None = None) -> np.ndarray:
+    def signal(self, name: str, samples: Samples, p: dict, model: Controlled,
+               circuit: dict | None = None) -> np.ndarray:
         """``icontrol``: the command with its compensation ramp, Iv + ma (t mod T) (A)."""
         return p["Iv"] + p["ma"] * np.mod(np.asarray(samples.t, dtype=float), model.period(p))
 
 
-def _loop_parameters():
+def _loop_parameters() -> tuple[Param, ...]:
     kept = {q.name: q for q in VOLTAGE_LOOP}
     return (kept["Vref"],
             nonnegative("ma", 0.0, "A/s", "slope compensation: the command falls by ma per second of each period"),
@@ -129,11 +133,12 @@ class PeakCurrentLoop(CompensatedLoop, PeakCurrent):
     key = "current-loop"
     title = "peak current-mode control under an outer voltage loop"
 
+    # a property where Control has a class attribute: read alike, but mypy refuses the override
     @property
-    def parameters(self):
+    def parameters(self) -> tuple[Param, ...]:  # type: ignore[override]
         return _loop_parameters()
 
-    def x0(self, model, p: dict) -> np.ndarray:
+    def x0(self, model: Controlled, p: dict) -> np.ndarray:
         """The output capacitor at Vref, the inductor current 0, the compensator's states (the command) at the
         inductor current the load needs at Vref in CCM: Vref / R for a buck, the input current P / Vin for a
         boost, input and output current for a buck-boost (the converter's ``ccm_ratio`` tells which: its output
@@ -148,7 +153,8 @@ class PeakCurrentLoop(CompensatedLoop, PeakCurrent):
             current = current / (1 - duty)
         return np.concatenate([x, np.full(len(Compensator.of(p).states), current)])
 
-    def law(self, model, p: dict, initial: int | None = None, circuit: dict | None = None) -> StateSwitching:
+    def law(self, model: Controlled, p: dict, initial: int | None = None,
+            circuit: dict | None = None) -> StateSwitching:
         sensed, offset = self.sensed(model, p if circuit is None else circuit)
         _, _, Cc, Dc = Compensator.of(p).matrices()
         n = len(model.converter.state_names)
@@ -159,7 +165,8 @@ class PeakCurrentLoop(CompensatedLoop, PeakCurrent):
         function = SwitchingFunction(c=c, d=-Dc * (p["Vref"] - offset), ramp=Ramp(0.0, -p["ma"] * T, T))
         return StateSwitching(function, below=ON, above=OFF, latch=True, clocked=True, initial=initial, limit=_limit(p))
 
-    def signal(self, name: str, samples: Samples, p: dict, model, circuit: dict | None = None) -> np.ndarray:
+    def signal(self, name: str, samples: Samples, p: dict, model: Controlled,
+               circuit: dict | None = None) -> np.ndarray:
         """``icontrol``: the compensator's command less the compensation ramp (A)."""
         _, _, Cc, Dc = Compensator.of(p).matrices()
         n = len(model.converter.state_names)

@@ -14,8 +14,10 @@ import math
 from dataclasses import dataclass, replace
 from functools import lru_cache
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import numpy.typing as npt
 
 from ..circuits.compile import Compiled, compile_netlist, compile_points, waveform_at
 from ..circuits.netlist import Netlist, NetlistError, Pulse, check_overrides, read_netlist, with_values
@@ -25,6 +27,9 @@ from ..problems import Configuration, LCSProblem, Sinusoids
 from ..trajectory import Samples
 from ..validate import quoted
 from .base import Labels, Model, jump_losses
+
+if TYPE_CHECKING:
+    from ..trajectory import Trajectory
 
 #: Units of the element values by letter.
 UNITS = {"R": "ohm", "L": "H", "C": "F", "V": "V", "I": "A", "K": "", "E": "", "G": "S", "F": "", "H": "ohm"}
@@ -44,7 +49,7 @@ class Circuit(Model):
 
     control = "pwm"
 
-    def __init__(self, netlist: Netlist, source: str):
+    def __init__(self, netlist: Netlist, source: str) -> None:
         self.netlist = netlist
         self.source = source
         self.name = Path(source).name if "\n" not in source else "netlist"
@@ -62,7 +67,7 @@ class Circuit(Model):
         self.output_state = next((s for s in compiled.state_names if s.startswith("v(")), compiled.state_names[0])
 
     @classmethod
-    def from_netlist(cls, path, text: str | None = None) -> "Circuit":
+    def from_netlist(cls, path: str | Path, text: str | None = None) -> "Circuit":
         """The model of the netlist at ``path`` (or of ``text``, ``path`` naming it in messages)."""
         netlist = read_netlist(text if text is not None else Path(path), name=str(path) if text is not None else None)
         return cls(netlist, str(path))
@@ -71,7 +76,7 @@ class Circuit(Model):
     def key(self) -> str:
         return self.name
 
-    def __reduce__(self):            # picklable for worker processes: rebuilt from the file's text
+    def __reduce__(self) -> tuple[Any, ...]:  # picklable for worker processes: rebuilt from the file's text
         return (_rebuild, (self.netlist.text, self.source))
 
     # --- parameters ------------------------------------------------------------------------------------------
@@ -148,7 +153,8 @@ class Circuit(Model):
 
     # --- the problem -----------------------------------------------------------------------------------------
 
-    def problem(self, p: dict, t_end: float, x0=None, t_start: float = 0.0, initial: int | None = None) -> LCSProblem:
+    def problem(self, p: dict, t_end: float, x0: npt.NDArray[np.float64] | None = None, t_start: float = 0.0,
+                initial: int | None = None) -> LCSProblem:
         c = self.compiled(p)
         x0 = c.x0 if x0 is None else x0
         inputs = Sinusoids(*c.inputs) if c.inputs is not None else None
@@ -186,7 +192,7 @@ class Circuit(Model):
     #: A circuit without a period is summarised over the last tenth of its run.
     WINDOW_FRACTION = 0.1
 
-    def summary(self, tr, p: dict) -> dict:
+    def summary(self, tr: Trajectory, p: dict) -> dict:
         """The model's summary (:meth:`Model.summary`); without a period, over the last tenth of the run
         (``window_s``); with what the circuit holds fixed (``invariants``: its loops of capacitors, cutsets of
         inductors and charge islands), where it has any."""
@@ -316,7 +322,7 @@ class Circuit(Model):
         c = self.compiled(p)
         conducting = self.conducting(samples, p) if c.pair_names != ("none",) else np.zeros((len(samples.t), 0), bool)
         config = np.asarray(samples.config, dtype=np.int64)
-        names = {}
+        names: dict[tuple[np.int64, ...], str] = {}
         out = np.empty(len(samples.t), dtype=object)
         diodes = [d.upper() for d in c.pair_names] if c.pair_names != ("none",) else []
         switches = [s.upper() for s in c.switch_names]
@@ -334,7 +340,7 @@ class Circuit(Model):
     turn_off_label = None
 
 
-def _difference(name: str, names: tuple):
+def _difference(name: str, names: tuple[str, ...]) -> tuple[str, ...] | None:
     """("v(a)", "v(b)") for "v(a,b)" when both are node voltages of the circuit (ground: 0)."""
     if not (name.startswith("v(") and name.endswith(")") and "," in name):
         return None
@@ -447,7 +453,7 @@ def _builtin_configurations(name: str, states: tuple, names: tuple, values: tupl
     return tuple(_permuted(c, order, label) for c, label in zip(compiled.configurations, names, strict=True))
 
 
-def _permuted(c, order: list, name: str) -> Configuration:
+def _permuted(c: Configuration, order: list[int], name: str) -> Configuration:
     """A configuration with its states in ``order`` (x_model = x_compiled[order]), named ``name``."""
     A, B, C, E = np.asarray(c.A), np.asarray(c.B), np.asarray(c.C), np.asarray(c.E)
     return Configuration(A=A[np.ix_(order, order)], B=B[order], C=C[:, order], D=c.D, E=E[order], F=c.F, name=name,
@@ -458,7 +464,7 @@ def _rebuild(text: str, source: str) -> Circuit:
     return Circuit(read_netlist(text, name=source), source)
 
 
-def load(path) -> Circuit:
+def load(path: str | Path) -> Circuit:
     """The Circuit of a netlist file, read once per process while the file is unchanged (its path, size and
     modification time)."""
     path = Path(path)
@@ -474,7 +480,7 @@ def _load(resolved: str, size: int, mtime: int, given: str) -> Circuit:
     return Circuit.from_netlist(given)
 
 
-def is_netlist(name) -> bool:
+def is_netlist(name: object) -> bool:
     """A CONVERTER argument that names a netlist file (``.cir``, ``.sp``, ``.net``, ``.spice``)."""
     return isinstance(name, (str, Path)) and str(name).lower().endswith((".cir", ".sp", ".net", ".spice", ".ckt"))
 

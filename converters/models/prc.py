@@ -10,13 +10,18 @@ carry their currents in u, D1 and D2 their reverse voltages); the drive is a squ
 from __future__ import annotations
 
 import itertools
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import numpy.typing as npt
 
 from ..problems import Schedule
 from ..params import positive
 from .base import Converter
 from .netlist import FromNetlist
+
+if TYPE_CHECKING:
+    from ..trajectory import Samples
 
 
 class PRC(FromNetlist, Converter):
@@ -40,7 +45,7 @@ class PRC(FromNetlist, Converter):
     configuration_names = ("drive+", "drive-")
     schedule_parameters = frozenset()
 
-    def schedule(self, p):
+    def schedule(self, p: dict) -> Schedule:
         return Schedule.pwm(self.period(p), 0.5, on=0, off=1)
 
     #: Every subset of the bridge's diodes that can conduct, by name ("D1+D4"), and DCM (none).
@@ -50,13 +55,14 @@ class PRC(FromNetlist, Converter):
     #: The ideal tank keeps a ~1e-4 V cycle-to-cycle jitter: compare the Siconos scene, 2 ms from rest.
     compare_defaults = {"start": "rest", "periods": 110, "window": 55}
 
-    def output_node_current(self, samples):
+    def output_node_current(self, samples: Samples) -> np.ndarray:
         return samples.x[:, 2]
 
-    def vout(self, samples, p):
+    def vout(self, samples: Samples, p: dict) -> np.ndarray:
         return samples.x[:, 3]
 
-    def modes(self, conducting, switch, x):
+    def modes(self, conducting: npt.NDArray[np.bool_], switch: npt.NDArray[Any],
+              x: npt.NDArray[np.float64]) -> npt.NDArray[Any]:
         """Named by the bridge's conducting diodes (``D1+D4``: the pair that carries the tank current one way,
         ``D2+D3`` the other); all four off is DCM (the output capacitor alone feeds the load)."""
         conducting = np.asarray(conducting, dtype=bool)

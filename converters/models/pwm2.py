@@ -12,11 +12,17 @@ otherwise) and Io a current the load draws beside R (the netlist's Iload, 0 unle
 diode, capacitor, input) are the netlist's own (:attr:`PWMTwoState.element_signals`)."""
 from __future__ import annotations
 
+from typing import TYPE_CHECKING, cast
+
 import numpy as np
+import numpy.typing as npt
 
 from ..params import Param, nonnegative, positive
 from .base import ON, Converter, power_balance
 from .netlist import FromNetlist
+
+if TYPE_CHECKING:
+    from ..trajectory import Samples, Trajectory
 
 COMMON = (
     nonnegative("Vin", 12.0, "V", "input voltage"),
@@ -62,19 +68,19 @@ class PWMTwoState(FromNetlist, Converter):
     #: current the one the source delivers, the capacitor's the one charging it): set per topology.
     element_signals: dict
 
-    def signal(self, name, samples, p):
+    def signal(self, name: str, samples: Samples, p: dict) -> np.ndarray:
         if name in ELEMENT_SIGNALS:
             return self.netlist_signal(self.element_signals[name], samples, p)
         return super().signal(name, samples, p)
 
-    def elements(self, samples, p) -> dict:
+    def elements(self, samples: Samples, p: dict) -> dict:
         """Input, switch, diode and capacitor currents and the switch's and diode's voltages: the netlist's own
         signals (:attr:`element_signals`, read on the compiled signal maps: exact with every parasitic, in every
         mode). An ngspice run has no pair variables: its element signals are NaN (not measured), and summaries leave
         them out."""
         return {name: self.netlist_signal(spice, samples, p) for name, spice in self.element_signals.items()}
 
-    def power(self, tr, p, t0: float, t1: float) -> dict:
+    def power(self, tr: Trajectory, p: dict, t0: float, t1: float) -> dict:
         """Input and output power, each element's loss and the efficiency over [t0, t1] (W), by the run's own
         quadrature (exact pieces for the event method). On a periodic orbit input = output + losses."""
         rL, Ron, Vf, Rd, rC = (p.get(k, 0.0) for k in ("rL", "Ron", "Vf", "Rd", "rC"))
@@ -88,14 +94,15 @@ class PWMTwoState(FromNetlist, Converter):
         p_out = square("vout") / p["R"] + (p["Io"] * abs(mean("vout")) if p.get("Io") else 0.0)
         return power_balance(p_in, p_out, losses)
 
-    def output_node_current(self, samples):
+    def output_node_current(self, samples: Samples) -> np.ndarray:
         """Current delivered to the output node (A): iL for the buck, the diode current otherwise."""
         if self.topology == "buck":
             return samples.x[:, 0]
         on = np.asarray(samples.config) == ON
-        return np.where(on, samples.u[:, 0], samples.x[:, 0])
+        u = cast("npt.NDArray[np.float64]", samples.u)         # the diode's current: a run with its pairs
+        return np.where(on, u[:, 0], samples.x[:, 0])
 
-    def output_row(self, p) -> tuple | None:
+    def output_row(self, p: dict) -> tuple[npt.NDArray[np.float64], float] | None:
         """|vout| as an affine function of the state, (c, d) with |vout| = c . x + d, where it is one: the buck's
         a vC + b iL (its ESR carries the inductor current); the others' vC without ESR. None where vout also
         depends on the diode's current (a boost or buck-boost with ESR): a loop sensing vout is then refused."""
@@ -105,7 +112,7 @@ class PWMTwoState(FromNetlist, Converter):
             return np.array([b, a]), -b * p.get("Io", 0.0)
         return (np.array([0.0, 1.0]), 0.0) if not rC else None
 
-    def vout(self, samples, p):
+    def vout(self, samples: Samples, p: dict) -> np.ndarray:
         R, rC = p["R"], p.get("rC", 0.0)
         a, b = R / (R + rC), R * rC / (R + rC)
         magnitude = a * samples.x[:, 1]

@@ -21,6 +21,7 @@ controller keeps its design values (Iref0 at the nominal R).
 from __future__ import annotations
 
 from dataclasses import replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -29,7 +30,10 @@ from ..params import nonnegative, positive
 from ..problems import Configuration, Relay, StateSwitching, SwitchingFunction
 from ..trajectory import Samples
 from .base import OFF, ON
-from .control import Control
+from .control import Control, Controlled
+
+if TYPE_CHECKING:
+    from ..trajectory import Trajectory
 
 PARAMETERS = (
     positive("Vref", 20.0, "V", "output voltage reference (must exceed Vin)"),
@@ -68,7 +72,7 @@ class SlidingMode(Control):
     def controller_states(self, p: dict) -> tuple:
         return ("z",) if p["Ki"] > 0.0 else ()
 
-    def check(self, model, p: dict) -> None:
+    def check(self, model: Controlled, p: dict) -> None:
         """A request where sliding cannot exist is refused."""
         if p["Vref"] <= p["Vin"]:
             raise ParameterError(f"Vref must be above Vin = {p['Vin']:g} V for a boost under sliding-mode control "
@@ -78,14 +82,14 @@ class SlidingMode(Control):
             raise ParameterError("t_step and R_step go together (the load steps from R to R_step at t_step); "
                                  f"got only {'t_step' if 't_step' in p else 'R_step'}")
 
-    def period(self, model, p: dict) -> float:
+    def period(self, model: Controlled, p: dict) -> float:
         """The predicted switching period 1/f at v = Vref (the law itself has no clock)."""
         return 1.0 / predicted_frequency(p)
 
     def periodic(self, p: dict) -> bool:
         return False
 
-    def default_h(self, model, p: dict) -> float:
+    def default_h(self, model: Controlled, p: dict) -> float:
         """Hysteresis: 1/500 of the shorter of t_on = 2 band L / Vin, t_off = 2 band L / (Vref - Vin).
         Implicit: 1 us bounded by 1/200 of sqrt(L C) (no switching to resolve)."""
         if self.implicit:
@@ -94,23 +98,23 @@ class SlidingMode(Control):
         t_off = 2.0 * p["band"] * p["L"] / (p["Vref"] - p["Vin"])
         return min(t_on, t_off) / 500.0
 
-    def max_h(self, model, p: dict) -> float:
+    def max_h(self, model: Controlled, p: dict) -> float:
         """Largest step accepted: 1/20 of the shorter switching interval (hysteresis), 200 default steps
         (implicit)."""
         return self.default_h(model, p) * (200.0 if self.implicit else 25.0)
 
-    def augment(self, configurations: tuple, p: dict, model) -> tuple:
+    def augment(self, configurations: tuple, p: dict, model: Controlled) -> tuple:
         """With Ki > 0 the PI integral z' = Vref - vout as a third state."""
         if p["Ki"] <= 0.0:
             return configurations
         c, _ = self.sensed(model, p)
         return tuple(_with_integrator(config, c[:config.n], p["Vref"]) for config in configurations)
 
-    def x0(self, model, p: dict) -> np.ndarray:
+    def x0(self, model: Controlled, p: dict) -> np.ndarray:
         """iL = 0, vC = Vin: the state a boost reaches at power-up through its diode (z = 0)."""
         return np.array([0.0, p["Vin"]] + [0.0] * (p["Ki"] > 0.0))
 
-    def sliding_function(self, model, p: dict, circuit: dict | None = None) -> SwitchingFunction:
+    def sliding_function(self, model: Controlled, p: dict, circuit: dict | None = None) -> SwitchingFunction:
         """sigma = iL - Iref0 - Kp (Vref - vout) - Ki z, affine in the state (vout sensed on the circuit in
         force; Iref0 at the design values)."""
         c, d = self.sensed(model, p if circuit is None else circuit)
@@ -122,18 +126,21 @@ class SlidingMode(Control):
             row = np.append(row, -p["Ki"])
         return SwitchingFunction(c=list(row), d=-(iref0(p) + p["Kp"] * (p["Vref"] - d)))
 
-    def law(self, model, p: dict, initial: int | None = None, circuit: dict | None = None):
+    def law(self, model: Controlled, p: dict, initial: int | None = None,
+            circuit: dict | None = None) -> Relay | StateSwitching:
         function = self.sliding_function(model, p, circuit)
         return (Relay(function, low=OFF, high=ON) if self.implicit
                 else StateSwitching(function, below=ON, above=OFF, band=p["band"], initial=initial))
 
-    def signal(self, name: str, samples: Samples, p: dict, model, circuit: dict | None = None) -> np.ndarray:
+    def signal(self, name: str, samples: Samples, p: dict, model: Controlled,
+               circuit: dict | None = None) -> np.ndarray:
         x = samples.x
         integral = p["Ki"] * x[:, 2] if x.shape[1] > 2 else 0.0
         sensed = np.abs(model.vout(samples, p if circuit is None else circuit))
         return iref0(p) + p["Kp"] * (p["Vref"] - sensed) + integral
 
-    def window_start(self, model, p: dict, t_start: float, t_end: float, window_s: float | None = None) -> float:
+    def window_start(self, model: Controlled, p: dict, t_start: float, t_end: float,
+                     window_s: float | None = None) -> float:
         """Where the summary's window begins: ``window_s`` (default min(a quarter of the run, 2 ms)) before the
         end, and not before a load step (standalone netlists measure over the same window)."""
         t0 = t_end - (window_s or min(0.25 * (t_end - t_start), 2e-3))
@@ -141,14 +148,14 @@ class SlidingMode(Control):
             t0 = max(t0, p["t_step"])
         return t0
 
-    def summary_from(self, model, p: dict, t_start: float, t_end: float) -> float:
+    def summary_from(self, model: Controlled, p: dict, t_start: float, t_end: float) -> float:
         """The window, the window before it (the accuracy check's transient), and from the load step on (the
         recovery time)."""
         window = t_end - self.window_start(model, p, t_start, t_end)
         start = t_end - 2 * window
         return max(t_start, min(start, p["t_step"]) if "t_step" in p else start)
 
-    def summary(self, model, tr, p: dict, window_s: float | None = None) -> dict:
+    def summary(self, model: Controlled, tr: Trajectory, p: dict, window_s: float | None = None) -> dict:
         """Measures over the last ``window_s`` (default min(T_end / 4, 2 ms), after the load step): mean vout
         against Vref, every state's and signal's mean, RMS, min, max and ripple (``measurements``); hysteresis: the
         switching frequency against the prediction at the measured v; implicit: the blend z against 1 - Vin / v
@@ -169,7 +176,7 @@ class SlidingMode(Control):
         return out
 
 
-def switching_frequency(tr, t0: float, t1: float | None = None, config: int = ON) -> float:
+def switching_frequency(tr: Trajectory, t0: float, t1: float | None = None, config: int = ON) -> float:
     """Switchings into ``config`` (default: the switch closing) per second between the first and the last
     one in [t0, t1]: from the trajectory's switching events (located inside the step, or exactly), or, for
     a measured run without events (ngspice), where its switch signal rises through 1/2."""
@@ -196,7 +203,7 @@ def _with_integrator(c: Configuration, sensed: np.ndarray, vref: float) -> Confi
                    E=np.append(c.E, vref))
 
 
-def recovery_time(t, v, vref, t_event, tol=0.01) -> float:
+def recovery_time(t: np.ndarray, v: np.ndarray, vref: float, t_event: float, tol: float = 0.01) -> float:
     """Time after t_event from which |v - vref| <= tol vref to the end (inf if never; 0 if never left)."""
     after = t >= t_event
     outside = np.flatnonzero(after & (np.abs(v - vref) > tol * vref))

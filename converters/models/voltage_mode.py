@@ -25,7 +25,7 @@ from ..params import Param, positive
 from ..problems import Ramp, StateSwitching, SwitchingFunction
 from ..trajectory import Samples
 from .base import OFF, ON
-from .control import Control
+from .control import Control, Controlled
 
 PARAMETERS = (
     positive("Vref", 11.3, "V", "reference voltage"),
@@ -50,7 +50,7 @@ class VoltageMode(Control):
     signal_units = {"vcon": "V", "ramp": "V"}
     output_only = True
 
-    def check(self, model, p: dict) -> None:
+    def check(self, model: Controlled, p: dict) -> None:
         """A ramp that does not rise, or a latch that is not 0 or 1, is refused."""
         if not p["VU"] > p["VL"]:
             raise ParameterError(f"VU (ramp high level) must be above VL = {p['VL']:g} V; got VU = {p['VU']:g} V")
@@ -58,15 +58,17 @@ class VoltageMode(Control):
             raise ParameterError(f"latch must be 0 or 1; got {p['latch']!r}")
         self.sensed(model, p)
 
-    def ramp(self, model, p: dict) -> Ramp:
+    def ramp(self, model: Controlled, p: dict) -> Ramp:
         return Ramp(p["VL"], p["VU"], model.period(p))
 
-    def law(self, model, p: dict, initial: int | None = None, circuit: dict | None = None) -> StateSwitching:
+    def law(self, model: Controlled, p: dict, initial: int | None = None,
+            circuit: dict | None = None) -> StateSwitching:
         c, d = self.sensed(model, p if circuit is None else circuit)
         function = SwitchingFunction(c=p["A"] * c, d=p["A"] * (d - p["Vref"]), ramp=self.ramp(model, p))
         return StateSwitching(function, below=ON, above=OFF, latch=bool(p["latch"]), initial=initial)
 
-    def signal(self, name: str, samples: Samples, p: dict, model, circuit: dict | None = None) -> np.ndarray:
+    def signal(self, name: str, samples: Samples, p: dict, model: Controlled,
+               circuit: dict | None = None) -> np.ndarray:
         if name == "vcon":
             return p["A"] * (np.abs(model.vout(samples, p if circuit is None else circuit)) - p["Vref"])
         return self.ramp(model, p)(samples.t)

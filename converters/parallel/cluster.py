@@ -9,8 +9,14 @@ they run.
 """
 from __future__ import annotations
 
+from collections.abc import Callable, Generator, Iterable
+from typing import TYPE_CHECKING, Any
+
 from ..errors import ParameterError
 from .local import Lost
+
+if TYPE_CHECKING:
+    from distributed import Client
 
 #: Seconds to reach a scheduler and hear its handshake (or --time-limit when shorter). Dask's own connect bounds
 #: the TCP connection only: a server that accepts and never answers held the client's first read forever.
@@ -30,16 +36,16 @@ class DaskBackend:
 
     name = "dask"
 
-    def __init__(self, scheduler, *, in_flight: int = 2):
+    def __init__(self, scheduler: str | Client, *, in_flight: int = 2) -> None:
         if isinstance(scheduler, str) and not scheduler.startswith(("tcp://", "tls://", "inproc://", "ws://", "wss://")):
             raise ParameterError(f"scheduler must be local or a Dask scheduler address like tcp://HOST:PORT; "
                                  f"got {scheduler!r}")
         if not (isinstance(in_flight, int) and in_flight >= 1):
             raise ParameterError(f"in_flight must be an integer >= 1; got {in_flight!r}")
         self.scheduler, self.in_flight = scheduler, in_flight
-        self._client = None
+        self._client: Client | None = None
 
-    def client(self):
+    def client(self) -> Client:
         try:
             from distributed import Client
         except ImportError:
@@ -58,22 +64,23 @@ class DaskBackend:
                                      f"({type(exc).__name__}: {str(exc)[:120]})") from None
         return self._client
 
-    def close(self):
+    def close(self) -> None:
         if self._client is not None:
             self._client.close()
             self._client = None
 
-    def map_chunks(self, function, chunks):
+    def map_chunks(self, function: Callable[[Any], Any],
+                   chunks: Iterable[Any]) -> Generator[tuple[int, Any], None, None]:
         """Yield (position, result or :class:`.Lost`) for each chunk, as they complete."""
         from distributed import as_completed
         client = self.client()
         chunks = list(chunks)
         threads = max(1, sum(client.nthreads().values()))
         queue = list(range(len(chunks)))[::-1]
-        pending = {}
+        pending: dict[Any, int] = {}                      # future -> position
         stream = as_completed()
         try:
-            def top_up():
+            def top_up() -> None:
                 while queue and len(pending) < self.in_flight * threads:
                     position = queue.pop()
                     future = client.submit(function, chunks[position], pure=False)
@@ -121,7 +128,7 @@ def _handshake(address: str, timeout: float) -> None:
     except OSError as exc:
         raise ParameterError(f"scheduler: no Dask scheduler answers at {address} ({exc.strerror or exc})") from None
 
-    async def probe():
+    async def probe() -> None:
         comm = await connect(address, timeout=timeout)
         await comm.close()
     try:

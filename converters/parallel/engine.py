@@ -15,8 +15,11 @@ from __future__ import annotations
 
 import re
 import sys
+from collections.abc import Callable, Generator, Iterable
+from typing import Any, Protocol
 
 import numpy as np
+import numpy.typing as npt
 
 from ..errors import ParameterError
 from .local import LocalBackend, Lost
@@ -24,7 +27,36 @@ from .local import LocalBackend, Lost
 BACKENDS = ("serial", "batched", "local")
 
 
-def backend_for(spec="local", *, workers: int | None = None):
+class Ensemble(Protocol):
+    """What :func:`run_ensemble` runs (module docstring)."""
+
+    @property
+    def chunk_hint(self) -> int: ...
+
+    def row(self, index: int, point: dict) -> dict: ...
+
+    def rows(self, items: list[tuple[int, dict]]) -> list[dict]: ...
+
+    def failed(self, index: int, point: dict, message: str) -> dict: ...
+
+
+class Points(Protocol):
+    """Parameter points addressed by index (:mod:`converters.sweeps.points`)."""
+
+    @property
+    def size(self) -> int: ...
+
+    def points(self, indices: npt.ArrayLike) -> list[tuple[int, dict]]: ...
+
+
+class Backend(Protocol):
+    """Where chunks run: (position, result or :class:`.local.Lost`) for each chunk, as they complete."""
+
+    def map_chunks(self, function: Callable[[Any], Any],
+                   chunks: Iterable[Any]) -> Generator[tuple[int, Any], None, None]: ...
+
+
+def backend_for(spec: Any = "local", *, workers: int | None = None) -> str | Backend:
     """A backend from its name (serial, batched, local), a Dask address (tcp://...), a Dask Client, or a
     backend object (returned as is)."""
     if hasattr(spec, "map_chunks") or spec in ("serial", "batched"):
@@ -58,18 +90,20 @@ def check_address(spec: str) -> str:
 class _Chunk:
     """The work of one chunk where it runs: its indices -> points -> rows."""
 
-    def __init__(self, ensemble, points, serial: bool = False):
+    def __init__(self, ensemble: Ensemble, points: Points, serial: bool = False) -> None:
         self.ensemble, self.points, self.serial = ensemble, points, serial
 
-    def __call__(self, indices):
+    def __call__(self, indices: npt.NDArray[np.int64]) -> list[dict]:
         items = self.points.points(indices)
         if self.serial:
             return [self.ensemble.row(i, point) for i, point in items]
         return self.ensemble.rows(items)
 
 
-def run_ensemble(ensemble, points, *, backend="local", indices=None, chunk: int | None = None, on_rows=None,
-                 progress: bool = False, label: str = "sweep", workers: int | None = None, done: int = 0):
+def run_ensemble(ensemble: Ensemble, points: Points, *, backend: Any = "local", indices: npt.ArrayLike | None = None,
+                 chunk: int | None = None, on_rows: Callable[[list[dict]], object] | None = None,
+                 progress: bool = False, label: str = "sweep", workers: int | None = None,
+                 done: int = 0) -> list[dict] | int:
     """The ensemble's rows at ``points`` (a :class:`.points.Grid` or :class:`.points.LatinHypercube`).
 
     Parameters

@@ -16,11 +16,18 @@ import multiprocessing
 import os
 import sys
 import time
+from collections.abc import Callable, Generator, Iterable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, TypeVar
 
 from ..errors import ParameterError, TimeLimitReached
 from ..limits import TIME_RANGE
 from ..validate import check_integer, check_range
+
+if TYPE_CHECKING:
+    from multiprocessing.context import BaseContext
+
+_T = TypeVar("_T")
 
 #: Most worker processes a backend starts: each holds a Python with numpy and the kernels (~50-100 MB).
 MAX_WORKERS = 64
@@ -36,7 +43,7 @@ def default_workers() -> int:
         return max(1, os.cpu_count() or 1)
 
 
-def _worker_init(parent: int):
+def _worker_init(parent: int) -> None:
     """A worker leaves SIGINT to its parent (a Ctrl-C reaches the whole process group: the parent stops the
     workers itself, without a traceback from each), dies at SIGTERM whatever handler it inherited, and ends
     itself when its parent is gone (killed with SIGKILL, nothing left to stop it): no orphan runs on.
@@ -48,7 +55,7 @@ def _worker_init(parent: int):
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
-    def watch():
+    def watch() -> None:
         while os.getppid() == parent:
             time.sleep(_PARENT_POLL_S)
         os._exit(1)
@@ -60,7 +67,7 @@ _PARENT_POLL_S = 0.2
 MANAGER_JOIN_S = 5.0
 
 
-def _context():
+def _context() -> BaseContext:
     # fork: the worker needs nothing re-imported (works from scripts, stdin and notebooks alike)
     return multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
 
@@ -79,19 +86,19 @@ class ProcessSlot:
     leaky library (PySpice) accumulated to the system. Safe across fork: a child never touches the
     parent's process."""
 
-    def __init__(self, tasks_per_process: int | None = None):
+    def __init__(self, tasks_per_process: int | None = None) -> None:
         self.tasks_per_process = tasks_per_process
-        self._pool = None
+        self._pool: futures.ProcessPoolExecutor | None = None
         self._tasks = 0
         self._owner = os.getpid()
 
-    def _forget_inherited(self):
+    def _forget_inherited(self) -> None:
         # in a forked child the parent's pool object is a copy whose process belongs to the parent: shutting it
         # down here would send the parent's worker its exit sentinel. Forget it instead.
         if self._owner != os.getpid():
             self._pool, self._tasks, self._owner = None, 0, os.getpid()
 
-    def submit(self, function, *args) -> futures.Future:
+    def submit(self, function: Callable[..., _T], *args: Any) -> futures.Future[_T]:
         self._forget_inherited()
         if self._pool is not None and self.tasks_per_process is not None and self._tasks >= self.tasks_per_process:
             self.close()
@@ -102,7 +109,7 @@ class ProcessSlot:
         self._tasks += 1
         return self._pool.submit(function, *args)
 
-    def call(self, function, *args, timeout: float | None = None):
+    def call(self, function: Callable[..., _T], *args: Any, timeout: float | None = None) -> _T:
         """``function(*args)`` in the process. Raises ``concurrent.futures.TimeoutError`` (the process is then
         terminated) or ``concurrent.futures.process.BrokenProcessPool`` (it died; the next call gets a new one)."""
         try:
@@ -117,7 +124,7 @@ class ProcessSlot:
             self.kill()                                 # exit would wait for its run)
             raise
 
-    def kill(self):
+    def kill(self) -> None:
         """Terminate the process (close() would wait for a hung one)."""
         self._forget_inherited()
         if self._pool is not None:
@@ -125,7 +132,7 @@ class ProcessSlot:
                 process.terminate()
             self.discard()
 
-    def discard(self):
+    def discard(self) -> None:
         if self._pool is not None:
             manager = getattr(self._pool, "_executor_manager_thread", None)
             self._pool.shutdown(wait=False, cancel_futures=True)
@@ -136,7 +143,7 @@ class ProcessSlot:
             if manager is not None and manager.is_alive():
                 manager.join(MANAGER_JOIN_S)
 
-    def close(self):
+    def close(self) -> None:
         self._forget_inherited()
         if self._pool is not None:
             self._pool.shutdown(wait=True, cancel_futures=True)
@@ -147,10 +154,10 @@ class _Call:
     """``function(chunk)`` in a worker, then ``finalize()`` (e.g. shut the worker's own ngspice process down
     before the slot's process ends)."""
 
-    def __init__(self, function, finalize=None):
+    def __init__(self, function: Callable[[Any], Any], finalize: Callable[[], object] | None = None) -> None:
         self.function, self.finalize = function, finalize
 
-    def __call__(self, chunk):
+    def __call__(self, chunk: Any) -> Any:
         try:
             return self.function(chunk)
         finally:
@@ -178,7 +185,7 @@ class LocalBackend:
     name = "local"
 
     def __init__(self, workers: int | None = None, *, timeout: float | None = None, attempts: int = 3,
-                 tasks_per_process: int | None = None, finalize=None):
+                 tasks_per_process: int | None = None, finalize: Callable[[], object] | None = None) -> None:
         workers = min(default_workers(), MAX_WORKERS) if workers is None else check_integer("workers", workers, 1,
                                                                                              MAX_WORKERS)
         if timeout is not None:
@@ -191,7 +198,8 @@ class LocalBackend:
         self.workers, self.timeout, self.attempts = workers, timeout, attempts
         self.tasks_per_process, self.finalize = tasks_per_process, finalize
 
-    def map_chunks(self, function, chunks):
+    def map_chunks(self, function: Callable[[Any], Any],
+                   chunks: Iterable[Any]) -> Generator[tuple[int, Any], None, None]:
         """Yield (position, result or :class:`Lost`) for each chunk, as they complete."""
         chunks = list(chunks)
         call = _Call(function, self.finalize)
@@ -240,7 +248,7 @@ class LocalBackend:
                     slot.close()
 
 
-def check_picklable(function) -> None:
+def check_picklable(function: object) -> None:
     """Refuse up front a function that cannot reach a worker process (a lambda, a function defined inside
     another): each chunk would otherwise come back lost with pickle's words."""
     import pickle
@@ -252,9 +260,11 @@ def check_picklable(function) -> None:
                              f"{type(exc).__name__}: {exc}") from None
 
 
-def parallel_map(function, items, *, workers: int | None = None, chunk: int = 1, progress: bool = False,
-                 label: str = "", unit: str = "pt", finalize=None, timeout: float | None = None,
-                 tasks_per_process: int | None = None, attempts: int = 3, on_lost=None) -> list:
+def parallel_map(function: Callable[[Any], Any], items: Iterable[Any], *, workers: int | None = None, chunk: int = 1,
+                 progress: bool = False, label: str = "", unit: str = "pt",
+                 finalize: Callable[[], object] | None = None, timeout: float | None = None,
+                 tasks_per_process: int | None = None, attempts: int = 3,
+                 on_lost: Callable[[Any, str], Any] | None = None) -> list:
     """[function(item) for item in items] on the local backend, in input order.
 
     Parameters
@@ -301,7 +311,7 @@ def parallel_map(function, items, *, workers: int | None = None, chunk: int = 1,
     return [r for chunk_results in results for r in chunk_results]
 
 
-def _in_process(function, chunk):
+def _in_process(function: Callable[[Any], Any], chunk: Any) -> Any:
     try:
         return function(chunk)
     except Exception as exc:                                # as a worker's exception comes back
@@ -309,10 +319,10 @@ def _in_process(function, chunk):
 
 
 class _Apply:
-    def __init__(self, function):
+    def __init__(self, function: Callable[[Any], Any]) -> None:
         self.function = function
 
-    def __call__(self, chunk):
+    def __call__(self, chunk: Iterable[Any]) -> list[Any]:
         return [self.function(item) for item in chunk]
 
 

@@ -16,13 +16,18 @@ lost (in the switch that closed; with a small on-resistance SPICE dissipates the
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TypeAlias
 
 import numpy as np
+import numpy.typing as npt
 
 from ..errors import ParameterError
 from ..validate import as_matrix, as_vector, parse_value
 from .schedule import Schedule
 from .switching import Comparators, Relay, StateSwitching
+
+#: What decides which configuration holds when (an :class:`LCSProblem`'s ``switching``).
+SwitchingLaw: TypeAlias = "Schedule | StateSwitching | Comparators | Relay"
 
 
 @dataclass(frozen=True)
@@ -40,7 +45,7 @@ class Jump:
     q: np.ndarray
     W: np.ndarray
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         P = as_matrix("jump P", self.P, (None, None))
         n = P.shape[0]
         q, W = as_vector("jump q", self.q, n), as_matrix("jump W", self.W, (n, n))
@@ -57,7 +62,7 @@ class Jump:
         d = self(x) - np.asarray(x, dtype=float)
         return 0.5 * np.einsum("...i,ij,...j->...", d, self.W, d)
 
-    def permuted(self, order: list) -> "Jump":
+    def permuted(self, order: list[int]) -> "Jump":
         """The jump on states reordered (x_new = x[order])."""
         ix = np.ix_(order, order)
         return Jump(P=self.P[ix], q=self.q[order], W=self.W[ix])
@@ -80,7 +85,7 @@ class Configuration:
     name: str = ""
     jump: Jump | None = None
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         label = f"configuration {self.name!r}: " if self.name else ""
         A = as_matrix(label + "A", self.A, (None, None))
         n = A.shape[0]
@@ -123,7 +128,7 @@ class Sinusoids:
     E: np.ndarray
     F: np.ndarray
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         omega, phase = (np.asarray(getattr(self, key), dtype=float).reshape(-1) for key in ("omega", "phase"))
         E, F = (np.asarray(getattr(self, key), dtype=float) for key in ("E", "F"))
         m = omega.size
@@ -138,7 +143,7 @@ class Sinusoids:
             value.setflags(write=False)
             object.__setattr__(self, key, value)
 
-    def values(self, t) -> np.ndarray:
+    def values(self, t: npt.ArrayLike) -> np.ndarray:
         """sin(omega_j t + phase_j) at each time, shape (len(t), m) (t a scalar: (m,))."""
         t = np.asarray(t, dtype=float)
         return np.sin(np.multiply.outer(t, self.omega) + self.phase)
@@ -155,7 +160,7 @@ class LCSProblem:
     """
 
     configurations: tuple[Configuration, ...]
-    switching: Schedule | StateSwitching | Comparators | Relay
+    switching: SwitchingLaw
     x0: np.ndarray
     t_span: tuple[float, float]
     state_names: tuple[str, ...] = ()
@@ -164,7 +169,7 @@ class LCSProblem:
     #: Sinusoidal inputs (AC sources) on top of each configuration's constant E and F, or None.
     inputs: Sinusoids | None = None
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         configs = tuple(self.configurations)
         if not configs:
             raise ParameterError("configurations must hold at least one Configuration; got none")

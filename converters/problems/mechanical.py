@@ -20,6 +20,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+import numpy.typing as npt
 
 from ..errors import ParameterError
 from ..validate import as_matrix, as_vector, parse_value
@@ -36,18 +37,18 @@ class PoppFriction:
     beta: float = 0.1
     eta: float = 0.01
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         for name in ("normal", "alpha", "gamma", "beta", "eta"):
             value = parse_value(f"friction {name}", getattr(self, name))
             if value < 0.0:
                 raise ParameterError(f"friction {name} must be >= 0; got {value!r}")
             object.__setattr__(self, name, value)
 
-    def magnitude(self, s):
+    def magnitude(self, s: float | npt.NDArray[np.float64]) -> float | npt.NDArray[np.float64]:
         a = abs(s) if isinstance(s, float) else np.abs(s)
         return self.normal * (self.alpha / (1.0 + self.gamma * a) + self.beta + self.eta * a * a)
 
-    def slope(self, s):
+    def slope(self, s: float | npt.NDArray[np.float64]) -> float | npt.NDArray[np.float64]:
         """d F / d s (a sign-carrying derivative: F is even in s)."""
         a = np.abs(s)
         return self.normal * np.sign(s) * (-self.alpha * self.gamma / (1.0 + self.gamma * a) ** 2 + 2.0 * self.eta * a)
@@ -75,7 +76,7 @@ class FrictionContact:
     belt: float = 0.0
     name: str = "friction"
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         d = as_vector(f"{self.name} direction", self.direction, None)
         d.setflags(write=False)
         object.__setattr__(self, "direction", d)
@@ -86,7 +87,7 @@ class FrictionContact:
 class ZeroOffset:
     """c(t) = 0."""
 
-    def __call__(self, t):
+    def __call__(self, t: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         zero = np.zeros_like(np.asarray(t, dtype=float))
         return zero, zero, zero
 
@@ -101,7 +102,7 @@ class UnilateralContact:
     offset: object = field(default_factory=ZeroOffset)
     name: str = "contact"
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         d = as_vector(f"{self.name} direction", self.direction, None)
         d.setflags(write=False)
         object.__setattr__(self, "direction", d)
@@ -120,7 +121,7 @@ class HarmonicForce:
     phase: float = 0.0
     constant: np.ndarray | None = None
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         amplitude = np.array(self.amplitude, dtype=float)
         amplitude.setflags(write=False)
         object.__setattr__(self, "amplitude", amplitude)
@@ -170,7 +171,7 @@ class MechanicalProblem:
     state_names: tuple = ()
     metadata: dict = field(default_factory=dict, compare=False)
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         M = as_matrix("mass", self.mass, (None, None))
         n = M.shape[0]
         if M.shape[1] != n or not np.allclose(M, M.T) or np.any(np.linalg.eigvalsh(0.5 * (M + M.T)) <= 0.0):

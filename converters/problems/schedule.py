@@ -4,6 +4,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import numpy.typing as npt
 
 from ..errors import ParameterError
 from ..validate import check_integer, check_positive, parse_value
@@ -21,7 +22,7 @@ class Schedule:
     starts: tuple[float, ...]
     configs: tuple[int, ...]
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         try:
             starts = tuple(parse_value("schedule start", s) for s in self.starts)
         except TypeError:
@@ -74,7 +75,7 @@ class Schedule:
         times = (periods[:, None] + np.array(self.starts)[None, :]).ravel()
         return times[(times > t0) & (times < t1)]
 
-    def initial_config(self, x0, t0: float) -> int:
+    def initial_config(self, x0: npt.ArrayLike, t0: float) -> int:
         return int(self.config_at(np.array([t0]))[0])
 
     def config_at(self, t: np.ndarray) -> np.ndarray:

@@ -26,9 +26,11 @@ configurations it selects), so methods treat all laws alike where they can.
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+import numpy.typing as npt
 
 from ..errors import ParameterError
 from ..validate import as_vector, check_positive, parse_value
@@ -44,7 +46,7 @@ class Ramp:
     #: Where the first period starts (s), in [0, period): a second phase's ramp delayed by period / 2.
     delay: float = 0.0
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         object.__setattr__(self, "low", parse_value("ramp low", self.low))
         object.__setattr__(self, "high", parse_value("ramp high", self.high))
         object.__setattr__(self, "period", check_positive("ramp period", self.period, "s"))
@@ -58,10 +60,10 @@ class Ramp:
         """d ramp / dt inside a period (V/s or the unit of s per second)."""
         return (self.high - self.low) / self.period
 
-    def __call__(self, t) -> np.ndarray:
+    def __call__(self, t: npt.ArrayLike) -> np.ndarray:
         return self.low + self.slope * self.phase(t)
 
-    def phase(self, t) -> np.ndarray:
+    def phase(self, t: npt.ArrayLike) -> np.ndarray:
         """Time since the ramp's last reset (s), in [0, period); within 1e-9 period of a reset it is that reset's 0
         (t = 100 T may be 100 T less one rounding, whose remainder would read a whole period), as the stepper's
         compiled loop rounds it."""
@@ -77,7 +79,7 @@ class SwitchingFunction:
     d: float = 0.0
     ramp: Ramp | None = None
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         c = as_vector("switching function c", self.c, None)
         c.setflags(write=False)
         object.__setattr__(self, "c", c)
@@ -87,19 +89,19 @@ class SwitchingFunction:
     def n(self) -> int:
         return self.c.shape[0]
 
-    def __call__(self, x, t) -> np.ndarray:
+    def __call__(self, x: npt.ArrayLike, t: npt.ArrayLike) -> np.ndarray:
         """s at states ``x`` (shape (n,) or (N, n)) and times ``t``."""
         value = np.asarray(x, dtype=float) @ self.c + self.d
         return value - self.ramp(t) if self.ramp is not None else value
 
 
-def _check_config(name: str, value) -> int:
+def _check_config(name: str, value: object) -> int:
     if not (isinstance(value, (int, np.integer)) and value >= 0):
         raise ParameterError(f"{name} must be a configuration index (an integer >= 0); got {value!r}")
     return int(value)
 
 
-def _check_function(function) -> None:
+def _check_function(function: object) -> None:
     if not isinstance(function, SwitchingFunction):        # None failed later with an AttributeError
         raise ParameterError(f"function must be a SwitchingFunction; got {function!r}")
 
@@ -140,7 +142,7 @@ class StateSwitching:
     clocked: bool = False
     limit: float | None = None
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         _check_function(self.function)
         for name in ("latch", "clocked"):
             if not isinstance(getattr(self, name), (bool, np.bool_)):          # a string ("no") is truthy
@@ -179,7 +181,7 @@ class StateSwitching:
     def configs(self) -> tuple[int, ...]:
         return (self.below, self.above)
 
-    def initial_config(self, x0, t0: float) -> int:
+    def initial_config(self, x0: npt.ArrayLike, t0: float) -> int:
         """The configuration at a run's start: ``initial`` (a run that continues another: a load step), set again
         by s against the band where the run starts on a ramp reset as any period start is; without ``initial``,
         ``below`` where s(x0, t0) < 0."""
@@ -247,7 +249,7 @@ class Comparators:
     names: tuple = ()
     words: tuple = ("below", "above")
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         channels = tuple(self.channels)
         if not 2 <= len(channels) <= MAX_CHANNELS:
             raise ParameterError(f"channels must hold 2 to {MAX_CHANNELS} StateSwitching laws (one is a "
@@ -281,11 +283,11 @@ class Comparators:
     def configs(self) -> tuple[int, ...]:
         return tuple(sorted(set(self.table) - {-1}))
 
-    def initial_bits(self, x0, t0: float) -> int:
+    def initial_bits(self, x0: npt.ArrayLike, t0: float) -> int:
         """The channels' states at a run's start, bit j channel j's (each channel's own rule)."""
         return sum(channel.initial_config(x0, t0) << j for j, channel in enumerate(self.channels))
 
-    def initial_config(self, x0, t0: float) -> int:
+    def initial_config(self, x0: npt.ArrayLike, t0: float) -> int:
         return self.config(self.initial_bits(x0, t0), t0)
 
     def config(self, bits: int, t: float) -> int:
@@ -302,7 +304,7 @@ class Comparators:
         return np.unique(np.concatenate([c.breakpoints(t0, t1) for c in self.channels]))
 
 
-def common_period(periods, what: str = "the ramps' periods") -> float:
+def common_period(periods: Sequence[float], what: str = "the ramps' periods") -> float:
     """The least common multiple of periods (s) whose ratios are rational with denominators up to 1000."""
     from fractions import Fraction
     import math
@@ -315,14 +317,14 @@ def common_period(periods, what: str = "the ramps' periods") -> float:
     return base * math.lcm(*[f.numerator * denominator // f.denominator for f in fractions]) / denominator
 
 
-def law_channels(law) -> tuple[tuple[StateSwitching, ...], tuple[int, ...]]:
+def law_channels(law: StateSwitching | Comparators) -> tuple[tuple[StateSwitching, ...], tuple[int, ...]]:
     """(channels, table) of a state-driven law: one channel (its table ``(below, above)``) for a StateSwitching."""
     if isinstance(law, Comparators):
         return law.channels, law.table
     return (law,), (law.below, law.above)
 
 
-def initial_bits(law, x0, t0: float) -> int:
+def initial_bits(law: StateSwitching | Comparators, x0: npt.ArrayLike, t0: float) -> int:
     """The channels' states (bit j: channel j above) at a run's start, for a StateSwitching or Comparators."""
     if isinstance(law, Comparators):
         return law.initial_bits(x0, t0)
@@ -341,7 +343,7 @@ class Relay:
     low: int
     high: int
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         _check_function(self.function)
         object.__setattr__(self, "low", _check_config("low", self.low))
         object.__setattr__(self, "high", _check_config("high", self.high))
@@ -358,7 +360,7 @@ class Relay:
     def configs(self) -> tuple[int, ...]:
         return (self.low, self.high)
 
-    def initial_config(self, x0, t0: float) -> int:
+    def initial_config(self, x0: npt.ArrayLike, t0: float) -> int:
         return self.low
 
     def breakpoints(self, t0: float, t1: float) -> np.ndarray:

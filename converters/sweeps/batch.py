@@ -15,6 +15,8 @@ differ, so a point right at the tolerance can take one Newton iteration more or 
 """
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 from numba import njit
 
@@ -22,6 +24,12 @@ from ..analysis.newton_kernel import newton_advance
 from ..analysis.floquet import spectral_radius
 from ..compiled import NEWTON_CONVERGED, NEWTON_EVALUATE, NEWTON_RADIUS, register_state
 from ..methods.theta_kernels import branch_maps, run_scalar, step_jacobian, theta_matrices
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    FloatArray = npt.NDArray[np.float64]
+    IntArray = npt.NDArray[np.int64]
 
 _spectral_radius = njit(cache=True)(spectral_radius)
 
@@ -32,7 +40,9 @@ STATUS = (NOT_CONVERGED, CONVERGED, ROUNDING, NOT_CONVERGED, SINGULAR, NO_SOLUTI
 
 
 @njit(cache=True)
-def _period(x0, which, Phi_b, Gamma_b, CPhi, q0, M, H, xs, us, ys, jac, with_jacobian, state):
+def _period(x0: FloatArray, which: IntArray, Phi_b: FloatArray, Gamma_b: FloatArray, CPhi: FloatArray,
+            q0: FloatArray, M: FloatArray, H: FloatArray, xs: FloatArray, us: FloatArray, ys: FloatArray,
+            jac: FloatArray, with_jacobian: bool, state: tuple[float, ...] | None) -> bool:
     """One period from x0 (one pair; ``which`` its steps): states into xs, pair into us, ys (rows 0..steps,
     shapes (rows, n), (rows, 1), (rows, 1)); the Jacobian into jac when asked. The serial stepper's own loop
     and Jacobian (:func:`.theta_kernels.run_scalar`, :func:`.theta_kernels.step_jacobian`), called once a
@@ -52,8 +62,11 @@ def _period(x0, which, Phi_b, Gamma_b, CPhi, q0, M, H, xs, us, ys, jac, with_jac
     return True
 
 
-def batch_steady(A, B, C, D, E, F, set_configs, set_dts, counts, which, steps, theta, x0, warm_up, tol, max_iter,
-                 xs, us, ys, x_star, jac_out, status, iterations, residuals, distances):
+def batch_steady(A: FloatArray, B: FloatArray, C: FloatArray, D: FloatArray, E: FloatArray, F: FloatArray,
+                 set_configs: IntArray, set_dts: FloatArray, counts: IntArray, which: IntArray, steps: IntArray,
+                 theta: float, x0: FloatArray, warm_up: int, tol: float, max_iter: int, xs: FloatArray,
+                 us: FloatArray, ys: FloatArray, x_star: FloatArray, jac_out: FloatArray, status: IntArray,
+                 iterations: IntArray, residuals: FloatArray, distances: FloatArray) -> None:
     """Steady states of P points (module docstring), in place.
 
     A..F: (P, configs, ...) matrices; set_configs, set_dts: (P, sets) the plan's matrix sets (``counts`` used
@@ -69,8 +82,12 @@ def batch_steady(A, B, C, D, E, F, set_configs, set_dts, counts, which, steps, t
 
 
 @njit(cache=True)
-def _batch_steady(A, B, C, D, E, F, set_configs, set_dts, counts, which, steps, theta, x0, warm_up, tol, max_iter,
-                  xs, us, ys, x_star, jac_out, status, iterations, residuals, distances, state):
+def _batch_steady(A: FloatArray, B: FloatArray, C: FloatArray, D: FloatArray, E: FloatArray, F: FloatArray,
+                  set_configs: IntArray, set_dts: FloatArray, counts: IntArray, which: IntArray, steps: IntArray,
+                  theta: float, x0: FloatArray, warm_up: int, tol: float, max_iter: int, xs: FloatArray,
+                  us: FloatArray, ys: FloatArray, x_star: FloatArray, jac_out: FloatArray, status: IntArray,
+                  iterations: IntArray, residuals: FloatArray, distances: FloatArray,
+                  state: tuple[float, ...] | None) -> None:
     """:func:`batch_steady` compiled (``state``: :func:`converters.compiled.register_state`)."""
     P, n = x0.shape[0], x0.shape[1]
     for p in range(P):

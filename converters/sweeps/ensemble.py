@@ -16,11 +16,20 @@ cannot take, goes through the per-point path :meth:`ModelSweep.row`. Both read t
 from __future__ import annotations
 
 import time
+from collections.abc import Iterable
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
 from ..errors import ParameterError
+
+if TYPE_CHECKING:
+    from ..methods.base import Method
+    from ..methods.theta import Theta
+    from ..models import Model
+    from ..problems import LCSProblem
+    from ..trajectory import Trajectory
 
 #: Newton's tolerance on the orbit (relative, the engine's default). The last Newton step is taken too
 #: (polished): on a fixed mode sequence the period map is affine and that step lands on the fixed point to
@@ -40,7 +49,7 @@ ACCURACY_MEASURES = {"error_estimate": float, "vout_mean_error_estimate": float,
                      "steps_per_period": int, "rtol_met": bool}
 
 
-def on_demand(metrics) -> list:
+def on_demand(metrics: Iterable[str]) -> list:
     """The metrics that are not a standard measure (nor an accuracy one): columns computed on demand."""
     return [m for m in metrics if m not in MEASURES and m not in ACCURACY_MEASURES]
 
@@ -60,7 +69,7 @@ def unstable(spectral_radius: float) -> str:
             "(a period-doubled orbit, or chaos)")
 
 
-def diverging(run, T: float) -> str:
+def diverging(run: Trajectory, T: float) -> str:
     """Why a run from rest has no measures worth keeping ('' when none): a state that is not finite, or whose
     largest magnitude grows by more than :data:`DIVERGING` a period over the last five without slowing."""
     x = np.abs(np.asarray(run.x))
@@ -85,7 +94,7 @@ def failed_row(index: int, point: dict, message: str, wall_s: float = 0.0) -> di
 
 
 
-def _refuse_steps(model, params: dict) -> None:
+def _refuse_steps(model: Model, params: dict) -> None:
     """A sweep's row is a periodic steady state or the last period of a run from rest: a load or input step
     would be ignored (each point's problem is the circuit before it), so it is refused."""
     given = [name for name in getattr(model, "STEP_PARAMETERS", ()) if name in params]
@@ -140,7 +149,7 @@ class ModelSweep:
                "spectral_radius": "1", "orbit_distance": "1", "error_estimate": "1", "vout_mean_error_estimate": "1"}
         return {**out, **self.metric_units}
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         from ..models import get_model
         model = get_model(self.model, self.control)
         _refuse_steps(model, self.base)
@@ -179,11 +188,11 @@ class ModelSweep:
         _refuse_steps(model, point)
         model.resolve({**self.base, **point})
 
-    def _model(self):
+    def _model(self) -> Model:
         from ..models import get_model
         return get_model(self.model, self.control)
 
-    def _method(self, model, p, problem):
+    def _method(self, model: Model, p: dict, problem: LCSProblem) -> Method:
         """A ``step`` method at h = T h_fraction (with ``theta`` where it takes one: the sweep's, else the point's
         default from ``problem``'s configurations), an exact one sampled at T/1000."""
         from ..methods.base import get_method
@@ -235,7 +244,7 @@ class ModelSweep:
         except (ValueError, RuntimeError, ArithmeticError) as exc:
             return failed_row(index, point, f"{type(exc).__name__}: {exc}", time.perf_counter() - clock)
 
-    def nominal_error(self, metrics) -> dict:
+    def nominal_error(self, metrics: Iterable[str]) -> dict:
         """How accurate each of ``metrics`` is, read at the nominal point (the base parameters): {metric: (absolute
         error estimate, how)}. The stepper: |Q(h) - Q(h/2)| (a first-order bound on the error at h, whatever its
         order); accuracy on request: rtol of the value; the event method: 0 (exact flows). Empty where the nominal
@@ -256,7 +265,7 @@ class ModelSweep:
         return {m: (abs(at_h[m] - at_half[m]), f"the nominal point at h = T/{1 / self.h_fraction:.4g} against "
                     f"h/2") for m in numeric if isinstance(at_half.get(m), float)}
 
-    def _accurate_row(self, model, p: dict) -> dict:
+    def _accurate_row(self, model: Model, p: dict) -> dict:
         """The measures of :func:`converters.analysis.accuracy.accurate_steady` (values its, mode and held
         fraction from its one-period orbit) with the worst and the mean's relative error estimates."""
         from ..analysis.accuracy import accurate_steady
@@ -317,7 +326,7 @@ class ModelSweep:
                 if problem.jumps:              # the batched steps take no jump: the point's own run does
                     rows[index] = self.row(index, point)
                     continue
-                method = self._method(model, p, problem)
+                method = cast("Theta", self._method(model, p, problem))        # batchable: the stepper
                 # the grid and matrix sets follow from the schedule and the step alone: points that vary only
                 # the circuit's values (a tolerance study) share them
                 key = (problem.switching, problem.t_span, method, len(problem.configurations))
@@ -329,7 +338,7 @@ class ModelSweep:
             self._batched(model, [item for item in prepared if item[3].theta == theta], rows)
         return [rows[index] for index, _ in items]
 
-    def _batched(self, model, prepared: list, rows: dict) -> None:
+    def _batched(self, model: Model, prepared: list, rows: dict) -> None:
         """The rows of prepared points of one theta through one compiled call (:func:`.batch.batch_steady`)."""
         from .batch import CONVERGED, ROUNDING, batch_steady
         P = len(prepared)
@@ -401,14 +410,15 @@ def _batch_failure(code: int, residual: float, distance: float) -> str:
             f"{STEADY_TOL:.3g}")
 
 
-def _stepper_trajectory(problem, method, t, x, u, y, config):
+def _stepper_trajectory(problem: LCSProblem, method: Theta, t: np.ndarray, x: np.ndarray, u: np.ndarray,
+                        y: np.ndarray, config: np.ndarray) -> Trajectory:
     from ..trajectory import Trajectory
     return Trajectory(t=t, x=x, u=u, y=y, config=config, state_names=problem.state_names, pair_names=problem.pair_names,
                       method=method.key, algorithm=method, steps=t.size - 1, rule="end" if method.theta == 1.0 else "linear",
                       period=problem.period)
 
 
-def orbit_row(model, p: dict, run, metrics: tuple = ()) -> dict:
+def orbit_row(model: Model, p: dict, run: Trajectory, metrics: tuple = ()) -> dict:
     """The measures of a one-period run on the orbit (the module docstring), through the model's labels, and the
     metrics asked for (:mod:`.metrics`)."""
     from dataclasses import replace
@@ -424,7 +434,7 @@ def orbit_row(model, p: dict, run, metrics: tuple = ()) -> dict:
     return {**row, **{name: metric_value(model, p, run, name) for name in metrics if name not in row}}
 
 
-def _number(value):
+def _number(value: Any) -> Any:
     try:
         return float(value)
     except (TypeError, ValueError):

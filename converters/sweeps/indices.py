@@ -10,9 +10,14 @@ small: S1_i ~ (dm/dp_i)^2 Var(p_i) / sum_j (dm/dp_j)^2 Var(p_j).
 """
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from ..errors import ParameterError
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 #: Harmonics summed (SALib's M) and bootstrap resamples of the confidence.
 HARMONICS = 10
@@ -22,7 +27,7 @@ MIN_SAMPLES = 100
 METHOD = "RBD-FAST (SALib; Tarantola et al. 2006, Tissot and Prieur 2012)"
 
 
-def first_order(frame, parameters: list, metrics: list, seed: int = 0) -> dict:
+def first_order(frame: pd.DataFrame, parameters: list, metrics: list, seed: int = 0) -> dict:
     """{metric: {"S1": {parameter: index}, "S1_conf": {parameter: 95 % half-width}, "sum": sum S1, "samples": n}}
     over the rows of ``frame`` whose metric is finite (a failed point has none)."""
     from SALib.analyze import rbd_fast

@@ -7,9 +7,16 @@ period spent in a mode (``fraction.DCM``, ``fraction.CCM-ON``; a netlist's ``fra
 enters it)."""
 from __future__ import annotations
 
+from collections.abc import Iterable
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from ..errors import ParameterError
+
+if TYPE_CHECKING:
+    from ..models import Model
+    from ..trajectory import Trajectory
 
 #: A signal's statistics over the measured period.
 STATISTICS = ("mean", "rms", "min", "max", "ripple")
@@ -17,7 +24,7 @@ STATISTICS = ("mean", "rms", "min", "max", "ripple")
 POWERS = {"efficiency": "1", "input_W": "W", "output_W": "W", "total_loss_W": "W"}
 
 
-def check_metrics(model, p: dict, names) -> dict:
+def check_metrics(model: Model, p: dict, names: Iterable[str]) -> dict:
     """{metric: unit} of metrics the model can give at ``p``; anything else is refused in one line naming the valid
     forms. The power balance's and the losses' names are read off one period of the stepper from the model's start
     (what its ``power`` reports at these parameters: the parasitics that are set)."""
@@ -50,7 +57,7 @@ def check_metrics(model, p: dict, names) -> dict:
     return out
 
 
-def metric_value(model, p: dict, run, name: str) -> float:
+def metric_value(model: Model, p: dict, run: Trajectory, name: str) -> float:
     """The metric on a one-period run (labelled with the model's laws)."""
     t0, t1 = run.t[0], run.t[-1]
     if name.startswith("fraction."):
@@ -66,13 +73,13 @@ def metric_value(model, p: dict, run, name: str) -> float:
     return float(values.min() if statistic == "min" else values.max())
 
 
-def _signal_names(model, p: dict) -> list[str]:
+def _signal_names(model: Model, p: dict) -> list[str]:
     labels = model.labels(p)
     states = list(getattr(model, "state_names", ()) or model.problem(p, model.period(p)).state_names)
     return states + [s for s in labels.signal_names if s not in states and s != "mode"]
 
 
-def _probe_power(model, p: dict) -> dict:
+def _probe_power(model: Model, p: dict) -> dict:
     """The power balance of one period from the model's start (the stepper at T/200): which losses it reports."""
     from dataclasses import replace
 

@@ -7,9 +7,11 @@ C order: the first axis varies slowest.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+import numpy.typing as npt
 
 from ..errors import ParameterError
 from ..validate import check_indices, parse_value, shown
@@ -28,7 +30,7 @@ class Axis:
     count: int = 1
     log: bool = False
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         # Axis.parse checks the text; an Axis built directly is checked here (NaN ends, count 0 or 2.5, a log axis
         # across zero would pass or fail deep in numpy)
         if not (isinstance(self.name, str) and self.name.strip()):
@@ -90,7 +92,7 @@ class Axis:
         return f"{self.name}={self.start:g}:{self.stop:g}:{self.count}" + (":log" if self.log else "")
 
 
-def _check_names(axes) -> None:
+def _check_names(axes: Sequence[Axis]) -> None:
     if not axes:
         raise ParameterError("a sweep needs at least one --grid NAME=START:STOP:COUNT")
     names = [a.name for a in axes]
@@ -103,7 +105,7 @@ class Grid:
 
     kind = "grid"
 
-    def __init__(self, axes):
+    def __init__(self, axes: Iterable[Axis]) -> None:
         self.axes = tuple(axes)
         _check_names(self.axes)
         self.shape = tuple(a.count for a in self.axes)
@@ -116,7 +118,7 @@ class Grid:
     def names(self) -> tuple[str, ...]:
         return tuple(a.name for a in self.axes)
 
-    def points(self, indices) -> list[tuple[int, dict]]:
+    def points(self, indices: npt.ArrayLike) -> list[tuple[int, dict]]:
         indices = check_indices("indices", indices, self.size)
         where = np.unravel_index(indices, self.shape)
         return [(int(i), {a.name: float(self._values[k][where[k][j]]) for k, a in enumerate(self.axes)})
@@ -130,7 +132,7 @@ class Grid:
         return {"kind": "grid", "axes": [a.text() for a in self.axes]}
 
 
-def _check_sampling(option: str, n, seed) -> None:
+def _check_sampling(option: str, n: object, seed: object) -> None:
     """A sample count in [1, MAX_POINTS] (given as ``option``) and a seed >= 0, integers (bool refused)."""
     if isinstance(n, bool) or not (isinstance(n, (int, np.integer)) and 1 <= n <= MAX_POINTS):
         raise ParameterError(f"{option} must be an integer in [1, {MAX_POINTS:,}]; got {n!r}")
@@ -144,7 +146,7 @@ class LatinHypercube:
 
     kind = "lhs"
 
-    def __init__(self, axes, n: int, seed: int = 0):
+    def __init__(self, axes: Iterable[Axis], n: int, seed: int = 0) -> None:
         self.axes = tuple(axes)
         _check_names(self.axes)
         _check_sampling("--lhs", n, seed)
@@ -157,7 +159,7 @@ class LatinHypercube:
     def names(self) -> tuple[str, ...]:
         return tuple(a.name for a in self.axes)
 
-    def points(self, indices) -> list[tuple[int, dict]]:
+    def points(self, indices: npt.ArrayLike) -> list[tuple[int, dict]]:
         return [(int(i), {a.name: float(self._samples[i, k]) for k, a in enumerate(self.axes)})
                 for i in check_indices("indices", indices, self.size)]
 
@@ -187,7 +189,7 @@ class Tolerance:
     tolerance: float
     distribution: str = "normal"
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if self.distribution not in DISTRIBUTIONS:
             raise ParameterError(f"--tolerance {self.name}: the distribution must be one of {', '.join(DISTRIBUTIONS)}; "
                                  f"got {self.distribution!r}")
@@ -253,7 +255,7 @@ class Tolerances:
 
     kind = "tolerance"
 
-    def __init__(self, tolerances, n: int, seed: int = 0, sampler: str = "lhs"):
+    def __init__(self, tolerances: Iterable[Tolerance], n: int, seed: int = 0, sampler: str = "lhs") -> None:
         self.tolerances = tuple(tolerances)
         names = [t.name for t in self.tolerances]
         if not names:
@@ -281,7 +283,7 @@ class Tolerances:
     def names(self) -> tuple[str, ...]:
         return tuple(t.name for t in self.tolerances)
 
-    def points(self, indices) -> list[tuple[int, dict]]:
+    def points(self, indices: npt.ArrayLike) -> list[tuple[int, dict]]:
         return [(int(i), {t.name: float(self._samples[i, k]) for k, t in enumerate(self.tolerances)})
                 for i in check_indices("indices", indices, self.size)]
 

@@ -3,12 +3,20 @@ study: the fraction of samples meeting every one, with its exact (Clopper-Pearso
 from __future__ import annotations
 
 import re
+from collections.abc import Iterable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
+import numpy.typing as npt
 
 from ..errors import ParameterError
 from ..validate import parse_value
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+    from .points import Grid, LatinHypercube, Tolerances
 
 #: METRIC OP VALUE, OP one of <, <=, >, >= (the metric may hold dots and parentheses: v(out).ripple).
 _SPEC = re.compile(r"^\s*(?P<metric>[^<>=\s]+)\s*(?P<op><=|>=|<|>)\s*(?P<value>\S+)\s*$")
@@ -31,13 +39,13 @@ class Spec:
                                  f"efficiency>0.95); got {text!r}")
         return cls(match["metric"], match["op"], parse_value(f"--spec {match['metric']}", match["value"]))
 
-    def holds(self, values) -> np.ndarray:
+    def holds(self, values: npt.ArrayLike) -> np.ndarray:
         """Where the values meet the bound (NaN, a failed point's, never does)."""
         v = np.asarray(values, dtype=float)
         with np.errstate(invalid="ignore"):
             return {"<": v < self.limit, "<=": v <= self.limit, ">": v > self.limit, ">=": v >= self.limit}[self.op]
 
-    def margin(self, values) -> np.ndarray:
+    def margin(self, values: npt.ArrayLike) -> np.ndarray:
         """How far inside the bound (negative: outside): the worst sample has the smallest margin."""
         v = np.asarray(values, dtype=float)
         return self.limit - v if self.op in ("<", "<=") else v - self.limit
@@ -56,7 +64,8 @@ def yield_interval(passed: int, total: int, confidence: float = CONFIDENCE) -> t
     return passed / total, float(ci.low), float(ci.high)
 
 
-def study_summary(frame, specs, tolerances=None) -> dict:
+def study_summary(frame: pd.DataFrame, specs: Iterable[Spec],
+                  tolerances: Grid | LatinHypercube | Tolerances | None = None) -> dict:
     """Per spec its pass fraction and worst sample, and the yield (every spec met; a failed point counts as a
     failure) with its confidence interval."""
     ok = (frame["status"] == "ok").to_numpy()

@@ -2,7 +2,10 @@
 the cascade of doublings."""
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
+import numpy.typing as npt
 
 from ...errors import ParameterError
 
@@ -52,7 +55,8 @@ def switch_branch(family: OrbitFamily, bifurcation: Bifurcation, start: float, s
     return branch
 
 
-def cascade(family: OrbitFamily, start: float, stop: float, x_guess, *, max_period: int = 8, **options) -> list[Branch]:
+def cascade(family: OrbitFamily, start: float, stop: float, x_guess: npt.ArrayLike, *, max_period: int = 8,
+            **options: Any) -> list[Branch]:
     """Follow the period-k orbit over the path and, at every period doubling where an orbit loses stability,
     the period-2k orbit born there, up to orbits of ``max_period`` switching periods. Returns every branch,
     the first one first, each child after its parent."""

@@ -1,13 +1,23 @@
 """An orbit of a family that meets one more condition: the codimension-one point where a test function of the orbit
-vanishes (an impact reaching a corner of the constraint, say), solved with its parameter value."""
+vanishes (an impact reaching a corner of the constraint, say), solved with its parameter value.
+
+Why a loop of its own and not the one Newton driver (:mod:`converters.analysis.newton_kernel`): the driver solves
+P(x) - x = 0 over the state alone, its matrix J - I and its stopping rule the distance to the orbit estimated from
+the map's multipliers (max |dx|, |P(x) - x| / (1 - rho)); here the unknowns are (x, p) with a bordering row, the
+matrix is not J - I and has no multipliers to estimate a distance from, so the step is the extended system's and the
+rule is its own (tests/test_architecture.py lists the Newton loops by structure, this one with its reason)."""
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
+import numpy.typing as npt
 
 from .family import OrbitFamily
 
 
-def locate_condition(family: OrbitFamily, condition, value: float, x0, *, tol: float = 1e-11, iterations: int = 20,
+def locate_condition(family: OrbitFamily, condition: Callable[[float, npt.NDArray[np.float64]], float], value: float,
+                     x0: npt.ArrayLike, *, tol: float = 1e-11, iterations: int = 20,
                      step: float = 1e-7) -> tuple[float, np.ndarray, float, float]:
     """(value, x0, residual, condition) of the orbit of ``family`` on which ``condition(value, x)`` vanishes, from
     an orbit (value, x0) near it: Newton on P^k(x; p) - x = 0 and condition(p, x) = 0 in (x, p) together, the

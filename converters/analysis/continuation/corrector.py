@@ -1,10 +1,21 @@
 """The pseudo-arclength corrector in scaled variables: Newton on [F(x, p); t . (z - z_pred)] = 0, and the tangent
-(the null vector of [J - I, F_p])."""
+(the null vector of [J - I, F_p]).
+
+Why a loop of its own and not the one Newton driver (:mod:`converters.analysis.newton_kernel`): the driver solves
+P(x) - x = 0 over the state alone, its matrix J - I and its stopping rule the distance to the orbit estimated from
+the map's multipliers (max |dx|, |P(x) - x| / (1 - rho)); here the unknowns are (x, p) with a bordering row, the
+matrix is not J - I and has no multipliers to estimate a distance from, so the step is the extended system's and the
+rule is its own (tests/test_architecture.py lists the Newton loops by structure, this one with its reason)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
+import numpy.typing as npt
+
+if TYPE_CHECKING:
+    from .family import OrbitFamily
 
 
 # --- the corrector ------------------------------------------------------------------------------------
@@ -17,10 +28,10 @@ class _Scaling:
     #: about sqrt(eps).
     fd_step: float = 1e-7
 
-    def z(self, x, p) -> np.ndarray:
+    def z(self, x: npt.ArrayLike, p: float) -> np.ndarray:
         return np.append(np.asarray(x, dtype=float) / self.x_scale, p / self.p_scale)
 
-    def split(self, z) -> tuple[np.ndarray, float]:
+    def split(self, z: npt.NDArray[np.float64]) -> tuple[np.ndarray, float]:
         return z[:-1] * self.x_scale, float(z[-1] * self.p_scale)
 
 
@@ -34,7 +45,9 @@ class _Solved:
     iterations: int
 
 
-def _extended_rows(family, scaling, x, value, fx, jacobian, fp=None):
+def _extended_rows(family: OrbitFamily, scaling: _Scaling, x: npt.NDArray[np.float64], value: float,
+                   fx: npt.NDArray[np.float64], jacobian: npt.NDArray[np.float64],
+                   fp: npt.NDArray[np.float64] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """[J - I, F_p p_scale / x_scale]: the Jacobian of F / x_scale in the scaled variables (F_p by a forward
     difference unless given)."""
     n = x.size
@@ -52,7 +65,8 @@ def _null_vector(rows: np.ndarray) -> np.ndarray:
     return np.linalg.svd(rows)[2][-1]
 
 
-def _correct(family, scaling: _Scaling, z_start, normal, anchor, tol: float, max_iter: int = 10) -> _Solved | None:
+def _correct(family: OrbitFamily, scaling: _Scaling, z_start: npt.ArrayLike, normal: npt.NDArray[np.float64],
+             anchor: npt.NDArray[np.float64], tol: float, max_iter: int = 10) -> _Solved | None:
     """Newton on [F(x, p) / x_scale; normal . (z - anchor)] = 0 from z_start (scaled variables). The column
     F_p is taken once at the start (a chord Newton in p: it moves little over one correction) and again at
     the solution for its tangent."""

@@ -2,15 +2,22 @@
 orbit's event signature (a border collision), located by bisection on the chord."""
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from dataclasses import replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .corrector import _correct
 from .family import TEST_NAMES, Bifurcation, OrbitPoint
 
+if TYPE_CHECKING:
+    from .corrector import _Scaling
+    from .family import OrbitFamily
 
-def _detect(family, scaling, a: OrbitPoint, b: OrbitPoint, tol, locate_tol) -> list[Bifurcation]:
+
+def _detect(family: OrbitFamily, scaling: _Scaling, a: OrbitPoint, b: OrbitPoint, tol: float,
+            locate_tol: float) -> list[Bifurcation]:
     """Every bifurcation between consecutive orbits a and b (module docstring)."""
     found: list[Bifurcation] = []
     collision = None
@@ -48,7 +55,10 @@ def _detect(family, scaling, a: OrbitPoint, b: OrbitPoint, tol, locate_tol) -> l
     return sorted(found, key=lambda b: b.value)
 
 
-def _locate(family, scaling, a: OrbitPoint, b: OrbitPoint, same_as_a, test, tol, locate_tol):
+def _locate(family: OrbitFamily, scaling: _Scaling, a: OrbitPoint, b: OrbitPoint,
+            # each called with an OrbitPoint (`...`: the callers' lambdas bind their kind as a default argument)
+            same_as_a: Callable[..., bool], test: Callable[..., float | None] | None, tol: float,
+            locate_tol: float) -> tuple[OrbitPoint, OrbitPoint, str]:
     """Bracket the change between orbits a and b of the predicate ``same_as_a`` (true at a, false at b), to a
     chord of ``locate_tol`` in scaled variables. Each new orbit is solved on the plane normal to the chord
     through the trial point, so that a bracket around a fold narrows too. The trial point is the chord's
@@ -86,7 +96,7 @@ def _locate(family, scaling, a: OrbitPoint, b: OrbitPoint, same_as_a, test, tol,
     return lo, hi, "bracket left after 100 steps"
 
 
-def _border_collision(family, lo: OrbitPoint, hi: OrbitPoint, note: str) -> Bifurcation:
+def _border_collision(family: OrbitFamily, lo: OrbitPoint, hi: OrbitPoint, note: str) -> Bifurcation:
     pairs, configs = family.event_names(lo.value)
     below, above = (lo, hi) if lo.value <= hi.value else (hi, lo)
     detail = (f"events per orbit {len(below.signature)} -> {len(above.signature)}: "
@@ -102,7 +112,7 @@ def _border_collision(family, lo: OrbitPoint, hi: OrbitPoint, note: str) -> Bifu
                        multipliers_after=above.multipliers, detail=detail)
 
 
-def _event_label(event, pairs, configs) -> str:
+def _event_label(event: tuple[str, int, int], pairs: Sequence[str], configs: Sequence[str]) -> str:
     kind, pair, config = event
     if kind == "switch":
         return f"switching to {configs[config] if 0 <= config < len(configs) else config}"
@@ -115,7 +125,7 @@ def _event_label(event, pairs, configs) -> str:
     return f"{name} {state}{where}"
 
 
-def _describe_change(before: tuple, after: tuple, pairs, configs) -> str:
+def _describe_change(before: tuple, after: tuple, pairs: Sequence[str], configs: Sequence[str]) -> str:
     from collections import Counter
     count_before, count_after = Counter(before), Counter(after)
     gained = [f"{_event_label(e, pairs, configs)} x{count_after[e] - count_before[e]}"

@@ -2,12 +2,20 @@
 branches they form."""
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import numpy.typing as npt
 
 from ...errors import ParameterError
-from ..periodic import multipliers_of, newton_orbit
+from ..periodic import PeriodicOrbit, multipliers_of, newton_orbit
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+    from ...methods.base import Method, PeriodMap
 
 KINDS = ("period-doubling", "fold", "neimark-sacker", "border-collision", "grazing-sliding", "crossing-sliding",
          "switching-sliding", "adding-sliding")
@@ -95,7 +103,7 @@ class Bifurcation:
         return self.stable_before and not self.stable_after
 
     def to_dict(self) -> dict:
-        def pairs(values):
+        def pairs(values: npt.NDArray[np.complex128]) -> list[list[float]]:
             return [[float(m.real), float(m.imag)] for m in values]
         out = {"type": self.kind, "value": self.value, "period": self.period, "multipliers": pairs(self.multipliers),
                "stable_before": self.stable_before, "stable_after": self.stable_after, "x0": self.x0.tolist(),
@@ -112,8 +120,8 @@ class Branch:
     ``parent``: the period-doubling it was born at (None for the first branch)."""
 
     period: int
-    points: list = field(default_factory=list)
-    bifurcations: list = field(default_factory=list)
+    points: list[OrbitPoint] = field(default_factory=list)
+    bifurcations: list[Bifurcation] = field(default_factory=list)
     message: str = ""
     parent: Bifurcation | None = None
 
@@ -124,7 +132,7 @@ class Branch:
     def values(self) -> np.ndarray:
         return np.array([pt.value for pt in self.points])
 
-    def to_frame(self, state_names=None):
+    def to_frame(self, state_names: Sequence[str] | None = None) -> pd.DataFrame:
         """One row per orbit and sample m: value, m, the states at t0 + m T, stable, spectral radius."""
         import pandas as pd
         rows = []
@@ -142,7 +150,8 @@ class OrbitFamily:
     ``problem_of`` returns the problem at a parameter value (only its start time is used); its switching
     law must have a period T (a schedule, or a state-driven law with a ramp)."""
 
-    def __init__(self, problem_of, method, periods: int = 1, classify=None):
+    def __init__(self, problem_of: Callable[[float], Any], method: Method, periods: int = 1,
+                 classify: Callable[[OrbitPoint, OrbitPoint], tuple[str, str] | None] | None = None):
         if not (isinstance(periods, (int, np.integer)) and periods >= 1):
             raise ParameterError(f"periods (of the orbit, in switching periods) must be an integer >= 1; got {periods!r}")
         self.problem_of, self.method, self.periods = problem_of, method, int(periods)
@@ -157,7 +166,7 @@ class OrbitFamily:
     def doubled(self) -> "OrbitFamily":
         return OrbitFamily(self.problem_of, self.method, 2 * self.periods, self.classify)
 
-    def problem(self, value: float, periods: int | None = None):
+    def problem(self, value: float, periods: int | None = None) -> Any:
         problem = self.problem_of(value)
         T = problem.period
         if not np.isfinite(T):
@@ -166,7 +175,7 @@ class OrbitFamily:
         t0 = problem.t_span[0]
         return replace(problem, t_span=(t0, t0 + (periods or self.periods) * T))
 
-    def period_map(self, value: float, periods: int | None = None):
+    def period_map(self, value: float, periods: int | None = None) -> PeriodMap:
         key = (float(value), periods or self.periods)
         cached = self._maps.get(key)
         if cached is None:
@@ -175,20 +184,20 @@ class OrbitFamily:
             cached = self._maps[key] = self.method.period_map(self.problem(value, periods))
         return cached
 
-    def residual(self, value: float, x) -> tuple[np.ndarray, np.ndarray]:
+    def residual(self, value: float, x: npt.NDArray[np.float64]) -> tuple[np.ndarray, np.ndarray]:
         """F = P^k(x) - x and J = d P^k / d x."""
         px, jac = self.period_map(value)(x)
         return px - x, jac
 
-    def parameter_derivative(self, value: float, x, step: float) -> np.ndarray:
+    def parameter_derivative(self, value: float, x: npt.NDArray[np.float64], step: float) -> np.ndarray:
         """d F / d p by a central difference of half-width ``step``."""
         return (self.period_map(value + step).end(x) - self.period_map(value - step).end(x)) / (2.0 * step)
 
-    def orbit(self, value: float, x_guess, tol: float = 1e-10, max_iter: int = 30):
+    def orbit(self, value: float, x_guess: npt.ArrayLike, tol: float = 1e-10, max_iter: int = 30) -> PeriodicOrbit:
         """The orbit at a fixed parameter value (Newton shooting, :func:`.periodic.newton_orbit`)."""
         return newton_orbit(self.period_map(value), x_guess, tol=tol, max_iter=max_iter)
 
-    def _events(self, value: float, x0) -> list:
+    def _events(self, value: float, x0: npt.NDArray[np.float64]) -> Sequence[tuple[float, str, int, int]]:
         events = self.period_map(value).events(x0)
         if events is None:                              # a method whose map does not record events
             from ...simulate import simulate
@@ -197,15 +206,15 @@ class OrbitFamily:
             events = list(zip(table["time"], table["kind"], table["pair"], config))
         return events
 
-    def event_times(self, value: float, x0, kind: str) -> np.ndarray:
+    def event_times(self, value: float, x0: npt.NDArray[np.float64], kind: str) -> np.ndarray:
         """The instants of the events of ``kind`` ("impact", "detach", ...) of the orbit from x0, in time order."""
         return np.array([e[0] for e in self._events(value, x0) if e[1] == kind], dtype=float)
 
-    def signature(self, value: float, x0) -> tuple:
+    def signature(self, value: float, x0: npt.NDArray[np.float64]) -> tuple:
         """(kind, pair, config) of every event over one orbit, as a cyclic sequence (its smallest rotation)."""
         return self.timed_signature(value, x0)[0]
 
-    def timed_signature(self, value: float, x0) -> tuple[tuple, tuple]:
+    def timed_signature(self, value: float, x0: npt.NDArray[np.float64]) -> tuple[tuple, tuple]:
         """(signature, timed events). The orbit's events are read over two of its periods, in a window of one
         period that starts in the middle of the largest gap between them: an event at the orbit's start t0
         (a held state that begins right there, say) is then counted once, whichever side of t0 it falls on."""
@@ -224,7 +233,7 @@ class OrbitFamily:
         sequence = tuple(e[1:] for e in timed)
         return min((sequence[i:] + sequence[:i] for i in range(len(sequence))), default=()), timed
 
-    def point(self, value: float, x0, jacobian) -> OrbitPoint:
+    def point(self, value: float, x0: npt.ArrayLike, jacobian: npt.NDArray[np.float64]) -> OrbitPoint:
         x0 = np.array(x0, dtype=float)
         samples = [x0]
         if self.periods > 1:
@@ -246,7 +255,7 @@ class OrbitFamily:
 def check_path(name: str, start: float, stop: float, low: float, high: float, low_open: bool = True,
                high_open: bool = True) -> None:
     """A path inside the parameter's valid range, or one clear line."""
-    def outside(v):
+    def outside(v: float) -> bool:
         return (v <= low if low_open else v < low) or (v >= high if high_open else v > high)
     if outside(start) or outside(stop):
         lb, rb = "(" if low_open else "[", ")" if high_open else "]"

@@ -2,18 +2,22 @@
 map, and detection of bifurcations between consecutive orbits."""
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
+import numpy.typing as npt
 
 from ...errors import ParameterError
 
-from .corrector import _correct, _extended_rows, _null_vector, _Scaling
+from .corrector import _correct, _extended_rows, _null_vector, _Scaling, _Solved
 from .detection import _detect
 from .family import KINDS, Branch, OrbitFamily, OrbitPoint
 
 
-def follow(family: OrbitFamily, start: float, stop: float, x_guess, *, max_step: float | None = None,
+def follow(family: OrbitFamily, start: float, stop: float, x_guess: npt.ArrayLike, *, max_step: float | None = None,
            tol: float = 1e-10, locate_tol: float = 1e-8, max_points: int = 2000, warm_up: int = 100,
-           fd_step: float = 1e-7, on_point=None, stop_at: tuple[str, ...] = ()) -> Branch:
+           fd_step: float = 1e-7, on_point: Callable[[float], object] | None = None,
+           stop_at: str | tuple[str, ...] = ()) -> Branch:
     """Follow the family's orbit from ``start`` to ``stop`` by pseudo-arclength continuation, locating every
     bifurcation on the way (module docstring).
 
@@ -87,8 +91,10 @@ def follow(family: OrbitFamily, start: float, stop: float, x_guess, *, max_step:
                   tol, locate_tol, max_points, on_point=on_point, stop_at=stop_at)
 
 
-def _trace(family, branch, scaling, current: OrbitPoint, tangent, bounds, max_step, tol, locate_tol, max_points,
-           first_step: float | None = None, on_point=None, stop_at: tuple[str, ...] = ()) -> Branch:
+def _trace(family: OrbitFamily, branch: Branch, scaling: _Scaling, current: OrbitPoint,
+           tangent: npt.NDArray[np.float64], bounds: tuple[float, float], max_step: float, tol: float,
+           locate_tol: float, max_points: int, first_step: float | None = None,
+           on_point: Callable[[float], object] | None = None, stop_at: tuple[str, ...] = ()) -> Branch:
     """Pseudo-arclength steps from ``current`` along ``tangent`` until the parameter leaves ``bounds`` (or a
     bifurcation of a kind in ``stop_at`` is located)."""
     ds_max = max_step / scaling.p_scale
@@ -160,7 +166,8 @@ def _trace(family, branch, scaling, current: OrbitPoint, tangent, bounds, max_st
     return branch
 
 
-def _turn_at_corner(family, scaling, current: OrbitPoint, previous: OrbitPoint | None, tangent, ds, tol):
+def _turn_at_corner(family: OrbitFamily, scaling: _Scaling, current: OrbitPoint, previous: OrbitPoint | None,
+                    tangent: npt.NDArray[np.float64], ds: float, tol: float) -> tuple[_Solved, np.ndarray] | None:
     """The branch has a corner at ``current`` (a border collision where it turns back: a non-smooth fold), and
     no step along ``tangent`` finds an orbit. Candidates: the tangent of the map's piece at ``current`` itself
     (the last steps may already have crossed the corner), and that of the piece on the far side, found by

@@ -39,8 +39,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any, Protocol
 
 import numpy as np
+import numpy.typing as npt
 
 from ...errors import ParameterError
 from ...problems import LCSProblem, StateSwitching
@@ -54,13 +56,23 @@ from .machine import _Machine
 from .maps import EventReturnMap
 
 
+class _Engine(Protocol):
+    """An engine module's entry points (each takes the problems of its own type: Any here)."""
+
+    def supports(self, problem: Any, options: EventDriven) -> None: ...
+
+    def solve(self, problem: Any, options: EventDriven, x0: npt.NDArray[np.float64]) -> Trajectory: ...
+
+    def period_map(self, problem: Any, options: EventDriven) -> PeriodMap: ...
+
+
 #: One engine per problem type (as Siconos has one integrator per dynamical-system type), each a module with
 #: ``supports``, ``solve`` and ``period_map`` over the core (:mod:`.core`): the exact flows of an LCS, and DOP853
 #: between the events of a mechanical problem with friction and impacts.
-ENGINES = ((MechanicalProblem, event_mechanical), (LCSProblem, lcs_engine))
+ENGINES: tuple[tuple[type, _Engine], ...] = ((MechanicalProblem, event_mechanical), (LCSProblem, lcs_engine))
 
 
-def _engine(problem):
+def _engine(problem: object) -> _Engine:
     for kind, engine in ENGINES:
         if isinstance(problem, kind):
             return engine
@@ -107,7 +119,7 @@ class EventDriven(Method, key="event"):
     description = "exact event-driven: matrix exponentials per mode, events by root finding, any number of pairs"
     domains = ("lcs", "mechanical")
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         tol = parse_value("event_tol", self.event_tol)
         if not 0.0 < tol <= 1e-2:
             raise ParameterError(f"event_tol must be in (0, 1e-2] (fraction of the period); got {tol!r}")
@@ -130,19 +142,19 @@ class EventDriven(Method, key="event"):
     def order(self) -> float:
         return math.inf
 
-    def supports(self, problem) -> None:
+    def supports(self, problem: LCSProblem | MechanicalProblem) -> None:
         _engine(problem).supports(problem, self)
 
-    def solve(self, problem, x0: np.ndarray) -> Trajectory:
+    def solve(self, problem: LCSProblem | MechanicalProblem, x0: np.ndarray) -> Trajectory:
         return _engine(problem).solve(problem, self, x0)
 
-    def period_map(self, problem) -> PeriodMap:
+    def period_map(self, problem: LCSProblem | MechanicalProblem) -> PeriodMap:
         """The exact map over ``problem.t_span`` with its exact Jacobian (state-transition matrices and
         saltation matrices)."""
         self.supports(problem)
         return _engine(problem).period_map(problem, self)
 
-    def engine(self, problem: LCSProblem):
+    def engine(self, problem: LCSProblem) -> _Machine:
         """The LCS engine of ``problem``: its modes' flows (``flow(config, held)``), its switching law's guard rows
         (``switch_row``), Moreau's impulse (``enter``), its runs (``run``) and ``timeline(x0)``: the run as typed
         records (:mod:`.timeline`), what a linearisation about it reads (:mod:`converters.analysis.smallsignal`)."""

@@ -7,11 +7,18 @@ An engine is a class built from (problem, options) whose ``period_run(x0, jacobi
 Jacobian of the span's end state or None) and whose ``run(x0)`` returns the recorded solution first."""
 from __future__ import annotations
 
-from typing import NamedTuple
+from collections.abc import Iterable, Sequence
+from typing import TYPE_CHECKING, Any, NamedTuple, Protocol
 
 import numpy as np
+import numpy.typing as npt
 
 from ..base import RecordingPeriodMap
+
+if TYPE_CHECKING:
+    from ...problems import LCSProblem
+    from ...problems.mechanical import MechanicalProblem
+    from . import EventDriven
 
 
 class Event(NamedTuple):
@@ -25,11 +32,20 @@ class Event(NamedTuple):
     config: int
 
 
+class Span(Protocol):
+    """What the core reads of an engine's segment: where it starts and ends (s)."""
+
+    t0: float
+    t1: float
+
+
 class PiecewiseSolution:
     """An engine's run: ``segments`` (each with t0 and t1), ``events`` (:class:`Event` records in time order),
     ``x_end``."""
 
-    def __init__(self, problem, segments, events, x_end, wall_s, options):
+    def __init__(self, problem: LCSProblem | MechanicalProblem, segments: Sequence[Span],
+                 events: Iterable[tuple[float, str, int, int]], x_end: npt.NDArray[np.float64], wall_s: float,
+                 options: EventDriven) -> None:
         self.problem, self.segments = problem, segments
         self.events = [Event(*event) for event in events]
         self.x_end, self.wall_s, self.options = x_end, wall_s, options
@@ -44,7 +60,7 @@ class PiecewiseSolution:
     event_pairs = property(lambda self: [e[2] for e in self.events])
     event_configs = property(lambda self: [e[3] for e in self.events])
 
-    def events_table(self, t: np.ndarray) -> dict:
+    def events_table(self, t: np.ndarray) -> dict[str, npt.NDArray[Any]]:
         """The events as a Trajectory's event columns; ``step``: the last sample of ``t`` before each."""
         times = np.array([e[0] for e in self.events], dtype=float)
         return {"time": times, "step": np.searchsorted(t, times) - 1,
@@ -58,16 +74,25 @@ class PiecewiseSolution:
         t0, t1 = self.problem.t_span
         grid = t0 + output_step * np.arange(int(np.floor((t1 - t0) / output_step * (1 + 1e-12))) + 1)
         t = np.unique(np.concatenate([grid[grid <= t1], [s.t1 for s in self.segments], [t1]]))
-        return t[np.concatenate([[True], np.diff(t) > 1e-12 * output_step])]
+        merged: npt.NDArray[np.float64] = t[np.concatenate([[True], np.diff(t) > 1e-12 * output_step])]
+        return merged
+
+
+class Engine(Protocol):
+    """What the period map asks of an engine (module docstring)."""
+
+    def period_run(self, x0: npt.NDArray[np.float64],
+                   jacobian: bool) -> tuple[PiecewiseSolution, npt.NDArray[np.float64] | None]: ...
 
 
 class EnginePeriodMap(RecordingPeriodMap):
     """x(t0) -> x(t1) over the problem's span by an engine's runs, with the engine's Jacobian (state-transition
     and saltation matrices); it keeps the events of its last run."""
 
-    def __init__(self, engine):
+    def __init__(self, engine: Engine) -> None:
         super().__init__()
         self.machine = engine
 
-    def _solve(self, x0, jacobian):
+    def _solve(self, x0: npt.NDArray[np.float64],
+               jacobian: bool) -> tuple[PiecewiseSolution, npt.NDArray[np.float64] | None]:
         return self.machine.period_run(x0, jacobian)

@@ -6,8 +6,11 @@ import math
 from functools import cached_property
 
 import numpy as np
+import numpy.typing as npt
 
 from ...problems import LCSProblem
+
+FloatArray = npt.NDArray[np.float64]
 
 
 def _time_scale(problem: LCSProblem) -> float:
@@ -35,10 +38,11 @@ MAX_SUBSTEPS = 100_000_000
 _ON_SET_RTOL = 1e-9    # a held pair's constraint N^T (C x + F) counts as met up to this (relative)
 
 
-def expm(A: np.ndarray) -> np.ndarray:
+def expm(A: FloatArray) -> FloatArray:
     """scipy's matrix exponential (imported on first use: a run that needs no event method never pays it)."""
     from scipy.linalg import expm as scipy_expm
-    return scipy_expm(A)
+    exponential: FloatArray = scipy_expm(A)           # scipy's functions are untyped
+    return exponential
 
 
 #: A flow of more states than this marches one sampling step per product until it has marched
@@ -50,7 +54,7 @@ STACK_STATES = 12
 MARCH_BEFORE_STACK = 4096
 
 
-def _march(S: np.ndarray, state: np.ndarray, count: int) -> np.ndarray:
+def _march(S: FloatArray, state: FloatArray, count: int) -> FloatArray:
     """S^1 state .. S^count state, shape (count, m): one product per step."""
     out = np.empty((count, state.size))
     for j in range(count):
@@ -59,7 +63,7 @@ def _march(S: np.ndarray, state: np.ndarray, count: int) -> np.ndarray:
     return out
 
 
-def _power_stack(S: np.ndarray, count: int) -> np.ndarray:
+def _power_stack(S: FloatArray, count: int) -> FloatArray:
     """S^0 .. S^count, shape (count + 1, m, m), by doubling (log2(count) batched products)."""
     stack = np.eye(S.shape[0])[None].copy()
     top = S
@@ -79,7 +83,8 @@ class Flow:
     powers, quadrature maps) is built on first use.
     """
 
-    def __init__(self, config_index: int, held: int, Z, u_rows, y_rows, constraint_rows, project, delta):
+    def __init__(self, config_index: int, held: int, Z: FloatArray, u_rows: FloatArray, y_rows: FloatArray,
+                 constraint_rows: FloatArray, project: tuple[FloatArray, FloatArray] | None, delta: float) -> None:
         self.config, self.held = config_index, held
         self.Z, self.u_rows, self.y_rows = Z, u_rows, y_rows
         k = u_rows.shape[0]
@@ -88,7 +93,8 @@ class Flow:
         self.held_flags = held_pairs
         self.constraint_rows, self.project = constraint_rows, project
         self.constraint_scales = np.abs(constraint_rows).sum(axis=1)
-        self.watches: dict = {}                  # _Watch per law state (built by the machine that owns the flow)
+        #: _Watch per law state (bits, latched), built by the machine that owns the flow
+        self.watches: dict[tuple[int, int], _Watch] = {}
         self.norm = norm = float(np.abs(Z).sum(axis=1).max())      # |Z|, 1/s
         self.delta = min(delta, 0.25 / norm) if norm > 0.0 else delta
         #: Sampling steps per quadrature piece (:data:`_PIECE_NORM`; at most a batched product's).
@@ -98,14 +104,15 @@ class Flow:
 
     @property
     def n(self) -> int:
-        return self.Z.shape[0] - 1
+        size: int = self.Z.shape[0]                        # numpy types a shape's entries Any
+        return size - 1
 
-    def field(self, xt: np.ndarray) -> np.ndarray:
+    def field(self, xt: FloatArray) -> FloatArray:
         """x' at x~."""
         return self.Z[:-1] @ xt
 
     @cached_property
-    def unit_field(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def unit_field(self) -> tuple[FloatArray, FloatArray, FloatArray]:
         """(Z / |Z|, |Z / |Z||, |watch rows|): the watched quantities' derivatives in the time unit 1 / |Z| (|Z| the
         largest row sum; their signs are the derivatives'), which keeps a 48-state ladder's 50th (|Z| ~ 1e7 / s)
         finite."""
@@ -113,7 +120,7 @@ class Flow:
         Z = self.Z / norm if norm > 0.0 else self.Z
         return Z, np.abs(Z), np.abs(self.watch_rows)
 
-    def lexicographic_ok(self, xt: np.ndarray, small_positive: bool = False) -> bool:
+    def lexicographic_ok(self, xt: FloatArray, small_positive: bool = False) -> bool:
         """Every watched quantity's first non-vanishing entry of (g, g', g'', ..., its (n+1)th derivative) along
         the flow is positive (or all vanish). An entry vanishes below :data:`_ZERO_RTOL` of its scale (|row|
         |Z|^j 1 max |x~|). ``small_positive``: a positive g counts as positive however small (the flow then
@@ -137,7 +144,7 @@ class Flow:
         return True
 
     @cached_property
-    def taylor(self) -> np.ndarray:
+    def taylor(self) -> FloatArray:
         """Z^j / j!, j = 0.._TAYLOR_TERMS - 1: x~(s) = sum_j s^j (Z^j / j!) x~ for s <= delta."""
         n1 = self.Z.shape[0]
         taylor = np.empty((_TAYLOR_TERMS, n1, n1))
@@ -147,22 +154,22 @@ class Flow:
         return taylor
 
     @cached_property
-    def step_map(self) -> np.ndarray:
+    def step_map(self) -> FloatArray:
         """expm(delta Z): one sampling step."""
         return expm(self.delta * self.Z)
 
     @cached_property
-    def powers(self) -> np.ndarray:
+    def powers(self) -> FloatArray:
         """expm(delta Z)^j, j = 0.._POWERS: the samples of a segment in one batched product."""
         return _power_stack(self.step_map, _POWERS)
 
     @cached_property
-    def piece_map(self) -> np.ndarray:
+    def piece_map(self) -> FloatArray:
         """expm(piece Z): one quadrature piece."""
         return self.powers[self.piece_steps] if "powers" in self.__dict__ else expm(self.piece * self.Z)
 
     @cached_property
-    def piece_powers(self) -> np.ndarray:
+    def piece_powers(self) -> FloatArray:
         """expm(piece Z)^j, j = 0.._POWERS: the starts of a segment's quadrature pieces in one batched product."""
         return _power_stack(self.piece_map, _POWERS)
 
@@ -173,16 +180,16 @@ class Flow:
         self.marched += steps
         return False
 
-    def steps(self, xt: np.ndarray, count: int) -> np.ndarray:
+    def steps(self, xt: FloatArray, count: int) -> FloatArray:
         """x~ after 1..count sampling steps (count <= _POWERS), shape (count, n+1)."""
         return self.powers[1:count + 1] @ xt if self.stacked(count) else _march(self.step_map, xt, count)
 
     @cached_property
-    def node_maps(self) -> np.ndarray:
+    def node_maps(self) -> FloatArray:
         """expm(s_k Z) at the Gauss-Legendre nodes s_k of [0, piece], shape (8, n+1, n+1)."""
         return np.stack([expm(s * self.Z) for s in 0.5 * (_GL_X + 1.0) * self.piece])
 
-    def series(self, xt: np.ndarray) -> np.ndarray:
+    def series(self, xt: FloatArray) -> FloatArray:
         """Z^j x~ / j!, j = 0.._TAYLOR_TERMS - 1, shape (terms, n+1): x~(s) = sum_j s^j (these)_j for s <= delta.
         From the stored :attr:`taylor` for small flows; one product per term for larger ones (the table is 26
         (n+1)^2: 0.5 MB a mode at n = 48, for a product saved)."""
@@ -194,11 +201,11 @@ class Flow:
             out[j] = self.Z @ out[j - 1] / j
         return out
 
-    def propagate(self, xt: np.ndarray, s: float) -> np.ndarray:
+    def propagate(self, xt: FloatArray, s: float) -> FloatArray:
         """x~ after s in [0, delta]."""
         return s ** _EXPONENTS @ self.series(xt)
 
-    def advance(self, xt: np.ndarray, tau: float) -> np.ndarray:
+    def advance(self, xt: FloatArray, tau: float) -> FloatArray:
         """x~ after any tau >= 0 (a rounding-negative tau counts as 0): whole sampling steps by powers of
         expm(delta Z), the rest by the series."""
         tau = max(tau, 0.0)
@@ -210,11 +217,11 @@ class Flow:
             q -= m
         return self.propagate(xt, max(tau - whole * self.delta, 0.0))
 
-    def transition(self, tau: float) -> np.ndarray:
+    def transition(self, tau: float) -> FloatArray:
         """The state-transition matrix over tau: d x(tau) / d x(0), shape (n, n)."""
         return expm(tau * self.Z)[:-1, :-1]
 
-    def sample_states(self, xt: np.ndarray, count: int, pieces: bool = False) -> np.ndarray:
+    def sample_states(self, xt: FloatArray, count: int, pieces: bool = False) -> FloatArray:
         """x~ at 0, delta, ..., count delta (``pieces``: 0, piece, ...): shape (count + 1, n+1)."""
         if not self.stacked(count * (self.piece_steps if pieces else 1)):
             return np.vstack([xt, _march(self.piece_map if pieces else self.step_map, xt, count)])
@@ -235,7 +242,8 @@ class _Watch:
     -1 - j: channel j of the switching law) and, in ``channels``, the law's channel of each row (``m``, one past
     the last channel, for a pair: its phase is never read, its slope is 0)."""
 
-    def __init__(self, flow: Flow, switch_rows=None, switch_slopes=None, channels=None, m: int = 1):
+    def __init__(self, flow: Flow, switch_rows: FloatArray | None = None, switch_slopes: FloatArray | None = None,
+                 channels: npt.NDArray[np.int64] | None = None, m: int = 1) -> None:
         count = flow.watch_rows.shape[0]
         rows, slopes, pairs, owners = [flow.watch_rows], [np.zeros(count)], [np.arange(count)], [np.full(count, m)]
         if switch_rows is not None:

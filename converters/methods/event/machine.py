@@ -4,21 +4,31 @@ one event to the next."""
 from __future__ import annotations
 
 import time
-from typing import TYPE_CHECKING
+from collections.abc import Callable
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
+import numpy.typing as npt
 
 from ...errors import SimulationError
 from ...limits import check_in_use
 from ...problems import Comparators, LCSProblem, Schedule, StateSwitching
 from ...problems.switching import initial_bits, law_channels
 from .core import EnginePeriodMap
-from .flow import _CROSS_RTOL, _ON_SET_RTOL, _POWERS, MAX_SERIES_NORM, MAX_SUBSTEPS, Flow, _time_scale, _Watch
+from .flow import (_CROSS_RTOL, _ON_SET_RTOL, _POWERS, MAX_SERIES_NORM, MAX_SUBSTEPS, FloatArray, Flow, _time_scale,
+                   _Watch)
 from .solution import EventSolution, Segment
 from .timeline import Crossing, Edge, FlowSpan, TimelineEntry
 
 if TYPE_CHECKING:
+    from ...problems.lcs import Configuration
+    from ...trajectory import Trajectory
     from . import EventDriven
+
+#: Where a run records an event: (time, kind, pair, configuration after it).
+EventLog = Callable[[float, str, int, int], None]
+#: A time-driven instant: (time, kind, channel), kind a configuration index, "reset", "limit" or "end".
+EdgeEntry = tuple[float, int | str, int]
 
 
 def _held_sets_by_distance(k: int, reference: int) -> list[int]:
@@ -47,24 +57,27 @@ MEMORY_LOOK = 4096
 class _Machine:
     """The flows of one problem (built on demand, reused for every run from a new initial state)."""
 
-    def __init__(self, problem: LCSProblem, options: EventDriven):
+    def __init__(self, problem: LCSProblem, options: EventDriven) -> None:
         options.supports(problem)
         self.problem, self.options = problem, options
         self.scale = _time_scale(problem)
-        self.flows: dict = {}
-        self.orders: dict = {}
-        self.select_data: dict = {}                 # per configuration: the mode-selection LCP's matrices
+        self.flows: dict[tuple[int, int], Flow] = {}
+        self.orders: dict[int, list[int]] = {}
+        #: per configuration: the mode-selection LCP's matrices (the LU factors of I - h A and their pivots, W, h)
+        self.select_data: dict[int, tuple[tuple[FloatArray, npt.NDArray[np.int32]], FloatArray, float]] = {}
         law = problem.switching
         self.law = law if isinstance(law, (StateSwitching, Comparators)) else None
         #: The law's channels (one per comparator) and the configuration of each combination of their states.
-        self.channels, self.table = law_channels(law) if self.law is not None else ((), ())
+        self.channels, self.table = law_channels(self.law) if self.law is not None else ((), ())
         #: The last run's jumps: ((time, energy lost), ...) (:meth:`enter`)
-        self.jumps: list = []
+        self.jumps: list[tuple[float, float]] = []
         self.index2 = [i for i in range(problem.k)
                        if all(not np.any(c.D[i, :]) and not np.any(c.D[:, i]) for c in problem.configurations)]
         K = self.index2
         #: Per configuration: (C_K, F_K, B_K, row scales) of the pairs whose y is a function of the state.
-        self.impulse_data = [(c.C[K], c.F[K], c.B[:, K], np.abs(c.C[K]).sum(axis=1) + np.abs(c.F[K]))
+        # (a Configuration's E and F are typed optional for their defaults; once it is built they are arrays)
+        self.impulse_data = [(c.C[K], cast(FloatArray, c.F)[K], c.B[:, K],
+                              np.abs(c.C[K]).sum(axis=1) + np.abs(cast(FloatArray, c.F)[K]))
                              for c in problem.configurations]
 
     # --- modes --------------------------------------------------------------------------------------
@@ -85,7 +98,7 @@ class _Machine:
         constraint_rows = np.zeros((0, xt_cols))
         project = None
         if J:
-            DJJ, CJ, FJ, BJ = c.D[np.ix_(J, J)], c.C[J], c.F[J], c.B[:, J]
+            DJJ, CJ, FJ, BJ = c.D[np.ix_(J, J)], c.C[J], cast(FloatArray, c.F)[J], c.B[:, J]
             U, S, _ = np.linalg.svd(DJJ)
             rank = int(np.sum(S > 1e-12 * max(S.max(initial=0.0), 1e-300))) if S.size else 0
             R, N = U[:, :rank], U[:, rank:]
@@ -100,11 +113,12 @@ class _Machine:
         Z = np.zeros((xt_cols, xt_cols))
         Z[:n, :n], Z[:n, n] = c.A, c.E
         Z[:n] += c.B @ u_rows
-        y_rows = np.hstack([c.C, c.F[:, None]]) + c.D @ u_rows
+        y_rows = np.hstack([c.C, cast(FloatArray, c.F)[:, None]]) + c.D @ u_rows
         delta = self.options.sample_fraction * self.scale
         return Flow(index, held, Z, u_rows, y_rows, constraint_rows, project, delta)
 
-    def _on_set(self, flow: Flow, xt: np.ndarray, size: float, rate_field, slack: float) -> tuple[bool, np.ndarray]:
+    def _on_set(self, flow: Flow, xt: np.ndarray, size: float, rate_field: FloatArray | None,
+                slack: float) -> tuple[bool, np.ndarray]:
         """Is x~ on the flow's state manifold N^T (C_J x + F_J) = 0? Up to rounding, and at an event up to
         what the located time's error (``slack`` s, along the field before the event) allows. Returns
         (ok, x~ projected onto the manifold along B_J). ``size``: max |x~|."""
@@ -117,12 +131,13 @@ class _Machine:
             tol = tol + slack * np.abs(rows[:, :-1] @ rate_field)
         if (np.abs(r) > tol).any():
             return False, xt
-        BJ, pinv = flow.project
+        BJ, pinv = cast("tuple[FloatArray, FloatArray]", flow.project)      # set where there are constraint rows
         out = xt.copy()
         out[:-1] -= BJ @ (pinv @ r)
         return True, out
 
-    def select(self, config: int, xt: np.ndarray, t: float, reference: int, rate_field=None) -> tuple[Flow, np.ndarray]:
+    def select(self, config: int, xt: np.ndarray, t: float, reference: int,
+               rate_field: FloatArray | None = None) -> tuple[Flow, np.ndarray]:
         """The mode at (t, x): a held set whose flow keeps every watched quantity lexicographically non-negative,
         x~ projected onto its manifold. Tried in turn: ``reference`` (the held set before the event with the pair
         that crossed flipped), the mode-selection LCP's candidate (:meth:`lcp_held`) and the sets one pair from
@@ -131,9 +146,9 @@ class _Machine:
         k = self.problem.k
         slack = 4.0 * self.options.event_tol * self.scale
         size = np.abs(xt).max()
-        tried: set = set()
+        tried: set[int] = set()
 
-        def valid(held, small_positive=False):
+        def valid(held: int, small_positive: bool = False) -> tuple[Flow, np.ndarray] | None:
             if held in tried and not small_positive:
                 return None
             tried.add(held)
@@ -194,7 +209,7 @@ class _Machine:
             data = self.select_data[config] = (lu, W, h)
         lu, W, h = data
         c = self.problem.configurations[config]
-        q = c.C @ scipy.linalg.lu_solve(lu, xt[:-1] + h * c.E) + c.F
+        q = c.C @ scipy.linalg.lu_solve(lu, xt[:-1] + h * cast(FloatArray, c.E)) + c.F
         from ...lcp import solve_lcp                 # imported here: a run that never needs it starts faster
         result = solve_lcp(W, q, method="lemke")
         if not result.solved:
@@ -205,7 +220,7 @@ class _Machine:
             held |= 1 << int(i)
         return held
 
-    def enter(self, config: int, xt: np.ndarray, t: float, log) -> tuple[np.ndarray, np.ndarray | None]:
+    def enter(self, config: int, xt: np.ndarray, t: float, log: EventLog) -> tuple[np.ndarray, np.ndarray | None]:
         """The state's jumps when configuration ``config`` is entered: first the charges its closed switches
         redistribute (:class:`~converters.problems.Jump`: x+ = P x + q, Jacobian P), then Moreau's impulse where
         y_K < 0 on the pairs K whose y is a function of the state: x+ = x + B_K lambda,
@@ -223,7 +238,8 @@ class _Machine:
             return xt, c.jump.P if impulse is None else impulse @ c.jump.P
         return self._impulse(c, config, xt, t, log)
 
-    def _impulse(self, c, config: int, xt: np.ndarray, t: float, log) -> tuple[np.ndarray, np.ndarray | None]:
+    def _impulse(self, c: Configuration, config: int, xt: np.ndarray, t: float,
+                 log: EventLog) -> tuple[np.ndarray, np.ndarray | None]:
         K = self.index2
         if not K:
             return xt, None
@@ -252,12 +268,15 @@ class _Machine:
 
     # --- switching law ------------------------------------------------------------------------------
 
-    def law_rows(self, bits: int, latched: int):
+    def law_rows(self, bits: int,
+                 latched: int) -> tuple[FloatArray | None, FloatArray | None, npt.NDArray[np.int64] | None]:
         """(rows, slopes, channels) of the quantities whose zero ends the channels' states ``bits`` (bit j: channel
         j above), the latched channels (``latched`` bits) and a clocked channel above (only its clock sets it) left
         out: channel j below ends when s_j = c x + d - ramp rises above +band (watch band - s_j), above when it falls
         below -band (watch s_j + band)."""
-        rows, slopes, channels = [], [], []
+        rows: list[FloatArray] = []
+        slopes: list[float] = []
+        channels: list[int] = []
         for j, channel in enumerate(self.channels):
             above = (bits >> j) & 1
             if (latched >> j) & 1 or (channel.clocked and above):
@@ -265,25 +284,27 @@ class _Machine:
             f = channel.function
             low, slope = (f.ramp.low, f.ramp.slope) if f.ramp is not None else (0.0, 0.0)
             if above:
-                rows.append(np.append(f.c, f.d - low + channel.band)), slopes.append(-slope)
+                rows.append(np.append(f.c, f.d - low + channel.band))
+                slopes.append(-slope)
             else:
-                rows.append(np.append(-f.c, channel.band - f.d + low)), slopes.append(slope)
+                rows.append(np.append(-f.c, channel.band - f.d + low))
+                slopes.append(slope)
             channels.append(j)
         if not rows:
             return None, None, None
         return np.array(rows), np.array(slopes), np.array(channels, dtype=int)
 
-    def switch_row(self, config: int, latched):
+    def switch_row(self, config: int, latched: int) -> tuple[FloatArray | None, float]:
         """(row, slope) of a one-comparator law's watched quantity in ``config`` (None when it cannot switch)."""
         if self.law is None:
             return None, 0.0
         rows, slopes, _ = self.law_rows(int(config == self.table[1]), int(bool(latched)))
-        return (rows[0], slopes[0]) if rows is not None else (None, 0.0)
+        return (rows[0], cast(FloatArray, slopes)[0]) if rows is not None else (None, 0.0)    # both, or neither
 
     def config_of(self, bits: int, t: float) -> int:
         """The configuration of the channels' states ``bits`` (a SimulationError where the law has none)."""
         config = self.table[bits]
-        return config if config >= 0 else self.law.config(bits, t)
+        return config if config >= 0 else cast(Comparators, self.law).config(bits, t)     # only theirs hold -1
 
     def reset_bits(self, xt: np.ndarray, bits: int, j: int) -> int:
         """At channel j's ramp reset: its state set by s_j against its band (inside the band it holds)."""
@@ -296,12 +317,12 @@ class _Machine:
             return bits | (1 << j)
         return bits
 
-    def edges(self, t0: float, t1: float):
+    def edges(self, t0: float, t1: float) -> list[EdgeEntry]:
         """(time, kind, channel) of every time-driven instant in (t0, t1), then (t1, 'end', -1). kind: a
         configuration index (schedule), 'reset' (channel's ramp reset), 'limit' (a latched channel's limit: a
         maximum duty ratio)."""
         law = self.problem.switching
-        out = []
+        out: list[EdgeEntry] = []
         if isinstance(law, Schedule) and np.isfinite(law.period):
             T = law.period
             for m in range(int(np.floor(t0 / T)), int(np.ceil(t1 / T)) + 1):
@@ -317,7 +338,8 @@ class _Machine:
 
     # --- crossings ----------------------------------------------------------------------------------
 
-    def cross(self, flow: Flow, watch: _Watch, xt: np.ndarray, tau_max: float, phase0):
+    def cross(self, flow: Flow, watch: _Watch, xt: np.ndarray, tau_max: float,
+              phase0: FloatArray | float) -> tuple[tuple[float, int] | tuple[None, None], FloatArray | None]:
         """First downward zero crossing of a watched quantity in (0, tau_max]: (tau, row) or (None, None),
         and x~ at tau_max when there is none. ``phase0``: each row's ramp phase at the segment's start (a scalar
         or one per row)."""
@@ -360,7 +382,8 @@ class _Machine:
             state = end
         return (None, None), state
 
-    def _locate(self, flow: Flow, watch: _Watch, xt_a, tau_a, width, g_scale, phase0):
+    def _locate(self, flow: Flow, watch: _Watch, xt_a: FloatArray, tau_a: float, width: float, g_scale: FloatArray,
+                phase0: FloatArray | float) -> tuple[float, int]:
         """The earliest crossing inside [tau_a, tau_a + width] (width <= delta): Brent's method on each
         watched quantity's Taylor polynomial, exact to rounding there. Returns (tau, row)."""
         V = flow.series(xt_a)                                   # x~(s) = sum_j s^j V_j
@@ -372,7 +395,7 @@ class _Machine:
         for r in range(watch.rows.shape[0]):
             poly = coefficients[::-1, r].tolist()                # highest power first
 
-            def g(s, poly=poly):
+            def g(s: float, poly: list[float] = poly) -> float:
                 value = 0.0
                 for c in poly:   # Horner on Python floats: cheaper than any numpy call here
                     value = value * s + c
@@ -382,6 +405,7 @@ class _Machine:
             if g(width) >= -threshold:
                 continue
             # The bracket's left end may sit on a zero of g (the mode just began); move it to where g > 0.
+            left: float | None
             left, g_left = 0.0, poly[-1]
             if g_left <= threshold:
                 probe, left = width, None
@@ -402,12 +426,13 @@ class _Machine:
                 best, best_row = s, r
         if best is None:                                         # rounding: the sample said below, no root
             return tau_a + width, int(np.argmin(watch.rows @ flow.propagate(xt_a, width)))
-        return tau_a + best, best_row
+        return tau_a + best, cast(int, best_row)                  # found with best
 
     # --- runs ---------------------------------------------------------------------------------------
 
-    def run(self, x0, record: bool = True, jacobian: bool = False, stop_config: int | None = None,
-            stop_count: int = 0, timeline: list[TimelineEntry] | None = None):
+    def run(self, x0: npt.ArrayLike, record: bool = True, jacobian: bool = False, stop_config: int | None = None,
+            stop_count: int = 0,
+            timeline: list[TimelineEntry] | None = None) -> tuple[EventSolution, FloatArray | None, float | None]:
         """Run over t_span from x0. ``jacobian``: also d x_end / d x0. ``stop_config``/``stop_count``: stop
         at the ``stop_count``-th switching into ``stop_config`` (a return map; the run may then end before
         t_span[1], which must be long enough). ``timeline``: a list that receives, in time order, what a
@@ -418,12 +443,19 @@ class _Machine:
         n = problem.n
         t, t_end = problem.t_span
         xt = np.append(np.asarray(x0, dtype=float), 1.0)
-        times, kinds, pairs, configs, segments = [], [], [], [], []
+        times: list[float] = []
+        kinds: list[str] = []
+        pairs: list[int] = []
+        configs: list[int] = []
+        segments: list[Segment] = []
         self.jumps = []
         jac = np.eye(n) if jacobian else None
 
-        def log(time_, kind, pair, config_):
-            times.append(time_), kinds.append(kind), pairs.append(pair), configs.append(config_)
+        def log(time_: float, kind: str, pair: int, config_: int) -> None:
+            times.append(time_)
+            kinds.append(kind)
+            pairs.append(pair)
+            configs.append(config_)
 
         law = self.law
         config = problem.switching.initial_config(xt[:-1], t)
@@ -432,8 +464,8 @@ class _Machine:
         # Each channel's ramp phase counts from its delay (ramp(t) = low + slope ((t - delay) mod T)), as in the
         # stepper; the last entry is the pairs' rows' (their slope is 0).
         phase_start = np.full(len(self.channels) + 1, t)
-        for j, channel in enumerate(self.channels):
-            ramp = channel.function.ramp
+        for j, law_channel in enumerate(self.channels):
+            ramp = law_channel.function.ramp
             if ramp is not None:
                 phase_start[j] = t - float(ramp.phase(t))
         xt, jump = self.enter(config, xt, t, log)
@@ -459,6 +491,7 @@ class _Machine:
                     xt_end = flow.advance(xt, edge_t - t)
                 if tau is not None:
                     xt_end = flow.advance(xt, tau)
+                xt_end = cast(FloatArray, xt_end)       # cross gives x~ at the edge when nothing crosses before it
                 t_next = edge_t if tau is None else t + tau
                 if record and t_next > t:
                     segments.append(Segment(t, t_next, flow, xt, xt_end))
@@ -476,6 +509,7 @@ class _Machine:
                                           f" near t = {t + tau:.9g} s (Zeno behaviour or a degenerate LCS); "
                                           f"max_events = {options.max_events}")
                 t, xt = t + tau, xt_end
+                which = cast(int, which)                 # found with tau
                 pair = int(watch.pairs[which])
                 grad = watch.rows[which, :n]
                 dgdt = watch.slopes[which]
@@ -534,7 +568,7 @@ class _Machine:
                     config = self.config_of(bits, t)
                     log(t, "switch", -1, config)
             else:
-                config = edge_kind
+                config = cast(int, edge_kind)                # a schedule's edge: the configuration it enters
             xt_before = xt
             xt, jump = self.enter(config, xt, t, log)
             if jac is not None and jump is not None:
@@ -555,7 +589,7 @@ class _Machine:
                                  time.perf_counter() - start_clock, options, config, tuple(self.jumps))
         return solution, jac, stop_time
 
-    def timeline(self, x0) -> list[TimelineEntry]:
+    def timeline(self, x0: npt.ArrayLike) -> list[TimelineEntry]:
         """The run from x0 over the span as typed records in time order (:mod:`.timeline`): a :class:`FlowSpan` per
         segment, a :class:`Crossing` per state event, an :class:`Edge` per time-driven instant: what a
         linearisation about the run reads (:mod:`converters.analysis.smallsignal`)."""
@@ -563,7 +597,7 @@ class _Machine:
         self.run(x0, record=False, timeline=entries)
         return entries
 
-    def period_run(self, x0, jacobian: bool):
+    def period_run(self, x0: FloatArray, jacobian: bool) -> tuple[EventSolution, FloatArray | None]:
         """(solution, Jacobian or None) of one span from x0, unrecorded (:class:`.core.EnginePeriodMap`)."""
         solution, jac, _ = self.run(x0, record=False, jacobian=jacobian)
         return solution, jac
@@ -573,7 +607,7 @@ class _Machine:
 
 # --- the engine's entry points (converters.methods.event.ENGINES) ----------------------------------------------
 
-def supports(problem, options) -> None:
+def supports(problem: LCSProblem, options: EventDriven) -> None:
     from ...errors import ParameterError
     from ...problems import Relay
     if getattr(problem, "inputs", None) is not None:
@@ -584,7 +618,7 @@ def supports(problem, options) -> None:
                              "exactly; the implicit relay is a time-stepping scheme: use --method lcp")
 
 
-def solve(problem, options, x0):
+def solve(problem: LCSProblem, options: EventDriven, x0: FloatArray) -> Trajectory:
     solution = _Machine(problem, options).run(x0)[0]
     return solution.trajectory(options.output_step or _time_scale(problem) / 1000.0)
 
@@ -593,5 +627,5 @@ class EventPeriodMap(EnginePeriodMap):
     """The exact map over an LCS's span, with its exact Jacobian; it keeps the events of its last run."""
 
 
-def period_map(problem, options):
+def period_map(problem: LCSProblem, options: EventDriven) -> EventPeriodMap:
     return EventPeriodMap(_Machine(problem, options))

@@ -32,9 +32,12 @@ from __future__ import annotations
 
 import itertools
 import time
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
+import numpy.typing as npt
 
 from ...errors import ParameterError, SimulationError
 from ...problems.mechanical import MechanicalProblem
@@ -42,8 +45,21 @@ from ...trajectory import Samples, Trajectory
 from ..base import FiniteDifferenceMap, PeriodMap
 from .core import EnginePeriodMap, PiecewiseSolution
 
+if TYPE_CHECKING:
+    from . import EventDriven
+
 STICK, SLIP_POS, SLIP_NEG, CLOSED, OPEN = 0, 1, 2, 3, 4
 _SIGN = {SLIP_POS: 1.0, SLIP_NEG: -1.0}
+
+FloatArray = npt.NDArray[np.float64]
+#: A watched quantity as a function of (t, y) (y: the integrator's state, x first): an event function of solve_ivp.
+EventFunction = Callable[[float, FloatArray], float]
+#: An event of a mode: (function, kind, index, direction) (:meth:`MechanicalMachine._events`).
+Watched = tuple[EventFunction, str, int, int]
+#: A run's events: (time, kind, pair, config) (:class:`.core.Event`).
+EventRecord = tuple[float, str, int, int]
+#: What an event leaves: (t, x, the mode's states, the Jacobian or None, whether a chattering sequence completed).
+EventOutcome = tuple[float, FloatArray, tuple[int, ...], FloatArray | None, bool]
 
 
 def time_scale(problem: MechanicalProblem) -> float:
@@ -53,7 +69,7 @@ def time_scale(problem: MechanicalProblem) -> float:
 class _Mode:
     """Everything about one mode that does not depend on the state (built once, reused)."""
 
-    def __init__(self, dyn: "_Dynamics", states: tuple):
+    def __init__(self, dyn: "_Dynamics", states: tuple[int, ...]) -> None:
         self.states = states
         m = dyn.m
         self.stick = [i for i in range(m) if states[i] == STICK]
@@ -82,21 +98,21 @@ class _Mode:
 class _Dynamics:
     """The problem's matrices and laws, with each mode's vector field, forces and Jacobian."""
 
-    def __init__(self, problem: MechanicalProblem):
+    def __init__(self, problem: MechanicalProblem) -> None:
         self.problem = problem
         self.n, self.m, self.c = problem.dof, len(problem.frictions), len(problem.contacts)
         self.Minv = np.linalg.inv(problem.mass)
         self.K, self.C = problem.stiffness, problem.damping
-        self.WT = np.array([f.direction for f in problem.frictions]).reshape(self.m, self.n)
-        self.V = np.array([f.belt for f in problem.frictions])
+        self.WT: FloatArray = np.array([f.direction for f in problem.frictions]).reshape(self.m, self.n)
+        self.V: FloatArray = np.array([f.belt for f in problem.frictions])
         self.laws = [f.law for f in problem.frictions]
         self.static = np.array([law.static for law in self.laws])
         self.WN = np.array([c.direction for c in problem.contacts]).reshape(self.c, self.n)
         self.e = np.array([c.restitution for c in problem.contacts])
         self.offsets = [c.offset for c in problem.contacts]
-        self.modes: dict = {}
+        self.modes: dict[tuple[int, ...], _Mode] = {}
 
-    def mode(self, states: tuple) -> _Mode:
+    def mode(self, states: tuple[int, ...]) -> _Mode:
         mode = self.modes.get(states)
         if mode is None:
             mode = self.modes[states] = _Mode(self, states)
@@ -104,11 +120,11 @@ class _Dynamics:
 
     # --- values at a state -----------------------------------------------------------------------------
 
-    def offset(self, j: int, t: float):
+    def offset(self, j: int, t: float) -> tuple[float, float, float]:
         c0, c1, c2 = self.offsets[j](t)
         return float(c0), float(c1), float(c2)
 
-    def base(self, mode: _Mode, t, q, v) -> np.ndarray:
+    def base(self, mode: _Mode, t: float, q: FloatArray, v: FloatArray) -> FloatArray:
         out = self.problem.external(t) - self.K @ q - self.C @ v
         for i, sigma in mode.slip:
             # The law's smooth continuation across s = 0 (F depends on |s| = sigma s in this mode): the
@@ -117,7 +133,7 @@ class _Dynamics:
             out -= (sigma * self.laws[i].branch(sigma * (float(w @ v) - self.V[i]))) * w
         return out
 
-    def held_forces(self, mode: _Mode, t, base) -> np.ndarray:
+    def held_forces(self, mode: _Mode, t: float, base: FloatArray) -> FloatArray:
         """Forces of the held contacts (sticks first, then closed contacts) that keep them held."""
         if not mode.H.shape[0]:
             return np.zeros(0)
@@ -126,7 +142,7 @@ class _Dynamics:
             rhs[len(mode.stick) + k] += self.offset(j, t)[2]
         return -mode.Ginv @ rhs
 
-    def field(self, mode: _Mode, t, x) -> np.ndarray:
+    def field(self, mode: _Mode, t: float, x: FloatArray) -> FloatArray:
         n = self.n
         out = np.empty(2 * n)
         out[:n] = x[n:]
@@ -138,7 +154,7 @@ class _Dynamics:
             out[n:] -= mode.R @ extra
         return out
 
-    def jacobian(self, mode: _Mode, t, x) -> np.ndarray:
+    def jacobian(self, mode: _Mode, t: float, x: FloatArray) -> FloatArray:
         """d field / d x (analytic): [[0, I], [-P K, P (-C - sum_slip sigma_i F_i'(s_i) w_i w_i^T)]]."""
         n = self.n
         v = x[n:]
@@ -152,7 +168,7 @@ class _Dynamics:
         J[n:, n:] = mode.P @ dv
         return J
 
-    def contact_forces(self, mode: _Mode, t, x) -> tuple[np.ndarray, np.ndarray]:
+    def contact_forces(self, mode: _Mode, t: float, x: FloatArray) -> tuple[FloatArray, FloatArray]:
         """(lambda_T (m,), Lambda_N (c,)) in the mode."""
         n = self.n
         q, v = x[:n], x[n:]
@@ -165,10 +181,10 @@ class _Dynamics:
         lam_n[mode.closed] = held[len(mode.stick):]
         return lam_t, lam_n
 
-    def slips(self, x) -> np.ndarray:
+    def slips(self, x: FloatArray) -> FloatArray:
         return self.WT @ x[self.n:] - self.V
 
-    def gaps(self, t, x) -> tuple[np.ndarray, np.ndarray]:
+    def gaps(self, t: float, x: FloatArray) -> tuple[FloatArray, FloatArray]:
         q, v = x[:self.n], x[self.n:]
         g, dg = np.empty(self.c), np.empty(self.c)
         for j in range(self.c):
@@ -182,7 +198,7 @@ class _Segment:
     t0: float
     t1: float
     mode: _Mode
-    solution: object      # scipy OdeSolution (x part first) or None for a zero-length segment
+    solution: Callable[[float], FloatArray] | None      # scipy OdeSolution (x part first); None: zero length
     x0: np.ndarray
     x1: np.ndarray
 
@@ -191,11 +207,15 @@ class MechanicalSolution(PiecewiseSolution):
     """The piecewise solution of a mechanical problem: segments with their dense outputs, and the events between
     them (:class:`.core.PiecewiseSolution`); ``chattered``: a chattering sequence was completed in closed form."""
 
-    def __init__(self, problem, segments, events, x_end, wall_s, options, chattered):
+    problem: MechanicalProblem
+    segments: list[_Segment]
+
+    def __init__(self, problem: MechanicalProblem, segments: list[_Segment], events: Iterable[EventRecord],
+                 x_end: FloatArray, wall_s: float, options: EventDriven, chattered: bool) -> None:
         super().__init__(problem, segments, events, x_end, wall_s, options)
         self.chattered = chattered
 
-    def sample(self, times) -> Samples:
+    def sample(self, times: npt.ArrayLike) -> Samples:
         dyn = _Dynamics(self.problem)
         times = np.asarray(times, dtype=float)
         starts = np.array([s.t0 for s in self.segments])
@@ -235,14 +255,15 @@ class MechanicalSolution(PiecewiseSolution):
 class MechanicalMachine:
     """Runs of one mechanical problem (the dynamics built once)."""
 
-    def __init__(self, problem: MechanicalProblem, options):
+    def __init__(self, problem: MechanicalProblem, options: EventDriven) -> None:
         self.problem, self.options = problem, options
         self.dyn = _Dynamics(problem)
         self.scale = time_scale(problem)
 
     # --- mode selection -------------------------------------------------------------------------------
 
-    def _consistent(self, states: tuple, t, x, zero_friction, zero_contacts) -> bool:
+    def _consistent(self, states: tuple[int, ...], t: float, x: FloatArray, zero_friction: Sequence[int],
+                    zero_contacts: Sequence[int]) -> bool:
         dyn = self.dyn
         mode = dyn.mode(states)
         lam_t, lam_n = dyn.contact_forces(mode, t, x)
@@ -267,8 +288,9 @@ class MechanicalMachine:
                     return False
         return True
 
-    def select(self, t, x, previous: tuple, zero_friction, zero_contacts, friction_order=(STICK, SLIP_POS, SLIP_NEG),
-               contact_order=None) -> tuple:
+    def select(self, t: float, x: FloatArray, previous: tuple[int, ...], zero_friction: Sequence[int],
+               zero_contacts: Sequence[int], friction_order: Sequence[int] = (STICK, SLIP_POS, SLIP_NEG),
+               contact_order: Sequence[int] | None = None) -> tuple[int, ...]:
         """The first consistent mode: contacts not at zero keep their state; a friction contact at zero tries
         ``friction_order`` (stick first where a velocity has just reached zero), a unilateral contact at zero
         ``contact_order`` (default: its previous state first)."""
@@ -289,14 +311,20 @@ class MechanicalMachine:
 
     # --- one segment -----------------------------------------------------------------------------------
 
-    def _events(self, mode: _Mode, t0, x0):
+    def _events(self, mode: _Mode, t0: float, x0: FloatArray) -> list[Watched]:
         """Event functions of the mode: (function, kind, index, direction). A watched quantity that starts the
         segment at zero is never mistaken for a crossing there: leaving at a speed it is watched as
         value / (t - t0) (positive at the start, the same later zeros); leaving tangentially as value - eps, armed
         once it has left zero by more than rounding (:meth:`_fresh`)."""
-        dyn, out = self.dyn, []
+        dyn = self.dyn
+        out: list[Watched] = []
         n = dyn.n
         start_field = dyn.field(mode, t0, x0)
+        # functions of (t, y) with each loop's values bound as defaults (which leaves mypy their parameters only)
+        value: Callable[..., float]
+        rate: Callable[..., float]
+        margin: Any                           # entries of the held forces, which numpy's stubs type as arrays
+        force: Any
         for i, sigma in mode.slip:
             w, V = dyn.WT[i], dyn.V[i]
             value = lambda t, y, w=w, V=V, s=sigma: s * (w @ y[n:2 * n] - V)       # noqa: E731
@@ -322,19 +350,20 @@ class MechanicalMachine:
             out.append((self._rate(force, mode), "detach-extremum", dyn.m + j, 1))
         return out
 
-    def _rate(self, function, mode):
+    def _rate(self, function: EventFunction, mode: _Mode) -> EventFunction:
         """d function / dt along the mode's flow (a central difference): its zeros are the extrema a held
         contact's margin may dip below zero between two integrator steps."""
         dyn, delta = self.dyn, 1e-7 * self.scale
         n2 = 2 * dyn.n
 
-        def rate(t, y):
+        def rate(t: float, y: FloatArray) -> float:
             x = y[:n2]
             f = dyn.field(mode, t, x)
             return (function(t + delta, x + delta * f) - function(t - delta, x - delta * f)) / (2.0 * delta)
         return rate
 
-    def _fresh(self, value, rate, t0, x0, start_field, mode):
+    def _fresh(self, value: EventFunction, rate: EventFunction, t0: float, x0: FloatArray, start_field: FloatArray,
+               mode: _Mode) -> EventFunction:
         """``value`` itself, or value / (t - t0)^p when it starts at zero (see :meth:`_events`)."""
         scale = 1e-12 * (1.0 + np.abs(x0).max())
         if abs(value(t0, x0)) > scale:
@@ -343,7 +372,8 @@ class MechanicalMachine:
         if first > scale:
             tiny = 1e-300
 
-            def watched(t, y):                      # leaving at a speed: value / (t - t0) starts at that speed
+            # leaving at a speed: value / (t - t0) starts at that speed
+            def watched(t: float, y: FloatArray) -> float:
                 if t <= t0:
                     return first
                 return value(t, y) / max(t - t0, tiny)
@@ -351,30 +381,32 @@ class MechanicalMachine:
         # A tangential start (a stick that breaks, a contact whose force reached zero): the value grows as a
         # power of (t - t0) that stays below its own rounding for a while, so its sign is noise there. Watch
         # value - eps: armed once the value has genuinely left zero, it fires at most eps early on the way back.
-        eps = 64.0 * scale
+        eps: float = 64.0 * scale
 
-        def armed(t, y):
+        def armed(t: float, y: FloatArray) -> float:
             return value(t, y) - eps
         return armed
 
-    def _integrate(self, mode: _Mode, t0, t1, x0, phi):
+    def _integrate(self, mode: _Mode, t0: float, t1: float, x0: FloatArray,
+                   phi: FloatArray | None) -> tuple[Any, list[Watched], tuple[float, int] | None]:
+        # (scipy's OdeResult, the mode's events, (time, index into them) of the one that ends the phase, or None)
         from scipy.integrate import solve_ivp
         dyn, opts = self.dyn, self.options
         n2 = 2 * dyn.n
         if phi is None:
-            def fun(t, y):
+            def fun(t: float, y: FloatArray) -> FloatArray:
                 return dyn.field(mode, t, y)
             y0 = x0
         else:
-            def fun(t, y):
+            def fun(t: float, y: FloatArray) -> FloatArray:
                 x = y[:n2]
                 return np.concatenate([dyn.field(mode, t, x), (dyn.jacobian(mode, t, x) @ y[n2:].reshape(n2, n2)).ravel()])
             y0 = np.concatenate([x0, phi.ravel()])
         watched = self._events(mode, t0, x0)
-        functions = []
+        functions: list[EventFunction] = []
         for function, kind, index, direction in watched:
-            function.terminal = not kind.endswith("extremum")
-            function.direction = direction
+            cast(Any, function).terminal = not kind.endswith("extremum")      # what solve_ivp reads of an event
+            cast(Any, function).direction = direction
             functions.append(function)
         scale = 1.0 + np.abs(x0).max()
         # The integrator sees the state's dynamics only: a friction contact's watched quantities follow them (and
@@ -408,7 +440,7 @@ class MechanicalMachine:
                     fired = (float(t_event), k)
         return result, watched, fired
 
-    def _scan_gaps(self, mode, watched, result, t0):
+    def _scan_gaps(self, mode: _Mode, watched: list[Watched], result: Any, t0: float) -> tuple[float, int] | None:
         """An open gap sampled on each step's dense output (8 points a step): the first sample below zero is
         an impact the step ends did not see. Returns (time, watched index) of the first such crossing, or None."""
         from scipy.optimize import brentq
@@ -438,12 +470,12 @@ class MechanicalMachine:
                 first = (float(t_zero), k)
         return first
 
-    def _below(self, kind, watched_entry, mode, t, result) -> bool:
+    def _below(self, kind: str, watched_entry: Watched, mode: _Mode, t: float, result: Any) -> bool:
         """Is the watched quantity of an extremum event below zero there (a crossing missed inside a step)?"""
         y = result.sol(t)
         return self._watched_value(kind, watched_entry[2], mode)(t, y) < 0.0
 
-    def _watched_value(self, kind, index, mode):
+    def _watched_value(self, kind: str, index: int, mode: _Mode) -> EventFunction:
         """The quantity whose extremum an ``*-extremum`` event watches, as a function of (t, y)."""
         dyn = self.dyn
         n = dyn.n
@@ -461,7 +493,7 @@ class MechanicalMachine:
 
     # --- runs --------------------------------------------------------------------------------------------
 
-    def period_run(self, x0, jacobian: bool):
+    def period_run(self, x0: FloatArray, jacobian: bool) -> tuple[MechanicalSolution, FloatArray | None]:
         """(solution, Jacobian or None) of one span from x0, unrecorded (:class:`.core.EnginePeriodMap`)."""
         solution, phi = self.run(x0, record=False, jacobian=jacobian)
         if jacobian and (solution.chattered or phi is None):
@@ -469,7 +501,8 @@ class MechanicalMachine:
                                   "use the finite-difference period map")
         return solution, phi
 
-    def run(self, x0, record: bool = True, jacobian: bool = False):
+    def run(self, x0: npt.ArrayLike, record: bool = True,
+            jacobian: bool = False) -> tuple[MechanicalSolution, FloatArray | None]:
         """Run over t_span from x0: (MechanicalSolution, d x_end / d x0 or None)."""
         clock = time.perf_counter()
         dyn, opts = self.dyn, self.options
@@ -478,7 +511,8 @@ class MechanicalMachine:
         t, t_end = problem.t_span
         x = np.array(x0, dtype=float)
         phi = np.eye(n2) if jacobian else None
-        events, segments = [], []
+        events: list[EventRecord] = []
+        segments: list[_Segment] = []
         chattered = False
         zero_f = [i for i in range(dyn.m) if abs(dyn.slips(x)[i]) <= 1e-12 * (1.0 + abs(dyn.V[i]))]
         g, dg = dyn.gaps(t, x)
@@ -517,7 +551,8 @@ class MechanicalMachine:
         solution = MechanicalSolution(problem, segments, events, x, time.perf_counter() - clock, opts, chattered)
         return solution, phi
 
-    def _handle(self, kind, index, t, x, mode, phi, result, events, segments, record):
+    def _handle(self, kind: str, index: int, t: float, x: FloatArray, mode: _Mode, phi: FloatArray | None,
+                result: Any, events: list[EventRecord], segments: list[_Segment], record: bool) -> EventOutcome:
         """The event at (t, x): the jump, the saltation, the new mode. Returns (t, x, states, phi, chattered)."""
         dyn = self.dyn
         n, m = dyn.n, dyn.m
@@ -567,7 +602,8 @@ class MechanicalMachine:
             return self._impact(index - m, t, x, mode, phi, f_before, events)
         raise AssertionError(kind)
 
-    def _impact(self, j, t, x, mode, phi, f_before, events):
+    def _impact(self, j: int, t: float, x: FloatArray, mode: _Mode, phi: FloatArray | None, f_before: FloatArray,
+                events: list[EventRecord]) -> EventOutcome:
         """Newton's law at contact j; a chattering sequence about to accumulate is completed in closed form."""
         dyn, opts = self.dyn, self.options
         n, m = dyn.n, dyn.m
@@ -621,7 +657,7 @@ class MechanicalMachine:
             phi = (R + np.outer(f_after - R @ f_before - extra, grad) / denominator) @ phi
         return t, x_after, tuple(states), phi, chattered
 
-    def _onto_contact(self, j, t, x):
+    def _onto_contact(self, j: int, t: float, x: FloatArray) -> FloatArray:
         """x moved along M^-1 n_j onto g_j = 0 and g_j' = 0 (a closed contact's state, its rounding drift removed)."""
         dyn = self.dyn
         n, w = dyn.n, dyn.WN[j]
@@ -632,7 +668,8 @@ class MechanicalMachine:
         x[n:] -= dyn.Minv @ w * ((w @ x[n:] + c1) / mass)
         return x
 
-    def _back_to_zero(self, result, function, t_ext, segments, record, phi):
+    def _back_to_zero(self, result: Any, function: EventFunction, t_ext: float, segments: list[_Segment],
+                      record: bool, phi: FloatArray | None) -> tuple[float, FloatArray, FloatArray | None]:
         """The zero of ``function(t, y)`` (positive at the segment's start, negative at t_ext) on the dense output:
         (t, x, phi) there, the last recorded segment cut to it."""
         from scipy.optimize import brentq
@@ -652,7 +689,7 @@ class MechanicalMachine:
             segments[-1] = _Segment(last.t0, t_zero, last.mode, last.solution, last.x0, y[:n2].copy())
         return t_zero, y[:n2].copy(), (y[n2:].reshape(n2, n2).copy() if phi is not None else None)
 
-    def _gradient(self, function, t, x):
+    def _gradient(self, function: EventFunction, t: float, x: FloatArray) -> tuple[FloatArray, float]:
         """(d h / d x, d h / d t) by central differences."""
         grad = np.empty(x.size)
         for k in range(x.size):
@@ -663,7 +700,8 @@ class MechanicalMachine:
         dt = 1e-7 * self.scale
         return grad, (function(t + dt, x) - function(t - dt, x)) / (2.0 * dt)
 
-    def _saltation(self, phi, new_mode, t, x, f_before, grad, dhdt):
+    def _saltation(self, phi: FloatArray | None, new_mode: _Mode, t: float, x: FloatArray, f_before: FloatArray,
+                   grad: FloatArray, dhdt: float) -> FloatArray | None:
         if phi is None:
             return None
         f_after = self.dyn.field(new_mode, t, x)
@@ -681,8 +719,9 @@ class MechanicalPeriodMap(EnginePeriodMap):
     ``jacobian_kind`` says which the last Jacobian was."""
 
     jacobian_kind = "exact"
+    machine: MechanicalMachine
 
-    def _solve(self, x0, jacobian):
+    def _solve(self, x0: FloatArray, jacobian: bool) -> tuple[MechanicalSolution, FloatArray | None]:
         solution, phi = self.machine.run(x0, record=False, jacobian=jacobian)
         self.jacobian_kind = "exact"
         if jacobian and (solution.chattered or phi is None):
@@ -691,11 +730,12 @@ class MechanicalPeriodMap(EnginePeriodMap):
         return solution, phi
 
 
-def period_map(problem: MechanicalProblem, options) -> PeriodMap:
+def period_map(problem: MechanicalProblem, options: EventDriven) -> PeriodMap:
     return MechanicalPeriodMap(MechanicalMachine(problem, options))
 
 
-def sliding_boundary(problem: MechanicalProblem, states: tuple, i: int, sigma: float, t: float, x) -> tuple[float, float]:
+def sliding_boundary(problem: MechanicalProblem, states: tuple[int, ...], i: int, sigma: float, t: float,
+                     x: npt.ArrayLike) -> tuple[float, float]:
     """(margin, curvature) of friction contact ``i`` at a state (t, x) on its surface s_i = 0, the other contacts
     in ``states`` (a mode's states, one per contact).
 
@@ -722,11 +762,11 @@ def sliding_boundary(problem: MechanicalProblem, states: tuple, i: int, sigma: f
     return float(margin), float(-np.sign(sigma) * (dyn.WT[i] @ jerk))
 
 
-def supports(problem: MechanicalProblem, options) -> None:
+def supports(problem: MechanicalProblem, options: EventDriven) -> None:
     """Every mechanical problem (its own checks ran when it was built)."""
 
 
-def solve(problem: MechanicalProblem, options, x0) -> Trajectory:
+def solve(problem: MechanicalProblem, options: EventDriven, x0: FloatArray) -> Trajectory:
     solution = MechanicalMachine(problem, options).run(x0)[0]
     step = options.output_step or time_scale(problem) / 200.0
     return solution.trajectory(step)

@@ -2,15 +2,25 @@
 exponential-polynomial piece) and samples on any grid."""
 from __future__ import annotations
 
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
+import numpy.typing as npt
 
 from ...errors import ParameterError
 from ...limits import check_memory
 from ...trajectory import Samples, Trajectory
 from .core import PiecewiseSolution
-from .flow import _EXPONENTS, _GL_W, _GL_X, Flow, _power_stack, expm
+from .flow import _EXPONENTS, _GL_W, _GL_X, FloatArray, Flow, _power_stack, expm
+
+if TYPE_CHECKING:
+    from ...problems import LCSProblem
+    from . import EventDriven
+
+#: One quadrature piece being gathered: its nodes' times and weights, x~ at the nodes, and the flow.
+_Part = tuple[FloatArray, FloatArray, FloatArray, Flow]
 
 _BLOCK = 1024
 #: Gauss-Legendre pieces a measure reads at a time (8 nodes each): a one-state circuit's block peaks at ~30 MB.
@@ -34,13 +44,18 @@ class EventSolution(PiecewiseSolution):
     (:class:`.core.PiecewiseSolution`; kinds 'activate', 'release', 'impulse', 'switch'); ``end_config`` the
     configuration in force at the end."""
 
-    def __init__(self, problem, segments, events, x_end, wall_s, options, end_config, jumps: tuple = ()):
+    problem: LCSProblem
+    segments: list[Segment]
+
+    def __init__(self, problem: LCSProblem, segments: list[Segment], events: Iterable[tuple[float, str, int, int]],
+                 x_end: FloatArray, wall_s: float, options: EventDriven, end_config: int,
+                 jumps: tuple[tuple[float, float], ...] = ()) -> None:
         super().__init__(problem, segments, events, x_end, wall_s, options)
         self.end_config = end_config
         #: ((time, energy lost), ...) of the state's jumps (:meth:`._Machine.enter`)
         self.jumps = jumps
 
-    def _segments_in(self, t0: float, t1: float):
+    def _segments_in(self, t0: float, t1: float) -> Iterator[tuple[Segment, float, float]]:
         for seg in self.segments:
             if seg.t1 > t0 and seg.t0 < t1:
                 yield seg, max(seg.t0, t0), min(seg.t1, t1)
@@ -49,7 +64,8 @@ class EventSolution(PiecewiseSolution):
         """Gauss-Legendre pieces over [t0, t1] (8 nodes each): what :meth:`quadrature` would hold."""
         return sum(int((b - a) / seg.flow.piece) + 1 for seg, a, b in self._segments_in(t0, t1) if b > a)
 
-    def quadrature_blocks(self, t0: float | None = None, t1: float | None = None, pieces: int = QUADRATURE_BLOCK):
+    def quadrature_blocks(self, t0: float | None = None, t1: float | None = None,
+                          pieces: int = QUADRATURE_BLOCK) -> Iterator[tuple[Samples, FloatArray]]:
         """Gauss-Legendre nodes over [t0, t1] (default: the whole run) as (Samples, weights), in blocks of about
         ``pieces`` pieces: a sum over the blocks is the integral, and no more than a block's nodes are held.
 
@@ -57,7 +73,7 @@ class EventSolution(PiecewiseSolution):
         (:data:`.flow._PIECE_NORM`), 8 nodes per piece."""
         t0 = self.problem.t_span[0] if t0 is None else t0
         t1 = self.problem.t_span[1] if t1 is None else t1
-        parts: list = []                           # (t, w, x~ nodes, flow) of the block being gathered
+        parts: list[_Part] = []                    # (t, w, x~ nodes, flow) of the block being gathered
         held_pieces, half, any_part = 0, 0.5 * (_GL_X + 1.0), False
         for seg, a, b in self._segments_in(t0, t1):
             flow, length = seg.flow, b - a
@@ -90,7 +106,7 @@ class EventSolution(PiecewiseSolution):
             raise ParameterError(f"quadrature interval [{t0:g}, {t1:g}] s lies outside the run")
 
     @staticmethod
-    def _block(parts: list) -> tuple[Samples, np.ndarray]:
+    def _block(parts: list[_Part]) -> tuple[Samples, FloatArray]:
         xs = [nodes for _, _, nodes, _ in parts]
         samples = Samples(np.concatenate([t for t, _, _, _ in parts]), np.vstack([x[:, :-1] for x in xs]),
                           np.vstack([x @ f.u_rows.T for x, (_, _, _, f) in zip(xs, parts)]),
@@ -100,7 +116,7 @@ class EventSolution(PiecewiseSolution):
                                           for x, (_, _, _, f) in zip(xs, parts)]))
         return samples, np.concatenate([w for _, w, _, _ in parts])
 
-    def quadrature(self, t0: float | None = None, t1: float | None = None) -> tuple[Samples, np.ndarray]:
+    def quadrature(self, t0: float | None = None, t1: float | None = None) -> tuple[Samples, FloatArray]:
         """Every Gauss-Legendre node over [t0, t1] at once (:meth:`quadrature_blocks`), after a check that they fit
         the memory limit."""
         a = self.problem.t_span[0] if t0 is None else t0
@@ -112,7 +128,7 @@ class EventSolution(PiecewiseSolution):
         blocks = list(self.quadrature_blocks(a, b, pieces=2**62))
         return blocks[0]
 
-    def sample(self, times) -> Samples:
+    def sample(self, times: npt.ArrayLike) -> Samples:
         """Exact states, pairs and configuration at the given times (a point on an event takes the
         segment arriving there)."""
         times = np.asarray(times, dtype=float)
@@ -157,7 +173,8 @@ class EventSolution(PiecewiseSolution):
                           wall_s=self.wall_s, rule="exact", exact=self, period=problem.switching.period, jumps=self.jumps,
                           metadata=dict(problem.metadata, event_tol=self.options.event_tol, label="event"))
 
-    def _sample_sorted(self, t: np.ndarray, step: float):
+    def _sample_sorted(self, t: FloatArray, step: float) -> tuple[FloatArray, FloatArray, FloatArray,
+                                                                   npt.NDArray[np.int64], npt.NDArray[np.bool_]]:
         """Sorted times on a grid of spacing ``step`` plus segment ends: per segment, offsets q step + r share a
         few remainders r; x = S^q expm(r Z) x0 with the powers S^q of S = expm(step Z) stacked once per flow."""
         n, k = self.problem.n, self.problem.k
@@ -166,8 +183,8 @@ class EventSolution(PiecewiseSolution):
         held = np.empty((t.size, k), dtype=bool)
         starts = np.array([seg.t0 for seg in self.segments])
         which = np.clip(np.searchsorted(starts, t, side="left") - 1, 0, len(self.segments) - 1)
-        powers: dict = {}
-        longest: dict = {}                       # per flow, its longest segment: how many powers it needs
+        powers: dict[int, FloatArray] = {}
+        longest: dict[int, float] = {}           # per flow, its longest segment: how many powers it needs
         for seg in self.segments:
             longest[id(seg.flow)] = max(longest.get(id(seg.flow), 0.0), seg.t1 - seg.t0)
         bounds = np.searchsorted(which, np.arange(len(self.segments) + 1))

@@ -3,6 +3,7 @@ e and accumulate at t_inf = sqrt(2 H / g) (1 + 2 e / (1 - e)), after which it re
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
 
 from ...params import Param, positive
 from ...problems.mechanical import HarmonicForce, MechanicalProblem, UnilateralContact
@@ -32,7 +33,8 @@ class BouncingBall(MechanicalModel):
     def time_scale(self, p: dict) -> float:
         return accumulation_time(p["H"], p["g"], p["e"])
 
-    def problem(self, p: dict, t_end: float, x0=None, t_start: float = 0.0) -> MechanicalProblem:
+    def problem(self, p: dict, t_end: float, x0: npt.NDArray[np.float64] | None = None,
+                t_start: float = 0.0) -> MechanicalProblem:
         return MechanicalProblem(mass=[[p["m"]]], damping=[[0.0]], stiffness=[[0.0]],
                                  force=HarmonicForce([0.0], 0.0, constant=[-p["m"] * p["g"]]),
                                  contacts=(UnilateralContact([1.0], p["e"], name="floor"),),

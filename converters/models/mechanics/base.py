@@ -10,13 +10,18 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
+import numpy.typing as npt
 
 from ...params import Param, resolve
 from ...problems.mechanical import MechanicalProblem
 from ...trajectory import Samples
 from ..base import BoundLabels
+
+if TYPE_CHECKING:
+    from ...trajectory import Trajectory
 
 _STATE_LABELS = {0: "stick", 1: "slip+", 2: "slip-", 3: "contact", 4: "flight"}
 
@@ -61,7 +66,8 @@ class MechanicalModel(ABC):
         return self.name
 
     @abstractmethod
-    def problem(self, p: dict, t_end: float, x0=None, t_start: float = 0.0) -> MechanicalProblem:
+    def problem(self, p: dict, t_end: float, x0: npt.NDArray[np.float64] | None = None,
+                t_start: float = 0.0) -> MechanicalProblem:
         """The problem over [t_start, t_end] from x0 (default: the model's start state)."""
 
     @abstractmethod
@@ -101,7 +107,7 @@ class MechanicalModel(ABC):
     def labels(self, p: dict) -> MechanicalLabels:
         return MechanicalLabels(self, p)
 
-    def summary(self, tr, p: dict) -> dict:
+    def summary(self, tr: Trajectory, p: dict) -> dict:
         """Counts of the run's events by kind, and the time spent in each mode over the last time scale."""
         events = tr.events
         counts = events["kind"].value_counts().to_dict() if len(events) else {}

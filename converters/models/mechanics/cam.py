@@ -14,6 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import numpy.typing as npt
 
 from ...params import Param, positive
 from ...problems.mechanical import MechanicalProblem, UnilateralContact
@@ -31,7 +32,8 @@ JOINTS = {"base | flank (rise)": np.pi / 2, "flank | nose (rise)": np.pi / 2 + B
           "nose | flank (fall)": 1.5 * np.pi - BETA2, "flank | base (fall)": 1.5 * np.pi}
 
 
-def _circle_arc(A, A1, A2, u, u1, u2, rho):
+def _circle_arc(A: np.ndarray, A1: np.ndarray, A2: np.ndarray, u: np.ndarray, u1: np.ndarray, u2: np.ndarray,
+                rho: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """h, h', h'' of A(beta) + rho sqrt(1 - u(beta)^2) from A, u and their first two derivatives."""
     S = np.sqrt(1.0 - u * u)
     S1 = -u * u1 / S
@@ -39,7 +41,7 @@ def _circle_arc(A, A1, A2, u, u1, u2, rho):
     return A + rho * S, A1 + rho * S1, A2 + rho * S2
 
 
-def profile(beta):
+def profile(beta: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The lift h_c and its first two derivatives in beta, for beta in [0, pi] (arrays)."""
     beta = np.asarray(beta, dtype=float)
     h, h1, h2 = np.full(beta.shape, RB), np.zeros(beta.shape), np.zeros(beta.shape)
@@ -66,7 +68,7 @@ class CamOffset:
 
     omega: float
 
-    def position(self, t):
+    def position(self, t: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """c(t), c'(t), c''(t) of the cam (m, m/s, m/s^2)."""
         t = np.asarray(t, dtype=float)
         beta = np.mod(self.omega * t + np.pi / 2.0, 2.0 * np.pi)
@@ -75,7 +77,7 @@ class CamOffset:
         sign = np.where(mirrored, -1.0, 1.0)
         return h - SHIFT, sign * h1 * self.omega, h2 * self.omega ** 2
 
-    def __call__(self, t):
+    def __call__(self, t: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         c, c1, c2 = self.position(t)
         return -c, -c1, -c2
 
@@ -101,7 +103,8 @@ class CamFollower(MechanicalModel):
     def offset(self, p: dict) -> CamOffset:
         return CamOffset(2.0 * np.pi * p["rpm"] / 60.0)
 
-    def problem(self, p: dict, t_end: float, x0=None, t_start: float = 0.0) -> MechanicalProblem:
+    def problem(self, p: dict, t_end: float, x0: npt.NDArray[np.float64] | None = None,
+                t_start: float = 0.0) -> MechanicalProblem:
         """From x0 (default: on the cam at rest, in its dwell)."""
         offset = self.offset(p)
         if x0 is None:
@@ -112,11 +115,11 @@ class CamFollower(MechanicalModel):
                                  t_span=(t_start, t_end), period=self.period(p), state_names=self.state_names,
                                  metadata={"model": self.name, **p})
 
-    def cam_angle(self, p: dict, t):
+    def cam_angle(self, p: dict, t: npt.ArrayLike) -> np.ndarray:
         """beta = (omega t + pi/2) mod 2 pi (rad): where on its profile the cam meets the follower at time t."""
         return np.mod(2.0 * np.pi * p["rpm"] / 60.0 * np.asarray(t, dtype=float) + np.pi / 2.0, 2.0 * np.pi)
 
-    def detachment_margin(self, p: dict, t):
+    def detachment_margin(self, p: dict, t: npt.ArrayLike) -> np.ndarray:
         """k c + m c'' (N): the contact force the cam must supply to keep the follower on it; below zero the
         spring cannot follow the cam's deceleration and the follower detaches."""
         c, _, c2 = self.offset(p).position(t)

@@ -11,6 +11,7 @@ force that keeps s = 0; the sliding (stick) region is |(-k x + A cos(omega t)) /
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
 
 from ...params import Param, nonnegative, positive
 from ...problems.mechanical import FrictionContact, HarmonicForce, MechanicalProblem, PoppFriction
@@ -48,7 +49,8 @@ class FrictionOscillator(MechanicalModel):
     def period(self, p: dict) -> float:
         return 2.0 * np.pi / p["omega"]
 
-    def problem(self, p: dict, t_end: float, x0=None, t_start: float = 0.0) -> MechanicalProblem:
+    def problem(self, p: dict, t_end: float, x0: npt.NDArray[np.float64] | None = None,
+                t_start: float = 0.0) -> MechanicalProblem:
         """From x0 (default: at rest, x = 0, v = 0: slipping backwards on the belt)."""
         return MechanicalProblem(mass=[[p["m"]]], damping=[[0.0]], stiffness=[[p["k"]]],
                                  force=HarmonicForce([p["A"]], p["omega"]),

@@ -13,6 +13,7 @@ bifurcation parameters (k2 = k1: the symmetric system).
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
 
 from ...params import nonnegative, positive
 from ...problems.mechanical import FrictionContact, MechanicalProblem
@@ -48,7 +49,8 @@ class TwoBlock(MechanicalModel):
         """The slower block's natural period, 2 pi sqrt(m / (k + kc))."""
         return float(2.0 * np.pi * max(np.sqrt(p["m1"] / (p["k1"] + p["kc"])), np.sqrt(p["m2"] / (p["k2"] + p["kc"]))))
 
-    def problem(self, p: dict, t_end: float, x0=None, t_start: float = 0.0) -> MechanicalProblem:
+    def problem(self, p: dict, t_end: float, x0: npt.NDArray[np.float64] | None = None,
+                t_start: float = 0.0) -> MechanicalProblem:
         """From x0 (default: both blocks at their springs' rest position, block 1 stuck to the belt, block 2
         at rest: an asymmetric start)."""
         K = np.array([[p["k1"] + p["kc"], -p["kc"]], [-p["kc"], p["k2"] + p["kc"]]])
