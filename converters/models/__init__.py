@@ -8,7 +8,7 @@ from .base import OFF, ON, Converter, Model, check_h
 from .boost import Boost
 from .buck import Buck
 from .buckboost import BuckBoost
-from .control import Control, Controlled, OpenLoop
+from .control import REGISTERED, Control, Controlled, OpenLoop
 from .compensator import VoltageLoop
 from .cuk import Cuk
 from .current_mode import PeakCurrent, PeakCurrentLoop, ValleyCurrent
@@ -30,6 +30,7 @@ DEFAULT_CONTROL = OpenLoop.key
 #: model is one object).
 MODELS: dict[tuple[str, str], Model] = {(name, key): control.on(converter) for key, control in CONTROLS.items()
                                         for name, converter in CONVERTERS.items() if control.applies_to(converter)}
+REGISTERED.update({key: model for key, model in MODELS.items() if isinstance(model, Controlled)})
 
 
 def get_converter(name: str) -> Converter:

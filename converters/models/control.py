@@ -171,7 +171,8 @@ class ControlledLabels(SteppedLabels):
 
 class Controlled(Converter):
     """A converter under a control (module docstring): the circuit's knowledge from ``converter``, the loop's from
-    ``loop``. Pickled as its plant and its loop (a sweep's workers rebuild it from them)."""
+    ``loop``. A registered loop pickles by name (a sweep's workers take the registry's), another as its plant and
+    its loop."""
 
     def __init__(self, converter: Converter, loop: Control) -> None:
         self.converter, self.loop = converter, loop
@@ -192,9 +193,9 @@ class Controlled(Converter):
         self.closed_form = False             # the closed forms are the open-loop converter's at a given D
 
     def __reduce__(self) -> tuple[Any, ...]:
-        # rebuilt from its plant and its loop, each pickled as itself (a built-in converter by its class, a
-        # netlist's plant by its file's text): the registry (converters.models) sits above this module
-        return (Controlled, (self.converter, self.loop))
+        if REGISTERED.get((self.name, self.control)) is self:      # a sweep's worker gets the registry's own object
+            return (registered, (self.name, self.control))
+        return (Controlled, (self.converter, self.loop))            # a netlist's loop: its plant pickles itself
 
     def parameter_name(self, name: str) -> str:
         """The plant's parameters as it names them (a netlist's case-insensitively), the loop's as the loop does."""
@@ -279,6 +280,16 @@ class Controlled(Converter):
         converter's."""
         own = self.loop.summary(self, tr, p, *options)
         return super().summary(tr, p) if own is None else own
+
+
+#: The closed loops of the registry (:data:`converters.models.MODELS`, which fills this in as it builds them), by
+#: (converter, control): here, below the registry, so that a loop pickles by name without importing it.
+REGISTERED: dict[tuple[str, str], Controlled] = {}
+
+
+def registered(name: str, control: str) -> Controlled:
+    """The registry's closed loop (unpickling imports converters.models, whose package fills REGISTERED first)."""
+    return REGISTERED[(name, control)]
 
 
 __all__ = ["Control", "Controlled", "OpenLoop"]
