@@ -95,14 +95,23 @@ def test_no_import_cycle_between_modules():
     assert _cycle(graph) is None, f"import cycle: {' -> '.join(_cycle(graph))}"
 
 
-def test_an_import_of_the_packages_own_init_is_an_edge_and_a_typing_import_is_not_a_runtime_one(tmp_path):
+def _package(tmp_path: Path, files: dict[str, str]) -> dict[str, Path]:
+    """A package ``converters`` of ``files`` (module name -> source; "" is its __init__) written under tmp_path."""
     package = tmp_path / "converters"
     package.mkdir()
-    (package / "__init__.py").write_text("from .control import Control\nREGISTRY = {}\n")
-    (package / "control.py").write_text("class Control:\n    def on(self):\n        from . import REGISTRY\n")
-    (package / "typed.py").write_text("from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from . import control\n")
-    modules = {"converters": package / "__init__.py", "converters.control": package / "control.py",
-               "converters.typed": package / "typed.py"}
+    modules = {}
+    for name, text in files.items():
+        path = package / f"{name or '__init__'}.py"
+        path.write_text(text)
+        modules["converters" + (f".{name}" if name else "")] = path
+    return modules
+
+
+def test_an_import_of_the_packages_own_init_is_an_edge_and_a_typing_import_is_not_a_runtime_one(tmp_path):
+    modules = _package(tmp_path, {
+        "": "from .control import Control\nREGISTRY = {}\n",
+        "control": "class Control:\n    def on(self):\n        from . import REGISTRY\n",
+        "typed": "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from . import control\n"})
     graph = {name: _imports(name, path, modules, typing=False) for name, path in modules.items()}
     assert _cycle(graph) == ["converters", "converters.control", "converters"] and graph["converters.typed"] == set()
     assert _imports("converters.typed", modules["converters.typed"], modules) == {"converters.control"}
@@ -112,13 +121,8 @@ def test_the_cycle_finder_finds_a_function_local_cycle(tmp_path):
     """The old event -> periodic -> stepping -> event cycle, through a function-local import, is caught."""
     assert _cycle({"a": {"b"}, "b": {"c"}, "c": {"a"}}) == ["a", "b", "c", "a"]
     assert _cycle({"a": {"b"}, "b": set(), "c": {"a"}}) is None
-    package = tmp_path / "converters"
-    package.mkdir()
-    (package / "__init__.py").write_text("")
-    (package / "event.py").write_text("from .periodic import shoot\n")
-    (package / "periodic.py").write_text("def shoot():\n    from .event import run\n")
-    modules = {"converters": package / "__init__.py", "converters.event": package / "event.py",
-               "converters.periodic": package / "periodic.py"}
+    modules = _package(tmp_path, {"": "", "event": "from .periodic import shoot\n",
+                                  "periodic": "def shoot():\n    from .event import run\n"})
     graph = {name: _imports(name, path, modules) for name, path in modules.items()}
     assert _cycle(graph) == ["converters.event", "converters.periodic", "converters.event"]
 
