@@ -144,3 +144,30 @@ def test_a_branch_that_fails_part_way_says_where_and_keeps_its_orbits():
     assert "the model or method refused the next orbit (p must be <= 3.2; got 3.2" in branch.message
     assert branch.values().max() == pytest.approx(3.2, abs=1e-3) and len(branch.points) > 10
     assert [b.kind for b in branch.bifurcations] == ["period-doubling"]      # found before it stopped
+
+
+def test_locating_a_sign_change_bisects_past_orbits_whose_test_is_undefined(monkeypatch):
+    """A Neimark-Sacker test is undefined (None) where the multipliers are real: a false-position trial that lands
+    there is not on a's side, and the next trial bisects towards it instead of dividing by None (it had raised a
+    TypeError). Here the test is v - 0.75 on a 1-D branch, undefined on (0.5, 0.74): the first trial (0.75 by
+    false position) is past the zero, the second lands where the test is undefined, and the bracket closes on
+    where a's side ends, 0.5."""
+    from types import SimpleNamespace
+
+    from converters.analysis.continuation import detection
+
+    def point(value):
+        test = None if 0.5 < value < 0.74 else value - 0.75
+        return SimpleNamespace(value=value, x0=np.array([value]), tests={"neimark-sacker": test})
+
+    family = SimpleNamespace(point=lambda value, x, jacobian: point(value))
+    scaling = SimpleNamespace(z=lambda x0, value: np.array([value]))
+    monkeypatch.setattr(detection, "_correct", lambda family, scaling, trial, direction, guess, tol:
+                        SimpleNamespace(value=float(trial[0]), x=trial.copy(), jacobian=None))
+    a, b = point(0.0), point(1.0)
+    lo, hi, note = detection._locate(
+        family, scaling, a, b, lambda s: s.tests["neimark-sacker"] is not None and s.tests["neimark-sacker"] < 0,
+        lambda s: s.tests["neimark-sacker"], 1e-9, 1e-8)
+    assert note == ""
+    assert lo.value <= 0.5 <= hi.value and hi.value - lo.value <= 1e-8
+    assert lo.tests["neimark-sacker"] < 0 and hi.tests["neimark-sacker"] is None

@@ -75,7 +75,8 @@ def _locate(family: OrbitFamily, scaling: _Scaling, a: OrbitPoint, b: OrbitPoint
         if length <= locate_tol:
             return lo, hi, ""
         fraction = 0.5
-        if test is not None and f_lo != f_hi:
+        # an end whose test is undefined (no complex pair for the Neimark-Sacker test) is bisected towards
+        if f_lo is not None and f_hi is not None and f_lo != f_hi:
             fraction = min(max(f_lo / (f_lo - f_hi), 0.02), 0.98)   # a step off the ends, so the bracket shrinks
         trial = z_lo + fraction * chord
         solved = _correct(family, scaling, trial, chord / length, trial, tol)
@@ -86,12 +87,12 @@ def _locate(family: OrbitFamily, scaling: _Scaling, a: OrbitPoint, b: OrbitPoint
         if same_as_a(mid):
             lo, f_lo = mid, f_mid
             retained = retained + 1 if retained >= 0 else 1       # hi retained again: halve its value
-            if test is not None and retained >= 2:
+            if f_hi is not None and retained >= 2:
                 f_hi *= 0.5
         else:
             hi, f_hi = mid, f_mid
             retained = retained - 1 if retained <= 0 else -1
-            if test is not None and retained <= -2:
+            if f_lo is not None and retained <= -2:
                 f_lo *= 0.5
     return lo, hi, "bracket left after 100 steps"
 
