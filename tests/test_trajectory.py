@@ -111,7 +111,7 @@ def test_exact_mode_fractions_put_an_event_where_it_is():
 def test_a_bare_lcs_run_plots_its_states_and_the_pairs_that_hold(method):
     """Trajectory.plot() raised on any run of a plain LCSProblem (no model labels): it draws the states and, as its
     mode timeline, the pairs that hold at each step (the diode bridge: D1 with D3, then D2 with D4)."""
-    from converters.models.circuits import diode_bridge
+    from .oracle_circuits import diode_bridge
     fig = simulate(diode_bridge(), method).plot()
     axes = fig.axes
     assert [ax.get_ylabel() for ax in axes] == ["vC (V)", "iL (A)", "held pairs"]
@@ -125,7 +125,7 @@ def test_a_solution_carries_its_problem_its_method_and_what_it_cost(method):
     """sol.prob, sol.alg and the statistics, as DifferentialEquations.jl's solutions carry them: the accuracy check of
     a run re-runs its own method object at another step, read from the trajectory (steady runs on the stepper's
     plan included)."""
-    from converters.models.circuits import diode_bridge
+    from .oracle_circuits import diode_bridge
     from converters.run import run_converter
     problem = diode_bridge()
     algorithm = Theta(h=1e-6, theta=0.5) if method == "lcp" else EventDriven()

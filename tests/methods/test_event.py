@@ -13,7 +13,9 @@ from converters.analysis.periodic import shoot
 from converters.errors import ParameterError, SimulationError
 from converters.methods import BackwardEuler, EventDriven, Smoothing, Theta
 from converters.models import get_converter, get_model
-from converters.models.circuits import half_wave_rectifier, parallel_rlc_exact
+from validation.core_checks import parallel_rlc_exact
+
+from ..oracle_circuits import half_wave_rectifier
 from converters.problems import Configuration, LCSProblem, Schedule
 from converters.run import run_converter, run_summary, steady_orbit
 from converters.simulate import simulate
@@ -181,7 +183,7 @@ def test_event_method_on_the_prc_agrees_with_the_steppers_extrapolation_to_h_zer
 
 
 def test_event_method_on_the_diode_bridge_is_its_closed_form_and_the_steppers_limit():
-    from converters.models.circuits import diode_bridge
+    from ..oracle_circuits import diode_bridge
     problem = diode_bridge(t_end=5e-3)
     exact = simulate(problem, EventDriven())
     np.testing.assert_allclose(exact.x, parallel_rlc_exact(exact.t), atol=1e-11)
@@ -197,7 +199,7 @@ def test_a_run_far_longer_than_the_fastest_time_constant_is_refused_not_hung(pro
     import time
 
     from converters.errors import ResourceError
-    from converters.models.circuits import half_wave_rectifier
+    from ..oracle_circuits import half_wave_rectifier
     name, value = problem.split("=")
     started = time.process_time()            # CPU seconds: the work done, whatever else the machine runs
     with pytest.raises(ResourceError, match=r"^--method event: the stiffest mode's time constant is about .* "

@@ -3,7 +3,9 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from converters.models.circuits import diode_bridge, half_wave_rectifier, parallel_rlc_exact
+from validation.core_checks import parallel_rlc_exact
+
+from ..oracle_circuits import diode_bridge, half_wave_rectifier
 from converters.errors import ParameterError, SimulationError
 from converters.problems import Configuration, LCSProblem, Schedule
 from converters.methods import BackwardEuler, Theta

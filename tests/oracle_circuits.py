@@ -1,4 +1,6 @@
-"""Two small diode circuits from the Siconos examples that prove the core (Siconos' DiodeBridge and CircuitRLCD).
+"""The tests' oracles: two small diode circuits from the Siconos examples (DiodeBridge and CircuitRLCD) as LCS
+matrices derived by hand, which the netlist compiler must reproduce (``netlists/circuits/half-wave.cir`` and
+``diode-bridge.cir``: ``tests/circuits/test_builtin_netlists.py``) and on which the methods are checked.
 
 Both are an LC tank (C = 1 uF, L = 10 mH, vC(0) = 10 V, iL(0) = 0) discharging into R = 1 kOhm:
 - :func:`half_wave_rectifier` (CircuitRLCD): R in series with one diode across the tank; the diode
@@ -12,8 +14,8 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
-from ..problems import Configuration, LCSProblem, Schedule
-from ..validate import check_positive, parse_value
+from converters.problems import Configuration, LCSProblem, Schedule
+from converters.validate import check_positive, parse_value
 
 
 def _tank(L: float, C: float) -> npt.NDArray[np.float64]:
@@ -52,15 +54,3 @@ def diode_bridge(L: float | str = 1e-2, C: float | str = 1e-6, R: float | str = 
     return LCSProblem((config,), Schedule.constant(), x0=[V0, 0.0], t_span=(0.0, t_end),
                       state_names=("vC", "iL"), pair_names=("D3", "D4", "D1", "D2"),
                       metadata={"circuit": "diode bridge (DiodeBridge)", "L": L, "C": C, "R": R})
-
-
-def parallel_rlc_exact(t: npt.ArrayLike, L: float = 1e-2, C: float = 1e-6, R: float = 1e3, V0: float = 10.0,
-                       iL0: float = 0.0) -> np.ndarray:
-    """Exact (vC, iL) of the parallel RLC tank, shape (len(t), 2): the diode bridge's closed form."""
-    A = np.array([[-1.0 / (R * C), -1.0 / C], [1.0 / L, 0.0]])
-    t = np.asarray(t, dtype=float)
-    # Eigen-decomposition is exact for this 2x2 underdamped A and vectorises over t.
-    w, V = np.linalg.eig(A)
-    coef = np.linalg.solve(V, np.array([V0, iL0], dtype=complex))
-    out = (V[None, :, :] * (coef[None, None, :] * np.exp(t[:, None, None] * w[None, None, :]))).sum(axis=2).real
-    return out
