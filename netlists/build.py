@@ -440,8 +440,8 @@ def standalone(netlist: Netlist, period: float, state_names=(), window_periods: 
 
 
 def standard_netlist(converter: str) -> str:
-    """The standard netlist of a converter (defaults, ``STANDARD_PERIODS`` periods from rest), as shipped in
-    ``netlists/<converter>.cir``."""
+    """The standard netlist of a converter (defaults, ``STANDARD_PERIODS`` periods from rest), as ``python -m
+    netlists DIR`` writes it."""
     conv = get_converter(converter)
     p = conv.resolve({})
     T = conv.period(p)

@@ -1,9 +1,10 @@
-"""The standard netlists in netlists/*.cir: what the builder makes, run by ngspice on its own (``ngspice -b``),
+"""The standard netlists (``python -m netlists DIR``, built on demand): run by ngspice on its own (``ngspice -b``),
 their .meas mean of vout the same as ``pcsuite simulate --method spice`` on the same circuit."""
 import json
 import re
 import shutil
 import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -12,20 +13,27 @@ from netlists import standard_netlist
 from netlists.build import STANDARD_PERIODS
 from validation.cli import main
 
-DIRECTORY = Path(__file__).resolve().parents[2] / "netlists"
 CONVERTERS = ("buck", "boost", "buck-boost", "cuk", "prc")
 
 
-@pytest.mark.parametrize("name", CONVERTERS)
-def test_each_shipped_netlist_is_what_the_builder_makes(name):
-    assert (DIRECTORY / f"{name}.cir").read_text() == standard_netlist(name), "run: python -m netlists"
+def test_python_m_netlists_writes_each_standard_netlist_into_the_directory_given(tmp_path):
+    done = subprocess.run([sys.executable, "-m", "netlists", str(tmp_path)], capture_output=True, text=True,
+                          timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(f"{name}.cir" for name in CONVERTERS)
+    assert (tmp_path / "cuk.cir").read_text() == standard_netlist("cuk")
+    refused = subprocess.run([sys.executable, "-m", "netlists", str(tmp_path / "absent")], capture_output=True,
+                             text=True, timeout=300)
+    assert refused.returncode != 0 and "DIR must be an existing directory" in refused.stderr
+    assert not (Path(__file__).resolve().parents[2] / "netlists" / "buck.cir").exists()     # nothing shipped
 
 
 @pytest.mark.parametrize("name", CONVERTERS)
 def test_ngspice_runs_the_file_alone_and_its_meas_mean_is_pcsuites(name, ngspice, tmp_path, capsys):
     binary = shutil.which("ngspice")
-    out = subprocess.run([binary, "-b", str(DIRECTORY / f"{name}.cir")], capture_output=True, text=True, timeout=300,
-                         cwd=tmp_path)
+    path = tmp_path / f"{name}.cir"
+    path.write_text(standard_netlist(name))
+    out = subprocess.run([binary, "-b", str(path)], capture_output=True, text=True, timeout=300, cwd=tmp_path)
     assert out.returncode == 0, out.stderr[-2000:]
     meas = {m.group(1).lower(): float(m.group(2))
             for m in re.finditer(r"^(\w+)\s*=\s*([-+0-9.eE]+)\s+from=", out.stdout, re.MULTILINE)}
