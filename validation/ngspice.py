@@ -72,6 +72,11 @@ class Spice(Method, key="spice"):
     description = ("the same circuit in ngspice, its ideal devices near-ideal (--spice-tmax, --spice-reltol, "
                    "--spice-method; --steady runs it on from the LCP's orbit until its 10-period mean settles)")
 
+    #: A sweep point in ngspice (:meth:`sweep_row`): the last period's measures, the mode and held fraction from
+    #: ngspice's diode currents, how far the mean moved from the period before (``settle``) and its accepted steps.
+    sweep_measures = {"vout_mean": float, "vout_ripple": float, "rms_state0": float, "mode": str,
+                      "held_fraction": float, "settle": float, "spice_steps": int}
+
     def __post_init__(self):
         if self.spice_reltol is not None:
             spice_settings(1.0, reltol=self.spice_reltol)
@@ -86,6 +91,41 @@ class Spice(Method, key="spice"):
     def solve(self, problem, x0):
         raise ParameterError("ngspice runs a circuit's netlist, not an LCS problem: run the model with this method "
                              "(converters.run.run_converter(model, params, method=Spice(...)))")
+
+    def sweep_check(self, model, p: dict, steady: bool, periods: int) -> None:
+        from netlists import model_netlist
+        if not (isinstance(periods, int) and periods >= 2):
+            raise ParameterError(f"periods must be an integer >= 2 for an ngspice sweep; got {periods!r}")
+        options = spice_settings(model.period(p), self.spice_tmax, self.spice_reltol, self.spice_method)
+        model_netlist(model, p, 2 * model.period(p), options)          # refuses a model without a netlist
+
+    def sweep_row(self, model, p: dict, steady: bool, periods: int) -> dict:
+        """``periods`` periods in ngspice from the LCP stepper's orbit (``steady``) or from rest, measured over the
+        last one (a failed run, "timestep too small", raises: the sweep stores it as a failed row)."""
+        from converters.analysis.modes import held_fraction, mode_class
+        from converters.run import make_method, steady_state
+        from netlists import model_netlist
+
+        from .gdcm import spice_intervals
+        from .spice import run_spice, spice_trajectory
+        T = model.period(p)
+        x0 = steady_state(model, p, make_method(model, p, "lcp", None)).x0 if steady else None
+        options = spice_settings(T, self.spice_tmax, self.spice_reltol, self.spice_method)
+        netlist = model_netlist(model, p, periods * T, options, x0=x0)
+        result = run_spice(netlist)
+        start = netlist.t_end - T
+        run = spice_trajectory(model, p, netlist, result, start)
+        intervals = spice_intervals(model, netlist, result, 1)
+        previous = run.mean("vout", t0=start - T, t1=start)
+        mean = run.mean("vout", t0=start)
+        return {"vout_mean": float(mean), "vout_ripple": float(run.ripple("vout", t0=start)),
+                "rms_state0": float(run.rms(model.state_names[0], t0=start)), "mode": mode_class(intervals),
+                "held_fraction": held_fraction(intervals, 1.0),
+                "settle": float(abs(mean - previous) / max(abs(mean), 1e-12)), "spice_steps": int(run.steps)}
+
+    def sweep_chunk_done(self) -> None:
+        from .spice import close_spice_worker
+        close_spice_worker()          # the chunk's ngspice process ends with the chunk (no orphan)
 
     def run_model(self, model, p: dict, *, t_end=None, periods=None, steady: bool = False, x0=None):
         """The model at ``p`` in ngspice over ``t_end`` s or ``periods`` periods (default 500; with ``steady``, the

@@ -19,10 +19,10 @@ part's indices must lie in the sweep and appear once. Anything else in ``parts/`
 part, another table, a link, a FIFO) is refused with one line naming it, and nothing is changed. Read a sweep
 back with :func:`load_sweep` (or ``pandas.read_parquet(DIR / "parts")``).
 
-:class:`SpiceSweep` is the ensemble of ngspice runs (the same circuits as netlists): per point, the LCP's
-periodic orbit as the initial condition (``steady``) or rest, ``periods`` periods in ngspice, the measures
-over the last one. A failed ngspice run ("timestep too small") is a row; every run goes through the
-recycled, time-limited ngspice worker of :mod:`.spice` inside whichever worker holds the chunk.
+A sweep in ngspice is the same :class:`converters.sweeps.ModelSweep` with ``method="spice"`` (the method measures
+each point on its own run: :meth:`validation.ngspice.Spice.sweep_row`). A failed ngspice run ("timestep too small")
+is a row; every run goes through the recycled, time-limited ngspice worker of :mod:`.spice` inside whichever worker
+holds the chunk.
 """
 from __future__ import annotations
 
@@ -55,82 +55,6 @@ FORMAT = 2
 SWEEP_KEY = b"pcsuite.sweep"
 #: A sweep.json is a few hundred bytes; a larger one is not a sweep's (and is not read whole).
 MANIFEST_MAX_BYTES = 1 << 20
-
-
-# --- the ngspice ensemble -----------------------------------------------------------------------------------
-
-@dataclass(frozen=True)
-class SpiceSweep:
-    """Rows of ``model`` (under ``control``) in ngspice: ``base`` parameters overlaid with each point's."""
-
-    model: str
-    control: str = "pwm"
-    base: dict = field(default_factory=dict)
-    steady: bool = True
-    periods: int = 10
-    reltol: float = 1e-3
-
-    measures = {"vout_mean": float, "vout_ripple": float, "rms_state0": float, "mode": str, "held_fraction": float,
-                "settle": float, "spice_steps": int}
-    chunk_hint = 2
-
-    def __post_init__(self):
-        from netlists import SpiceOptions, model_netlist
-        model = self._model()
-        p = model.resolve(self.base)
-        if not (isinstance(self.periods, int) and self.periods >= 2):
-            raise ParameterError(f"periods must be an integer >= 2 for an ngspice sweep; got {self.periods!r}")
-        model_netlist(model, p, 2 * model.period(p), SpiceOptions(reltol=self.reltol))   # refuses a model without one
-        if self.steady and not np.isfinite(model.problem(p, 1.0).period):
-            raise ParameterError(f"steady: {model.key} switches on its state, with no forcing period to shoot over; "
-                                 "sweep it without --steady")
-
-    def _model(self):
-        from converters.models import get_model
-        return get_model(self.model, self.control)
-
-    def validate(self, point: dict) -> None:
-        self._model().resolve({**self.base, **point})
-
-    def failed(self, index: int, point: dict, message: str) -> dict:
-        return failed_row(index, point, message)
-
-    def row(self, index: int, point: dict) -> dict:
-        from converters.analysis.modes import held_fraction, mode_class
-        from converters.run import make_method, steady_state
-        from netlists import SpiceOptions, model_netlist
-
-        from .gdcm import spice_intervals
-        from .spice import SpiceError, run_spice, spice_trajectory
-        clock = time.perf_counter()
-        try:
-            model = self._model()
-            p = model.resolve({**self.base, **point})
-            T = model.period(p)
-            x0 = steady_state(model, p, make_method(model, p, "lcp", None)).x0 if self.steady else None
-            netlist = model_netlist(model, p, self.periods * T, SpiceOptions(reltol=self.reltol), x0=x0)
-            result = run_spice(netlist)
-            start = netlist.t_end - T
-            run = spice_trajectory(model, p, netlist, result, start)
-            intervals = spice_intervals(model, netlist, result, 1)
-            previous = run.mean("vout", t0=start - T, t1=start)
-            mean = run.mean("vout", t0=start)
-            return {"index": int(index), **{k: float(v) for k, v in point.items()}, "status": "ok", "message": "",
-                    "vout_mean": float(mean), "vout_ripple": float(run.ripple("vout", t0=start)),
-                    "rms_state0": float(run.rms(model.state_names[0], t0=start)), "mode": mode_class(intervals),
-                    "held_fraction": held_fraction(intervals, 1.0),
-                    "settle": float(abs(mean - previous) / max(abs(mean), 1e-12)), "spice_steps": int(run.steps),
-                    "wall_s": time.perf_counter() - clock}
-        except (SpiceError, ValueError, RuntimeError, ArithmeticError) as exc:
-            first = str(exc).splitlines()[0] if str(exc) else ""
-            return failed_row(index, point, f"{type(exc).__name__}: {first[:300]}", time.perf_counter() - clock)
-
-    def rows(self, items) -> list[dict]:
-        from .spice import close_spice_worker
-        try:
-            return [self.row(i, point) for i, point in items]
-        finally:
-            close_spice_worker()          # the chunk's ngspice process ends with the chunk (no orphan)
 
 
 # --- the dataset --------------------------------------------------------------------------------------------
@@ -631,5 +555,5 @@ def write_summary(out, points, metrics="vout_mean", title: str = "", specs=(), u
     return frame
 
 
-__all__ = ["SpiceSweep", "SweepStore", "SweepRun", "run_sweep", "load_sweep", "summary_plot", "write_summary",
+__all__ = ["SweepStore", "SweepRun", "run_sweep", "load_sweep", "summary_plot", "write_summary",
            "describe"]

@@ -86,6 +86,21 @@ class Method(ABC):
     model_error: ClassVar[str] = ""
     #: Steady states of many parameter points advance in one compiled call (:mod:`converters.sweeps.batch`).
     batches: ClassVar[bool] = False
+    #: A method that runs a model's circuit itself (domain ``circuit``: ngspice) measures a sweep's points on its own
+    #: run: its row's measures and their types here, the row from :meth:`sweep_row`, and :meth:`sweep_chunk_done`
+    #: after each chunk (:class:`converters.sweeps.ModelSweep` asks). None: the sweep runs the method on the LCS.
+    sweep_measures: ClassVar[dict[str, type] | None] = None
+
+    def sweep_check(self, model: Any, p: dict[str, Any], steady: bool, periods: int) -> None:
+        """Refuse, before a sweep runs, what its points cannot be run with (a circuit method's)."""
+        raise NotImplementedError(f"the {self.key} method runs on the LCS: a sweep steps it itself")
+
+    def sweep_row(self, model: Any, p: dict[str, Any], steady: bool, periods: int) -> dict[str, Any]:
+        """The measures (:attr:`sweep_measures`) of one sweep point run by the method itself."""
+        raise NotImplementedError(f"the {self.key} method runs on the LCS: a sweep steps it itself")
+
+    def sweep_chunk_done(self) -> None:
+        """After a chunk of :meth:`sweep_row` calls (a worker process it started ends with the chunk)."""
 
     def __init_subclass__(cls, key: str = "", **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)

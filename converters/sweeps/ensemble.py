@@ -114,7 +114,9 @@ class ModelSweep:
 
     ``method``: ``lcp`` (the stepper, h = T * ``h_fraction``, ``theta``) or ``event``; ``steady``: the method's
     periodic orbit (``warm_up`` periods from rest, then Newton) or, without it, ``periods`` periods from rest
-    (the measures over the last one)."""
+    (the measures over the last one). A method that runs the circuit itself (``spice``) measures each point on its
+    own run (:attr:`converters.methods.base.Method.sweep_measures`): ``periods`` periods from the LCP stepper's
+    orbit (``steady``) or from rest."""
 
     model: str
     control: str = "pwm"
@@ -136,6 +138,9 @@ class ModelSweep:
     def measures(self) -> dict:
         """The row's measures and their types; with ``rtol`` also each point's error estimates and the step
         chosen (accuracy on request); then the metrics asked for."""
+        own = self._runs_circuit()
+        if own is not None:
+            return dict(own)
         standard = {**MEASURES, **ACCURACY_MEASURES} if self.rtol is not None else MEASURES
         return {**standard, **{name: float for name in self.metrics if name not in standard}}
 
@@ -146,7 +151,8 @@ class ModelSweep:
         state = model.state_names[0] if getattr(model, "state_names", None) else ""
         from ..trajectory import signal_unit
         out = {**{q.name: q.unit for q in model.parameters}, "vout_mean": "V", "vout_ripple": "V", "rms_state0": signal_unit({}, state), "held_fraction": "1",
-               "spectral_radius": "1", "orbit_distance": "1", "error_estimate": "1", "vout_mean_error_estimate": "1"}
+               "spectral_radius": "1", "orbit_distance": "1", "error_estimate": "1", "vout_mean_error_estimate": "1",
+               "settle": "1"}
         return {**out, **self.metric_units}
 
     def __post_init__(self) -> None:
@@ -159,6 +165,12 @@ class ModelSweep:
                                  "sweep it without --steady (periods from rest, measured over the last one)")
         if self.method not in sweep_methods():
             raise ParameterError(f"method must be {' or '.join(sweep_methods())} for a sweep; got {self.method!r}")
+        if self._runs_circuit() is not None:
+            if self.rtol is not None or self.metrics:
+                raise ParameterError(f"method {self.method} runs the circuit itself: its sweep measures "
+                                     f"{', '.join(self.measures)}; rtol and metrics on demand are the LCS methods'")
+            self._circuit_method().sweep_check(model, p, self.steady, self.periods)
+            return
         from ..analysis.periodic import MAX_WARM_UP
         from ..validate import check_flag, check_integer, check_range
         check_flag("steady", self.steady)
@@ -192,6 +204,15 @@ class ModelSweep:
         from ..models import get_model
         return get_model(self.model, self.control)
 
+    def _runs_circuit(self) -> dict[str, type] | None:
+        """The measures of a method that runs the circuit itself, or None for a method on the LCS."""
+        from ..methods.base import get_method
+        return get_method(self.method).sweep_measures
+
+    def _circuit_method(self) -> Method:
+        from ..methods.base import get_method
+        return get_method(self.method)()
+
     def _method(self, model: Model, p: dict, problem: LCSProblem) -> Method:
         """A ``step`` method at h = T h_fraction (with ``theta`` where it takes one: the sweep's, else the point's
         default from ``problem``'s configurations), an exact one sampled at T/1000."""
@@ -214,6 +235,13 @@ class ModelSweep:
         try:
             model = self._model()
             p = model.resolve({**self.base, **point})
+            if self._runs_circuit() is not None:
+                try:
+                    measured = self._circuit_method().sweep_row(model, p, self.steady, self.periods)
+                except (ValueError, RuntimeError, ArithmeticError) as exc:    # the first line of ngspice's story
+                    first = str(exc).splitlines()[0] if str(exc) else ""
+                    return failed_row(index, point, f"{type(exc).__name__}: {first[:300]}", time.perf_counter() - clock)
+                return {**out, "status": "ok", "message": "", **measured, "wall_s": time.perf_counter() - clock}
             if self.rtol is not None:
                 row = self._accurate_row(model, p)
                 if unstable(row["spectral_radius"]):
@@ -256,6 +284,8 @@ class ModelSweep:
         numeric = [m for m in metrics if isinstance(at_h.get(m), float)]
         if self.rtol is not None:
             return {m: (abs(at_h[m]) * self.rtol, f"accuracy on request (rtol {self.rtol:g})") for m in numeric}
+        if self._runs_circuit() is not None:         # its error is its devices': no estimate to state
+            return {}
         if not get_method(self.method).fixed_step:
             return {m: (0.0, f"{self.method}: exact flows") for m in numeric}
         from dataclasses import replace
@@ -287,6 +317,8 @@ class ModelSweep:
     def chunk_hint(self) -> int:
         """Points per chunk: enough that a chunk of cheap points outweighs its round trip to a worker."""
         from ..methods.base import get_method
+        if self._runs_circuit() is not None:
+            return 2                  # a run is seconds: small chunks spread them over the workers
         stepped = get_method(self.method).fixed_step
         return 500 if self.batchable() else (100 if stepped and self.rtol is None else 10)
 
@@ -303,6 +335,11 @@ class ModelSweep:
     def rows(self, items: list[tuple[int, dict]]) -> list[dict]:
         """Rows of (index, point) items: one compiled call for every point the batch can take (module docstring),
         the per-point path for the rest. Rows in the order of ``items``."""
+        if self._runs_circuit() is not None:
+            try:
+                return [self.row(i, point) for i, point in items]
+            finally:
+                self._circuit_method().sweep_chunk_done()
         if not self.batchable():
             return [self.row(i, point) for i, point in items]
         from ..methods.theta import plan_arrays
@@ -395,8 +432,10 @@ class ModelSweep:
 
 def sweep_methods() -> list[str]:
     """The methods a sweep takes: a converter's, with an error a step twin or exact flows can state."""
-    from ..methods.base import METHODS
-    return [key for key, cls in METHODS.items() if "lcs" in cls.domains and (cls.fixed_step or cls.exact)]
+    from ..methods.base import METHODS, load_methods
+    load_methods()
+    return [key for key, cls in METHODS.items()
+            if ("lcs" in cls.domains and (cls.fixed_step or cls.exact)) or cls.sweep_measures is not None]
 
 
 def _batch_failure(code: int, residual: float, distance: float) -> str:

@@ -202,15 +202,15 @@ def test_a_lhs_sweep_stores_n_points_inside_the_ranges(tmp_path, capsys):
 
 
 def test_an_ngspice_sweep_runs_in_workers_and_a_failed_run_is_a_row(ngspice, tmp_path, monkeypatch):
-    """Two buck points in ngspice started on the LCP orbit: the same vout as the LCP sweep to 0.5 %; a
-    failing run (ngspice's own error, forced at one point) is a row with its message."""
+    """Two buck points in ngspice started on the LCP orbit, through the same ModelSweep as every method: the same
+    vout as the LCP sweep to 0.5 %; a failing run (ngspice's own error, forced at one point) is a row with its
+    message."""
     from converters.parallel import run_ensemble
     from converters.sweeps import Axis, Grid, ModelSweep
     from validation import spice
-    from validation.sweep import SpiceSweep
     grid = Grid([Axis.parse("D=0.3:0.8:2"), Axis.parse("R=3:3:1")])   # K = 2L/RT = 1/3: DCM, CCM
     lcp = pd.DataFrame(run_ensemble(ModelSweep("buck"), grid, backend="serial")).set_index("index")
-    rows = pd.DataFrame(run_ensemble(SpiceSweep("buck", periods=4), grid, backend="local", workers=2, chunk=1))
+    rows = pd.DataFrame(run_ensemble(ModelSweep("buck", method="spice", periods=4), grid, backend="local", workers=2, chunk=1))
     rows = rows.set_index("index").sort_index()
     assert (rows["status"] == "ok").all(), rows["message"].tolist()
     np.testing.assert_allclose(rows["vout_mean"], lcp["vout_mean"], rtol=5e-3)
@@ -225,7 +225,7 @@ def test_an_ngspice_sweep_runs_in_workers_and_a_failed_run_is_a_row(ngspice, tmp
             raise spice.SpiceError(f"ngspice failed on {netlist.converter}: doAnalyses: TRAN:  Timestep too small")
         return real(netlist)
     monkeypatch.setattr(spice, "run_spice", first_run_fails)
-    mixed = run_ensemble(SpiceSweep("buck", periods=4), grid, backend="serial")
+    mixed = run_ensemble(ModelSweep("buck", method="spice", periods=4), grid, backend="serial")
     assert [r["status"] for r in mixed] == ["failed", "ok"]
     assert mixed[0]["message"] == "SpiceError: ngspice failed on buck: doAnalyses: TRAN:  Timestep too small"
     assert mixed[0]["D"] == 0.3 and np.isnan(mixed[0].get("vout_mean", np.nan))

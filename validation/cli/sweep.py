@@ -98,7 +98,6 @@ def build(args):
     from converters.sweeps import Axis, Grid, LatinHypercube, ModelSweep
     from converters.validate import parse_value
 
-    from ..sweep import SpiceSweep
     base = {k: parse_value(k, v) for k, v in parse_assignments(args.params).items()}
     from converters.limits import check_memory
     from converters.sweeps.specs import Spec
@@ -141,11 +140,14 @@ def build(args):
         raise ParameterError(f"--periods must be an integer >= 1; got {args.periods}")
     _refuse_ignored(args)
     if _runs_circuits(args.method):
-        extra = [m for m in metrics if m not in SpiceSweep.measures]
+        from converters.methods.base import get_method
+        measures = get_method(args.method).sweep_measures or {}
+        extra = [m for m in metrics if m not in measures]
         if extra:
             raise ParameterError(f"--metric {extra[0]}: an ngspice sweep's measures are "
-                                 f"{', '.join(k for k, t in SpiceSweep.measures.items() if t is not str)}")
-        ensemble = SpiceSweep(args.model, args.control, base, steady=args.steady, periods=args.periods or 10)
+                                 f"{', '.join(k for k, t in measures.items() if t is not str)}")
+        ensemble = ModelSweep(args.model, args.control, base, method=args.method, steady=args.steady,
+                              periods=args.periods or 10)
     elif args.rtol is not None:
         from converters.methods.base import DEFAULT_METHOD
         if args.h_fraction is not None or args.method != DEFAULT_METHOD:
@@ -172,7 +174,7 @@ def _extra(metrics: list) -> tuple:
 
 
 def _runs_circuits(key: str) -> bool:
-    """The method runs the circuit itself (ngspice: :class:`validation.sweep.SpiceSweep`), not an LCS."""
+    """The method runs the circuit itself (ngspice: its sweep rows are its own, through the same ModelSweep)."""
     from converters.methods.base import get_method
     return "circuit" in get_method(key).domains
 
