@@ -85,7 +85,7 @@ _FORMS: dict[tuple[object, ...], tuple[str, ...]] = {}
 MAX_KEPT_FORMS = 4096
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Compiled:
     """The LCS of a netlist: configurations, the switching law, names, and each configuration's signal maps."""
 
@@ -691,10 +691,12 @@ class _Compiler:
                                 words=("closed", "open")))
         periods = [ch.period for ch in channels if math.isfinite(ch.period)]
         state_names = tuple(f"v({x.name})" for x in self.capacitors) + tuple(f"i({x.name})" for x in self.inductors)
-        return Compiled(tuple(configs), law, state_names, tuple(d.name for d in self.diodes) or ("none",),
-                        tuple(pair_currents), tuple(x.name for x in self.switches), tuple(closed), self.signal_names(),
-                        tuple(maps), common_period(periods) if periods else math.inf, self.initial_state(),
-                        self.units(), gates=self.gate_waveforms(), invariants=self.invariants(state_names),
+        return Compiled(configurations=tuple(configs), law=law, state_names=state_names,
+                        pair_names=tuple(d.name for d in self.diodes) or ("none",), pair_currents=tuple(pair_currents),
+                        switch_names=tuple(x.name for x in self.switches), closed=tuple(closed),
+                        signal_names=self.signal_names(), signal_maps=tuple(maps),
+                        period=common_period(periods) if periods else math.inf, x0=self.initial_state(),
+                        units=self.units(), gates=self.gate_waveforms(), invariants=self.invariants(state_names),
                         notes=self.moved(state_names), energy=self.energy())
 
     def period(self) -> float:
