@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, cast
 
 import numpy as np
@@ -53,6 +54,45 @@ ENUMERATE_PAIRS = 12
 
 #: How often (in segments) the engine looks at the memory it holds against the limit (/proc: ~10 us a look).
 MEMORY_LOOK = 4096
+
+@dataclass(eq=False)
+class _Run:
+    """One event-driven run as it advances (:meth:`_Machine.run`): where it is (t, the augmented state, the mode and
+    configuration, the law's channel bits and latches, each ramp's phase start), what it has recorded (segments, the
+    event log, the timeline), the period map's Jacobian so far, and its counters."""
+
+    t: float
+    xt: FloatArray
+    config: int
+    bits: int                                    # bit j: channel j above
+    phase_start: FloatArray
+    jac: FloatArray | None
+    record: bool
+    timeline: list[TimelineEntry] | None
+    flow: Flow | None = None
+    latched: int = 0                             # bit j: channel j latched
+    segments: list[Segment] = field(default_factory=list)
+    times: list[float] = field(default_factory=list)
+    kinds: list[str] = field(default_factory=list)
+    pairs: list[int] = field(default_factory=list)
+    configs: list[int] = field(default_factory=list)
+    same_time_events: int = 0
+    events: int = 0
+    crossings: int = 0
+    looks: int = 0
+    stop_time: float | None = None
+
+    def log(self, time_: float, kind: str, pair: int, config: int) -> None:
+        self.times.append(time_)
+        self.kinds.append(kind)
+        self.pairs.append(pair)
+        self.configs.append(config)
+
+    def apply(self, jump: FloatArray | None) -> None:
+        """Carry the Jacobian through a state jump (a configuration entered across a charged capacitance)."""
+        if self.jac is not None and jump is not None:
+            self.jac[:] = jump @ self.jac
+
 
 class _Machine:
     """The flows of one problem (built on demand, reused for every run from a new initial state)."""
@@ -437,30 +477,38 @@ class _Machine:
         at the ``stop_count``-th switching into ``stop_config`` (a return map; the run may then end before
         t_span[1], which must be long enough). ``timeline``: a list that receives, in time order, what a
         linearisation about the run needs (:meth:`timeline`). Returns (EventSolution, jacobian or None, stop time
-        or None)."""
+        or None).
+
+        The run goes from edge to edge of the time-driven law (:meth:`edges`); between two it flows in its mode and
+        stops at each crossing of a watched row (:meth:`_to_crossing_or`, :meth:`_cross_into`), and at the edge
+        enters what the edge says (:meth:`_at_edge`)."""
         start_clock = time.perf_counter()
-        problem, options = self.problem, self.options
-        n = problem.n
-        t, t_end = problem.t_span
+        problem = self.problem
+        t_end = problem.t_span[1]
+        run = self._start(x0, record, jacobian, timeline)
+        for edge_t, edge_kind, channel in self.edges(run.t, t_end):
+            while not self._to_crossing_or(run, edge_t, stop_config, stop_count):
+                pass
+            if run.stop_time is not None or edge_kind == "end":
+                break
+            self._at_edge(run, edge_kind, channel)
+        if stop_config is not None and run.stop_time is None:
+            raise SimulationError(f"the return map found {run.crossings} of {stop_count} switchings into configuration "
+                                  f"{stop_config} before t = {t_end:g} s; lengthen the problem's t_span")
+        solution = EventSolution(problem, run.segments, zip(run.times, run.kinds, run.pairs, run.configs),
+                                 run.xt[:-1].copy(), time.perf_counter() - start_clock, self.options, run.config,
+                                 tuple(self.jumps))
+        return solution, run.jac, run.stop_time
+
+    def _start(self, x0: npt.ArrayLike, record: bool, jacobian: bool,
+               timeline: list[TimelineEntry] | None) -> _Run:
+        """The run at t_span[0]: the law's configuration and channel states there, its ramps' phases, the state
+        after entering the configuration (a jump where it closes across a charged capacitance) and its mode."""
+        problem, law = self.problem, self.law
+        t = problem.t_span[0]
         xt = np.append(np.asarray(x0, dtype=float), 1.0)
-        times: list[float] = []
-        kinds: list[str] = []
-        pairs: list[int] = []
-        configs: list[int] = []
-        segments: list[Segment] = []
         self.jumps = []
-        jac = np.eye(n) if jacobian else None
-
-        def log(time_: float, kind: str, pair: int, config_: int) -> None:
-            times.append(time_)
-            kinds.append(kind)
-            pairs.append(pair)
-            configs.append(config_)
-
-        law = self.law
         config = problem.switching.initial_config(xt[:-1], t)
-        bits = initial_bits(law, xt[:-1], t) if law is not None else 0      # bit j: channel j above
-        latched = 0                                                          # bit j: channel j latched
         # Each channel's ramp phase counts from its delay (ramp(t) = low + slope ((t - delay) mod T)), as in the
         # stepper; the last entry is the pairs' rows' (their slope is 0).
         phase_start = np.full(len(self.channels) + 1, t)
@@ -468,126 +516,139 @@ class _Machine:
             ramp = law_channel.function.ramp
             if ramp is not None:
                 phase_start[j] = t - float(ramp.phase(t))
-        xt, jump = self.enter(config, xt, t, log)
-        if jac is not None and jump is not None:
-            jac[:] = jump @ jac
-        flow, xt = self.select(config, xt, t, 0)
-        same_time_events, events, crossings, looks = 0, 0, 0, 0
-        stop_time = None
-        for edge_t, edge_kind, channel in self.edges(t, t_end):
-            while True:
-                looks += 1
-                if looks % MEMORY_LOOK == 0:
-                    check_in_use(f"--method event at t = {t:.6g} s ({events:,} events, {len(segments):,} segments)",
-                                 "--method lcp (its memory is known before the run), or a shorter --t-end")
-                watch = flow.watches.get((bits, latched))
-                if watch is None:                        # the law's rows depend on its channels' states and latches
-                    watch = flow.watches[bits, latched] = _Watch(flow, *self.law_rows(bits, latched),
+        run = _Run(t=t, xt=xt, config=config, bits=initial_bits(law, xt[:-1], t) if law is not None else 0,
+                   phase_start=phase_start, jac=np.eye(problem.n) if jacobian else None, record=record,
+                   timeline=timeline)
+        run.xt, jump = self.enter(config, run.xt, t, run.log)
+        run.apply(jump)
+        run.flow, run.xt = self.select(config, run.xt, t, 0)
+        return run
+
+    def _to_crossing_or(self, run: _Run, edge_t: float, stop_config: int | None, stop_count: int) -> bool:
+        """Flow from ``run``'s state to the first crossing of a watched row before ``edge_t`` and take it, or to
+        ``edge_t``: True when the run reached the edge or stopped (a return map's crossing), False after a
+        crossing."""
+        options = self.options
+        run.looks += 1
+        if run.looks % MEMORY_LOOK == 0:
+            check_in_use(f"--method event at t = {run.t:.6g} s ({run.events:,} events, {len(run.segments):,} "
+                         "segments)", "--method lcp (its memory is known before the run), or a shorter --t-end")
+        flow, t, xt = cast(Flow, run.flow), run.t, run.xt
+        watch = flow.watches.get((run.bits, run.latched))
+        if watch is None:                        # the law's rows depend on its channels' states and latches
+            watch = flow.watches[run.bits, run.latched] = _Watch(flow, *self.law_rows(run.bits, run.latched),
                                                                  m=len(self.channels))
-                phase0 = t - phase_start[watch.channels] if watch.timed else 0.0
-                (tau, which), xt_end = self.cross(flow, watch, xt, edge_t - t, phase0)
-                if tau is not None and t + tau >= edge_t - options.event_tol * self.scale:
-                    tau = None                                   # a crossing on the edge itself: the edge handles it
-                    xt_end = flow.advance(xt, edge_t - t)
-                if tau is not None:
-                    xt_end = flow.advance(xt, tau)
-                xt_end = cast(FloatArray, xt_end)       # cross gives x~ at the edge when nothing crosses before it
-                t_next = edge_t if tau is None else t + tau
-                if record and t_next > t:
-                    segments.append(Segment(t, t_next, flow, xt, xt_end))
-                if timeline is not None and t_next > t:
-                    timeline.append(FlowSpan(t, t_next, flow, xt))
-                if jac is not None:
-                    jac[:] = flow.transition(t_next - t) @ jac
-                if tau is None:
-                    t, xt = edge_t, xt_end
-                    break
-                same_time_events = same_time_events + 1 if tau == 0.0 else 0
-                events += 1
-                if same_time_events > 8 or events > options.max_events:
-                    raise SimulationError(f"{'repeated events at one instant' if same_time_events > 8 else 'too many events'}"
-                                          f" near t = {t + tau:.9g} s (Zeno behaviour or a degenerate LCS); "
-                                          f"max_events = {options.max_events}")
-                t, xt = t + tau, xt_end
-                which = cast(int, which)                 # found with tau
-                pair = int(watch.pairs[which])
-                grad = watch.rows[which, :n]
-                dgdt = watch.slopes[which]
-                f_before = flow.field(xt)
-                flow_before, latched_before, xt_before = flow, latched, xt
-                if pair < 0:                                     # channel -1 - pair of the law switches
-                    j = -1 - pair
-                    bits ^= 1 << j
-                    latched |= int(self.channels[j].latch) << j
-                    config = self.config_of(bits, t)
-                    log(t, "switch", -1, config)
-                    if stop_config is not None and config == stop_config:
-                        crossings += 1
-                        if crossings >= stop_count:
-                            if jac is not None:
-                                denominator = grad @ f_before + dgdt
-                                jac[:] = (np.eye(n) - np.outer(f_before, grad) / denominator) @ jac
-                            stop_time = t
-                            break
-                    xt_in, jump = self.enter(config, xt, t, log)
-                    new, xt_new = self.select(config, xt_in, t, flow.held, f_before)
-                else:
-                    jump = None
-                    new, xt_new = self.select(config, xt, t, flow.held ^ (1 << pair), f_before)
-                if timeline is not None:
-                    timeline.append(Crossing(t, watch.rows[which].copy(), dgdt, f_before, new.field(xt_new),
-                                             np.eye(n) if jump is None else jump, pair, flow_before, latched_before,
-                                             xt_before, config, new, xt_new))
-                if jac is not None:
-                    # Saltation through a jump x+ = Pi(x): S = DPi + (f+ - DPi f-) n^T / (n^T f- + dg/dt).
-                    f_after = new.field(xt_new)
-                    jump_jac = np.eye(n) if jump is None else jump
-                    denominator = grad @ f_before + dgdt
-                    if denominator != 0.0:
-                        jac[:] = (jump_jac + np.outer(f_after - jump_jac @ f_before, grad) / denominator) @ jac
-                    else:
-                        jac[:] = jump_jac @ jac
-                for i in range(problem.k):
-                    was, now = (flow.held >> i) & 1, (new.held >> i) & 1
-                    if was != now:
-                        log(t, "activate" if now else "release", i, config)
-                flow, xt = new, xt_new
-            if stop_time is not None or edge_kind == "end":
-                break
-            if edge_kind == "reset":
-                phase_start[channel] = t
-                latched &= ~(1 << channel)
-                new_bits = self.reset_bits(xt, bits, channel)
-                if new_bits != bits:
-                    bits, config = new_bits, self.config_of(new_bits, t)
-                    log(t, "switch", -1, config)
-            elif edge_kind == "limit":                       # the period's limit: leave below and latch
-                latched |= 1 << channel
-                if not (bits >> channel) & 1:
-                    bits |= 1 << channel
-                    config = self.config_of(bits, t)
-                    log(t, "switch", -1, config)
+        phase0 = t - run.phase_start[watch.channels] if watch.timed else 0.0
+        (tau, which), xt_end = self.cross(flow, watch, xt, edge_t - t, phase0)
+        if tau is not None and t + tau >= edge_t - options.event_tol * self.scale:
+            tau = None                                   # a crossing on the edge itself: the edge handles it
+            xt_end = flow.advance(xt, edge_t - t)
+        if tau is not None:
+            xt_end = flow.advance(xt, tau)
+        xt_end = cast(FloatArray, xt_end)       # cross gives x~ at the edge when nothing crosses before it
+        t_next = edge_t if tau is None else t + tau
+        if run.record and t_next > t:
+            run.segments.append(Segment(t, t_next, flow, xt, xt_end))
+        if run.timeline is not None and t_next > t:
+            run.timeline.append(FlowSpan(t, t_next, flow, xt))
+        if run.jac is not None:
+            run.jac[:] = flow.transition(t_next - t) @ run.jac
+        if tau is None:
+            run.t, run.xt = edge_t, xt_end
+            return True
+        run.same_time_events = run.same_time_events + 1 if tau == 0.0 else 0
+        run.events += 1
+        if run.same_time_events > 8 or run.events > options.max_events:
+            raise SimulationError(f"{'repeated events at one instant' if run.same_time_events > 8 else 'too many events'}"
+                                  f" near t = {t + tau:.9g} s (Zeno behaviour or a degenerate LCS); "
+                                  f"max_events = {options.max_events}")
+        run.t, run.xt = t + tau, xt_end
+        return self._cross_into(run, watch, cast(int, which), stop_config, stop_count)
+
+    def _cross_into(self, run: _Run, watch: _Watch, which: int, stop_config: int | None, stop_count: int) -> bool:
+        """At a crossing of ``watch``'s row ``which``: a law's channel switches (its configuration entered) or a
+        pair is held or freed; the mode after it, the saltation of the Jacobian, the log. True when a return map
+        stops here."""
+        n, t, xt = self.problem.n, run.t, run.xt
+        flow = cast(Flow, run.flow)
+        pair = int(watch.pairs[which])
+        grad = watch.rows[which, :n]
+        dgdt = watch.slopes[which]
+        f_before = flow.field(xt)
+        latched_before = run.latched
+        if pair < 0:                                     # channel -1 - pair of the law switches
+            j = -1 - pair
+            run.bits ^= 1 << j
+            run.latched |= int(self.channels[j].latch) << j
+            run.config = self.config_of(run.bits, t)
+            run.log(t, "switch", -1, run.config)
+            if stop_config is not None and run.config == stop_config:
+                run.crossings += 1
+                if run.crossings >= stop_count:
+                    if run.jac is not None:
+                        denominator = grad @ f_before + dgdt
+                        run.jac[:] = (np.eye(n) - np.outer(f_before, grad) / denominator) @ run.jac
+                    run.stop_time = t
+                    return True
+            xt_in, jump = self.enter(run.config, xt, t, run.log)
+            new, xt_new = self.select(run.config, xt_in, t, flow.held, f_before)
+        else:
+            jump = None
+            new, xt_new = self.select(run.config, xt, t, flow.held ^ (1 << pair), f_before)
+        if run.timeline is not None:
+            run.timeline.append(Crossing(t, watch.rows[which].copy(), dgdt, f_before, new.field(xt_new),
+                                         np.eye(n) if jump is None else jump, pair, flow, latched_before,
+                                         xt, run.config, new, xt_new))
+        if run.jac is not None:
+            # Saltation through a jump x+ = Pi(x): S = DPi + (f+ - DPi f-) n^T / (n^T f- + dg/dt).
+            f_after = new.field(xt_new)
+            jump_jac = np.eye(n) if jump is None else jump
+            denominator = grad @ f_before + dgdt
+            if denominator != 0.0:
+                run.jac[:] = (jump_jac + np.outer(f_after - jump_jac @ f_before, grad) / denominator) @ run.jac
             else:
-                config = cast(int, edge_kind)                # a schedule's edge: the configuration it enters
-            xt_before = xt
-            xt, jump = self.enter(config, xt, t, log)
-            if jac is not None and jump is not None:
-                jac[:] = jump @ jac
-            new, xt = self.select(config, xt, t, flow.held)
-            if timeline is not None:
-                timeline.append(Edge(t, edge_kind, config, np.eye(n) if jump is None else jump, xt_before, flow,
-                                     new, xt))
-            for i in range(problem.k):
-                was, now = (flow.held >> i) & 1, (new.held >> i) & 1
-                if was != now:
-                    log(t, "activate" if now else "release", i, config)
-            flow = new
-        if stop_config is not None and stop_time is None:
-            raise SimulationError(f"the return map found {crossings} of {stop_count} switchings into configuration "
-                                  f"{stop_config} before t = {t_end:g} s; lengthen the problem's t_span")
-        solution = EventSolution(problem, segments, zip(times, kinds, pairs, configs), xt[:-1].copy(),
-                                 time.perf_counter() - start_clock, options, config, tuple(self.jumps))
-        return solution, jac, stop_time
+                run.jac[:] = jump_jac @ run.jac
+        self._log_pairs(run, flow, new)
+        run.flow, run.xt = new, xt_new
+        return False
+
+    def _at_edge(self, run: _Run, edge_kind: str | int, channel: int) -> None:
+        """At a time-driven instant: a ramp's reset (the channel's phase restarts, its latch clears, its state
+        re-read), a period's limit (the channel leaves below and latches) or a schedule's edge (the configuration
+        it enters); then the configuration entered and its mode."""
+        n, t = self.problem.n, run.t
+        flow = cast(Flow, run.flow)
+        if edge_kind == "reset":
+            run.phase_start[channel] = t
+            run.latched &= ~(1 << channel)
+            new_bits = self.reset_bits(run.xt, run.bits, channel)
+            if new_bits != run.bits:
+                run.bits, run.config = new_bits, self.config_of(new_bits, t)
+                run.log(t, "switch", -1, run.config)
+        elif edge_kind == "limit":                       # the period's limit: leave below and latch
+            run.latched |= 1 << channel
+            if not (run.bits >> channel) & 1:
+                run.bits |= 1 << channel
+                run.config = self.config_of(run.bits, t)
+                run.log(t, "switch", -1, run.config)
+        else:
+            run.config = cast(int, edge_kind)            # a schedule's edge: the configuration it enters
+        xt_before = run.xt
+        run.xt, jump = self.enter(run.config, run.xt, t, run.log)
+        run.apply(jump)
+        new, run.xt = self.select(run.config, run.xt, t, flow.held)
+        if run.timeline is not None:
+            run.timeline.append(Edge(t, edge_kind, run.config, np.eye(n) if jump is None else jump, xt_before, flow,
+                                     new, run.xt))
+        self._log_pairs(run, flow, new)
+        run.flow = new
+
+    def _log_pairs(self, run: _Run, before: Flow, after: Flow) -> None:
+        """Log each pair held or freed between two modes at the run's instant."""
+        for i in range(self.problem.k):
+            was, now = (before.held >> i) & 1, (after.held >> i) & 1
+            if was != now:
+                run.log(run.t, "activate" if now else "release", i, run.config)
 
     def timeline(self, x0: npt.ArrayLike) -> list[TimelineEntry]:
         """The run from x0 over the span as typed records in time order (:mod:`.timeline`): a :class:`FlowSpan` per
