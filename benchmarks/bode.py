@@ -13,6 +13,8 @@ import time
 
 import numpy as np
 
+from record import Figures  # benchmarks/record.py (this script's folder is sys.path[0])
+
 from converters.analysis.smallsignal import SmallSignalModel, frequencies, injection_response
 from converters.models import get_model
 
@@ -30,7 +32,7 @@ def best(function):
     return fastest, out
 
 
-def case(title: str, model, params: dict, name: str, output: str) -> None:
+def case(figures: Figures, key: str, title: str, model, params: dict, name: str, output: str) -> float:
     model_s, small = best(lambda: SmallSignalModel(model, params, input=name, outputs=(output,)))
     f = frequencies(small.T, None, None, POINTS)
     response_s, _ = best(lambda: small.response(f, output))
@@ -45,12 +47,40 @@ def case(title: str, model, params: dict, name: str, output: str) -> None:
           f"({brute_s / CHECKS * 1e3:.0f} ms per frequency: {POINTS} would take ~{brute_s / CHECKS * POINTS:.0f} s, "
           f"{brute_s / CHECKS * POINTS / (model_s + response_s):.0f}x the exact plot); largest difference "
           f"{difference:.1e} dB")
+    exact_s = model_s + response_s
+    what = f"{title} (" + ", ".join(f"{k} = {v:g}" if isinstance(v, float) else f"{k} = {v}"
+                                    for k, v in params.items()) + ")"
+    figures.add(f"{key}_orbit_ms", model_s * 1e3, "ms", f"{what}: the periodic orbit and its linearisation "
+                f"(best of {REPEATS})")
+    figures.add(f"{key}_response_ms", response_s * 1e3, "ms", f"{what}: {POINTS} frequencies of the exact response "
+                f"(best of {REPEATS})")
+    figures.add(f"{key}_exact_ms", exact_s * 1e3, "ms", f"{what}: the exact {POINTS}-point Bode plot (orbit, "
+                "linearisation and response)", target="< 0.2 s")
+    figures.add(f"{key}_brute_s", brute_s, "s", f"{what}: brute force (a sinusoid injected, each frequency to its "
+                f"periodic steady state by the event method) at {CHECKS} frequencies")
+    figures.add(f"{key}_brute_per_frequency_ms", brute_s / CHECKS * 1e3, "ms",
+                f"{what}: brute force per frequency (mean over {CHECKS})")
+    figures.add(f"{key}_brute_{POINTS}_s", brute_s / CHECKS * POINTS, "s",
+                f"{what}: brute force's time per frequency times {POINTS} (what a {POINTS}-point plot would take)")
+    figures.add(f"{key}_brute_over_exact", brute_s / CHECKS * POINTS / exact_s, "x",
+                f"{what}: that {POINTS}-point brute force over the exact plot's time")
+    figures.add(f"{key}_difference_db", difference, "dB", f"{what}: largest difference between the brute force "
+                f"and the exact response at the {CHECKS} frequencies", digits=2)
+    return exact_s
 
 
 def main() -> None:
-    case("CCM buck, vout/D", get_model("buck"), {"L": "100u", "C": "100u", "R": 10, "D": 0.4}, "D", "vout")
-    case("voltage-mode buck, vout/vcomparator", get_model("buck", "voltage-mode"), {"Vin": 22}, "control", "vout")
-    case("peak current-mode buck, iL/Iref", get_model("buck", "peak-current"), {"Iref": 0.6, "ma": 2e4}, "Iref", "iL")
+    figures = Figures("bode", "the exact small-signal Bode plot against the brute-force injection")
+    exact = [case(figures, "ccm_buck", "CCM buck, vout/D", get_model("buck"),
+                  {"L": "100u", "C": "100u", "R": 10, "D": 0.4}, "D", "vout"),
+             case(figures, "voltage_mode_buck", "voltage-mode buck, vout/vcomparator",
+                  get_model("buck", "voltage-mode"), {"Vin": 22}, "control", "vout"),
+             case(figures, "peak_current_buck", "peak current-mode buck, iL/Iref", get_model("buck", "peak-current"),
+                  {"Iref": 0.6, "ma": 2e4}, "Iref", "iL")]
+    figures.add("exact_ms_min", min(exact) * 1e3, "ms", f"the fastest of the three exact {POINTS}-point Bode plots")
+    figures.add("exact_ms_max", max(exact) * 1e3, "ms", f"the slowest of the three exact {POINTS}-point Bode plots",
+                target="< 0.2 s")
+    figures.save()
 
 
 if __name__ == "__main__":

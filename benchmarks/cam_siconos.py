@@ -24,6 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
+from record import Figures
+
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 SYSTEM_PYTHON = "/usr/bin/python3"
@@ -89,11 +91,17 @@ def main(argv=None) -> int:
     exact = simulate(model.problem(p, args.t_end), EventDriven()).events
     exact_impacts = exact.loc[exact["kind"] == "impact", "time"].to_numpy()
     ours_impacts = ours.events.loc[ours.events["kind"] == "impact", "time"].to_numpy()
+    figures = Figures("cam_siconos", "the cam-follower at 358 rpm: pcsuite's Moreau-Jean against Siconos' own")
+    case = f"cam-follower, 358 rpm, h = {h:g} s over {args.t_end:g} s ({steps:,} steps)"
+    figures.add("pcsuite_loop_ms", ours.wall_s * 1e3, "ms", f"{case}: pcsuite's Moreau-Jean (theta 0.5), warm, one run")
+    figures.add("pcsuite_impacts", ours_impacts.size, "", f"{case}: impacts pcsuite's Moreau-Jean finds", digits=1)
+    figures.add("event_impacts", exact_impacts.size, "", f"{case}: impacts the event method finds", digits=1)
 
     probe = subprocess.run([SYSTEM_PYTHON, "-c", "import siconos.kernel"], capture_output=True, text=True)
     if probe.returncode != 0:
         print("Siconos: python3-siconos is not installed for the system Python (make bench installs it); "
               f"pcsuite's Moreau-Jean found {ours_impacts.size} impacts, the event method {exact_impacts.size}")
+        figures.save()
         return 0
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(tmp)
@@ -130,6 +138,16 @@ def main(argv=None) -> int:
     both = apart(siconos_impacts, ours_impacts)
     print(f"  pcsuite's impacts against Siconos': {int((both <= 2).sum())} of {both.size} within two steps "
           f"(largest {both.max():.1f} steps)")
+    figures.add("siconos_loop_ms", wall * 1e3, "ms",
+                f"{case}: Siconos 4.4's MoreauJeanOSI(0.5) in the gap coordinate, its time loop alone, one run")
+    figures.add("siconos_ratio", wall / ours.wall_s, "x", f"{case}: Siconos' loop time over pcsuite's Moreau-Jean")
+    figures.add("siconos_impacts", siconos_impacts.size, "", f"{case}: impacts Siconos' run shows", digits=1)
+    figures.add("impacts_within_two_steps", int((both <= 2).sum()), "",
+                f"{case}: pcsuite's impacts within two steps of one of Siconos'", digits=1)
+    figures.add("impacts_largest_apart_steps", both.max(), "",
+                f"{case}: the largest distance, in steps, from one of pcsuite's impacts to the nearest of Siconos'",
+                digits=2)
+    figures.save()
     return 0
 
 

@@ -24,6 +24,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
 from netlist import REPEATS, best  # noqa: E402
+from record import Figures  # noqa: E402
 
 from converters.methods import EventDriven  # noqa: E402
 from converters.methods.event import machine  # noqa: E402
@@ -71,6 +72,8 @@ def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help=f"stages {QUICK_STAGES} only")
     args = parser.parse_args(argv)
+    figures = Figures("event_scaling", "the event method's cost per event against the number of diodes k, on the "
+                      "Cockcroft-Walton ladder" + (" (--quick)" if args.quick else ""))
     print(f"Cockcroft-Walton ladders, R = {LOAD}, {PERIODS} periods from the event method's orbit, best of {REPEATS}")
     print(f"{'k':>4} {'n':>4} {'events/T':>9} {'LCP us/event':>13} {'growth':>7} {'2^k enum us/event':>18} "
           f"{'enum/LCP':>9} {'same end':>9}")
@@ -83,6 +86,7 @@ def main(argv=None) -> None:
         problem = circuit.problem(p, PERIODS * T, orbit.x[0])
         cost, events, end = per_event(problem)
         growth = f"{cost / previous:7.2f}" if previous else f"{'':>7}"
+        growth_value = cost / previous if previous else None
         previous = cost
         enum, ratio, same = "", "", ""
         if problem.k <= machine.ENUMERATE_PAIRS:
@@ -93,9 +97,27 @@ def main(argv=None) -> None:
             finally:
                 machine._Machine.select = lcp_select
             enum, ratio = f"{enum_cost * 1e6:18.1f}", f"{enum_cost / cost:9.2f}"
-            same = f"{np.abs(enum_end - end).max() / np.abs(end).max():9.1e}"
+            end_difference = np.abs(enum_end - end).max() / np.abs(end).max()
+            same = f"{end_difference:9.1e}"
         print(f"{problem.k:>4} {problem.n:>4} {events:9.1f} {cost * 1e6:13.1f} {growth} {enum:>18} {ratio:>9} {same:>9}",
               flush=True)
+        k, ladder_text = problem.k, (f"{stages}-stage Cockcroft-Walton ladder (k = {problem.k} diodes, n = {problem.n} "
+                                     f"states, R = {LOAD}), {PERIODS} periods from its orbit, best of {REPEATS}")
+        figures.add(f"k{k}_us_per_event", cost * 1e6, "us", f"event method (mode-selection LCP), wall time per event: "
+                    f"{ladder_text}")
+        figures.add(f"k{k}_run_s", cost * events * PERIODS, "s", f"event method (mode-selection LCP), the whole run: "
+                    f"{ladder_text}")
+        figures.add(f"k{k}_events_per_period", events, "", f"events per period: {ladder_text}")
+        if growth_value is not None:
+            figures.add(f"k{k}_growth", growth_value, "x", f"cost per event at k = {k} over the k before it")
+        if enum:
+            figures.add(f"k{k}_enum_us_per_event", enum_cost * 1e6, "us", "the held set sought by enumerating the 2^k "
+                        f"sets nearest the reference first, wall time per event: {ladder_text}")
+            figures.add(f"k{k}_enum_over_lcp", enum_cost / cost, "x", f"enumeration's cost per event over the LCP's, "
+                        f"k = {k}")
+            figures.add(f"k{k}_enum_end_difference", end_difference, "", f"largest difference of the final states, "
+                        f"enumeration against the LCP, relative to the largest state, k = {k}", digits=2)
+    figures.save()
 
 
 if __name__ == "__main__":

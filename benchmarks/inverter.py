@@ -23,7 +23,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from netlist import TARGET, best, refined  # noqa: E402
+from netlist import REPEATS, TARGET, best, refined  # noqa: E402
+from record import Figures  # noqa: E402
 
 from converters.methods import EventDriven, Theta  # noqa: E402
 from converters.models import Circuit  # noqa: E402
@@ -39,7 +40,13 @@ STEPPER_FRACTIONS = tuple(1 / (250 * 2 ** k) for k in range(10))
 SPICE_FRACTIONS = tuple(1 / (5000 * 2 ** k) for k in range(7))
 
 
+#: A figure's key for each side.
+KEYS = {"stepper, theta 0.5": "stepper05", "stepper, theta 1": "stepper1", "ngspice": "ngspice", "event": "event"}
+
+
 def main() -> int:
+    figures = Figures("inverter", "the three-phase inverter against ngspice: time per fundamental period at equal "
+                      "accuracy")
     circuit = Circuit.from_netlist(ROOT / "netlists" / "circuits" / "three-phase-inverter.cir")
     p = circuit.resolve({})
     T = circuit.period(p)
@@ -74,12 +81,28 @@ def main() -> int:
           f"current's RMS over the last, exact: {reference:.9g} A. Steps halved until the error is "
           f"{TARGET:g}.")
     print(f"  event method (exact): {wall_event / PERIODS:.3e} s/period, error {event_error:.1e}")
+    run = (f"three-phase inverter (three-phase-inverter.cir, 200 carrier periods per {T * 1e3:g} ms period), "
+           f"{PERIODS} periods from its orbit, best of {REPEATS}")
+    figures.add("event_ms_per_period", wall_event / PERIODS * 1e3, "ms", f"event method (exact), per period: {run}")
+    figures.add("event_error", event_error, "", "event method: the load current's RMS over the last period against "
+                "the exact value on the orbit, relative", digits=2)
     rows = {"stepper, theta 0.5": refined(stepper(0.5), STEPPER_FRACTIONS, reference),
             "stepper, theta 1": refined(stepper(1.0), STEPPER_FRACTIONS, reference),
             "ngspice": refined(spice, SPICE_FRACTIONS, reference)}
     for name, runs in rows.items():
         for fraction, wall, error in runs:
             print(f"  {name:20s} step T/{1 / fraction:<7.0f} {wall:.3e} s/period  error {error:.1e}")
+        if not runs:
+            continue
+        fraction, wall, error = runs[-1]
+        side = f"{name} at {'TMAX' if name == 'ngspice' else 'h'} = T/{1 / fraction:.0f}"
+        unit, scale = ("s", 1.0) if name == "ngspice" else ("ms", 1e3)
+        first = (SPICE_FRACTIONS if name == "ngspice" else STEPPER_FRACTIONS)[0]
+        figures.add(f"{KEYS[name]}_steps_per_period", 1 / fraction, "", f"{name}: N of the step T/N its halving "
+                    f"from T/{1 / first:.0f} ended at (the first with error <= {TARGET:g}, or the last run)", digits=1)
+        figures.add(f"{KEYS[name]}_per_period", wall * scale, unit, f"{side}, per period: {run}")
+        figures.add(f"{KEYS[name]}_error", error, "", f"{side}: the load current's RMS over the last period against "
+                    "the exact value, relative", digits=2)
     # At the steps chosen, the cost of LONG periods against PERIODS: a run's fixed part (the stepper's matrices
     # for the ~1,450 distinct steps a period's switching instants make, built once and repeated; ngspice's set-up)
     # and its cost per further period.
@@ -107,12 +130,33 @@ def main() -> int:
     print(f"  at the steps above, {PERIODS} and {LONG} periods: fixed part and cost per further period")
     for name, (fixed, per_period) in costs.items():
         print(f"  {name:20s} fixed {fixed:.3e} s, {per_period:.3e} s/period")
+        unit, scale = ("s", 1.0) if name == "ngspice" else ("ms", 1e3)
+        at = "exact, no step" if name == "event" else "at the step above"
+        long_run = f"{name} ({at}), {PERIODS} and {LONG} periods from the orbit, best of {REPEATS} each"
+        figures.add(f"{KEYS[name]}_fixed", fixed * scale, unit, f"{long_run}: the run's fixed part")
+        figures.add(f"{KEYS[name]}_per_further_period", per_period * scale, unit,
+                    f"{long_run}: the cost of each further period")
     spice_fixed, spice_per = costs["ngspice"]
     for name, (fixed, per_period) in costs.items():
         if name != "ngspice" and spice_error <= TARGET:
             whole = (spice_fixed + LONG * spice_per) / (fixed + LONG * per_period)
             print(f"  ngspice / {name}: {spice_per / per_period:.1f}x per period, {whole:.1f}x over {LONG} periods"
                   + (" (goal 100x)" if name.startswith("stepper") else ""))
+            key = KEYS[name]
+            goal = "100x" if name.startswith("stepper") else None
+            figures.add(f"ngspice_over_{key}_per_period", spice_per / per_period, "x",
+                        f"ngspice's cost per further period over the {name}'s, at equal accuracy", target=goal)
+            figures.add(f"ngspice_over_{key}_{LONG}_periods", whole, "x",
+                        f"ngspice's time for {LONG} periods over the {name}'s, at equal accuracy", target=goal)
+            figures.add(f"ngspice_over_{key}_{PERIODS}_periods",
+                        (spice_fixed + PERIODS * spice_per) / (fixed + PERIODS * per_period), "x",
+                        f"ngspice's time for {PERIODS} periods over the {name}'s, at equal accuracy (from the fixed "
+                        "parts and costs per period)", target=goal)
+            if goal and spice_per > 100 * per_period:
+                goal_from = max(0.0, (100 * fixed - spice_fixed) / (spice_per - 100 * per_period))
+                figures.add(f"{key}_goal_from_periods", goal_from, "", f"periods from which ngspice takes 100 times "
+                            f"the {name}'s time (from the fixed parts and costs per period)", digits=2)
+    figures.save()
     return 0
 
 

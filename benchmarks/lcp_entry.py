@@ -28,6 +28,8 @@ import sys
 import time
 from pathlib import Path
 
+from record import Figures
+
 ROOT = Path(__file__).resolve().parents[1]
 REPEATS = 3
 
@@ -101,13 +103,28 @@ def cold_cli() -> float:
 
 
 def main() -> None:
+    figures = Figures("lcp_entry", "solve_lcp's entry paths: one problem per call, and many small problems in one call")
     times = {name: run(name) for name in WORKLOADS}
     report = times["report lcp"]
     print(f"report lcp                         {report['s'] * 1e3:8.2f} ms  ({report['calls']:,} solve_lcp calls)")
-    print(f"lcp solve (fresh process)          {cold_cli() * 1e3:8.2f} ms")
+    best = f"best of {REPEATS} fresh processes"
+    figures.add("report_lcp_ms", report["s"] * 1e3, "ms",
+                f"the report's two LCP sections (the project's problem set and Siconos' collection, every method on "
+                f"every problem), timed after one warm-up pass; {best}")
+    figures.add("report_lcp_calls", report["calls"], "", "solve_lcp calls the report's two LCP sections make", digits=1)
+    cold = cold_cli()
+    print(f"lcp solve (fresh process)          {cold * 1e3:8.2f} ms")
+    figures.add("lcp_solve_cold_s", cold, "s",
+                f"`pcsuite lcp solve validation/data/siconos-lcp/lcp_exp_murty.dat --json` as a fresh process, end to "
+                f"end; best of {REPEATS}")
     each, many = times["20,000 problems: solve_lcp each"]["s"], times["20,000 problems: solve_lcp_many"]["s"]
     print(f"20,000 problems of k = 3, per problem: solve_lcp {each * 1e6:.2f} us, solve_lcp_many {many * 1e6:.2f} us "
           f"({each / many:.1f}x)")
+    loop = "20,000 problems of k = 3 (a nonsymmetric P-matrix, a different q each), after 2,000 to warm up"
+    figures.add("solve_lcp_us", each * 1e6, "us", f"{loop}: solve_lcp once per problem, per problem; {best}")
+    figures.add("solve_lcp_many_us", many * 1e6, "us", f"{loop}: one solve_lcp_many call, per problem; {best}")
+    figures.add("many_speedup", each / many, "x", f"{loop}: solve_lcp per problem over solve_lcp_many per problem")
+    figures.save()
 
 
 if __name__ == "__main__":

@@ -44,14 +44,19 @@ else:
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
 write_frame(tr.waveforms(), Path(tempfile.mkdtemp()) / "w.parquet")
 peak = max(peak, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024)
-print(json.dumps({"samples": int(samples), "estimate": estimate, "peak": peak - base}))
+print(json.dumps({"samples": int(samples), "estimate": estimate, "peak": peak - base, "base": base}))
 """
 
 CASES = [("lcp", 2000, "1e-8"), ("lcp", 500, "1e-8"), ("event", 1000, "1e-8"), ("smooth", 100, "1e-8"),
          ("spice", 2000, "1e-8")]
+#: A case's method in words, for the figures' labels.
+METHODS = {"lcp": "the LCP stepper", "event": "the event method", "smooth": "smoothing", "spice": "ngspice"}
 
 
 def main() -> None:
+    from record import Figures
+    figures = Figures("memory", "the memory estimate every run is checked against, against the measured peak of a "
+                      "fresh process (the buck, its waveform file written)")
     print(f"{'method':8s} {'samples':>10s} {'estimate':>10s} {'peak':>10s} {'estimate/peak':>14s}")
     for method, periods, h in CASES:
         out = subprocess.run([sys.executable, "-c", CHILD, method, str(periods), h], capture_output=True, text=True,
@@ -59,6 +64,22 @@ def main() -> None:
         row = json.loads(out.stdout.strip().splitlines()[-1])
         print(f"{method:8s} {row['samples']:>10,d} {row['estimate'] / 2**20:>8.0f} MB {row['peak'] / 2**20:>8.0f} MB "
               f"{row['estimate'] / row['peak']:>14.2f}")
+        key = f"{method}{periods}"
+        run = (f"buck, {periods:,} periods, {METHODS[method]}" + (f" at h = {h} s" if method != "spice" else "")
+               + f" ({row['samples']:,} samples), waveform file written, in a fresh process")
+        figures.add(f"{key}_samples", row["samples"], "", f"{run}: samples stored", digits=1)
+        figures.add(f"{key}_estimate_mb", row["estimate"] / 2**20, "MB", f"{run}: the estimate checked before the run")
+        figures.add(f"{key}_peak_mb", row["peak"] / 2**20, "MB", f"{run}: measured peak RSS above the process's "
+                    "baseline (imports done)")
+        figures.add(f"{key}_estimate_over_peak", row["estimate"] / row["peak"], "x", f"{run}: estimate / measured peak",
+                    target=">= 1x and not far above")
+        figures.add(f"{key}_peak_bytes_per_sample", row["peak"] / row["samples"], "",
+                    f"{run}: measured peak in bytes per stored sample", digits=2)
+        figures.add(f"{key}_estimate_bytes_per_sample", row["estimate"] / row["samples"], "",
+                    f"{run}: the estimate in bytes per stored sample", digits=2)
+        figures.add(f"{key}_baseline_mb", row["base"] / 2**20, "MB", f"{run}: the process's peak RSS after the script's imports, "
+                    "before the run (subtracted from the peak; left out of the estimate)")
+    figures.save()
 
 
 if __name__ == "__main__":

@@ -33,6 +33,7 @@ import numpy as np
 from converters.methods import Theta
 from converters.models import Circuit, get_model
 from converters.simulate import simulate
+from record import Figures
 
 ROOT = Path(__file__).resolve().parents[1]
 REPEATS = 3
@@ -61,7 +62,7 @@ def best(function, repeats: int = REPEATS) -> tuple:
     return fastest, out
 
 
-def buck_per_step(periods: int) -> None:
+def buck_per_step(periods: int, figures: Figures) -> None:
     circuit = get_model("buck")
     hand = _hand_models()["buck"]
     p_c, p_h = circuit.resolve({}), hand.resolve({})
@@ -81,6 +82,15 @@ def buck_per_step(periods: int) -> None:
     print(f"  netlist {wall_c / tr_c.steps * 1e9:7.2f} ns/step, hand model {wall_h / tr_h.steps * 1e9:7.2f} ns/step: "
           f"ratio {wall_c / wall_h:.3f} (the netlist read and compiled once: {compile_s * 1e3:.1f} ms)")
     print(f"  final states equal to {np.abs(tr_c.x[-1] - tr_h.x[-1]).max():.2g}")
+    run = f"buck, {periods:,} periods at T/1000 ({tr_c.steps:,} steps), backward Euler, best of {REPEATS}"
+    figures.add("buck_netlist_ns_per_step", wall_c / tr_c.steps * 1e9, "ns/step",
+                f"stepper on the buck compiled from netlists/circuits/buck.cir: {run}")
+    figures.add("buck_hand_ns_per_step", wall_h / tr_h.steps * 1e9, "ns/step",
+                f"stepper on the hand-derived buck matrices (tests/models/hand.py): {run}")
+    figures.add("buck_netlist_over_hand", wall_c / wall_h, "x",
+                f"netlist buck's time / hand-derived buck's time, {run}", target="1x (the same per-step cost)")
+    figures.add("buck_compile_ms", compile_s * 1e3, "ms",
+                f"reading and compiling netlists/circuits/buck.cir once (no cached compile), best of {REPEATS}")
 
 
 def _hand_models() -> dict:
@@ -178,7 +188,7 @@ def refined(run, fractions, reference: float):
     return out
 
 
-def multiplier(stages: list, periods: int, siconos_periods: int) -> None:
+def multiplier(stages: list, periods: int, siconos_periods: int, figures: Figures) -> None:
     print(f"Cockcroft-Walton multiplier (netlists.generators: RS C = T/20, edges T/1000, 100 kohm): {periods} periods "
           f"from a state on its periodic orbit (the stepper's at T/{START_STEPS}), the same run on both sides. Error: "
           f"of the mean vout over the last 10 periods against that run's h -> 0 limit, the stepper's at T/"
@@ -198,12 +208,14 @@ def multiplier(stages: list, periods: int, siconos_periods: int) -> None:
         fine = run_mean(circuit, p, x0, T / REFERENCE_STEPS, periods)
         half = run_mean(circuit, p, x0, T / (REFERENCE_STEPS // 2), periods)
         reference, uncertainty = 2 * fine - half, abs(fine - half)
+        steps_taken = {}                                                # (fraction, grade) -> steps per period
 
         def lcp(fraction, grade=0.0):
             method = Theta(h=fraction * T, theta=0.5, grade=grade, growth=GROWTH)
             problem = circuit.problem(p, periods * T, x0=x0)
             simulate(problem, method)                                   # its compiled loop loaded
             wall, tr = best(lambda: simulate(problem, method))
+            steps_taken[fraction, grade] = tr.steps / periods
             return wall / periods, replace(tr, labels=circuit.labels(p)).mean("vout", periods=10)
 
         def spice(fraction):
@@ -212,7 +224,7 @@ def multiplier(stages: list, periods: int, siconos_periods: int) -> None:
         stepper = refined(lcp, LCP_FRACTIONS, reference)
         graded = refined(lambda fraction: lcp(fraction, GRADE), GRADED_FRACTIONS, reference)
         ngspice = refined(spice, SPICE_TMAX, reference)
-        sic_text = "-"
+        sic_text, sic_ratio = "-", None
         if n <= 8:
             short = circuit.problem(p, siconos_periods * T, x0=x0)
             h = stepper[-1][0] * T
@@ -223,6 +235,7 @@ def multiplier(stages: list, periods: int, siconos_periods: int) -> None:
                 wall, tr = best(lambda: simulate(short, same_method))
                 apart = float(np.abs(sic[1] - tr.x[-1]).max() / np.abs(tr.x[-1]).max())
                 sic_text = f"{sic[0] / wall:8.1f} ({apart:.1e})"
+                sic_ratio = (sic[0] / wall, apart)
         (hs, ws, es), (hg, wg, eg), (ht, wt, et) = stepper[-1], graded[-1], ngspice[-1]
 
         def ratio(e, w):
@@ -231,17 +244,79 @@ def multiplier(stages: list, periods: int, siconos_periods: int) -> None:
               f"{ws:10.3e}  {es:.1e}   T/{1 / hg:<5.0f} {wg:10.3e}  {eg:.1e}   T/{1 / ht:<6.0f} {wt:10.3e}  {et:.1e}"
               f"   {ratio(es, ws):>11}  {ratio(eg, wg):>11}   {sic_text}", flush=True)
         costs.append((n, ws * hs))
+        _multiplier_figures(figures, n, periods, rho, uncertainty / reference, stepper, graded, ngspice,
+                            steps_taken, sic_ratio, siconos_periods)
     if len(costs) > 1:
         growth = np.polyfit(np.log([c[0] for c in costs]), np.log([c[1] for c in costs]), 1)[0]
         print(f"  the stepper's cost per step grows as N^{growth:.2f}")
+        figures.add("cw_stepper_cost_growth", growth, "",
+                    f"exponent g of the uniform stepper's cost per step ~ N^g over N = {costs[0][0]} .. {costs[-1][0]} "
+                    "(a fit of log cost on log N, each N at the step it needed)", digits=2)
+
+
+def _multiplier_figures(figures: Figures, n: int, periods: int, rho: float, uncertainty: float, stepper: list,
+                        graded: list, ngspice: list, steps_taken: dict, sic_ratio, siconos_periods: int) -> None:
+    """The N-stage multiplier's figures, keys ``cwN_...``: per side (stepper, graded, ngspice) the step it ended at
+    (T/step), its cost per period and error there, and each step it tried on the way (``_error_T<step>``,
+    ``_ms_per_period_T<step>``); the ratios where both sides reached TARGET; Siconos' where it ran."""
+    run = f"{n}-stage Cockcroft-Walton (k = {2 * n} diodes), {periods} periods from its periodic orbit"
+    judged = "error of the mean vout over the last 10 periods against the run's h -> 0 limit"
+    figures.add(f"cw{n}_one_minus_rho", 1 - rho, "", f"{run}: 1 - the slowest Floquet multiplier's modulus "
+                f"(the stepper's orbit at theta 0.5, T/{START_STEPS})", digits=2)
+    figures.add(f"cw{n}_reference_uncertainty", uncertainty, "",
+                f"{run}: the h -> 0 reference's relative uncertainty (its T/{REFERENCE_STEPS // 2} and "
+                f"T/{REFERENCE_STEPS} means apart)", digits=1)
+    sides = (("stepper", "the uniform stepper (theta 0.5)", "h", stepper, 0.0),
+             ("graded", f"the graded stepper (theta 0.5, grade {GRADE:g}, growth {GROWTH:g})", "h", graded, GRADE),
+             ("ngspice", "ngspice on the same file", "TMAX", ngspice, None))
+    for side, what, step, path, grade in sides:
+        for fraction, wall, error in path:
+            at = f"{step} = T/{1 / fraction:.0f}"
+            figures.add(f"cw{n}_{side}_ms_per_period_T{1 / fraction:.0f}", wall * 1e3, "ms",
+                        f"{run}: {what} at {at}, wall time per simulated period "
+                        + (f"(best of {REPEATS})" if grade is not None else "(one run)"))
+            figures.add(f"cw{n}_{side}_error_T{1 / fraction:.0f}", error, "", f"{run}: {what} at {at}, {judged}",
+                        digits=2)
+        fraction, wall, error = path[-1]
+        at = f"{step} = T/{1 / fraction:.0f}"
+        reached = "reached" if error <= TARGET else "not reached"
+        figures.add(f"cw{n}_{side}_step", 1 / fraction, "",
+                    f"{run}: {what}, the step it ended at ({step} = T/this; halved until the error is {TARGET:g}: "
+                    f"{reached})", digits=1)
+        figures.add(f"cw{n}_{side}_ms_per_period", wall * 1e3, "ms",
+                    f"{run}: {what} at the step it ended at, {at}, wall time per simulated period")
+        figures.add(f"cw{n}_{side}_error", error, "", f"{run}: {what} at the step it ended at, {at}, {judged} "
+                    f"(target {TARGET:g})", digits=2)
+        if grade is not None and (fraction, grade) in steps_taken:
+            figures.add(f"cw{n}_{side}_steps_per_period", steps_taken[fraction, grade], "",
+                        f"{run}: {what} at {at}, steps taken per period", digits=1)
+    spice_ok = ngspice[-1][2] <= TARGET
+    for side, what, path in (("stepper", "uniform", stepper), ("graded", "graded", graded)):
+        if spice_ok and path[-1][2] <= TARGET:
+            figures.add(f"cw{n}_ngspice_over_{side}", ngspice[-1][1] / path[-1][1], "x",
+                        f"{run}: ngspice's time per period / the {what} stepper's, each at the step that reached "
+                        f"{TARGET:g} (ngspice TMAX = T/{1 / ngspice[-1][0]:.0f}, the stepper's h = "
+                        f"T/{1 / path[-1][0]:.0f})")
+    if sic_ratio is not None:
+        ratio, apart = sic_ratio
+        figures.add(f"cw{n}_siconos_over_stepper", ratio, "x",
+                    f"{n}-stage Cockcroft-Walton, {siconos_periods} periods from its orbit: Siconos 4.4's own time loop "
+                    f"(EulerMoreauOSI, its Lemke) / the stepper's time, same LCS and step T/{1 / stepper[-1][0]:.0f}")
+        figures.add(f"cw{n}_siconos_end_states_apart", apart, "",
+                    f"{n}-stage Cockcroft-Walton, {siconos_periods} periods: Siconos' and the stepper's end states "
+                    "apart (relative, max norm)", digits=2)
 
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--quick", action="store_true", help="fewer periods and stages")
     args = parser.parse_args(argv)
-    buck_per_step(200 if args.quick else 2000)
-    multiplier([1, 2, 4] if args.quick else [1, 2, 4, 8, 16, 32], SPICE_PERIODS, 5 if args.quick else 20)
+    figures = Figures("netlist", "netlists: the buck compiled from its file against the hand-derived matrices, and "
+                      "the Cockcroft-Walton multiplier against ngspice at equal accuracy"
+                      + (" (--quick: 200 buck periods, N = 1, 2, 4)" if args.quick else ""))
+    buck_per_step(200 if args.quick else 2000, figures)
+    multiplier([1, 2, 4] if args.quick else [1, 2, 4, 8, 16, 32], SPICE_PERIODS, 5 if args.quick else 20, figures)
+    figures.save()
     return 0
 
 

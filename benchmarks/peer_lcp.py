@@ -39,6 +39,7 @@ if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
 from converters.lcp import read_siconos_lcp, solve_lcp  # noqa: E402
+from record import Figures  # noqa: E402
 from validation.peer import peer_directory  # noqa: E402
 
 SYSTEM_PYTHON = "/usr/bin/python3"
@@ -47,6 +48,8 @@ LOOP_SECONDS = 0.01
 #: Siconos' enumeration visits 2^k bases with no limit of its own: it is not tried above this k.
 SICONOS_ENUM_MAX_K = 16
 SUCCESS_ERR = 1e-6
+#: The figures give ranges over the problems up to this size and each larger problem's own.
+SMALL_K = 9
 
 WORKER = r"""
 import json, os, sys, time
@@ -279,6 +282,11 @@ def run(directory: Path | None = None, repeats: int = REPEATS, siconos: bool = T
             ours_us = 1e6 * statistics.median(ours)
             compiled_us = 1e6 * statistics.median(compiled) if compiled else None
             medians = {s: 1e6 * statistics.median(t) for s, t in theirs.items() if s not in crashed}
+            unresolved = sorted(s for s, m in medians.items() if m <= 0.0)
+            if unresolved:      # a median at or below its empty loop's: the machine's noise exceeds the call
+                medians = {s: m for s, m in medians.items() if m > 0.0}
+                print(f"{p.name}: {', '.join(unresolved)} timed at or below the empty loop (noise larger than the "
+                      "call): left out")
             fastest = min(medians, key=medians.get) if medians else None
             new_us = None
             if fastest is not None:                   # the same solver, a new problem object per call
@@ -305,7 +313,59 @@ def run(directory: Path | None = None, repeats: int = REPEATS, siconos: bool = T
     return rows
 
 
+def key_of(name: str) -> str:
+    """A problem's name as a figure key's part: ``mmc``, ``Pang_isolated_sol``."""
+    return "".join(c if c.isalnum() or c == "_" else "_" for c in name)
+
+
+def record_figures(figures: Figures, rows: list[dict]) -> None:
+    """Over the problems ours solves: the ranges over those with k <= SMALL_K, each larger problem's own times and
+    ratios, and the medians and counts over those Siconos solves too."""
+    call = f"median of {REPEATS} alternating loops of ~{LOOP_SECONDS * 1e3:.0f} ms, the empty loop subtracted"
+    columns = (("us", "us_per_call", "solve_lcp(M, q) (auto, tol 1e-10) per call"),
+               ("siconos_us", "siconos_us_per_call", "Siconos' fastest successful solver per problem, its call alone "
+                                                     "(problem object, z, w and options built once)"),
+               ("siconos_new_us", "siconos_new_us_per_call", "the same Siconos solver given a new (M, q) each call "
+                                                             "(sn.LCP(M, q), z, w built in the call; options reused)"),
+               ("many_us", "compiled_us_per_call", "solve_lcp_many per problem (the same problem n times in one call)"))
+    solved = [r for r in rows if r["status"] == "solved"]
+    small = [r for r in solved if r["k"] <= SMALL_K]
+    for key, column, label in columns:
+        values = [r[column] for r in small if r.get(column) is not None]
+        if values:
+            where = f"over the {len(values)} problems with k <= {SMALL_K} of the Siconos peer collection solved; {call}"
+            figures.add(f"{key}_small_min", min(values), "us", f"{label}: fastest {where}", digits=2)
+            figures.add(f"{key}_small_max", max(values), "us", f"{label}: slowest {where}", digits=2)
+    for r in solved:
+        if r["k"] <= SMALL_K:
+            continue
+        name = key_of(r["problem"])
+        for key, column, label in columns:
+            if r.get(column) is not None:
+                figures.add(f"{key}_{name}", r[column], "us", f"{label}, {r['problem']} (k = {r['k']}); {call}")
+        for key, column, label in (("ratio", "ratio", "solve_lcp's time over Siconos' fastest call alone"),
+                                   ("ratio_many", "ratio_compiled",
+                                    "solve_lcp_many's time per problem over Siconos' fastest call alone")):
+            if r.get(column) is not None:
+                figures.add(f"{key}_{name}", r[column], "x", f"{label}, {r['problem']} (k = {r['k']})")
+    for key, column, label in (("ratio", "ratio", "solve_lcp(M, q) per call over Siconos' fastest solver's call "
+                                                  "alone"),
+                               ("ratio_new", "ratio_new", "solve_lcp(M, q) per call over the same Siconos solver "
+                                                          "given a new (M, q) each call"),
+                               ("ratio_many", "ratio_compiled", "solve_lcp_many per problem over Siconos' fastest "
+                                                                "solver's call alone")):
+        ratios = [r[column] for r in solved if r.get(column) is not None]
+        if ratios:
+            over = f"over the {len(ratios)} problems of the Siconos peer collection both solve"
+            figures.add(f"{key}_median", statistics.median(ratios), "x", f"{label}: median {over}")
+            figures.add(f"{key}_faster", sum(1 for x in ratios if x < 1.0), "",
+                        f"{label}: problems on which pcsuite is faster, {over}", digits=1)
+            figures.add(f"{key}_problems", len(ratios), "", f"{label}: problems compared", digits=1)
+
+
 def main():
+    figures = Figures("peer_lcp", "solve_lcp per call against Siconos' fastest LCP solver on the Siconos peer "
+                                  "collection")
     rows = run()
     note = rows[0]["siconos_note"] if rows else ""
     print("Siconos peer collection: solve_lcp(M, q) (default: auto, tol 1e-10) against Siconos' fastest successful "
@@ -351,6 +411,8 @@ def main():
     if unsolved:
         print("not solved by ours: " + ", ".join(f"{r['problem']} ({r['status']}: {r['method']})" for r in rows
                                                 if r["status"] != "solved"))
+    record_figures(figures, rows)
+    figures.save()
 
 
 if __name__ == "__main__":

@@ -32,6 +32,8 @@ from pathlib import Path
 
 import numpy as np
 
+from record import Figures
+
 ROOT = Path(__file__).resolve().parents[1]
 REPEATS = 5
 WARM_CALLS = 5
@@ -188,12 +190,21 @@ def main() -> None:
             cold_siconos.append(wall)
             warm_siconos.append(json.loads(done.stdout)["wall_s"])
     med = statistics.median
+    figures = Figures("peers", "pcsuite against Siconos and ngspice on the same buck circuit, side by side")
+    case = "buck DCM (Vin 12 V, 100 kHz, D 0.4, L 10 uH, C 100 uF, R 10 ohm), 5 ms from rest"
+    runs = f"median of {REPEATS} interleaved repetitions"
     print(f"buck DCM (Vin 12 V, 100 kHz, D 0.4, 10 uH, 100 uF, 10 ohm), {T_END * 1e3:g} ms from rest; medians of "
           f"{REPEATS} interleaved runs")
     print(f"  exact mean vout over the last 10 periods (event method): {exact:.9f} V")
     print(f"  pcsuite warm, h = 50 ns (theta 1, {int(round(T_END / H_SICONOS)):,} steps; median of {WARM_CALLS} calls): "
           f"{med(warm_ours) * 1e3:.2f} ms "
           f"({med(warm_ours) / (T_END / H_SICONOS) * 1e9:.1f} ns/step end to end), error {errors.get(H_SICONOS, error_at(H_SICONOS)):.1e}")
+    warm_label = (f"{case}, h = 50 ns (theta 1, {int(round(T_END / H_SICONOS)):,} steps): pcsuite simulate() warm, "
+                  f"median of {WARM_CALLS} back-to-back calls")
+    figures.add("warm_ms", med(warm_ours) * 1e3, "ms", f"{warm_label}; {runs}")
+    figures.add("warm_ns", med(warm_ours) / (T_END / H_SICONOS) * 1e9, "ns/step", f"{warm_label}, per step end to end")
+    figures.add("warm_first_ms", med(first_ours) * 1e3, "ms",
+                f"{case}, h = 50 ns: pcsuite simulate(), the first call after the other programs ran; {runs}")
     if sic:
         print(f"  Siconos: skipped ({sic})")
     else:
@@ -201,15 +212,44 @@ def main() -> None:
               f"{med(warm_siconos) * 1e3:.1f} ms -> pcsuite {med(warm_siconos) / med(warm_ours):.0f}x faster "
               f"(target >= 300x; the first call after the other programs ran: {med(first_ours) * 1e3:.2f} ms, "
               f"{med(warm_siconos) / med(first_ours):.0f}x)")
+        figures.add("siconos_warm_ms", med(warm_siconos) * 1e3, "ms",
+                    f"{case}, h = 50 ns: Siconos 4.4's own time loop (EulerMoreauOSI + Lemke, the same LCS matrices), "
+                    f"timed in its process from building the model (imports excluded); {runs}")
+        figures.add("siconos_ratio", med(warm_siconos) / med(warm_ours), "x",
+                    "Siconos' warm time over pcsuite's warm time, h = 50 ns", target=">= 300x")
+        figures.add("siconos_ratio_first_call", med(warm_siconos) / med(first_ours), "x",
+                    "Siconos' warm time over pcsuite's first call after the other programs ran, h = 50 ns")
     if ngspice:
         print(f"  ngspice -b (TMAX T/200, RELTOL 1e-3, gear): error {spice_error:.1e}, {med(cold_spice) * 1e3:.0f} ms per "
               f"process; pcsuite at equal accuracy (h = T/{round(T / equal_h)}, error {errors[equal_h]:.1e}): "
               f"{med(warm_equal) * 1e3:.3f} ms -> {med(cold_spice) / med(warm_equal):.0f}x (target >= 300x; ngspice's "
               "time is its whole process: it has no warm mode)")
+        figures.add("equal_accuracy_steps_per_period", round(T / equal_h), "",
+                    "pcsuite's step at ngspice's accuracy: T divided by (the largest h of T/50 .. T/2000 whose error "
+                    "in the mean vout over the last 10 periods is not above ngspice's)", digits=1)
+        figures.add("equal_accuracy_ms", med(warm_equal) * 1e3, "ms",
+                    f"{case}: pcsuite simulate() warm at h = T/{round(T / equal_h)} (ngspice's accuracy), median of "
+                    f"{WARM_CALLS} back-to-back calls; {runs}")
+        figures.add("ngspice_ms", med(cold_spice) * 1e3, "ms",
+                    f"{case}: `ngspice -b` on pcsuite's netlist, its whole process (it has no warm mode); {runs}")
+        figures.add("ngspice_ratio", med(cold_spice) / med(warm_equal), "x",
+                    "ngspice's time over pcsuite's warm time at ngspice's accuracy", target=">= 300x")
     print(f"  cold, a fresh process each: pcsuite simulate --json {med(cold_ours) * 1e3:.0f} ms"
           + (f", ngspice -b {med(cold_spice) * 1e3:.0f} ms ({med(cold_spice) / med(cold_ours):.2f}x pcsuite's)" if ngspice else "")
           + (f", Siconos script {med(cold_siconos) * 1e3:.0f} ms ({med(cold_siconos) / med(cold_ours):.2f}x)" if not sic else "")
           + " (target: pcsuite below both)")
+    figures.add("cold_ms", med(cold_ours) * 1e3, "ms",
+                f"{case}, h = 50 ns: `pcsuite simulate buck ... --t-end 5e-3 --json` as a fresh process (bytecode "
+                f"compiled); {runs}", target="below ngspice's and Siconos' cold time")
+    if ngspice:
+        figures.add("ngspice_cold_ratio", med(cold_spice) / med(cold_ours), "x",
+                    "`ngspice -b`'s time over pcsuite's cold process")
+    if not sic:
+        figures.add("siconos_cold_ms", med(cold_siconos) * 1e3, "ms",
+                    f"{case}, h = 50 ns: the Siconos script as a fresh process of the system Python; {runs}")
+        figures.add("siconos_cold_ratio", med(cold_siconos) / med(cold_ours), "x",
+                    "the Siconos script's cold time over pcsuite's cold process")
+    figures.save()
     lcp = ROOT / "benchmarks" / "peer_lcp.py"
     if lcp.exists():
         print()

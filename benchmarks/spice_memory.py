@@ -8,6 +8,7 @@ import os
 import time
 
 from netlists import build_netlist
+from record import Figures
 from validation.spice import run_spice
 
 
@@ -30,6 +31,15 @@ def main(runs: int = 50):
     after = rss_mb()
     print(f"{runs} ngspice runs (buck, 20 periods): caller RSS {before:.1f} MB -> {after:.1f} MB "
           f"(growth {after - before:+.1f} MB, target < 50 MB); {elapsed / runs * 1e3:.0f} ms per run")
+    figures = Figures("spice_memory", f"the calling process's memory over {runs} ngspice runs (PySpice keeps memory; "
+                      "the worker absorbs it)")
+    run = f"{runs} ngspice runs of the buck, 20 periods (2e-4 s), one before them"
+    figures.add("runs", runs, "", "ngspice runs measured", digits=1)
+    figures.add("rss_before_mb", before, "MB", f"{run}: the caller's RSS before them")
+    figures.add("rss_after_mb", after, "MB", f"{run}: the caller's RSS after them")
+    figures.add("rss_growth_mb", after - before, "MB", f"{run}: the caller's RSS growth", target="< 50 MB", digits=2)
+    figures.add("ms_per_run", elapsed / runs * 1e3, "ms", f"{run}: wall time per run, worker included")
+    figures.save()
 
 
 if __name__ == "__main__":

@@ -28,12 +28,25 @@ import numpy as np
 from converters.analysis.periodic import require, shoot
 from converters.run import make_method, resolve_model, run_converter, steady_orbit
 from converters.simulate import simulate
+from record import Figures
 
 REPEATS = 5
 POINTS = 100
 TARGET = 1000.0
 D_SWEEP = "D sweep (R 10 ohm)"
 FREED = "D sweep, run freed"
+#: A figure's key for each run and sweep (``run_converter_d_sweep_rate``, ...).
+RUN_KEYS = {"run_converter(steady=True)": "run_converter", "  previous pipeline": "previous_run_converter",
+            "steady_orbit": "steady_orbit", "  previous steady_orbit": "previous_steady_orbit"}
+SWEEP_KEYS = {D_SWEEP: "d_sweep", "R sweep (D 0.5)": "r_sweep", FREED: "d_sweep_freed"}
+SWEEP_LABELS = {D_SWEEP: f"D 0.2 .. 0.8, R 10 ohm (DCM), {POINTS} points",
+                "R sweep (D 0.5)": f"R 0.5 .. 50 ohm log-spaced at D 0.5 (CCM and DCM), {POINTS} points",
+                FREED: f"D 0.2 .. 0.8, R 10 ohm, {POINTS} points, each run freed before the next call"}
+RUN_LABELS = {"run_converter(steady=True)": "run_converter(steady=True)",
+              "  previous pipeline": "the previous run_converter(steady=True) pipeline (20 periods from rest "
+                                     "before Newton, two step plans)",
+              "steady_orbit": "steady_orbit", "  previous steady_orbit": "the previous steady_orbit (5 warm-up "
+                                                                        "periods before Newton)"}
 
 
 def previous_run_converter(name, params, warm_up=20, periods=20, tol=1e-7):
@@ -71,6 +84,7 @@ def sweeps():
 
 
 def main():
+    figures = Figures("steady_rate", "buck steady-state operating points per second through the public API")
     cases = sweeps()
     runs = {
         "run_converter(steady=True)": lambda params: run_converter("buck", params, steady=True),
@@ -106,12 +120,26 @@ def main():
                    else "")
         print(f"{run:29s} {sweep:19s} {rate:7,.0f} points/s = {1e3 / rate:5.2f} ms/point; {mean_periods:5.1f} periods "
               f"simulated per point, {held} of {POINTS} points with a held diode (DCM){verdict}")
+        key = f"{RUN_KEYS[run]}_{SWEEP_KEYS[sweep]}"
+        figures.add(key + "_rate", rate, "points/s",
+                    f"buck operating points per second, {RUN_LABELS[run]}, {SWEEP_LABELS[sweep]}, best of {REPEATS} "
+                    "interleaved passes, one warm process",
+                    target=f">= {TARGET:,.0f} points/s" if run.startswith("run_") else None)
+        if not run.startswith(" "):
+            figures.add(key + "_periods", mean_periods, "",
+                        f"periods simulated per point (mean; shooting's and those returned), {RUN_LABELS[run]}, "
+                        f"{SWEEP_LABELS[sweep]}")
     for run, previous in (("run_converter(steady=True)", "  previous pipeline"),
                           ("steady_orbit", "  previous steady_orbit")):
         for sweep in (*cases, FREED):
             if (run, sweep) in best:
                 print(f"{run} over the {sweep}: {best[(previous, sweep)] / best[(run, sweep)]:.2f}x the previous "
                       "pipeline's rate")
+                figures.add(f"{RUN_KEYS[run]}_{SWEEP_KEYS[sweep]}_speedup",
+                            best[(previous, sweep)] / best[(run, sweep)], "x",
+                            f"{run}'s rate over that of {RUN_LABELS[previous]}, run alongside, {SWEEP_LABELS[sweep]}",
+                            digits=2)
+    figures.save()
 
 
 if __name__ == "__main__":

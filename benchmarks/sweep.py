@@ -23,6 +23,8 @@ from pathlib import Path
 
 LOCAL_TARGET = 1000.0           # points per second
 DASK_TARGET = 1.5               # Dask time / local time
+#: What each figure's label says was run.
+THROUGHPUT = "buck steady-state sweep, D = 0.2 .. 0.8 x R = 2 .. 40 ohm, 100 x 100 = 10,000 points, h = T/200, to Parquet"
 
 
 def _grid(n_side: int):
@@ -41,7 +43,7 @@ def _sweep(backend, points, tag: str):
     return run.wall_s, int((frame["status"] == "ok").sum())
 
 
-def throughput(dask: bool = True):
+def throughput(figures, dask: bool = True):
     from converters.parallel import LocalBackend, default_workers
     points, warm = _grid(100), _grid(32)          # warm-up: a chunk for every worker
     results = {}
@@ -52,16 +54,26 @@ def throughput(dask: bool = True):
         results[name] = wall
         print(f"{name:28s} {points.size:,} points in {wall:6.2f} s = {points.size / wall:7,.0f} points/s "
               f"({ok:,} converged)", flush=True)
+        key = "batched" if backend == "batched" else "local"
+        figures.add(f"{key}_s", wall, "s", f"{THROUGHPUT}: {name}, wall time (warmed up first)")
+        figures.add(f"{key}_points_per_s", points.size / wall, "points/s", f"{THROUGHPUT}: {name}",
+                    target=None if key == "batched" else f">= {LOCAL_TARGET:,.0f} points/s")
+        figures.add(f"{key}_converged", ok, "", f"{THROUGHPUT}: {name}, points converged")
     local = results[f"local ({default_workers()} processes)"]
     print(f"  local backend: {points.size / local:,.0f} points/s = {points.size / local / LOCAL_TARGET:.2f} x the "
           f"{LOCAL_TARGET:,.0f} points/s target", flush=True)
+    figures.add("local_over_target", points.size / local / LOCAL_TARGET, "x",
+                f"{THROUGHPUT}: the local backend's points/s / the {LOCAL_TARGET:,.0f} points/s target", target=">= 1x")
     if not dask:
         return
     import distributed
     clock = time.perf_counter()
     cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None)
     client = distributed.Client(cluster)
-    print(f"  Dask LocalCluster (2 workers) started in {time.perf_counter() - clock:.2f} s (not counted)", flush=True)
+    started = time.perf_counter() - clock
+    print(f"  Dask LocalCluster (2 workers) started in {started:.2f} s (not counted)", flush=True)
+    figures.add("dask_start_s", started, "s", "Dask LocalCluster, 2 worker processes of 1 thread: its start-up "
+                "(not counted in the sweep's time)")
     try:
         _sweep(client, warm, "warm")
         wall, ok = _sweep(client, points, "run")
@@ -71,6 +83,12 @@ def throughput(dask: bool = True):
     print(f"{'Dask LocalCluster (2 workers)':28s} {points.size:,} points in {wall:6.2f} s = "
           f"{points.size / wall:7,.0f} points/s ({ok:,} converged)")
     print(f"  Dask / local time: {wall / local:.2f} (target <= {DASK_TARGET:g})", flush=True)
+    name = "Dask LocalCluster, 2 worker processes of 1 thread"
+    figures.add("dask_s", wall, "s", f"{THROUGHPUT}: {name}, wall time (warmed up first)")
+    figures.add("dask_points_per_s", points.size / wall, "points/s", f"{THROUGHPUT}: {name}")
+    figures.add("dask_converged", ok, "", f"{THROUGHPUT}: {name}, points converged")
+    figures.add("dask_over_local", wall / local, "x", f"{THROUGHPUT}: the Dask cluster's time / the local backend's",
+                target=f"<= {DASK_TARGET:g}x")
 
 
 def memory_child(n_side: int):
@@ -82,7 +100,7 @@ def memory_child(n_side: int):
     print(json.dumps({"points": n_side ** 2, "wall_s": wall, "ok": ok, "self_mb": own, "worker_mb": worker}))
 
 
-def memory():
+def memory(figures):
     peaks = []
     for n_side in (100, 317):
         out = subprocess.run([sys.executable, __file__, "--memory-child", str(n_side)], capture_output=True,
@@ -91,15 +109,32 @@ def memory():
         peaks.append(peak)
         print(f"memory: {peak['points']:7,} points in {peak['wall_s']:6.1f} s: peak RSS {peak['self_mb']:6.0f} MB "
               f"(the sweep's process), {peak['worker_mb']:6.0f} MB (its largest worker)", flush=True)
+        size = "10k" if n_side == 100 else "100k"
+        run = (f"buck steady-state sweep of {n_side} x {n_side} = {peak['points']:,} points (h = T/200, to Parquet), "
+               "local backend, in a fresh process")
+        figures.add(f"memory_{size}_points", peak["points"], "", f"{run}: points")
+        figures.add(f"memory_{size}_s", peak["wall_s"], "s", f"{run}: wall time")
+        figures.add(f"memory_{size}_process_mb", peak["self_mb"], "MB", f"{run}: peak RSS of the sweep's process")
+        figures.add(f"memory_{size}_worker_mb", peak["worker_mb"], "MB", f"{run}: peak RSS of its largest worker")
     small, large = peaks
     print(f"  100k / 10k peak RSS: {large['self_mb'] / small['self_mb']:.2f} (process), "
           f"{large['worker_mb'] / small['worker_mb']:.2f} (worker) for 10x the points")
+    ratio = f"peak RSS of the {large['points']:,}-point sweep / the {small['points']:,}-point sweep's"
+    figures.add("memory_process_ratio", large["self_mb"] / small["self_mb"], "x", f"{ratio}, the sweep's process",
+                target="about 1x (bounded)")
+    figures.add("memory_worker_ratio", large["worker_mb"] / small["worker_mb"], "x", f"{ratio}, its largest worker",
+                target="about 1x (bounded)")
 
 
 if __name__ == "__main__":
     if "--memory-child" in sys.argv:
         memory_child(int(sys.argv[sys.argv.index("--memory-child") + 1]))
     else:
-        throughput(dask="--skip-dask" not in sys.argv)
+        from record import Figures
+        skipped = [flag for flag in ("--skip-dask", "--skip-memory") if flag in sys.argv]
+        figures = Figures("sweep", "a 10,000-point buck steady-state sweep on each backend, and the memory of "
+                          "10,000- and 100,000-point sweeps" + (f" ({', '.join(skipped)})" if skipped else ""))
+        throughput(figures, dask="--skip-dask" not in sys.argv)
         if "--skip-memory" not in sys.argv:
-            memory()
+            memory(figures)
+        figures.save()

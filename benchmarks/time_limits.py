@@ -19,6 +19,7 @@ import numpy as np
 
 from converters.lcp import solve_lcp
 from converters.lcp.problems import murty_exponential, random_p_matrix
+from record import Figures
 
 REPEATS = 5
 
@@ -37,6 +38,9 @@ def _cases():
 
 
 def main() -> None:
+    figures = Figures("time_limits", "how close to its time limit a long LCP solve stops: the wall time a limited "
+                      "solve takes over its limit")
+    overshoots = []
     solve_lcp(np.eye(3), -np.ones(3), method="pgs", time_limit=1.0)        # the engine imported, its kernels loaded
     print(f"{'solve':40s} {'limit (s)':>9s} {'took (s), best':>15s} {'worst':>7s} {'over the limit':>15s}")
     for name, M, q, options, limit in _cases():
@@ -48,6 +52,18 @@ def main() -> None:
             took.append(time.perf_counter() - start)
             assert result.status == "failed" and "time limit" in result.message, result.message
         print(f"{name:40s} {limit:9.2f} {min(took):15.3f} {max(took):7.3f} {max(took) / limit - 1:14.1%}")
+        key = {"murty": "murty", "pgs": "pgs"}.get(options.get("method"), "lemke")      # auto: Lemke here
+        run = f"{name}, time limit {limit:g} s, {REPEATS} solves (kernels loaded)"
+        figures.add(f"{key}_best_s", min(took), "s", f"{run}: the fastest solve's wall time")
+        figures.add(f"{key}_worst_s", max(took), "s", f"{run}: the slowest solve's wall time")
+        figures.add(f"{key}_over_limit_pct", 100 * (max(took) / limit - 1), "%",
+                    f"{run}: the slowest solve past its limit", target="<= 10 %", digits=2)
+        overshoots.append(100 * (max(took) / limit - 1))
+    figures.add("least_over_limit_pct", min(overshoots), "%", "the least of the three solves' slowest overshoots past "
+                "their limits (Murty, PGS, Lemke)", digits=2)
+    figures.add("most_over_limit_pct", max(overshoots), "%", "the largest of the three solves' slowest overshoots "
+                "past their limits (Murty, PGS, Lemke)", target="<= 10 %", digits=2)
+    figures.save()
 
 
 if __name__ == "__main__":
