@@ -20,7 +20,7 @@ from converters.analysis.bifurcation import aperiodic_onset, brute_force
 from converters.analysis.continuation import OrbitFamily, cascade
 from converters.methods.event import EventDriven
 from converters.models import get_model
-from converters.run import ParameterPath
+from converters.models.path import ParameterPath
 from converters.parallel import default_workers
 from validation.bifurcation import diagram_method
 from validation.defaults import BIFURCATION

@@ -345,7 +345,7 @@ def test_the_mechanical_module_reuses_the_core():
     only the methods integrate (solve_ivp in the smoothing and the mechanical event machine), and only the one
     orbit engine solves for fixed points."""
     mechanical = [*ROOT.joinpath("converters", "models", "mechanics").rglob("*.py"),
-                  ROOT / "validation" / "mechanics.py", ROOT / "validation" / "mechanics_plots.py",
+                  *ROOT.joinpath("converters", "analysis", "mechanics").rglob("*.py"), ROOT / "validation" / "mechanics.py", ROOT / "validation" / "mechanics_plots.py",
                   ROOT / "validation" / "cli" / "mech.py"]
     pattern = re.compile(r"solve_ivp|odeint|def \w*(newton|shoot|fixed_point|integrate|step)\w*\(|linalg\.solve\(")
     assert not [p.name for p in mechanical if pattern.search(p.read_text())]

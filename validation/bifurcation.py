@@ -27,7 +27,7 @@ from converters.analysis.continuation import OrbitFamily, cascade, check_path
 from converters.errors import ParameterError
 from converters.methods.event import EventDriven
 from converters.models import Model, get_model
-from converters.run import ParameterPath
+from converters.models.path import ParameterPath
 from converters.validate import parse_value
 
 from .defaults import BIFURCATION, PUBLISHED_BIFURCATIONS, THRESHOLDS

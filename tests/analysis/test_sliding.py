@@ -3,8 +3,8 @@ continuation on the event method's exact map and named from the orbit's events; 
 import pytest
 
 from converters.analysis.continuation import OrbitPoint
+from converters.analysis.mechanics import sliding_study
 from converters.analysis.sliding import TYPES, classify_sliding
-from validation.mechanics import sliding_study
 
 
 def _found(study, kind):
@@ -51,13 +51,13 @@ def _closed_form_margin(omega, A=0.5, k=1.0, m=1.0, g=10.0, Vdr=1.0, alpha=0.3, 
 
     import numpy as np
 
+    from converters.analysis.continuation import OrbitFamily
+    from converters.analysis.mechanics import mechanical_path, orbit_period
     from converters.methods import EventDriven
     from converters.methods.event.mechanical import MechanicalMachine
     from converters.models.mechanics import get_mechanical
-    from validation.mechanics import _mechanical_path, orbit_period
-    from converters.analysis.continuation import OrbitFamily
     model = get_mechanical("friction")
-    path = _mechanical_path(model, {"A": A}, "omega", 2.85, 2.95)
+    path = mechanical_path(model, {"A": A}, "omega", 2.85, 2.95)
     family = OrbitFamily(path, EventDriven(), 4)
     _, guess = orbit_period(path, 2.906, np.zeros(2))
     x = guess

@@ -4,12 +4,12 @@ it refuses."""
 import numpy as np
 import pytest
 
+from converters.analysis.mechanics import cam_checks, friction_agreement
 from converters.errors import ParameterError
 from converters.methods import EventDriven, MoreauJean
 from converters.models import get_model
 from converters.models.mechanics import accumulation_time, get_mechanical
 from converters.simulate import simulate
-from validation.mechanics import cam_checks, friction_agreement
 
 
 def test_the_bouncing_ball_penetrates_by_o_h_and_comes_to_rest_at_the_closed_form_time():

@@ -13,7 +13,7 @@ from converters.errors import ParameterError
 from converters.methods.event import EventDriven
 from converters.methods.theta import Theta
 from converters.models import get_model
-from converters.run import ParameterPath
+from converters.models.path import ParameterPath
 
 MODEL = get_model("buck", "voltage-mode")
 CLASSIC = dict(L=20e-3, C=47e-6, R=22.0, Vref=11.3, A=8.4, VL=3.8, VU=8.2, T=400e-6)

@@ -128,7 +128,7 @@ def run_bifurcations(args) -> int:
 
     from ..bifurcation import parse_path
     from ..io import atomic_write_bytes
-    from ..mechanics import impact_phase_diagram, sliding_study, two_block_diagram
+    from converters.analysis.mechanics import impact_phase_diagram, sliding_study, two_block_diagram
     from ..mechanics_plots import diagram_figure
     name, start, stop = parse_path(args.param)
     model = get_mechanical(args.model)
@@ -170,7 +170,7 @@ def run_bifurcations(args) -> int:
     values = np.linspace(start, stop, points) if points else np.empty(0)
     if points:
         if model.diagram == "stroboscopic":
-            from ..mechanics import friction_diagram
+            from converters.analysis.mechanics import friction_diagram
             rows = friction_diagram(params, name, values, workers=args.workers, progress=not args.json)
         elif model.diagram == "section":
             rows = two_block_diagram(params, name, values, workers=args.workers, progress=not args.json)
