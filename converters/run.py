@@ -1,19 +1,25 @@
 """Run a model: parameters in, a labelled Trajectory out (what ``pcsuite simulate`` and scenes call).
 
-``run_converter`` resolves the model and its parameters, builds the method from command-line style
-options (:meth:`~converters.methods.base.Method.from_options`), picks h and the duration, and either
-simulates (split at the model's load steps) or, with ``steady``, finds the method's own periodic orbit
-by Newton shooting (:mod:`converters.analysis.periodic`) and simulates the periods asked for from it (the
-stepper on the same step plan as Newton's period map). The
-Trajectory carries the model's labels (signals ``vout``, ``switch``, ..., and modes) and the run's
-metadata: model, control, params, method options, periods, and the orbit's statistics.
+A run passes through its stages once, top down in :func:`run_converter`:
+
+1. resolve: the model and its parameters (:func:`_resolved`); accuracy on request (``rtol``) leaves here for
+   :func:`converters.analysis.accuracy.accurate_steady`, which chooses the method and its step;
+2. the method, from command-line style options (:func:`make_method`); a method that runs the circuit itself
+   (ngspice) takes the run from here;
+3. the span (:func:`_span`): the duration from rest, or the periods returned on the orbit;
+4. the steady state (:func:`_on_steady_state`: the method's own orbit by Newton shooting, the span simulated
+   from it on the same step plan), or the run from rest (:func:`_from_rest`: split at the model's load steps,
+   kept as its :class:`~converters.saveat.SaveAt` says: output spacing, thinning, chunks);
+5. labels and metadata (model, control, params, method options, periods, the orbit's statistics).
+
+The summary and its accuracy estimate are the stages after it (:func:`run_summary`, :func:`check_accuracy`: by
+what the method declares, ``Method.error_kind``).
 """
 from __future__ import annotations
 
 import time
-from collections.abc import Iterator
-from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING, Any, cast
+from dataclasses import replace
+from typing import Any, cast
 
 import numpy as np
 import numpy.typing as npt
@@ -23,13 +29,11 @@ from .errors import ParameterError, SimulationError
 from .methods.base import DEFAULT_METHOD, Method, PeriodMap, get_method
 from .methods.theta import StepPlanMap
 from .models import Model, check_h, get_model
+from .models.path import ParameterPath, check_no_step  # noqa: F401 (the API documents converters.run.ParameterPath)
+from .saveat import SaveAt
 from .simulate import simulate
 from .trajectory import ReturnCode, Trajectory, concatenate
 from .validate import check_flag, check_integer, parse_value
-
-if TYPE_CHECKING:
-    from .problems import LCSProblem
-    from .problems.mechanical import MechanicalProblem
 
 #: Periods simulated from x0 before Newton shooting starts: none. With the exact Jacobian Newton starts from x0
 #: itself; where no fraction of its step lowers the residual (far from the orbit, off its mode sequence) it takes
@@ -150,6 +154,34 @@ def run_converter(name_or_model: str | Model, params: dict | None = None, *, con
         Default: every step, or, for a run whose steps would not fit in the memory limit, the finest spacing whose
         samples fit in half of it (``metadata['output_step']`` says which).
     """
+    start = time.perf_counter()
+    model, p = _resolved(name_or_model, control, params, steady, periods)
+    if rtol is not None:                        # accuracy on request: the method and its step are chosen for it
+        return _accurate(model, p, rtol, start, method=method, h=h, t_end=t_end, periods=periods, steady=steady,
+                         x0=x0, options=options)
+    method = make_method(model, p, method, h, **options)
+    if "circuit" in method.domains:             # a method that runs the model's circuit itself (ngspice)
+        if output_step is not None:
+            raise ParameterError(f"output_step applies to the LCS methods; the {method.key} method keeps its own points")
+        return method.run_model(model, p, t_end=t_end, periods=periods, steady=steady, x0=x0)
+    span = _span(model, p, method, steady, t_end, periods)
+    steady_tol = parse_value("steady_tol", steady_tol)
+    if not 0.0 < steady_tol < 1.0:
+        raise ParameterError(f"steady_tol must be in (0, 1); got {steady_tol!r}")
+    if steady:
+        if output_step is not None:
+            raise ParameterError("output_step applies to a run from rest; --steady returns its periods on the orbit "
+                                 "at every step")
+        tr, meta = _on_steady_state(model, p, method, span, x0, steady_tol)
+    else:
+        tr, meta = _from_rest(model, p, method, span, x0, SaveAt.plan(model, p, method, span, x0, output_step))
+    meta = {"model": model.name, "control": model.control, "params": p, "method_options": method.options(), **meta}
+    return replace(tr, labels=model.labels(p), wall_s=time.perf_counter() - start, metadata={**tr.metadata, **meta})
+
+
+def _resolved(name_or_model: str | Model, control: str, params: dict | None, steady: bool,
+              periods: int | None) -> tuple[Model, dict]:
+    """The run's first stage: the model and its parameters, resolved and checked."""
     model = resolve_model(name_or_model, control)
     if params is not None and not isinstance(params, dict):
         raise ParameterError(f"params must be a dict of NAME: VALUE; got {params!r}")
@@ -157,20 +189,17 @@ def run_converter(name_or_model: str | Model, params: dict | None = None, *, con
     check_flag("steady", steady)
     if periods is not None:
         check_integer("periods", periods, 1)
-    start = time.perf_counter()
-    if rtol is not None:
-        return _accurate(model, p, rtol, start, method=method, h=h, t_end=t_end, periods=periods, steady=steady,
-                         x0=x0, options=options)
-    method = make_method(model, p, method, h, **options)
-    if "circuit" in method.domains:          # a method that runs the model's circuit itself (ngspice)
-        if output_step is not None:
-            raise ParameterError(f"output_step applies to the LCS methods; the {method.key} method keeps its own points")
-        return method.run_model(model, p, t_end=t_end, periods=periods, steady=steady, x0=x0)
-    T = model.period(p)
+    return model, p
+
+
+def _span(model: Model, p: dict, method: Method, steady: bool, t_end: float | str | None,
+          periods: int | None) -> float:
+    """The span the run returns (s): from rest, its duration; on the steady state, the periods returned on the
+    orbit (default ``STEADY_PERIODS``). A step must fall inside it, and it must be at least one step."""
     if steady:
         check_steady(model, p)
-    if steady and t_end is None and periods is None:
-        periods = STEADY_PERIODS                 # what --steady returns: periods on the orbit
+        if t_end is None and periods is None:
+            periods = STEADY_PERIODS
     span = duration(model, p, t_end, periods)
     for instant in model.step_times(p):
         if not 0.0 < instant < span:
@@ -179,39 +208,40 @@ def run_converter(name_or_model: str | Model, params: dict | None = None, *, con
     step = getattr(method, method.step_option, None) if method.step_option else None
     if step is not None and span < step:
         raise ParameterError(f"t_end must be at least one step ({method.step_option} = {step:.3g} s); got {span:.3g} s")
-    steady_tol = parse_value("steady_tol", steady_tol)
-    if not 0.0 < steady_tol < 1.0:
-        raise ParameterError(f"steady_tol must be in (0, 1); got {steady_tol!r}")
-    meta: dict[str, Any] = {"model": model.name, "control": model.control, "params": p,
-                            "method_options": method.options()}
-    if steady:
-        orbit, period_map = _orbit_and_map(model, p, method, x0=x0, tol=0.1 * steady_tol)
-        if not orbit.stable:
-            # A fixed point of the period map the circuit does not settle on is no steady state.
-            mu = orbit.multipliers[0]
-            raise SimulationError(
-                f"the periodic orbit of {model.key} is unstable (Floquet spectral radius {orbit.spectral_radius:.6g}, "
-                f"a multiplier at {mu.real:.6g}{f'{mu.imag:+.3g}j' if abs(mu.imag) > 1e-12 else ''}): the circuit "
-                "settles elsewhere (a period-doubled orbit, or chaos); run --periods N without --steady, or follow "
-                "its orbits with pcsuite bifurcation")
-        tr = _on_orbit(model, p, method, period_map, orbit.x0, span)
-        simulated = orbit.evaluations + span / T        # the warm-up and Newton's spans, then the output
-        # periods: what the returned run spans; steady_periods: every period simulated to get there and it
-        meta.update(periods=int(round(span / T)), steady_periods=int(round(simulated)), orbit=orbit.summary())
-    else:
-        if output_step is not None and (steady or rtol is not None):
-            raise ParameterError("output_step applies to a run from rest; --steady returns its periods on the orbit "
-                                 "at every step")
-        spacing, resolved = output_plan(model, p, method, span, x0, output_step)
-        tr = _simulate_phases(model, p, method, span, x0, spacing, resolved)
-        meta.update(periods=int(round(span / T)) if model.periodic(p) else None)
-        if spacing is not None:
-            meta.update(output_step=spacing, resolved_from_s=tr.resolved_from)
-        target = _step_target(model, p, method)
-        if target is not None:
-            meta["step_target"] = target
-    return replace(tr, labels=model.labels(p), wall_s=time.perf_counter() - start,
-                   metadata={**tr.metadata, **meta})
+    return span
+
+
+def _on_steady_state(model: Model, p: dict, method: Method, span: float, x0: npt.NDArray[np.float64] | None,
+                     steady_tol: float) -> tuple[Trajectory, dict]:
+    """The steady-state stage: the method's own orbit by Newton shooting (refused when unstable: the circuit would
+    not settle on it), then ``span`` simulated from it on the same step plan."""
+    orbit, period_map = _orbit_and_map(model, p, method, x0=x0, tol=0.1 * steady_tol)
+    if not orbit.stable:
+        # A fixed point of the period map the circuit does not settle on is no steady state.
+        mu = orbit.multipliers[0]
+        raise SimulationError(
+            f"the periodic orbit of {model.key} is unstable (Floquet spectral radius {orbit.spectral_radius:.6g}, "
+            f"a multiplier at {mu.real:.6g}{f'{mu.imag:+.3g}j' if abs(mu.imag) > 1e-12 else ''}): the circuit "
+            "settles elsewhere (a period-doubled orbit, or chaos); run --periods N without --steady, or follow "
+            "its orbits with pcsuite bifurcation")
+    tr = _on_orbit(model, p, method, period_map, orbit.x0, span)
+    T = model.period(p)
+    simulated = orbit.evaluations + span / T        # the warm-up and Newton's spans, then the output
+    # periods: what the returned run spans; steady_periods: every period simulated to get there and it
+    return tr, {"periods": int(round(span / T)), "steady_periods": int(round(simulated)), "orbit": orbit.summary()}
+
+
+def _from_rest(model: Model, p: dict, method: Method, span: float, x0: npt.NDArray[np.float64] | None,
+               save: SaveAt) -> tuple[Trajectory, dict]:
+    """The run from rest (or x0) over [0, span], split at the model's steps and kept as ``save`` says; where an
+    open-loop step leads, for its response to be read against (:func:`_step_target`)."""
+    tr = _simulate_phases(model, p, method, span, x0, save)
+    meta: dict[str, Any] = {"periods": int(round(span / model.period(p))) if model.periodic(p) else None,
+                            **save.metadata(tr)}
+    target = _step_target(model, p, method)
+    if target is not None:
+        meta["step_target"] = target
+    return tr, meta
 
 
 def check_steady(model: Model, p: dict) -> None:
@@ -220,15 +250,6 @@ def check_steady(model: Model, p: dict) -> None:
     if not model.periodic(p):
         raise ParameterError(f"--steady needs a fixed switching period; {model.key} has none (run --t-end, or find "
                              "its cycle with converters.analysis.periodic.autonomous_orbit and the event method)")
-
-
-def check_no_step(model: Model, p: dict) -> None:
-    """A periodic orbit (a steady state, a branch of orbits) is no answer for a run with a load or input step."""
-    if model.step_times(p):
-        raise ParameterError("a periodic steady state (--steady, gdcm, bifurcation, compare's start on the orbit) "
-                             "needs a periodic circuit; a run with a step (t_step, a switch driven by a PWL or PULSE "
-                             "that does not repeat, or a PWL source in the power circuit) is not periodic: run "
-                             "--periods N (or --t-end) from rest")
 
 
 def _accurate(model: Model, p: dict, rtol: float | str, start: float, *, method: str | Method | None,
@@ -273,92 +294,19 @@ def _step_target(model: Model, p: dict, method: Method) -> float | None:
     return tr.mean("vout")
 
 
-#: The most steps a run kept in chunks may take (memory no longer bounds it: ~20-60 s of compiled stepping).
-MAX_RUN_STEPS = 2e9
-#: Steps one chunk of a run kept at an output spacing simulates at once (its memory before thinning: ~300 MB for
-#: a two-state converter's stepper).
-CHUNK_STEPS = 500_000
-
-
-def output_plan(model: Model, p: dict, method: Method, span: float, x0: npt.NDArray[np.float64] | None,
-                output_step: float | str | None = None) -> tuple:
-    """(spacing, resolved_from) of a run from rest over [0, span]: the output spacing (s; None: every step) and
-    where every step is kept from (the model's ``summary_from``). Default spacing: none while the whole run fits
-    in the memory limit, else the finest multiple of the step whose samples fit in half of it. Refuses, before
-    the first step, a run whose kept samples would not fit."""
-    from .limits import check_memory, max_memory
-    resolved = model.summary_from(p, 0.0, span)
-    step = getattr(method, method.step_option, None) if method.step_option else None
-    if step is None:
-        if output_step is not None:
-            raise ParameterError(f"output_step needs a method with a fixed step or output spacing; --method "
-                                 f"{method.key} keeps its own points")
-        return None, resolved
-    whole = model.problem(p, span, x0)
-    estimate = method.memory_estimate(whole)
-    per_sample = estimate / method.samples(whole)
-    if output_step is None:
-        if estimate <= max_memory():
-            return None, resolved
-        tail = (span - resolved) / step * per_sample
-        check_memory(f"--method {method.key}: the last {span - resolved:.3g} s, what the summary and the plot read "
-                     f"at every {method.step_option} = {step:.3g} s,", 2.0 * tail,
-                     remedy="a larger --h, or a shorter --t-end")
-        head = (0.5 * max_memory() - tail) / per_sample              # samples left for the rest
-        spacing = step * max(1.0, float(np.ceil(resolved / max(head, 1.0) / step)))
-    else:
-        spacing = parse_value("output_step", output_step, "s")
-        if not step <= spacing <= span:
-            raise ParameterError(f"output_step must be in [{step:.3g}, {span:.3g}] s (the method's "
-                                 f"{method.step_option} and the run's length); got {spacing:g}")
-    check_memory(f"--method {method.key}: {span:.3g} s kept at output_step = {spacing:.3g} s before {resolved:.3g} s "
-                 "and at every step after it", (resolved / spacing + (span - resolved) / step) * per_sample,
-                 remedy="a larger --output-step, a larger --h, or a shorter --t-end")
-    if not span / step <= MAX_RUN_STEPS:           # kept in chunks, memory no longer bounds its length
-        raise ParameterError(f"t_end: {span:.3g} s at {method.step_option} = {step:.3g} s is {span / step:.3g} steps, "
-                             f"more than a run takes ({MAX_RUN_STEPS:.0e}); use a shorter --t-end or fewer --periods, "
-                             f"or a larger --{method.step_option.replace('_', '-')}")
-    return spacing, resolved
-
-
 def _simulate_phases(model: Model, p: dict, method: Method, t_end: float, x0: npt.NDArray[np.float64] | None,
-                     spacing: float | None = None, resolved: float = 0.0) -> Trajectory:
+                     save: SaveAt) -> Trajectory:
     """One simulation per phase between the model's step times (a load step), the state and the switching
-    law's memory carried across; with an output ``spacing``, each phase in chunks of ``CHUNK_STEPS`` steps, the
-    rows before ``resolved`` thinned to it as each chunk ends."""
+    law's memory carried across, each phase in the chunks ``save`` asks for, each chunk kept as it says."""
     bounds = [0.0] + [t for t in model.step_times(p) if 0.0 < t < t_end] + [t_end]
     parts, state, initial = [], x0, None
     for a, b in zip(bounds[:-1], bounds[1:]):
         options = model.phase_options(p, a)
-        for c0, c1 in _chunks(a, b, method, spacing, model.period(p) if model.periodic(p) else np.inf):
+        for c0, c1 in save.chunks(a, b, method, model.period(p) if model.periodic(p) else np.inf):
             part = simulate(model.problem(p, c1, state, t_start=c0, initial=initial, **options), method)
             state, initial = part.x[-1], int(part.config[-1])
-            parts.append(part.thinned(spacing, resolved) if spacing is not None and c0 < resolved else part)
+            parts.append(save.kept(part, c0))
     return concatenate(parts)
-
-
-def _chunks(a: float, b: float, method: Method, spacing: float | None, period: float) -> Iterator[tuple[float, float]]:
-    """[a, b] whole, or, for a run kept at an output spacing, in pieces of about CHUNK_STEPS of the method's steps:
-    whole periods where the run has a period and a starts on one (each chunk then starts on the grid of the run
-    whole, bit for bit), else a multiple of the step."""
-    if spacing is None:
-        yield a, b
-        return
-    step = getattr(method, method.step_option)
-    if np.isfinite(period) and a == round(a / period) * period:
-        per = max(1, int(CHUNK_STEPS * step / period))
-        first = int(round(a / period))
-        edge = lambda k: (first + k * per) * period          # noqa: E731
-    else:
-        edge = lambda k: a + k * CHUNK_STEPS * step          # noqa: E731
-    k, start = 1, a
-    while True:                                       # lazily: a long run has many chunks
-        end = edge(k)
-        if end >= b - 1e-9 * (b - a):
-            yield start, b
-            return
-        yield start, end
-        start, k = end, k + 1
 
 
 def steady_state(model: Model, p: dict, method: Method, *, x0: npt.NDArray[np.float64] | None = None,
@@ -405,38 +353,6 @@ def steady_orbit(name_or_model: str | Model, params: dict | None = None, *, meth
     tr = _on_orbit(model, p, method, period_map, orbit.x0, model.period(p))
     return replace(tr, labels=model.labels(p),
                    metadata={**tr.metadata, "model": model.name, "params": p, "orbit": orbit.summary()})
-
-
-@dataclass(frozen=True)
-class ParameterPath:
-    """A model's problems along one of its parameters (picklable: workers rebuild each problem).
-
-    ``path(value)`` is the problem over one switching (or forcing) period from the model's start state (an
-    autonomous model: over its time unit), with every other parameter as in ``params``; each value is
-    validated against the parameter's range."""
-
-    model: Model
-    params: dict
-    name: str
-
-    def __post_init__(self) -> None:
-        # a netlist's names are case-insensitive (Model.parameter_name); a mechanical model's are as typed
-        object.__setattr__(self, "name", getattr(self.model, "parameter_name", str)(self.name))
-        known = [p.name for p in self.model.parameters]
-        if self.name not in known:
-            raise ParameterError(f"unknown parameter {self.name!r} for {self.model.key}; valid names: {', '.join(known)}")
-        if getattr(self.model, "step_times", None) is not None:       # the path's orbits are periodic ones
-            check_no_step(self.model, self.model.resolve(self.params))
-
-    def resolve(self, value: float | str) -> dict:
-        return self.model.resolve({**self.params, self.name: value})
-
-    def __call__(self, value: float | str) -> LCSProblem | MechanicalProblem:
-        p = self.resolve(value)
-        span = self.model.period(p)
-        if not np.isfinite(span):                     # an autonomous model: one of its own time units
-            span = self.model.time_scale(p)      # type: ignore[attr-defined]  # a netlist's, a mechanical model's
-        return self.model.problem(p, span)
 
 
 #: The power summary's error estimates (:func:`converters.analysis.accuracy.default_check`).

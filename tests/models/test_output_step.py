@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 import converters.run
+import converters.saveat
 from converters.errors import ParameterError, ResourceError, SignalError
 from converters.run import run_converter, run_summary
 
@@ -24,7 +25,7 @@ def test_a_chunked_thinned_run_reports_what_the_whole_run_does(monkeypatch, name
     """Chunks of 20,000 steps (their boundaries on the run's grid, the state and the switch carried across), the
     rows before the summary's window thinned to 1 us: the summary's numbers are those of the run kept whole."""
     whole = run_summary(run_converter(name, params, control=control, **span))
-    monkeypatch.setattr(converters.run, "CHUNK_STEPS", 20_000)
+    monkeypatch.setattr(converters.saveat, "CHUNK_STEPS", 20_000)
     tr = run_converter(name, params, control=control, output_step="1u", **span)
     thin = run_summary(tr)
     assert thin["output_step"] == 1e-6 and tr.resolved_from == thin["resolved_from_s"] > 0
@@ -117,3 +118,10 @@ def test_a_run_kept_in_chunks_is_still_bounded_in_length():
     with pytest.raises(ParameterError, match=r"t_end: 1e\+09 s at h = 1e-08 s is 1e\+17 steps, more than a run takes"):
         run_converter("buck", {}, t_end=1e9)
     assert time.process_time() - start < 5.0
+
+
+def test_an_output_step_on_the_steady_state_is_refused_through_the_api_as_on_the_command_line():
+    """--steady returns its periods on the orbit at every step: an output_step given with it is refused by name (the
+    API had dropped it silently while the command line refused it)."""
+    with pytest.raises(ParameterError, match="output_step applies to a run from rest"):
+        run_converter("buck", {}, steady=True, output_step="1u")
