@@ -24,7 +24,9 @@ def locate_condition(family: OrbitFamily, condition: Callable[[float, npt.NDArra
     bordered Jacobian [[J - I, dP/dp], [dc/dx, dc/dp]] with the map's own J and the rest by central differences
     (relative ``step``). The condition need only be C1 across the point (a corner of the map, where J jumps, is
     passed: each side's J serves its side). Stops when the orbit's residual is at most tol (1 + |x|) and
-    |condition| at most tol, or after ``iterations``; returns the last iterate with both residuals."""
+    |condition| at most tol, or after ``iterations``; returns the last iterate with both residuals. (The engine's
+    driver, :mod:`converters.analysis.newton_kernel`, solves for x at a fixed p and stops on the multipliers'
+    distance estimate; this system has p among its unknowns and a second equation, so it has a loop of its own.)"""
     x = np.array(x0, dtype=float)
     n = x.size
     for _ in range(iterations):

@@ -69,7 +69,12 @@ def _correct(family: OrbitFamily, scaling: _Scaling, z_start: npt.ArrayLike, nor
              anchor: npt.NDArray[np.float64], tol: float, max_iter: int = 10) -> _Solved | None:
     """Newton on [F(x, p) / x_scale; normal . (z - anchor)] = 0 from z_start (scaled variables). The column
     F_p is taken once at the start (a chord Newton in p: it moves little over one correction) and again at
-    the solution for its tangent."""
+    the solution for its tangent.
+
+    Not the engine's driver (:mod:`converters.analysis.newton_kernel`): that one solves P(x) - x = 0 in x alone
+    with J - I, stops on the distance to the orbit |r| / (1 - rho) from the multipliers and falls back on a plain
+    period where Newton stalls; here p is an unknown, the matrix is bordered by F_p and the tangent's row, and
+    neither that stopping rule nor a plain period (it would leave the hyperplane) applies."""
     z = np.array(z_start, dtype=float)
     n = z.size - 1
     A = np.empty((n + 1, n + 1))
