@@ -1,0 +1,100 @@
+"""Loss tables: values on a grid read by multilinear interpolation and linear extrapolation.
+
+PLECS reads the tables of a thermal description so (its manual: "PLECS uses a linear interpolation technique";
+outside the table the same lines are extended), and so does pcsuite: a turn-on or turn-off energy over the blocked
+voltage, the commutated current and the junction temperature, an on-state voltage over the current and the
+temperature. An axis of one point is constant along it (a datasheet taken at one temperature). Switching energies
+and on-state voltages extrapolated below zero are read as zero: neither is negative in a device.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+from ..errors import ParameterError
+
+
+@dataclass(frozen=True, eq=False)
+class Table:
+    """``values[i0, i1, ...]`` at (axes[0][i0], axes[1][i1], ...); ``names`` and ``units`` name the axes in messages."""
+
+    names: tuple[str, ...]
+    units: tuple[str, ...]
+    axes: tuple[npt.NDArray[np.float64], ...]
+    values: npt.NDArray[np.float64]
+    what: str = "table"
+
+    def __post_init__(self) -> None:
+        if len(self.axes) != len(self.names) or self.values.ndim != len(self.axes):
+            raise ParameterError(f"{self.what}: {self.values.ndim} dimensions of values for {len(self.axes)} axes")
+        for name, unit, axis, size in zip(self.names, self.units, self.axes, self.values.shape):
+            check_axis(f"{self.what}: the {name} axis", axis, unit)
+            if axis.size != size:
+                raise ParameterError(f"{self.what}: the {name} axis has {axis.size} points and the values {size} "
+                                     f"along it")
+        if not np.all(np.isfinite(self.values)):
+            raise ParameterError(f"{self.what}: the values must be finite numbers")
+
+    def __call__(self, *point: float) -> float:
+        """The value at ``point`` (one coordinate per axis, in the axes' units)."""
+        values = self.values
+        for axis, x in zip(self.axes, point):       # contract one axis at a time, first to last
+            if axis.size == 1:
+                values = values[0]
+                continue
+            j = int(np.clip(np.searchsorted(axis, x) - 1, 0, axis.size - 2))
+            w = (x - axis[j]) / (axis[j + 1] - axis[j])      # outside [axis[0], axis[-1]]: the end segment's line
+            values = (1.0 - w) * values[j] + w * values[j + 1]
+        return max(float(values), 0.0)
+
+
+def check_axis(what: str, axis: npt.NDArray[np.float64], unit: str) -> None:
+    """An axis: at least one finite point, strictly increasing."""
+    if axis.ndim != 1 or axis.size == 0:
+        raise ParameterError(f"{what} must hold at least one value ({unit})")
+    if not np.all(np.isfinite(axis)):
+        raise ParameterError(f"{what} must hold finite numbers ({unit}); got {axis.tolist()}")
+    if axis.size > 1 and not np.all(np.diff(axis) > 0):
+        raise ParameterError(f"{what} must increase strictly ({unit}); got {axis.tolist()}")
+
+
+def energy_table(what: str, voltage: npt.ArrayLike, current: npt.ArrayLike, temperature: npt.ArrayLike,
+                 energy: npt.ArrayLike) -> Table:
+    """A switching energy (J) over the blocked voltage (V), the commutated current (A) and the junction temperature
+    (degC): ``energy[temperature][voltage][current]``, the nesting of a PLECS description. Refused: a negative
+    energy; a single voltage column other than 0 V (linear interpolation could not scale the energy with the
+    blocked voltage: add the 0 V column, E = 0 there, as vendors' files have it)."""
+    v, i, t = (np.asarray(a, dtype=float).ravel() for a in (voltage, current, temperature))
+    e = np.asarray(energy, dtype=float)
+    if e.shape != (t.size, v.size, i.size):
+        raise ParameterError(f"{what}: the energies must be {t.size} x {v.size} x {i.size} (temperature x voltage x "
+                             f"current, one per point of the axes); got the shape {e.shape}")
+    if np.any(e < 0):
+        raise ParameterError(f"{what}: a switching energy must be >= 0 J; got {float(e.min()):g} J")
+    if v.size == 1 and v[0] != 0.0:
+        raise ParameterError(f"{what}: one voltage column ({v[0]:g} V) cannot scale the energy with the blocked "
+                             "voltage; add a 0 V column (0 J) or a second voltage")
+    return Table(("voltage", "current", "temperature"), ("V", "A", "degC"), (v, i, t), np.transpose(e, (1, 2, 0)),
+                 what)
+
+
+def on_state_table(what: str, current: npt.ArrayLike, temperature: npt.ArrayLike,
+                   voltage: npt.ArrayLike) -> Table:
+    """An on-state voltage (V) over the current (A) and the junction temperature (degC): ``voltage[temperature]
+    [current]``. Refused: a negative drop, or one that falls as the current rises (a datasheet's curve never does:
+    a column in the wrong order)."""
+    i, t = (np.asarray(a, dtype=float).ravel() for a in (current, temperature))
+    v = np.asarray(voltage, dtype=float)
+    if i.size and i[0] < 0:
+        raise ParameterError(f"{what}: the current axis must start at >= 0 A (the reverse quadrant is not read); got "
+                             f"{i[0]:g} A")
+    if v.shape != (t.size, i.size):
+        raise ParameterError(f"{what}: the on-state voltages must be {t.size} x {i.size} (temperature x current); got "
+                             f"the shape {v.shape}")
+    if np.any(v < 0):
+        raise ParameterError(f"{what}: an on-state voltage must be >= 0 V at a current >= 0; got {float(v.min()):g} V")
+    if i.size > 1 and np.any(np.diff(v, axis=1) < 0):
+        raise ParameterError(f"{what}: the on-state voltage must not fall as the current rises (at each temperature)")
+    return Table(("current", "temperature"), ("A", "degC"), (i, t), v.T.copy(), what)
