@@ -456,21 +456,32 @@ class Trajectory:
         the one the point ended: a switch current that jumps to zero there would otherwise be integrated over
         half the step after the edge, a first-order error whose size follows the split step's length, not h
         (a buck's input power 5.5e-5 off at every h from T/1600 to T/12800)."""
-        if self.config is None or self.u is None or self.labels is None:
+        if self.labels is None:
             return starts
-        config = self.config[rows]
-        edges = np.flatnonzero(config[1:] != config[:-1])
+        edges, _, first = self.edges(rows)
         if edges.size == 0:
             return starts
+        starts = np.array(starts, dtype=float)
+        starts[edges] = np.asarray(function(first), dtype=float)
+        return starts
+
+    def edges(self, rows: npt.NDArray[np.integer[Any]]) -> tuple[npt.NDArray[np.int_], Samples, Samples]:
+        """The switching edges among ``rows`` (positions k in ``rows`` where the configuration of row k + 1 differs:
+        row k, at the edge's instant, still holds the configuration it ends), and the samples at each edge in the
+        configuration before it (row k itself) and after it (row k's state, the next row's configuration and pair
+        variables: the state is continuous across a switching, the pair variables are the new configuration's)."""
+        if self.config is None or self.u is None:
+            none = np.empty(0, dtype=int)
+            return none, self.samples(none), self.samples(none)
+        config = self.config[rows]
+        edges = np.flatnonzero(config[1:] != config[:-1])
         assert self.y is not None                    # a run with pairs has both u and y
         left, right = rows[edges], rows[edges + 1]
         pick: Callable[[npt.NDArray[Any] | None], npt.NDArray[Any] | None] = (
             lambda a: None if a is None else a[right])
-        first = Samples(self.t[left], self.x[left], self.u[right], self.y[right], self.config[right],
+        after = Samples(self.t[left], self.x[left], self.u[right], self.y[right], self.config[right],
                         pick(self.relay), pick(self.held))
-        starts = np.array(starts, dtype=float)
-        starts[edges] = np.asarray(function(first), dtype=float)
-        return starts
+        return edges, self.samples(left), after
 
     def _span(self, t0: float, t1: float) -> float:
         if self.rule == "exact" and self.exact is not None:

@@ -39,15 +39,30 @@ class Table:
 
     def __call__(self, *point: float) -> float:
         """The value at ``point`` (one coordinate per axis, in the axes' units)."""
-        values = self.values
-        for axis, x in zip(self.axes, point):       # contract one axis at a time, first to last
-            if axis.size == 1:
-                values = values[0]
-                continue
-            j = int(np.clip(np.searchsorted(axis, x) - 1, 0, axis.size - 2))
-            w = (x - axis[j]) / (axis[j + 1] - axis[j])      # outside [axis[0], axis[-1]]: the end segment's line
-            values = (1.0 - w) * values[j] + w * values[j + 1]
-        return max(float(values), 0.0)
+        return float(self.at(*point))
+
+    def at(self, *point: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """The values at points given axis by axis as arrays (broadcast together)."""
+        coords = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in point))
+        lower, upper, weights = [], [], []
+        for axis, x in zip(self.axes, coords):
+            if axis.size == 1:                          # constant along it
+                j, w = np.zeros(x.shape, dtype=int), np.zeros(x.shape)
+            else:
+                j = np.clip(np.searchsorted(axis, x) - 1, 0, axis.size - 2)
+                w = (x - axis[j]) / (axis[j + 1] - axis[j])      # outside the axis: its end segment's line
+            lower.append(j)
+            upper.append(np.minimum(j + 1, axis.size - 1))
+            weights.append(w)
+        total = np.zeros(coords[0].shape)
+        for corner in range(2 ** len(self.axes)):       # multilinear: the 2^d corners of each point's cell
+            index, weight = [], np.ones(coords[0].shape)
+            for d in range(len(self.axes)):
+                up = (corner >> d) & 1
+                index.append(upper[d] if up else lower[d])
+                weight = weight * (weights[d] if up else 1.0 - weights[d])
+            total += weight * self.values[tuple(index)]
+        return np.maximum(total, 0.0)
 
 
 def check_axis(what: str, axis: npt.NDArray[np.float64], unit: str) -> None:
