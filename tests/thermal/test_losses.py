@@ -83,3 +83,37 @@ def test_a_description_on_no_device_or_the_wrong_kind_is_refused_by_name():
         device_losses(model, p, tr, {"q7": DESCRIPTIONS["s1"]}, {"q7": 25.0}, t1 - 1e-5, t1)
     with pytest.raises(ParameterError, match="d1: a MOSFET description on a diode"):
         device_losses(model, p, tr, {"d1": DESCRIPTIONS["s1"]}, {"d1": 25.0}, t1 - 1e-5, t1)
+
+
+def test_the_junction_temperatures_in_steady_state_are_the_closed_form_of_losses_linear_in_temperature():
+    """Losses linear in T_j (the tables interpolate linearly in temperature), P_k(T) = a_k + b_k T: on a shared
+    heatsink T_hs = T_a + R_ha (P_1 + P_2), T_j,k = T_hs + (R_ch,k + R_jc,k) P_k, a linear system solved here
+    directly; the fixed point reaches it to 1e-6 K."""
+    from types import SimpleNamespace
+
+    from converters.thermal.network import Heatsink, Mount, ThermalSetup
+    q = {"s1": DESCRIPTIONS["s1"], "d1": DeviceDescription("D1", "Diode", None, None, None,
+                                                           ThermalChain("cauer", (0.3, 0.9), (1e-3, 0.1)))}
+    setup = ThermalSetup(40.0, {"s1": Mount(q["s1"], "hs", 0.2), "d1": Mount(q["d1"], "hs", 0.4)},
+                         {"hs": Heatsink(1.5, 80.0)})
+    a, b = {"s1": 3.0, "d1": 1.2}, {"s1": 0.012, "d1": 0.004}
+    steady = setup.steady(lambda tj: {d: SimpleNamespace(total_W=a[d] + b[d] * tj[d]) for d in tj})
+    r = {"s1": 0.2 + 0.5, "d1": 0.4 + 1.2}
+    # T_k = T_a + R_ha sum_m (a_m + b_m T_m) + r_k (a_k + b_k T_k): two linear equations in T_s1, T_d1
+    M = np.array([[1 - 1.5 * b["s1"] - r["s1"] * b["s1"], -1.5 * b["d1"]],
+                  [-1.5 * b["s1"], 1 - 1.5 * b["d1"] - r["d1"] * b["d1"]]])
+    rhs = np.array([40 + 1.5 * (a["s1"] + a["d1"]) + r[d] * a[d] for d in ("s1", "d1")])
+    exact = np.linalg.solve(M, rhs)
+    assert [steady.junction["s1"], steady.junction["d1"]] == pytest.approx(exact, abs=1e-6)
+    assert steady.heatsink["hs"] == pytest.approx(40 + 1.5 * sum(a[d] + b[d] * t for d, t in zip(("s1", "d1"), exact)),
+                                                  abs=1e-6)
+
+
+def test_a_loss_that_outgrows_its_heatsink_is_refused_as_thermal_runaway():
+    from types import SimpleNamespace
+
+    from converters.errors import SimulationError
+    from converters.thermal.network import Heatsink, Mount, ThermalSetup
+    setup = ThermalSetup(25.0, {"s1": Mount(DESCRIPTIONS["s1"], "hs", 0.0)}, {"hs": Heatsink(4.0)})
+    with pytest.raises(SimulationError, match="thermal runaway"):              # R dP/dT = 4.5 * 0.3 > 1
+        setup.steady(lambda tj: {"s1": SimpleNamespace(total_W=1.0 + 0.3 * tj["s1"])})

@@ -57,6 +57,10 @@ def add(sub) -> None:
     sim.add_argument("--out", type=given_path, default=None, help="waveform file, .csv or .parquet")
     sim.add_argument("--plot", type=given_path, default=None,
                      help="FILE.png or FILE.svg: the last periods' waveforms and the mode timeline")
+    sim.add_argument("--thermal", type=given_path, default=None,
+                     help="with --steady: a thermal setup (FILE.toml: devices, their PLECS .xml or .toml loss and "
+                          "thermal descriptions, heatsinks, ambient) for the devices' losses and junction temperatures "
+                          "(default: the one a netlist names on a '*pcsuite thermal FILE' line)")
     sim.add_argument("--json", action="store_true", help="print one JSON summary object")
     sim.set_defaults(run=run, one_run=True)
 
@@ -69,6 +73,9 @@ def run(args) -> int:
     if args.plot is not None and args.plot.suffix.lower() not in (".png", ".svg"):
         raise ParameterError(f"--plot must end in .png or .svg; got {str(args.plot)!r}")
     params = parse_assignments(args.params)
+    if args.thermal is not None and not args.steady and args.rtol is None:
+        raise ParameterError("--thermal reads the losses of the periodic steady state: give --steady (or --rtol)")
+    thermal = None if args.thermal is None else _thermal_setup(args.thermal)      # read before the run
     if args.steady_tol is not None and not args.steady and args.rtol is None:
         raise ParameterError(f"--steady-tol applies with --steady only; got --steady-tol {args.steady_tol} without it")
     if args.rtol is not None:
@@ -111,6 +118,15 @@ def run(args) -> int:
         summary = run_summary(tr)
         if "lcs" in cls.domains:
             summary["setup_s"] = setup_s
+    if args.steady or args.rtol is not None:
+        model = tr.labels.model
+        if thermal is None and hasattr(model, "netlist"):
+            from converters.thermal.network import declared_setup
+            declared = declared_setup(model.netlist.text, model.source)
+            thermal = None if declared is None else _thermal_setup(declared)
+        if thermal is not None:
+            from converters.thermal.summary import thermal_summary
+            summary["thermal"] = thermal_summary(model, tr.metadata["params"], tr, thermal)
     if args.out is not None:
         write_frame(tr.waveforms(), args.out, meta={k: summary.get(k) for k in ("converter", "control", "method",
                                                                                    "options", "output_step",
@@ -130,6 +146,11 @@ def run(args) -> int:
     else:
         _print(summary, tr, args)
     return 0
+
+
+def _thermal_setup(path):
+    from converters.thermal.network import read_setup
+    return read_setup(path)
 
 
 def _set_up(converter, params, control, method, steady, options) -> float:
@@ -186,6 +207,16 @@ def _print(summary: dict, tr, args) -> None:
                   else "")
         print(f"power over the last {summary['window_periods']:g} periods: in {power['input_W']:.6g} W, out "
               f"{power['output_W']:.6g} W, efficiency {100 * power['efficiency']:.3f}{within} % (losses: {losses})")
+    thermal = summary.get("thermal")
+    if thermal:
+        for name, d in thermal["devices"].items():
+            off = "recovery" if d["kind"] == "Diode" else "turn-off"
+            print(f"{name} ({d['name']}): {d['total_W']:.4g} W (conduction {d['conduction_W']:.4g}, turn-on "
+                  f"{d['turn_on_W']:.4g}, {off} {d.get('recovery_W', d.get('turn_off_W')):.4g}), junction "
+                  f"{d['tj_C']:.2f} degC, case {d['case_C']:.2f} degC")
+        power = thermal["power"]
+        print(f"with the devices' losses: in {power['input_W']:.6g} W, out {power['output_W']:.6g} W, efficiency "
+              f"{100 * power['efficiency']:.3f} % (ambient {thermal['ambient_C']:g} degC)")
     step = summary.get("step")
     if step:
         final = ("steady state after the step" if step["final_from"] != "run end"

@@ -1,0 +1,179 @@
+"""Where the heat goes: devices mounted on heatsinks, heatsinks to the ambient, and the junction temperatures in
+steady state.
+
+A device's junction reaches its case through its description's chain (R_jc), its case the heatsink through an
+interface (R_ch), the heatsink the ambient through R_ha; devices on one heatsink share it. A device with no
+heatsink has its case held at the ambient. In the periodic steady state the thermal time constants (ms to
+minutes) are far longer than a switching period (us), so the temperatures follow the period's average losses
+(time-scale separation): T_hs = T_a + R_ha sum P, T_c = T_hs + R_ch P, T_j = T_c + R_jc P. The losses depend on
+T_j through the tables, so the two are iterated to a fixed point (:meth:`ThermalSetup.steady`); a loop whose
+loss grows faster with T_j than the heat can leave (R dP/dT_j >= 1) runs away and is refused.
+
+The setup file (TOML; paths relative to it)::
+
+    ambient = 40.0                       # degC
+    [heatsinks.hs1]  R = 2.0, C = 50.0   # K/W to the ambient, J/K (C: the heatsink's time constant R C)
+    [devices.s1]     description = "q1.toml", heatsink = "hs1", interface = 0.5    # K/W case to heatsink
+"""
+from __future__ import annotations
+
+import tomllib
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import ParameterError, SimulationError
+from ..validate import quoted
+from .description import MAX_BYTES, DeviceDescription, read_description
+
+#: The fixed point stops when no junction temperature moves more than this (K).
+TJ_TOL = 1e-6
+MAX_ITERATIONS = 200
+
+
+@dataclass(frozen=True)
+class Heatsink:
+    R: float            # K/W to the ambient
+    C: float = 0.0      # J/K
+
+
+@dataclass(frozen=True)
+class Mount:
+    description: DeviceDescription
+    heatsink: str | None = None      # None: the case held at the ambient
+    interface: float = 0.0           # K/W, case to heatsink
+
+
+@dataclass(frozen=True)
+class ThermalSteady:
+    """Temperatures (degC) and average losses (W) per device at the fixed point, and how it was reached."""
+
+    junction: dict[str, float]
+    case: dict[str, float]
+    heatsink: dict[str, float]
+    losses: dict[str, Any]
+    iterations: int
+    moved: float                      # the last iteration's largest change of a junction temperature (K)
+
+
+@dataclass(frozen=True)
+class ThermalSetup:
+    ambient: float
+    devices: dict[str, Mount]
+    heatsinks: dict[str, Heatsink] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if not np.isfinite(self.ambient) or not -273.15 < self.ambient < 1000.0:
+            raise ParameterError(f"ambient must be a temperature in (-273.15, 1000) degC; got {self.ambient!r}")
+        for name, mount in self.devices.items():
+            if mount.heatsink is not None and mount.heatsink not in self.heatsinks:
+                raise ParameterError(f"device {name}: heatsink {mount.heatsink!r} is not defined (heatsinks: "
+                                     f"{', '.join(self.heatsinks) or 'none'})")
+            if not (np.isfinite(mount.interface) and mount.interface >= 0):
+                raise ParameterError(f"device {name}: interface must be a resistance >= 0 K/W; got {mount.interface!r}")
+            if mount.description.thermal is None:
+                raise ParameterError(f"device {name}: its description ({mount.description.name}) has no thermal chain "
+                                     "(junction to case)")
+        for name, sink in self.heatsinks.items():
+            if not (np.isfinite(sink.R) and sink.R > 0 and np.isfinite(sink.C) and sink.C >= 0):
+                raise ParameterError(f"heatsink {name}: R must be > 0 K/W and C >= 0 J/K; got R = {sink.R!r}, "
+                                     f"C = {sink.C!r}")
+
+    def temperatures(self, power: Mapping[str, float]) -> tuple[dict[str, float], dict[str, float], dict[str, float]]:
+        """(junction, case, heatsink) temperatures (degC) in steady state at the devices' average losses (W)."""
+        sinks = {name: self.ambient + sink.R * sum(power[d] for d, m in self.devices.items() if m.heatsink == name)
+                 for name, sink in self.heatsinks.items()}
+        case = {d: (sinks[m.heatsink] if m.heatsink else self.ambient) + m.interface * power[d]
+                for d, m in self.devices.items()}
+        junction = {d: case[d] + m.description.thermal.resistance * power[d]   # type: ignore[union-attr]
+                    for d, m in self.devices.items()}
+        return junction, case, sinks
+
+    def steady(self, losses_at: Callable[[dict[str, float]], Mapping[str, Any]]) -> ThermalSteady:
+        """The junction temperatures and the losses at them: ``losses_at(tj)`` gives each device's losses (an
+        object with ``total_W``) at junction temperatures ``tj``; iterated from the ambient until no temperature
+        moves more than TJ_TOL."""
+        tj = {d: self.ambient for d in self.devices}
+        moved, previous = np.inf, np.inf
+        for iteration in range(1, MAX_ITERATIONS + 1):
+            losses = losses_at(tj)
+            junction, case, sinks = self.temperatures({d: losses[d].total_W for d in self.devices})
+            moved = max(abs(junction[d] - tj[d]) for d in self.devices)
+            tj = junction
+            if moved <= TJ_TOL:
+                return ThermalSteady(junction, case, sinks, dict(losses_at(tj)), iteration, moved)
+            if iteration > 3 and moved >= previous:
+                break
+            previous = moved
+        raise SimulationError(f"thermal runaway: the junction temperatures do not settle (the last step moved them "
+                              f"{moved:.3g} K after {iteration} iterations): the losses grow with the temperature "
+                              "faster than the heat can leave (R_th dP/dT_j >= 1); a larger heatsink or a lower load")
+
+
+def read_setup(path: str | Path) -> ThermalSetup:
+    """A thermal setup file (TOML): its devices' descriptions are read relative to it."""
+    path = Path(path)
+    try:
+        if path.stat().st_size > MAX_BYTES:
+            raise ParameterError(f"{quoted(path)}: larger than a thermal setup holds ({MAX_BYTES} bytes at most)")
+        doc = tomllib.loads(path.read_text(encoding="utf-8"))
+    except OSError as error:
+        raise ParameterError(f"cannot read the thermal setup {quoted(path)}: {error.strerror}") from None
+    except (UnicodeDecodeError, tomllib.TOMLDecodeError) as error:
+        raise ParameterError(f"{quoted(path)}: not a TOML file ({error})") from None
+    where = quoted(path)
+    unknown = set(doc) - {"ambient", "heatsinks", "devices"}
+    if unknown:
+        raise ParameterError(f"{where}: unknown key {sorted(unknown)[0]!r} (read: ambient, [heatsinks.NAME], "
+                             "[devices.NAME])")
+    if not isinstance(doc.get("devices"), dict) or not doc["devices"]:
+        raise ParameterError(f"{where}: at least one [devices.NAME] table (NAME a switch or diode of the netlist)")
+    heatsinks = {}
+    for name, table in doc.get("heatsinks", {}).items():
+        _keys(table, {"R", "C"}, f"{where} [heatsinks.{name}]")
+        heatsinks[name] = Heatsink(_number(table, "R", where, name), _number(table, "C", where, name, 0.0))
+    devices = {}
+    for name, table in doc["devices"].items():
+        _keys(table, {"description", "heatsink", "interface"}, f"{where} [devices.{name}]")
+        text = table.get("description")
+        if not isinstance(text, str) or not text:
+            raise ParameterError(f"{where} [devices.{name}]: description = \"FILE.xml\" or \"FILE.toml\" (relative to "
+                                 "the setup file) is needed")
+        devices[name.lower()] = Mount(read_description(path.parent / text), table.get("heatsink"),
+                                      _number(table, "interface", where, name, 0.0))
+    return ThermalSetup(_number(doc, "ambient", where, "", 25.0), devices, heatsinks)
+
+
+def _keys(table: Any, known: set[str], where: str) -> None:
+    if not isinstance(table, dict):
+        raise ParameterError(f"{where} must be a table")
+    unknown = set(table) - known
+    if unknown:
+        raise ParameterError(f"{where}: unknown key {sorted(unknown)[0]!r} (read: {', '.join(sorted(known))})")
+
+
+def _number(table: Mapping[str, Any], key: str, where: str, name: str, default: float | None = None) -> float:
+    value = table.get(key, default)
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ParameterError(f"{where}{f' {name}' if name else ''}: {key} must be a number; got {value!r}")
+    return float(value)
+
+
+#: A netlist names its thermal setup on a comment line (ngspice reads it as a comment): ``*pcsuite thermal FILE``.
+DIRECTIVE = "*pcsuite thermal"
+
+
+def declared_setup(text: str, source: str | Path) -> Path | None:
+    """The thermal setup a netlist (its ``text``, read from ``source``) names on a ``*pcsuite thermal FILE.toml``
+    line: a file beside the netlist, by its bare name; None where it names none."""
+    for number, line in enumerate(text.splitlines(), 1):
+        if line.lower().startswith(DIRECTIVE):
+            name = line[len(DIRECTIVE):].strip()
+            if not name or Path(name).name != name or name in (".", ".."):
+                raise ParameterError(f"{quoted(source)}:{number}: {DIRECTIVE} takes the bare name of a file beside "
+                                     f"the netlist; got {name!r}")
+            return Path(source).with_name(name)
+    return None

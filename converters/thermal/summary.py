@@ -1,0 +1,66 @@
+"""A steady-state run's device losses and junction temperatures: what ``simulate --steady --thermal`` adds to the
+JSON summary."""
+from __future__ import annotations
+
+from typing import Any
+
+from ..errors import ParameterError
+from ..trajectory import Trajectory
+from .losses import device_losses
+from .network import ThermalSetup
+
+
+def thermal_summary(model: Any, p: dict, tr: Trajectory, setup: ThermalSetup) -> dict[str, Any]:
+    """Each device's losses by kind over the orbit's last period at its steady junction temperature (losses and
+    temperatures iterated to a fixed point: :meth:`ThermalSetup.steady`), the case and heatsink temperatures, and
+    the power balance with the devices' losses. The switches and diodes are ideal in the circuit, as in PLECS: the
+    tables' losses are not in its currents, so the source delivers the circuit's input plus the devices' losses.
+    ``balance_W`` is what is left of input = output + the circuit's resistive losses + the devices' losses: the
+    circuit's own balance over the period (its discretization), the devices' losses adding to both sides."""
+    if "orbit" not in tr.metadata:
+        raise ParameterError("--thermal reads the losses of the periodic steady state: run with --steady")
+    if not hasattr(model, "netlist"):
+        raise ParameterError("--thermal applies to a netlist's switches and diodes (FILE.cir)")
+    T = model.period(p)
+    t1 = float(tr.t[-1])
+    t0 = t1 - T
+    descriptions = {d: m.description for d, m in setup.devices.items()}
+    steady = setup.steady(lambda tj: device_losses(model, p, tr, descriptions, tj, t0, t1))
+    devices = {d: {**steady.losses[d].summary(), "name": setup.devices[d].description.name,
+                   "case_C": steady.case[d]} for d in setup.devices}
+    losses = sum(v["total_W"] for v in devices.values())
+    source, load, resistive = _circuit_power(model, p, tr, t0, t1)
+    total_in = source + losses
+    return {"ambient_C": setup.ambient, "devices": devices, "heatsinks_C": steady.heatsink,
+            "iterations": steady.iterations, "tj_moved_K": steady.moved,
+            "power": {"input_W": total_in, "output_W": load, "circuit_losses_W": resistive,
+                      "device_losses_W": losses, "efficiency": load / total_in if total_in > 0 else float("nan"),
+                      "balance_W": total_in - load - resistive - losses},
+            "time_scales": "junction temperatures from the period's average losses (the thermal time constants are "
+                           "far longer than the switching period)"}
+
+
+def _circuit_power(model: Any, p: dict, tr: Trajectory, t0: float, t1: float) -> tuple[float, float, float]:
+    """(what the sources deliver, what the load takes, what the other resistors dissipate) over [t0, t1] (W): the
+    load the resistors from the output node to ground (NaN without one)."""
+    def mean(function: Any) -> float:
+        return tr.integral(function, t0, t1) / (t1 - t0)
+
+    def across(e: Any) -> Any:
+        a, b = e.nodes[:2]
+        return lambda s: model.signal(f"v({a})", s, p) - model.signal(f"v({b})", s, p)
+    output = getattr(model, "output", "")
+    node = output[2:-1] if output.startswith("v(") and "," not in output else None
+    source = load = resistive = 0.0
+    has_load = False
+    for e in model.netlist.elements:
+        v = across(e)
+        if e.kind in "VI":
+            source += mean(lambda s, e=e, v=v: -v(s) * model.signal(f"i({e.name})", s, p))
+        elif e.kind == "R":
+            dissipated = mean(lambda s, e=e, v=v: v(s) * model.signal(f"i({e.name})", s, p))
+            if node is not None and set(e.nodes[:2]) == {node, "0"}:
+                load, has_load = load + dissipated, True
+            else:
+                resistive += dissipated
+    return source, (load if has_load else float("nan")), resistive

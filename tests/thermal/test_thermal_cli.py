@@ -1,0 +1,57 @@
+"""`pcsuite simulate netlists/circuits/sync-buck-thermal.cir --steady --json`: each device's losses by kind, its
+junction temperature, and a power balance that closes."""
+import json
+from pathlib import Path
+
+import pytest
+
+from validation.cli import main
+
+NETLIST = Path(__file__).resolve().parents[2] / "netlists" / "circuits" / "sync-buck-thermal.cir"
+
+
+def _run(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_the_shipped_thermal_example_gives_losses_junction_temperatures_and_a_balance_that_closes(capsys):
+    code, out, err = _run(capsys, "simulate", str(NETLIST), "--steady", "--json")
+    assert code == 0, err
+    thermal = json.loads(out)["thermal"]
+    devices, power = thermal["devices"], thermal["power"]
+    assert set(devices) == {"s1", "s2", "d1", "d2"}
+    s1, s2, d2 = devices["s1"], devices["s2"], devices["d2"]
+    # the high side switches hard (both edges at 48 V), the low side at zero voltage (its body diode conducts
+    # first), the low side's body diode recovers when the high side turns on
+    assert s1["turn_on_W"] > 0.1 and s1["turn_off_W"] > 0.1 and s2["turn_on_W"] == s2["turn_off_W"] == 0.0
+    assert d2["recovery_W"] > 0.05 and devices["d1"]["total_W"] == 0.0
+    # the conduction losses: R_on(T_j) I_rms^2, the tables linear in current (8 mohm at 25, 12 mohm at 125 degC)
+    r_on = 0.008 + 0.004 * (s2["tj_C"] - 25.0) / 100.0
+    assert s2["conduction_W"] == pytest.approx(r_on * json.loads(out)["measurements"]["i(s2)"]["rms"] ** 2, rel=1e-6)
+    # steady state: T_j = T_a + R_ha sum P + (R_ch + R_jc) P, to 0.1 K (the fixed point's own tolerance is 1e-6 K)
+    total = sum(d["total_W"] for d in devices.values())
+    for d in devices.values():
+        assert d["tj_C"] == pytest.approx(40.0 + 2.0 * total + (0.5 + 1.0) * d["total_W"], abs=1e-5)
+    assert power["output_W"] == pytest.approx(12.0 ** 2 / 1.2, rel=1e-3)
+    assert power["device_losses_W"] == pytest.approx(total, rel=1e-12)
+    assert abs(power["balance_W"]) <= 1e-5 * power["input_W"]
+    assert power["efficiency"] == pytest.approx(power["output_W"] / (power["output_W"] + total), rel=1e-5)
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--thermal", "x.toml"], "--thermal reads the losses of the periodic steady state: give --steady"),
+    (["--steady", "--thermal", "nosuch.toml"], "cannot read the thermal setup nosuch.toml"),
+])
+def test_a_thermal_setup_that_cannot_apply_is_refused_in_one_line(capsys, argv, message):
+    code, out, err = _run(capsys, "simulate", str(NETLIST.with_name("sync-buck.cir")), *argv)
+    assert code == 2 and out == "" and err.count("\n") == 1 and message in err
+
+
+def test_a_setup_that_names_no_device_of_the_circuit_is_refused_by_name(capsys, tmp_path):
+    setup = tmp_path / "setup.toml"
+    setup.write_text(NETLIST.with_name("sync-buck-thermal.toml").read_text().replace("[devices.d2]", "[devices.q9]")
+                     .replace('"example-', f'"{NETLIST.parent.as_posix()}/example-'))
+    code, out, err = _run(capsys, "simulate", str(NETLIST), "--steady", "--thermal", str(setup))
+    assert code == 2 and "names 'q9', which is no switch (S) or diode (D) of the circuit" in err
