@@ -75,7 +75,7 @@ siconos:
 # substitutes (docs/hooks/figures.py). peers.py runs peer_lcp.py and tradeoff.py runs accuracy.py. A benchmark that
 # misses its target exits non-zero: the others still run, and `make bench` fails at the end. About an hour.
 BENCHMARKS := step_cost simulate_buck steady_rate lcp_entry time_limits memory spice_memory cam_siconos \
-	event_scaling inverter bode gdcm_maps sweep tolerance netlist peers tradeoff report
+	event_scaling inverter bode gdcm_maps sweep tolerance netlist peers tradeoff report thermal
 bench: setup siconos
 	@status=0; for name in $(BENCHMARKS); do echo "== benchmarks/$$name.py"; \
 	  $(PY) benchmarks/$$name.py || { echo "benchmarks/$$name.py exited $$?"; status=1; }; done; \

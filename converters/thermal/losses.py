@@ -54,15 +54,54 @@ class DeviceLosses:
                 off: self.turn_off_W, "total_W": self.total_W, "turn_ons": self.turn_ons, "turn_offs": self.turn_offs}
 
 
+@dataclass(frozen=True)
+class Waveforms:
+    """What a device's losses are read from, taken once from a run: the conduction's quadrature (the device's
+    |current| at the nodes, each node's weight over the window's length, zero where it does not conduct) and, at
+    its edges, the (blocked voltage, current) of each turn-on and each turn-off. Its losses at a junction
+    temperature are then a few table reads (:meth:`losses`), as the temperature is iterated."""
+
+    name: str
+    description: DeviceDescription
+    current: npt.NDArray[np.float64]
+    weight: npt.NDArray[np.float64]
+    on_edges: tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]
+    off_edges: tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]
+    span: float
+
+    def __post_init__(self) -> None:
+        # the tables read at the run's currents and voltages once, at each of their temperatures (Table.slices):
+        # an evaluation at a junction temperature is then a blend of two of them
+        d, cache = self.description, self.__dict__
+        cache["_drop"] = None if d.conduction is None else d.conduction.slices(self.current)
+        cache["_on"] = None if d.turn_on is None else d.turn_on.slices(*self.on_edges)
+        cache["_off"] = None if d.turn_off is None else d.turn_off.slices(*self.off_edges)
+
+    def losses(self, tj: float) -> DeviceLosses:
+        d, cache = self.description, self.__dict__
+
+        def energy(table: Table | None, slices: npt.NDArray[np.float64] | None) -> float:
+            return 0.0 if table is None or slices is None else float(table.blend(slices, tj).sum()) / self.span
+        conduction = (0.0 if d.conduction is None else
+                      float(self.weight @ (d.conduction.blend(cache["_drop"], tj) * self.current)))
+        return DeviceLosses(self.name, d.kind, tj, conduction, energy(d.turn_on, cache["_on"]),
+                            energy(d.turn_off, cache["_off"]), int(self.on_edges[0].size), int(self.off_edges[0].size))
+
+
 def device_losses(model: Any, p: dict, tr: Trajectory, descriptions: Mapping[str, DeviceDescription],
                   tj: Mapping[str, float], t0: float, t1: float) -> dict[str, DeviceLosses]:
     """Each described device's losses over [t0, t1] of ``tr`` (a run of the netlist ``model`` at ``p``), its
     tables read at ``tj[name]`` (degC). ``descriptions`` maps element names (``s1``, ``d1``) to descriptions."""
+    return {name: w.losses(float(tj[name])) for name, w in waveforms(model, p, tr, descriptions, t0, t1).items()}
+
+
+def waveforms(model: Any, p: dict, tr: Trajectory, descriptions: Mapping[str, DeviceDescription],
+              t0: float, t1: float) -> dict[str, Waveforms]:
+    """Each described device's :class:`Waveforms` over [t0, t1] of ``tr``."""
     compiled = model.compiled(p)
     elements = {e.name.lower(): e for e in model.netlist.elements}
     rows = tr.rows_between(t0, t1)
     _, before, after = tr.edges(rows)
-    span = t1 - t0
     out = {}
     for name, description in descriptions.items():
         element = elements.get(name.lower())
@@ -71,15 +110,14 @@ def device_losses(model: Any, p: dict, tr: Trajectory, descriptions: Mapping[str
                                  f"the circuit ({', '.join(n for n, e in elements.items() if e.kind in 'SD')})")
         if description.kind == "Diode" and element.kind != "D" or description.kind != "Diode" and element.kind != "S":
             raise ParameterError(f"{name}: a {description.kind} description on a {'diode' if element.kind == 'D' else 'switch'}")
-        temperature = float(tj[name])
         a, b = element.nodes[:2]
 
         def current(s: Samples, element_name: str = name) -> npt.NDArray[np.float64]:
             return np.asarray(model.signal(f"i({element_name.lower()})", s, p), dtype=float)
 
-        def blocked(s: Samples, a: str = a, b: str = b, diode: bool = element.kind == "D") -> npt.NDArray[np.float64]:
-            v = np.asarray(model.signal(f"v({a})", s, p) - model.signal(f"v({b})", s, p), dtype=float)
-            return np.abs(v)                      # a diode blocks v(cathode) - v(anode), a switch either polarity
+        def blocked(s: Samples, a: str = a, b: str = b) -> npt.NDArray[np.float64]:
+            # a diode blocks v(cathode) - v(anode), a switch either polarity: read at the magnitude
+            return np.abs(np.asarray(model.signal(f"v({a})", s, p) - model.signal(f"v({b})", s, p), dtype=float))
 
         if element.kind == "S":
             k = compiled.switch_names.index(element.name.lower())
@@ -93,46 +131,35 @@ def device_losses(model: Any, p: dict, tr: Trajectory, descriptions: Mapping[str
             def conducting(s: Samples) -> npt.NDArray[np.bool_]:
                 return current(s) > CONDUCTING * peak
 
-        conduction = 0.0
-        if description.conduction is not None:
-            table = description.conduction
-
-            def power(i: npt.NDArray[np.float64], on: npt.NDArray[np.bool_]) -> npt.NDArray[np.float64]:
-                return np.where(on, table.at(np.abs(i), temperature) * np.abs(i), 0.0)
-            conduction = _mean(tr, rows, lambda s: power(current(s), conducting(s)), power, current, conducting,
-                               t0, t1)
+        i, weight = _quadrature(tr, rows, current, conducting, t0, t1)
         was, now = conducting(before), conducting(after)
         ons, offs = np.flatnonzero(~was & now), np.flatnonzero(was & ~now)
-        on_energy = _energies(description.turn_on, blocked(before)[ons], np.abs(current(after))[ons], temperature)
-        off_energy = _energies(description.turn_off, blocked(after)[offs], np.abs(current(before))[offs],
-                               temperature)
-        out[name] = DeviceLosses(name, description.kind, temperature, conduction, on_energy / span,
-                                 off_energy / span, int(ons.size), int(offs.size))
+        out[name] = Waveforms(name, description, i, weight,
+                              (blocked(before)[ons], np.abs(current(after))[ons]),
+                              (blocked(after)[offs], np.abs(current(before))[offs]), t1 - t0)
     return out
 
 
-def _mean(tr: Trajectory, rows: npt.NDArray[np.int_], of_samples: Any, power: Any, current: Any, conducting: Any,
-          t0: float, t1: float) -> float:
-    """The mean over [t0, t1] of a power that is a function of the device's current: by the exact method's
-    quadrature, or, on a run read linearly between its points, by Simpson's rule on each step's current (linear
-    there): exact for a drop linear in the current, as the run's own RMS is (its (a^2 + a b + b^2) / 3)."""
-    if tr.rule == "exact":
-        return tr.integral(of_samples, t0, t1) / (t1 - t0)
+def _quadrature(tr: Trajectory, rows: npt.NDArray[np.int_], current: Any, conducting: Any, t0: float,
+                t1: float) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
+    """(|current| at the nodes, weights over the window's length, zero where the device does not conduct) of the
+    mean of a function of the current over [t0, t1]: the exact method's quadrature on its exact pieces, or, on a
+    run read linearly between its points, Simpson's rule on each step's current (linear there): exact for a drop
+    linear in the current, as the run's own RMS is (its (a^2 + a b + b^2) / 3); the end-point rule on a run read
+    so."""
+    if tr.rule == "exact" and tr.exact is not None:
+        blocks = list(tr.exact.quadrature_blocks(t0, t1))
+        i = np.concatenate([np.abs(current(nodes)) for nodes, _ in blocks])
+        w = np.concatenate([weights * conducting(nodes) for nodes, weights in blocks])
+        return i, w / (t1 - t0)
     samples = tr.samples(rows)
     i, on = current(samples), conducting(samples)
     a, a_on = i[:-1].copy(), on[:-1].copy()
     edges, _, after = tr.edges(rows)
     a[edges], a_on[edges] = current(after), conducting(after)      # a step that starts at an edge: its own side
-    dt = np.diff(samples.t)
+    dt = np.diff(samples.t) / float(samples.t[-1] - samples.t[0])
     b = i[1:]
     if tr.rule == "end":
-        return float(dt @ power(b, on[1:])) / float(samples.t[-1] - samples.t[0])
-    simpson = power(a, a_on) + 4.0 * power(0.5 * (a + b), a_on) + power(b, a_on)
-    return float(dt @ simpson) / 6.0 / float(samples.t[-1] - samples.t[0])
-
-
-def _energies(table: Table | None, voltage: npt.NDArray[np.float64], current: npt.NDArray[np.float64],
-              temperature: float) -> float:
-    if table is None:
-        return 0.0
-    return float(table.at(voltage, current, temperature).sum())
+        return np.abs(b), dt * on[1:]
+    step = dt * a_on / 6.0
+    return np.abs(np.concatenate([a, 0.5 * (a + b), b])), np.concatenate([step, 4.0 * step, step])

@@ -6,7 +6,7 @@ from typing import Any
 
 from ..errors import ParameterError
 from ..trajectory import Trajectory
-from .losses import device_losses
+from .losses import waveforms
 from .network import ThermalSetup
 
 
@@ -24,8 +24,8 @@ def thermal_summary(model: Any, p: dict, tr: Trajectory, setup: ThermalSetup) ->
     T = model.period(p)
     t1 = float(tr.t[-1])
     t0 = t1 - T
-    descriptions = {d: m.description for d, m in setup.devices.items()}
-    steady = setup.steady(lambda tj: device_losses(model, p, tr, descriptions, tj, t0, t1))
+    read = waveforms(model, p, tr, {d: m.description for d, m in setup.devices.items()}, t0, t1)
+    steady = setup.steady(lambda tj: {d: w.losses(tj[d]) for d, w in read.items()})
     devices = {d: {**steady.losses[d].summary(), "name": setup.devices[d].description.name,
                    "case_C": steady.case[d]} for d in setup.devices}
     losses = sum(v["total_W"] for v in devices.values())

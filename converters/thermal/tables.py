@@ -44,8 +44,16 @@ class Table:
     def at(self, *point: npt.ArrayLike) -> npt.NDArray[np.float64]:
         """The values at points given axis by axis as arrays (broadcast together)."""
         coords = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in point))
+        return self.blend(self.slices(*coords[:-1]), coords[-1])
+
+    def slices(self, *point: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """The values at points given on every axis but the last, at each point of the last (a temperature):
+        shape (its size, the points'). :meth:`blend` then reads them at any value of the last axis, so a table
+        read at fixed currents and voltages over many temperatures interpolates those once."""
+        coords = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in point))
+        shape = coords[0].shape if coords else ()
         lower, upper, weights = [], [], []
-        for axis, x in zip(self.axes, coords):
+        for axis, x in zip(self.axes[:-1], coords):
             if axis.size == 1:                          # constant along it
                 j, w = np.zeros(x.shape, dtype=int), np.zeros(x.shape)
             else:
@@ -54,15 +62,27 @@ class Table:
             lower.append(j)
             upper.append(np.minimum(j + 1, axis.size - 1))
             weights.append(w)
-        total = np.zeros(coords[0].shape)
-        for corner in range(2 ** len(self.axes)):       # multilinear: the 2^d corners of each point's cell
-            index, weight = [], np.ones(coords[0].shape)
-            for d in range(len(self.axes)):
+        total = np.zeros((self.axes[-1].size, *shape))
+        for corner in range(2 ** len(lower)):           # multilinear: the 2^d corners of each point's cell
+            index, weight = [], np.ones(shape)
+            for d in range(len(lower)):
                 up = (corner >> d) & 1
                 index.append(upper[d] if up else lower[d])
                 weight = weight * (weights[d] if up else 1.0 - weights[d])
-            total += weight * self.values[tuple(index)]
-        return np.maximum(total, 0.0)
+            total += weight * np.moveaxis(self.values[tuple(index)], -1, 0)
+        return total
+
+    def blend(self, slices: npt.NDArray[np.float64], last: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """:meth:`slices` read at ``last`` on the last axis (linear, extrapolated as the others; below zero: zero)."""
+        axis, x = self.axes[-1], np.asarray(last, dtype=float)
+        if axis.size == 1:
+            return np.maximum(slices[0], 0.0)
+        j = np.clip(np.searchsorted(axis, x) - 1, 0, axis.size - 2)
+        w = (x - axis[j]) / (axis[j + 1] - axis[j])
+        if j.ndim == 0:
+            return np.maximum((1.0 - w) * slices[int(j)] + w * slices[int(j) + 1], 0.0)
+        rows = np.arange(slices.shape[1]) if slices.ndim > 1 else ()
+        return np.maximum((1.0 - w) * slices[j, rows] + w * slices[j + 1, rows], 0.0)
 
 
 def check_axis(what: str, axis: npt.NDArray[np.float64], unit: str) -> None:
