@@ -1,6 +1,8 @@
 """The measures a sweep row holds on demand, beside its standard ones: any signal's statistic over the measured
 period (``v(out).ripple``, ``iL.rms``, ``vout.max``), the power balance (``efficiency``, ``input_W``, ``output_W``,
-``total_loss_W``) and each element's loss (``losses.Ron``). Each is read on the same one-period run as the
+``total_loss_W``) and each element's loss (``losses.Ron``); with a thermal setup (a netlist's ``*pcsuite thermal FILE``: devices' losses
+from their descriptions, :mod:`converters.thermal`), ``thermal.efficiency``, ``thermal.losses_W``, ``tj.NAME``
+and ``tj.max`` (junction temperatures, degC), ``loss.NAME`` (a device's losses, W). Each is read on the same one-period run as the
 standard measures, by the run's own rule (exact quadrature for the event method), so every backend gives the same
 value; each has a unit (the Parquet dataset's metadata, the plots' axes). ``fraction.MODE`` is the fraction of the
 period spent in a mode (``fraction.DCM``, ``fraction.CCM-ON``; a netlist's ``fraction.S1``: 0 where the point never
@@ -22,6 +24,8 @@ if TYPE_CHECKING:
 STATISTICS = ("mean", "rms", "min", "max", "ripple")
 #: The power balance's measures and their units.
 POWERS = {"efficiency": "1", "input_W": "W", "output_W": "W", "total_loss_W": "W"}
+#: With a thermal setup: the balance with the devices' losses, and per device (tj.NAME, loss.NAME).
+THERMAL = {"thermal.efficiency": "1", "thermal.losses_W": "W", "tj.max": "degC"}
 
 
 def check_metrics(model: Model, p: dict, names: Iterable[str]) -> dict:
@@ -36,6 +40,13 @@ def check_metrics(model: Model, p: dict, names: Iterable[str]) -> dict:
             raise ParameterError(f"a metric must be a name (SIGNAL.STAT, efficiency, losses.NAME); got {name!r}")
         if name.startswith("fraction.") and name[len("fraction."):].strip():
             out[name] = "1"
+            continue
+        if name in THERMAL or name.startswith(("tj.", "loss.")):
+            setup = _thermal_setup(model)
+            device = name.partition(".")[2]
+            if name not in THERMAL and device not in setup.devices:
+                raise ParameterError(f"metric {name!r}: the thermal setup's devices are {', '.join(setup.devices)}")
+            out[name] = THERMAL.get(name, "degC" if name.startswith("tj.") else "W")
             continue
         if name in POWERS or name.startswith("losses."):
             if not hasattr(model, "power"):
@@ -52,7 +63,8 @@ def check_metrics(model: Model, p: dict, names: Iterable[str]) -> dict:
         if not dot or statistic not in STATISTICS or signal not in names_here:
             raise ParameterError(f"metric {name!r}: a sweep's metrics are SIGNAL.STAT with STAT one of "
                                  f"{', '.join(STATISTICS)} and SIGNAL one of {', '.join(names_here)}; or "
-                                 f"{', '.join(POWERS)}, losses.NAME, fraction.MODE")
+                                 f"{', '.join(POWERS)}, losses.NAME, fraction.MODE, tj.NAME, loss.NAME, "
+                                 "thermal.efficiency")
         out[name] = signal_unit(units, signal)
     return out
 
@@ -62,6 +74,20 @@ def metric_value(model: Model, p: dict, run: Trajectory, name: str) -> float:
     t0, t1 = run.t[0], run.t[-1]
     if name.startswith("fraction."):
         return float(run.mode_fractions(None, t0=t0, t1=t1).get(name[len("fraction."):], 0.0))
+    if name in THERMAL or name.startswith(("tj.", "loss.")):
+        thermal = run.__dict__.setdefault("_thermal", {})       # one summary per run, whatever it is asked
+        if "summary" not in thermal:
+            from ..thermal.summary import thermal_of_run
+            thermal["summary"] = thermal_of_run(model, p, run, _thermal_setup(model), float(t0), float(t1))
+        summary = thermal["summary"]
+        if name == "thermal.efficiency":
+            return float(summary["power"]["efficiency"])
+        if name == "thermal.losses_W":
+            return float(summary["power"]["device_losses_W"])
+        if name == "tj.max":
+            return float(max(d["tj_C"] for d in summary["devices"].values()))
+        device = summary["devices"][name.partition(".")[2]]
+        return float(device["tj_C"] if name.startswith("tj.") else device["total_W"])
     if name in POWERS or name.startswith("losses."):
         power = model.window_power(run, p, t0, t1)
         return float(power["losses_W"].get(name[len("losses."):], np.nan) if name.startswith("losses.")
@@ -71,6 +97,16 @@ def metric_value(model: Model, p: dict, run: Trajectory, name: str) -> float:
         return float(getattr(run, statistic)(signal, t0=t0, t1=t1))
     values = np.asarray(run.signal(signal, run.rows_between(t0, t1)), dtype=float)
     return float(values.min() if statistic == "min" else values.max())
+
+
+def _thermal_setup(model: Model):  # -> ThermalSetup
+    """The thermal setup a netlist names (``*pcsuite thermal FILE``), or a one-line refusal."""
+    from ..thermal.network import declared_setup, read_setup
+    declared = declared_setup(model.netlist.text, model.source) if hasattr(model, "netlist") else None
+    if declared is None:
+        raise ParameterError(f"the thermal metrics (tj.NAME, loss.NAME, thermal.efficiency) need a netlist that names "
+                             f"its thermal setup ('*pcsuite thermal FILE'); {model.key} names none")
+    return read_setup(declared)
 
 
 def _signal_names(model: Model, p: dict) -> list[str]:

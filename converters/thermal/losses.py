@@ -74,8 +74,9 @@ class Waveforms:
         # an evaluation at a junction temperature is then a blend of two of them
         d, cache = self.description, self.__dict__
         cache["_drop"] = None if d.conduction is None else d.conduction.slices(self.current)
-        cache["_on"] = None if d.turn_on is None else d.turn_on.slices(*self.on_edges)
-        cache["_off"] = None if d.turn_off is None else d.turn_off.slices(*self.off_edges)
+        cache["_on"] = None if d.turn_on is None or not self.on_edges[0].size else d.turn_on.slices(*self.on_edges)
+        cache["_off"] = (None if d.turn_off is None or not self.off_edges[0].size
+                         else d.turn_off.slices(*self.off_edges))
 
     def losses(self, tj: float) -> DeviceLosses:
         d, cache = self.description, self.__dict__
@@ -96,12 +97,14 @@ def device_losses(model: Any, p: dict, tr: Trajectory, descriptions: Mapping[str
 
 
 def waveforms(model: Any, p: dict, tr: Trajectory, descriptions: Mapping[str, DeviceDescription],
-              t0: float, t1: float) -> dict[str, Waveforms]:
-    """Each described device's :class:`Waveforms` over [t0, t1] of ``tr``."""
+              t0: float, t1: float, window: Window | None = None) -> dict[str, Waveforms]:
+    """Each described device's :class:`Waveforms` over [t0, t1] of ``tr`` (``window``: the window's reading, to
+    share with other means over it)."""
     compiled = model.compiled(p)
     elements = {e.name.lower(): e for e in model.netlist.elements}
-    rows = tr.rows_between(t0, t1)
-    _, before, after = tr.edges(rows)
+    window = window or Window(model, p, tr, t0, t1)
+    read = window.read
+    before, after = _edges_of_period(tr, window.row_indices)
     out = {}
     for name, description in descriptions.items():
         element = elements.get(name.lower())
@@ -113,11 +116,11 @@ def waveforms(model: Any, p: dict, tr: Trajectory, descriptions: Mapping[str, De
         a, b = element.nodes[:2]
 
         def current(s: Samples, element_name: str = name) -> npt.NDArray[np.float64]:
-            return np.asarray(model.signal(f"i({element_name.lower()})", s, p), dtype=float)
+            return read(f"i({element_name.lower()})", s)
 
         def blocked(s: Samples, a: str = a, b: str = b) -> npt.NDArray[np.float64]:
             # a diode blocks v(cathode) - v(anode), a switch either polarity: read at the magnitude
-            return np.abs(np.asarray(model.signal(f"v({a})", s, p) - model.signal(f"v({b})", s, p), dtype=float))
+            return np.abs(read(f"v({a})", s) - read(f"v({b})", s))
 
         if element.kind == "S":
             k = compiled.switch_names.index(element.name.lower())
@@ -126,12 +129,12 @@ def waveforms(model: Any, p: dict, tr: Trajectory, descriptions: Mapping[str, De
             def conducting(s: Samples) -> npt.NDArray[np.bool_]:
                 return closed_by[np.asarray(s.config, dtype=int)]
         else:
-            peak = float(np.max(np.abs(current(tr.samples(rows))), initial=0.0))
+            peak = float(np.max(np.abs(current(window.rows)), initial=0.0))
 
             def conducting(s: Samples) -> npt.NDArray[np.bool_]:
                 return current(s) > CONDUCTING * peak
 
-        i, weight = _quadrature(tr, rows, current, conducting, t0, t1)
+        i, weight = window.quadrature(current, conducting)
         was, now = conducting(before), conducting(after)
         ons, offs = np.flatnonzero(~was & now), np.flatnonzero(was & ~now)
         out[name] = Waveforms(name, description, i, weight,
@@ -140,26 +143,89 @@ def waveforms(model: Any, p: dict, tr: Trajectory, descriptions: Mapping[str, De
     return out
 
 
-def _quadrature(tr: Trajectory, rows: npt.NDArray[np.int_], current: Any, conducting: Any, t0: float,
-                t1: float) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
-    """(|current| at the nodes, weights over the window's length, zero where the device does not conduct) of the
-    mean of a function of the current over [t0, t1]: the exact method's quadrature on its exact pieces, or, on a
-    run read linearly between its points, Simpson's rule on each step's current (linear there): exact for a drop
-    linear in the current, as the run's own RMS is (its (a^2 + a b + b^2) / 3); the end-point rule on a run read
-    so."""
-    if tr.rule == "exact" and tr.exact is not None:
-        blocks = list(tr.exact.quadrature_blocks(t0, t1))
-        i = np.concatenate([np.abs(current(nodes)) for nodes, _ in blocks])
-        w = np.concatenate([weights * conducting(nodes) for nodes, weights in blocks])
-        return i, w / (t1 - t0)
-    samples = tr.samples(rows)
-    i, on = current(samples), conducting(samples)
-    a, a_on = i[:-1].copy(), on[:-1].copy()
-    edges, _, after = tr.edges(rows)
-    a[edges], a_on[edges] = current(after), conducting(after)      # a step that starts at an edge: its own side
-    dt = np.diff(samples.t) / float(samples.t[-1] - samples.t[0])
-    b = i[1:]
-    if tr.rule == "end":
-        return np.abs(b), dt * on[1:]
-    step = dt * a_on / 6.0
-    return np.abs(np.concatenate([a, 0.5 * (a + b), b])), np.concatenate([step, 4.0 * step, step])
+class _Signals:
+    """The model's signals read once per set of samples (the devices share nodes and edges)."""
+
+    def __init__(self, model: Any, p: dict) -> None:
+        self.model, self.p = model, p
+        self.memo: dict[tuple[str, int], tuple[npt.NDArray[np.float64], Samples]] = {}
+
+    def __call__(self, name: str, samples: Samples) -> npt.NDArray[np.float64]:
+        key = (name, id(samples))
+        if key not in self.memo:                # the samples are kept with the values: their id stays theirs
+            self.memo[key] = (np.asarray(self.model.signal(name, samples, self.p), dtype=float), samples)
+        return self.memo[key][0]
+
+
+class Window:
+    """A window [t0, t1] of a run and how means over it are read: at the exact method's quadrature nodes on its
+    exact pieces, or at the run's points (a step that starts at a switching edge read in its own configuration);
+    the model's signals read once per set of points."""
+
+    def __init__(self, model: Any, p: dict, tr: Trajectory, t0: float, t1: float) -> None:
+        self.read = _Signals(model, p)
+        self.rule = tr.rule if tr.rule != "exact" or tr.exact is not None else "linear"
+        self.row_indices = rows = tr.rows_between(t0, t1)
+        self.rows = tr.samples(rows)
+        self.span = t1 - t0
+        if self.rule == "exact":
+            assert tr.exact is not None
+            self.blocks = list(tr.exact.quadrature_blocks(t0, t1))
+        else:
+            self.edges, _, self.edge_starts = tr.edges(rows)
+
+    def mean(self, function: Any) -> float:
+        """The mean over the window of ``function(samples)`` by the run's rule (as :meth:`Trajectory.integral`)."""
+        if self.rule == "exact":
+            return sum(float(weights @ np.asarray(function(nodes), dtype=float)) for nodes, weights in self.blocks) \
+                / self.span
+        s = self.rows
+        v = np.asarray(function(s), dtype=float)
+        dt = np.diff(s.t)
+        if self.rule == "end":
+            return float(dt @ v[1:]) / float(s.t[-1] - s.t[0])
+        a = v[:-1].copy()
+        a[self.edges] = np.asarray(function(self.edge_starts), dtype=float)
+        return float(dt @ (0.5 * (a + v[1:]))) / float(s.t[-1] - s.t[0])
+
+    def quadrature(self, current: Any, conducting: Any) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
+        """The nodes and weights of the mean of a function of a device's current: (|current| at the nodes, weights
+        over the window's length, zero where the device does not conduct). Simpson's rule on each step of a run read
+        linearly (its current linear there): exact for a drop linear in the current, as the run's own RMS is (its
+        (a^2 + a b + b^2) / 3)."""
+        if self.rule == "exact":
+            i = np.concatenate([np.abs(current(nodes)) for nodes, _ in self.blocks])
+            w = np.concatenate([weights * conducting(nodes) for nodes, weights in self.blocks])
+            return i, w / self.span
+        s = self.rows
+        i, on = current(s), conducting(s)
+        a, a_on = i[:-1].copy(), on[:-1].copy()
+        # a step that starts at an edge: its own side
+        a[self.edges], a_on[self.edges] = current(self.edge_starts), conducting(self.edge_starts)
+        dt = np.diff(s.t) / float(s.t[-1] - s.t[0])
+        b = i[1:]
+        if self.rule == "end":
+            return np.abs(b), dt * on[1:]
+        step = dt * a_on / 6.0
+        return np.abs(np.concatenate([a, 0.5 * (a + b), b])), np.concatenate([step, 4.0 * step, step])
+
+
+def _edges_of_period(tr: Trajectory, rows: npt.NDArray[np.int_]) -> tuple[Samples, Samples]:
+    """The samples before and after each switching edge of a window that is one period of a periodic run
+    (:meth:`Trajectory.edges`), and the edge at the window's bound when the run starts there: a run of one period
+    from the orbit begins in the configuration its last row ends, so that edge is at its last row (the state
+    there is the first row's, by periodicity) with the first row's configuration and pair variables after it."""
+    _, before, after = tr.edges(rows)
+    if tr.config is None or tr.u is None or tr.y is None or tr.config[rows[0]] == tr.config[rows[-1]]:
+        return before, after
+    first, last = rows[:1], rows[-1:]
+    at_end = tr.samples(last)
+    wrapped = Samples(at_end.t, at_end.x, tr.u[first], tr.y[first], tr.config[first],
+                      None if tr.relay is None else tr.relay[first], None if tr.held is None else tr.held[first])
+
+    def join(a: Samples, b: Samples) -> Samples:
+        def cat(x: npt.NDArray[Any] | None, y: npt.NDArray[Any] | None) -> npt.NDArray[Any] | None:
+            return None if x is None or y is None else np.concatenate([x, y])
+        return Samples(np.concatenate([a.t, b.t]), np.concatenate([a.x, b.x]), cat(a.u, b.u), cat(a.y, b.y),
+                       cat(a.config, b.config), cat(a.relay, b.relay), cat(a.held, b.held))
+    return join(before, at_end), join(after, wrapped)

@@ -20,6 +20,7 @@ from __future__ import annotations
 import tomllib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
@@ -94,17 +95,33 @@ class ThermalSetup:
 
     def steady(self, losses_at: Callable[[dict[str, float]], Mapping[str, Any]]) -> ThermalSteady:
         """The junction temperatures and the losses at them: ``losses_at(tj)`` gives each device's losses (an
-        object with ``total_W``) at junction temperatures ``tj``; iterated from the ambient until no temperature
-        moves more than TJ_TOL."""
-        tj = {d: self.ambient for d in self.devices}
+        object with ``total_W``) at junction temperatures ``tj``. The losses are linear in T_j between the tables'
+        temperatures, so a first step solves the linear system their values at T_a and T_a + 1 K give (T = T_a +
+        M (P_a + B (T - T_a)), M the resistances from the devices' powers to their junctions); from there the
+        fixed point T = T_a + M P(T) is iterated until no temperature moves more than TJ_TOL."""
+        names = list(self.devices)
+        ambient = {d: self.ambient for d in names}
+        zero = {d: 0.0 for d in names}
+        M = np.column_stack([np.array([self.temperatures({**zero, d: 1.0})[0][k] for k in names]) - self.ambient
+                             for d in names])
+        at_a = losses_at(ambient)
+        above = losses_at({d: self.ambient + 1.0 for d in names})
+        P_a = np.array([at_a[d].total_W for d in names])
+        B = np.diag([above[d].total_W - at_a[d].total_W for d in names])
+        gain = M @ B
+        tj = ambient
+        if np.max(np.abs(np.linalg.eigvals(gain)), initial=0.0) < 1.0:
+            rise = np.linalg.solve(np.eye(len(names)) - gain, M @ P_a)
+            tj = {d: self.ambient + float(r) for d, r in zip(names, rise)}
         moved, previous = np.inf, np.inf
         for iteration in range(1, MAX_ITERATIONS + 1):
             losses = losses_at(tj)
-            junction, case, sinks = self.temperatures({d: losses[d].total_W for d in self.devices})
-            moved = max(abs(junction[d] - tj[d]) for d in self.devices)
-            tj = junction
+            junction, case, sinks = self.temperatures({d: losses[d].total_W for d in names})
+            moved = max(abs(junction[d] - tj[d]) for d in names)
             if moved <= TJ_TOL:
-                return ThermalSteady(junction, case, sinks, dict(losses_at(tj)), iteration, moved)
+                return ThermalSteady(tj, *self.temperatures({d: losses[d].total_W for d in names})[1:],
+                                     dict(losses), iteration + 2, moved)
+            tj = junction
             if iteration > 3 and moved >= previous:
                 break
             previous = moved
@@ -114,8 +131,19 @@ class ThermalSetup:
 
 
 def read_setup(path: str | Path) -> ThermalSetup:
-    """A thermal setup file (TOML): its devices' descriptions are read relative to it."""
+    """A thermal setup file (TOML): its devices' descriptions are read relative to it. Read once per process while
+    the file is unchanged (a sweep's points read it at each)."""
     path = Path(path)
+    try:
+        stat = path.stat()
+    except OSError as error:
+        raise ParameterError(f"cannot read the thermal setup {quoted(path)}: {error.strerror}") from None
+    return _read_setup(str(path), stat.st_size, stat.st_mtime_ns)
+
+
+@lru_cache(maxsize=8)
+def _read_setup(name: str, size: int, mtime: int) -> ThermalSetup:
+    path = Path(name)
     try:
         if path.stat().st_size > MAX_BYTES:
             raise ParameterError(f"{quoted(path)}: larger than a thermal setup holds ({MAX_BYTES} bytes at most)")

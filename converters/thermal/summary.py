@@ -4,9 +4,11 @@ from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
+
 from ..errors import ParameterError
 from ..trajectory import Trajectory
-from .losses import waveforms
+from .losses import Window, waveforms
 from .network import ThermalSetup
 
 
@@ -23,13 +25,18 @@ def thermal_summary(model: Any, p: dict, tr: Trajectory, setup: ThermalSetup) ->
         raise ParameterError("--thermal applies to a netlist's switches and diodes (FILE.cir)")
     T = model.period(p)
     t1 = float(tr.t[-1])
-    t0 = t1 - T
-    read = waveforms(model, p, tr, {d: m.description for d, m in setup.devices.items()}, t0, t1)
+    return thermal_of_run(model, p, tr, setup, t1 - T, t1)
+
+
+def thermal_of_run(model: Any, p: dict, tr: Trajectory, setup: ThermalSetup, t0: float, t1: float) -> dict[str, Any]:
+    """:func:`thermal_summary` over [t0, t1] of ``tr`` (a period of the steady state), unchecked."""
+    window = Window(model, p, tr, t0, t1)
+    read = waveforms(model, p, tr, {d: m.description for d, m in setup.devices.items()}, t0, t1, window)
     steady = setup.steady(lambda tj: {d: w.losses(tj[d]) for d, w in read.items()})
     devices = {d: {**steady.losses[d].summary(), "name": setup.devices[d].description.name,
                    "case_C": steady.case[d]} for d in setup.devices}
     losses = sum(v["total_W"] for v in devices.values())
-    source, load, resistive = _circuit_power(model, p, tr, t0, t1)
+    source, load, resistive = _circuit_power(model, window)
     total_in = source + losses
     return {"ambient_C": setup.ambient, "devices": devices, "heatsinks_C": steady.heatsink,
             "iterations": steady.iterations, "tj_moved_K": steady.moved,
@@ -40,25 +47,25 @@ def thermal_summary(model: Any, p: dict, tr: Trajectory, setup: ThermalSetup) ->
                            "far longer than the switching period)"}
 
 
-def _circuit_power(model: Any, p: dict, tr: Trajectory, t0: float, t1: float) -> tuple[float, float, float]:
-    """(what the sources deliver, what the load takes, what the other resistors dissipate) over [t0, t1] (W): the
+def _circuit_power(model: Any, window: Window) -> tuple[float, float, float]:
+    """(what the sources deliver, what the load takes, what the other resistors dissipate) over the window (W): the
     load the resistors from the output node to ground (NaN without one)."""
-    def mean(function: Any) -> float:
-        return tr.integral(function, t0, t1) / (t1 - t0)
+    read = window.read
 
-    def across(e: Any) -> Any:
+    def across(e: Any, s: Any) -> Any:
         a, b = e.nodes[:2]
-        return lambda s: model.signal(f"v({a})", s, p) - model.signal(f"v({b})", s, p)
+        return read(f"v({a})", s) - read(f"v({b})", s)
     output = getattr(model, "output", "")
     node = output[2:-1] if output.startswith("v(") and "," not in output else None
     source = load = resistive = 0.0
     has_load = False
     for e in model.netlist.elements:
-        v = across(e)
         if e.kind in "VI":
-            source += mean(lambda s, e=e, v=v: -v(s) * model.signal(f"i({e.name})", s, p))
+            if not np.any(read(f"i({e.name})", window.rows)):       # a gate's drive: it delivers nothing
+                continue
+            source += window.mean(lambda s, e=e: -across(e, s) * read(f"i({e.name})", s))
         elif e.kind == "R":
-            dissipated = mean(lambda s, e=e, v=v: v(s) * model.signal(f"i({e.name})", s, p))
+            dissipated = window.mean(lambda s, e=e: across(e, s) * read(f"i({e.name})", s))
             if node is not None and set(e.nodes[:2]) == {node, "0"}:
                 load, has_load = load + dissipated, True
             else:

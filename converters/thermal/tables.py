@@ -9,6 +9,7 @@ and on-state voltages extrapolated below zero are read as zero: neither is negat
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -62,14 +63,18 @@ class Table:
             lower.append(j)
             upper.append(np.minimum(j + 1, axis.size - 1))
             weights.append(w)
+        by_last = self.__dict__.get("_by_last")
+        if by_last is None:                             # the last axis first: a corner's values are one take
+            by_last = self.__dict__["_by_last"] = np.ascontiguousarray(np.moveaxis(self.values, -1, 0))
         total = np.zeros((self.axes[-1].size, *shape))
         for corner in range(2 ** len(lower)):           # multilinear: the 2^d corners of each point's cell
-            index, weight = [], np.ones(shape)
+            index: list[Any] = [slice(None)]
+            weight: Any = 1.0
             for d in range(len(lower)):
                 up = (corner >> d) & 1
                 index.append(upper[d] if up else lower[d])
                 weight = weight * (weights[d] if up else 1.0 - weights[d])
-            total += weight * np.moveaxis(self.values[tuple(index)], -1, 0)
+            total += weight * by_last[tuple(index)]
         return total
 
     def blend(self, slices: npt.NDArray[np.float64], last: npt.ArrayLike) -> npt.NDArray[np.float64]:

@@ -55,3 +55,36 @@ def test_a_setup_that_names_no_device_of_the_circuit_is_refused_by_name(capsys, 
                      .replace('"example-', f'"{NETLIST.parent.as_posix()}/example-'))
     code, out, err = _run(capsys, "simulate", str(NETLIST), "--steady", "--thermal", str(setup))
     assert code == 2 and "names 'q9', which is no switch (S) or diode (D) of the circuit" in err
+
+
+def test_a_sweep_point_gives_the_losses_and_temperatures_simulate_gives_there():
+    """The thermal metrics of a sweep row (its one period run from the orbit: the high side's turn-on is the edge at
+    the period's bound) against simulate's summary at the same step."""
+    from converters.models import get_model
+    from converters.run import run_converter
+    from converters.sweeps import ModelSweep
+    from converters.thermal.network import declared_setup, read_setup
+    from converters.thermal.summary import thermal_summary
+    metrics = ("thermal.efficiency", "thermal.losses_W", "tj.max", "tj.s1", "loss.s1", "loss.d2")
+    row = ModelSweep(str(NETLIST), h_fraction=1e-3, metrics=metrics).row(0, {})
+    assert row["status"] == "ok", row["message"]
+    model = get_model(str(NETLIST))
+    p = model.resolve({})
+    tr = run_converter(model, p, steady=True)
+    summary = thermal_summary(model, p, tr, read_setup(declared_setup(model.netlist.text, model.source)))
+    expected = {"thermal.efficiency": summary["power"]["efficiency"],
+                "thermal.losses_W": summary["power"]["device_losses_W"],
+                "tj.max": max(d["tj_C"] for d in summary["devices"].values()), "tj.s1": summary["devices"]["s1"]["tj_C"],
+                "loss.s1": summary["devices"]["s1"]["total_W"], "loss.d2": summary["devices"]["d2"]["total_W"]}
+    for name, value in expected.items():
+        assert row[name] == pytest.approx(value, rel=1e-6), name
+    assert summary["devices"]["s1"]["turn_on_W"] > 0.3              # the edge the one-period run starts on
+
+
+def test_a_thermal_metric_on_a_circuit_without_a_setup_is_refused_by_name():
+    from converters.errors import ParameterError
+    from converters.sweeps import ModelSweep
+    with pytest.raises(ParameterError, match="need a netlist that names its thermal setup"):
+        ModelSweep(str(NETLIST.with_name("sync-buck.cir")), metrics=("tj.max",))
+    with pytest.raises(ParameterError, match="the thermal setup's devices are s1, s2, d1, d2"):
+        ModelSweep(str(NETLIST), metrics=("tj.q7",))
