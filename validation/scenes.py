@@ -436,7 +436,7 @@ def suite_names(directory=SCENE_DIR) -> list[str]:
 
 #: The suites made of report sections (:data:`validation.sections.EXTRA_SECTIONS`, whose module imports pandas,
 #: matplotlib and the solvers: ``pcsuite list`` reads the names here; a test checks that the two agree).
-EXTRA_SUITES = ("bench", "bifurcation", "default", "gdcm", "lcp", "mechanics")
+EXTRA_SUITES = ("bench", "bifurcation", "default", "gdcm", "lcp", "mechanics", "thermal")
 
 
 def all_suites() -> list[str]:

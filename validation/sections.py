@@ -422,5 +422,10 @@ EXTRA_SECTIONS["mechanics"] = [
 EXTRA_SECTIONS["default"] += [(_BIFURCATION_TITLE, partial(bifurcation_section, workers=1))]
 EXTRA_SECTIONS["default"] += [("Speed-accuracy trade-off", runs_alone(partial(default_bench_section, "tradeoff"))),
                               ("Numerical stability at the extremes", partial(default_bench_section, "stability"))]
+
+from .thermal import TITLE as _THERMAL_TITLE, thermal_section  # noqa: E402
+
+EXTRA_SECTIONS["default"] += [(_THERMAL_TITLE, thermal_section)]
+EXTRA_SECTIONS["thermal"] = [(_THERMAL_TITLE, thermal_section)]
 EXTRA_SECTIONS["bench"] = [("Speed-accuracy trade-off", runs_alone(partial(live_bench_section, "tradeoff"))),
                            ("Numerical stability at the extremes", partial(live_bench_section, "stability"))]

@@ -88,3 +88,15 @@ def test_a_thermal_metric_on_a_circuit_without_a_setup_is_refused_by_name():
         ModelSweep(str(NETLIST.with_name("sync-buck.cir")), metrics=("tj.max",))
     with pytest.raises(ParameterError, match="the thermal setup's devices are s1, s2, d1, d2"):
         ModelSweep(str(NETLIST), metrics=("tj.q7",))
+
+
+@pytest.mark.slow
+def test_the_reports_thermal_section_passes_its_checks_and_draws_its_maps():
+    """The stepper's losses against the exact method's (a second resolution) within 1e-3 of the total, the balance
+    within 1e-5, the temperatures on their closed form; 49 points of the efficiency map."""
+    from validation.thermal import thermal_section
+    section = thermal_section()
+    assert section.ok, section.html[:2000]
+    assert {"thermal_losses.png", "thermal_efficiency_map.png", "thermal_efficiency_map.csv"} <= set(section.files)
+    assert section.metrics["efficiency"] == pytest.approx(0.98389, abs=1e-4)
+    assert section.files["thermal_efficiency_map.csv"].decode().count("\n") == 50
