@@ -60,12 +60,18 @@ def thermal_section() -> Section:
          agreement, "limit": AGREEMENT_REL, "result": "pass" if agreement <= AGREEMENT_REL else "fail"},
         {"check": "junction temperatures against T_a + R_ha sum P + (R_ch + R_jc) P (K)", "value": tj_error,
          "limit": TJ_K, "result": "pass" if tj_error <= TJ_K else "fail"}])
+    cycling, settle = _load_step(model, p, setup, lcp)
+    checks = pd.concat([checks, pd.DataFrame([
+        {"check": "after a step from half to full load, the junctions 5 heatsink time constants on against the full "
+                  "load's steady state, over the step's rise", "value": settle, "limit": 0.01,
+         "result": "pass" if settle <= 0.01 else "fail"}])], ignore_index=True)
     grid = Grid([Axis.parse(f"Vin={MAP_VIN[0]}:{MAP_VIN[1]}:{MAP_VIN[2]}"),
                  Axis.parse(f"R={MAP_R[0]}:{MAP_R[1]}:{MAP_R[2]}")])
     sweep = ModelSweep(str(NETLIST), h_fraction=1e-3, metrics=("thermal.efficiency", "tj.max"))
     swept = pd.DataFrame(run_ensemble(sweep, grid, backend="serial"))
     failed = int((swept["status"] != "ok").sum())
     files = {"thermal_losses.png": _losses_figure(table), "thermal_efficiency_map.png": _map_figure(swept),
+             "thermal_load_step.png": cycling,
              "thermal_devices.csv": csv_bytes(table), "thermal_checks.csv": csv_bytes(checks),
              "thermal_efficiency_map.csv": csv_bytes(swept)}
     text = (f"<p>{NETLIST.name}: 48 V to 12 V, 10 A, 100 kHz, two MOSFETs with their body diodes on one heatsink "
@@ -77,10 +83,46 @@ def thermal_section() -> Section:
             + f'<img src="{url("thermal_losses.png")}" alt="losses by device and kind">'
             + f"<p>The efficiency with the devices' losses over input voltage and load ({len(swept)} steady states, "
               f"{failed} failed), and the hottest junction:</p>"
-            + f'<img src="{url("thermal_efficiency_map.png")}" alt="efficiency map">')
+            + f'<img src="{url("thermal_efficiency_map.png")}" alt="efficiency map">'
+            + "<p>A load step from half (2.4 ohm) to full load (1.2 ohm): each junction and the heatsink from the "
+              "half load's steady state, the losses after the step read at the junctions' temperatures as they rise "
+              "(the electrical steady state is reached in milliseconds, the thermal one in minutes):</p>"
+            + f'<img src="{url("thermal_load_step.png")}" alt="junction temperatures after a load step">')
     ok = bool((checks["result"] == "pass").all()) and failed == 0
     return Section(TITLE, text, files, ok=ok, metrics={"efficiency": power["efficiency"], "device_losses_W": total,
                                                        "tj_max_C": float(table["junction (degC)"].max())})
+
+
+def _load_step(model, p: dict, setup, full: dict) -> tuple[bytes, float]:
+    """The junctions after a step from half to full load (the figure) and how far from the full load's steady state
+    they are 5 heatsink time constants on, over the step's rise (the check)."""
+    import matplotlib.pyplot as plt
+
+    from converters.run import run_converter
+    from converters.thermal.losses import waveforms
+    from converters.thermal.network import thermal_transient
+    from converters.thermal.summary import thermal_summary
+    half = {**p, "r": 2.0 * p["r"]}
+    start = {d: v["tj_C"] for d, v in thermal_summary(model, half, run_converter(model, half, steady=True),
+                                                      setup)["devices"].items()}
+    tr = run_converter(model, p, steady=True)
+    T, t1 = model.period(p), float(tr.t[-1])
+    read = waveforms(model, p, tr, {d: m.description for d, m in setup.devices.items()}, t1 - T, t1)
+    tau = max(sink.R * sink.C for sink in setup.heatsinks.values())
+    run = thermal_transient(setup, lambda tj: {d: w.losses(tj[d]) for d, w in read.items()}, start, 5.0 * tau)
+    settle = max(abs(run.junction[d][-1] - full["devices"][d]["tj_C"]) / max(abs(full["devices"][d]["tj_C"]
+                                                                                  - start[d]), 1e-12)
+                 for d in setup.devices)
+    fig, ax = plt.subplots(figsize=(6.4, 3.6))
+    for d, values in run.junction.items():
+        ax.semilogx(run.t[1:], values[1:], label=f"{d} junction")
+    for h, values in run.heatsink.items():
+        ax.semilogx(run.t[1:], values[1:], "k--", label=f"heatsink {h}")
+    ax.set_xlabel("time after the step (s)")
+    ax.set_ylabel("temperature (degC)")
+    ax.set_title("half to full load: junctions and heatsink")
+    ax.legend(fontsize=8)
+    return figure_png(fig), float(settle)
 
 
 def _losses_figure(table: pd.DataFrame) -> bytes:

@@ -205,3 +205,104 @@ def declared_setup(text: str, source: str | Path) -> Path | None:
                                      f"the netlist; got {name!r}")
             return Path(source).with_name(name)
     return None
+
+
+@dataclass(frozen=True)
+class ThermalTransient:
+    """Temperatures (degC) at times t (s) after a change of the losses: per device its junction, per heatsink its
+    own; and each device's losses (W) along them."""
+
+    t: np.ndarray
+    junction: dict[str, np.ndarray]
+    heatsink: dict[str, np.ndarray]
+    losses: dict[str, np.ndarray]
+
+
+def thermal_transient(setup: ThermalSetup, losses_at: Callable[[dict[str, float]], Mapping[str, Any]],
+                      start: Mapping[str, float], t_end: float, points: int = 400) -> ThermalTransient:
+    """The temperatures after the losses change at t = 0 from a steady state with junctions at ``start``
+    (degC; the chains and heatsinks in equilibrium there) to ``losses_at(tj)`` (the losses of the circuit after the
+    change at junction temperatures tj), over [0, t_end] on a logarithmic grid of ``points`` from t_end / 1e7.
+
+    Each device's chain is read relative to its case (a Foster chain has no physical inner nodes: the usual reading;
+    a Cauer ladder the same way), the case an interface R above its heatsink, a heatsink with its C an R C to the
+    ambient (with C = 0, at its steady value at once). The network is linear with the losses as its input, so each
+    step of the grid is the exact exponential of the network with the losses held at the step's start (exponential
+    Euler: exact for losses that do not change with the temperature)."""
+    from scipy.linalg import expm
+    if not (np.isfinite(t_end) and t_end > 0):
+        raise ParameterError(f"t_end must be a duration > 0 s; got {t_end!r}")
+    names = list(setup.devices)
+    blocks, index = [], {}
+    for d in names:
+        chain = setup.devices[d].description.thermal
+        assert chain is not None                      # ThermalSetup refuses a device without one
+        if chain.kind == "foster":
+            R, tau = chain.foster()
+            A = np.diag(-1.0 / tau)
+            b = R / tau                               # C_k d theta_k/dt = P - theta_k / R_k, C_k = tau_k / R_k
+        else:
+            A, b = chain._ladder()
+        index[d] = (sum(len(x[1]) for x in blocks), len(b))
+        blocks.append((A, b))
+    sinks = [h for h in setup.heatsinks if setup.heatsinks[h].C > 0]
+    n = sum(len(b) for _, b in blocks) + len(sinks)
+    A = np.zeros((n, n))
+    B = np.zeros((n, len(names)))
+    for k, (d, (a, b)) in enumerate(zip(names, blocks)):
+        i, m = index[d]
+        A[i:i + m, i:i + m] = a
+        B[i:i + m, k] = b
+    offset = n - len(sinks)
+    for j, h in enumerate(sinks):
+        sink = setup.heatsinks[h]
+        A[offset + j, offset + j] = -1.0 / (sink.R * sink.C)
+        for k, d in enumerate(names):
+            if setup.devices[d].heatsink == h:
+                B[offset + j, k] = 1.0 / sink.C
+
+    def temperatures(x: np.ndarray, power: np.ndarray) -> tuple[dict[str, float], dict[str, float]]:
+        total = {h: sum(power[k] for k, d in enumerate(names) if setup.devices[d].heatsink == h)
+                 for h in setup.heatsinks}
+        sink = {h: setup.ambient + (x[offset + sinks.index(h)] if h in sinks else setup.heatsinks[h].R * total[h])
+                for h in setup.heatsinks}
+        junction = {}
+        for k, d in enumerate(names):
+            mount, (i, m) = setup.devices[d], index[d]
+            case = (sink[mount.heatsink] if mount.heatsink else setup.ambient) + mount.interface * power[k]
+            rise = x[i:i + m].sum() if mount.description.thermal.kind == "foster" else x[i]
+            junction[d] = case + rise
+        return junction, sink
+
+    # the start: the network in equilibrium at the losses that hold the junctions at ``start``
+    power = _steady_losses(setup, start)
+    x = np.linalg.solve(A, -B @ power)
+    grid = np.concatenate([[0.0], np.geomspace(t_end * 1e-7, t_end, points - 1)])
+    junction = {d: np.empty(points) for d in names}
+    heat = {h: np.empty(points) for h in setup.heatsinks}
+    lost = {d: np.empty(points) for d in names}
+    tj = dict(start)
+    for step, t in enumerate(grid):
+        if step:
+            h = t - grid[step - 1]
+            E = expm(A * h)
+            x = E @ x + np.linalg.solve(A, (E - np.eye(n)) @ (B @ power))
+            tj, sink = temperatures(x, power)
+        losses = losses_at(tj)
+        power = np.array([losses[d].total_W for d in names])
+        tj, sink = temperatures(x, power)
+        for k, d in enumerate(names):
+            junction[d][step], lost[d][step] = tj[d], power[k]
+        for h in setup.heatsinks:
+            heat[h][step] = sink[h]
+    return ThermalTransient(grid, junction, heat, lost)
+
+
+def _steady_losses(setup: ThermalSetup, start: Mapping[str, float]) -> np.ndarray:
+    """The devices' losses (W) in the steady state whose junctions are at ``start``: the temperatures are linear in
+    the losses (T = T_a + M P), so P = M^-1 (T - T_a)."""
+    names = list(setup.devices)
+    zero = {d: 0.0 for d in names}
+    M = np.column_stack([np.array([setup.temperatures({**zero, d: 1.0})[0][k] for k in names]) - setup.ambient
+                         for d in names])
+    return np.linalg.solve(M, np.array([start[d] for d in names]) - setup.ambient)

@@ -117,3 +117,28 @@ def test_a_loss_that_outgrows_its_heatsink_is_refused_as_thermal_runaway():
     setup = ThermalSetup(25.0, {"s1": Mount(DESCRIPTIONS["s1"], "hs", 0.0)}, {"hs": Heatsink(4.0)})
     with pytest.raises(SimulationError, match="thermal runaway"):              # R dP/dT = 4.5 * 0.3 > 1
         setup.steady(lambda tj: {"s1": SimpleNamespace(total_W=1.0 + 0.3 * tj["s1"])})
+
+
+def test_a_loss_step_heats_the_junction_as_the_foster_chain_and_the_heatsink_in_closed_form():
+    """Constant losses stepping from P0 to P1 at t = 0 (two devices on one heatsink, one Foster, one Cauer): the
+    junction of the Foster device follows T_a + R_ha (P0_tot + dP_tot (1 - e^-t/tau_hs)) + R_ch P1 + sum R_k (P0 + dP
+    (1 - e^-t/tau_k)), the exponential integrator exact for losses that do not change with temperature."""
+    from types import SimpleNamespace
+
+    from converters.thermal.network import Heatsink, Mount, ThermalSetup, thermal_transient
+    foster = DeviceDescription("Q", "MOSFET", thermal=ThermalChain("foster", (0.2, 0.5, 0.3), (1e-4, 2e-3, 2e-2)))
+    cauer = DeviceDescription("D", "Diode", thermal=ThermalChain("cauer", (0.3, 0.9), (1e-3, 0.1)))
+    setup = ThermalSetup(40.0, {"s1": Mount(foster, "hs", 0.5), "d1": Mount(cauer, "hs", 0.4)},
+                         {"hs": Heatsink(2.0, 5.0)})
+    P0, P1 = {"s1": 1.0, "d1": 0.3}, {"s1": 2.5, "d1": 0.1}
+    start = setup.temperatures(P0)[0]
+    run = thermal_transient(setup, lambda tj: {d: SimpleNamespace(total_W=P1[d]) for d in tj}, start, 60.0)
+    t = run.t
+    sink = 40.0 + 2.0 * (1.3 + (2.6 - 1.3) * -np.expm1(-t / 10.0))
+    chain = sum(r * (1.0 + 1.5 * -np.expm1(-t / k)) for r, k in zip((0.2, 0.5, 0.3), (1e-4, 2e-3, 2e-2)))
+    assert np.allclose(run.heatsink["hs"], sink, rtol=0, atol=1e-9)
+    assert np.allclose(run.junction["s1"], sink + 0.5 * 2.5 + chain, rtol=0, atol=1e-9)
+    # six heatsink time constants on, each junction short of its new steady state by the heatsink's e^-6 alone
+    # (the Cauer diode's own chain settled: its slowest mode 0.1 s)
+    for d in ("s1", "d1"):
+        assert run.junction[d][-1] == pytest.approx(setup.temperatures(P1)[0][d] - 2.0 * 1.3 * np.exp(-6.0), abs=1e-9)
