@@ -102,6 +102,8 @@ def parse_plecs(data: bytes, where: str = "the description") -> DeviceDescriptio
                                      "not read)")
             found["data"] = _semiconductor_data(child, f"{where} <SemiconductorData>", kind)
         elif tag == "ThermalModel":
+            if "thermal" in found:
+                raise ParameterError(f"{where}: more than one <ThermalModel>")
             found["thermal"] = _thermal_model(child, f"{where} <ThermalModel>")
         elif tag == "Variables":
             if len(child) or (child.text or "").strip():
@@ -227,8 +229,11 @@ def _thermal_model(element: ET.Element, what: str) -> ThermalChain:
 
 def _attribute(stage: ET.Element, name: str, what: str) -> float:
     text = stage.get(name)
+    if text is None:
+        raise ParameterError(f"{what}: each <{_tag(stage)}> needs its {name} attribute; got "
+                             f"{sorted(stage.attrib)}")
     try:
-        return float(text) if text is not None else float("nan")
+        return float(text)
     except ValueError:
         raise ParameterError(f"{what}: {name} must be a number (no unit); got {text!r}") from None
 
