@@ -20,7 +20,7 @@ from __future__ import annotations
 import tomllib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from functools import lru_cache
+from functools import cached_property, lru_cache
 from pathlib import Path
 from typing import Any
 
@@ -93,6 +93,14 @@ class ThermalSetup:
                     for d, m in self.devices.items()}
         return junction, case, sinks
 
+    @cached_property
+    def resistances(self) -> np.ndarray:
+        """M (K/W): the junctions' rises over the ambient are M P for the devices' losses P (in ``devices``' order)."""
+        names = list(self.devices)
+        zero = {d: 0.0 for d in names}
+        return np.column_stack([np.array([self.temperatures({**zero, d: 1.0})[0][k] for k in names]) - self.ambient
+                                for d in names])
+
     def steady(self, losses_at: Callable[[dict[str, float]], Mapping[str, Any]]) -> ThermalSteady:
         """The junction temperatures and the losses at them: ``losses_at(tj)`` gives each device's losses (an
         object with ``total_W``) at junction temperatures ``tj``. The losses are linear in T_j between the tables'
@@ -101,9 +109,7 @@ class ThermalSetup:
         fixed point T = T_a + M P(T) is iterated until no temperature moves more than TJ_TOL."""
         names = list(self.devices)
         ambient = {d: self.ambient for d in names}
-        zero = {d: 0.0 for d in names}
-        M = np.column_stack([np.array([self.temperatures({**zero, d: 1.0})[0][k] for k in names]) - self.ambient
-                             for d in names])
+        M = self.resistances
         at_a = losses_at(ambient)
         above = losses_at({d: self.ambient + 1.0 for d in names})
         P_a = np.array([at_a[d].total_W for d in names])
@@ -116,11 +122,12 @@ class ThermalSetup:
         moved, previous = np.inf, np.inf
         for iteration in range(1, MAX_ITERATIONS + 1):
             losses = losses_at(tj)
-            junction, case, sinks = self.temperatures({d: losses[d].total_W for d in names})
+            power = np.array([losses[d].total_W for d in names])
+            junction = dict(zip(names, (self.ambient + M @ power).tolist()))
             moved = max(abs(junction[d] - tj[d]) for d in names)
             if moved <= TJ_TOL:
-                return ThermalSteady(tj, *self.temperatures({d: losses[d].total_W for d in names})[1:],
-                                     dict(losses), iteration + 2, moved)
+                return ThermalSteady(tj, *self.temperatures(dict(zip(names, power.tolist())))[1:], dict(losses),
+                                     iteration + 2, moved)
             tj = junction
             if iteration > 3 and moved >= previous:
                 break
@@ -301,8 +308,4 @@ def thermal_transient(setup: ThermalSetup, losses_at: Callable[[dict[str, float]
 def _steady_losses(setup: ThermalSetup, start: Mapping[str, float]) -> np.ndarray:
     """The devices' losses (W) in the steady state whose junctions are at ``start``: the temperatures are linear in
     the losses (T = T_a + M P), so P = M^-1 (T - T_a)."""
-    names = list(setup.devices)
-    zero = {d: 0.0 for d in names}
-    M = np.column_stack([np.array([setup.temperatures({**zero, d: 1.0})[0][k] for k in names]) - setup.ambient
-                         for d in names])
-    return np.linalg.solve(M, np.array([start[d] for d in names]) - setup.ambient)
+    return np.linalg.solve(setup.resistances, np.array([start[d] for d in setup.devices]) - setup.ambient)
