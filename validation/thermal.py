@@ -32,9 +32,9 @@ def thermal_section() -> Section:
     model = get_model(str(NETLIST))
     p = model.resolve({})
     setup = read_setup(declared_setup(model.netlist.text, model.source))
-    runs = {method: thermal_summary(model, p, run_converter(model, p, steady=True, method=method), setup)
-            for method in ("lcp", "event")}
-    lcp, exact = runs["lcp"], runs["event"]
+    # the default stepper, and the exact method as the second resolution of every loss
+    lcp, exact = (thermal_summary(model, p, run_converter(model, p, steady=True, method=m), setup)
+                  for m in ("lcp", "event"))
     rows = []
     for name, d in lcp["devices"].items():
         off = d.get("recovery_W", d.get("turn_off_W"))

@@ -100,3 +100,13 @@ def test_the_reports_thermal_section_passes_its_checks_and_draws_its_maps():
     assert {"thermal_losses.png", "thermal_efficiency_map.png", "thermal_efficiency_map.csv"} <= set(section.files)
     assert section.metrics["efficiency"] == pytest.approx(0.98389, abs=1e-4)
     assert section.files["thermal_efficiency_map.csv"].decode().count("\n") == 50
+
+
+def test_a_netlists_sweep_without_out_writes_its_folder_by_the_files_stem(capsys, tmp_path, monkeypatch):
+    """The default folder of a netlist's sweep is sweep-STEM in the current directory (it had been
+    sweep-netlists/circuits/NAME.cir/, folders nested from the path)."""
+    monkeypatch.chdir(tmp_path)
+    code, out, err = _run(capsys, "sweep", str(NETLIST), "--grid", "Vin=40:48:2", "--steady", "--metric", "tj.max",
+                          "--no-progress", "--workers", "1")
+    assert code == 0, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["sweep-sync-buck-thermal"]

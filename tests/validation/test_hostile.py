@@ -314,7 +314,7 @@ IGNORED = [
     (["bifurcation", "boost", "--param", "D=0.2:0.5", "--points", "0"],     # the default control, not given
      "--control voltage-mode is available for buck only (boost takes --control pwm, smc, smc-implicit, "
      "peak-current, valley-current, current-loop, voltage-loop)"),
-    (["report", ""], "TARGET must be a suite (bench, bifurcation, default, gdcm, lcp, mechanics), a scene file "
+    (["report", ""], "TARGET must be a suite (bench, bifurcation, default, gdcm, lcp, mechanics, thermal), a scene file "
                      "FILE.toml or a directory of them; got ''"),                 # read as '.' before
     # the third audit: accepted and ignored before
     (["list", "--time-limit", "5"], "--time-limit bounds ngspice runs and LCP solves; this command runs neither"),
@@ -377,7 +377,8 @@ EMPTY_PATHS = [
     ["mech", "simulate", "friction", "--out", ""], ["mech", "bifurcations", "friction", "--param", "omega=2.85:2.95",
                                                       "--diagram", ""],
     ["netlist", "buck", "--out", " "], ["report", "lcp", "--out", ""], ["simulate", "buck", "--out", ""],
-    ["simulate", "buck", "--plot", ""], ["sweep", "buck", "--grid", "D=0.2:0.8:3", "--out", ""],
+    ["simulate", "buck", "--plot", ""], ["simulate", "buck", "--steady", "--thermal", ""],
+    ["sweep", "buck", "--grid", "D=0.2:0.8:3", "--out", ""],
     ["sensitivity", "buck", "--plot", ""],
 ]
 
@@ -411,7 +412,7 @@ def test_every_path_option_refuses_an_empty_path():
     walk(build_parser(), ())
     table = {(tuple(a[:2] if a[0] in ("lcp", "mech") else a[:1]), "file" if a[:2] == ["lcp", "solve"] else a[-2])
              for a in EMPTY_PATHS}
-    assert table == paths and len(paths) == 14
+    assert table == paths and len(paths) == 15
 
 
 @pytest.mark.parametrize("argv,message", UNPARSABLE, ids=[" ".join(a) for a, _ in UNPARSABLE])

@@ -221,7 +221,8 @@ def run(args) -> int:
     if args.chunk is not None and args.chunk < 1:
         raise ParameterError(f"--chunk must be an integer >= 1; got {args.chunk}")
     backend = backend_for(args.scheduler, workers=args.workers)
-    out = args.out or Path(f"sweep-{args.model}")
+    # a netlist's default folder is named by its file's stem, in the current directory (its path would nest folders)
+    out = args.out or Path(f"sweep-{Path(args.model).stem if args.model.lower().endswith('.cir') else args.model}")
     if hasattr(backend, "client"):
         backend.client()                              # a scheduler that does not answer: refused before --out is made
     previous = signal.signal(signal.SIGTERM, _interrupt)          # a terminated sweep stops like an interrupted one
