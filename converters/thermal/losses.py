@@ -158,35 +158,21 @@ class _Signals:
 
 
 class Window:
-    """A window [t0, t1] of a run and how means over it are read: at the exact method's quadrature nodes on its
-    exact pieces, or at the run's points (a step that starts at a switching edge read in its own configuration);
-    the model's signals read once per set of points."""
+    """A window [t0, t1] of a run and where a device's conduction loss is read over it: at the exact method's
+    quadrature nodes on its exact pieces, or at the run's points (a step that starts at a switching edge read in its
+    own configuration); the model's signals read once per set of points, the devices sharing them."""
 
     def __init__(self, model: Any, p: dict, tr: Trajectory, t0: float, t1: float) -> None:
         self.read = _Signals(model, p)
         self.rule = tr.rule if tr.rule != "exact" or tr.exact is not None else "linear"
         self.row_indices = rows = tr.rows_between(t0, t1)
         self.rows = tr.samples(rows)
-        self.span = t1 - t0
+        self.t0, self.t1, self.span = t0, t1, t1 - t0
         if self.rule == "exact":
             assert tr.exact is not None
             self.blocks = list(tr.exact.quadrature_blocks(t0, t1))
         else:
             self.edges, _, self.edge_starts = tr.edges(rows)
-
-    def mean(self, function: Any) -> float:
-        """The mean over the window of ``function(samples)`` by the run's rule (as :meth:`Trajectory.integral`)."""
-        if self.rule == "exact":
-            return sum(float(weights @ np.asarray(function(nodes), dtype=float)) for nodes, weights in self.blocks) \
-                / self.span
-        s = self.rows
-        v = np.asarray(function(s), dtype=float)
-        dt = np.diff(s.t)
-        if self.rule == "end":
-            return float(dt @ v[1:]) / float(s.t[-1] - s.t[0])
-        a = v[:-1].copy()
-        a[self.edges] = np.asarray(function(self.edge_starts), dtype=float)
-        return float(dt @ (0.5 * (a + v[1:]))) / float(s.t[-1] - s.t[0])
 
     def quadrature(self, current: Any, conducting: Any) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
         """The nodes and weights of the mean of a function of a device's current: (|current| at the nodes, weights

@@ -36,7 +36,7 @@ def thermal_of_run(model: Any, p: dict, tr: Trajectory, setup: ThermalSetup, t0:
     devices = {d: {**steady.losses[d].summary(), "name": setup.devices[d].description.name,
                    "case_C": steady.case[d]} for d in setup.devices}
     losses = sum(v["total_W"] for v in devices.values())
-    source, load, resistive = _circuit_power(model, window)
+    source, load, resistive = _circuit_power(model, p, tr, window)
     total_in = source + losses
     return {"ambient_C": setup.ambient, "devices": devices, "heatsinks_C": steady.heatsink,
             "iterations": steady.iterations, "tj_moved_K": steady.moved,
@@ -47,14 +47,20 @@ def thermal_of_run(model: Any, p: dict, tr: Trajectory, setup: ThermalSetup, t0:
                            "far longer than the switching period)"}
 
 
-def _circuit_power(model: Any, window: Window) -> tuple[float, float, float]:
-    """(what the sources deliver, what the load takes, what the other resistors dissipate) over the window (W): the
-    load the resistors from the output node to ground (NaN without one)."""
+def _circuit_power(model: Any, p: dict, tr: Trajectory, window: Window) -> tuple[float, float, float]:
+    """(what the sources deliver, what the load takes, what the other resistors dissipate) over the window (W), by
+    the run's own rule (:meth:`Trajectory.integral`): the load the resistors from the output node to ground (NaN
+    without one)."""
     read = window.read
+    t0, t1 = window.t0, window.t1
 
-    def across(e: Any, s: Any) -> Any:
+    def mean(function: Any) -> float:
+        return tr.integral(function, t0, t1) / (t1 - t0)
+
+    def power(e: Any, sign: float) -> Any:
         a, b = e.nodes[:2]
-        return read(f"v({a})", s) - read(f"v({b})", s)
+        return lambda s: sign * (model.signal(f"v({a})", s, p) - model.signal(f"v({b})", s, p)) \
+            * model.signal(f"i({e.name})", s, p)
     output = getattr(model, "output", "")
     node = output[2:-1] if output.startswith("v(") and "," not in output else None
     source = load = resistive = 0.0
@@ -63,9 +69,9 @@ def _circuit_power(model: Any, window: Window) -> tuple[float, float, float]:
         if e.kind in "VI":
             if not np.any(read(f"i({e.name})", window.rows)):       # a gate's drive: it delivers nothing
                 continue
-            source += window.mean(lambda s, e=e: -across(e, s) * read(f"i({e.name})", s))
+            source += mean(power(e, -1.0))
         elif e.kind == "R":
-            dissipated = window.mean(lambda s, e=e: across(e, s) * read(f"i({e.name})", s))
+            dissipated = mean(power(e, 1.0))
             if node is not None and set(e.nodes[:2]) == {node, "0"}:
                 load, has_load = load + dissipated, True
             else:
