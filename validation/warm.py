@@ -50,6 +50,7 @@ COMMANDS = [
     ["simulate", str(CIRCUITS / "half-wave.cir"), "--t-end", "1m"],
     ["simulate", str(CIRCUITS / "hysteretic-buck.cir"), "--t-end", "50u"],
     ["simulate", str(CIRCUITS / "sepic.cir"), "--periods", "2", "--steady"],
+    ["simulate", str(CIRCUITS / "sync-buck-thermal.cir"), "--periods", "2", "--steady"],
     ["simulate", str(CIRCUITS / "flyback.cir"), "--periods", "2"],
     ["simulate", str(CIRCUITS / "rectifier-3ph.cir"), "--periods", "1"],
     ["simulate", str(CIRCUITS / "cockcroft-walton.cir"), "--periods", "1"],

@@ -126,6 +126,23 @@ class Compiled:
             cache[row] = tuple(np.array([m[i][row] for m in self.signal_maps]) for i in range(5))
         return cache[row]
 
+    def signal_stack(self, names: tuple[str, ...] | None = None) -> tuple[_Array, ...]:
+        """The signals' maps (every signal's, or those of ``names`` in their order) stacked over the configurations:
+        (Sx (configs, S, n), Su, s0, Ssin, Sgate), built once per set of names
+        (:meth:`converters.models.netlist.NetlistModel.signal_table` reads them all at once)."""
+        stacks: dict[tuple[str, ...] | None, tuple[_Array, ...]] = self.__dict__.setdefault("_signal_stacks", {})
+        if names not in stacks:
+            every = stacks.get(None)
+            if every is None:
+                every = stacks[None] = tuple(np.array([m[i] for m in self.signal_maps]) for i in range(5))
+            if names is not None:
+                unknown = [name for name in names if name not in self.signal_names]
+                if unknown:
+                    raise ValueError(f"signal must be one of {', '.join(self.signal_names)}; got {unknown[0]!r}")
+                columns = [self.signal_names.index(name) for name in names]
+                stacks[names] = tuple(np.ascontiguousarray(a[:, columns]) for a in every)
+        return stacks[names]
+
     def law_at(self, t: float) -> Law:
         """The switching law in force at time t."""
         law = self.law

@@ -11,6 +11,7 @@ mode of a point is the set of conducting diodes and closed switches (``S1+D2``; 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from functools import lru_cache
 from pathlib import Path
@@ -257,6 +258,42 @@ class Circuit(Model):
         if c.gates and Sgate.any():                      # a gate's node voltage follows its waveform
             gate_values = np.column_stack([waveform_at(w, t) for w in c.gates])
             out += np.einsum("ij,ij->i", gate_values, Sgate[config])
+        return out
+
+    def signal_table(self, samples: Samples, p: dict, names: Sequence[str] | None = None) -> np.ndarray:
+        """The signals ``names`` of the compiled circuit (default: every one, its ``signal_names``' order) at each
+        point, (points, signals): one product per configuration the points are in, where :meth:`signal` reads one
+        signal (losses and power balances read many at the same points)."""
+        c = self.compiled(p)
+        try:
+            Sx, Su, s0, Ssin, Sgate = c.signal_stack(None if names is None else tuple(names))
+        except ValueError as error:
+            raise SignalError(str(error)) from None
+        config = np.asarray(samples.config, dtype=np.int64)
+        x, t = np.asarray(samples.x, dtype=float), np.asarray(samples.t, dtype=float)
+        u = None if samples.u is None else np.asarray(samples.u, dtype=float)
+        sines = np.sin(np.multiply.outer(t, c.inputs[0]) + c.inputs[1]) if c.inputs is not None and Ssin.any() else None
+        gates = np.column_stack([waveform_at(w, t) for w in c.gates]) if c.gates and Sgate.any() else None
+        small = t.size <= 64      # a few points (a run's switching edges): one gather beats a pass per configuration
+        if small:
+            out = np.einsum("pj,pkj->pk", x, Sx[config]) + s0[config]
+            if u is not None:
+                out += np.einsum("pj,pkj->pk", u, Su[config])
+        else:                     # a run's rows: one compiled pass
+            from ..thermal.kernels import signal_rows
+            out = np.empty((t.size, s0.shape[1]))
+            signal_rows(np.ascontiguousarray(x), np.zeros((t.size, 0)) if u is None else np.ascontiguousarray(u),
+                        np.ascontiguousarray(config), np.ascontiguousarray(Sx), np.ascontiguousarray(Su),
+                        np.ascontiguousarray(s0), out)
+        for values, maps in ((sines, Ssin), (gates, Sgate)):
+            if values is None:
+                continue
+            if small:
+                out += np.einsum("pj,pkj->pk", values, maps[config])
+                continue
+            for k in np.unique(config):
+                at = config == k
+                out[at] += values[at] @ maps[k].T
         return out
 
     def storage_power(self, samples: Samples, p: dict) -> np.ndarray:

@@ -14,7 +14,7 @@ tables at the run's currents and voltages and at a given junction temperature.
 """
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -29,6 +29,8 @@ from .tables import Table
 #: A diode conducts where its current exceeds this fraction of its largest in the window (an ideal diode's current
 #: is zero to rounding when it blocks).
 CONDUCTING = 1e-9
+#: The ground's names: its voltage is zero.
+GROUND = ("v(0)", "v(gnd)")
 
 
 @dataclass(frozen=True)
@@ -63,30 +65,73 @@ class Waveforms:
 
     name: str
     description: DeviceDescription
-    current: npt.NDArray[np.float64]
-    weight: npt.NDArray[np.float64]
+    #: () -> (|current| at the conduction's quadrature nodes, the nodes' weights): read when first needed
+    quadrature: Callable[[], tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]]
     on_edges: tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]
     off_edges: tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]
     span: float
+    #: The conduction's sums at the on-state table's temperatures and the least table value read, where the
+    #: compiled pass gave them (:func:`.kernels.conduction_sums`); None: read here.
+    conduction: tuple[npt.NDArray[np.float64], float] | None = None
+
+    @property
+    def current(self) -> npt.NDArray[np.float64]:
+        """|current| at the conduction's quadrature nodes."""
+        return self._nodes()[0]
+
+    @property
+    def weight(self) -> npt.NDArray[np.float64]:
+        """The nodes' weights over the window's length, zero where the device does not conduct."""
+        return self._nodes()[1]
+
+    def _nodes(self) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
+        if "_node_values" not in self.__dict__:
+            self.__dict__["_node_values"] = self.quadrature()
+        return self.__dict__["_node_values"]
 
     def __post_init__(self) -> None:
-        # the tables read at the run's currents and voltages once, at each of their temperatures (Table.slices):
-        # an evaluation at a junction temperature is then a blend of two of them
+        # the tables read at the run's currents and voltages once, at each of their temperatures (Table.slices),
+        # and summed with the quadrature's weights: a loss at a junction temperature is then a blend of two sums
         d, cache = self.description, self.__dict__
-        cache["_drop"] = None if d.conduction is None else d.conduction.slices(self.current)
-        cache["_on"] = None if d.turn_on is None or not self.on_edges[0].size else d.turn_on.slices(*self.on_edges)
-        cache["_off"] = (None if d.turn_off is None or not self.off_edges[0].size
-                         else d.turn_off.slices(*self.off_edges))
+        table = d.conduction
+        if table is None:
+            cache["_conduction"] = None
+        elif self.conduction is None:
+            cache["_conduction"] = table.weighted_sum(table.slices(self.current), self.weight * self.current)
+        else:
+            cache["_conduction"] = table.summed(self.conduction[0], self.conduction[1] >= 0.0, lambda last: float(
+                table.blend(table.slices(self.current), last) @ (self.weight * self.current)))
+        for key, energy, (v, i) in (("_on", d.turn_on, self.on_edges), ("_off", d.turn_off, self.off_edges)):
+            cache[key] = None if energy is None or not v.size else _energies(energy, v, i, self.span)
+
+    def total_W(self, tj: float) -> float:
+        """The device's losses at the junction temperature ``tj`` (W): :meth:`losses`' total."""
+        cache = self.__dict__
+        return sum(cache[key](tj) for key in ("_conduction", "_on", "_off") if cache[key] is not None)
 
     def losses(self, tj: float) -> DeviceLosses:
-        d, cache = self.description, self.__dict__
+        cache = self.__dict__
 
-        def energy(table: Table | None, slices: npt.NDArray[np.float64] | None) -> float:
-            return 0.0 if table is None or slices is None else float(table.blend(slices, tj).sum()) / self.span
-        conduction = (0.0 if d.conduction is None else
-                      float(self.weight @ (d.conduction.blend(cache["_drop"], tj) * self.current)))
-        return DeviceLosses(self.name, d.kind, tj, conduction, energy(d.turn_on, cache["_on"]),
-                            energy(d.turn_off, cache["_off"]), int(self.on_edges[0].size), int(self.off_edges[0].size))
+        def read(key: str) -> float:
+            return 0.0 if cache[key] is None else cache[key](tj)
+        return DeviceLosses(self.name, self.description.kind, tj, read("_conduction"), read("_on"), read("_off"),
+                            int(self.on_edges[0].size), int(self.off_edges[0].size))
+
+
+def _energies(table: Table, voltage: npt.NDArray[np.float64], current: npt.NDArray[np.float64],
+              span: float) -> Callable[[float], float]:
+    """``tj -> the table's energies at the edges (voltage, current) summed over the window's span`` (W), as
+    :meth:`Table.weighted_sum` reads them; a (voltage, current, temperature) table summed at its temperatures in one
+    compiled pass (:func:`.kernels.energy_sums`)."""
+    weights = np.full(voltage.size, 1.0 / span)
+    if len(table.axes) != 3:
+        return table.weighted_sum(table.slices(voltage, current), weights)
+    from .kernels import energy_sums
+    sums = np.zeros(table.axes[2].size)
+    lowest = energy_sums(np.ascontiguousarray(voltage, dtype=float), np.ascontiguousarray(current, dtype=float),
+                         table.axes[0], table.axes[1], table.by_last, sums)
+    return table.summed(sums / span, lowest >= 0.0,
+                        lambda last: float(table.blend(table.slices(voltage, current), last) @ weights))
 
 
 def device_losses(model: Any, p: dict, tr: Trajectory, descriptions: Mapping[str, DeviceDescription],
@@ -99,62 +144,158 @@ def device_losses(model: Any, p: dict, tr: Trajectory, descriptions: Mapping[str
 def waveforms(model: Any, p: dict, tr: Trajectory, descriptions: Mapping[str, DeviceDescription],
               t0: float, t1: float, window: Window | None = None) -> dict[str, Waveforms]:
     """Each described device's :class:`Waveforms` over [t0, t1] of ``tr`` (``window``: the window's reading, to
-    share with other means over it)."""
+    share with other means over it). The devices are read together: their currents, conduction and blocked
+    voltages as columns of one array per set of points."""
     compiled = model.compiled(p)
     elements = {e.name.lower(): e for e in model.netlist.elements}
-    window = window or Window(model, p, tr, t0, t1)
-    read = window.read
-    before, after = _edges_of_period(tr, window.row_indices)
-    out = {}
-    for name, description in descriptions.items():
-        element = elements.get(name.lower())
+    names = list(descriptions)
+    for name in names:
+        element, description = elements.get(name.lower()), descriptions[name]
         if element is None or element.kind not in "SD":
             raise ParameterError(f"a thermal description names {name!r}, which is no switch (S) or diode (D) of "
                                  f"the circuit ({', '.join(n for n, e in elements.items() if e.kind in 'SD')})")
         if description.kind == "Diode" and element.kind != "D" or description.kind != "Diode" and element.kind != "S":
-            raise ParameterError(f"{name}: a {description.kind} description on a {'diode' if element.kind == 'D' else 'switch'}")
-        a, b = element.nodes[:2]
+            on = "a diode" if element.kind == "D" else "a switch"
+            raise ParameterError(f"{name}: a {description.kind} description on {on}")
+    devices = [elements[name.lower()] for name in names]
+    window = window or Window(model, p, tr, t0, t1, device_signals(devices))
+    read = window.read
+    before, after = _edges_of_period(tr, window.row_indices)
+    # a switch conducts while closed (its channel either way, with the same drop), a diode while its current is
+    # positive; each device's column of the switches' states, or None for a diode
+    closed = np.array(compiled.closed, dtype=bool).reshape(len(compiled.closed), -1)
+    switch_of = [compiled.switch_names.index(e.name.lower()) if e.kind == "S" else None for e in devices]
 
-        def current(s: Samples, element_name: str = name) -> npt.NDArray[np.float64]:
-            return read(f"i({element_name.lower()})", s)
+    currents = tuple(f"i({e.name.lower()})" for e in devices)
+    terminals = tuple(f"v({node})" for e in devices for node in e.nodes[:2])
+    diodes = np.array([k is None for k in switch_of], dtype=bool)
+    by_switch = closed[:, [k if k is not None else 0 for k in switch_of]]
+    memo: dict[Any, Any] = {}
+    D = len(devices)
 
-        def blocked(s: Samples, a: str = a, b: str = b) -> npt.NDArray[np.float64]:
-            # a diode blocks v(cathode) - v(anode), a switch either polarity: read at the magnitude
-            return np.abs(read(f"v({a})", s) - read(f"v({b})", s))
+    def current(s: Samples) -> npt.NDArray[np.float64]:
+        if id(s) not in memo:                   # the samples kept with the values: their id stays theirs
+            memo[id(s)] = (read.many(currents + terminals, s), s)
+        return memo[id(s)][0][:, :D]
 
-        if element.kind == "S":
-            k = compiled.switch_names.index(element.name.lower())
-            closed_by = np.array([c[k] for c in compiled.closed], dtype=bool)
+    def blocked(s: Samples) -> npt.NDArray[np.float64]:
+        # a diode blocks v(cathode) - v(anode), a switch either polarity: read at the magnitude
+        current(s)
+        v = memo[id(s)][0]
+        return np.abs(v[:, D::2] - v[:, D + 1::2])
 
-            def conducting(s: Samples) -> npt.NDArray[np.bool_]:
-                return closed_by[np.asarray(s.config, dtype=int)]
-        else:
-            peak = float(np.max(np.abs(current(window.rows)), initial=0.0))
+    peak = np.max(np.abs(current(window.rows)), axis=0, initial=0.0)
 
-            def conducting(s: Samples) -> npt.NDArray[np.bool_]:
-                return current(s) > CONDUCTING * peak
+    def conducting(s: Samples) -> npt.NDArray[np.bool_]:
+        if ("on", id(s)) not in memo:
+            memo["on", id(s)] = (np.where(diodes, current(s) > CONDUCTING * peak,
+                                          by_switch[np.asarray(s.config, dtype=int)]), s)
+        return memo["on", id(s)][0]
 
-        i, weight = window.quadrature(current, conducting)
-        was, now = conducting(before), conducting(after)
-        ons, offs = np.flatnonzero(~was & now), np.flatnonzero(was & ~now)
-        out[name] = Waveforms(name, description, i, weight,
-                              (blocked(before)[ons], np.abs(current(after))[ons]),
-                              (blocked(after)[offs], np.abs(current(before))[offs]), t1 - t0)
+    nodes: list[Any] = []
+
+    def quadrature() -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:      # every device's, once
+        if not nodes:
+            nodes.append(window.quadrature(current, conducting))
+        return nodes[0]
+    tables = [descriptions[name].conduction for name in names]
+    sums = None
+    if window.rule == "linear" and devices and all(t is None or len(t.axes) == 2 for t in tables):
+        sums = _conduction_compiled(window, current(window.rows), current(window.edge_starts), diodes,
+                                    CONDUCTING * peak, by_switch, tables)
+    was, now = conducting(before), conducting(after)
+    v_before, v_after = blocked(before), blocked(after)
+    i_before, i_after = np.abs(current(before)), np.abs(current(after))
+    out = {}
+    for d, name in enumerate(names):
+        ons, offs = np.flatnonzero(~was[:, d] & now[:, d]), np.flatnonzero(was[:, d] & ~now[:, d])
+        out[name] = Waveforms(name, descriptions[name], lambda d=d: (quadrature()[0][:, d], quadrature()[1][:, d]),
+                              (v_before[ons, d], i_after[ons, d]), (v_after[offs, d], i_before[offs, d]), t1 - t0,
+                              None if sums is None else (sums[0][d], float(sums[1][d])))
     return out
 
 
-class _Signals:
-    """The model's signals read once per set of samples (the devices share nodes and edges)."""
+def _conduction_compiled(window: Window, current: npt.NDArray[np.float64], current_starts: npt.NDArray[np.float64],
+                         diode: npt.NDArray[np.bool_], threshold: npt.NDArray[np.float64],
+                         closed: npt.NDArray[np.bool_], tables: list[Table | None]) -> tuple[
+                             npt.NDArray[np.float64], npt.NDArray[np.float64]]:
+    """The on-state tables' weighted sums at each of their temperatures over :meth:`Window.quadrature`'s nodes of
+    a linearly read run, in one compiled pass (:func:`.kernels.conduction_sums`): (sums, least values read), a row
+    per device (``current``'s columns); a device without a table reads a zero drop."""
+    from .kernels import conduction_sums
+    D = len(tables)
+    A = max((t.axes[0].size for t in tables if t is not None), default=1)
+    T = max((t.axes[1].size for t in tables if t is not None), default=1)
+    axes, sizes = np.zeros((D, A)), np.ones(D, dtype=np.int64)
+    values, temperatures = np.zeros((D, T, A)), np.ones(D, dtype=np.int64)
+    for d, table in enumerate(tables):
+        if table is not None:
+            sizes[d], temperatures[d] = table.axes[0].size, table.axes[1].size
+            axes[d, :sizes[d]] = table.axes[0]
+            values[d, :temperatures[d], :sizes[d]] = table.values.T
+    sums, lowest = np.zeros((D, T)), np.zeros(D)
+    conduction_sums(np.asarray(window.rows.t, dtype=float), np.ascontiguousarray(current),
+                    np.asarray(window.rows.config, dtype=np.int64), np.ascontiguousarray(current_starts).reshape(-1, D),
+                    np.asarray(window.edge_starts.config, dtype=np.int64), np.asarray(window.edges, dtype=np.int64),
+                    diode, np.ascontiguousarray(threshold, dtype=float), np.ascontiguousarray(closed), axes, sizes,
+                    values, temperatures, sums, lowest)
+    return sums, lowest
 
-    def __init__(self, model: Any, p: dict) -> None:
+
+def device_signals(elements: Iterable[Any]) -> list[str]:
+    """The signals a netlist's elements' losses or powers are read from: each one's current and its two nodes'
+    voltages."""
+    return [name for e in elements for name in (f"i({e.name.lower()})", f"v({e.nodes[0]})", f"v({e.nodes[1]})")]
+
+
+class _Signals:
+    """The model's signals read once per set of samples, together in one pass (the devices and the power balance
+    share nodes, edges and points: :meth:`NetlistModel.signal_table`); a signal that follows a SIN or gate
+    waveform (a gate's node) is read alone, when asked."""
+
+    def __init__(self, model: Any, p: dict, names: Iterable[str] | None = None) -> None:
         self.model, self.p = model, p
-        self.memo: dict[tuple[str, int], tuple[npt.NDArray[np.float64], Samples]] = {}
+        compiled = model.compiled(p)
+        known = compiled.signal_names
+        _, _, _, Ssin, Sgate = compiled.signal_stack()
+        waved = {known[k] for k in np.flatnonzero(Ssin.any(axis=(0, 2)) | Sgate.any(axis=(0, 2)))}
+        wanted = known if names is None else [n for n in dict.fromkeys(names) if n in known]
+        self.names = [n for n in wanted if n not in waved]
+        self.columns = {name: k for k, name in enumerate(self.names)}
+        self.memo: dict[Any, tuple[npt.NDArray[np.float64], Samples]] = {}
+
+        self.plans: dict[tuple[str, ...], Any] = {}
 
     def __call__(self, name: str, samples: Samples) -> npt.NDArray[np.float64]:
+        if name in GROUND:
+            return np.zeros(len(samples.t))
+        column = self.columns.get(name)
+        if column is not None:
+            return self._table(samples)[:, column]
         key = (name, id(samples))
-        if key not in self.memo:                # the samples are kept with the values: their id stays theirs
+        if key not in self.memo:
             self.memo[key] = (np.asarray(self.model.signal(name, samples, self.p), dtype=float), samples)
         return self.memo[key][0]
+
+    def many(self, names: tuple[str, ...], samples: Samples) -> npt.NDArray[np.float64]:
+        """The signals ``names`` at the samples as columns, (points, names): one take of the table."""
+        plan = self.plans.get(names)
+        if plan is None:
+            ground = np.array([n in GROUND for n in names], dtype=bool)
+            plan = self.plans[names] = ((np.array([self.columns.get(n, 0) for n in names], dtype=np.int64), ground)
+                                        if all(g or n in self.columns for n, g in zip(names, ground)) else False)
+        if plan is False:
+            return np.column_stack([self(n, samples) for n in names]) if names else np.zeros((len(samples.t), 0))
+        columns, ground = plan
+        out = self._table(samples)[:, columns]
+        if ground.any():
+            out[:, ground] = 0.0
+        return out
+
+    def _table(self, samples: Samples) -> npt.NDArray[np.float64]:
+        if id(samples) not in self.memo:        # the samples are kept with the values: their id stays theirs
+            self.memo[id(samples)] = (self.model.signal_table(samples, self.p, self.names), samples)
+        return self.memo[id(samples)][0]
 
 
 class Window:
@@ -162,8 +303,9 @@ class Window:
     quadrature nodes on its exact pieces, or at the run's points (a step that starts at a switching edge read in its
     own configuration); the model's signals read once per set of points, the devices sharing them."""
 
-    def __init__(self, model: Any, p: dict, tr: Trajectory, t0: float, t1: float) -> None:
-        self.read = _Signals(model, p)
+    def __init__(self, model: Any, p: dict, tr: Trajectory, t0: float, t1: float,
+                 names: Iterable[str] | None = None) -> None:
+        self.read = _Signals(model, p, names)       # names: the signals read over it (default: all)
         self.rule = tr.rule if tr.rule != "exact" or tr.exact is not None else "linear"
         self.row_indices = rows = tr.rows_between(t0, t1)
         self.rows = tr.samples(rows)
@@ -174,21 +316,37 @@ class Window:
         else:
             self.edges, _, self.edge_starts = tr.edges(rows)
 
+    def mean(self, function: Any) -> float:
+        """The mean over the window of ``function(samples)`` (a product of signals read through :attr:`read`) by
+        the run's own rule, as :meth:`Trajectory.integral` integrates it."""
+        if self.rule == "exact":
+            return sum(float(weights @ function(nodes)) for nodes, weights in self.blocks) / self.span
+        v = function(self.rows)
+        dt = np.diff(self.rows.t)
+        if self.rule == "end":
+            return float(dt @ v[1:]) / self.span
+        starts = np.array(v[:-1], dtype=float)
+        if self.edges.size:
+            starts[self.edges] = function(self.edge_starts)
+        return float(dt @ (0.5 * (starts + v[1:]))) / self.span
+
     def quadrature(self, current: Any, conducting: Any) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
         """The nodes and weights of the mean of a function of a device's current: (|current| at the nodes, weights
-        over the window's length, zero where the device does not conduct). Simpson's rule on each step of a run read
+        over the window's length, zero where the device does not conduct); a column per device where ``current``
+        and ``conducting`` give one. Simpson's rule on each step of a run read
         linearly (its current linear there): exact for a drop linear in the current, as the run's own RMS is (its
         (a^2 + a b + b^2) / 3)."""
         if self.rule == "exact":
             i = np.concatenate([np.abs(current(nodes)) for nodes, _ in self.blocks])
-            w = np.concatenate([weights * conducting(nodes) for nodes, weights in self.blocks])
+            w = np.concatenate([weights.reshape(-1, *(1,) * (np.ndim(on) - 1)) * on
+                                for nodes, weights in self.blocks for on in (conducting(nodes),)])
             return i, w / self.span
         s = self.rows
         i, on = current(s), conducting(s)
         a, a_on = i[:-1].copy(), on[:-1].copy()
         # a step that starts at an edge: its own side
         a[self.edges], a_on[self.edges] = current(self.edge_starts), conducting(self.edge_starts)
-        dt = np.diff(s.t) / float(s.t[-1] - s.t[0])
+        dt = (np.diff(s.t) / float(s.t[-1] - s.t[0])).reshape(-1, *(1,) * (i.ndim - 1))
         b = i[1:]
         if self.rule == "end":
             return np.abs(b), dt * on[1:]

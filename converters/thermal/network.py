@@ -101,33 +101,39 @@ class ThermalSetup:
         return np.column_stack([np.array([self.temperatures({**zero, d: 1.0})[0][k] for k in names]) - self.ambient
                                 for d in names])
 
-    def steady(self, losses_at: Callable[[dict[str, float]], Mapping[str, Any]]) -> ThermalSteady:
+    def steady(self, losses_at: Callable[[dict[str, float]], Mapping[str, Any]],
+               totals_at: Callable[[dict[str, float]], Mapping[str, float]] | None = None) -> ThermalSteady:
         """The junction temperatures and the losses at them: ``losses_at(tj)`` gives each device's losses (an
-        object with ``total_W``) at junction temperatures ``tj``. The losses are linear in T_j between the tables'
-        temperatures, so a first step solves the linear system their values at T_a and T_a + 1 K give (T = T_a +
-        M (P_a + B (T - T_a)), M the resistances from the devices' powers to their junctions); from there the
-        fixed point T = T_a + M P(T) is iterated until no temperature moves more than TJ_TOL."""
+        object with ``total_W``) at junction temperatures ``tj`` (``totals_at(tj)``, where given, only their
+        totals: the iterations need no more). The losses are linear in T_j between the tables' temperatures, so a
+        first step solves the linear system their values at T_a and T_a + 1 K give (T = T_a + M (P_a + B (T -
+        T_a)), M the resistances from the devices' powers to their junctions); from there the fixed point T = T_a +
+        M P(T) is iterated until no temperature moves more than TJ_TOL."""
         names = list(self.devices)
+        if totals_at is None:
+            def totals_at(tj: dict[str, float]) -> dict[str, float]:
+                return {d: losses.total_W for d, losses in losses_at(tj).items()}
         ambient = {d: self.ambient for d in names}
         M = self.resistances
-        at_a = losses_at(ambient)
-        above = losses_at({d: self.ambient + 1.0 for d in names})
-        P_a = np.array([at_a[d].total_W for d in names])
-        B = np.diag([above[d].total_W - at_a[d].total_W for d in names])
+        at_a = totals_at(ambient)
+        above = totals_at({d: self.ambient + 1.0 for d in names})
+        P_a = np.array([at_a[d] for d in names])
+        B = np.diag([above[d] - at_a[d] for d in names])
         gain = M @ B
         tj = ambient
-        if np.max(np.abs(np.linalg.eigvals(gain)), initial=0.0) < 1.0:
+        # the spectral radius below 1 (a row-sum norm below 1 bounds it: no eigenvalues needed)
+        if gain.size and (np.abs(gain).sum(axis=1).max() < 1.0 or np.max(np.abs(np.linalg.eigvals(gain))) < 1.0):
             rise = np.linalg.solve(np.eye(len(names)) - gain, M @ P_a)
             tj = {d: self.ambient + float(r) for d, r in zip(names, rise)}
         moved, previous = np.inf, np.inf
         for iteration in range(1, MAX_ITERATIONS + 1):
-            losses = losses_at(tj)
-            power = np.array([losses[d].total_W for d in names])
+            totals = totals_at(tj)
+            power = np.array([totals[d] for d in names])
             junction = dict(zip(names, (self.ambient + M @ power).tolist()))
             moved = max(abs(junction[d] - tj[d]) for d in names)
             if moved <= TJ_TOL:
-                return ThermalSteady(tj, *self.temperatures(dict(zip(names, power.tolist())))[1:], dict(losses),
-                                     iteration + 2, moved)
+                return ThermalSteady(tj, *self.temperatures(dict(zip(names, power.tolist())))[1:],
+                                     dict(losses_at(tj)), iteration + 2, moved)
             tj = junction
             if iteration > 3 and moved >= previous:
                 break

@@ -8,7 +8,7 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..trajectory import Trajectory
-from .losses import Window, waveforms
+from .losses import Window, device_signals, waveforms
 from .network import ThermalSetup
 
 
@@ -30,9 +30,11 @@ def thermal_summary(model: Any, p: dict, tr: Trajectory, setup: ThermalSetup) ->
 
 def thermal_of_run(model: Any, p: dict, tr: Trajectory, setup: ThermalSetup, t0: float, t1: float) -> dict[str, Any]:
     """:func:`thermal_summary` over [t0, t1] of ``tr`` (a period of the steady state), unchecked."""
-    window = Window(model, p, tr, t0, t1)
+    elements = [e for e in model.netlist.elements if e.kind in "VIR" or e.name.lower() in setup.devices]
+    window = Window(model, p, tr, t0, t1, device_signals(elements))
     read = waveforms(model, p, tr, {d: m.description for d, m in setup.devices.items()}, t0, t1, window)
-    steady = setup.steady(lambda tj: {d: w.losses(tj[d]) for d, w in read.items()})
+    steady = setup.steady(lambda tj: {d: w.losses(tj[d]) for d, w in read.items()},
+                          lambda tj: {d: w.total_W(tj[d]) for d, w in read.items()})
     devices = {d: {**steady.losses[d].summary(), "name": setup.devices[d].description.name,
                    "case_C": steady.case[d]} for d in setup.devices}
     losses = sum(v["total_W"] for v in devices.values())
@@ -52,15 +54,10 @@ def _circuit_power(model: Any, p: dict, tr: Trajectory, window: Window) -> tuple
     the run's own rule (:meth:`Trajectory.integral`): the load the resistors from the output node to ground (NaN
     without one)."""
     read = window.read
-    t0, t1 = window.t0, window.t1
-
-    def mean(function: Any) -> float:
-        return tr.integral(function, t0, t1) / (t1 - t0)
 
     def power(e: Any, sign: float) -> Any:
         a, b = e.nodes[:2]
-        return lambda s: sign * (model.signal(f"v({a})", s, p) - model.signal(f"v({b})", s, p)) \
-            * model.signal(f"i({e.name})", s, p)
+        return lambda s: sign * (read(f"v({a})", s) - read(f"v({b})", s)) * read(f"i({e.name})", s)
     output = getattr(model, "output", "")
     node = output[2:-1] if output.startswith("v(") and "," not in output else None
     source = load = resistive = 0.0
@@ -69,9 +66,9 @@ def _circuit_power(model: Any, p: dict, tr: Trajectory, window: Window) -> tuple
         if e.kind in "VI":
             if not np.any(read(f"i({e.name})", window.rows)):       # a gate's drive: it delivers nothing
                 continue
-            source += mean(power(e, -1.0))
+            source += window.mean(power(e, -1.0))
         elif e.kind == "R":
-            dissipated = mean(power(e, 1.0))
+            dissipated = window.mean(power(e, 1.0))
             if node is not None and set(e.nodes[:2]) == {node, "0"}:
                 load, has_load = load + dissipated, True
             else:

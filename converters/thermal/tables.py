@@ -8,6 +8,8 @@ and on-state voltages extrapolated below zero are read as zero: neither is negat
 """
 from __future__ import annotations
 
+import bisect
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -47,35 +49,39 @@ class Table:
         coords = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in point))
         return self.blend(self.slices(*coords[:-1]), coords[-1])
 
+    @property
+    def by_last(self) -> npt.NDArray[np.float64]:
+        """The values with the last axis first (a corner's values over the temperatures are one take), kept."""
+        by_last = self.__dict__.get("_by_last")
+        if by_last is None:
+            by_last = self.__dict__["_by_last"] = np.ascontiguousarray(np.moveaxis(self.values, -1, 0))
+        return by_last
+
     def slices(self, *point: npt.ArrayLike) -> npt.NDArray[np.float64]:
         """The values at points given on every axis but the last, at each point of the last (a temperature):
         shape (its size, the points'). :meth:`blend` then reads them at any value of the last axis, so a table
         read at fixed currents and voltages over many temperatures interpolates those once."""
-        coords = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in point))
+        coords = [np.asarray(x, dtype=float) for x in point]
+        if len(coords) > 1:
+            coords = list(np.broadcast_arrays(*coords))
         shape = coords[0].shape if coords else ()
-        lower, upper, weights = [], [], []
-        for axis, x in zip(self.axes[:-1], coords):
+        cells = self.__dict__.get("_cells")
+        if cells is None:          # per axis: its inner points (a cell index is one search) and its cells' widths
+            cells = self.__dict__["_cells"] = [(axis[1:-1], np.diff(axis)) for axis in self.axes[:-1]]
+        by_last = self.by_last
+        total: Any = 0.0
+        corners: list[tuple[Any, Any]] = [((slice(None),), 1.0)]
+        for axis, (inner, widths), x in zip(self.axes[:-1], cells, coords):
             if axis.size == 1:                          # constant along it
-                j, w = np.zeros(x.shape, dtype=int), np.zeros(x.shape)
-            else:
-                j = np.clip(np.searchsorted(axis, x) - 1, 0, axis.size - 2)
-                w = (x - axis[j]) / (axis[j + 1] - axis[j])      # outside the axis: its end segment's line
-            lower.append(j)
-            upper.append(np.minimum(j + 1, axis.size - 1))
-            weights.append(w)
-        by_last = self.__dict__.get("_by_last")
-        if by_last is None:                             # the last axis first: a corner's values are one take
-            by_last = self.__dict__["_by_last"] = np.ascontiguousarray(np.moveaxis(self.values, -1, 0))
-        total = np.zeros((self.axes[-1].size, *shape))
-        for corner in range(2 ** len(lower)):           # multilinear: the 2^d corners of each point's cell
-            index: list[Any] = [slice(None)]
-            weight: Any = 1.0
-            for d in range(len(lower)):
-                up = (corner >> d) & 1
-                index.append(upper[d] if up else lower[d])
-                weight = weight * (weights[d] if up else 1.0 - weights[d])
-            total += weight * by_last[tuple(index)]
-        return total
+                corners = [(index + (0,), weight) for index, weight in corners]
+                continue
+            j = np.searchsorted(inner, x)               # the cell; outside the axis its end cell's line
+            w = (x - axis[j]) / widths[j]
+            corners = [c for index, weight in corners
+                       for c in ((index + (j,), weight * (1.0 - w)), (index + (j + 1,), weight * w))]
+        for index, weight in corners:                   # multilinear: the 2^d corners of each point's cell
+            total = total + weight * by_last[index]
+        return np.broadcast_to(total, (self.axes[-1].size, *shape)) if np.ndim(total) < 1 + len(shape) else total
 
     def blend(self, slices: npt.NDArray[np.float64], last: npt.ArrayLike) -> npt.NDArray[np.float64]:
         """:meth:`slices` read at ``last`` on the last axis (linear, extrapolated as the others; below zero: zero)."""
@@ -88,6 +94,31 @@ class Table:
             return np.maximum((1.0 - w) * slices[int(j)] + w * slices[int(j) + 1], 0.0)
         rows = np.arange(slices.shape[1]) if slices.ndim > 1 else ()
         return np.maximum((1.0 - w) * slices[j, rows] + w * slices[j + 1, rows], 0.0)
+
+
+    def weighted_sum(self, slices: npt.NDArray[np.float64],
+                     weights: npt.NDArray[np.float64]) -> Callable[[float], float]:
+        """``last -> weights @ blend(slices, last)``, read as the temperature is iterated (:meth:`summed`)."""
+        return self.summed(slices @ weights, bool(np.all(slices >= 0.0)),
+                           lambda last: float(self.blend(slices, last) @ weights))
+
+    def summed(self, sums: npt.NDArray[np.float64], nonnegative: bool,
+               elsewhere: Callable[[float], float]) -> Callable[[float], float]:
+        """``last -> weights @ blend(slices, last)`` from ``sums`` (the slices' weighted sums, one per point of the
+        last axis): within the last axis' range and with no slice below zero (``nonnegative``: a blend of two
+        values >= 0 is >= 0, so the clip at zero never acts) a blend of two sums instead of every point's;
+        elsewhere ``elsewhere(last)``, the points' blend."""
+        low, high, grid = float(self.axes[-1][0]), float(self.axes[-1][-1]), self.axes[-1].tolist()
+
+        def at(last: float) -> float:
+            if nonnegative and low <= last <= high:
+                if len(grid) == 1:
+                    return float(sums[0])
+                j = min(max(bisect.bisect_left(grid, last) - 1, 0), len(grid) - 2)
+                w = (last - grid[j]) / (grid[j + 1] - grid[j])
+                return float((1.0 - w) * sums[j] + w * sums[j + 1])
+            return elsewhere(last)
+        return at
 
 
 def check_axis(what: str, axis: npt.NDArray[np.float64], unit: str) -> None:

@@ -1,0 +1,111 @@
+"""Compiled loops of the losses over a window of a stepped run (:class:`converters.thermal.losses.Window`).
+
+A sweep reads each point's losses from a period of about a thousand steps: the signals at every row, the
+conduction's Simpson nodes and the on-state table at each of them are a few multiply-adds per row, which numpy
+spreads over some hundred array operations per point (as long as the point's own run). Here they are one pass.
+The numpy forms in :mod:`converters.thermal.losses` stay the reference (and the path of exact runs, and of
+signals that follow a SIN or gate waveform); a test holds the two together to rounding.
+"""
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numba import njit
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
+
+    FloatArray = npt.NDArray[np.float64]
+    IntArray = npt.NDArray[np.int64]
+    BoolArray = npt.NDArray[np.bool_]
+
+
+@njit(cache=True)
+def signal_rows(x: FloatArray, u: FloatArray, config: IntArray, Sx: FloatArray, Su: FloatArray, s0: FloatArray,
+                out: FloatArray) -> None:
+    """``out[r, k]`` = signal k at row r: ``Sx[c, k] . x[r] + Su[c, k] . u[r] + s0[c, k]``, c the row's
+    configuration (the signal maps of :meth:`Compiled.signal_stack`, without SIN or gate terms)."""
+    for r in range(x.shape[0]):
+        c = config[r]
+        for k in range(s0.shape[1]):
+            value = s0[c, k]
+            for j in range(x.shape[1]):
+                value += Sx[c, k, j] * x[r, j]
+            for j in range(u.shape[1]):
+                value += Su[c, k, j] * u[r, j]
+            out[r, k] = value
+
+
+@njit(cache=True, inline="always")
+def _cell(axis: FloatArray, size: int, x: float) -> tuple[int, int, float]:
+    """(lower, upper, weight of the upper) of x's cell on an axis of ``size`` points: the end cells' lines
+    outside it, and an axis of one point constant (:meth:`Table.slices`)."""
+    if size == 1:
+        return 0, 0, 0.0
+    j = 0
+    while j < size - 2 and axis[j + 1] < x:
+        j += 1
+    return j, j + 1, (x - axis[j]) / (axis[j + 1] - axis[j])
+
+
+@njit(cache=True)
+def energy_sums(voltage: FloatArray, current: FloatArray, axis_v: FloatArray, axis_i: FloatArray,
+                by_last: FloatArray, sums: FloatArray) -> float:
+    """``sums[k]`` = the sum over the points (voltage[p], current[p]) of a switching-energy table's bilinear
+    value at its k-th temperature (``by_last[k, v, i]``); returns the least value read (>= 0: the clip at zero
+    never acts)."""
+    low = np.inf
+    for k in range(by_last.shape[0]):
+        sums[k] = 0.0
+    for p in range(voltage.size):
+        v0, v1, wv = _cell(axis_v, axis_v.size, voltage[p])
+        i0, i1, wi = _cell(axis_i, axis_i.size, current[p])
+        for k in range(by_last.shape[0]):
+            e = ((1.0 - wv) * ((1.0 - wi) * by_last[k, v0, i0] + wi * by_last[k, v0, i1])
+                 + wv * ((1.0 - wi) * by_last[k, v1, i0] + wi * by_last[k, v1, i1]))
+            if e < low:
+                low = e
+            sums[k] += e
+    return low
+
+
+@njit(cache=True)
+def conduction_sums(t: FloatArray, current: FloatArray, config: IntArray, current_starts: FloatArray,
+                    config_starts: IntArray, edges: IntArray, diode: BoolArray, threshold: FloatArray,
+                    closed: BoolArray, axes: FloatArray, sizes: IntArray, values: FloatArray,
+                    temperatures: IntArray, sums: FloatArray, lowest: FloatArray) -> None:
+    """Per device d (a column of ``current``): ``sums[d, k]`` = the mean over the window of |i| v_on(|i|) at the
+    table's k-th temperature by Simpson's rule on each step while the device conducts at the step's start (a
+    diode while its current exceeds ``threshold[d]``, a switch while ``closed[configuration, d]``); a step that
+    starts at an edge read from the edge's own side (row e of ``current_starts`` for the step from row
+    ``edges[e]``), as :meth:`Window.quadrature` and :meth:`Table.weighted_sum` compute it. ``lowest[d]``: the least
+    table value read at any node (>= 0: the clip at zero never acts). The device's table: ``axes[d, :sizes[d]]``
+    (A) and ``values[d, :temperatures[d], :sizes[d]]`` (V)."""
+    span = t[-1] - t[0]
+    n = t.size
+    for d in range(current.shape[1]):
+        size, count = sizes[d], temperatures[d]
+        axis, table = axes[d], values[d]
+        for k in range(count):
+            sums[d, k] = 0.0
+        low = np.inf
+        e = 0
+        for r in range(n - 1):
+            a, c = current[r, d], config[r]
+            while e < edges.size and edges[e] < r:
+                e += 1
+            if e < edges.size and edges[e] == r:
+                a, c = current_starts[e, d], config_starts[e]
+            on = a > threshold[d] if diode[d] else closed[c, d]
+            b = current[r + 1, d]
+            step = (t[r + 1] - t[r]) / span / 6.0 if on else 0.0
+            for node in range(3):
+                i = abs(a) if node == 0 else (abs(0.5 * (a + b)) if node == 1 else abs(b))
+                lower, upper, w = _cell(axis, size, i)
+                for k in range(count):
+                    v = (1.0 - w) * table[k, lower] + w * table[k, upper]
+                    if v < low:
+                        low = v
+                    sums[d, k] += step * (4.0 if node == 1 else 1.0) * i * v
+        lowest[d] = low
