@@ -527,6 +527,16 @@ def last_period(model: Model, p: dict, tr: Trajectory) -> dict:
             "shortest_interval_T": float(np.diff(bounds)[np.diff(bounds) > 1e-12 * T].min() / T)}
 
 
+def orbit_runs(model: Model, p: dict, method: Method,
+               tr: Trajectory) -> tuple[Trajectory, Trajectory | None] | str:
+    """:func:`_orbit_runs` from the run's last state, found once per run and method: the accuracy check and the
+    devices' losses' estimate (:mod:`converters.thermal.summary`) read the same orbits."""
+    cache: dict[int, Any] = tr.__dict__.setdefault("_orbit_runs", {})
+    if id(method) not in cache:
+        cache[id(method)] = (_orbit_runs(model, p, method, tr.x[-1]), method)     # the method kept: its id stays
+    return cast("tuple[Trajectory, Trajectory | None] | str", cache[id(method)][0])
+
+
 def _orbit_runs(model: Model, p: dict, method: Method,
                 x_guess: npt.NDArray[np.float64]) -> tuple[Trajectory, Trajectory | None] | str:
     """One period on the method's periodic orbit, and for the stepper also on its orbit at 2h (None for the
@@ -549,7 +559,7 @@ def _orbit_runs(model: Model, p: dict, method: Method,
     return run(method, orbit.x0), run(coarse, orbit_2h.x0)
 
 
-def _richardson_factor(method: Method, fine: Trajectory, T: float) -> float:
+def richardson_factor(method: Method, fine: Trajectory, T: float) -> float:
     """2^p - 1 for Richardson at h and 2h: p the method's declared order, or :data:`ORDER_THROUGH_EVENTS` where it
     is higher and the orbit ``fine`` has a diode event inside a step (its order falls there)."""
     order = method.order
@@ -574,7 +584,7 @@ def _power_check(model: Model, p: dict, method: Method, fine: Trajectory, coarse
     if coarse is not None:
         at_2h = model.power(coarse, p, 0.0, T)
         coarse_values = {"efficiency": at_2h["efficiency"], "input_W": at_2h["input_W"], **at_2h["losses_W"]}
-        factor = _richardson_factor(method, fine, T)
+        factor = richardson_factor(method, fine, T)
         exact = {k: v + (v - coarse_values[k]) / factor for k, v in exact.items()}
     scale = max(abs(exact["input_W"]), 1e-300)
     losses = [abs(v - exact[k]) / scale for k, v in reported["losses_W"].items() if k in exact]
@@ -625,7 +635,7 @@ def default_check(model: Model, p: dict, method: Method, tr: Trajectory, reporte
                               f"settled (its 10-period mean moved {transient:.1e} from the 10 periods before): run "
                               "more --periods")
         return out
-    runs = _orbit_runs(model, p, method, tr.x[-1])
+    runs = orbit_runs(model, p, method, tr)
     if isinstance(runs, str):
         return {**out, "checked": False, "reason": runs,
                 "warning": f"vout mean's error could not be estimated: {runs}"}
@@ -633,7 +643,7 @@ def default_check(model: Model, p: dict, method: Method, tr: Trajectory, reporte
     m_h = fine.mean("vout", t0=0.0, t1=T)
     exact = m_h
     if coarse is not None:
-        exact = m_h + (m_h - coarse.mean("vout", t0=0.0, t1=T)) / _richardson_factor(method, fine, T)
+        exact = m_h + (m_h - coarse.mean("vout", t0=0.0, t1=T)) / richardson_factor(method, fine, T)
     # relative to the output's RMS over the period: its mean for a DC output (to its ripple's square), its size for
     # an AC one, whose mean is ~0 (an inverter's load current: 6e-13 A, "2.2e-01 off" against it)
     scale = max(abs(exact), fine.rms("vout", t0=0.0, t1=T), 1e-300)

@@ -80,10 +80,13 @@ def conduction_sums(t: FloatArray, current: FloatArray, config: IntArray, curren
     diode while its current exceeds ``threshold[d]``, a switch while ``closed[configuration, d]``); a step that
     starts at an edge read from the edge's own side (row e of ``current_starts`` for the step from row
     ``edges[e]``), as :meth:`Window.quadrature` and :meth:`Table.weighted_sum` compute it. ``lowest[d]``: the least
-    table value read at any node (>= 0: the clip at zero never acts). The device's table: ``axes[d, :sizes[d]]``
-    (A) and ``values[d, :temperatures[d], :sizes[d]]`` (V)."""
+    table value read at any node (>= 0: the clip at zero never acts). Each step is cut where its current crosses
+    a kink of |i| v_on(|i|) (zero, a table point either way), as :meth:`Window.quadrature` cuts it: Simpson is
+    exact on each piece. The device's table: ``axes[d, :sizes[d]]`` (A) and ``values[d, :temperatures[d],
+    :sizes[d]]`` (V)."""
     span = t[-1] - t[0]
     n = t.size
+    cuts = np.empty(2 * axes.shape[1] + 1)
     for d in range(current.shape[1]):
         size, count = sizes[d], temperatures[d]
         axis, table = axes[d], values[d]
@@ -100,12 +103,33 @@ def conduction_sums(t: FloatArray, current: FloatArray, config: IntArray, curren
             on = a > threshold[d] if diode[d] else closed[c, d]
             b = current[r + 1, d]
             step = (t[r + 1] - t[r]) / span / 6.0 if on else 0.0
-            for node in range(3):
-                i = abs(a) if node == 0 else (abs(0.5 * (a + b)) if node == 1 else abs(b))
-                lower, upper, w = _cell(axis, size, i)
-                for k in range(count):
-                    v = (1.0 - w) * table[k, lower] + w * table[k, upper]
-                    if v < low:
-                        low = v
-                    sums[d, k] += step * (4.0 if node == 1 else 1.0) * i * v
+            # the step cut where the current crosses a kink of |i| v_on(|i|): 0 and the table's points either way
+            count_cuts = 0
+            if a != b:
+                for j in range(-1, size):
+                    for sign in (1.0, -1.0):
+                        if j < 0 and sign < 0:
+                            continue
+                        kink = 0.0 if j < 0 else sign * axis[j]
+                        if j >= 0 and axis[j] <= 0.0:
+                            continue
+                        s = (kink - a) / (b - a)
+                        if 0.0 < s < 1.0:
+                            cuts[count_cuts] = s
+                            count_cuts += 1
+            cuts[:count_cuts].sort()
+            start = 0.0
+            for piece in range(count_cuts + 1):
+                end = cuts[piece] if piece < count_cuts else 1.0
+                for node in range(3):
+                    f = start if node == 0 else (0.5 * (start + end) if node == 1 else end)
+                    i = abs(a + f * (b - a))
+                    lower, upper, w = _cell(axis, size, i)
+                    weight = step * (end - start) * (4.0 if node == 1 else 1.0)
+                    for k in range(count):
+                        v = (1.0 - w) * table[k, lower] + w * table[k, upper]
+                        if v < low:
+                            low = v
+                        sums[d, k] += weight * i * v
+                start = end
         lowest[d] = low

@@ -194,11 +194,12 @@ def waveforms(model: Any, p: dict, tr: Trajectory, descriptions: Mapping[str, De
 
     nodes: list[Any] = []
 
+    tables = [descriptions[name].conduction for name in names]
+
     def quadrature() -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:      # every device's, once
         if not nodes:
-            nodes.append(window.quadrature(current, conducting))
+            nodes.append(window.quadrature(current, conducting, _kinks(tables)))
         return nodes[0]
-    tables = [descriptions[name].conduction for name in names]
     sums = None
     if window.rule == "linear" and devices and all(t is None or len(t.axes) == 2 for t in tables):
         sums = _conduction_compiled(window, current(window.rows), current(window.edge_starts), diodes,
@@ -212,6 +213,17 @@ def waveforms(model: Any, p: dict, tr: Trajectory, descriptions: Mapping[str, De
         out[name] = Waveforms(name, descriptions[name], lambda d=d: (quadrature()[0][:, d], quadrature()[1][:, d]),
                               (v_before[ons, d], i_after[ons, d]), (v_after[offs, d], i_before[offs, d]), t1 - t0,
                               None if sums is None else (sums[0][d], float(sums[1][d])))
+    return out
+
+
+def _kinks(tables: list[Table | None]) -> npt.NDArray[np.float64]:
+    """(K, devices): the currents where |i| v_on(|i|) has a kink for each device's on-state table (0, and each
+    point of its current axis either way), padded with 0 (a repeated cut is a piece of zero length)."""
+    points = [[0.0] + [s * float(x) for x in (t.axes[0] if t is not None else ()) if x > 0 for s in (1.0, -1.0)]
+              for t in tables]
+    out = np.zeros((max(map(len, points), default=1), len(tables)))
+    for d, p in enumerate(points):
+        out[:len(p), d] = p
     return out
 
 
@@ -330,12 +342,16 @@ class Window:
             starts[self.edges] = function(self.edge_starts)
         return float(dt @ (0.5 * (starts + v[1:]))) / self.span
 
-    def quadrature(self, current: Any, conducting: Any) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
+    def quadrature(self, current: Any, conducting: Any, kinks: npt.ArrayLike | None = None) -> tuple[
+            npt.NDArray[np.float64], npt.NDArray[np.float64]]:
         """The nodes and weights of the mean of a function of a device's current: (|current| at the nodes, weights
         over the window's length, zero where the device does not conduct); a column per device where ``current``
-        and ``conducting`` give one. Simpson's rule on each step of a run read
-        linearly (its current linear there): exact for a drop linear in the current, as the run's own RMS is (its
-        (a^2 + a b + b^2) / 3)."""
+        and ``conducting`` give one. Simpson's rule on each step of a run read linearly (its current linear
+        there), each step cut where the current crosses one of ``kinks`` ((K,) or (K, devices): the currents where
+        the function has a kink, as |i| v_on(|i|) at 0 and at an on-state table's points): exact for a function
+        quadratic in the current between its kinks, as |i| v_on(|i|) is for a table linear there (uncut, a step
+        across a table's point reads it to O(step^2) however fine the run: a dead time of one step stays one
+        step at h and at 2h, and their difference would not show it)."""
         if self.rule == "exact":
             i = np.concatenate([np.abs(current(nodes)) for nodes, _ in self.blocks])
             w = np.concatenate([weights.reshape(-1, *(1,) * (np.ndim(on) - 1)) * on
@@ -351,7 +367,24 @@ class Window:
         if self.rule == "end":
             return np.abs(b), dt * on[1:]
         step = dt * a_on / 6.0
-        return np.abs(np.concatenate([a, 0.5 * (a + b), b])), np.concatenate([step, 4.0 * step, step])
+        if kinks is None:
+            return np.abs(np.concatenate([a, 0.5 * (a + b), b])), np.concatenate([step, 4.0 * step, step])
+        flat = a.ndim == 1
+        a, b, step = (np.atleast_2d(v.T).T for v in (a, b, step))          # (steps, devices)
+        c = np.asarray(kinks, dtype=float).reshape(len(kinks), -1)           # (K, devices)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            cut = (c[None] - a[:, None]) / (b - a)[:, None]                 # where each kink is crossed
+        cut = np.where(np.isfinite(cut), np.clip(cut, 0.0, 1.0), 0.0)
+        ends = np.ones_like(a)[:, None]
+        cuts = np.sort(np.concatenate([0.0 * ends, cut, ends], axis=1), axis=1)
+        lo, hi = cuts[:, :-1], cuts[:, 1:]                                   # (steps, K + 1, devices)
+
+        def at(s: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
+            return (a[:, None] + s * (b - a)[:, None]).reshape(-1, a.shape[1])
+        piece = (step[:, None] * (hi - lo)).reshape(-1, a.shape[1])
+        i = np.abs(np.concatenate([at(lo), at(0.5 * (lo + hi)), at(hi)]))
+        w = np.concatenate([piece, 4.0 * piece, piece])
+        return (i[:, 0], w[:, 0]) if flat else (i, w)
 
 
 def _edges_of_period(tr: Trajectory, rows: npt.NDArray[np.int_]) -> tuple[Samples, Samples]:

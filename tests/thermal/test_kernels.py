@@ -10,7 +10,7 @@ import pytest
 from converters.models import get_model
 from converters.run import run_converter
 from converters.thermal import DeviceDescription, ThermalChain, energy_table, on_state_table
-from converters.thermal.losses import CONDUCTING, Window, waveforms
+from converters.thermal.losses import CONDUCTING, Window, _kinks, waveforms
 from converters.thermal.network import declared_setup, read_setup
 
 CIRCUITS = Path(__file__).resolve().parents[2] / "netlists" / "circuits"
@@ -35,15 +35,44 @@ def test_the_signal_table_is_each_signals_own_read(name):
                 assert np.allclose(table[:, k], own, rtol=1e-12, atol=1e-12 * (1.0 + np.abs(own).max())), signal
 
 
-def _reference(window, description, name, model, p, tj):
-    """A switch's conduction loss by the numpy forms: Window.quadrature and Table.weighted_sum."""
+def _reference(window, description, name, model, p, tj, cut=True):
+    """A switch's conduction loss by the numpy forms: Window.quadrature (its steps cut at the table's kinks, or
+    not) and Table.weighted_sum."""
     read = window.read
     compiled = model.compiled(p)
     k = compiled.switch_names.index(name)
     closed = np.array([c[k] for c in compiled.closed], dtype=bool)
-    i, w = window.quadrature(lambda s: read(f"i({name})", s), lambda s: closed[np.asarray(s.config, dtype=int)])
     table = description.conduction
+    i, w = window.quadrature(lambda s: read(f"i({name})", s), lambda s: closed[np.asarray(s.config, dtype=int)],
+                             _kinks([table])[:, 0] if cut else None)
     return table.weighted_sum(table.slices(i), w * i)(tj)
+
+
+def test_a_step_across_a_kink_of_the_on_state_table_is_integrated_exactly():
+    # the low side's current runs from about 8 A to 12 A: across a kink at 10 A (0.1 V there, 0.6 V at 40 A)
+    drop = on_state_table("drop", [0.0, 10.0, 40.0], [25.0, 125.0], [[0.0, 0.1, 0.6], [0.0, 0.15, 0.8]])
+    description = DeviceDescription("Q", "MOSFET", None, None, drop, ThermalChain("foster", (0.5,), (1e-3,)))
+    model, p, tr = _run("sync-buck-thermal.cir", steady=True)
+    T = model.period(p)
+    t1 = float(tr.t[-1])
+    window = Window(model, p, tr, t1 - T, t1)
+    compiled = waveforms(model, p, tr, {"s2": description}, t1 - T, t1, window)["s2"].losses(25.0).conduction_W
+    cut, uncut = (_reference(window, description, "s2", model, p, 25.0, c) for c in (True, False))
+    # the run's current linear on each step: the integral by 64 sub-steps each (midpoints), independent of the cuts
+    rows = window.rows
+    i = np.abs(model.signal("i(s2)", rows, p))
+    a = i[:-1].copy()
+    a[window.edges] = np.abs(model.signal("i(s2)", window.edge_starts, p))
+    on = np.array([c[model.compiled(p).switch_names.index("s2")] for c in model.compiled(p).closed])
+    on_at = on[np.asarray(rows.config, dtype=int)][:-1]
+    on_at[window.edges] = on[np.asarray(window.edge_starts.config, dtype=int)]
+    f = (np.arange(64) + 0.5) / 64
+    sub = a[:, None] + f * (i[1:] - a)[:, None]
+    dense = float(np.sum(np.diff(rows.t)[:, None] * on_at[:, None] * sub * np.interp(sub, [0, 10, 40], [0, 0.1, 0.6]))
+                  / 64 / T)
+    assert compiled == pytest.approx(cut, rel=1e-12)
+    assert cut == pytest.approx(dense, rel=1e-9)             # 1.2e-11 (the midpoints' own error at the kinks)
+    assert abs(uncut - dense) > 10 * abs(cut - dense)      # uncut 3.4e-10: a step across the kink read to O(h^2)
 
 
 @pytest.mark.parametrize("tj", [60.0, 10.0, 190.0])      # inside the tables' temperatures, below, above

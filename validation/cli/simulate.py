@@ -127,6 +127,8 @@ def run(args) -> int:
         if thermal is not None:
             from converters.thermal.summary import thermal_summary
             summary["thermal"] = thermal_summary(model, tr.metadata["params"], tr, thermal)
+            if "warning" in summary["thermal"]:
+                summary["warnings"] = [*summary.get("warnings", []), summary["thermal"]["warning"]]
     if args.out is not None:
         write_frame(tr.waveforms(), args.out, meta={k: summary.get(k) for k in ("converter", "control", "method",
                                                                                    "options", "output_step",
@@ -217,6 +219,10 @@ def _print(summary: dict, tr, args) -> None:
         power = thermal["power"]
         print(f"with the devices' losses: in {power['input_W']:.6g} W, out {power['output_W']:.6g} W, efficiency "
               f"{100 * power['efficiency']:.3f} % (ambient {thermal['ambient_C']:g} degC)")
+        accuracy = thermal.get("accuracy", {})
+        if accuracy.get("checked"):
+            print(f"device losses within ~{accuracy['losses_error_estimate']:.1g} of their total (estimated: the run's "
+                  "distance to its orbit and the orbit's losses at a finer step)")
     step = summary.get("step")
     if step:
         final = ("steady state after the step" if step["final_from"] != "run end"
