@@ -18,7 +18,7 @@ The setup file (TOML; paths relative to it)::
 from __future__ import annotations
 
 import tomllib
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property, lru_cache
 from pathlib import Path
@@ -242,9 +242,18 @@ def thermal_transient(setup: ThermalSetup, losses_at: Callable[[dict[str, float]
     ambient (with C = 0, at its steady value at once). The network is linear with the losses as its input, so each
     step of the grid is the exact exponential of the network with the losses held at the step's start (exponential
     Euler: exact for losses that do not change with the temperature)."""
-    from scipy.linalg import expm
     if not (np.isfinite(t_end) and t_end > 0):
         raise ParameterError(f"t_end must be a duration > 0 s; got {t_end!r}")
+    grid = np.concatenate([[0.0], np.geomspace(t_end * 1e-7, t_end, points - 1)])
+    return _integrate(setup, grid, lambda tj, step: losses_at(tj), _steady_losses(setup, start), dict(start))
+
+
+def _integrate(setup: ThermalSetup, grid: np.ndarray, losses_at: Callable[[dict[str, float], int], Mapping[str, Any]],
+               power: np.ndarray, tj: dict[str, float]) -> ThermalTransient:
+    """The network from equilibrium at the losses ``power`` (junctions at ``tj``) over ``grid``: over each of its
+    intervals the exact exponential of the network with the losses ``losses_at(tj, k)`` held (k the interval's
+    index, tj the junctions at its start; exponential Euler)."""
+    from scipy.linalg import expm
     names = list(setup.devices)
     blocks, index = [], {}
     for d in names:
@@ -287,21 +296,22 @@ def thermal_transient(setup: ThermalSetup, losses_at: Callable[[dict[str, float]
             junction[d] = case + rise
         return junction, sink
 
-    # the start: the network in equilibrium at the losses that hold the junctions at ``start``
-    power = _steady_losses(setup, start)
+    # the start: the network in equilibrium at ``power``
     x = np.linalg.solve(A, -B @ power)
-    grid = np.concatenate([[0.0], np.geomspace(t_end * 1e-7, t_end, points - 1)])
+    points = grid.size
     junction = {d: np.empty(points) for d in names}
     heat = {h: np.empty(points) for h in setup.heatsinks}
     lost = {d: np.empty(points) for d in names}
-    tj = dict(start)
+    propagators: dict[float, np.ndarray] = {}          # equal intervals (a run's periods): one exponential
     for step, t in enumerate(grid):
         if step:
-            h = t - grid[step - 1]
-            E = expm(A * h)
+            h = float(t - grid[step - 1])
+            if h not in propagators:
+                propagators[h] = expm(A * h)
+            E = propagators[h]
             x = E @ x + np.linalg.solve(A, (E - np.eye(n)) @ (B @ power))
             tj, sink = temperatures(x, power)
-        losses = losses_at(tj)
+        losses = losses_at(tj, step)
         power = np.array([losses[d].total_W for d in names])
         tj, sink = temperatures(x, power)
         for k, d in enumerate(names):
@@ -309,6 +319,29 @@ def thermal_transient(setup: ThermalSetup, losses_at: Callable[[dict[str, float]
         for h in setup.heatsinks:
             heat[h][step] = sink[h]
     return ThermalTransient(grid, junction, heat, lost)
+
+
+def thermal_cosimulation(setup: ThermalSetup, windows: Sequence[tuple[float, float, Mapping[str, Any]]],
+                         start: Mapping[str, float] | None = None) -> ThermalTransient:
+    """The temperatures along an electrical run, the thermal network stepped with it: ``windows`` are the run's
+    consecutive intervals (t0, t1, {device: its :class:`.losses.Waveforms` there}), each device's losses over an
+    interval read from its tables at its junction temperature at the interval's start and held over it (the
+    network's exact exponential: exact for losses that do not change with the temperature). From the network in
+    equilibrium with the junctions at ``start`` (default: every node at the ambient, a cold start). The times are the
+    windows' bounds; the junctions' ripple within a window (a switching period) is not resolved, its average
+    heating is."""
+    if not windows:
+        raise ParameterError("a thermal co-simulation needs at least one window of the run")
+    names = list(setup.devices)
+    tj = {d: setup.ambient for d in names} if start is None else dict(start)
+    power = _steady_losses(setup, tj)
+    grid = np.array([windows[0][0]] + [t1 for _, t1, _ in windows])
+
+    def losses_at(tj: dict[str, float], k: int) -> dict[str, Any]:
+        read = windows[min(k, len(windows) - 1)][2]          # at the last bound: the last window's
+        return {d: read[d].losses(tj[d]) for d in names}
+    out = _integrate(setup, grid - grid[0], losses_at, power, tj)
+    return ThermalTransient(grid, out.junction, out.heatsink, out.losses)
 
 
 def _steady_losses(setup: ThermalSetup, start: Mapping[str, float]) -> np.ndarray:

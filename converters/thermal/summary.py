@@ -117,6 +117,29 @@ def thermal_of_run(model: Any, p: dict, tr: Trajectory, setup: ThermalSetup, t0:
                            "far longer than the switching period)"}
 
 
+def thermal_of_transient(model: Any, p: dict, tr: Trajectory, setup: ThermalSetup,
+                         start: dict[str, float] | None = None) -> Any:
+    """The junction and heatsink temperatures along a run of a periodic netlist, period by period
+    (:func:`.network.thermal_cosimulation`): each period's losses read at the junctions' temperatures at its
+    start, the network stepped over it; from ``start`` (default: a cold start at the ambient). A
+    :class:`.network.ThermalTransient` at the periods' bounds."""
+    from .network import thermal_cosimulation
+    T = model.period(p)
+    t0 = float(tr.t[0])
+    count = int(np.floor((float(tr.t[-1]) - t0) / T * (1.0 + 1e-9)))
+    if count < 1:
+        raise ParameterError(f"a thermal co-simulation reads whole periods: the run spans {float(tr.t[-1]) - t0:.3g} s, "
+                             f"less than one period ({T:.3g} s)")
+    descriptions = {d: m.description for d, m in setup.devices.items()}
+    elements = [e for e in model.netlist.elements if e.name.lower() in setup.devices]
+    windows = []
+    for k in range(count):
+        a, b = t0 + k * T, t0 + (k + 1) * T
+        windows.append((a, b, waveforms(model, p, tr, descriptions, a, b,
+                                        Window(model, p, tr, a, b, device_signals(elements)))))
+    return thermal_cosimulation(setup, windows, start)
+
+
 def _circuit_power(model: Any, p: dict, tr: Trajectory, window: Window) -> tuple[float, float, float]:
     """(what the sources deliver, what the load takes, what the other resistors dissipate) over the window (W), by
     the run's own rule (:meth:`Trajectory.integral`): the load the resistors from the output node to ground (NaN
