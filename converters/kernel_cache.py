@@ -21,7 +21,7 @@ from pathlib import Path
 COMPILED = ("lcp/result.py", "lcp/fastpaths.py", "lcp/lemke.py", "lcp/murty.py", "lcp/pgs.py", "lcp/newton.py",
             "lcp/enumeration.py", "lcp/dispatch.py", "lcp/auto.py", "lcp/engine.py", "lcp/kernels.py",
             "methods/theta_kernels.py", "methods/moreau_kernels.py", "analysis/newton_kernel.py", "sweeps/batch.py",
-            "analysis/floquet.py", "thermal/kernels.py")
+            "analysis/floquet.py", "thermal/kernels.py", "circuits/kernels.py")
 #: Their sources: those modules and the constants they read at compile time.
 SOURCES = COMPILED + ("lcp/state.py", "compiled.py")
 STAMP = "kernel-sources.sha256"

@@ -280,7 +280,7 @@ class Circuit(Model):
             if u is not None:
                 out += np.einsum("pj,pkj->pk", u, Su[config])
         else:                     # a run's rows: one compiled pass
-            from ..thermal.kernels import signal_rows
+            from ..circuits.kernels import signal_rows
             out = np.empty((t.size, s0.shape[1]))
             signal_rows(np.ascontiguousarray(x), np.zeros((t.size, 0)) if u is None else np.ascontiguousarray(u),
                         np.ascontiguousarray(config), np.ascontiguousarray(Sx), np.ascontiguousarray(Su),

@@ -102,10 +102,7 @@ def metric_value(model: Model, p: dict, run: Trajectory, name: str) -> float:
 def _thermal_setup(model: Model):  # -> ThermalSetup
     """The thermal setup a netlist names (``*pcsuite thermal FILE``), or a one-line refusal."""
     from ..thermal.network import declared_setup, read_setup
-    declared = model.__dict__.get("_thermal_setup_file", False)     # the netlist's text is the model's: read once
-    if declared is False:
-        declared = declared_setup(model.netlist.text, model.source) if hasattr(model, "netlist") else None
-        model.__dict__["_thermal_setup_file"] = declared
+    declared = declared_setup(model.netlist.text, model.source) if hasattr(model, "netlist") else None
     if declared is None:
         raise ParameterError(f"the thermal metrics (tj.NAME, loss.NAME, thermal.efficiency) need a netlist that names "
                              f"its thermal setup ('*pcsuite thermal FILE'); {model.key} names none")

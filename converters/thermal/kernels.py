@@ -1,8 +1,9 @@
 """Compiled loops of the losses over a window of a stepped run (:class:`converters.thermal.losses.Window`).
 
-A sweep reads each point's losses from a period of about a thousand steps: the signals at every row, the
-conduction's Simpson nodes and the on-state table at each of them are a few multiply-adds per row, which numpy
-spreads over some hundred array operations per point (as long as the point's own run). Here they are one pass.
+A sweep reads each point's losses from a period of about a thousand steps: the conduction's Simpson nodes and the
+on-state table at each of them are a few multiply-adds per row, which numpy spreads over some hundred array
+operations per point (as long as the point's own run). Here they are one pass (and the signals at the rows one
+more: :func:`converters.circuits.kernels.signal_rows`).
 The numpy forms in :mod:`converters.thermal.losses` stay the reference (and the path of exact runs, and of
 signals that follow a SIN or gate waveform); a test holds the two together to rounding.
 """
@@ -19,22 +20,6 @@ if TYPE_CHECKING:
     FloatArray = npt.NDArray[np.float64]
     IntArray = npt.NDArray[np.int64]
     BoolArray = npt.NDArray[np.bool_]
-
-
-@njit(cache=True)
-def signal_rows(x: FloatArray, u: FloatArray, config: IntArray, Sx: FloatArray, Su: FloatArray, s0: FloatArray,
-                out: FloatArray) -> None:
-    """``out[r, k]`` = signal k at row r: ``Sx[c, k] . x[r] + Su[c, k] . u[r] + s0[c, k]``, c the row's
-    configuration (the signal maps of :meth:`Compiled.signal_stack`, without SIN or gate terms)."""
-    for r in range(x.shape[0]):
-        c = config[r]
-        for k in range(s0.shape[1]):
-            value = s0[c, k]
-            for j in range(x.shape[1]):
-                value += Sx[c, k, j] * x[r, j]
-            for j in range(u.shape[1]):
-                value += Su[c, k, j] * u[r, j]
-            out[r, k] = value
 
 
 @njit(cache=True, inline="always")

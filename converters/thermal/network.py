@@ -207,9 +207,11 @@ def _number(table: Mapping[str, Any], key: str, where: str, name: str, default: 
 DIRECTIVE = "*pcsuite thermal"
 
 
+@lru_cache(maxsize=16)
 def declared_setup(text: str, source: str | Path) -> Path | None:
     """The thermal setup a netlist (its ``text``, read from ``source``) names on a ``*pcsuite thermal FILE.toml``
-    line: a file beside the netlist, by its bare name; None where it names none."""
+    line: a file beside the netlist, by its bare name; None where it names none. Kept per text (a sweep's points
+    ask at each)."""
     for number, line in enumerate(text.splitlines(), 1):
         if line.lower().startswith(DIRECTIVE):
             name = line[len(DIRECTIVE):].strip()

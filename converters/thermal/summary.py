@@ -128,8 +128,9 @@ def thermal_of_transient(model: Any, p: dict, tr: Trajectory, setup: ThermalSetu
     t0 = float(tr.t[0])
     count = int(np.floor((float(tr.t[-1]) - t0) / T * (1.0 + 1e-9)))
     if count < 1:
-        raise ParameterError(f"a thermal co-simulation reads whole periods: the run spans {float(tr.t[-1]) - t0:.3g} s, "
-                             f"less than one period ({T:.3g} s)")
+        span = float(tr.t[-1]) - t0
+        raise ParameterError(f"a thermal co-simulation reads whole periods: the run spans {span:.3g} s, less than "
+                             f"one period ({T:.3g} s)")
     descriptions = {d: m.description for d, m in setup.devices.items()}
     elements = [e for e in model.netlist.elements if e.name.lower() in setup.devices]
     windows = []
