@@ -59,6 +59,21 @@ QuadratureBlock: TypeAlias = tuple[Samples, npt.NDArray[np.float64]]
 EventColumns: TypeAlias = "Mapping[str, npt.NDArray[Any]] | pd.DataFrame"
 
 
+@dataclass(frozen=True)
+class IntegrationPoints:
+    """Where :meth:`Trajectory.integral` reads a function over a window: the exact method's quadrature ``blocks``, or
+    the window's ``rows`` (their spacings ``dt``) and, for the linear rule, the positions of the steps that start at a
+    switching edge (``edges``) with those steps' own first samples (``edge_starts``). Taken once, several functions
+    integrate at the same :class:`Samples` (a caller may keep what it reads at them)."""
+
+    rule: str
+    blocks: list[QuadratureBlock] | None = None
+    rows: Samples | None = None
+    dt: npt.NDArray[np.float64] | None = None
+    edges: npt.NDArray[np.int_] | None = None
+    edge_starts: Samples | None = None
+
+
 class ExactSolution(Protocol):
     """The exact pieces of an event-driven run (:attr:`Trajectory.exact`): the Gauss-Legendre nodes and weights of
     a window, at once or a block at a time (a long window's nodes are not all held at once)."""
@@ -434,20 +449,39 @@ class Trajectory:
             return {n: (one / span, float(np.sqrt(two / span))) for n, (one, two) in totals.items()}
         return {n: (self.mean(n, t0=t0, t1=t1), self.rms(n, t0=t0, t1=t1)) for n in names}
 
-    def integral(self, function: Callable[[Samples], npt.ArrayLike], t0: float, t1: float) -> float:
+    def integral(self, function: Callable[[Samples], npt.ArrayLike], t0: float, t1: float,
+                 points: IntegrationPoints | None = None) -> float:
         """The integral over [t0, t1] of ``function(samples)`` (values at a :class:`Samples`' points: a product of
         signals, an element's power) by the trajectory's own rule, as :meth:`mean` integrates a signal: the exact
         method's quadrature on its exact pieces, the end-point rule, or the linear rule with each step that starts
-        at a switching edge read in its own configuration."""
-        if self.rule == "exact" and self.exact is not None:
+        at a switching edge read in its own configuration; at ``points`` (:meth:`integration_points` of the same
+        window) where given."""
+        if points is None and self.rule == "exact" and self.exact is not None:      # a long window: block by block
             return sum(float(weights @ np.asarray(function(nodes), dtype=float))
                        for nodes, weights in self.exact.quadrature_blocks(t0, t1))
+        points = points or self.integration_points(t0, t1)
+        if points.blocks is not None:
+            return sum(float(weights @ np.asarray(function(nodes), dtype=float)) for nodes, weights in points.blocks)
+        assert points.rows is not None and points.dt is not None and points.edges is not None
+        v = np.asarray(function(points.rows), dtype=float)
+        if points.rule == "end":
+            return float(points.dt @ v[1:])
+        starts = v[:-1]
+        if points.edges.size:
+            starts = np.array(starts, dtype=float)
+            starts[points.edges] = np.asarray(function(cast(Samples, points.edge_starts)), dtype=float)
+        return float(points.dt @ (0.5 * (starts + v[1:])))
+
+    def integration_points(self, t0: float, t1: float) -> IntegrationPoints:
+        """Where :meth:`integral` reads over [t0, t1] (:class:`IntegrationPoints`; an exact run's blocks all kept)."""
+        if self.rule == "exact" and self.exact is not None:
+            return IntegrationPoints("exact", blocks=list(self.exact.quadrature_blocks(t0, t1)))
         rows = self.rows_between(t0, t1)
-        v = np.asarray(function(self.samples(rows)), dtype=float)
-        dt = np.diff(self.t[rows])
-        if self.rule == "end":
-            return float(dt @ v[1:])
-        return float(dt @ (0.5 * (self._step_starts(function, rows, v[:-1]) + v[1:])))
+        rule = "end" if self.rule == "end" else "linear"
+        edges, _, first = self.edges(rows) if rule == "linear" and self.labels is not None else (
+            np.zeros(0, dtype=int), None, self.samples(rows[:0]))
+        return IntegrationPoints(rule, rows=self.samples(rows), dt=np.diff(self.t[rows]), edges=edges,
+                                 edge_starts=first)
 
     def _step_starts(self, function: Callable[[Samples], npt.ArrayLike], rows: np.ndarray,
                      starts: np.ndarray) -> np.ndarray:

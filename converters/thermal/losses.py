@@ -318,29 +318,18 @@ class Window:
     def __init__(self, model: Any, p: dict, tr: Trajectory, t0: float, t1: float,
                  names: Iterable[str] | None = None) -> None:
         self.read = _Signals(model, p, names)       # names: the signals read over it (default: all)
-        self.rule = tr.rule if tr.rule != "exact" or tr.exact is not None else "linear"
+        self.tr, self.t0, self.t1, self.span = tr, t0, t1, t1 - t0
+        # the run's own rule's points (Trajectory.integral's), kept: the signals read at them once, for every mean
+        self.points = points = tr.integration_points(t0, t1)
+        self.rule, self.blocks = points.rule, points.blocks
         self.row_indices = rows = tr.rows_between(t0, t1)
-        self.rows = tr.samples(rows)
-        self.t0, self.t1, self.span = t0, t1, t1 - t0
-        if self.rule == "exact":
-            assert tr.exact is not None
-            self.blocks = list(tr.exact.quadrature_blocks(t0, t1))
-        else:
-            self.edges, _, self.edge_starts = tr.edges(rows)
+        self.rows = points.rows if points.rows is not None else tr.samples(rows)
+        self.edges, self.edge_starts = points.edges, points.edge_starts
 
     def mean(self, function: Any) -> float:
         """The mean over the window of ``function(samples)`` (a product of signals read through :attr:`read`) by
-        the run's own rule, as :meth:`Trajectory.integral` integrates it."""
-        if self.rule == "exact":
-            return sum(float(weights @ function(nodes)) for nodes, weights in self.blocks) / self.span
-        v = function(self.rows)
-        dt = np.diff(self.rows.t)
-        if self.rule == "end":
-            return float(dt @ v[1:]) / self.span
-        starts = np.array(v[:-1], dtype=float)
-        if self.edges.size:
-            starts[self.edges] = function(self.edge_starts)
-        return float(dt @ (0.5 * (starts + v[1:]))) / self.span
+        the run's own rule: :meth:`Trajectory.integral` at the window's points."""
+        return self.tr.integral(function, self.t0, self.t1, self.points) / self.span
 
     def quadrature(self, current: Any, conducting: Any, kinks: npt.ArrayLike | None = None) -> tuple[
             npt.NDArray[np.float64], npt.NDArray[np.float64]]:
