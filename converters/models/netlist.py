@@ -274,22 +274,13 @@ class Circuit(Model):
         u = None if samples.u is None else np.asarray(samples.u, dtype=float)
         sines = np.sin(np.multiply.outer(t, c.inputs[0]) + c.inputs[1]) if c.inputs is not None and Ssin.any() else None
         gates = np.column_stack([waveform_at(w, t) for w in c.gates]) if c.gates and Sgate.any() else None
-        small = t.size <= 64      # a few points (a run's switching edges): one gather beats a pass per configuration
-        if small:
-            out = np.einsum("pj,pkj->pk", x, Sx[config]) + s0[config]
-            if u is not None:
-                out += np.einsum("pj,pkj->pk", u, Su[config])
-        else:                     # a run's rows: one compiled pass
-            from ..circuits.kernels import signal_rows
-            out = np.empty((t.size, s0.shape[1]))
-            signal_rows(np.ascontiguousarray(x), np.zeros((t.size, 0)) if u is None else np.ascontiguousarray(u),
-                        np.ascontiguousarray(config), np.ascontiguousarray(Sx), np.ascontiguousarray(Su),
-                        np.ascontiguousarray(s0), out)
-        for values, maps in ((sines, Ssin), (gates, Sgate)):
+        from ..circuits.kernels import signal_rows          # the states' and pairs' share: one compiled pass
+        out = np.empty((t.size, s0.shape[1]))
+        signal_rows(np.ascontiguousarray(x), np.zeros((t.size, 0)) if u is None else np.ascontiguousarray(u),
+                    np.ascontiguousarray(config), np.ascontiguousarray(Sx), np.ascontiguousarray(Su),
+                    np.ascontiguousarray(s0), out)
+        for values, maps in ((sines, Ssin), (gates, Sgate)):      # the waveforms' share, per configuration
             if values is None:
-                continue
-            if small:
-                out += np.einsum("pj,pkj->pk", values, maps[config])
                 continue
             for k in np.unique(config):
                 at = config == k

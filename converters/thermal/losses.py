@@ -275,7 +275,6 @@ class _Signals:
         self.names = [n for n in wanted if n not in waved]
         self.columns = {name: k for k, name in enumerate(self.names)}
         self.memo: dict[Any, tuple[npt.NDArray[np.float64], Samples]] = {}
-
         self.plans: dict[tuple[str, ...], Any] = {}
 
     def __call__(self, name: str, samples: Samples) -> npt.NDArray[np.float64]:

@@ -47,7 +47,7 @@ def _losses_estimate(model: Any, p: dict, tr: Trajectory, setup: ThermalSetup, s
     method's orbit has no discretization. Per device in W, and in
     all relative to the devices' total (their absolute errors summed: none cancels another); a warning beyond
     the default target."""
-    from ..analysis.accuracy import DEFAULT_RTOL, last_period, orbit_runs
+    from ..analysis.accuracy import DEFAULT_RTOL, orbit_runs
     from ..methods.base import ErrorKind
     method = tr.algorithm
     if method is None or method.error_kind is ErrorKind.MODEL:
@@ -60,7 +60,7 @@ def _losses_estimate(model: Any, p: dict, tr: Trajectory, setup: ThermalSetup, s
     T = model.period(p)
     pair, bound = (fine, coarse), 1.0
     step = getattr(method, "h", None)
-    shortest = last_period(model, p, tr)["shortest_interval_T"] * T if coarse is not None and step else np.inf
+    shortest = _shortest_interval(fine, T) if coarse is not None and step else np.inf
     if step and shortest < 4.0 * step:          # h / 2^m: the shortest interval 2 steps or more
         halved = orbit_runs(model, p, method.coarsened(0.5 ** max(1, math.ceil(math.log2(2.0 * step / shortest)))),
                             tr)
@@ -115,6 +115,17 @@ def thermal_of_run(model: Any, p: dict, tr: Trajectory, setup: ThermalSetup, t0:
                       "balance_W": total_in - load - resistive - losses},
             "time_scales": "junction temperatures from the period's average losses (the thermal time constants are "
                            "far longer than the switching period)"}
+
+
+def _shortest_interval(orbit: Trajectory, T: float) -> float:
+    """The shortest time between two switchings of a one-period run on the orbit (its configuration's changes, the
+    period's wrap counted; T where it switches less than twice)."""
+    if orbit.config is None:
+        return T
+    times = orbit.t[np.flatnonzero(np.diff(orbit.config) != 0)]
+    if times.size < 2:
+        return T
+    return float(np.diff(np.concatenate([times, [times[0] + T]])).min())
 
 
 def thermal_of_transient(model: Any, p: dict, tr: Trajectory, setup: ThermalSetup,
