@@ -42,10 +42,35 @@ def ngspice():
     return True
 
 
+@pytest.fixture(scope="session")
+def chromium():
+    """A function that starts headless Chromium (Selenium, its console log kept): ``browser = chromium()``. In CI a
+    missing browser is a failure; the test carries the spice mark (:func:`pytest_collection_modifyitems`)."""
+    import shutil
+    binary, driver = shutil.which("chromium"), shutil.which("chromedriver")
+    if not (binary and driver):
+        if os.environ.get("CI"):
+            pytest.fail("chromium and chromedriver must be installed in CI (make test installs them)")
+        pytest.skip("chromium not installed (make test installs it)")
+    from selenium import webdriver
+
+    def start():
+        options = webdriver.ChromeOptions()
+        options.binary_location = binary
+        for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
+                    "--disable-background-networking", "--disable-component-update", "--disable-sync",
+                    "--no-first-run", "--allow-file-access-from-files", "--window-size=1400,1000"):
+            options.add_argument(arg)
+        options.set_capability("goog:loggingPrefs", {"browser": "ALL"})
+        return webdriver.Chrome(options=options, service=webdriver.ChromeService(executable_path=driver))
+    return start
+
+
 def pytest_collection_modifyitems(items):
-    """Every test that asks for ngspice carries the spice mark (``pytest -m "not spice"`` leaves them all out)."""
+    """Every test that asks for ngspice or Chromium carries the spice mark (``pytest -m "not spice"`` leaves them
+    all out; in CI they run for real)."""
     for item in items:
-        if "ngspice" in getattr(item, "fixturenames", ()):
+        if {"ngspice", "chromium"} & set(getattr(item, "fixturenames", ())):
             item.add_marker(pytest.mark.spice)
 
 

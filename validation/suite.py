@@ -85,7 +85,8 @@ def _run_pwm_scene(scene: Scene) -> SceneResult:
              f"scenes/{scene.name}/spice.parquet": _window(c.spice, c.window_start),
              f"scenes/{scene.name}/overlay.png": comparison_plot(c),
              f"scenes/{scene.name}/modes.png": mode_timeline_plot(c.lcp.t, c.lcp.modes(), c.spice.t, c.spice.modes(),
-                                                                  conv.period(c.params), scene.name)}
+                                                                  conv.period(c.params), scene.name),
+             **_scope(scene, c, c.window_start)}
     ok = all(check[3] for check in checks)
     failed = [name for name, _, _, passed in checks if not passed]
     return SceneResult(scene, ok=ok, reason=("failed checks: " + ", ".join(failed)) if failed else "",
@@ -111,7 +112,8 @@ def _run_circuit_scene(scene: Scene) -> SceneResult:
              f"scenes/{scene.name}/spice.parquet": _window(c.spice, c.window[0]),
              f"scenes/{scene.name}/overlay.png": comparison_plot(c),
              f"scenes/{scene.name}/modes.png": mode_timeline_plot(c.lcp.t, c.lcp.modes(), c.spice.t, c.spice.modes(),
-                                                                  period, scene.name)}
+                                                                  period, scene.name),
+             **_scope(scene, c, c.window[0])}
     checks = list(c.rows)
     failed = [name for name, _, _, passed in checks if not passed]
     return SceneResult(scene, ok=not failed, reason=("failed checks: " + ", ".join(failed)) if failed else "",
@@ -133,7 +135,8 @@ def _run_smc_scene(scene: Scene) -> SceneResult:
     checks = smc_checks(m, scene.checks, c.params, t_end)
     frame = c.lcp.waveforms()
     files = {f"scenes/{scene.name}/lcp.parquet": parquet_bytes(frame.iloc[::max(1, len(frame) // 200_000)]),
-             f"scenes/{scene.name}/overlay.png": smc_plot(c)}
+             f"scenes/{scene.name}/overlay.png": smc_plot(c),
+             **_scope(scene, c, m["window_s"][0])}          # the measured window: the whole run is 3 MB a ms
     failed = [name for name, _, _, ok in checks if not ok]
     return SceneResult(scene, ok=not failed, reason=("failed checks: " + ", ".join(failed)) if failed else "",
                        checks=checks, metrics=m, files=files)
@@ -145,14 +148,23 @@ def _run_smc_implicit_scene(scene: Scene) -> SceneResult:
     checks = implicit_checks(m, scene.checks)
     failed = [name for name, _, _, ok in checks if not ok]
     from .plots import png
+    from .scope import of_trajectory, scope_files
     files = {f"scenes/{scene.name}/lcp.parquet": parquet_bytes(run.waveforms()),
-             f"scenes/{scene.name}/waveforms.png": png(run.plot())}
+             f"scenes/{scene.name}/waveforms.png": png(run.plot()),
+             **scope_files(of_trajectory(run, title=f"Scene {scene.name}"), f"scenes/{scene.name}/scope.html")}
     return SceneResult(scene, ok=not failed, reason=("failed checks: " + ", ".join(failed)) if failed else "",
                        checks=checks, metrics=m, files=files)
 
 
 #: The study of each scene kind other than a PWM converter's comparison: a netlist's, the sliding-mode boost's.
 SCENE_RUNNERS = {"circuit": _run_circuit_scene, "smc": _run_smc_scene, "smc-implicit": _run_smc_implicit_scene}
+
+
+def _scope(scene: Scene, c, t0: float) -> dict:
+    """The scene's interactive scope over its compared window, ngspice beside pcsuite."""
+    from .scope import of_comparison, scope_files
+    return scope_files(of_comparison(c.lcp, c.spice, f"Scene {scene.name}: pcsuite against ngspice", t0=t0),
+                       f"scenes/{scene.name}/scope.html")
 
 
 def _window(tr, t0: float) -> bytes:
@@ -181,8 +193,9 @@ def scene_section(result: SceneResult) -> Section:
     base = f"scenes/{s.name}/"
     images = "".join(f"<img src='{url(base + name)}' alt='{esc(name[:-4])} {esc(s.name)}'>"
                      for name in ("overlay.png", "modes.png", "waveforms.png") if f"{base}{name}" in result.files)
-    links = ", ".join(f"<a href='{url(base + name)}'>{label} (Parquet)</a>" for name, label in
-                      (("lcp.parquet", "LCP"), ("spice.parquet", "ngspice")) if f"{base}{name}" in result.files)
+    links = ", ".join(f"<a href='{url(base + name)}'>{label}</a>" for name, label in
+                      (("scope.html", "interactive scope (zoom, cursors)"), ("lcp.parquet", "LCP (Parquet)"),
+                       ("spice.parquet", "ngspice (Parquet)")) if f"{base}{name}" in result.files)
     notes = "".join(f"<p class='note'>Note: {esc(note)}</p>" for note in result.notes)
     body = (head + verdict + table_html(checks.drop(columns="pass"), "result", good=("pass",)) + notes
             + accuracy_html(result.accuracy) + images

@@ -44,7 +44,7 @@ from converters.parallel import run_ensemble
 from converters.sweeps import failed_row
 from converters.validate import quoted
 
-from .io import _kind, atomic_write_bytes, atomic_write_text
+from .io import _kind, atomic_write_bytes, atomic_write_files, atomic_write_text
 
 MANIFEST = "sweep.json"
 PARTS = "parts"
@@ -544,14 +544,23 @@ def summary_plot(frame: pd.DataFrame, points, metric: str = "vout_mean", title: 
     return png(fig)
 
 
-def write_summary(out, points, metrics="vout_mean", title: str = "", specs=(), units=None) -> pd.DataFrame:
+def write_summary(out, points, metrics="vout_mean", title: str = "", specs=(), units=None,
+                  scope_metrics=None) -> pd.DataFrame:
     """The summary plot of a complete sweep, written atomically beside its parts: a tolerance study's histogram and
-    scatter per metric (``metrics``: a name or several), or the (first) metric over the sweep's points."""
+    scatter per metric (``metrics``: a name or several), or the (first) metric over the sweep's points; over one
+    parameter also ``summary.html``, a scope of ``scope_metrics`` (default: the plotted ones) over it."""
     frame = load_sweep(out)
     first = metrics if isinstance(metrics, str) else metrics[0]
     figure = (tolerance_plot(frame, points, metrics, specs, units, title) if points.kind == "tolerance"
               else summary_plot(frame, points, first, title, units))
-    atomic_write_bytes(Path(out) / "summary.png", figure)
+    files = {Path(out) / "summary.png": figure}
+    if len(points.names) == 1 and points.kind != "tolerance" and len(frame) >= 2:
+        # a line over one parameter: also as a scope (zoom, cursors: the metric's change between two points)
+        from .scope import of_sweep, scope_files
+        names = list(scope_metrics or ([metrics] if isinstance(metrics, str) else metrics))
+        page = of_sweep(frame, points.names[0], names, units, points.axes[0].log, title or "sweep summary")
+        files.update({Path(out) / name: data for name, data in scope_files(page, "summary.html").items()})
+    atomic_write_files(files)
     return frame
 
 

@@ -1,8 +1,7 @@
 """The report: scenes load strictly, the page refers only to files that exist, and it works in a real
 browser (headless Chromium: every image loads)."""
-import os
 import re
-import shutil
+import time
 from functools import partial
 from html.parser import HTMLParser
 from pathlib import Path
@@ -41,7 +40,7 @@ def test_every_file_the_page_refers_to_exists(report):
     for name in ("summary.csv", "metrics.json"):
         assert (report.parent / name).stat().st_size > 0
     assert sorted(p.name for p in (report.parent / "scenes" / "buck-dcm").iterdir()) == [
-        "lcp.parquet", "modes.png", "overlay.png", "spice.parquet"]
+        "lcp.parquet", "modes.png", "overlay.png", "scope.html", "spice.parquet"]
 
 
 def test_the_default_report_is_under_50_mb_and_its_waveforms_are_the_compared_windows(report):
@@ -158,32 +157,24 @@ def test_full_is_refused_for_a_suite_without_a_quick_form(capsys, tmp_path):
                    "suites with some: mechanics)\n") and not (tmp_path / "r").exists()
 
 
-def _chromium():
-    binary, driver = shutil.which("chromium"), shutil.which("chromedriver")
-    if not (binary and driver):
-        if os.environ.get("CI"):
-            pytest.fail("chromium and chromedriver must be installed in CI (make test installs them)")
-        pytest.skip("chromium not installed (make test installs it)")
-    from selenium import webdriver
-    options = webdriver.ChromeOptions()
-    options.binary_location = binary
-    for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
-                "--disable-background-networking", "--disable-component-update", "--disable-sync",
-                "--no-first-run", "--allow-file-access-from-files"):
-        options.add_argument(arg)
-    return webdriver.Chrome(options=options, service=webdriver.ChromeService(executable_path=driver))
-
-
-def test_the_page_loads_every_image_in_headless_chromium(report):
-    browser = _chromium()
+def test_the_page_loads_every_image_in_headless_chromium(report, chromium):
+    browser = chromium()
     try:
         browser.get(report.as_uri())
         browser.execute_script("return document.readyState")
         images = browser.execute_script(
             "return Array.from(document.images).map(i => [i.getAttribute('src'), i.complete, i.naturalWidth]);")
         title = browser.title
+        browser.get((report.parent / "scenes" / "buck-ccm" / "scope.html").as_uri())     # a scene's scope
+        for _ in range(100):
+            if browser.execute_script("return !!(window.pcsuiteScope && pcsuiteScope.ready)"):
+                break
+            time.sleep(0.05)
+        scope = browser.execute_script("return [pcsuiteScope.ready, pcsuiteScope.shown('vout')[0].length]")
+        errors = [e for e in browser.get_log("browser") if e["level"] in ("SEVERE", "ERROR")]
     finally:
         browser.quit()
+    assert scope[0] and scope[1] > 100 and errors == []
     assert title == "pcsuite report: default"
     assert len(images) >= 2 * len(scenes_of("default"))
     broken = [src for src, complete, width in images if not (complete and width > 0)]

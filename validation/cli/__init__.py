@@ -8,7 +8,7 @@ import sys
 from converters.errors import ParameterError, PcsuiteError
 
 from . import (bench, bifurcation, bode, compare, gdcm, gdcm_map, lcp, listing, mech, netlist, report, sensitivity,
-               simulate, sweep)
+               simulate, sweep, view)
 from .common import EXIT_BAD_INPUT, EXIT_INTERRUPTED
 
 #: A command that is one run stops at a x --time-limit + b s: its ngspice run or LCP solve, timed from its own start,
@@ -16,7 +16,7 @@ from .common import EXIT_BAD_INPUT, EXIT_INTERRUPTED
 ALARM_GRACE = (1.05, 0.5)
 #: The subcommands, in the order ``pcsuite --help`` lists them.
 SUBCOMMANDS = (listing, simulate, lcp, compare, gdcm, gdcm_map, sweep, bifurcation, bode, sensitivity, mech, netlist,
-               report, bench)
+               report, bench, view)
 
 
 def main(argv=None) -> int:

@@ -22,7 +22,9 @@ def add(sub) -> None:
                      help="the control around the converter (default pwm: open loop; see simulate)")
     cmp.add_argument("--t-end", default=None, help="duration in s (sliding mode; default 30 ms)")
     add_spice_options(cmp)
-    cmp.add_argument("--plot", type=given_path, default=None, help="write the overlay/residual plot (.png)")
+    cmp.add_argument("--plot", type=given_path, default=None,
+                     help="FILE.png: the overlay and residual plot; FILE.html: an interactive scope, ngspice beside "
+                          "pcsuite (zoom, two cursors with the mean and RMS between them)")
     cmp.add_argument("--json", action="store_true")
     cmp.set_defaults(run=run)
 
@@ -31,9 +33,8 @@ def run(args) -> int:
     from ..io import check_output_file; check_output_file("--plot", args.plot)  # noqa: E702 (before the run)
     from converters.params import parse_assignments
 
-    from ..io import atomic_write_bytes
-    if args.plot is not None and args.plot.suffix.lower() != ".png":
-        raise ParameterError(f"--plot must end in .png; got {str(args.plot)!r}")
+    if args.plot is not None and args.plot.suffix.lower() not in (".png", ".html"):
+        raise ParameterError(f"--plot must end in .png or .html; got {str(args.plot)!r}")
     params = parse_assignments(args.params)
     from converters.models import DEFAULT_CONTROL, is_netlist
     if is_netlist(args.converter):
@@ -45,7 +46,7 @@ def run(args) -> int:
         rows, metrics, header, plot, extra = COMPARISONS[args.control](args, params)
     passed = all(ok for _, _, _, ok in rows)
     if args.plot is not None:
-        atomic_write_bytes(args.plot, plot())
+        plot(args.plot)
     if args.json:
         print(json_text({**extra, "metrics": metrics, "checks": {name: ok for name, _, _, ok in rows},
                          "thresholds": {name: threshold for name, _, threshold, _ in rows}, "passed": passed}))
@@ -72,7 +73,19 @@ def _circuit(args, params):
     result = compare_circuit(circuit, params, h=args.h, start=args.start, spice_options=spice_options(args, period),
                              spice_start=args.spice_start)
     header = f"{result.circuit}: LCP against {result.spice.metadata['ngspice']} on the same netlist"
-    return result.rows, result.metrics, header, (lambda: comparison_plot(result)), result.to_dict()
+    return result.rows, result.metrics, header, _plot(lambda: comparison_plot(result), result, header), result.to_dict()
+
+
+def _plot(png, result, title):
+    """Where ``--plot`` goes: the PNG ``png()`` draws, or the scope of both runs (FILE.html)."""
+    def write(path) -> None:
+        if path.suffix.lower() == ".html":
+            from ..scope import of_comparison, write_scope
+            write_scope(of_comparison(result.lcp, result.spice, title), path)
+        else:
+            from ..io import atomic_write_bytes
+            atomic_write_bytes(path, png())
+    return write
 
 
 def _clocked(args, params):
@@ -88,7 +101,7 @@ def _clocked(args, params):
     result = compare(args.converter, params, h=args.h, start=args.start, spice_options=options, control=args.control,
                      spice_start=args.spice_start)
     header = f"{result.converter}: LCP against {result.spice.metadata['ngspice']}"
-    return result.rows, result.metrics, header, (lambda: comparison_plot(result)), result.to_dict()
+    return result.rows, result.metrics, header, _plot(lambda: comparison_plot(result), result, header), result.to_dict()
 
 
 def _smc(args, params):
@@ -107,7 +120,8 @@ def _smc(args, params):
                     spice_options=spice_options(args, model.period(model.resolve(params))))
     rows = smc_checks(c.metrics, THRESHOLDS["smc"], c.params, t_end)
     header = f"boost (sliding mode): LCP against {c.spice.metadata['ngspice']}"
-    return rows, c.metrics, header, (lambda: smc_plot(c)), {"converter": "boost", "control": "smc", "params": c.params}
+    return (rows, c.metrics, header, _plot(lambda: smc_plot(c), c, header),
+            {"converter": "boost", "control": "smc", "params": c.params})
 
 
 #: The comparison of each control --control takes: the sliding-mode boost from rest, the clocked loops whose period

@@ -56,7 +56,8 @@ def add(sub) -> None:
                           "every step, or the finest spacing that fits in half the memory limit)")
     sim.add_argument("--out", type=given_path, default=None, help="waveform file, .csv or .parquet")
     sim.add_argument("--plot", type=given_path, default=None,
-                     help="FILE.png or FILE.svg: the last periods' waveforms and the mode timeline")
+                     help="FILE.png or FILE.svg: the last periods' waveforms and the mode timeline; FILE.html: an "
+                          "interactive scope of the whole run (zoom, two cursors with the mean and RMS between them)")
     sim.add_argument("--thermal", type=given_path, default=None,
                      help="with --steady: a thermal setup (FILE.toml: devices, their PLECS .xml or .toml loss and "
                           "thermal descriptions, heatsinks, ambient) for the devices' losses and junction temperatures "
@@ -70,8 +71,8 @@ def run(args) -> int:
     from converters.params import parse_assignments
     from converters.run import run_converter, run_summary
     check_out(args.out)
-    if args.plot is not None and args.plot.suffix.lower() not in (".png", ".svg"):
-        raise ParameterError(f"--plot must end in .png or .svg; got {str(args.plot)!r}")
+    if args.plot is not None and args.plot.suffix.lower() not in (".png", ".svg", ".html"):
+        raise ParameterError(f"--plot must end in .png, .svg or .html; got {str(args.plot)!r}")
     params = parse_assignments(args.params)
     if args.thermal is not None and not args.steady and args.rtol is None:
         raise ParameterError("--thermal reads the losses of the periodic steady state: give --steady (or --rtol)")
@@ -130,10 +131,18 @@ def run(args) -> int:
             if "warning" in summary["thermal"]:
                 summary["warnings"] = [*summary.get("warnings", []), summary["thermal"]["warning"]]
     if args.out is not None:
-        write_frame(tr.waveforms(), args.out, meta={k: summary.get(k) for k in ("converter", "control", "method",
-                                                                                   "options", "output_step",
-                                                                                   "resolved_from_s") if k in summary})
-    if args.plot is not None:
+        from ..scope import scope_meta
+        frame = tr.waveforms()
+        meta = {k: summary.get(k) for k in ("converter", "control", "method", "options", "output_step",
+                                            "resolved_from_s") if k in summary}
+        if tr.resolved_from <= tr.t[0]:         # every step stored: the scope of the file integrates as the run does
+            meta["scope"] = scope_meta(tr, [c for c in frame.columns if c not in ("time", "mode")])
+        write_frame(frame, args.out, meta=meta)
+    if args.plot is not None and args.plot.suffix.lower() == ".html":
+        from ..scope import of_trajectory, write_scope
+        write_scope(of_trajectory(tr, title=_scope_title(args.converter, summary["method"],
+                                                         tr.metadata.get("params") or {})), args.plot)
+    elif args.plot is not None:
         import io
 
         from ..io import atomic_write_bytes
@@ -264,11 +273,20 @@ def _print(summary: dict, tr, args) -> None:
               f"(estimated: {how}{trust})")
     for warning in summary.get("warnings", []):
         print(f"warning: {warning}", file=sys.stderr)
-    if args.out is not None:
-        from converters.validate import quoted
-        print(f"wrote {quoted(args.out)}")
+    from converters.validate import quoted
+    for path in (args.out, args.plot):
+        if path is not None:
+            print(f"wrote {quoted(path)}")
 
 
 def _radius(rho: float) -> str:
     """A spectral radius as read: within 1e-5 of 1 as 1 less its distance (0.99999985 printed "1" looked marginal)."""
     return f"1 - {1.0 - rho:.2g}" if 0.0 < 1.0 - rho < 1e-5 else f"{rho:.6g}"
+
+
+def _scope_title(converter: str, method: str, params: dict) -> str:
+    """The scope's heading: the circuit, its method and its operating point."""
+    from converters.plotting import eng
+    point = ", ".join(f"{k} = {eng(v)}" for k, v in params.items()
+                      if isinstance(v, (int, float)) and not isinstance(v, bool))
+    return f"{converter} ({method}){': ' + point if point else ''}"

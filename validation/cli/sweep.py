@@ -242,13 +242,15 @@ def run(args) -> int:
     title = f"{ensemble.model} ({args.method}{', steady' if args.steady else ''})"
     title += "" if points.kind == "tolerance" else f": {metrics[0]}"
     units = getattr(ensemble, "units", {})
-    frame = write_summary(out, points, plotted, title, specs=specs, units=units)
+    frame = write_summary(out, points, plotted, title, specs=specs, units=units, scope_metrics=metrics)
     failed = frame[frame["status"] != "ok"]
     summary = {"out": str(out), "points": points.size, "stored_before": result.on_disk_before,
                "computed": result.computed, "ok": int(len(frame) - len(failed)), "failed": int(len(failed)),
                "wall_s": result.wall_s, "points_per_s": result.rate,
                "failures": failed["message"].value_counts().head(5).to_dict(),
                "dataset": str(out / "parts"), "summary_plot": str(out / "summary.png")}
+    if (out / "summary.html").is_file() and len(points.names) == 1 and points.kind != "tolerance":
+        summary["summary_scope"] = str(out / "summary.html")
     if specs or points.kind == "tolerance":
         from converters.sweeps.specs import study_summary
         summary["study"] = study_summary(frame, specs, points)
@@ -273,6 +275,8 @@ def run(args) -> int:
     if "study" in summary:
         _print_study(summary["study"], units)
     print(f"  dataset: {quoted(summary['dataset'])}  (pandas.read_parquet)\n  plot:    {quoted(summary['summary_plot'])}")
+    if "summary_scope" in summary:
+        print(f"  scope:   {quoted(summary['summary_scope'])}  (pcsuite view {quoted(out)})")
     if code:
         print(f"pcsuite: no point of the sweep succeeded ({points.size:,} failed); the reasons are above",
               file=sys.stderr)
