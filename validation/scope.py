@@ -28,7 +28,6 @@ from __future__ import annotations
 import base64
 import html
 import json
-import math
 import re
 import zlib
 from dataclasses import dataclass, field
@@ -195,7 +194,7 @@ def _trace_of(tr: Any, names: list[str], source: str, t0: float | None = None) -
     modes = None
     if tr.labels is not None or "mode" in tr.measured:
         try:
-            modes = np.asarray(tr.modes(rows)).astype(str)
+            modes = np.asarray(tr.modes(rows))
         except Exception:                        # a run with no mode rule: the band is left out, not the scope
             modes = None
     return Trace(source, tr.t[rows], values, rule, edge_rows, edge_values, modes, note)
@@ -286,11 +285,12 @@ def _chunks(n: int) -> list[tuple[int, int]]:
 
 
 def _mode_runs(modes: np.ndarray, t: np.ndarray) -> dict:
-    labels, codes = np.unique(modes, return_inverse=True)
-    change = np.flatnonzero(np.diff(codes) != 0) + 1
-    starts = np.concatenate([[0], change])
+    """The mode band: where each run of one mode starts, and its label's code."""
+    modes = np.asarray(modes)
+    starts = np.concatenate([[0], np.flatnonzero(modes[1:] != modes[:-1]) + 1])
+    labels, codes = np.unique(modes[starts].astype(str), return_inverse=True)     # labels of the runs only
     return {"labels": labels.tolist(), "colours": [PALETTE[i % len(PALETTE)] for i in range(labels.size)],
-            "t": _b64(t[starts]), "code": _b64(codes[starts].astype(float))}
+            "t": _b64(t[starts]), "code": _b64(codes.astype(float))}
 
 
 def _payload(scope: Scope, data_dir: str | None) -> tuple[dict, list[tuple[int, int, str]]]:
@@ -303,7 +303,7 @@ def _payload(scope: Scope, data_dir: str | None) -> tuple[dict, list[tuple[int, 
         chunks = []
         for k, (r0, r1) in enumerate(_chunks(tr.t.size)):
             chunks.append({"r0": r0, "r1": r1, "t0": float(tr.t[r0]), "t1": float(tr.t[r1]),
-                           "sums": {n: [math.fsum(terms[n][0][r0:r1]), math.fsum(terms[n][1][r0:r1])]
+                           "sums": {n: [float(terms[n][0][r0:r1].sum()), float(terms[n][1][r0:r1].sum())]
                                     for n in names}})
             body = json.dumps({n: _packed(tr.values[n][r0:r1 + 1]) for n in names if n not in same})
             scripts.append((i, k, f'pcsuiteChunk({i},{k},"{_packed(tr.t[r0:r1 + 1])}",{body});'))

@@ -225,7 +225,7 @@ def test_a_million_step_runs_page_opens_in_under_2_s_weighs_under_10_mb_and_keep
         _open(browser, spiky)
         shown = browser.execute_script("return pcsuiteScope.shown('v')")
         # zoomed to 200,001 rows about the spike: drawn from every row (the chunks read), decimated in the page
-        browser.execute_script(f"pcsuiteScope.setView({t[554_321]!r}, {t[754_321]!r})")
+        browser.execute_script(f"pcsuiteScope.setView({float(t[554_321])!r}, {float(t[754_321])!r})")
         end = time.monotonic() + 10
         while browser.execute_script("return pcsuiteScope.loading()") and time.monotonic() < end:
             time.sleep(0.05)
