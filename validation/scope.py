@@ -177,27 +177,43 @@ def _default_signals(tr: Any) -> list[str]:
 
 
 def _trace_of(tr: Any, names: list[str], source: str, t0: float | None = None) -> Trace:
-    start = max(tr.resolved_from, tr.t[0] if t0 is None else t0)   # a thinned run: the rows it kept every step of
-    rows = np.arange(tr.t.size) if start <= tr.t[0] else tr.rows_between(start, tr.t[-1])
+    rows = _rows(tr, t0)
     values = {n: np.asarray(tr.signal(n), dtype=float)[rows] for n in names}
-    rule, note = ("end" if tr.rule == "end" else "linear"), ""
+    rule, edge_rows, edge_values = _rule_of(tr, rows, names)
+    notes = []
     if tr.rule == "exact":
-        note = ("the run integrates its exact pieces; the page's mean and RMS use the linear rule on its samples "
-                "(pcsuite measure gives the exact ones)")
-    edge_rows, edge_values = np.zeros(0, dtype=np.int64), {}
+        notes.append("the run integrates its exact pieces; the page's mean and RMS use the linear rule on its samples "
+                     "(the run's summary and Trajectory.mean give the exact ones)")
+    if rows[0] > 0 and tr.t[0] < tr.resolved_from and (t0 is None or t0 < tr.resolved_from):
+        notes.append(f"the run kept every step from {tr.resolved_from:.6g} s on (--output-step before it): the scope "
+                     "shows that part")
+    modes = None
+    if tr.labels is not None or "mode" in tr.measured:
+        from converters.errors import SignalError
+        try:
+            modes = np.asarray(tr.modes(rows))
+        except SignalError:                      # a run with no mode rule: the band is left out, not the scope
+            modes = None
+    return Trace(source, tr.t[rows], values, rule, edge_rows, edge_values, modes, "; ".join(notes))
+
+
+def _rows(tr: Any, t0: float | None) -> np.ndarray:
+    """The rows a scope shows: from ``t0`` (default: the start) on, and only where the run kept every step."""
+    start = max(tr.resolved_from, tr.t[0] if t0 is None else t0)
+    return np.arange(tr.t.size) if start <= tr.t[0] else tr.rows_between(start, tr.t[-1])
+
+
+def _rule_of(tr: Any, rows: np.ndarray, names: list[str]) -> tuple[str, np.ndarray, dict[str, np.ndarray]]:
+    """How the page integrates the run's ``rows`` as the run does: its rule, and for the linear rule the steps that
+    start at a switching edge (positions in ``rows``) with each algebraic signal's start value there."""
+    rule = "end" if tr.rule == "end" else "linear"
     algebraic = [n for n in names if n not in tr.state_names and n not in tr.measured]
     if rule == "linear" and tr.labels is not None and algebraic and tr.config is not None:
         edges, _, first = tr.edges(rows)
         if edges.size:
-            edge_rows = edges.astype(np.int64)
-            edge_values = {n: np.asarray(tr.labels.signal(n, first), dtype=float) for n in algebraic}
-    modes = None
-    if tr.labels is not None or "mode" in tr.measured:
-        try:
-            modes = np.asarray(tr.modes(rows))
-        except Exception:                        # a run with no mode rule: the band is left out, not the scope
-            modes = None
-    return Trace(source, tr.t[rows], values, rule, edge_rows, edge_values, modes, note)
+            return rule, edges.astype(np.int64), {n: np.asarray(tr.labels.signal(n, first), dtype=float)
+                                                  for n in algebraic}
+    return rule, np.zeros(0, dtype=np.int64), {}
 
 
 def of_frame(frame: Any, meta: dict | None = None, title: str = "") -> Scope:
@@ -241,9 +257,9 @@ def _stored_rule(stored: Any, rows: int, names: list[str]) -> tuple[str | None, 
 def scope_meta(tr: Any, names: list[str]) -> dict:
     """What a waveform file stores for its scope to integrate as the run does: the rule, and the edge steps with
     their start values (``pcsuite view`` reads them back)."""
-    trace = _trace_of(tr, names, tr.method or "run")
-    return {"rule": trace.rule, "edge_rows": trace.edge_rows.tolist(),
-            "edge_values": {n: v.tolist() for n, v in trace.edge_values.items()}}
+    rule, edge_rows, edge_values = _rule_of(tr, _rows(tr, None), names)
+    return {"rule": rule, "edge_rows": edge_rows.tolist(),
+            "edge_values": {n: v.tolist() for n, v in edge_values.items()}}
 
 
 # --- the page --------------------------------------------------------------------------------------------------
