@@ -119,6 +119,26 @@ def test_cursors_at_two_times_show_the_mean_and_rms_pcsuite_measures(chromium, t
         assert cells[(name, source, "a")] == tr.signal(name)[row]
 
 
+def test_stacked_charts_span_the_same_times_however_many_there_are(chromium, tmp_path):
+    """Twelve charts, more than a screen holds: every plot area (and the mode band's) starts and ends at the same
+    pixels, so a time lies under one x in all of them (charts made after the page's scroll bar appeared were
+    narrower)."""
+    t = np.linspace(0.0, 1e-3, 1001)
+    values = {f"v{k}": np.sin(2 * np.pi * (k + 1) * 1e3 * t) for k in range(12)}
+    modes = np.where(t < 5e-4, "ON", "OFF")
+    page = tmp_path / "many.html"
+    write_scope(Scope("many", (Trace("run", t, values, modes=modes),), tuple(values), {}), page)
+    browser = chromium()
+    try:
+        _open(browser, page)
+        areas = browser.execute_script("return pcsuiteScope.plotAreas()")
+        errors = _errors(browser)
+    finally:
+        browser.quit()
+    assert errors == [] and len(areas) == 13
+    assert len({tuple(area) for area in areas}) == 1, areas
+
+
 def test_view_opens_a_stored_run_that_integrates_as_the_run_did(chromium, tmp_path, capsys):
     """``simulate --out RUN.parquet`` stores the run's rule and edge starts; ``pcsuite view`` reads them back: the
     cursors' mean of the switch command (a signal with an edge at each switching) is the run's own."""

@@ -215,6 +215,7 @@ window.pcsuiteScope = (() => {
     const ticks = (u, values) => { const [s] = timeUnit(view.max - view.min); return values.map((t) => +(t * s).toPrecision(8)); };
     return {
       width: width(), height, series,
+      padding: [8, 24, 0, 0],              // fixed, so that every chart's plot area spans the same times
       scales: { x: { time: false, distr: D.x.log ? 3 : 1, range: () => [view.min, view.max] } },
       axes: [last ? { values: ticks, label: xLabel(unit), labelSize: 18, size: 34 }
                   : { values: (u, values) => values.map(() => ""), size: 6, ticks: { show: false } },
@@ -405,7 +406,8 @@ window.pcsuiteScope = (() => {
   }
   const api = { start, setCursor, setCursors, setView, measured, ready: false, openedMs: null, readyAt: null,
                 shown: (name) => { const ch = charts.find((c) => c.name === name); return ch && [Array.from(ch.u.data[0]), Array.from(ch.u.data[1])]; },
-                view: () => ({ ...view }), loading: () => loading };
+                view: () => ({ ...view }), loading: () => loading,
+                plotAreas: () => [...charts.map((c) => c.u), band].filter(Boolean).map((u) => [u.bbox.left, u.bbox.width]) };
   window.addEventListener("resize", () => { for (const ch of charts) ch.u.setSize({ width: width(), height: ch.u.height }); if (band) band.setSize({ width: width(), height: band.height }); });
   return api;
 })();
