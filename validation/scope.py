@@ -300,13 +300,25 @@ def _chunks(n: int) -> list[tuple[int, int]]:
     return [(a, b) for a, b in zip(bounds[:-1], bounds[1:])]
 
 
-def _mode_runs(modes: np.ndarray, t: np.ndarray) -> dict:
-    """The mode band: where each run of one mode starts, and its label's code."""
+def _mode_runs(modes: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Where each run of one mode starts (rows) and its label."""
     modes = np.asarray(modes)
     starts = np.concatenate([[0], np.flatnonzero(modes[1:] != modes[:-1]) + 1])
-    labels, codes = np.unique(modes[starts].astype(str), return_inverse=True)     # labels of the runs only
-    return {"labels": labels.tolist(), "colours": [PALETTE[i % len(PALETTE)] for i in range(labels.size)],
-            "t": _b64(t[starts]), "code": _b64(codes.astype(float))}
+    return starts, modes[starts].astype(str)
+
+
+def _mode_bands(scope: Scope) -> dict | None:
+    """The mode band of every trace that has modes (pcsuite's and, in compare, ngspice's, one stripe each): the
+    labels of all of them with one colour each, and per trace its runs' start times and label codes."""
+    runs = {i: _mode_runs(tr.modes, tr.t) for i, tr in enumerate(scope.traces) if tr.modes is not None}
+    if not runs:
+        return None
+    labels = sorted(set().union(*(set(names.tolist()) for _, names in runs.values())))
+    code = {label: k for k, label in enumerate(labels)}
+    return {"labels": labels, "colours": [PALETTE[k % len(PALETTE)] for k in range(len(labels))],
+            "stripes": [{"trace": i, "source": scope.traces[i].source, "t": _b64(scope.traces[i].t[starts]),
+                         "code": _b64(np.array([code[n] for n in names], dtype=float))}
+                        for i, (starts, names) in runs.items()]}
 
 
 def _payload(scope: Scope, data_dir: str | None) -> tuple[dict, list[tuple[int, int, str]]]:
@@ -331,9 +343,9 @@ def _payload(scope: Scope, data_dir: str | None) -> tuple[dict, list[tuple[int, 
                        "signals": names, "chunks": chunks, "overview": overview,
                        "edges": {"rows": _b64(tr.edge_rows.astype(float)),
                                  "values": {n: _b64(v) for n, v in tr.edge_values.items() if n in names}},
-                       "modes": None if tr.modes is None else _mode_runs(tr.modes, tr.t)})
+                       })
     return {"title": scope.title, "signals": list(scope.signals), "units": scope.units, "traces": traces,
-            "x": {"name": scope.x_name, "unit": scope.x_unit, "log": scope.x_log},
+            "x": {"name": scope.x_name, "unit": scope.x_unit, "log": scope.x_log}, "modes": _mode_bands(scope),
             "dataDir": data_dir, "chunkRows": CHUNK_ROWS}, scripts
 
 

@@ -170,11 +170,13 @@ def test_the_page_loads_every_image_in_headless_chromium(report, chromium):
             if browser.execute_script("return !!(window.pcsuiteScope && pcsuiteScope.ready)"):
                 break
             time.sleep(0.05)
-        scope = browser.execute_script("return [pcsuiteScope.ready, pcsuiteScope.shown('vout')[0].length]")
+        scope = browser.execute_script("return [pcsuiteScope.ready, pcsuiteScope.shown('vout')[0].length, "
+                                       "pcsuiteScope.modeStripes()]")
         errors = [e for e in browser.get_log("browser") if e["level"] in ("SEVERE", "ERROR")]
     finally:
         browser.quit()
     assert scope[0] and scope[1] > 100 and errors == []
+    assert scope[2] == ["pcsuite", "ngspice"]                 # both simulators' modes in the band
     assert title == "pcsuite report: default"
     assert len(images) >= 2 * len(scenes_of("default"))
     broken = [src for src, complete, width in images if not (complete and width > 0)]

@@ -32,9 +32,7 @@ window.pcsuiteScope = (() => {
     for (const n in tr.edges.values) edgeValues[n] = f64(tr.edges.values[n]);
     const overview = {};
     for (const n in tr.overview) overview[n] = { t: f64(tr.overview[n].t), v: f64(tr.overview[n].v) };
-    const modes = tr.modes && { labels: tr.modes.labels, colours: tr.modes.colours, t: f64(tr.modes.t),
-                                code: f64(tr.modes.code) };
-    return { ...tr, edges, edgeValues, overviewData: overview, modeRuns: modes,
+    return { ...tr, edges, edgeValues, overviewData: overview,
              chunkT0: tr.chunks.map((c) => c.t0), data: tr.chunks.map(() => null), pending: {} };
   });
   const waiting = {};
@@ -182,17 +180,25 @@ window.pcsuiteScope = (() => {
       ctx.fillText(key, x + 3 * devicePixelRatio, top + 12 * devicePixelRatio); ctx.restore();
     }
   }
+  // The mode band: one stripe per trace with modes (pcsuite's, then ngspice's in compare), named at its left.
+  const MODES = D.modes && { ...D.modes, stripes: D.modes.stripes.map((s) => ({ ...s, t: f64(s.t), code: f64(s.code) })) };
   function drawModes(u) {
-    const m = T[0].modeRuns;
-    if (!m) return;
-    const ctx = u.ctx, { top, height } = u.bbox;
-    let j = Math.max(0, upper(m.t, view.min) - 1);
-    for (; j < m.t.length && m.t[j] < view.max; j++) {
-      const end = j + 1 < m.t.length ? m.t[j + 1] : full.max;
-      const x0 = u.valToPos(Math.max(m.t[j], view.min), "x", true), x1 = u.valToPos(Math.min(end, view.max), "x", true);
-      ctx.fillStyle = m.colours[m.code[j]];
-      ctx.fillRect(x0, top, Math.max(x1 - x0, 1), height);
-    }
+    if (!MODES) return;
+    const ctx = u.ctx, { top, height } = u.bbox, h = height / MODES.stripes.length;
+    MODES.stripes.forEach((m, s) => {
+      const y = top + s * h, last = T[m.trace].chunks[T[m.trace].chunks.length - 1].t1;
+      let j = Math.max(0, upper(m.t, view.min) - 1);
+      for (; j < m.t.length && m.t[j] < view.max; j++) {
+        const end = j + 1 < m.t.length ? m.t[j + 1] : last;
+        const x0 = u.valToPos(Math.max(m.t[j], view.min), "x", true), x1 = u.valToPos(Math.min(end, view.max), "x", true);
+        ctx.fillStyle = MODES.colours[m.code[j]];
+        ctx.fillRect(x0, y, Math.max(x1 - x0, 1), h - (s + 1 < MODES.stripes.length ? devicePixelRatio : 0));
+      }
+      if (MODES.stripes.length > 1) {
+        ctx.save(); ctx.fillStyle = "#222"; ctx.textAlign = "right"; ctx.font = (10 * devicePixelRatio) + "px sans-serif";
+        ctx.fillText(m.source, u.bbox.left - 4 * devicePixelRatio, y + h / 2 + 4 * devicePixelRatio); ctx.restore();
+      }
+    });
   }
   function interact(u) {
     let down = null;
@@ -377,12 +383,12 @@ window.pcsuiteScope = (() => {
       const series = [{}, ...traces.map((i) => ({ label: T[i].source, stroke: COLOURS[i % COLOURS.length], width: 1, spanGaps: true }))];
       const unit = D.units[name] ? " (" + D.units[name] + ")" : "";
       const ch = { name, traces, el, shown: true };
-      const last = !T[0].modeRuns && name === D.signals[D.signals.length - 1];
+      const last = !MODES && name === D.signals[D.signals.length - 1];
       ch.u = new uPlot(options(name + unit, series, last ? 150 : 120, [], last), [[view.min, view.max], ...traces.map(() => [null, null])], el);
       interact(ch.u);
       charts.push(ch);
     }
-    if (T[0].modeRuns) {
+    if (MODES) {
       const el = document.createElement("div"); el.className = "band"; host.appendChild(el);
       const opts = options("mode", [{}, { show: false }], 100, [drawModes], true);
       opts.scales.y = { range: () => [0, 1] };
@@ -391,8 +397,8 @@ window.pcsuiteScope = (() => {
       band = new uPlot(opts, [[view.min, view.max], [0, 0]], el);
       interact(band);
       const key = document.createElement("div"); key.className = "modes";
-      T[0].modeRuns.labels.forEach((l, j) => {
-        const s = document.createElement("span"); s.className = "swatch"; s.style.background = T[0].modeRuns.colours[j];
+      MODES.labels.forEach((l, j) => {
+        const s = document.createElement("span"); s.className = "swatch"; s.style.background = MODES.colours[j];
         key.append(s, " " + l + "  ");
       });
       host.appendChild(key);
@@ -407,6 +413,7 @@ window.pcsuiteScope = (() => {
   const api = { start, setCursor, setCursors, setView, measured, ready: false, openedMs: null, readyAt: null,
                 shown: (name) => { const ch = charts.find((c) => c.name === name); return ch && [Array.from(ch.u.data[0]), Array.from(ch.u.data[1])]; },
                 view: () => ({ ...view }), loading: () => loading,
+                modeStripes: () => (MODES ? MODES.stripes.map((s) => s.source) : []),
                 plotAreas: () => [...charts.map((c) => c.u), band].filter(Boolean).map((u) => [u.bbox.left, u.bbox.width]) };
   window.addEventListener("resize", () => { for (const ch of charts) ch.u.setSize({ width: width(), height: ch.u.height }); if (band) band.setSize({ width: width(), height: band.height }); });
   return api;
