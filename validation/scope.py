@@ -8,8 +8,9 @@ stylesheet ship in ``validation/data/scope`` and are inlined: the page fetches n
 rather than Plotly or Bokeh: it draws a million points in tens of milliseconds from typed arrays and weighs 51 kB
 where Plotly's bundle is 3.5 MB, so a scope page costs its data and little else.
 
-The data travels in chunks of rows (:data:`CHUNK_ROWS`, consecutive chunks share their boundary row), as
-little-endian float64, every step of the run: inline in the page for a run up to :data:`INLINE_BYTES`, otherwise
+The data travels in chunks of rows (:data:`CHUNK_ROWS`, consecutive chunks share their boundary row), every step of
+the run, each value exact (float64, or float32 where that holds it; compressed: :func:`_packed`): inline in the
+page for a run up to :data:`INLINE_BYTES` of samples, otherwise
 as script files in a folder beside the page (``NAME_files/``) that the page loads when a zoom or a cursor needs
 them (a ``<script>`` element loads from a local file where a fetch may not). What the page shows of a window
 holding more rows than the screen has columns is decimated to the first, last, minimum and maximum row of each
@@ -28,6 +29,7 @@ from __future__ import annotations
 import base64
 import html
 import json
+import math
 import re
 import zlib
 from dataclasses import dataclass, field
@@ -45,6 +47,9 @@ CHUNK_ROWS = 1 << 16
 INLINE_BYTES = 8 << 20
 #: Screen columns of the overview the page opens on.
 OVERVIEW_COLUMNS = 2000
+#: What an event-driven run's scope says: the page has its samples, not its exact pieces.
+EXACT_NOTE = ("the run integrates its exact pieces; the page's mean and RMS use the linear rule on its samples (the "
+              "run's summary and Trajectory.mean give the exact ones)")
 #: Mode band colours (the static plots' own, then a cycle for a netlist's held-set labels).
 PALETTE = ("#4c72b0", "#55a868", "#c44e52", "#8172b2", "#ccb974", "#64b5cd", "#dd8452", "#937860", "#da8bc3",
            "#8c8c8c")
@@ -110,7 +115,8 @@ class Scope:
 
 def minmax_rows(v: np.ndarray, columns: int) -> np.ndarray:
     """The rows that draw ``v`` on ``columns`` screen columns as every row would: each column's first, last,
-    minimum and maximum row, in order (every row where there are no more than 4 per column)."""
+    minimum and maximum row and its first NaN (a gap), in order (every row where there are no more than 4 per
+    column)."""
     v = np.asarray(v, dtype=float)
     n = v.size
     if n <= 4 * columns:
@@ -123,7 +129,8 @@ def minmax_rows(v: np.ndarray, columns: int) -> np.ndarray:
     low = base + np.argmin(finite, axis=1)
     high = base + np.argmax(np.where(np.isnan(padded), -np.inf, padded), axis=1)
     last = np.minimum(base + per - 1, n - 1)
-    return np.unique(np.minimum(np.concatenate([base, low, high, last]), n - 1))
+    gaps = base[np.isnan(padded).any(axis=1)] + np.argmax(np.isnan(padded), axis=1)[np.isnan(padded).any(axis=1)]
+    return np.unique(np.minimum(np.concatenate([base, low, high, last, gaps]), n - 1))
 
 
 def of_trajectory(tr: Any, signals: list[str] | None = None, title: str = "",
@@ -182,8 +189,7 @@ def _trace_of(tr: Any, names: list[str], source: str, t0: float | None = None) -
     rule, edge_rows, edge_values = _rule_of(tr, rows, names)
     notes = []
     if tr.rule == "exact":
-        notes.append("the run integrates its exact pieces; the page's mean and RMS use the linear rule on its samples "
-                     "(the run's summary and Trajectory.mean give the exact ones)")
+        notes.append(EXACT_NOTE)
     if rows[0] > 0 and tr.t[0] < tr.resolved_from and (t0 is None or t0 < tr.resolved_from):
         notes.append(f"the run kept every step from {tr.resolved_from:.6g} s on (--output-step before it): the scope "
                      "shows that part")
@@ -227,14 +233,18 @@ def of_frame(frame: Any, meta: dict | None = None, title: str = "") -> Scope:
     names = [c for c in frame.columns if not skip.match(str(c)) and frame[c].dtype.kind in "fiub"]
     if not names:
         raise ParameterError("the run's waveform file has no numeric signal to show")
-    rule, edge_rows, edge_values = _stored_rule(meta.get("scope"), len(frame), names)
+    stored = meta.get("scope")
+    rule, edge_rows, edge_values = _stored_rule(stored, len(frame), names)
+    note = "the file does not say how its run integrates (or says it in a form not read here): the page reads the " \
+           "linear rule on its samples"
+    if rule:
+        note = EXACT_NOTE if stored.get("exact") is True else ""
     modes = frame["mode"].astype(str).to_numpy() if "mode" in frame.columns else None
-    trace = Trace(str(meta.get("method") or "run"), frame["time"].to_numpy(dtype=float),
+    trace = Trace(str(meta.get("method") or "run")[:40], frame["time"].to_numpy(dtype=float),
                   {n: frame[n].to_numpy(dtype=float) for n in names}, rule or "linear", edge_rows, edge_values, modes,
-                  "" if rule else "the file does not say how its run integrates (or says it in a form not read here): "
-                                  "the page reads the linear rule on its samples")
-    units = meta.get("units") or {}
-    return Scope(title, (trace,), tuple(names), {n: str(units.get(n, "")) for n in names})
+                  note)
+    units = meta.get("units") if isinstance(meta.get("units"), dict) else {}
+    return Scope(title, (trace,), tuple(names), {n: str(units.get(n, ""))[:20] for n in names})
 
 
 def _stored_rule(stored: Any, rows: int, names: list[str]) -> tuple[str | None, np.ndarray, dict[str, np.ndarray]]:
@@ -244,25 +254,33 @@ def _stored_rule(stored: Any, rows: int, names: list[str]) -> tuple[str | None, 
     if not isinstance(stored, dict) or stored.get("rule") not in ("linear", "end"):
         return none
     try:
-        edge_rows = np.asarray(stored.get("edge_rows", []), dtype=np.int64).reshape(-1)
+        given = np.asarray(stored.get("edge_rows", []), dtype=float).reshape(-1)
         values = {str(n): np.asarray(v, dtype=float).reshape(-1) for n, v in (stored.get("edge_values") or {}).items()}
-    except (TypeError, ValueError, AttributeError):
+    except (TypeError, ValueError, AttributeError, OverflowError):
         return none
-    if (edge_rows.size and (edge_rows.min() < 0 or edge_rows.max() >= rows - 1 or np.any(np.diff(edge_rows) <= 0))) \
-            or any(v.size != edge_rows.size for v in values.values()):
+    if given.size and not (np.all(np.isfinite(given)) and np.all(given == np.round(given)) and given.min() >= 0
+                           and given.max() < rows - 1 and np.all(np.diff(given) > 0)):
         return none
-    return str(stored["rule"]), edge_rows, {n: v for n, v in values.items() if n in names}
+    if any(v.size != given.size for v in values.values()):
+        return none
+    return str(stored["rule"]), given.astype(np.int64), {n: v for n, v in values.items() if n in names}
 
 
 def scope_meta(tr: Any, names: list[str]) -> dict:
     """What a waveform file stores for its scope to integrate as the run does: the rule, and the edge steps with
     their start values (``pcsuite view`` reads them back)."""
     rule, edge_rows, edge_values = _rule_of(tr, _rows(tr, None), names)
-    return {"rule": rule, "edge_rows": edge_rows.tolist(),
+    return {"rule": rule, "exact": tr.rule == "exact", "edge_rows": edge_rows.tolist(),
             "edge_values": {n: v.tolist() for n, v in edge_values.items()}}
 
 
 # --- the page --------------------------------------------------------------------------------------------------
+
+def _number(value: float) -> float | None:
+    """A sum for the page's JSON: a NaN sample (a failed sweep point) makes it null, which JSON has (NaN it has not)."""
+    value = float(value)
+    return value if math.isfinite(value) else None
+
 
 def _b64(a: np.ndarray) -> str:
     return base64.b64encode(np.ascontiguousarray(a, dtype="<f8").tobytes()).decode("ascii")
@@ -331,9 +349,10 @@ def _payload(scope: Scope, data_dir: str | None) -> tuple[dict, list[tuple[int, 
         chunks = []
         for k, (r0, r1) in enumerate(_chunks(tr.t.size)):
             chunks.append({"r0": r0, "r1": r1, "t0": float(tr.t[r0]), "t1": float(tr.t[r1]),
-                           "sums": {n: [float(terms[n][0][r0:r1].sum()), float(terms[n][1][r0:r1].sum())]
+                           "sums": {n: [_number(terms[n][0][r0:r1].sum()), _number(terms[n][1][r0:r1].sum())]
                                     for n in names}})
-            body = json.dumps({n: _packed(tr.values[n][r0:r1 + 1]) for n in names if n not in same})
+            body = json.dumps({n: _packed(tr.values[n][r0:r1 + 1]) for n in names if n not in same}
+                              ).replace("<", "\\u003c")      # a signal's name cannot end the page's script element
             scripts.append((i, k, f'pcsuiteChunk({i},{k},"{_packed(tr.t[r0:r1 + 1])}",{body});'))
         overview = {}
         for n in names if data_dir is not None else ():     # inline, every row is there from the start
@@ -363,7 +382,8 @@ def page(scope: Scope, data_dir: str | None = None) -> tuple[str, list[tuple[int
     payload, scripts = _payload(scope, data_dir)
     inline = "" if data_dir is not None else "\n".join(_script(s) for _, _, s in scripts)
     title = html.escape(scope.title or "pcsuite scope")
-    data = json.dumps(payload).replace("</", "<\\/")
+    # every "<" escaped: a column name or unit read from a file cannot end the script element or open a comment
+    data = json.dumps(payload, allow_nan=False).replace("<", "\\u003c")
     text = f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>{title}</title>
 <style>{_asset("uPlot.min.css")}</style><style>{_asset("scope.css")}</style></head>
@@ -406,7 +426,7 @@ def write_scope(scope: Scope, path: Path) -> list[Path]:
         folder.mkdir(exist_ok=True)
     written = atomic_write_files(files)
     if folder.is_dir():
-        for stale in folder.glob("t*-c*.js"):        # an earlier, longer run's chunks
-            if stale not in files:
+        for stale in folder.iterdir():               # an earlier, longer run's chunks (only names the page gives)
+            if re.fullmatch(r"t\d+-c\d+\.js", stale.name) and stale not in files:
                 stale.unlink()
     return written

@@ -139,6 +139,71 @@ def test_stacked_charts_span_the_same_times_however_many_there_are(chromium, tmp
     assert len({tuple(area) for area in areas}) == 1, areas
 
 
+def test_gaps_and_hostile_names_neither_blank_the_page_nor_hide_a_spike(chromium, tmp_path):
+    """NaN samples (a failed sweep point; a signal undefined for a while) made the page's JSON invalid (NaN) and
+    blanked it; a NaN in a screen column hid that column's minimum. A column name from a file that opens an HTML
+    comment and a script tag ended the page's data early. Now: the page opens without a console error, a NaN is a
+    gap (null), the spike beside it is drawn, and the name shows as written."""
+    t = np.linspace(0.0, 1.0, 200_001)
+    v = np.sin(2 * np.pi * 5 * t)
+    v[1000:1100] = np.nan
+    v[1150] = -4.0                               # in the same screen column as the gap's end
+    name = "<!--<script>v"
+    page = tmp_path / "gaps.html"
+    write_scope(Scope("gaps", (Trace("run", t, {name: v}),), (name,), {name: "V"}), page)
+    rows = minmax_rows(v, 2000)
+    assert np.nanmin(v[rows]) == -4.0 and np.isnan(v[rows]).any()
+    browser = chromium()
+    try:
+        _open(browser, page)
+        shown = browser.execute_script(f"return pcsuiteScope.shown({name!r})")
+        labels = browser.execute_script("return Array.from(document.querySelectorAll('#controls label')).map("
+                                        "(l) => l.textContent.trim())")
+        errors = _errors(browser)
+    finally:
+        browser.quit()
+    assert errors == []
+    assert None in shown[1] and min(x for x in shown[1] if x is not None) == -4.0
+    assert name in labels
+
+
+def test_a_stored_files_hostile_metadata_is_refused_or_ignored_in_one_line(tmp_path, capsys):
+    """Units as a list, edge rows past a double or fractional, JSON nested past the parser: ``view`` writes its page
+    (the rule not trusted) or says why in one line, never a traceback; a folder's files it did not write stay."""
+    import pandas as pd
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+    frame = pd.DataFrame({"time": np.arange(5.0), "v": np.arange(5.0)})
+    for meta in ('{"units": ["V"], "scope": {"rule": "linear", "edge_rows": [1e400], "edge_values": {"v": [1]}}}',
+                 '{"scope": {"rule": "linear", "edge_rows": [1.5], "edge_values": {"v": [1]}}}',
+                 "[" * 100_000 + "]" * 100_000):
+        table = pa.Table.from_pandas(frame, preserve_index=False)
+        pq.write_table(table.replace_schema_metadata({b"pcsuite": meta.encode()}), tmp_path / "run.parquet")
+        assert main(["view", str(tmp_path / "run.parquet"), "--out", str(tmp_path / "run.html"), "--no-open"]) == 0
+        assert "linear rule on its samples" in (tmp_path / "run.html").read_text()
+    capsys.readouterr()
+    folder = tmp_path / "big_files"
+    folder.mkdir()
+    (folder / "test-common.js").write_text("mine")
+    (folder / "t0-c999.js").write_text("an old chunk")
+    t = np.linspace(0, 1, 600_000)
+    monkey = scope_module.INLINE_BYTES
+    scope_module.INLINE_BYTES = 0
+    try:
+        write_scope(Scope("big", (Trace("run", t, {"v": t}),), ("v",), {}), tmp_path / "big.html")
+    finally:
+        scope_module.INLINE_BYTES = monkey
+    assert (folder / "test-common.js").read_text() == "mine" and not (folder / "t0-c999.js").exists()
+
+
+def test_a_stored_event_run_says_its_page_does_not_integrate_its_exact_pieces(tmp_path, capsys):
+    run = tmp_path / "event.parquet"
+    assert main(["simulate", "buck", "--method", "event", "--t-end", "1e-4", "--out", str(run), "--json"]) == 0
+    capsys.readouterr()
+    assert main(["view", str(run), "--out", str(tmp_path / "event.html"), "--no-open"]) == 0
+    assert scope_module.EXACT_NOTE in (tmp_path / "event.html").read_text()
+
+
 def test_view_opens_a_stored_run_that_integrates_as_the_run_did(chromium, tmp_path, capsys):
     """``simulate --out RUN.parquet`` stores the run's rule and edge starts; ``pcsuite view`` reads them back: the
     cursors' mean of the switch command (a signal with an edge at each switching) is the run's own."""

@@ -68,7 +68,7 @@ def _write_run_page(path, out):
     if raw is not None:
         try:
             meta = json.loads(raw)
-        except ValueError:
+        except (ValueError, RecursionError):         # not JSON, or nested past what the parser takes
             meta = {}
         meta = meta if isinstance(meta, dict) else {}
     if out is None:

@@ -57,7 +57,7 @@ window.pcsuiteScope = (() => {
       const arrived = packed[i][k] ? Promise.resolve() : new Promise((resolve, reject) => {
         waiting[i + "," + k] = resolve;
         const s = document.createElement("script");
-        s.src = D.dataDir + "/t" + i + "-c" + k + ".js";
+        s.src = encodeURIComponent(D.dataDir) + "/t" + i + "-c" + k + ".js";
         s.onerror = () => reject(new Error("the scope's data file " + s.src + " could not be read"));
         document.head.appendChild(s);
       });
@@ -87,28 +87,30 @@ window.pcsuiteScope = (() => {
       for (const p of parts) for (let j = p.lo; j <= p.hi; j++) push(p.t[j], p.v[j]);
       return [xs, ys];
     }
+    // per column its first, last, lowest and highest sample, and its first NaN (a gap): in row order
     const scale = columns / (b - a);
-    let col = null, kept = [];
+    let col = null, first = null, low = null, high = null, end = null, gap = null;
     const flush = () => {
-      kept.sort((x, y) => x[0] - y[0]);
+      const kept = [first, low, high, end, gap].filter(Boolean).sort((x, y) => x[0] - y[0]);
       let last = -1;
       for (const [idx, t, v] of kept) if (idx !== last) { push(t, v); last = idx; }
     };
-    let idx = 0, first, low, high, end;
+    let idx = 0;
     for (const p of parts) {
       for (let j = p.lo; j <= p.hi; j++, idx++) {
-        const t = p.t[j], v = p.v[j], c = Math.floor((t - a) * scale);
+        const t = p.t[j], v = p.v[j], c = Math.floor((t - a) * scale), point = [idx, t, v];
         if (c !== col) {
-          if (col !== null) { kept = [first, low, high, end]; flush(); }
-          col = c; first = low = high = end = [idx, t, v];
-        } else {
-          end = [idx, t, v];
-          if (v < low[2] || Number.isNaN(v)) low = end;
-          if (v > high[2]) high = end;
+          if (col !== null) flush();
+          col = c; first = low = high = end = gap = null;
         }
+        if (Number.isNaN(v)) { if (!gap) gap = point; continue; }
+        if (!first) first = low = high = point;
+        end = point;
+        if (v < low[2]) low = point;
+        if (v > high[2]) high = point;
       }
     }
-    if (col !== null) { kept = [first, low, high, end]; flush(); }
+    if (col !== null) flush();
     return [xs, ys];
   }
 
@@ -238,7 +240,7 @@ window.pcsuiteScope = (() => {
     const columns = Math.ceil(width());
     const tracks = ch.traces.map((i) => traceView(i, ch.name, columns));
     if (tracks.length === 1) return tracks[0];
-    return uPlot.join(tracks, tracks.map(() => [0, 0]));
+    return uPlot.join(tracks, tracks.map(() => [1]));       // a NaN sample (null) stays a gap
   }
   function refresh() {
     for (const ch of charts) if (ch.shown) ch.u.setData(chartData(ch), true);
@@ -268,7 +270,7 @@ window.pcsuiteScope = (() => {
     for (let k = 0; k < tr.chunks.length; k++) {
       const c = tr.chunks[k], lo = Math.max(c.r0, ra), hi = Math.min(c.r1, rb);
       if (lo >= hi) continue;
-      if (lo === c.r0 && hi === c.r1) { s1 += c.sums[n][0]; s2 += c.sums[n][1]; continue; }
+      if (lo === c.r0 && hi === c.r1) { s1 += c.sums[n][0] ?? NaN; s2 += c.sums[n][1] ?? NaN; continue; }
       const d = await load(i, k), t = d.t, v = d.v[n];
       for (let r = lo; r < hi; r++) {
         const j = r - c.r0, dt = t[j + 1] - t[j], b = v[j + 1];
@@ -297,11 +299,10 @@ window.pcsuiteScope = (() => {
     for (const k in attrs || {}) td.dataset[k] = attrs[k];
     return td;
   }
-  let results = [];
+  let results = [], generation = 0;
   async function readout() {
-    const box = document.getElementById("readout"), A = cursors.A, B = cursors.B;
-    const table = document.createElement("table"), head = document.createElement("tr");
-    results = [];
+    const box = document.getElementById("readout"), A = cursors.A, B = cursors.B, mine = ++generation;
+    const table = document.createElement("table"), head = document.createElement("tr"), rows = [];
     ["signal", "source", "at A", "at B", "B - A", "mean A..B", "RMS A..B"].forEach((h) => {
       const th = document.createElement("th"); th.textContent = h; head.appendChild(th);
     });
@@ -320,7 +321,7 @@ window.pcsuiteScope = (() => {
             row.mean = s1 / span; row.rms = Math.sqrt(s2 / span);
           }
         }
-        results.push(row);
+        rows.push(row);
         const tr = document.createElement("tr"), q = { signal: name, source: T[i].source };
         tr.appendChild(cell(name)); tr.appendChild(cell(T[i].source));
         tr.appendChild(cell(eng(row.a) + unit, row.a, { ...q, quantity: "a" }));
@@ -341,6 +342,8 @@ window.pcsuiteScope = (() => {
     } else {
       info.textContent = "Click a chart to place cursor A, shift-click for cursor B (or type their times above).";
     }
+    if (mine !== generation) return;          // a later cursor move started its own readout: it shows
+    results = rows;
     const notes = T.filter((tr) => tr.note).map((tr) => tr.source + ": " + tr.note);
     box.replaceChildren(info, table, ...notes.map((n) => { const p = document.createElement("p"); p.className = "note"; p.textContent = n; return p; }));
   }
@@ -380,7 +383,7 @@ window.pcsuiteScope = (() => {
     for (const name of D.signals) {
       const traces = T.map((tr, i) => i).filter((i) => T[i].signals.includes(name));
       const el = document.createElement("div"); host.appendChild(el);
-      const series = [{}, ...traces.map((i) => ({ label: T[i].source, stroke: COLOURS[i % COLOURS.length], width: 1, spanGaps: true }))];
+      const series = [{}, ...traces.map((i) => ({ label: T[i].source, stroke: COLOURS[i % COLOURS.length], width: 1, spanGaps: false }))];
       const unit = D.units[name] ? " (" + D.units[name] + ")" : "";
       const ch = { name, traces, el, shown: true };
       const last = !MODES && name === D.signals[D.signals.length - 1];
