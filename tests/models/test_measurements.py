@@ -133,7 +133,7 @@ def test_a_run_plots_its_last_periods_with_units_the_operating_point_and_its_mod
         assert main(["simulate", "buck", "--periods", "20", "--plot", str(target)]) == 0
         assert target.read_bytes()[:5].startswith(magic)
     assert main(["simulate", "buck", "--plot", str(tmp_path / "w.jpg")]) == 2
-    assert "--plot must end in .png or .svg" in capsys.readouterr().err
+    assert "--plot must end in .png, .svg or .html" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("params", [{}, {"L1": "10u", "L2": "10u"}], ids=["ccm", "gdcm"])

@@ -379,8 +379,13 @@ EMPTY_PATHS = [
     ["netlist", "buck", "--out", " "], ["report", "lcp", "--out", ""], ["simulate", "buck", "--out", ""],
     ["simulate", "buck", "--plot", ""], ["simulate", "buck", "--steady", "--thermal", ""],
     ["sweep", "buck", "--grid", "D=0.2:0.8:3", "--out", ""],
-    ["sensitivity", "buck", "--plot", ""],
+    ["sensitivity", "buck", "--plot", ""], ["view", ""], ["view", "run.parquet", "--out", ""],
 ]
+
+
+def _flag(argv):
+    """The option an EMPTY_PATHS case gives empty (a positional: its name)."""
+    return "file" if argv[:2] == ["lcp", "solve"] else "path" if argv == ["view", ""] else argv[-2]
 
 
 @pytest.mark.parametrize("argv", EMPTY_PATHS, ids=[" ".join(a) for a in EMPTY_PATHS])
@@ -388,7 +393,7 @@ def test_an_empty_path_is_refused_not_read_as_the_current_directory(capsys, tmp_
     monkeypatch.chdir(tmp_path)
     with pytest.raises(SystemExit) as stop:
         main(argv)
-    flag = "file" if argv[:2] == ["lcp", "solve"] else argv[-2]
+    flag = _flag(argv)
     assert stop.value.code == 2 and capsys.readouterr().err == f"pcsuite: error: argument {flag}: must be a path; got {argv[-1]!r}\n"
     assert list(tmp_path.iterdir()) == []
 
@@ -410,9 +415,8 @@ def test_every_path_option_refuses_an_empty_path():
                 if getattr(action.type, "__name__", "") == "given_path":
                     paths.add((path, (action.option_strings or [action.dest])[0]))
     walk(build_parser(), ())
-    table = {(tuple(a[:2] if a[0] in ("lcp", "mech") else a[:1]), "file" if a[:2] == ["lcp", "solve"] else a[-2])
-             for a in EMPTY_PATHS}
-    assert table == paths and len(paths) == 15
+    table = {(tuple(a[:2] if a[0] in ("lcp", "mech") else a[:1]), _flag(a)) for a in EMPTY_PATHS}
+    assert table == paths and len(paths) == 17
 
 
 @pytest.mark.parametrize("argv,message", UNPARSABLE, ids=[" ".join(a) for a, _ in UNPARSABLE])

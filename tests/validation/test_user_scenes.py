@@ -321,7 +321,7 @@ def test_a_users_scene_file_and_directory_run_and_every_string_is_escaped(tmp_pa
     _check_page(index, [NASTY, nasty_file, f"mine/../mine/{nasty_file}"])
     assert sorted(p.relative_to(work / "single").as_posix() for p in (work / "single").rglob("*")) == [
         ".pcsuite-report.json", "index.html", "metrics.json", "scenes", "scenes.csv", "scenes/fast-1",
-        "scenes/fast-1/lcp.parquet", "scenes/fast-1/waveforms.png", "summary.csv"]
+        "scenes/fast-1/lcp.parquet", "scenes/fast-1/scope.html", "scenes/fast-1/waveforms.png", "summary.csv"]
     assert json.loads((work / "single" / "metrics.json").read_text())["suite"] == f"mine/../mine/{nasty_file}"
     # A directory: every *.toml in it, default --out reports/DIRNAME.
     code, out, err = cli(capsys, "report", "mine", "--workers", "1")
