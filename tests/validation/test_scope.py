@@ -78,6 +78,21 @@ def _cursors(browser, a, b):
         f"pcsuiteScope.setCursors({a!r}, {b!r}).then(done, (e) => done(String(e)));")
 
 
+def _measured(chromium, page, a, b):
+    """Open ``page``, move the cursors to ``a`` and ``b``: (the times they took, the readout's cells); no console
+    error on the way."""
+    browser = chromium()
+    try:
+        _open(browser, page)
+        measured = _cursors(browser, a, b)
+        cells = _readout(browser)
+        errors = _errors(browser)
+    finally:
+        browser.quit()
+    assert errors == []
+    return measured, cells
+
+
 def _readout(browser):
     """The readout's cells as the page shows them: {(signal, source, quantity): value}."""
     cells = browser.execute_script(
@@ -99,15 +114,7 @@ def test_cursors_at_two_times_show_the_mean_and_rms_pcsuite_measures(chromium, t
     page = tmp_path / "run.html"
     written = write_scope(of_trajectory(tr, title="buck"), page)
     assert len(written) == (1 if inline else 1 + -(-(tr.t.size - 1) // 5000))
-    browser = chromium()
-    try:
-        _open(browser, page)
-        measured = _cursors(browser, 1.234567e-4, 2.71828e-4)
-        cells = _readout(browser)
-        errors = _errors(browser)
-    finally:
-        browser.quit()
-    assert errors == []
+    measured, cells = _measured(chromium, page, 1.234567e-4, 2.71828e-4)
     ta, tb = measured["A"], measured["B"]
     assert ta in tr.t and tb in tr.t
     assert abs(ta - 1.234567e-4) <= 1e-7 and abs(tb - 2.71828e-4) <= 1e-7      # the nearest samples (h = 1e-8)
@@ -214,15 +221,7 @@ def test_view_opens_a_stored_run_that_integrates_as_the_run_did(chromium, tmp_pa
     assert main(["view", str(run), "--out", str(page), "--no-open"]) == 0
     assert capsys.readouterr().out.strip() == f"scope: {page.resolve().as_uri()}"
     tr = run_converter("buck", {}, t_end=2e-4)
-    browser = chromium()
-    try:
-        _open(browser, page)
-        measured = _cursors(browser, 1.00005e-4, 1.70003e-4)
-        cells = _readout(browser)
-        errors = _errors(browser)
-    finally:
-        browser.quit()
-    assert errors == []
+    measured, cells = _measured(chromium, page, 1.00005e-4, 1.70003e-4)
     ta, tb = measured["A"], measured["B"]
     for name in ("iL", "switch"):
         assert cells[(name, "lcp", "mean")] == pytest.approx(tr.mean(name, t0=ta, t1=tb), rel=1e-9)
@@ -238,15 +237,8 @@ def test_a_one_parameter_sweeps_summary_is_a_scope_of_its_metrics(chromium, tmp_
                  str(out), "--no-progress", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["summary_scope"] == str(out / "summary.html")
     frame = pd.read_parquet(out / "parts").sort_values("Vin")
-    browser = chromium()
-    try:
-        _open(browser, out / "summary.html")
-        measured = _cursors(browser, 10.2, 13.9)
-        cells = _readout(browser)
-        errors = _errors(browser)
-    finally:
-        browser.quit()
-    assert errors == [] and (measured["A"], measured["B"]) == (10.0, 14.0)
+    measured, cells = _measured(chromium, out / "summary.html", 10.2, 13.9)
+    assert (measured["A"], measured["B"]) == (10.0, 14.0)
     for metric in ("vout.mean", "iL.rms"):
         stored = dict(zip(frame["Vin"], frame[metric]))
         assert cells[(metric, "sweep", "a")] == stored[10.0] and cells[(metric, "sweep", "b")] == stored[14.0]
