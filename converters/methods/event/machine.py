@@ -16,8 +16,8 @@ from ...limits import check_in_use
 from ...problems import Comparators, LCSProblem, Schedule, StateSwitching
 from ...problems.switching import initial_bits, law_channels
 from .core import EnginePeriodMap
-from .flow import (_CROSS_RTOL, _ON_SET_RTOL, _POWERS, MAX_SERIES_NORM, MAX_SUBSTEPS, FloatArray, Flow, _time_scale,
-                   _Watch)
+from .flow import (_CROSS_RTOL, _ON_SET_RTOL, _POWERS, _ZERO_RTOL, MAX_SERIES_NORM, MAX_SUBSTEPS, FloatArray, Flow,
+                   _time_scale, _Watch)
 from .solution import EventSolution, Segment
 from .timeline import Crossing, Edge, FlowSpan, TimelineEntry
 
@@ -383,10 +383,32 @@ class _Machine:
         """First downward zero crossing of a watched quantity in (0, tau_max]: (tau, row) or (None, None),
         and x~ at tau_max when there is none. ``phase0``: each row's ramp phase at the segment's start (a scalar
         or one per row)."""
-        g_scale = watch.row_scales * np.abs(xt).max()
+        size = np.abs(xt).max()
+        g_scale = watch.row_scales * size
         if watch.timed:
             g_scale = g_scale + np.abs(watch.slopes) * self.scale
-        threshold = -_CROSS_RTOL * g_scale
+        # A pair's quantity that starts below zero but inside the mode selection's zero band (which took it as
+        # zero and let its flow's derivatives decide) and dips further before it rises crosses where it falls
+        # below that dip, not at once: else the crossing at tau = 0 flips it, the selection keeps the mode, and the
+        # run repeats the instant (a Newton iterate of a no-load 48-diode ladder: a held diode's current at
+        # -5.8e-8 A, falling at 21 A/s, rising again at 4e9 A/s^2 from -8.6e-8 A; the band 9.2e-8 A).
+        k = self.problem.k
+        band = _ZERO_RTOL * g_scale[:k]
+        start = watch.rows[:k] @ xt
+        offsets = np.zeros(watch.rows.shape[0])
+        dipping = np.flatnonzero((start < _CROSS_RTOL * g_scale[:k]) & (start >= -band))
+        if dipping.size:         # at zero or below it: those falling (a pair just flipped rises from zero)
+            dipping = dipping[(start[dipping] < -_CROSS_RTOL * g_scale[dipping])
+                              | (watch.rows[dipping, :-1] @ flow.field(xt) < 0.0)]
+        if dipping.size:
+            s = np.linspace(0.0, flow.delta, 65)                            # the first step finely, then steps
+            coefficients = flow.series(xt) @ watch.rows[dipping].T          # (terms, rows): g(s) = sum_j s^j c_j
+            g = np.vstack([np.vander(s, coefficients.shape[0], increasing=True) @ coefficients,
+                           flow.steps(xt, min(_POWERS, 64)) @ watch.rows[dipping].T])
+            low = g.min(axis=0)
+            rises = (g[-1] > low + _CROSS_RTOL * g_scale[dipping]) & (low >= -2.0 * band[dipping])
+            offsets[dipping] = np.where(rises, np.minimum(low, start[dipping]), 0.0)
+        threshold = offsets - _CROSS_RTOL * g_scale
         if not (flow.delta > 0.0 and tau_max / flow.delta <= MAX_SUBSTEPS):
             from ...errors import ResourceError
             raise ResourceError(f"--method event: the stiffest mode's time constant is about {4.0 * flow.delta:.3g} s, "
@@ -411,24 +433,27 @@ class _Machine:
             if below.size:
                 i = below[0]
                 start = state if i == 0 else states[i - 1]
-                return self._locate(flow, watch, start, tau + i * flow.delta, flow.delta, g_scale, phase0), None
+                return self._locate(flow, watch, start, tau + i * flow.delta, flow.delta, g_scale, phase0,
+                                    offsets), None
             tau, state, full = tau + m * flow.delta, states[m - 1], full - m
         rest = tau_max - tau
         if rest > 0.0:
             end = flow.propagate(state, rest)
             values = watch.rows @ end + (phase0 + tau_max) * watch.slopes
             if np.any(values < threshold):
-                return self._locate(flow, watch, state, tau, rest, g_scale, phase0), None
+                return self._locate(flow, watch, state, tau, rest, g_scale, phase0, offsets), None
             state = end
         return (None, None), state
 
     def _locate(self, flow: Flow, watch: _Watch, xt_a: FloatArray, tau_a: float, width: float, g_scale: FloatArray,
-                phase0: FloatArray | float) -> tuple[float, int]:
+                phase0: FloatArray | float, offsets: FloatArray) -> tuple[float, int]:
         """The earliest crossing inside [tau_a, tau_a + width] (width <= delta): Brent's method on each
-        watched quantity's Taylor polynomial, exact to rounding there. Returns (tau, row)."""
+        watched quantity's Taylor polynomial, exact to rounding there; a row crosses its ``offsets`` entry (0, or
+        where the segment started it below zero inside the zero band and it dips before it rises, the dip's
+        bottom). Returns (tau, row)."""
         V = flow.series(xt_a)                                   # x~(s) = sum_j s^j V_j
         coefficients = V @ watch.rows.T                          # (terms, rows)
-        coefficients[0] += (phase0 + tau_a) * watch.slopes
+        coefficients[0] += (phase0 + tau_a) * watch.slopes - offsets
         coefficients[1] += watch.slopes
         xtol = max(self.options.event_tol * self.scale, 1e-300)
         best, best_row = None, None
@@ -465,7 +490,7 @@ class _Machine:
             if best is None or s < best:
                 best, best_row = s, r
         if best is None:                                         # rounding: the sample said below, no root
-            return tau_a + width, int(np.argmin(watch.rows @ flow.propagate(xt_a, width)))
+            return tau_a + width, int(np.argmin(watch.rows @ flow.propagate(xt_a, width) - offsets))
         return tau_a + best, cast(int, best_row)                  # found with best
 
     # --- runs ---------------------------------------------------------------------------------------
@@ -594,7 +619,7 @@ class _Machine:
             new, xt_new = self.select(run.config, xt_in, t, flow.held, f_before)
         else:
             jump = None
-            new, xt_new = self.select(run.config, xt, t, flow.held ^ (1 << pair), f_before)
+            new, xt_new = self.select(run.config, xt, t, flow.held ^ self._crossed(watch, xt, pair), f_before)
         if run.timeline is not None:
             run.timeline.append(Crossing(t, watch.rows[which].copy(), dgdt, f_before, new.field(xt_new),
                                          np.eye(n) if jump is None else jump, pair, flow, latched_before,
@@ -611,6 +636,19 @@ class _Machine:
         self._log_pairs(run, flow, new)
         run.flow, run.xt = new, xt_new
         return False
+
+    def _crossed(self, watch: _Watch, xt: FloatArray, pair: int) -> int:
+        """The pairs (bit mask) a crossing of ``pair`` flips: it and every pair whose watched quantity is already
+        below the crossing threshold at this instant. They all cross now; taken one per event, each would end a
+        zero-length segment (a Newton iterate of a no-load 48-diode ladder starts a period with every other diode a
+        few nV forward: 24 crossings at one instant, and a saltation through each)."""
+        k = self.problem.k
+        values = watch.rows[:k] @ xt
+        below = values < -_CROSS_RTOL * watch.row_scales[:k] * np.abs(xt).max()
+        flipped = 1 << pair
+        for i in np.flatnonzero(below):
+            flipped |= 1 << int(i)
+        return flipped
 
     def _at_edge(self, run: _Run, edge_kind: str | int, channel: int) -> None:
         """At a time-driven instant: a ramp's reset (the channel's phase restarts, its latch clears, its state
