@@ -261,8 +261,8 @@ def _modes_by_current(lcp, circuit, p: dict, t0: float) -> None:
     currents = (np.column_stack([np.asarray(lcp.signal(f"i({d})"), dtype=float) for d in diodes]) if diodes
                 else np.zeros((lcp.t.size, 0)))
     closed = np.asarray(compiled.closed, dtype=bool)[lcp.config]
-    lcp.measured["mode"] = mode_labels(compiled.switch_names, closed, diodes, conducting_by_current(currents,
-                                                                                                   lcp.t >= t0))
+    lcp.measured["mode"] = mode_labels(compiled.switch_names, closed, diodes,
+                                       conducting_by_current(currents, lcp.t >= t0, lcp.t, circuit.period(p)))
 
 
 def _transient(result: CircuitComparison, circuit, th: dict) -> CircuitComparison:

@@ -167,12 +167,17 @@ def test_a_default_answer_whose_error_cannot_be_estimated_says_so(monkeypatch, c
 
 
 @pytest.mark.spice
-@pytest.mark.parametrize("name", ["stiff-100ns", "esr-buck", "buck-into-1F", "snubbered-buck", "dcm-boost-1uH"])
+@pytest.mark.parametrize("name", ["stiff-100ns", "esr-buck", "buck-into-1F", "snubbered-buck", "dcm-boost-1uH",
+                                  "forward-bleeders"])
 def test_compare_never_passes_a_value_more_than_one_percent_off(name, tmp_path, capsys, ngspice):
     """`compare` at default settings on the corpus: where it passes, pcsuite's value is within 1 % of the reference
     (the stiff node and the 1 uH boost fail: ngspice reads 10.0087 V where the node holds 10 V, and its switch and
     diode models leave the boost 1.3e-3 lower; the buck into 1 F passes from pcsuite's orbit, which its check
-    could not find before: Newton there is resolved to 1.4e-8 by rounding, short of the 1e-9 asked)."""
+    could not find before: Newton there is resolved to 1.4e-8 by rounding, short of the 1e-9 asked). The forward
+    with bleeders passes with its modes agreeing: ngspice's clamp diode D3 rings to -88 A and +20 A within 2e-13 s
+    at the switches' turn-on (its 1 pF junction), and that spike had set the scale its conduction is read against
+    (1e-3 of it: D3 read off at 7 mA of its 1.27 A, a D4+D2 phase the circuit does not have); a peak is now the
+    largest mean over 1e-3 T."""
     path, _ = _file(name, tmp_path)
     code = main(["compare", str(path), "--json"])
     result = json.loads(capsys.readouterr().out)
@@ -180,8 +185,11 @@ def test_compare_never_passes_a_value_more_than_one_percent_off(name, tmp_path, 
     reference = exact.mean("vout", t0=exact.t[0], t1=exact.t[-1]) if CORPUS[name][1] is None else CORPUS[name][1]
     if result["passed"]:
         assert code == 0 and abs(result["metrics"]["v(out)_mean_lcp"] / reference - 1) <= 1e-2
-    if name in ("buck-into-1F", "esr-buck", "snubbered-buck"):
+    if name in ("buck-into-1F", "esr-buck", "snubbered-buck", "forward-bleeders"):
         assert result["passed"]
+    if name == "forward-bleeders":
+        m = result["metrics"]
+        assert m["mode_agreement"] == 1.0 and m["mode_sequence_spice"] == m["mode_sequence_lcp"]
     if name == "dcm-boost-1uH":      # 15 A peaks through RON = 1 mohm: 1.6e-3 of the input power, the 1.3e-3 apart
         assert not result["passed"] and any("ngspice's switch and diode models (RON = 0.001 ohm, N = 0.001) "
                                             "dissipate about 0.0016 of the input power" in n for n in result["notes"])
