@@ -263,6 +263,8 @@ def require(orbit: PeriodicOrbit, what: str = "the periodic orbit", rounding_bou
     """The orbit when converged (or, with ``rounding_bound``, resolved to it as far as rounding goes); otherwise a
     SimulationError with the reason and a remedy."""
     if not resolved(orbit, rounding_bound):
-        raise SimulationError(f"Newton shooting did not find {what}: {orbit.message}; try a looser --steady-tol, "
-                              "or --periods N without --steady to see the transient")
+        asked = (f" (Newton aims at a tenth of the tolerance asked, {rounding_bound:.3g}, and takes an orbit rounding "
+                 "resolves to that tolerance itself)" if rounding_bound > 0.0 else "")
+        raise SimulationError(f"Newton shooting did not find {what}: {orbit.message}{asked}; try a looser "
+                              "--steady-tol, or --periods N without --steady to see the transient")
     return orbit

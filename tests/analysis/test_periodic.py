@@ -109,6 +109,40 @@ def test_a_tolerance_beyond_double_precision_is_a_clear_failure():
         run_converter("boost", {"D": 0.3, "L": "10u", "R": "10k"}, steady=True, steady_tol=1e-13)
 
 
+DCM_BOOST = """Boost in DCM: 12 V, 200 kHz, D 0.3, 4.7 uH, 47 uF, 100 ohm
+.param Vin=12 L=4.7u C=47u R=100 f_sw=200k D=0.3
+.param T={1/f_sw} e={1e-6/f_sw}
+Vin in 0 DC {Vin}
+Vg gate 0 PULSE(1 0 {D*T - e/2} {e} {e} {(1-D)*T - e} {T})
+L1 in sw {L}
+S1 sw 0 gate 0 SWMOD
+D1 sw out DMOD
+C1 out 0 {C}
+R1 out 0 {R}
+.model SWMOD SW(VT=0.5)
+.model DMOD D
+.tran {T/1000} {2000*T} 0 {T/200} UIC
+.end
+"""
+
+
+def test_an_orbit_rounding_resolves_to_the_tolerance_asked_is_taken_and_a_refusal_names_that_tolerance(tmp_path):
+    """Newton aims at a tenth of --steady-tol. A DCM boost's orbit (1 - rho = 2.7e-3) is resolved by rounding to
+    4.6e-12: asked 1e-11 it was refused ("> tol 1e-12", a tolerance nobody asked for); it is taken now, vout
+    within 4.3e-8 of the DCM closed form Vin (1 + sqrt(1 + 4 D^2 / K)) / 2, K = 2 L / (R T) (its ripple the rest).
+    Asked 1e-12, it is refused, and the message names the 1e-12 asked."""
+    path = tmp_path / "dcm-boost.cir"
+    path.write_text(DCM_BOOST)
+    run = run_converter(str(path), {}, method="event", steady=True, steady_tol=1e-11)
+    assert run.metadata["orbit"]["distance"] <= 1e-11
+    D, L, R, T = 0.3, 4.7e-6, 100.0, 5e-6
+    closed = 12.0 * (1 + np.sqrt(1 + 4 * D * D / (2 * L / (R * T)))) / 2
+    assert run.mean("vout", t0=0.0, t1=T) == pytest.approx(closed, rel=1e-7)
+    with pytest.raises(SimulationError, match=r"Newton aims at a tenth of the tolerance asked, 1e-12, and takes an "
+                                              r"orbit rounding resolves to that tolerance itself"):
+        run_converter(str(path), {}, method="event", steady=True, steady_tol=1e-12)
+
+
 class _Rotation(PeriodMap):
     """x -> R x + b with a multiplier exactly at 1: no isolated orbit."""
 
