@@ -480,8 +480,15 @@ class _Compiler:
         power = [s for s in self.sources if isinstance(s.waveform, Pulse) and self.in_power_circuit(s)]
         self.check_ramps()
         for s in power:
-            if not math.isfinite(cast(Pulse, s.waveform).per):
+            w = cast(Pulse, s.waveform)
+            if not math.isfinite(w.per):
                 raise self.error(s, f"{s.title}: a single pulse in the power circuit: give it a period (PER)")
+            if max(w.tr, w.tf) > STEP_EDGE_FRACTION * w.per * (1.0 + 1e-9):     # (a file's T/1000 by rounding)
+                raise self.error(s, f"{s.title}: a PULSE in the power circuit switches between its levels at the "
+                                    f"middle of its edges, so its edges must take at most {STEP_EDGE_FRACTION:g} of "
+                                    f"its period (PER = {w.per:.4g} s: TR, TF <= {STEP_EDGE_FRACTION * w.per:.4g} s); "
+                                    f"got TR = {w.tr:.4g} s, TF = {w.tf:.4g} s (a ramp that repeats is not compiled: "
+                                    "for a smooth periodic source use SIN)")
         once = {name: d for name, d in drives.items() if d and any(_once(self.source(n).waveform) for n in d)}
         corners = ({t for r in self.ramps for t, _ in cast(Pwl, r.waveform).points if t > 0.0}
                    | {cast(Sin, o.waveform).td for o in self.oscillators if cast(Sin, o.waveform).td > 0.0})
@@ -1357,6 +1364,14 @@ def _crossings(corners: _Array, values: _Array, on: float, off: float, state: bo
             state = not state
             changes.append((float(t), state))
     return changes
+
+
+#: A PULSE in the power circuit whose edges take at most this fraction of its period switches between its two levels
+#: at the middle of each edge (a square wave: the shipped Cockcroft-Walton ladder's T/1000 edges); a slower edge is
+#: refused: its ramp is no level of a configuration (a +-10 V triangle, its edges T/2, through a half-wave rectifier,
+#: read as a square wave, gave 5.0 V where the mean of its positive half is 2.5 V), and a ramp that repeats is a state
+#: a periodic steady state cannot pin (as a PWL with r=).
+STEP_EDGE_FRACTION = 1e-3
 
 
 def waveform_at(w: Waveform, t: _Array) -> _Array:
