@@ -176,7 +176,29 @@ def compare_circuit(circuit, params: dict | None = None, *, h=None, spice_option
                                 f"{options.diode_n:g}) dissipate about {losses:.2g} of the input power on pcsuite's "
                                 f"orbit, where its ideal ones dissipate none: a difference of that order "
                                 f"({error:.2g}) is the models', not the methods'")
+    if independent is not None:
+        _own_estimate(result, circuit, p, make_method(circuit, p, "lcp", h), th)
     return result
+
+
+def _own_estimate(result: CircuitComparison, circuit, p: dict, method, th: dict) -> None:
+    """Where ngspice ran from pcsuite's orbit (its own start had not settled), it keeps what that orbit holds in a
+    slow mode, so the means agree whatever the orbit is worth: the mean check then passes only where pcsuite's own
+    estimate is within the threshold too (a 1 MHz DCM boost at 10 Mohm: pcsuite's 1127.95 V at its default step,
+    estimated 0.18 off, 6.1 % above the exact 1063.16; ngspice from it read 1127.95 and the mean passed)."""
+    from converters.analysis.accuracy import default_check
+    lcp, (t0, span) = result.lcp, result.window
+    check = default_check(circuit, p, method, lcp, lcp.mean("vout", t0=t0, t1=span))
+    estimate = check.get("vout_mean_error_estimate")
+    if estimate is None:
+        return
+    result.metrics["lcp_mean_error_estimate"] = estimate
+    if estimate > th["mean_rel"]:
+        result.rows = [(name, value, limit, ok and name != "mean_rel") for name, value, limit, ok in result.rows]
+        result.notes.append(f"pcsuite's own estimate says its mean may be {estimate:.2g} off (more than "
+                            f"{th['mean_rel']:g}), and ngspice, which did not settle from its own start, ran from "
+                            "pcsuite's orbit and keeps it: the means' agreement says nothing; the mean check fails "
+                            "(run compare with a smaller --h)")
 
 
 #: The thermal voltage ngspice's diode model uses at its default 27 C (V).
