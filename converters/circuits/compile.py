@@ -1403,6 +1403,25 @@ def waveform_at(w: Waveform, t: _Array) -> _Array:
 #: waveforms' corners (a sine-triangle modulator: the carrier's corners are far denser).
 SINE_PIECES = 64
 
+#: Resistances further apart than this ratio make the network's matrix singular in double precision (1 ohm beside
+#: 1e13 ohm was refused as "no path to ground", 1 ohm beside 1e12 ohm runs): a refusal then says so.
+RESISTANCE_SPREAD = 1e12
+
+
+def _spread_hint(c: _Compiler) -> str:
+    """'' or why a singular network may be the values' and not the topology's: the resistances span more than
+    RESISTANCE_SPREAD."""
+    resistors = [(float(e.value), e.name.upper()) for e in c.by_kind["R"] if e.value and e.value > 0.0]
+    if len(resistors) < 2:
+        return ""
+    (low, small), (high, large) = min(resistors), max(resistors)
+    if high <= RESISTANCE_SPREAD * low:
+        return ""
+    return (f"; or its values: the resistances span {high / low:.1e} ({small} {low:.3g} ohm beside {large} "
+            f"{high:.3g} ohm), beyond the {RESISTANCE_SPREAD:.0e} double precision resolves in one network: bring the "
+            "extremes closer (an open as 1e9 ohm, a short as 1e-3 ohm)")
+
+
 #: A loop of capacitors holds its constraint at this rate over the period (:meth:`_Network.solve_loops`): a start off
 #: it decays by e^-10 a period, and the rate is far below a step's (h = T/1000: 0.01).
 LOOP_RATE = 10.0
@@ -1667,6 +1686,7 @@ class _Network:
         null = null / np.abs(null).max()
         where = ", ".join(f"{k}={'closed' if v else 'open'}" for k, v in self.switch_state.items())
         where = f" (with {where})" if where else ""
+        spread = _spread_hint(c)
         members = [(kind, e) for j, (kind, e, a, b) in enumerate(self.branches) if abs(null[len(self.nodes) + j]) > 1e-6]
         loop = [e.name.upper() for _, e in members]
         nodes = [n for n, i in self.nodes.items() if abs(null[i]) > 1e-6 and "#" not in n]
@@ -1676,12 +1696,12 @@ class _Network:
             kinds = [name for letter, name in LOOP_KINDS if any(kind == letter for kind, _ in members)]
             held = ", ".join(kinds[:-1]) + (" and " if len(kinds) > 1 else "") + kinds[-1]
             return NetlistError(f"{c.path}: {', '.join(loop)} form a loop of {held}{where}: their voltages are not "
-                                "independent")
+                                f"independent{spread}")
         around = [e.name.upper() for e in c.nl.elements if set(e.nodes) & set(nodes)]
         return NetlistError(f"{c.path}: node{'s' if len(nodes) > 1 else ''} {', '.join(nodes)} ha"
                             f"{'ve' if len(nodes) > 1 else 's'} no path to ground but through inductors and current "
                             f"sources{where} ({', '.join(around)}): a current interrupted with no path, or a floating "
-                            "node")
+                            f"node{spread}")
 
     def unit(self, column: int | None = None) -> _Array:
         """A row of the MNA's input columns (per point of a batch): 0, or 1 in ``column``."""

@@ -147,6 +147,23 @@ def test_a_power_pulse_whose_edges_are_not_steps_is_refused_not_read_as_a_square
     assert square.mean("vout", t0=0.0, t1=50e-6) == pytest.approx(10 * 1.001e6 / 2.001e6, rel=1e-4)
 
 
+def test_a_network_singular_by_its_values_says_so_not_only_that_a_node_floats(tmp_path):
+    """1 nohm beside 1e13 ohm resistors (a divider to node b): its matrix is singular in double precision and the
+    refusal said only "node b has no path to ground", which is false (1e13 ohm leads there). It names the spread."""
+    from converters.circuits.netlist import NetlistError
+    path = tmp_path / "spread.cir"
+    path.write_text("buck feeding a 1e13 ohm divider through 1 nohm\nVin in 0 DC 10\n"
+                    "Vg g 0 PULSE(0 1 0 1n 1n {6u-2n} 10u)\nS1 in sw g 0 SWMOD\nD1 0 sw DMOD\nL1 sw out 100u\n"
+                    "C1 out 0 10u\nR1 out 0 10\nRt out a 1e-9\nRx a b 1e13\nRy b 0 1e13\nRz a 0 1e13\n"
+                    ".model SWMOD SW(VT=0.5)\n.model DMOD D\n.tran 10n 2m\n.end\n")
+    with pytest.raises(NetlistError, match=r"or its values: the resistances span 1.0e\+22 \(RT 1e-09 ohm beside RZ "
+                                           r"1e\+13 ohm\), beyond the 1e\+12 double precision resolves"):
+        run_converter(str(path), {}, steady=True)
+    path.write_text(path.read_text().replace("Rt out a 1e-9", "Rt out a 1e-3").replace(" 1e13", " 1e9"))
+    run = run_converter(str(path), {}, method="event", steady=True, periods=1)
+    assert run.mean("v(b)", t0=0.0, t1=1e-5) == pytest.approx(0.5 * run.mean("vout", t0=0.0, t1=1e-5), rel=1e-6)
+
+
 BUCK_FILE = VOLTAGE_MODE.with_name("buck.cir")
 #: The buck's gate as a PULSE and as a repeated PWL with the same edges: falling around D T, rising over [T - e, T].
 GATE = "Vg gate 0 PULSE(1 0 {D*T - e/2} {e} {e} {(1-D)*T - e} {T})"
