@@ -657,6 +657,8 @@ class Trajectory:
                 data[f"active_{name}"] = active[:, i]
         if self.config is not None:
             names = list(self.config_names) or [str(c) for c in range(int(self.config.max()) + 1)]
+            # configurations a model names alike (its name need not say every level it holds) stay apart
+            names = [name if names.count(name) == 1 else f"{name}#{i}" for i, name in enumerate(names)]
             data["config"] = pd.Categorical.from_codes(self.config, categories=names)
         frame = pd.DataFrame(data)
         if columns is None:

@@ -1026,7 +1026,9 @@ class _Compiler:
             # any current would do (0 <= u, y = 0); the switch carries it all: a pair that never holds (y = u + 1)
             B[..., :, i], C[..., i, :], D[..., i, :], D[..., :, i], F[..., i] = 0.0, 0.0, 0.0, 0.0, 1.0
             D[..., i, i] = 1.0
-        name = ",".join(f"{sw}={'on' if on else 'off'}" for sw, on in switch_state.items()) or "circuit"
+        # a power PULSE's level is part of the configuration too (a rectifier of a square wave: two configurations)
+        name = ",".join([f"{sw}={'on' if on else 'off'}" for sw, on in switch_state.items()]
+                        + [f"{src}={'v2' if level else 'v1'}" for src, level in solution.levels.items()]) or "circuit"
         rows = solution.signal_rows(self.signal_names())
         columns, amplitudes = self.sinusoid_columns()
         E_sin, F_sin = dx[..., columns] * amplitudes, ports[..., columns] * amplitudes

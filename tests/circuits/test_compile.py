@@ -164,6 +164,18 @@ def test_a_network_singular_by_its_values_says_so_not_only_that_a_node_floats(tm
     assert run.mean("v(b)", t0=0.0, t1=1e-5) == pytest.approx(0.5 * run.mean("vout", t0=0.0, t1=1e-5), rel=1e-6)
 
 
+def test_a_square_waves_two_levels_are_two_configurations_by_name_and_the_run_is_written(tmp_path):
+    """The Cockcroft-Walton ladder has no switch: its configurations differ by its source's PULSE level alone and were
+    both named "circuit", so `simulate --out` stopped on "Categorical categories must be unique"."""
+    from validation.cli import main
+    path = VOLTAGE_MODE.with_name("cockcroft-walton.cir")
+    run = run_converter(str(path), {}, steady=True, periods=1)
+    assert run.config_names == ("vs=v1", "vs=v2")
+    assert set(run.to_pandas()["config"].cat.categories) == {"vs=v1", "vs=v2"}
+    out = tmp_path / "cw.parquet"
+    assert main(["simulate", str(path), "--steady", "--periods", "1", "--out", str(out)]) == 0 and out.stat().st_size
+
+
 BUCK_FILE = VOLTAGE_MODE.with_name("buck.cir")
 #: The buck's gate as a PULSE and as a repeated PWL with the same edges: falling around D T, rising over [T - e, T].
 GATE = "Vg gate 0 PULSE(1 0 {D*T - e/2} {e} {e} {(1-D)*T - e} {T})"
