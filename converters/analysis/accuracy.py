@@ -500,8 +500,16 @@ def accurate_steady(model: Model, p: dict, rtol: float, *, x0: npt.NDArray[np.fl
     exact_events = [(pair, kind, Estimate(time_T, floor, 1.0)) for pair, kind, time_T in events]
     result = AccurateSteady(quantities, exact_events, rtol, method, None, tr, orbit, True, runs=runs)
     met = result.worst() <= rtol
-    message = "" if met else (f"the orbit is resolved to {orbit.distance:.2g} in double precision (a Floquet "
-                              f"multiplier at {np.abs(orbit.multipliers).max():.8f}); rtol {rtol:g} is beyond it")
+    name, worst = max(((name, q.relative) for name, q in quantities.items()), key=lambda item: item[1],
+                      default=("", 0.0))
+    if met:
+        message = ""
+    elif worst > 10.0 * floor:      # not the orbit's rounding: an extremum read on the samples (a ripple)
+        message = (f"{name} is estimated only to {worst:.2g} (relative), read on the exact run's {EVENT_SAMPLES} "
+                   f"samples a period (an extremum between two of them); rtol {rtol:g} is beyond it")
+    else:
+        message = (f"the orbit is resolved to {orbit.distance:.2g} in double precision (a Floquet multiplier at "
+                   f"{np.abs(orbit.multipliers).max():.8f}); rtol {rtol:g} is beyond it")
     return replace(result, met=met, message=message, wall_s=time.perf_counter() - clock)
 
 
@@ -820,6 +828,13 @@ def _overdamped(model: Model, p: dict, method: Any) -> str:     # (method: a Met
     if found is None:
         return ""
     frequency, q, ratio = found
+    if theta <= 0.5:
+        # the trapezoid adds no damping: what it found is a resonance the circuit itself leaves undamped (its decay
+        # below rounding), whose ring the step's phase error shifts at h and 2h alike
+        return (f"the circuit's {frequency:.3g} Hz resonance is undamped (Q {q:.3g}: no resistance in its loop), "
+                f"and the trapezoid (h = {method.h:.3g} s) shifts its ring's frequency by (omega h)^2 / 12 at h "
+                "and 2h alike: the values and their estimates may be off by more than stated; use a smaller --h, or "
+                "--method event (exact flows)")
     return (f"the step damps the circuit's {frequency:.3g} Hz resonance (Q {q:.3g}) {ratio:.3g}x faster than the "
             f"circuit does (theta {theta:g}, h = {method.h:.3g} s): the values and their estimates may be off by "
             "more than stated; use a smaller --h, or --theta 0.5 where every time constant is resolved")

@@ -116,6 +116,62 @@ def test_a_resonance_the_step_damps_more_than_the_circuit_does_says_the_estimate
     assert "trusted" not in run_summary(run_converter(str(NETLISTS / "buck.cir"), steady=True))["accuracy"]
 
 
+SRC = """series resonant converter: half-bridge (dead time, body diodes) drives Lr-Cr into a diode bridge
+.param Vdc=400 Lr=50u Cr=50n Cf=20u R=50 fs=110k td=100n
+.param T={1/fs}
+Vdc in 0 DC {Vdc}
+Vg1 g1 0 PULSE(0 1 {td} 1n 1n {T/2-td-2n} {T})
+Vg2 g2 0 PULSE(0 1 {T/2+td} 1n 1n {T/2-td-2n} {T})
+S1 in sw g1 0 SWMOD
+S2 sw 0 g2 0 SWMOD
+Db1 sw in DMOD
+Db2 0 sw DMOD
+Csn sw 0 100p
+Lr sw a {Lr}
+Cr a b {Cr}
+D1 b p DMOD
+D2 0 p DMOD
+D3 nn b DMOD
+D4 nn 0 DMOD
+Cf p nn {Cf}
+R1 p nn {R}
+.model SWMOD SW(VT=0.5)
+.model DMOD D
+.tran {T/1000} 5m
+.end
+"""
+
+
+def test_an_undamped_resonance_under_the_trapezoid_is_named_as_such_with_a_remedy_that_changes_something(tmp_path):
+    """A series resonant converter: Lr (50 uH) rings with the 100 pF across the switches at 2.25 MHz with no
+    resistance in the loop. The default (theta 0.5 there) keeps it ringing with a frequency error the runs at h and
+    2h share: the estimate 1.1e-6, the exact method 9.9e-5 away. The warning had said the step "damps" it 6.7e3x
+    faster (rounding: the trapezoid adds no damping), with Q 3.9e18, and advised --theta 0.5, the theta in use."""
+    path = tmp_path / "src.cir"
+    path.write_text(SRC)
+    run = run_converter(str(path), steady=True)
+    summary = run_summary(run)
+    assert run.algorithm.theta == 0.5 and summary["accuracy"]["trusted"] is False
+    (warning,) = summary["warnings"]
+    assert warning.startswith("the circuit's 2.25e+06 Hz resonance is undamped")
+    assert warning.endswith("use a smaller --h, or --method event (exact flows)") and "--theta" not in warning
+    exact = run_converter(str(path), method="event", steady=True, periods=1)
+    error = abs(summary["vout_mean"] / exact.mean("vout", t0=0.0, t1=exact.period) - 1)
+    assert error > 10 * summary["accuracy"]["vout_mean_error_estimate"]
+
+
+def test_accuracy_on_request_names_the_quantity_that_missed_rtol(tmp_path, capsys):
+    """A 1 MHz boost in deep DCM at 10 Mohm at --rtol 1e-4: the exact method's orbit is resolved to 5e-10, its
+    ripple (an extremum read on 8,192 samples a period) only to 1.3e-4. The warning blamed the orbit's resolution."""
+    from .test_netlist_cli import LIGHT_DCM_BOOST
+    path = tmp_path / "light.cir"
+    path.write_text(LIGHT_DCM_BOOST)
+    assert main(["simulate", str(path), "--steady", "--rtol", "1e-4"]) == 0
+    err = capsys.readouterr().err
+    assert "warning: rtol 0.0001 not met: vout_ripple is estimated only to 0.00013 (relative), read on the exact " \
+           "run's 8192 samples a period" in err and "orbit is resolved" not in err
+
+
 @pytest.mark.slow
 def test_a_conduction_that_begins_inside_the_first_step_after_a_switching_says_the_estimate_cannot_be_trusted():
     """boost-coss.cir at theta 1 (h = T/1000 = 10 ns): at the turn-off the 2 nF Coss charges from 0 to vout in
