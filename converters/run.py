@@ -217,7 +217,9 @@ def _on_steady_state(model: Model, p: dict, method: Method, span: float, x0: npt
     not settle on it), then ``span`` simulated from it on the same step plan."""
     # Newton aims at a tenth of the tolerance asked; an orbit rounding stops short of that is still the answer
     # asked for where it is resolved to the tolerance itself (a DCM boost at --steady-tol 1e-11: 4.6e-12)
-    orbit, period_map = _orbit_and_map(model, p, method, x0=x0, tol=0.1 * steady_tol, rounding_bound=steady_tol)
+    orbit, period_map = _orbit_and_map(model, p, method, x0=x0, tol=0.1 * steady_tol, rounding_bound=steady_tol,
+                                       explain=f" (Newton aims at a tenth of the tolerance asked, {steady_tol:.3g}, "
+                                               "and takes an orbit rounding resolves to that tolerance itself)")
     if not orbit.stable:
         # A fixed point of the period map the circuit does not settle on is no steady state.
         mu = orbit.multipliers[0]
@@ -322,7 +324,7 @@ def steady_state(model: Model, p: dict, method: Method, *, x0: npt.NDArray[np.fl
 
 def _orbit_and_map(model: Model, p: dict, method: Method, *, x0: npt.NDArray[np.float64] | None = None,
                    warm_up: int = WARM_UP_PERIODS, tol: float = 1e-10, periods: int = 1,
-                   rounding_bound: float = 0.0) -> tuple[PeriodicOrbit, PeriodMap]:
+                   rounding_bound: float = 0.0, explain: str = "") -> tuple[PeriodicOrbit, PeriodMap]:
     """(orbit, period map): :func:`steady_state` and the map it shot on (its step plan, for the stepper,
     serves the run on the orbit too: :func:`_on_orbit`). Every orbit goes through here, so a step (no steady
     state: its problem over one period would be the circuit before the step) is refused here for all of them."""
@@ -330,7 +332,7 @@ def _orbit_and_map(model: Model, p: dict, method: Method, *, x0: npt.NDArray[np.
     problem = model.problem(p, periods * model.period(p), x0)
     period_map = method.period_map(problem)
     orbit = shoot(problem, method, problem.x0, periods=periods, warm_up=warm_up, tol=tol, period_map=period_map)
-    return require(orbit, f"the periodic orbit of {model.key}", rounding_bound), period_map
+    return require(orbit, f"the periodic orbit of {model.key}", rounding_bound, explain), period_map
 
 
 def _on_orbit(model: Model, p: dict, method: Method, period_map: PeriodMap, x0: npt.NDArray[np.float64],

@@ -145,3 +145,14 @@ def test_a_return_code_given_by_its_value_is_the_typed_code_and_writes_as_its_va
     tr = Trajectory(t=np.zeros(1), x=np.zeros((1, 1)), state_names=("x",), retcode="not_converged")
     assert tr.retcode is ReturnCode.NOT_CONVERGED and tr.retcode == "not_converged"
     assert json.dumps({"retcode": tr.retcode}) == '{"retcode": "not_converged"}' and str(tr.retcode) == "not_converged"
+
+
+def test_configurations_named_alike_stay_apart_in_a_table():
+    """A model may name two configurations alike (its name need not say every level or slope it holds): the table's
+    categorical column keeps them apart (it raised "Categorical categories must be unique")."""
+    t = np.linspace(0.0, 1.0, 5)
+    tr = Trajectory(t=t, x=t[:, None], state_names=("x",), config=np.array([0, 1, 0, 1, 2]),
+                    config_names=("circuit", "circuit", "other"))
+    column = tr.to_pandas()["config"]
+    assert list(column.cat.categories) == ["circuit#0", "circuit#1", "other"]
+    assert list(column.astype(str)) == ["circuit#0", "circuit#1", "circuit#0", "circuit#1", "other"]

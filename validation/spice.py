@@ -248,7 +248,7 @@ def conducting_by_current(currents: np.ndarray, in_window: np.ndarray, t: np.nda
                           period: float | None = None) -> np.ndarray:
     """Each device (column) conducting where its current exceeds CURRENT_FRACTION of its own peak in the window:
     with the times ``t``, the peak of its mean over PEAK_AVERAGE_FRACTION of the ``period`` (or of the window)."""
-    if not in_window.any():
+    if not in_window.any() or currents.shape[1] == 0:
         return currents > 0.0
     if t is None:
         peaks = np.abs(currents[in_window]).max(axis=0)

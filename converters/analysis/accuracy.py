@@ -707,8 +707,10 @@ def _energy_check(model: Model, p: dict, method: Method, fine: Trajectory, coars
         return ""
     residual = balance["residual"]
     out["energy_residual"] = residual
-    # what rounding alone can leave, on the same scale: at no load it is most of the little the sources deliver
-    out["energy_residual_floor"] = balance["rounding_J"] * residual / max(balance["residual_J"], 1e-300)
+    if method.exact:
+        # what rounding alone can leave, on the same scale: at no load it is most of the little the sources deliver
+        out["energy_residual_floor"] = balance["rounding_J"] / max(abs(balance["absorbed_J"]),
+                                                                   balance["delivered_J"], 1e-300)
     if coarse is not None:
         out["energy_residual_2h"] = energy_balance(model, p, coarse, 0.0, T)["residual"]
     if method.exact and residual > ENERGY_EXACT_RTOL and balance["residual_J"] > 2.0 * balance["rounding_J"]:
@@ -823,18 +825,27 @@ def _overdamped(model: Model, p: dict, method: Any) -> str:     # (method: a Met
     theta = getattr(method, "theta", None)
     if theta is None or not hasattr(model, "problem"):
         return ""
-    from ..methods.theta import overdamped_resonance
-    found = overdamped_resonance(model.problem(p, model.period(p)).configurations, method.h, theta)
+    from ..methods.theta import overdamped_resonance, undamped_resonance
+    configurations = model.problem(p, model.period(p)).configurations
+    if theta <= 0.5:
+        # the trapezoid adds no damping, but a resonance no resistance damps rings on, its frequency off by
+        # (omega h)^2 / 12 at h and 2h alike (a series resonant converter's Lr with the 100 pF across its switches:
+        # the estimate 1.1e-6, the exact method 9.9e-5 away)
+        undamped = undamped_resonance(configurations)
+        if undamped is None:
+            return ""
+        frequency, q = undamped
+        shift = (2.0 * np.pi * frequency * method.h) ** 2 / 12.0
+        if shift <= DEFAULT_RTOL:           # (a Cuk's 5 kHz input loop at T/1000: 8e-9)
+            return ""
+        return (f"the circuit's {frequency:.3g} Hz resonance is undamped (no resistance in its loop), and the "
+                f"trapezoid (h = {method.h:.3g} s) shifts its ring's frequency by {shift:.1e} ((omega h)^2 / 12) at "
+                "h and 2h alike: the values and their estimates may be off by more than stated (a smaller --h "
+                "shrinks that error, no estimate sees it); use --method event (exact flows)")
+    found = overdamped_resonance(configurations, method.h, theta)
     if found is None:
         return ""
     frequency, q, ratio = found
-    if theta <= 0.5:
-        # the trapezoid adds no damping: what it found is a resonance the circuit itself leaves undamped (its decay
-        # below rounding), whose ring the step's phase error shifts at h and 2h alike
-        return (f"the circuit's {frequency:.3g} Hz resonance is undamped (Q {q:.3g}: no resistance in its loop), "
-                f"and the trapezoid (h = {method.h:.3g} s) shifts its ring's frequency by (omega h)^2 / 12 at h "
-                "and 2h alike: the values and their estimates may be off by more than stated; use a smaller --h, or "
-                "--method event (exact flows)")
     return (f"the step damps the circuit's {frequency:.3g} Hz resonance (Q {q:.3g}) {ratio:.3g}x faster than the "
             f"circuit does (theta {theta:g}, h = {method.h:.3g} s): the values and their estimates may be off by "
             "more than stated; use a smaller --h, or --theta 0.5 where every time constant is resolved")

@@ -259,12 +259,12 @@ def resolved(orbit: PeriodicOrbit, bound: float = ROUNDING_RESOLVED) -> bool:
     return orbit.converged or (orbit.message.startswith(ROUNDING_LIMITED) and orbit.distance <= bound)
 
 
-def require(orbit: PeriodicOrbit, what: str = "the periodic orbit", rounding_bound: float = 0.0) -> PeriodicOrbit:
+def require(orbit: PeriodicOrbit, what: str = "the periodic orbit", rounding_bound: float = 0.0,
+            explain: str = "") -> PeriodicOrbit:
     """The orbit when converged (or, with ``rounding_bound``, resolved to it as far as rounding goes); otherwise a
-    SimulationError with the reason and a remedy."""
+    SimulationError with the reason (``explain`` after it) and a remedy."""
     if not resolved(orbit, rounding_bound):
-        asked = (f" (Newton aims at a tenth of the tolerance asked, {rounding_bound:.3g}, and takes an orbit rounding "
-                 "resolves to that tolerance itself)" if rounding_bound > 0.0 else "")
-        raise SimulationError(f"Newton shooting did not find {what}: {orbit.message}{asked}; try a looser "
+        taken = (f" (an orbit rounding resolves to {rounding_bound:.3g} is taken)" if rounding_bound > 0.0 else "")
+        raise SimulationError(f"Newton shooting did not find {what}: {orbit.message}{explain or taken}; try a looser "
                               "--steady-tol, or --periods N without --steady to see the transient")
     return orbit

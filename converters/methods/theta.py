@@ -205,11 +205,13 @@ def overdamped_resonance(configurations: Iterable[Configuration], h: float,
     oscillatory mode is damped more by the step than by the circuit. The scheme's decay rate of a mode lambda is
     -ln|r(h lambda)| / h, r(z) = (1 + (1 - theta) z) / (1 - theta z): backward Euler adds ~h omega^2 / 2 (a
     100 pF snubber's 5 MHz ring with a 10 uH inductor, Q 316, decays 96x faster at h = 10 ns than it does)."""
+    if theta <= 0.5:        # the trapezoid adds no damping: a ratio above 1 there is the rounding of an undamped mode
+        return None
     worst = None
     for config in configurations:
         for lam in np.linalg.eigvals(config.A) if config.A.size and np.isfinite(config.A).all() else ():
             sigma, omega = -lam.real, abs(lam.imag)
-            if omega <= 0.0 or sigma <= 0.0:
+            if omega <= 0.0 or sigma <= UNDAMPED * abs(lam):
                 continue
             z = h * lam
             extra = -np.log(abs((1.0 + (1.0 - theta) * z) / (1.0 - theta * z))) / h - sigma
@@ -217,6 +219,22 @@ def overdamped_resonance(configurations: Iterable[Configuration], h: float,
             if ratio > 1.0 and (worst is None or ratio > worst[2]):
                 worst = (omega / (2.0 * np.pi), abs(lam) / (2.0 * sigma), float(ratio))
     return worst
+
+
+#: A mode whose decay rate is below this fraction of its |lambda| is undamped: its decay is the eigenvalues' rounding.
+UNDAMPED = 1e-12
+
+
+def undamped_resonance(configurations: Iterable[Configuration]) -> tuple[float, float] | None:
+    """(frequency in Hz, Q) of the highest-frequency oscillatory mode no resistance damps (decay below
+    :data:`UNDAMPED` of |lambda|: an LC loop with no resistance in it), or None."""
+    found = None
+    for config in configurations:
+        for lam in np.linalg.eigvals(config.A) if config.A.size and np.isfinite(config.A).all() else ():
+            sigma, omega = -lam.real, abs(lam.imag)
+            if omega > 0.0 and abs(sigma) <= UNDAMPED * abs(lam) and (found is None or omega > found[0]):
+                found = (omega, abs(lam) / (2.0 * max(abs(sigma), 1e-300)))
+    return None if found is None else (found[0] / (2.0 * np.pi), found[1])
 
 
 def default_theta(configurations: Iterable[Configuration], h: float) -> float:

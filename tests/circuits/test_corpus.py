@@ -14,6 +14,7 @@ two-switch forward with bleeders."""
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from converters.models import Circuit
@@ -193,3 +194,18 @@ def test_compare_never_passes_a_value_more_than_one_percent_off(name, tmp_path, 
     if name == "dcm-boost-1uH":      # 15 A peaks through RON = 1 mohm: 1.6e-3 of the input power, the 1.3e-3 apart
         assert not result["passed"] and any("ngspice's switch and diode models (RON = 0.001 ohm, N = 0.001) "
                                             "dissipate about 0.0016 of the input power" in n for n in result["notes"])
+
+
+def test_a_diodes_conduction_scale_is_its_largest_mean_over_a_thousandth_of_the_period_not_a_spike():
+    """conducting_by_current: a diode carrying 1.27 A with a 2e-13 s spike of 88 A at an edge (ngspice's, at a
+    two-switch forward's turn-on) still reads conducting at 7 mA (1e-3 of 1.27 A is 1.3 mA; of 88 A, 88 mA); a
+    circuit without diodes (no column) reads nothing (it raised on the empty stack)."""
+    from validation.spice import conducting_by_current
+    T = 1e-5
+    t = np.sort(np.concatenate([np.linspace(0.0, T, 4001), [1e-13, 2e-13, 3e-13]]))   # ngspice's steps at the spike
+    current = np.where(t < 0.5 * T, 1.27, 0.007)
+    current[(t > 0.0) & (t <= 2e-13)] = 88.0
+    conducting = conducting_by_current(current[:, None], np.ones(t.size, dtype=bool), t, T)
+    assert conducting[t > 0.5 * T, 0].all()
+    empty = conducting_by_current(np.zeros((t.size, 0)), np.ones(t.size, dtype=bool), t, T)
+    assert empty.shape == (t.size, 0)

@@ -407,7 +407,8 @@ def test_the_event_method_takes_a_no_load_ladder_to_2_n_vpk(capsys, tmp_path, N)
     diode's current inside the mode selection's zero band that dips before it rises (-5.8e-8 A falling at 21 A/s,
     the band 9.2e-8 A), crossed at once and kept by the selection again and again (now crossed below its dip). The
     orbit is stable (its slowest multiplier 0.996 at N = 12, 0.999 at N = 24) and its exact energy balance closes
-    to rounding, which at no load is most of the 1e-14 J a period the source delivers: no warning."""
+    to rounding, which at no load is much of what the source delivers (5.9e-14 J a period beside 4.7e-3 J stored at
+    N = 12; 2.3e-13 J beside 9.5e-3 J at N = 24): no warning (it had said the balance does not close)."""
     path = tmp_path / f"cw{N}.cir"
     path.write_text(cockcroft_walton(N))
     code = main(["simulate", str(path), "-p", "R=1e13", "--steady", "--method", "event", "--json"])
@@ -418,8 +419,8 @@ def test_the_event_method_takes_a_no_load_ladder_to_2_n_vpk(capsys, tmp_path, N)
     assert 0.0 < droop < 2e-8 * 2 * N * 10.0
     assert summary["orbit"]["stable"] and 0.99 < summary["orbit"]["spectral_radius"] < 1.0
     accuracy = summary["accuracy"]
-    # beyond the exact method's 1e-8 of the delivered energy, within twice what rounding leaves: no warning
-    assert 1e-8 < accuracy["energy_residual"] <= 2.0 * accuracy["energy_residual_floor"]
+    # within twice what rounding leaves: no warning
+    assert accuracy["energy_residual"] <= 2.0 * accuracy["energy_residual_floor"]
     assert not summary.get("warnings") and "trusted" not in accuracy
 
 

@@ -387,28 +387,6 @@ class _Machine:
         g_scale = watch.row_scales * size
         if watch.timed:
             g_scale = g_scale + np.abs(watch.slopes) * self.scale
-        # A pair's quantity that starts below zero but inside the mode selection's zero band (which took it as
-        # zero and let its flow's derivatives decide) and dips further before it rises crosses where it falls
-        # below that dip, not at once: else the crossing at tau = 0 flips it, the selection keeps the mode, and the
-        # run repeats the instant (a Newton iterate of a no-load 48-diode ladder: a held diode's current at
-        # -5.8e-8 A, falling at 21 A/s, rising again at 4e9 A/s^2 from -8.6e-8 A; the band 9.2e-8 A).
-        k = self.problem.k
-        band = _ZERO_RTOL * g_scale[:k]
-        start = watch.rows[:k] @ xt
-        offsets = np.zeros(watch.rows.shape[0])
-        dipping = np.flatnonzero((start < _CROSS_RTOL * g_scale[:k]) & (start >= -band))
-        if dipping.size:         # at zero or below it: those falling (a pair just flipped rises from zero)
-            dipping = dipping[(start[dipping] < -_CROSS_RTOL * g_scale[dipping])
-                              | (watch.rows[dipping, :-1] @ flow.field(xt) < 0.0)]
-        if dipping.size:
-            s = np.linspace(0.0, flow.delta, 65)                            # the first step finely, then steps
-            coefficients = flow.series(xt) @ watch.rows[dipping].T          # (terms, rows): g(s) = sum_j s^j c_j
-            g = np.vstack([np.vander(s, coefficients.shape[0], increasing=True) @ coefficients,
-                           flow.steps(xt, min(_POWERS, 64)) @ watch.rows[dipping].T])
-            low = g.min(axis=0)
-            rises = (g[-1] > low + _CROSS_RTOL * g_scale[dipping]) & (low >= -2.0 * band[dipping])
-            offsets[dipping] = np.where(rises, np.minimum(low, start[dipping]), 0.0)
-        threshold = offsets - _CROSS_RTOL * g_scale
         if not (flow.delta > 0.0 and tau_max / flow.delta <= MAX_SUBSTEPS):
             from ...errors import ResourceError
             raise ResourceError(f"--method event: the stiffest mode's time constant is about {4.0 * flow.delta:.3g} s, "
@@ -420,6 +398,9 @@ class _Machine:
             raise ResourceError(f"--method event: the stiffest mode's time constant is about {4.0 * flow.delta:.3g} s, "
                                 f"shorter than the exact flows represent in double precision (about "
                                 f"{1.0 / MAX_SERIES_NORM:.1g} s: a tiny C, L or R); use --method lcp")
+        offsets = self._dip_offsets(flow, watch, xt, g_scale)
+        base = -_CROSS_RTOL * g_scale
+        threshold = offsets + base
         full = int(np.floor(tau_max / flow.delta * (1.0 - 1e-12)))
         tau, state = 0.0, xt
         while full > 0:
@@ -436,6 +417,8 @@ class _Machine:
                 return self._locate(flow, watch, start, tau + i * flow.delta, flow.delta, g_scale, phase0,
                                     offsets), None
             tau, state, full = tau + m * flow.delta, states[m - 1], full - m
+            if offsets.any():            # a dip is looked for over the first _POWERS steps: past them, plain zero
+                offsets, threshold = np.zeros_like(offsets), base
         rest = tau_max - tau
         if rest > 0.0:
             end = flow.propagate(state, rest)
@@ -444,6 +427,31 @@ class _Machine:
                 return self._locate(flow, watch, state, tau, rest, g_scale, phase0, offsets), None
             state = end
         return (None, None), state
+
+    def _dip_offsets(self, flow: Flow, watch: _Watch, xt: FloatArray, g_scale: FloatArray) -> FloatArray:
+        """Where each watched row crosses at the segment's start: 0, or for a pair's quantity that starts at or below
+        zero inside the mode selection's zero band (which took it as zero and let its flow's derivatives decide) and
+        dips further before it rises within the first _POWERS steps, that dip's bottom. Crossed at once, such a
+        row is flipped, the selection keeps the mode, and the run repeats the instant (a Newton iterate of a no-load
+        48-diode ladder: a held diode's current at -5.8e-8 A, falling at 21 A/s, rising again at 4e9 A/s^2 from
+        -8.6e-8 A; the band 9.2e-8 A)."""
+        k = self.problem.k
+        band = _ZERO_RTOL * g_scale[:k]
+        start = watch.rows[:k] @ xt
+        offsets = np.zeros(watch.rows.shape[0])
+        dipping = np.flatnonzero((start < _CROSS_RTOL * g_scale[:k]) & (start >= -band))
+        if dipping.size:         # at zero or below it: those falling (a pair just flipped rises from zero)
+            dipping = dipping[(start[dipping] < -_CROSS_RTOL * g_scale[dipping])
+                              | (watch.rows[dipping, :-1] @ flow.field(xt) < 0.0)]
+        if dipping.size:
+            s = np.linspace(0.0, flow.delta, 65)                            # the first step finely, then steps
+            coefficients = flow.series(xt) @ watch.rows[dipping].T          # (terms, rows): g(s) = sum_j s^j c_j
+            g = np.vstack([np.vander(s, coefficients.shape[0], increasing=True) @ coefficients,
+                           flow.steps(xt, _POWERS) @ watch.rows[dipping].T])
+            low = g.min(axis=0)
+            rises = (g[-1] > low + _CROSS_RTOL * g_scale[dipping]) & (low >= -2.0 * band[dipping])
+            offsets[dipping] = np.where(rises, np.minimum(low, start[dipping]), 0.0)
+        return offsets
 
     def _locate(self, flow: Flow, watch: _Watch, xt_a: FloatArray, tau_a: float, width: float, g_scale: FloatArray,
                 phase0: FloatArray | float, offsets: FloatArray) -> tuple[float, int]:
@@ -644,6 +652,7 @@ class _Machine:
         few nV forward: 24 crossings at one instant, and a saltation through each)."""
         k = self.problem.k
         values = watch.rows[:k] @ xt
+        # (a pair that dips inside the zero band counts too: taken with the others, the selection decides it)
         below = values < -_CROSS_RTOL * watch.row_scales[:k] * np.abs(xt).max()
         flipped = 1 << pair
         for i in np.flatnonzero(below):
