@@ -96,18 +96,24 @@ def test_a_named_converter_and_its_netlist_get_the_same_default_method_and_numbe
     assert a == pytest.approx(b, rel=1e-10)
 
 
+def _one_warning(path, text, theta):
+    """(path, the default steady run of ``text`` written to ``path``, its summary, its one warning), the run's theta
+    asserted and its estimate marked untrusted."""
+    path.write_text(text)
+    run = run_converter(str(path), steady=True)
+    summary = run_summary(run)
+    assert run.algorithm.theta == theta and summary["accuracy"]["trusted"] is False
+    (warning,) = summary["warnings"]
+    return path, run, summary, warning
+
+
 def test_a_resonance_the_step_damps_more_than_the_circuit_does_says_the_estimate_cannot_be_trusted(tmp_path):
     """The buck with an RC snubber (1 ohm, 100 pF) from its switch node: the snubber's 100 ps sets backward Euler
     (h = 10 ns), which erases the 5 MHz ring of L1 (10 uH) with the snubber's capacitor after the diode turns off
     (Q = sqrt(L/C)/R = 316.2; f = 1/(2 pi sqrt(L C)) = 5.033 MHz). Richardson at h and 2h compares two runs that both
     erase it and stated 2e-6; at h/10 the mean moves 4e-4 and at h/40 3e-3: a warning says so."""
     text = (NETLISTS / "buck.cir").read_text().replace("R1 out 0 {R}", "R1 out 0 {R}\nRsn sw sn 1\nCsn sn 0 100p")
-    path = tmp_path / "snubbed.cir"
-    path.write_text(text)
-    run = run_converter(str(path), steady=True)
-    summary = run_summary(run)
-    assert run.algorithm.theta == 1.0 and summary["accuracy"]["trusted"] is False
-    (warning,) = summary["warnings"]
+    path, run, summary, warning = _one_warning(tmp_path / "snubbed.cir", text, theta=1.0)
     assert warning.startswith("the step damps the circuit's 5.03e+06 Hz resonance (Q 316)")
     finer = run_summary(run_converter(str(path), steady=True, h=1e-9))["vout_mean"]
     moved = abs(finer - summary["vout_mean"]) / finer
@@ -149,12 +155,7 @@ def test_an_undamped_resonance_under_the_trapezoid_is_named_as_such_with_a_remed
     the step "damps" it 6.7e3x faster (rounding: the trapezoid adds no damping, and that reading came and went with
     the eigenvalues' last bits), with Q 3.9e18, and advised --theta 0.5, the theta in use. An undamped loop whose
     frequency error stays below 1e-3 (the shipped Cuk's 5 kHz input loop: 8e-9) is not warned about."""
-    path = tmp_path / "src.cir"
-    path.write_text(SRC)
-    run = run_converter(str(path), steady=True)
-    summary = run_summary(run)
-    assert run.algorithm.theta == 0.5 and summary["accuracy"]["trusted"] is False
-    (warning,) = summary["warnings"]
+    path, run, summary, warning = _one_warning(tmp_path / "src.cir", SRC, theta=0.5)
     assert warning.startswith("the circuit's 2.25e+06 Hz resonance is undamped")
     assert warning.endswith("; use --method event (exact flows)") and "--theta" not in warning
     shift = (2 * np.pi * 2.25e6 * run.algorithm.h) ** 2 / 12           # the ring's frequency error: above 1e-3
