@@ -62,10 +62,17 @@ MAX_RATIO = 2
 #: An estimate may fall at most 1/GUARD below what the previous one predicts by the order (:func:`_guarded`).
 GUARD = 0.1
 THETA = 0.5
-#: The order a default run's Richardson estimate assumes for a stepper of declared order above it when the orbit
+#: The most order a default run's Richardson estimate assumes for a stepper of declared order above it when the orbit
 #: has a diode event inside a step (measured at the 15 points of tests/analysis: theta 0.5's effective order
 #: through the events is ~1.3-1.5; with p = 2 the estimate fell to 0.28x the true error, with 1.5 to 0.46x).
+#: Below it the order observed on a third orbit at 4h is taken (:func:`_observed_order`), down to LEAST_ORDER: a
+#: ladder whose every diode stops inside a step (the 10-stage Cockcroft-Walton) read 0.40x its error at 1.5.
 ORDER_THROUGH_EVENTS = 1.5
+#: The least order a stepper of higher declared order is assumed to keep through diode events: backward Euler's, the
+#: first order every event inside a step leaves (the ladder observed 0.53 at h, 2h and 4h, still before the
+#: asymptotic range: order 1 reads 0.74x its error, 0.53 1.7x). Also where the differences h-2h and 2h-4h do not
+#: shrink or the orbit at 4h is not found.
+LEAST_ORDER = 1.0
 #: The event method's output samples per period (ripple and peaks are read on them; the estimate of that
 #: reading is Richardson's on every other sample, the sampling error being O(spacing^2) at a smooth extremum).
 EVENT_SAMPLES = 8192
@@ -535,20 +542,32 @@ def last_period(model: Model, p: dict, tr: Trajectory) -> dict:
             "shortest_interval_T": float(np.diff(bounds)[np.diff(bounds) > 1e-12 * T].min() / T)}
 
 
-def orbit_runs(model: Model, p: dict, method: Method,
-               tr: Trajectory) -> tuple[Trajectory, Trajectory | None] | str:
+@dataclass(frozen=True)
+class OrbitRuns:
+    """One period on the method's periodic orbit (``fine``), for a stepper also on its orbit at 2h (``coarse``; None
+    for the exact event method), and the order Richardson's estimate from the two takes (:func:`_observed_order`)."""
+    fine: Trajectory
+    coarse: Trajectory | None
+    order: float
+
+    @property
+    def factor(self) -> float:
+        """2^p - 1: the difference at h and 2h over the error at h, for an error C h^p."""
+        return 2.0 ** self.order - 1.0
+
+
+def orbit_runs(model: Model, p: dict, method: Method, tr: Trajectory) -> OrbitRuns | str:
     """:func:`_orbit_runs` from the run's last state, found once per run and method: the accuracy check and the
     devices' losses' estimate (:mod:`converters.thermal.summary`) read the same orbits."""
     cache: dict[int, Any] = tr.__dict__.setdefault("_orbit_runs", {})
     if id(method) not in cache:
         cache[id(method)] = (_orbit_runs(model, p, method, tr.x[-1]), method)     # the method kept: its id stays
-    return cast("tuple[Trajectory, Trajectory | None] | str", cache[id(method)][0])
+    return cast("OrbitRuns | str", cache[id(method)][0])
 
 
-def _orbit_runs(model: Model, p: dict, method: Method,
-                x_guess: npt.NDArray[np.float64]) -> tuple[Trajectory, Trajectory | None] | str:
+def _orbit_runs(model: Model, p: dict, method: Method, x_guess: npt.NDArray[np.float64]) -> OrbitRuns | str:
     """One period on the method's periodic orbit, and for the stepper also on its orbit at 2h (None for the
-    event method, exact); or a string saying which orbit was not found."""
+    event method, exact), with the order of the stepper's error; or a string saying which orbit was not found."""
     from ..simulate import simulate
     from .periodic import resolved, shoot        # resolved: an orbit rounding stops short of 1e-8 serves here
     T = model.period(p)
@@ -559,25 +578,47 @@ def _orbit_runs(model: Model, p: dict, method: Method,
     def run(m: Method, x0: npt.NDArray[np.float64]) -> Trajectory:
         return replace(simulate(model.problem(p, T, x0), m), labels=model.labels(p))
     if not method.fixed_step:
-        return run(method, orbit.x0), None
+        return OrbitRuns(run(method, orbit.x0), None, math.inf)
     coarse = method.coarsened()
     orbit_2h = shoot(model.problem(p, T, orbit.x0), coarse, orbit.x0, tol=1e-8, polish=True)
     if not resolved(orbit_2h):
         return f"the orbit at 2h was not found ({orbit_2h.message})"
-    return run(method, orbit.x0), run(coarse, orbit_2h.x0)
+    fine = run(method, orbit.x0)
+    coarse_run = run(coarse, orbit_2h.x0)
+    order = float(method.order)
+    if order > LEAST_ORDER and substep_events(fine, T):
+        order = _observed_order(model, p, method, orbit_2h.x0, fine, coarse_run)
+    return OrbitRuns(fine, coarse_run, order)
 
 
-def richardson_factor(method: Method, fine: Trajectory, T: float) -> float:
-    """2^p - 1 for Richardson at h and 2h: p the method's declared order, or :data:`ORDER_THROUGH_EVENTS` where it
-    is higher and the orbit ``fine`` has a diode event inside a step (its order falls there)."""
-    order = method.order
-    if order > ORDER_THROUGH_EVENTS and substep_events(fine, T):
-        order = ORDER_THROUGH_EVENTS
-    return 2.0 ** order - 1.0
+def _observed_order(model: Model, p: dict, method: Method, x_2h: npt.NDArray[np.float64], fine: Trajectory,
+                    coarse: Trajectory) -> float:
+    """The order of the stepper's error in vout's mean on an orbit with a diode event inside a step, where it falls
+    below the declared one by as much as the events weigh: from a third orbit at 4h, log2 of the ratio of the
+    differences 2h-4h and h-2h, at most :data:`ORDER_THROUGH_EVENTS` and the declared order, at least
+    :data:`LEAST_ORDER` (also where the differences do not shrink or the orbit at 4h is not found). Backward Euler,
+    of declared order LEAST_ORDER, is not asked: its order is that already."""
+    from ..simulate import simulate
+    from .periodic import resolved, shoot
+    T = model.period(p)
+    ceiling = min(float(method.order), ORDER_THROUGH_EVENTS)
+    coarser = method.coarsened(4.0)
+    orbit_4h = shoot(model.problem(p, T, x_2h), coarser, x_2h, tol=1e-8, polish=True)
+    if not resolved(orbit_4h):
+        return LEAST_ORDER
+    at_4h = simulate(model.problem(p, T, orbit_4h.x0), coarser)
+    m_h, m_2h = fine.mean("vout", t0=0.0, t1=T), coarse.mean("vout", t0=0.0, t1=T)
+    m_4h = replace(at_4h, labels=model.labels(p)).mean("vout", t0=0.0, t1=T)
+    near, far = m_h - m_2h, m_2h - m_4h
+    if near == 0.0:
+        return ceiling
+    ratio = far / near
+    if not ratio > 2.0 ** LEAST_ORDER:         # not shrinking as a power of h (or changing sign): not asymptotic
+        return LEAST_ORDER
+    return min(ceiling, math.log2(ratio))
 
 
-def _power_check(model: Model, p: dict, method: Method, fine: Trajectory, coarse: Trajectory | None,
-                 reported: dict | None) -> dict:
+def _power_check(model: Model, p: dict, runs: OrbitRuns, reported: dict | None) -> dict:
     """How far the reported efficiency (absolute), input power and each loss (relative to the input power) may
     be from the exact periodic ones: the reported values' distance to the orbit's plus Richardson's estimate
     from the orbits at h and 2h, by the method's order (the switched currents' jumps at the switching edges are
@@ -587,13 +628,13 @@ def _power_check(model: Model, p: dict, method: Method, fine: Trajectory, coarse
     if reported is None or not hasattr(model, "power") or not np.isfinite(reported.get("input_W", np.nan)):
         return {}
     T = model.period(p)
+    fine, coarse = runs.fine, runs.coarse
     at_h = model.power(fine, p, 0.0, T)
     exact = {"efficiency": at_h["efficiency"], "input_W": at_h["input_W"], **at_h["losses_W"]}
     if coarse is not None:
         at_2h = model.power(coarse, p, 0.0, T)
         coarse_values = {"efficiency": at_2h["efficiency"], "input_W": at_2h["input_W"], **at_2h["losses_W"]}
-        factor = richardson_factor(method, fine, T)
-        exact = {k: v + (v - coarse_values[k]) / factor for k, v in exact.items()}
+        exact = {k: v + (v - coarse_values[k]) / runs.factor for k, v in exact.items()}
     scale = max(abs(exact["input_W"]), 1e-300)
     losses = [abs(v - exact[k]) / scale for k, v in reported["losses_W"].items() if k in exact]
     return {"efficiency_error_estimate": abs(reported["efficiency"] - exact["efficiency"]),
@@ -622,11 +663,12 @@ def default_check(model: Model, p: dict, method: Method, tr: Trajectory, reporte
     """How far the reported mean (vout over the run's last 10 periods) may be from the exact periodic one, relative
     to vout's RMS over the period (its mean for a DC output; the size of an AC one, whose mean is ~0):
     the run's distance to the method's own orbit (a transient not settled) plus the method's discretization
-    error, Richardson's from the orbit at h and 2h (the stepper's declared order, at most
-    :data:`ORDER_THROUGH_EVENTS` through a diode event inside a step; the event method: none).
-    Returns the estimate, its parts, the shortest interval between switchings in steps, and a warning when
-    the estimate exceeds ``DEFAULT_RTOL``; with the run's ``power`` summary, also the efficiency's and the
-    input power's estimates (:func:`_power_check`), and a warning when the efficiency's exceeds it."""
+    error, Richardson's from the orbit at h and 2h (the stepper's declared order; through a diode event inside a
+    step the order observed at h, 2h and 4h, at most :data:`ORDER_THROUGH_EVENTS`; the event method: none).
+    Returns the estimate, its parts, the order Richardson took, the shortest interval between switchings in
+    steps, and a warning when the estimate exceeds ``DEFAULT_RTOL``; with the run's ``power`` summary, also the
+    efficiency's and the input power's estimates (:func:`_power_check`), and a warning when the efficiency's
+    exceeds it."""
     T = model.period(p)
     out: dict[str, Any] = {"target": DEFAULT_RTOL}
     if method.error_kind is ErrorKind.MODEL:
@@ -647,11 +689,11 @@ def default_check(model: Model, p: dict, method: Method, tr: Trajectory, reporte
     if isinstance(runs, str):
         return {**out, "checked": False, "reason": runs,
                 "warning": f"vout mean's error could not be estimated: {runs}"}
-    fine, coarse = runs
+    fine, coarse = runs.fine, runs.coarse
     m_h = fine.mean("vout", t0=0.0, t1=T)
     exact = m_h
     if coarse is not None:
-        exact = m_h + (m_h - coarse.mean("vout", t0=0.0, t1=T)) / richardson_factor(method, fine, T)
+        exact = m_h + (m_h - coarse.mean("vout", t0=0.0, t1=T)) / runs.factor
     # relative to the output's RMS over the period: its mean for a DC output (to its ripple's square), its size for
     # an AC one, whose mean is ~0 (an inverter's load current: 6e-13 A, "2.2e-01 off" against it)
     scale = max(abs(exact), fine.rms("vout", t0=0.0, t1=T), 1e-300)
@@ -660,8 +702,9 @@ def default_check(model: Model, p: dict, method: Method, tr: Trajectory, reporte
     period = last_period(model, p, tr)
     step = getattr(method, "h", None)
     out.update(checked=True, vout_mean_error_estimate=error, transient=transient, discretization=discretization,
+               **({"richardson_order": runs.order} if coarse is not None else {}),
                shortest_interval_steps=period["shortest_interval_T"] * T / step if step else None,
-               **_power_check(model, p, method, fine, coarse, power))
+               **_power_check(model, p, runs, power))
     power_warning = _power_warning(out, method)
     if error > DEFAULT_RTOL:
         reasons = []

@@ -56,7 +56,7 @@ def _losses_estimate(model: Any, p: dict, tr: Trajectory, setup: ThermalSetup, s
     if isinstance(runs, str):
         return {"checked": False, "reason": runs, "warning": f"the devices' losses' error could not be estimated: "
                                                              f"{runs}"}
-    fine, coarse = runs
+    fine, coarse = runs.fine, runs.coarse
     T = model.period(p)
     pair, bound = (fine, coarse), 1.0
     step = getattr(method, "h", None)
@@ -67,7 +67,7 @@ def _losses_estimate(model: Any, p: dict, tr: Trajectory, setup: ThermalSetup, s
         if isinstance(halved, str):
             return {"checked": False, "reason": halved, "warning": f"the devices' losses' error could not be "
                                                                    f"estimated: {halved}"}
-        pair, bound = halved, 2.0      # the error at h: twice the difference from h/2 (p >= 1)
+        pair, bound = (halved.fine, halved.coarse), 2.0      # the error at h: twice the difference from h/2 (p >= 1)
     descriptions = {d: m.description for d, m in setup.devices.items()}
     tj = {d: v["tj_C"] for d, v in summary["devices"].items()}
 
