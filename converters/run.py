@@ -25,7 +25,7 @@ import numpy as np
 import numpy.typing as npt
 
 from .analysis.periodic import PeriodicOrbit, require, shoot
-from .errors import ParameterError, SimulationError
+from .errors import ParameterError, ResourceError, SimulationError
 from .methods.base import DEFAULT_METHOD, Method, PeriodMap, get_method
 from .methods.theta import StepPlanMap
 from .models import Model, check_h, get_model
@@ -291,6 +291,8 @@ def _step_target(model: Model, p: dict, method: Method) -> float | None:
     after = {k: v for k, v in model.stepped(p).items() if k not in model.STEP_PARAMETERS}
     try:
         orbit, period_map = _orbit_and_map(model, after, method)
+    except ResourceError:                    # a limit reached is the run's, not a missing target
+        raise
     except (SimulationError, ParameterError):
         return None
     tr = replace(_on_orbit(model, after, method, period_map, orbit.x0, model.period(after)),

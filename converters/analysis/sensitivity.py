@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
-from ..errors import ParameterError, SignalError, SimulationError
+from ..errors import ParameterError, ResourceError, SignalError, SimulationError
 from .smallsignal import SmallSignalModel, _mean_output, quantity_unit
 
 if TYPE_CHECKING:
@@ -112,7 +112,7 @@ def sensitivities(model: Model | str, params: dict | None = None, *, metric: str
         try:
             small = SmallSignalModel(model, p, input=name, outputs=(signal,), tol=tol,
                                      orbit=None if base is None else base.orbit)
-        except SignalError:                 # the metric's signal: wrong for every parameter
+        except (SignalError, ResourceError):    # the metric's signal (wrong for every parameter), or a limit
             raise
         except ParameterError as error:
             if explicit:
@@ -155,6 +155,8 @@ def finite_difference(model: Model | str, params: dict | None, metric: str, para
     def at(k: int) -> float | None:
         try:
             return steady_mean(model, {**given, key: value + k * h}, signal, tol)
+        except ResourceError:
+            raise
         except ParameterError:
             return None
     for offsets, weights, denominator in STENCILS:

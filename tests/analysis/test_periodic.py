@@ -201,3 +201,30 @@ def test_shooting_refuses_what_it_cannot_honour(kwargs, message):
     with pytest.raises(ParameterError) as refused:
         shoot(problem, Theta(h=conv.period(p) / 200), **kwargs)
     assert str(refused.value).startswith(message)
+
+
+class _LimitedMap:
+    """P(x) = x / 2 (orbit 0), whose evaluations after the first ``calls`` reach a limit (the command line's alarm
+    raising TimeLimitReached inside a period run), or leave the map's domain (a ParameterError)."""
+    evaluations, jacobian_kind = 0, "exact"
+
+    def __init__(self, calls, error):
+        self.calls, self.error = calls, error
+
+    def __call__(self, x):
+        self.evaluations += 1
+        if self.evaluations > self.calls:
+            raise self.error
+        return 0.5 * np.asarray(x), 0.5 * np.eye(len(x))
+
+
+def test_newton_stops_on_a_limit_and_halves_a_step_out_of_the_maps_domain():
+    """A trial the map refuses as out of its domain (ParameterError) is a step too long, halved; a limit reached in
+    the map (ResourceError: --time-limit's alarm, the memory limit, the event method's substeps) ends the run. It was
+    taken for a trial out of the domain: the alarm fired once inside the event method's period run, Newton halved its
+    step, and `simulate --steady --method event --time-limit 5` on a 10 ps mode ran past 100 s."""
+    from converters.errors import ParameterError, TimeLimitReached
+    with pytest.raises(TimeLimitReached, match="time limit"):
+        newton_orbit(_LimitedMap(1, TimeLimitReached("the time limit of 5 s")), np.ones(2))
+    refused = newton_orbit(_LimitedMap(1, ParameterError("below the surface")), np.ones(2), max_iter=5)
+    assert not refused.converged

@@ -135,6 +135,13 @@ FUZZ = [
      "the run did not finish within the time limit of 2 s (--time-limit)"),
     ("event-time-limit", ["simulate", "buck", "--method", "event", "--t-end", "5", "--h", "9e-6", "--time-limit", "2"],
      {}, "the run did not finish within the time limit of 2 s (--time-limit)"),
+    # the alarm fired inside an event period run that Newton shooting called, and Newton took it for a trial outside
+    # the map's domain and carried on: a 10 ps mode (10 pH, 1 ohm) ran past 100 s at --time-limit 5
+    ("event-steady-time-limit", ["simulate", "ps.cir", "--steady", "--method", "event", "--time-limit", "2"],
+     {"ps.cir": "peak detector through 10 pH and 1 ohm\n.param f=100k T={1/f} e={1e-3/f}\n"
+                "Vs a 0 PULSE(-10 10 {T/2-e/2} {e} {e} {T/2-e} {T})\nR1 a b 1\nL1 b c 10p\nD1 c out DMOD\n"
+                "C1 out 0 1u\nR2 out 0 1k\n.model DMOD D\n.tran {T/1000} {100*T}\n.end\n"},
+     "the run did not finish within the time limit of 2 s (--time-limit)"),
     ("bifurcation-time-limit", ["bifurcation", "buck", "--param", "A=1:2", "--time-limit", "5"], {},
      "--time-limit bounds ngspice runs and LCP solves; this command runs neither"),
     ("param-twice", ["simulate", "buck", "-p", "Vin=1", "-p", "Vin=2"], {}, "-p Vin is given twice (Vin=1 and Vin=2)"),

@@ -161,6 +161,8 @@ def _time_is_up(seconds: float, source: str = "--time-limit"):
             signal.setitimer(signal.ITIMER_REAL, owed)
             return
         from converters.errors import TimeLimitReached
+        # again in a second, should a handler on the way up take the stop for a failed trial and carry on
+        signal.setitimer(signal.ITIMER_REAL, 1.0)
         raise TimeLimitReached(f"the run did not finish within the time limit of {seconds:g} s ({source}); "
                                "raise it, or ask for a shorter run (--t-end, --periods) or a coarser one")
     return handler
