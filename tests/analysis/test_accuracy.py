@@ -218,3 +218,43 @@ def test_a_ladder_whose_diodes_all_stop_inside_a_step_states_its_error_within_2x
     estimate = summary["accuracy"]["vout_mean_error_estimate"]
     assert summary["accuracy"]["richardson_order"] == 1.0 and true > 1e-5
     assert true <= 2 * estimate and estimate <= 2 * true, (true, estimate)
+
+
+DICKSON = """Dickson charge pump, 4 stages, two-phase clock, diode RS
+.param Vin=5 Vclk=5 C=100n Co=1u R=20k f=100k RS=1
+.param T={1/f} e={1e-3/f}
+Vin in 0 DC {Vin}
+Vc1 clk 0 PULSE(0 {Vclk} {T/2 - e/2} {e} {e} {T/2 - e} {T})
+Vc2 clkb 0 PULSE({Vclk} 0 {T/2 - e/2} {e} {e} {T/2 - e} {T})
+D1 in n1 DMOD
+C1 n1 clk {C}
+D2 n1 n2 DMOD
+C2 n2 clkb {C}
+D3 n2 n3 DMOD
+C3 n3 clk {C}
+D4 n3 n4 DMOD
+C4 n4 clkb {C}
+D5 n4 out DMOD
+Co out 0 {Co}
+R1 out 0 {R}
+.model DMOD D(RS={RS})
+.tran {T/1000} {500*T} 0 {T/200} UIC
+.end
+"""
+
+
+@pytest.mark.slow
+def test_a_pump_whose_diodes_switch_with_the_clock_edges_states_its_error_at_the_order_it_converges():
+    """A Dickson pump: every diode changes with a clock edge (none inside a step), and the trapezoid's error in
+    vout's mean halves with the step (a step from an edge takes the pair's value before it): order 1, where the
+    estimate had taken the declared 2 and read the error 3.0x short (2.34e-7 against the exact method's, 7.8e-8
+    stated). The order observed at h, 2h and 4h is 1.00 and the estimate within 1 % of the error."""
+    from converters.models import Circuit
+    from converters.run import run_converter, run_summary
+    model = Circuit.from_netlist("dickson.cir", text=DICKSON)
+    summary = run_summary(run_converter(model, steady=True))
+    exact = run_summary(run_converter(model, steady=True, method="event"))["vout_mean"]
+    true = abs(summary["vout_mean"] - exact) / abs(exact)
+    estimate = summary["accuracy"]["vout_mean_error_estimate"]
+    assert summary["accuracy"]["richardson_order"] == pytest.approx(1.0, abs=0.01) and true > 1e-7
+    assert estimate == pytest.approx(true, rel=0.1), (true, estimate)
