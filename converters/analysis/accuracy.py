@@ -40,7 +40,7 @@ from typing import TYPE_CHECKING, Any, cast
 import numpy as np
 import numpy.typing as npt
 
-from ..errors import ParameterError, SimulationError
+from ..errors import ParameterError, ResourceError, SimulationError
 from ..methods.base import ErrorKind
 
 if TYPE_CHECKING:
@@ -618,7 +618,12 @@ def _orbit_runs(model: Model, p: dict, method: Method, x_guess: npt.NDArray[np.f
     if not method.fixed_step:
         return OrbitRuns(run(method, orbit.x0), None, math.inf)
     coarse = method.coarsened()
-    orbit_2h = shoot(model.problem(p, T, orbit.x0), coarse, orbit.x0, tol=1e-8, polish=True)
+    try:
+        orbit_2h = shoot(model.problem(p, T, orbit.x0), coarse, orbit.x0, tol=1e-8, polish=True)
+    except ResourceError:
+        raise
+    except ParameterError as why:        # a step the run takes whose double it does not (a SIN source: T / 2h whole)
+        return f"the orbit at 2h cannot be run ({why})"
     if not resolved(orbit_2h):
         return f"the orbit at 2h was not found ({orbit_2h.message})"
     fine = run(method, orbit.x0)
@@ -644,10 +649,15 @@ def _observed_order(model: Model, p: dict, method: Method, x_2h: npt.NDArray[np.
     from .periodic import resolved, shoot
     T = model.period(p)
     coarser = method.coarsened(4.0)
-    orbit_4h = shoot(model.problem(p, T, x_2h), coarser, x_2h, tol=1e-8, polish=True)
-    if not resolved(orbit_4h):
+    try:
+        orbit_4h = shoot(model.problem(p, T, x_2h), coarser, x_2h, tol=1e-8, polish=True)
+        if not resolved(orbit_4h):
+            return LEAST_ORDER
+        at_4h = simulate(model.problem(p, T, orbit_4h.x0), coarser)
+    except ResourceError:
+        raise
+    except ParameterError:               # 4h not a step the circuit takes (a SIN source: T / 4h not whole)
         return LEAST_ORDER
-    at_4h = simulate(model.problem(p, T, orbit_4h.x0), coarser)
     m_h, m_2h = fine.mean("vout", t0=0.0, t1=T), coarse.mean("vout", t0=0.0, t1=T)
     m_4h = replace(at_4h, labels=model.labels(p)).mean("vout", t0=0.0, t1=T)
     near, far = m_h - m_2h, m_2h - m_4h
