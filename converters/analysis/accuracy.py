@@ -67,14 +67,18 @@ THETA = 0.5
 #: The most order a default run's Richardson estimate assumes for a stepper of declared order above it when the orbit
 #: has a diode event inside a step (measured at the 15 points of tests/analysis: theta 0.5's effective order
 #: through the events is ~1.3-1.5; with p = 2 the estimate fell to 0.28x the true error, with 1.5 to 0.46x).
-#: Below it the order observed on a third orbit at 4h is taken (:func:`_observed_order`), down to LEAST_ORDER: a
+#: Below it the order observed on a third orbit at 4h is taken (:func:`_observed_order`), down to OBSERVED_FLOOR: a
 #: ladder whose every diode stops inside a step (the 10-stage Cockcroft-Walton) read 0.40x its error at 1.5.
 ORDER_THROUGH_EVENTS = 1.5
-#: The least order a stepper of higher declared order is assumed to keep through diode events: backward Euler's, the
-#: first order every event inside a step leaves (the ladder observed 0.53 at h, 2h and 4h, still before the
-#: asymptotic range: order 1 reads 0.74x its error, 0.53 1.7x). Also where the differences h-2h and 2h-4h do not
-#: shrink or the orbit at 4h is not found.
+#: The order assumed where it cannot be observed (the orbit at 4h not found, or not a step the circuit takes; the
+#: first run of ``--rtol`` on a circuit the event method cannot take): backward Euler's, the first order a diode event
+#: inside a step leaves.
 LEAST_ORDER = 1.0
+#: The least order observed that a default run's estimate takes, and the one it takes where the differences h-2h and
+#: 2h-4h do not shrink by 2^0.5: a Cockcroft-Walton ladder's are still before their asymptotic range at the default
+#: step (observed 0.30 to 0.53: its error falls more slowly from 4h to h than it will), and order 1 there read its
+#: error 1.35x (6 stages) to 3.3x (12 stages at T/1000) short; at 0.5 the estimates are 1.2x to 1.8x above it.
+OBSERVED_FLOOR = 0.5
 #: The event method's output samples per period (ripple and peaks are read on them; the estimate of that
 #: reading is Richardson's on every other sample, the sampling error being O(spacing^2) at a smooth extremum).
 EVENT_SAMPLES = 8192
@@ -643,8 +647,9 @@ def _observed_order(model: Model, p: dict, method: Method, x_2h: npt.NDArray[np.
     """The order of the stepper's error in vout's mean, which falls below the declared one by as much as the diode
     events weigh: from a third orbit at 4h, log2 of the ratio of the differences 2h-4h and h-2h, at most ``ceiling``
     (the declared order, or :data:`ORDER_THROUGH_EVENTS` through an event inside a step), at least
-    :data:`LEAST_ORDER` (also where the differences do not shrink or the orbit at 4h is not found). Backward Euler,
-    of declared order LEAST_ORDER, is not asked: its order is that already."""
+    :data:`OBSERVED_FLOOR` (also where the differences do not shrink); :data:`LEAST_ORDER` where the orbit at 4h
+    cannot be found or run. Backward Euler, of declared order LEAST_ORDER, is not asked: its order is that
+    already."""
     from ..simulate import simulate
     from .periodic import resolved, shoot
     T = model.period(p)
@@ -664,8 +669,8 @@ def _observed_order(model: Model, p: dict, method: Method, x_2h: npt.NDArray[np.
     if near == 0.0:
         return ceiling
     ratio = far / near
-    if not ratio > 2.0 ** LEAST_ORDER:         # not shrinking as a power of h (or changing sign): not asymptotic
-        return LEAST_ORDER
+    if not ratio > 2.0 ** OBSERVED_FLOOR:      # not shrinking as a power of h (or changing sign): not asymptotic
+        return OBSERVED_FLOOR
     return min(ceiling, math.log2(ratio))
 
 

@@ -203,9 +203,10 @@ def test_accuracy_on_request_covers_the_power_summary(name, params, rtol):
 @pytest.mark.parametrize("stages", [6, 16])
 def test_a_ladder_whose_diodes_all_stop_inside_a_step_states_its_error_within_2x(stages, tmp_path):
     """A Cockcroft-Walton ladder at the default step (T/4000, the source's edges T/1000): every diode's conduction
-    ends inside a step, and the trapezoid's error in vout's mean converges at about first order, not the 1.5 the
-    estimate had assumed (its differences at h, 2h and 4h shrink by less than 2^1.5). The estimate read 2.47x (6
-    stages) and 3.18x (16) short of the exact method's error; with the order observed it is 1.35x and 1.74x short."""
+    ends inside a step, and the trapezoid's error in vout's mean falls from 4h to h more slowly than the 1.5 the
+    estimate had assumed (its differences at h, 2h and 4h shrink by less than 2^0.5: before the asymptotic range).
+    The estimate read 2.47x (6 stages) and 3.18x (16) short of the exact method's error; at the observed floor 0.5
+    it is 1.79x and 1.38x above it (at order 1 it had been 1.35x and 1.74x short)."""
     from converters.models import Circuit
     from converters.run import run_converter, run_summary
     from netlists.generators import cockcroft_walton
@@ -216,8 +217,8 @@ def test_a_ladder_whose_diodes_all_stop_inside_a_step_states_its_error_within_2x
     exact = run_summary(run_converter(model, steady=True, method="event"))["vout_mean"]
     true = abs(summary["vout_mean"] - exact) / abs(exact)
     estimate = summary["accuracy"]["vout_mean_error_estimate"]
-    assert summary["accuracy"]["richardson_order"] == 1.0 and true > 1e-5
-    assert true <= 2 * estimate and estimate <= 2 * true, (true, estimate)
+    assert summary["accuracy"]["richardson_order"] == 0.5 and true > 1e-5
+    assert true <= estimate <= 2 * true, (true, estimate)
 
 
 DICKSON = """Dickson charge pump, 4 stages, two-phase clock, diode RS
