@@ -411,7 +411,7 @@ def check_accuracy(tr: Trajectory, summary: dict) -> dict:
     ``summary["warnings"]``; updated in place and returned.
 
     - A periodic circuit run with a time schedule (no step): the run against its method's periodic orbit, and a
-      ``step`` method's orbit against the one at twice the step (Richardson's estimate by the declared order);
+      ``step`` method's orbit against the one at twice the step (Richardson's estimate by the order it observes);
       the mode fractions and events of the last period are then read inside the step
       (:func:`converters.analysis.accuracy.default_check`).
     - A run with no periodic orbit to compare with (a state-driven law, a load step): the same run at twice the

@@ -457,6 +457,8 @@ def accurate_steady(model: Model, p: dict, rtol: float, *, x0: npt.NDArray[np.fl
     try:
         EventDriven().supports(model.problem(p, T))
         observe = False
+    except ResourceError:
+        raise
     except ParameterError:
         observe = True
     differences: list[tuple[int, float, float]] = []         # (fine N, N / coarse N, |vout_mean difference|)
@@ -490,7 +492,7 @@ def accurate_steady(model: Model, p: dict, rtol: float, *, x0: npt.NDArray[np.fl
         best = result
         if floor > target:                       # rounding over the period's steps, amplified near rho = 1
             break
-        # the next fine N from the estimates and the declared order (x 1.2, to land in one step); its coarse
+        # the next fine N from the estimates and the order (x 1.2, to land in one step); its coarse
         # run is this one when the ratio stays within MAX_RATIO, else a new one at half the step count
         growth = 1.2 * (worst / target) ** (1.0 / order) if math.isfinite(worst) else 2.0
         next_n = int(math.ceil(fine_n * min(max(growth, 2.0), MAX_GROWTH)))
@@ -507,6 +509,8 @@ def accurate_steady(model: Model, p: dict, rtol: float, *, x0: npt.NDArray[np.fl
     method = EventDriven(output_step=T / EVENT_SAMPLES)
     try:
         method.supports(model.problem(p, T))
+    except ResourceError:
+        raise
     except ParameterError as why:
         if best is None:
             raise
@@ -549,7 +553,8 @@ def _order_between(differences: Sequence[tuple[int, float, float]], declared: fl
     if not (d1 > 0.0 and d2 > 0.0):
         return declared if d2 == 0.0 else LEAST_ORDER
 
-    def mismatch(q: float) -> float:     # decreasing in q: the order that makes d1 / d2 what it is
+    # zero at the order that makes d1 / d2 what it is; decreasing in q where r2 <= n2 / n1 (the loop's growth >= 2)
+    def mismatch(q: float) -> float:
         return math.log(d1 / d2) - q * math.log(n2 / n1) - math.log((r1 ** q - 1.0) / (r2 ** q - 1.0))
     low, high = LEAST_ORDER, declared
     if mismatch(high) >= 0.0:
@@ -598,16 +603,18 @@ class OrbitRuns:
         return 2.0 ** self.order - 1.0
 
 
-def orbit_runs(model: Model, p: dict, method: Method, tr: Trajectory) -> OrbitRuns | str:
+def orbit_runs(model: Model, p: dict, method: Method, tr: Trajectory, observe: bool = True) -> OrbitRuns | str:
     """:func:`_orbit_runs` from the run's last state, found once per run and method: the accuracy check and the
-    devices' losses' estimate (:mod:`converters.thermal.summary`) read the same orbits."""
+    devices' losses' estimate (:mod:`converters.thermal.summary`) read the same orbits. ``observe``: the order
+    observed on a third orbit at 4h (else the declared one: a caller that does not read it)."""
     cache: dict[int, Any] = tr.__dict__.setdefault("_orbit_runs", {})
     if id(method) not in cache:
-        cache[id(method)] = (_orbit_runs(model, p, method, tr.x[-1]), method)     # the method kept: its id stays
+        cache[id(method)] = (_orbit_runs(model, p, method, tr.x[-1], observe), method)   # the method kept: its id
     return cast("OrbitRuns | str", cache[id(method)][0])
 
 
-def _orbit_runs(model: Model, p: dict, method: Method, x_guess: npt.NDArray[np.float64]) -> OrbitRuns | str:
+def _orbit_runs(model: Model, p: dict, method: Method, x_guess: npt.NDArray[np.float64],
+                observe: bool = True) -> OrbitRuns | str:
     """One period on the method's periodic orbit, and for the stepper also on its orbit at 2h (None for the
     event method, exact), with the order of the stepper's error; or a string saying which orbit was not found."""
     from ..simulate import simulate
@@ -633,7 +640,7 @@ def _orbit_runs(model: Model, p: dict, method: Method, x_guess: npt.NDArray[np.f
     fine = run(method, orbit.x0)
     coarse_run = run(coarse, orbit_2h.x0)
     order = float(method.order)
-    if order > LEAST_ORDER:
+    if observe and order > LEAST_ORDER:
         # through a diode event inside a step the trapezoid's order falls to 1.5 or below; where a pair changes with a
         # switching edge it can fall to 1 as well (a step from the edge takes the pair's value before it: a Dickson
         # pump's diodes, each switching at the clock's edges, converge at order 1 and order 2 read 3.0x short)
@@ -661,8 +668,8 @@ def _observed_order(model: Model, p: dict, method: Method, x_2h: npt.NDArray[np.
         at_4h = simulate(model.problem(p, T, orbit_4h.x0), coarser)
     except ResourceError:
         raise
-    except ParameterError:               # 4h not a step the circuit takes (a SIN source: T / 4h not whole)
-        return LEAST_ORDER
+    except (ParameterError, SimulationError):   # 4h not a step the circuit takes (a SIN source: T / 4h not whole),
+        return LEAST_ORDER                       # or a step LCP without a solution there
     m_h, m_2h = fine.mean("vout", t0=0.0, t1=T), coarse.mean("vout", t0=0.0, t1=T)
     m_4h = replace(at_4h, labels=model.labels(p)).mean("vout", t0=0.0, t1=T)
     near, far = m_h - m_2h, m_2h - m_4h
@@ -719,8 +726,9 @@ def default_check(model: Model, p: dict, method: Method, tr: Trajectory, reporte
     """How far the reported mean (vout over the run's last 10 periods) may be from the exact periodic one, relative
     to vout's RMS over the period (its mean for a DC output; the size of an AC one, whose mean is ~0):
     the run's distance to the method's own orbit (a transient not settled) plus the method's discretization
-    error, Richardson's from the orbit at h and 2h (the stepper's declared order; through a diode event inside a
-    step the order observed at h, 2h and 4h, at most :data:`ORDER_THROUGH_EVENTS`; the event method: none).
+    error, Richardson's from the orbit at h and 2h (a stepper of declared order above 1: the order observed at h,
+    2h and 4h, at least :data:`OBSERVED_FLOOR`, at most the declared one and :data:`ORDER_THROUGH_EVENTS` through a
+    diode event inside a step; backward Euler: its order 1; the event method: none).
     Returns the estimate, its parts, the order Richardson took, the shortest interval between switchings in
     steps, and a warning when the estimate exceeds ``DEFAULT_RTOL``; with the run's ``power`` summary, also the
     efficiency's and the input power's estimates (:func:`_power_check`), and a warning when the efficiency's

@@ -63,7 +63,7 @@ def _losses_estimate(model: Any, p: dict, tr: Trajectory, setup: ThermalSetup, s
     shortest = _shortest_interval(fine, T) if coarse is not None and step else np.inf
     if step and shortest < 4.0 * step:          # h / 2^m: the shortest interval 2 steps or more
         halved = orbit_runs(model, p, method.coarsened(0.5 ** max(1, math.ceil(math.log2(2.0 * step / shortest)))),
-                            tr)
+                            tr, observe=False)
         if isinstance(halved, str):
             return {"checked": False, "reason": halved, "warning": f"the devices' losses' error could not be "
                                                                    f"estimated: {halved}"}

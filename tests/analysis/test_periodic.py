@@ -228,3 +228,7 @@ def test_newton_stops_on_a_limit_and_halves_a_step_out_of_the_maps_domain():
         newton_orbit(_LimitedMap(1, TimeLimitReached("the time limit of 5 s")), np.ones(2))
     refused = newton_orbit(_LimitedMap(1, ParameterError("below the surface")), np.ones(2), max_iter=5)
     assert not refused.converged
+    # a refusal of a mode only the trial enters (the event method's substeps, a memory estimate) is a step too long
+    from converters.errors import ResourceError
+    refused = newton_orbit(_LimitedMap(1, ResourceError("the stiffest mode's time constant")), np.ones(2), max_iter=5)
+    assert not refused.converged

@@ -66,6 +66,8 @@ def _main(argv=None) -> int:
         sys.stderr.close()
         return 0
     except (PcsuiteError, ValueError) as exc:
+        import signal
+        signal.setitimer(signal.ITIMER_REAL, 0.0)       # a time limit's re-armed alarm: its one line is this one
         print(f"pcsuite: error: {printable(str(exc))}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:   # Ctrl-C: one line, the shell's code for SIGINT (outputs are written atomically)

@@ -4,7 +4,7 @@ from __future__ import annotations
 import sys
 import time
 
-from converters.errors import ParameterError
+from converters.errors import ParameterError, ResourceError
 
 from .common import add_params, add_spice_options, check_out, given_path, integer, json_text, method_options, write_frame
 
@@ -180,6 +180,8 @@ def _set_up(converter, params, control, method, steady, options) -> float:
             run_converter(model, p, method=method, h=model.period(p) / 20, periods=1, steady=steady, **options)
         else:
             run_converter(model, p, method=method, t_end=50 * model.default_h(p), **options)
+    except ResourceError:                   # a limit reached (--time-limit's alarm) is the command's
+        raise
     except (ValueError, RuntimeError):      # a set-up that fails says nothing: the run itself reports
         pass
     return time.perf_counter() - start
