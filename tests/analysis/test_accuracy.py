@@ -126,8 +126,8 @@ def test_default_settings_warn_on_exactly_the_points_whose_mean_misses_1e_3(key,
     more than 1e-3 off the exact periodic value. Backward Euler (measured: 6 of 15 steady runs and 12 of 15
     from rest miss): each estimate within 43 % of the true error where the error is above 1e-6. Theta 0.5 (no
     steady run misses; the worst 5.8e-4): Richardson's order drops through a diode event (1.5 at most, the order
-    observed at h, 2h and 4h below it, down to 0.5: 1.32 on the 5 kHz DCM buck-boost, 0.5 on the Cuk in GDCM-OFF), so each
-    estimate is between 0.78x and 6.9x the true error (never more than 3x short)."""
+    observed at h, 2h and 4h below it, down to 0.5: 1.32 on the 5 kHz DCM buck-boost, 0.5 on the Cuk in
+    GDCM-OFF), so each estimate is between 0.78x and 6.9x the true error (never more than 3x short)."""
     from converters.run import run_converter, run_summary
     from converters.analysis.accuracy import DEFAULT_RTOL
     name, params = POINTS[key]
