@@ -1594,7 +1594,7 @@ class _Network:
         allowed = {j for j, (kind, e, _, _) in enumerate(self.branches)
                    if kind in "CRS" or (kind == "V" and isinstance(e.waveform, float))}
         support = np.flatnonzero(np.abs(loops).max(axis=1, initial=0.0) > 1e-9)
-        if any(r < rows or (r - rows) not in allowed for r in support):
+        if any((r - rows) not in allowed for r in support):      # (a loop has no node rows: zeroed above)
             return False
         caps = [self.branch_of[e.name] for e in c.capacitors]
         if loops.shape[1] and (not caps or np.linalg.matrix_rank(loops[caps], tol=1e-9) < loops.shape[1]):
