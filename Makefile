@@ -27,10 +27,11 @@ system-deps:
 	fi
 	@ngspice --version 2>/dev/null | grep -o 'ngspice-[0-9.]*' | head -1
 
-$(STAMP): pyproject.toml
+# constraints.txt: the versions the tests last passed with (a fresh machine gets those, not the latest release)
+$(STAMP): pyproject.toml constraints.txt
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
-	$(PY) -m pip install -q -e '.[test]'
+	$(PY) -m pip install -q -c constraints.txt -e '.[test]'
 	touch $(STAMP)
 
 # The compiled kernels ahead of time (numba.pycc; converters/compiled.py says why): rebuilt when a kernel source

@@ -22,12 +22,14 @@ class SimulationError(PcsuiteError, RuntimeError):
 
 
 class ResourceError(ParameterError):
-    """A run would exceed a resource limit (memory it would allocate, or time); the message names the limit and the
-    flag that raises it (``--max-memory``, ``--time-limit``)."""
+    """A run would exceed a resource limit (memory it would allocate, or an LCP solve's time); the message names the
+    limit and the flag that raises it (``--max-memory``, ``--time-limit``)."""
 
 
-class TimeLimitReached(ResourceError):
-    """A command's --time-limit passed while it ran (raised by the alarm the command line sets)."""
+class TimeLimitReached(BaseException):
+    """A command's --time-limit passed while it ran (raised by the alarm the command line sets). A BaseException, as
+    KeyboardInterrupt is: the alarm lands anywhere, and a handler of a failed trial, point or section (``except
+    ParameterError``, ``except Exception``) must not take the command's end for its own failure and carry on."""
 
 
 class SignalError(KeyError, ParameterError):

@@ -90,7 +90,7 @@ def installed(dist, tmp_path_factory):
     tmp = tmp_path_factory.mktemp("installed")
     _run([sys.executable, "-m", "venv", tmp / "venv"])
     bin_dir = tmp / "venv" / "bin"
-    _run([bin_dir / "python", "-m", "pip", "install", "-q", dist[2]])
+    _run([bin_dir / "python", "-m", "pip", "install", "-q", "-c", ROOT / "constraints.txt", dist[2]])
     elsewhere = tmp / "elsewhere"
     elsewhere.mkdir()
     env = {k: v for k, v in os.environ.items()

@@ -25,7 +25,7 @@ import numpy.typing as npt
 from ..compiled import (NEWTON_CONVERGED, NEWTON_EVALUATE, NEWTON_EXHAUSTED, NEWTON_NO_SOLUTION, NEWTON_NONFINITE,
                         NEWTON_RADIUS, NEWTON_ROUNDING, NEWTON_SINGULAR, kernel)
 from ..compiled import ROUNDING as _ROUNDING
-from ..errors import ParameterError, SimulationError, TimeLimitReached
+from ..errors import ParameterError, SimulationError
 from ..validate import as_vector, check_flag, check_integer
 from ..problems import LCSProblem
 from .floquet import multipliers_of, spectral_radius
@@ -153,9 +153,7 @@ def newton_orbit(period_map: NewtonMap, x_guess: npt.ArrayLike, *, tol: float = 
             try:
                 p_trial[:], jac_trial[:, :] = period_map(trial)
                 ok = True
-            except TimeLimitReached:         # the command's time is up: no trial's domain (a substep or memory
-                raise                        # refusal of a mode only the trial enters is a step too long)
-            except ParameterError:
+            except ParameterError:           # (a substep or memory refusal of a mode only the trial enters too)
                 ok = False
         else:
             break

@@ -344,3 +344,24 @@ def test_the_time_limits_alarm_fires_again_if_its_stop_is_taken_for_something_el
         assert signal.getitimer(signal.ITIMER_REAL)[0] == 0.0
     finally:
         signal.setitimer(signal.ITIMER_REAL, 0.0)
+
+
+@pytest.mark.parametrize("handler", ["ParameterError", "ResourceError", "ValueError", "Exception"])
+def test_the_time_limits_stop_passes_every_handler_of_a_failed_trial_point_or_section(handler):
+    """The alarm's stop lands inside whatever runs: Newton's trial (except ParameterError), a sweep's point or a
+    report's section (except Exception) took it for their own failure and carried on (until the re-armed alarm hit
+    something else). A BaseException, as Ctrl-C is, none of them takes it."""
+    import signal
+
+    from converters import errors
+    from converters.errors import TimeLimitReached
+    from validation.cli import _time_is_up
+    caught = getattr(errors, handler, None) or {"ValueError": ValueError, "Exception": Exception}[handler]
+    try:
+        with pytest.raises(TimeLimitReached, match="time limit of 2 s"):
+            try:
+                _time_is_up(2.0)(signal.SIGALRM, None)
+            except caught:
+                pytest.fail(f"except {handler} took the time limit's stop")
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0.0)

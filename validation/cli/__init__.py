@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from converters.errors import ParameterError, PcsuiteError
+from converters.errors import ParameterError, PcsuiteError, TimeLimitReached
 
 from . import (bench, bifurcation, bode, compare, gdcm, gdcm_map, lcp, listing, mech, netlist, report, sensitivity,
                simulate, sweep, view)
@@ -65,7 +65,7 @@ def _main(argv=None) -> int:
     except BrokenPipeError:  # e.g. `pcsuite list | head`
         sys.stderr.close()
         return 0
-    except (PcsuiteError, ValueError) as exc:
+    except (PcsuiteError, ValueError, TimeLimitReached) as exc:
         import signal
         signal.setitimer(signal.ITIMER_REAL, 0.0)       # a time limit's re-armed alarm: its one line is this one
         print(f"pcsuite: error: {printable(str(exc))}", file=sys.stderr)
@@ -162,8 +162,7 @@ def _time_is_up(seconds: float, source: str = "--time-limit"):
             granted[0] += owed
             signal.setitimer(signal.ITIMER_REAL, owed)
             return
-        from converters.errors import TimeLimitReached
-        # again in a second, should a handler on the way up take the stop for a failed trial and carry on
+        # again in a second, should a library's bare except on the way up swallow the stop and carry on
         signal.setitimer(signal.ITIMER_REAL, 1.0)
         raise TimeLimitReached(f"the run did not finish within the time limit of {seconds:g} s ({source}); "
                                "raise it, or ask for a shorter run (--t-end, --periods) or a coarser one")
