@@ -373,10 +373,26 @@ def _rounding(orbit: PeriodicOrbit, operations: int) -> float:
     return max(orbit.distance, ROUNDING_PER_OPERATION * operations * amplification)
 
 
-def same_events(a: list, b: list) -> bool:
-    """Two runs' period events are the same sequence: as many, each of the same pair and kind in the same order
-    (only then is one run's event an estimate of the other's)."""
-    return len(a) == len(b) and all(x[:2] == y[:2] for x, y in zip(a, b))
+def paired_events(a: Sequence[tuple], b: Sequence[tuple]) -> list[tuple[int, int]] | None:
+    """Which event of ``b`` each event of ``a`` is (index pairs in ``a``'s order), or None where the two runs'
+    period events are not the same: every pair with the same sequence of kinds in both (the k-th event of a pair is
+    its k-th in the other run; only then is one run's event an estimate of the other's). Events of different pairs
+    may interleave differently: a 12-stage ladder's diodes at nearly one instant swap places from one step to the
+    next, and a strict order left every event without an estimate (inf) up to the largest step count."""
+    def by_pair(events: Sequence[tuple]) -> dict[Any, list[tuple[str, int]]]:
+        out: dict[Any, list[tuple[str, int]]] = {}
+        for index, event in enumerate(events):
+            out.setdefault(event[0], []).append((event[1], index))
+        return out
+    ours, theirs = by_pair(a), by_pair(b)
+    if len(a) != len(b) or ours.keys() != theirs.keys():
+        return None
+    matches = []
+    for pair, sequence in ours.items():
+        if [kind for kind, _ in sequence] != [kind for kind, _ in theirs[pair]]:
+            return None
+        matches += [(i, j) for (_, i), (_, j) in zip(sequence, theirs[pair])]
+    return sorted(matches)
 
 
 def _estimates(fine: dict, coarse: dict, fine_events: list[tuple[str, str, float]],
@@ -394,9 +410,10 @@ def _estimates(fine: dict, coarse: dict, fine_events: list[tuple[str, str, float
     for name in coarse:
         if name.startswith("fraction_") and name not in out:             # a mode the finer orbit lost
             out[name] = Estimate(0.0, coarse[name][0] / factor, 1.0)
-    if same_events(fine_events, coarse_events):
-        events = [(pair, kind, Estimate(tf, max(abs(tf - tc) / factor, floor), 1.0))
-                  for (pair, kind, tf), (_, _, tc) in zip(fine_events, coarse_events)]
+    matches = paired_events(fine_events, coarse_events)
+    if matches is not None:
+        events = [(pair, kind, Estimate(tf, max(abs(tf - coarse_events[j][2]) / factor, floor), 1.0))
+                  for (pair, kind, tf), (_, j) in zip(fine_events, matches)]
     else:                                                                # the event sequence is not settled
         events = [(pair, kind, Estimate(tf, math.inf, 1.0)) for pair, kind, tf in fine_events]
     return out, events
@@ -419,9 +436,10 @@ def _guarded(quantities: dict[str, Estimate], events: list[tuple[str, str, Estim
         before = previous.get(name)
         predicted = before.error_estimate * shrink if before is not None else 0.0
         out[name] = Estimate(q.value, max(q.error_estimate, predicted), q.scale)
-    if same_events(events, previous_events):
-        events = [(pair, kind, Estimate(e.value, max(e.error_estimate, old.error_estimate * shrink), 1.0))
-                  for (pair, kind, e), (_, _, old) in zip(events, previous_events)]
+    matches = paired_events(events, previous_events)
+    if matches is not None:
+        events = [(pair, kind, Estimate(e.value, max(e.error_estimate, previous_events[j][2].error_estimate * shrink),
+                                        1.0)) for (pair, kind, e), (_, j) in zip(events, matches)]
     return out, events
 
 
