@@ -26,6 +26,7 @@ import numpy.typing as npt
 
 from .analysis.periodic import PeriodicOrbit, require, shoot
 from .errors import ParameterError, ResourceError, SimulationError
+from .limits import max_memory
 from .methods.base import DEFAULT_METHOD, Method, PeriodMap, get_method
 from .methods.theta import StepPlanMap
 from .models import Model, check_h, get_model
@@ -270,9 +271,15 @@ def _accurate(model: Model, p: dict, rtol: float | str, start: float, *, method:
         raise ParameterError(f"rtol: accuracy on request needs a periodic steady state; {model.key} has no fixed "
                              "switching period (run --t-end)")
     result = accurate_steady(model, p, rtol, x0=x0)
-    span = duration(model, p, t_end, periods if (periods is not None or t_end is not None) else STEADY_PERIODS)
-    tr = simulate(model.problem(p, span, result.orbit.x0), result.method)
     T = model.period(p)
+    span = duration(model, p, t_end, periods if (periods is not None or t_end is not None) else STEADY_PERIODS)
+    if periods is None and t_end is None:
+        # the default periods at the step rtol chose, as many as the memory limit holds: the orbit's one period
+        # was run at that step, and a user who asked for none should not lose the answer to the periods after it
+        fits = [n for n in range(STEADY_PERIODS, 0, -1)
+                if result.method.memory_estimate(model.problem(p, n * T, result.orbit.x0)) <= max_memory()]
+        span = T * (fits[0] if fits else 1)
+    tr = simulate(model.problem(p, span, result.orbit.x0), result.method)
     simulated = sum(run["periods"] for run in result.runs) + span / T     # every orbit's periods, then the span
     meta = {"model": model.name, "control": model.control, "params": p, "method_options": result.method.options(),
             "orbit": result.orbit.summary(), "accuracy": result.summary(),

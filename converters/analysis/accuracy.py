@@ -489,9 +489,16 @@ def accurate_steady(model: Model, p: dict, rtol: float, *, x0: npt.NDArray[np.fl
     fine_n = 2 * coarse_n
     history, best = None, None
     events: list            # (pair, kind, Estimate) of the stepper's runs; (pair, kind, time) of the event method's
+    stopped = ""            # why the stepper's refinement stopped short of MAX_STEPS
     while previous is not None and fine_n <= MAX_STEPS:
         fine_method = Theta(h=T / fine_n, theta=THETA)
-        orbit, tr = run(fine_method, previous[1].x0, 0)
+        try:
+            orbit, tr = run(fine_method, previous[1].x0, 0)
+        except ResourceError as why:     # a SIN source's plan holds a matrix set a step: memory ends the refinement
+            if best is None:
+                raise
+            stopped = f"the next run at {fine_n:,} steps a period cannot be made ({why})"
+            break
         fine, fine_events = measures(model, p, tr, T)
         (coarse, coarse_events), _ = previous
         floor = _rounding(orbit, fine_n)
@@ -520,7 +527,11 @@ def accurate_steady(model: Model, p: dict, rtol: float, *, x0: npt.NDArray[np.fl
             coarse_n, previous = fine_n, ((fine, fine_events), orbit)
         else:
             coarse_n = next_n // 2
-            orbit_c, tr_c = run(Theta(h=T / coarse_n, theta=THETA), orbit.x0, 0)
+            try:
+                orbit_c, tr_c = run(Theta(h=T / coarse_n, theta=THETA), orbit.x0, 0)
+            except ResourceError as why:
+                stopped = f"the next runs at {coarse_n:,} and {next_n:,} steps a period cannot be made ({why})"
+                break
             previous = (measures(model, p, tr_c, T), orbit_c)
         fine_n = next_n
     # the stepper would need more than MAX_STEPS steps per period: the exact method, where it takes the circuit
@@ -535,7 +546,8 @@ def accurate_steady(model: Model, p: dict, rtol: float, *, x0: npt.NDArray[np.fl
         # a SIN source: the stepper's finest run is the answer, its Richardson estimates stated and rtol said unmet
         met = best.worst() <= rtol
         message = "" if met else (f"the stepper's estimate at {best.steps_per_period:,} steps a period is "
-                                  f"{best.worst():.2g}, and the exact event method does not take this circuit ({why})")
+                                  f"{best.worst():.2g}, " + (f"{stopped}, " if stopped else "")
+                                  + f"and the exact event method does not take this circuit ({why})")
         return replace(best, met=met, message=message, wall_s=time.perf_counter() - clock)
     orbit, tr = run(method, x0 if previous is None else previous[1].x0, 20 if previous is None else 0)
     values, events = measures(model, p, tr, T)
