@@ -176,8 +176,12 @@ class Circuit(Model):
 
     def default_h(self, p: dict) -> float:
         tran = self.netlist.tran
-        if self.periodic(p):          # T/1000, or the file's own step (a fraction of its period) where it is finer
-            return self.period(p) * min(1e-3, tran.tstep / self.period(self.resolve({})))
+        if self.periodic(p):
+            # T/1000, or the file's own step (a fraction of its period) where it is finer, as a whole number of steps
+            # a period and a multiple of 4: a SIN source needs whole steps at h, and the accuracy check's orbits at
+            # 2h and 4h too (a 60 Hz rectifier's .tran 10u was refused: T/1666.7)
+            fraction = min(1e-3, tran.tstep / self.period(self.resolve({})))
+            return self.period(p) / (4 * math.ceil(0.25 / fraction - 1e-9))
         return min(tran.tmax or tran.tstep, tran.tstop / 5000.0)     # the file's step, at most a 5,000th of its run
 
     def max_h(self, p: dict) -> float:
