@@ -131,7 +131,9 @@ def spice_steady(chunk, steady: bool, orbit, T: float, periods: int, window: int
     ``chunk(x0)`` runs ngspice ``periods`` periods from ``x0`` (None: the circuit's own start) and returns its
     trajectory; a run from rest (not ``steady``) is one chunk from ``orbit`` (the run's start); a periodic comparison
     runs on from where each ended until its window's mean moves less
-    than SPICE_SETTLE (at most MAX_SPICE_PERIODS). With ``spice_start`` 'own' ngspice goes from its own start, and
+    than SPICE_SETTLE (at most MAX_SPICE_PERIODS), or, once the slowest mode has decayed, until that move stops
+    falling (STALL_CHUNKS chunks without halving: ngspice's own solution moving between periods, which the verdict
+    then names). With ``spice_start`` 'own' ngspice goes from its own start, and
     has settled only once the LCP orbit's slowest mode (spectral radius ``rho``) has decayed to 1e-3 over its run
     too (the interleaved buck's phase currents balance at 0.99 a period while its mean of vout holds still), so
     that a wrong orbit of pcsuite's is not handed to it (a capacitor behind a blocked diode kept 1.36 MV in both);
@@ -143,24 +145,33 @@ def spice_steady(chunk, steady: bool, orbit, T: float, periods: int, window: int
 
     end = periods * T
 
+    def stalled(drifts):
+        # the circuit's slowest mode has decayed and the drift no longer falls (its last three chunks' least not
+        # half the least before them): ngspice's own solution moving between periods, which more periods do not
+        # settle (a full bridge's load current: 2e-4..1.5e-3 of its RMS, chunk after chunk to 600 periods)
+        return len(drifts) >= STALL_CHUNKS + 1 and min(drifts[-STALL_CHUNKS:]) > 0.5 * min(drifts[:-STALL_CHUNKS])
+
     def decayed(n):
         return rho is None or rho ** n <= 1e-3
 
     def settle_from(x0):
         run = chunk(x0)
-        n, drift, means = periods, spice_drift(run, T, periods, window), []
+        n, drifts, means = periods, [spice_drift(run, T, periods, window)], []
         while True:
             means.append(run.mean("vout", t0=end - window * T, t1=end))
-            if not steady or (drift <= SPICE_SETTLE and (x0 is not None or decayed(n))) or n >= MAX_SPICE_PERIODS:
-                return run, n, drift, means
+            if not steady or (drifts[-1] <= SPICE_SETTLE and (x0 is not None or decayed(n))) or n >= MAX_SPICE_PERIODS:
+                return run, n, drifts[-1], means, False
+            if decayed(n) and stalled(drifts):
+                return run, n, drifts[-1], means, True
             run = chunk(run.x[-1])
-            n, drift = n + periods, spice_drift(run, T, periods, window)
+            n = n + periods
+            drifts.append(spice_drift(run, T, periods, window))
     if not steady or spice_start == "orbit":
         return (*settle_from(orbit)[:3], [], None)
-    own, n, drift, means = settle_from(None)
-    if (drift <= SPICE_SETTLE and decayed(n)) or orbit is None:
+    own, n, drift, means, at_noise = settle_from(None)
+    if ((drift <= SPICE_SETTLE or at_noise) and decayed(n)) or orbit is None:
         return own, n, drift, [], None
-    handed, n_orbit, drift_orbit, _ = settle_from(orbit)
+    handed, n_orbit, drift_orbit, _, _ = settle_from(orbit)
     target = handed.mean("vout", t0=end - window * T, t1=end)
     # the envelope of its distance over the run shrinks (a ring-down passes by and away from it window by window)
     distance = np.abs(np.array(means) - target) / max(abs(target), 1e-12)
@@ -193,6 +204,9 @@ def unsettled_cause(rho: float, periods: int) -> str:
 #: before; it runs on (from where it ended, at most MAX_SPICE_PERIODS in all) until then.
 SPICE_SETTLE = 1e-5
 MAX_SPICE_PERIODS = 600
+#: Chunks of ngspice periods without its drift halving, once the circuit's slowest mode has decayed, after which its
+#: run counts as settled as far as ngspice settles it (:func:`spice_steady`).
+STALL_CHUNKS = 3
 
 
 def _period_ripple(tr, t0: float, T: float, window: int) -> float:

@@ -1,0 +1,43 @@
+"""How long compare runs ngspice towards its steady state (validation.compare.spice_steady), on stand-in runs: no
+ngspice needed."""
+import numpy as np
+import pytest
+
+
+class _NoisyRun:
+    """A chunk of ngspice periods whose window's mean of vout moves by ``drift`` of its RMS (19 A) between windows:
+    an inverter's load current, its mean ~0, settled but for ngspice's own switching instants."""
+
+    def __init__(self, drift, end):
+        self.drift, self.end, self.x = drift, end, np.zeros((1, 1))
+
+    def mean(self, name, t0, t1):
+        return 0.0 if t1 >= self.end - 1e-12 else self.drift * 19.0
+
+    def rms(self, name, t0, t1):
+        return 19.0
+
+
+def test_ngspice_whose_drift_stops_falling_once_the_circuit_has_settled_is_not_run_to_600_periods():
+    """A full bridge's load current moved 2e-4 to 1.5e-3 of its RMS from window to window in ngspice, chunk after
+    chunk (its switching instants fall at its own time points), with the circuit's slowest mode decayed in one
+    period (spectral radius 3.7e-6): compare ran ngspice its 600 periods from its own start and 600 again from the
+    LCP's orbit (over 900 s with its refinements). Once three chunks do not halve the least drift before them, the
+    run is as settled as ngspice settles it: seven chunks (the e08 drifts below: 210 periods, as measured), not
+    forty."""
+    from validation.compare import spice_steady
+    drifts = iter([1.2e-3, 1.5e-3, 8e-4, 2.3e-4, 1.5e-3, 1.1e-3, 3.7e-4] + [1e-3] * 100)
+    T, periods, window = 1 / 60, 30, 10
+    calls = []
+
+    def chunk(x0):
+        calls.append(x0)
+        return _NoisyRun(next(drifts), periods * T)
+    run, n, drift, notes, independent = spice_steady(chunk, True, np.zeros(1), T, periods, window, "own", 3.7e-6)
+    assert len(calls) == 7 and n == 210 and drift == pytest.approx(3.7e-4)
+    assert notes == [] and independent is None and all(x0 is None or x0.shape == (1,) for x0 in calls[1:])
+    # a lightly damped circuit (its slowest mode not decayed) is run on as before: a stall is not a settling there
+    drifts = iter([1e-3] * 100)
+    calls.clear()
+    spice_steady(chunk, True, np.zeros(1), T, periods, window, "own", 0.9999)
+    assert len(calls) > 20
