@@ -743,9 +743,10 @@ class _Compiler:
             raise NetlistError(f"{self.path}: {error}") from None
 
     def in_power_circuit(self, source: Element) -> bool:
-        """False for a gate driver: a source whose nodes reach, through resistors and other sources, only switch
-        control terminals and ground (its value then decides when switches close, not the circuit's dynamics)."""
-        power = {n for e in self.nl.elements if e.kind in "LCDSWEGFH" for n in e.nodes[:2]}
+        """False for a gate driver: a source whose nodes reach, through resistors and other voltage sources (a
+        controlled one's output too: a current sense's H output beside a compensation ramp), only switch control
+        terminals and ground (its value then decides when switches close, not the circuit's dynamics)."""
+        power = {n for e in self.nl.elements if e.kind in "LCDSWGF" for n in e.nodes[:2]}
         power |= {n for e in self.by_kind["I"] for n in e.nodes}
         seen, todo = set(), [n for n in source.nodes if n != "0"]
         while todo:
@@ -756,8 +757,9 @@ class _Compiler:
             if node in power:
                 return True
             for e in self.nl.elements:
-                if e.kind in "RV" and node in e.nodes:
-                    todo += [m for m in e.nodes if m != "0" and m not in seen]
+                ends = e.nodes if e.kind in "RV" else e.nodes[:2] if e.kind in "EH" else ()
+                if node in ends:
+                    todo += [m for m in ends if m != "0" and m not in seen]
         return False
 
     def follows(self, switch: Element, row0: _Array, other: Element, row: _Array) -> tuple[bool, float] | None:

@@ -79,3 +79,42 @@ def test_a_designed_compensators_parts_close_its_loop_in_the_netlist(capsys):
     assert closed.crossover_hz == pytest.approx(summary["margins"]["crossover_hz"], rel=1e-5)
     assert closed.phase_margin_deg == pytest.approx(summary["margins"]["phase_margin_deg"], abs=1e-3)
     assert abs(closed.crossover_hz / 5e3 - 1) < 0.05 and abs(closed.phase_margin_deg - 50) < 3
+
+
+SENSED_RAMP = """Boost 12 V under a comparator: the switch's current sensed by an H source, a 1 V/T ramp added to it
+.param Vin=12 L=22u C=100u R=12 f_sw=100k Rs=0.1 Vc=1.0 Va=1
+.param T={1/f_sw} e={1e-6/f_sw}
+Vin in 0 DC {Vin}
+Vsense in lx DC 0
+L1 lx sw {L}
+S1 sw 0 vc xsum SWM
+D1 sw out DM
+C1 out 0 {C}
+R1 out 0 {R}
+Hsense cs 0 Vsense {Rs}
+Vslope xsum cs {ramp}
+Vctl vc 0 DC {Vc}
+.model SWM SW(VT=0)
+.model DM D
+.tran {T/500} {1000*T} 0 {T/2000} UIC
+.meas tran vout_avg AVG v(out) FROM={990*T} TO={1000*T}
+.end
+"""
+
+
+@pytest.mark.parametrize("method", ["lcp", "event"])
+def test_a_ramp_in_series_with_a_sensed_current_is_the_comparators_own(method):
+    """The compensation ramp written in series with the current sense's H output (on the comparator's other input)
+    was refused, "a state-driven switch with PULSE, SIN or PWL sources in the power circuit": the H output counted
+    as the power circuit. It reaches only the switch's control, as the same ramp subtracted from the command does
+    (accepted before): both give the same orbit, and the exact method's 23.3940748 V."""
+    from converters.models import Circuit
+    from converters.run import run_converter, run_summary
+    ramp = "PULSE(0 {Va} 0 {T - 2*e} {e} {e} {T})"
+    added = Circuit.from_netlist("sensed.cir", text=SENSED_RAMP.replace("{ramp}", ramp))
+    text = SENSED_RAMP.replace("S1 sw 0 vc xsum", "S1 sw 0 vcr cs")
+    subtracted = Circuit.from_netlist("command.cir", text=text.replace(
+        "Vslope xsum cs {ramp}", "Vslope vcr vc PULSE(0 {-Va} 0 {T - 2*e} {e} {e} {T})"))
+    a = run_summary(run_converter(added, steady=True, method=method))["vout_mean"]
+    b = run_summary(run_converter(subtracted, steady=True, method=method))["vout_mean"]
+    assert a == pytest.approx(b, rel=1e-12) and a == pytest.approx(23.3940748, rel=1e-7)
