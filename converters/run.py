@@ -233,7 +233,8 @@ def _on_steady_state(model: Model, p: dict, method: Method, span: float, x0: npt
     T = model.period(p)
     simulated = orbit.evaluations + span / T        # the warm-up and Newton's spans, then the output
     # periods: what the returned run spans; steady_periods: every period simulated to get there and it
-    return tr, {"periods": int(round(span / T)), "steady_periods": int(round(simulated)), "orbit": orbit.summary()}
+    return tr, {"periods": int(round(span / T)), "steady_periods": int(round(simulated)), "orbit": orbit.summary(),
+                **({"warnings": [orbit.warning]} if orbit.warning else {})}
 
 
 def _from_rest(model: Model, p: dict, method: Method, span: float, x0: npt.NDArray[np.float64] | None,

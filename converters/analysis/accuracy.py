@@ -480,9 +480,9 @@ def accurate_steady(model: Model, p: dict, rtol: float, *, x0: npt.NDArray[np.fl
     except ParameterError:
         observe = True
     differences: list[tuple[int, float, float]] = []         # (fine N, N / coarse N, |vout_mean difference|)
-    coarse_n = FIRST_STEPS
+    theta, coarse_n = _refinement_start(model, p)
     try:
-        orbit, tr = run(Theta(h=T / coarse_n, theta=THETA), x0, 20)
+        orbit, tr = run(Theta(h=T / coarse_n, theta=theta), x0, 20)
         previous = (measures(model, p, tr, T), orbit)
     except SimulationError:
         previous = None
@@ -491,7 +491,7 @@ def accurate_steady(model: Model, p: dict, rtol: float, *, x0: npt.NDArray[np.fl
     events: list            # (pair, kind, Estimate) of the stepper's runs; (pair, kind, time) of the event method's
     stopped = ""            # why the stepper's refinement stopped short of MAX_STEPS
     while previous is not None and fine_n <= MAX_STEPS:
-        fine_method = Theta(h=T / fine_n, theta=THETA)
+        fine_method = Theta(h=T / fine_n, theta=theta)
         try:
             orbit, tr = run(fine_method, previous[1].x0, 0)
         except ResourceError as why:     # a SIN source's plan holds a matrix set a step: memory ends the refinement
@@ -528,7 +528,7 @@ def accurate_steady(model: Model, p: dict, rtol: float, *, x0: npt.NDArray[np.fl
         else:
             coarse_n = next_n // 2
             try:
-                orbit_c, tr_c = run(Theta(h=T / coarse_n, theta=THETA), orbit.x0, 0)
+                orbit_c, tr_c = run(Theta(h=T / coarse_n, theta=theta), orbit.x0, 0)
             except ResourceError as why:
                 stopped = f"the next runs at {coarse_n:,} and {next_n:,} steps a period cannot be made ({why})"
                 break
@@ -538,18 +538,18 @@ def accurate_steady(model: Model, p: dict, rtol: float, *, x0: npt.NDArray[np.fl
     method = EventDriven(output_step=T / EVENT_SAMPLES)
     try:
         method.supports(model.problem(p, T))
-    except ResourceError:
-        raise
-    except ParameterError as why:
+        orbit, tr = run(method, x0 if previous is None else previous[1].x0, 20 if previous is None else 0)
+    except (ParameterError, SimulationError, ResourceError) as why:
         if best is None:
             raise
-        # a SIN source: the stepper's finest run is the answer, its Richardson estimates stated and rtol said unmet
+        # a SIN source, a time constant the exact flows would cross in billions of substeps (a 1 mohm ESR beside
+        # 10 pF: 3.3e-15 s), a limit reached, or no orbit found: the stepper's finest run is the answer, its
+        # Richardson estimates stated and rtol said unmet
         met = best.worst() <= rtol
         message = "" if met else (f"the stepper's estimate at {best.steps_per_period:,} steps a period is "
                                   f"{best.worst():.2g}, " + (f"{stopped}, " if stopped else "")
                                   + f"and the exact event method does not take this circuit ({why})")
         return replace(best, met=met, message=message, wall_s=time.perf_counter() - clock)
-    orbit, tr = run(method, x0 if previous is None else previous[1].x0, 20 if previous is None else 0)
     values, events = measures(model, p, tr, T)
     floor = _rounding(orbit, EVENT_SEGMENTS)
     quantities = {name: Estimate(float(v), floor * s if (events or not name.startswith("fraction_")) else 0.0,
@@ -571,6 +571,21 @@ def accurate_steady(model: Model, p: dict, rtol: float, *, x0: npt.NDArray[np.fl
         message = (f"the orbit is resolved to {orbit.distance:.2g} in double precision (a Floquet multiplier at "
                    f"{np.abs(orbit.multipliers).max():.8f}); rtol {rtol:g} is beyond it")
     return replace(result, met=met, message=message, wall_s=time.perf_counter() - clock)
+
+
+def _refinement_start(model: Model, p: dict) -> tuple[float, int]:
+    """The stepper's theta for the whole refinement and its first steps per period: THETA (second order) from the
+    first step count at which it does not ring on the circuit's fastest mode (the amplification -RINGS of
+    :func:`~converters.methods.theta.check_ringing`: h rate <= 6; FIRST_STEPS at least) where that leaves the
+    refinement room, else backward Euler from FIRST_STEPS (L-stable, first order): theta 0.5 over a 3.3e-15 s node
+    (1 mohm beside 10 pF, 3e7 time constants a step at T/100) had no step LCP solution, and --rtol fell to the event
+    method, which refuses that time constant."""
+    from ..methods.theta import RINGS
+    limit = 2.0 * (1.0 + RINGS) / (1.0 - RINGS)          # (1 - z/2) / (1 + z/2) = -RINGS at z = h rate = limit
+    needed = math.ceil(model.period(p) * model.fastest_rate(p) / limit)
+    if needed <= FIRST_STEPS:
+        return THETA, FIRST_STEPS
+    return (THETA, needed) if needed <= MAX_STEPS // FIRST_STEPS else (1.0, FIRST_STEPS)
 
 
 def _order_between(differences: Sequence[tuple[int, float, float]], declared: float) -> float:

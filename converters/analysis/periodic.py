@@ -16,6 +16,7 @@ tolerance; a run that cannot get there is reported as not converged, never repla
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Protocol
 
@@ -72,6 +73,9 @@ class PeriodicOrbit:
         Why it did not converge (with a remedy), or empty.
     transient : int
         Plain periods simulated before the Newton iteration that converged (:func:`shoot`'s settling rounds).
+    warning : str
+        What a converged orbit's caller should pass on: an orbit far from where Newton started that the transient
+        was not seen to reach (:func:`shoot`), or empty.
     """
 
     x0: np.ndarray
@@ -86,6 +90,7 @@ class PeriodicOrbit:
     jacobian_kind: str
     message: str = ""
     transient: int = 0
+    warning: str = ""
 
     @property
     def spectral_radius(self) -> float:
@@ -98,7 +103,7 @@ class PeriodicOrbit:
     def summary(self) -> dict:
         return {"period_s": self.period, "residual": self.residual, "distance": self.distance,
                 "iterations": self.iterations, "evaluations": self.evaluations, "transient": self.transient,
-                "converged": self.converged,
+                "converged": self.converged, **({"warning": self.warning} if self.warning else {}),
                 "spectral_radius": self.spectral_radius, "stable": self.stable, "jacobian": self.jacobian_kind,
                 "multipliers": [[float(m.real), float(m.imag)] for m in self.multipliers]}   # [re, im] pairs
 
@@ -205,17 +210,58 @@ def shoot(problem: LCSProblem, method: Method, x_guess: npt.ArrayLike | None = N
     # loop is open there and its integrator a multiplier at 1, and Newton's steps leave for worse states. The
     # transient itself settles (a type II voltage loop's in ~500 periods): plain periods in rounds of doubling
     # length, Newton again from where each ends, as far as the transient goes within SETTLE_PERIODS.
+    # Such a step can also land on a fixed point of the saturated map (a boost's loop latched at duty 1, its
+    # integrator wound up to 2.5 MV: vout 0 V, multiplier 1 - 5e-9), one the circuit would take billions of periods
+    # to reach from where Newton started, while its transient settles elsewhere (24 V, in ~30 periods): such a
+    # remote orbit stands only where Newton from the settled transient returns to it (a loop in dropout winding up).
+    start = x
+    remote = orbit if orbit.converged and periods_to_reach(orbit, start, tol) > REMOTE_PERIODS else None
     done, rounds = 0, SETTLE_FIRST
-    while not orbit.converged and orbit.message.startswith(SETTLE_AFTER) and done < SETTLE_PERIODS:
+    while (remote is not None or orbit.message.startswith(SETTLE_AFTER)) and not (
+            orbit.converged and orbit is not remote) and done < SETTLE_PERIODS:
+        diverged = False
         for _ in range(min(rounds, SETTLE_PERIODS - done)):
             x = period_map.end(x)
-            if not np.all(np.isfinite(x)):
-                return orbit
+            if diverged := not np.all(np.isfinite(x)):
+                break
+        if diverged:
+            break
         done, rounds = done + rounds, 2 * rounds
         retry = newton_orbit(period_map, x, tol=tol, max_iter=min(max_iter, SETTLE_NEWTON), period=periods * T,
                              polish=polish)
-        orbit = replace(retry, transient=done, evaluations=period_map.evaluations)
+        if remote is not None and retry.converged and _same(remote, retry, tol):
+            orbit = replace(remote, evaluations=period_map.evaluations)       # confirmed: Newton's own answer
+        elif remote is None or retry.converged:
+            orbit = replace(retry, transient=done, evaluations=period_map.evaluations)
+    if remote is not None and orbit is remote:
+        return replace(remote, evaluations=period_map.evaluations, warning=(
+            f"the orbit lies ~{periods_to_reach(remote, start, tol):.1g} periods of its slowest mode (multiplier "
+            f"{remote.spectral_radius:.10g}) from where Newton started, and Newton from {done} periods of the "
+            "transient did not return to it: the circuit may settle elsewhere (run --periods N without --steady "
+            "to see)"))
     return orbit
+
+
+#: An orbit Newton converged to that the circuit's slowest mode would take more periods than this to bring the start
+#: to (:func:`periods_to_reach`) is checked against the transient (:func:`shoot`). A 1 F output's DCM buck (multiplier
+#: 1 - 1.5e-7) is one; a type III loop's orbit 1,000 periods from its start (multiplier 0.98) is not.
+REMOTE_PERIODS = 1e5
+
+
+def _same(a: PeriodicOrbit, b: PeriodicOrbit, tol: float) -> bool:
+    """Two converged orbits one fixed point: their starts apart by no more than their stated distances to it."""
+    gap = float(np.abs(a.x0 - b.x0).max()) / (1.0 + float(np.abs(a.x0).max()))
+    return gap <= max(a.distance + b.distance, 2.0 * tol)
+
+
+def periods_to_reach(orbit: PeriodicOrbit, x_start: npt.NDArray[np.float64], tol: float) -> float:
+    """The periods the orbit's slowest mode (its spectral radius rho) takes to bring the distance from ``x_start``
+    to the orbit down to the tolerance: ln(distance / tolerance) / -ln(rho) (0 for rho = 0, inf for rho >= 1)."""
+    rho = orbit.spectral_radius
+    if rho >= 1.0:
+        return np.inf
+    gap = float(np.abs(orbit.x0 - x_start).max()) / (tol * (1.0 + float(np.abs(orbit.x0).max())))
+    return 0.0 if rho == 0.0 or gap <= 1.0 else math.log(gap) / -math.log(rho)
 
 
 def autonomous_orbit(problem: LCSProblem, method: Method, x_guess: npt.ArrayLike, *, config: int, crossings: int = 1,

@@ -418,3 +418,48 @@ def test_a_comparators_crossing_inside_a_step_is_in_the_stepped_means_estimate()
     estimate = summary["accuracy"]["estimates"]["vout_mean"]["error_estimate"]
     assert 1e-5 < true < 1e-3 and "warnings" not in summary
     assert true <= estimate <= 3 * true, (true, estimate)
+
+
+STIFF_BUCK = """Buck 100 kHz, D 0.25 open loop: 1 mohm sense and ESR resistors beside a 1 Mohm bleeder and divider, 10 pF
+.param T=10u e=10p
+Vin in 0 DC 48
+Vg gate 0 PULSE(1 0 {0.25*T - e/2} {e} {e} {0.75*T - e} {T})
+S1 in sw gate 0 SWMOD
+D1 0 sw DMOD
+Rb sw 0 1Meg
+L1 sw lr 33u
+Rsh lr out 1m
+Rc out cp 1m
+C1 cp 0 220u
+R1 out 0 2
+Rt out fb 1Meg
+Rbot fb 0 100k
+Cff out fb 10p
+Cfb fb 0 100p
+.model SWMOD SW(VT=0.5)
+.model DMOD D
+.tran 10n 5m
+.meas tran vout_mean AVG v(out)
+.end
+"""
+
+
+def test_accuracy_on_request_steps_a_node_no_step_resolves_with_backward_euler():
+    """A 3.3e-15 s node (1 mohm beside 10 pF; a 1e9 resistance ratio): theta 0.5 at T/100 had no step LCP
+    solution, and --rtol fell to the event method, which refuses that time constant (billions of substeps a
+    period): exit 2 where the stepper is exact enough. Now the whole refinement is backward Euler (L-stable; theta
+    0.5 where it stops ringing on the node within MAX_STEPS / FIRST_STEPS steps a period), and a method that cannot
+    take the circuit leaves the stepper's best standing. In CCM the switch node is Vin for D T and 0 after, so
+    mean(vout) = D Vin Rl / (Rl + Rsh), Rl = R || (Rt + Rbot): 11.9940029876 V."""
+    from converters.run import run_converter, run_summary
+    from converters.models import Circuit
+    model = Circuit.from_netlist("stiff-buck.cir", text=STIFF_BUCK)
+    summary = run_summary(run_converter(model, rtol=1e-4))
+    accuracy = summary["accuracy"]
+    assert accuracy["met"] and accuracy["method"] == "lcp" and accuracy["theta"] == 1.0
+    rl = 2.0 * 1.1e6 / (2.0 + 1.1e6)
+    closed = 0.25 * 48.0 * rl / (rl + 1e-3)
+    q = accuracy["quantities"]["vout_mean"]
+    true = abs(q["value"] - closed) / closed
+    assert true <= 1e-4 and true <= 3 * q["relative_error_estimate"], (true, q["relative_error_estimate"])
+    assert summary["mode_fractions"] == pytest.approx({"S1": 0.25, "D1": 0.75}, abs=1e-9)

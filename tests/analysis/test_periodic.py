@@ -232,3 +232,52 @@ def test_newton_stops_on_a_limit_and_halves_a_step_out_of_the_maps_domain():
     from converters.errors import ResourceError
     refused = newton_orbit(_LimitedMap(1, ResourceError("the stiffest mode's time constant")), np.ones(2), max_iter=5)
     assert not refused.converged
+
+
+class _LatchMap(PeriodMap):
+    """A 1-D map with a loop's three regions: saturated (30 <= x < 1000: x drifts down 5 a period, its multiplier
+    1 - 1e-6, an integrator with the loop open), latched (x < -1e6: an affine map with its fixed point at -4e6,
+    multiplier 1 - 1e-6) and regulating (x < 30: the orbit at 20, multiplier 0.5; or, with ``settles`` False, a
+    drift up one a period that never settles)."""
+
+    def __init__(self, settles=True):
+        super().__init__()
+        self.settles = settles
+
+    def __call__(self, x0):
+        self.evaluations += 1
+        x = float(x0[0])
+        if x < -1e6:
+            p, j = -4e6 + (1 - 1e-6) * (x + 4e6), 1 - 1e-6
+        elif x < 30:
+            p, j = (0.5 * x + 10, 0.5) if self.settles else (x + 1, 1.0)
+        else:
+            p, j = (1 - 1e-6) * x - 5, 1 - 1e-6
+        return np.array([p]), np.array([[j]])
+
+
+def _latch_problem(x0):
+    from types import SimpleNamespace
+    return SimpleNamespace(period=1.0, t_span=(0.0, 1.0), x0=np.array([x0]), n=1)
+
+
+def test_an_orbit_newton_jumps_to_stands_only_where_the_settled_transient_returns_to_it():
+    """Newton from the saturated region: its step (residual / (1 - multiplier), 5e6) lands in the latched region,
+    whose affine map it solves next: a fixed point the circuit would take ~2e7 periods to reach, while its
+    transient settles at 20 within 32 periods. The transient's orbit is taken; a latched start's own orbit, which
+    the transient does approach, stands as Newton found it (same iterations: a sweep's serial and batched engines
+    agree); where the transient settles on nothing, the remote orbit comes with a warning."""
+    from converters.analysis.periodic import REMOTE_PERIODS, periods_to_reach
+    first = newton_orbit(_LatchMap(), np.array([100.0]), tol=1e-9)
+    assert first.converged and first.x0[0] == pytest.approx(-4e6)
+    assert periods_to_reach(first, np.array([100.0]), 1e-9) > REMOTE_PERIODS
+    orbit = shoot(_latch_problem(100.0), None, tol=1e-9, period_map=_LatchMap())
+    assert orbit.converged and orbit.x0[0] == pytest.approx(20.0) and orbit.transient == 32 and not orbit.warning
+    latched = shoot(_latch_problem(-2e6), None, tol=1e-9, period_map=_LatchMap())
+    direct = newton_orbit(_LatchMap(), np.array([-2e6]), tol=1e-9)
+    assert latched.x0[0] == direct.x0[0] and latched.iterations == direct.iterations and not latched.warning
+    assert latched.evaluations > direct.evaluations + 32                      # the transient it was checked on
+    lost = shoot(_latch_problem(100.0), None, tol=1e-9, period_map=_LatchMap(settles=False))
+    assert lost.converged and lost.x0[0] == pytest.approx(-4e6)
+    assert "did not return to it: the circuit may settle elsewhere" in lost.warning
+    assert lost.summary()["warning"] == lost.warning

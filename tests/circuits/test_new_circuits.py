@@ -746,6 +746,55 @@ def test_type2_loop_buck_at_an_open_loop_gain_of_a_million_reaches_its_orbit(met
     assert summary["vout_mean"] == pytest.approx(p["vref"] - vcon / p["aol"], rel=tol)
 
 
+BOOST_TYPE3 = """Boost 12 V -> 24 V, voltage mode, type III compensator (E, R, C; Aol = 1e6), started near its orbit
+.param T=10u e=10p
+Vsrc vin 0 DC 12
+Rw vin x 0.05
+Lb x sw 22u IC=5
+Sw sw 0 vc ramp SWM
+Dr sw out DM
+Co out ce 100u IC=24
+Resr ce 0 50m
+Rload out 0 10
+Ri out fb 100k
+Rb fb 0 11.628k
+R3 out n3 9k
+C3 n3 fb 1n
+Rz fb z 600
+Cz z vc 180n IC=2
+Cp fb vc 5.6n IC=2
+Vref ref 0 DC 2.5
+Eea vc 0 ref fb 1e6
+Vramp ramp 0 PULSE(0 1 0 {T - 2*e} {e} {e} {T})
+.model SWM SW(VT=0)
+.model DM D
+.tran 20n 20m
+.meas tran vout_avg AVG v(out)
+.end
+"""
+
+
+@pytest.mark.parametrize("method, tol", [("event", 1e-9), ("lcp", 3e-5)])
+def test_newton_does_not_leave_a_regulating_loop_for_its_latched_orbit(tmp_path, method, tol):
+    """A boost's loop latched at duty 1 is an orbit too: vout 0, the integrator wound up to Aol Vref = 2.5 MV
+    (multiplier 1 - 5.2e-9). Newton's second step from the netlist's start (its map saturated, its integrator a
+    multiplier near 1) landed on it: the event method printed vout -2.0e-12 V with exit 0, warning only "may be
+    3.3e-02 off: not settled", while the circuit settles on its regulated orbit in ~30 periods. An orbit billions of
+    periods of its slowest mode away from the start stands now only where Newton from the settled transient returns
+    to it: 23.9998231 V. On any regulated orbit the capacitors carry no mean current, so mean(fb) = mean(vout) Rb /
+    (Ri + Rb) and mean(vc) = Aol (Vref - mean(fb)): the closed form below (the event method to 1e-9; the stepper to
+    its stated 1e-5 estimate: its samples join vout across the ESR's jump at each crossing, measured 1.2e-5)."""
+    path = tmp_path / "boost-type3.cir"
+    path.write_text(BOOST_TYPE3)
+    tr = run_converter(str(path), {}, steady=True, method=method, periods=1)
+    summary = run_summary(tr)
+    o = summary["orbit"]
+    assert o["converged"] and o["spectral_radius"] == pytest.approx(0.98250, abs=1e-4) and "warning" not in o
+    vc = summary["measurements"]["v(vc)"]["mean"]
+    assert 0.4 < vc < 0.6                                           # the duty ratio 1 - 12/24 on a 1 V ramp
+    assert summary["vout_mean"] == pytest.approx((2.5 - vc / 1e6) * (100e3 + 11.628e3) / 11.628e3, rel=tol)
+
+
 def test_type2_loop_buck_compare_passes_against_ngspice(capsys, ngspice):
     """ngspice from rest over its own settling (480 periods): mean 2.6e-5 apart, ripple 3.2e-4, modes agree."""
     assert main(["compare", str(NETLISTS / "type2-loop-buck.cir"), "--json"]) == 0

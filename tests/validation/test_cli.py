@@ -365,3 +365,13 @@ def test_the_time_limits_stop_passes_every_handler_of_a_failed_trial_point_or_se
                 pytest.fail(f"except {handler} took the time limit's stop")
     finally:
         signal.setitimer(signal.ITIMER_REAL, 0.0)
+
+
+def test_an_exact_run_too_short_to_check_says_so_instead_of_a_traceback(capsys):
+    """The event method on a comparator loop over one period: its flows are exact and the run is too short for its
+    window to be compared with the one before, so nothing is estimated; the summary printer read an estimate that
+    was not there (KeyError, a traceback after the result)."""
+    netlist = Path(__file__).resolve().parents[2] / "netlists" / "circuits" / "type2-loop-buck.cir"
+    assert main(["simulate", str(netlist), "--method", "event", "--periods", "1"]) == 0
+    out = capsys.readouterr().out
+    assert "accuracy: exact flows (no step error); whether the run has settled is not estimated" in out

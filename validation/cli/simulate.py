@@ -265,6 +265,9 @@ def _print(summary: dict, tr, args) -> None:
     elif accuracy.get("estimates"):
         print("accuracy (relative; " + accuracy["how"] + "): " + ", ".join(
             f"{name} within ~{q['error_estimate']:.1g}" for name, q in accuracy["estimates"].items()))
+    elif "estimates" in accuracy:      # a window check with nothing to estimate: exact flows over a short run
+        print("accuracy: exact flows (no step error); whether the run has settled is not estimated (the run is "
+              "shorter than two windows of its measures, or a step lies in them)")
     elif not accuracy.get("checked") and "transient" in accuracy:       # a method whose error is its model's
         print(f"vout mean moved {accuracy['transient']:.1g} (relative) from the 10 periods before ({accuracy['reason']})")
     elif accuracy.get("checked"):
