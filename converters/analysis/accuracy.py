@@ -20,7 +20,9 @@ input power; the efficiency, their ratio, is then within rtol: :func:`efficiency
   and the switching edges, not from the step grid.
 * **Event-driven** (exact flows, events to rounding): taken when the stepper would need more than
   ``MAX_STEPS`` steps per period (the trade-off data: there the exact method is the cheaper; at 1e-8 and
-  below). Its estimate is the orbit's Newton distance and the rounding of its period map, not Richardson.
+  below). Its estimate is the orbit's Newton distance and the rounding of its period map, not Richardson; ripple
+  and peaks, read on its samples, are estimated from every other sample and read again on the orbit's period at
+  ``SAMPLE_GROWTH`` times the samples while that estimate misses the target.
 
 Every estimate has a floor: the orbit's rounding, eps x (operations per period) / (1 - rho), which near
 rho = 1 (light load) keeps a fine stepper from some targets; the event method then takes over.
@@ -82,6 +84,9 @@ OBSERVED_FLOOR = 0.5
 #: The event method's output samples per period (ripple and peaks are read on them; the estimate of that
 #: reading is Richardson's on every other sample, the sampling error being O(spacing^2) at a smooth extremum).
 EVENT_SAMPLES = 8192
+#: Where an extremum read on them misses the target, the period is run again on the orbit with SAMPLE_GROWTH times
+#: the samples, up to MAX_EVENT_SAMPLES a period (a 10 mF output's ripple, a snubber's ring on a winding's peak).
+SAMPLE_GROWTH, MAX_EVENT_SAMPLES = 8, 1 << 19
 #: The event method's rounding: its period map is a few exact segments.
 EVENT_SEGMENTS = 16
 #: Rounding per step of the stepper's period map, in units of eps (measured, see :func:`_rounding`).
@@ -553,13 +558,29 @@ def accurate_steady(model: Model, p: dict, rtol: float, *, x0: npt.NDArray[np.fl
                                   f"{best.worst():.2g}, " + (f"{stopped}, " if stopped else "")
                                   + f"and the exact event method does not take this circuit ({why})")
         return replace(best, met=met, message=message, wall_s=time.perf_counter() - clock)
-    values, events = measures(model, p, tr, T)
     floor = _rounding(orbit, EVENT_SEGMENTS)
-    quantities = {name: Estimate(float(v), floor * s if (events or not name.startswith("fraction_")) else 0.0,
-                                 float(s)) for name, (v, s) in values.items()}
-    for name, coarse in _sampled(model, tr, T).items():             # extrema read on the samples: their error
-        q = quantities[name]
-        quantities[name] = Estimate(q.value, max(abs(q.value - coarse) / 3.0, q.error_estimate), q.scale)
+    samples = EVENT_SAMPLES
+    while True:
+        values, events = measures(model, p, tr, T)
+        quantities = {name: Estimate(float(v), floor * s if (events or not name.startswith("fraction_")) else 0.0,
+                                     float(s)) for name, (v, s) in values.items()}
+        read = _sampled(model, tr, T)
+        for name, coarse in read.items():                           # extrema read on the samples: their error
+            q = quantities[name]
+            quantities[name] = Estimate(q.value, max(abs(q.value - coarse) / 3.0, q.error_estimate), q.scale)
+        if max((quantities[name].relative for name in read), default=0.0) <= target \
+                or samples * SAMPLE_GROWTH > MAX_EVENT_SAMPLES:
+            break
+        # an extremum between samples short of the target (a snubber's ring on a peak, a 10 mF output's ripple):
+        # the same orbit's period again at a finer spacing, its flows as exact as before
+        start = time.perf_counter()
+        # (the result's method keeps the first spacing: a run shown on the orbit need not carry the finest)
+        samples *= SAMPLE_GROWTH
+        from ..simulate import simulate
+        tr = replace(simulate(model.problem(p, T, orbit.x0), EventDriven(output_step=T / samples)),
+                     labels=model.labels(p))
+        runs.append({"method": method.key, "steps_per_period": None, "periods": 1, "samples_per_period": samples,
+                     "wall_s": time.perf_counter() - start, "orbit_distance": orbit.distance})
     exact_events = [(pair, kind, Estimate(time_T, floor, 1.0)) for pair, kind, time_T in events]
     result = AccurateSteady(quantities, exact_events, rtol, method, None, tr, orbit, True, runs=runs)
     met = result.worst() <= rtol
@@ -568,7 +589,7 @@ def accurate_steady(model: Model, p: dict, rtol: float, *, x0: npt.NDArray[np.fl
     if met:
         message = ""
     elif worst > 10.0 * floor:      # not the orbit's rounding: an extremum read on the samples (a ripple)
-        message = (f"{name} is estimated only to {worst:.2g} (relative), read on the exact run's {EVENT_SAMPLES} "
+        message = (f"{name} is estimated only to {worst:.2g} (relative), read on the exact run's {samples:,} "
                    f"samples a period (an extremum between two of them); rtol {rtol:g} is beyond it")
     else:
         message = (f"the orbit is resolved to {orbit.distance:.2g} in double precision (a Floquet multiplier at "
