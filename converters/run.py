@@ -284,7 +284,8 @@ def _accurate(model: Model, p: dict, rtol: float | str, start: float, *, method:
     simulated = sum(run["periods"] for run in result.runs) + span / T     # every orbit's periods, then the span
     meta = {"model": model.name, "control": model.control, "params": p, "method_options": result.method.options(),
             "orbit": result.orbit.summary(), "accuracy": result.summary(),
-            "steady_periods": int(round(simulated)), "periods": int(round(span / T))}
+            "steady_periods": int(round(simulated)), "periods": int(round(span / T)),
+            **({"warnings": [result.orbit.warning]} if result.orbit.warning else {})}
     return replace(tr, labels=model.labels(p), wall_s=time.perf_counter() - start, metadata={**tr.metadata, **meta},
                    retcode=ReturnCode.SUCCESS if result.met else ReturnCode.NOT_CONVERGED)
 

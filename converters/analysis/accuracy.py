@@ -344,14 +344,13 @@ def _orbit(model: Model, p: dict, method: Method, x_guess: npt.NDArray[np.float6
            tol: float) -> tuple[PeriodicOrbit, Trajectory]:
     """The method's orbit (Newton on its period map, after ``warm_up`` periods) and one period on it, the
     stepper's from the same step plan (built once)."""
-    from .periodic import newton_orbit, require
+    from .periodic import require, shoot
     T = model.period(p)
     problem = model.problem(p, T, x_guess)
     period_map = method.period_map(problem)
-    x = np.array(problem.x0, dtype=float)
-    for _ in range(warm_up):
-        x = period_map.end(x)
-    orbit = require(newton_orbit(period_map, x, tol=tol, period=T, polish=True), f"the periodic orbit of {model.key}")
+    # shooting's own checks: settling rounds where Newton fails, a remote orbit checked against the transient
+    orbit = require(shoot(problem, method, problem.x0, warm_up=warm_up, tol=tol, polish=True, period_map=period_map),
+                    f"the periodic orbit of {model.key}")
     plan = getattr(period_map, "plan", None)
     if plan is not None and hasattr(plan, "trajectory"):
         tr = plan.trajectory(orbit.x0)

@@ -258,6 +258,9 @@ class ModelSweep:
                     return failed_row(index, point, f"no steady state: {orbit.message}", time.perf_counter() - clock)
                 if unstable(orbit.spectral_radius):
                     return failed_row(index, point, unstable(orbit.spectral_radius), time.perf_counter() - clock)
+                if orbit.warning:          # an orbit the transient was not seen to reach (simulate warns of it)
+                    return failed_row(index, point, f"no trusted steady state: {orbit.warning}",
+                                      time.perf_counter() - clock)
                 run = simulate(model.problem(p, T, orbit.x0), method)
                 extra = {"spectral_radius": orbit.spectral_radius, "iterations": orbit.iterations,
                          "orbit_distance": orbit.distance}
