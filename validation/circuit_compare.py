@@ -26,7 +26,7 @@ from converters.problems import Comparators, StateSwitching
 from converters.problems.switching import law_channels
 from converters.run import make_method, run_converter, steady_state
 
-from .compare import SPICE_SETTLE, spice_drift, spice_steady, unsettled_cause
+from .compare import SPICE_SETTLE, spice_steady, unsettled_cause
 from .defaults import THRESHOLDS, passes
 
 PERIODS, WINDOW = 30, 10
