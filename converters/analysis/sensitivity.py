@@ -56,6 +56,7 @@ class Sensitivities:
     rows: tuple                         # Sensitivity, ranked by |normalised| then |derivative|
     skipped: dict                       # parameter -> why it has no sensitivity here
     multipliers: np.ndarray             # the orbit's Floquet multipliers (its stability)
+    orbit_warning: str = ""             # the orbit's own (PeriodicOrbit.warning: a remote orbit)
 
     def as_dict(self) -> dict:
         return {"metric": self.metric, "value": self.metric_value, "unit": self.metric_unit,
@@ -131,7 +132,7 @@ def sensitivities(model: Model | str, params: dict | None = None, *, metric: str
     ranked = sorted(rows, key=lambda s: (-abs(s.normalised(value)) if math.isfinite(s.normalised(value)) else 0.0,
                                          -abs(s.derivative)))
     return Sensitivities(metric, signal, value, quantity_unit(model, p, signal), tuple(ranked), skipped,
-                         base.orbit.multipliers)
+                         base.orbit.multipliers, base.orbit.warning)
 
 
 

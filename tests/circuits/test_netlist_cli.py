@@ -269,3 +269,42 @@ def test_compare_runs_ngspice_finer_where_its_tmax_does_not_resolve_the_circuit_
     assert second.startswith("ngspice at TMAX = 0.0025 T, RELTOL 1e-05: its mean of vout moved")
     assert float(first.split("moved ")[1].split(" ")[0]) > 1e-3
     assert result["spice_options"]["tmax_fraction"] == pytest.approx(1 / 400) and result["spice_options"]["reltol"] == 1e-5
+
+
+#: A six-pulse rectifier on stiff 60 Hz sources with a DC-side LC filter: its commutations are microseconds long
+RECTIFIER_LC = """Three-phase six-pulse diode rectifier (100 V phase peak, 60 Hz, stiff sources) with a DC-side LC filter
+.param Vpk=100 f=60 Ldc=5m Cdc=2.2m R=20
+Va a 0 SIN(0 {Vpk} {f} 0 0 0)
+Vb b 0 SIN(0 {Vpk} {f} 0 0 -120)
+Vc c 0 SIN(0 {Vpk} {f} 0 0 120)
+D1 a p DM
+D3 b p DM
+D5 c p DM
+D4 n a DM
+D6 n b DM
+D2 n c DM
+Ldc p x {Ldc}
+Cdc x n {Cdc}
+R1 x n {R}
+.model DM D
+.tran 10u 500m
+.meas tran vdc AVG v(x,n) FROM={480m} TO={500m}
+.end
+"""
+
+
+@pytest.mark.slow
+@pytest.mark.spice
+def test_compare_runs_ngspice_finer_where_its_modes_or_ripple_fail_though_its_mean_agrees(tmp_path, capsys, ngspice):
+    """ngspice's default TMAX (T/200, 83 us) on the LC-filtered rectifier: its mean agrees to 1e-5, but its diodes'
+    commutations are read on its steps, so a period's modes agree at 0.4 and its ripple fails; refined to T/800 and
+    T/3200 (RELTOL 1e-4, 1e-5) both pass (ripple 3.3e-3, modes 1.0). While the refinement ran only where the mean
+    failed, this compare failed on its modes and ripple."""
+    netlist = tmp_path / "rectifier-lc.cir"
+    netlist.write_text(RECTIFIER_LC)
+    code, out, err = run_cli(capsys, "compare", netlist, "--json")
+    result = json.loads(out)
+    assert code == 0 and result["passed"], result["checks"]
+    assert result["metrics"]["mode_agreement"] == 1.0
+    assert result["metrics"]["v(x,n)_ripple_rel_error"] < 0.02
+    assert any(n.startswith("ngspice at TMAX = 0.00125 T, RELTOL 0.0001") for n in result["notes"])

@@ -138,6 +138,24 @@ def test_an_analysis_about_an_unstable_orbit_is_refused_or_says_so(capsys, comma
     assert summary["spectral_radius"] == pytest.approx(0.82413, abs=1e-5)
 
 
+@pytest.mark.parametrize("command", [["sensitivity"], ["bode", "--input", "vin"]], ids=["sensitivity", "bode"])
+def test_an_analysis_about_an_orbit_newton_could_not_confirm_says_so(capsys, monkeypatch, command):
+    """shoot() marks a converged orbit far (in periods of its slowest mode) from where Newton started, which Newton
+    from the settled transient did not return to (a loop latched at duty 1 beside the regulating orbit): simulate
+    --steady warns; sensitivity and bode printed that orbit's numbers silently. Here the stable orbit of the
+    voltage-mode buck carries such a warning: both say it on stderr and in the JSON."""
+    from dataclasses import replace
+
+    from converters.analysis import periodic
+    shoot, words = periodic.shoot, "the orbit lies ~1e+06 periods of its slowest mode from where Newton started"
+    monkeypatch.setattr(periodic, "shoot", lambda *a, **k: replace(shoot(*a, **k), warning=words))
+    code, out, err = run_cli(capsys, command[0], VOLTAGE_MODE, *command[1:], "--json")
+    summary = json.loads(out)
+    assert code == 0 and summary["stable"] is True and summary["orbit_warning"] == words
+    what = "sensitivities" if command[0] == "sensitivity" else "frequency responses"
+    assert err.strip() == f"warning: {words}: its {what} are that orbit's"
+
+
 @pytest.mark.parametrize("args, words", [
     (["--fmax", "1e300"], "fmax must be a frequency in (0, 1e+08] Hz (1000 times the switching frequency); got 1e+300"),
     (["--fmin", "1e-6", "--check"], "the check injects at frequencies down to fs/20,000 (5 Hz): at 1e-06 Hz its common "

@@ -83,7 +83,8 @@ def run(args) -> int:
     fmax = None if args.fmax is None else parse_value("--fmax", args.fmax)
     start = time.perf_counter()
     small = SmallSignalModel(model, params, input=name, outputs=(output,))
-    stability = orbit_stability("frequency responses", model.key, small.orbit.multipliers, args.unstable)
+    stability = orbit_stability("frequency responses", model.key, small.orbit.multipliers, args.unstable,
+                                small.orbit.warning)
     model_s = time.perf_counter() - start
     start = time.perf_counter()
     f = frequencies(small.T, fmin, fmax, args.points)

@@ -87,9 +87,11 @@ def add_unstable_option(parser) -> None:
                              "unit circle: the circuit does not settle on it); the output says so")
 
 
-def orbit_stability(what: str, key: str, multipliers, allowed: bool) -> dict:
+def orbit_stability(what: str, key: str, multipliers, allowed: bool, warning: str = "") -> dict:
     """``spectral_radius`` and ``stable`` of the orbit an analysis is about; an unstable orbit is refused in one
-    line unless ``allowed`` (--unstable), and then said in a warning."""
+    line unless ``allowed`` (--unstable), and then said in a warning. The orbit's own ``warning`` (Newton's orbit
+    far from where the settled transient went: :func:`converters.analysis.periodic.shoot`) is said on stderr and
+    kept in the JSON as ``orbit_warning``."""
     import sys
 
     import numpy as np
@@ -104,7 +106,9 @@ def orbit_stability(what: str, key: str, multipliers, allowed: bool) -> dict:
             raise SimulationError(f"{how}, so its {what} describe no steady state; run pcsuite bifurcation to see "
                                   "where it settles, or pass --unstable to analyse the orbit all the same")
         print(f"warning: {how}: its {what} are the unstable orbit's (--unstable)", file=sys.stderr)
-    return {"spectral_radius": rho, "stable": stable}
+    if warning:
+        print(f"warning: {warning}: its {what} are that orbit's", file=sys.stderr)
+    return {"spectral_radius": rho, "stable": stable, **({"orbit_warning": warning} if warning else {})}
 
 
 def add_spice_options(parser) -> None:
