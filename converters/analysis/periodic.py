@@ -257,10 +257,15 @@ def _same(a: PeriodicOrbit, b: PeriodicOrbit, tol: float) -> bool:
 def periods_to_reach(orbit: PeriodicOrbit, x_start: npt.NDArray[np.float64], tol: float) -> float:
     """The periods the orbit's slowest mode (its spectral radius rho) takes to bring the distance from ``x_start``
     to the orbit down to the tolerance: ln(distance / tolerance) / -ln(rho) (0 for rho = 0, inf for rho >= 1)."""
-    rho = orbit.spectral_radius
+    return periods_apart(orbit.x0, orbit.spectral_radius, x_start, tol)
+
+
+def periods_apart(x_orbit: npt.NDArray[np.float64], rho: float, x_start: npt.NDArray[np.float64],
+                  tol: float) -> float:
+    """:func:`periods_to_reach` of a fixed point ``x_orbit`` with spectral radius ``rho``."""
     if rho >= 1.0:
         return np.inf
-    gap = float(np.abs(orbit.x0 - x_start).max()) / (tol * (1.0 + float(np.abs(orbit.x0).max())))
+    gap = float(np.abs(x_orbit - x_start).max()) / (tol * (1.0 + float(np.abs(x_orbit).max())))
     return 0.0 if rho == 0.0 or gap <= 1.0 else math.log(gap) / -math.log(rho)
 
 

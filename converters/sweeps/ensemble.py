@@ -380,6 +380,7 @@ class ModelSweep:
 
     def _batched(self, model: Model, prepared: list, rows: dict) -> None:
         """The rows of prepared points of one theta through one compiled call (:func:`.batch.batch_steady`)."""
+        from ..analysis.periodic import REMOTE_PERIODS, periods_apart
         from .batch import CONVERGED, ROUNDING, batch_steady
         P = len(prepared)
         n = prepared[0][4].n
@@ -427,6 +428,12 @@ class ModelSweep:
             rho = float(np.abs(multipliers).max())
             if unstable(rho):
                 rows[index] = failed_row(index, point, unstable(rho), time.perf_counter() - clock)
+                continue
+            if periods_apart(x_star[k], rho, problem.x0, STEADY_TOL) > REMOTE_PERIODS:
+                # an orbit its slowest mode would take so long to reach from the start: the point's own shoot()
+                # checks it against the settled transient (from problem.x0, before the warm-up: a few more points
+                # than shoot's own test, none fewer)
+                rows[index] = self.row(index, point)
                 continue
             rows[index] = {"index": int(index), **{key: _number(v) for key, v in point.items()}, "status": "ok", "message": "", **orbit_row(model, p, run, self.metrics),
                            "spectral_radius": rho, "iterations": int(iterations[k]),

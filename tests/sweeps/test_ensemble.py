@@ -312,3 +312,28 @@ def test_diverging_tells_an_exponential_from_a_start_up(shape, verdict):
     t = np.linspace(0.0, 50.0, 50 * 200 + 1)
     message = diverging(_Run(t, shape(t)[:, None]), 1.0)
     assert message.startswith(verdict) and bool(message) == bool(verdict)
+
+
+def test_a_batched_point_on_an_orbit_its_slowest_mode_takes_ages_to_reach_is_checked_as_the_point_alone(monkeypatch):
+    """The buck into 1 F (RC = 10 s, multiplier ~1 - 1e-6): Newton's orbit lies ~1e7 periods of its slowest mode
+    from the start, the point's own shoot() checks it against the settled transient (its warning, where the check
+    fails, fails the point); the batched engine kept every converged orbit. Here every orbit shoot() returns carries
+    a warning: the 100 uF point (~2e3 periods away) stays in the compiled call and ok, the 1 F point fails."""
+    from converters.analysis import periodic
+    shoot = periodic.shoot
+    monkeypatch.setattr(periodic, "shoot", lambda *a, **k: _warned(shoot(*a, **k)))
+    rows = _frame(run_ensemble(ModelSweep("buck"), Grid([Axis.parse("C=100u:1:2")]), backend="batched"))
+    assert list(rows["status"]) == ["ok", "failed"], rows
+    assert rows.loc[1, "message"] == "no trusted steady state: a remote orbit"
+    monkeypatch.setattr(periodic, "shoot", shoot)
+    batched = _frame(run_ensemble(ModelSweep("buck"), Grid([Axis.parse("C=100u:1:2")]), backend="batched"))
+    serial = _frame(run_ensemble(ModelSweep("buck"), Grid([Axis.parse("C=100u:1:2")]), backend="serial"))
+    assert list(batched["status"]) == list(serial["status"]) == ["ok", "ok"]
+    assert list(batched["iterations"]) == list(serial["iterations"])
+    np.testing.assert_allclose(batched[NUMERIC].to_numpy(float), serial[NUMERIC].to_numpy(float), rtol=1e-12,
+                               atol=1e-12)
+
+
+def _warned(orbit):
+    from dataclasses import replace
+    return replace(orbit, warning="a remote orbit")
