@@ -59,7 +59,7 @@ def test_compare_runs_ngspice_on_the_same_netlist_and_passes(capsys, ngspice, na
 @pytest.mark.spice
 def test_compare_on_the_cockcroft_walton_ladder_passes_with_the_modes_read_alike_at_the_files_own_steps(capsys, ngspice):
     """The ladder's file asks ngspice for TMAX = T/2000 and ABSTOL = 1 uA (.tran, .options): its mean and ripple
-    then meet the LCP's (3.7e-5 and 2.3e-3 measured); at compare's default T/200 its mean is 6e-4 off. The mode
+    then meet the LCP's (3.7e-5 and 2.3e-3 measured); refined from compare's default T/200, its mean moves 7.4e-4. The mode
     sequences agree in every period, the even diodes' second conduction (at 1e-3 to 2e-3 of their peak) included,
     when both runs are read by the same rule (a diode conducts above 0.1 % of its peak) and the stepper takes the
     file's TSTEP = T/4000. Read by the LCS's own rule, D1 conducts on (its current decaying through RS towards 1e-6
@@ -85,7 +85,9 @@ def test_compare_on_the_cockcroft_walton_ladder_passes_with_the_modes_read_alike
     assert circuit.default_h(p) == pytest.approx(T / 4000, rel=1e-12)
     coarse = compare_circuit(circuit, h=T / 1000, spice_options=replace(file_spice_options(circuit),
                                                                          tmax_fraction=1 / 200))
-    assert coarse.metrics["v(out)_mean_rel_error"] > 3e-4 and coarse.metrics["mode_agreement"] < 1.0
+    # the modes fail at the stepper's T/1000, so ngspice is refined from T/200: its mean moves by more than 3e-4
+    first = next(n for n in coarse.notes if n.startswith("ngspice at TMAX = 0.00125 T"))
+    assert float(first.split("moved ")[1].split(" ")[0]) > 3e-4 and coarse.metrics["mode_agreement"] < 1.0
     exact = replace(coarse.lcp, measured={})                 # the LCS's own rule: D1 never reads off
     t1 = float(exact.t[-1])
     assert "D1 > off" not in " > ".join(_mode_sequences(exact, t1 - 10 * T, T, 10)[-1])
