@@ -12,6 +12,8 @@ inductor and diode currents. The diode model sets the accuracy floor (about 1 mV
 """
 from __future__ import annotations
 
+import re
+
 from dataclasses import replace
 
 from converters.circuits.netlist import Pulse, Pwl
@@ -385,7 +387,12 @@ CONTROL_NETLISTS = {
 
 
 def model_netlist(model, params: dict, t_end, options: SpiceOptions | None = None, x0=None) -> Netlist:
-    """The netlist of a model (a converter under its control) with validated ``params``."""
+    """The netlist of a model (a converter under its control, or a netlist file's circuit with the file's own
+    ngspice settings where ``options`` is not given) with validated ``params``."""
+    from converters.models.netlist import Circuit
+    if isinstance(model, Circuit):
+        from .circuit import circuit_netlist, file_spice_options
+        return circuit_netlist(model, params, t_end, file_spice_options(model, options), x0=x0)
     writer = CONTROL_NETLISTS.get(model.control)
     if writer is None:
         raise ParameterError(f"no ngspice netlist for {model.key}: the implicit relay is a time-stepping scheme of "
@@ -409,11 +416,13 @@ def _vector(probe) -> str | None:
 
 
 def standalone(netlist: Netlist, period: float, state_names=(), window_periods: int = MEASURE_PERIODS,
-               window: tuple | None = None) -> str:
+               window: tuple | None = None, output: str = "vout") -> str:
     """The netlist as a file ngspice runs on its own (``ngspice -b FILE.cir``): ``.meas`` of vout's mean and
     peak-to-peak ripple and of each state's mean over the last ``window_periods`` periods, or over ``window``
     (t0, t1) in seconds for a model without a period (the sliding-mode boost: its summary's window); states
-    with a negative probe sign are printed as the probe reads them: the comment says so."""
+    with a negative probe sign are printed as the probe reads them: the comment says so. ``output``: the probe
+    measured as vout (a netlist file's output, ``v(out)``); a state named as SPICE names it is measured as
+    ``v_c1_mean`` (a .meas name is a word)."""
     t1 = netlist.t_end
     if window is None:
         t0 = max(0.0, t1 - window_periods * period)
@@ -424,8 +433,10 @@ def standalone(netlist: Netlist, period: float, state_names=(), window_periods: 
     window = f"FROM={_num('t0', t0)} TO={_num('t1', t1)}"
     lines = [f"* ngspice -b this file: .meas over {over} [{t0:.6g}, {t1:.6g}] s",
              f"* parameters: {' '.join(f'{k}={v:g}' for k, v in netlist.params.items())}"]
-    measures = [f".meas tran vout_mean AVG {_vector(netlist.probes['vout'])} {window}",
-                f".meas tran vout_ripple PP {_vector(netlist.probes['vout'])} {window}"]
+    if output != "vout":
+        lines.append(f"* vout_mean and vout_ripple measure {output}")
+    measures = [f".meas tran vout_mean AVG {_vector(netlist.probes[output])} {window}",
+                f".meas tran vout_ripple PP {_vector(netlist.probes[output])} {window}"]
     for name in state_names:
         probe = netlist.probes.get(name)
         if probe is None or isinstance(probe[0], tuple):
@@ -433,7 +444,8 @@ def standalone(netlist: Netlist, period: float, state_names=(), window_periods: 
         sign = "" if probe[1] > 0 else f"  (pcsuite's {name} = -this)"
         if sign:
             lines.append(f"* {name}_mean is the probe {_vector(probe)}{sign}")
-        measures.append(f".meas tran {name}_mean AVG {_vector(probe)} {window}")
+        word = re.sub(r"\W+", "_", name).strip("_")
+        measures.append(f".meas tran {word}_mean AVG {_vector(probe)} {window}")
     body = netlist.text.rstrip("\n").split("\n")
     assert body[-1] == ".end"
     return "\n".join([body[0], *lines, *body[1:-1], *measures, ".end"]) + "\n"

@@ -238,22 +238,24 @@ def test_compare_does_not_pass_a_mean_that_ngspice_only_kept_from_pcsuites_orbit
 @pytest.mark.spice
 def test_compare_on_the_stiff_node_says_where_ngspice_is_the_one_unresolved(tmp_path, capsys, ngspice):
     """The stiff node (10 ohm, 10 nF): pcsuite's 10 V is exact (1e-9 of droop a period). ngspice at the file's TMAX
-    reads 10.015 V (its mean fails); refined once (TMAX T/800, RELTOL 1e-4) it reads 10.0087 V and passes at 8.7e-4,
-    having moved 6.6e-3: the verdict says ngspice resolves the mean to about that, not to 8.7e-4. The ripples
-    (pcsuite's 5e-9 V, ngspice's 3.4e-6 V) both lie far below what RELTOL 1e-4 resolves on 10 V (1e-3 V): the
-    ripple check fails on ngspice's rounding, and says so."""
+    reads 10.015 V (its mean fails); its ripple and modes fail too, so it is refined twice (TMAX T/800, RELTOL 1e-4:
+    10.0087 V, moved 6.6e-3; T/3200, 1e-5: 10.00027 V, moved 8.4e-4) and its mean passes at 2.7e-5: the verdict says
+    ngspice resolves the mean to about 8.4e-4, not to 2.7e-5. The ripples (pcsuite's 5e-9 V, ngspice's 4.6e-6 V) both
+    lie far below what RELTOL 1e-5 resolves on 10 V (1e-4 V): the ripple check fails on ngspice's rounding, and says
+    so."""
     path = tmp_path / "stiff.cir"
     path.write_text(STIFF.format(r="10", c="10n"))
     code, out, err = run_cli(capsys, "compare", path, "--json")
     result = json.loads(out)
     m = result["metrics"]
     assert m["v(out)_mean_lcp"] == pytest.approx(10.0, abs=1e-8)
-    assert 1e-4 < m["v(out)_mean_rel_error"] < 1e-3
+    assert 1e-5 < m["v(out)_mean_rel_error"] < 1e-4
+    assert result["spice_options"]["reltol"] == 1e-5
     (resolved,) = [n for n in result["notes"] if n.startswith("ngspice's last refinement moved its mean")]
     moved = float(resolved.split("moved its mean ")[1].split(",")[0])
     assert moved > 3 * m["v(out)_mean_rel_error"]
     (ripple,) = [n for n in result["notes"] if n.startswith("both ripples of v(out)")]
-    assert m["v(out)_ripple_spice"] < 0.1 * 1e-4 * 10.0 and "RELTOL 0.0001" in ripple
+    assert m["v(out)_ripple_spice"] < 0.1 * 1e-5 * 10.0 and "RELTOL 1e-05" in ripple
     assert not result["passed"] and code != 0
 
 

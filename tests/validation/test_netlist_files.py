@@ -143,3 +143,35 @@ def test_the_voltage_mode_netlist_is_the_bucks_own_with_its_parasitics_and_load_
     from netlists.build import build_voltage_mode_netlist
     text = build_voltage_mode_netlist(params, 0.08).text
     assert "V=0.5+0.5*tanh(100*(V(ramp)-8.4*(V(out)-11.3)))" in text and "Bstep out 0" in text
+
+
+NETLISTS = Path(__file__).resolve().parents[2] / "netlists" / "circuits"
+
+
+def test_the_netlist_of_a_netlist_file_is_what_ngspice_runs_with_its_output_measured(capsys):
+    """``pcsuite netlist FILE.cir`` had refused every file ("CONVERTER must be one of ...; got 'buck.cir'"): it
+    writes the circuit as compare runs it (the file's own ngspice settings, sense sources, no .control), measuring
+    the file's output as vout and each state under a .meas word."""
+    assert main(["netlist", str(NETLISTS / "buck.cir")]) == 0
+    text = capsys.readouterr().out
+    assert "* vout_mean and vout_ripple measure v(out)" in text
+    assert ".meas tran vout_mean AVG v(out) FROM=0.0049 TO=0.005" in text            # 500 periods of 10 us
+    assert ".meas tran i_l1_mean AVG i(vsense_l1) " in text and ".tran 5e-08 0.005 0 5e-08 UIC" in text
+    assert main(["netlist", str(NETLISTS / "buck.cir"), "--control", "smc"]) == 2
+    assert "--control applies to the built-in converters" in capsys.readouterr().err
+
+
+def test_ngspice_runs_a_netlist_files_netlist_alone_as_simulate_runs_it(ngspice, tmp_path, capsys):
+    path = tmp_path / "buck.cir"
+    assert main(["netlist", str(NETLISTS / "buck.cir"), "--out", str(path)]) == 0
+    out = subprocess.run([shutil.which("ngspice"), "-b", str(path)], capture_output=True, text=True, timeout=300,
+                         cwd=tmp_path)
+    assert out.returncode == 0, out.stderr[-2000:]
+    meas = {m.group(1).lower(): float(m.group(2))
+            for m in re.finditer(r"^(\w+)\s*=\s*([-+0-9.eE]+)\s+from=", out.stdout, re.MULTILINE)}
+    capsys.readouterr()
+    assert main(["simulate", str(NETLISTS / "buck.cir"), "--method", "spice", "--periods", "500", "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert meas["vout_mean"] == pytest.approx(summary["vout_mean"], rel=1e-6)        # 6.961939 both
+    assert meas["v_c1_mean"] == meas["vout_mean"]
+    assert meas["i_l1_mean"] == pytest.approx(meas["vout_mean"] / 10, rel=1e-4)         # the load's 10 ohm

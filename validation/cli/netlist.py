@@ -33,6 +33,10 @@ def run(args) -> int:
     from ..spice import check_spice_memory
     if args.out is not None and args.out.suffix.lower() not in (".cir", ".sp", ".net"):
         raise ParameterError(f"--out must end in .cir, .sp or .net; got {str(args.out)!r}")
+    from converters.models import is_netlist
+    if is_netlist(args.converter) and args.control != "pwm":
+        raise ParameterError(f"--control applies to the built-in converters; a netlist states its own drives (got "
+                             f"--control {args.control} with {str(args.converter)!r})")
     model = get_model(args.converter, args.control)
     p = model.resolve(parse_assignments(args.params))
     x0 = None
@@ -44,11 +48,13 @@ def run(args) -> int:
         raise ParameterError(f"t_end must be at least one switching period ({model.period(p):.3g} s): the netlist's "
                              f".meas lines measure the last periods; got {t_end:.3g} s")
     netlist = model_netlist(model, p, t_end, x0=x0)
+    output = model.output if is_netlist(args.converter) else "vout"          # a file's output, as SPICE names it
     check_spice_memory(netlist, remedy="a shorter --t-end")      # refused here, not when ngspice runs out of memory
     if model.periodic(p):
-        text = standalone(netlist, model.period(p), model.state_names)
+        text = standalone(netlist, model.period(p), model.state_names, output=output)
     else:                # a switching law of its own (the sliding-mode boost): over its summary's window
-        text = standalone(netlist, float("nan"), model.state_names, window=(model.window_start(p, 0.0, t_end), t_end))
+        text = standalone(netlist, float("nan"), model.state_names, window=(model.window_start(p, 0.0, t_end), t_end),
+                          output=output)
     if args.out is None:
         print(text, end="")
     else:
