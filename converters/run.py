@@ -221,14 +221,7 @@ def _on_steady_state(model: Model, p: dict, method: Method, span: float, x0: npt
     orbit, period_map = _orbit_and_map(model, p, method, x0=x0, tol=0.1 * steady_tol, rounding_bound=steady_tol,
                                        explain=f" (Newton aims at a tenth of the tolerance asked, {steady_tol:.3g}, "
                                                "and takes an orbit rounding resolves to that tolerance itself)")
-    if not orbit.stable:
-        # A fixed point of the period map the circuit does not settle on is no steady state.
-        mu = orbit.multipliers[0]
-        raise SimulationError(
-            f"the periodic orbit of {model.key} is unstable (Floquet spectral radius {orbit.spectral_radius:.6g}, "
-            f"a multiplier at {mu.real:.6g}{f'{mu.imag:+.3g}j' if abs(mu.imag) > 1e-12 else ''}): the circuit "
-            "settles elsewhere (a period-doubled orbit, or chaos); run --periods N without --steady, or follow "
-            "its orbits with pcsuite bifurcation")
+    require_stable(model, p, orbit, "run --periods N without --steady")
     tr = _on_orbit(model, p, method, period_map, orbit.x0, span)
     T = model.period(p)
     simulated = orbit.evaluations + span / T        # the warm-up and Newton's spans, then the output
@@ -248,6 +241,16 @@ def _from_rest(model: Model, p: dict, method: Method, span: float, x0: npt.NDArr
     if target is not None:
         meta["step_target"] = target
     return tr, meta
+
+
+def require_stable(model: Model, p: dict, orbit: PeriodicOrbit, instead: str) -> None:
+    """Refuse an unstable orbit in one line: a fixed point of the period map the circuit does not settle on is no
+    steady state (``instead``: what the command can run in its place)."""
+    from .analysis.periodic import instability
+    why = instability(orbit.multipliers, model.period(p))
+    if why:
+        raise SimulationError(f"the periodic orbit of {model.key} is {why}; {instead}, or follow its orbits with "
+                              "pcsuite bifurcation")
 
 
 def check_steady(model: Model, p: dict) -> None:

@@ -24,9 +24,9 @@ import numpy as np
 from converters.analysis.periodic import ROUNDING_RESOLVED
 from converters.problems import Comparators, StateSwitching
 from converters.problems.switching import law_channels
-from converters.run import make_method, run_converter, steady_state
+from converters.run import make_method, require_stable, run_converter, steady_state
 
-from .compare import SPICE_SETTLE, spice_steady, unsettled_cause
+from .compare import SPICE_SETTLE, START_REST, spice_steady, unsettled_cause
 from .defaults import THRESHOLDS, passes
 
 PERIODS, WINDOW = 30, 10
@@ -99,6 +99,8 @@ def compare_circuit(circuit, params: dict | None = None, *, h=None, spice_option
     rho = None
     if start == "steady":
         orbit = steady_state(circuit, p, make_method(circuit, p, "lcp", h), tol=1e-9, rounding_bound=ROUNDING_RESOLVED)
+        # ngspice started on an orbit neither simulator settles on stays near it for a while and agrees with it
+        require_stable(circuit, p, orbit, START_REST)
         x0, rho = orbit.x0, orbit.spectral_radius
     lcp = run_converter(circuit, p, h=h, t_end=span, x0=x0)
     t0 = span - window * T

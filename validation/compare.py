@@ -18,7 +18,7 @@ import numpy as np
 from converters.errors import ParameterError
 from converters.models import get_model
 from converters.analysis.periodic import ROUNDING_RESOLVED
-from converters.run import make_method, run_converter, steady_state
+from converters.run import make_method, require_stable, run_converter, steady_state
 from netlists import SpiceOptions
 from netlists.build import model_netlist
 
@@ -27,6 +27,8 @@ from .modes import period_sequences
 from .spice import run_spice, spice_trajectory
 
 EDGE_GUARD_T = 1e-2
+#: What compare runs in place of a comparison on an unstable orbit.
+START_REST = "compare both from rest with --start rest"
 THERMAL_VOLTAGE = 0.025852
 
 
@@ -88,6 +90,8 @@ def compare(converter: str, params: dict | None = None, *, periods: int | None =
         if start == "steady":
             orbit = steady_state(model, p, make_method(model, p, "lcp", h, theta=theta), tol=1e-7,
                                  rounding_bound=ROUNDING_RESOLVED)
+            # ngspice started on an orbit neither simulator settles on stays near it for a while and agrees with it
+            require_stable(model, p, orbit, START_REST)
             x_star, rho = orbit.x0, orbit.spectral_radius
         lcp = run_converter(model, p, h=h, theta=theta, periods=periods, x0=x_star)
     window_start = (periods - window) * T

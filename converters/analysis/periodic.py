@@ -34,6 +34,32 @@ from .floquet import multipliers_of, spectral_radius
 if TYPE_CHECKING:
     from ..methods.base import Method, PeriodMap
 
+#: Where a circuit goes from an unstable orbit when its leading multiplier is not known (a batched sweep keeps the
+#: spectral radius only).
+ELSEWHERE = "a period-doubled or quasi-periodic orbit, chaos, or a latch"
+
+
+def instability(multipliers, period: float) -> str:
+    """Why an orbit with these Floquet multipliers (its period ``period`` s) is no steady state, '' when it is
+    stable: its spectral radius, the leading multiplier and what leaving the unit circle there means. A real
+    multiplier below -1 doubles the period (or leads to chaos); a complex pair (a Neimark-Sacker bifurcation) adds
+    an oscillation at |arg mu| / (2 pi T), modulo the switching frequency (an input filter's resonance under a
+    regulating loop); one above +1 leaves for another orbit, a latch or a runaway."""
+    mu = np.asarray(multipliers, dtype=complex)
+    if mu.size == 0 or np.abs(mu).max() < 1.0:
+        return ""
+    lead = mu[np.argmax(np.abs(mu))]
+    if abs(lead.imag) > 1e-9 * abs(lead):
+        hz = abs(np.angle(lead)) / (2 * np.pi * period)
+        where = (f"a complex pair: an oscillation about it at about {hz:.3g} Hz, modulo the switching frequency: "
+                 "a quasi-periodic orbit")
+        at = f"{lead.real:.6g}{lead.imag:+.3g}j"
+    else:
+        where = "a period-doubled orbit, or chaos" if lead.real < 0 else "another orbit, a latch, or a runaway"
+        at = f"{lead.real:.6g}"
+    return (f"unstable (Floquet spectral radius {abs(lead):.6g}, a multiplier at {at}): the circuit does not settle "
+            f"on it ({where})")
+
 
 class NewtonMap(Protocol):
     """What Newton shooting calls and reads of a period map: a :class:`~converters.methods.base.PeriodMap`, or a

@@ -65,8 +65,9 @@ def unstable(spectral_radius: float) -> str:
     judgement as ``simulate --steady``'s."""
     if spectral_radius < 1.0:
         return ""
+    from ..analysis.periodic import ELSEWHERE
     return (f"unstable orbit (Floquet spectral radius {spectral_radius:.6g}): the circuit does not settle on it "
-            "(a period-doubled orbit, or chaos)")
+            f"({ELSEWHERE})")
 
 
 def diverging(run: Trajectory, T: float) -> str:

@@ -281,3 +281,18 @@ def test_an_orbit_newton_jumps_to_stands_only_where_the_settled_transient_return
     assert lost.converged and lost.x0[0] == pytest.approx(-4e6)
     assert "did not return to it: the circuit may settle elsewhere" in lost.warning
     assert lost.summary()["warning"] == lost.warning
+
+
+@pytest.mark.parametrize("multipliers, says", [
+    ([-2.00834, 0.3], "a multiplier at -2.00834): the circuit does not settle on it (a period-doubled orbit, or chaos)"),
+    ([1.2, 0.5], "a multiplier at 1.2): the circuit does not settle on it (another orbit, a latch, or a runaway)"),
+    ([0.957132 + 0.298j, 0.957132 - 0.298j], "a multiplier at 0.957132+0.298j): the circuit does not settle on it (a "
+     "complex pair: an oscillation about it at about 4.8e+03 Hz, modulo the switching frequency")])
+def test_an_unstable_orbit_is_named_by_where_its_leading_multiplier_leaves_the_unit_circle(multipliers, says):
+    """A complex pair at r e^(i theta) adds an oscillation of theta / (2 pi T) (here 0.30183 rad at 100 kHz: 4804 Hz,
+    a type II buck's loop against its input filter's resonance); the stepper's refusal had said "a period-doubled
+    orbit, or chaos" for every multiplier."""
+    from converters.analysis.periodic import instability
+    why = instability(np.array(multipliers), 1e-5)
+    assert says in why and why.startswith(f"unstable (Floquet spectral radius {abs(multipliers[0]):.6g}")
+    assert instability(np.array([0.999, -0.5]), 1e-5) == ""

@@ -312,3 +312,46 @@ def test_compare_runs_ngspice_finer_where_its_modes_or_ripple_fail_though_its_me
     assert result["metrics"]["mode_agreement"] == 1.0
     assert result["metrics"]["v(x,n)_ripple_rel_error"] < 0.02
     assert any(n.startswith("ngspice at TMAX = 0.00125 T, RELTOL 0.0001") for n in result["notes"])
+
+
+FILTERED_BUCK = """Type II voltage-mode buck behind a lightly damped LC input filter
+.param Vs=12 Lf=100u rLf=0.05 Cf=10u L=100u C=100u Resr=0.2 R=10 f_sw=100k
+.param Vref=5 Aol=1e5 Ri=10k Rz=20k Cz=15n Cp=270p
+.param T={1/f_sw} e={1e-6/f_sw}
+Vs src 0 DC {Vs}
+Lf src lfr {Lf}
+RLf lfr in {rLf}
+Cf in 0 {Cf}
+S1 in sw vcon ramp SWMOD
+D1 0 sw DMOD
+L1 sw out {L}
+C1 out ce {C}
+Resr ce 0 {Resr}
+R1 out 0 {R}
+R2 out fb {Ri}
+C2 vcon nz {Cz}
+R4 nz fb {Rz}
+C4 vcon fb {Cp}
+Vr ref 0 DC {Vref}
+E1 vcon 0 ref fb {Aol}
+Vramp ramp 0 PULSE(0 1 0 {T - 2*e} {e} {e} {T})
+.model SWMOD SW(VT=0)
+.model DMOD D
+.tran {T/500} {2000*T} 0 {T/2000} UIC
+.end
+"""
+
+
+@pytest.mark.slow
+def test_compare_refuses_an_orbit_the_circuit_does_not_settle_on(tmp_path, capsys):
+    """A type II buck whose loop's negative input resistance (-12.5 ohm) undamps its input filter (Z0 3.16 ohm,
+    Middlebrook): its orbit's multipliers 0.957 +- 0.298j lie outside the unit circle (radius 1.00249), and from rest
+    it oscillates at ~4.8 kHz about it (v(in) 6.9 to 14.6 V after 4000 periods; the orbit's ripple 0.057 V, the
+    circuit's 0.27 V). compare had PASSed (mean 4.2e-6, ripple 7.4e-4): ngspice, not settled from its own start,
+    was compared from pcsuite's orbit and stayed near it. It refuses as simulate --steady does."""
+    path = tmp_path / "filtered.cir"
+    path.write_text(FILTERED_BUCK)
+    code, out, err = run_cli(capsys, "compare", path, "--json")
+    assert code == 2 and out == "" and len(err.strip().splitlines()) == 1
+    assert "is unstable (Floquet spectral radius 1.00249" in err and "a multiplier at 0.957" in err
+    assert "an oscillation about it at about 4.81e+03 Hz" in err and "--start rest" in err

@@ -83,7 +83,7 @@ def run(args) -> int:
     fmax = None if args.fmax is None else parse_value("--fmax", args.fmax)
     start = time.perf_counter()
     small = SmallSignalModel(model, params, input=name, outputs=(output,))
-    stability = orbit_stability("frequency responses", model.key, small.orbit.multipliers, args.unstable,
+    stability = orbit_stability("frequency responses", model.key, small.orbit.multipliers, small.T, args.unstable,
                                 small.orbit.warning)
     model_s = time.perf_counter() - start
     start = time.perf_counter()
@@ -207,7 +207,7 @@ def _design(args, model, params: dict) -> int:
     fmin = None if args.fmin is None else parse_value("--fmin", args.fmin)
     fmax = None if args.fmax is None else parse_value("--fmax", args.fmax)
     response, found = loop_gain(model, closed, fmin=fmin, fmax=fmax, points=args.points)
-    stability = orbit_stability("loop gain", model.key, response.multipliers, args.unstable)
+    stability = orbit_stability("loop gain", model.key, response.multipliers, model.period(p), args.unstable)
     plant = SmallSignalModel(model.converter, {**model.plant(p), "D": design.duty}, input="D")
     f = frequencies(plant.T, fmin, fmax, args.points)
     before = FrequencyResponse(f, plant.response(f) / (p["VU"] - p["VL"]), "D", "vout", "loop gain", plant.T,

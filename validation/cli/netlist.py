@@ -33,8 +33,8 @@ def run(args) -> int:
     from ..spice import check_spice_memory
     if args.out is not None and args.out.suffix.lower() not in (".cir", ".sp", ".net"):
         raise ParameterError(f"--out must end in .cir, .sp or .net; got {str(args.out)!r}")
-    from converters.models import is_netlist
-    if is_netlist(args.converter) and args.control != "pwm":
+    from converters.models import DEFAULT_CONTROL, is_netlist
+    if is_netlist(args.converter) and args.control != DEFAULT_CONTROL:
         raise ParameterError(f"--control applies to the built-in converters; a netlist states its own drives (got "
                              f"--control {args.control} with {str(args.converter)!r})")
     model = get_model(args.converter, args.control)

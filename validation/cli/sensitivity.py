@@ -49,7 +49,8 @@ def run(args) -> int:
     params = parse_assignments(args.params)
     found = sensitivities(model, params, metric=args.metric, parameters=args.param)
     summary = {"converter": model.key, **found.as_dict(),
-               **orbit_stability("sensitivities", model.key, found.multipliers, args.unstable,
+               **orbit_stability("sensitivities", model.key, found.multipliers, model.period(model.resolve(params)),
+                                  args.unstable,
                                   found.orbit_warning)}
     checks = {}
     if args.check:
