@@ -24,7 +24,7 @@ from typing import Any, cast
 import numpy as np
 import numpy.typing as npt
 
-from .analysis.periodic import PeriodicOrbit, require, shoot
+from .analysis.periodic import SIMULATE_REMEDY, PeriodicOrbit, require, shoot
 from .errors import ParameterError, ResourceError, SimulationError
 from .limits import max_memory
 from .methods.base import DEFAULT_METHOD, Method, PeriodMap, get_method
@@ -329,16 +329,18 @@ def _simulate_phases(model: Model, p: dict, method: Method, t_end: float, x0: np
 
 def steady_state(model: Model, p: dict, method: Method, *, x0: npt.NDArray[np.float64] | None = None,
                  warm_up: int = WARM_UP_PERIODS, tol: float = 1e-10, periods: int = 1,
-                 rounding_bound: float = 0.0) -> PeriodicOrbit:
-    """The method's own periodic orbit of ``model`` at ``p`` (raises SimulationError when Newton fails; with
-    ``rounding_bound``, an orbit rounding resolves to it serves: :func:`.analysis.periodic.require`)."""
+                 rounding_bound: float = 0.0, remedy: str = SIMULATE_REMEDY) -> PeriodicOrbit:
+    """The method's own periodic orbit of ``model`` at ``p`` (raises SimulationError when Newton fails, offering
+    ``remedy``; with ``rounding_bound``, an orbit rounding resolves to it serves:
+    :func:`.analysis.periodic.require`)."""
     return _orbit_and_map(model, p, method, x0=x0, warm_up=warm_up, tol=tol, periods=periods,
-                          rounding_bound=rounding_bound)[0]
+                          rounding_bound=rounding_bound, remedy=remedy)[0]
 
 
 def _orbit_and_map(model: Model, p: dict, method: Method, *, x0: npt.NDArray[np.float64] | None = None,
                    warm_up: int = WARM_UP_PERIODS, tol: float = 1e-10, periods: int = 1,
-                   rounding_bound: float = 0.0, explain: str = "") -> tuple[PeriodicOrbit, PeriodMap]:
+                   rounding_bound: float = 0.0, explain: str = "",
+                   remedy: str = SIMULATE_REMEDY) -> tuple[PeriodicOrbit, PeriodMap]:
     """(orbit, period map): :func:`steady_state` and the map it shot on (its step plan, for the stepper,
     serves the run on the orbit too: :func:`_on_orbit`). Every orbit goes through here, so a step (no steady
     state: its problem over one period would be the circuit before the step) is refused here for all of them."""
@@ -346,7 +348,7 @@ def _orbit_and_map(model: Model, p: dict, method: Method, *, x0: npt.NDArray[np.
     problem = model.problem(p, periods * model.period(p), x0)
     period_map = method.period_map(problem)
     orbit = shoot(problem, method, problem.x0, periods=periods, warm_up=warm_up, tol=tol, period_map=period_map)
-    return require(orbit, f"the periodic orbit of {model.key}", rounding_bound, explain), period_map
+    return require(orbit, f"the periodic orbit of {model.key}", rounding_bound, explain, remedy), period_map
 
 
 def _on_orbit(model: Model, p: dict, method: Method, period_map: PeriodMap, x0: npt.NDArray[np.float64],

@@ -98,7 +98,8 @@ def compare_circuit(circuit, params: dict | None = None, *, h=None, spice_option
     x0 = None
     rho = None
     if start == "steady":
-        orbit = steady_state(circuit, p, make_method(circuit, p, "lcp", h), tol=1e-9, rounding_bound=ROUNDING_RESOLVED)
+        orbit = steady_state(circuit, p, make_method(circuit, p, "lcp", h), tol=1e-9, rounding_bound=ROUNDING_RESOLVED,
+                             remedy=START_REST)
         # ngspice started on an orbit neither simulator settles on stays near it for a while and agrees with it
         require_stable(circuit, p, orbit, START_REST)
         x0, rho = orbit.x0, orbit.spectral_radius

@@ -27,7 +27,7 @@ from .modes import period_sequences
 from .spice import run_spice, spice_trajectory
 
 EDGE_GUARD_T = 1e-2
-#: What compare runs in place of a comparison on an unstable orbit.
+#: What compare runs in place of a comparison on an orbit it cannot take (unstable, or not found).
 START_REST = "compare both from rest with --start rest"
 THERMAL_VOLTAGE = 0.025852
 
@@ -89,7 +89,7 @@ def compare(converter: str, params: dict | None = None, *, periods: int | None =
     else:
         if start == "steady":
             orbit = steady_state(model, p, make_method(model, p, "lcp", h, theta=theta), tol=1e-7,
-                                 rounding_bound=ROUNDING_RESOLVED)
+                                 rounding_bound=ROUNDING_RESOLVED, remedy=START_REST)
             # ngspice started on an orbit neither simulator settles on stays near it for a while and agrees with it
             require_stable(model, p, orbit, START_REST)
             x_star, rho = orbit.x0, orbit.spectral_radius

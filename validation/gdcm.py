@@ -139,6 +139,7 @@ def circuit_check(path, params: dict | None = None, *, h=None) -> dict:
     from dataclasses import replace
 
     from converters.models import get_model
+    from converters.analysis.periodic import ANALYSIS_REMEDY
     from converters.run import make_method, steady_state
     from converters.simulate import simulate
     from netlists.circuit import circuit_netlist, file_spice_options
@@ -151,7 +152,7 @@ def circuit_check(path, params: dict | None = None, *, h=None) -> dict:
                              "it switches itself)")
     T = circuit.period(p)
     method = make_method(circuit, p, "lcp", h)
-    orbit = steady_state(circuit, p, method, tol=1e-9)
+    orbit = steady_state(circuit, p, method, tol=1e-9, remedy=ANALYSIS_REMEDY)
     lcp = replace(simulate(circuit.problem(p, T, x0=orbit.x0), method), labels=circuit.labels(p))
     span = SPICE_PERIODS * T
     netlist, run, notes = run_spice_retrying(lambda o: circuit_netlist(circuit, p, span, o, x0=orbit.x0),

@@ -336,12 +336,18 @@ def resolved(orbit: PeriodicOrbit, bound: float = ROUNDING_RESOLVED) -> bool:
     return orbit.converged or (orbit.message.startswith(ROUNDING_LIMITED) and orbit.distance <= bound)
 
 
+#: What simulate offers where Newton does not find the orbit.
+SIMULATE_REMEDY = "try a looser --steady-tol, or --periods N without --steady to see the transient"
+#: What an analysis about the orbit (bode, sensitivity, gdcm), which has no tolerance to loosen, offers.
+ANALYSIS_REMEDY = "see where the circuit goes with pcsuite simulate --periods N"
+
+
 def require(orbit: PeriodicOrbit, what: str = "the periodic orbit", rounding_bound: float = 0.0,
-            explain: str = "") -> PeriodicOrbit:
+            explain: str = "", remedy: str = SIMULATE_REMEDY) -> PeriodicOrbit:
     """The orbit when converged (or, with ``rounding_bound``, resolved to it as far as rounding goes); otherwise a
-    SimulationError with the reason (``explain`` after it) and a remedy."""
+    SimulationError with the reason (``explain`` after it) and ``remedy``: what the command asking can run
+    instead (compare has no --steady-tol)."""
     if not resolved(orbit, rounding_bound):
         taken = (f" (an orbit rounding resolves to {rounding_bound:.3g} is taken)" if rounding_bound > 0.0 else "")
-        raise SimulationError(f"Newton shooting did not find {what}: {orbit.message}{explain or taken}; try a looser "
-                              "--steady-tol, or --periods N without --steady to see the transient")
+        raise SimulationError(f"Newton shooting did not find {what}: {orbit.message}{explain or taken}; {remedy}")
     return orbit

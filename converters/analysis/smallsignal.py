@@ -151,7 +151,7 @@ class SmallSignalModel:
     def __init__(self, model: Model | str, params: dict | None = None, *, input: str,
                  outputs: Iterable[str] = ("vout",), tol: float = 1e-9, orbit: PeriodicOrbit | None = None):
         from ..methods import EventDriven
-        from .periodic import require, shoot
+        from .periodic import ANALYSIS_REMEDY, require, shoot
         if isinstance(model, str):
             from ..models import get_model
             model = get_model(model)
@@ -174,7 +174,8 @@ class SmallSignalModel:
             raise ParameterError(f"{model.key} switches on {len(problem.switching.channels)} comparators: the "
                                  "small-signal model is built for one comparator or a schedule")
         if orbit is None:
-            orbit = require(shoot(problem, method, problem.x0, tol=tol), f"the periodic orbit of {model.key}")
+            orbit = require(shoot(problem, method, problem.x0, tol=tol), f"the periodic orbit of {model.key}",
+                            remedy=ANALYSIS_REMEDY)
         self.orbit = orbit
         problem = model.problem(p, T, orbit.x0)
         self.n = problem.n
@@ -723,12 +724,13 @@ def steady_mean(model: Model, params: dict | None = None, output: str = "vout", 
     """The mean of an output over the exact periodic orbit (Newton shooting on the event method's map to ``tol``):
     what a finite difference of the steady state reads."""
     from ..methods import EventDriven
-    from .periodic import require, shoot
+    from .periodic import ANALYSIS_REMEDY, require, shoot
     p = model.resolve(params)
     T = model.period(p)
     method = EventDriven()
     problem = model.problem(p, T)
-    orbit = require(shoot(problem, method, problem.x0, tol=tol), f"the periodic orbit of {model.key}")
+    orbit = require(shoot(problem, method, problem.x0, tol=tol), f"the periodic orbit of {model.key}",
+                    remedy=ANALYSIS_REMEDY)
     return _orbit_mean(method.engine(model.problem(p, T, orbit.x0)), orbit.x0, model, p, output)
 
 

@@ -42,7 +42,7 @@ def run(args) -> int:
     x0 = None
     if args.steady:
         check_steady(model, p)
-        x0 = steady_state(model, p, make_method(model, p, "lcp")).x0
+        x0 = steady_state(model, p, make_method(model, p, "lcp"), remedy="write it from rest without --steady").x0
     t_end = duration(model, p, args.t_end)
     if model.periodic(p) and t_end < model.period(p):
         raise ParameterError(f"t_end must be at least one switching period ({model.period(p):.3g} s): the netlist's "
