@@ -368,9 +368,16 @@ def run_spice_retrying(build, options=None):
         try:
             return netlist, run_spice(netlist), notes
         except SpiceError as error:
-            if "timestep too small" not in str(error).lower() or attempt == TMAX_RETRIES:
+            if "timestep too small" not in str(error).lower():
                 raise
             reason = str(error).split(': ', 1)[-1]
+            if attempt == TMAX_RETRIES:
+                raise SpiceError(f"{error}, after {len(notes)} runs more (ABSTOL {options.abstol:g} A, diode CJO "
+                                 f"{options.diode_cjo:g} F, TMAX down to {options.tmax_fraction:g} T): ngspice's "
+                                 "near-ideal devices do not converge on this circuit at RELTOL "
+                                 f"{options.reltol:g}; compare and simulate take a looser --spice-reltol (1e-2 ran an "
+                                 "LLC's output bridge behind an ideal transformer) and --spice-method gear or trap"
+                                 ) from None
             if not fallback:
                 fallback = True
                 notes.append(f"ngspice stopped ({reason}); run again with ABSTOL {CONVERGENCE_FALLBACK['abstol']:g} A, "
