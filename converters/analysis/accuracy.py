@@ -705,11 +705,13 @@ def _orbit_runs(model: Model, p: dict, method: Method, x_guess: npt.NDArray[np.f
     """One period on the method's periodic orbit, and for the stepper also on its orbit at 2h (None for the
     event method, exact), with the order of the stepper's error; or a string saying which orbit was not found."""
     from ..simulate import simulate
-    from .periodic import resolved, shoot        # resolved: an orbit rounding stops short of 1e-8 serves here
+    from .periodic import ROUNDING_RESOLVED, resolved, shoot    # an orbit rounding stops short of 1e-8 serves
     T = model.period(p)
     orbit = shoot(model.problem(p, T, x_guess), method, x_guess, tol=1e-8, polish=True)
     if not resolved(orbit):
-        return f"the method's periodic orbit was not found ({orbit.message})"
+        # its tolerance is the check's, not the run's: a run at --steady-tol 1e-4 read "> tol 1e-08" as its own
+        return (f"the check's own orbit (Newton from the run's end to 1e-8, or to {ROUNDING_RESOLVED:g} where rounding "
+                f"stops it) was not found ({orbit.message})")
 
     def run(m: Method, x0: npt.NDArray[np.float64]) -> Trajectory:
         return replace(simulate(model.problem(p, T, x0), m), labels=model.labels(p))
