@@ -89,10 +89,13 @@ def test_a_run_whose_steps_exceed_the_memory_limit_is_kept_at_an_output_spacing_
 @pytest.mark.slow
 def test_a_60_ms_sliding_mode_run_at_the_default_step_writes_its_waveform_within_the_default_limit(tmp_path):
     """The issue's run: 15 M steps of 4 ns had been refused at 8.4 GiB. It writes its waveform at the output spacing,
-    within the default 4 GiB (its peak measured in its own process)."""
+    within the default 4 GiB: its peak, VmHWM of its own program, is 1.37 GB (2.43 GB while the CSV was built whole
+    as text and as bytes), held under 2 GiB. ru_maxrss is not that: Linux carries the forked test process's resident
+    set (4.8 GB late in a full run) into the child's across exec."""
     out = tmp_path / "f.csv"
-    script = ("import resource, sys\nfrom validation.cli import main\ncode = main(sys.argv[1:])\n"
-              "print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, file=sys.stderr)\nsys.exit(code)\n")
+    script = ("import sys\nfrom validation.cli import main\ncode = main(sys.argv[1:])\n"
+              "print([line.split()[1] for line in open('/proc/self/status') if line.startswith('VmHWM')][0], "
+              "file=sys.stderr)\nsys.exit(code)\n")
     env = {k: v for k, v in os.environ.items() if k != "PCSUITE_MAX_MEMORY"}
     args = [sys.executable, "-c", script, "simulate", "boost", "--control", "smc",
             *[f"-p{k}={v}" for k, v in SMC.items()], "--t-end", "0.06", "--out", str(out), "--json"]
@@ -100,7 +103,7 @@ def test_a_60_ms_sliding_mode_run_at_the_default_step_writes_its_waveform_within
     assert done.returncode == 0, done.stderr[-2000:]
     summary = json.loads(done.stdout)
     peak_kib = int(done.stderr.strip().splitlines()[-1])
-    assert summary["steps"] == 15_000_000 and peak_kib * 1024 < 4 << 30
+    assert summary["steps"] == 15_000_000 and peak_kib * 1024 < 2 << 30
     meta = json.loads((tmp_path / "f.csv.json").read_text())
     assert meta["output_step"] == summary["output_step"] and meta["resolved_from_s"] == summary["resolved_from_s"]
     import pandas as pd
