@@ -546,7 +546,7 @@ def test_report_twice_into_one_directory_replaces_the_first(tmp_path, capsys):
 @pytest.mark.slow
 def test_a_waveform_csv_streams_to_its_file_and_lands_with_its_sidecar(tmp_path):
     """A CSV had been built whole as text, then as bytes (2.4 times the file at the peak: a 60 ms sliding-mode
-    run's 577 MB of CSV took 4.6 GiB in CI); written 4,000 rows at a time it holds 0.23 of this 16 MB file (a
+    run's 577 MB of CSV peaked at 2.4 GB); written 4,000 rows at a time it holds 0.23 of this 16 MB file (a
     fixed few MB). The file is the text built whole, byte for byte."""
     import tracemalloc
 

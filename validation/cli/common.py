@@ -158,7 +158,7 @@ def write_frame(frame, path: Path, meta: dict | None = None) -> None:
     by :func:`column_units`) travel with it: in the
     Parquet schema's metadata (key ``pcsuite``), or in a JSON sidecar ``FILE.csv.json`` beside a CSV. A CSV
     streams to its file (:data:`CSV_CHUNK_ROWS`): built whole as text, then as bytes, a sliding-mode boost's 60 ms
-    (577 MB of CSV) had peaked at 2.4 GB here and 4.6 GiB in CI."""
+    (577 MB of CSV) had peaked at 2.4 GB; streamed, 1.4 GB."""
     from ..io import atomic_write_bytes, atomic_write_files, parquet_bytes
     meta = dict(meta or {})
     meta.setdefault("units", column_units(frame.columns))
