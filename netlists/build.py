@@ -13,7 +13,6 @@ inductor and diode currents. The diode model sets the accuracy floor (about 1 mV
 from __future__ import annotations
 
 import re
-
 from dataclasses import replace
 
 from converters.circuits.netlist import Pulse, Pwl
