@@ -22,6 +22,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from converters.analysis.periodic import ROUNDING_RESOLVED
+from converters.errors import ParameterError
 from converters.problems import Comparators, StateSwitching
 from converters.problems.switching import law_channels
 from converters.run import make_method, require_stable, run_converter, steady_state
@@ -51,6 +52,8 @@ class CircuitComparison:
     metrics: dict = field(default_factory=dict)
     rows: list = field(default_factory=list)
     notes: list = field(default_factory=list)
+    #: The outputs not compared: the circuit leaves them floating over part of the window (the notes say which)
+    unset: tuple = ()
 
     @property
     def converter(self) -> str:           # what the comparison plot titles
@@ -94,7 +97,6 @@ def compare_circuit(circuit, params: dict | None = None, *, h=None, spice_option
     periodic = circuit.periodic(p)
     start = start or ("steady" if periodic and not circuit.step_times(p) else "rest")      # a load step runs from rest
     if start == "steady" and not periodic:
-        from converters.errors import ParameterError
         raise ParameterError(f"--start steady needs a periodic circuit; {circuit.name} has no period (its sources "
                              "are DC): use --start rest")
     if periodic and circuit.step_times(p):        # the file's whole run, its window after the last step
@@ -118,6 +120,12 @@ def compare_circuit(circuit, params: dict | None = None, *, h=None, spice_option
     # a transient's modes are compared over the whole run: a diode conducts above a fraction of its peak over it (the
     # last window's peak can be a blocked diode's leakage, 1e-11 A, read as conduction)
     modes_from = t0 if periodic or oscillating else 0.0
+    # a node the circuit leaves floating has no value to compare: ngspice's is its leakages', pcsuite's the LCP's pick
+    floating = circuit.floating_shares(lcp, p, ["vout", *circuit.netlist.outputs], modes_from, span)
+    if "vout" in floating or circuit.output in floating:
+        raise ParameterError(f"compare: {circuit.name}'s output {circuit.floating_text(p, floating)} (the output "
+                             "compared is the first .meas vector)")
+    unset_note = [f"not compared: {circuit.floating_text(p, floating)}"] if floating else []
     _modes_by_current(lcp, circuit, p, modes_from)
     state = {"options": spice_options, "notes": []}
 
@@ -136,8 +144,8 @@ def compare_circuit(circuit, params: dict | None = None, *, h=None, spice_option
 
     spice, options, notes, spice_periods, settle, independent = settled(spice_options, spice_start)
     th = {**THRESHOLDS["circuit"], **(thresholds or {})}
-    result = CircuitComparison(circuit.name, p, lcp, spice, (t0, span))
-    result.notes += notes
+    result = CircuitComparison(circuit.name, p, lcp, spice, (t0, span), unset=tuple(floating))
+    result.notes += notes + unset_note
     if not periodic:
         if oscillating:
             return _self_oscillating(result, circuit, th)
@@ -165,8 +173,8 @@ def compare_circuit(circuit, params: dict | None = None, *, h=None, spice_option
                        f"{moved:.2g} (relative) from TMAX = {options.tmax_fraction:g} T, RELTOL {options.reltol:g}; "
                        "compared there")
         spice, options, spice_periods = spice_f, options_f, periods_f
-        result = CircuitComparison(circuit.name, p, lcp, spice, (t0, span))
-        result.notes += notes_f + refined
+        result = CircuitComparison(circuit.name, p, lcp, spice, (t0, span), unset=tuple(floating))
+        result.notes += notes_f + unset_note + refined
         _periodic(result, circuit, T, window, th, (settle_f, spice_periods, start, rho), independent)
     error = result.metrics[f"{circuit.output}_mean_rel_error"]
     if moved > 0.1 * error and not _passed(result, "mean_rel"):
@@ -253,6 +261,11 @@ def model_losses(circuit, p: dict, lcp, options, t0: float, t1: float) -> float 
     return abs(loss) / power if power > 0.0 else None
 
 
+def _compared(result: CircuitComparison, circuit) -> list[str]:
+    """The outputs compared: vout and each .meas vector, but those the circuit leaves floating."""
+    return [name for name in dict.fromkeys(["vout", *circuit.netlist.outputs]) if name not in result.unset]
+
+
 def _passed(result: CircuitComparison, check: str) -> bool:
     return next(ok for name, _, _, ok in result.rows if name == check)
 
@@ -265,7 +278,8 @@ def _periodic(result: CircuitComparison, circuit, T: float, window: int, th: dic
     settle, spice_periods, start, rho = settling
     lcp, spice, m = result.lcp, result.spice, result.metrics
     t0, span = result.window
-    outputs = list(dict.fromkeys(["vout", *[v for v in circuit.netlist.outputs if v != circuit.output]]))
+    outputs = [name for name in dict.fromkeys(["vout", *[v for v in circuit.netlist.outputs if v != circuit.output]])
+               if name not in result.unset]
     worst_mean, worst_ripple = 0.0, 0.0
     for name in outputs:
         mean_l, mean_s = lcp.mean(name, t0=t0, t1=span), spice.mean(name, t0=t0, t1=span)
@@ -318,7 +332,7 @@ def _transient(result: CircuitComparison, circuit, th: dict) -> CircuitCompariso
     result.window = (float(lcp.t[0]), float(lcp.t[-1]))            # what is compared: the whole run
     grid = np.linspace(lcp.t[0], lcp.t[-1], 20001)
     worst = 0.0
-    for name in dict.fromkeys(["vout", *circuit.netlist.outputs]):
+    for name in _compared(result, circuit):
         a = np.interp(grid, lcp.t, np.asarray(lcp.signal(name), dtype=float))
         b = np.interp(grid, spice.t, np.asarray(spice.signal(name), dtype=float))
         label = circuit.output if name == "vout" else name
@@ -388,7 +402,7 @@ def _self_oscillating(result: CircuitComparison, circuit, th: dict) -> CircuitCo
         cycle_rel = max(cycle_rel, float(abs(b / a - 1)))
     m["cycle_rel_error"] = cycle_rel
     worst_mean, worst_ripple = 0.0, 0.0
-    for name in dict.fromkeys(["vout", *circuit.netlist.outputs]):
+    for name in _compared(result, circuit):
         label = circuit.output if name == "vout" else name
         mean_l, mean_s = lcp.mean(name, t0=t0, t1=t1), spice.mean(name, t0=t0, t1=t1)
         scale = max(abs(mean_l), 1e-12)

@@ -116,6 +116,9 @@ class Compiled:
     #: The stored energy's weights, (capacitances (n_c,), inductance matrix (n_L, n_L)) in the states' order, for the
     #: energy balance (:func:`converters.analysis.accuracy.energy_balance`); () where not known (a batch's points).
     energy: tuple[_Array, ...] = ()
+    #: Per configuration, the node potentials nothing but diodes ties to the rest of the circuit (:meth:`_Compiler.
+    #: floating`): (what each signal does along them (S, m), what each diode's voltage does (k, m)), or None.
+    floating: tuple[tuple[_Array, _Array] | None, ...] = ()
 
     def signal_rows(self, row: int) -> tuple[_Array, ...]:
         """Signal ``row``'s maps stacked over the configurations: (Sx (configs, n), Su, s0, Ssin, Sgate), built once
@@ -512,6 +515,7 @@ class _Compiler:
         maps: list[_Maps]
         per_config_sinusoids: list[tuple[_Array, _Array]]
         configs, pair_currents, closed, maps, per_config_sinusoids = [], [], [], [], []
+        floats: list[tuple[_Array, _Array] | None] = []
         #: each configuration's (switch states, source levels, slopes, running): what :meth:`rerun` solves again
         self.built: list[tuple[dict[str, bool], dict[str, int], tuple[float, ...], tuple[bool, ...]]] = []
         for key in distinct:
@@ -524,6 +528,7 @@ class _Compiler:
             pair_currents.append(tuple(f == CURRENT for f in forms))
             closed.append(tuple(key[0]))
             maps.append(signals)
+            floats.append(self.floating(switch_state, levels))
         sines = [cast(Sin, self.sources[c - self.n - self.k].waveform) for c in self.sinusoid_columns()[0]]
         laws = [self.schedule(period, starts, [distinct.index(k) for k in keys_], bool(sines)) for keys_ in phase_keys]
         schedule = laws[0]
@@ -543,7 +548,8 @@ class _Compiler:
                         signal_names=self.signal_names(), signal_maps=tuple(maps),
                         period=period if periodic else math.inf, x0=self.initial_state(), units=self.units(),
                         inputs=inputs, gates=self.gate_waveforms(), phases=tuple(zip(phase_times, laws[1:])),
-                        invariants=self.invariants(state_names), notes=self.moved(state_names), energy=self.energy())
+                        invariants=self.invariants(state_names), notes=self.moved(state_names), energy=self.energy(),
+                        floating=tuple(floats))
 
     @staticmethod
     def schedule(period: float, starts: list[float], index: list[int], sines: bool) -> Schedule:
@@ -672,6 +678,7 @@ class _Compiler:
         maps: list[_Maps]
         index_of: list[int]
         pieces, configs, pair_currents, closed, maps, index_of = [], [], [], [], [], []
+        floats: list[tuple[_Array, _Array] | None] = []
         for index in range(2 ** m):
             on = [bool(index >> j & 1) for j in range(m)]
             state = {**fixed, **{leader.name: on[j] for j, (leader, _) in enumerate(leaders)},
@@ -688,6 +695,7 @@ class _Compiler:
             pair_currents.append(tuple(f == CURRENT for f in forms))
             closed.append(tuple(state[x.name] for x in self.switches))
             maps.append(signals)
+            floats.append(self.floating(state, {}))
             solution = self.network(state, {})[0]
             pieces.append([self.control(solution, leader) for leader, _ in leaders])
             for f, (j, _, scale) in followers.items():
@@ -721,7 +729,7 @@ class _Compiler:
                         signal_names=self.signal_names(), signal_maps=tuple(maps),
                         period=common_period(periods) if periods else math.inf, x0=self.initial_state(),
                         units=self.units(), gates=self.gate_waveforms(), invariants=self.invariants(state_names),
-                        notes=self.moved(state_names), energy=self.energy())
+                        notes=self.moved(state_names), energy=self.energy(), floating=tuple(floats))
 
     def period(self) -> float:
         """The common period of the PULSE sources (their least common multiple), inf without one."""
@@ -1003,6 +1011,42 @@ class _Compiler:
         config, signals, sinusoids = cast(_Lcs, self.lcs(solution, forms, switch_state, slopes, running))
         self.check_unique_ports(config, switch_state)
         return config, forms, signals, sinusoids
+
+    def floating(self, switch_state: dict[str, bool], levels: dict[str, int]) -> tuple[_Array, _Array] | None:
+        """The node potentials of this configuration that only its diodes tie to the rest of the circuit: shifts of
+        the network's unknowns (every diode a current port) that satisfy every equation and change no capacitor's
+        current and no inductor's voltage, so no state's derivative. A bridge rectifier's output while its four diodes
+        block, a two-switch forward's winding between its clamp diodes at zero current: there the circuit sets no
+        value to those nodes' potential (the LCP picks one of many; SPICE's comes from its leakages), and a conducting
+        diode whose voltage a shift moves pins it. (what each signal does along them (S, m), what each diode's
+        voltage does (k, m)), or None where there is none (a node behind an off diode and an inductor is set by the
+        inductor's current and is not one). Not for a batch's points, nor a network beyond LARGE_NETWORK."""
+        if not self.diodes or self.lead:
+            return None
+        network = _Network(self, switch_state, levels, [CURRENT] * len(self.diodes))
+        if network.size == 0 or network.size > LARGE_NETWORK or network.nullity() == 0:
+            return None
+        _, sv, vt = np.linalg.svd(network.G)          # the null space at :meth:`_Network.nullity`'s tolerance
+        shifts = vt[int(np.sum(sv > 1e-12 * max(np.abs(network.G).max(), 1.0))):].T
+        moving = [np.eye(network.size)[network.branch_of[e.name]] for e in self.capacitors]
+        for e in self.inductors:
+            row = np.zeros(network.size)
+            for node, sign in zip(e.nodes[:2], (1.0, -1.0)):
+                if network.idx(node) is not None:
+                    row[network.idx(node)] += sign
+            moving.append(row)
+        if moving:
+            shifts = shifts @ _null(np.array(moving) @ shifts)
+        if shifts.shape[1] == 0:
+            return None
+        along = copy.copy(network)             # the network's signal rows read along the shifts, not the inputs
+        along.Z = shifts
+        zero = np.zeros(shifts.shape[1])
+        along.unit = lambda column=None: zero    # type: ignore[method-assign]  # states, diode currents: unmoved
+        signals, ports = along.signal_rows(self.signal_names()), along.ports()
+        for a in (signals, ports):
+            a[np.abs(a) < 1e-9] = 0.0
+        return (signals, ports) if signals.any() else None
 
     def lcs(self, solution: _Network, forms: Sequence[str], switch_state: dict[str, bool],
             slopes: tuple[float, ...] = (), running: tuple[bool, ...] = ()) -> _Lcs | list[_Lcs]:

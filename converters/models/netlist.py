@@ -205,13 +205,89 @@ class Circuit(Model):
         held = {"invariants": [dict(i) for i in compiled.invariants]} if compiled.invariants else {}
         if compiled.notes:
             held["warnings"] = list(compiled.notes)
+        outputs = ["vout", *self.netlist.outputs]
         if self.periodic(p):
-            return {**super().summary(tr, p), **held}
+            out = super().summary(tr, p)
+            t1 = float(tr.t[-1])
+            floating = self.floating_warning(tr, p, outputs, t1 - out["window_periods"] * self.period(p), t1)
+            if floating:
+                held["warnings"] = [*held.get("warnings", []), floating]
+            return {**out, **held}
         t1 = float(tr.t[-1])
         t0 = t1 - self.WINDOW_FRACTION * (t1 - float(tr.t[0]))
+        floating = self.floating_warning(tr, p, outputs, t0, t1)
+        if floating:
+            held["warnings"] = [*held.get("warnings", []), floating]
         return {"vout_mean": tr.mean("vout", t0=t0, t1=t1), "window_s": [t0, t1],
                 "mode_fractions": tr.mode_fractions(None, t0=t0, t1=t1),
                 "measurements": tr.measurement_rows(t0=t0, t1=t1), **jump_losses(tr, t0, t1), **held}
+
+    def floating_mask(self, names: Sequence[str], samples: Samples, p: dict) -> np.ndarray:
+        """Where each signal of ``names`` is not set by the circuit (bool, (points, names)): in a configuration with
+        node potentials only diodes tie to the rest (:meth:`~converters.circuits.compile._Compiler.floating`), where
+        the diodes that conduct pin no shift of them that moves the signal."""
+        c = self.compiled(p)
+        out = np.zeros((len(samples.t), len(names)), dtype=bool)
+        weights = [_weights(self.output if name == "vout" else name, c.signal_names) for name in names]
+        if not any(f is not None for f in c.floating) or samples.u is None:      # an ngspice run's: its leakages set it
+            return out
+        rows = np.array([np.zeros(len(c.signal_names)) if w is None else w for w in weights])
+        # a diode pins the potentials where it carries current; one held at zero current (the event method's mode
+        # may hold a blocked diode at u = y = 0) pins them on one side only, and they are not set there
+        forms = np.asarray(c.pair_currents, dtype=bool)[np.asarray(samples.config, dtype=np.int64)]
+        current = np.where(forms, samples.u, samples.y)
+        conducting = current > 1e-9 * np.abs(current).max(initial=0.0)
+        config, k = np.asarray(samples.config, dtype=np.int64), conducting.shape[1]
+        if k + int(config.max(initial=0)).bit_length() < 63:     # one integer per (configuration, conducting diodes)
+            codes = (config << k) | (conducting.astype(np.int64) @ (np.int64(1) << np.arange(k, dtype=np.int64)))
+        else:
+            codes = np.unique(np.column_stack([config, conducting]), axis=0, return_inverse=True)[1].ravel()
+        _, first, inverse = np.unique(codes, return_index=True, return_inverse=True)
+        for j, at in enumerate(first):
+            floating = c.floating[config[at]]
+            if floating is not None:
+                out[inverse.ravel() == j] = (np.abs(rows @ floating[0] @ _pinned(floating[1], conducting[at]))
+                                             > 1e-9).any(axis=1)
+        return out
+
+    def floating_shares(self, tr: Trajectory, p: dict, names: Sequence[str], t0: float, t1: float) -> dict[str, float]:
+        """{name: the fraction of [t0, t1] it is not set by the circuit} for the signals of ``names`` that are not
+        (:meth:`floating_mask`; "vout" as the file's output)."""
+        if not any(f is not None for f in self.compiled(p).floating):
+            return {}
+        names = list(dict.fromkeys(names))
+        masks: dict[int, np.ndarray] = {}            # the integral reads each name's column at the same samples
+
+        def column(samples: Samples, i: int) -> np.ndarray:
+            if id(samples) not in masks:
+                masks[id(samples)] = self.floating_mask(names, samples, p)
+            return masks[id(samples)][:, i]
+        points = tr.integration_points(t0, t1)
+        shares = {name: tr.integral(lambda s, i=i: column(s, i), t0, t1, points) / (t1 - t0)
+                  for i, name in enumerate(names)}
+        return {name: share for name, share in shares.items() if share > 0}
+
+    def floating_text(self, p: dict, shares: dict[str, float]) -> str:
+        """What :meth:`floating_shares` found, in one line: how long, which nodes float and which diodes alone would
+        tie them, and what to do."""
+        c = self.compiled(p)
+        found = [f for f in c.floating if f is not None]       # in the file's order: nodes, then diodes
+        nodes = [n[2:-1] for i, n in enumerate(c.signal_names)
+                 if n.startswith("v(") and any(f[0][i].any() for f in found)]
+        diodes = [d.upper() for i, d in enumerate(c.pair_names) if any(f[1][i].any() for f in found)]
+        named = {self.output if name == "vout" else name: share for name, share in shares.items()}
+        floats = ", ".join(f"{name} ({100 * share:.3g} % of the time)" for name, share in named.items())
+        across = f" (v({nodes[0]},{nodes[1]}))" if len(nodes) > 1 else ""
+        return (f"{floats} {'is' if len(named) == 1 else 'are'} not set by the circuit: while "
+                f"{_and(diodes)} block, node{'s' if len(nodes) > 1 else ''} {', '.join(nodes)} float "
+                "(nothing else ties them to the rest), and pcsuite's value there is one of many the LCP could pick "
+                f"(SPICE's comes from its leakages); measure a voltage across the floating nodes{across}, or tie "
+                "them to a reference with a resistor")
+
+    def floating_warning(self, tr: Trajectory, p: dict, names: Sequence[str], t0: float, t1: float) -> str | None:
+        """:meth:`floating_text` of the signals of ``names`` not set over part of [t0, t1]; None where all are."""
+        shares = self.floating_shares(tr, p, names, t0, t1)
+        return self.floating_text(p, shares) if shares else None
 
     def summary_from(self, p: dict, t_start: float, t_end: float) -> float:
         if self.periodic(p):
@@ -370,6 +446,33 @@ class Circuit(Model):
 
     off_held_label = "off"
     turn_off_label = None
+
+
+def _weights(name: str, names: tuple[str, ...]) -> np.ndarray | None:
+    """Signal ``name`` as weights of the compiled signals ``names`` (a node pair's voltage: +1 and -1; ground: 0);
+    None for one that is not a combination of them ("switch")."""
+    if name in names:
+        return np.eye(len(names))[names.index(name)]
+    if name in ("v(0)", "v(gnd)"):
+        return np.zeros(len(names))
+    pair = _difference(name, names)
+    if pair is None:
+        return None
+    a, b = (_weights(v, names) for v in pair)
+    return None if a is None or b is None else a - b
+
+
+def _pinned(ports: np.ndarray, conducting: np.ndarray) -> np.ndarray:
+    """The floating shifts (columns) that the conducting diodes' voltages, held at 0, leave free."""
+    if not conducting.any():
+        return np.eye(ports.shape[1])
+    from scipy.linalg import null_space
+    return null_space(ports[conducting], rcond=1e-9)
+
+
+def _and(names: list[str]) -> str:
+    """'D1', 'D1 and D2', 'D1, D2 and D3'."""
+    return names[0] if len(names) == 1 else f"{', '.join(names[:-1])} and {names[-1]}"
 
 
 def _difference(name: str, names: tuple[str, ...]) -> tuple[str, ...] | None:
