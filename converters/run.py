@@ -24,7 +24,7 @@ from typing import Any, cast
 import numpy as np
 import numpy.typing as npt
 
-from .analysis.periodic import SIMULATE_REMEDY, PeriodicOrbit, instability, require, shoot
+from .analysis.periodic import ONE_MODE, SIMULATE_REMEDY, PeriodicOrbit, instability, require, resolved, shoot
 from .errors import ParameterError, ResourceError, SimulationError
 from .limits import max_memory
 from .methods.base import DEFAULT_METHOD, Method, PeriodMap, get_method
@@ -33,7 +33,7 @@ from .models import Model, check_h, get_model
 from .models.path import ParameterPath, check_no_step  # noqa: F401 (the API documents converters.run.ParameterPath)
 from .saveat import SaveAt
 from .simulate import simulate
-from .trajectory import ReturnCode, Trajectory, concatenate
+from .trajectory import ReturnCode, Trajectory, concatenate, signal_unit
 from .validate import check_flag, check_integer, parse_value
 
 #: Periods simulated from x0 before Newton shooting starts: none. With the exact Jacobian Newton starts from x0
@@ -347,7 +347,27 @@ def _orbit_and_map(model: Model, p: dict, method: Method, *, x0: npt.NDArray[np.
     problem = model.problem(p, periods * model.period(p), x0)
     period_map = method.period_map(problem)
     orbit = shoot(problem, method, problem.x0, periods=periods, warm_up=warm_up, tol=tol, period_map=period_map)
+    if not resolved(orbit, rounding_bound) and orbit.settled is not None:
+        explain += one_mode(model, p, method, orbit.settled)
     return require(orbit, f"the periodic orbit of {model.key}", rounding_bound, explain, remedy), period_map
+
+
+def one_mode(model: Model, p: dict, method: Method, x: npt.NDArray[np.float64]) -> str:
+    """Where a period from ``x`` (a transient's end) stays in one mode, what that means: no switch changes state,
+    so there is no switching orbit to find (a loop latched at duty 1 or 0: its control never crosses its ramp),
+    and the state that drifts most; else ''."""
+    try:
+        tr = run_converter(model, p, method=method, t_end=model.period(p), x0=x)
+    except (SimulationError, ParameterError):
+        return ""
+    fractions = tr.mode_fractions(1)
+    if len(fractions) != 1:
+        return ""
+    start, end = np.asarray(tr.x[0], dtype=float), np.asarray(tr.x[-1], dtype=float)
+    i = int(np.argmax(np.abs(end - start)))
+    unit = signal_unit(getattr(model, "signal_units", None) or {}, tr.state_names[i])
+    return (f"; where the transient ends, a whole period stays in one mode ({next(iter(fractions))}): {ONE_MODE}, "
+            f"and {tr.state_names[i]} drifts from {start[i]:.4g} to {end[i]:.4g} {unit} over the period")
 
 
 def _on_orbit(model: Model, p: dict, method: Method, period_map: PeriodMap, x0: npt.NDArray[np.float64],

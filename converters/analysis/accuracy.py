@@ -1137,6 +1137,10 @@ def window_check(model: Model, p: dict, method: Method, tr: Trajectory, summary:
         why = ("the run has not settled: use a longer --t-end" if (part.get("transient") or 0.0) >
                (part["discretization"] or 0.0) + (part.get("crossings") or 0.0) else
                "the step is too coarse: use a smaller --h")
+        modes = summary.get("mode_fractions") or {}
+        if why.startswith("the run has not settled") and len(modes) == 1:
+            from .periodic import ONE_MODE
+            why += f" (its last period stays in one mode, {next(iter(modes))}: {ONE_MODE}; it may stay there)"
         out["warning"] = (f"{worst} may be {part['error_estimate']:.1e} off (relative; more than {DEFAULT_RTOL:g}): "
                           f"{why}")
     return out

@@ -102,6 +102,9 @@ class PeriodicOrbit:
     warning : str
         What a converged orbit's caller should pass on: an orbit far from where Newton started that the transient
         was not seen to reach (:func:`shoot`), or empty.
+    settled : ndarray or None
+        Where Newton failed after settling rounds: the state the transient reached (the last round's end), which
+        says what the circuit does instead (a loop latched at duty 1); ``x0`` is then Newton's last iterate.
     """
 
     x0: np.ndarray
@@ -117,6 +120,7 @@ class PeriodicOrbit:
     message: str = ""
     transient: int = 0
     warning: str = ""
+    settled: np.ndarray | None = None
 
     @property
     def spectral_radius(self) -> float:
@@ -259,6 +263,8 @@ def shoot(problem: LCSProblem, method: Method, x_guess: npt.ArrayLike | None = N
             orbit = replace(remote, evaluations=period_map.evaluations)       # confirmed: Newton's own answer
         elif remote is None or retry.converged:
             orbit = replace(retry, transient=done, evaluations=period_map.evaluations)
+    if done and not orbit.converged:
+        orbit = replace(orbit, settled=x)
     if remote is not None and orbit is remote:
         return replace(remote, evaluations=period_map.evaluations, warning=(
             f"the orbit lies ~{periods_to_reach(remote, start, tol):.1g} periods of its slowest mode (multiplier "
@@ -336,6 +342,10 @@ def resolved(orbit: PeriodicOrbit, bound: float = ROUNDING_RESOLVED) -> bool:
     return orbit.converged or (orbit.message.startswith(ROUNDING_LIMITED) and orbit.distance <= bound)
 
 
+#: What a period that stays in one mode means where a switching orbit was asked for (:func:`converters.run.one_mode`,
+#: :func:`converters.analysis.accuracy.window_check`).
+ONE_MODE = ("no switch changes state, so there is no switching orbit there: a loop latched at duty 1 or 0, its "
+            "control beyond its ramp")
 #: What simulate offers where Newton does not find the orbit.
 SIMULATE_REMEDY = "try a looser --steady-tol, or --periods N without --steady to see the transient"
 #: What an analysis about the orbit (bode, sensitivity, gdcm), which has no tolerance to loosen, offers.
