@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
-from ..errors import ParameterError
+from ..errors import ParameterError, SimulationError
 
 if TYPE_CHECKING:
     from ..methods.base import Method
@@ -436,8 +436,13 @@ class ModelSweep:
                 # than shoot's own test, none fewer)
                 rows[index] = self.row(index, point)
                 continue
-            rows[index] = {"index": int(index), **{key: _number(v) for key, v in point.items()}, "status": "ok", "message": "", **orbit_row(model, p, run, self.metrics),
-                           "spectral_radius": rho, "iterations": int(iterations[k]),
+            try:
+                measured = orbit_row(model, p, run, self.metrics)
+            except SimulationError as exc:
+                rows[index] = failed_row(index, point, f"{type(exc).__name__}: {exc}", time.perf_counter() - clock)
+                continue
+            rows[index] = {"index": int(index), **{key: _number(v) for key, v in point.items()}, "status": "ok",
+                           "message": "", **measured, "spectral_radius": rho, "iterations": int(iterations[k]),
                            "orbit_distance": float(distances[k]), "wall_s": time.perf_counter() - clock}
 
 
@@ -477,6 +482,12 @@ def orbit_row(model: Model, p: dict, run: Trajectory, metrics: tuple = ()) -> di
     from .metrics import metric_value
     run = replace(run, labels=model.labels(p))
     t0, t1 = run.t[0], run.t[-1]
+    # a netlist's output the circuit leaves floating has no value to store (simulate warns of it, compare refuses it)
+    circuit = cast(Any, model)                # a Circuit's: built-in converters' outputs are states
+    shares = (circuit.floating_shares(run, p, ["vout"], float(t0), float(t1)) if hasattr(model, "floating_shares")
+              else {})
+    if shares:
+        raise SimulationError(f"no value to measure: {circuit.floating_text(p, shares)}")
     intervals = orbit_intervals(run)
     row = {"vout_mean": float(run.mean("vout", t0=t0, t1=t1)), "vout_ripple": float(run.ripple("vout", t0=t0, t1=t1)),
            "rms_state0": float(run.rms(run.state_names[0], t0=t0, t1=t1)), "mode": mode_class(intervals),

@@ -105,3 +105,21 @@ def test_compare_refuses_a_floating_output_before_running_ngspice(tmp_path, monk
     with pytest.raises(ParameterError, match=r"compare: bridge0.cir's output v\(p\) \(50 % of the time\) is not "
                                              r"set by the circuit: while D1, D2, D3 and D4 block, nodes p, n float"):
         compare_circuit(bridge_from_zero(tmp_path))
+
+
+@pytest.mark.parametrize("method", ["lcp", "event"])
+def test_a_sweep_point_whose_output_floats_is_failed(tmp_path, method):
+    """A sweep of the bridge read at v(p): every point failed with the reason (the batched stepper's path and the
+    event method's per-point path); read at v(p,n) every point is ok, below the source's 10 V peak."""
+    from converters.sweeps.ensemble import ModelSweep
+
+    points = [(0, {"R": 50.0}), (1, {"R": 100.0})]
+    for output, ok in (("v(p)", False), ("v(p,n)", True)):
+        bridge_from_zero(tmp_path, output)
+        rows = ModelSweep(str(tmp_path / "bridge0.cir"), method=method, steady=True).rows(points)
+        assert [row["status"] == "ok" for row in rows] == [ok, ok]
+        if not ok:
+            assert all("no value to measure: v(p) (50 % of the time) is not set by the circuit" in row["message"]
+                       for row in rows)
+        else:
+            assert all(0.0 < row["vout_mean"] < 10.0 for row in rows)

@@ -5,6 +5,7 @@ import sys
 import time
 
 from converters.errors import ParameterError, ResourceError
+from converters.trajectory import signal_unit
 
 from .common import add_params, add_spice_options, check_out, given_path, integer, json_text, method_options, write_frame
 
@@ -194,7 +195,11 @@ def _print(summary: dict, tr, args) -> None:
                         and not isinstance(v, dict) and k != "max_events")
     title = summary["converter"] + (f" --control {summary['control']}" if "control" in summary else "")
     line = f"{title} ({tr.method}): {summary['steps']} {unit} ({options}) in {summary['wall_s']:.3f} s; "
-    line += f"vout mean = {summary['vout_mean']:.9g} V"
+    # a netlist's vout is the file's output (its first .meas vector, v(out) or its first node): named, in its unit
+    model = getattr(tr.labels, "model", None)
+    output = getattr(model, "output", None)
+    unit = signal_unit(getattr(model, "signal_units", None) or {}, "vout")
+    line += f"vout{f' ({output})' if output else ''} mean = {summary['vout_mean']:.9g} {unit}"
     if "vref" in summary:
         line += f" (Vref {summary['vref']:g} V)"
     print(line)

@@ -53,7 +53,7 @@ def add(sub) -> None:
 
     METHODS = load_methods()
     circuits = [key for key, cls in METHODS.items() if "circuit" in cls.domains]
-    sw.add_argument("--method", default=DEFAULT_METHOD, choices=[*sweep_methods(), *circuits],
+    sw.add_argument("--method", default=DEFAULT_METHOD, choices=list(dict.fromkeys([*sweep_methods(), *circuits])),
                     help="lcp: the stepper, h = T/200 (default; batched); event: exact switching; spice: ngspice")
     sw.add_argument("--steady", action="store_true",
                     help="measure on the periodic orbit (lcp, event: Newton shooting; spice: started on the LCP's "
