@@ -348,7 +348,10 @@ def _orbit_and_map(model: Model, p: dict, method: Method, *, x0: npt.NDArray[np.
     period_map = method.period_map(problem)
     orbit = shoot(problem, method, problem.x0, periods=periods, warm_up=warm_up, tol=tol, period_map=period_map)
     if not resolved(orbit, rounding_bound) and orbit.settled is not None:
-        explain += one_mode(model, p, method, orbit.settled)
+        latched = one_mode(model, p, method, orbit.settled)
+        if latched and remedy == SIMULATE_REMEDY:         # no tolerance finds an orbit that is not there
+            remedy = "run --periods N without --steady to see where it goes"
+        explain += latched
     return require(orbit, f"the periodic orbit of {model.key}", rounding_bound, explain, remedy), period_map
 
 

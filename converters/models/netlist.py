@@ -229,8 +229,8 @@ class Circuit(Model):
         c = self.compiled(p)
         out = np.zeros((len(samples.t), len(names)), dtype=bool)
         weights = [_weights(self.output if name == "vout" else name, c.signal_names) for name in names]
-        if not any(f is not None for f in c.floating) or samples.u is None:      # an ngspice run's: its leakages set it
-            return out
+        if not any(f is not None for f in c.floating) or samples.u is None or samples.config is None:
+            return out                                  # (an ngspice run's: its leakages set it)
         rows = np.array([np.zeros(len(c.signal_names)) if w is None else w for w in weights])
         # a diode pins the potentials where it carries current; one held at zero current (the event method's mode
         # may hold a blocked diode at u = y = 0) pins them on one side only, and they are not set there

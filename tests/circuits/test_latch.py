@@ -43,5 +43,6 @@ def test_the_latched_transient_says_its_period_stays_in_one_mode(latched):
 def test_steady_says_where_the_transient_went(latched):
     """Newton's settling rounds (2,048 periods) end latched; the refusal says so (2 s)."""
     with pytest.raises(SimulationError, match=r"where the transient ends, a whole period stays in one mode \(S1\): "
-                                              r"no switch changes state, so there is no switching orbit there"):
+                                              r"no switch changes state, so there is no switching orbit there") as error:
         run_converter(latched, {}, steady=True)
+    assert str(error.value).endswith("; run --periods N without --steady to see where it goes")
