@@ -205,22 +205,19 @@ class Circuit(Model):
         held = {"invariants": [dict(i) for i in compiled.invariants]} if compiled.invariants else {}
         if compiled.notes:
             held["warnings"] = list(compiled.notes)
-        outputs = ["vout", *self.netlist.outputs]
+        t1 = float(tr.t[-1])
         if self.periodic(p):
             out = super().summary(tr, p)
-            t1 = float(tr.t[-1])
-            floating = self.floating_warning(tr, p, outputs, t1 - out["window_periods"] * self.period(p), t1)
-            if floating:
-                held["warnings"] = [*held.get("warnings", []), floating]
-            return {**out, **held}
-        t1 = float(tr.t[-1])
-        t0 = t1 - self.WINDOW_FRACTION * (t1 - float(tr.t[0]))
-        floating = self.floating_warning(tr, p, outputs, t0, t1)
+            t0 = t1 - out["window_periods"] * self.period(p)
+        else:
+            t0 = t1 - self.WINDOW_FRACTION * (t1 - float(tr.t[0]))
+            out = {"vout_mean": tr.mean("vout", t0=t0, t1=t1), "window_s": [t0, t1],
+                   "mode_fractions": tr.mode_fractions(None, t0=t0, t1=t1),
+                   "measurements": tr.measurement_rows(t0=t0, t1=t1), **jump_losses(tr, t0, t1)}
+        floating = self.floating_warning(tr, p, ["vout", *self.netlist.outputs], t0, t1)
         if floating:
             held["warnings"] = [*held.get("warnings", []), floating]
-        return {"vout_mean": tr.mean("vout", t0=t0, t1=t1), "window_s": [t0, t1],
-                "mode_fractions": tr.mode_fractions(None, t0=t0, t1=t1),
-                "measurements": tr.measurement_rows(t0=t0, t1=t1), **jump_losses(tr, t0, t1), **held}
+        return {**out, **held}
 
     def floating_mask(self, names: Sequence[str], samples: Samples, p: dict) -> np.ndarray:
         """Where each signal of ``names`` is not set by the circuit (bool, (points, names)): in a configuration with
@@ -228,9 +225,9 @@ class Circuit(Model):
         the diodes that conduct pin no shift of them that moves the signal."""
         c = self.compiled(p)
         out = np.zeros((len(samples.t), len(names)), dtype=bool)
-        weights = [_weights(self.output if name == "vout" else name, c.signal_names) for name in names]
         if not any(f is not None for f in c.floating) or samples.u is None or samples.config is None:
             return out                                  # (an ngspice run's: its leakages set it)
+        weights = [_weights(self.output if name == "vout" else name, c.signal_names) for name in names]
         rows = np.array([np.zeros(len(c.signal_names)) if w is None else w for w in weights])
         # a diode pins the potentials where it carries current; one held at zero current (the event method's mode
         # may hold a blocked diode at u = y = 0) pins them on one side only, and they are not set there
