@@ -268,11 +268,20 @@ class Circuit(Model):
         """What :meth:`floating_shares` found, in one line: how long, which nodes float and which diodes alone would
         tie them, and what to do."""
         c = self.compiled(p)
-        found = [f for f in c.floating if f is not None]       # in the file's order: nodes, then diodes
-        nodes = [n[2:-1] for i, n in enumerate(c.signal_names)
-                 if n.startswith("v(") and any(f[0][i].any() for f in found)]
-        diodes = [d.upper() for i, d in enumerate(c.pair_names) if any(f[1][i].any() for f in found)]
         named = {self.output if name == "vout" else name: share for name, share in shares.items()}
+        # per configuration, the shift that moves the named signals most (S^T w): the nodes and diodes it moves
+        # are the floating group behind them, not every group the circuit has
+        moved_nodes, moved_diodes = np.zeros(len(c.signal_names), bool), np.zeros(len(c.pair_names), bool)
+        for signals, ports in (f for f in c.floating if f is not None):
+            for name in named:
+                w = _weights(name, c.signal_names)
+                d = signals.T @ w if w is not None else np.zeros(signals.shape[1])
+                if np.abs(d).max(initial=0.0) > 1e-9:
+                    d = d / np.linalg.norm(d)
+                    moved_nodes |= np.abs(signals @ d) > 1e-9
+                    moved_diodes |= np.abs(ports @ d) > 1e-9
+        nodes = [n[2:-1] for i, n in enumerate(c.signal_names) if n.startswith("v(") and moved_nodes[i]]
+        diodes = [d.upper() for i, d in enumerate(c.pair_names) if moved_diodes[i]]
         floats = ", ".join(f"{name} ({100 * share:.3g} % of the time)" for name, share in named.items())
         across = f" (v({nodes[0]},{nodes[1]}))" if len(nodes) > 1 else ""
         return (f"{floats} {'is' if len(named) == 1 else 'are'} not set by the circuit: while "

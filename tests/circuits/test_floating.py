@@ -123,3 +123,27 @@ def test_a_sweep_point_whose_output_floats_is_failed(tmp_path, method):
                        for row in rows)
         else:
             assert all(0.0 < row["vout_mean"] < 10.0 for row in rows)
+
+
+def test_the_warning_names_the_floating_group_behind_the_output_only(tmp_path):
+    """Two bridges from PULSE(0 Vpk) sources in one file float as two groups at once: v(p) is named with its own
+    nodes p, n and diodes D1-D4, not the second bridge's p2, n2 and D5-D8 (the shift that moves v(p) most moves
+    those of its own group alone)."""
+    text = (NETLISTS / "bridge-rectifier.cir").read_text().replace("PULSE({-Vpk}", "PULSE(0")
+    text = text.replace(".meas tran vout_mean AVG v(p,n)", ".meas tran vout_mean AVG v(p)")
+    second = ("Vs2 b0 0 PULSE(0 {Vpk} {T/2 - e/2} {e} {e} {T/2 - e} {T})\nR02 b0 b {Rs}\nD5 b p2 DMOD\n"
+              "D6 0 p2 DMOD\nD7 n2 b DMOD\nD8 n2 0 DMOD\nC2 p2 n2 {C}\nR2 p2 n2 {R}\n.model DMOD D")
+    path = tmp_path / "two-bridges.cir"
+    path.write_text(text.replace(".model DMOD D", second))
+    circuit = Circuit.from_netlist(path)
+    p = circuit.resolve({})
+    T = circuit.period(p)
+    tr = run_converter(circuit, {}, steady=True, periods=1)
+    t1 = float(tr.t[-1])
+    both = circuit.floating_shares(tr, p, ["vout", "v(p2)"], t1 - T, t1)
+    assert both == pytest.approx({"vout": 0.5, "v(p2)": 0.5}, abs=2e-3)
+    assert circuit.floating_text(p, {"vout": both["vout"]}).startswith(
+        "v(p) (50 % of the time) is not set by the circuit: while D1, D2, D3 and D4 block, nodes p, n float")
+    assert circuit.floating_text(p, {"v(p2)": both["v(p2)"]}).startswith(
+        "v(p2) (50 % of the time) is not set by the circuit: while D5, D6, D7 and D8 block, nodes p2, n2 float")
+    assert "nodes p, n, p2, n2 float" in circuit.floating_text(p, both)
