@@ -44,6 +44,8 @@ from .validate import check_flag, check_integer, parse_value
 #: default: STEADY_PERIODS.
 WARM_UP_PERIODS = 0
 STEADY_PERIODS = 20
+#: The most steps an accuracy-on-request run writes by default (its periods at the step rtol chose).
+WRITTEN_STEPS = 1 << 20
 DEFAULT_PERIODS = 500
 #: Duration of a run of a model without a fixed period (s), when none is given.
 DEFAULT_AUTONOMOUS_T_END = 30e-3
@@ -277,10 +279,13 @@ def _accurate(model: Model, p: dict, rtol: float | str, start: float, *, method:
     T = model.period(p)
     span = duration(model, p, t_end, periods if (periods is not None or t_end is not None) else STEADY_PERIODS)
     if periods is None and t_end is None:
-        # the default periods at the step rtol chose, as many as the memory limit holds: the orbit's one period
-        # was run at that step, and a user who asked for none should not lose the answer to the periods after it
-        fits = [n for n in range(STEADY_PERIODS, 0, -1)
-                if result.method.memory_estimate(model.problem(p, n * T, result.orbit.x0)) <= max_memory()]
+        # the default periods at the step rtol chose, as many as the memory limit and WRITTEN_STEPS hold: the
+        # orbit's one period was run at that step, and a user who asked for none should not lose the answer to
+        # the periods after it, nor wait minutes for a file of them (a stiff snubber's trapezoid at 3.3e5 steps a
+        # period: 20 periods' CSV took 114 s)
+        per_period = T / result.method.step if result.method.step else 0.0
+        fits = [n for n in range(STEADY_PERIODS, 0, -1) if n * per_period <= WRITTEN_STEPS
+                and result.method.memory_estimate(model.problem(p, n * T, result.orbit.x0)) <= max_memory()]
         span = T * (fits[0] if fits else 1)
     tr = simulate(model.problem(p, span, result.orbit.x0), result.method)
     simulated = sum(run["periods"] for run in result.runs) + span / T     # every orbit's periods, then the span

@@ -22,7 +22,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from converters.analysis.periodic import ROUNDING_RESOLVED
-from converters.errors import ParameterError
+from converters.errors import ParameterError, ResourceError
 from converters.problems import Comparators, StateSwitching
 from converters.problems.switching import law_channels
 from converters.run import make_method, require_stable, run_converter, steady_state
@@ -162,10 +162,13 @@ def compare_circuit(circuit, params: dict | None = None, *, h=None, spice_option
         finer = replace(options, tmax_fraction=options.tmax_fraction / 4, reltol=max(options.reltol / 10, MIN_RELTOL))
         try:
             spice_f, options_f, notes_f, periods_f, settle_f, independent = settled(finer, spice_start)
-        except SpiceError as error:           # the comparison made stands; the note says it could not be refined
+        except (SpiceError, ResourceError) as error:
+            # the comparison made stands; the note says it could not be refined, and why: ngspice's message, or the
+            # limit the finer run would pass (its remedy is the user's options, which the refinement chose instead)
+            why = str(error).split(": ", 1)[-1]
             result.notes.append(f"ngspice at TMAX = {finer.tmax_fraction:g} T, RELTOL {finer.reltol:g} did not run "
-                                f"({str(error).split(': ', 1)[-1]}): compared at TMAX = {options.tmax_fraction:g} T, "
-                                f"RELTOL {options.reltol:g}")
+                                f"({why.split('; ')[0] if isinstance(error, ResourceError) else why}): compared at "
+                                f"TMAX = {options.tmax_fraction:g} T, RELTOL {options.reltol:g}")
             break
         before, after = spice.mean("vout", t0=t0, t1=span), spice_f.mean("vout", t0=t0, t1=span)
         moved = abs(after - before) / _scale(lcp, "vout", t0, span)

@@ -301,9 +301,10 @@ def circuit_trajectory(circuit, params: dict, netlist: Netlist, result: SpiceRes
             measured[f"i({e.name})"] = (nodes(e.nodes[0]) - nodes(e.nodes[1])) / e.value
     for name in compiled.signal_names:
         measured.setdefault(name, np.full_like(t, np.nan))
-    if circuit.output not in measured:
-        a, b = circuit.output[2:-1].split(",")
-        measured[circuit.output] = nodes(a.strip()) - nodes(b.strip())
+    for vector in circuit.signal_names:      # the output and each .meas vector that is a difference v(a,b)
+        if vector not in measured and vector.startswith("v(") and "," in vector:
+            a, b = vector[2:-1].split(",")
+            measured[vector] = nodes(a.strip()) - nodes(b.strip())
     measured["vout"] = measured[circuit.output]
     in_window = t >= window_start
     diodes = [d for d in compiled.pair_names if d != "none"]

@@ -17,7 +17,11 @@ input power; the efficiency, their ratio, is then within rtol: :func:`efficiency
   orbit starts from the previous one (one warm-up). Event instants are read inside the step, by extrapolating the
   pair's vanishing quantity (y before it is held, u before it is released) from the two steps before it
   (or, after a switching edge, back from the two after it); the mode fractions come from those instants
-  and the switching edges, not from the step grid.
+  and the switching edges, not from the step grid. Where a time constant far below the step makes the
+  refinement start with backward Euler and that step damps one of the circuit's resonances more than the
+  circuit does (a snubber's ring), its runs at N and 2N erase the ring alike and their estimates agree with
+  themselves: the refinement starts again with the trapezoid from the steps at which it does not ring on the
+  fastest mode, as far as the memory limit allows.
 * **Event-driven** (exact flows, events to rounding): taken when the stepper would need more than
   ``MAX_STEPS`` steps per period (the trade-off data: there the exact method is the cheaper; at 1e-8 and
   below). Its estimate is the orbit's Newton distance and the rounding of its period map, not Richardson; ripple
@@ -510,7 +514,9 @@ def accurate_steady(model: Model, p: dict, rtol: float, *, x0: npt.NDArray[np.fl
     history, best = None, None
     events: list            # (pair, kind, Estimate) of the stepper's runs; (pair, kind, time) of the event method's
     stopped = ""            # why the stepper's refinement stopped short of MAX_STEPS
-    while previous is not None and fine_n <= MAX_STEPS:
+    damped = ""             # why backward Euler's estimates cannot be trusted (:func:`_overdamped`)
+    most_n = MAX_STEPS
+    while previous is not None and fine_n <= most_n:
         fine_method = Theta(h=T / fine_n, theta=theta)
         try:
             orbit, tr = run(fine_method, previous[1].x0, 0)
@@ -538,16 +544,33 @@ def accurate_steady(model: Model, p: dict, rtol: float, *, x0: npt.NDArray[np.fl
         history = (fine_n, quantities, events)
         result = AccurateSteady(quantities, events, rtol, fine_method, fine_n, tr, orbit, True, runs=runs)
         worst = result.worst()
-        if worst <= target:
+        # backward Euler erasing a resonance the circuit keeps (a snubber's ring) does so at N and 2N alike: its
+        # estimates agree with themselves (a buck's 1 ohm, 10 pF snubbers: 9e-6 estimated, 6.6e-4 true)
+        damped = _overdamped(model, p, fine_method, remedy=False)
+        if worst <= target and not damped:
             return replace(result, wall_s=time.perf_counter() - clock)
         best = result
+        if damped and theta > THETA:
+            # the trapezoid from the steps at which it does not ring on the fastest mode damps nothing: the
+            # refinement starts again there (the same buck: 1.7e5 steps a period, 0.04 s each), as far as memory
+            # allows; the event method after it where it does not meet rtol
+            theta, coarse_n = THETA, _resolved_steps(model, p)
+            try:
+                orbit, tr = run(Theta(h=T / coarse_n, theta=theta), orbit.x0, 0)
+            except ResourceError as why:
+                stopped = f"the trapezoid at {coarse_n:,} steps a period cannot be run ({why})"
+                break
+            previous, history, fine_n = (measures(model, p, tr, T), orbit), None, 2 * coarse_n
+            most_n = max(MAX_STEPS, 4 * coarse_n)
+            differences.clear()
+            continue
         if floor > target:                       # rounding over the period's steps, amplified near rho = 1
             break
         # the next fine N from the estimates and the order (x 1.2, to land in one step); its coarse
         # run is this one when the ratio stays within MAX_RATIO, else a new one at half the step count
         growth = 1.2 * (worst / target) ** (1.0 / order) if math.isfinite(worst) else 2.0
         next_n = int(math.ceil(fine_n * min(max(growth, 2.0), MAX_GROWTH)))
-        if next_n > MAX_STEPS:
+        if next_n > most_n:
             break
         if next_n <= MAX_RATIO * fine_n:
             coarse_n, previous = fine_n, ((fine, fine_events), orbit)
@@ -571,9 +594,10 @@ def accurate_steady(model: Model, p: dict, rtol: float, *, x0: npt.NDArray[np.fl
         # a SIN source, a time constant the exact flows would cross in billions of substeps (a 1 mohm ESR beside
         # 10 pF: 3.3e-15 s), a limit reached, or no orbit found: the stepper's finest run is the answer, its
         # Richardson estimates stated and rtol said unmet
-        met = best.worst() <= rtol
+        met = best.worst() <= rtol and not damped
         message = "" if met else (f"the stepper's estimate at {best.steps_per_period:,} steps a period is "
-                                  f"{best.worst():.2g}, " + (f"{stopped}, " if stopped else "")
+                                  f"{best.worst():.2g}" + (f", not to be trusted: {damped}" if damped else "")
+                                  + "; " + (f"{stopped}; " if stopped else "")
                                   + f"and the exact event method does not take this circuit ({why})")
         return replace(best, met=met, message=message, wall_s=time.perf_counter() - clock)
     floor = _rounding(orbit, EVENT_SEGMENTS)
@@ -615,6 +639,14 @@ def accurate_steady(model: Model, p: dict, rtol: float, *, x0: npt.NDArray[np.fl
     return replace(result, met=met, message=message, wall_s=time.perf_counter() - clock)
 
 
+def _resolved_steps(model: Model, p: dict) -> int:
+    """The fewest steps per period at which the trapezoid does not ring on the circuit's fastest mode (its
+    amplification at z = -h rate above -RINGS: :func:`~converters.methods.theta.check_ringing`)."""
+    from ..methods.theta import RINGS
+    limit = 2.0 * (1.0 + RINGS) / (1.0 - RINGS)          # (1 - z/2) / (1 + z/2) = -RINGS at z = h rate = limit
+    return max(FIRST_STEPS, math.ceil(model.period(p) * model.fastest_rate(p) / limit))
+
+
 def _refinement_start(model: Model, p: dict) -> tuple[float, int]:
     """The stepper's theta for the whole refinement and its first steps per period: THETA (second order) from the
     first step count at which it does not ring on the circuit's fastest mode (the amplification -RINGS of
@@ -622,9 +654,7 @@ def _refinement_start(model: Model, p: dict) -> tuple[float, int]:
     refinement room, else backward Euler from FIRST_STEPS (L-stable, first order): theta 0.5 over a 3.3e-15 s node
     (1 mohm beside 10 pF, 3e7 time constants a step at T/100) had no step LCP solution, and --rtol fell to the event
     method, which refuses that time constant."""
-    from ..methods.theta import RINGS
-    limit = 2.0 * (1.0 + RINGS) / (1.0 - RINGS)          # (1 - z/2) / (1 + z/2) = -RINGS at z = h rate = limit
-    needed = math.ceil(model.period(p) * model.fastest_rate(p) / limit)
+    needed = _resolved_steps(model, p)
     if needed <= FIRST_STEPS:
         return THETA, FIRST_STEPS
     return (THETA, needed) if needed <= MAX_STEPS // FIRST_STEPS else (1.0, FIRST_STEPS)
@@ -1014,15 +1044,17 @@ def _unresolved_onset(model: Model, p: dict, fine: Trajectory) -> str:
     return ""
 
 
-def _overdamped(model: Model, p: dict, method: Any) -> str:     # (method: a Method; one with a theta has its step h)
+def _overdamped(model: Model, p: dict, method: Any, remedy: bool = True) -> str:  # (a Method; a theta's has h)
     """Why the estimate cannot be trusted where the step damps one of the circuit's resonances more than the
     circuit does (:func:`~converters.methods.theta.overdamped_resonance`): Richardson at h and 2h then compares two
-    runs that both erase the ring, and agrees with itself ('' when no resonance is)."""
+    runs that both erase the ring, and agrees with itself ('' when no resonance is); with ``remedy``, what to do
+    (a run that chose its own step, accuracy on request, takes the reason alone)."""
     theta = getattr(method, "theta", None)
     if theta is None or not hasattr(model, "problem"):
         return ""
     from ..methods.theta import overdamped_resonance, undamped_resonance
     configurations = model.problem(p, model.period(p)).configurations
+    stated = "the values and their estimates may be off by more than stated"
     if theta <= 0.5:
         # the trapezoid adds no damping, but a resonance no resistance damps rings on, its frequency off by
         # (omega h)^2 / 12 at h and 2h alike (a series resonant converter's Lr with the 100 pF across its switches:
@@ -1034,10 +1066,11 @@ def _overdamped(model: Model, p: dict, method: Any) -> str:     # (method: a Met
         shift = (2.0 * np.pi * frequency * method.h) ** 2 / 12.0
         if shift <= DEFAULT_RTOL:           # (a Cuk's 5 kHz input loop at T/1000: 8e-9)
             return ""
-        return (f"the circuit's {frequency:.3g} Hz resonance is undamped (no resistance in its loop), and the "
-                f"trapezoid (h = {method.h:.3g} s) shifts its ring's frequency by {shift:.1e} ((omega h)^2 / 12) at "
-                "h and 2h alike: the values and their estimates may be off by more than stated (a smaller --h "
-                "shrinks that error, no estimate sees it); use --method event (exact flows)")
+        reason = (f"the circuit's {frequency:.3g} Hz resonance is undamped (no resistance in its loop), and the "
+                  f"trapezoid (h = {method.h:.3g} s) shifts its ring's frequency by {shift:.1e} ((omega h)^2 / 12) at "
+                  "h and 2h alike")
+        return reason + (f": {stated} (a smaller --h shrinks that error, no estimate sees it); use --method event "
+                         "(exact flows)" if remedy else "")
     found = overdamped_resonance(configurations, method.h, theta)
     if found is None:
         # a resonance no resistance damps (no decay of its own to compare with): the step's damping of it over a
@@ -1051,13 +1084,14 @@ def _overdamped(model: Model, p: dict, method: Any) -> str:     # (method: a Met
         decay = -np.log(abs((1.0 + (1.0 - theta) * z) / (1.0 - theta * z))) * model.period(p) / method.h
         if not decay > DEFAULT_RTOL:
             return ""
-        return (f"the circuit's {frequency:.3g} Hz resonance is undamped (no resistance in its loop), and the step "
-                f"damps it by e^-{decay:.3g} a period (theta {theta:g}, h = {method.h:.3g} s): the values and their "
-                "estimates may be off by more than stated; use --method event (exact flows)")
+        reason = (f"the circuit's {frequency:.3g} Hz resonance is undamped (no resistance in its loop), and the step "
+                  f"damps it by e^-{decay:.3g} a period (theta {theta:g}, h = {method.h:.3g} s)")
+        return reason + (f": {stated}; use --method event (exact flows)" if remedy else "")
     frequency, q, ratio = found
-    return (f"the step damps the circuit's {frequency:.3g} Hz resonance (Q {q:.3g}) {ratio:.3g}x faster than the "
-            f"circuit does (theta {theta:g}, h = {method.h:.3g} s): the values and their estimates may be off by "
-            "more than stated; use a smaller --h, or --theta 0.5 where every time constant is resolved")
+    reason = (f"the step damps the circuit's {frequency:.3g} Hz resonance (Q {q:.3g}) {ratio:.3g}x faster than the "
+              f"circuit does (theta {theta:g}, h = {method.h:.3g} s)")
+    return reason + (f": {stated}; use a smaller --h, or --theta 0.5 where every time constant is resolved"
+                     if remedy else "")
 
 
 #: The measures of a run's summary that :func:`window_check` estimates (those the summary has).

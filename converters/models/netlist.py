@@ -60,9 +60,12 @@ class Circuit(Model):
         self.state_names = compiled.state_names
         self.pair_names = compiled.pair_names
         self.output = self._output(compiled)
-        extra = (self.output,) if self.output not in compiled.signal_names else ()
+        # the output and each .meas vector that is a difference of node voltages (v(a,b)) are signals too
+        extra = tuple(v for v in dict.fromkeys([self.output, *netlist.outputs]) if v not in compiled.signal_names
+                      and (v == self.output or _difference(v, compiled.signal_names)))
         self.signal_names = ("vout", "switch") + compiled.signal_names + extra
-        compiled.units.setdefault(self.output, "A" if self.output.startswith("i(") else "V")
+        for name in (self.output, *extra):
+            compiled.units.setdefault(name, "A" if name.startswith("i(") else "V")
         # vout is the file's output: a current where its .meas reads one (an inverter's load current)
         self.signal_units = {"vout": compiled.units[self.output], "switch": "1", **compiled.units}
         self.output_state = next((s for s in compiled.state_names if s.startswith("v(")), compiled.state_names[0])

@@ -458,6 +458,42 @@ def test_a_refinement_ngspice_cannot_run_leaves_the_comparison_made(tmp_path, ng
     assert note.endswith("): compared at TMAX = 0.005 T, RELTOL 0.01")
 
 
+def test_a_refinement_past_the_memory_limit_leaves_the_comparison_made(monkeypatch, ngspice):
+    """A refinement whose ngspice run would pass the memory limit (a push-pull's at TMAX T/3200 needed 8.33 GiB)
+    had ended compare with that error, the comparison already made lost. The buck held to a mean within 1e-12 under
+    32 MiB: refined once, then the next run (57.6 MiB) is a note, and the comparison at the last TMAX stands."""
+    from validation.circuit_compare import compare_circuit
+    monkeypatch.setenv("PCSUITE_MAX_MEMORY", "32M")
+    result = compare_circuit(Circuit.from_netlist(NETLISTS / "buck.cir"), thresholds={"mean_rel": 1e-12})
+    assert not result.passed and result.metrics["v(out)_mean_rel_error"] < 1e-3
+    (note,) = [n for n in result.notes if "did not run" in n]
+    assert note.startswith("ngspice at TMAX = 0.0003125 T, RELTOL 1e-05 did not run (")
+    assert "above the memory limit of 32 MiB): compared at TMAX = 0.00125 T, RELTOL 0.0001" in note
+    assert "--spice-tmax" not in note
+
+
+def test_a_meas_of_a_difference_is_measured_by_simulate_and_compared_by_compare(tmp_path, capsys, ngspice):
+    """A second .meas of v(in,sw) (the switch's voltage) beside the output: compare had stopped with "signal must
+    be one of ...; got 'v(in,sw)'" and simulate had left it out of its measurements. Its mean over the orbit is
+    Vin - vout's mean (an inductor's mean voltage is 0 over a period); simulate's and compare's, read on the run's
+    steps (T/1000) by the linear rule, are within h vout / (2 T) = 3.5e-3 V of it (the diode's turn-off inside a
+    step, where v(sw) jumps by vout), and ngspice's within the mean check's 1e-3."""
+    text = (NETLISTS / "buck.cir").read_text().replace(
+        ".end", ".meas tran vsw AVG v(in,sw) FROM={490*T} TO={500*T}\n.end")
+    path = tmp_path / "buck-vsw.cir"
+    path.write_text(text)
+    code, out, err = run_cli(capsys, "simulate", path, "--steady", "--json")
+    rows = json.loads(out)["measurements"]
+    assert code == 0 and rows["v(in,sw)"]["unit"] == "V"
+    exact = 12.0 - rows["v(out)"]["mean"]
+    assert abs(rows["v(in,sw)"]["mean"] - exact) <= 1e-3 * rows["v(out)"]["mean"] / 2
+    code, out, err = run_cli(capsys, "compare", path, "--json")
+    result = json.loads(out)
+    assert code == 0 and result["passed"] and result["metrics"]["v(in,sw)_mean_rel_error"] < 1e-3
+    assert result["metrics"]["v(in,sw)_mean_lcp"] == pytest.approx(rows["v(in,sw)"]["mean"], rel=1e-9)
+    assert abs(result["metrics"]["v(in,sw)_mean_spice"] - exact) <= 1e-3 * exact
+
+
 def test_compare_refuses_the_llc_read_at_its_floating_secondary(tmp_path, capsys):
     """Read at v(out), the secondary's node against ground, which the ideal bridge leaves floating while its diodes
     block (pcsuite's 12.906 V is one pick; ngspice's 13.227 V is its RSHUNT's): compare refuses in one line before

@@ -111,14 +111,15 @@ class _Machine:
         self.channels, self.table = law_channels(self.law) if self.law is not None else ((), ())
         #: The last run's jumps: ((time, energy lost), ...) (:meth:`enter`)
         self.jumps: list[tuple[float, float]] = []
-        self.index2 = [i for i in range(problem.k)
-                       if all(not np.any(c.D[i, :]) and not np.any(c.D[:, i]) for c in problem.configurations)]
-        K = self.index2
-        #: Per configuration: (C_K, F_K, B_K, row scales) of the pairs whose y is a function of the state.
+        #: Per configuration: the pairs whose y is a function of the state there (no D row or column: a diode in
+        #: series with an inductor once the switch across it opens, though the closed switch gave it a D), and
+        #: their (C_K, F_K, B_K, row scales).
+        self.index2 = [[i for i in range(problem.k) if not np.any(c.D[i, :]) and not np.any(c.D[:, i])]
+                       for c in problem.configurations]
         # (a Configuration's E and F are typed optional for their defaults; once it is built they are arrays)
         self.impulse_data = [(c.C[K], cast(FloatArray, c.F)[K], c.B[:, K],
                               np.abs(c.C[K]).sum(axis=1) + np.abs(cast(FloatArray, c.F)[K]))
-                             for c in problem.configurations]
+                             for c, K in zip(problem.configurations, self.index2)]
 
     # --- modes --------------------------------------------------------------------------------------
 
@@ -280,7 +281,7 @@ class _Machine:
 
     def _impulse(self, c: Configuration, config: int, xt: np.ndarray, t: float,
                  log: EventLog) -> tuple[np.ndarray, np.ndarray | None]:
-        K = self.index2
+        K = self.index2[config]
         if not K:
             return xt, None
         CK, FK, BK, row_scale = self.impulse_data[config]
