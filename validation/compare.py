@@ -181,12 +181,16 @@ def spice_steady(chunk, steady: bool, orbit, T: float, periods: int, window: int
         return own, n, drift, [], None
     handed, n_orbit, drift_orbit, _, _ = settle_from(orbit)
     target = handed.mean("vout", t0=end - window * T, t1=end)
-    # the envelope of its distance over the run shrinks (a ring-down passes by and away from it window by window)
-    distance = np.abs(np.array(means) - target) / max(abs(target), 1e-12)
+    # the envelope of its distance over the run shrinks (a ring-down passes by and away from it window by window);
+    # relative to the output's size, as :func:`spice_drift` reads it (an AC output's mean is ~0: a half-bridge's
+    # load current had read 7.1e+03)
+    size = max(abs(target), handed.rms("vout", t0=end - window * T, t1=end), 1e-12)
+    distance = np.abs(np.array(means) - target) / size
     third = max(1, distance.size // 3)
     approaching = bool(distance[-third:].max() < distance[:third].max())
     note = (f"ngspice from its own start has not settled after {n} periods: its mean of vout is {means[-1]:.6g}, "
-            f"{distance[-1]:.2g} (relative) from where it settles from pcsuite's orbit ({target:.6g}); the largest "
+            f"{distance[-1]:.2g} (relative to its size) from where it settles from pcsuite's orbit ({target:.6g}); "
+            "the largest "
             f"distance over its last third {distance[-third:].max():.2g}, over its first {distance[:third].max():.2g}: "
             + ("approaching it; compared from the orbit" if approaching else "NOT approaching it: ngspice's own "
                "steady state is elsewhere"))

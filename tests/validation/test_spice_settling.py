@@ -46,3 +46,39 @@ def test_ngspice_whose_drift_stops_falling_once_the_circuit_has_settled_is_not_r
     calls.clear()
     spice_steady(chunk, True, np.zeros(1), T, periods, window, "own", 0.9999)
     assert len(calls) > 20
+
+
+class _AcRun:
+    """A chunk whose window's mean of vout is ``mean`` and the window's before ``before``, its RMS 3.6 A: a
+    half-bridge's load current, its mean ~0."""
+
+    def __init__(self, mean, before, end):
+        self.value, self.before, self.end, self.x = mean, before, end, np.zeros((1, 1))
+
+    def mean(self, name, t0, t1):
+        return self.value if t1 >= self.end - 1e-12 else self.before
+
+    def rms(self, name, t0, t1):
+        return 3.6
+
+
+def test_ngspices_distance_from_its_orbit_run_is_relative_to_an_ac_outputs_size():
+    """A half-bridge's load current from ngspice's own start (rho 0.9999: not decayed in 600 periods) ends at a
+    mean of -0.00688 A, 0.00689 A from the 9.68e-7 A it settles at from the LCP's orbit: the note had read that
+    7.1e+03 "(relative)", against the mean; against the current's RMS (3.6 A) it is 1.9e-3."""
+    from validation.compare import spice_steady
+    T, periods, window = 5e-5, 30, 10
+    end = periods * T
+
+    own = iter(np.linspace(-0.02, -0.00688197, 20))          # from its own start: approaching, 20 chunks of 30
+
+    def chunk(x0):
+        if x0 is not None and x0.shape == (1,) and x0[0] == 1.0:             # from the LCP's orbit: settled
+            return _AcRun(9.68e-7, 9.68e-7, end)
+        mean = next(own)
+        return _AcRun(mean, 1.01 * mean, end)
+    run, n, drift, notes, independent = spice_steady(chunk, True, np.ones(1), T, periods, window, "own", 0.9999)
+    (note,) = notes
+    distance = (0.00688197 + 9.68e-7) / 3.6
+    assert f"its mean of vout is -0.00688197, {distance:.2g} (relative to its size) from where it settles" in note
+    assert independent
