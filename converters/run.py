@@ -44,6 +44,8 @@ from .validate import check_flag, check_integer, parse_value
 #: default: STEADY_PERIODS.
 WARM_UP_PERIODS = 0
 STEADY_PERIODS = 20
+#: The relative distance to the orbit at which a run's steady state counts as reached (``--steady-tol``).
+STEADY_TOL = 1e-6
 #: The most steps an accuracy-on-request run writes by default (its periods at the step rtol chose).
 WRITTEN_STEPS = 1 << 20
 DEFAULT_PERIODS = 500
@@ -113,7 +115,7 @@ def duration(model: Model, p: dict, t_end: float | str | None = None, periods: i
 
 def run_converter(name_or_model: str | Model, params: dict | None = None, *, control: str = "pwm",
                   method: str | Method | None = None, h: float | str | None = None, t_end: float | str | None = None,
-                  periods: int | None = None, steady: bool = False, steady_tol: float = 1e-6,
+                  periods: int | None = None, steady: bool = False, steady_tol: float = STEADY_TOL,
                   x0: npt.NDArray[np.float64] | None = None, rtol: float | str | None = None,
                   output_step: float | str | None = None, **options: Any) -> Trajectory:
     """Simulate a model (a converter under ``control``) with any method; returns a labelled Trajectory.

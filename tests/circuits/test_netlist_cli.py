@@ -494,6 +494,43 @@ def test_a_meas_of_a_difference_is_measured_by_simulate_and_compared_by_compare(
     assert abs(result["metrics"]["v(in,sw)_mean_spice"] - exact) <= 1e-3 * exact
 
 
+SEPIC_SPLIT = """SEPIC whose coupling capacitor is two in series (their junction m touches nothing else)
+.param Vin=12 L1=47u L2=47u Ca=4.7u Cb=10u C=100u R=12 f_sw=100k D=0.6
+.param T={1/f_sw} e={1e-6/f_sw}
+Vin in 0 DC {Vin}
+Vg gate 0 PULSE(1 0 {D*T - e/2} {e} {e} {(1-D)*T - e} {T})
+L1 in sw {L1}
+S1 sw 0 gate 0 SWMOD
+Ca sw m {Ca}
+Cb m k {Cb}
+L2 k 0 {L2}
+D1 k out DMOD
+Co out 0 {C}
+R1 out 0 {R}
+.model SWMOD SW(VT=0.5)
+.model DMOD D
+.tran {T/1000} {1000*T} 0 {T/200} UIC
+.meas tran vout_mean AVG v(out) FROM={990*T} TO={1000*T}
+.end
+"""
+
+
+def test_netlist_steady_starts_on_the_orbit_found_to_simulates_tolerance(tmp_path, capsys):
+    """A SEPIC at rho = 1 - 3.6e-6 (its light damping): Newton resolves the orbit to 2.6e-10 in double precision,
+    and `netlist --steady` had asked for 1e-10 and refused it, where `simulate --steady` (1e-6) runs. The netlist
+    now starts on the orbit found to simulate's tolerance: its IC of Co is simulate's orbit's v(co) to 1e-6."""
+    import re
+
+    from converters.run import run_converter
+    path = tmp_path / "sepic.cir"
+    path.write_text(SEPIC_SPLIT)
+    code, out, err = run_cli(capsys, "netlist", path, "--steady")
+    assert code == 0, err
+    ic = float(re.search(r"^Co out 0 \S+ IC=(\S+)$", out, re.M).group(1))
+    tr = run_converter(str(path), steady=True, periods=1)
+    assert ic == pytest.approx(tr.x[0, tr.state_names.index("v(co)")], rel=1e-6)
+
+
 def test_compare_refuses_the_llc_read_at_its_floating_secondary(tmp_path, capsys):
     """Read at v(out), the secondary's node against ground, which the ideal bridge leaves floating while its diodes
     block (pcsuite's 12.906 V is one pick; ngspice's 13.227 V is its RSHUNT's): compare refuses in one line before

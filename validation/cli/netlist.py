@@ -26,7 +26,7 @@ def run(args) -> int:
     from ..io import check_output_file; check_output_file("--out", args.out)  # noqa: E702 (before the run)
     from converters.models import get_model
     from converters.params import parse_assignments
-    from converters.run import check_steady, duration, make_method, steady_state
+    from converters.run import STEADY_TOL, check_steady, duration, make_method, steady_state
     from netlists import model_netlist, standalone
 
     from ..io import atomic_write_text
@@ -42,7 +42,10 @@ def run(args) -> int:
     x0 = None
     if args.steady:
         check_steady(model, p)
-        x0 = steady_state(model, p, make_method(model, p, "lcp"), remedy="write it from rest without --steady").x0
+        # the orbit to simulate's own tolerance: ngspice runs from it at a RELTOL of 1e-3 (a SEPIC at rho = 1 -
+        # 3.6e-6 resolves it to 2.6e-10 in double precision, and 1e-10 had refused it)
+        x0 = steady_state(model, p, make_method(model, p, "lcp"), tol=STEADY_TOL,
+                          remedy="write it from rest without --steady").x0
     t_end = duration(model, p, args.t_end)
     if model.periodic(p) and t_end < model.period(p):
         raise ParameterError(f"t_end must be at least one switching period ({model.period(p):.3g} s): the netlist's "

@@ -70,7 +70,7 @@ def add(sub) -> None:
 def run(args) -> int:
     from ..io import check_output_file; check_output_file("--plot", args.plot)  # noqa: E702 (before the run)
     from converters.params import parse_assignments
-    from converters.run import run_converter, run_summary
+    from converters.run import STEADY_TOL, run_converter, run_summary
     check_out(args.out)
     if args.plot is not None and args.plot.suffix.lower() not in (".png", ".svg", ".html"):
         raise ParameterError(f"--plot must end in .png, .svg or .html; got {str(args.plot)!r}")
@@ -115,7 +115,7 @@ def run(args) -> int:
             if "lcs" in cls.domains else None
         tr = run_converter(args.converter, params, control=args.control, method=method, h=args.h,
                            t_end=args.t_end, periods=args.periods, steady=args.steady,
-                           steady_tol=1e-6 if args.steady_tol is None else args.steady_tol,
+                           steady_tol=STEADY_TOL if args.steady_tol is None else args.steady_tol,
                            output_step=args.output_step, **options)
         summary = run_summary(tr)
         if "lcs" in cls.domains:
