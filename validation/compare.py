@@ -163,17 +163,26 @@ def spice_steady(chunk, steady: bool, orbit, T: float, periods: int, window: int
         return rho is None or rho ** n <= 1e-3
 
     def settle_from(x0):
-        run = chunk(x0)
-        n, drifts, means = periods, [spice_drift(run, T, periods, window)], []
-        while True:
-            means.append(run.mean("vout", t0=end - window * T, t1=end))
-            if not steady or (drifts[-1] <= SPICE_SETTLE and (x0 is not None or decayed(n))) or n >= MAX_SPICE_PERIODS:
-                return run, n, drifts[-1], means, False
-            if decayed(n) and stalled(drifts):
-                return run, n, drifts[-1], means, True
-            run = chunk(run.x[-1])
-            n = n + periods
-            drifts.append(spice_drift(run, T, periods, window))
+        # a bar on a terminal (ngspice's 600 periods can take minutes); none where stderr is a file or a pipe
+        import sys
+
+        from tqdm import tqdm
+        with tqdm(total=MAX_SPICE_PERIODS if steady else periods, unit="period", file=sys.stderr, disable=None,
+                  leave=False, desc="ngspice " + ("from its own start" if x0 is None else "from the orbit")) as bar:
+            run = chunk(x0)
+            bar.update(periods)
+            n, drifts, means = periods, [spice_drift(run, T, periods, window)], []
+            while True:
+                means.append(run.mean("vout", t0=end - window * T, t1=end))
+                if not steady or (drifts[-1] <= SPICE_SETTLE and (x0 is not None or decayed(n))) \
+                        or n >= MAX_SPICE_PERIODS:
+                    return run, n, drifts[-1], means, False
+                if decayed(n) and stalled(drifts):
+                    return run, n, drifts[-1], means, True
+                run = chunk(run.x[-1])
+                n = n + periods
+                bar.update(periods)
+                drifts.append(spice_drift(run, T, periods, window))
     if not steady or spice_start == "orbit":
         return (*settle_from(orbit)[:3], [], None)
     own, n, drift, means, at_noise = settle_from(None)

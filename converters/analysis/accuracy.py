@@ -702,8 +702,18 @@ def last_period(model: Model, p: dict, tr: Trajectory) -> dict:
               if not np.any(np.abs(boundaries - (t0 + e[2] * T)) <= 1e-9 * T)]
     fractions = mode_fractions(tr, T, events, edges, t0)
     bounds = np.unique(np.concatenate([boundaries, [t0 + e[2] * T for e in events]]))
+    # the shortest mode between two pair events with no switching edge between them: (its length in T, the event
+    # that starts it, the one that ends it); None with fewer than two
+    between = None
+    timed = sorted(events, key=lambda e: e[2])
+    for a, b in zip(timed, timed[1:]):
+        length = b[2] - a[2]
+        if length > 1e-12 and not np.any((boundaries > t0 + a[2] * T) & (boundaries < t0 + b[2] * T)) \
+                and (between is None or length < between[0]):
+            between = (length, a, b)
     return {"mode_fractions": fractions, "events": events, "t0": t0,
-            "shortest_interval_T": float(np.diff(bounds)[np.diff(bounds) > 1e-12 * T].min() / T)}
+            "shortest_interval_T": float(np.diff(bounds)[np.diff(bounds) > 1e-12 * T].min() / T),
+            "shortest_mode": between}
 
 
 @dataclass(frozen=True)
@@ -909,6 +919,10 @@ def default_check(model: Model, p: dict, method: Method, tr: Trajectory, reporte
     if onset:
         out["trusted"] = False
         out["warning"] = f"{out['warning']}; {onset}" if "warning" in out else onset
+    brief = _unresolved_mode(period, T, step) if coarse is not None else ""
+    if brief:
+        out["trusted"] = False
+        out["warning"] = f"{out['warning']}; {brief}" if "warning" in out else brief
     imbalance = _energy_check(model, p, method, fine, coarse, out)
     if imbalance:
         out["trusted"] = False
@@ -1003,6 +1017,24 @@ def energy_balance(model: Any,  # a Model, read by duck typing: a Circuit's stor
 #: A pair counts as conducting where its u exceeds this fraction of the largest u at that sample, and as blocking
 #: at a switching where its y exceeds this fraction of its scale (|C_i| |x| + |F_i|).
 ONSET_RTOL = 1e-6
+
+
+def _unresolved_mode(period: dict, T: float, step: float | None) -> str:
+    """Why the stepper's estimate cannot be trusted where its orbit holds a mode shorter than one step between two
+    pair events (:func:`last_period`'s ``shortest_mode``): the step cannot resolve it, and the runs at h and 2h
+    may both make it where the circuit has none (a series resonant converter's bridge commutating as its current
+    reverses: "off" for 0.076 of a step at T/1000, T/2000 and T/4000 alike; the estimate 6.5e-5, the exact orbit,
+    which commutes directly, 6.0e-4 away). '' where every such mode spans a step."""
+    found = period.get("shortest_mode")
+    # (a mode of exactly one step, its events on the grid, is the step's own and scales with it: Richardson sees it)
+    if not step or found is None or found[0] * T >= (1.0 - 1e-6) * step:
+        return ""
+    length, (pair_a, kind_a, _), (pair_b, kind_b, _) = found
+    name = lambda pair, kind: "the switching" if pair == SWITCHING else f"{pair} {kind}"      # noqa: E731
+    return (f"between {name(pair_a, kind_a)} and {name(pair_b, kind_b)} the orbit holds a mode for "
+            f"{length * T / step:.2g} of a step ({length:.2g} T): the step cannot resolve it, and the runs at h and "
+            "2h may both make a mode the circuit does not have, so the estimate may be far too small; use --method "
+            "event (exact at every event), or a --h that resolves it")
 
 
 def _unresolved_onset(model: Model, p: dict, fine: Trajectory) -> str:

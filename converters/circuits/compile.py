@@ -732,23 +732,28 @@ class _Compiler:
                         notes=self.moved(state_names), energy=self.energy(), floating=tuple(floats))
 
     def period(self) -> float:
-        """The common period of the PULSE sources (their least common multiple), inf without one."""
-        periods = [s.waveform.per for s in self.sources if isinstance(s.waveform, Pulse) and math.isfinite(s.waveform.per)]
+        """The common period of the periodic sources (PULSE, SIN, a repeating PWL: their least common multiple), inf
+        without one."""
         for s in self.sources:
             w = s.waveform
             if isinstance(w, Pulse) and math.isfinite(w.per) and w.td >= w.per:
                 raise self.error(s, f"{s.title}: a PULSE delay TD = {w.td:g} s of a whole period ({w.per:g} s) or "
                                     "more: the waveform is not periodic from t = 0")
-        periods += [1.0 / s.waveform.freq for s in self.sources if isinstance(s.waveform, Sin) and s.waveform.freq > 0
-                    and s not in self.oscillators]
-        periods += [s.waveform.period for s in self.sources if isinstance(s.waveform, Pwl) and not _once(s.waveform)]
-        if not periods:
+        named = [(s, "PULSE", s.waveform.per) for s in self.sources
+                 if isinstance(s.waveform, Pulse) and math.isfinite(s.waveform.per)]
+        named += [(s, "SIN", 1.0 / s.waveform.freq) for s in self.sources
+                  if isinstance(s.waveform, Sin) and s.waveform.freq > 0 and s not in self.oscillators]
+        named += [(s, "PWL", s.waveform.period) for s in self.sources
+                  if isinstance(s.waveform, Pwl) and not _once(s.waveform)]
+        if not named:
             return math.inf
         from ..problems.switching import common_period
         try:
-            return common_period(periods, "the PULSE periods")
-        except ParameterError as error:
-            raise NetlistError(f"{self.path}: {error}") from None
+            return common_period([period for _, _, period in named])
+        except ParameterError:
+            listed = ", ".join(f"{s.name.upper()} ({kind}) {period:.9g} s" for s, kind, period in named)
+            raise NetlistError(f"{self.path}: the sources' periods have no common period (their ratios are not "
+                               f"fractions with denominators up to 1000): {listed}") from None
 
     def in_power_circuit(self, source: Element) -> bool:
         """False for a gate driver: a source whose nodes reach, through resistors and other voltage sources (a

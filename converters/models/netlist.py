@@ -107,6 +107,11 @@ class Circuit(Model):
                                  low_open=False))
         names = [q.name for q in out]
         twice = next((n for n in names if names.count(n) > 1), None)
+        # a source with a waveform is not a parameter, but its name keys its value as one (the waveform is refused
+        # a -p): a .param of its name would set it
+        twice = twice or next((n for n in self.netlist.params if n not in self.netlist.derived and any(
+            e.name == n and e.kind in "VI" and not isinstance(e.waveform, float) for e in self.netlist.elements)),
+            None)
         if twice is not None:          # -p NAME would be ambiguous: SPICE names are case-insensitive
             element = next(e for e in self.netlist.elements if e.name == twice)
             raise NetlistError(f"{self.netlist.where(twice)}: .param {twice} and {element.title} (line {element.line}) "

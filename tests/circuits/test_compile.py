@@ -113,6 +113,11 @@ def test_a_param_and_an_element_of_the_same_name_are_refused():
     text = "dup\n.param r1=5\nVin in 0 DC 12\nR1 in out 10\nC1 out 0 1u\n.tran 1u 1m\n.end\n"
     with pytest.raises(NetlistError, match=r"dup.cir:2: .param r1 and resistor R1 \(line 4\) share a name"):
         Circuit.from_netlist("dup.cir", text=text)
+    # a source with a waveform is no parameter, but a .param of its name reached it as one: "-p vin: voltage source
+    # Vin is a PWL source", where no -p was given
+    text = "dup\n.param Vin=12\nVin in 0 PWL(0 12 5u 14 10u 12)\nR1 in out 10\nC1 out 0 1u\n.tran 1u 1m\n.end\n"
+    with pytest.raises(NetlistError, match=r"dup.cir:2: .param vin and voltage source VIN \(line 3\) share a name"):
+        Circuit.from_netlist("dup.cir", text=text)
 
 
 TRIANGLE = """triangle through a half-wave rectifier

@@ -229,7 +229,9 @@ def test_an_undamped_resonance_under_the_trapezoid_is_named_as_such_with_a_remed
     output's v(p,nn), by its .meas: without it, the first node's, v(in) = Vdc, whose error is rounding.)"""
     path, run, summary, warning = _one_warning(tmp_path / "src.cir", SRC, theta=0.5)
     assert warning.startswith("the circuit's 2.25e+06 Hz resonance is undamped")
-    assert warning.endswith("; use --method event (exact flows)") and "--theta" not in warning
+    assert "; use --method event (exact flows)" in warning and "--theta" not in warning
+    # (and the stepper's commutation of the bridge as the tank current reverses: a mode of 0.094 of a step)
+    assert "the orbit holds a mode for 0.094 of a step" in warning
     shift = (2 * np.pi * 2.25e6 * run.algorithm.h) ** 2 / 12           # the ring's frequency error: above 1e-3
     assert f"shifts its ring's frequency by {shift:.1e}" in warning and shift > 1e-3
     exact = run_converter(str(path), method="event", steady=True, periods=1)
@@ -237,6 +239,43 @@ def test_an_undamped_resonance_under_the_trapezoid_is_named_as_such_with_a_remed
     assert error > 10 * summary["accuracy"]["vout_mean_error_estimate"]
     cuk = run_summary(run_converter(str(NETLISTS / "cuk.cir"), steady=True))
     assert "trusted" not in cuk["accuracy"] and not cuk.get("warnings")
+
+
+SRC_BRIDGE = """series resonant converter: a +-10 V square wave into Lr Cr (f0 50.33 kHz) and a diode bridge, at 52 kHz
+.param Vin=10 Lr=100u Cr=100n Co=10u R=5 f_sw=52k
+.param T={1/f_sw} e={1e-6/f_sw}
+Vdr drv 0 PULSE({Vin} {-Vin} {T/2 - e/2} {e} {e} {T/2 - e} {T})
+Lr drv x {Lr}
+Cr x a {Cr}
+D1 a p DMOD
+D2 0 p DMOD
+D3 n a DMOD
+D4 n 0 DMOD
+Co p n {Co}
+R1 p n {R}
+.model DMOD D
+.tran {T/1000} 4m 0 {T/200} UIC
+.meas tran vo_mean AVG v(p,n) FROM=3m TO=4m
+.end
+"""
+
+
+def test_a_mode_shorter_than_a_step_between_two_diode_events_says_the_estimate_cannot_be_trusted(tmp_path):
+    """The bridge commutes directly as the tank current reverses (the exact orbit: D1+D4, D2+D3, nothing between;
+    8.8508266 V, as an independent expm-and-bisection orbit gives, 8.850826589). The stepper at T/1000 holds
+    "off" for 0.038 of a step at each reversal, at 2h as well: the estimate 6.5e-5, the error 6.0e-4, no warning.
+    A mode shorter than a step between two pair events now says the estimate cannot be trusted."""
+    path = tmp_path / "src.cir"
+    path.write_text(SRC_BRIDGE)
+    stepper = run_summary(run_converter(str(path), steady=True))
+    (warning,) = stepper["warnings"]
+    assert "the orbit holds a mode for 0.038 of a step" in warning and "use --method event" in warning
+    assert stepper["accuracy"]["trusted"] is False
+    error = abs(stepper["vout_mean"] / 8.850826589 - 1)
+    assert error > 3 * stepper["accuracy"]["vout_mean_error_estimate"]
+    event = run_summary(run_converter(str(path), steady=True, method="event"))
+    assert event["vout_mean"] == pytest.approx(8.850826589, rel=1e-8) and not event.get("warnings")
+    assert set(event["mode_fractions"]) == {"D1+D4", "D2+D3"}
 
 
 def test_accuracy_on_request_reads_a_ripple_the_exact_runs_samples_miss_on_finer_ones(tmp_path, capsys):
@@ -364,3 +403,19 @@ def test_a_resonance_no_resistance_damps_is_named_where_backward_euler_erases_it
     assert abs(summary["vout_mean"] - exact) / exact > 0.02
     (warning,) = [w for w in summary.get("warnings", []) if "resonance is undamped" in w]
     assert "2.25e+07 Hz" in warning and "e^-9.9 a period" in warning and "--method event" in warning
+
+
+@pytest.mark.parametrize("command, extra", [("sensitivity", []), ("bode", ["--input", "duty"])])
+def test_a_command_on_the_exact_orbit_refuses_a_time_constant_it_cannot_cross_with_its_own_remedy(
+        tmp_path, capsys, command, extra):
+    """The 0.077 ps mode of the stiff buck is beyond the event method's substeps: sensitivity and bode (which read
+    its orbit) had said "use --method lcp, or a shorter --t-end", options neither has. They say what they work on,
+    and that simulate --steady runs the circuit."""
+    path = tmp_path / "span.cir"
+    path.write_text(STIFF_SPAN)
+    assert main([command, str(path), *extra]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "--t-end" not in err and "--method" not in err
+    assert err.startswith(f"pcsuite: error: {command} works on the exact event method's orbit, which cannot take "
+                          "this circuit: the stiffest mode's time constant is about 7.69e-14 s")
+    assert err.endswith("; simulate --steady runs it with the stepper")

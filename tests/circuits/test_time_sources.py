@@ -289,3 +289,28 @@ def test_a_files_step_that_does_not_divide_the_sin_period_is_rounded_to_one_that
     true = abs(summary["vout_mean"] - exact) / exact
     assert true < 1e-5 and "warnings" not in summary
     assert true <= 3 * summary["accuracy"]["vout_mean_error_estimate"], (true, summary["accuracy"])
+
+
+def test_sources_without_a_common_period_are_named_each_with_its_kind_and_period():
+    """A 100 kHz PULSE gate beside a 33.3333 kHz SIN input: the refusal had said "the PULSE periods [1e-05,
+    3.0000030000029998e-05] s have no common period", the SIN's period among them; it names each source."""
+    from converters.circuits.netlist import NetlistError
+    from converters.models import Circuit
+    text = """buck fed from a sine
+Vin in 0 SIN(12 1 33.3333k)
+Vg gate 0 PULSE(1 0 4u 1p 1p 6u 10u)
+S1 in sw gate 0 SWMOD
+D1 0 sw DMOD
+L1 sw out 10u
+C1 out 0 100u
+R1 out 0 10
+.model SWMOD SW(VT=0.5)
+.model DMOD D
+.tran 10n 1m
+.end
+"""
+    with pytest.raises(NetlistError) as caught:
+        Circuit.from_netlist("sin-buck.cir", text=text)
+    assert str(caught.value) == ("sin-buck.cir: the sources' periods have no common period (their ratios are not "
+                                 "fractions with denominators up to 1000): VG (PULSE) 1e-05 s, VIN (SIN) "
+                                 "3.000003e-05 s")

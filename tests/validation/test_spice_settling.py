@@ -82,3 +82,27 @@ def test_ngspices_distance_from_its_orbit_run_is_relative_to_an_ac_outputs_size(
     distance = (0.00688197 + 9.68e-7) / 3.6
     assert f"its mean of vout is -0.00688197, {distance:.2g} (relative to its size) from where it settles" in note
     assert independent
+
+
+def test_ngspices_settling_shows_a_bar_on_a_terminal_and_nothing_in_a_pipe(monkeypatch, capsys):
+    """compare's ngspice runs up to 600 periods from its own start and again from the orbit, minutes on a large
+    circuit, had printed nothing until its verdict: a bar in periods on a terminal's stderr, nothing where stderr
+    is a file or a pipe (a refusal stays one line)."""
+    import io
+    import sys
+
+    from validation.compare import spice_steady
+    T, periods, window = 1 / 60, 30, 10
+
+    def chunk(x0):
+        return _NoisyRun(1e-3, periods * T)
+
+    class Terminal(io.StringIO):
+        def isatty(self):
+            return True
+    for terminal in (True, False):
+        stream = Terminal() if terminal else io.StringIO()
+        monkeypatch.setattr(sys, "stderr", stream)
+        spice_steady(chunk, True, None, T, periods, window, "own", 0.9999)
+        shown = stream.getvalue()
+        assert ("ngspice from its own start" in shown and "period" in shown) if terminal else shown == ""

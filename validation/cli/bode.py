@@ -7,7 +7,7 @@ import time
 
 from converters.errors import ParameterError
 
-from .common import add_params, add_unstable_option, given_path, integer, json_text, orbit_stability
+from .common import add_params, add_unstable_option, given_path, integer, json_text, on_exact_orbit, orbit_stability
 
 #: What --input accepts beside a parameter's name: the duty ratio, the input voltage and the load current (the
 #: output impedance's input, 0 A unless -p Io= says otherwise) by their usual names.
@@ -49,7 +49,7 @@ def add(sub) -> None:
     bode.add_argument("--plot", type=given_path, default=None, help="write the Bode plot to FILE.png or FILE.svg")
     bode.add_argument("--json", action="store_true", help="print one JSON object (frequency_hz, magnitude_db, "
                                                          "phase_deg, margins of a loop gain, the check)")
-    bode.set_defaults(run=run, one_run=True)
+    bode.set_defaults(run=on_exact_orbit("bode", run), one_run=True)
 
 
 def run(args) -> int:

@@ -111,6 +111,26 @@ def orbit_stability(what: str, key: str, multipliers, period: float, allowed: bo
     return {"spectral_radius": rho, "stable": not why, **({"orbit_warning": warning} if warning else {})}
 
 
+def on_exact_orbit(command: str, run):
+    """``run`` (a command's) with the event method's refusal of a circuit's stiffest mode said for ``command``,
+    which reads the exact orbit and has no other method: its remedies (--method lcp, a shorter --t-end) are
+    simulate's, not this command's."""
+    from converters.errors import ResourceError
+
+    def wrapped(args):
+        try:
+            return run(args)
+        except ResourceError as error:
+            text = str(error)
+            if not text.startswith("--method event: "):
+                raise
+            reason = text.removeprefix("--method event: ").split("; use --method lcp")[0]
+            raise ResourceError(f"{command} works on the exact event method's orbit, which cannot take this circuit: "
+                                f"{reason.replace(', or a long --t-end', '')}; simulate --steady runs it with the "
+                                "stepper") from None
+    return wrapped
+
+
 def add_spice_options(parser) -> None:
     """ngspice's transient settings on a command that runs it."""
     parser.add_argument("--spice-tmax", default=None,

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import math
 
-from .common import add_params, add_unstable_option, given_path, orbit_stability
+from .common import add_params, add_unstable_option, given_path, on_exact_orbit, orbit_stability
 
 
 def add(sub) -> None:
@@ -31,7 +31,7 @@ def add(sub) -> None:
     cmd.add_argument("--json", action="store_true",
                      help="print one JSON object (the metric, its value and unit, each parameter's derivative and "
                           "normalised sensitivity, the parameters not taken and why)")
-    cmd.set_defaults(run=run, one_run=True)
+    cmd.set_defaults(run=on_exact_orbit("sensitivity", run), one_run=True)
 
 
 def run(args) -> int:
