@@ -919,7 +919,7 @@ def default_check(model: Model, p: dict, method: Method, tr: Trajectory, reporte
     if onset:
         out["trusted"] = False
         out["warning"] = f"{out['warning']}; {onset}" if "warning" in out else onset
-    brief = _unresolved_mode(period, T, step) if coarse is not None else ""
+    brief = _unresolved_mode(period, tr, T, step) if coarse is not None else ""
     if brief:
         out["trusted"] = False
         out["warning"] = f"{out['warning']}; {brief}" if "warning" in out else brief
@@ -1019,17 +1019,22 @@ def energy_balance(model: Any,  # a Model, read by duck typing: a Circuit's stor
 ONSET_RTOL = 1e-6
 
 
-def _unresolved_mode(period: dict, T: float, step: float | None) -> str:
-    """Why the stepper's estimate cannot be trusted where its orbit holds a mode shorter than one step between two
-    pair events (:func:`last_period`'s ``shortest_mode``): the step cannot resolve it, and the runs at h and 2h
-    may both make it where the circuit has none (a series resonant converter's bridge commutating as its current
-    reverses: "off" for 0.076 of a step at T/1000, T/2000 and T/4000 alike; the estimate 6.5e-5, the exact orbit,
-    which commutes directly, 6.0e-4 away). '' where every such mode spans a step."""
+def _unresolved_mode(period: dict, tr: Trajectory, T: float, step: float | None) -> str:
+    """Why the stepper's estimate cannot be trusted where its orbit (``tr``'s last period, read by
+    :func:`last_period`: ``shortest_mode``) holds a mode shorter than one step between two pair events: the step
+    cannot resolve it, and the runs at h and 2h may both make it where the circuit has none (a series resonant
+    converter's bridge commutating as its current reverses: "off" for 0.038 of a step at T/1000, T/2000 and T/4000
+    alike; the estimate 6.5e-5, the exact orbit, which commutes directly, 6.0e-4 away; a parallel resonant one's
+    D1+D2+D4). '' where every such mode spans a step, or both events fall inside one step (a bridge's pair of diodes
+    starting together, their instants read 0.006 of a step apart: one event of the step's)."""
     found = period.get("shortest_mode")
     # (a mode of exactly one step, its events on the grid, is the step's own and scales with it: Richardson sees it)
     if not step or found is None or found[0] * T >= (1.0 - 1e-6) * step:
         return ""
-    length, (pair_a, kind_a, _), (pair_b, kind_b, _) = found
+    length, (pair_a, kind_a, at_a), (pair_b, kind_b, at_b) = found
+    start, end = period["t0"] + at_a * T, period["t0"] + at_b * T
+    if not np.any((tr.t > start) & (tr.t <= end + 1e-9 * step)):
+        return ""
     name = lambda pair, kind: "the switching" if pair == SWITCHING else f"{pair} {kind}"      # noqa: E731
     return (f"between {name(pair_a, kind_a)} and {name(pair_b, kind_b)} the orbit holds a mode for "
             f"{length * T / step:.2g} of a step ({length:.2g} T): the step cannot resolve it, and the runs at h and "
