@@ -168,7 +168,7 @@ def spice_steady(chunk, steady: bool, orbit, T: float, periods: int, window: int
 
         from tqdm import tqdm
         with tqdm(total=MAX_SPICE_PERIODS if steady else periods, unit="period", file=sys.stderr, disable=None,
-                  leave=False, desc="ngspice " + ("from its own start" if x0 is None else "from the orbit")) as bar:
+                  leave=False, desc="ngspice" + (" from its own start" if x0 is None else "")) as bar:
             run = chunk(x0)
             bar.update(periods)
             n, drifts, means = periods, [spice_drift(run, T, periods, window)], []

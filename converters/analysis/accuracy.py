@@ -546,7 +546,7 @@ def accurate_steady(model: Model, p: dict, rtol: float, *, x0: npt.NDArray[np.fl
         worst = result.worst()
         # backward Euler erasing a resonance the circuit keeps (a snubber's ring) does so at N and 2N alike: its
         # estimates agree with themselves (a buck's 1 ohm, 10 pF snubbers: 9e-6 estimated, 6.6e-4 true)
-        damped = _overdamped(model, p, fine_method, remedy=False)
+        damped = _overdamped(model, p, fine_method, remedy=False) if theta > THETA else ""
         if worst <= target and not damped:
             return replace(result, wall_s=time.perf_counter() - clock)
         best = result
@@ -557,7 +557,7 @@ def accurate_steady(model: Model, p: dict, rtol: float, *, x0: npt.NDArray[np.fl
             theta, coarse_n = THETA, _resolved_steps(model, p)
             try:
                 orbit, tr = run(Theta(h=T / coarse_n, theta=theta), orbit.x0, 0)
-            except ResourceError as why:
+            except (ResourceError, SimulationError) as why:
                 stopped = f"the trapezoid at {coarse_n:,} steps a period cannot be run ({why})"
                 break
             previous, history, fine_n = (measures(model, p, tr, T), orbit), None, 2 * coarse_n
@@ -702,18 +702,15 @@ def last_period(model: Model, p: dict, tr: Trajectory) -> dict:
               if not np.any(np.abs(boundaries - (t0 + e[2] * T)) <= 1e-9 * T)]
     fractions = mode_fractions(tr, T, events, edges, t0)
     bounds = np.unique(np.concatenate([boundaries, [t0 + e[2] * T for e in events]]))
-    # the shortest mode between two pair events with no switching edge between them: (its length in T, the event
-    # that starts it, the one that ends it); None with fewer than two
-    between = None
+    # each mode between two pair events with no switching edge between them, shortest first: (its length in T, the
+    # event that starts it, the one that ends it)
     timed = sorted(events, key=lambda e: e[2])
-    for a, b in zip(timed, timed[1:]):
-        length = b[2] - a[2]
-        if length > 1e-12 and not np.any((boundaries > t0 + a[2] * T) & (boundaries < t0 + b[2] * T)) \
-                and (between is None or length < between[0]):
-            between = (length, a, b)
+    between = sorted(((b[2] - a[2], a, b) for a, b in zip(timed, timed[1:]) if b[2] - a[2] > 1e-12
+                      and not np.any((boundaries > t0 + a[2] * T) & (boundaries < t0 + b[2] * T))),
+                     key=lambda mode: mode[0])
     return {"mode_fractions": fractions, "events": events, "t0": t0,
             "shortest_interval_T": float(np.diff(bounds)[np.diff(bounds) > 1e-12 * T].min() / T),
-            "shortest_mode": between}
+            "modes_between_events": between}
 
 
 @dataclass(frozen=True)
@@ -1021,21 +1018,25 @@ ONSET_RTOL = 1e-6
 
 def _unresolved_mode(period: dict, tr: Trajectory, T: float, step: float | None) -> str:
     """Why the stepper's estimate cannot be trusted where its orbit (``tr``'s last period, read by
-    :func:`last_period`: ``shortest_mode``) holds a mode shorter than one step between two pair events: the step
+    :func:`last_period`: ``modes_between_events``) holds a mode shorter than one step between two pair events: the step
     cannot resolve it, and the runs at h and 2h may both make it where the circuit has none (a series resonant
     converter's bridge commutating as its current reverses: "off" for 0.038 of a step at T/1000, T/2000 and T/4000
     alike; the estimate 6.5e-5, the exact orbit, which commutes directly, 6.0e-4 away; a parallel resonant one's
     D1+D2+D4). '' where every such mode spans a step, or both events fall inside one step (a bridge's pair of diodes
     starting together, their instants read 0.006 of a step apart: one event of the step's)."""
-    found = period.get("shortest_mode")
+    if not step:
+        return ""
+
+    def crosses_a_step(mode) -> bool:
+        start, end = period["t0"] + mode[1][2] * T, period["t0"] + mode[2][2] * T
+        return bool(np.any((tr.t > start) & (tr.t <= end + 1e-9 * step)))
     # (a mode of exactly one step, its events on the grid, is the step's own and scales with it: Richardson sees it)
-    if not step or found is None or found[0] * T >= (1.0 - 1e-6) * step:
+    found = next((mode for mode in period.get("modes_between_events", ())
+                  if mode[0] * T < (1.0 - 1e-6) * step and crosses_a_step(mode)), None)
+    if found is None:
         return ""
-    length, (pair_a, kind_a, at_a), (pair_b, kind_b, at_b) = found
-    start, end = period["t0"] + at_a * T, period["t0"] + at_b * T
-    if not np.any((tr.t > start) & (tr.t <= end + 1e-9 * step)):
-        return ""
-    name = lambda pair, kind: "the switching" if pair == SWITCHING else f"{pair} {kind}"      # noqa: E731
+    length, (pair_a, kind_a, _), (pair_b, kind_b, _) = found
+    name = lambda pair, kind: "the comparator's switching" if pair == SWITCHING else f"{pair} {kind}"  # noqa: E731
     return (f"between {name(pair_a, kind_a)} and {name(pair_b, kind_b)} the orbit holds a mode for "
             f"{length * T / step:.2g} of a step ({length:.2g} T): the step cannot resolve it, and the runs at h and "
             "2h may both make a mode the circuit does not have, so the estimate may be far too small; use --method "

@@ -115,7 +115,8 @@ class Circuit(Model):
         if twice is not None:          # -p NAME would be ambiguous: SPICE names are case-insensitive
             element = next(e for e in self.netlist.elements if e.name == twice)
             raise NetlistError(f"{self.netlist.where(twice)}: .param {twice} and {element.title} (line {element.line}) "
-                               "share a name, so -p would not know which to set; rename one")
+                               "share a name, and pcsuite sets a value by its name (-p, or the .param itself) without "
+                               "telling them apart; rename one")
         return tuple(out)
 
     def resolve(self, given: dict | None = None) -> dict:

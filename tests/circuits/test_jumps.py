@@ -270,7 +270,7 @@ def test_a_push_pulls_winding_hands_its_current_to_the_other_half_through_its_bo
     energy to the source (the DB2+DR1+DR2 interval). The event method had refused it ("the mode-selection LCP ...
     has no solution; the LCS is not well posed there"): its impulse pairs were those free of D in every
     configuration, and the closed S1 gives DB1 one. Both methods reach the same orbit (1e-8), below the ideal
-    2 Dh n Vin = 9.6 V by the leakage's division, with the same modes."""
+    2 Dh n Vin = 9.6 V by the leakage's division, with the same DB2 interval (1e-4 T)."""
     path = tmp_path / "push-pull.cir"
     path.write_text(PUSH_PULL)
     model = Circuit.from_netlist(path)
