@@ -473,33 +473,17 @@ def test_a_refinement_past_the_memory_limit_leaves_the_comparison_made(monkeypat
     assert "--spice-tmax" not in note
 
 
-BOOST_99 = """Boost at duty 0.99 in CCM (Vin / (1 - D) = 1200 V)
-.param Vin=12 L=10u C=100u R=1k f_sw=100k D=0.99
-.param T={1/f_sw} e={1e-6/f_sw}
-Vin in 0 DC {Vin}
-Vg gate 0 PULSE(1 0 {D*T - e/2} {e} {e} {(1-D)*T - e} {T})
-L1 in sw {L}
-S1 sw 0 gate 0 SWMOD
-D1 sw out DMOD
-C1 out 0 {C}
-R1 out 0 {R}
-.model SWMOD SW(VT=0.5)
-.model DMOD D
-.tran {T/1000} {500*T} 0 {T/200} UIC
-.meas tran vout_mean AVG v(out) FROM={490*T} TO={500*T}
-.end
-"""
-
-
 @pytest.mark.slow
 def test_compare_does_not_refine_ngspice_where_its_models_losses_make_the_difference(tmp_path, ngspice):
     """A boost at D = 0.99 (1200 V from 12 V): ngspice's RON dissipates ~1 % of the input power on pcsuite's orbit,
     and its mean is 1.04 % lower. compare refined ngspice (TMAX / 4, RELTOL / 10), which ran to its 600 s time limit
     before the same FAIL; the models' losses make that difference at any resolution, so it does not refine."""
     from validation.circuit_compare import compare_circuit
+    from ..analysis.test_periodic import DCM_BOOST
     path = tmp_path / "boost99.cir"
-    path.write_text(BOOST_99)
-    result = compare_circuit(Circuit.from_netlist(path))
+    path.write_text(DCM_BOOST)
+    result = compare_circuit(Circuit.from_netlist(path), {"D": 0.99, "L": 10e-6, "C": 100e-6, "R": 1000.0,
+                                                           "f_sw": 100e3})
     assert not result.passed and 0.009 < result.metrics["v(out)_mean_rel_error"] < 0.012
     assert not any(note.startswith("ngspice at TMAX") for note in result.notes), result.notes
     assert any("ngspice's switch and diode models (RON = 0.001 ohm" in note for note in result.notes)
