@@ -11,6 +11,7 @@ from ``data/defaults.toml``.
 """
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -95,11 +96,15 @@ def compare(converter: str, params: dict | None = None, *, periods: int | None =
             x_star, rho = orbit.x0, orbit.spectral_radius
         lcp = run_converter(model, p, h=h, theta=theta, periods=periods, x0=x_star)
     window_start = (periods - window) * T
-    built = {}
+    built = {"seconds": 0.0}
 
     def chunk(x0):
-        built["netlist"] = model_netlist(model, p, periods * T, spice_options, x0=x0)
-        return spice_trajectory(model, p, built["netlist"], run_spice(built["netlist"]), window_start)
+        started = time.perf_counter()
+        try:
+            built["netlist"] = model_netlist(model, p, periods * T, spice_options, x0=x0)
+            return spice_trajectory(model, p, built["netlist"], run_spice(built["netlist"]), window_start)
+        finally:
+            built["seconds"] += time.perf_counter() - started
     spice, spice_periods, settle, notes, independent = spice_steady(chunk, start == "steady", x_star, T, periods,
                                                                     window, spice_start, rho)
     netlist = built["netlist"]
@@ -112,6 +117,8 @@ def compare(converter: str, params: dict | None = None, *, periods: int | None =
         result.checks = {name: ok for name, _, _, ok in result.rows}
     result.metrics["spice_settle"] = settle
     result.metrics["spice_periods"] = spice_periods
+    # every ngspice run the comparison made (its settling chunks): spice_wall_s is the last
+    result.metrics["spice_total_s"] = built["seconds"]
     result.metrics["spice_settled"] = bool(settle <= SPICE_SETTLE)
     if settle <= SPICE_SETTLE:                  # the ripple agreement is checked on a settled ngspice run only
         th, value = result.thresholds["vout_ripple_rel"], result.metrics["vout_ripple_rel_error"]
