@@ -128,7 +128,8 @@ def test_accuracy_on_request_does_not_take_backward_eulers_agreement_with_itself
     at N and 2N erase the 5 MHz ring alike: it had stopped at 1,560 steps a period, 6.962259 V "within 9.6e-7",
     5.0e-3 below the exact method's 6.997088458 V (event, exact flows, 27 s). It now starts again with the
     trapezoid from the steps at which it does not ring on the snubber (h rate <= 6: 16,667 a period), and meets
-    rtol there."""
+    rtol there. Its error converges at order ~1 from there (the step does not resolve the snubber): its estimate
+    takes the order observed, where the declared 2 had read 3.4e-6 against an error of 1.5e-5."""
     from converters.analysis.accuracy import accurate_steady
     text = (NETLISTS / "buck.cir").read_text().replace("R1 out 0 {R}", "R1 out 0 {R}\nRsn sw sn 1\nCsn sn 0 100p")
     (tmp_path / "snubbed.cir").write_text(text)
@@ -137,6 +138,7 @@ def test_accuracy_on_request_does_not_take_backward_eulers_agreement_with_itself
     q = result.quantities["vout_mean"]
     assert result.met and result.method.theta == 0.5 and result.steps_per_period >= 16_667
     assert abs(q.value - 6.997088458) <= 1e-4 * 6.997088458 and q.relative <= 5e-5
+    assert abs(q.value - 6.997088458) <= 3 * q.error_estimate         # measured 1.5x
 
 
 def test_accuracy_on_request_writes_at_most_a_million_steps_by_default(tmp_path):
