@@ -93,34 +93,33 @@ class Spice(Method, key="spice"):
                              "(converters.run.run_converter(model, params, method=Spice(...)))")
 
     def sweep_check(self, model, p: dict, steady: bool, periods: int) -> None:
-        from netlists import model_netlist
         if not (isinstance(periods, int) and periods >= 2):
             raise ParameterError(f"periods must be an integer >= 2 for an ngspice sweep; got {periods!r}")
         options = spice_settings(model.period(p), self.spice_tmax, self.spice_reltol, self.spice_method)
-        model_netlist(model, p, 2 * model.period(p), options)          # refuses a model without a netlist
+        _deck(model, p, 2 * model.period(p), options)[0](None)          # refuses a model without a netlist
 
     def sweep_row(self, model, p: dict, steady: bool, periods: int) -> dict:
         """``periods`` periods in ngspice from the LCP stepper's orbit (``steady``) or from rest, measured over the
         last one (a failed run, "timestep too small", raises: the sweep stores it as a failed row)."""
-        from converters.analysis.modes import held_fraction, mode_class
+        from converters.analysis.modes import mode_intervals, period_modes
         from converters.run import make_method, steady_state
-        from netlists import model_netlist
 
-        from .gdcm import spice_intervals
-        from .spice import run_spice, spice_trajectory
+        from .gdcm import SPICE_MIN_RUN
+        from .spice import run_spice
         T = model.period(p)
         x0 = steady_state(model, p, make_method(model, p, "lcp", None)).x0 if steady else None
         options = spice_settings(T, self.spice_tmax, self.spice_reltol, self.spice_method)
-        netlist = model_netlist(model, p, periods * T, options, x0=x0)
+        write, labelled = _deck(model, p, periods * T, options)
+        netlist = write(x0)
         result = run_spice(netlist)
-        start = netlist.t_end - T
-        run = spice_trajectory(model, p, netlist, result, start)
-        intervals = spice_intervals(model, netlist, result, 1)
+        end = float(result.time[-1])
+        start = end - T
+        run = labelled(model, p, netlist, result, start)
+        mode, held = period_modes(model, mode_intervals(run.t, run.modes(), start, end, T, SPICE_MIN_RUN))
         previous = run.mean("vout", t0=start - T, t1=start)
         mean = run.mean("vout", t0=start)
         return {"vout_mean": float(mean), "vout_ripple": float(run.ripple("vout", t0=start)),
-                "rms_state0": float(run.rms(model.state_names[0], t0=start)), "mode": mode_class(intervals),
-                "held_fraction": held_fraction(intervals, 1.0),
+                "rms_state0": float(run.rms(model.state_names[0], t0=start)), "mode": mode, "held_fraction": held,
                 "settle": float(abs(mean - previous) / max(abs(mean), 1e-12)), "spice_steps": int(run.steps)}
 
     def sweep_chunk_done(self) -> None:
@@ -147,22 +146,9 @@ class Spice(Method, key="spice"):
                 periods = STEADY_PERIODS
         span_s = duration(model, p, t_end, periods)
         T = model.period(p)
-        if hasattr(model, "netlist"):             # a netlist file: ngspice runs the same circuit
-            from netlists.circuit import circuit_netlist, file_spice_options
-
-            from .spice import circuit_trajectory as labelled
-            options = file_spice_options(model, options)
-
-            def write(start):
-                return circuit_netlist(model, p, span_s, options, x0=start)
-            T = T if model.periodic(p) else span_s / 10
-        else:
-            from netlists import model_netlist
-
-            from .spice import spice_trajectory as labelled
-
-            def write(start):
-                return model_netlist(model, p, span_s, options, x0=start)
+        if hasattr(model, "netlist") and not model.periodic(p):
+            T = span_s / 10
+        write, labelled = _deck(model, p, span_s, options)
         netlist = write(x0)
         result = run_spice(netlist)
         window_start = result.time[-1] - 10 * T
@@ -189,3 +175,19 @@ class Spice(Method, key="spice"):
                     "warnings": warnings}
         return replace(tr, algorithm=self, wall_s=time.perf_counter() - start, metadata=metadata,
                        retcode=ReturnCode.SUCCESS if notes.get("spice_settled", True) else ReturnCode.NOT_CONVERGED)
+
+
+def _deck(model, p: dict, span_s: float, options):
+    """(write(x0) -> the Netlist of ``span_s`` s from ``x0``, labelled(model, p, netlist, result, window_start) -> its
+    Trajectory): a netlist file's own circuit (its signals and modes its own: a sweep had read a built-in model's
+    probes on it, "KeyError: 'vout'"), or a built-in model's deck."""
+    if hasattr(model, "netlist"):             # a netlist file: ngspice runs the same circuit
+        from netlists.circuit import circuit_netlist, file_spice_options
+
+        from .spice import circuit_trajectory
+        options = file_spice_options(model, options)
+        return (lambda start: circuit_netlist(model, p, span_s, options, x0=start)), circuit_trajectory
+    from netlists import model_netlist
+
+    from .spice import spice_trajectory
+    return (lambda start: model_netlist(model, p, span_s, options, x0=start)), spice_trajectory

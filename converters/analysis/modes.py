@@ -62,6 +62,27 @@ def held_fraction(intervals: list[dict], periods: float) -> float:
     return float(sum(iv["fraction"] for iv in intervals if iv["mode"] in HELD) / periods)
 
 
+def mode_sequence(intervals: list[dict]) -> str:
+    """The modes the intervals pass through, in order and joined by ' > ' (one period's: a run that wraps around
+    the period's end is one)."""
+    labels = [iv["mode"] for iv in intervals]
+    sequence = [label for i, label in enumerate(labels) if i == 0 or label != labels[i - 1]]
+    if len(sequence) > 1 and sequence[0] == sequence[-1]:
+        sequence.pop()
+    return " > ".join(sequence)
+
+
+def period_modes(model: object, intervals: list[dict]) -> tuple[str, float]:
+    """What a sweep stores of one period's modes: (mode, held fraction of T). A built-in converter's mode class
+    ('CCM', 'DCM', ...; :func:`mode_class`) and the fraction its pairs are held; a netlist's modes name its closed
+    switches and conducting diodes, not a class, so its mode is their sequence over the period ('S1 > D1 > off')
+    and the fraction is that of 'off', where nothing conducts (a buck's DCM). A netlist's every mode had read
+    'CCM', held 0, in deep DCM: none of its labels is a class's."""
+    if getattr(model, "off_held_label", None) == "off":
+        return mode_sequence(intervals), float(sum(iv["fraction"] for iv in intervals if iv["mode"] == "off"))
+    return mode_class(intervals), held_fraction(intervals, 1.0)
+
+
 def orbit_intervals(orbit: Trajectory) -> list[dict]:
     """Mode intervals over one period of a labelled orbit Trajectory (each point carries the label of the
     step that ends there)."""

@@ -5,8 +5,8 @@ point -> the model's problem, a method, and the row of measures each run gives.
 local processes, a Dask cluster) and gives the same rows everywhere. A row holds the point's index and
 parameters, its status (``ok`` or ``failed``) and message, and the steady state's measures: the mean and
 ripple of vout and the RMS of the first state over one period on the orbit, the conduction mode class
-(CCM, DCM, GDCM-ON, ... from :mod:`converters.analysis.modes`) and the fraction of the period a pair is
-held, the Floquet spectral radius and the Newton iterations. A point that fails is a row with its message, never an exception.
+(CCM, DCM, GDCM-ON, ... from :mod:`converters.analysis.modes`; a netlist's sequence of conduction states,
+'S1 > D1 > off') and the fraction of the period a pair is held (a netlist's: nothing conducts), the Floquet spectral radius and the Newton iterations. A point that fails is a row with its message, never an exception.
 
 ``rows`` runs the points of a PWM converter on the LCP stepper (one complementarity pair) through
 one compiled call (:mod:`converters.sweeps.batch`); any other model or method, and a point the batch
@@ -86,6 +86,36 @@ def diverging(run: Trajectory, T: float) -> str:
         return (f"diverging: the state's largest magnitude grows {100 * growth[-1]:.3g} % a period (to "
                 f"{peaks[-1]:.3g} at the end): no steady state")
     return ""
+
+
+#: A row from rest whose mean may be further than this (relative) from the periodic steady state says so.
+UNSETTLED = 1e-3
+#: What a row from rest that has not settled says first (the command line counts them).
+NOT_SETTLED = "not settled"
+
+
+def unsettled(run: Trajectory, T: float) -> str:
+    """Why a run from rest's last period is not the steady state's ('' where it is, to UNSETTLED): its mean of vout
+    still moves, and the moves' decay over the last five periods, taken as geometric (ratio r a period), puts the
+    steady state about move r / (1 - r) away (a DCM boost at 50 periods: 40.6 V stored as ok, 54.37 V its orbit's;
+    this reads 0.26). A ring-down's means alternate: the moves are summed over two periods."""
+    end = float(run.t[-1])
+    periods = int(round((end - float(run.t[0])) / T))
+    if periods < 6:
+        return ""
+    means = np.array([run.mean("vout", t0=end - (k + 1) * T, t1=end - k * T) for k in range(5, -1, -1)])
+    moves = np.abs(np.diff(means))
+    scale = max(abs(means[-1]), run.rms("vout", t0=end - T, t1=end), 1e-300)
+    first, last = moves[:2].sum(), moves[-2:].sum()
+    if last <= 1e-12 * scale:
+        return ""
+    ratio = min((last / first) ** (1.0 / 3.0), 0.999) if first > 0.0 else 0.999
+    away = 0.5 * last * ratio / (1.0 - ratio) / scale
+    if away <= UNSETTLED:
+        return ""
+    return (f"{NOT_SETTLED} after {periods} periods from rest: its mean of vout moved {moves[-1] / scale:.1e} "
+            f"(relative) over the last period and is about {away:.1e} from the periodic steady state (its moves "
+            "decaying geometrically): use --steady, or more --periods")
 
 
 def failed_row(index: int, point: dict, message: str, wall_s: float = 0.0) -> dict:
@@ -270,7 +300,8 @@ class ModelSweep:
                 if diverging(long, T):
                     return failed_row(index, point, diverging(long, T), time.perf_counter() - clock)
                 run = simulate(model.problem(p, T, long.x[-1]), method)
-                extra = {}
+                from dataclasses import replace
+                extra = {"message": unsettled(replace(long, labels=model.labels(p)), T)}
             return {**out, "status": "ok", "message": "", **orbit_row(model, p, run, self.metrics), **extra,
                     "wall_s": time.perf_counter() - clock}
         except (ValueError, RuntimeError, ArithmeticError) as exc:
@@ -306,8 +337,11 @@ class ModelSweep:
         result = accurate_steady(model, p, self.rtol)
         q = result.quantities
         row = orbit_row(model, p, result.trajectory, self.metrics)
+        # the first state's RMS is an estimated measure where that state is an inductor's current; a capacitor's
+        # (a netlist's first state may be one) is the orbit's, read by the run's own rule
+        rms = q.get(f"{model.state_names[0]}_rms")
         row.update(vout_mean=q["vout_mean"].value, vout_ripple=q["vout_ripple"].value,
-                   rms_state0=q[f"{model.state_names[0]}_rms"].value,
+                   rms_state0=row["rms_state0"] if rms is None else rms.value,
                    spectral_radius=float(np.abs(result.orbit.multipliers).max()), iterations=int(result.orbit.iterations),
                    orbit_distance=float(result.orbit.distance),
                    error_estimate=result.worst(), vout_mean_error_estimate=q["vout_mean"].relative,
@@ -478,7 +512,7 @@ def orbit_row(model: Model, p: dict, run: Trajectory, metrics: tuple = ()) -> di
     metrics asked for (:mod:`.metrics`)."""
     from dataclasses import replace
 
-    from ..analysis.modes import held_fraction, mode_class, orbit_intervals
+    from ..analysis.modes import orbit_intervals, period_modes
     from .metrics import metric_value
     run = replace(run, labels=model.labels(p))
     t0, t1 = run.t[0], run.t[-1]
@@ -488,10 +522,9 @@ def orbit_row(model: Model, p: dict, run: Trajectory, metrics: tuple = ()) -> di
               else {})
     if shares:
         raise SimulationError(f"no value to measure: {circuit.floating_text(p, shares)}")
-    intervals = orbit_intervals(run)
+    mode, held = period_modes(model, orbit_intervals(run))
     row = {"vout_mean": float(run.mean("vout", t0=t0, t1=t1)), "vout_ripple": float(run.ripple("vout", t0=t0, t1=t1)),
-           "rms_state0": float(run.rms(run.state_names[0], t0=t0, t1=t1)), "mode": mode_class(intervals),
-           "held_fraction": held_fraction(intervals, 1.0)}
+           "rms_state0": float(run.rms(run.state_names[0], t0=t0, t1=t1)), "mode": mode, "held_fraction": held}
     return {**row, **{name: metric_value(model, p, run, name) for name in metrics if name not in row}}
 
 

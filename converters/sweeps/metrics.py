@@ -5,12 +5,12 @@ from their descriptions, :mod:`converters.thermal`), ``thermal.efficiency``, ``t
 and ``tj.max`` (junction temperatures, degC), ``loss.NAME`` (a device's losses, W). Each is read on the same one-period run as the
 standard measures, by the run's own rule (exact quadrature for the event method), so every backend gives the same
 value; each has a unit (the Parquet dataset's metadata, the plots' axes). ``fraction.MODE`` is the fraction of the
-period spent in a mode (``fraction.DCM``, ``fraction.CCM-ON``; a netlist's ``fraction.S1``: 0 where the point never
-enters it)."""
+period spent in a mode the model names (``fraction.DCM``, ``fraction.CCM-ON``; a netlist's ``fraction.S1``,
+``fraction.off``: 0 where the point never enters it); another name is refused."""
 from __future__ import annotations
 
 from collections.abc import Iterable
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -38,7 +38,8 @@ def check_metrics(model: Model, p: dict, names: Iterable[str]) -> dict:
     for name in names:
         if not isinstance(name, str) or not name.strip():
             raise ParameterError(f"a metric must be a name (SIGNAL.STAT, efficiency, losses.NAME); got {name!r}")
-        if name.startswith("fraction.") and name[len("fraction."):].strip():
+        if name.startswith("fraction."):
+            _check_mode(model, name)
             out[name] = "1"
             continue
         if name in THERMAL or name.startswith(("tj.", "loss.")):
@@ -97,6 +98,35 @@ def metric_value(model: Model, p: dict, run: Trajectory, name: str) -> float:
         return float(getattr(run, statistic)(signal, t0=t0, t1=t1))
     values = np.asarray(run.signal(signal, run.rows_between(t0, t1)), dtype=float)
     return float(values.min() if statistic == "min" else values.max())
+
+
+def _check_mode(model: Model, name: str) -> None:
+    """Refuse ``fraction.MODE`` for a mode the model never names (``fraction.DCM`` on a netlist, whose modes name its
+    conducting elements, had read 0.0 at every point of a buck in DCM). A netlist's modes are its closed switches,
+    then its conducting diodes, in the file's order, joined by '+', or 'off'."""
+    mode = name[len("fraction."):]
+    circuit: Any = model
+    while circuit is not None and not hasattr(circuit, "netlist"):      # a netlist's plant, or a loop around one
+        circuit = getattr(circuit, "circuit", None) or getattr(circuit, "converter", None)
+    if circuit is None or getattr(model, "off_held_label", None) != "off":       # a built-in converter's classes
+        labels = tuple(label for label in dict.fromkeys([*(getattr(model, "mode_labels", ()) or ()),
+                                                         getattr(model, "off_held_label", None)]) if label)
+        if mode not in labels:
+            raise ParameterError(f"metric {name!r}: the modes of {model.key} are "
+                                 f"{', '.join('fraction.' + label for label in labels)}")
+        return
+    compiled = circuit.compiled(circuit.resolve({}))
+    switches = [s.upper() for s in compiled.switch_names]
+    diodes = [d.upper() for d in compiled.pair_names] if compiled.pair_names != ("none",) else []
+    parts = mode.split("+")
+    canonical = "+".join([s for s in switches if s in parts] + [d for d in diodes if d in parts])
+    if mode == "off" or (canonical == mode and len(set(parts)) == len(parts)):
+        return
+    names = ", ".join(switches + diodes) or "none"
+    hint = f"; in their order: fraction.{canonical}" if set(parts) <= set(switches + diodes) and canonical else ""
+    raise ParameterError(f"metric {name!r}: a netlist's modes are its closed switches and conducting diodes "
+                         f"({names}) joined by '+' (switches first, in the file's order), or 'off' where nothing "
+                         f"conducts{hint}")
 
 
 def _thermal_setup(model: Model):  # -> ThermalSetup

@@ -337,3 +337,39 @@ def test_a_batched_point_on_an_orbit_its_slowest_mode_takes_ages_to_reach_is_che
 def _warned(orbit):
     from dataclasses import replace
     return replace(orbit, warning="a remote orbit")
+
+
+@pytest.mark.parametrize("method, within", [("event", 1e-7), ("lcp", 5e-3)])     # lcp: one step, T/200
+def test_a_netlists_sweep_row_names_its_mode_sequence_and_the_fraction_nothing_conducts(method, within):
+    """A netlist's modes name its conducting elements (S1, D1, off), none of them a class's: every row had read
+    mode 'CCM', held_fraction 0, in deep DCM. The buck at D = 0.3 and 0.5 spends 0.378734556 and 0.238066722 of
+    its period with nothing conducting (the tester's exact orbit: matrix exponentials, the diode's turn-off by
+    Brent's method); fraction.off reads the same, fraction.DCM is refused."""
+    from converters.models import get_model
+    from converters.sweeps.metrics import check_metrics
+    buck = str(NETLISTS / "buck.cir")
+    rows = _frame(run_ensemble(ModelSweep(buck, method=method, metrics=("fraction.off",)),
+                               Grid([Axis.parse("D=0.3:0.5:2")]), backend="serial"))
+    assert list(rows["mode"]) == ["S1 > D1 > off"] * 2
+    np.testing.assert_allclose(rows["held_fraction"], [0.378734556, 0.238066722], atol=within)
+    np.testing.assert_allclose(rows["fraction.off"], rows["held_fraction"], atol=1e-12)
+    model = get_model(buck)
+    for name, hint in [("fraction.DCM", "or 'off' where nothing conducts"),
+                       ("fraction.D1+S1", "in their order: fraction.S1+D1")]:
+        with pytest.raises(ParameterError, match="a netlist's modes are its closed switches and conducting diodes "
+                                                 r"\(S1, D1\)") as caught:
+            check_metrics(model, model.resolve({}), [name])
+        assert str(caught.value).endswith(hint)
+    with pytest.raises(ParameterError, match="the modes of buck are fraction.CCM-ON, fraction.CCM-OFF, fraction.DCM"):
+        check_metrics(get_model("buck"), get_model("buck").resolve({}), ["fraction.FOO"])
+
+
+def test_accuracy_on_request_sweeps_a_netlist_whose_first_state_is_a_capacitors():
+    """The buck netlist's first state is v(c1); --rtol's rows read rms_state0 from an estimated inductor RMS of that
+    name: "KeyError: 'v(c1)_rms'" at every point. Its value is the orbit's RMS of v(c1), vout's mean (5.79449 V at
+    D = 0.3) within rtol."""
+    rows = _frame(run_ensemble(ModelSweep(str(NETLISTS / "buck.cir"), rtol=1e-6), Grid([Axis.parse("D=0.3:0.3:1")]),
+                               backend="serial"))
+    assert rows.loc[0, "status"] == "ok", rows.loc[0, "message"]
+    assert abs(rows.loc[0, "vout_mean"] - 5.794489706) < 1e-6 * 5.794489706
+    assert abs(rows.loc[0, "rms_state0"] - 5.794489706) < 1e-3 and rows.loc[0, "rtol_met"]

@@ -133,7 +133,17 @@ def build(args):
     else:
         points = Grid([Axis.parse(g) for g in args.grid])
     check_memory(f"sweep: {points.size:,} points", float(points.size) * BYTES_PER_ROW, remedy="fewer points")
-    clash = sorted(set(base) & set(points.names))
+    # -p, --grid and --tolerance name a parameter as the model keys it (a netlist's case-insensitively): -p L=10u
+    # beside --tolerance L=10% had reached the netlist as both L and l, "-p l is given twice"
+    from converters.models import get_model as model_of
+    keyed = model_of(args.model, args.control).parameter_name
+    names = [keyed(str(k)) for k in base]
+    twice = next((k for k, name in zip(base, names) if names.count(name) > 1), None)
+    if twice is not None:
+        raise ParameterError(f"-p {twice} is given twice (as {' and '.join(k for k in base if keyed(str(k)) == keyed(str(twice)))}"
+                             "; a netlist's names are case-insensitive)")
+    base = dict(zip(names, base.values()))
+    clash = sorted(set(base) & {keyed(str(name)) for name in points.names})
     if clash and points.kind != "tolerance":             # a tolerance's nominal may be given with -p
         raise ParameterError(f"{clash[0]} is both swept (--grid) and fixed (-p); give it once")
     if args.periods is not None and args.periods < 1:
@@ -244,8 +254,12 @@ def run(args) -> int:
     units = getattr(ensemble, "units", {})
     frame = write_summary(out, points, plotted, title, specs=specs, units=units, scope_metrics=metrics)
     failed = frame[frame["status"] != "ok"]
+    # rows from rest whose last period is not yet the steady state's (their values are the transient's)
+    from converters.sweeps.ensemble import NOT_SETTLED
+    unsettled = frame[(frame["status"] == "ok") & frame["message"].astype(str).str.startswith(NOT_SETTLED)]
     summary = {"out": str(out), "points": points.size, "stored_before": result.on_disk_before,
                "computed": result.computed, "ok": int(len(frame) - len(failed)), "failed": int(len(failed)),
+               "unsettled": int(len(unsettled)),
                "wall_s": result.wall_s, "points_per_s": result.rate,
                "failures": failed["message"].value_counts().head(5).to_dict(),
                "dataset": str(out / "parts"), "summary_plot": str(out / "summary.png")}
@@ -272,6 +286,10 @@ def run(args) -> int:
           f"{result.rate:,.0f} points/s)")
     for message, count in summary["failures"].items():
         print(f"  failed x{count}: {message}")
+    if len(unsettled):
+        worst = unsettled["message"].iloc[0]
+        print(f"pcsuite: warning: {len(unsettled):,} of the {summary['ok']:,} points stored as ok have not settled "
+              f"(their measures are the transient's, not the steady state's; the first: {worst})", file=sys.stderr)
     if "study" in summary:
         _print_study(summary["study"], units)
     print(f"  dataset: {quoted(summary['dataset'])}  (pandas.read_parquet)\n  plot:    {quoted(summary['summary_plot'])}")
