@@ -676,10 +676,12 @@ def injection_response(small: SmallSignalModel, frequency_hz: npt.ArrayLike, out
     of fs / WINDOW, off the multiples of fs/2) the input perturbed by ``amplitude`` cos(2 pi f t) (default: 1e-5 of
     the input's value, or of the comparator's ramp), the periodic steady state of the circuit with it (Newton shooting over the common
     period, exact event method), and the output's fundamental over that period, per unit amplitude. Returns (the
-    frequencies used, the responses)."""
+    frequencies used, each once, and the responses)."""
     from .periodic import newton_orbit, require
     T, n = small.T, small.n
-    plan = [_common(float(f), T) for f in np.atleast_1d(np.asarray(frequency_hz, dtype=float))]
+    # each frequency once: neighbours moved to the same multiple (eight asked about one frequency had run it four
+    # times each)
+    plan = list(dict.fromkeys(_common(float(f), T) for f in np.atleast_1d(np.asarray(frequency_hz, dtype=float))))
     longest = max((span for _, span in plan), default=0.0)
     if longest > MAX_CHECK_PERIODS * T * (1 + 1e-9):
         lowest = min(f for f, _ in plan)

@@ -184,3 +184,13 @@ def test_one_frequency_and_a_time_limit(capsys, monkeypatch):
     assert three["frequency_hz"][1] == pytest.approx(20000.0, rel=1e-12)
     assert one["magnitude_db"][0] == pytest.approx(three["magnitude_db"][1], abs=1e-9)
     assert one["phase_deg"][0] == pytest.approx(three["phase_deg"][1], abs=1e-7)
+
+
+def test_one_frequencys_check_injects_once(capsys):
+    """--check at one frequency had injected at eight copies of it (the same two, 49 kHz and 48.98 kHz, four times
+    each at fs/2). It injects once, at the frequency moved off fs/2, and the two responses agree to 1e-7 dB."""
+    code, out, _ = run_cli(capsys, "bode", "buck", "--input", "duty", "--fmin", "50k", "--fmax", "50k", "--points", "1",
+                           "--check", "--json")
+    check = json.loads(out)["check"]
+    assert code == 0 and check["frequency_hz"] == [pytest.approx(48979.5918, rel=1e-9)]      # 1 - 1/49 of fs/2
+    assert abs(check["difference_db"][0]) < 1e-7

@@ -104,7 +104,9 @@ def run(args) -> int:
     check = None
     if args.check:
         start = time.perf_counter()
-        f_check = np.geomspace(f[0], min(f[-1], 0.49 / small.T), CHECK_POINTS)
+        top = min(f[-1], 0.49 / small.T)
+        bottom = min(f[0], top)
+        f_check = np.geomspace(bottom, top, CHECK_POINTS if bottom < top else 1)
         f_used, measured = injection_response(small, f_check, output)
         if loop:
             measured = loop_from_closed(measured, at)
@@ -143,7 +145,8 @@ def _print(response, summary: dict, found) -> None:
     rho = float(np.abs(response.multipliers).max())
     print(f"{summary['converter']}: {what}{unit}, exact small-signal model about the periodic orbit (T = "
           f"{response.period:.6g} s, spectral radius {rho:.4g}): the orbit and its linearisation in "
-          f"{summary['model_s'] * 1e3:.1f} ms, {f.size} frequencies in {summary['response_s'] * 1e3:.1f} ms")
+          f"{summary['model_s'] * 1e3:.1f} ms, {f.size} frequenc{'y' if f.size == 1 else 'ies'} in "
+          f"{summary['response_s'] * 1e3:.1f} ms")
     rows = np.unique(np.round(np.linspace(0, f.size - 1, min(f.size, 11))).astype(int))
     print(f"  {'f (Hz)':>12} {'|H| (dB)':>10} {'phase (deg)':>12}")
     for i in rows:
@@ -153,7 +156,8 @@ def _print(response, summary: dict, found) -> None:
               f"{found.phase_crossover_hz:.6g} Hz, gain margin {found.gain_margin_db:.4g} dB (nan: none in the range)")
     check = summary.get("check")
     if check:
-        print(f"check: a sinusoid injected at {len(check['frequency_hz'])} frequencies, each simulated to its periodic "
+        print(f"check: a sinusoid injected at {len(check['frequency_hz'])} "
+              f"frequenc{'y' if len(check['frequency_hz']) == 1 else 'ies'}, each simulated to its periodic "
               f"steady state (exact event method), in {check['check_s']:.2f} s:")
         print(f"  {'f (Hz)':>12} {'exact (dB)':>11} {'injected (dB)':>14} {'diff (dB)':>10} {'diff (deg)':>11}")
         for row in zip(check["frequency_hz"], check["exact_db"], check["injected_db"], check["difference_db"],
