@@ -601,3 +601,16 @@ def test_an_ngspice_sweep_runs_a_netlists_own_circuit(ngspice):
     assert row["status"] == "ok", row["message"]
     assert abs(row["vout_mean"] - 5.794489706) < 1e-4 * 5.794489706
     assert row["mode"] == "S1 > D1 > off" and abs(row["held_fraction"] - 0.378734556) < 5e-3
+
+
+def test_a_metric_the_tolerances_do_not_move_gets_no_accuracy_warning(tmp_path, capsys):
+    """The ideal CCM buck's mean is D Vin whatever L and R: its samples spread by rounding (~3e-14 V) and its error
+    is rounding too, and the study warned "error 2.7e-15 is 0.2 of its spread ... the yield may be off"; with
+    --samples 1, "inf of its spread (nan)". Neither is a warning now, and each says why."""
+    args = ["sweep", "buck", "-p", "R=1", "--tolerance", "L=10%", "--steady", "--no-progress"]
+    assert main([*args, "--tolerance", "R=5%", "--samples", "8", "--out", str(tmp_path / "a")]) == 0
+    out, err = capsys.readouterr()
+    assert "warning" not in err and "; the samples do not move it (standard deviation " in out
+    assert main([*args, "--samples", "1", "--out", str(tmp_path / "b")]) == 0
+    out, err = capsys.readouterr()
+    assert "warning" not in err and "; one sample, no spread to weigh it against" in out

@@ -303,6 +303,8 @@ def run(args) -> int:
 
 #: A tolerance study's metric is accurate enough where its error is below this fraction of its spread.
 WELL_BELOW = 0.1
+#: A spread (and an error) below this fraction of a metric's size is rounding: the samples do not move it.
+ROUNDING_SPREAD = 1e-12
 
 
 def study_accuracy(ensemble, frame, metrics) -> dict:
@@ -315,9 +317,21 @@ def study_accuracy(ensemble, frame, metrics) -> dict:
     ok = frame[frame["status"] == "ok"]
     out = {"metrics": {}, "warnings": []}
     for metric, (error, how) in ensemble.nominal_error(list(dict.fromkeys(metrics))).items():
-        spread = float(np.std(ok[metric].to_numpy(dtype=float))) if metric in ok and len(ok) > 1 else float("nan")
+        values = ok[metric].to_numpy(dtype=float) if metric in ok else np.array([])
+        spread = float(np.std(values)) if values.size > 1 else float("nan")
+        size = float(np.abs(values).max(initial=0.0))
         ratio = error / spread if spread > 0 else (0.0 if error == 0 else float("inf"))
         out["metrics"][metric] = {"error": error, "spread": spread, "ratio": ratio, "how": how}
+        if values.size < 2:
+            # one sample has no spread to weigh the error against (--samples 1 had read "inf of its spread (nan)")
+            out["metrics"][metric]["ratio"] = float("nan")
+            continue
+        if spread <= ROUNDING_SPREAD * size and error <= ROUNDING_SPREAD * size:
+            # a metric the toleranced parameters do not move (an ideal CCM buck's mean: D Vin, whatever L, C and R):
+            # its spread is rounding, and an error at rounding is no part of it ("2.7e-15 is 0.2 of 1.3e-14")
+            out["metrics"][metric]["ratio"] = float("nan")
+            out["metrics"][metric]["constant"] = True
+            continue
         if not ratio <= WELL_BELOW:
             out["warnings"].append(f"{metric}'s error ({error:.3g}) is {ratio:.2g} of its spread over the samples "
                                    f"({spread:.3g}): the yield may be off; use a smaller --h-fraction, --rtol or "
@@ -355,8 +369,13 @@ def _print_study(study: dict, units: dict) -> None:
     for metric, a in study.get("accuracy", {}).get("metrics", {}).items():
         unit = units.get(metric, "")
         unit = f" {unit}" if unit not in ("", "1") else ""
-        print(f"  accuracy: {metric} within ~{a['error']:.2g}{unit} ({a['how']}), {a['ratio']:.2g} of its spread "
-              f"(standard deviation {a['spread']:.3g}{unit})")
+        if a.get("constant"):
+            against = f"; the samples do not move it (standard deviation {a['spread']:.2g}{unit}, rounding)"
+        elif a["spread"] != a["spread"]:                                   # NaN: one sample
+            against = "; one sample, no spread to weigh it against"
+        else:
+            against = f", {a['ratio']:.2g} of its spread (standard deviation {a['spread']:.3g}{unit})"
+        print(f"  accuracy: {metric} within ~{a['error']:.2g}{unit} ({a['how']}){against}")
     for warning in study.get("accuracy", {}).get("warnings", []):
         print(f"warning: {warning}", file=sys.stderr)
     if "indices" in study:
