@@ -616,3 +616,15 @@ def test_the_time_limit_stops_a_netlist_while_it_compiles(tmp_path):
     (line,) = err.strip().splitlines()
     assert line.startswith("pcsuite: error: the run did not finish within the time limit of 5 s (--time-limit)")
     assert cpu < 20.0, cpu
+
+
+@pytest.mark.parametrize("command", [["sensitivity"], ["bode", "--input", "D", "--points", "3"]])
+def test_a_file_names_control_characters_reach_the_terminal_as_escapes(capsys, tmp_path, monkeypatch, command):
+    """An ESC in a netlist's file name reached stdout raw in sensitivity's and bode's headers (their errors were
+    escaped already): a file could recolour or clear what the user reads. Every command's output is escaped."""
+    buck = Path(__file__).resolve().parents[2] / "netlists" / "circuits" / "buck.cir"
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "e\x1b[2Jx.cir").write_text(buck.read_text())
+    assert main([command[0], "e\x1b[2Jx.cir", *command[1:]]) == 0
+    out = capsys.readouterr().out
+    assert "\x1b" not in out and out.startswith("e\\x1b[2Jx.cir: ")

@@ -23,10 +23,15 @@ def main(argv=None) -> int:
     import warnings
     warnings.formatwarning = _one_line          # a warning (a bad tuning variable, ...) is one line, like an error
     code = 1
+    stdout = sys.stdout
+    # what a command prints of a user's names (a file's, an element's) reaches the terminal with its control
+    # characters escaped, as its errors do (an ESC in a netlist's file name recoloured bode's header)
+    sys.stdout = _Escaping(stdout)
     try:
         code = _main(argv)
         return code
     finally:
+        sys.stdout = stdout
         compile_module = sys.modules.get("converters.circuits.compile")
         if argv is None and compile_module is not None and compile_module.ABANDONED:
             # a factorisation the time limit stopped waiting for ran on in LAPACK: the interpreter's exit then
@@ -44,6 +49,23 @@ def main(argv=None) -> int:
 
 def _one_line(message, category, filename, lineno, line=None) -> str:
     return f"pcsuite: warning: {printable(str(message))}\n"
+
+
+#: C0 and C1 control characters and DEL, as escapes; a newline and a tab are kept (tables, lines).
+_CONTROLS = {c: repr(chr(c))[1:-1] for c in (*range(0x20), *range(0x7f, 0xa0)) if chr(c) not in "\n\t"}
+
+
+class _Escaping:
+    """A text stream that writes control characters as escapes (str.translate: fast on long tables)."""
+
+    def __init__(self, stream) -> None:
+        self._stream = stream
+
+    def write(self, text: str) -> int:
+        return self._stream.write(text.translate(_CONTROLS))
+
+    def __getattr__(self, name: str):
+        return getattr(self._stream, name)
 
 
 def printable(text: str) -> str:
