@@ -14,8 +14,8 @@ the dataset an uninterrupted run writes. A directory holding a different sweep, 
 refused, never overwritten. Resume trusts no part blindly: a part listed in ``parts.jsonl`` must have the
 bytes listed there, and one that is not (a kill between a part's rename and its line) must have the sweep's
 columns; every part must carry the sweep's digest (the SHA-256 of its identity, a netlist's content included, in
-the part's Parquet metadata: another sweep's part copied in, the journal edited to match, is refused); every
-part's indices must lie in the sweep and appear once. Anything else in ``parts/`` (a copied
+the part's Parquet metadata: another sweep's part copied in, the journal edited to match, is refused) and that of
+its own rows (one edited in place with the journal deleted is refused); every part's indices must lie in the sweep and appear once. Anything else in ``parts/`` (a copied
 part, another table, a link, a FIFO) is refused with one line naming it, and nothing is changed. Read a sweep
 back with :func:`load_sweep` (or ``pandas.read_parquet(DIR / "parts")``).
 
@@ -51,8 +51,10 @@ PARTS = "parts"
 JOURNAL = "parts.jsonl"
 LOCK = ".lock"
 #: 2: every part carries its sweep's digest (SWEEP_KEY in its Parquet metadata); a netlist's content is hashed.
-FORMAT = 2
+#: 3: and the digest of its own rows (ROWS_KEY).
+FORMAT = 3
 SWEEP_KEY = b"pcsuite.sweep"
+ROWS_KEY = b"pcsuite.rows"
 #: A sweep.json is a few hundred bytes; a larger one is not a sweep's (and is not read whole).
 MANIFEST_MAX_BYTES = 1 << 20
 
@@ -86,6 +88,11 @@ def schema(ensemble, names):
               ("wall_s", pa.float64())]
     units = getattr(ensemble, "units", {}) or {}
     return pa.schema(columns, metadata={b"units": json.dumps(units, sort_keys=True).encode()})
+
+
+def rows_digest(table) -> str:
+    """The SHA-256 of a part's rows as JSON (its values, not its bytes: the same whatever writes the Parquet)."""
+    return hashlib.sha256(json.dumps(table.to_pylist(), sort_keys=True, default=str).encode()).hexdigest()
 
 
 def read_part(data: bytes, columns=None):
@@ -251,6 +258,7 @@ class SweepStore:
                 more = f" and {again.size - 1:,} more" if again.size > 1 else ""
                 raise self._refuse(f"{where} holds indices also stored in {PARTS}/{quoted(owner)} (index "
                                    f"{int(again[0])}{more}); one of them is not a part this sweep wrote")
+            self._check_rows(data, where)
             seen[indices] = True
             stored.append((name, indices))
             if listed is None:
@@ -268,6 +276,17 @@ class SweepStore:
             raise self._refuse(f"{where} was written by {held}, not this one's ({self.digest[:12]}: the model, its "
                                "parameters, the points and the options in sweep.json)")
 
+
+    def _check_rows(self, data: bytes, where: str) -> None:
+        """Refuse a part whose rows are not those it was written with (ROWS_KEY): one edited in place, its metadata
+        kept and the journal deleted, had been taken in (a vout_mean of 99 V, a D moved to 0.9)."""
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+        written = (pq.ParquetFile(pa.BufferReader(data)).schema_arrow.metadata or {}).get(ROWS_KEY, b"").decode()
+        if written != rows_digest(read_part(data)):
+            raise self._refuse(f"{where} was changed after pcsuite wrote it (its rows are not the ones it was written "
+                               "with)")
+
     def _indices(self, data: bytes, where: str, check_schema: bool) -> np.ndarray:
         """A part's index column; for a part the journal does not list, its columns are checked first."""
         import pyarrow as pa
@@ -276,10 +295,7 @@ class SweepStore:
             if check_schema:
                 found = pq.ParquetFile(pa.BufferReader(data)).schema_arrow
                 if not found.equals(self.schema, check_metadata=False):
-                    columns = ", ".join(found.names[:8]) + (", ..." if len(found.names) > 8 else "")
-                    wanted = ", ".join(self.schema.names[:8]) + (", ..." if len(self.schema.names) > 8 else "")
-                    raise self._refuse(f"{where} is not a part of this sweep (its columns: {columns}; a part's: "
-                                       f"{wanted})")
+                    raise self._refuse(f"{where} is not a part of this sweep ({_schema_difference(found, self.schema)})")
             column = read_part(data, columns=["index"]).column(0)
         except (pa.ArrowException, OSError, ValueError) as exc:
             if isinstance(exc, ParameterError):
@@ -295,6 +311,7 @@ class SweepStore:
         import pyarrow as pa
         import pyarrow.parquet as pq
         table = pa.Table.from_pylist(rows, schema=self.schema)
+        table = table.replace_schema_metadata({**(self.schema.metadata or {}), ROWS_KEY: rows_digest(table).encode()})
         buffer = io.BytesIO()
         pq.write_table(table, buffer)
         first = min(row["index"] for row in rows)
@@ -302,6 +319,18 @@ class SweepStore:
         data = buffer.getvalue()
         atomic_write_bytes(self.parts / name, data)
         _Journal.append(self.out / JOURNAL, _Journal.line(name, len(rows), data))
+
+
+def _schema_difference(found, wanted) -> str:
+    """Where a part's columns first differ from a sweep's: a name, or a type under the same names (a part rewritten
+    by pandas, its columns' names all kept, had been shown as two identical-looking lists)."""
+    if found.names == wanted.names:
+        name = next(f.name for f, w in zip(found, wanted) if not f.equals(w, check_metadata=False))
+        return (f"its column {name} is {found.field(name).type}{'' if found.field(name).nullable else ' not null'}, "
+                f"a part's {wanted.field(name).type}")
+    columns = ", ".join(found.names[:8]) + (", ..." if len(found.names) > 8 else "")
+    expected = ", ".join(wanted.names[:8]) + (", ..." if len(wanted.names) > 8 else "")
+    return f"its columns: {columns}; a part's: {expected}"
 
 
 def _what(mode: int) -> str:

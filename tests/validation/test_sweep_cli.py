@@ -311,6 +311,16 @@ def _tamper(kind: str, out: Path, tmp_path: Path) -> str:
         changed.loc[0, "vout_mean"] = 1234.5
         _table(changed, parts[0], like=parts[0])
         return parts[0].name
+    if kind == "edited, its journal deleted":          # '4 already stored', exit 0, before
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+        table = pq.read_table(parts[0])
+        frame = table.to_pandas()
+        frame.loc[0, "vout_mean"] = 99.0
+        edited = pa.Table.from_pandas(frame, schema=table.schema, preserve_index=False)
+        pq.write_table(edited.replace_schema_metadata(table.schema.metadata), parts[0])       # its metadata kept
+        (out / "parts.jsonl").unlink()
+        return parts[0].name
     if kind == "another sweep's part":                # its journal line dropped: '4 already stored', exit 0, before
         other = tmp_path / "other"
         assert main([*SMALL, "-p", "Vin=24", "--out", str(other)]) == 0
@@ -344,6 +354,8 @@ TAMPERED = {"duplicate copy": "holds indices also stored in parts/", "duplicate 
             "was changed after pcsuite wrote it", "symbolic link": "is a symbolic link, not a part pcsuite wrote",
             "not a parquet file": "is not a part of this sweep (not a .parquet file)",
             "another sweep's part": "was written by another sweep's (",
+            "edited, its journal deleted": "was changed after pcsuite wrote it (its rows are not the ones it was "
+                                           "written with)",
             "FIFO": "is a FIFO (named pipe), not a part pcsuite wrote"}
 
 
