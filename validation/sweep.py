@@ -15,9 +15,9 @@ refused, never overwritten. Resume trusts no part blindly: a part listed in ``pa
 bytes listed there, and one that is not (a kill between a part's rename and its line) must have the sweep's
 columns; every part must carry the sweep's digest (the SHA-256 of its identity, a netlist's content included, in
 the part's Parquet metadata: another sweep's part copied in, the journal edited to match, is refused) and that of
-its own rows (one edited in place with the journal deleted is refused); every part's indices must lie in the sweep and appear once. Anything else in ``parts/`` (a copied
-part, another table, a link, a FIFO) is refused with one line naming it, and nothing is changed. Read a sweep
-back with :func:`load_sweep` (or ``pandas.read_parquet(DIR / "parts")``).
+its own rows (one edited in place with the journal deleted is refused); every part's indices must lie in the sweep
+and appear once. Anything else in ``parts/`` (a copied part, another table, a link, a FIFO) is refused with one
+line naming it, and nothing is changed. Read a sweep back with :func:`load_sweep` (or ``pandas.read_parquet(DIR / "parts")``).
 
 A sweep in ngspice is the same :class:`converters.sweeps.ModelSweep` with ``method="spice"`` (the method measures
 each point on its own run: :meth:`validation.ngspice.Spice.sweep_row`). A failed ngspice run ("timestep too small")
@@ -295,7 +295,8 @@ class SweepStore:
             if check_schema:
                 found = pq.ParquetFile(pa.BufferReader(data)).schema_arrow
                 if not found.equals(self.schema, check_metadata=False):
-                    raise self._refuse(f"{where} is not a part of this sweep ({_schema_difference(found, self.schema)})")
+                    difference = _schema_difference(found, self.schema)
+                    raise self._refuse(f"{where} is not a part of this sweep ({difference})")
             column = read_part(data, columns=["index"]).column(0)
         except (pa.ArrowException, OSError, ValueError) as exc:
             if isinstance(exc, ParameterError):
