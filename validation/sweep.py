@@ -17,7 +17,8 @@ columns; every part must carry the sweep's digest (the SHA-256 of its identity, 
 the part's Parquet metadata: another sweep's part copied in, the journal edited to match, is refused) and that of
 its own rows (one edited in place with the journal deleted is refused); every part's indices must lie in the sweep
 and appear once. Anything else in ``parts/`` (a copied part, another table, a link, a FIFO) is refused with one
-line naming it, and nothing is changed. Read a sweep back with :func:`load_sweep` (or ``pandas.read_parquet(DIR / "parts")``).
+line naming it, and nothing is changed. Read a sweep back with :func:`load_sweep` (or
+``pandas.read_parquet(DIR / "parts")``).
 
 A sweep in ngspice is the same :class:`converters.sweeps.ModelSweep` with ``method="spice"`` (the method measures
 each point on its own run: :meth:`validation.ngspice.Spice.sweep_row`). A failed ngspice run ("timestep too small")
