@@ -165,6 +165,7 @@ class EventSolution(PiecewiseSolution):
         held[at_end] = np.array([seg.flow.held_flags for seg in segs]).reshape(-1, k)
         inside = ~at_end
         x[inside], u[inside], y[inside], config[inside], held[inside] = self._sample_sorted(t[inside], output_step)
+        t, x, u, y, config, held = self._after_boundaries(t, x, u, y, config, held)
         problem = self.problem
         return Trajectory(t=t, x=x, u=u, y=y, config=config, held=held, state_names=problem.state_names,
                           pair_names=problem.pair_names,
@@ -172,6 +173,28 @@ class EventSolution(PiecewiseSolution):
                           event_columns=self.events_table(t), method="event", steps=len(self.segments),
                           wall_s=self.wall_s, rule="exact", exact=self, period=problem.switching.period, jumps=self.jumps,
                           metadata=dict(problem.metadata, event_tol=self.options.event_tol, label="event"))
+
+    def _after_boundaries(self, t, x, u, y, config, held):
+        """The samples with a second one at each boundary where the state jumps (a charge or flux redistributed) or
+        the configuration changes (an output with a feedthrough, a capacitor's ESR carrying a switched current,
+        steps there): the sample on a boundary holds the value before it, and the next one on the grid had been the
+        first after it (an inductor cutset's peak read 1.4 % low, at a sample 0.001 T after its jump)."""
+        n = self.problem.n
+        rows = []
+        for before, seg in zip(self.segments, self.segments[1:]):
+            if seg.flow.config == before.flow.config and np.array_equal(seg.xt0, before.xt1):
+                continue
+            xt = seg.xt0
+            rows.append((seg.t0, xt[:n], seg.flow.u_rows @ xt, seg.flow.y_rows @ xt, seg.flow.config,
+                         seg.flow.held_flags))
+        if not rows:
+            return t, x, u, y, config, held
+        at = np.searchsorted(t, np.array([r[0] for r in rows]), side="right")
+        return (np.insert(t, at, [r[0] for r in rows]), np.insert(x, at, np.array([r[1] for r in rows]), axis=0),
+                np.insert(u, at, np.array([r[2] for r in rows]), axis=0),
+                np.insert(y, at, np.array([r[3] for r in rows]), axis=0),
+                np.insert(config, at, [r[4] for r in rows]),
+                np.insert(held, at, np.array([r[5] for r in rows]), axis=0))
 
     def _sample_sorted(self, t: FloatArray, step: float) -> tuple[FloatArray, FloatArray, FloatArray,
                                                                    npt.NDArray[np.int64], npt.NDArray[np.bool_]]:
