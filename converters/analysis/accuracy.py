@@ -724,6 +724,10 @@ def _order_between(differences: Sequence[tuple[int, float, float]], declared: fl
 
 #: The accuracy the defaults promise on every reported mean, or warn about.
 DEFAULT_RTOL = 1e-3
+#: The smallest output (V or A) a relative estimate is taken against: an output that is rounding (a path the diodes
+#: block both ways: 4e-16 V) had read "within ~0.2" and "has not settled (2.5e-01 from the periodic orbit)" on an
+#: orbit 5.5e-14 from Newton's.
+OUTPUT_FLOOR = 1e-9
 #: A conduction interval spanning fewer steps than this is named in the warning.
 FEW_STEPS = 20
 
@@ -886,7 +890,8 @@ def _power_warning(check: dict, method: Method) -> str:
 def default_check(model: Model, p: dict, method: Method, tr: Trajectory, reported: float,
                   power: dict | None = None) -> dict:
     """How far the reported mean (vout over the run's last 10 periods) may be from the exact periodic one, relative
-    to vout's RMS over the period (its mean for a DC output; the size of an AC one, whose mean is ~0):
+    to vout's RMS over the period (its mean for a DC output; the size of an AC one, whose mean is ~0; at least
+    OUTPUT_FLOOR):
     the run's distance to the method's own orbit (a transient not settled) plus the method's discretization
     error, Richardson's from the orbit at h and 2h (a stepper of declared order above 1: the order observed at h,
     2h and 4h, at least :data:`OBSERVED_FLOOR`, at most the declared one and :data:`ORDER_THROUGH_EVENTS` through a
@@ -904,7 +909,7 @@ def default_check(model: Model, p: dict, method: Method, tr: Trajectory, reporte
             return {**out, "checked": False, "reason": reason}
         # what can be said: how far the mean moved from the 10 periods before (a transient it still carries)
         before = tr.mean("vout", t0=end - 20 * T, t1=end - 10 * T)
-        transient = abs(reported - before) / max(abs(reported), 1e-300)
+        transient = abs(reported - before) / max(abs(reported), OUTPUT_FLOOR)
         out.update(checked=False, reason=reason, transient=transient)
         if transient > DEFAULT_RTOL:
             out["warning"] = (f"vout mean may be {transient:.1e} off (more than {DEFAULT_RTOL:g}): the run has not "
@@ -922,7 +927,7 @@ def default_check(model: Model, p: dict, method: Method, tr: Trajectory, reporte
         exact = m_h + (m_h - coarse.mean("vout", t0=0.0, t1=T)) / runs.factor
     # relative to the output's RMS over the period: its mean for a DC output (to its ripple's square), its size for
     # an AC one, whose mean is ~0 (an inverter's load current: 6e-13 A, "2.2e-01 off" against it)
-    scale = max(abs(exact), fine.rms("vout", t0=0.0, t1=T), 1e-300)
+    scale = max(abs(exact), fine.rms("vout", t0=0.0, t1=T), OUTPUT_FLOOR)
     transient, discretization = abs(reported - m_h) / scale, abs(m_h - exact) / scale
     error = abs(reported - exact) / scale
     period = last_period(model, p, tr)
@@ -1222,7 +1227,8 @@ def window_check(model: Model, p: dict, method: Method, tr: Trajectory, summary:
     steps = [t for t in model.step_times(p) if a < t < t1]
     transient = None
     if a >= tr.t[0] - 1e-12 * (t1 - t0) and not steps:
-        transient = abs(tr.mean("vout", t0=a, t1=t0) - summary["vout_mean"]) / max(abs(summary["vout_mean"]), 1e-300)
+        transient = (abs(tr.mean("vout", t0=a, t1=t0) - summary["vout_mean"])
+                     / max(abs(summary["vout_mean"]), OUTPUT_FLOOR))
     estimates = {}
     for name in names:
         value = summary[name]
@@ -1231,7 +1237,7 @@ def window_check(model: Model, p: dict, method: Method, tr: Trajectory, summary:
         if name == "vout_mean":
             part["transient"] = transient
             if coarse_summary:
-                part["crossings"] = _crossing_bound(tr, t0, t1) / max(abs(value), 1e-300)
+                part["crossings"] = _crossing_bound(tr, t0, t1) / max(abs(value), OUTPUT_FLOOR)
         known = [x for x in part.values() if x is not None]
         if known:       # the event method's switching frequency: exact flows, no transient measured: nothing to say
             estimates[name] = {**part, "error_estimate": sum(known)}
