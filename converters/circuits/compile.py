@@ -751,9 +751,13 @@ class _Compiler:
         try:
             return common_period([period for _, _, period in named])
         except ParameterError:
+            # pcsuite compiles a circuit's switching over the common period of its sources, a transient too (a
+            # comparator's crossings are found within it): ngspice needs none
             listed = ", ".join(f"{s.name.upper()} ({kind}) {period:.9g} s" for s, kind, period in named)
-            raise NetlistError(f"{self.path}: the sources' periods have no common period (their ratios are not "
-                               f"fractions with denominators up to 1000): {listed}") from None
+            longest = max(period for _, _, period in named)
+            raise NetlistError(f"{self.path}: the sources' periods have no common period, which pcsuite compiles a "
+                               f"circuit's switching over (a transient too): each must be a fraction of the longest "
+                               f"({longest:.9g} s) with a denominator up to 1000; {listed}") from None
 
     def in_power_circuit(self, source: Element) -> bool:
         """False for a gate driver: a source whose nodes reach, through resistors and other voltage sources (a

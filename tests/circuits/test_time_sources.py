@@ -293,7 +293,9 @@ def test_a_files_step_that_does_not_divide_the_sin_period_is_rounded_to_one_that
 
 def test_sources_without_a_common_period_are_named_each_with_its_kind_and_period():
     """A 100 kHz PULSE gate beside a 33.3333 kHz SIN input: the refusal had said "the PULSE periods [1e-05,
-    3.0000030000029998e-05] s have no common period", the SIN's period among them; it names each source."""
+    3.0000030000029998e-05] s have no common period", the SIN's period among them; it names each source, and says
+    that a transient needs one too (a full bridge's 10,007 Hz carrier under a 50 Hz sine was refused as though its
+    50/10007 were a fraction within the bound)."""
     from converters.circuits.netlist import NetlistError
     from converters.models import Circuit
     text = """buck fed from a sine
@@ -311,6 +313,7 @@ R1 out 0 10
 """
     with pytest.raises(NetlistError) as caught:
         Circuit.from_netlist("sin-buck.cir", text=text)
-    assert str(caught.value) == ("sin-buck.cir: the sources' periods have no common period (their ratios are not "
-                                 "fractions with denominators up to 1000): VG (PULSE) 1e-05 s, VIN (SIN) "
+    assert str(caught.value) == ("sin-buck.cir: the sources' periods have no common period, which pcsuite compiles "
+                                 "a circuit's switching over (a transient too): each must be a fraction of the longest "
+                                 "(3.000003e-05 s) with a denominator up to 1000; VG (PULSE) 1e-05 s, VIN (SIN) "
                                  "3.000003e-05 s")
