@@ -1650,6 +1650,8 @@ class _Network:
                    if kind in "CRS" or (kind == "V" and isinstance(e.waveform, float))}
         support = np.flatnonzero(np.abs(loops).max(axis=1, initial=0.0) > 1e-9)
         if any((r - rows) not in allowed for r in support):      # (a loop has no node rows: zeroed above)
+            self.varying = [e for j, (kind, e, _, _) in enumerate(self.branches) if rows + j in support and (
+                kind in "EH" or (kind == "V" and not isinstance(e.waveform, float)))]
             return False
         caps = [self.branch_of[e.name] for e in c.capacitors]
         if loops.shape[1] and (not caps or np.linalg.matrix_rank(loops[caps], tol=1e-9) < loops.shape[1]):
@@ -1665,7 +1667,11 @@ class _Network:
         sources = K_w[:, c.n + c.k:]
         varying = [j for j, e in enumerate(c.sources) if not isinstance(e.waveform, float)]
         if varying and np.abs(sources[:, varying]).max() > 1e-9 * np.abs(K_w).max():
-            return False                                # a loop or cutset through a source that varies
+            # a loop or cutset through a source that varies: its states would follow the source's steps (an
+            # impulsive current or voltage), which a DC source's constraint does not ask; named in the refusal
+            self.varying = [c.sources[j] for j in varying
+                            if np.abs(sources[:, j]).max() > 1e-9 * np.abs(K_w).max()]
+            return False
         island = {node for node, i in self.nodes.items() if np.abs(cuts[i]).max(initial=0.0) > 1e-9}
         bordered = [e for e in c.switches
                     if not self.switch_state.get(e.name) and len({e.nodes[0], e.nodes[1]} & island) == 1]
@@ -1759,6 +1765,15 @@ class _Network:
             # loop through "0 ohm resistors" where there was none)
             kinds = [name for letter, name in LOOP_KINDS if any(kind == letter for kind, _ in members)]
             held = ", ".join(kinds[:-1]) + (" and " if len(kinds) > 1 else "") + kinds[-1]
+            varying = [e for e in getattr(self, "varying", ()) if e.name.upper() in loop]
+            if varying:
+                names = ", ".join(f"{e.name.upper()} (" + ("controlled" if e.kind in "EH" else
+                                                            type(e.waveform).__name__.upper()) + ")" for e in varying)
+                return NetlistError(f"{c.path}: {', '.join(loop)} form a loop of {held}{where} closed by {names}, "
+                                    f"a source whose value varies: the loop's capacitor voltages are then set by it, not "
+                                    "states of their own (pcsuite reduces such a loop where its sources are DC); put "
+                                    "a resistance in the loop (a capacitor's ESR, the source's own)"
+                                    f"{spread}")
             return NetlistError(f"{c.path}: {', '.join(loop)} form a loop of {held}{where}: their voltages are not "
                                 f"independent{spread}")
         around = [e.name.upper() for e in c.nl.elements if set(e.nodes) & set(nodes)]

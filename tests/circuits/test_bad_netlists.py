@@ -244,6 +244,17 @@ CASES = {
     # a loop named by what it holds: it listed "0 ohm resistors" and switches where there were none
     "loop-of-a-source-and-a-short": (rc("R9 in 0 0"), [], ["VIN, R9 form a loop of voltage sources and "
                                                           "0 ohm resistors: their voltages"], None),
+    # a loop a DC source closes is reduced (its capacitors' sum held); one a varying source closes was said "not
+    # independent", which the DC one is not either: the cause is the source that varies
+    "capacitor-across-a-sin-source": (text("X capacitor across the mains", "Vs in 0 SIN(0 325 50)", "Cx in 0 100n",
+                                           "R1 in out 10", "C1 out 0 1u", ".tran 10u 100m"), [],
+                                      ["VS, CX form a loop of voltage sources and capacitors closed by VS (SIN), a "
+                                       "source whose value varies", "pcsuite reduces such a loop where its sources "
+                                       "are DC); put a resistance in the loop"], None),
+    "capacitors-in-series-across-a-pulse": (rc("V2 in2 0 PULSE(0 10 0 1u 1u 0.5m 1m)", "C2 in2 m 1u", "C3 m 0 3u",
+                                               "R2 m 0 10k"), [],
+                                            ["V2, C2, C3 form a loop of voltage sources and capacitors closed by V2 "
+                                             "(PULSE), a source whose value varies"], None),
 }
 
 
