@@ -73,7 +73,8 @@ def test_with_an_esr_and_a_load_current_the_loop_senses_the_output_node(design, 
     crossings = events["time"][np.abs(np.remainder(events["time"] / T + 0.5, 1.0) - 0.5) > 1e-6].to_numpy()
     waves = tr.waveforms()
     at = np.flatnonzero(np.isin(waves["time"].to_numpy(), crossings))
-    assert len(crossings) == 2 and len(at) == 2                        # one crossing a period, sampled at its instant
+    # one crossing a period, sampled at its instant (on both sides: the configuration changes there)
+    assert len(crossings) == 2 and len(at) == 4 and np.unique(waves["time"].to_numpy()[at]).size == 2
     np.testing.assert_allclose(waves["vc"].to_numpy()[at], waves["carrier"].to_numpy()[at], rtol=0, atol=1e-9)
 
 def test_a_load_steps_recovery_is_the_exact_models_prediction(design):
