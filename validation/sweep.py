@@ -136,6 +136,11 @@ class SweepStore:
                                  "or empty directory (nothing was written)")
         if os.path.lexists(manifest):
             held = self._identity_on_disk(manifest)
+            if held.get("format") != FORMAT:
+                raise ParameterError(f"--out {str(out)!r} holds a sweep of an earlier pcsuite (format "
+                                     f"{held.get('format')!r}; this one writes {FORMAT}), which it cannot resume; "
+                                     "read it with pandas.read_parquet, and choose another directory for the sweep "
+                                     "(nothing was changed)")
             if held != self.identity:
                 keys = sorted(k for k in set(held) | set(self.identity) if held.get(k) != self.identity.get(k))
                 diff = "; ".join(f"{k}: {held.get(k)!r} on disk, {self.identity.get(k)!r} asked" for k in keys[:3])
@@ -276,7 +281,6 @@ class SweepStore:
             held = f"another sweep's ({mark[:12]})" if mark else "no sweep's"
             raise self._refuse(f"{where} was written by {held}, not this one's ({self.digest[:12]}: the model, its "
                                "parameters, the points and the options in sweep.json)")
-
 
     def _check_rows(self, data: bytes, where: str) -> None:
         """Refuse a part whose rows are not those it was written with (ROWS_KEY): one edited in place, its metadata

@@ -322,20 +322,25 @@ def measures(model: Model, p: dict, tr: Trajectory, T: float) -> tuple[dict, lis
     events = [e for e in substep_events(tr, T)
               if not np.any(np.abs(np.concatenate([edges, [0.0, T]]) - e[2] * T) <= 1e-9 * T)]
     instants = [] if _exact(tr) else [e[2] * T for e in events]
+    # a measure's relative error is taken on its own size, or on SMALLEST of the circuit's (its largest state or
+    # pair variable) where it is smaller: an output the diodes block both ways (4e-16 V in a 12 V circuit) had been
+    # estimated against its own rounding, "6.2e-28"
+    least = SMALLEST * max(float(np.abs(np.asarray(a, dtype=float)).max(initial=0.0))
+                           for a in (tr.x, tr.u if tr.u is not None else 0.0, tr.y if tr.y is not None else 0.0))
     mean = tr.mean("vout", t0=0.0, t1=T)
-    values["vout_mean"] = (mean, abs(mean))
+    values["vout_mean"] = (mean, max(abs(mean), least))
     rows = np.arange(tr.t.size)
     vout = np.asarray(tr.signal("vout", rows), dtype=float)
     at = event_values(tr, vout, instants)
     ripple = extremum(tr.t, vout, tr.config, 1.0, at, edges) - extremum(tr.t, vout, tr.config, -1.0, at, edges)
-    values["vout_ripple"] = (ripple, max(abs(ripple), 1e-6 * abs(mean)))
+    values["vout_ripple"] = (ripple, max(abs(ripple), SMALLEST * abs(mean), least))
     for name in _inductor_currents(model):
         rms = tr.rms(name, t0=0.0, t1=T)
-        values[f"{name}_rms"] = (rms, abs(rms))
+        values[f"{name}_rms"] = (rms, max(abs(rms), least))
         current = tr.state(name)
         sign = 1.0 if current.max() >= -current.min() else -1.0
         peak = extremum(tr.t, current, tr.config, sign, event_values(tr, current, instants), edges)
-        values[f"{name}_peak"] = (peak, abs(peak))
+        values[f"{name}_peak"] = (peak, max(abs(peak), least))
     for label, fraction in mode_fractions(tr, T, events, edges).items():
         values[f"fraction_{label}"] = (fraction, 1.0)
     values.update(power_measures(model, p, tr, T))
@@ -394,9 +399,9 @@ def _orbit(model: Model, p: dict, method: Method, x_guess: npt.NDArray[np.float6
     return orbit, replace(tr, labels=model.labels(p))
 
 
-def _sampled(model: Model, p: dict, tr: Trajectory, T: float) -> dict:
-    """Ripple and peaks read on every other output sample (event instants kept): {name: value}."""
-    edges = np.asarray(model.problem(p, T).switching.breakpoints(0.0, T), dtype=float)
+def _sampled(model: Model, tr: Trajectory, T: float) -> dict:
+    """Ripple and peaks read on every other output sample (event instants kept, and the samples either side of each
+    boundary: the exact run holds both, so a jump's value after it is read as a sample): {name: value}."""
     keep = np.zeros(tr.t.size, dtype=bool)
     keep[::2] = True
     keep[-1] = True
@@ -408,13 +413,13 @@ def _sampled(model: Model, p: dict, tr: Trajectory, T: float) -> dict:
     rows = np.flatnonzero(keep & (tr.t <= T))
     t, config = tr.t[rows], configs[rows]
     vout = np.asarray(tr.signal("vout", rows), dtype=float)
-    out = {"vout_ripple": extremum(t, vout, config, 1.0, (), edges) - extremum(t, vout, config, -1.0, (), edges)}
+    out = {"vout_ripple": extremum(t, vout, config, 1.0) - extremum(t, vout, config, -1.0)}
     for name in _inductor_currents(model):
         current = tr.state(name)
         # signed and on the side :func:`measures` takes (a winding's negative peak was compared in its absolute
         # value with its signed one: 2 x 2.71 A apart, "estimated only to 0.67" on an exact run)
         sign = 1.0 if current.max() >= -current.min() else -1.0
-        out[f"{name}_peak"] = extremum(t, current[rows], config, sign, (), edges)
+        out[f"{name}_peak"] = extremum(t, current[rows], config, sign)
     return out
 
 
@@ -642,7 +647,7 @@ def accurate_steady(model: Model, p: dict, rtol: float, *, x0: npt.NDArray[np.fl
         values, events = measures(model, p, tr, T)
         quantities = {name: Estimate(float(v), floor * s if (events or not name.startswith("fraction_")) else 0.0,
                                      float(s)) for name, (v, s) in values.items()}
-        read = _sampled(model, p, tr, T)
+        read = _sampled(model, tr, T)
         for name, coarse in read.items():                           # extrema read on the samples: their error
             q = quantities[name]
             quantities[name] = Estimate(q.value, max(abs(q.value - coarse) / 3.0, q.error_estimate), q.scale)
@@ -722,6 +727,8 @@ def _order_between(differences: Sequence[tuple[int, float, float]], declared: fl
 
 # --- what a run with the defaults can claim --------------------------------------------------------------
 
+#: The smallest scale of a measure's relative error, relative to the circuit's (a ripple's: to its mean).
+SMALLEST = 1e-6
 #: The accuracy the defaults promise on every reported mean, or warn about.
 DEFAULT_RTOL = 1e-3
 #: The smallest output (V or A) a relative estimate is taken against: an output that is rounding (a path the diodes

@@ -222,6 +222,7 @@ class SmallSignalModel:
             raise ParameterError(f"input {name!r} has no value here (an optional parameter that is not set); give "
                                  f"it one with -p {name}=VALUE")
         given = {k: v for k, v in p.items() if v is not None}
+        refused: list[str] = []
 
         def at(offset: float) -> tuple[Machine, dict, LCSProblem] | None:
             """(machine, params) with the input moved by ``offset``, None outside its range."""
@@ -230,7 +231,8 @@ class SmallSignalModel:
                 # a netlist's .param has no range of its own: the element it sets refuses the value (a resistance
                 # at 0 moved to -2e-5, which had left rl, rc and rd "not taken")
                 moved = model.problem(moved_p, self.T, self.orbit.x0)
-            except ParameterError:
+            except ParameterError as why:
+                refused.append(str(why))
                 return None
             if moved.switching.period != problem.switching.period:
                 raise ParameterError(f"input {name!r} changes the switching period: the small-signal model is taken "
@@ -254,8 +256,10 @@ class SmallSignalModel:
             if all(point is not None for point in points):
                 found_all = cast("list[tuple[Machine, dict, LCSProblem]]", points)      # (all() does not narrow)
                 return [(m, q, w / (denominator * h)) for (m, q, _), w in zip(found_all, weights)], True
-        raise ParameterError(f"input {name!r} = {value!r} cannot be moved by +-{2 * DYNAMIC_MOVE * move_scale(param, value):g} "
-                             f"inside its range {param.range_text()}")
+        scale = move_scale(param, value)
+        raise ParameterError(f"input {name!r} = {value!r} cannot be moved by +-{2 * DYNAMIC_MOVE * scale:g}, nor by "
+                             f"{2 * ONE_SIDED_MOVE * scale:g} to one side, inside its range {param.range_text()}"
+                             + (f" ({refused[-1]})" if refused else ""))
 
     @property
     def moved(self) -> Machine:

@@ -102,7 +102,10 @@ def unsettled(run: Trajectory, T: float) -> str:
     end = float(run.t[-1])
     periods = int(round((end - float(run.t[0])) / T))
     if periods < 6:
-        return ""
+        # too few to read a decay from (a boost at 5 periods: 9.94 V stored as ok, its orbit 54.37 V)
+        return (f"{NOT_SETTLED} as far as can be told: {periods} period{'s' if periods > 1 else ''} from rest are "
+                "too few to measure how far the last is from the periodic steady state (6 at least): use --steady, "
+                "or more --periods")
     means = np.array([run.mean("vout", t0=end - (k + 1) * T, t1=end - k * T) for k in range(5, -1, -1)])
     moves = np.abs(np.diff(means))
     scale = max(abs(means[-1]), run.rms("vout", t0=end - T, t1=end), 1e-300)

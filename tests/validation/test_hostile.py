@@ -628,3 +628,12 @@ def test_a_file_names_control_characters_reach_the_terminal_as_escapes(capsys, t
     assert main([command[0], "e\x1b[2Jx.cir", *command[1:]]) == 0
     out = capsys.readouterr().out
     assert "\x1b" not in out and out.startswith("e\\x1b[2Jx.cir: ")
+
+
+def test_a_command_without_a_stdout_runs(tmp_path):
+    """With stdout closed (`pcsuite list >&-`) Python's sys.stdout is None and print does nothing; the escaping
+    stream wrapped it and ended in a traceback."""
+    root = Path(__file__).resolve().parents[2]
+    done = subprocess.run(["sh", "-c", f'"{sys.executable}" -m validation.cli list >&-'], capture_output=True,
+                          text=True, cwd=root, env={**os.environ, "PYTHONPATH": str(root)}, timeout=120)
+    assert done.returncode == 0 and "Traceback" not in done.stderr, done.stderr

@@ -26,7 +26,8 @@ def main(argv=None) -> int:
     stdout = sys.stdout
     # what a command prints of a user's names (a file's, an element's) reaches the terminal with its control
     # characters escaped, as its errors do (an ESC in a netlist's file name recoloured bode's header)
-    sys.stdout = _Escaping(stdout)
+    if stdout is not None:                      # (None where the process has no stdout: print is then a no-op)
+        sys.stdout = _Escaping(stdout)
     try:
         code = _main(argv)
         return code
@@ -51,18 +52,21 @@ def _one_line(message, category, filename, lineno, line=None) -> str:
     return f"pcsuite: warning: {printable(str(message))}\n"
 
 
-#: C0 and C1 control characters and DEL, as escapes; a newline and a tab are kept (tables, lines).
-_CONTROLS = {c: repr(chr(c))[1:-1] for c in (*range(0x20), *range(0x7f, 0xa0)) if chr(c) not in "\n\t"}
-
-
 class _Escaping:
-    """A text stream that writes control characters as escapes (str.translate: fast on long tables)."""
+    """A text stream that writes what :func:`printable` escapes as escapes, a newline and a tab kept (tables, lines);
+    text that is all printable (nearly all of it) is passed as it is."""
 
     def __init__(self, stream) -> None:
         self._stream = stream
 
     def write(self, text: str) -> int:
-        return self._stream.write(text.translate(_CONTROLS))
+        if not text.replace("\n", "").replace("\t", "").isprintable():
+            text = "".join(c if c.isprintable() or c in "\n\t" else repr(c)[1:-1] for c in text)
+        return self._stream.write(text)
+
+    def writelines(self, lines) -> None:
+        for line in lines:
+            self.write(line)
 
     def __getattr__(self, name: str):
         return getattr(self._stream, name)

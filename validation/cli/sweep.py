@@ -276,6 +276,10 @@ def run(args) -> int:
             from converters.sweeps.indices import METHOD, first_order
             summary["study"]["indices"] = {"method": METHOD, "metrics": first_order(frame, list(points.names), metrics,
                                                                                    seed=points.seed)}
+    if len(unsettled):
+        summary["warnings"] = [f"{len(unsettled):,} of the {summary['ok']:,} points stored as ok have not settled "
+                               "(their measures are the transient's, not the steady state's; the first: "
+                               f"{unsettled['message'].iloc[0]})"]
     # no point succeeded: say so in the exit code too (1, as a failed check), not only in the counts
     code = 1 if points.size and not summary["ok"] else 0
     if args.json:
@@ -286,10 +290,8 @@ def run(args) -> int:
           f"{result.rate:,.0f} points/s)")
     for message, count in summary["failures"].items():
         print(f"  failed x{count}: {message}")
-    if len(unsettled):
-        worst = unsettled["message"].iloc[0]
-        print(f"pcsuite: warning: {len(unsettled):,} of the {summary['ok']:,} points stored as ok have not settled "
-              f"(their measures are the transient's, not the steady state's; the first: {worst})", file=sys.stderr)
+    for warning in summary.get("warnings", []):
+        print(f"pcsuite: warning: {warning}", file=sys.stderr)
     if "study" in summary:
         _print_study(summary["study"], units)
     print(f"  dataset: {quoted(summary['dataset'])}  (pandas.read_parquet)\n  plot:    {quoted(summary['summary_plot'])}")
@@ -324,7 +326,7 @@ def study_accuracy(ensemble, frame, metrics) -> dict:
         out["metrics"][metric] = {"error": error, "spread": spread, "ratio": ratio, "how": how}
         if values.size < 2:
             # one sample has no spread to weigh the error against (--samples 1 had read "inf of its spread (nan)")
-            out["metrics"][metric]["ratio"] = float("nan")
+            out["metrics"][metric].update(ratio=float("nan"), samples=int(values.size))
             continue
         if spread <= ROUNDING_SPREAD * size and error <= ROUNDING_SPREAD * size:
             # a metric the toleranced parameters do not move (an ideal CCM buck's mean: D Vin, whatever L, C and R):
@@ -371,8 +373,8 @@ def _print_study(study: dict, units: dict) -> None:
         unit = f" {unit}" if unit not in ("", "1") else ""
         if a.get("constant"):
             against = f"; the samples do not move it (standard deviation {a['spread']:.2g}{unit}, rounding)"
-        elif a["spread"] != a["spread"]:                                   # NaN: one sample
-            against = "; one sample, no spread to weigh it against"
+        elif a["spread"] != a["spread"]:                                   # NaN: one sample, or none
+            against = f"; {'one sample' if a.get('samples') == 1 else 'no sample'}, no spread to weigh it against"
         else:
             against = f", {a['ratio']:.2g} of its spread (standard deviation {a['spread']:.3g}{unit})"
         print(f"  accuracy: {metric} within ~{a['error']:.2g}{unit} ({a['how']}){against}")
