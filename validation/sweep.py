@@ -136,7 +136,8 @@ class SweepStore:
                                  "or empty directory (nothing was written)")
         if os.path.lexists(manifest):
             held = self._identity_on_disk(manifest)
-            if held.get("format") != FORMAT:
+            earlier = held.get("format")
+            if isinstance(earlier, int) and 0 < earlier < FORMAT and {"ensemble", "points"} <= set(held):
                 raise ParameterError(f"--out {str(out)!r} holds a sweep of an earlier pcsuite (format "
                                      f"{held.get('format')!r}; this one writes {FORMAT}), which it cannot resume; "
                                      "read it with pandas.read_parquet, and choose another directory for the sweep "
