@@ -57,6 +57,31 @@ def _run_scene(scene: Scene) -> SceneResult:
     return SCENE_RUNNERS.get(scene.control, _run_pwm_scene)(scene)
 
 
+def _resolved(gdcm: dict, conv, p: dict, c) -> None:
+    """A scene's conduction classes that differ from the exact prediction only by an interval below what the side
+    resolves (the LCP's step, ngspice's SPICE_MIN_RUN) agree, with a note (:func:`validation.gdcm._judge`)."""
+    from converters.analysis.modes import held_fraction, orbit_intervals
+    from converters.run import steady_orbit
+
+    from .gdcm import SPICE_MIN_RUN
+    T = conv.period(p)
+    exact = held_fraction(orbit_intervals(steady_orbit(conv, p, method="event")), 1)
+    notes = []
+    for side, run, resolution in (("lcp", c.lcp, float(np.diff(c.lcp.t).max()) / T), ("spice", c.spice, SPICE_MIN_RUN)):
+        if gdcm[side] == gdcm["predicted"]:
+            continue
+        if gdcm[side] == "CCM":                 # a held interval shorter than it resolves is one it cannot see
+            within = exact <= resolution * (1 + 1e-9)
+        else:                                   # one it sees where the exact orbit has none: as short
+            fractions = run.mode_fractions(None, t0=c.window_start, t1=float(c.lcp.t[-1]))
+            within = gdcm["predicted"] == "CCM" and sum(v for k, v in fractions.items() if k in HELD) <= resolution
+        if not within:
+            return
+        notes.append(f"{side} reads {gdcm[side]} where the exact orbit is {gdcm['predicted']} (held {exact:.2g} of T): "
+                     f"within what it resolves ({resolution:.2g} of T)")
+    gdcm.update(agree=True, notes=notes, exact_held=exact)
+
+
 def _run_pwm_scene(scene: Scene) -> SceneResult:
     conv = get_converter(scene.converter)
     c = compare(scene.converter, scene.params, periods=scene.run.get("periods"), window=scene.run.get("window"),
@@ -69,12 +94,18 @@ def _run_pwm_scene(scene: Scene) -> SceneResult:
         p = c.params
         # the held class by the model's own label: DCM, or GDCM where the held pair keeps i1 = -i2 != 0 (Cuk)
         held = "GDCM" if conv.off_held_label.startswith("GDCM") else "DCM"
-        predicted = held if analytic.predicted_mode(p, conv.name) == "DCM" else "CCM"
+        # the exact prediction (from the matrices), as the gdcm command's: the small-ripple closed form had said CCM
+        # at a buck's R = 3.327 ohm, DCM for 3.7e-5 of T, where gdcm said DISAGREE
+        from converters.analysis.gdcm import exact_mode
+        predicted = "CCM" if exact_mode(conv, p)["mode"] == "CCM" else held
         lcp_held = any(label in m["mode_sequence_lcp"] for label in HELD)
         spice_held = any(label in m["mode_sequence_spice"] for label in HELD)
         gdcm = {"K": analytic.k_factor(p, conv.name), "Kcrit": analytic.k_crit(p["D"], conv.name),
+                "closed_form": held if analytic.predicted_mode(p, conv.name) == "DCM" else "CCM",
                 "predicted": predicted, "lcp": held if lcp_held else "CCM", "spice": held if spice_held else "CCM"}
         gdcm["agree"] = gdcm["predicted"] == gdcm["lcp"] == gdcm["spice"]
+        if not gdcm["agree"]:
+            _resolved(gdcm, conv, p, c)
         checks.append(("gdcm_verdict", float(gdcm["agree"]), 1.0, gdcm["agree"]))
         if "closed_form_rel" in scene.checks:
             expected = analytic.conversion_ratio(p, conv.name) * p["Vin"]
@@ -91,7 +122,7 @@ def _run_pwm_scene(scene: Scene) -> SceneResult:
     failed = [name for name, _, _, passed in checks if not passed]
     return SceneResult(scene, ok=ok, reason=("failed checks: " + ", ".join(failed)) if failed else "",
                        checks=checks, metrics=m, gdcm=gdcm, files=files,
-                       accuracy=c.lcp.metadata.get("accuracy", {}), notes=list(c.notes))
+                       accuracy=c.lcp.metadata.get("accuracy", {}), notes=list(c.notes) + gdcm.get("notes", []))
 
 
 def _run_circuit_scene(scene: Scene) -> SceneResult:
@@ -118,7 +149,7 @@ def _run_circuit_scene(scene: Scene) -> SceneResult:
     failed = [name for name, _, _, passed in checks if not passed]
     return SceneResult(scene, ok=not failed, reason=("failed checks: " + ", ".join(failed)) if failed else "",
                        checks=checks, metrics=c.metrics, gdcm={}, files=files,
-                       accuracy=c.lcp.metadata.get("accuracy", {}), notes=list(c.notes))
+                       accuracy=c.lcp.metadata.get("accuracy", {}), notes=list(c.notes) + gdcm.get("notes", []))
 
 
 def _check(name, value, scene, label=None):

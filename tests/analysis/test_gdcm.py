@@ -190,3 +190,22 @@ def test_cuk_gdcm_on_is_predicted_found_and_constrained(params):
     held = result["gdcm_constraint"]["GDCM-ON"]
     assert held["configuration"] == "ON" and held["max_abs_Cx_plus_F"] <= 1e-9 and held["min_multiplier"] > 0.0
     assert abs(result["held_fraction"]["lcp"] - result["held_fraction"]["spice"]) < 5e-3
+
+
+@pytest.mark.usefixtures("ngspice")
+def test_a_held_interval_below_what_a_side_resolves_agrees_with_a_note_and_the_exact_fraction_is_given():
+    """A buck at R = 3.327 ohm, 0.001 % past its exact DCM boundary (R = 3.326673 ohm, the tester's exact orbit):
+    held 3.6909462e-5 of T (0.3105337598 at R = 10 ohm; an independent exact orbit: matrix exponentials, the
+    diode's turn-off by Brent's method, Newton on the period map). The LCP at T/1000 read DCM, held 0.0010 (a whole step), ngspice CCM (its runs shorter than
+    5e-4 of T are glitches), and gdcm said DISAGREE, exit 1, with no reason. The exact held fraction is the event
+    method's; ngspice's CCM is within what it resolves, and a note says so. At R = 10 ohm every side agrees with
+    no note."""
+    edge = gdcm_check("buck", {"R": 3.327})
+    assert edge["predicted"] == "DCM" and edge["spice"] == "CCM" and edge["agree"]
+    assert edge["held_fraction"]["exact"] == pytest.approx(3.6909462e-5, abs=1e-9)
+    assert edge["resolution"] == {"lcp": pytest.approx(1e-3), "spice": 5e-4}
+    assert edge["notes"] == ["spice reads CCM where the exact orbit is DCM (held 3.7e-05 of T): within what it "
+                             "resolves (0.0005 of T)"]
+    deep = gdcm_check("buck", {"R": 10})
+    assert deep["agree"] and deep["notes"] == [] and deep["held_fraction"]["exact"] == pytest.approx(0.3105337598,
+                                                                                                       abs=1e-9)

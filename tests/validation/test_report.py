@@ -278,3 +278,17 @@ def test_the_scenes_summary_gives_a_netlist_scenes_numbers_under_its_outputs_nam
     row = pd.read_csv(io.StringIO(table)).iloc[0]
     assert (row["vout_lcp_V"], row["vout_spice_V"], row["rel_error"]) == (6.96, 6.9601, 1.4e-5)
     assert row["spice/lcp time"] == pytest.approx(50.0)
+
+
+def test_a_scenes_conduction_verdict_takes_the_exact_prediction_to_what_each_side_resolves(tmp_path, ngspice):
+    """A buck at R = 3.327 ohm is DCM for 3.6909e-5 of T (an independent exact orbit). The report's verdict took the
+    small-ripple closed form (K = 0.6011 > 0.6: CCM) and passed, where the gdcm command's exact prediction said DCM
+    and DISAGREE. It takes the exact one, and both sides' CCM agree with it to what they resolve, noted."""
+    from validation.suite import _run_pwm_scene
+    (tmp_path / "edge.toml").write_text('converter = "buck"\ndescription = "at the DCM boundary"\n[params]\nR = 3.327\n')
+    result = _run_pwm_scene(load_scene(tmp_path / "edge.toml"))
+    gdcm = result.gdcm
+    assert (gdcm["closed_form"], gdcm["predicted"], gdcm["lcp"], gdcm["spice"]) == ("CCM", "DCM", "CCM", "CCM")
+    assert gdcm["agree"] and gdcm["exact_held"] == pytest.approx(3.6909462e-5, abs=1e-9)
+    assert [note for note in result.notes if "within what it resolves" in note] == gdcm["notes"] and \
+        len(gdcm["notes"]) == 2

@@ -30,10 +30,14 @@ def run(args) -> int:
             print(f"  GDCM condition, {row['configuration']}: {'possible' if row['possible'] else 'impossible'} "
                   f"({row['condition']})")
         T = result["period_s"]
+        print(f"  exact orbit (event method): held {result['held_fraction']['exact']:.4g} of T")
         for side in ("lcp", "spice"):
-            print(f"  {side}: {result[side]}, held {result['held_fraction'][side]:.4f} of T")
+            print(f"  {side}: {result[side]}, held {result['held_fraction'][side]:.4f} of T (it resolves "
+                  f"{result['resolution'][side]:.2g} of T)")
             for iv in result["intervals"][side]:
                 print(f"      {iv['mode']:<9} {iv['start'] / T:7.4f} T .. {iv['end'] / T:7.4f} T  ({iv['fraction']:.4f} T)")
+        for note in result.get("notes", []):
+            print(f"  note: {note}")
     else:
         for side in ("lcp", "spice"):
             conduction = f"{result['conduction'][side]}: " if "conduction" in result else ""
