@@ -73,6 +73,12 @@ def compare(converter: str, params: dict | None = None, *, periods: int | None =
         raise ParameterError(f"compare starts both simulators on a periodic orbit; {model.key} has no clock (its "
                              "comparison is --control smc's)")
     p = model.resolve(params)
+    if control == "pwm" and p.get("D") in (0.0, 1.0):
+        # no switching: the output's ripple is 0 and the relative checks divide by it (ngspice's RON and ROFF then
+        # read as a difference of 1e8 of nothing)
+        raise ParameterError(f"compare checks a switching converter; at D = {p['D']:g} the switch never "
+                             f"{'opens' if p['D'] == 1.0 else 'closes'}: give D in (0, 1) (simulate runs the DC "
+                             "circuit)")
     T = model.period(p)
     defaults = model.compare_defaults
     start = start or defaults["start"]

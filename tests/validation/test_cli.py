@@ -375,3 +375,13 @@ def test_an_exact_run_too_short_to_check_says_so_instead_of_a_traceback(capsys):
     assert main(["simulate", str(netlist), "--method", "event", "--periods", "1"]) == 0
     out = capsys.readouterr().out
     assert "accuracy: exact flows (no step error); whether the run has settled is not estimated" in out
+
+
+@pytest.mark.parametrize("duty, word", [("1", "opens"), ("0", "closes")])
+def test_compare_refuses_a_duty_ratio_at_which_nothing_switches(capsys, duty, word):
+    """At D = 1 (or 0) the buck's switch never opens (closes): its ripple is 0 and compare's relative checks divided
+    by it, a FAIL at 8.9e7 (ngspice's RON leaving 8.9e-5 V) that said nothing of why."""
+    from validation.cli import main
+    assert main(["compare", "buck", "-p", f"D={duty}"]) == 2
+    assert capsys.readouterr().err == (f"pcsuite: error: compare checks a switching converter; at D = {duty} the "
+                                       f"switch never {word}: give D in (0, 1) (simulate runs the DC circuit)\n")
