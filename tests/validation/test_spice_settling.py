@@ -48,6 +48,26 @@ def test_ngspice_whose_drift_stops_falling_once_the_circuit_has_settled_is_not_r
     assert len(calls) > 20
 
 
+def test_once_the_circuit_has_decayed_ngspice_from_the_orbit_runs_one_chunk():
+    """The full bridge again: its drift from window to window stays at 4.3e-5 of its RMS, below a stall's 1e-4 and
+    above a settling's 1e-5, so ngspice ran its 600 periods from its own start and 600 more from the LCP's orbit
+    (7.7 minutes) to compare the two means. With the circuit's slowest mode decayed over the first run, what still
+    moves is ngspice's own, and one chunk from the orbit says where it settles: 21 chunks, not 40. Its own run's
+    mean is already the orbit run's (equal here): that is approaching it (a strict shrink of the distance had read
+    two runs equal to rounding as "NOT approaching", a FAIL)."""
+    from validation.compare import MAX_SPICE_PERIODS, spice_steady
+    T, periods, window = 1 / 50, 30, 10
+    calls = []
+
+    def chunk(x0):
+        calls.append(x0)
+        return _NoisyRun(4.3e-5, periods * T)
+    run, n, drift, notes, independent = spice_steady(chunk, True, np.ones(1), T, periods, window, "own", 4.2e-18)
+    assert len(calls) == MAX_SPICE_PERIODS // periods + 1 and n == periods
+    assert [x0 is not None and x0.shape == (1,) and x0[0] == 1.0 for x0 in calls].count(True) == 1
+    assert independent and "approaching it" in notes[0]
+
+
 class _AcRun:
     """A chunk whose window's mean of vout is ``mean`` and the window's before ``before``, its RMS 3.6 A: a
     half-bridge's load current, its mean ~0."""
