@@ -73,7 +73,7 @@ def compare(converter: str, params: dict | None = None, *, periods: int | None =
         raise ParameterError(f"compare starts both simulators on a periodic orbit; {model.key} has no clock (its "
                              "comparison is --control smc's)")
     p = model.resolve(params)
-    if control == "pwm" and p.get("D") in (0.0, 1.0):
+    if p.get("D") in (0.0, 1.0):                # (a loop sets its duty ratio: no D among its parameters)
         # no switching: the output's ripple is 0 and the relative checks divide by it (ngspice's RON and ROFF then
         # read as a difference of 1e8 of nothing)
         raise ParameterError(f"compare checks a switching converter; at D = {p['D']:g} the switch never "
