@@ -149,7 +149,7 @@ def _run_circuit_scene(scene: Scene) -> SceneResult:
     failed = [name for name, _, _, passed in checks if not passed]
     return SceneResult(scene, ok=not failed, reason=("failed checks: " + ", ".join(failed)) if failed else "",
                        checks=checks, metrics=c.metrics, gdcm={}, files=files,
-                       accuracy=c.lcp.metadata.get("accuracy", {}), notes=list(c.notes) + gdcm.get("notes", []))
+                       accuracy=c.lcp.metadata.get("accuracy", {}), notes=list(c.notes))
 
 
 def _check(name, value, scene, label=None):

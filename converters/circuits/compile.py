@@ -1770,9 +1770,9 @@ class _Network:
                 names = ", ".join(f"{e.name.upper()} (" + ("controlled" if e.kind in "EH" else
                                                             type(e.waveform).__name__.upper()) + ")" for e in varying)
                 return NetlistError(f"{c.path}: {', '.join(loop)} form a loop of {held}{where} closed by {names}, "
-                                    f"a source whose value varies: the loop's capacitor voltages are then set by it, not "
-                                    "states of their own (pcsuite reduces such a loop where its sources are DC); put "
-                                    "a resistance in the loop (a capacitor's ESR, the source's own)"
+                                    "a source whose value varies: the loop's capacitor voltages are then set by it, "
+                                    "not states of their own (pcsuite reduces such a loop where its sources are "
+                                    "DC); put a resistance in the loop (a capacitor's ESR, the source's own)"
                                     f"{spread}")
             return NetlistError(f"{c.path}: {', '.join(loop)} form a loop of {held}{where}: their voltages are not "
                                 f"independent{spread}")

@@ -6,7 +6,8 @@ local processes, a Dask cluster) and gives the same rows everywhere. A row holds
 parameters, its status (``ok`` or ``failed``) and message, and the steady state's measures: the mean and
 ripple of vout and the RMS of the first state over one period on the orbit, the conduction mode class
 (CCM, DCM, GDCM-ON, ... from :mod:`converters.analysis.modes`; a netlist's sequence of conduction states,
-'S1 > D1 > off') and the fraction of the period a pair is held (a netlist's: nothing conducts), the Floquet spectral radius and the Newton iterations. A point that fails is a row with its message, never an exception.
+'S1 > D1 > off') and the fraction of the period a pair is held (a netlist's: nothing conducts), the Floquet
+spectral radius and the Newton iterations. A point that fails is a row with its message, never an exception.
 
 ``rows`` runs the points of a PWM converter on the LCP stepper (one complementarity pair) through
 one compiled call (:mod:`converters.sweeps.batch`); any other model or method, and a point the batch

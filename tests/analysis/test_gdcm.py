@@ -196,7 +196,8 @@ def test_cuk_gdcm_on_is_predicted_found_and_constrained(params):
 def test_a_held_interval_below_what_a_side_resolves_agrees_with_a_note_and_the_exact_fraction_is_given():
     """A buck at R = 3.327 ohm, 0.001 % past its exact DCM boundary (R = 3.326673 ohm, the tester's exact orbit):
     held 3.6909462e-5 of T (0.3105337598 at R = 10 ohm; an independent exact orbit: matrix exponentials, the
-    diode's turn-off by Brent's method, Newton on the period map). The LCP at T/1000 read DCM, held 0.0010 (a whole step), ngspice CCM (its runs shorter than
+    diode's turn-off by Brent's method, Newton on the period map). The LCP at T/1000 read DCM, held 0.0010 (a whole
+    step), ngspice CCM (its runs shorter than
     5e-4 of T are glitches), and gdcm said DISAGREE, exit 1, with no reason. The exact held fraction is the event
     method's; ngspice's CCM is within what it resolves, and a note says so. At R = 10 ohm every side agrees with
     no note."""

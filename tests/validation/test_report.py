@@ -285,7 +285,8 @@ def test_a_scenes_conduction_verdict_takes_the_exact_prediction_to_what_each_sid
     small-ripple closed form (K = 0.6011 > 0.6: CCM) and passed, where the gdcm command's exact prediction said DCM
     and DISAGREE. It takes the exact one, and both sides' CCM agree with it to what they resolve, noted."""
     from validation.suite import _run_pwm_scene
-    (tmp_path / "edge.toml").write_text('converter = "buck"\ndescription = "at the DCM boundary"\n[params]\nR = 3.327\n')
+    (tmp_path / "edge.toml").write_text('converter = "buck"\ndescription = "at the DCM boundary"\n'
+                                        '[params]\nR = 3.327\n')
     result = _run_pwm_scene(load_scene(tmp_path / "edge.toml"))
     gdcm = result.gdcm
     assert (gdcm["closed_form"], gdcm["predicted"], gdcm["lcp"], gdcm["spice"]) == ("CCM", "DCM", "CCM", "CCM")

@@ -616,8 +616,8 @@ def test_an_ngspice_sweep_runs_a_netlists_own_circuit(ngspice):
     from converters.parallel import run_ensemble
     from converters.sweeps import Axis, Grid, ModelSweep
     netlist = str(Path(__file__).resolve().parents[2] / "netlists" / "circuits" / "buck.cir")
-    (row,) = run_ensemble(ModelSweep(netlist, method="spice", steady=True, periods=4), Grid([Axis.parse("D=0.3:0.3:1")]),
-                          backend="serial")
+    (row,) = run_ensemble(ModelSweep(netlist, method="spice", steady=True, periods=4),
+                          Grid([Axis.parse("D=0.3:0.3:1")]), backend="serial")
     assert row["status"] == "ok", row["message"]
     assert abs(row["vout_mean"] - 5.794489706) < 1e-4 * 5.794489706
     assert row["mode"] == "S1 > D1 > off" and abs(row["held_fraction"] - 0.378734556) < 5e-3 and row["message"] == ""

@@ -140,8 +140,8 @@ def build(args):
     names = [keyed(str(k)) for k in base]
     twice = next((k for k, name in zip(base, names) if names.count(name) > 1), None)
     if twice is not None:
-        raise ParameterError(f"-p {twice} is given twice (as {' and '.join(k for k in base if keyed(str(k)) == keyed(str(twice)))}"
-                             "; a netlist's names are case-insensitive)")
+        both = " and ".join(k for k in base if keyed(str(k)) == keyed(str(twice)))
+        raise ParameterError(f"-p {twice} is given twice (as {both}; a netlist's names are case-insensitive)")
     base = dict(zip(names, base.values()))
     clash = sorted(set(base) & {keyed(str(name)) for name in points.names})
     if clash and points.kind != "tolerance":             # a tolerance's nominal may be given with -p
