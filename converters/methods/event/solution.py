@@ -174,7 +174,10 @@ class EventSolution(PiecewiseSolution):
                           wall_s=self.wall_s, rule="exact", exact=self, period=problem.switching.period, jumps=self.jumps,
                           metadata=dict(problem.metadata, event_tol=self.options.event_tol, label="event"))
 
-    def _after_boundaries(self, t, x, u, y, config, held):
+    def _after_boundaries(self, t: FloatArray, x: FloatArray, u: FloatArray, y: FloatArray,
+                          config: npt.NDArray[np.int64], held: npt.NDArray[np.bool_]
+                          ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, npt.NDArray[np.int64],
+                                     npt.NDArray[np.bool_]]:
         """The samples with a second one at each boundary where the state jumps (a charge or flux redistributed) or
         the configuration changes (an output with a feedthrough, a capacitor's ESR carrying a switched current,
         steps there): the sample on a boundary holds the value before it, and the next one on the grid had been the
