@@ -81,32 +81,42 @@ def gdcm_check(name: str, params: dict | None = None, *, h=None) -> dict:
 
 
 def _judge(out: dict, conv, p: dict, orbit) -> None:
-    """The verdict, to what each side resolves: the held fraction of the exact orbit (the event method's) beside
-    each side's, whose resolution is a step for the LCP (its fraction is a whole number of steps) and SPICE_MIN_RUN
-    for ngspice (shorter runs are its glitches). A side whose class differs from the prediction while its held
-    fraction is within its resolution of the exact one agrees to what it can see, and a note says so; otherwise
-    the disagreement names the side and the fractions. Near the DCM boundary (a buck at R = 3.327 ohm, held 3.7e-5
-    of T) the LCP had printed 0.0010 and ngspice CCM, and the verdict DISAGREE said nothing of why."""
-    exact_run = steady_orbit(conv, p, method="event")
-    exact = held_fraction(orbit_intervals(exact_run), 1)
+    """The verdict, to what each side resolves (:func:`judge_held`): the LCP's held fraction is a whole number of
+    its steps, ngspice's runs shorter than SPICE_MIN_RUN are its glitches. Near the DCM boundary (a buck at R =
+    3.327 ohm, held 3.7e-5 of T) the LCP had printed 0.0010 and ngspice CCM, and the verdict DISAGREE said nothing
+    of why."""
+    exact = exact_held(conv, p)
     T = out["period_s"]
     resolution = {"lcp": float(np.diff(orbit.t).max()) / T, "spice": SPICE_MIN_RUN}
     out["held_fraction"]["exact"] = exact
     out["resolution"] = resolution
+    out["agree"], out["notes"] = judge_held(out["predicted"], exact, {
+        side: (out[side], out["held_fraction"][side], resolution[side]) for side in ("lcp", "spice")})
+
+
+def exact_held(conv, p: dict) -> float:
+    """The fraction of the period the exact orbit (the event method's) holds every device off."""
+    return held_fraction(orbit_intervals(steady_orbit(conv, p, method="event")), 1)
+
+
+def judge_held(predicted: str, exact: float, sides: dict) -> tuple[bool, list[str]]:
+    """Whether each side's conduction class agrees with the exact prediction to what the side resolves, and the
+    notes that say why. ``sides`` maps a side's name to (its class, its held fraction of T, its resolution as a
+    fraction of T). A side whose class differs from the prediction while its held fraction is within its resolution
+    of the exact one agrees to what it can see, and a note says so; otherwise the disagreement names the side and
+    the fractions. The one rule of the gdcm command and the report's scenes."""
     notes, differ = [], []
-    for side in ("lcp", "spice"):
-        if out[side] == out["predicted"]:
+    for side, (label, held, resolution) in sides.items():
+        if label == predicted:
             continue
-        apart = abs(out["held_fraction"][side] - exact)
-        if apart <= resolution[side] * (1 + 1e-9):
-            notes.append(f"{side} reads {out[side]} where the exact orbit is {out['predicted']} (held {exact:.2g} of "
-                         f"T): within what it resolves ({resolution[side]:.2g} of T)")
+        apart = abs(held - exact)
+        if apart <= resolution * (1 + 1e-9):
+            notes.append(f"{side} reads {label} where the exact orbit is {predicted} (held {exact:.2g} of T): within "
+                         f"what it resolves ({resolution:.2g} of T)")
         else:
-            differ.append(f"{side} reads {out[side]}, held {out['held_fraction'][side]:.4g} of T, where the exact "
-                          f"orbit is {out['predicted']}, held {exact:.4g} of T ({apart:.2g} apart; it resolves "
-                          f"{resolution[side]:.2g})")
-    out["agree"] = not differ
-    out["notes"] = notes + differ
+            differ.append(f"{side} reads {label}, held {held:.4g} of T, where the exact orbit is {predicted}, held "
+                          f"{exact:.4g} of T ({apart:.2g} apart; it resolves {resolution:.2g})")
+    return not differ, notes + differ
 
 
 def _constraint_residuals(conv, p, orbit) -> dict:

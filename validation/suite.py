@@ -13,7 +13,6 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from converters.analysis.modes import HELD
 from converters.models import analytic, get_converter
 from converters.parallel import parallel_map
 from netlists import SpiceOptions
@@ -57,29 +56,41 @@ def _run_scene(scene: Scene) -> SceneResult:
     return SCENE_RUNNERS.get(scene.control, _run_pwm_scene)(scene)
 
 
-def _resolved(gdcm: dict, conv, p: dict, c) -> None:
-    """A scene's conduction classes that differ from the exact prediction only by an interval below what the side
-    resolves (the LCP's step, ngspice's SPICE_MIN_RUN) agree, with a note (:func:`validation.gdcm._judge`)."""
-    from converters.analysis.modes import held_fraction, orbit_intervals
-    from converters.run import steady_orbit
+def _scene_classes(conv, p: dict, c) -> dict:
+    """A scene's conduction classes, each side's from its own intervals over the window with runs shorter than
+    what the scene resolves (MIN_RUN_FRACTION of T, and the LCP's step where coarser) merged into their
+    neighbours, and judged against the exact prediction by the gdcm command's rule
+    (:func:`validation.gdcm.judge_held`). The classes had come from the mode sequences (runs under 1 % of T
+    dropped) while the judgement took the LCP's step and ngspice's SPICE_MIN_RUN as what they resolve: a held
+    interval between the two was a DISAGREE the sides could not see."""
+    from converters.analysis.modes import held_fraction, mode_class, mode_intervals
 
-    from .gdcm import SPICE_MIN_RUN
+    from .gdcm import exact_held, judge_held
+    from .modes import MIN_RUN_FRACTION
     T = conv.period(p)
-    exact = held_fraction(orbit_intervals(steady_orbit(conv, p, method="event")), 1)
-    notes = []
-    for side, run, resolution in (("lcp", c.lcp, float(np.diff(c.lcp.t).max()) / T), ("spice", c.spice, SPICE_MIN_RUN)):
-        if gdcm[side] == gdcm["predicted"]:
-            continue
-        if gdcm[side] == "CCM":                 # a held interval shorter than it resolves is one it cannot see
-            within = exact <= resolution * (1 + 1e-9)
-        else:                                   # one it sees where the exact orbit has none: as short
-            fractions = run.mode_fractions(None, t0=c.window_start, t1=float(c.lcp.t[-1]))
-            within = gdcm["predicted"] == "CCM" and sum(v for k, v in fractions.items() if k in HELD) <= resolution
-        if not within:
-            return
-        notes.append(f"{side} reads {gdcm[side]} where the exact orbit is {gdcm['predicted']} (held {exact:.2g} of T): "
-                     f"within what it resolves ({resolution:.2g} of T)")
-    gdcm.update(agree=True, notes=notes, exact_held=exact)
+    t0, t1 = c.window_start, float(c.lcp.t[-1])
+    periods = (t1 - t0) / T
+    resolution = {"lcp": max(float(np.diff(c.lcp.t).max()) / T, MIN_RUN_FRACTION), "spice": MIN_RUN_FRACTION}
+    # each LCP point carries the label of the step that ends there; ngspice's label holds from its point on
+    intervals = {"lcp": mode_intervals(c.lcp.t, np.asarray(c.lcp.modes())[1:], t0, t1, T, MIN_RUN_FRACTION),
+                 "spice": mode_intervals(c.spice.t, np.asarray(c.spice.modes()), t0, t1, T, MIN_RUN_FRACTION)}
+    # the held class by the model's own label: DCM, or GDCM where the held pair keeps i1 = -i2 != 0 (Cuk)
+    held = "GDCM" if conv.off_held_label.startswith("GDCM") else "DCM"
+    # the exact prediction (from the matrices), as the gdcm command's: the small-ripple closed form had said CCM
+    # at a buck's R = 3.327 ohm, DCM for 3.7e-5 of T, where gdcm said DISAGREE
+    from converters.analysis.gdcm import exact_mode
+    gdcm = {"K": analytic.k_factor(p, conv.name), "Kcrit": analytic.k_crit(p["D"], conv.name),
+            "closed_form": held if analytic.predicted_mode(p, conv.name) == "DCM" else "CCM",
+            "predicted": "CCM" if exact_mode(conv, p)["mode"] == "CCM" else held}
+    for side, iv in intervals.items():
+        gdcm[side] = "CCM" if mode_class(iv) == "CCM" else held
+    gdcm["agree"] = gdcm["predicted"] == gdcm["lcp"] == gdcm["spice"]
+    if not gdcm["agree"]:
+        exact = exact_held(conv, p)
+        sides = {side: (gdcm[side], held_fraction(iv, periods), resolution[side]) for side, iv in intervals.items()}
+        gdcm["agree"], gdcm["notes"] = judge_held(gdcm["predicted"], exact, sides)
+        gdcm["exact_held"] = exact
+    return gdcm
 
 
 def _run_pwm_scene(scene: Scene) -> SceneResult:
@@ -92,20 +103,7 @@ def _run_pwm_scene(scene: Scene) -> SceneResult:
     gdcm = {}
     if conv.closed_form:
         p = c.params
-        # the held class by the model's own label: DCM, or GDCM where the held pair keeps i1 = -i2 != 0 (Cuk)
-        held = "GDCM" if conv.off_held_label.startswith("GDCM") else "DCM"
-        # the exact prediction (from the matrices), as the gdcm command's: the small-ripple closed form had said CCM
-        # at a buck's R = 3.327 ohm, DCM for 3.7e-5 of T, where gdcm said DISAGREE
-        from converters.analysis.gdcm import exact_mode
-        predicted = "CCM" if exact_mode(conv, p)["mode"] == "CCM" else held
-        lcp_held = any(label in m["mode_sequence_lcp"] for label in HELD)
-        spice_held = any(label in m["mode_sequence_spice"] for label in HELD)
-        gdcm = {"K": analytic.k_factor(p, conv.name), "Kcrit": analytic.k_crit(p["D"], conv.name),
-                "closed_form": held if analytic.predicted_mode(p, conv.name) == "DCM" else "CCM",
-                "predicted": predicted, "lcp": held if lcp_held else "CCM", "spice": held if spice_held else "CCM"}
-        gdcm["agree"] = gdcm["predicted"] == gdcm["lcp"] == gdcm["spice"]
-        if not gdcm["agree"]:
-            _resolved(gdcm, conv, p, c)
+        gdcm = _scene_classes(conv, p, c)
         checks.append(("gdcm_verdict", float(gdcm["agree"]), 1.0, gdcm["agree"]))
         if "closed_form_rel" in scene.checks:
             expected = analytic.conversion_ratio(p, conv.name) * p["Vin"]

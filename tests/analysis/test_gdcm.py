@@ -210,3 +210,16 @@ def test_a_held_interval_below_what_a_side_resolves_agrees_with_a_note_and_the_e
     deep = gdcm_check("buck", {"R": 10})
     assert deep["agree"] and deep["notes"] == [] and deep["held_fraction"]["exact"] == pytest.approx(0.3105337598,
                                                                                                        abs=1e-9)
+
+
+def test_one_rule_judges_a_side_against_the_exact_held_fraction_to_what_it_resolves():
+    """The gdcm command and the report's scenes judge by judge_held (two copies of the rule had differed: the
+    report's said nothing of a disagreement). A side reading CCM 3.7e-5 of T from the exact DCM agrees at a
+    resolution of 5e-4 T, with a note; at 1e-5 T it disagrees and the note names the side and both fractions."""
+    from validation.gdcm import judge_held
+    agree, notes = judge_held("DCM", 3.7e-5, {"lcp": ("DCM", 4e-5, 1e-3), "spice": ("CCM", 0.0, 5e-4)})
+    assert agree and notes == ["spice reads CCM where the exact orbit is DCM (held 3.7e-05 of T): within what it "
+                               "resolves (0.0005 of T)"]
+    agree, notes = judge_held("DCM", 3.7e-5, {"spice": ("CCM", 0.0, 1e-5)})
+    assert not agree and notes == ["spice reads CCM, held 0 of T, where the exact orbit is DCM, held 3.7e-05 of T "
+                                   "(3.7e-05 apart; it resolves 1e-05)"]

@@ -293,3 +293,19 @@ def test_a_scenes_conduction_verdict_takes_the_exact_prediction_to_what_each_sid
     assert gdcm["agree"] and gdcm["exact_held"] == pytest.approx(3.6909462e-5, abs=1e-9)
     assert [note for note in result.notes if "within what it resolves" in note] == gdcm["notes"] and \
         len(gdcm["notes"]) == 2
+
+
+def test_a_scenes_classes_and_their_judgement_take_one_resolution(tmp_path, ngspice):
+    """A buck at R = 3.35 ohm is DCM for 2.6213329e-3 of T (an independent exact orbit: matrix exponentials, the
+    diode's turn-off by Brent's method, a fixed point of the period map). The scene's classes dropped runs under
+    1 % of T, so both sides read CCM, while the judgement took the LCP's step (1e-3 T) as what it resolves: the
+    scene failed its gdcm_verdict with no note. Classes and judgement now take the scene's 1 % of T."""
+    from validation.suite import _run_pwm_scene
+    (tmp_path / "near.toml").write_text('converter = "buck"\ndescription = "near the DCM boundary"\n'
+                                        '[params]\nR = 3.35\n')
+    result = _run_pwm_scene(load_scene(tmp_path / "near.toml"))
+    gdcm = result.gdcm
+    assert (gdcm["predicted"], gdcm["lcp"], gdcm["spice"]) == ("DCM", "CCM", "CCM") and gdcm["agree"] and result.ok
+    assert gdcm["exact_held"] == pytest.approx(2.6213329e-3, abs=1e-9)
+    assert gdcm["notes"] == [f"{side} reads CCM where the exact orbit is DCM (held 0.0026 of T): within what it "
+                             "resolves (0.01 of T)" for side in ("lcp", "spice")]
