@@ -46,6 +46,8 @@ WARM_UP_PERIODS = 0
 STEADY_PERIODS = 20
 #: The relative distance to the orbit at which a run's steady state counts as reached (``--steady-tol``).
 STEADY_TOL = 1e-6
+#: The steady tolerances taken: Newton aims at a tenth of one, and its own stops at 1e-15 (TOL_RANGE).
+STEADY_TOL_RANGE = (1e-14, 1.0)
 #: The most steps an accuracy-on-request run writes by default (its periods at the step rtol chose).
 WRITTEN_STEPS = 1 << 20
 DEFAULT_PERIODS = 500
@@ -171,8 +173,9 @@ def run_converter(name_or_model: str | Model, params: dict | None = None, *, con
         return method.run_model(model, p, t_end=t_end, periods=periods, steady=steady, x0=x0)
     span = _span(model, p, method, steady, t_end, periods)
     steady_tol = parse_value("steady_tol", steady_tol)
-    if not 0.0 < steady_tol < 1.0:
-        raise ParameterError(f"steady_tol must be in (0, 1); got {steady_tol!r}")
+    if not STEADY_TOL_RANGE[0] <= steady_tol < STEADY_TOL_RANGE[1]:
+        raise ParameterError(f"steady_tol must be in [{STEADY_TOL_RANGE[0]:g}, {STEADY_TOL_RANGE[1]:g}) (relative; "
+                             f"Newton aims at a tenth of it); got {steady_tol!r}")
     if steady:
         if output_step is not None:
             raise ParameterError("output_step applies to a run from rest; --steady returns its periods on the orbit "

@@ -322,11 +322,9 @@ def measures(model: Model, p: dict, tr: Trajectory, T: float) -> tuple[dict, lis
     events = [e for e in substep_events(tr, T)
               if not np.any(np.abs(np.concatenate([edges, [0.0, T]]) - e[2] * T) <= 1e-9 * T)]
     instants = [] if _exact(tr) else [e[2] * T for e in events]
-    # a measure's relative error is taken on its own size, or on SMALLEST of the circuit's (its largest state or
-    # pair variable) where it is smaller: an output the diodes block both ways (4e-16 V in a 12 V circuit) had been
-    # estimated against its own rounding, "6.2e-28"
-    least = SMALLEST * max(float(np.abs(np.asarray(a, dtype=float)).max(initial=0.0))
-                           for a in (tr.x, tr.u if tr.u is not None else 0.0, tr.y if tr.y is not None else 0.0))
+    # a measure's relative error is taken on its own size, or on the circuit's floor where it is smaller: an output
+    # the diodes block both ways (4e-16 V in a 12 V circuit) had been estimated against its own rounding, "6.2e-28"
+    least = circuit_floor(tr)
     mean = tr.mean("vout", t0=0.0, t1=T)
     values["vout_mean"] = (mean, max(abs(mean), least))
     rows = np.arange(tr.t.size)
@@ -731,10 +729,19 @@ def _order_between(differences: Sequence[tuple[int, float, float]], declared: fl
 SMALLEST = 1e-6
 #: The accuracy the defaults promise on every reported mean, or warn about.
 DEFAULT_RTOL = 1e-3
-#: The smallest output (V or A) a relative estimate is taken against: an output that is rounding (a path the diodes
-#: block both ways: 4e-16 V) had read "within ~0.2" and "has not settled (2.5e-01 from the periodic orbit)" on an
-#: orbit 5.5e-14 from Newton's.
-OUTPUT_FLOOR = 1e-9
+
+
+def circuit_floor(tr: Trajectory) -> float:
+    """The smallest size a relative error is taken on: SMALLEST of the circuit's scale (its largest state, input or
+    pair variable over the run). An output that is rounding (a path the diodes block both ways: 4e-16 V in a 12 V
+    circuit) had read "within ~0.2" and "has not settled (2.5e-01 from the periodic orbit)" on an orbit 5.5e-14
+    from Newton's, and "3.7e-16 +- 6.2e-28" under --rtol. One floor for the defaults' check and --rtol's measures:
+    a fixed 1 nV had served the first, which is 1e-6 of a 1 mV circuit and 1e-12 of a 1 kV one."""
+    scale = max(float(np.abs(np.asarray(a, dtype=float)).max(initial=0.0))
+                for a in (tr.x, tr.u if tr.u is not None else 0.0, tr.y if tr.y is not None else 0.0))
+    return max(SMALLEST * scale, float(np.finfo(float).tiny))
+
+
 #: A conduction interval spanning fewer steps than this is named in the warning.
 FEW_STEPS = 20
 
@@ -898,7 +905,7 @@ def default_check(model: Model, p: dict, method: Method, tr: Trajectory, reporte
                   power: dict | None = None) -> dict:
     """How far the reported mean (vout over the run's last 10 periods) may be from the exact periodic one, relative
     to vout's RMS over the period (its mean for a DC output; the size of an AC one, whose mean is ~0; at least
-    OUTPUT_FLOOR):
+    :func:`circuit_floor`):
     the run's distance to the method's own orbit (a transient not settled) plus the method's discretization
     error, Richardson's from the orbit at h and 2h (a stepper of declared order above 1: the order observed at h,
     2h and 4h, at least :data:`OBSERVED_FLOOR`, at most the declared one and :data:`ORDER_THROUGH_EVENTS` through a
@@ -916,7 +923,7 @@ def default_check(model: Model, p: dict, method: Method, tr: Trajectory, reporte
             return {**out, "checked": False, "reason": reason}
         # what can be said: how far the mean moved from the 10 periods before (a transient it still carries)
         before = tr.mean("vout", t0=end - 20 * T, t1=end - 10 * T)
-        transient = abs(reported - before) / max(abs(reported), OUTPUT_FLOOR)
+        transient = abs(reported - before) / max(abs(reported), circuit_floor(tr))
         out.update(checked=False, reason=reason, transient=transient)
         if transient > DEFAULT_RTOL:
             out["warning"] = (f"vout mean may be {transient:.1e} off (more than {DEFAULT_RTOL:g}): the run has not "
@@ -934,7 +941,7 @@ def default_check(model: Model, p: dict, method: Method, tr: Trajectory, reporte
         exact = m_h + (m_h - coarse.mean("vout", t0=0.0, t1=T)) / runs.factor
     # relative to the output's RMS over the period: its mean for a DC output (to its ripple's square), its size for
     # an AC one, whose mean is ~0 (an inverter's load current: 6e-13 A, "2.2e-01 off" against it)
-    scale = max(abs(exact), fine.rms("vout", t0=0.0, t1=T), OUTPUT_FLOOR)
+    scale = max(abs(exact), fine.rms("vout", t0=0.0, t1=T), circuit_floor(tr))
     transient, discretization = abs(reported - m_h) / scale, abs(m_h - exact) / scale
     error = abs(reported - exact) / scale
     period = last_period(model, p, tr)
@@ -1235,16 +1242,16 @@ def window_check(model: Model, p: dict, method: Method, tr: Trajectory, summary:
     transient = None
     if a >= tr.t[0] - 1e-12 * (t1 - t0) and not steps:
         transient = (abs(tr.mean("vout", t0=a, t1=t0) - summary["vout_mean"])
-                     / max(abs(summary["vout_mean"]), OUTPUT_FLOOR))
+                     / max(abs(summary["vout_mean"]), circuit_floor(tr)))
     estimates = {}
     for name in names:
         value = summary[name]
-        part = {"discretization": abs(value - coarse_summary[name]) / max(abs(value), 1e-300) if coarse_summary
-                else None}
+        part = {"discretization": abs(value - coarse_summary[name]) / max(abs(value), circuit_floor(tr))
+                if coarse_summary else None}
         if name == "vout_mean":
             part["transient"] = transient
             if coarse_summary:
-                part["crossings"] = _crossing_bound(tr, t0, t1) / max(abs(value), OUTPUT_FLOOR)
+                part["crossings"] = _crossing_bound(tr, t0, t1) / max(abs(value), circuit_floor(tr))
         known = [x for x in part.values() if x is not None]
         if known:       # the event method's switching frequency: exact flows, no transient measured: nothing to say
             estimates[name] = {**part, "error_estimate": sum(known)}

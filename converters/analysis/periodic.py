@@ -86,9 +86,9 @@ class PeriodicOrbit:
     multipliers : ndarray, shape (n,)
         Floquet multipliers (eigenvalues of ``jacobian``), largest modulus first.
     residual : float
-        max |P(x0) - x0| / (1 + max |x0|).
+        max |P(x0) - x0| / (s + max |x0|), s the circuit's size where below 1 (:func:`newton_orbit`), else 1.
     distance : float
-        Estimated max |x0 - x*| / (1 + max |x0|): the larger of the Newton step and residual / (1 - rho).
+        Estimated max |x0 - x*| / (s + max |x0|): the larger of the Newton step and residual / (1 - rho).
     iterations, evaluations : int
         Newton iterations; spans simulated (period-map calls, finite-difference columns included).
     converged : bool
@@ -163,16 +163,28 @@ def check_newton(tol: float, max_iter: int) -> None:
 
 
 def newton_orbit(period_map: NewtonMap, x_guess: npt.ArrayLike, *, tol: float = 1e-10, max_iter: int = 50,
-                 period: float = np.nan, polish: bool = False) -> PeriodicOrbit:
+                 period: float = np.nan, polish: bool = False, size: float | None = None) -> PeriodicOrbit:
     """Newton's method on P(x) - x = 0 for a :class:`~converters.methods.base.PeriodMap` ``period_map``: the
     compiled driver (:func:`converters.analysis.newton_kernel.newton_advance`, the batched steady states' too),
     answered here with the map's values and numpy's spectral radius. ``polish``: return x + the last Newton step
-    (within about its square of the orbit) instead of x."""
+    (within about its square of the orbit) instead of x. ``size``: the circuit's size in state units
+    (:func:`problem_size`), where the distance is to be relative to it below 1."""
     check_newton(tol, max_iter)
     check_flag("polish", polish)
     x = np.array(as_vector("x_guess", x_guess, None), dtype=float)
     n = x.size
     px, jac = (np.array(v, dtype=float) for v in period_map(x))       # copies: P's output may be a view
+    # The driver measures distances relative to 1 + max |x| (state units): a circuit whose states are far below 1
+    # (a buck from 1.2e-8 V) was resolved to 1e-10 V absolute, 1.5 % of its 7 nV output, and its --steady run read
+    # "has not settled: use --steady". Given the circuit's ``size``, Newton works on x / s, s the largest of that
+    # size, the start and its image where below 1, so its tolerance is relative to s + max |x|; at s = 1 nothing
+    # changes. (The states alone are no size: a path the diodes block both ways holds them at 1e-19 in a 12 V
+    # circuit, whose orbit is then resolved to its rounding.)
+    s = 1.0
+    if size is not None:
+        largest = max(size, float(np.abs(x).max(initial=0.0)), float(np.abs(px).max(initial=0.0)))
+        s = min(1.0, largest) if np.isfinite(largest) and largest > 0.0 else 1.0
+    x, px = x / s, px / s
     dx, work, trial, p_trial, jac_trial = np.empty(n), np.empty((n, n + 1)), np.empty(n), np.empty(n), np.empty((n, n))
     istate, rstate = np.zeros(4, dtype=np.int64), np.array([np.inf, np.inf, np.inf, 0.0])
     advance = kernel("newton_advance")
@@ -186,7 +198,8 @@ def newton_orbit(period_map: NewtonMap, x_guess: npt.ArrayLike, *, tol: float = 
             # long, halved like one that does not lower the residual (a plain period the map refuses ends Newton:
             # NEWTON_NO_SOLUTION); any other failure of the map raises with its own reason.
             try:
-                p_trial[:], jac_trial[:, :] = period_map(trial)
+                image, jac_trial[:, :] = period_map(trial * s)
+                p_trial[:] = np.asarray(image, dtype=float) / s
                 ok = True
             except ParameterError:           # (a substep or memory refusal of a mode only the trial enters too)
                 ok = False
@@ -195,6 +208,7 @@ def newton_orbit(period_map: NewtonMap, x_guess: npt.ArrayLike, *, tol: float = 
     iteration, relaxations = int(istate[1]), int(istate[3])
     residual, distance, rho = (float(v) for v in rstate[1:])
     span = getattr(period_map, "period", period)
+    x, dx = x * s, dx * s
     if verdict == NEWTON_CONVERGED:
         return PeriodicOrbit(x + dx if polish else x, span, jac, multipliers_of(jac), residual, distance, iteration,
                              period_map.evaluations, True, period_map.jacobian_kind)
@@ -235,7 +249,8 @@ def shoot(problem: LCSProblem, method: Method, x_guess: npt.ArrayLike | None = N
     x = as_vector("x_guess", problem.x0 if x_guess is None else x_guess, problem.n)
     for _ in range(warm_up):
         x = period_map.end(x)
-    orbit = newton_orbit(period_map, x, tol=tol, max_iter=max_iter, period=periods * T, polish=polish)
+    size = problem_size(problem)
+    orbit = newton_orbit(period_map, x, tol=tol, max_iter=max_iter, period=periods * T, polish=polish, size=size)
     # Far from the orbit the map may not be the orbit's: a loop's integrator saturates the duty ratio (0 or 1), the
     # loop is open there and its integrator a multiplier at 1, and Newton's steps leave for worse states. The
     # transient itself settles (a type II voltage loop's in ~500 periods): plain periods in rounds of doubling
@@ -258,7 +273,7 @@ def shoot(problem: LCSProblem, method: Method, x_guess: npt.ArrayLike | None = N
             break
         done, rounds = done + rounds, 2 * rounds
         retry = newton_orbit(period_map, x, tol=tol, max_iter=min(max_iter, SETTLE_NEWTON), period=periods * T,
-                             polish=polish)
+                             polish=polish, size=size)
         if remote is not None and retry.converged and _same(remote, retry, tol):
             orbit = replace(remote, evaluations=period_map.evaluations)       # confirmed: Newton's own answer
         elif remote is None or retry.converged:
@@ -272,6 +287,22 @@ def shoot(problem: LCSProblem, method: Method, x_guess: npt.ArrayLike | None = N
             "transient did not return to it: the circuit may settle elsewhere (run --periods N without --steady "
             "to see)"))
     return orbit
+
+
+def problem_size(problem: LCSProblem) -> float | None:
+    """The circuit's size in state units: the largest of its start, each configuration's constant pair terms F (a
+    source's voltage across a blocking diode) and its constant drift E over a period (a source's change of a state
+    in T), with the sinusoidal inputs' amplitudes. None for another problem (a mechanism's: Newton's distance stays
+    relative to 1 + max |x|)."""
+    if not isinstance(problem, LCSProblem):
+        return None
+    T = problem.period if np.isfinite(problem.period) else problem.t_span[1] - problem.t_span[0]
+    parts = [np.abs(problem.x0)]
+    for c in problem.configurations:
+        parts += [np.abs(c.E) * T, np.abs(c.F)]
+    if problem.inputs is not None:
+        parts += [np.abs(problem.inputs.E) * T, np.abs(problem.inputs.F)]
+    return max(float(np.max(part, initial=0.0)) for part in parts)
 
 
 #: An orbit Newton converged to that the circuit's slowest mode would take more periods than this to bring the start

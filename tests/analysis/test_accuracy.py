@@ -622,7 +622,7 @@ R1 out 0 10
 def test_an_output_at_rounding_is_not_estimated_against_itself(tmp_path, capsys, method):
     """D2 and D3 block every path to the output: vout is 0 (4e-16 V of rounding). Its estimate was taken relative to
     that rounding: "within ~0.2" and "the run has not settled (2.5e-01 from the periodic orbit): use --steady" on an
-    orbit Newton had found to 5.5e-14, with --steady given. Against the output floor of 1 nV it is ~1e-7."""
+    orbit Newton had found to 5.5e-14, with --steady given. Against the circuit floor (1e-6 of its 12 V) it is ~1e-11."""
     import json
 
     from validation.cli import main

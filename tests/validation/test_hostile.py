@@ -282,7 +282,9 @@ IGNORED = [
      "--steady needs a fixed switching period"),
     (["simulate", "buck", "--steady-tol", "inf", "--steady"], "steady_tol must be a number"),
     (["simulate", "buck", "--steady-tol", "nan", "--steady"], "steady_tol must be a number"),
-    (["simulate", "buck", "--steady-tol", "0", "--steady"], "steady_tol must be in (0, 1); got 0.0"),
+    (["simulate", "buck", "--steady-tol", "0", "--steady"], "steady_tol must be in [1e-14, 1) (relative; Newton aims "
+                                                            "at a tenth of it); got 0.0"),
+    (["simulate", "buck", "--steady-tol", "1e-15", "--steady"], "steady_tol must be in [1e-14, 1)"),   # "tol ... 1e-16"
     (["simulate", "buck", "--t-end", "1e9"], "a shorter --t-end"),
     (["compare", "buck", "--t-end", "nan"], "--t-end applies to --control smc"),
     (["compare", "buck", "--t-end", "1e9"], "--t-end applies to --control smc"),
