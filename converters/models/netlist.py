@@ -240,9 +240,7 @@ class Circuit(Model):
         rows = np.array([np.zeros(len(c.signal_names)) if w is None else w for w in weights])
         # a diode pins the potentials where it carries current; one held at zero current (the event method's mode
         # may hold a blocked diode at u = y = 0) pins them on one side only, and they are not set there
-        forms = np.asarray(c.pair_currents, dtype=bool)[np.asarray(samples.config, dtype=np.int64)]
-        current = np.where(forms, samples.u, samples.y)
-        conducting = current > 1e-9 * np.abs(current).max(initial=0.0)
+        conducting = _carrying(c, samples)
         config, k = np.asarray(samples.config, dtype=np.int64), conducting.shape[1]
         if k + int(config.max(initial=0)).bit_length() < 63:     # one integer per (configuration, conducting diodes)
             codes = (config << k) | (conducting.astype(np.int64) @ (np.int64(1) << np.arange(k, dtype=np.int64)))
@@ -437,9 +435,10 @@ class Circuit(Model):
         if samples.held is not None:                  # the event method's own modes
             return samples.held == currents
         # a diode conducts where its current exceeds its reverse voltage (u > y where u is its current, y > u where u
-        # is its voltage: the model's rule), and a pair at u = y = 0 (a bridge's output floating while every diode
-        # blocks) carries nothing, whichever variable u is
-        return np.where(currents, samples.u > samples.y, samples.y > samples.u)
+        # is its voltage: the model's rule) and rounding: a pair at u = y = 0 (a bridge's output floating while every
+        # diode blocks) carries nothing, whichever variable u is. The stepper had read a bridge's D3 at 1e-16 A as
+        # conducting, "D3 0.148" where it is off (0.415 exact).
+        return np.where(currents, samples.u > samples.y, samples.y > samples.u) & _carrying(c, samples)
 
     def mode_labels(self, samples: Samples, p: dict) -> np.ndarray:
         c = self.compiled(p)
@@ -461,6 +460,25 @@ class Circuit(Model):
 
     off_held_label = "off"
     turn_off_label = None
+
+
+#: A pair's current counts where it exceeds this fraction of its sample's largest pair variable (V or A): rounding
+#: leaves 1e-16 A in a diode that a 325 V bridge holds at u = y = 0.
+CARRYING = 1e-9
+
+
+def _carrying(c, samples: Samples) -> np.ndarray:
+    """Per point and pair: the pair carries a current above rounding, :data:`CARRYING` of the larger of the point's
+    largest pair variable and the circuit's (its sources' terms in the pairs: a blocked diode's 12 V), so a
+    window's label does not depend on the rows asked for, and a point where every pair is at rounding (1e-28 as a
+    switch opens on a path the diodes block) reads nothing as conducting."""
+    forms = np.asarray(c.pair_currents, dtype=bool)[np.asarray(samples.config, dtype=np.int64)]
+    u, y = np.asarray(samples.u, dtype=float), np.asarray(samples.y, dtype=float)
+    current = np.where(forms, u, y)
+    sources = max([float(np.abs(k.F).max(initial=0.0)) for k in c.configurations]
+                  + ([float(np.abs(c.inputs[3]).max(initial=0.0))] if c.inputs is not None else []))
+    scale = np.maximum(np.maximum(np.abs(u).max(axis=1, initial=0.0), np.abs(y).max(axis=1, initial=0.0)), sources)
+    return current > CARRYING * scale[:, None]
 
 
 def _weights(name: str, names: tuple[str, ...]) -> np.ndarray | None:

@@ -45,3 +45,33 @@ def test_a_bridge_rectifier_holds_the_peak_at_no_load_and_conducts_in_pairs(name
     loaded = run_summary(run_converter(circuit, {}, steady=True))
     assert set(loaded["mode_fractions"]) == modes
     assert 0.8 * peak < loaded["vout_mean"] < peak
+
+
+BRIDGE_LC = """bridge rectifier with an LC filter (its inductor current resets: every diode blocks for 0.415 of T)
+Vs a0 0 SIN(0 325 50 0 0 0)
+R0 a0 a 0.1
+D1 a p DMOD
+D2 0 p DMOD
+D3 n a DMOD
+D4 n 0 DMOD
+L1 p q 10m
+C1 q n 1m
+R1 q n 50
+.model DMOD D
+.tran 20u 400m
+.end
+"""
+
+
+def test_a_diode_at_zero_current_and_voltage_is_not_read_as_conducting():
+    """While every diode blocks, the bridge's output floats and the LCP leaves D3 at u = y = 0 with 1e-16 A of
+    rounding: the summary had read "D3 0.148371" (no loop lets D3 conduct alone) and "off 0.267883", where the exact
+    orbit (Radau at rtol 1e-12 with the diode events located, a fixed point of the period map) conducts on
+    [0.1493752, 0.4417371] T and its mirror: off 0.415276, each pair 0.292362. The stepper's fractions are within
+    one step (1e-3 T) of those."""
+    circuit = Circuit.from_netlist("bridge_lc.cir", text=BRIDGE_LC)
+    fractions = run_summary(run_converter(circuit, {}, steady=True))["mode_fractions"]
+    assert set(fractions) == {"off", "D1+D4", "D2+D3"}
+    assert fractions["off"] == pytest.approx(0.415276, abs=1e-3)
+    assert fractions["D1+D4"] == pytest.approx(0.292362, abs=1e-3)
+    assert fractions["D2+D3"] == pytest.approx(0.292362, abs=1e-3)
