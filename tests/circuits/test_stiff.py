@@ -44,7 +44,14 @@ def test_a_stiff_node_charges_the_capacitor_to_the_source_voltage_not_beyond(r, 
     summary = json.loads(capsys.readouterr().out)
     assert summary["options"]["theta"] == 1.0 and summary["orbit"]["stable"]
     assert summary["vout_mean"] == pytest.approx(10.0, abs=1e-7)
-    assert summary["accuracy"]["vout_mean_error_estimate"] < 1e-9 and "warnings" not in summary
+    assert summary["accuracy"]["vout_mean_error_estimate"] < 1e-9
+    # the source's current is a pulse of 10 V / R decaying in tau, which no sample of a 1 us step sees (0.091 A read
+    # of 1 A at 10 ohm): the warning names the currents, not vout
+    peak = 10.0 / float(r.replace("m", "e-3"))
+    assert summary["measurements"]["i(c1)"]["max"] < 0.5 * peak
+    (warning,) = summary["warnings"]
+    assert warning.startswith("measurements may be off by more than 0.01 of their signal's size (")
+    assert "i(c1)" in warning and "vout" not in warning and "v(" not in warning
     model = get_model(str(path))
     assert model.fastest_rate(model.resolve({})) == pytest.approx(1 / tau, rel=1e-6)
     # asked for by name, the trapezoidal rule is refused in one line, with the remedy
@@ -360,13 +367,20 @@ def test_the_exact_flows_balance_the_energy_their_sources_deliver(name):
 def test_a_steppers_energy_residual_halves_with_its_step_at_diode_events_inside_steps():
     """The Cockcroft-Walton ladder at the stepper's default (T/4000): its diodes stop inside steps, where the
     trapezoid of v i is first order, so the energy balance reads 2.8e-2 at h and 5.3e-2 at 2h while vout is within
-    3e-6: reported, first order, and no warning (a stepper's residual is the power's quadrature as much as its
-    error)."""
+    3e-6: reported, first order, and not judged (a stepper's residual is the power's quadrature as much as its
+    error). The diodes' current peaks, which the steps miss (i(d8) 0.2643 A where the exact orbit's is 0.2871 A:
+    8 % low), are warned of; vout is not."""
     summary = run_summary(run_converter(str(NETLISTS / "cockcroft-walton.cir"), steady=True))
     accuracy = summary["accuracy"]
     assert 1e-3 < accuracy["energy_residual"] < 0.1
     assert 0.4 < accuracy["energy_residual"] / accuracy["energy_residual_2h"] < 0.75
-    assert "trusted" not in accuracy and not summary.get("warnings")
+    assert "trusted" not in accuracy
+    exact = run_summary(run_converter(str(NETLISTS / "cockcroft-walton.cir"), steady=True, method="event"))
+    assert "warnings" not in exact
+    assert summary["measurements"]["i(d8)"]["max"] < 0.95 * exact["measurements"]["i(d8)"]["max"]
+    (warning,) = summary["warnings"]
+    assert warning.startswith("measurements may be off by more than 0.01") and "i(d8)" in warning
+    assert "vout" not in warning
 
 
 UNDAMPED_LOOP_BUCK = """Buck 1 MHz, a 50 nH commutation loop with no resistance and 1 nF across the switch, 100 ohm / 1 pF sense RC
