@@ -913,7 +913,9 @@ class _Compiler:
 
     def corners(self, coefficients: dict[str, float], period: float) -> _Array:
         points: list[float] | _Array
-        points = [0.0]
+        # the window's ends are corners too: a ramp still rising at 2 T (a sawtooth delayed by T/3 restarts at 4T/3)
+        # had its last segment dropped with its crossing, and the duty 0.4 read 0.667
+        points = [0.0, period, 2 * period]
         for name in coefficients:
             w = self.source(name).waveform
             if isinstance(w, Pulse):

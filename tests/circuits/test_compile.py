@@ -346,3 +346,38 @@ def test_what_a_circuit_holds_is_reported_and_an_ic_that_contradicts_it_is_said(
     series.write_text(SERIES.format(extra=".ic v(fa)=3"))
     (held,) = run_summary(run_converter(Circuit.from_netlist(series), method="event", t_end=1e-4))["invariants"]
     assert held["kind"] == "charge" and held["unit"] == "C" and held["value"] == pytest.approx(6e-4, rel=1e-12)
+
+
+SAWTOOTH = """buck: a DC level against a 0..1 sawtooth delayed by td T, the switch closed while {closed}
+.param Vin=12 L=4.7u C=100u R=0.5 f=500k Vc={vc} td={td}
+.param T={{1/f}} e={{1e-6/f}}
+Vin in 0 DC {{Vin}}
+Vc c 0 DC {{Vc}}
+Vr r 0 PULSE(0 1 {{td*T}} {{T-2*e}} {{e}} {{e}} {{T}})
+S2 in x {control} SWMOD
+D2 0 x DMOD
+L2 x out {{L}}
+Co out 0 {{C}}
+Rload out 0 {{R}}
+.model SWMOD SW(VT=0)
+.model DMOD D
+.tran 2n 1m
+.end
+"""
+
+
+@pytest.mark.parametrize("td", [0.0, 0.25, 1 / 3, 0.5, 0.6, 0.75])
+@pytest.mark.parametrize("below, vc", [(True, 0.4), (True, 0.2), (False, 0.3)])
+@pytest.mark.parametrize("method", ["event", "lcp"])
+def test_a_comparator_against_a_delayed_sawtooth_closes_for_its_level_whatever_the_delay(td, below, vc, method):
+    """The ramp (0 to 1 over T - 2e, back in e) is below Vc for Vc (T - 2e) of each period, whatever its delay: the
+    duty is Vc closed while the ramp is below it, 1 - Vc while above (to 2e-6, its edges), and vout D Vin in CCM.
+    The schedule's crossings were sought on the corners of [0, 2 T], and a ramp still rising at 2 T (td = T/3:
+    restarted at 4T/3) lost its last segment with its crossing: 0.667 read for 0.4 (vout 8.0 V for 4.8 V), 0.25
+    for 0.7 closed above."""
+    control = "c r" if below else "r c"
+    text = SAWTOOTH.format(vc=vc, td=td, closed="the ramp is below Vc" if below else "above", control=control)
+    circuit = Circuit.from_netlist("saw.cir", text=text)
+    fractions = run_summary(run_converter(circuit, {}, steady=True, method=method))["mode_fractions"]
+    duty = vc if below else 1 - vc
+    assert fractions["S2"] == pytest.approx(duty, abs=3e-6)
