@@ -381,3 +381,25 @@ def test_a_comparator_against_a_delayed_sawtooth_closes_for_its_level_whatever_t
     fractions = run_summary(run_converter(circuit, {}, steady=True, method=method))["mode_fractions"]
     duty = vc if below else 1 - vc
     assert fractions["S2"] == pytest.approx(duty, abs=3e-6)
+
+
+def _dickson(stages: int) -> str:
+    lines = ["Dickson charge pump, two-phase square clocks, 10 ohm in every diode",
+             ".param T=10u e=1e-11", "Vin in 0 DC 5", "Vp1 ck1 0 PULSE(0 5 0 {e} {e} {T/2-e} {T})",
+             "Vp2 ck2 0 PULSE(5 0 0 {e} {e} {T/2-e} {T})", "D0 in n1 DMOD"]
+    for i in range(1, stages + 1):
+        lines += [f"C{i} n{i} ck{2 - i % 2} 100n", f"D{i} n{i} n{i + 1} DMOD"]
+    lines += [f"Co n{stages + 1} 0 1u", f"Rl n{stages + 1} 0 1meg", ".model DMOD D(RS=10)", ".tran 10n 1m", ".end"]
+    return "\n".join(lines) + "\n"
+
+
+def test_an_event_method_that_does_not_find_a_mode_past_its_enumeration_says_so_not_that_the_circuit_is_ill_posed():
+    """Past 12 pairs the event method tries only the mode-selection LCP's held set and its neighbours; a 16-stage
+    Dickson pump (17 diodes, 10 ohm in each: unique at every instant) where they fail was refused as "the LCS is not
+    well posed there". The refusal names the method's limit and the remedy (the stepper runs it)."""
+    from converters.errors import SimulationError
+    circuit = Circuit.from_netlist("dickson16.cir", text=_dickson(16))
+    with pytest.raises(SimulationError) as refused:
+        run_converter(circuit, {}, steady=True, method="event")
+    message = str(refused.value)
+    assert "not well posed" not in message and "with 17 pairs" in message and message.endswith("use --method lcp")
