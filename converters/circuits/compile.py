@@ -1406,6 +1406,22 @@ def _once(w: Waveform | None) -> bool:
                                                          and w.td + w.tr + w.pw + w.tf < math.inf)
 
 
+def _reaches_ground(elements: Sequence[Element], node: str) -> bool:
+    """Whether some chain of elements (their first two nodes: a switch's or a controlled source's output, never its
+    control) joins ``node`` to ground, whatever the switches' states."""
+    parent: dict[str, str] = {}
+
+    def root(n: str) -> str:
+        while parent.setdefault(n, n) != n:
+            parent[n] = parent[parent[n]]
+            n = parent[n]
+        return n
+    for e in elements:
+        if len(e.nodes) >= 2:
+            parent[root(e.nodes[0])] = root(e.nodes[1])
+    return root(node) == root("0")
+
+
 def _crossings(corners: _Array, values: _Array, on: float, off: float, state: bool,
                exact: Callable[[float], float] | None = None) -> list[tuple[float, bool]]:
     """[(t, closed)] where a control (``values`` at ``corners``) starting in ``state`` rises above ``on`` (closing)
@@ -1779,10 +1795,17 @@ class _Network:
             return NetlistError(f"{c.path}: {', '.join(loop)} form a loop of {held}{where}: their voltages are not "
                                 f"independent{spread}")
         around = [e.name.upper() for e in c.nl.elements if set(e.nodes) & set(nodes)]
+        if nodes and not _reaches_ground(c.nl.elements, nodes[0]):
+            # no element of any kind, in any switch state, joins them to the rest: the switches and inductors the
+            # message below names were not the cause (a resistor between two nodes of its own)
+            return NetlistError(f"{c.path}: node{'s' if len(nodes) > 1 else ''} {', '.join(nodes)} ha"
+                                f"{'ve' if len(nodes) > 1 else 's'} no path to ground through any element "
+                                f"({', '.join(around)} connect only among them): a floating node; tie it to the circuit "
+                                "(SPICE needs a path to ground too)")
         return NetlistError(f"{c.path}: node{'s' if len(nodes) > 1 else ''} {', '.join(nodes)} ha"
-                            f"{'ve' if len(nodes) > 1 else 's'} no path to ground but through inductors and current "
-                            f"sources{where} ({', '.join(around)}): a current interrupted with no path, or a floating "
-                            f"node{spread}")
+                            f"{'ve' if len(nodes) > 1 else 's'} no path to ground{where} but through open switches, "
+                            f"inductors or current sources ({', '.join(around)}): a current interrupted with no path, "
+                            f"or a node floating while a switch is open{spread}")
 
     def unit(self, column: int | None = None) -> _Array:
         """A row of the MNA's input columns (per point of a batch): 0, or 1 in ``column``."""

@@ -403,3 +403,18 @@ def test_an_event_method_that_does_not_find_a_mode_past_its_enumeration_says_so_
         run_converter(circuit, {}, steady=True, method="event")
     message = str(refused.value)
     assert "not well posed" not in message and "with 17 pairs" in message and message.endswith("use --method lcp")
+
+
+def test_a_resistor_between_two_nodes_of_its_own_is_a_floating_node_not_an_interrupted_current(tmp_path):
+    """Rf joins fa and fb to each other and to nothing else: the refusal had blamed "inductors and current sources
+    (with s1=open)", neither of which is the cause."""
+    from converters.circuits import NetlistError
+    path = tmp_path / "island.cir"
+    path.write_text("buck with a resistor of its own\nVin in 0 DC 12\nVg g 0 PULSE(1 0 4u 1n 1n 6u 10u)\n"
+                    "S1 in sw g 0 SWMOD\nD1 0 sw DMOD\nL1 sw out 10u\nC1 out 0 100u\nR1 out 0 5\nRf fa fb 1k\n"
+                    ".model SWMOD SW(VT=0.5)\n.model DMOD D\n.tran 10n 1m\n.end\n")
+    with pytest.raises(NetlistError) as refused:
+        Circuit.from_netlist(path)
+    assert str(refused.value) == (f"{path}: nodes fa, fb have no path to ground through any element (RF connect "
+                                  "only among them): a floating node; tie it to the circuit (SPICE needs a path to "
+                                  "ground too)")
