@@ -381,13 +381,20 @@ def _orbit(model: Model, p: dict, method: Method, x_guess: npt.NDArray[np.float6
            tol: float) -> tuple[PeriodicOrbit, Trajectory]:
     """The method's orbit (Newton on its period map, after ``warm_up`` periods) and one period on it, the
     stepper's from the same step plan (built once)."""
-    from .periodic import require, shoot
+    from .periodic import ROUNDING_LIMITED, instability, require, shoot
     T = model.period(p)
     problem = model.problem(p, T, x_guess)
     period_map = method.period_map(problem)
     # shooting's own checks: settling rounds where Newton fails, a remote orbit checked against the transient
-    orbit = require(shoot(problem, method, problem.x0, warm_up=warm_up, tol=tol, polish=True, period_map=period_map),
-                    f"the periodic orbit of {model.key}")
+    orbit = shoot(problem, method, problem.x0, warm_up=warm_up, tol=tol, polish=True, period_map=period_map)
+    # an orbit the circuit does not settle on is no steady state to be accurate about (a peak-current buck past its
+    # period doubling had read "rtol 0.001 met", vout 7.0452 +- 0.0063 V, where it settles at 6.000005 V on its
+    # period-2 orbit; at 1e-5 "1 - rho = -0.7 amplifies" the rounding)
+    why = instability(orbit.multipliers, T) if orbit.converged or orbit.message.startswith(ROUNDING_LIMITED) else ""
+    if why:
+        raise SimulationError(f"the periodic orbit of {model.key} is {why}; accuracy on request needs a steady "
+                              "state: run --periods N without --rtol, or follow its orbits with pcsuite bifurcation")
+    orbit = require(orbit, f"the periodic orbit of {model.key}")
     plan = getattr(period_map, "plan", None)
     if plan is not None and hasattr(plan, "trajectory"):
         tr = plan.trajectory(orbit.x0)

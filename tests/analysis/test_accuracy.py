@@ -645,3 +645,18 @@ def test_accuracy_on_request_states_an_output_at_rounding_within_its_estimate():
     for name in ("vout_mean", "vout_ripple", "i(l1)_rms", "i(l1)_peak"):
         q = result.quantities[name]
         assert abs(q.value) <= q.error_estimate < 1e-12, (name, q)
+
+
+@pytest.mark.parametrize("rtol", [1e-3, 1e-5])
+def test_accuracy_on_request_refuses_an_orbit_the_circuit_does_not_settle_on(rtol):
+    """The peak-current buck at Iref = 0.85 A is past its period doubling: its period-1 orbit (vout 7.0452 V) has
+    the multiplier -m2/m1 = -vout/(Vin - vout) = -1.4219 of the current ramps (-1.42087 with the ripple's moves),
+    and the circuit settles on its period-2 orbit at 6.000005 V (an independent exact orbit). --rtol had read
+    "rtol 0.001 met", 7.0452 +- 0.0063 V, and at 1e-5 blamed double precision ("1 - rho = -0.7 amplifies it")."""
+    from converters.errors import SimulationError
+    model = get_model("buck", control="peak-current")
+    with pytest.raises(SimulationError) as refused:
+        accurate_steady(model, model.resolve({"Iref": 0.85}), rtol)
+    message = str(refused.value)
+    assert "is unstable (Floquet spectral radius 1.42087, a multiplier at -1.42087)" in message
+    assert "accuracy on request needs a steady state" in message
