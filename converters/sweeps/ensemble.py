@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING, Any, cast
 import numpy as np
 
 from ..errors import ParameterError, SimulationError
+from ..problems import Schedule
 
 if TYPE_CHECKING:
     from ..methods.base import Method
@@ -402,7 +403,10 @@ class ModelSweep:
             try:
                 p = resolved[index]
                 problem = model.problem(p, model.period(p))
-                if problem.jumps:              # the batched steps take no jump: the point's own run does
+                # the batched steps take no jump, and their plan is a schedule's (a comparator's switching is the
+                # state's, its law no key of a shared plan: a voltage-mode sweep had failed every point with
+                # "unhashable type"): the point's own run does
+                if problem.jumps or not isinstance(problem.switching, Schedule):
                     rows[index] = self.row(index, point)
                     continue
                 method = cast("Theta", self._method(model, p, problem))        # batchable: the stepper

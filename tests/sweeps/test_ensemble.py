@@ -11,6 +11,7 @@ import pytest
 
 from converters.errors import ParameterError
 from converters.parallel import LocalBackend, parallel_map, run_ensemble
+from converters.run import run_converter, run_summary
 from converters.sweeps import Axis, Grid, LatinHypercube, ModelSweep
 
 #: 200 buck points across CCM and DCM (R up to 40 ohm at D = 0.2 is deep DCM).
@@ -373,3 +374,17 @@ def test_accuracy_on_request_sweeps_a_netlist_whose_first_state_is_a_capacitors(
     assert rows.loc[0, "status"] == "ok", rows.loc[0, "message"]
     assert abs(rows.loc[0, "vout_mean"] - 5.794489706) < 1e-6 * 5.794489706
     assert abs(rows.loc[0, "rms_state0"] - 5.794489706) < 1e-3 and rows.loc[0, "rtol_met"]
+
+
+@pytest.mark.parametrize("backend", ["batched", "serial"])
+def test_a_comparators_steady_sweep_runs_each_point_as_the_point_alone(backend):
+    """The voltage-mode buck switches on its state, a law the batched engine's shared plans cannot key (every point
+    had failed, "TypeError: unhashable type: 'numpy.ndarray'"): its points run alone, the same rows either way. It
+    doubles its period at Vin = 24.5166 V (the published point, checked by an independent exact orbit to 24.5165729):
+    20 and 24 V are ok, 28 V is refused as unstable."""
+    rows = _frame(run_ensemble(ModelSweep("buck", control="voltage-mode"), Grid([Axis.parse("Vin=20:28:3")]),
+                               backend=backend))
+    assert list(rows["status"]) == ["ok", "ok", "failed"], rows
+    assert rows.loc[2, "message"].startswith("unstable orbit (Floquet spectral radius 1.49")
+    alone = run_summary(run_converter("buck", {"Vin": 24.0}, control="voltage-mode", steady=True))
+    assert rows.loc[1, "vout_mean"] == pytest.approx(alone["vout_mean"], rel=1e-6)
