@@ -255,11 +255,13 @@ def run(args) -> int:
     frame = write_summary(out, points, plotted, title, specs=specs, units=units, scope_metrics=metrics)
     failed = frame[frame["status"] != "ok"]
     # rows from rest whose last period is not yet the steady state's (their values are the transient's)
-    from converters.sweeps.ensemble import NOT_SETTLED
+    from converters.sweeps.ensemble import NOT_SETTLED, TOO_COARSE
     unsettled = frame[(frame["status"] == "ok") & frame["message"].astype(str).str.startswith(NOT_SETTLED)]
+    # rows whose orbit at 2h says the step is too coarse for their measures (as simulate warns of its own)
+    coarse = frame[(frame["status"] == "ok") & frame["message"].astype(str).str.startswith(TOO_COARSE)]
     summary = {"out": str(out), "points": points.size, "stored_before": result.on_disk_before,
                "computed": result.computed, "ok": int(len(frame) - len(failed)), "failed": int(len(failed)),
-               "unsettled": int(len(unsettled)),
+               "unsettled": int(len(unsettled)), "too_coarse": int(len(coarse)),
                "wall_s": result.wall_s, "points_per_s": result.rate,
                "failures": failed["message"].value_counts().head(5).to_dict(),
                "dataset": str(out / "parts"), "summary_plot": str(out / "summary.png")}
@@ -280,6 +282,10 @@ def run(args) -> int:
         summary["warnings"] = [f"{len(unsettled):,} of the {summary['ok']:,} points stored as ok have not settled "
                                "(their measures are the transient's, not the steady state's; the first: "
                                f"{unsettled['message'].iloc[0]})"]
+    if len(coarse):
+        summary["warnings"] = [*summary.get("warnings", []),
+                               f"{len(coarse):,} of the {summary['ok']:,} points stored as ok may be off by more than "
+                               "the defaults promise (the first: " + str(coarse["message"].iloc[0]) + ")"]
     # no point succeeded: say so in the exit code too (1, as a failed check), not only in the counts
     code = 1 if points.size and not summary["ok"] else 0
     if args.json:
