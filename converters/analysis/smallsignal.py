@@ -241,11 +241,19 @@ class SmallSignalModel:
             return engine(moved), moved_p, moved
 
         scale = max(abs(value), 1.0)
+        edges = len(law.starts) if isinstance(law, Schedule) else None
         for delta in (RELATIVE_MOVE * scale, -RELATIVE_MOVE * scale):
             found = at(delta)
-            if found is not None:
+            # a move that adds or removes a schedule's edge (the duty ratio 0.999 moved to 1) is no derivative of the
+            # edges there: the other side's is (it had been refused as "a duty ratio of 0 or 1")
+            if found is not None and (edges is None or len(getattr(found[2].switching, "starts", ())) == edges):
                 break
         else:
+            if edges is not None and any(found is not None for found in (at(RELATIVE_MOVE * scale),
+                                                                        at(-RELATIVE_MOVE * scale))):
+                raise ParameterError(f"input {name!r} = {value!r}: any move of it adds or removes a switching edge "
+                                     "(a duty ratio of 0 or 1, where the converter does not switch): the response "
+                                     "there is one-sided, no small-signal model; take it inside (0, 1)")
             raise ParameterError(f"input {name!r} = {value!r} cannot be moved inside its range {param.range_text()}")
         machine, moved_p, moved = found
         if not _changes_matrices(problem, moved):

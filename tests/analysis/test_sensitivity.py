@@ -136,3 +136,21 @@ def test_bad_sensitivity_input_is_one_line(capsys, tmp_path, monkeypatch, argv, 
     out, err = capsys.readouterr()
     assert code == 2 and out == "" and err.count("\n") == 1 and message in err
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("D", [0.0, 1.0])
+def test_a_duty_ratio_where_the_converter_does_not_switch_is_refused_not_differentiated_to_zero(D):
+    """At D = 0 (or 1) the buck does not switch and any move of D makes it: the derivative is one-sided (26.83 V
+    per unit of D from above at D = 0, a tester's differences), where the small-signal model had read 0 (its
+    schedule has no edge to move) and bode -inf dB."""
+    with pytest.raises(ParameterError, match=r"adds or removes a switching edge \(a duty ratio of 0 or 1"):
+        sensitivities("buck", {"D": D}, parameters=["D"])
+
+
+def test_a_duty_ratio_a_move_from_one_takes_the_move_to_the_other_side():
+    """D = 0.999: the move +1e-3 reaches 1, where the schedule loses its edge; it had been refused as "a duty ratio
+    of 0 or 1". The move to the other side is the affine input's exact derivative: the brute-force difference of
+    steady means agrees."""
+    found = sensitivities("buck", {"D": 0.999}, parameters=["D"])
+    (row,) = found.rows
+    assert row.derivative == pytest.approx(finite_difference("buck", {"D": 0.999}, "vout", "D"), rel=1e-6)
