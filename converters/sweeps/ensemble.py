@@ -16,6 +16,7 @@ cannot take, goes through the per-point path :meth:`ModelSweep.row`. Both read t
 """
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Iterable
 from dataclasses import dataclass, field
@@ -114,7 +115,14 @@ def unsettled(run: Trajectory, T: float) -> str:
     first, last = moves[:2].sum(), moves[-2:].sum()
     if last <= 1e-12 * scale:
         return ""
-    ratio = min((last / first) ** (1.0 / 3.0), 0.999) if first > 0.0 else 0.999
+    ratio = (last / first) ** (1.0 / 3.0) if first > 0.0 else math.inf
+    if ratio >= 0.999:
+        # moves that do not shrink are no transient to extrapolate (a period-doubled orbit's means alternate by a
+        # constant step: "about 1.8e+01 from the periodic steady state (its moves decaying geometrically)" had
+        # read, and --steady then refused the point's unstable period-1 orbit)
+        return (f"{NOT_SETTLED} after {periods} periods from rest: its mean of vout moved {moves[-1] / scale:.1e} "
+                "(relative) over the last period and its moves do not decay (a sustained oscillation, a period-"
+                "doubled orbit or chaos?): see pcsuite bifurcation, or more --periods")
     away = 0.5 * last * ratio / (1.0 - ratio) / scale
     if away <= UNSETTLED:
         return ""

@@ -403,3 +403,14 @@ def test_a_steady_row_whose_step_is_too_coarse_says_so_as_simulate_warns(backend
     assert abs(rows.loc[0, "vout_mean"] / 9.030955 - 1) > 0.05
     assert rows.loc[0, "message"].startswith(f"{TOO_COARSE}: vout mean may be ")
     assert rows.loc[1, "message"] == ""
+
+
+def test_a_row_from_rest_whose_moves_do_not_decay_is_not_extrapolated():
+    """The voltage-mode buck at Vin = 28 V lies past its period doubling (24.5166 V): from rest its period means
+    alternate by a constant step, which had been extrapolated as a geometric decay ("about 1.8e+01 from the
+    periodic steady state"). The row says its moves do not decay; at 20 V it settles and says nothing."""
+    rows = _frame(run_ensemble(ModelSweep("buck", control="voltage-mode", steady=False, periods=300),
+                               Grid([Axis.parse("Vin=20:28:2")]), backend="serial"))
+    assert list(rows["status"]) == ["ok", "ok"] and rows.loc[0, "message"] == ""
+    assert rows.loc[1, "message"].startswith("not settled after 300 periods from rest: its mean of vout moved ")
+    assert "its moves do not decay" in rows.loc[1, "message"] and "geometrically" not in rows.loc[1, "message"]
