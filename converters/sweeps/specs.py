@@ -31,13 +31,24 @@ class Spec:
     op: str
     limit: float
 
-    @classmethod
-    def parse(cls, text: str) -> "Spec":
+    @staticmethod
+    def metric_of(text: str) -> str:
+        """The metric a spec names (its form checked; its value read by :meth:`parse`, with the metric's unit)."""
         match = _SPEC.match(str(text))
         if match is None:
             raise ParameterError(f"--spec takes METRIC<VALUE or METRIC>VALUE (<= and >= too; e.g. vout_ripple<50m, "
                                  f"efficiency>0.95); got {text!r}")
-        return cls(match["metric"], match["op"], parse_value(f"--spec {match['metric']}", match["value"]))
+        return match["metric"]
+
+    @classmethod
+    def parse(cls, text: str, units: dict | None = None) -> "Spec":
+        """The spec, its value in the metric's unit where ``units`` knows it (``vout_mean<3V``; a unit that
+        contradicts it is refused, as a parameter's is)."""
+        metric = cls.metric_of(text)
+        match = _SPEC.match(str(text))
+        assert match is not None
+        unit = (units or {}).get(metric) or None
+        return cls(metric, match["op"], parse_value(f"--spec {metric}", match["value"], unit))
 
     def holds(self, values: npt.ArrayLike) -> np.ndarray:
         """Where the values meet the bound (NaN, a failed point's, never does)."""

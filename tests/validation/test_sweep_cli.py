@@ -653,3 +653,17 @@ def test_a_sweep_of_an_earlier_format_is_named_as_such(tmp_path, capsys):
     assert main(args) == 2
     assert "holds a sweep of an earlier pcsuite (format 2; this one writes 3), which it cannot resume" in \
         capsys.readouterr().err
+
+
+def test_a_spec_takes_its_metrics_unit_and_refuses_another(tmp_path, capsys):
+    """vout_mean is in volts: "vout_mean<3V" had been refused ("the parameter takes no unit"); it reads as
+    "vout_mean<3", and "3A" is refused naming the metric's unit."""
+    results = []
+    for spec in ("vout_mean<3V", "vout_mean<3"):
+        assert main(["sweep", "buck", "--grid", "D=0.1:0.5:2", "--spec", spec, "--json",
+                     "--out", str(tmp_path / spec.replace("<", "_"))]) == 0
+        results.append(_summary(capsys)["study"])
+    assert results[0] == results[1] and results[0]["passed"] == 1
+    assert main(["sweep", "buck", "--grid", "D=0.1:0.5:2", "--spec", "vout_mean<3A", "--out", str(tmp_path / "a")]) == 2
+    assert capsys.readouterr().err == ("pcsuite: error: --spec vout_mean: the unit 'A' in '3A' contradicts the "
+                                       "parameter (its unit is V)\n")

@@ -101,10 +101,9 @@ def build(args):
     base = {k: parse_value(k, v) for k, v in parse_assignments(args.params).items()}
     from converters.limits import check_memory
     from converters.sweeps.specs import Spec
-    specs = [Spec.parse(text) for text in args.spec]
+    named = [Spec.metric_of(text) for text in args.spec]
     # the plotted metric: the first --metric, else the first spec's, else vout_mean
-    metrics = list(dict.fromkeys([*(args.metric or ([specs[0].metric] if specs else ["vout_mean"])),
-                                  *(s.metric for s in specs)]))
+    metrics = list(dict.fromkeys([*(args.metric or (named[:1] or ["vout_mean"])), *named]))
     if args.tolerance:
         if args.grid or args.lhs is not None:
             raise ParameterError("--tolerance is a study of its own (samples about the nominal values); give either "
@@ -174,6 +173,8 @@ def build(args):
             numeric = [k for k, t in ensemble.measures.items() if t is not str]
             raise ParameterError(f"--metric must be numeric: one of {', '.join(numeric)} or one on demand; got "
                                  f"{metric!r}")
+    # each spec's value in its metric's unit (vout_mean<3V had been refused: "the parameter takes no unit")
+    specs = [Spec.parse(text, getattr(ensemble, "units", {})) for text in args.spec]
     return ensemble, points, metrics, specs
 
 
