@@ -235,6 +235,45 @@ def _structure(netlist: Netlist) -> tuple[object, ...]:
 _JOINING = "RLVEHDSW"
 
 
+def inductor_loops(inductors: Sequence[Element]) -> list[_Array]:
+    """The independent loops of inductors alone (a cycle of the graph of the inductors' branches: two in parallel,
+    a triangle of three), each as its sign per inductor (+1 where the loop runs from the inductor's first node to its
+    second): sum(sign v_L) = 0 around it, so its flux sign^T M i is conserved, whatever the switches and diodes do."""
+    parent: dict[str, str] = {}
+    tree: dict[str, list[tuple[str, int, int]]] = {}           # node: [(neighbour, inductor, +1 along it)]
+
+    def find(n: str) -> str:
+        while parent.setdefault(n, n) != n:
+            parent[n] = parent[parent[n]]
+            n = parent[n]
+        return n
+
+    def path(a: str, b: str) -> list[tuple[int, int]]:
+        """The tree's branches from a to b, each (inductor, +1 where traversed from its first node)."""
+        seen, frontier = {a: []}, [a]
+        while frontier:
+            node = frontier.pop()
+            for other, index, direction in tree.get(node, []):
+                if other not in seen:
+                    seen[other] = seen[node] + [(index, direction)]
+                    frontier.append(other)
+        return seen[b]
+    loops = []
+    for index, e in enumerate(inductors):
+        a, b = e.nodes[0], e.nodes[1]
+        if find(a) == find(b):
+            sign = np.zeros(len(inductors))
+            sign[index] = 1.0                                   # a -> b through the inductor, back b -> a in the tree
+            for other, direction in path(b, a):
+                sign[other] += direction
+            loops.append(sign)
+        else:
+            parent[find(a)] = find(b)
+            tree.setdefault(a, []).append((b, index, 1))
+            tree.setdefault(b, []).append((a, index, -1))
+    return loops
+
+
 def charge_islands(netlist: Netlist) -> list[tuple[tuple[str, ...], tuple[str, ...]]]:
     """Sets of nodes joined to the rest of the circuit (ground included) only through capacitors, whatever the
     switches and diodes do: each set's net charge is conserved (the capacitors' currents into it sum to zero), so
@@ -334,6 +373,9 @@ class _Compiler:
         self.shorts = [r for r in self.by_kind["R"] if r.value == 0]
         self.switch_ron = {s.name: self.nl.models[cast(str, s.model)].params.get("RON", 0.0) for s in self.switches}
         self.mutual = self.inductance_matrix()
+        #: Loops of inductors alone (two in parallel): sign per inductor around each, its flux sign^T M i conserved
+        #: (the loop's voltages sum to zero), held where the run starts (:meth:`hold_fluxes`)
+        self.flux_loops: list[_Array] = inductor_loops(self.inductors)
         #: One circuit: (); a batch of P circuits alike but for their values: (P,), each value's P numbers in
         #: ``batch`` (:meth:`rerun`)
         self.lead: tuple[int, ...]
@@ -362,7 +404,8 @@ class _Compiler:
         law depends on the values), no ramp or delayed SIN (states of their own), no loop of capacitors or node
         held by its charge (:meth:`_Network.solve_loops`, :meth:`hold_islands`: solved one circuit at a time)."""
         return hasattr(self, "built") and not (self.state_rows or self.ramps or self.oscillators or self.islands
-                                               or getattr(self, "loops", None) is not None or self.switch_loops)
+                                               or self.flux_loops or getattr(self, "loops", None) is not None
+                                               or self.switch_loops)
 
     def rerun(self, netlists: list[Netlist], compiled: Compiled) -> list[Compiled | None]:
         """The compiles of ``netlists``, each this circuit (its :meth:`run` gave ``compiled``) with other values:
@@ -1072,6 +1115,8 @@ class _Compiler:
         A, B, E = dx[..., :n], dx[..., n:n + k], _times(dx[..., n + k:], s)
         if self.islands and not self.lead:
             A, E = self.hold_islands(A, E)
+        if self.flux_loops and not self.lead:
+            A, E = self.hold_fluxes(A, E)
         C, D, F = ports[..., :n], ports[..., n:n + k], _times(ports[..., n + k:], s)
         if not self.diodes:                   # no diode: a pair that never holds (y = u + 1: u = 0)
             D, F = np.ones(self.lead + (1, 1)), np.ones(self.lead + (1,))
@@ -1272,6 +1317,24 @@ class _Compiler:
             E[:n_c] += gamma * sign * (weight @ x0[:n_c]) / total
         return A, E
 
+    def hold_fluxes(self, A: _Array, E: _Array) -> tuple[_Array, _Array]:
+        """A and E with each loop of inductors' flux phi = s^T M i held at its value where the run starts (phi0, from
+        the IC= or from rest), as :meth:`hold_islands` holds a charge: phi' = -gamma (phi - phi0), which the circuit's
+        own phi' = 0 meets on its states. Without it a current circulating in the loop never decays and every start
+        has an orbit of its own: Newton had stopped at "1 - rho = 8.6e-14 amplifies" the rounding of two inductors in
+        parallel."""
+        A, E = A.copy(), E.copy()
+        n_c = len(self.capacitors)
+        M = np.asarray(self.mutual, dtype=float)
+        i0 = self.initial_state()[n_c:]
+        gamma = LOOP_RATE / self.loop_time()
+        for sign in self.flux_loops:
+            weight = M @ sign                               # phi = weight . i (M symmetric)
+            total = float(sign @ weight)
+            A[n_c:, n_c:] -= gamma * np.outer(sign, weight) / total
+            E[n_c:] += gamma * sign * (weight @ i0) / total
+        return A, E
+
     def invariants(self, state_names: tuple[str, ...]) -> tuple[Invariant, ...]:
         """What every configuration holds, as the summary reports it: each loop of capacitors' and cutset of
         inductors' constraint (sum of coefficient x state = value, its largest coefficient 1; from the sources), and
@@ -1303,6 +1366,17 @@ class _Compiler:
                 if abs(charge) <= 1e-12 * float(np.abs(weight) @ np.abs(v)):      # rounding of a zero charge
                     charge = 0.0
                 out.append({"kind": "charge", "constraint": _sum_text(terms), "value": charge, "unit": "C"})
+        if self.flux_loops:
+            n_c = len(self.capacitors)
+            M = np.asarray(self.mutual, dtype=float)
+            i0 = self.initial_state()[n_c:]
+            for sign in self.flux_loops:
+                weight = M @ sign
+                terms = [(float(w), name) for w, name in zip(weight, state_names[n_c:]) if w]
+                flux = float(weight @ i0)
+                if abs(flux) <= 1e-12 * float(np.abs(weight) @ np.abs(i0)):        # rounding of a zero flux
+                    flux = 0.0
+                out.append({"kind": "flux", "constraint": _sum_text(terms), "value": flux, "unit": "Wb"})
         return tuple(out)
 
     def energy(self) -> tuple[_Array, _Array]:
