@@ -644,6 +644,9 @@ class _Reader:
                 pass
             elif re.search(r"(?i)\b(pulse|sin|pwl|ac)\b", text):
                 raise self.error(line, f"{title}: give either DC VALUE or one waveform")
+        bare = re.match(r"(?i)(pulse|sin|pwl)\s+([^()=]+?)\s*((?:r|td)\s*=.*)?$", text)
+        if bare:                      # SPICE's form without parentheses: PULSE 1 0 4u 1n 1n 6u 10u
+            text = f"{bare.group(1)}({bare.group(2)}) {bare.group(3) or ''}".strip()
         match = re.match(r"(?i)(pulse|sin|pwl)\s*\((.*)\)\s*((?:r|td)\s*=.*)?$", text)
         if not match:
             if re.match(r"(?i)(pulse|sin|pwl|exp|sffm|am|trrandom|trnoise)\b", text):

@@ -457,3 +457,16 @@ def test_inductors_in_parallel_hold_their_loops_flux_and_are_the_buck_of_their_e
     assert held["kind"] == "flux" and held["value"] == 0.0 and held["unit"] == "Wb"
     i1, i2 = (summary["measurements"][f"i(l{j})"]["mean"] for j in (1, 2))
     assert (22e-6 - M) * i2 == pytest.approx((10e-6 - M) * i1, rel=1e-8)      # L1 i1 + M i2 = M i1 + L2 i2
+
+
+@pytest.mark.parametrize("gate", ["PULSE 1 0 4u 1n 1n 6u 10u", "PULSE(1 0 4u 1n 1n 6u 10u)",
+                                  "pulse  1 0 4u 1n 1n 6u 10u"])
+def test_a_waveform_without_parentheses_is_read_as_spice_reads_it(gate):
+    """ngspice takes PULSE 1 0 ... without parentheses; it had been refused as "PULSE ... is not read (DC, PULSE,
+    SIN, PWL)", a list that names it. Read, it is the same source: the same orbit to rounding."""
+    text = (f"buck\nVin in 0 DC 12\nVg g 0 {gate}\nS1 in sw g 0 SWMOD\nD1 0 sw DMOD\nL1 sw out 10u\nC1 out 0 100u\n"
+            "R1 out 0 10\n.model SWMOD SW(VT=0.5)\n.model DMOD D\n.tran 10n 1m\n.end\n")
+    circuit = Circuit.from_netlist("gate.cir", text=text)
+    reference = Circuit.from_netlist("gate.cir", text=text.replace(gate, "PULSE(1 0 4u 1n 1n 6u 10u)"))
+    mean = run_summary(run_converter(circuit, {}, steady=True, method="event"))["vout_mean"]
+    assert mean == run_summary(run_converter(reference, {}, steady=True, method="event"))["vout_mean"]
