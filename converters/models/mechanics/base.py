@@ -114,4 +114,30 @@ class MechanicalModel(ABC):
         t1 = tr.t[-1]
         t0 = max(tr.t[0], t1 - self.time_scale(p))
         return {"events": {str(k): int(v) for k, v in counts.items()},
-                "mode_fractions": tr.mode_fractions(None, t0=t0, t1=t1)}
+                "mode_fractions": _fractions_at_events(tr, t0, t1)}
+
+
+def _fractions_at_events(tr: Trajectory, t0: float, t1: float) -> dict[str, float]:
+    """The time in each mode over [t0, t1], the mode before each event held up to its time: on the output grid
+    alone each step is counted by its end point's mode, and a sample at an event carries the mode after it (the
+    friction oscillator's slip+ read 0.130 for 0.1274194, one output sample, 2 %; a stick of 0.0095632 read
+    0.010)."""
+    import numpy as np
+    fractions = tr.mode_fractions(None, t0=t0, t1=t1)
+    table = tr.event_table()
+    if table is None or not len(table["time"]):
+        return fractions
+    rows = tr.rows_between(t0, t1)
+    t = tr.t[rows]
+    labels = np.asarray(tr.modes(rows)).astype(str)
+    seconds = {label: share * (t[-1] - t[0]) for label, share in fractions.items()}
+    for when in np.asarray(table["time"], dtype=float):
+        # the step (t[k-1], t[k]] ending at the event (a sample there carries the mode after it) or holding it
+        k = int(np.searchsorted(t, when * (1 - 1e-15), side="left"))
+        if not 0 < k < t.size or not t[k - 1] < when <= t[k] * (1 + 1e-15) or labels[k] == labels[k - 1]:
+            continue
+        moved = min(when, t[k]) - t[k - 1]                       # the part before the event: the earlier mode's
+        seconds[labels[k]] -= moved
+        seconds[labels[k - 1]] = seconds.get(labels[k - 1], 0.0) + moved
+    total = t[-1] - t[0]
+    return {label: float(value / total) for label, value in sorted(seconds.items())}
