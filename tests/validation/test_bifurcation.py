@@ -137,3 +137,18 @@ def test_steady_refuses_an_unstable_orbit_and_reports_stability(capsys):
                            "--method", "event", "--json")
     orbit = json.loads(out)["orbit"]
     assert code == 0 and orbit["stable"] and orbit["spectral_radius"] == pytest.approx(0.824133, abs=1e-6)   # |-0.7528 +- 0.3354j|
+
+
+@pytest.mark.slow
+def test_a_diagram_with_isolated_values_without_a_period_does_not_read_periodic_everywhere(capsys):
+    """Along Vin 20..36 V at 9 values one value has no period within the record (the diagram's JSON says so) and
+    fewer than aperiodic_onset's three in a row: the text had read "periodic everywhere"."""
+    code, out, _ = run_cli(capsys, "bifurcation", "buck", "--control", "voltage-mode", "--param", "Vin=20:36",
+                           "--points", "9", "--json")
+    windows = json.loads(out)["diagram"]["windows"]
+    isolated = sum(w["count"] for w in windows if w["period"] == 0)
+    assert code == 0 and isolated == 1
+    code, out, _ = run_cli(capsys, "bifurcation", "buck", "--control", "voltage-mode", "--param", "Vin=20:36",
+                           "--points", "9")
+    assert code == 0 and "no aperiodic range (1 isolated value without a period)" in out
+    assert "periodic everywhere" not in out

@@ -101,8 +101,13 @@ def _print(study, summary: dict, args) -> None:
     diagram = summary.get("diagram")
     if diagram:
         onset = diagram["aperiodic_onset"]
+        # isolated values without a period (fewer than aperiodic_onset's run) are no onset, but not periodic either
+        isolated = sum(w["count"] for w in diagram["windows"] if w["period"] == 0)
+        where = (f"aperiodic from {onset:.5g}" if onset is not None else
+                 f"no aperiodic range ({isolated} isolated value{'s' if isolated != 1 else ''} without a period)"
+                 if isolated else "periodic everywhere")
         print(f"brute-force diagram: {diagram['points']} values ({diagram['method']}) in {diagram['wall_s']:.1f} s; "
-              + (f"aperiodic from {onset:.5g}" if onset is not None else "periodic everywhere")
+              + where
               + (f"; {diagram['errors']} values failed" if diagram["errors"] else ""))
         if args.diagram is not None:
             from converters.validate import quoted
