@@ -90,7 +90,23 @@ class Study:
             return {}
         return {"points": len(self.attractors), "method": self.diagram_method, "wall_s": self.diagram_s,
                 "aperiodic_onset": aperiodic_onset(self.attractors), "windows": period_windows(self.attractors),
-                "errors": sum(bool(a.error) for a in self.attractors)}
+                "errors": sum(bool(a.error) for a in self.attractors), "unconfirmed": self.unconfirmed()}
+
+    def unconfirmed(self) -> list[dict]:
+        """The diagram's values whose period is not that of the orbit the continuation (the exact method) holds
+        stable there, where it holds one: [{value, period, stable_period}]. The stepper's map at T/500 may carry
+        an attractor the circuit does not have (the voltage-mode buck at Vin = 30 V from the previous value: period
+        6 at T/500 and T/1000, where the exact method and the stepper at T/250 and T/2000 settle on the period-2
+        orbit the continuation holds stable over 24.517..31.118 V). A value near a bifurcation, where the
+        transient is slow, may be listed too; a coexisting attractor would be, and is worth a look."""
+        stable = [(b["period"], lo, hi) for b in (branch_summary(branch) for branch in self.branches)
+                  for lo, hi in b["stable"]]
+        out = []
+        for a in self.attractors or []:
+            holding = [period for period, lo, hi in stable if lo < a.value < hi]
+            if not a.error and holding and a.period not in holding:
+                out.append({"value": float(a.value), "period": int(a.period), "stable_period": int(holding[0])})
+        return out
 
     def to_dict(self) -> dict:
         out = {"converter": self.model.name, "control": self.model.control, "param": self.name, "start": self.start,

@@ -152,3 +152,19 @@ def test_a_diagram_with_isolated_values_without_a_period_does_not_read_periodic_
                            "--points", "9")
     assert code == 0 and "no aperiodic range (1 isolated value without a period)" in out
     assert "periodic everywhere" not in out
+
+
+@pytest.mark.slow
+def test_a_diagram_period_the_continuation_does_not_hold_stable_there_is_warned_of(capsys):
+    """Vin 20..36 V at 9 values, each started from the previous one's end: the stepper at T/500 settles at 30 V on a
+    period-6 cycle (at T/1000 too), where the exact method and the stepper at T/250 and T/2000 settle on the period-2
+    orbit the continuation holds stable over 24.5166..31.1179 V (the published doublings). The diagram's JSON lists
+    the value and the command warns, naming the continuation's stable period."""
+    code, out, err = run_cli(capsys, "bifurcation", "buck", "--control", "voltage-mode", "--param", "Vin=20:36",
+                             "--points", "9", "--transient", "2000", "--json")
+    assert code == 0
+    assert {"value": 30.0, "period": 6, "stable_period": 2} in json.loads(out)["diagram"]["unconfirmed"]
+    code, out, err = run_cli(capsys, "bifurcation", "buck", "--control", "voltage-mode", "--param", "Vin=20:36",
+                             "--points", "9", "--transient", "2000")
+    assert code == 0 and ("is not the stable orbit's the continuation holds there (the first: 6 at 30, where period "
+                          "2 is stable)") in err

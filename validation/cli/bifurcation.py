@@ -2,6 +2,8 @@
 along a parameter, their bifurcations, and the brute-force diagram."""
 from __future__ import annotations
 
+import sys
+
 from converters.errors import ParameterError
 
 from .common import MAX_WORKERS, add_params, check_workers, given_path, integer, json_text, unit_of
@@ -106,6 +108,13 @@ def _print(study, summary: dict, args) -> None:
         where = (f"aperiodic from {onset:.5g}" if onset is not None else
                  f"no aperiodic range ({isolated} isolated value{'s' if isolated != 1 else ''} without a period)"
                  if isolated else "periodic everywhere")
+        unconfirmed = diagram["unconfirmed"]
+        if unconfirmed:
+            first = unconfirmed[0]
+            values = f"{len(unconfirmed)} value{'s' if len(unconfirmed) > 1 else ''}"
+            print(f"pcsuite: warning: the diagram's period at {values} is not the stable orbit's the continuation "
+                  f"holds there (the first: {first['period']} at {first['value']:.6g}, where period {first['stable_period']} is stable): the diagram's step may "
+                  "not resolve the attractor; use --diagram-method event", file=sys.stderr)
         print(f"brute-force diagram: {diagram['points']} values ({diagram['method']}) in {diagram['wall_s']:.1f} s; "
               + where
               + (f"; {diagram['errors']} values failed" if diagram["errors"] else ""))
