@@ -113,7 +113,8 @@ def _print(study, summary: dict, args) -> None:
             first = unconfirmed[0]
             values = f"{len(unconfirmed)} value{'s' if len(unconfirmed) > 1 else ''}"
             print(f"pcsuite: warning: the diagram's period at {values} is not the stable orbit's the continuation "
-                  f"holds there (the first: {first['period']} at {first['value']:.6g}, where period {first['stable_period']} is stable): the diagram's step may "
+                  f"holds there (the first: {first['period']} at {first['value']:.6g}, where period "
+                  f"{first['stable_period']} is stable): the diagram's step may "
                   "not resolve the attractor; use --diagram-method event", file=sys.stderr)
         print(f"brute-force diagram: {diagram['points']} values ({diagram['method']}) in {diagram['wall_s']:.1f} s; "
               + where
