@@ -560,16 +560,17 @@ class Trajectory:
         rows = self.measurement_rows(periods, t0, t1)
         return pd.DataFrame([{"signal": name, **row} for name, row in rows.items()]).set_index("signal")
 
-    def measurement_rows(self, periods: float | None = None, t0: float | None = None,
-                         t1: float | None = None) -> dict[str, dict[str, str | float]]:
+    def measurement_rows(self, periods: float | None = None, t0: float | None = None, t1: float | None = None,
+                         names: Iterable[str] | None = None) -> dict[str, dict[str, str | float]]:
         """:meth:`measurements` as plain data, {signal: {unit, mean, rms, min, max, ripple}} (no pandas: the JSON
-        summary of a fresh process does not pay for importing it)."""
+        summary of a fresh process does not pay for importing it); of ``names`` only, where given."""
         a, b = self.window(periods, t0, t1)
         rows = self.rows_between(a, b)
         units = dict(getattr(getattr(self.labels, "model", None), "signal_units", {}) or {})
         sampled: dict[str, npt.NDArray[np.float64]] = {}
+        chosen = None if names is None else set(names)
         for name in self.signal_names:
-            if name == "mode":
+            if name == "mode" or (chosen is not None and name not in chosen):
                 continue
             values = np.asarray(self.signal(name, rows), dtype=float)
             if np.isfinite(values).any():                     # else not measured in this run (ngspice: no pairs)

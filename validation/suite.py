@@ -60,9 +60,9 @@ def _scene_classes(conv, p: dict, c) -> dict:
     """A scene's conduction classes, each side's from its own intervals over the window with runs shorter than
     what the scene resolves (MIN_RUN_FRACTION of T, and the LCP's step where coarser) merged into their
     neighbours, and judged against the exact prediction by the gdcm command's rule
-    (:func:`validation.gdcm.judge_held`). The classes had come from the mode sequences (runs under 1 % of T
-    dropped) while the judgement took the LCP's step and ngspice's SPICE_MIN_RUN as what they resolve: a held
-    interval between the two was a DISAGREE the sides could not see."""
+    (:func:`validation.gdcm.judge_held`). Classes and judgement take one resolution: a held interval shorter than
+    what the classes see, judged at a finer one, is a disagreement neither side can show (a buck at R = 3.35 ohm,
+    held 2.6e-3 of T)."""
     from converters.analysis.modes import held_fraction, mode_class, mode_intervals
 
     from .gdcm import exact_held, judge_held

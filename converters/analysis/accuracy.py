@@ -381,7 +381,7 @@ def _orbit(model: Model, p: dict, method: Method, x_guess: npt.NDArray[np.float6
            tol: float) -> tuple[PeriodicOrbit, Trajectory]:
     """The method's orbit (Newton on its period map, after ``warm_up`` periods) and one period on it, the
     stepper's from the same step plan (built once)."""
-    from .periodic import ROUNDING_LIMITED, instability, require, shoot
+    from .periodic import ROUNDING_LIMITED, require, shoot
     T = model.period(p)
     problem = model.problem(p, T, x_guess)
     period_map = method.period_map(problem)
@@ -390,10 +390,9 @@ def _orbit(model: Model, p: dict, method: Method, x_guess: npt.NDArray[np.float6
     # an orbit the circuit does not settle on is no steady state to be accurate about (a peak-current buck past its
     # period doubling had read "rtol 0.001 met", vout 7.0452 +- 0.0063 V, where it settles at 6.000005 V on its
     # period-2 orbit; at 1e-5 "1 - rho = -0.7 amplifies" the rounding)
-    why = instability(orbit.multipliers, T) if orbit.converged or orbit.message.startswith(ROUNDING_LIMITED) else ""
-    if why:
-        raise SimulationError(f"the periodic orbit of {model.key} is {why}; accuracy on request needs a steady "
-                              "state: run --periods N without --rtol, or follow its orbits with pcsuite bifurcation")
+    if orbit.converged or orbit.message.startswith(ROUNDING_LIMITED):
+        from ..run import require_stable
+        require_stable(model, p, orbit, "accuracy on request needs a steady state: run --periods N without --rtol")
     orbit = require(orbit, f"the periodic orbit of {model.key}")
     plan = getattr(period_map, "plan", None)
     if plan is not None and hasattr(plan, "trajectory"):
@@ -995,7 +994,8 @@ def default_check(model: Model, p: dict, method: Method, tr: Trajectory, reporte
     # relative to the output's RMS over the period: its mean for a DC output (to its ripple's square), its size for
     # an AC one, whose mean is ~0 (an inverter's load current: 6e-13 A, "2.2e-01 off" against it)
     scale = max(abs(exact), fine.rms("vout", t0=0.0, t1=T), circuit_floor(tr))
-    transient, discretization = abs(reported - m_h) / scale, abs(m_h - exact) / scale
+    transient = abs(reported - m_h) / scale
+    discretization = mean_discretization(fine, coarse, runs.factor, T, circuit_floor(tr)) if coarse is not None else 0.0
     error = abs(reported - exact) / scale
     period = last_period(model, p, tr)
     step = getattr(method, "h", None)
@@ -1039,6 +1039,36 @@ def default_check(model: Model, p: dict, method: Method, tr: Trajectory, reporte
     return out
 
 
+def mean_discretization(fine: Trajectory, coarse: Trajectory, factor: float, T: float, floor: float) -> float:
+    """Richardson's estimate of vout's mean on the orbit at h from the orbit at 2h (``factor`` = 2^order - 1),
+    relative to vout's size over the period (its mean for a DC output, its rms for an AC one; at least ``floor``)."""
+    m_h = fine.mean("vout", t0=0.0, t1=T)
+    exact = m_h + (m_h - coarse.mean("vout", t0=0.0, t1=T)) / factor
+    return abs(m_h - exact) / max(abs(exact), fine.rms("vout", t0=0.0, t1=T), floor)
+
+
+def step_checks(model: Model, p: dict, fine: Trajectory, coarse: Trajectory, factor: float,
+                signals: Iterable[str] | None = None) -> list[str]:
+    """What a stepper's orbit at h (``fine``, one period from 0) says against its orbit at 2h (``coarse``) that its
+    numbers may miss, as reasons: vout's mean past DEFAULT_RTOL (:func:`mean_discretization`), a measurement of
+    ``signals`` (default: every one) past MEASUREMENT_RTOL (:func:`_measurement_check`), a conduction beginning
+    inside the first step after a switching (:func:`_unresolved_onset`). The checks of a sweep's steady row;
+    :func:`default_check` makes them with its own order and more."""
+    T = model.period(p)
+    floor = circuit_floor(fine)
+    reasons = []
+    mean = mean_discretization(fine, coarse, factor, T, floor)
+    if mean > DEFAULT_RTOL:
+        reasons.append(f"vout mean may be {mean:.1e} off (more than {DEFAULT_RTOL:g})")
+    spread = _measurement_check(fine, coarse, T, floor, {}, signals)
+    if spread:
+        reasons.append(spread.split(": use ")[0])
+    onset = _unresolved_onset(model, p, fine)
+    if onset:
+        reasons.append(onset)
+    return reasons
+
+
 #: The measures of each signal a run's summary prints (``measurements``), estimated by :func:`_measurement_check`.
 MEASURES = ("mean", "rms", "min", "max", "ripple")
 #: The signals' estimates a warning names (the worst first).
@@ -1049,14 +1079,15 @@ NAMED = 3
 MEASUREMENT_RTOL = 1e-2
 
 
-def _measurement_check(fine: Trajectory, coarse: Trajectory, T: float, floor: float, out: dict) -> str:
+def _measurement_check(fine: Trajectory, coarse: Trajectory, T: float, floor: float, out: dict,
+                       signals: Iterable[str] | None = None) -> str:
     """Each printed signal's mean, rms, min, max and ripple on the orbit at h against the orbit at 2h, relative to
     the signal's size (its largest magnitude or rms, at least ``floor``), into ``out["measurement_error_estimates"]``
     ({signal: its worst}); the difference itself is the estimate, as for a first-order error (a sampled peak's: a
     step that misses a current spike converges no faster). A warning names the worst beyond MEASUREMENT_RTOL: a
     rectifier charging its capacitor through 1 mohm had printed its diode's peak 4.4 % low and its rms 0.9 % low
     with no word, the mean's estimate (2.9e-6) speaking for everything."""
-    at_h, at_2h = fine.measurement_rows(t0=0.0, t1=T), coarse.measurement_rows(t0=0.0, t1=T)
+    at_h, at_2h = (run.measurement_rows(t0=0.0, t1=T, names=signals) for run in (fine, coarse))
     worst: dict[str, tuple[float, str]] = {}
     for name, row in at_h.items():
         other = at_2h.get(name)

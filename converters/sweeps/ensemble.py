@@ -110,7 +110,8 @@ def unsettled(run: Trajectory, T: float) -> str:
                 "too few to measure how far the last is from the periodic steady state (6 at least): use --steady, "
                 "or more --periods")
     means = np.array([run.mean("vout", t0=end - (k + 1) * T, t1=end - k * T) for k in range(5, -1, -1)])
-    moves = np.abs(np.diff(means))
+    steps = np.diff(means)
+    moves = np.abs(steps)
     scale = max(abs(means[-1]), run.rms("vout", t0=end - T, t1=end), 1e-300)
     first, last = moves[:2].sum(), moves[-2:].sum()
     if last <= 1e-12 * scale:
@@ -119,10 +120,15 @@ def unsettled(run: Trajectory, T: float) -> str:
     if ratio >= 0.999:
         # moves that do not shrink are no transient to extrapolate (a period-doubled orbit's means alternate by a
         # constant step: "about 1.8e+01 from the periodic steady state (its moves decaying geometrically)" had
-        # read, and --steady then refused the point's unstable period-1 orbit)
-        return (f"{NOT_SETTLED} after {periods} periods from rest: its mean of vout moved {moves[-1] / scale:.1e} "
-                "(relative) over the last period and its moves do not decay (a sustained oscillation, a period-"
-                "doubled orbit or chaos?): see pcsuite bifurcation, or more --periods")
+        # read, and --steady then refused the point's unstable period-1 orbit); moves of one sign are a transient
+        # slower than five periods show (a buck into 10 mF still charging)
+        if np.all(steps[:-1] * steps[1:] < 0.0):
+            return (f"{NOT_SETTLED} after {periods} periods from rest: its mean of vout moved {moves[-1] / scale:.1e} "
+                    "(relative) over the last period, alternating, and its moves do not decay (a period-doubled "
+                    "orbit, or chaos?): see pcsuite bifurcation, or more --periods")
+        return (f"{NOT_SETTLED} after {periods} periods from rest: its mean of vout still moves "
+                f"{moves[-1] / scale:.1e} (relative) a period, one way, with no decay seen over the last five: use "
+                "--steady, or more --periods")
     away = 0.5 * last * ratio / (1.0 - ratio) / scale
     if away <= UNSETTLED:
         return ""
@@ -131,52 +137,41 @@ def unsettled(run: Trajectory, T: float) -> str:
             "decaying geometrically): use --steady, or more --periods")
 
 
+#: A circuit's size (state units, :func:`~converters.analysis.periodic.problem_size`) below which the batched engine's
+#: absolute Newton tolerance (1e-10 of 1 + |x|) is coarser than 1e-7 of it: such points run alone.
+SMALL_CIRCUIT = 1e-3
 #: What a steady row whose step is too coarse for its mean says first (the command line counts them).
 TOO_COARSE = "the step is too coarse"
 
 
-def step_error(model: Model, p: dict, method: Method, x_orbit: np.ndarray, run: Trajectory) -> str:
-    """'' or the message of a stepper's steady row whose step is too coarse, by the checks a simulate run's warnings
-    make (:func:`~converters.analysis.accuracy.default_check`): its orbit at 2h, Newton from the orbit at h; vout's
-    mean by Richardson at the declared order, at most ORDER_THROUGH_EVENTS (a diode event inside a step), against
-    DEFAULT_RTOL; the row's ripple and the first state's rms by their difference itself against MEASUREMENT_RTOL;
-    each relative to its signal's size over the period (at least the circuit's floor). A buck at f_sw = 316 Hz
-    (deep DCM, its inductor's current reset within a few steps) had been stored as ok at 8.214 V for 9.031 V, and
-    at 100 Hz its ripple 41 % and its inductor's rms 80 % low."""
+def step_error(model: Model, p: dict, method: Method, run: Trajectory, at_2h: Trajectory) -> str:
+    """'' or the message of a stepper's steady row whose step is too coarse: its one-period run on the orbit at h
+    against the one at 2h, by the checks a simulate run's warnings make
+    (:func:`~converters.analysis.accuracy.step_checks`: vout's mean by Richardson against DEFAULT_RTOL, every
+    measurement by its difference against MEASUREMENT_RTOL, a conduction beginning inside the first step after a
+    switching). A buck at f_sw = 316 Hz (deep DCM, its inductor's current reset within a few steps) had been stored
+    as ok at 8.214 V for 9.031 V, and at 100 Hz its ripple 41 % and its inductor's rms 80 % low."""
     from dataclasses import replace
 
-    from ..analysis.accuracy import DEFAULT_RTOL, MEASUREMENT_RTOL, ORDER_THROUGH_EVENTS, circuit_floor
+    from ..analysis.accuracy import ORDER_THROUGH_EVENTS, step_checks
+    fine, coarse = (replace(r, labels=model.labels(p)) for r in (run, at_2h))
+    # the declared order, at most that through a diode event inside a step (no third orbit at 4h here)
+    # the signals the row stores: vout (its mean and ripple) and the first state (its rms)
+    reasons = step_checks(model, p, fine, coarse, 2.0 ** min(float(method.order), ORDER_THROUGH_EVENTS) - 1.0,
+                          signals=("vout", model.state_names[0]))
+    return f"{TOO_COARSE}: " + "; ".join(reasons) + ": use --rtol, or a smaller --h" if reasons else ""
+
+
+def _orbit_at_2h(model: Model, p: dict, method: Method, x_orbit: np.ndarray) -> Trajectory | str:
+    """One period of the stepper's orbit at 2h, Newton from the orbit at h; or why it was not found."""
     from ..analysis.periodic import resolved, shoot
     from ..simulate import simulate
     T = model.period(p)
     coarse = method.coarsened()
-    orbit = shoot(model.problem(p, T, x_orbit), coarse, x_orbit, tol=1e-8, polish=True)
+    orbit = shoot(model.problem(p, T, x_orbit), coarse, x_orbit, tol=STEADY_TOL, polish=True)
     if not resolved(orbit):
         return f"{TOO_COARSE} to tell: its orbit at 2h was not found ({orbit.message})"
-    runs = [replace(r, labels=model.labels(p)) for r in (run, simulate(model.problem(p, T, orbit.x0), coarse))]
-    state = model.state_names[0]
-    read = []
-    for r in runs:
-        t0, t1 = float(r.t[0]), float(r.t[-1])
-        vout = np.asarray(r.signal("vout"), dtype=float)
-        read.append({"vout_mean": r.mean("vout", t0=t0, t1=t1), "vout_ripple": float(np.ptp(vout)),
-                     "rms_state0": r.rms(state, t0=t0, t1=t1), "vout_size": max(float(np.abs(vout).max()),
-                                                                                r.rms("vout", t0=t0, t1=t1)),
-                     "state_size": float(np.abs(r.state(state)).max())})
-    fine, at_2h = read
-    floor = circuit_floor(runs[0])
-    order = min(float(method.order), ORDER_THROUGH_EVENTS)
-    off = {"vout mean": (abs(fine["vout_mean"] - at_2h["vout_mean"]) / (2.0 ** order - 1.0)
-                         / max(fine["vout_size"], floor), DEFAULT_RTOL),
-           "vout ripple": (abs(fine["vout_ripple"] - at_2h["vout_ripple"]) / max(fine["vout_size"], floor),
-                           MEASUREMENT_RTOL),
-           f"{state} rms": (abs(fine["rms_state0"] - at_2h["rms_state0"]) / max(fine["state_size"], floor),
-                            MEASUREMENT_RTOL)}
-    beyond = [f"{name} may be {error:.1e} off (more than {limit:g})" for name, (error, limit) in off.items()
-              if error > limit]
-    if not beyond:
-        return ""
-    return f"{TOO_COARSE}: " + ", ".join(beyond) + " (its orbit at 2h reads them so far apart): use --rtol, or a smaller --h"
+    return simulate(model.problem(p, T, orbit.x0), coarse)
 
 
 def failed_row(index: int, point: dict, message: str, wall_s: float = 0.0) -> dict:
@@ -357,7 +352,8 @@ class ModelSweep:
                 extra = {"spectral_radius": orbit.spectral_radius, "iterations": orbit.iterations,
                          "orbit_distance": orbit.distance}
                 if method.fixed_step:
-                    extra["message"] = step_error(model, p, method, orbit.x0, run)
+                    at_2h = _orbit_at_2h(model, p, method, orbit.x0)
+                    extra["message"] = at_2h if isinstance(at_2h, str) else step_error(model, p, method, run, at_2h)
             else:
                 long = simulate(model.problem(p, self.periods * T), method)
                 if diverging(long, T):
@@ -443,6 +439,7 @@ class ModelSweep:
                 self._circuit_method().sweep_chunk_done()
         if not self.batchable():
             return [self.row(i, point) for i, point in items]
+        from ..analysis.periodic import problem_size
         from ..methods.theta import plan_arrays
         model = self._model()
         prepared, rows, plans, resolved = [], {}, {}, {}
@@ -464,7 +461,10 @@ class ModelSweep:
                 # the batched steps take no jump, and their plan is a schedule's (a comparator's switching is the
                 # state's, its law no key of a shared plan: a voltage-mode sweep had failed every point with
                 # "unhashable type"): the point's own run does
-                if problem.jumps or not isinstance(problem.switching, Schedule):
+                # and its Newton measures distances against 1 + |x|: a circuit far below 1 (a buck from 1.2e-11 V,
+                # stored 8 % off in 0 iterations) is resolved by the point's own shoot(), relative to its size
+                alone = not isinstance(problem.switching, Schedule) or problem_size(problem) < SMALL_CIRCUIT
+                if problem.jumps or alone:
                     rows[index] = self.row(index, point)
                     continue
                 method = cast("Theta", self._method(model, p, problem))        # batchable: the stepper
@@ -480,57 +480,29 @@ class ModelSweep:
         return [rows[index] for index, _ in items]
 
     def _batched(self, model: Model, prepared: list, rows: dict) -> None:
-        """The rows of prepared points of one theta through one compiled call (:func:`.batch.batch_steady`)."""
+        """The rows of prepared points of one theta through one compiled call (:func:`.batch.batch_steady`), and
+        each converged row checked against its orbit at 2h through a second one (:func:`step_error`)."""
         from ..analysis.periodic import REMOTE_PERIODS, periods_apart
-        from .batch import CONVERGED, ROUNDING, batch_steady
-        P = len(prepared)
-        n = prepared[0][4].n
-        configs = len(prepared[0][4].configurations)
-        S = max(len(item[5].which) for item in prepared)
-        sets = max(len(item[5].set_configs) for item in prepared)
-        A, B = np.zeros((P, configs, n, n)), np.zeros((P, configs, n, 1))
-        C, D = np.zeros((P, configs, 1, n)), np.zeros((P, configs, 1, 1))
-        E, F = np.zeros((P, configs, n)), np.zeros((P, configs, 1))
-        set_configs, set_dts = np.zeros((P, sets), dtype=np.int64), np.ones((P, sets))
-        counts, which, steps = np.zeros(P, dtype=np.int64), np.zeros((P, S), dtype=np.int64), np.zeros(P, dtype=np.int64)
-        x0 = np.zeros((P, n))
-        for k, (_, _, _, _, problem, plan, _) in enumerate(prepared):
-            for c, cfg in enumerate(problem.configurations):
-                A[k, c], B[k, c], C[k, c], D[k, c], E[k, c], F[k, c] = cfg.A, cfg.B, cfg.C, cfg.D, cfg.E, cfg.F
-            counts[k] = len(plan.set_configs)
-            set_configs[k, :counts[k]], set_dts[k, :counts[k]] = plan.set_configs, plan.set_dts
-            steps[k] = len(plan.which)
-            which[k, :steps[k]] = plan.which
-            x0[k] = problem.x0
-        xs, us, ys = np.zeros((P, S + 1, n)), np.zeros((P, S + 1)), np.zeros((P, S + 1))
-        x_star, jac = np.zeros((P, n)), np.zeros((P, n, n))
-        status, iterations = np.zeros(P, dtype=np.int64), np.zeros(P, dtype=np.int64)
-        residuals, distances = np.full(P, np.inf), np.full(P, np.inf)
+        from ..methods.theta import plan_arrays
+        from .batch import CONVERGED, ROUNDING
         clock = time.perf_counter()
-        batch_steady(A, B, C, D, E, F, set_configs, set_dts, counts, which, steps, prepared[0][3].theta, x0,
-                     self.warm_up, STEADY_TOL, MAX_ITER, xs, us, ys, x_star, jac, status, iterations, residuals,
-                     distances)
-        share = (time.perf_counter() - clock) / P                # the compiled call's time, per point
-        for k, (index, point, p, method, problem, plan, prep) in enumerate(prepared):
+        found = _batch_orbits(prepared, self.warm_up)
+        share = (time.perf_counter() - clock) / len(prepared)          # the compiled call's time, per point
+        kept = []
+        for item, (status, x_star, run, rho, iterations, residual, distance) in zip(prepared, found):
+            index, point, p, method, problem, plan, prep = item
             clock = time.perf_counter() - prep - share
-            if status[k] == ROUNDING and distances[k] <= ROUNDED_TOL:     # kept: the per-point path's orbit
+            if status == ROUNDING and distance <= ROUNDED_TOL:     # kept: the per-point path's orbit
                 rows[index] = self.row(index, point)
                 continue
-            if status[k] != CONVERGED:
-                rows[index] = failed_row(index, point, _batch_failure(status[k], residuals[k], distances[k]),
+            if status != CONVERGED:
+                rows[index] = failed_row(index, point, _batch_failure(status, residual, distance),
                                          time.perf_counter() - clock)
                 continue
-            t, step_config = plan.t, plan.step_config
-            count = steps[k] + 1
-            config = np.concatenate([step_config[:1], step_config])
-            run = _stepper_trajectory(problem, method, t, xs[k, :count], us[k, :count, None], ys[k, :count, None],
-                                      config)
-            multipliers = np.linalg.eigvals(jac[k])
-            rho = float(np.abs(multipliers).max())
             if unstable(rho):
                 rows[index] = failed_row(index, point, unstable(rho), time.perf_counter() - clock)
                 continue
-            if periods_apart(x_star[k], rho, problem.x0, STEADY_TOL) > REMOTE_PERIODS:
+            if periods_apart(x_star, rho, problem.x0, STEADY_TOL) > REMOTE_PERIODS:
                 # an orbit its slowest mode would take so long to reach from the start: the point's own shoot()
                 # checks it against the settled transient (from problem.x0, before the warm-up: a few more points
                 # than shoot's own test, none fewer)
@@ -542,9 +514,67 @@ class ModelSweep:
                 rows[index] = failed_row(index, point, f"{type(exc).__name__}: {exc}", time.perf_counter() - clock)
                 continue
             rows[index] = {"index": int(index), **{key: _number(v) for key, v in point.items()}, "status": "ok",
-                           "message": step_error(model, p, method, x_star[k], run), **measured,
-                           "spectral_radius": rho, "iterations": int(iterations[k]),
-                           "orbit_distance": float(distances[k]), "wall_s": time.perf_counter() - clock}
+                           "message": "", **measured, "spectral_radius": rho, "iterations": int(iterations),
+                           "orbit_distance": float(distance), "wall_s": time.perf_counter() - clock}
+            kept.append((index, p, method, problem, x_star, run))
+        # the same points at 2h, from their orbits at h (a second compiled call: the check costs what the rows did)
+        coarse, plans = [], {}
+        for index, p, method, problem, x_star, run in kept:
+            twice = method.coarsened()
+            moved = model.problem(p, model.period(p), x_star)
+            key = (moved.switching, moved.t_span, twice, len(moved.configurations))
+            plan = plans.get(key) or plans.setdefault(key, plan_arrays(moved, twice.h, twice.graded))
+            coarse.append((index, None, p, twice, moved, plan, 0.0))
+        for (index, p, method, problem, x_star, run), (status, _, at_2h, *_) in zip(kept, _batch_orbits(coarse, 0)
+                                                                                   if coarse else []):
+            clock = time.perf_counter()
+            try:
+                rows[index]["message"] = (step_error(model, p, method, run, at_2h) if status == CONVERGED else
+                                          f"{TOO_COARSE} to tell: its orbit at 2h was not found")
+            except (ValueError, RuntimeError, ArithmeticError) as exc:
+                rows[index]["message"] = f"{TOO_COARSE} to tell: {type(exc).__name__}: {exc}"
+            rows[index]["wall_s"] += time.perf_counter() - clock
+
+
+def _batch_orbits(prepared: list, warm_up: int) -> list[tuple]:
+    """One compiled call (:func:`.batch.batch_steady`) for prepared points of one theta: per point (status, x*,
+    its one-period run, spectral radius, iterations, residual, distance)."""
+    from .batch import batch_steady
+    P = len(prepared)
+    n = prepared[0][4].n
+    configs = len(prepared[0][4].configurations)
+    S = max(len(item[5].which) for item in prepared)
+    sets = max(len(item[5].set_configs) for item in prepared)
+    A, B = np.zeros((P, configs, n, n)), np.zeros((P, configs, n, 1))
+    C, D = np.zeros((P, configs, 1, n)), np.zeros((P, configs, 1, 1))
+    E, F = np.zeros((P, configs, n)), np.zeros((P, configs, 1))
+    set_configs, set_dts = np.zeros((P, sets), dtype=np.int64), np.ones((P, sets))
+    counts, which, steps = np.zeros(P, dtype=np.int64), np.zeros((P, S), dtype=np.int64), np.zeros(P, dtype=np.int64)
+    x0 = np.zeros((P, n))
+    for k, (_, _, _, _, problem, plan, _) in enumerate(prepared):
+        for c, cfg in enumerate(problem.configurations):
+            A[k, c], B[k, c], C[k, c], D[k, c], E[k, c], F[k, c] = cfg.A, cfg.B, cfg.C, cfg.D, cfg.E, cfg.F
+        counts[k] = len(plan.set_configs)
+        set_configs[k, :counts[k]], set_dts[k, :counts[k]] = plan.set_configs, plan.set_dts
+        steps[k] = len(plan.which)
+        which[k, :steps[k]] = plan.which
+        x0[k] = problem.x0
+    xs, us, ys = np.zeros((P, S + 1, n)), np.zeros((P, S + 1)), np.zeros((P, S + 1))
+    x_star, jac = np.zeros((P, n)), np.zeros((P, n, n))
+    status, iterations = np.zeros(P, dtype=np.int64), np.zeros(P, dtype=np.int64)
+    residuals, distances = np.full(P, np.inf), np.full(P, np.inf)
+    batch_steady(A, B, C, D, E, F, set_configs, set_dts, counts, which, steps, prepared[0][3].theta, x0, warm_up,
+                 STEADY_TOL, MAX_ITER, xs, us, ys, x_star, jac, status, iterations, residuals, distances)
+    out = []
+    for k, (_, _, _, method, problem, plan, _) in enumerate(prepared):
+        count = steps[k] + 1
+        config = np.concatenate([plan.step_config[:1], plan.step_config])
+        run = _stepper_trajectory(problem, method, plan.t, xs[k, :count], us[k, :count, None], ys[k, :count, None],
+                                  config)
+        rho = float(np.abs(np.linalg.eigvals(jac[k])).max()) if np.all(np.isfinite(jac[k])) else math.inf
+        out.append((int(status[k]), x_star[k].copy(), run, rho, int(iterations[k]), float(residuals[k]),
+                    float(distances[k])))
+    return out
 
 
 def sweep_methods() -> list[str]:

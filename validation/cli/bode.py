@@ -152,7 +152,7 @@ def _print(response, summary: dict, found) -> None:
     for i in rows:
         print(f"  {f[i]:12.5g} {mag[i]:10.3f} {phase[i]:12.2f}")
     if rows.size < f.size:
-        print(f"  ({rows.size} of the {f.size} frequencies shown; --json or --out holds every one)")
+        print(f"  ({rows.size} of the {f.size} frequencies shown; --json holds every one)")
     if np.any(f >= 0.5 / response.period * (1 - 1e-9)):
         # a sampled system's response at fs/2 folds onto itself: an injection's phase decides what it reads (a
         # voltage-mode buck: 9.20 dB with a sine injection, 5.75 dB with a cosine, -3.49 dB at 45 degrees; the
