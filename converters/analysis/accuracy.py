@@ -404,22 +404,31 @@ def _orbit(model: Model, p: dict, method: Method, x_guess: npt.NDArray[np.float6
 
 
 def _extremum_run(model: Model, tr: Trajectory, T: float) -> float:
-    """The fewest steps of a configuration's run that holds or meets an extremum the measures read (vout's maximum
-    and minimum, each inductor current's peak): inf where none is short. An extremum in a run of a few steps lies at
+    """The fewest steps of a configuration's run that holds an extremum the measures read (vout's maximum and
+    minimum, each inductor current's peak): inf where none is short. An extremum in a run of a few steps lies at
     its ends, where no parabola of one configuration reaches and the runs at N and N/2 share their samples (a buck
     at D = 0.01, its on-time two steps at T/200: its vout minimum 2e-4 V below the sample, the ripple "met" at
-    0.1753036 +- 1.3e-6 where it is 0.1755037). A signal flat to the circuit's floor (a path the diodes block) has
+    0.1753036 +- 1.3e-6 where it is 0.1755037). The period's runs are taken cyclically (the one through t = 0 is
+    one run). An extremum on a sample between two runs lies in the run its one-sided slopes point into (second-order
+    differences on each side); where they disagree in sign it is a corner at the switching, which the sample holds
+    exactly (an RC's peak at its switch's edge). A signal flat to the circuit's floor (a path the diodes block) has
     no extremum to resolve."""
     config = tr.config
     if config is None:
         return math.inf
     rows = np.flatnonzero(tr.t <= tr.t[0] + T * (1 + 1e-12))
-    c = np.asarray(config)[rows]
-    change = np.flatnonzero(np.diff(c) != 0) + 1
-    starts, ends = np.concatenate([[0], change]), np.concatenate([change, [c.size]])
-    length = np.empty(c.size)
+    t, steps = tr.t[rows], np.asarray(config)[rows][1:]         # steps[k]: the configuration of (t[k], t[k + 1]]
+    N = steps.size
+    if N < 3:
+        return math.inf
+    change = np.flatnonzero(steps[1:] != steps[:-1]) + 1
+    starts, ends = np.concatenate([[0], change]), np.concatenate([change, [N]])
+    length = np.empty(N)
     for a, b in zip(starts, ends):
-        length[a:b] = b - a                    # steps of the run each step (ending at that sample) belongs to
+        length[a:b] = b - a
+    if len(starts) > 1 and steps[0] == steps[-1]:                # the run through t = 0, joined
+        length[:ends[0]] = length[starts[-1]:] = ends[0] + (N - starts[-1])
+    h = float(np.median(np.diff(t)))
     floor = circuit_floor(tr)
     fewest = math.inf
     signals = [(np.asarray(tr.signal("vout", rows), dtype=float), (1.0, -1.0))]
@@ -430,9 +439,20 @@ def _extremum_run(model: Model, tr: Trajectory, T: float) -> float:
         if np.ptp(values) <= floor:
             continue
         for sign in signs:
-            j = int(np.argmax(sign * values))
-            around = [length[k] for k in (j, j + 1) if 0 < k < c.size]     # the runs of the steps either side
-            fewest = min(fewest, min(around, default=math.inf))
+            w = sign * values[:N]                        # one period, cyclic (the orbit's last sample is its first)
+            j = int(np.argmax(w))
+            left, right = (j - 1) % N, j % N              # the steps ending and starting at sample j
+            if steps[left] == steps[right]:
+                fewest = min(fewest, length[right])
+                continue
+            slope_left = ((3 * w[j] - 4 * w[(j - 1) % N] + w[(j - 2) % N]) / (2 * h)
+                          if steps[(left - 1) % N] == steps[left] else None)
+            slope_right = ((-3 * w[j] + 4 * w[(j + 1) % N] - w[(j + 2) % N]) / (2 * h)
+                           if steps[(right + 1) % N] == steps[right] else None)
+            if slope_left is None or slope_right is None:
+                fewest = min(fewest, length[left], length[right])
+            elif slope_left * slope_right > 0.0:       # still rising (or falling) through the switching
+                fewest = min(fewest, length[right] if slope_right > 0.0 else length[left])
     return fewest
 
 
@@ -588,6 +608,7 @@ def accurate_steady(model: Model, p: dict, rtol: float, *, x0: npt.NDArray[np.fl
     events: list            # (pair, kind, Estimate) of the stepper's runs; (pair, kind, time) of the event method's
     stopped = ""            # why the stepper's refinement stopped short of MAX_STEPS
     damped = ""             # why backward Euler's estimates cannot be trusted (:func:`_overdamped`)
+    unresolved = ""         # why the finest stepper run's estimates miss an error (a short run, an onset in a step)
     most_n = MAX_STEPS
     while previous is not None and fine_n <= most_n:
         fine_method = Theta(h=T / fine_n, theta=theta)
@@ -628,6 +649,8 @@ def accurate_steady(model: Model, p: dict, rtol: float, *, x0: npt.NDArray[np.fl
         # Richardson does not see its first-order error at any step (a buck with 1 mohm in its inductor into 1 Mohm:
         # its peak 4.7873e-5 +- 1.7e-9 A "met", where it is 4.79452e-5, 43 times the estimate): the exact method
         onset = _unresolved_onset(model, p, tr) if worst <= target and not damped else ""
+        unresolved = onset or (f"an extremum lies in a run of {few:.0f} step{'s' if few != 1 else ''} (its estimate "
+                               f"needs {FEW_STEPS})" if few < FEW_STEPS else "")
         if onset:
             best, stopped = result, onset
             break
@@ -658,8 +681,8 @@ def accurate_steady(model: Model, p: dict, rtol: float, *, x0: npt.NDArray[np.fl
         # the next fine N from the estimates and the order (x 1.2, to land in one step); its coarse
         # run is this one when the ratio stays within MAX_RATIO, else a new one at half the step count
         growth = 1.2 * (worst / target) ** (1.0 / order) if math.isfinite(worst) else 2.0
-        if few < FEW_STEPS:
-            growth = max(growth, 1.2 * FEW_STEPS / max(few, 1e-300))
+        if few < FEW_STEPS:      # at least the next doubling (the extremum may move into a long run there)
+            growth = max(growth, 2.0)
         next_n = int(math.ceil(fine_n * min(max(growth, 2.0), MAX_GROWTH)))
         if next_n > most_n:
             break
@@ -685,9 +708,12 @@ def accurate_steady(model: Model, p: dict, rtol: float, *, x0: npt.NDArray[np.fl
         # a SIN source, a time constant the exact flows would cross in billions of substeps (a 1 mohm ESR beside
         # 10 pF: 3.3e-15 s), a limit reached, or no orbit found: the stepper's finest run is the answer, its
         # Richardson estimates stated and rtol said unmet
-        met = best.worst() <= rtol and not damped
+        # the rules the stepper's estimates answer to hold for its finest run too (a SIN source's circuit)
+        met = best.worst() <= rtol and not damped and not unresolved
         message = "" if met else (f"the stepper's estimate at {best.steps_per_period:,} steps a period is "
                                   f"{best.worst():.2g}" + (f", not to be trusted: {damped}" if damped else "")
+                                  + (f", not to be trusted: {unresolved}" if unresolved and unresolved != stopped
+                                     else "")
                                   + "; " + (f"{stopped}; " if stopped else "")
                                   + f"and the exact event method does not take this circuit ({why})")
         return replace(best, met=met, message=message, wall_s=time.perf_counter() - clock)
