@@ -24,7 +24,8 @@ from typing import Any, cast
 import numpy as np
 import numpy.typing as npt
 
-from .analysis.periodic import ONE_MODE, SIMULATE_REMEDY, PeriodicOrbit, instability, require, resolved, shoot
+from .analysis.periodic import (ONE_MODE, SIMULATE_REMEDY, PeriodicOrbit, require, require_stable, resolved,
+                                shoot)
 from .errors import ParameterError, ResourceError, SimulationError
 from .limits import max_memory
 from .methods.base import DEFAULT_METHOD, Method, PeriodMap, get_method
@@ -248,15 +249,6 @@ def _from_rest(model: Model, p: dict, method: Method, span: float, x0: npt.NDArr
     if target is not None:
         meta["step_target"] = target
     return tr, meta
-
-
-def require_stable(model: Model, p: dict, orbit: PeriodicOrbit, instead: str) -> None:
-    """Refuse an unstable orbit in one line: a fixed point of the period map the circuit does not settle on is no
-    steady state (``instead``: what the command can run in its place)."""
-    why = instability(orbit.multipliers, model.period(p))
-    if why:
-        raise SimulationError(f"the periodic orbit of {model.key} is {why}; {instead}, or follow its orbits with "
-                              "pcsuite bifurcation")
 
 
 def check_steady(model: Model, p: dict) -> None:

@@ -381,7 +381,7 @@ def _orbit(model: Model, p: dict, method: Method, x_guess: npt.NDArray[np.float6
            tol: float) -> tuple[PeriodicOrbit, Trajectory]:
     """The method's orbit (Newton on its period map, after ``warm_up`` periods) and one period on it, the
     stepper's from the same step plan (built once)."""
-    from .periodic import ROUNDING_LIMITED, require, shoot
+    from .periodic import ROUNDING_LIMITED, require, require_stable, shoot
     T = model.period(p)
     problem = model.problem(p, T, x_guess)
     period_map = method.period_map(problem)
@@ -391,7 +391,6 @@ def _orbit(model: Model, p: dict, method: Method, x_guess: npt.NDArray[np.float6
     # period doubling had read "rtol 0.001 met", vout 7.0452 +- 0.0063 V, where it settles at 6.000005 V on its
     # period-2 orbit; at 1e-5 "1 - rho = -0.7 amplifies" the rounding)
     if orbit.converged or orbit.message.startswith(ROUNDING_LIMITED):
-        from ..run import require_stable
         require_stable(model, p, orbit, "accuracy on request needs a steady state: run --periods N without --rtol")
     orbit = require(orbit, f"the periodic orbit of {model.key}")
     plan = getattr(period_map, "plan", None)

@@ -33,6 +33,7 @@ from .floquet import multipliers_of, spectral_radius
 
 if TYPE_CHECKING:
     from ..methods.base import Method, PeriodMap
+    from ..models.base import Model
 
 #: Where a circuit goes from an unstable orbit when its leading multiplier is not known (a batched sweep keeps the
 #: spectral radius only).
@@ -59,6 +60,15 @@ def instability(multipliers, period: float) -> str:
         at = f"{lead.real:.6g}"
     return (f"unstable (Floquet spectral radius {abs(lead):.6g}, a multiplier at {at}): the circuit does not settle "
             f"on it ({where})")
+
+
+def require_stable(model: Model, p: dict, orbit: PeriodicOrbit, instead: str) -> None:
+    """Refuse an unstable orbit in one line: a fixed point of the period map the circuit does not settle on is no
+    steady state (``instead``: what the command can run in its place)."""
+    why = instability(orbit.multipliers, model.period(p))
+    if why:
+        raise SimulationError(f"the periodic orbit of {model.key} is {why}; {instead}, or follow its orbits with "
+                              "pcsuite bifurcation")
 
 
 class NewtonMap(Protocol):
