@@ -235,6 +235,14 @@ def _structure(netlist: Netlist) -> tuple[object, ...]:
 _JOINING = "RLVEHDSW"
 
 
+def _root(parent: dict[str, str], n: str) -> str:
+    """The root of node ``n`` in a union-find forest (``parent``; a node not yet seen is its own root)."""
+    while parent.setdefault(n, n) != n:
+        parent[n] = parent[parent[n]]
+        n = parent[n]
+    return n
+
+
 def inductor_loops(inductors: Sequence[Element]) -> list[_Array]:
     """The independent loops of inductors alone (a cycle of the graph of the inductors' branches: two in parallel,
     a triangle of three), each as its sign per inductor (+1 where the loop runs from the inductor's first node to its
@@ -243,10 +251,7 @@ def inductor_loops(inductors: Sequence[Element]) -> list[_Array]:
     tree: dict[str, list[tuple[str, int, int]]] = {}           # node: [(neighbour, inductor, +1 along it)]
 
     def find(n: str) -> str:
-        while parent.setdefault(n, n) != n:
-            parent[n] = parent[parent[n]]
-            n = parent[n]
-        return n
+        return _root(parent, n)
 
     def path(a: str, b: str) -> list[tuple[int, int]]:
         """The tree's branches from a to b, each (inductor, +1 where traversed from its first node)."""
@@ -283,10 +288,7 @@ def charge_islands(netlist: Netlist) -> list[tuple[tuple[str, ...], tuple[str, .
     parent: dict[str, str] = {}
 
     def find(n: str) -> str:
-        while parent.setdefault(n, n) != n:
-            parent[n] = parent[parent[n]]
-            n = parent[n]
-        return n
+        return _root(parent, n)
 
     driven: set[str] = set()
     for e in netlist.elements:
@@ -1486,10 +1488,7 @@ def _reaches_ground(elements: Sequence[Element], node: str) -> bool:
     parent: dict[str, str] = {}
 
     def root(n: str) -> str:
-        while parent.setdefault(n, n) != n:
-            parent[n] = parent[parent[n]]
-            n = parent[n]
-        return n
+        return _root(parent, n)
     for e in elements:
         if len(e.nodes) >= 2:
             parent[root(e.nodes[0])] = root(e.nodes[1])
