@@ -255,7 +255,8 @@ def inductor_loops(inductors: Sequence[Element]) -> list[_Array]:
 
     def path(a: str, b: str) -> list[tuple[int, int]]:
         """The tree's branches from a to b, each (inductor, +1 where traversed from its first node)."""
-        seen, frontier = {a: []}, [a]
+        seen: dict[str, list[tuple[int, int]]] = {a: []}
+        frontier = [a]
         while frontier:
             node = frontier.pop()
             for other, index, direction in tree.get(node, []):
