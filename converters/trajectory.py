@@ -522,8 +522,8 @@ class Trajectory:
     #: near it; elsewhere (a diode whose current is an inductor's, D = 0 and q = 0) the step's own pair stands.
     _INSTANT_RTOL = 1e-9
 
-    def _pairs_after_edges(self, left: npt.NDArray[np.int_],
-                           right: npt.NDArray[np.int_]) -> tuple[npt.NDArray[Any], npt.NDArray[Any]]:
+    def _pairs_after_edges(self, left: npt.NDArray[np.integer[Any]],
+                           right: npt.NDArray[np.integer[Any]]) -> tuple[npt.NDArray[Any], npt.NDArray[Any]]:
         """The pair variables at each switching edge in the configuration after it: the new configuration's LCP,
         0 <= u _|_ D u + C x + F >= 0, at the edge's own state x[left], where its solution is unique there; else
         the step's end (row ``right``, solved at the state a step later). A stepper's end pair at the other state

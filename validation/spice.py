@@ -8,7 +8,9 @@ from __future__ import annotations
 
 import atexit
 import concurrent.futures as futures
+import os
 import re
+import tempfile
 import time
 from dataclasses import dataclass, field
 
@@ -25,8 +27,24 @@ _FATAL = re.compile(r"(timestep too small|singular matrix|no convergence|too man
                     r"simulation\(s\) aborted|error)", re.IGNORECASE)
 
 
+_PERCENT = re.compile(r"tran:?\s*([0-9.]+)\s*%", re.IGNORECASE)
+#: After this long, a run whose pace (what it reported done, plus the 0.1 % it may have done since) needs
+#: CRAWL_FACTOR times its time limit or more is stopped: it would not finish, and the limit's minutes are saved.
+CRAWL_AFTER_S = 30.0
+CRAWL_FACTOR = 3.0
+WATCH_EVERY_S = 5.0     # how often the parent reads the run's progress
+
+
 class SpiceError(SimulationError):
     """An ngspice run failed (the message carries ngspice's reason)."""
+
+
+def _crawl_message(netlist: Netlist, reached: float, elapsed: float, limit: float) -> str:
+    need = elapsed / (reached + 1e-3)
+    return (f"ngspice crawls on {netlist.converter}: {100 * reached:.1f} % of its {netlist.t_end:.3g} s transient in "
+            f"{elapsed:.0f} s, a pace that needs {need / 3600:.2g} h or more where the time limit is {limit:g} s: its "
+            "time step has collapsed (sharp diode or switch transitions at fast edges); the comparison needs "
+            "ngspice to run, so it is not made")
 
 
 @dataclass(frozen=True)
@@ -53,8 +71,9 @@ class SpiceResult:
         return (value >= threshold).astype(np.int8)
 
 
-def _worker(text: str) -> dict:
-    """Runs inside the worker: load, run, collect. Returns plain data (picklable)."""
+def _worker(text: str, progress: str | None = None) -> dict:
+    """Runs inside the worker: load, run, collect. Returns plain data (picklable). ``progress``: a file that
+    gets ngspice's percentage of its transient each time it reports one (every 0.1 %)."""
     import logging
     logging.getLogger("PySpice").setLevel(logging.CRITICAL)
     from PySpice.Spice.NgSpice.Shared import NgSpiceShared
@@ -63,6 +82,14 @@ def _worker(text: str) -> dict:
     ng.destroy()
     ng._stdout.clear()
     ng._stderr.clear()
+    if progress is not None:
+        def stat(message: str, ngspice_id: int) -> int:
+            found = _PERCENT.search(message)
+            if found:
+                with open(progress, "w") as out:
+                    out.write(found.group(1))
+            return 0
+        ng.send_stat = stat
     start = time.perf_counter()
     try:
         ng.load_circuit(text)
@@ -99,15 +126,37 @@ class SpiceRunner:
             raise TypeError("run() takes a netlists.Netlist (built from validated parameters)")
         check_spice_memory(netlist)
         limit = time_limit(TIMEOUT_S)
+        handle, progress = tempfile.mkstemp(prefix="pcsuite-ngspice-", suffix=".progress")
+        os.close(handle)
+
+        def reached() -> float | None:
+            """The fraction of its transient ngspice has reported (every 0.1 %); None before its first report."""
+            try:
+                with open(progress) as read:
+                    return float(read.read()) / 100.0
+            except (OSError, ValueError):
+                return None
+
+        def watch(elapsed: float) -> None:
+            # at most (reached + 0.1 %) done in `elapsed`: a pace that needs CRAWL_FACTOR times the limit or more
+            # will not finish within it (a 16-stage Dickson pump's 10 ps clock edges through sharp diodes: 0.1 %
+            # of 30 periods in 300 s). Judged only once ngspice has reported its progress at all.
+            done = reached()
+            if done is not None and elapsed >= CRAWL_AFTER_S and elapsed / (done + 1e-3) > CRAWL_FACTOR * limit:
+                raise SpiceError(_crawl_message(netlist, done, elapsed, limit))
         try:
-            out = self._slot.call(_worker, netlist.text, timeout=limit)
+            out = self._slot.call(_worker, netlist.text, progress, timeout=limit, watch=watch,
+                                  every=WATCH_EVERY_S)
         except futures.process.BrokenProcessPool:
             raise SpiceError(f"ngspice worker crashed while simulating {netlist.converter}; the run is lost, "
                              "the caller is unaffected (try a larger TMAX or METHOD=gear)") from None
         except futures.TimeoutError:
-            raise SpiceError(f"ngspice did not finish {netlist.converter} within the time limit of {limit:g} s; "
-                             "raise it with --time-limit S (or PCSUITE_TIME_LIMIT), or run fewer periods or a "
-                             "larger --spice-tmax") from None
+            raise SpiceError(f"ngspice did not finish {netlist.converter} within the time limit of {limit:g} s "
+                             f"(it had reached {100 * (reached() or 0.0):.1f} % of its {netlist.t_end:.3g} s); raise "
+                             "it with --time-limit S (or PCSUITE_TIME_LIMIT), or run fewer periods or a larger "
+                             "--spice-tmax") from None
+        finally:
+            os.unlink(progress)
         if "error" in out:
             reason = _reason(out["log"]) or out["error"]
             raise SpiceError(f"ngspice failed on {netlist.converter}: {reason}")

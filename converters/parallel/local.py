@@ -109,11 +109,28 @@ class ProcessSlot:
         self._tasks += 1
         return self._pool.submit(function, *args)
 
-    def call(self, function: Callable[..., _T], *args: Any, timeout: float | None = None) -> _T:
+    def call(self, function: Callable[..., _T], *args: Any, timeout: float | None = None,
+             watch: Callable[[float], None] | None = None, every: float = 5.0) -> _T:
         """``function(*args)`` in the process. Raises ``concurrent.futures.TimeoutError`` (the process is then
-        terminated) or ``concurrent.futures.process.BrokenProcessPool`` (it died; the next call gets a new one)."""
+        terminated) or ``concurrent.futures.process.BrokenProcessPool`` (it died; the next call gets a new one).
+        ``watch(elapsed s)``, called every ``every`` s while the call runs, may raise to end it (the process is
+        then terminated and its error raised)."""
+        start = time.monotonic()
         try:
-            return self.submit(function, *args).result(timeout=timeout)
+            future = self.submit(function, *args)
+            while True:
+                left = None if timeout is None else timeout - (time.monotonic() - start)
+                wait = left if watch is None else (every if left is None else min(every, left))
+                try:
+                    return future.result(timeout=None if wait is None else max(wait, 0.0))
+                except futures.TimeoutError:
+                    if watch is None or (left is not None and left <= every):
+                        raise
+                try:
+                    watch(time.monotonic() - start)
+                except Exception:                       # the watch ends the call
+                    self.kill()
+                    raise
         except futures.TimeoutError:
             self.kill()
             raise

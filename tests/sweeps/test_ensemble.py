@@ -217,6 +217,25 @@ def test_ctrl_c_while_waiting_for_a_worker_ends_the_worker_at_once():
     slot.close()                                             # nothing left to wait for
 
 
+def test_a_watch_that_raises_ends_the_call_and_its_worker():
+    """ProcessSlot.call's ``watch`` (ngspice's crawl check) is called while the call runs; its error ends the call
+    and terminates the worker, whose run would otherwise go on to the time limit. A call that finishes first
+    returns its value."""
+    from converters.parallel.local import ProcessSlot
+    slot = ProcessSlot()
+    seen = []
+
+    def watch(elapsed):
+        seen.append(elapsed)
+        if len(seen) == 2:
+            raise ValueError("crawls")
+    with pytest.raises(ValueError, match="crawls"):
+        slot.call(_sleep, 600.0, timeout=1200.0, watch=watch, every=0.05)
+    assert len(seen) == 2 and seen[0] < seen[1] and slot._pool is None
+    assert slot.call(_sleep, 0.0, timeout=60.0, watch=watch, every=0.05) == 0.0
+    slot.close()
+
+
 def test_a_killed_slot_leaves_no_pool_thread_for_the_exit_hook_to_race():
     """CPython 3.11's exit hook wakes each pool's manager thread through a pipe the manager closes when it finds
     its worker dead; a manager still closing at exit printed a 'Bad file descriptor' traceback after a

@@ -98,6 +98,22 @@ def test_a_failed_ngspice_run_is_a_clear_error_and_the_caller_keeps_working():
     assert result.time[-1] == pytest.approx(1e-4) and result.accepted_steps > 0
 
 
+def test_a_run_whose_reported_pace_would_not_finish_is_stopped_in_one_line_and_the_caller_keeps_working(monkeypatch):
+    """ngspice reports its progress (every 0.1 %); past CRAWL_AFTER_S, a pace that needs CRAWL_FACTOR times the time
+    limit stops the run in one line instead of waiting the limit out (a 16-stage Dickson pump with 10 ps clock
+    edges had reached 0.1 % of 30 periods in 300 s: compare waited its 600 s in silence). Here the factor is set so
+    that a 2000-period buck's honest pace counts as a crawl: the progress is read from the run and the message
+    names it."""
+    from validation import spice
+    monkeypatch.setattr(spice, "CRAWL_AFTER_S", 0.3)
+    monkeypatch.setattr(spice, "WATCH_EVERY_S", 0.1)
+    monkeypatch.setattr(spice, "CRAWL_FACTOR", 1e-9)
+    with pytest.raises(SpiceError, match=r"^ngspice crawls on buck: [0-9.]+ % of its 0\.02 s transient in \d+ s, a "
+                                         r"pace that needs [0-9.e+-]+ h or more where the time limit is 600 s"):
+        run_spice(build_netlist("buck", {}, 0.02))
+    assert run_spice(build_netlist("buck", {}, 1e-4)).time[-1] == pytest.approx(1e-4)
+
+
 def _rss_mb() -> float:
     with open(f"/proc/{os.getpid()}/status") as status:
         for line in status:

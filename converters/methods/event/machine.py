@@ -247,7 +247,8 @@ class _Machine:
 
     def lcp_held(self, config: int, xt: np.ndarray, refinement: int = 0) -> int:
         """The held set (bit mask) of the backward-Euler LCP over a step h = :data:`SELECT_STEP` over the
-        configuration's fastest rate (times :data:`SELECT_REFINE` ** ``refinement``): 0 <= u _|_ (D + C (I - hA)^-1 h B) u + C (I - hA)^-1 (x + h E) + F >= 0. It is
+        configuration's fastest rate (times :data:`SELECT_REFINE` ** ``refinement``):
+        0 <= u _|_ (D + C (I - hA)^-1 h B) u + C (I - hA)^-1 (x + h E) + F >= 0. It is
         the rational complementarity problem at sigma = 1/h, whose solution for large sigma gives the mode the LCS
         leaves x in, the watched quantities' derivatives ordered lexicographically (Heemels, Schumacher and Weiland,
         "Linear complementarity systems", SIAM J. Appl. Math. 60 (2000); for passive networks the backward-Euler
