@@ -400,7 +400,8 @@ def steady_orbit(name_or_model: str | Model, params: dict | None = None, *, meth
 
 
 #: The power summary's error estimates (:func:`converters.analysis.accuracy.default_check`).
-POWER_ESTIMATES = ("efficiency_error_estimate", "input_W_error_estimate", "losses_W_error_estimate")
+POWER_ESTIMATES = ("efficiency_error_estimate", "input_W_error_estimate", "losses_W_error_estimate",
+                   "loss_error_estimates_W")
 
 
 def run_summary(tr: Trajectory, *, check: bool = True) -> dict:
@@ -435,7 +436,9 @@ def run_summary(tr: Trajectory, *, check: bool = True) -> dict:
                       if f"loss_{k}" in quantities]
             out["power"].update(efficiency_error_estimate=efficiency_estimate(quantities),
                                 input_W_error_estimate=quantities["input_W"]["relative_error_estimate"],
-                                losses_W_error_estimate=max(losses, default=0.0))
+                                losses_W_error_estimate=max(losses, default=0.0),
+                                loss_error_estimates_W={k: quantities[f"loss_{k}"]["error_estimate"]
+                                                        for k in out["power"]["losses_W"] if f"loss_{k}" in quantities})
     elif check:
         check_accuracy(tr, out)
     if meta.get("warnings"):

@@ -220,7 +220,15 @@ def _print(summary: dict, tr, args) -> None:
         print(f"held ({held['kind']}): {held['constraint']} = {held['value']:.6g} {held['unit']}")
     power = summary.get("power")
     if power:                 # every converter with a power balance: a warning about it names what is printed
-        losses = ", ".join(f"{k} {v * 1e3:.4g} mW" for k, v in power["losses_W"].items()) or "none: ideal parts"
+        from converters.analysis.accuracy import MEASUREMENT_RTOL
+        estimates = power.get("loss_error_estimates_W", {})
+
+        def loss(name: str, value: float) -> str:
+            # a loss known to less than 1 % of itself says how well (a diode's drop conducting for one step)
+            error = estimates.get(name, 0.0)
+            within = f" +- {error * 1e3:.2g}" if error > MEASUREMENT_RTOL * abs(value) else ""
+            return f"{name} {value * 1e3:.4g}{within} mW"
+        losses = ", ".join(loss(k, v) for k, v in power["losses_W"].items()) or "none: ideal parts"
         within = (f" +- {100 * power['efficiency_error_estimate']:.1g}" if "efficiency_error_estimate" in power
                   else "")
         print(f"power over the last {summary['window_periods']:g} periods: in {power['input_W']:.6g} W, out "
