@@ -513,9 +513,29 @@ class Trajectory:
         left, right = rows[edges], rows[edges + 1]
         pick: Callable[[npt.NDArray[Any] | None], npt.NDArray[Any] | None] = (
             lambda a: None if a is None else a[right])
-        u, y = self._pairs_after_edges(left, right)
+        u, y, _ = self._pairs_after_edges(left, right)
         after = Samples(self.t[left], self.x[left], u, y, self.config[right], pick(self.relay), pick(self.held))
         return edges, self.samples(left), after
+
+    def edge_limits(self, rows: npt.NDArray[np.integer[Any]]) -> Samples | None:
+        """The samples just after each switching edge among ``rows`` (the right limits: the edge's state in the new
+        configuration with its pair variables solved there), where that LCP's solution is unique at every edge;
+        None if there are none, or if one edge's is not (a diode at zero current and voltage as a square wave
+        falls: which way it goes is its derivatives', so that edge's limit is unknown, and an extremum over the
+        others would hide its miss from the check at h and 2h). A stepper's samples miss the value a switch
+        takes at the instant it closes onto a snubber (vout / Rs + iL = 8.35 A; the next sample, a step later,
+        6.43 A): an extremum is taken over them too."""
+        if self.config is None or self.u is None or not rows.size:
+            return None
+        edges = np.flatnonzero(self.config[rows][1:] != self.config[rows][:-1])
+        left, right = rows[edges], rows[edges + 1]
+        u, y, solved = self._pairs_after_edges(left, right)
+        if not solved.size or not solved.all():
+            return None
+        pick: Callable[[npt.NDArray[Any] | None], npt.NDArray[Any] | None] = (
+            lambda a: None if a is None else a[right[solved]])
+        return Samples(self.t[left[solved]], self.x[left[solved]], u[solved], y[solved], self.config[right[solved]],
+                       pick(self.relay), pick(self.held))
 
     #: An instantaneous pair is taken where each pair's u + y exceeds this fraction of its scale (strictly
     #: complementary) and the held pairs' D block is this far from singular: the LCP's solution is then unique
@@ -523,7 +543,8 @@ class Trajectory:
     _INSTANT_RTOL = 1e-9
 
     def _pairs_after_edges(self, left: npt.NDArray[np.integer[Any]],
-                           right: npt.NDArray[np.integer[Any]]) -> tuple[npt.NDArray[Any], npt.NDArray[Any]]:
+                           right: npt.NDArray[np.integer[Any]]
+                           ) -> tuple[npt.NDArray[Any], npt.NDArray[Any], npt.NDArray[np.bool_]]:
         """The pair variables at each switching edge in the configuration after it: the new configuration's LCP,
         0 <= u _|_ D u + C x + F >= 0, at the edge's own state x[left], where its solution is unique there; else
         the step's end (row ``right``, solved at the state a step later). A stepper's end pair at the other state
@@ -533,9 +554,10 @@ class Trajectory:
         phases holds its first phase's problem)."""
         assert self.u is not None and self.y is not None and self.config is not None
         u, y = self.u[right].copy(), self.y[right].copy()
+        solved = np.zeros(left.size, dtype=bool)
         problem = self.problem
         if not left.size or getattr(problem, "configuration_at", None) is None:
-            return u, y
+            return u, y, solved
         cache: dict[int, tuple[npt.NDArray[Any], npt.NDArray[Any]] | None] = self.__dict__.setdefault(
             "_edge_pairs", {})
         for i, (a, b) in enumerate(zip(left.tolist(), right.tolist())):
@@ -544,7 +566,8 @@ class Trajectory:
             found = cache[a]
             if found is not None:
                 u[i], y[i] = found
-        return u, y
+                solved[i] = True
+        return u, y, solved
 
     def _instant_pair(self, problem: Any, a: int, b: int) -> tuple[npt.NDArray[Any], npt.NDArray[Any]] | None:
         assert self.u is not None and self.y is not None and self.config is not None
@@ -629,6 +652,12 @@ class Trajectory:
             if np.isfinite(values).any():                     # else not measured in this run (ngspice: no pairs)
                 sampled[name] = values
         integrals = self._means_and_rms(list(sampled), a, b)
+        limits = self.edge_limits(rows) if self.labels is not None and self.rule != "exact" else None
+        if limits is not None:          # the values just after the switching edges belong to the waveform too
+            assert self.labels is not None
+            own = set(self.labels.signal_names) - set(self.measured)
+            sampled = {name: np.concatenate([values, np.asarray(self.labels.signal(name, limits), dtype=float)])
+                       if name in own else values for name, values in sampled.items()}
         return {name: {"unit": signal_unit(units, name), "mean": integrals[name][0], "rms": integrals[name][1],
                        "min": float(values.min()), "max": float(values.max()), "ripple": float(np.ptp(values))}
                 for name, values in sampled.items()}

@@ -50,7 +50,7 @@ def test_a_stiff_node_charges_the_capacitor_to_the_source_voltage_not_beyond(r, 
     peak = 10.0 / float(r.replace("m", "e-3"))
     assert summary["measurements"]["i(c1)"]["max"] < 0.5 * peak
     (warning,) = summary["warnings"]
-    assert warning.startswith("measurements may be off by more than 0.01 of their signal's size (")
+    assert warning.startswith("measurements may be off by more than 0.01 (")
     assert "i(c1)" in warning and "vout" not in warning and "v(" not in warning
     model = get_model(str(path))
     assert model.fastest_rate(model.resolve({})) == pytest.approx(1 / tau, rel=1e-6)
@@ -378,10 +378,14 @@ def test_a_steppers_energy_residual_halves_with_its_step_at_diode_events_inside_
     assert "trusted" not in accuracy
     exact = run_summary(run_converter(str(NETLISTS / "cockcroft-walton.cir"), steady=True, method="event"))
     assert "warnings" not in exact
-    assert summary["measurements"]["i(d8)"]["max"] < 0.95 * exact["measurements"]["i(d8)"]["max"]
+    # the peak is the right limit at the source's edge, 1.1e-5 from the exact (the sample a step later had read
+    # 0.2643, 8 % low); the mean, 4.5 % high there (each edge's jump counted over half a step that the scheme's
+    # own charge leaves out), is judged against itself and warned of (against the peak it had passed at 1.3e-4)
+    assert summary["measurements"]["i(d8)"]["max"] == pytest.approx(exact["measurements"]["i(d8)"]["max"], rel=1e-4)
+    assert summary["measurements"]["i(d8)"]["mean"] > 1.04 * exact["measurements"]["i(d8)"]["mean"]
     (warning,) = summary["warnings"]
-    assert warning.startswith("measurements may be off by more than 0.01") and "i(d8)" in warning
-    assert "vout" not in warning
+    assert warning.startswith("measurements may be off by more than 0.01") and "vout" not in warning
+    assert summary["accuracy"]["measurement_error_estimates"]["i(d8)"] > 0.03
 
 
 UNDAMPED_LOOP_BUCK = """Buck 1 MHz, a 50 nH commutation loop with no resistance and 1 nF across the switch, 100 ohm / 1 pF sense RC
@@ -436,3 +440,36 @@ def test_a_command_on_the_exact_orbit_refuses_a_time_constant_it_cannot_cross_wi
     assert err.startswith(f"pcsuite: error: {command} works on the exact event method's orbit, which cannot take "
                           "this circuit: the stiffest mode's time constant is about 7.69e-14 s")
     assert err.endswith("; simulate --steady runs it with the stepper")
+
+
+SNUBBED_BOOST = """Boost with an RC snubber across the switch (Rs=10, Cs=2n: RC = 20 ns, two steps of T/1000)
+.param Vin=24 L=47u C=47u R=20 f_sw=100k D=0.5 Rs=10 Cs=2n
+.param T={1/f_sw} e={1e-6/f_sw}
+Vin in 0 DC {Vin}
+Vg gate 0 PULSE(1 0 {D*T - e/2} {e} {e} {(1-D)*T - e} {T})
+L1 in sw {L}
+S1 sw 0 gate 0 SWMOD
+Rs sw sn {Rs}
+Cs sn 0 {Cs}
+D1 sw out DMOD
+C1 out 0 {C}
+R1 out 0 {R}
+.model SWMOD SW(VT=0.5)
+.model DMOD D
+.tran {T/1000} {500*T}
+.end
+"""
+
+
+def test_a_switch_closing_onto_a_snubber_peaks_at_the_instant_it_closes_not_a_step_later(tmp_path):
+    """At turn-on the snubber's capacitor, charged to vout, discharges through Rs and the switch: i(s1) jumps to
+    iL + vout / Rs = 8.35 A and decays in Rs Cs = 20 ns, two steps. The sample a step later had read 6.43 A
+    (23 % low) at h and 2h alike, so nothing warned. The extremum now includes each switching edge's right limit
+    (the edge's state in the new configuration, its pair solved there): the event method's peak to 1e-3."""
+    path = tmp_path / "snub.cir"
+    path.write_text(SNUBBED_BOOST)
+    lcp = run_summary(run_converter(str(path), steady=True))["measurements"]
+    exact = run_summary(run_converter(str(path), steady=True, method="event"))["measurements"]
+    for name, measure in (("i(s1)", "max"), ("i(rs)", "max"), ("i(rs)", "min")):
+        assert lcp[name][measure] == pytest.approx(exact[name][measure], rel=1e-3), (name, measure)
+    assert exact["i(s1)"]["max"] == pytest.approx(8.3498, abs=1e-4)
