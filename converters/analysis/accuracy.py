@@ -1115,8 +1115,9 @@ def _measure_scale(measure: str, row: Mapping[str, Any], other: Mapping[str, Any
 #: The signals' estimates a warning names (the worst first).
 NAMED = 3
 #: The accuracy the defaults promise on every printed measurement of a signal (its peaks and ripple relative to the
-#: signal's size, its mean and rms to themselves: :func:`_measure_scale`), or warn about: a sampled peak is a step's slope off where a current jumps at a switching
-#: edge (the buck's diode current: 3.5e-3 at T/1000), which the waveform shows as it is.
+#: signal's size, its mean and rms to themselves: :func:`_measure_scale`), or warn about: a sampled peak is a
+#: step's slope off where a current jumps at a switching edge (the buck's diode current: 3.5e-3 at T/1000), which
+#: the waveform shows as it is.
 MEASUREMENT_RTOL = 1e-2
 
 
@@ -1144,9 +1145,9 @@ def _measurement_check(fine: Trajectory, coarse: Trajectory, T: float, floor: fl
         return ""
     named = ", ".join(f"{name} {measure} {value:.1e}" for value, name, measure in beyond[:NAMED])
     more = f" and {len(beyond) - NAMED} more" if len(beyond) > NAMED else ""
-    return (f"measurements may be off by more than {MEASUREMENT_RTOL:g} ({named}{more}: their values at h and 2h differ "
-            "by that, relative to a peak's or ripple's signal, to a mean or rms itself): use --method event, a smaller "
-            "--h, or --rtol")
+    return (f"measurements may be off by more than {MEASUREMENT_RTOL:g} ({named}{more}: their values at h and 2h "
+            "differ by that, relative to a peak's or ripple's signal, to a mean or rms itself): use --method event, a "
+            "smaller --h, or --rtol")
 
 
 #: The exact method's energy balance closes to rounding (1e-11 on the shipped netlists): past this it is a fault.
