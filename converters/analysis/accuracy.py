@@ -1088,9 +1088,9 @@ def step_checks(model: Model, p: dict, fine: Trajectory, coarse: Trajectory, fac
     mean = mean_discretization(fine, coarse, factor, T, floor)
     if mean > DEFAULT_RTOL:
         reasons.append(f"vout mean may be {mean:.1e} off (more than {DEFAULT_RTOL:g})")
-    spread = _measurement_check(fine, coarse, T, floor, {}, signals)
+    spread = _measurement_check(fine, coarse, T, floor, {}, signals, remedy=False)
     if spread:
-        reasons.append(spread.split(": use ")[0])
+        reasons.append(spread)
     onset = _unresolved_onset(model, p, fine)
     if onset:
         reasons.append(onset)
@@ -1112,6 +1112,8 @@ def _measure_scale(measure: str, row: Mapping[str, Any], other: Mapping[str, Any
     if measure in ("mean", "rms"):
         return max(abs(float(row[measure])), abs(float(other[measure])), OWN_SCALE_FLOOR * size)
     return size
+
+
 #: The signals' estimates a warning names (the worst first).
 NAMED = 3
 #: The accuracy the defaults promise on every printed measurement of a signal (its peaks and ripple relative to the
@@ -1122,13 +1124,15 @@ MEASUREMENT_RTOL = 1e-2
 
 
 def _measurement_check(fine: Trajectory, coarse: Trajectory, T: float, floor: float, out: dict,
-                       signals: Iterable[str] | None = None) -> str:
+                       signals: Iterable[str] | None = None, remedy: bool = True) -> str:
     """Each printed signal's mean, rms, min, max and ripple on the orbit at h against the orbit at 2h, relative to
-    the signal's size (its largest magnitude or rms, at least ``floor``), into ``out["measurement_error_estimates"]``
+    the signal's size (its largest magnitude or rms, at least ``floor``; a mean or rms to itself:
+    :func:`_measure_scale`), into ``out["measurement_error_estimates"]``
     ({signal: its worst}); the difference itself is the estimate, as for a first-order error (a sampled peak's: a
     step that misses a current spike converges no faster). A warning names the worst beyond MEASUREMENT_RTOL: a
     rectifier charging its capacitor through 1 mohm had printed its diode's peak 4.4 % low and its rms 0.9 % low
-    with no word, the mean's estimate (2.9e-6) speaking for everything."""
+    with no word, the mean's estimate (2.9e-6) speaking for everything. ``remedy``: the warning ends with what
+    to do (a sweep's row states the reason only)."""
     at_h, at_2h = (run.measurement_rows(t0=0.0, t1=T, names=signals) for run in (fine, coarse))
     worst: dict[str, tuple[float, str]] = {}
     for name, row in at_h.items():
@@ -1145,9 +1149,9 @@ def _measurement_check(fine: Trajectory, coarse: Trajectory, T: float, floor: fl
         return ""
     named = ", ".join(f"{name} {measure} {value:.1e}" for value, name, measure in beyond[:NAMED])
     more = f" and {len(beyond) - NAMED} more" if len(beyond) > NAMED else ""
-    return (f"measurements may be off by more than {MEASUREMENT_RTOL:g} ({named}{more}: their values at h and 2h "
-            "differ by that, relative to a peak's or ripple's signal, to a mean or rms itself): use --method event, a "
-            "smaller --h, or --rtol")
+    what = (f"measurements may be off by more than {MEASUREMENT_RTOL:g} ({named}{more}: their values at h and 2h "
+            "differ by that, relative to a peak's or ripple's signal, to a mean or rms itself)")
+    return what + (": use --method event, a smaller --h, or --rtol" if remedy else "")
 
 
 #: The exact method's energy balance closes to rounding (1e-11 on the shipped netlists): past this it is a fault.
