@@ -1015,15 +1015,9 @@ def default_check(model: Model, p: dict, method: Method, tr: Trajectory, reporte
         return {**out, "checked": False, "reason": runs,
                 "warning": f"vout mean's error could not be estimated: {runs}"}
     fine, coarse = runs.fine, runs.coarse
-    m_h = fine.mean("vout", t0=0.0, t1=T)
-    exact = m_h
-    if coarse is not None:
-        exact = m_h + (m_h - coarse.mean("vout", t0=0.0, t1=T)) / runs.factor
-    # relative to the output's RMS over the period: its mean for a DC output (to its ripple's square), its size for
-    # an AC one, whose mean is ~0 (an inverter's load current: 6e-13 A, "2.2e-01 off" against it)
-    scale = max(abs(exact), fine.rms("vout", t0=0.0, t1=T), circuit_floor(tr))
+    m_h, exact, scale = richardson_mean(fine, coarse, runs.factor, T, circuit_floor(tr))
     transient = abs(reported - m_h) / scale
-    discretization = mean_discretization(fine, coarse, runs.factor, T, circuit_floor(tr)) if coarse is not None else 0.0
+    discretization = abs(m_h - exact) / scale
     error = abs(reported - exact) / scale
     period = last_period(model, p, tr)
     step = getattr(method, "h", None)
@@ -1067,12 +1061,21 @@ def default_check(model: Model, p: dict, method: Method, tr: Trajectory, reporte
     return out
 
 
-def mean_discretization(fine: Trajectory, coarse: Trajectory, factor: float, T: float, floor: float) -> float:
-    """Richardson's estimate of vout's mean on the orbit at h from the orbit at 2h (``factor`` = 2^order - 1),
-    relative to vout's size over the period (its mean for a DC output, its rms for an AC one; at least ``floor``)."""
+def richardson_mean(fine: Trajectory, coarse: Trajectory | None, factor: float, T: float,
+                    floor: float) -> tuple[float, float, float]:
+    """vout's mean on the orbit at h, Richardson's extrapolation of it from the orbit at 2h (``factor`` =
+    2^order - 1; the mean at h itself without one), and the scale its errors are relative to: vout's rms over the
+    period, its mean for a DC output (to its ripple's square) and its size for an AC one, whose mean is ~0 (an
+    inverter's load current: 6e-13 A, "2.2e-01 off" against it); at least ``floor``."""
     m_h = fine.mean("vout", t0=0.0, t1=T)
-    exact = m_h + (m_h - coarse.mean("vout", t0=0.0, t1=T)) / factor
-    return abs(m_h - exact) / max(abs(exact), fine.rms("vout", t0=0.0, t1=T), floor)
+    exact = m_h if coarse is None else m_h + (m_h - coarse.mean("vout", t0=0.0, t1=T)) / factor
+    return m_h, exact, max(abs(exact), fine.rms("vout", t0=0.0, t1=T), floor)
+
+
+def mean_discretization(fine: Trajectory, coarse: Trajectory, factor: float, T: float, floor: float) -> float:
+    """Richardson's estimate of vout's mean on the orbit at h (:func:`richardson_mean`), relative to its scale."""
+    m_h, exact, scale = richardson_mean(fine, coarse, factor, T, floor)
+    return abs(m_h - exact) / scale
 
 
 def step_checks(model: Model, p: dict, fine: Trajectory, coarse: Trajectory, factor: float,
