@@ -1246,9 +1246,15 @@ class _Compiler:
                 if same and not parallel and self.in_series(config, i, j):
                     continue
                 if parallel or same:
-                    raise self.error(d2, f"{d2.title} and {d1.title} are ideal diodes in parallel (or in series with "
-                                         "nothing between): the split of their current or voltage is not unique; put a "
-                                         "resistance (RS in their .model) on one")
+                    # joined through closed switches only in some configuration: name it (an interleaved boost's
+                    # diodes meet at ground where both phases' switches are closed, which its gates reach)
+                    own = (d1.nodes[0], d1.nodes[1]) == (d2.nodes[0], d2.nodes[1])
+                    closed = sorted(name.upper() for name, on in switch_state.items() if on)
+                    where = f" where {', '.join(closed)} {'is' if len(closed) == 1 else 'are'} closed" if (
+                        closed and not own) else ""
+                    raise self.error(d2, f"{d2.title} and {d1.title} are ideal diodes in parallel{where} (or in "
+                                         "series with nothing between): the split of their current or voltage is not "
+                                         "unique; put a resistance (RS in their .model) on one")
 
     def on_loops(self, C: _Array, F: _Array) -> tuple[_Array, _Array]:
         """(C, F) of the ports on the states the loops of capacitors allow (K x = b: :meth:`_Network.solve_loops`'s

@@ -487,3 +487,30 @@ def test_a_waveform_without_parentheses_is_read_as_spice_reads_it(gate):
     reference = Circuit.from_netlist("gate.cir", text=text.replace(gate, "PULSE(1 0 4u 1n 1n 6u 10u)"))
     mean = run_summary(run_converter(circuit, {}, steady=True, method="event"))["vout_mean"]
     assert mean == run_summary(run_converter(reference, {}, steady=True, method="event"))["vout_mean"]
+
+
+def test_diodes_in_parallel_through_closed_switches_name_the_configuration_that_joins_them():
+    """An interleaved boost with ideal diodes: where both phases' switches are closed (its gates overlap), the two
+    diodes meet at ground and are in parallel to the output. The refusal had named only the diodes, which are not
+    in parallel in the file; it names the switches that join them."""
+    from converters.circuits import NetlistError
+    text = """Two-phase interleaved boost, the gates overlapping
+Vin in 0 DC 5
+Vg1 g1 0 PULSE(1 0 4.5u 1p 1p 0.5u 5u)
+Vg2 g2 0 PULSE(1 0 2u 1p 1p 0.5u 5u)
+L1 in sw1 22u
+L2 in sw2 22u
+S1 sw1 0 g1 0 SWMOD
+S2 sw2 0 g2 0 SWMOD
+D1 sw1 out DMOD
+D2 sw2 out DMOD
+C1 out 0 47u
+R1 out 0 200
+.model SWMOD SW(VT=0.5)
+.model DMOD D
+.tran 5n 1m
+.end
+"""
+    with pytest.raises(NetlistError) as refused:
+        Circuit.from_netlist("boost2.cir", text=text)
+    assert "diode D2 and diode D1 are ideal diodes in parallel where S1, S2 are closed" in str(refused.value)
