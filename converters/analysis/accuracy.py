@@ -214,11 +214,12 @@ def _locate(t: npt.NDArray[np.float64], u: npt.NDArray[np.float64], y: npt.NDArr
     a, b = t[j], t[j + 1]
     before = y if kind == "held" else u
     after = u if kind == "held" else y
-    if j >= 1 and config[j - 1] == config[j] == config[j + 1] and before[j - 1] != before[j]:
+    # (a jump's two rows share their instant: no slope between them)
+    if j >= 1 and config[j - 1] == config[j] == config[j + 1] and before[j - 1] != before[j] and t[j] > t[j - 1]:
         slope = (before[j] - before[j - 1]) / (t[j] - t[j - 1])
         if slope < 0:
             return float(min(max(a - before[j] / slope, a), b))
-    if j + 2 < t.size and config[j + 2] == config[j + 1] and after[j + 2] > after[j + 1] > 0:
+    if j + 2 < t.size and config[j + 2] == config[j + 1] and after[j + 2] > after[j + 1] > 0 and t[j + 2] > t[j + 1]:
         slope = (after[j + 2] - after[j + 1]) / (t[j + 2] - t[j + 1])
         return float(min(max(b - after[j + 1] / slope, a), b))
     return float(b)
@@ -1058,7 +1059,27 @@ def default_check(model: Model, p: dict, method: Method, tr: Trajectory, reporte
         spread = _measurement_check(fine, coarse, T, circuit_floor(tr), out)
         if spread:
             out["warning"] = f"{out['warning']}; {spread}" if "warning" in out else spread
+        jumps = _jump_loss_check(fine, coarse, T, out)
+        if jumps:
+            out["warning"] = f"{out['warning']}; {jumps}" if "warning" in out else jumps
     return out
+
+
+def _jump_loss_check(fine: Trajectory, coarse: Trajectory, T: float, out: dict) -> str:
+    """The charge redistributions' loss over the period on the orbit at h against 2h (its difference the
+    estimate, relative to itself, into ``out["redistribution_error_estimate"]``); a warning past
+    MEASUREMENT_RTOL. A flyback's leakage ringing undamped with its switch's 1 nF was caught by the switch at a
+    voltage the step did not resolve: 0.04569 W where the exact orbit loses 0.13570 W."""
+    count, loss = fine.jump_losses(t0=0.0, t1=T)
+    if not count:
+        return ""
+    _, other = coarse.jump_losses(t0=0.0, t1=T)
+    error = abs(loss - other) / max(abs(loss), abs(other), 1e-300)
+    out["redistribution_error_estimate"] = error
+    if error <= MEASUREMENT_RTOL:
+        return ""
+    return (f"the charge redistributions' loss may be {100 * error:.2g} % off (at h and 2h: {loss / T:.4g} and "
+            f"{other / T:.4g} W): use --method event (exact at the instants the switches close)")
 
 
 def richardson_mean(fine: Trajectory, coarse: Trajectory | None, factor: float, T: float,

@@ -489,8 +489,8 @@ def _impulse_warning(summary: dict, compiled) -> str:
         said.append("the means of the voltages across the inductors, switches and diodes of the cutsets that jump "
                     "leave out each jump's impulse of flux")
     return (f"the state jumps {losses['jumps']} times in the window ({' and '.join(sorted(moved))} redistributed in "
-            f"an instant: {losses['redistribution_W']:.4g} W lost): " + "; ".join(said) + "; the other measurements "
-            "and the loss stand (a switch's RON makes the impulse a pulse the run can read)")
+            f"an instant: {losses['redistribution_W']:.4g} W lost): " + "; ".join(said) + " (a switch's RON makes "
+            "the impulse a pulse the run can read)")
 
 
 #: A pair's current counts where it exceeds this fraction of its sample's largest pair variable (V or A): rounding
