@@ -428,7 +428,7 @@ def test_a_runs_current_means_that_leave_out_a_jumps_impulse_are_warned_of(metho
                          "the run can read)")]
 
 
-RINGING_FLYBACK = """Flyback k=0.999, only 1 nF across the switch: the leakage rings undamped with it, the switch shorts it
+RINGING_FLYBACK = """Flyback k=0.999, only 1 nF across the switch: the leakage rings undamped with it
 .param Vin=24 Lp=100u Ls=100u k=0.999 Cs=1n C=100u R=20 f_sw=100k D=0.4
 .param T={1/f_sw} e={1e-6/f_sw}
 Vin in 0 DC {Vin}
