@@ -464,3 +464,33 @@ def test_a_redistribution_loss_the_step_does_not_resolve_is_warned_of():
     assert any("the charge redistributions' loss may be 40 % off (at h and 2h: 0.04569 and 0.07579 W)" in w
                for w in summary["warnings"])
     assert not any("redistributions' loss" in w for w in exact.get("warnings", []))
+
+
+COSS_DCM_BOOST = """Boost in DCM with a 2 nF Coss across the switch: the switch node rings with L after the diode stops
+.param Vin=12 L=10u Cs=2n C=47u R=200 f_sw=100k D=0.3
+.param T={1/f_sw} e={1e-6/f_sw}
+Vin in 0 DC {Vin}
+Vg g 0 PULSE(1 0 {D*T - e/2} {e} {e} {(1-D)*T - e} {T})
+L1 in sw {L}
+S1 sw 0 g 0 SWMOD
+Cs sw 0 {Cs}
+D1 sw out DMOD
+C1 out 0 {C}
+Rl out 0 {R}
+.model SWMOD SW(VT=0.5)
+.model DMOD D
+.tran {T/1000} {500*T}
+.end
+"""
+
+
+def test_accuracy_on_request_leaves_a_steppers_unstable_orbit_to_the_exact_method_where_the_circuit_is_stable():
+    """The switch node rings with L through Coss after the diode stops; at one of --rtol's steps the trapezoid's
+    orbit has a multiplier at -1.00211, where the circuit's (the event method's, and an independent solve_ivp
+    shooting at rtol 1e-12) is stable at 0.99893 and settles at 42.983875 V from a perturbed start. --rtol had
+    refused it: "the circuit does not settle on it (a period-doubled orbit, or chaos)". The exact method answers."""
+    from converters.analysis.accuracy import accurate_steady
+    model = Circuit.from_netlist("coss_dcm.cir", text=COSS_DCM_BOOST)
+    result = accurate_steady(model, model.resolve({}), 1e-4)
+    assert result.met and result.method.exact
+    assert result.quantities["vout_mean"].value == pytest.approx(42.983875, abs=2e-6)
