@@ -564,3 +564,33 @@ def test_an_interleaved_bucks_phases_share_the_load_equally_with_a_retrace_a_pic
     assert tr.mean("v(out)") == pytest.approx(vout, rel=1e-7)
     for k in range(1, 5):
         assert tr.mean(f"i(l{k})") == pytest.approx(vout / 1.6, rel=1e-6), k
+
+
+def test_a_netlist_without_an_output_takes_the_first_node_no_source_holds_not_its_dc_link():
+    """No .meas and no node `out`: the output had been the first node, the DC link v(p) that Vdc holds at 200 V,
+    which compare then matched against ngspice's 200 V and passed. It is now the first node no voltage source holds
+    to ground: the split link's midpoint, at (D + td / T) Vdc = 74 V on the orbit (the load's mean voltage is 0 and
+    the leg's node a spends D + td / T of the period at Vdc, S2 and D2 the rest at 0)."""
+    text = """Half-bridge inverter, unequal split DC link 100u/330u, dead time, RL load to the midpoint
+.param Vdc=200 Ca=100u Cb=330u L=2m R=8 f=20k D=0.35 td=1u
+.param T={1/f} e={1e-6/f}
+Vdc p 0 DC {Vdc}
+C1 p m {Ca}
+C2 m 0 {Cb}
+Vg1 g1 0 PULSE(0 1 0 {e} {e} {D*T - e} {T})
+Vg2 g2 0 PULSE(0 1 {D*T + td} {e} {e} {(1-D)*T - 2*td - e} {T})
+S1 p a g1 0 SWMOD
+S2 a 0 g2 0 SWMOD
+D1 a p DMOD
+D2 0 a DMOD
+Rl a b {R}
+Ll b m {L}
+.model SWMOD SW(VT=0.5)
+.model DMOD D
+.tran {T/1000} {500*T}
+.end
+"""
+    circuit = Circuit.from_netlist("hb.cir", text=text)
+    assert circuit.output == "v(m)"
+    summary = run_summary(run_converter(circuit, {}, steady=True, method="event"))
+    assert summary["vout_mean"] == pytest.approx((0.35 + 1e-6 * 20e3) * 200, rel=1e-6)
