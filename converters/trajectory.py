@@ -529,6 +529,8 @@ class Trajectory:
             return None
         edges = np.flatnonzero(self.config[rows][1:] != self.config[rows][:-1])
         left, right = rows[edges], rows[edges + 1]
+        stepped = self.t[right] > self.t[left]          # a jump's second row is the limit there: a sample already
+        left, right = left[stepped], right[stepped]
         u, y, solved = self._pairs_after_edges(left, right)
         if not solved.size or not solved.all():
             return None
@@ -561,6 +563,9 @@ class Trajectory:
         cache: dict[int, tuple[npt.NDArray[Any], npt.NDArray[Any]] | None] = self.__dict__.setdefault(
             "_edge_pairs", {})
         for i, (a, b) in enumerate(zip(left.tolist(), right.tolist())):
+            if self.t[b] == self.t[a]:      # a jump's two rows: row b is the new configuration's own sample there
+                solved[i] = True
+                continue
             if a not in cache:
                 cache[a] = self._instant_pair(problem, a, b)
             found = cache[a]
@@ -571,10 +576,13 @@ class Trajectory:
 
     def _instant_pair(self, problem: Any, a: int, b: int) -> tuple[npt.NDArray[Any], npt.NDArray[Any]] | None:
         assert self.u is not None and self.y is not None and self.config is not None
+        if getattr(problem.configurations[int(self.config[b])], "jump", None) is not None:
+            return None                     # its state jumps on entry: x[a] is the state before the jump
+        at_end = problem.configuration_at(int(self.config[b]), float(self.t[b]))     # the step's LCP: F at its end
         c = problem.configuration_at(int(self.config[b]), float(self.t[a]))
         tol = self._INSTANT_RTOL
-        end = c.D @ self.u[b] + c.C @ self.x[b] + c.F
-        end_scale = np.abs(c.D) @ np.abs(self.u[b]) + np.abs(c.C) @ np.abs(self.x[b]) + np.abs(c.F)
+        end = at_end.D @ self.u[b] + at_end.C @ self.x[b] + at_end.F
+        end_scale = np.abs(at_end.D) @ np.abs(self.u[b]) + np.abs(at_end.C) @ np.abs(self.x[b]) + np.abs(at_end.F)
         if (np.abs(end - self.y[b]) > 1e-6 * end_scale + 1e-300).any():      # not this run's configuration
             return None
         q = c.C @ self.x[a] + c.F

@@ -41,10 +41,10 @@ class SpiceError(SimulationError):
 
 def _crawl_message(netlist: Netlist, reached: float, elapsed: float, limit: float) -> str:
     need = elapsed / (reached + 1e-3)
-    return (f"ngspice crawls on {netlist.converter}: {100 * reached:.1f} % of its {netlist.t_end:.3g} s transient in "
-            f"{elapsed:.0f} s, a pace that needs {need / 3600:.2g} h or more where the time limit is {limit:g} s: its "
-            "time step has collapsed (sharp diode or switch transitions at fast edges); the comparison needs "
-            "ngspice to run, so it is not made")
+    return (f"ngspice would not finish {netlist.converter} within the time limit of {limit:g} s: "
+            f"{100 * reached:.1f} % of its {netlist.t_end:.3g} s transient in {elapsed:.0f} s, a pace that needs "
+            f"{need / 3600:.2g} h or more; raise it with --time-limit S (or PCSUITE_TIME_LIMIT), or run fewer periods "
+            "or a larger --spice-tmax")
 
 
 @dataclass(frozen=True)

@@ -597,6 +597,7 @@ def accurate_steady(model: Model, p: dict, rtol: float, *, x0: npt.NDArray[np.fl
     except ParameterError:
         observe = True
     exact_takes_it = not observe
+    stepper_failed: SimulationError | None = None     # a finer stepper run's refusal, left to the exact method
     differences: list[tuple[int, float, float]] = []         # (fine N, N / coarse N, |vout_mean difference|)
     theta, coarse_n = _refinement_start(model, p)
     try:
@@ -626,7 +627,7 @@ def accurate_steady(model: Model, p: dict, rtol: float, *, x0: npt.NDArray[np.fl
             # one step, the circuit's orbit stable at 0.99893, had been refused as "the circuit does not settle")
             if not exact_takes_it:
                 raise
-            stopped = f"the stepper at {fine_n:,} steps a period: {why}"
+            stepper_failed = why
             break
         fine, fine_events = measures(model, p, tr, T)
         (coarse, coarse_events), _ = previous
@@ -712,7 +713,8 @@ def accurate_steady(model: Model, p: dict, rtol: float, *, x0: npt.NDArray[np.fl
         method.supports(model.problem(p, T))
         orbit, tr = run(method, x0 if previous is None else previous[1].x0, 20 if previous is None else 0)
     except (ParameterError, SimulationError, ResourceError) as why:
-        if best is None:
+        if best is None or stepper_failed is not None:
+            # no coarser run stands for an answer once a finer one was refused: the exact method's refusal decides
             raise
         # a SIN source, a time constant the exact flows would cross in billions of substeps (a 1 mohm ESR beside
         # 10 pF: 3.3e-15 s), a limit reached, or no orbit found: the stepper's finest run is the answer, its
@@ -1075,7 +1077,7 @@ def default_check(model: Model, p: dict, method: Method, tr: Trajectory, reporte
 
 
 def _jump_loss_check(fine: Trajectory, coarse: Trajectory, T: float, out: dict) -> str:
-    """The charge redistributions' loss over the period on the orbit at h against 2h (its difference the
+    """The jumps' loss (charge or flux redistributed) over the period on the orbit at h against 2h (its difference the
     estimate, relative to itself, into ``out["redistribution_error_estimate"]``); a warning past
     MEASUREMENT_RTOL. A flyback's leakage ringing undamped with its switch's 1 nF was caught by the switch at a
     voltage the step did not resolve: 0.04569 W where the exact orbit loses 0.13570 W."""
@@ -1087,8 +1089,8 @@ def _jump_loss_check(fine: Trajectory, coarse: Trajectory, T: float, out: dict) 
     out["redistribution_error_estimate"] = error
     if error <= MEASUREMENT_RTOL:
         return ""
-    return (f"the charge redistributions' loss may be {100 * error:.2g} % off (at h and 2h: {loss / T:.4g} and "
-            f"{other / T:.4g} W): use --method event (exact at the instants the switches close)")
+    return (f"the jumps' loss (charge or flux redistributed) may be {100 * error:.2g} % off (at h and 2h: "
+            f"{loss / T:.4g} and {other / T:.4g} W): use --method event (exact at the jumps)")
 
 
 def richardson_mean(fine: Trajectory, coarse: Trajectory | None, factor: float, T: float,

@@ -326,8 +326,14 @@ class Circuit(Model):
         nodes = [s for s in compiled.signal_names if s.startswith("v(")]
         # not a node a voltage source holds to ground (a DC link, a gate): no output (a half-bridge's link,
         # v(p) = 200 V, had been compared with ngspice's and passed)
-        held = {f"v({n})" for e in self.netlist.elements if e.kind == "V"
-                for n, other in (e.nodes[:2], e.nodes[1::-1]) if other == "0"}
+        held, grown = {"0"}, True
+        while grown:                        # sources stacked on sources (a link of two 100 V halves) hold too
+            grown = False
+            for e in self.netlist.elements:
+                if e.kind == "V" and (e.nodes[0] in held) != (e.nodes[1] in held):
+                    held |= {e.nodes[0], e.nodes[1]}
+                    grown = True
+        held = {f"v({n})" for n in held}
         return next((name for name in nodes if name not in held), nodes[0])
 
     def signal(self, name: str, samples: Samples, p: dict) -> np.ndarray:

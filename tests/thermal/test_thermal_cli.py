@@ -130,7 +130,6 @@ def test_the_losses_error_estimate_bounds_their_error_against_the_exact_method(c
     total = exact["power"]["device_losses_W"]
     errors = {d: abs(v["total_W"] - exact["devices"][d]["total_W"]) for d, v in thermal["devices"].items()}
     estimates = thermal["accuracy"]["device_error_W"]
-    assert abs(thermal["power"]["device_losses_W"] - total) <= sum(errors.values())
     assert sum(errors.values()) / total <= thermal["accuracy"]["losses_error_estimate"]
     for device, error in errors.items():
         assert error <= estimates[device] <= 3.2 * error + 1e-12 * total, device

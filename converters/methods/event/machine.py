@@ -189,7 +189,8 @@ class _Machine:
         """The mode at (t, x): a held set whose flow keeps every watched quantity lexicographically non-negative,
         x~ projected onto its manifold. Tried in turn: ``reference`` (the held set before the event with the pair
         that crossed flipped), the mode-selection LCP's candidate (:meth:`lcp_held`) and the sets one pair from
-        it; then, for at most :data:`ENUMERATE_PAIRS` pairs, every set nearest ``reference`` first. ``rate_field``:
+        it, then the same at its shorter steps (:data:`SELECT_REFINEMENTS`); then, for at most
+        :data:`ENUMERATE_PAIRS` pairs, every set nearest ``reference`` first. ``rate_field``:
         the vector field before an event (its location error may leave a held pair's y slightly off zero)."""
         k = self.problem.k
         slack = 4.0 * self.options.event_tol * self.scale
@@ -214,9 +215,7 @@ class _Machine:
                 return found
         for refinement in range(1, SELECT_REFINEMENTS + 1):
             finer = self.lcp_held(config, xt, refinement)
-            if finer in tried:
-                continue
-            for held in [finer, *_neighbours(k, finer)]:
+            for held in [finer, *_neighbours(k, finer)]:        # (a set already tried is not tried again)
                 found = valid(held)
                 if found is not None:
                     return found
@@ -242,8 +241,9 @@ class _Machine:
         # past ENUMERATE_PAIRS only the LCP's candidate and its neighbours are tried: not finding the mode among them
         # says nothing of the circuit (a 16-stage Dickson pump with 10 ohm in every diode, unique at every instant)
         raise SimulationError(f"the event method did not find the mode at t = {t:.9g} s in configuration {name!r}: "
-                              f"with {k} pairs it tries the mode-selection LCP's held set and the sets one pair from "
-                              f"it, and enumerates every set only up to {ENUMERATE_PAIRS} pairs; use --method lcp")
+                              f"with {k} pairs it tries the mode-selection LCP's held sets (at its step and shorter "
+                              f"ones) and the sets one pair from them, and enumerates every set only up to "
+                              f"{ENUMERATE_PAIRS} pairs; use --method lcp")
 
     def lcp_held(self, config: int, xt: np.ndarray, refinement: int = 0) -> int:
         """The held set (bit mask) of the backward-Euler LCP over a step h = :data:`SELECT_STEP` over the
