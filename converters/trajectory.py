@@ -593,9 +593,13 @@ class Trajectory:
         z = np.maximum(result.z, 0.0)
         w = c.D @ z + q
         scale = np.abs(c.D) @ np.abs(z) + np.abs(c.C) @ np.abs(self.x[a]) + np.abs(c.F) + 1e-300
-        if (z + np.maximum(w, 0.0) <= tol * scale).any() or (w < -tol * scale).any():
+        # z is in u's units and w in y's (amperes and volts): z's scale is w's through the pair's own D_ii (a diode
+        # behind 1 Gohm carries 3.9 nA where its terms are 10 V, and had read as degenerate against the volts)
+        diagonal = np.abs(np.diag(c.D))
+        z_scale = np.where(diagonal > 0.0, scale / np.where(diagonal > 0.0, diagonal, 1.0), scale)
+        if ((z <= tol * z_scale) & (np.maximum(w, 0.0) <= tol * scale)).any() or (w < -tol * scale).any():
             return None                            # degenerate, or not a solution: the step's own pair
-        held = z > w
+        held = z > tol * z_scale
         block = c.D[np.ix_(held, held)]
         if held.any() and np.linalg.cond(block) > 1.0 / tol:
             return None

@@ -189,7 +189,10 @@ class Circuit(Model):
             # T/1000, or the file's own step (a fraction of its period) where it is finer, as a whole number of steps
             # a period and a multiple of 4: a SIN source needs whole steps at h, and the accuracy check's orbits at
             # 2h and 4h too (a 60 Hz rectifier's .tran 10u was refused: T/1666.7)
-            fraction = min(1e-3, tran.tstep / self.period(self.resolve({})))
+            # (its period at the file's own parameters, where they have one: a gate at -p VT=0.5 switches where
+            # the file's VT = 1.5 left it none, and the fraction had been 0, a ZeroDivisionError)
+            own = self.period(self.resolve({}))
+            fraction = min(1e-3, tran.tstep / (own if math.isfinite(own) else self.period(p)))
             return self.period(p) / (4 * math.ceil(0.25 / fraction - 1e-9))
         return min(tran.tmax or tran.tstep, tran.tstop / 5000.0)     # the file's step, at most a 5,000th of its run
 
@@ -433,6 +436,36 @@ class Circuit(Model):
         v, i = np.asarray(x[:n_c], float), np.asarray(x[n_c:n_c + n_l], float)
         return float(0.5 * capacitance @ (v * v) + 0.5 * i @ inductance @ i)
 
+    def unit_scales(self, samples: Samples, p: dict) -> dict[str, float] | None:
+        """{"V": the largest voltage, "A": the largest current among ``samples``' states and pair variables, "S":
+        the circuit's largest conductance: of its signal maps (a current signal's weight on a capacitor's voltage:
+        1/R), a period over an inductance, a capacitance over a period; 0 where none}: what a relative error of each unit is taken on (:func:`converters.analysis.accuracy.
+        circuit_floor`)."""
+        c = self.compiled(p)
+        x = np.abs(np.asarray(samples.x, dtype=float))
+        currents = np.array([name.startswith("i(") for name in c.state_names])
+        volts = float(x[:, ~currents].max(initial=0.0)) if x.size else 0.0
+        amps = float(x[:, currents].max(initial=0.0)) if x.size else 0.0
+        if samples.u is not None and samples.y is not None and samples.config is not None and c.pair_names != ("none",):
+            forms = np.asarray(c.pair_currents, dtype=bool)[np.asarray(samples.config, dtype=np.int64)]
+            u, y = np.abs(np.asarray(samples.u, dtype=float)), np.abs(np.asarray(samples.y, dtype=float))
+            amps = max(amps, float(np.where(forms, u, y).max(initial=0.0)))
+            volts = max(volts, float(np.where(forms, y, u).max(initial=0.0)))
+        if "_conductance" not in c.__dict__:
+            rows = [i for i, name in enumerate(c.signal_names) if c.units.get(name) == "A"]
+            columns = np.flatnonzero(~currents)
+            conductance = max((float(np.abs(maps[0][np.ix_(rows, columns)]).max(initial=0.0))
+                               for maps in c.signal_maps), default=0.0)
+            if c.energy and np.isfinite(c.period) and c.period > 0.0:
+                # the current a period's voltage drives through an inductor (T / L) or into a capacitor (C / T): a
+                # path the diodes block has currents of rounding whose scale is no resistor's (0.1 S beside 1 S)
+                capacitance, inductance = c.energy
+                diagonal = np.abs(np.diag(inductance)) if np.size(inductance) else np.zeros(0)
+                conductance = max(conductance, float((c.period / diagonal[diagonal > 0.0]).max(initial=0.0)),
+                                  float(np.abs(capacitance).max(initial=0.0)) / c.period)
+            c.__dict__["_conductance"] = conductance
+        return {"V": volts, "A": amps, "S": c.__dict__["_conductance"]}
+
     def vout(self, samples: Samples, p: dict) -> np.ndarray:
         return self.signal("vout", samples, p)
 
@@ -520,7 +553,19 @@ def _carrying(c, samples: Samples) -> np.ndarray:
     sources = max([float(np.abs(k.F).max(initial=0.0)) for k in c.configurations]
                   + ([float(np.abs(c.inputs[3]).max(initial=0.0))] if c.inputs is not None else []))
     scale = np.maximum(np.maximum(np.abs(u).max(axis=1, initial=0.0), np.abs(y).max(axis=1, initial=0.0)), sources)
-    return current > CARRYING * scale[:, None]
+    # a pair behind an impedance D_ii (its current's own term: ohms where u is its current, siemens where u is its
+    # voltage) is solved to rounding of the current that scale drives through it, not of the scale itself in
+    # amperes: a peak detector's diode fed through 1 Gohm carries 9 pA where 1e-9 of its 10 V source is 10 nA, and
+    # had read "off 1.000000" where it conducts half the period; the mixed scale stays a bound (a pair whose
+    # current no impedance of its own sets, D_ii = 0: a diode in series with an inductor)
+    diagonal = np.array([np.diag(k.D) if np.size(k.D) else np.zeros(forms.shape[1]) for k in c.configurations])
+    d = diagonal[np.asarray(samples.config, dtype=np.int64)]
+    with np.errstate(divide="ignore"):
+        conductance = np.where(forms, np.where(d > 0.0, 1.0 / np.where(d > 0.0, d, 1.0), np.inf), d)
+    conductance = np.where(conductance > 0.0, conductance, np.inf)
+    driven = np.minimum(scale[:, None] * conductance, scale[:, None])
+    own = np.abs(current).max(axis=1, initial=0.0)
+    return current > CARRYING * np.maximum(driven, own[:, None])
 
 
 def _weights(name: str, names: tuple[str, ...]) -> np.ndarray | None:

@@ -75,3 +75,46 @@ def test_a_diode_at_zero_current_and_voltage_is_not_read_as_conducting():
     assert fractions["off"] == pytest.approx(0.415276, abs=1e-3)
     assert fractions["D1+D4"] == pytest.approx(0.292362, abs=1e-3)
     assert fractions["D2+D3"] == pytest.approx(0.292362, abs=1e-3)
+
+
+SIN_GATE = """SIN gate just above its threshold near its peak: buck
+.param Vin=100 L=100u C=100u R=10 VT=0.999 PH=2.8125
+Vin in 0 DC {Vin}
+Vg g 0 SIN(0 1 10k 0 0 {PH})
+S1 in sw g 0 SWMOD
+D1 0 sw DMOD
+L1 sw out {L}
+C1 out 0 {C}
+R1 out 0 {R}
+.model SWMOD SW(VT={VT})
+.model DMOD D
+.tran 0.1u 20m 0 0.1u UIC
+.end
+"""
+
+
+@pytest.mark.parametrize("phase", [0.0, 2.8125, 1.0])
+@pytest.mark.parametrize("method", ["event", "lcp"])
+def test_a_sine_gate_above_its_threshold_only_near_its_peak_closes_its_switch_at_every_phase(phase, method):
+    """S1 closes while sin(w t + phase) > 0.999: 1.4236 % of the period around the peak, (pi - 2 asin(0.999)) / 2 pi.
+    The gate's sine is crossed on pieces of 1/64 of its period; at phase 2.8125 deg (half a piece) the peak lay
+    mid-piece, both ends at 0.998795, and the pulse was lost: "no fixed switching period", or with a second switch
+    vout 0 V "within ~0" where it is 2.58 V. The phase only shifts the orbit in time: vout is the same at each."""
+    model = Circuit.from_netlist("sin-gate.cir", text=SIN_GATE)
+    summary = run_summary(run_converter(model, {"PH": phase}, steady=True, method=method))
+    duty = (math.pi - 2 * math.asin(0.999)) / (2 * math.pi)
+    assert summary["mode_fractions"]["S1"] == pytest.approx(duty, abs=1e-9 if method == "event" else 1e-6)
+    reference = run_summary(run_converter(model, {"PH": 0.0}, steady=True, method="event"))["vout_mean"]
+    assert reference == pytest.approx(3.134261157, rel=1e-8)     # solve_ivp at rtol 1e-12, closed-form instants
+    assert summary["vout_mean"] == pytest.approx(reference, rel=1e-9 if method == "event" else 1e-5)
+
+
+def test_a_period_the_parameters_give_where_the_files_own_have_none_sets_the_default_step():
+    """At the file's VT = 1.5 the sine never reaches its switch's threshold (no period); -p VT=0.99 gives one. The
+    default step's fraction was taken of the file's own period, infinite: a ZeroDivisionError."""
+    model = Circuit.from_netlist("sin-gate.cir", text=SIN_GATE.replace("VT=0.999 PH=2.8125", "VT=1.5 PH=0"))
+    assert not model.periodic(model.resolve({}))
+    p = model.resolve({"VT": 0.99})
+    assert model.default_h(p) == pytest.approx(1e-7)          # T/1000 (the file's own step is T/1000 too)
+    summary = run_summary(run_converter(model, {"VT": 0.99}, steady=True))
+    assert summary["mode_fractions"]["S1"] == pytest.approx((math.pi - 2 * math.asin(0.99)) / (2 * math.pi), abs=1e-6)

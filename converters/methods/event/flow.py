@@ -32,9 +32,15 @@ _POWERS = 64           # sampling steps per batched product
 _PIECE_NORM = 2.0
 _ZERO_RTOL = 1e-10     # a derivative counts as zero below this fraction of its own scale
 _CROSS_RTOL = 1e-13    # a watched value counts as negative below -this fraction of its scale
-#: Most substeps (each a quarter of the mode's fastest time constant at most) one crossing search may take: about
-#: 5 s of work. A circuit far stiffer than its run (C = 1e-15 F in a 5 ms run: 2e10 substeps) is refused, not hung.
-MAX_SUBSTEPS = 100_000_000
+#: Most substeps (each a quarter of the mode's fastest time constant at most) one crossing search may take: 1 to 3 s
+#: of work (0.1 to 0.3 us each), which a steady state's Newton repeats a few times a period. A circuit far stiffer
+#: than its run (C = 1e-15 F in a 5 ms run: 2e10 substeps) is refused, not hung; so is one whose fastest time
+#: constant is 1e7 times shorter than its switching period (a 1 mohm, 1 nF probe on a 100 kHz buck: 8e7 substeps
+#: a period, 12 s each, had run past 300 s).
+MAX_SUBSTEPS = 10_000_000
+#: A search whose stretch holds more than this many times MAX_SUBSTEPS is refused before it starts (a crossing
+#: could end it early, but not that early).
+HOPELESS = 100
 _ON_SET_RTOL = 1e-9    # a held pair's constraint N^T (C x + F) counts as met up to this (relative)
 
 

@@ -16,8 +16,8 @@ from ...limits import check_in_use
 from ...problems import Comparators, LCSProblem, Schedule, StateSwitching
 from ...problems.switching import initial_bits, law_channels
 from .core import EnginePeriodMap
-from .flow import (_CROSS_RTOL, _ON_SET_RTOL, _POWERS, _ZERO_RTOL, MAX_SERIES_NORM, MAX_SUBSTEPS, FloatArray, Flow,
-                   _time_scale, _Watch)
+from .flow import (_CROSS_RTOL, _ON_SET_RTOL, _POWERS, _ZERO_RTOL, HOPELESS, MAX_SERIES_NORM, MAX_SUBSTEPS, FloatArray,
+                   Flow, _time_scale, _Watch)
 from .solution import EventSolution, Segment
 from .timeline import Crossing, Edge, FlowSpan, TimelineEntry
 
@@ -410,12 +410,18 @@ class _Machine:
         g_scale = watch.row_scales * size
         if watch.timed:
             g_scale = g_scale + np.abs(watch.slopes) * self.scale
-        if not (flow.delta > 0.0 and tau_max / flow.delta <= MAX_SUBSTEPS):
+        def too_long() -> Exception:
             from ...errors import ResourceError
-            raise ResourceError(f"--method event: the stiffest mode's time constant is about {4.0 * flow.delta:.3g} s, "
-                                f"so crossing {tau_max:.3g} s takes {tau_max / flow.delta if flow.delta > 0 else np.inf:.3g}"
-                                f" substeps (at most {MAX_SUBSTEPS:.0e}): a run far longer than the circuit's fastest time "
-                                "constant (a tiny C, L or R, or a long --t-end); use --method lcp, or a shorter --t-end")
+            return ResourceError(f"--method event: the stiffest mode's time constant is about {4.0 * flow.delta:.3g} s, "
+                                 f"so crossing {tau_max:.3g} s takes "
+                                 f"{tau_max / flow.delta if flow.delta > 0 else np.inf:.3g} substeps (at most "
+                                 f"{MAX_SUBSTEPS:.0e}): a run or a switching period far longer than the circuit's fastest "
+                                 "time constant (a tiny C, L or R, or a long --t-end); use --method lcp, or a shorter "
+                                 "--t-end")
+        # a search whose whole stretch is beyond reach is refused at once; one that may end at a crossing early (an
+        # autonomous circuit's stretch is its run) once it has taken MAX_SUBSTEPS without meeting one
+        if not (flow.delta > 0.0 and tau_max / flow.delta <= HOPELESS * MAX_SUBSTEPS):
+            raise too_long()
         if flow.norm > MAX_SERIES_NORM:                      # a flow too fast for its series (Z^j / j! overflows)
             from ...errors import ResourceError
             raise ResourceError(f"--method event: the stiffest mode's time constant is about {4.0 * flow.delta:.3g} s, "
@@ -425,9 +431,12 @@ class _Machine:
         base = -_CROSS_RTOL * g_scale
         threshold = offsets + base
         full = int(np.floor(tau_max / flow.delta * (1.0 - 1e-12)))
-        tau, state = 0.0, xt
+        tau, state, allowed = 0.0, xt, MAX_SUBSTEPS
         while full > 0:
+            if allowed <= 0:
+                raise too_long()
             m = min(full, _POWERS)
+            allowed -= m
             states = flow.steps(state, m)
             values = states @ watch.rows_T
             if watch.timed:
