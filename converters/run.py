@@ -24,8 +24,8 @@ from typing import Any, cast
 import numpy as np
 import numpy.typing as npt
 
-from .analysis.periodic import (ONE_MODE, SIMULATE_REMEDY, PeriodicOrbit, require, require_stable, resolved,
-                                shoot)
+from .analysis.periodic import (ONE_MODE, SIMULATE_REMEDY, PeriodicOrbit, instability, require, require_stable,
+                                resolved, shoot)
 from .errors import ParameterError, ResourceError, SimulationError
 from .limits import max_memory
 from .methods.base import DEFAULT_METHOD, Method, PeriodMap, get_method
@@ -167,6 +167,7 @@ def run_converter(name_or_model: str | Model, params: dict | None = None, *, con
     if rtol is not None:                        # accuracy on request: the method and its step are chosen for it
         return _accurate(model, p, rtol, start, method=method, h=h, t_end=t_end, periods=periods, steady=steady,
                          x0=x0, options=options)
+    given = method
     method = make_method(model, p, method, h, **options)
     if "circuit" in method.domains:             # a method that runs the model's circuit itself (ngspice)
         if output_step is not None:
@@ -181,7 +182,16 @@ def run_converter(name_or_model: str | Model, params: dict | None = None, *, con
         if output_step is not None:
             raise ParameterError("output_step applies to a run from rest; --steady returns its periods on the orbit "
                                  "at every step")
-        tr, meta = _on_steady_state(model, p, method, span, x0, steady_tol)
+        try:
+            tr, meta = _on_steady_state(model, p, method, span, x0, steady_tol)
+        except DiscretizationUnstable as why:
+            if given is not None or h is not None or any(v is not None for v in options.values()):
+                raise                               # the stepper asked for: its refusal names the step's instability
+            # the default's step: the exact method's orbit is the answer, said so
+            method = make_method(model, p, "event")
+            tr, meta = _on_steady_state(model, p, method, span, why.exact.x0, steady_tol)
+            meta["warnings"] = [*meta.get("warnings", []), f"{why.args[0].split('; use --method')[0]}: the exact "
+                                "(event) method's orbit is given"]
     else:
         tr, meta = _from_rest(model, p, method, span, x0, SaveAt.plan(model, p, method, span, x0, output_step))
     meta = {"model": model.name, "control": model.control, "params": p, "method_options": method.options(), **meta}
@@ -229,6 +239,18 @@ def _on_steady_state(model: Model, p: dict, method: Method, span: float, x0: npt
     orbit, period_map = _orbit_and_map(model, p, method, x0=x0, tol=0.1 * steady_tol, rounding_bound=steady_tol,
                                        explain=f" (Newton aims at a tenth of the tolerance asked, {steady_tol:.3g}, "
                                                "and takes an orbit rounding resolves to that tolerance itself)")
+    unstable = instability(orbit.multipliers, model.period(p))
+    if unstable and not method.exact:
+        exact = _exact_orbit(model, p, orbit.x0, steady_tol)
+        if exact is not None and not instability(exact.multipliers, model.period(p)):
+            # the stepper's orbit is unstable where the circuit's is not: its step's instability, not the circuit's
+            # (a comparator chattering ~200 times a period inside 5 ns steps: 489.5 at h, 0.356 exact)
+            step = getattr(method, "h", None)
+            raise DiscretizationUnstable(
+                f"the stepper's periodic orbit of {model.key}"
+                + (f" at h = {step:.3g} s" if step else "") + f" is {unstable.split(': the circuit')[0]}, where the "
+                f"circuit's exact orbit is stable (spectral radius {np.abs(exact.multipliers).max():.6g}): an "
+                "instability of the step, not of the circuit; use --method event, or a smaller --h", exact)
     require_stable(model, p, orbit, "run --periods N without --steady")
     tr = _on_orbit(model, p, method, period_map, orbit.x0, span)
     T = model.period(p)
@@ -236,6 +258,27 @@ def _on_steady_state(model: Model, p: dict, method: Method, span: float, x0: npt
     # periods: what the returned run spans; steady_periods: every period simulated to get there and it
     return tr, {"periods": int(round(span / T)), "steady_periods": int(round(simulated)), "orbit": orbit.summary(),
                 **({"warnings": [orbit.warning]} if orbit.warning else {})}
+
+
+class DiscretizationUnstable(SimulationError):
+    """A stepper's orbit that is unstable where the exact method's is stable (``exact``: that orbit)."""
+
+    def __init__(self, message: str, exact: PeriodicOrbit) -> None:
+        super().__init__(message)
+        self.exact = exact
+
+
+def _exact_orbit(model: Model, p: dict, x0: npt.NDArray[np.float64], steady_tol: float) -> PeriodicOrbit | None:
+    """The exact method's orbit from ``x0`` (a stepper's), None where the method does not take the circuit or
+    finds none: what decides whether a stepper's unstable orbit is the circuit's."""
+    from .methods import EventDriven
+    method = EventDriven()
+    try:
+        method.supports(model.problem(p, model.period(p)))
+        return _orbit_and_map(model, p, method, x0=x0, warm_up=0, tol=0.1 * steady_tol,
+                              rounding_bound=steady_tol)[0]
+    except (ParameterError, SimulationError, ResourceError):
+        return None
 
 
 def _from_rest(model: Model, p: dict, method: Method, span: float, x0: npt.NDArray[np.float64] | None,

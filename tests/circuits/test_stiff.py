@@ -571,3 +571,47 @@ def test_a_comparator_circuits_run_judges_every_signal_at_h_against_2h():
     assert estimates["i(rsn)"] > 0.05 and estimates["v(out)"] < 1e-3
     (warning,) = [w for w in summary["warnings"] if w.startswith("measurements may be off by more than 0.01")]
     assert "i(rsn) rms" in warning and "to an rms itself" in warning
+
+
+RIPPLE_LOOP = """Ripple-fed voltage-mode buck: a gain-200 amplifier on v(out) with an ESR, hysteresis 10 mV against a sawtooth
+.param Vin=12 L=22u C=100u Resr=50m R=2 f_sw=200k Vref=3.3 A=200 VH=0.01 Voff=0.2
+.param T={1/f_sw} e={1e-6/f_sw}
+Vin in 0 DC {Vin}
+S1 in sw vcon ramp SWMOD
+D1 0 sw DMOD
+L1 sw out {L}
+C1 out ce {C}
+Resr ce 0 {Resr}
+R1 out 0 {R}
+Vr ref 0 DC {Vref}
+Eo x 0 ref out {A}
+Ev vcon x off 0 1
+Vo off 0 DC {Voff}
+Vramp ramp 0 PULSE(0 1 0 {T - 2*e} {e} {e} {T})
+.model SWMOD SW(VT=0 VH={VH})
+.model DMOD D
+.tran {T/1000} {500*T} 0 {T/2000} UIC
+.end
+"""
+
+
+@pytest.mark.slow
+def test_a_steps_unstable_orbit_is_not_called_the_circuits(tmp_path, capsys):
+    """The amplified ripple crosses the sawtooth ~200 times a period, 4 to 15 ns apart, inside the default 5 ns
+    steps: the stepper's orbit has the multiplier 489.5 and --steady had refused it as the circuit's ("the circuit
+    does not settle on it"). The circuit's orbit is stable: 300 plain periods of an independent solve_ivp model
+    settle at vout 3.298374273 V, multipliers -0.315 and 0.356. The default answers with the exact method's orbit
+    and says why; the stepper asked for names the step's instability, not the circuit's."""
+    path = tmp_path / "ripple.cir"
+    path.write_text(RIPPLE_LOOP)
+    assert main(["simulate", str(path), "--steady", "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["method"] == "event"
+    assert summary["vout_mean"] == pytest.approx(3.298374273, rel=1e-8)
+    assert summary["orbit"]["spectral_radius"] == pytest.approx(0.356, abs=1e-3)
+    (warning,) = [w for w in summary["warnings"] if w.startswith("the stepper's periodic orbit")]
+    assert "unstable (Floquet spectral radius 489.5" in warning and "the exact (event) method's orbit is given" in warning
+    assert main(["simulate", str(path), "--steady", "--method", "lcp"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "an instability of the step, not of the circuit" in err
+    assert "does not settle" not in err

@@ -113,7 +113,8 @@ def run(args) -> int:
                                           "spice_method": args.spice_method})
         setup_s = _set_up(args.converter, params, args.control, method, args.steady, options) \
             if "lcs" in cls.domains else None
-        tr = run_converter(args.converter, params, control=args.control, method=method, h=args.h,
+        # (the method as given: the default's may leave a step's unstable orbit to the exact method)
+        tr = run_converter(args.converter, params, control=args.control, method=args.method, h=args.h,
                            t_end=args.t_end, periods=args.periods, steady=args.steady,
                            steady_tol=STEADY_TOL if args.steady_tol is None else args.steady_tol,
                            output_step=args.output_step, **options)
