@@ -180,12 +180,20 @@ def spice_steady(chunk, steady: bool, orbit, T: float, periods: int, window: int
         import sys
 
         from tqdm import tqdm
+        desc = "ngspice" + (" from its own start" if x0 is None else " from pcsuite's orbit")
         with tqdm(total=most if steady else periods, unit="period", file=sys.stderr, disable=None,
-                  leave=False, desc="ngspice" + (" from its own start" if x0 is None else "")) as bar:
+                  leave=False, desc=desc) as bar:
+            said = time.perf_counter()
             run = chunk(x0)
             bar.update(periods)
             n, drifts, means = periods, [spice_drift(run, T, periods, window)], []
             while True:
+                if bar.disable and steady and time.perf_counter() - said >= PROGRESS_EVERY_S:
+                    # no bar where stderr is a file or a pipe: a line now and then, so a long settling is not
+                    # silence (two current-mode loops' compares had printed nothing in 300 s)
+                    print(f"{desc}: {n} of at most {most} periods, its window mean moving {drifts[-1]:.2g} a chunk "
+                          f"(settled below {SPICE_SETTLE:g})", file=sys.stderr, flush=True)
+                    said = time.perf_counter()
                 means.append(run.mean("vout", t0=end - window * T, t1=end))
                 if not steady or (drifts[-1] <= SPICE_SETTLE and (x0 is not None or decayed(n))) \
                         or n >= most:
@@ -241,6 +249,8 @@ def unsettled_cause(rho: float, periods: int) -> str:
 #: ngspice counts as settled when its window's mean of vout moves less than this (relative) from the window
 #: before; it runs on (from where it ended, at most MAX_SPICE_PERIODS in all) until then.
 SPICE_SETTLE = 1e-5
+#: Where no progress bar is drawn (stderr not a terminal), a settling ngspice says where it is this often (s).
+PROGRESS_EVERY_S = 30.0
 MAX_SPICE_PERIODS = 600
 #: Chunks of ngspice periods without its drift halving, once the circuit's slowest mode has decayed, after which its
 #: run counts as settled as far as ngspice settles it (:func:`spice_steady`).

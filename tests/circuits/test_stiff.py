@@ -573,7 +573,7 @@ def test_a_comparator_circuits_run_judges_every_signal_at_h_against_2h():
     assert "i(rsn) rms" in warning and "to an rms itself" in warning
 
 
-RIPPLE_LOOP = """Ripple-fed voltage-mode buck: a gain-200 amplifier on v(out) with an ESR, hysteresis 10 mV against a sawtooth
+RIPPLE_LOOP = """Ripple-fed voltage-mode buck: a gain-200 amplifier on v(out), an ESR, hysteresis 10 mV on a sawtooth
 .param Vin=12 L=22u C=100u Resr=50m R=2 f_sw=200k Vref=3.3 A=200 VH=0.01 Voff=0.2
 .param T={1/f_sw} e={1e-6/f_sw}
 Vin in 0 DC {Vin}
@@ -610,7 +610,8 @@ def test_a_steps_unstable_orbit_is_not_called_the_circuits(tmp_path, capsys):
     assert summary["vout_mean"] == pytest.approx(3.298374273, rel=1e-8)
     assert summary["orbit"]["spectral_radius"] == pytest.approx(0.356, abs=1e-3)
     (warning,) = [w for w in summary["warnings"] if w.startswith("the stepper's periodic orbit")]
-    assert "unstable (Floquet spectral radius 489.5" in warning and "the exact (event) method's orbit is given" in warning
+    assert "unstable (Floquet spectral radius 489.5" in warning
+    assert "the exact (event) method's orbit is given" in warning
     assert main(["simulate", str(path), "--steady", "--method", "lcp"]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "an instability of the step, not of the circuit" in err

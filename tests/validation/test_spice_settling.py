@@ -107,7 +107,7 @@ def test_ngspices_distance_from_its_orbit_run_is_relative_to_an_ac_outputs_size(
 def test_ngspices_settling_shows_a_bar_on_a_terminal_and_nothing_in_a_pipe(monkeypatch, capsys):
     """compare's ngspice runs up to 600 periods from its own start and again from the orbit, minutes on a large
     circuit, had printed nothing until its verdict: a bar in periods on a terminal's stderr, nothing where stderr
-    is a file or a pipe (a refusal stays one line)."""
+    is a file or a pipe within PROGRESS_EVERY_S (a refusal stays one line)."""
     import io
     import sys
 
@@ -126,3 +126,24 @@ def test_ngspices_settling_shows_a_bar_on_a_terminal_and_nothing_in_a_pipe(monke
         spice_steady(chunk, True, None, T, periods, window, "own", 0.9999)
         shown = stream.getvalue()
         assert ("ngspice from its own start" in shown and "period" in shown) if terminal else shown == ""
+
+
+def test_ngspices_long_settling_says_where_it_is_in_a_pipe(monkeypatch):
+    """Two current-mode loops' compares (a slowest mode of 0.983 a period: 400 periods of ngspice, 50 a chunk) had
+    printed nothing in 300 s where stderr was a pipe. Every PROGRESS_EVERY_S (here 0: every chunk) a line says how
+    many periods of the most it may run, and how far its window's mean still moves."""
+    import io
+    import sys
+
+    from validation import compare
+    T, periods, window = 1 / 60, 30, 10
+    monkeypatch.setattr(compare, "PROGRESS_EVERY_S", 0.0)
+    stream = io.StringIO()
+    monkeypatch.setattr(sys, "stderr", stream)
+    drifts = iter([1e-3, 5e-4, 2e-4, 5e-6])
+    compare.spice_steady(lambda x0: _NoisyRun(next(drifts), periods * T), True, np.zeros(1), T, periods, window,
+                         "orbit", 0.5)
+    lines = stream.getvalue().splitlines()
+    moves = ((30, "0.001"), (60, "0.0005"), (90, "0.0002"), (120, "5e-06"))
+    assert lines == [f"ngspice from pcsuite's orbit: {n} of at most 600 periods, its window mean moving {d} a chunk "
+                     "(settled below 1e-05)" for n, d in moves]
