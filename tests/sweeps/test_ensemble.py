@@ -449,3 +449,42 @@ def test_a_circuit_far_below_one_in_state_units_is_resolved_in_the_batched_engin
     plain = _frame(run_ensemble(ModelSweep("buck"), grid, backend="batched"))
     np.testing.assert_allclose(tiny["vout_mean"] * 1e12, plain["vout_mean"], rtol=1e-7)
     assert list(tiny["message"]) == list(plain["message"]) == ["", ""]
+
+
+SERIES_CAPS_DCM = """Buck at light load (DCM) with two unequal output capacitors in series, a bleeder on the bottom one
+.param Vin=24 L=10u C1=220u C2=68u R=60 R1=4.7k f_sw=200k D=0.25
+.param T={1/f_sw} e={1e-6/f_sw}
+Vin in 0 DC {Vin}
+Vg g 0 PULSE(1 0 {D*T - e/2} {e} {e} {(1-D)*T - e} {T})
+S1 in sw g 0 SWMOD
+D1 0 sw DMOD
+L1 sw out {L}
+Ca out mid {C1}
+Cb mid 0 {C2}
+Ra mid 0 {R1}
+Rload out 0 {R}
+.model SWMOD SW(VT=0.5)
+.model DMOD D
+.tran {T/1000} {500*T} 0 {T/200} UIC
+.end
+"""
+
+
+def test_a_remote_orbit_newton_returns_to_at_the_maps_rounding_is_a_steady_state(tmp_path):
+    """The bleeder's mode (Ra (Ca + Cb) = 1.35 s: 1 - 3.7e-6 a period) puts the orbit ~6e6 periods from rest, so
+    Newton's orbit is checked against Newton from the settled transient; those runs stop at the map's rounding (1 -
+    rho amplifies it) at the same orbit, and had not counted as a return: R = 20.000000000000004 (a log grid's
+    point) failed "the circuit may settle elsewhere", where R = 20, its first Newton stopped at rounding too, was
+    taken. Both are the orbit the event method finds."""
+    from converters.models import Circuit
+    path = tmp_path / "cser.cir"
+    path.write_text(SERIES_CAPS_DCM)
+    sweep = ModelSweep(model=str(path))
+    exact = run_summary(run_converter(Circuit.from_netlist(str(path)), {"R": 20.0}, steady=True,
+                                      method="event"))["vout_mean"]
+    # the small-ripple DCM closed form 2 Vin / (1 + sqrt(1 + 4 K / D^2)), K = 2 L / (R T), gives 10.1806
+    assert exact == pytest.approx(10.1806, rel=5e-4)
+    for R in (20.0, 20.000000000000004):
+        row = sweep.row(0, {"R": R})
+        assert row["status"] == "ok", row["message"]
+        assert row["vout_mean"] == pytest.approx(exact, rel=1e-4)          # the stepper at T/200
