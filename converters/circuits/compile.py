@@ -725,16 +725,18 @@ class _Compiler:
         index_of: list[int]
         pieces, configs, pair_currents, closed, maps, index_of = [], [], [], [], [], []
         floats: list[tuple[_Array, _Array] | None] = []
+        why: dict[int, str] = {}                # the combinations with no configuration: the compiler's reason
         for index in range(2 ** m):
             on = [bool(index >> j & 1) for j in range(m)]
             state = {**fixed, **{leader.name: on[j] for j, (leader, _) in enumerate(leaders)},
                      **{f: on[j] == same for f, (j, same, _) in followers.items()}}
             try:
                 config, forms, signals, _ = self.configuration(state, {})
-            except NetlistError:
+            except NetlistError as refused:
                 if m == 1:
                     raise
                 index_of.append(-1)    # the comparators' switches together short a source: a run that gets there stops
+                why[index] = str(refused).split(": ", 1)[-1] if str(refused).startswith(self.nl.path) else str(refused)
                 continue
             index_of.append(len(configs))
             configs.append(config)
@@ -766,7 +768,8 @@ class _Compiler:
         law: Law
         law = (StateSwitching(channels[0].function, below=table[0], above=table[1], band=channels[0].band) if m == 1
                else Comparators(tuple(channels), table, names=tuple(leader.name for leader, _ in leaders),
-                                words=("closed", "open")))
+                                words=("closed", "open"),
+                                reasons=tuple(why.get((2 ** m - 1) ^ bits, "") for bits in range(2 ** m))))
         periods = [ch.period for ch in channels if math.isfinite(ch.period)]
         state_names = tuple(f"v({x.name})" for x in self.capacitors) + tuple(f"i({x.name})" for x in self.inductors)
         return Compiled(configurations=tuple(configs), law=law, state_names=state_names,
@@ -1256,7 +1259,12 @@ class _Compiler:
         if len(self.diodes) < 2:
             return
         assert config.F is not None                     # a Configuration fills in its F
-        C, F = self.on_loops(config.C, config.F)
+        C, F = config.C, config.F
+        if config.jump is not None:
+            # the state is on the configuration's loops once it has jumped (x = P x + q): a diode a closed switch's
+            # shorted capacitance ties to Vin (two phases' Coss, both switches closed) is blocked by Vin alone
+            C, F = C @ config.jump.P, F + C @ config.jump.q
+        C, F = self.on_loops(C, F)
         rows = np.hstack([C, config.D, F[:, None]])
         root = self.joined(switch_state)
         ends = [(root(d.nodes[0]), root(d.nodes[1])) for d in self.diodes]

@@ -242,12 +242,16 @@ class Comparators:
         A label per channel for messages (a netlist's switch names); default ``comparator0``, ...
     words : (str, str)
         What a channel's states 0 and 1 are called in messages (a netlist's switch: closed, open).
+    reasons : tuple of str
+        Why each combination with no configuration has none (one entry per ``table`` entry, '' elsewhere; default
+        none): said when a run reaches it.
     """
 
     channels: tuple
     table: tuple
     names: tuple = ()
     words: tuple = ("below", "above")
+    reasons: tuple = ()
 
     def __post_init__(self) -> None:
         channels = tuple(self.channels)
@@ -296,8 +300,9 @@ class Comparators:
         if config < 0:
             from ..errors import SimulationError
             states = ", ".join(f"{name} {self.words[bits >> j & 1]}" for j, name in enumerate(self.names))
+            why = self.reasons[bits] if bits < len(self.reasons) else ""
             raise SimulationError(f"at t = {t:.9g} s the comparators reach a combination of states the system has no "
-                                  f"configuration for ({states})")
+                                  f"configuration for ({states})" + (f": {why}" if why else ""))
         return config
 
     def breakpoints(self, t0: float, t1: float) -> np.ndarray:

@@ -594,3 +594,37 @@ Ll b m {L}
     assert circuit.output == "v(m)"
     summary = run_summary(run_converter(circuit, {}, steady=True, method="event"))
     assert summary["vout_mean"] == pytest.approx((0.35 + 1e-6 * 20e3) * 200, rel=1e-6)
+
+
+def test_a_combination_of_comparators_with_no_configuration_says_why_when_a_run_reaches_it():
+    """Two hysteretic phases whose second switch, closed with the first, shorts the source: the compiler leaves that
+    combination without a configuration, and a run that got there had stopped with "no configuration for (w1
+    closed, w2 closed)" alone. The compiler's reason now follows."""
+    from converters.errors import SimulationError
+    text = (Path(__file__).parents[2] / "netlists" / "circuits" / "two-phase-hysteretic-buck.cir").read_text()
+    model = Circuit.from_netlist("short.cir", text=text.replace("W2 in sw2 Vs2 WMOD", "W2 sw1 0 Vs2 WMOD"))
+    law = model.problem(model.resolve({}), 1e-3).switching
+    with pytest.raises(SimulationError) as stopped:
+        law.config(0, 0.0)                      # both channels below: both switches closed
+    assert str(stopped.value) == (
+        "at t = 0 s the comparators reach a combination of states the system has no configuration for (w1 closed, "
+        "w2 closed): VIN, W1, W2 form a loop of voltage sources and closed switches (with w1=closed, w2=closed): "
+        "their voltages are not independent")
+
+
+def test_diodes_a_shorted_capacitance_ties_to_the_source_are_blocked_by_it_alone():
+    """Two hysteretic phases with 2 nF across each switch. With both switches closed each Coss is shorted (the state
+    jumps onto v(co) = 0 entering the configuration) and both diodes' cathodes sit at Vin: they are blocked by the
+    source alone once the state has jumped, but their rows still read the Coss voltages, and the configuration was
+    refused as "diodes in parallel where W1, W2 are closed": a run from rest stopped at t = 0, where both phases'
+    comparators close. Each closing then redistributes 1/2 Coss Vin^2 (the diode conducts: the switch node at 0,
+    Coss at Vin), exactly, in the event method's run from rest."""
+    text = (Path(__file__).parents[2] / "netlists" / "circuits" / "two-phase-hysteretic-buck.cir").read_text()
+    model = Circuit.from_netlist("coss.cir", text=text.replace("R1 out 0 {R}", "R1 out 0 {R}\nCo1 in sw1 2n\n"
+                                                                             "Co2 in sw2 2n"))
+    law = model.problem(model.resolve({}), 1e-3).switching
+    assert -1 not in law.table
+    tr = run_converter(model, t_end=1e-4, method="event")
+    count, lost = tr.jump_losses(t0=0.0, t1=1e-4)
+    assert count > 10
+    assert lost == pytest.approx(count * 0.5 * 2e-9 * 12.0 ** 2, rel=1e-9)
