@@ -168,11 +168,15 @@ def run_converter(name_or_model: str | Model, params: dict | None = None, *, con
         return _accurate(model, p, rtol, start, method=method, h=h, t_end=t_end, periods=periods, steady=steady,
                          x0=x0, options=options)
     given = method
+    defaults = given is None and h is None and not any(v is not None for v in options.values())
     method = make_method(model, p, method, h, **options)
     if "circuit" in method.domains:             # a method that runs the model's circuit itself (ngspice)
         if output_step is not None:
             raise ParameterError(f"output_step applies to the LCS methods; the {method.key} method keeps its own points")
         return method.run_model(model, p, t_end=t_end, periods=periods, steady=steady, x0=x0)
+    instead = _exact_instead(model, p, method) if defaults else None
+    if instead is not None:
+        method, why = instead
     span = _span(model, p, method, steady, t_end, periods)
     steady_tol = parse_value("steady_tol", steady_tol)
     if not STEADY_TOL_RANGE[0] <= steady_tol < STEADY_TOL_RANGE[1]:
@@ -194,6 +198,8 @@ def run_converter(name_or_model: str | Model, params: dict | None = None, *, con
                                 "(event) method's orbit is given"]
     else:
         tr, meta = _from_rest(model, p, method, span, x0, SaveAt.plan(model, p, method, span, x0, output_step))
+    if instead is not None:
+        meta["warnings"] = [*meta.get("warnings", []), why]
     meta = {"model": model.name, "control": model.control, "params": p, "method_options": method.options(), **meta}
     return replace(tr, labels=model.labels(p), wall_s=time.perf_counter() - start, metadata={**tr.metadata, **meta})
 
@@ -258,6 +264,28 @@ def _on_steady_state(model: Model, p: dict, method: Method, span: float, x0: npt
     # periods: what the returned run spans; steady_periods: every period simulated to get there and it
     return tr, {"periods": int(round(span / T)), "steady_periods": int(round(simulated)), "orbit": orbit.summary(),
                 **({"warnings": [orbit.warning]} if orbit.warning else {})}
+
+
+def _exact_instead(model: Model, p: dict, method: Method) -> tuple[Method, str] | None:
+    """(the exact method, why) where the default stepper does not take the circuit and the exact method does (two
+    comparator phases with a capacitance across each switch: the stepper does not locate a jump inside a step), so
+    that the defaults answer; None where the stepper takes it, or neither does."""
+    span = model.period(p) if model.periodic(p) else getattr(model, "default_duration", lambda p: None)(p)
+    if method.exact or span is None:
+        return None
+    problem = model.problem(p, span)
+    try:
+        method.supports(problem)
+        return None
+    except ParameterError as refused:
+        from .methods import EventDriven
+        try:
+            EventDriven().supports(problem)
+        except ParameterError:
+            return None
+        reason = str(refused).split(": use --method event")[0]
+        return make_method(model, p, "event"), (f"the stepper does not take this circuit ({reason}): the exact "
+                                                "(event) method's run is given")
 
 
 class DiscretizationUnstable(SimulationError):

@@ -628,3 +628,19 @@ def test_diodes_a_shorted_capacitance_ties_to_the_source_are_blocked_by_it_alone
     count, lost = tr.jump_losses(t0=0.0, t1=1e-4)
     assert count > 10
     assert lost == pytest.approx(count * 0.5 * 2e-9 * 12.0 ** 2, rel=1e-9)
+
+
+def test_the_defaults_answer_with_the_exact_method_where_the_stepper_does_not_take_the_circuit():
+    """Comparator phases with a capacitance across each switch: the stepper does not locate a jump inside its step,
+    and the defaults had refused ("use --method event"). Without a method, step or option asked for, the exact
+    method runs and a warning says why; a stepper asked for still refuses."""
+    from converters.errors import ParameterError
+    text = (Path(__file__).parents[2] / "netlists" / "circuits" / "two-phase-hysteretic-buck.cir").read_text()
+    model = Circuit.from_netlist("coss.cir", text=text.replace("R1 out 0 {R}", "R1 out 0 {R}\nCo1 in sw1 2n\n"
+                                                                             "Co2 in sw2 2n"))
+    tr = run_converter(model, t_end=1e-4)
+    assert tr.algorithm.exact
+    (warning,) = [w for w in tr.metadata["warnings"] if w.startswith("the stepper does not take this circuit")]
+    assert "is not stepped yet" in warning and warning.endswith("the exact (event) method's run is given")
+    with pytest.raises(ParameterError, match="use --method event"):
+        run_converter(model, t_end=1e-4, method="lcp")
