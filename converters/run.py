@@ -548,6 +548,10 @@ def check_accuracy(tr: Trajectory, summary: dict) -> dict:
         coarse = (run_converter(model, p, method=method.coarsened(), t_end=float(tr.t[-1] - tr.t[0]), x0=tr.x[0])
                   if method.fixed_step else None)      # the same run at twice the step
         check = window_check(model, p, method, tr, out, window, coarse)
+        undecided = _stability_at_2h(model, p, method, tr)
+        if undecided:
+            check["trusted"] = False
+            check["warning"] = f"{check['warning']}; {undecided}" if "warning" in check else undecided
         if model.periodic(p) and "mode_fractions" in out:
             # a comparator's switchings at the instants the run located inside its steps, not on its grid (a type III
             # boost's duty ratio printed 0.512000 at T/1000, exact 0.512937)
@@ -559,6 +563,25 @@ def check_accuracy(tr: Trajectory, summary: dict) -> dict:
     if "warning" in check:
         out["warnings"] = [*out.get("warnings", []), check["warning"]]
     return out
+
+
+def _stability_at_2h(model: Model, p: dict, method: Method, tr: Trajectory) -> str:
+    """'' or why a stepper's steady orbit under a state-driven law may be on the other side of 1 than its spectral
+    radius says: its orbit at 2h, from the run's start (on the orbit), against it
+    (:func:`.analysis.periodic.stability_undecided`). The orbit's check does this from its own runs at h and 2h."""
+    orbit = tr.metadata.get("orbit")
+    if not (method.fixed_step and model.periodic(p) and orbit):
+        return ""
+    from .analysis.periodic import stability_undecided
+    T = model.period(p)
+    try:
+        at_2h = shoot(model.problem(p, T, tr.x[0]), method.coarsened(), tr.x[0], tol=1e-8, polish=True)
+    except (ParameterError, SimulationError):
+        return ""
+    if not resolved(at_2h):
+        return ""
+    undecided = stability_undecided(float(orbit["spectral_radius"]), at_2h.spectral_radius)
+    return f"the orbit's {undecided[4:]}: use --method event (or a smaller --h)" if undecided else ""
 
 
 def _schedule_driven(model: Model, p: dict) -> bool:

@@ -566,6 +566,7 @@ def accurate_steady(model: Model, p: dict, rtol: float, *, x0: npt.NDArray[np.fl
     (module docstring). Raises ParameterError for an rtol outside [1e-10, 0.1] or a model without a fixed
     period, SimulationError when no orbit is found."""
     from ..methods import EventDriven, Theta
+    from .periodic import stability_undecided
     rtol = float(rtol)
     if not RTOL_RANGE[0] <= rtol <= RTOL_RANGE[1]:
         raise ParameterError(f"rtol must be in [{RTOL_RANGE[0]:g}, {RTOL_RANGE[1]:g}]; got {rtol!r}")
@@ -665,7 +666,14 @@ def accurate_steady(model: Model, p: dict, rtol: float, *, x0: npt.NDArray[np.fl
             best, stopped = result, onset
             break
         if worst <= target and not damped and few >= FEW_STEPS:
-            return replace(result, wall_s=time.perf_counter() - clock)
+            # a spectral radius the step's own error may carry across 1 is no stable orbit yet: the exact method's
+            # decides (a voltage-mode buck past its period doubling, exact -1.0139, read stable and "met")
+            undecided = (stability_undecided(orbit.spectral_radius, previous[1].spectral_radius)
+                         if exact_takes_it else "")
+            if not undecided:
+                return replace(result, wall_s=time.perf_counter() - clock)
+            best, stopped, stepper_failed = result, undecided, SimulationError(undecided)
+            break
         best = result
         if damped and theta > THETA:
             # the trapezoid from the steps at which it does not ring on the fastest mode damps nothing: the
@@ -827,12 +835,12 @@ def circuit_floor(tr: Trajectory, unit: str | None = None) -> float:
     from Newton's, and "3.7e-16 +- 6.2e-28" under --rtol. One floor for the defaults' check and --rtol's measures:
     a fixed 1 nV had served the first, which is 1e-6 of a 1 mV circuit and 1e-12 of a 1 kV one.
 
-    With a ``unit`` ("V", "A", or "vout" for the output's) of a model that says its scales (a netlist's :meth:`~converters.models.Circuit.
-    unit_scales`), the scale is that unit's, and the other unit's through the circuit's largest conductance where
-    that is smaller than the mixed scale: a volt is no size for an ampere (a peak detector fed through 1 Gohm, its
-    diode's 3.9 nA peak read half as large at h, had been judged against 1e-6 of its 10 V source: 3.3e-5 "off",
-    no warning), and currents that are all rounding (a path the diodes block) are still judged against the current
-    the circuit's voltages drive through its resistors."""
+    With a ``unit`` ("V", "A", or "vout" for the output's) of a model that says its scales (a netlist's
+    :meth:`~converters.models.Circuit.unit_scales`), the scale is that unit's, and the other unit's through the
+    circuit's largest conductance where that is smaller than the mixed scale: a volt is no size for an ampere (a peak
+    detector fed through 1 Gohm, its diode's 3.9 nA peak read half as large at h, had been judged against 1e-6 of
+    its 10 V source: 3.3e-5 "off", no warning), and currents that are all rounding (a path the diodes block) are
+    still judged against the current the circuit's voltages drive through it."""
     scale = max(float(np.abs(np.asarray(a, dtype=float)).max(initial=0.0))
                 for a in (tr.x, tr.u if tr.u is not None else 0.0, tr.y if tr.y is not None else 0.0))
     mixed = max(SMALLEST * scale, float(np.finfo(float).tiny))
@@ -894,6 +902,8 @@ class OrbitRuns:
     fine: Trajectory
     coarse: Trajectory | None
     order: float
+    #: The orbits' Floquet spectral radii at h and 2h (a stepper's), or None.
+    radii: tuple[float, float] | None = None
 
     @property
     def factor(self) -> float:
@@ -946,7 +956,7 @@ def _orbit_runs(model: Model, p: dict, method: Method, x_guess: npt.NDArray[np.f
         # pump's diodes, each switching at the clock's edges, converge at order 1 and order 2 read 3.0x short)
         ceiling = min(order, ORDER_THROUGH_EVENTS) if substep_events(fine, T) else order
         order = _observed_order(model, p, method, orbit_2h.x0, fine, coarse_run, ceiling)
-    return OrbitRuns(fine, coarse_run, order)
+    return OrbitRuns(fine, coarse_run, order, (orbit.spectral_radius, orbit_2h.spectral_radius))
 
 
 def _observed_order(model: Model, p: dict, method: Method, x_2h: npt.NDArray[np.float64], fine: Trajectory,
@@ -1081,6 +1091,13 @@ def default_check(model: Model, p: dict, method: Method, tr: Trajectory, reporte
         out["warning"] = (f"vout mean may be {error:.1e} off (more than {DEFAULT_RTOL:g}): " + "; ".join(reasons))
     if power_warning:
         out["warning"] = f"{out['warning']}; {power_warning}" if "warning" in out else power_warning
+    from .periodic import stability_undecided
+    undecided = stability_undecided(*runs.radii) if runs.radii is not None else ""
+    if undecided:
+        # (a voltage-mode buck near its period doubling: the stepper's radius at T/200 is 0.06 off the exact one)
+        out["trusted"] = False
+        said = f"the orbit's {undecided[4:]}: use --method event (or a smaller --h)"
+        out["warning"] = f"{out['warning']}; {said}" if "warning" in out else said
     resonance = _overdamped(model, p, method)
     if resonance:
         out["trusted"] = False

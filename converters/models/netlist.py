@@ -439,8 +439,8 @@ class Circuit(Model):
     def unit_scales(self, samples: Samples, p: dict) -> dict[str, float] | None:
         """{"V": the largest voltage, "A": the largest current among ``samples``' states and pair variables, "S":
         the circuit's largest conductance: of its signal maps (a current signal's weight on a capacitor's voltage:
-        1/R), a period over an inductance, a capacitance over a period; 0 where none}: what a relative error of each unit is taken on (:func:`converters.analysis.accuracy.
-        circuit_floor`)."""
+        1/R), a period over an inductance, a capacitance over a period; 0 where none}: what a relative error of
+        each unit is taken on (:func:`converters.analysis.accuracy.circuit_floor`)."""
         c = self.compiled(p)
         x = np.abs(np.asarray(samples.x, dtype=float))
         currents = np.array([name.startswith("i(") for name in c.state_names])

@@ -162,8 +162,9 @@ def step_error(model: Model, p: dict, method: Method, run: Trajectory, at_2h: Tr
     return f"{TOO_COARSE}: " + "; ".join(reasons) + ": use --rtol, or a smaller --h" if reasons else ""
 
 
-def _orbit_at_2h(model: Model, p: dict, method: Method, x_orbit: np.ndarray) -> Trajectory | str:
-    """One period of the stepper's orbit at 2h, Newton from the orbit at h; or why it was not found."""
+def _orbit_at_2h(model: Model, p: dict, method: Method, x_orbit: np.ndarray) -> tuple[Trajectory, float] | str:
+    """One period of the stepper's orbit at 2h, Newton from the orbit at h, and its spectral radius; or why it was
+    not found."""
     from ..analysis.periodic import resolved, shoot
     from ..simulate import simulate
     T = model.period(p)
@@ -171,7 +172,7 @@ def _orbit_at_2h(model: Model, p: dict, method: Method, x_orbit: np.ndarray) -> 
     orbit = shoot(model.problem(p, T, x_orbit), coarse, x_orbit, tol=STEADY_TOL, polish=True)
     if not resolved(orbit):
         return f"{TOO_COARSE} to tell: its orbit at 2h was not found ({orbit.message})"
-    return simulate(model.problem(p, T, orbit.x0), coarse)
+    return simulate(model.problem(p, T, orbit.x0), coarse), orbit.spectral_radius
 
 
 def failed_row(index: int, point: dict, message: str, wall_s: float = 0.0) -> dict:
@@ -315,7 +316,7 @@ class ModelSweep:
 
     def row(self, index: int, point: dict) -> dict:
         """The row of one point, by the per-point path (failures as rows)."""
-        from ..analysis.periodic import ROUNDING_LIMITED, shoot
+        from ..analysis.periodic import ROUNDING_LIMITED, shoot, stability_undecided
         from ..simulate import simulate
         clock = time.perf_counter()
         out = {"index": int(index), **{k: _number(v) for k, v in point.items()}}
@@ -343,6 +344,9 @@ class ModelSweep:
                 if not orbit.converged and not (orbit.message.startswith(ROUNDING_LIMITED) and
                                                 orbit.distance <= ROUNDED_TOL):
                     return failed_row(index, point, f"no steady state: {orbit.message}", time.perf_counter() - clock)
+                at_2h = _orbit_at_2h(model, p, method, orbit.x0) if method.fixed_step else None
+                if isinstance(at_2h, tuple) and stability_undecided(orbit.spectral_radius, at_2h[1]):
+                    return self._exact_row(index, point, stability_undecided(orbit.spectral_radius, at_2h[1]))
                 if unstable(orbit.spectral_radius):
                     return failed_row(index, point, unstable(orbit.spectral_radius), time.perf_counter() - clock)
                 if orbit.warning:          # an orbit the transient was not seen to reach (simulate warns of it)
@@ -351,9 +355,8 @@ class ModelSweep:
                 run = simulate(model.problem(p, T, orbit.x0), method)
                 extra = {"spectral_radius": orbit.spectral_radius, "iterations": orbit.iterations,
                          "orbit_distance": orbit.distance}
-                if method.fixed_step:
-                    at_2h = _orbit_at_2h(model, p, method, orbit.x0)
-                    extra["message"] = at_2h if isinstance(at_2h, str) else step_error(model, p, method, run, at_2h)
+                if at_2h is not None:
+                    extra["message"] = at_2h if isinstance(at_2h, str) else step_error(model, p, method, run, at_2h[0])
             else:
                 long = simulate(model.problem(p, self.periods * T), method)
                 if diverging(long, T):
@@ -365,6 +368,24 @@ class ModelSweep:
                     "wall_s": time.perf_counter() - clock}
         except (ValueError, RuntimeError, ArithmeticError) as exc:
             return failed_row(index, point, f"{type(exc).__name__}: {exc}", time.perf_counter() - clock)
+
+    def _exact_row(self, index: int, point: dict, why: str) -> dict:
+        """The row of a point whose stability the stepper leaves undecided (``why``), by the exact method where it
+        takes the circuit (its message says so), else failed with the reason."""
+        from dataclasses import replace
+
+        from ..methods import EventDriven
+        model = self._model()
+        p = model.resolve({**self.base, **point})
+        try:
+            EventDriven().supports(model.problem(p, model.period(p)))
+        except ValueError as refused:
+            return failed_row(index, point, f"{why}; the exact method does not take the circuit ({refused}): use a "
+                                            "smaller --h")
+        row = replace(self, method="event", theta=None).row(index, point)
+        said = f"{why}: decided by the exact method"
+        row["message"] = f"{row['message']}; {said}" if row.get("message") else said
+        return row
 
     def nominal_error(self, metrics: Iterable[str]) -> dict:
         """How accurate each of ``metrics`` is, read at the nominal point (the base parameters): {metric: (absolute
@@ -482,13 +503,13 @@ class ModelSweep:
     def _batched(self, model: Model, prepared: list, rows: dict) -> None:
         """The rows of prepared points of one theta through one compiled call (:func:`.batch.batch_steady`), and
         each converged row checked against its orbit at 2h through a second one (:func:`step_error`)."""
-        from ..analysis.periodic import REMOTE_PERIODS, periods_apart
+        from ..analysis.periodic import REMOTE_PERIODS, periods_apart, stability_undecided
         from ..methods.theta import plan_arrays
         from .batch import CONVERGED, ROUNDING
         clock = time.perf_counter()
         found = _batch_orbits(prepared, self.warm_up)
         share = (time.perf_counter() - clock) / len(prepared)          # the compiled call's time, per point
-        kept = []
+        near: list[tuple] = []          # the converged points (their rows, or None where unstable) for the 2h pass
         for item, (status, x_star, run, rho, iterations, residual, distance) in zip(prepared, found):
             index, point, p, method, problem, plan, prep = item
             clock = time.perf_counter() - prep - share
@@ -501,6 +522,7 @@ class ModelSweep:
                 continue
             if unstable(rho):
                 rows[index] = failed_row(index, point, unstable(rho), time.perf_counter() - clock)
+                near.append((index, point, p, method, problem, x_star, None, rho))     # unless 2h leaves it open
                 continue
             if periods_apart(x_star, rho, problem.x0, STEADY_TOL) > REMOTE_PERIODS:
                 # an orbit its slowest mode would take so long to reach from the start: the point's own shoot()
@@ -516,18 +538,27 @@ class ModelSweep:
             rows[index] = {"index": int(index), **{key: _number(v) for key, v in point.items()}, "status": "ok",
                            "message": "", **measured, "spectral_radius": rho, "iterations": int(iterations),
                            "orbit_distance": float(distance), "wall_s": time.perf_counter() - clock}
-            kept.append((index, p, method, problem, x_star, run))
+            near.append((index, point, p, method, problem, x_star, run, rho))
         # the same points at 2h, from their orbits at h (a second compiled call: the check costs what the rows did)
         coarse, plans = [], {}
-        for index, p, method, problem, x_star, run in kept:
+        for index, point, p, method, problem, x_star, run, rho in near:
             twice = method.coarsened()
             moved = model.problem(p, model.period(p), x_star)
             key = (moved.switching, moved.t_span, twice, len(moved.configurations))
             plan = plans.get(key) or plans.setdefault(key, plan_arrays(moved, twice.h, twice.graded))
             coarse.append((index, None, p, twice, moved, plan, 0.0))
-        for (index, p, method, problem, x_star, run), (status, _, at_2h, *_) in zip(kept, _batch_orbits(coarse, 0)
-                                                                                   if coarse else []):
+        for (index, point, p, method, problem, x_star, run, rho), (status, _, at_2h, rho_2h, *_) in zip(
+                near, _batch_orbits(coarse, 0) if coarse else []):
             clock = time.perf_counter()
+            # a spectral radius whose distance from 1 the step's own error may cross: the exact method decides (a
+            # voltage-mode buck just past its period doubling, exact -1.0139, read 0.97 to 0.99 at T/200: stored as
+            # stable; just before it, as unstable)
+            undecided = stability_undecided(rho, rho_2h) if status == CONVERGED else ""
+            if undecided:
+                rows[index] = self._exact_row(index, point, undecided)
+                continue
+            if run is None:                                # unstable at h and 2h alike: its failed row stands
+                continue
             try:
                 rows[index]["message"] = (step_error(model, p, method, run, at_2h) if status == CONVERGED else
                                           f"{TOO_COARSE} to tell: its orbit at 2h was not found")

@@ -3,6 +3,7 @@ interval of 0.37 % of T, GDCM-ON, GDCM-OFF, loads to 10 kOhm, 10 kHz to 1 MHz, d
 mean meets rtol against the exact event-driven orbit and every error estimate is within a factor 10 of the
 true error."""
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -771,3 +772,32 @@ def test_an_extremum_at_a_switching_corner_is_held_by_its_sample_and_asks_no_fin
     ripple = result.quantities["vout_ripple"]
     assert result.met and result.steps_per_period == 200
     assert ripple.value == pytest.approx(v_b * (1 - a_off), rel=1e-4)
+
+
+def test_accuracy_on_request_does_not_call_an_orbit_stable_the_steps_error_may_carry_across_one():
+    """The shipped voltage-mode buck at Vin = 24.58, past its period doubling (24.5166; the exact orbit's multiplier
+    -1.0139, an independent exact-flow computation): the stepper's orbits read stable, and --rtol 1e-4 had printed
+    its ripple 0.13105996 +- 2.2e-8 "met" where the circuit settles on its period-2 orbit (0.1598 V peak to peak).
+    Where the radius at the finest step and the one before leave the side of 1 open, the exact method decides; at
+    24.48 (exact 0.9916) that is a stable orbit, met."""
+    from converters.errors import SimulationError
+    from converters.models import Circuit
+    model = Circuit.from_netlist(str(Path(__file__).parents[2] / "netlists" / "circuits" / "voltage-mode-buck.cir"))
+    with pytest.raises(SimulationError, match=r"is unstable \(Floquet spectral radius 1\.013[89]"):
+        accurate_steady(model, model.resolve({"Vin": 24.58}), 1e-4)
+    result = accurate_steady(model, model.resolve({"Vin": 24.48}), 1e-4)
+    assert result.met and result.orbit.spectral_radius == pytest.approx(0.9916, abs=1e-3)
+
+
+def test_a_steady_run_whose_stability_the_step_leaves_open_says_so():
+    """The voltage-mode buck at Vin = 24.40, just before its period doubling (exact spectral radius 0.972): at
+    T/200 the stepper's orbit reads 0.967 and at T/100 1.013, across 1. The run's check names it and does not
+    trust its estimate."""
+    from converters.models import Circuit
+    from converters.run import run_converter, run_summary
+    model = Circuit.from_netlist(str(Path(__file__).parents[2] / "netlists" / "circuits" / "voltage-mode-buck.cir"))
+    summary = run_summary(run_converter(model, {"Vin": 24.40}, steady=True, h=400e-6 / 200))
+    assert summary["accuracy"]["trusted"] is False
+    (warning,) = [w for w in summary["warnings"] if "stability is undecided" in w]
+    assert "the orbit's stability is undecided at this step (Floquet spectral radius 0.96" in warning
+    assert warning.endswith("use --method event (or a smaller --h)")

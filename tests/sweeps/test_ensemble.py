@@ -488,3 +488,22 @@ def test_a_remote_orbit_newton_returns_to_at_the_maps_rounding_is_a_steady_state
         row = sweep.row(0, {"R": R})
         assert row["status"] == "ok", row["message"]
         assert row["vout_mean"] == pytest.approx(exact, rel=1e-4)          # the stepper at T/200
+
+
+@pytest.mark.parametrize("path", ["batched", "per-point"])
+def test_a_points_stability_the_step_may_carry_across_one_is_decided_by_the_exact_method(path):
+    """The shipped voltage-mode buck doubles its period at Vin = 24.5166 (the exact orbit's multiplier -1 there;
+    -1.0139 at 24.58, an independent exact-flow computation). At the sweep's T/200 the stepper's spectral radius is
+    0.96 to 1.02 across 24.40..24.64 and its error as large as its distance from 1: 24.56..24.60 had been stored ok
+    (unstable) and 24.46..24.50 failed (stable). Where the radius at h and 2h leave the side of 1 open, the exact
+    method decides, and the row says so."""
+    path_file = Path(__file__).parents[2] / "netlists" / "circuits" / "voltage-mode-buck.cir"
+    sweep = ModelSweep(model=str(path_file))
+    items = [(0, {"Vin": 24.48}), (1, {"Vin": 24.58})]
+    rows = sweep.rows(items) if path == "batched" else [sweep.row(i, point) for i, point in items]
+    stable, unstable = rows
+    assert stable["status"] == "ok" and stable["message"].endswith("decided by the exact method")
+    assert stable["spectral_radius"] == pytest.approx(0.9916, abs=1e-3)
+    assert unstable["status"] == "failed"
+    radius = float(unstable["message"].split("unstable orbit (Floquet spectral radius ")[1].split(")")[0])
+    assert radius == pytest.approx(1.0139, abs=2e-4)

@@ -412,12 +412,12 @@ class _Machine:
             g_scale = g_scale + np.abs(watch.slopes) * self.scale
         def too_long() -> Exception:
             from ...errors import ResourceError
-            return ResourceError(f"--method event: the stiffest mode's time constant is about {4.0 * flow.delta:.3g} s, "
-                                 f"so crossing {tau_max:.3g} s takes "
+            return ResourceError(f"--method event: the stiffest mode's time constant is about "
+                                 f"{4.0 * flow.delta:.3g} s, so crossing {tau_max:.3g} s takes "
                                  f"{tau_max / flow.delta if flow.delta > 0 else np.inf:.3g} substeps (at most "
-                                 f"{MAX_SUBSTEPS:.0e}): a run or a switching period far longer than the circuit's fastest "
-                                 "time constant (a tiny C, L or R, or a long --t-end); use --method lcp, or a shorter "
-                                 "--t-end")
+                                 f"{MAX_SUBSTEPS:.0e}): a run or a switching period far longer than the circuit's "
+                                 "fastest time constant (a tiny C, L or R, or a long --t-end); use --method lcp, or a "
+                                 "shorter --t-end")
         # a search whose whole stretch is beyond reach is refused at once; one that may end at a crossing early (an
         # autonomous circuit's stretch is its run) once it has taken MAX_SUBSTEPS without meeting one
         if not (flow.delta > 0.0 and tau_max / flow.delta <= HOPELESS * MAX_SUBSTEPS):
