@@ -580,7 +580,8 @@ def _stability_at_2h(model: Model, p: dict, method: Method, tr: Trajectory) -> s
         return ""
     if not resolved(at_2h):
         return ""
-    undecided = stability_undecided(float(orbit["spectral_radius"]), at_2h.spectral_radius)
+    at_h = [complex(re, im) for re, im in orbit.get("multipliers", [])]
+    undecided = stability_undecided(at_h, at_2h.multipliers)
     return f"the orbit's {undecided[4:]}: use --method event (or a smaller --h)" if undecided else ""
 
 

@@ -668,7 +668,7 @@ def accurate_steady(model: Model, p: dict, rtol: float, *, x0: npt.NDArray[np.fl
         if worst <= target and not damped and few >= FEW_STEPS:
             # a spectral radius the step's own error may carry across 1 is no stable orbit yet: the exact method's
             # decides (a voltage-mode buck past its period doubling, exact -1.0139, read stable and "met")
-            undecided = (stability_undecided(orbit.spectral_radius, previous[1].spectral_radius)
+            undecided = (stability_undecided(orbit.multipliers, previous[1].multipliers)
                          if exact_takes_it else "")
             if not undecided:
                 return replace(result, wall_s=time.perf_counter() - clock)
@@ -902,8 +902,8 @@ class OrbitRuns:
     fine: Trajectory
     coarse: Trajectory | None
     order: float
-    #: The orbits' Floquet spectral radii at h and 2h (a stepper's), or None.
-    radii: tuple[float, float] | None = None
+    #: The orbits' Floquet multipliers at h and 2h (a stepper's), or None.
+    multipliers: tuple[npt.NDArray[np.complex128], npt.NDArray[np.complex128]] | None = None
 
     @property
     def factor(self) -> float:
@@ -956,7 +956,7 @@ def _orbit_runs(model: Model, p: dict, method: Method, x_guess: npt.NDArray[np.f
         # pump's diodes, each switching at the clock's edges, converge at order 1 and order 2 read 3.0x short)
         ceiling = min(order, ORDER_THROUGH_EVENTS) if substep_events(fine, T) else order
         order = _observed_order(model, p, method, orbit_2h.x0, fine, coarse_run, ceiling)
-    return OrbitRuns(fine, coarse_run, order, (orbit.spectral_radius, orbit_2h.spectral_radius))
+    return OrbitRuns(fine, coarse_run, order, (orbit.multipliers, orbit_2h.multipliers))
 
 
 def _observed_order(model: Model, p: dict, method: Method, x_2h: npt.NDArray[np.float64], fine: Trajectory,
@@ -1092,7 +1092,7 @@ def default_check(model: Model, p: dict, method: Method, tr: Trajectory, reporte
     if power_warning:
         out["warning"] = f"{out['warning']}; {power_warning}" if "warning" in out else power_warning
     from .periodic import stability_undecided
-    undecided = stability_undecided(*runs.radii) if runs.radii is not None else ""
+    undecided = stability_undecided(*runs.multipliers) if runs.multipliers is not None else ""
     if undecided:
         # (a voltage-mode buck near its period doubling: the stepper's radius at T/200 is 0.06 off the exact one)
         out["trusted"] = False

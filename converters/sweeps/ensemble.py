@@ -162,9 +162,9 @@ def step_error(model: Model, p: dict, method: Method, run: Trajectory, at_2h: Tr
     return f"{TOO_COARSE}: " + "; ".join(reasons) + ": use --rtol, or a smaller --h" if reasons else ""
 
 
-def _orbit_at_2h(model: Model, p: dict, method: Method, x_orbit: np.ndarray) -> tuple[Trajectory, float] | str:
-    """One period of the stepper's orbit at 2h, Newton from the orbit at h, and its spectral radius; or why it was
-    not found."""
+def _orbit_at_2h(model: Model, p: dict, method: Method, x_orbit: np.ndarray) -> tuple[Trajectory, np.ndarray] | str:
+    """One period of the stepper's orbit at 2h, Newton from the orbit at h, and its Floquet multipliers; or why it
+    was not found."""
     from ..analysis.periodic import resolved, shoot
     from ..simulate import simulate
     T = model.period(p)
@@ -172,7 +172,7 @@ def _orbit_at_2h(model: Model, p: dict, method: Method, x_orbit: np.ndarray) -> 
     orbit = shoot(model.problem(p, T, x_orbit), coarse, x_orbit, tol=STEADY_TOL, polish=True)
     if not resolved(orbit):
         return f"{TOO_COARSE} to tell: its orbit at 2h was not found ({orbit.message})"
-    return simulate(model.problem(p, T, orbit.x0), coarse), orbit.spectral_radius
+    return simulate(model.problem(p, T, orbit.x0), coarse), orbit.multipliers
 
 
 def failed_row(index: int, point: dict, message: str, wall_s: float = 0.0) -> dict:
@@ -345,8 +345,8 @@ class ModelSweep:
                                                 orbit.distance <= ROUNDED_TOL):
                     return failed_row(index, point, f"no steady state: {orbit.message}", time.perf_counter() - clock)
                 at_2h = _orbit_at_2h(model, p, method, orbit.x0) if method.fixed_step else None
-                if isinstance(at_2h, tuple) and stability_undecided(orbit.spectral_radius, at_2h[1]):
-                    return self._exact_row(index, point, stability_undecided(orbit.spectral_radius, at_2h[1]))
+                if isinstance(at_2h, tuple) and stability_undecided(orbit.multipliers, at_2h[1]):
+                    return self._exact_row(index, point, stability_undecided(orbit.multipliers, at_2h[1]))
                 if unstable(orbit.spectral_radius):
                     return failed_row(index, point, unstable(orbit.spectral_radius), time.perf_counter() - clock)
                 if orbit.warning:          # an orbit the transient was not seen to reach (simulate warns of it)
@@ -510,7 +510,7 @@ class ModelSweep:
         found = _batch_orbits(prepared, self.warm_up)
         share = (time.perf_counter() - clock) / len(prepared)          # the compiled call's time, per point
         near: list[tuple] = []          # the converged points (their rows, or None where unstable) for the 2h pass
-        for item, (status, x_star, run, rho, iterations, residual, distance) in zip(prepared, found):
+        for item, (status, x_star, run, rho, iterations, residual, distance, multipliers) in zip(prepared, found):
             index, point, p, method, problem, plan, prep = item
             clock = time.perf_counter() - prep - share
             if status == ROUNDING and distance <= ROUNDED_TOL:     # kept: the per-point path's orbit
@@ -522,7 +522,7 @@ class ModelSweep:
                 continue
             if unstable(rho):
                 rows[index] = failed_row(index, point, unstable(rho), time.perf_counter() - clock)
-                near.append((index, point, p, method, problem, x_star, None, rho))     # unless 2h leaves it open
+                near.append((index, point, p, method, problem, x_star, None, multipliers))  # unless 2h leaves it open
                 continue
             if periods_apart(x_star, rho, problem.x0, STEADY_TOL) > REMOTE_PERIODS:
                 # an orbit its slowest mode would take so long to reach from the start: the point's own shoot()
@@ -538,7 +538,7 @@ class ModelSweep:
             rows[index] = {"index": int(index), **{key: _number(v) for key, v in point.items()}, "status": "ok",
                            "message": "", **measured, "spectral_radius": rho, "iterations": int(iterations),
                            "orbit_distance": float(distance), "wall_s": time.perf_counter() - clock}
-            near.append((index, point, p, method, problem, x_star, run, rho))
+            near.append((index, point, p, method, problem, x_star, run, multipliers))
         # the same points at 2h, from their orbits at h (a second compiled call: the check costs what the rows did)
         coarse, plans = [], {}
         for index, point, p, method, problem, x_star, run, rho in near:
@@ -547,13 +547,13 @@ class ModelSweep:
             key = (moved.switching, moved.t_span, twice, len(moved.configurations))
             plan = plans.get(key) or plans.setdefault(key, plan_arrays(moved, twice.h, twice.graded))
             coarse.append((index, None, p, twice, moved, plan, 0.0))
-        for (index, point, p, method, problem, x_star, run, rho), (status, _, at_2h, rho_2h, *_) in zip(
+        for (index, point, p, method, problem, x_star, run, mu), (status, _, at_2h, _, *rest) in zip(
                 near, _batch_orbits(coarse, 0) if coarse else []):
             clock = time.perf_counter()
             # a spectral radius whose distance from 1 the step's own error may cross: the exact method decides (a
             # voltage-mode buck just past its period doubling, exact -1.0139, read 0.97 to 0.99 at T/200: stored as
             # stable; just before it, as unstable)
-            undecided = stability_undecided(rho, rho_2h) if status == CONVERGED else ""
+            undecided = stability_undecided(mu, rest[-1]) if status == CONVERGED else ""
             if undecided:
                 rows[index] = self._exact_row(index, point, undecided)
                 continue
@@ -569,7 +569,7 @@ class ModelSweep:
 
 def _batch_orbits(prepared: list, warm_up: int) -> list[tuple]:
     """One compiled call (:func:`.batch.batch_steady`) for prepared points of one theta: per point (status, x*,
-    its one-period run, spectral radius, iterations, residual, distance)."""
+    its one-period run, spectral radius, iterations, residual, distance, Floquet multipliers)."""
     from .batch import batch_steady
     P = len(prepared)
     n = prepared[0][4].n
@@ -602,9 +602,10 @@ def _batch_orbits(prepared: list, warm_up: int) -> list[tuple]:
         config = np.concatenate([plan.step_config[:1], plan.step_config])
         run = _stepper_trajectory(problem, method, plan.t, xs[k, :count], us[k, :count, None], ys[k, :count, None],
                                   config)
-        rho = float(np.abs(np.linalg.eigvals(jac[k])).max()) if np.all(np.isfinite(jac[k])) else math.inf
+        multipliers = np.linalg.eigvals(jac[k]) if np.all(np.isfinite(jac[k])) else np.full(n, np.inf + 0j)
+        rho = float(np.abs(multipliers).max())
         out.append((int(status[k]), x_star[k].copy(), run, rho, int(iterations[k]), float(residuals[k]),
-                    float(distances[k])))
+                    float(distances[k]), multipliers))
     return out
 
 

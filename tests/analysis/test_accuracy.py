@@ -791,13 +791,13 @@ def test_accuracy_on_request_does_not_call_an_orbit_stable_the_steps_error_may_c
 
 def test_a_steady_run_whose_stability_the_step_leaves_open_says_so():
     """The voltage-mode buck at Vin = 24.40, just before its period doubling (exact spectral radius 0.972): at
-    T/200 the stepper's orbit reads 0.967 and at T/100 1.013, across 1. The run's check names it and does not
-    trust its estimate."""
+    T/200 the stepper's leading multiplier reads -0.967 and at T/100 -1.013, across the unit circle. The run's check
+    names it and does not trust its estimate."""
     from converters.models import Circuit
     from converters.run import run_converter, run_summary
     model = Circuit.from_netlist(str(Path(__file__).parents[2] / "netlists" / "circuits" / "voltage-mode-buck.cir"))
     summary = run_summary(run_converter(model, {"Vin": 24.40}, steady=True, h=400e-6 / 200))
     assert summary["accuracy"]["trusted"] is False
     (warning,) = [w for w in summary["warnings"] if "stability is undecided" in w]
-    assert "the orbit's stability is undecided at this step (Floquet spectral radius 0.96" in warning
+    assert "the orbit's stability is undecided at this step (its leading Floquet multiplier -0.966" in warning
     assert warning.endswith("use --method event (or a smaller --h)")
