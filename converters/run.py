@@ -247,7 +247,14 @@ def _on_steady_state(model: Model, p: dict, method: Method, span: float, x0: npt
                                                "and takes an orbit rounding resolves to that tolerance itself)")
     unstable = instability(orbit.multipliers, model.period(p))
     if unstable and not method.exact:
-        exact = _exact_orbit(model, p, orbit.x0, steady_tol)
+        exact, unchecked = _exact_orbit(model, p, orbit.x0, steady_tol)
+        if exact is None and unchecked:
+            # the step's instability or the circuit's: the exact method, which would tell them apart, could not run
+            step = getattr(method, "h", None)
+            raise SimulationError(f"the stepper's periodic orbit of {model.key}" + (f" at h = {step:.3g} s" if step
+                                  else "") + f" is {unstable.split(': the circuit')[0]}; the exact method, which "
+                                  f"would tell the circuit's from the step's, could not check it ({unchecked}): run "
+                                  "--periods N without --steady, or a smaller --h")
         if exact is not None and not instability(exact.multipliers, model.period(p)):
             # the stepper's orbit is unstable where the circuit's is not: its step's instability, not the circuit's
             # (a comparator chattering ~200 times a period inside 5 ns steps: 489.5 at h, 0.356 exact)
@@ -257,6 +264,8 @@ def _on_steady_state(model: Model, p: dict, method: Method, span: float, x0: npt
                 + (f" at h = {step:.3g} s" if step else "") + f" is {unstable.split(': the circuit')[0]}, where the "
                 f"circuit's exact orbit is stable (spectral radius {np.abs(exact.multipliers).max():.6g}): an "
                 "instability of the step, not of the circuit; use --method event, or a smaller --h", exact)
+        if exact is not None:                   # the circuit's own: its exact multipliers say how unstable
+            require_stable(model, p, exact, "run --periods N without --steady")
     require_stable(model, p, orbit, "run --periods N without --steady")
     tr = _on_orbit(model, p, method, period_map, orbit.x0, span)
     T = model.period(p)
@@ -296,17 +305,22 @@ class DiscretizationUnstable(SimulationError):
         self.exact = exact
 
 
-def _exact_orbit(model: Model, p: dict, x0: npt.NDArray[np.float64], steady_tol: float) -> PeriodicOrbit | None:
-    """The exact method's orbit from ``x0`` (a stepper's), None where the method does not take the circuit or
-    finds none: what decides whether a stepper's unstable orbit is the circuit's."""
+def _exact_orbit(model: Model, p: dict, x0: npt.NDArray[np.float64],
+                 steady_tol: float) -> tuple[PeriodicOrbit | None, str]:
+    """(the exact method's orbit from ``x0`` (a stepper's), '') : what decides whether a stepper's unstable orbit is
+    the circuit's; (None, '') where the method does not take the circuit (a SIN source), (None, why) where it
+    takes it but found no orbit or reached a limit."""
     from .methods import EventDriven
     method = EventDriven()
     try:
         method.supports(model.problem(p, model.period(p)))
+    except ParameterError:
+        return None, ""
+    try:
         return _orbit_and_map(model, p, method, x0=x0, warm_up=0, tol=0.1 * steady_tol,
-                              rounding_bound=steady_tol)[0]
-    except (ParameterError, SimulationError, ResourceError):
-        return None
+                              rounding_bound=steady_tol)[0], ""
+    except (ParameterError, SimulationError, ResourceError) as why:
+        return None, str(why).split("; ")[0]
 
 
 def _from_rest(model: Model, p: dict, method: Method, span: float, x0: npt.NDArray[np.float64] | None,
@@ -572,7 +586,9 @@ def _stability_at_2h(model: Model, p: dict, method: Method, tr: Trajectory) -> s
     orbit = tr.metadata.get("orbit")
     if not (method.fixed_step and model.periodic(p) and orbit):
         return ""
-    from .analysis.periodic import stability_undecided
+    from .analysis.periodic import passive, stability_undecided, undecided_remedy
+    if passive(model, p):
+        return ""
     T = model.period(p)
     try:
         at_2h = shoot(model.problem(p, T, tr.x[0]), method.coarsened(), tr.x[0], tol=1e-8, polish=True)
@@ -582,7 +598,7 @@ def _stability_at_2h(model: Model, p: dict, method: Method, tr: Trajectory) -> s
         return ""
     at_h = [complex(re, im) for re, im in orbit.get("multipliers", [])]
     undecided = stability_undecided(at_h, at_2h.multipliers)
-    return f"the orbit's {undecided[4:]}: use --method event (or a smaller --h)" if undecided else ""
+    return f"the orbit's {undecided[4:]}: {undecided_remedy(model, p)}" if undecided else ""
 
 
 def _schedule_driven(model: Model, p: dict) -> bool:

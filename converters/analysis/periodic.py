@@ -89,6 +89,27 @@ def stability_undecided(at_h: npt.ArrayLike, at_2h: npt.ArrayLike) -> str:
             f"{said(counterpart)} at 2h: within twice their difference of the unit circle)")
 
 
+def passive(model: Model, p: dict) -> bool:
+    """The circuit can only lose energy: switched on a time schedule, with no controlled source (a netlist's E, F,
+    G, H) and no loop of its own: its orbit cannot be unstable, whatever a step's multipliers say (a lossless LC
+    ring's pair at 0.81 at h, 0.66 at 2h). A state-driven law or a controlled source can destabilise it."""
+    from ..problems import Schedule
+    if not isinstance(model.problem(p, model.period(p)).switching, Schedule):
+        return False
+    netlist = getattr(model, "netlist", None)
+    return netlist is None or not any(e.kind in "EFGH" for e in netlist.elements)
+
+
+def undecided_remedy(model: Model, p: dict) -> str:
+    """What settles a stability the step leaves open: the exact method where it takes the circuit, else a step."""
+    from ..methods import EventDriven
+    try:
+        EventDriven().supports(model.problem(p, model.period(p)))
+    except ParameterError:
+        return "use a smaller --h"
+    return "use --method event (or a smaller --h)"
+
+
 def require_stable(model: Model, p: dict, orbit: PeriodicOrbit, instead: str) -> None:
     """Refuse an unstable orbit in one line: a fixed point of the period map the circuit does not settle on is no
     steady state (``instead``: what the command can run in its place)."""

@@ -316,7 +316,7 @@ class ModelSweep:
 
     def row(self, index: int, point: dict) -> dict:
         """The row of one point, by the per-point path (failures as rows)."""
-        from ..analysis.periodic import ROUNDING_LIMITED, shoot, stability_undecided
+        from ..analysis.periodic import ROUNDING_LIMITED, passive, shoot, stability_undecided
         from ..simulate import simulate
         clock = time.perf_counter()
         out = {"index": int(index), **{k: _number(v) for k, v in point.items()}}
@@ -345,7 +345,8 @@ class ModelSweep:
                                                 orbit.distance <= ROUNDED_TOL):
                     return failed_row(index, point, f"no steady state: {orbit.message}", time.perf_counter() - clock)
                 at_2h = _orbit_at_2h(model, p, method, orbit.x0) if method.fixed_step else None
-                if isinstance(at_2h, tuple) and stability_undecided(orbit.multipliers, at_2h[1]):
+                if isinstance(at_2h, tuple) and not passive(model, p) and stability_undecided(orbit.multipliers,
+                                                                                               at_2h[1]):
                     return self._exact_row(index, point, stability_undecided(orbit.multipliers, at_2h[1]))
                 if unstable(orbit.spectral_radius):
                     return failed_row(index, point, unstable(orbit.spectral_radius), time.perf_counter() - clock)
@@ -503,7 +504,7 @@ class ModelSweep:
     def _batched(self, model: Model, prepared: list, rows: dict) -> None:
         """The rows of prepared points of one theta through one compiled call (:func:`.batch.batch_steady`), and
         each converged row checked against its orbit at 2h through a second one (:func:`step_error`)."""
-        from ..analysis.periodic import REMOTE_PERIODS, periods_apart, stability_undecided
+        from ..analysis.periodic import REMOTE_PERIODS, passive, periods_apart, stability_undecided
         from ..methods.theta import plan_arrays
         from .batch import CONVERGED, ROUNDING
         clock = time.perf_counter()
@@ -547,13 +548,14 @@ class ModelSweep:
             key = (moved.switching, moved.t_span, twice, len(moved.configurations))
             plan = plans.get(key) or plans.setdefault(key, plan_arrays(moved, twice.h, twice.graded))
             coarse.append((index, None, p, twice, moved, plan, 0.0))
+        lossy = passive(model, prepared[0][2])        # (the points differ in values only: one structure, one law)
         for (index, point, p, method, problem, x_star, run, mu), (status, _, at_2h, _, *rest) in zip(
                 near, _batch_orbits(coarse, 0) if coarse else []):
             clock = time.perf_counter()
             # a spectral radius whose distance from 1 the step's own error may cross: the exact method decides (a
             # voltage-mode buck just past its period doubling, exact -1.0139, read 0.97 to 0.99 at T/200: stored as
             # stable; just before it, as unstable)
-            undecided = stability_undecided(mu, rest[-1]) if status == CONVERGED else ""
+            undecided = stability_undecided(mu, rest[-1]) if status == CONVERGED and not lossy else ""
             if undecided:
                 rows[index] = self._exact_row(index, point, undecided)
                 continue

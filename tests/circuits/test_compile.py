@@ -640,6 +640,8 @@ def test_the_defaults_answer_with_the_exact_method_where_the_stepper_does_not_ta
                                                                              "Co2 in sw2 2n"))
     tr = run_converter(model, t_end=1e-4)
     assert tr.algorithm.exact
+    count, lost = tr.jump_losses(t0=0.0, t1=1e-4)            # each closing: 1/2 Coss Vin^2 (the diode conducts)
+    assert count > 10 and lost == pytest.approx(count * 0.5 * 2e-9 * 12.0 ** 2, rel=1e-9)
     (warning,) = [w for w in tr.metadata["warnings"] if w.startswith("the stepper does not take this circuit")]
     assert "is not stepped yet" in warning and warning.endswith("the exact (event) method's run is given")
     with pytest.raises(ParameterError, match="use --method event"):
