@@ -131,8 +131,8 @@ def test_steady_refuses_an_unstable_orbit_and_reports_stability(capsys):
     """At 28 V the period-1 orbit exists but is unstable (multiplier -1.486): it is not the circuit's steady state."""
     code, out, err = run_cli(capsys, "simulate", "buck", "--control", "voltage-mode", "-p", "Vin=28", "--steady")
     assert code == 2 and out == ""
-    # the stepper's multiplier: the exact one is -1.48442 (event method), theta 0.5 at T/1000 reads -1.48843
-    assert "the periodic orbit of buck --control voltage-mode is unstable (Floquet spectral radius 1.488" in err
+    # the exact multiplier (the event method's, which confirms the stepper's -1.48843 at T/1000 as the circuit's)
+    assert "the periodic orbit of buck --control voltage-mode is unstable (Floquet spectral radius 1.48442" in err
     code, out, _ = run_cli(capsys, "simulate", "buck", "--control", "voltage-mode", "-p", "Vin=22", "--steady",
                            "--method", "event", "--json")
     orbit = json.loads(out)["orbit"]
