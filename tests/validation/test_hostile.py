@@ -141,7 +141,9 @@ FUZZ = [
      {"ps.cir": "peak detector through 10 pH and 1 ohm\n.param f=100k T={1/f} e={1e-3/f}\n"
                 "Vs a 0 PULSE(-10 10 {T/2-e/2} {e} {e} {T/2-e} {T})\nR1 a b 1\nL1 b c 10p\nD1 c out DMOD\n"
                 "C1 out 0 1u\nR2 out 0 1k\n.model DMOD D\n.tran {T/1000} {100*T}\n.end\n"},
-     "the run did not finish within the time limit of 2 s (--time-limit)"),
+     # whichever comes first: the limit, or the crossing search's bound on substeps (2.4e7 for one 5 us stretch)
+     ("the run did not finish within the time limit of 2 s (--time-limit)",
+      "the stiffest mode's time constant is about 8.33e-13 s, so crossing 5e-06 s takes 2.4e+07 substeps")),
     ("bifurcation-time-limit", ["bifurcation", "buck", "--param", "A=1:2", "--time-limit", "5"], {},
      "--time-limit bounds ngspice runs and LCP solves; this command runs neither"),
     ("param-twice", ["simulate", "buck", "-p", "Vin=1", "-p", "Vin=2"], {}, "-p Vin is given twice (Vin=1 and Vin=2)"),
@@ -240,7 +242,7 @@ def test_each_hostile_case_gets_one_clear_line_quickly_and_in_bounded_memory(fuz
     assert code not in (0, "timeout"), (code, err)
     assert "Traceback" not in err and "Traceback" not in out
     assert len(lines) == 1 and lines[0].startswith("pcsuite:"), err
-    assert expected in lines[0], lines[0]
+    assert any(said in lines[0] for said in ((expected,) if isinstance(expected, str) else expected)), lines[0]
     assert cpu < TIME_BOUND_S, cpu
     assert maxrss_kb < MEMORY_BOUND_KB, maxrss_kb
     assert after == before                                    # nothing written anywhere, OUT included
