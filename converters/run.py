@@ -282,15 +282,12 @@ def _exact_instead(model: Model, p: dict, method: Method) -> tuple[Method, str] 
     span = model.period(p) if model.periodic(p) else getattr(model, "default_duration", lambda p: None)(p)
     if method.exact or span is None:
         return None
-    problem = model.problem(p, span)
     try:
-        method.supports(problem)
+        method.supports(model.problem(p, span))
         return None
     except ParameterError as refused:
-        from .methods import EventDriven
-        try:
-            EventDriven().supports(problem)
-        except ParameterError:
+        from .analysis.periodic import exact_refusal
+        if exact_refusal(model, p, span):
             return None
         reason = str(refused).split(": use --method event")[0]
         return make_method(model, p, "event"), (f"the stepper does not take this circuit ({reason}): the exact "
@@ -310,14 +307,12 @@ def _exact_orbit(model: Model, p: dict, x0: npt.NDArray[np.float64],
     """(the exact method's orbit from ``x0`` (a stepper's), '') : what decides whether a stepper's unstable orbit is
     the circuit's; (None, '') where the method does not take the circuit (a SIN source), (None, why) where it
     takes it but found no orbit or reached a limit."""
+    from .analysis.periodic import exact_refusal
     from .methods import EventDriven
-    method = EventDriven()
-    try:
-        method.supports(model.problem(p, model.period(p)))
-    except ParameterError:
+    if exact_refusal(model, p):
         return None, ""
     try:
-        return _orbit_and_map(model, p, method, x0=x0, warm_up=0, tol=0.1 * steady_tol,
+        return _orbit_and_map(model, p, EventDriven(), x0=x0, warm_up=0, tol=0.1 * steady_tol,
                               rounding_bound=steady_tol)[0], ""
     except (ParameterError, SimulationError, ResourceError) as why:
         return None, str(why).split("; ")[0]

@@ -100,14 +100,20 @@ def passive(model: Model, p: dict) -> bool:
     return netlist is None or not any(e.kind in "EFGH" for e in netlist.elements)
 
 
-def undecided_remedy(model: Model, p: dict) -> str:
-    """What settles a stability the step leaves open: the exact method where it takes the circuit, else a step."""
+def exact_refusal(model: Model, p: dict, span: float | None = None) -> str:
+    """'' where the exact (event) method takes the circuit at ``p`` (over ``span``, default its period), else why
+    not (a SIN source): the one test of the places that leave a question to the exact method."""
     from ..methods import EventDriven
     try:
-        EventDriven().supports(model.problem(p, model.period(p)))
-    except ParameterError:
-        return "use a smaller --h"
-    return "use --method event (or a smaller --h)"
+        EventDriven().supports(model.problem(p, model.period(p) if span is None else span))
+    except ParameterError as refused:
+        return str(refused)
+    return ""
+
+
+def undecided_remedy(model: Model, p: dict) -> str:
+    """What settles a stability the step leaves open: the exact method where it takes the circuit, else a step."""
+    return "use a smaller --h" if exact_refusal(model, p) else "use --method event (or a smaller --h)"
 
 
 def require_stable(model: Model, p: dict, orbit: PeriodicOrbit, instead: str) -> None:

@@ -558,8 +558,10 @@ def _carrying(c, samples: Samples) -> np.ndarray:
     # amperes: a peak detector's diode fed through 1 Gohm carries 9 pA where 1e-9 of its 10 V source is 10 nA, and
     # had read "off 1.000000" where it conducts half the period; the mixed scale stays a bound (a pair whose
     # current no impedance of its own sets, D_ii = 0: a diode in series with an inductor)
-    diagonal = np.array([np.diag(k.D) if np.size(k.D) else np.zeros(forms.shape[1]) for k in c.configurations])
-    d = diagonal[np.asarray(samples.config, dtype=np.int64)]
+    if "_pair_diagonals" not in c.__dict__:          # (per configuration, once: measures read many sample blocks)
+        c.__dict__["_pair_diagonals"] = np.array([np.diag(k.D) if np.size(k.D) else np.zeros(forms.shape[1])
+                                                  for k in c.configurations])
+    d = c.__dict__["_pair_diagonals"][np.asarray(samples.config, dtype=np.int64)]
     with np.errstate(divide="ignore"):
         conductance = np.where(forms, np.where(d > 0.0, 1.0 / np.where(d > 0.0, d, 1.0), np.inf), d)
     conductance = np.where(conductance > 0.0, conductance, np.inf)

@@ -375,12 +375,10 @@ class ModelSweep:
         takes the circuit (its message says so), else failed with the reason."""
         from dataclasses import replace
 
-        from ..methods import EventDriven
+        from ..analysis.periodic import exact_refusal
         model = self._model()
-        p = model.resolve({**self.base, **point})
-        try:
-            EventDriven().supports(model.problem(p, model.period(p)))
-        except ValueError as refused:
+        refused = exact_refusal(model, model.resolve({**self.base, **point}))
+        if refused:
             return failed_row(index, point, f"{why}; the exact method does not take the circuit ({refused}): use a "
                                             "smaller --h")
         row = replace(self, method="event", theta=None).row(index, point)
