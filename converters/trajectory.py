@@ -13,13 +13,19 @@ were produced (``rule``):
                 piece: the trapezoidal rule on y^2 would add its own error, 3e-4 at T/100 on a DCM
                 buck's current, more than the methods' own)
     ``exact``   Gauss-Legendre quadrature on the exact pieces of the event-driven solution
+
+A stepper that moves its states by the pair variables at each step's end (the theta method's h B u_{k+1}:
+``pair_rule = "end"``) has its signals' means taken in two parts: the part that reads the state by ``rule``,
+the part that reads the pair variables by the end-point rule. The discrete charge and flux balances hold with
+that rule, and the state's own accuracy carries over to the mean. The linear rule on the pairs' samples would
+add half a step of every jump: a Cockcroft-Walton diode's current, 0.287 A at its edge, read 4.5 % high.
 """
 from __future__ import annotations
 
 import itertools
 import math
 from collections.abc import Callable, Iterable, Iterator, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from enum import Enum
 from typing import TYPE_CHECKING, Any, ClassVar, Protocol, TypeAlias, Union, cast
 
@@ -237,6 +243,10 @@ class Trajectory:
     steps: int = 0
     wall_s: float = 0.0
     rule: str = "linear"
+    #: How the pair variables' share of a signal's mean is integrated: ``rule``'s way (``"linear"``: also a
+    #: smoothed run's u, a smooth function of y), or ``"end"`` where the method moves the states by the pairs at
+    #: each step's end (module docstring).
+    pair_rule: str = "linear"
     exact: ExactSolution | None = None
     event_columns: EventColumns | Callable[[], EventColumns | None] | None = None
     labels: SignalLabels | None = None
@@ -418,7 +428,13 @@ class Trajectory:
             return float(dt @ v[1:] ** power)
         a, b = v[:-1], v[1:]
         if name not in self.state_names and name not in self.measured:
-            a = self._step_starts(lambda samples: cast("SignalLabels", self.labels).signal(name, samples), rows, a)
+            labels = cast("SignalLabels", self.labels)
+            algebraic = self._algebraic_part(name) if power == 1 else None
+            if algebraic is not None:
+                own = algebraic(self.samples(rows))
+                starts = self._step_starts(algebraic, rows, own[:-1])
+                return float(dt @ (0.5 * (starts + own[1:])) + dt @ (v - own)[1:])
+            a = self._step_starts(lambda samples: labels.signal(name, samples), rows, a)
         if power == 1:
             return float(dt @ (0.5 * (a + b)))
         return float(dt @ ((a * a + a * b + b * b) / 3.0))
@@ -482,6 +498,56 @@ class Trajectory:
             np.zeros(0, dtype=int), None, self.samples(rows[:0]))
         return IntegrationPoints(rule, rows=self.samples(rows), dt=np.diff(self.t[rows]), edges=edges,
                                  edge_starts=first)
+
+    def pair_moved(self, names: Iterable[str]) -> list[str]:
+        """Those of ``names`` whose mean reads a share of the pair variables by the end-point rule (``pair_rule``
+        "end": the share that moves the state), where it is not zero: what a page that integrates the samples by
+        the linear rule alone reads differently."""
+        moved = []
+        for name in names:
+            algebraic = self._algebraic_part(name) if name not in self.state_names and name not in self.measured \
+                else None
+            if algebraic is not None:
+                samples = self.samples()
+                if np.any(np.asarray(self.signal(name), dtype=float) != algebraic(samples)):
+                    moved.append(name)
+        return moved
+
+    def _algebraic_part(self, name: str) -> Callable[[Samples], npt.NDArray[Any]] | None:
+        """The signal ``name`` with the pair variables' state-moving share taken out (:meth:`_moving_pairs`), as a
+        function of samples; None where the run's pairs are not integrated apart (``pair_rule`` "linear")."""
+        moving = self._moving_pairs() if self.pair_rule == "end" and self.labels is not None else None
+        if moving is None:
+            return None
+        labels = self.labels
+
+        def algebraic(samples: Samples) -> npt.NDArray[Any]:
+            u = np.asarray(samples.u, dtype=float)
+            kept = u - np.einsum("nij,nj->ni", moving[np.asarray(samples.config, dtype=np.int64)], u)
+            return np.asarray(labels.signal(name, replace(samples, u=kept)), dtype=float)
+        return algebraic
+
+    def _moving_pairs(self) -> npt.NDArray[np.float64] | None:
+        """Per configuration, the projector onto the pair directions that move the state (the row space of B,
+        (configs, k, k)): the share of a signal the stepper's h B u_{k+1} integrates, by the end-point rule
+        (module docstring). The rest of u (a diode's current that the inductor's fixes, B's null space) is
+        algebraic: the linear rule reads it. None where the run has no pairs or no problem to read B from."""
+        if "_moving" in self.__dict__:
+            return cast("npt.NDArray[np.float64] | None", self.__dict__["_moving"])
+        projectors = None
+        configurations = getattr(self.problem, "configurations", None)
+        if self.u is not None and self.u.shape[1] and self.config is not None and configurations is not None:
+            stack = []
+            for c in configurations:
+                B = np.asarray(c.B, dtype=float)
+                _, sigma, vt = np.linalg.svd(B)
+                rank = int((sigma > 1e-12 * sigma.max(initial=0.0)).sum()) if sigma.size else 0
+                stack.append(vt[:rank].T @ vt[:rank])
+            projectors = np.array(stack)
+            if int(self.config.max(initial=0)) >= len(stack):
+                projectors = None                   # a run in phases whose later problems have more configurations
+        self.__dict__["_moving"] = projectors
+        return projectors
 
     def _step_starts(self, function: Callable[[Samples], npt.ArrayLike], rows: np.ndarray,
                      starts: np.ndarray) -> np.ndarray:
@@ -724,7 +790,6 @@ class Trajectory:
             columns["step"] = np.minimum(np.searchsorted(rows, np.asarray(columns["step"], dtype=np.int64)),
                                          rows.size - 1)
         measured = {k: np.asarray(v)[rows] for k, v in self.measured.items()}
-        from dataclasses import replace
         return replace(self, t=t[rows], x=self.x[rows], u=pick(self.u), y=pick(self.y), config=pick(self.config),
                        relay=pick(self.relay), held=pick(self.held), event_columns=columns, measured=measured,
                        resolved_from=resolved)
@@ -780,7 +845,6 @@ def concatenate(parts: list[Trajectory]) -> Trajectory:
     first = parts[0]
     if len(parts) == 1:
         return first
-    from dataclasses import replace
 
     import pandas as pd
 

@@ -175,6 +175,14 @@ def of_sweep(frame: Any, parameter: str, metrics: list[str], units: dict | None 
                  x_unit=str(units.get(parameter, "")), x_log=log)
 
 
+def pair_note(names: list[str]) -> str:
+    """What a scope says of the signals whose run's mean reads the stepper's pair share by the end-point rule
+    (:meth:`converters.trajectory.Trajectory.pair_moved`), which the page's linear rule does not."""
+    return (f"the run's means of {', '.join(names[:4])}{' and more' if len(names) > 4 else ''} read the diodes' "
+            "share at each step's end, as the stepper moved the charge; the page's read the linear rule on the "
+            "samples (half a step of each jump apart)")
+
+
 def _default_signals(tr: Any) -> list[str]:
     names = list(tr.state_names)
     for extra in ("vout", "switch"):
@@ -190,6 +198,7 @@ def _trace_of(tr: Any, names: list[str], source: str, t0: float | None = None) -
     notes = []
     if tr.rule == "exact":
         notes.append(EXACT_NOTE)
+    notes += [pair_note(moved) for moved in [tr.pair_moved(names)] if moved]
     if rows[0] > 0 and tr.t[0] < tr.resolved_from and (t0 is None or t0 < tr.resolved_from):
         notes.append(f"the run kept every step from {tr.resolved_from:.6g} s on (--output-step before it): the scope "
                      "shows that part")
@@ -239,6 +248,10 @@ def of_frame(frame: Any, meta: dict | None = None, title: str = "") -> Scope:
            "linear rule on its samples"
     if rule:
         note = EXACT_NOTE if stored.get("exact") is True else ""
+        moved = stored.get("pair_moved")
+        moved = [str(n) for n in moved if str(n) in names] if isinstance(moved, list) else []
+        if moved:
+            note = "; ".join(filter(None, (note, pair_note(moved))))
     modes = frame["mode"].astype(str).to_numpy() if "mode" in frame.columns else None
     trace = Trace(str(meta.get("method") or "run")[:40], frame["time"].to_numpy(dtype=float),
                   {n: frame[n].to_numpy(dtype=float) for n in names}, rule or "linear", edge_rows, edge_values, modes,
@@ -271,7 +284,7 @@ def scope_meta(tr: Any, names: list[str]) -> dict:
     their start values (``pcsuite view`` reads them back)."""
     rule, edge_rows, edge_values = _rule_of(tr, _rows(tr, None), names)
     return {"rule": rule, "exact": tr.rule == "exact", "edge_rows": edge_rows.tolist(),
-            "edge_values": {n: v.tolist() for n, v in edge_values.items()}}
+            "edge_values": {n: v.tolist() for n, v in edge_values.items()}, "pair_moved": tr.pair_moved(names)}
 
 
 # --- the page --------------------------------------------------------------------------------------------------

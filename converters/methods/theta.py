@@ -678,7 +678,7 @@ def _trajectory(problem: LCSProblem, method: Theta, t: FloatArray, x: FloatArray
                       pair_names=problem.pair_names,
                       config_names=tuple(c.name or f"config{i}" for i, c in enumerate(problem.configurations)),
                       relay=relay, event_columns=events, method=method.key, steps=t.shape[0] - 1, wall_s=wall_s,
-                      rule="end" if method.theta == 1.0 else "linear", period=problem.switching.period,
+                      rule="end" if method.theta == 1.0 else "linear", pair_rule="end", period=problem.switching.period,
                       general_solves=general_solves, problem=problem, algorithm=method, jumps=jumps,
                       metadata=dict(problem.metadata, h=method.h, theta=method.theta, label=method.label))
 
