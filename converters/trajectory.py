@@ -398,6 +398,13 @@ class Trajectory:
         # t is non-decreasing: the window's rows by bisection (a scan would cost O(N) per window)
         first = int(np.searchsorted(self.t, t0 - 1e-12 * span, side="left"))
         last = int(np.searchsorted(self.t, t1 + 1e-12 * span, side="right"))
+        # an end between two rows takes the nearer: a stepper's plan drops a period's start within h/1000 of a
+        # switching instant (a ramp reset 5e-9 T before it), and the window [t - T, t] had lost its first step
+        if (0 < first < self.t.size and t0 - self.t[first - 1] < self.t[first] - t0
+                and self.t[first - 1] >= self.resolved_from):
+            first -= 1
+        if 0 < last < self.t.size and self.t[last] - t1 < t1 - self.t[last - 1]:
+            last += 1
         rows = np.arange(first, last)
         if rows.size < 2:
             last = min(max(int(np.searchsorted(self.t, t1)), 1), self.t.size - 1)

@@ -916,18 +916,26 @@ class _Compiler:
                                           "ramp: PULSE(V1 V2 TD TR TF PW PER) rising over TR, with its width, its "
                                           "fall and any rest at V1 (PER - TR) at most PER/1000, and TD under PER "
                                           f"(got TR = {w.tr:.6g} s, PER = {w.per:.6g} s)")
-                # s = VT - V: the ramp enters as -a pulse, the sawtooth from V1 to V2 over the whole period that the
-                # PULSE draws (its retrace instantaneous: a built-in model's ramp). A delayed ramp (TD > 0: a second
-                # phase) is periodic from t = 0, where SPICE holds V1 until TD: a run from rest differs over its first
-                # TD seconds only
-                ramp = Ramp(low=a * w.v1, high=a * w.v2, period=w.per, delay=w.td)
-                if w.per - w.tr > RETRACE_SAID * w.per:
+                # s = VT - V: the ramp enters as -a pulse, a sawtooth with the PULSE's own slope (V2 - V1) / TR,
+                # so a crossing as it rises is the PULSE's to rounding, reset at the middle of its fall (TD + TR + PW
+                # + TF / 2): a crossing as it falls, at TR + PW + TF (V2 - V) / (V2 - V1), moves by TF / 2 at most.
+                # Against an exact computation of the literal PULSE (a fall of 5e-4 of the period), the voltage-mode
+                # buck's vout is 2.2e-5 V off (the sawtooth over the whole period: 9.9e-5; reset at the fall's end:
+                # 1.05e-4). A delayed ramp (TD > 0: a second phase) is periodic from t = 0, where SPICE holds V1
+                # until TD: a run from rest differs over its first TD seconds only
+                slope = (w.v2 - w.v1) / w.tr
+                reset = w.tr + w.pw + w.tf / 2
+                low = w.v1 - slope * (w.per - reset)
+                ramp = Ramp(low=a * low, high=a * (low + slope * w.per), period=w.per,
+                            delay=math.fmod(w.td + reset, w.per))
+                if w.tf / 2 > RETRACE_SAID * w.per:
                     self.ramp_notes.append(
-                        f"{src.title}'s ramp retraces over {(w.per - w.tr) / w.per:.2g} of its period (PER - TR), "
-                        f"which {switch.title}'s comparator takes as the sawtooth from V1 to V2 over the whole period, "
-                        "its retrace instantaneous: a switching inside the retrace (a turn-on as the ramp falls) is "
-                        "moved by up to that, and the numbers with it, against ngspice's (said from "
-                        f"{RETRACE_SAID:g} of the period)")
+                        f"{src.title}'s ramp falls over {w.tf / w.per:.2g} of its period (TF), which "
+                        f"{switch.title}'s comparator takes at the fall's middle: a switching as the ramp falls is "
+                        f"moved by up to {w.tf / 2 / w.per:.2g} of the period, and the numbers with it, against "
+                        "ngspice's (a control beyond V2 by less than the ramp's slope times its width and half its "
+                        "fall, or below V1 by less than its slope times half its fall and its rest, crosses where the "
+                        f"PULSE does not; said from {RETRACE_SAID:g} of the period)")
             elif isinstance(w, (Sin, Pwl)):
                 raise self.error(src, f"{src.title}: a {type(w).__name__.upper()} in {switch.title}'s control is not "
                                       "compiled")
@@ -1448,8 +1456,8 @@ class _Compiler:
 
     def moved(self, state_names: tuple[str, ...]) -> tuple[str, ...]:
         """A warning where the file's initial conditions (IC=, .ic) contradict a loop of capacitors or a cutset of
-        inductors, which the run's start is moved onto (:meth:`consistent`); and where a comparator's ramp retraces
-        over more than RETRACE_SAID of its period (:meth:`state_law`)."""
+        inductors, which the run's start is moved onto (:meth:`consistent`); and where half a comparator's ramp's fall
+        takes more than RETRACE_SAID of its period (:meth:`state_law`)."""
         return tuple(dict.fromkeys(self.ramp_notes)) + self._moved_start(state_names)
 
     def _moved_start(self, state_names: tuple[str, ...]) -> tuple[str, ...]:
@@ -1612,10 +1620,10 @@ def waveform_at(w: Waveform, t: _Array) -> _Array:
     return out
 
 
-#: A comparator's ramp whose retrace (PER - TR: its width, fall and any rest at V1) takes more than this fraction of
-#: its period is said to be taken as instantaneous (against the literal PULSE a voltage-mode buck's period doubling
-#: moves 9e-4 of Vin with a retrace of 1e-3 of the period, 2e-6 with the shipped netlist's 2e-6).
-RETRACE_SAID = 1e-5
+#: A comparator's ramp whose half fall (TF / 2, the most a switching as it falls moves: :meth:`_Compiler.state_law`)
+#: takes more than this fraction of its period is said with every run (against the literal PULSE, a fall of 1e-6 of
+#: the period moves the voltage-mode buck's period doubling by 8e-7 V from pcsuite's).
+RETRACE_SAID = 1e-8
 
 #: A SIN in a switch's control is crossed on pieces of at most 1/SINE_PIECES of its period between the other
 #: waveforms' corners (a sine-triangle modulator: the carrier's corners are far denser).

@@ -420,7 +420,7 @@ def test_accuracy_on_request_that_outgrows_the_memory_limit_states_its_best(tmp_
 BOOST_TYPE2 = """Boost 12 V -> 24 V, voltage mode, type II compensator (E, R, C; Aol = 1e5), output capacitor with ESR
 .param Vin=12 L=22u rL=0.1 C=100u Resr=0.1 R=10 f_sw=100k Vref=2.5 Aol=1e5
 .param Ri=10k Rb=1.1628k Rz=300 Cz=1u Cp=1n Vm=1
-.param T={1/f_sw} e={1e-6/f_sw}
+.param T={1/f_sw} e={1e-8/f_sw}
 Vin vin 0 DC {Vin}
 RL vin x {rL}
 L1 x sw {L} IC=4.2

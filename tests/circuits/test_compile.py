@@ -57,11 +57,16 @@ VOLTAGE_MODE = Path(__file__).resolve().parents[2] / "netlists" / "circuits" / "
 @pytest.mark.parametrize("vin", [20, 24])
 def test_a_comparator_on_the_circuits_own_voltages_is_the_hand_models_state_driven_law(vin):
     """The voltage-mode buck as a netlist (an E amplifier, a sawtooth PULSE, a switch whose control is v(ramp) -
-    v(vcon)) compiles to the hand model's StateSwitching: the same period-1 orbit (to 1e-10) and Floquet multipliers."""
+    v(vcon)) compiles to the hand model's StateSwitching: the same period-1 orbit (to 1e-10) and Floquet multipliers.
+    The hand model's sawtooth retraces at once; the file's PULSE over 2e-8 of the period (its orbit 3e-10 away),
+    here over 2e-13."""
     from converters.methods import EventDriven
     from converters.models import get_model
     from converters.run import steady_state
-    circuit, hand = Circuit.from_netlist(VOLTAGE_MODE), get_model("buck", "voltage-mode")
+    text = VOLTAGE_MODE.read_text()
+    assert ".param e={1e-8*T}" in text
+    circuit = Circuit.from_netlist("ideal-ramp.cir", text=text.replace(".param e={1e-8*T}", ".param e={1e-13*T}"))
+    hand = get_model("buck", "voltage-mode")
     p_c, p_h = circuit.resolve({"Vin": vin}), hand.resolve({"Vin": vin})
     orbit_c = steady_state(circuit, p_c, EventDriven(), tol=1e-11)
     orbit_h = steady_state(hand, p_h, EventDriven(), tol=1e-11)
@@ -79,6 +84,74 @@ def test_the_voltage_mode_netlist_doubles_its_period_at_the_published_input_volt
     flips = [b for b in json.loads(capsys.readouterr().out)["bifurcations"] if b["type"] == "period-doubling"]
     assert flips[0]["value"] == pytest.approx(24.516573, abs=2e-6)
 
+
+
+def _literal_ramp_orbit(vin, e):
+    """An independent reference: the voltage-mode buck (Hamill, Deane and Jefferies 1992: L 20 mH, C 47 uF, R 22 ohm,
+    vcon = 8.4 (vout - 11.3), S1 closed while PULSE(3.8 8.2 0 T-2e e e T) exceeds it) with the PULSE as written: CCM
+    flows by scipy's expm, the rising and falling crossings by brentq to 1e-15 of the period, the period-1 orbit by
+    fsolve; the mean of vout over the period from the flow's integral row. Returns (mean vout, S1's opening / T)."""
+    from scipy.linalg import expm
+    from scipy.optimize import brentq, fsolve
+    L, C, R, Vref, A, VL, VU, T = 20e-3, 47e-6, 22.0, 11.3, 8.4, 3.8, 8.2, 400e-6
+    TR, PW, TF = T - 2 * e * T, e * T, e * T
+
+    def ramp(t):
+        return VL + (VU - VL) * t / TR if t <= TR else VU if t <= TR + PW else VU - (VU - VL) * (t - TR - PW) / TF
+
+    def flow(z, on, dt):                               # z = (iL, vC, 1, integral of vC)
+        m = np.zeros((4, 4))
+        m[0, 1], m[0, 2], m[1, 0], m[1, 1], m[3, 1] = -1 / L, vin / L if on else 0.0, 1 / C, -1 / (R * C), 1.0
+        return expm(m * dt) @ z
+
+    def period(x0):
+        z = np.array([x0[0], x0[1], 1.0, 0.0])
+        closes = brentq(lambda t: ramp(t) - A * (flow(z, False, t)[1] - Vref), 0.0, TR, xtol=1e-18, rtol=1e-15)
+        z1 = flow(z, False, closes)
+        opens = brentq(lambda t: ramp(t) - A * (flow(z1, True, t - closes)[1] - Vref), TR + PW, T * (1 - 1e-15),
+                       xtol=1e-18, rtol=1e-15)
+        z2 = flow(z1, True, opens - closes)
+        return flow(z2, False, T - opens), opens
+    x = fsolve(lambda x0: period(x0)[0][:2] - x0, [0.55, 12.0], xtol=1e-13)
+    z, opens = period(x)
+    return z[3] / T, opens / T
+
+
+@pytest.mark.parametrize("method", ["event", "lcp"])
+def test_a_comparators_ramp_is_the_literal_pulses_but_for_half_its_fall(method):
+    """A ramp PULSE(VL VU 0 T-2e e e T) falling over e = 5e-4 T: S1 opens as it falls (at 0.99979 T here). Taken as
+    the sawtooth over the whole period (its slope (VU - VL) / T, its retrace at T) vout read 9.9e-5 V off an
+    independent computation of the literal PULSE; with the PULSE's own slope and its reset at the fall's middle it
+    is 2.2e-5 V off (the opening moved by 4.3e-5 T, less than TF / 2, as its note says). The period doubling with
+    the fall of 1e-6 T: 24.5166175 V against the literal PULSE's 24.5166184 (the same reference's Floquet multiplier
+    through -1, by central differences of its period map; the sawtooth over the whole period: 24.516573)."""
+    from converters.run import run_converter
+    text = VOLTAGE_MODE.read_text().replace(".param e={1e-8*T}", ".param e={5e-4*T}")
+    literal, opens = _literal_ramp_orbit(20.0, 5e-4)
+    assert 0.9995 < opens < 1.0                       # S1 opens inside the fall
+    tr = run_converter(Circuit.from_netlist("ramp.cir", text=text), {"Vin": 20}, steady=True, method=method)
+    assert abs(tr.mean("vout") - literal) < 2.5e-5
+    sawtooth = run_converter("buck", {"Vin": 20}, control="voltage-mode", steady=True, method="event")
+    assert abs(sawtooth.mean("vout") - literal) > 9e-5
+
+
+@pytest.mark.slow
+def test_the_voltage_mode_netlists_doubling_with_a_slow_fall_is_the_literal_pulses(capsys, tmp_path):
+    """The doubling with the shipped file's ramp falling over 1e-6 T (the file before: e = 1e-6 T): 24.5166175 V,
+    the literal PULSE's 24.5166184 (the independent reference of _literal_ramp_orbit: its multiplier through -1 by
+    brentq on Vin, the Jacobian by central differences of 1e-5 and 5e-7, agreeing to 6e-9 V); the sawtooth over the
+    whole period had given 24.516573, 4.6e-5 off, and a note now says a switching may move by 5e-7 of the period."""
+    import json
+
+    from validation.cli import main
+    path = tmp_path / "ramp.cir"
+    path.write_text(VOLTAGE_MODE.read_text().replace(".param e={1e-8*T}", ".param e={1e-6*T}"))
+    assert main(["bifurcation", str(path), "--param", "Vin=24:25", "--points", "0", "--max-period", "2",
+                 "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    flips = [b for b in out["bifurcations"] if b["type"] == "period-doubling"]
+    assert flips[0]["value"] == pytest.approx(24.5166184, abs=1.5e-6)
+    assert abs(flips[0]["value"] - 24.516573) > 4e-5
 
 SYNC = VOLTAGE_MODE.with_name("voltage-mode-sync-buck.cir")
 
@@ -648,19 +721,20 @@ def test_the_defaults_answer_with_the_exact_method_where_the_stepper_does_not_ta
         run_converter(model, t_end=1e-4, method="lcp")
 
 
-@pytest.mark.parametrize("retrace, said", [("T/2", None), ("{1e-3*T}", "0.001"), ("{2e-6*T}", None)])
+@pytest.mark.parametrize("retrace, said", [("T/2", None), ("{1e-3*T}", "0.0005"), ("{2e-6*T}", "1e-06"),
+                                           ("{2e-8*T}", None)])
 def test_a_comparators_ramp_must_rise_over_its_period_and_a_slow_retrace_is_said(retrace, said):
     """The shipped voltage-mode buck with its ramp PULSE(VL VU 0 TR e e T): rising over half the period and resting
     at VL for the other half, it had been read as the sawtooth over the whole period (the loop gain 4.9 dB high,
-    its mean 2.1 % off against an exact computation of the literal ramp): refused, naming the rise. A retrace of
-    1e-3 of the period is taken as instantaneous and said with every run (against the literal PULSE the period
-    doubling moves 9e-4 of Vin); the shipped one's 2e-6 is not."""
+    its mean 2.1 % off against an exact computation of the literal ramp): refused, naming the rise. A ramp whose
+    fall (TF = e) is taken at its middle, a switching there moved by up to TF / 2, says so with every run from 1e-8
+    of the period; the shipped one's (e = 1e-8 T) does not."""
     from converters.circuits.netlist import NetlistError
     text = (Path(__file__).parents[2] / "netlists" / "circuits" / "voltage-mode-buck.cir").read_text()
     if retrace == "T/2":
         text = text.replace("PULSE({VL} {VU} 0 {T - 2*e} {e} {e} {T})", "PULSE({VL} {VU} 0 {T/2} {e} {e} {T})")
     else:
-        text = text.replace(".param e={1e-6*T}", f".param e={{{retrace[1:-1]}/2}}")
+        text = text.replace(".param e={1e-8*T}", f".param e={{{retrace[1:-1]}/2}}")
     if said is None and retrace == "T/2":
         with pytest.raises(NetlistError, match=r"VRAMP: in voltage-controlled switch S1's control a PULSE must be "
                                                r"one sawtooth ramp: .*rising over TR.*\(got TR = 0\.0002 s, "
@@ -673,4 +747,6 @@ def test_a_comparators_ramp_must_rise_over_its_period_and_a_slow_retrace_is_said
         assert notes == ()
     else:
         (note,) = notes
-        assert note.startswith(f"voltage source VRAMP's ramp retraces over {said} of its period (PER - TR)")
+        assert note.startswith(f"voltage source VRAMP's ramp falls over {said} of its period (TF), which "
+                               "voltage-controlled switch S1's comparator takes at the fall's middle: a switching as "
+                               "the ramp falls is moved by up to")

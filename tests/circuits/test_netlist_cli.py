@@ -318,7 +318,7 @@ def test_compare_runs_ngspice_finer_where_its_modes_or_ripple_fail_though_its_me
 FILTERED_BUCK = """Type II voltage-mode buck behind a lightly damped LC input filter
 .param Vs=12 Lf=100u rLf=0.05 Cf=10u L=100u C=100u Resr=0.2 R=10 f_sw=100k
 .param Vref=5 Aol=1e5 Ri=10k Rz=20k Cz=15n Cp=270p
-.param T={1/f_sw} e={1e-6/f_sw}
+.param T={1/f_sw} e={1e-8/f_sw}
 Vs src 0 DC {Vs}
 Lf src lfr {Lf}
 RLf lfr in {rLf}

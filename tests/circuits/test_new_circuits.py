@@ -308,10 +308,12 @@ def test_interleaved_voltage_mode_buck_two_comparators_share_the_current_by_the_
         D = fractions["S1+D2"] + fractions["S1+S2"]
         assert fractions["S2+D1"] + fractions["S1+S2"] == pytest.approx(D, abs=1e-12)
         assert vout == pytest.approx(D * Vin / (1 + RL / (2 * R)), rel=1e-10)
-        closes = tr.events[(tr.events["kind"] == "switch")]
-        s1 = closes.loc[closes["config"].isin([1, 3]) & (closes["time"] < T / 2), "time"].to_numpy()
-        s2 = closes.loc[closes["config"].isin([2, 3]) & (closes["time"] >= T / 2), "time"].to_numpy()
-        assert s1.size == 1 and s2.size == 1 and s2[0] - s1[0] == pytest.approx(T / 2, abs=1e-12 * T)
+        switched = tr.events[(tr.events["kind"] == "switch")]
+        closed = [tuple(part.endswith("=on") for part in tr.config_names[c].split(",")) for c in switched["config"]]
+        before = [closed[-1], *closed[:-1]]          # one period of an orbit: the last event's configuration
+        times = switched["time"].to_numpy()
+        s1, s2 = ([t for t, now, then in zip(times, closed, before) if now[k] and not then[k]] for k in (0, 1))
+        assert len(s1) == 1 and len(s2) == 1 and s2[0] - s1[0] == pytest.approx(T / 2, abs=1e-12 * T)
     else:
         exact = orbit("interleaved-vm-buck", method="event", tol=1e-11, summary=False)[1]
         assert vout == pytest.approx(mean(exact, "vout", 0, T), rel=1e-7)
