@@ -57,6 +57,7 @@ class Sensitivities:
     skipped: dict                       # parameter -> why it has no sensitivity here
     multipliers: np.ndarray             # the orbit's Floquet multipliers (its stability)
     orbit_warning: str = ""             # the orbit's own (PeriodicOrbit.warning: a remote orbit)
+    border: str = ""                    # where the orbit lies at a border of its modes (SmallSignalModel.border)
 
     def as_dict(self) -> dict:
         return {"metric": self.metric, "value": self.metric_value, "unit": self.metric_unit,
@@ -64,7 +65,8 @@ class Sensitivities:
                                    "derivative": s.derivative, "normalised": s.normalised(self.metric_value)}
                                   for s in self.rows],
                 "skipped": dict(self.skipped),
-                "spectral_radius": float(np.abs(self.multipliers).max(initial=0.0))}
+                "spectral_radius": float(np.abs(self.multipliers).max(initial=0.0)),
+                **({"border": self.border} if self.border else {})}
 
 
 def parse_metric(text: str) -> tuple[str, str]:
@@ -132,7 +134,7 @@ def sensitivities(model: Model | str, params: dict | None = None, *, metric: str
     ranked = sorted(rows, key=lambda s: (-abs(s.normalised(value)) if math.isfinite(s.normalised(value)) else 0.0,
                                          -abs(s.derivative)))
     return Sensitivities(metric, signal, value, quantity_unit(model, p, signal), tuple(ranked), skipped,
-                         base.orbit.multipliers, base.orbit.warning)
+                         base.orbit.multipliers, base.orbit.warning, base.border())
 
 
 

@@ -72,6 +72,10 @@ MAX_CHECK_PERIODS = 20_000
 #: The finite move of an input for its derivatives (relative to its value, at least this absolute amount): the
 #: circuit is affine in it, so the difference is exact to rounding.
 RELATIVE_MOVE = 1e-3
+#: An orbit whose mode sequence changes within this fraction of the period (a mode this short, or a pair's guard
+#: reaching 0 this soon after another event) lies at a border: its derivatives are one-sided
+#: (:meth:`SmallSignalModel.border`).
+BORDER_PERIODS = 1e-6
 #: The move of a parameter of the dynamics (relative to its value) in its five-point difference.
 DYNAMIC_MOVE = 1e-5
 #: Its move in a three-point one-sided difference (at the end of its range: a resistance at 0), whose error is of
@@ -387,6 +391,59 @@ class SmallSignalModel:
                 j_u = self._jump_offset(config, xt_b, t) if not np.array_equal(J, np.eye(n)) else np.zeros(n)
                 pieces.append(self._jump(J, kick, j_u, np.zeros(n), shift, self._step(flow_b, xt_b, flow_a, xt_a, t)))
         return pieces
+
+    def border(self) -> str:
+        """Where the orbit lies within BORDER_PERIODS of the period from a border of its mode sequence, what meets
+        there, in one line; "" where it does not. At a border (a boost whose diode current reaches 0 as its switch
+        closes: CCM on one side, a DCM interval on the other) the orbit's derivatives are one-sided: the boost's
+        normalised d vout / d L read +0.00013 on one side, -0.2857 on the other, with no word. Two signs: a mode
+        that lasts less than that (the modes taken around the period), or a pair's guard (a held diode's current, a
+        free one's voltage) that would reach 0 less than that after its mode ends at another event."""
+        from scipy.linalg import expm
+        T, names = self.T, self.machine.problem.pair_names
+        spans = [(i, item) for i, item in enumerate(self.timeline) if isinstance(item, FlowSpan)]
+        if len(spans) < 2:
+            return ""
+        modes = [(item.flow.config, item.flow.held) for _, item in spans]
+        nearest, what = BORDER_PERIODS * T, ""
+        # the modes' lengths around the period (a mode that runs on across the period's end is one)
+        changes = [j for j in range(len(spans)) if modes[j] != modes[j - 1]]
+        for a, b in zip(changes, changes[1:] + [changes[0] + len(spans)] if changes else []):
+            length = sum(spans[j % len(spans)][1].t1 - spans[j % len(spans)][1].t0 for j in range(a, b))
+            if length < nearest:
+                item = spans[a][1]
+                nearest, what = length, f"a mode lasts {length / T:.2g} of the period from t = {item.t0:.6g} s"
+        for j, (i, item) in enumerate(spans):
+            if modes[(j + 1) % len(spans)] == modes[j]:
+                continue                                    # its mode runs on: no event ends it here
+            after = self.timeline[i + 1] if i + 1 < len(self.timeline) else None
+            flow = item.flow
+            rows = flow.watch_rows
+            # the pair whose own event ends the mode, and those in series with it (one current through a winding
+            # and two clamps, a bridge's two diodes: their guards are one, and reach 0 together at every value)
+            own = np.zeros(rows.shape[0], dtype=bool)
+            if isinstance(after, Crossing) and after.pair >= 0:
+                norms = np.linalg.norm(rows, axis=1)
+                ref = rows[after.pair] / max(norms[after.pair], 1e-300)
+                own = np.abs(rows @ ref) >= (1.0 - 1e-9) * norms
+            xt = expm(flow.Z * (item.t1 - item.t0)) @ item.xt0
+            g, speed = rows @ xt, rows @ (flow.Z @ xt)
+            for k in range(g.size):
+                if own[k] or not speed[k] < 0.0:
+                    continue
+                until = max(g[k], 0.0) / -speed[k]
+                if until < nearest:
+                    quantity = "current" if flow.held_flags[k] == self._currents(flow.config)[k] else "voltage"
+                    nearest, what = until, (f"{names[k].upper()}'s {quantity} would reach 0 {until / T:.2g} of the "
+                                            f"period after the event at t = {item.t1:.6g} s")
+        return f"the orbit lies {nearest / T:.2g} of the period from a border of its mode sequence ({what})" if what \
+            else ""
+
+    def _currents(self, config: int) -> npt.NDArray[np.bool_]:
+        """Per pair, whether u is the device's current in configuration ``config`` (else its voltage)."""
+        compiled = getattr(self.model, "compiled", None)
+        currents = compiled(self.params).pair_currents if compiled is not None else self.model.pair_currents
+        return np.asarray(currents[config], dtype=bool)
 
     @staticmethod
     def _jump(J: npt.NDArray[np.float64], kick: npt.NDArray[np.float64], j_u: npt.NDArray[np.float64],

@@ -154,3 +154,41 @@ def test_a_duty_ratio_a_move_from_one_takes_the_move_to_the_other_side():
     found = sensitivities("buck", {"D": 0.999}, parameters=["D"])
     (row,) = found.rows
     assert row.derivative == pytest.approx(finite_difference("buck", {"D": 0.999}, "vout", "D"), rel=1e-6)
+
+
+@pytest.mark.parametrize("L, side", [("36.0168u", "ccm"), ("36.0167995u", "dcm"), ("30u", None)])
+def test_an_orbit_at_a_border_of_its_modes_says_its_derivatives_are_one_sided(capsys, L, side):
+    """The ideal boost at D = 0.4, R = 50 ohm meets its CCM/DCM border at L = 36.0168 uH (D (1 - D)^2 R T / 2 =
+    36 uH with vout's ripple): there the mean has a kink. On the CCM side vout = Vin / (1 - D) whatever L (S_L ~ 0);
+    on the DCM side S_L = (K / M) dM/dK with M = (1 + sqrt(1 + 4 D^2 / K)) / 2 at K = D (1 - D)^2: -2/7. Both
+    sides printed their one-sided derivative with no word (only --check showed a 0.14 difference): each now says
+    the orbit lies at a border (D1's current reaches 0 4e-9 of the period after S1 closes; a DCM interval of
+    2.2e-10 of the period), in one line and in the JSON; an orbit 0.2 of the period from it (30 uH) says nothing.
+    The frequency response says so too."""
+    assert main(["sensitivity", str(NETLISTS / "boost.cir"), "-p", f"L={L}", "-p", "R=50", "--param", "L",
+                 "--json"]) == 0
+    out, err = capsys.readouterr()
+    summary = json.loads(out)
+    (row,) = summary["sensitivities"]
+    if side is None:
+        assert "border" not in summary and err == ""
+        return
+    assert row["normalised"] == (pytest.approx(0.0, abs=1e-3) if side == "ccm" else pytest.approx(-2 / 7, abs=1e-3))
+    assert summary["border"].startswith("the orbit lies ")
+    what = "D1's current would reach 0 4e-09 of the period after" if side == "ccm" else "a mode lasts 2.2e-10"
+    assert what in summary["border"]
+    assert err.count("\n") == 1 and "its sensitivities are one-sided there, and differ across it" in err
+    assert main(["bode", str(NETLISTS / "boost.cir"), "-p", f"L={L}", "-p", "R=50", "--input", "duty",
+                 "--points", "2", "--json"]) == 0
+    out, err = capsys.readouterr()
+    assert what in json.loads(out)["border"] and "its frequency responses are one-sided there" in err
+
+
+@pytest.mark.parametrize("name, input", [("prc", "Vin"), ("two-switch-forward", "Vin"), ("boost", "R")])
+def test_diodes_in_series_that_stop_together_are_no_border(name, input):
+    """The series resonant converter's output bridge (two diodes carry one current) and the two-switch forward's
+    clamps (D3, the primary, D4: one current) reach 0 together at every parameter value, one event: no border (each
+    had been said to lie 0 and 5.8e-17 of the period from one). The shipped boost at its defaults: none either."""
+    from converters.analysis.smallsignal import SmallSignalModel
+    small = SmallSignalModel(resolve_model(str(NETLISTS / f"{name}.cir")), {}, input=input)
+    assert small.border() == ""

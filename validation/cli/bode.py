@@ -84,7 +84,7 @@ def run(args) -> int:
     start = time.perf_counter()
     small = SmallSignalModel(model, params, input=name, outputs=(output,))
     stability = orbit_stability("frequency responses", model.key, small.orbit.multipliers, small.T, args.unstable,
-                                small.orbit.warning)
+                                small.orbit.warning, small.border())
     model_s = time.perf_counter() - start
     start = time.perf_counter()
     f = frequencies(small.T, fmin, fmax, args.points)

@@ -87,11 +87,14 @@ def add_unstable_option(parser) -> None:
                              "unit circle: the circuit does not settle on it); the output says so")
 
 
-def orbit_stability(what: str, key: str, multipliers, period: float, allowed: bool, warning: str = "") -> dict:
+def orbit_stability(what: str, key: str, multipliers, period: float, allowed: bool, warning: str = "",
+                    border: str = "") -> dict:
     """``spectral_radius`` and ``stable`` of the orbit an analysis is about (its period ``period`` s); an unstable
     orbit is refused in one line unless ``allowed`` (--unstable), and then said in a warning. The orbit's own
     ``warning`` (Newton's orbit far from where the settled transient went:
-    :func:`converters.analysis.periodic.shoot`) is said on stderr and kept in the JSON as ``orbit_warning``."""
+    :func:`converters.analysis.periodic.shoot`) is said on stderr and kept in the JSON as ``orbit_warning``; so is
+    a ``border`` of its modes it lies at (:meth:`converters.analysis.smallsignal.SmallSignalModel.border`), as
+    ``border``."""
     import sys
 
     import numpy as np
@@ -108,7 +111,11 @@ def orbit_stability(what: str, key: str, multipliers, period: float, allowed: bo
         print(f"warning: {how}: its {what} are the unstable orbit's (--unstable)", file=sys.stderr)
     if warning:
         print(f"warning: {warning}: its {what} are that orbit's", file=sys.stderr)
-    return {"spectral_radius": rho, "stable": not why, **({"orbit_warning": warning} if warning else {})}
+    if border:
+        check = " (--check compares finite differences)" if what == "sensitivities" else ""
+        print(f"warning: {border}: its {what} are one-sided there, and differ across it{check}", file=sys.stderr)
+    return {"spectral_radius": rho, "stable": not why, **({"orbit_warning": warning} if warning else {}),
+            **({"border": border} if border else {})}
 
 
 def on_exact_orbit(command: str, run):

@@ -50,8 +50,7 @@ def run(args) -> int:
     found = sensitivities(model, params, metric=args.metric, parameters=args.param)
     summary = {"converter": model.key, **found.as_dict(),
                **orbit_stability("sensitivities", model.key, found.multipliers, model.period(model.resolve(params)),
-                                  args.unstable,
-                                  found.orbit_warning)}
+                                  args.unstable, found.orbit_warning, found.border)}
     checks = {}
     if args.check:
         for row in found.rows:
