@@ -744,7 +744,54 @@ def _solve_state_switched(problem: LCSProblem, method: Theta, x0: np.ndarray, st
     count = int(state[2])
     pair_events = _events(t, u, y, config, mats.M, config[1:])
     events = _merge_events(pair_events, ev_time[:count], ev_step[:count], ev_config[:count])
-    return _trajectory(problem, method, t, x, u, y, config, events, time.perf_counter() - start)
+    steps = t.size - 1
+    t, x, u, y, config, events = _with_crossings(problem, t, x, u, y, config, events)
+    return replace(_trajectory(problem, method, t, x, u, y, config, events, time.perf_counter() - start), steps=steps)
+
+
+def _with_crossings(problem: LCSProblem, t: FloatArray, x: FloatArray, u: FloatArray, y: FloatArray,
+                    config: IndexArray, events: EventTable) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray,
+                                                                     IndexArray, EventTable]:
+    """The run with a sample at each switching of a state-driven law inside a step, in the configuration it ends.
+    The loop places the crossing inside the step and redoes the step from it, but keeps its samples on the grid: a
+    mean by the linear rule read the whole step in the new configuration, and a comparator's duty ratio in whole
+    steps (a voltage loop's switch node at D = 0.025 read 4 % low, its input power 5.9 %, with no estimate: h and 2h
+    quantize alike). The new row's state is the step's start moved along its configuration's field for the time to
+    the crossing (the loop's own state there is not kept; this one is O(h^2) from it, where the step's chord is
+    O(h) off at the corner the switching makes: an inductor's peak at a turn-off 1e-2 low), its pairs the step's
+    first; the events' rows move with the samples."""
+    switches = events["kind"] == "switch"
+    steps, times, entered = events["step"][switches], events["time"][switches], events["config"][switches]
+    span = t[steps + 1] - t[steps]
+    at_grid = times <= t[steps] + 1e-12 * span                 # a ramp's reset: a grid point already
+    inside = ~at_grid & (times < t[steps + 1] - 1e-12 * span)
+    if not inside.any():
+        return t, x, u, y, config, events
+    # the configuration in force as each step starts: the row's own, or the one a reset at its grid point entered
+    start = config.copy()
+    start[steps[at_grid]] = entered[at_grid]                   # (in time order: the last reset there wins)
+    order = np.argsort(times[inside], kind="stable")           # (the table is in time order already)
+    steps, times, entered = steps[inside][order], times[inside][order], entered[inside][order]
+    first = np.r_[True, steps[1:] != steps[:-1]]               # the first crossing in its step
+    ends = np.where(first, start[steps], np.r_[0, entered[:-1]])
+    x_new = np.empty((steps.size, x.shape[1]))
+    for c in np.unique(ends):
+        at_c = ends == c
+        if problem.inputs is None:
+            cfg = problem.configurations[int(c)]
+            field = x[steps[at_c]] @ cfg.A.T + u[steps[at_c]] @ cfg.B.T + cfg.E
+        else:                                    # a SIN source's share of E at each step's start
+            field = np.array([problem.configuration_at(int(c), float(t[j])).E for j in steps[at_c]])
+            field += x[steps[at_c]] @ problem.configurations[int(c)].A.T + u[steps[at_c]] @ \
+                problem.configurations[int(c)].B.T
+        x_new[at_c] = x[steps[at_c]] + (times[at_c] - t[steps[at_c]])[:, None] * field
+    at = steps + 1
+    t, config = np.insert(t, at, times), np.insert(config, at, ends)
+    x = np.insert(x, at, x_new, axis=0)
+    u, y = (np.insert(a, at, a[steps], axis=0) for a in (u, y))
+    # an event's row: its step's, moved past the rows inserted before it in time (at most its own)
+    moved = events["step"] + np.searchsorted(times, events["time"], side="right")
+    return t, x, u, y, config, dict(events, step=moved)
 
 
 def _solve_relay(problem: LCSProblem, method: Theta, x0: np.ndarray, start: float) -> Trajectory:
