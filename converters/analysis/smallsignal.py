@@ -40,7 +40,7 @@ import numpy.typing as npt
 
 from ..errors import ParameterError, SimulationError
 from ..problems import Comparators, Schedule, StateSwitching
-from ..methods.event.timeline import Crossing, FlowSpan
+from ..methods.event.timeline import Crossing, Edge, FlowSpan
 from ..trajectory import Samples
 
 if TYPE_CHECKING:
@@ -396,48 +396,83 @@ class SmallSignalModel:
         """Where the orbit lies within BORDER_PERIODS of the period from a border of its mode sequence, what meets
         there, in one line; "" where it does not. At a border (a boost whose diode current reaches 0 as its switch
         closes: CCM on one side, a DCM interval on the other) the orbit's derivatives are one-sided: the boost's
-        normalised d vout / d L read +0.00013 on one side, -0.2857 on the other, with no word. Two signs: a mode
-        that lasts less than that (the modes taken around the period), or a pair's guard (a held diode's current, a
-        free one's voltage) that would reach 0 less than that after its mode ends at another event."""
+        normalised d vout / d L read +0.00013 on one side, -0.2857 on the other, with no word. Three signs: a mode
+        that a state event begins or ends and that lasts less than that (the modes taken around the period: two
+        schedule edges close together swap smoothly), a pair's guard (a held diode's current, a free one's voltage)
+        that would reach 0 less than that after its mode ends at another event, or a comparator whose switching
+        function, kept on one side through a ramp's reset, was that close to its threshold there (a loop held at a
+        duty ratio of 0 or 1: vout / Vref 0 on one side, 0.84 on the other)."""
         from scipy.linalg import expm
         T, names = self.T, self.machine.problem.pair_names
-        spans = [(i, item) for i, item in enumerate(self.timeline) if isinstance(item, FlowSpan)]
-        if len(spans) < 2:
-            return ""
-        modes = [(item.flow.config, item.flow.held) for _, item in spans]
+        timeline = self.timeline
+        spans = [(i, item) for i, item in enumerate(timeline) if isinstance(item, FlowSpan)]
         nearest, what = BORDER_PERIODS * T, ""
+        modes = [(item.flow.config, item.flow.held) for _, item in spans]
         # the modes' lengths around the period (a mode that runs on across the period's end is one)
-        changes = [j for j in range(len(spans)) if modes[j] != modes[j - 1]]
+        changes = [j for j in range(len(spans)) if modes[j] != modes[j - 1]] if len(spans) > 1 else []
+
+        def stated(i: int) -> bool:                       # a state event begins the span that starts after i
+            return isinstance(timeline[i], Crossing) if 0 <= i < len(timeline) else False
         for a, b in zip(changes, changes[1:] + [changes[0] + len(spans)] if changes else []):
             length = sum(spans[j % len(spans)][1].t1 - spans[j % len(spans)][1].t0 for j in range(a, b))
-            if length < nearest:
+            begins, ends = spans[a][0] - 1, spans[(b - 1) % len(spans)][0] + 1
+            if length < nearest and (stated(begins) or stated(ends)):
                 item = spans[a][1]
                 nearest, what = length, f"a mode lasts {length / T:.2g} of the period from t = {item.t0:.6g} s"
         for j, (i, item) in enumerate(spans):
-            if modes[(j + 1) % len(spans)] == modes[j]:
-                continue                                    # its mode runs on: no event ends it here
-            after = self.timeline[i + 1] if i + 1 < len(self.timeline) else None
+            after = timeline[i + 1] if i + 1 < len(timeline) else None
             flow = item.flow
-            rows = flow.watch_rows
-            # the pair whose own event ends the mode, and those in series with it (one current through a winding
-            # and two clamps, a bridge's two diodes: their guards are one, and reach 0 together at every value)
-            own = np.zeros(rows.shape[0], dtype=bool)
-            if isinstance(after, Crossing) and after.pair >= 0:
-                norms = np.linalg.norm(rows, axis=1)
-                ref = rows[after.pair] / max(norms[after.pair], 1e-300)
-                own = np.abs(rows @ ref) >= (1.0 - 1e-9) * norms
             xt = expm(flow.Z * (item.t1 - item.t0)) @ item.xt0
-            g, speed = rows @ xt, rows @ (flow.Z @ xt)
-            for k in range(g.size):
-                if own[k] or not speed[k] < 0.0:
-                    continue
-                until = max(g[k], 0.0) / -speed[k]
+            if len(spans) > 1 and modes[(j + 1) % len(spans)] != modes[j]:     # an event ends its mode here
+                rows = flow.watch_rows
+                # the pair whose own event ends the mode, and those in series with it (one current through a
+                # winding and two clamps, a bridge's two diodes: their guards are one, and reach 0 together)
+                own = np.zeros(rows.shape[0], dtype=bool)
+                if isinstance(after, Crossing) and after.pair >= 0:
+                    norms = np.linalg.norm(rows, axis=1)
+                    ref = rows[after.pair] / max(norms[after.pair], 1e-300)
+                    own = np.abs(rows @ ref) >= (1.0 - 1e-9) * norms
+                g, speed = rows @ xt, rows @ (flow.Z @ xt)
+                for k in range(g.size):
+                    if own[k] or not speed[k] < 0.0:
+                        continue
+                    until = max(g[k], 0.0) / -speed[k]
+                    if until < nearest:
+                        quantity = "current" if flow.held_flags[k] == self._currents(flow.config)[k] else "voltage"
+                        nearest, what = until, (f"{names[k].upper()}'s {quantity} would reach 0 {until / T:.2g} of "
+                                                f"the period after the event at t = {item.t1:.6g} s")
+            own_event = isinstance(after, Crossing) and after.pair < 0
+            if isinstance(self.law, StateSwitching) and not own_event:
+                until = self._comparator_margin(flow, xt, item.t1, ahead=True)
                 if until < nearest:
-                    quantity = "current" if flow.held_flags[k] == self._currents(flow.config)[k] else "voltage"
-                    nearest, what = until, (f"{names[k].upper()}'s {quantity} would reach 0 {until / T:.2g} of the "
-                                            f"period after the event at t = {item.t1:.6g} s")
+                    nearest, what = until, (f"the comparator's switching function would reach its threshold "
+                                            f"{until / T:.2g} of the period after t = {item.t1:.6g} s")
+            before = timeline[i - 1] if i > 0 else None
+            if (isinstance(self.law, StateSwitching) and isinstance(before, Edge) and before.kind == "reset"
+                    and before.flow_before.config == flow.config):
+                until = self._comparator_margin(flow, item.xt0, item.t0, ahead=False)
+                if until < nearest:
+                    nearest, what = until, (f"the comparator's switching function, kept on its side through the "
+                                            f"ramp's reset at t = {item.t0:.6g} s, was {until / T:.2g} of the period "
+                                            "from its threshold")
         return f"the orbit lies {nearest / T:.2g} of the period from a border of its mode sequence ({what})" if what \
             else ""
+
+    def _comparator_margin(self, flow: Flow, xt: npt.NDArray[np.float64], t: float, ahead: bool) -> float:
+        """The time (s) in which the one comparator's switching function s = c x + d - ramp, moving at its rate in
+        ``flow`` at state ``xt`` and time ``t``, reaches the threshold that ends its side (ahead), or since it
+        would have (not ahead); inf where it moves away (ahead) or toward it (not ahead)."""
+        law = cast(StateSwitching, self.law)
+        f, n = law.function, self.n
+        ramp = f.ramp
+        phase = float(ramp.phase(t)) if ramp is not None else 0.0
+        value = float(f.c @ xt[:n] + f.d - (ramp.low + ramp.slope * phase if ramp is not None else 0.0))
+        rate = float(f.c @ flow.field(xt) - (ramp.slope if ramp is not None else 0.0))
+        below = flow.config == law.below
+        g, dg = (law.band - value, -rate) if below else (value + law.band, rate)   # > 0 on its side
+        if ahead:
+            return max(g, 0.0) / -dg if dg < 0.0 else math.inf
+        return max(g, 0.0) / dg if dg > 0.0 else math.inf
 
     def _currents(self, config: int) -> npt.NDArray[np.bool_]:
         """Per pair, whether u is the device's current in configuration ``config`` (else its voltage)."""

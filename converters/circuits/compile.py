@@ -928,14 +928,20 @@ class _Compiler:
                 low = w.v1 - slope * (w.per - reset)
                 ramp = Ramp(low=a * low, high=a * (low + slope * w.per), period=w.per,
                             delay=math.fmod(w.td + reset, w.per))
-                if w.tf / 2 > RETRACE_SAID * w.per:
+                # where the sawtooth leaves the PULSE: a falling crossing moved by up to TF / 2, and past V2 for PW +
+                # TF / 2 (the PULSE's width and half its fall) and below V1 for the rest at V1 and half the fall,
+                # where a control beyond V2 or V1 switches that the PULSE never crosses (a loop held at a duty of 1
+                # by 2 mV: 13 mV of vout where there is none)
+                rest = max(w.per - w.tr - w.pw - w.tf, 0.0)
+                above, below = w.pw + w.tf / 2, rest + w.tf / 2
+                if max(above, below) > RETRACE_SAID * w.per:
                     self.ramp_notes.append(
-                        f"{src.title}'s ramp falls over {w.tf / w.per:.2g} of its period (TF), which "
-                        f"{switch.title}'s comparator takes at the fall's middle: a switching as the ramp falls is "
-                        f"moved by up to {w.tf / 2 / w.per:.2g} of the period, and the numbers with it, against "
-                        "ngspice's (a control beyond V2 by less than the ramp's slope times its width and half its "
-                        "fall, or below V1 by less than its slope times half its fall and its rest, crosses where the "
-                        f"PULSE does not; said from {RETRACE_SAID:g} of the period)")
+                        f"{src.title}'s ramp is taken as a sawtooth with its slope, reset at the middle of its fall "
+                        f"(TF = {w.tf / w.per:.2g} of its period): in {switch.title}'s comparator a switching as the "
+                        f"ramp falls moves by up to {w.tf / 2 / w.per:.2g} of the period, and a control beyond V2 by "
+                        f"less than {abs(slope) * above:.2g} V (its slope times PW + TF/2) or beyond V1 by less than "
+                        f"{abs(slope) * below:.2g} V (times its rest at V1 + TF/2) switches where the PULSE does not: "
+                        f"the numbers move with them against ngspice's (said from {RETRACE_SAID:g} of the period)")
             elif isinstance(w, (Sin, Pwl)):
                 raise self.error(src, f"{src.title}: a {type(w).__name__.upper()} in {switch.title}'s control is not "
                                       "compiled")
@@ -1456,8 +1462,8 @@ class _Compiler:
 
     def moved(self, state_names: tuple[str, ...]) -> tuple[str, ...]:
         """A warning where the file's initial conditions (IC=, .ic) contradict a loop of capacitors or a cutset of
-        inductors, which the run's start is moved onto (:meth:`consistent`); and where half a comparator's ramp's fall
-        takes more than RETRACE_SAID of its period (:meth:`state_law`)."""
+        inductors, which the run's start is moved onto (:meth:`consistent`); and where a comparator's sawtooth leaves
+        its PULSE for more than RETRACE_SAID of its period (:meth:`state_law`)."""
         return tuple(dict.fromkeys(self.ramp_notes)) + self._moved_start(state_names)
 
     def _moved_start(self, state_names: tuple[str, ...]) -> tuple[str, ...]:
@@ -1620,10 +1626,11 @@ def waveform_at(w: Waveform, t: _Array) -> _Array:
     return out
 
 
-#: A comparator's ramp whose half fall (TF / 2, the most a switching as it falls moves: :meth:`_Compiler.state_law`)
-#: takes more than this fraction of its period is said with every run (against the literal PULSE, a fall of 1e-6 of
-#: the period moves the voltage-mode buck's period doubling by 8e-7 V from pcsuite's).
-RETRACE_SAID = 1e-8
+#: A comparator's ramp whose sawtooth leaves its PULSE for more than this fraction of its period (past V2 for its
+#: width and half its fall, below V1 for its rest and half its fall: :meth:`_Compiler.state_law`) is said with every
+#: run (against the literal PULSE, a fall of 1e-6 of the period moves the voltage-mode buck's period doubling by
+#: 8e-7 V from pcsuite's; the shipped ramps' 1.5e-8 moves it by 8e-9 V).
+RETRACE_SAID = 2e-8
 
 #: A SIN in a switch's control is crossed on pieces of at most 1/SINE_PIECES of its period between the other
 #: waveforms' corners (a sine-triangle modulator: the carrier's corners are far denser).

@@ -192,3 +192,38 @@ def test_diodes_in_series_that_stop_together_are_no_border(name, input):
     from converters.analysis.smallsignal import SmallSignalModel
     small = SmallSignalModel(resolve_model(str(NETLISTS / f"{name}.cir")), {}, input=input)
     assert small.border() == ""
+
+
+@pytest.mark.parametrize("vref, border", [("20.2000001", True), ("15", False)])
+def test_a_comparator_held_at_a_duty_of_one_by_a_hair_lies_at_a_border(capsys, tmp_path, vref, border):
+    """The voltage-mode buck with its amplifier's gain 1: at Vref = 20.2000001 V its control vcon = vout - Vref lies
+    1e-7 V below the ramp's low end, so S1 stays on (vout = Vin = 24 V exactly, d vout / d Vref = 0) and the
+    comparator's function comes within 1.8e-8 of the period of its threshold at each ramp reset: a hair of Vref
+    lower and the loop switches (one-sided differences of exact orbits: 0 on one side, 0.84 on the other). One
+    mode a period had been read as no border at all. At 15 V the loop regulates, far from either end."""
+    text = (NETLISTS / "voltage-mode-buck.cir").read_text()
+    assert "A=8.4" in text
+    path = tmp_path / "vm-gain1.cir"
+    path.write_text(text.replace("A=8.4", "A=1"))
+    assert main(["sensitivity", str(path), "-p", f"Vref={vref}", "--param", "Vref", "--json"]) == 0
+    out, err = capsys.readouterr()
+    summary = json.loads(out)
+    if not border:
+        assert "border" not in summary and err == ""
+        return
+    assert summary["value"] == pytest.approx(24.0, rel=1e-12) and summary["sensitivities"][0]["derivative"] == 0.0
+    assert "the comparator's switching function, kept on its side through the ramp's reset" in summary["border"]
+    assert "its sensitivities are one-sided there" in err
+
+
+def test_an_analysis_says_what_its_circuit_says_with_every_run(capsys, tmp_path):
+    """A comparator's ramp falling over 1e-3 of its period is taken as a sawtooth reset at the fall's middle, which
+    simulate says with every run; sensitivity and bode, reading the same orbit, had said nothing."""
+    path = tmp_path / "slow-fall.cir"
+    path.write_text((NETLISTS / "voltage-mode-buck.cir").read_text().replace(".param e={1e-8*T}",
+                                                                              ".param e={5e-4*T}"))
+    for argv in (["sensitivity", str(path), "--param", "Vin"], ["bode", str(path), "--input", "vin", "--points", "2"]):
+        assert main([*argv, "--json"]) == 0
+        out, err = capsys.readouterr()
+        (note,) = json.loads(out)["warnings"]
+        assert note.startswith("voltage source VRAMP's ramp is taken as a sawtooth") and f"warning: {note}" in err

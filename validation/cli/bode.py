@@ -7,7 +7,8 @@ import time
 
 from converters.errors import ParameterError
 
-from .common import add_params, add_unstable_option, given_path, integer, json_text, on_exact_orbit, orbit_stability
+from .common import (add_params, add_unstable_option, circuit_notes, given_path, integer, json_text, on_exact_orbit,
+                     orbit_stability)
 
 #: What --input accepts beside a parameter's name: the duty ratio, the input voltage and the load current (the
 #: output impedance's input, 0 A unless -p Io= says otherwise) by their usual names.
@@ -85,6 +86,7 @@ def run(args) -> int:
     small = SmallSignalModel(model, params, input=name, outputs=(output,))
     stability = orbit_stability("frequency responses", model.key, small.orbit.multipliers, small.T, args.unstable,
                                 small.orbit.warning, small.border())
+    stability.update(circuit_notes(model, params))
     model_s = time.perf_counter() - start
     start = time.perf_counter()
     f = frequencies(small.T, fmin, fmax, args.points)

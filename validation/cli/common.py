@@ -118,6 +118,18 @@ def orbit_stability(what: str, key: str, multipliers, period: float, allowed: bo
             **({"border": border} if border else {})}
 
 
+def circuit_notes(model, params: dict) -> dict:
+    """What a netlist's circuit says with every run (:attr:`converters.circuits.compile.Compiled.notes`: a
+    comparator's ramp taken as a sawtooth, a start moved onto a loop's invariant), said on stderr for an analysis
+    that reads its orbit as ``simulate`` says it, and kept in the JSON as ``warnings``."""
+    import sys
+    compiled = getattr(model, "compiled", None)
+    notes = list(compiled(model.resolve(params)).notes) if compiled is not None else []
+    for note in notes:
+        print(f"warning: {note}", file=sys.stderr)
+    return {"warnings": notes} if notes else {}
+
+
 def on_exact_orbit(command: str, run):
     """``run`` (a command's) with the event method's refusal of a circuit's stiffest mode said for ``command``,
     which reads the exact orbit and has no other method: its remedies (--method lcp, a shorter --t-end) are

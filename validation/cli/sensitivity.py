@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import math
 
-from .common import add_params, add_unstable_option, given_path, on_exact_orbit, orbit_stability
+from .common import add_params, add_unstable_option, circuit_notes, given_path, on_exact_orbit, orbit_stability
 
 
 def add(sub) -> None:
@@ -50,7 +50,8 @@ def run(args) -> int:
     found = sensitivities(model, params, metric=args.metric, parameters=args.param)
     summary = {"converter": model.key, **found.as_dict(),
                **orbit_stability("sensitivities", model.key, found.multipliers, model.period(model.resolve(params)),
-                                  args.unstable, found.orbit_warning, found.border)}
+                                  args.unstable, found.orbit_warning, found.border),
+               **circuit_notes(model, params)}
     checks = {}
     if args.check:
         for row in found.rows:
