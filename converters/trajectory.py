@@ -526,7 +526,7 @@ class Trajectory:
         moving = self._moving_pairs() if self.pair_rule == "end" and self.labels is not None else None
         if moving is None:
             return None
-        labels = self.labels
+        labels = cast("SignalLabels", self.labels)
 
         def algebraic(samples: Samples) -> npt.NDArray[Any]:
             u = np.asarray(samples.u, dtype=float)

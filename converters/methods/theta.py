@@ -744,9 +744,9 @@ def _solve_state_switched(problem: LCSProblem, method: Theta, x0: np.ndarray, st
     count = int(state[2])
     pair_events = _events(t, u, y, config, mats.M, config[1:])
     events = _merge_events(pair_events, ev_time[:count], ev_step[:count], ev_config[:count])
-    steps = t.size - 1
-    t, x, u, y, config, events = _with_crossings(problem, t, x, u, y, config, events)
-    return replace(_trajectory(problem, method, t, x, u, y, config, events, time.perf_counter() - start), steps=steps)
+    planned = t.size - 1
+    rows = _with_crossings(problem, t, x, u, y, config, events)
+    return replace(_trajectory(problem, method, *rows, time.perf_counter() - start), steps=planned)
 
 
 def _with_crossings(problem: LCSProblem, t: FloatArray, x: FloatArray, u: FloatArray, y: FloatArray,
