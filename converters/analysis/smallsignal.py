@@ -466,6 +466,8 @@ class SmallSignalModel:
         f, n = law.function, self.n
         ramp = f.ramp
         phase = float(ramp.phase(t)) if ramp is not None else 0.0
+        if ahead and ramp is not None and phase <= 1e-9 * ramp.period:
+            phase = ramp.period                 # a mode that ends at the ramp's reset: the top it reached
         value = float(f.c @ xt[:n] + f.d - (ramp.low + ramp.slope * phase if ramp is not None else 0.0))
         rate = float(f.c @ flow.field(xt) - (ramp.slope if ramp is not None else 0.0))
         below = flow.config == law.below

@@ -286,7 +286,8 @@ def time_grid(problem: LCSProblem, h: float, graded: tuple[float, ...] = ()) -> 
     switching instant (t0 among them where the schedule switches there) that replace the uniform points they span
     (:attr:`Theta.graded`).
 
-    Grid points closer than h/1000 to a switching instant are dropped (the instant replaces them).
+    Grid points closer than h/1000 to a switching instant are dropped (the instant replaces them), but for a period's
+    start (a multiple of the switching period).
     """
     t0, t1 = problem.t_span
     Theta(h=h, theta=1.0).check_memory(problem)           # before anything of the run's size is allocated
@@ -304,6 +305,13 @@ def time_grid(problem: LCSProblem, h: float, graded: tuple[float, ...] = ()) -> 
     gap = np.minimum(bounded[nearest + 1] - uniform, uniform - bounded[nearest])     # to the nearer switching
     keep = (gap > 1e-3 * h)
     keep[0] = keep[-1] = True
+    T = problem.switching.period
+    if np.isfinite(T):
+        # a period's start stays a sample however near a switching falls (a ramp reset at the middle of its fall,
+        # 5e-9 T before it): what reads the run period by period (a bifurcation diagram's strobe, a window of whole
+        # periods) needs a row there
+        phase = uniform / T
+        keep |= np.abs(phase - np.round(phase)) <= 1e-9 * max(1.0, float(np.abs(phase).max(initial=1.0)))
     grid = np.concatenate((uniform[keep], breaks))
     grid.sort()
     return np.unique(grid) if (grid[1:] == grid[:-1]).any() else grid      # np.union1d, without its overhead
@@ -753,13 +761,13 @@ def _with_crossings(problem: LCSProblem, t: FloatArray, x: FloatArray, u: FloatA
                     config: IndexArray, events: EventTable) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray,
                                                                      IndexArray, EventTable]:
     """The run with a sample at each switching of a state-driven law inside a step, in the configuration it ends.
-    The loop places the crossing inside the step and redoes the step from it, but keeps its samples on the grid: a
-    mean by the linear rule read the whole step in the new configuration, and a comparator's duty ratio in whole
-    steps (a voltage loop's switch node at D = 0.025 read 4 % low, its input power 5.9 %, with no estimate: h and 2h
-    quantize alike). The new row's state is the step's start moved along its configuration's field for the time to
-    the crossing (the loop's own state there is not kept; this one is O(h^2) from it, where the step's chord is
-    O(h) off at the corner the switching makes: an inductor's peak at a turn-off 1e-2 low), its pairs the step's
-    first; the events' rows move with the samples."""
+    The loop places the crossing inside the step and redoes the step from it, but keeps its samples on the grid;
+    without a sample there a mean by the linear rule reads the whole step in the new configuration, a comparator's
+    duty ratio in whole steps (a voltage loop's switch node at D = 0.025: 4 % low, its input power 5.9 %, h and 2h
+    quantizing alike). The new row's state is the one before it (the step's start, or the crossing before it in the
+    same step) moved along the field of the configuration in force between them: O(h^2) from the loop's own state
+    there, which it does not keep, where the step's chord is O(h) off at the corner the switching makes. Its pairs
+    are the step's first; the events' rows move with the samples."""
     switches = events["kind"] == "switch"
     steps, times, entered = events["step"][switches], events["time"][switches], events["config"][switches]
     span = t[steps + 1] - t[steps]
@@ -767,24 +775,21 @@ def _with_crossings(problem: LCSProblem, t: FloatArray, x: FloatArray, u: FloatA
     inside = ~at_grid & (times < t[steps + 1] - 1e-12 * span)
     if not inside.any():
         return t, x, u, y, config, events
-    # the configuration in force as each step starts: the row's own, or the one a reset at its grid point entered
+    # the configuration in force as each step starts: the row's own, or the one the last reset at its grid point
+    # entered (the table is in time order)
     start = config.copy()
-    start[steps[at_grid]] = entered[at_grid]                   # (in time order: the last reset there wins)
-    order = np.argsort(times[inside], kind="stable")           # (the table is in time order already)
-    steps, times, entered = steps[inside][order], times[inside][order], entered[inside][order]
+    for j, c in zip(steps[at_grid].tolist(), entered[at_grid].tolist()):
+        start[j] = c
+    steps, times, entered = steps[inside], times[inside], entered[inside]
     first = np.r_[True, steps[1:] != steps[:-1]]               # the first crossing in its step
     ends = np.where(first, start[steps], np.r_[0, entered[:-1]])
+    # each crossing's state: the one before it (the step's start, or the crossing before it in the same step) moved
+    # along the field of the configuration in force between them
     x_new = np.empty((steps.size, x.shape[1]))
-    for c in np.unique(ends):
-        at_c = ends == c
-        if problem.inputs is None:
-            cfg = problem.configurations[int(c)]
-            field = x[steps[at_c]] @ cfg.A.T + u[steps[at_c]] @ cfg.B.T + cfg.E
-        else:                                    # a SIN source's share of E at each step's start
-            field = np.array([problem.configuration_at(int(c), float(t[j])).E for j in steps[at_c]])
-            field += x[steps[at_c]] @ problem.configurations[int(c)].A.T + u[steps[at_c]] @ \
-                problem.configurations[int(c)].B.T
-        x_new[at_c] = x[steps[at_c]] + (times[at_c] - t[steps[at_c]])[:, None] * field
+    for k in range(steps.size):
+        before_t, before_x = (t[steps[k]], x[steps[k]]) if first[k] else (times[k - 1], x_new[k - 1])
+        cfg = problem.configurations[int(ends[k])]
+        x_new[k] = before_x + (times[k] - before_t) * (cfg.A @ before_x + cfg.B @ u[steps[k]] + cfg.E)
     at = steps + 1
     t, config = np.insert(t, at, times), np.insert(config, at, ends)
     x = np.insert(x, at, x_new, axis=0)

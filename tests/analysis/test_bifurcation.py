@@ -102,3 +102,32 @@ def test_a_value_that_fails_is_a_row_with_its_error():
     rows = brute_force(Refusing("logistic"), MapMethod(), [-1.0, 2.5], [0.5], transient=40, record=4, workers=1)
     assert rows[0].error == "ParameterError: p must be >= 0; got -1.0" and rows[0].samples.size == 0
     assert rows[1].period == 1 and not rows[1].error
+
+
+class _VoltageModeAt:
+    """Vin -> the shipped voltage-mode buck netlist's problem (picklable: a module-level class)."""
+
+    def __call__(self, vin):
+        from pathlib import Path
+
+        from converters.models import Circuit
+        model = Circuit.from_netlist(Path(__file__).resolve().parents[2] / "netlists" / "circuits" /
+                                     "voltage-mode-buck.cir")
+        p = model.resolve({"Vin": vin})
+        return model.problem(p, model.period(p))
+
+
+def test_the_steppers_diagram_strobes_a_comparator_netlist_whose_ramp_resets_just_before_each_period():
+    """The shipped voltage-mode buck's ramp resets at the middle of its fall, 5e-9 T before each period's start: the
+    stepper's grid had dropped the period starts (within h/1000 of the reset) and the brute-force diagram, which
+    strobes the run there, failed every value ("2 values failed", exit 0). Its period-1 attractor at 20 V is the
+    exact method's orbit to the stepper's accuracy."""
+    from converters.analysis.periodic import shoot
+    from converters.methods import EventDriven, Theta
+    problem_of = _VoltageModeAt()
+    problem = problem_of(20.0)
+    T = problem.switching.period
+    (attractor,) = brute_force(problem_of, Theta(h=T / 1000, theta=0.5), [20.0], problem.x0, transient=200, record=8)
+    exact = shoot(problem, EventDriven(), problem.x0, tol=1e-10).x0
+    assert attractor.period == 1
+    assert np.abs(attractor.samples - exact).max() <= 1e-6 * np.abs(exact).max()
