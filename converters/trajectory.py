@@ -527,7 +527,7 @@ class Trajectory:
         """The signal ``name`` with the pair variables' state-moving share taken out (:meth:`_moving_pairs`), as a
         function of samples; None where the run's pairs are not integrated apart (``pair_rule`` "linear")."""
         moving = self._moving_pairs() if self.pair_rule == "end" and self.labels is not None else None
-        if moving is None:
+        if moving is None or not self._moves_state(name, moving):
             return None
         labels = cast("SignalLabels", self.labels)
 
@@ -536,6 +536,31 @@ class Trajectory:
             kept = u - np.einsum("nij,nj->ni", moving[np.asarray(samples.config, dtype=np.int64)], u)
             return np.asarray(labels.signal(name, replace(samples, u=kept)), dtype=float)
         return algebraic
+
+    def _moves_state(self, name: str, moving: npt.NDArray[np.float64]) -> bool:
+        """Whether signal ``name`` has a share in the pair directions that move the state in some configuration:
+        the signal is affine in u, so its response to each unit pair and to each projected one, at x = 0, says so
+        (once per name and run; a signal with none, a node voltage or an inductor's current, is read by the linear
+        rule at the cost of one evaluation, not two a mean)."""
+        cache: dict[str, bool] = self.__dict__.setdefault("_state_moving_names", {})
+        if name not in cache:
+            configs, k = moving.shape[0], moving.shape[1]
+            units = np.concatenate([np.zeros((1, k)), np.eye(k)])                 # u = 0, then each e_i
+            u = np.concatenate([np.concatenate([units, units[1:] @ moving[c].T]) for c in range(configs)])
+            per = 2 * k + 1
+            rows = configs * per
+            samples = Samples(np.zeros(rows), np.zeros((rows, self.x.shape[1])), u, np.zeros((rows, k)),
+                              np.repeat(np.arange(configs), per))
+            try:
+                values = np.asarray(cast("SignalLabels", self.labels).signal(name, samples), dtype=float)
+            except (ValueError, ArithmeticError, IndexError, SignalError):
+                cache[name] = True                  # not read at these points: split, as for any signal
+                return True
+            values = values.reshape(configs, per)
+            raw = np.abs(values[:, 1:k + 1] - values[:, :1]).max(initial=0.0)
+            projected = np.abs(values[:, k + 1:] - values[:, :1]).max(initial=0.0)
+            cache[name] = bool(projected > 1e-9 * raw)
+        return cache[name]
 
     def _moving_pairs(self) -> npt.NDArray[np.float64] | None:
         """Per configuration, the projector onto the pair directions that move the state (the row space of B,
