@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from converters.analysis.periodic import exact_refusal
 from converters.models import Circuit
 from converters.run import run_converter
 from validation.cli import main
@@ -128,7 +129,14 @@ def test_every_default_answer_on_the_corpus_is_within_one_percent_and_its_estima
     assert error <= 1e-2
     accuracy = summary["accuracy"]
     assert accuracy["checked"]
-    if accuracy.get("trusted", True) and "warnings" not in summary:
+    # a stated estimate is within 3x of the error, warnings or not; one the step cannot vouch for (a resonance it
+    # damps, a mode or an onset inside a step) is checked by the exact orbit wherever the exact method takes the
+    # circuit (the snubbered buck's Richardson estimate read 1.4e-13 for 7.0e-5, marked untrusted)
+    model = Circuit.from_netlist(path)
+    params = model.resolve(dict(item.split("=") for item in extra[1::2]))
+    if not exact_refusal(model, params):
+        assert accuracy.get("trusted", True), accuracy
+    if accuracy.get("trusted", True):
         assert error <= max(3 * _estimate(accuracy), 1e-8), (error, _estimate(accuracy))
 
 

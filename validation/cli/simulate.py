@@ -286,6 +286,7 @@ def _print(summary: dict, tr, args) -> None:
         print(f"vout mean moved {accuracy['transient']:.1g} (relative) from the 10 periods before ({accuracy['reason']})")
     elif accuracy.get("checked"):
         how = (f"the run's distance to its orbit; the {tr.method} method has no step error" if tr.algorithm.exact
+               else f"the run's distance to its orbit and {accuracy['estimated_by']}" if "estimated_by" in accuracy
                else "the run's distance to its orbit and Richardson at h and 2h")
         trust = "" if accuracy.get("trusted", True) else "; not to be trusted here: see the warning"
         print(f"vout mean within ~{accuracy['vout_mean_error_estimate']:.1g} (relative) of the exact periodic value "
