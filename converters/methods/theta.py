@@ -373,15 +373,18 @@ def _distinct(keys: np.ndarray) -> tuple[IndexArray, IndexArray]:
 def _period_grid(problem: LCSProblem, h: float, graded: tuple[float, ...] = ()) -> Plan | None:
     """One period of a run that repeats it, from a whole period m T: (local grid [0, T] with the switching
     instants, each step's configuration, each step's matrix set, set_configs, set_dts); None when the run does
-    not repeat a period of whole steps (no period, T not a whole number of steps, a start other than m T: a run
-    kept in chunks of whole periods starts each on the same grid as the run whole)."""
+    not repeat a period (no period, a start other than m T: a run kept in chunks of whole periods starts each on
+    the same grid as the run whole; sinusoidal inputs where T is not a whole number of steps). A period that is not
+    a whole number of steps ends on a short step, in every period alike: the grid Newton's period map ran on. (A run
+    gridded whole from 0 had steps that straddle the period starts, and its periods were not the orbit's: at h =
+    T/303.03 a buck's capacitor current read a mean of 5.1e-6 A, its estimate 50 times smaller.)"""
     schedule = cast(Schedule, problem.switching)          # a plan's problem switches on a schedule
     T, n_configs = schedule.period, len(problem.configurations)
     per_period = T / h if np.isfinite(T) else 0.0
     steps = int(round(per_period))
     t0 = problem.t_span[0]
-    if (not np.isfinite(T) or steps < 1 or abs(per_period - steps) > 1e-9 * per_period
-            or t0 != round(t0 / T) * T):
+    if (not np.isfinite(T) or per_period < 1.0 or t0 != round(t0 / T) * T
+            or (problem.inputs is not None and abs(per_period - steps) > 1e-9 * per_period)):
         return None
     one = problem if problem.t_span == (0.0, T) else replace(problem, t_span=(0.0, T))
     local = time_grid(one, h, graded)                                    # [0, T] with the breakpoints

@@ -1,4 +1,6 @@
 """The theta time-stepper on circuits with closed-form answers: accuracy, order, complementarity."""
+from pathlib import Path
+
 import numpy as np
 import pytest
 from scipy.optimize import brentq
@@ -251,3 +253,20 @@ def test_the_last_periods_active_sets_as_guesses_change_no_bit(stages):
     assert (runs[0][1][-period:] > 0).any(axis=0).sum() == plan.problem.k        # every diode conducts
     for a, b in zip(*runs):
         assert np.array_equal(a, b)
+
+
+def test_a_steady_run_whose_step_does_not_divide_the_period_repeats_the_orbits_period():
+    """h = 33 ns does not divide the buck's 10 us period (303.03 steps): Newton's period map runs [0, T] ending on a
+    short step, and the run returned from the orbit must repeat that grid period by period. Gridded whole from 0,
+    its steps straddled the period starts and its periods were not the orbit's: the capacitor current's mean over
+    the 10 periods read 5.1e-6 A (0 on an orbit, to rounding) and vout's mean differed from the orbit's by 3e-7."""
+    from converters.run import run_converter, run_summary
+    path = Path(__file__).resolve().parents[2] / "netlists" / "circuits" / "buck.cir"
+    run = run_converter(str(path), steady=True, h=33e-9)
+    orbit = run_converter(str(path), steady=True, h=33e-9, periods=1)
+    T = 1e-5
+    assert np.allclose(np.diff(run.t[run.t > run.t[-1] - T]), np.diff(orbit.t[orbit.t > orbit.t[-1] - T]), rtol=0,
+                       atol=1e-15)
+    summary = run_summary(run)
+    assert abs(summary["measurements"]["i(c1)"]["mean"]) < 1e-10
+    assert summary["vout_mean"] == pytest.approx(orbit.mean("vout", t0=orbit.t[0], t1=orbit.t[-1]), rel=1e-12)
