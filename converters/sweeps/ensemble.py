@@ -164,7 +164,7 @@ def step_error(model: Model, p: dict, method: Method, run: Trajectory, at_2h: Tr
     # the declared order, at most that through a diode event inside a step (no third orbit at 4h here)
     # the signals the row stores: vout (its mean and ripple) and the first state (its rms)
     reasons = step_checks(model, p, fine, coarse, 2.0 ** min(float(method.order), ORDER_THROUGH_EVENTS) - 1.0,
-                          signals=("vout", model.state_names[0]))
+                          signals=("vout", model.state_names[0]), method=method)
     if multipliers is not None:
         from ..analysis.accuracy import MEASUREMENT_RTOL
         rho_h, rho_2h = (float(np.abs(m).max(initial=0.0)) for m in multipliers)

@@ -424,6 +424,24 @@ def test_a_steady_row_whose_step_is_too_coarse_says_so_as_simulate_warns(backend
     assert rows.loc[1, "message"] == ""
 
 
+@pytest.mark.parametrize("backend", ["batched", "serial"])
+def test_a_steady_row_whose_mode_is_shorter_than_a_step_says_so_as_simulate_does(backend, tmp_path):
+    """The series resonant converter's bridge (tests/circuits/test_stiff.py's SRC_BRIDGE) at T/1000: its orbit holds
+    "off" for 0.038 of a step at each reversal of the tank current, at 2h alike, where the exact orbit commutes
+    directly (8.850826589 V, an independent expm-and-bisection orbit). The row, 6.0e-4 below it, had been stored
+    with an empty message: h and 2h differ by less than the defaults promise. Its message now names the mode, as
+    simulate's check does."""
+    from ..circuits.test_stiff import SRC_BRIDGE
+    path = tmp_path / "src.cir"
+    path.write_text(SRC_BRIDGE)
+    rows = _frame(run_ensemble(ModelSweep(str(path), h_fraction=1e-3), Grid([Axis.parse("R=5:6:2")]),
+                               backend=backend))
+    assert list(rows["status"]) == ["ok", "ok"]
+    assert abs(rows.loc[0, "vout_mean"] / 8.850826589 - 1) == pytest.approx(6.0e-4, rel=2e-2)
+    assert ("the orbit holds a mode for 0.038 of a step (3.8e-05 T): the runs at h and 2h may both miss it by more "
+            "than they differ") in rows.loc[0, "message"]
+
+
 def test_a_row_from_rest_whose_moves_do_not_decay_is_not_extrapolated():
     """The voltage-mode buck at Vin = 28 V lies past its period doubling (24.5166 V): from rest its period means
     alternate by a constant step, which had been extrapolated as a geometric decay ("about 1.8e+01 from the
