@@ -1095,15 +1095,7 @@ def default_check(model: Model, p: dict, method: Method, tr: Trajectory, reporte
     period = last_period(model, p, tr)
     step = getattr(method, "h", None)
     floor = circuit_floor(tr, "vout")
-    # why Richardson at h and 2h cannot be trusted here (each: the cause, and the warning with its remedy)
-    doubts = [(_overdamped(model, p, method, remedy=False), _overdamped(model, p, method))]
-    if coarse is not None:
-        onset, brief = _unresolved_onset(model, p, fine, remedy=False), _unresolved_mode(period, tr, T, step, False)
-        doubts += [(onset, onset + ONSET_REMEDY), (brief, brief + BRIEF_REMEDY)]
-    doubts = [doubt for doubt in doubts if doubt[0]]
-    # there a second resolution is asked for: the exact method's orbit, where it takes the circuit (a buck's RC
-    # snubber rings at 1.6 MHz, Q 1,000, across a 10 ns step: Richardson stated 1.4e-13 for vout 7.0e-5 off)
-    reference = _exact_reference(model, p, fine) if doubts and coarse is not None else None
+    doubts, reference = second_resolution(model, p, method, tr, runs)
     exact_reference = reference if not isinstance(reference, str) else None
     if exact_reference is not None:
         m_h = fine.mean("vout", t0=0.0, t1=T)
@@ -1161,6 +1153,30 @@ def default_check(model: Model, p: dict, method: Method, tr: Trajectory, reporte
             if check:
                 out["warning"] = f"{out['warning']}; {check}" if "warning" in out else check
     return out
+
+
+def second_resolution(model: Model, p: dict, method: Method, tr: Trajectory,
+                      runs: OrbitRuns) -> tuple[list[tuple[str, str]], Trajectory | str | None]:
+    """Why Richardson at h and 2h cannot be trusted on a stepper's ``runs`` (:func:`orbit_runs` of ``tr``), each as
+    (the cause, the warning with its remedy): a resonance the step damps or shifts, a conduction beginning inside the
+    first step after a switching, a mode shorter than a step; and there the second resolution: one period of the
+    exact method's orbit (:func:`_exact_reference`), or why there is none (None where nothing is in doubt). Found
+    once per run and method: the accuracy check and the devices' losses' estimate read the same. (A buck's RC
+    snubber rings at 1.6 MHz, Q 1,000, across a 10 ns step: Richardson stated 1.4e-13 for vout 7.0e-5 off.)"""
+    cache: dict[int, Any] = tr.__dict__.setdefault("_second_resolution", {})
+    if id(method) in cache:
+        return cast("tuple[list[tuple[str, str]], Trajectory | str | None]", cache[id(method)][0])
+    fine, coarse = runs.fine, runs.coarse
+    doubts = [(_overdamped(model, p, method, remedy=False), _overdamped(model, p, method))]
+    if coarse is not None:
+        T, step = model.period(p), getattr(method, "h", None)
+        onset = _unresolved_onset(model, p, fine, remedy=False)
+        brief = _unresolved_mode(last_period(model, p, tr), tr, T, step, False)
+        doubts += [(onset, onset + ONSET_REMEDY), (brief, brief + BRIEF_REMEDY)]
+    doubts = [doubt for doubt in doubts if doubt[0]]
+    reference = _exact_reference(model, p, fine) if doubts and coarse is not None else None
+    cache[id(method)] = ((doubts, reference), method)            # the method kept: its id
+    return doubts, reference
 
 
 def _exact_reference(model: Model, p: dict, fine: Trajectory) -> Trajectory | str:

@@ -44,10 +44,12 @@ def _losses_estimate(model: Any, p: dict, tr: Trajectory, setup: ThermalSetup, s
     2h: a dead time of one step is one step at h and at 2h, and their difference does not show its error: 1e-8
     against 6e-5 on the shipped example at h = T/200), the orbit at h against one at h / 2^m where that interval
     spans 2 steps or more, and twice their difference (for p >= 1 the error at h is at most twice it). The event
-    method's orbit has no discretization. Per device in W, and in
+    method's orbit has no discretization. Where the stepper's difference at h and 2h cannot be trusted (a resonance
+    the step damps, a mode shorter than a step: :func:`~converters.analysis.accuracy.second_resolution`), the exact
+    method's orbit at the same junction temperatures stands for the exact losses. Per device in W, and in
     all relative to the devices' total (their absolute errors summed: none cancels another); a warning beyond
     the default target."""
-    from ..analysis.accuracy import DEFAULT_RTOL, orbit_runs
+    from ..analysis.accuracy import DEFAULT_RTOL, orbit_runs, second_resolution
     from ..methods.base import ErrorKind
     method = tr.algorithm
     if method is None or method.error_kind is ErrorKind.MODEL:
@@ -60,8 +62,11 @@ def _losses_estimate(model: Any, p: dict, tr: Trajectory, setup: ThermalSetup, s
     T = model.period(p)
     pair, bound = (fine, coarse), 1.0
     step = getattr(method, "h", None)
+    reference = second_resolution(model, p, method, tr, runs)[1] if coarse is not None else None
+    if isinstance(reference, str):
+        reference = None
     shortest = _shortest_interval(fine, T) if coarse is not None and step else np.inf
-    if step and shortest < 4.0 * step:          # h / 2^m: the shortest interval 2 steps or more
+    if step and shortest < 4.0 * step and reference is None:     # h / 2^m: the shortest interval 2 steps or more
         halved = orbit_runs(model, p, method.coarsened(0.5 ** max(1, math.ceil(math.log2(2.0 * step / shortest)))),
                             tr, observe=False)
         if isinstance(halved, str):
@@ -76,13 +81,18 @@ def _losses_estimate(model: Any, p: dict, tr: Trajectory, setup: ThermalSetup, s
         return {d: w.total_W(tj[d]) for d, w in read.items()}
     orbit = totals(fine)
     exact = dict(orbit)
-    if pair[1] is not None:       # the error at h bounded by the difference to 2h (or twice that of h/2 to h)
+    if reference is not None:
+        # where the step's difference cannot be trusted (a resonance it damps, a mode shorter than a step): the
+        # exact orbit's losses at the same junction temperatures
+        exact = totals(reference)
+    elif pair[1] is not None:     # the error at h bounded by the difference to 2h (or twice that of h/2 to h)
         finer, coarser = (orbit, totals(pair[1])) if pair[0] is fine else (totals(pair[0]), orbit)
         exact = {d: orbit[d] + bound * (finer[d] - coarser[d]) for d in orbit}
     reported = {d: v["total_W"] for d, v in summary["devices"].items()}
     errors = {d: abs(reported[d] - exact[d]) for d in reported}
     scale = max(sum(reported.values()), 1e-300)
     out: dict[str, Any] = {"checked": True, "target": DEFAULT_RTOL,
+                           **({"estimated_by": "the exact (event) method's orbit"} if reference is not None else {}),
                            "losses_error_estimate": sum(errors.values()) / scale,
                            "transient": sum(abs(reported[d] - orbit[d]) for d in reported) / scale,
                            "discretization": sum(abs(orbit[d] - exact[d]) for d in reported) / scale,
