@@ -137,6 +137,7 @@ def test_a_step_estimate_that_cannot_be_trusted_and_no_exact_orbit_to_check_it_i
             "reason)") in warning
 
 
+@pytest.mark.slow
 def test_a_resonance_the_step_damps_more_than_the_circuit_does_says_the_estimate_cannot_be_trusted(tmp_path):
     """The buck with an RC snubber (1 ohm, 100 pF) from its switch node: the snubber's 100 ps sets backward Euler
     (h = 10 ns), which erases the 5 MHz ring of L1 (10 uH) with the snubber's capacitor after the diode turns off
