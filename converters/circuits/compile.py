@@ -1972,6 +1972,20 @@ class _Network:
                                 f"{'ve' if len(nodes) > 1 else 's'} no path to ground through any element "
                                 f"({', '.join(around)} connect only among them): a floating node; tie it to the circuit "
                                 "(SPICE needs a path to ground too)")
+        # a resistor at the nodes is a path: where it is there, its conductance is below what G's rank resolves
+        # beside the network's largest (a 1 TOhm resistor to ground had been named among the open elements)
+        weak = [e for e in c.by_kind["R"] if e.value and set(e.nodes[:2]) & set(nodes)]
+        opened = [name for name in around if name not in {e.name.upper() for e in weak}]
+        if weak:
+            scale = max(float(np.abs(self.G).max()), 1.0)           # as nullity() takes it
+            said = ", ".join(f"{e.name.upper()} ({float(e.value):.3g} ohm: {1.0 / float(e.value):.3g} S)"
+                             for e in weak)
+            return NetlistError(f"{c.path}: node{'s' if len(nodes) > 1 else ''} {', '.join(nodes)} reach"
+                                f"{'' if len(nodes) > 1 else 'es'} ground{where} only through {said}"
+                                + (f" beside {', '.join(opened)}" if opened else "")
+                                + f": a conductance at or below 1e-12 of the network's scale ({scale:.3g} S), where "
+                                "pcsuite takes its matrix as singular; lower the resistance (an open as 1e9 ohm)"
+                                f"{spread}")
         return NetlistError(f"{c.path}: node{'s' if len(nodes) > 1 else ''} {', '.join(nodes)} ha"
                             f"{'ve' if len(nodes) > 1 else 's'} no path to ground{where} but through open switches, "
                             f"inductors or current sources ({', '.join(around)}): a current interrupted with no path, "

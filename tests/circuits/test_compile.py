@@ -790,3 +790,19 @@ def test_a_sawtooth_past_its_pulses_ends_is_said(pulse, vref, literal):
     (note,) = [w for w in summary["warnings"] if "VRAMP's ramp is taken as a sawtooth" in w]
     band = "beyond V2 by less than 0.0044 V" if literal == 0.0 else "beyond V1 by less than 0.0044 V"
     assert band in note and "switches where the PULSE does not" in note
+
+
+def test_a_resistance_too_high_to_resolve_is_named_as_a_path_not_as_an_open_element(tmp_path):
+    """A 1 TOhm resistor (1e-12 S, at the rank tolerance beside the MNA's unit entries) is the only path of a node
+    behind a 1 fH inductor: the refusal named it among "open switches, inductors or current sources". It names the
+    resistor as the path, its conductance and the scale it is compared with."""
+    from converters.circuits.netlist import NetlistError
+    path = tmp_path / "tiny.cir"
+    path.write_text("buck with a tera-ohm tail\nVin in 0 DC 12\nVg g 0 PULSE(0 1 0 10n 10n 4u 10u)\n"
+                    "S1 in sw g 0 SWMOD\nD1 0 sw DMOD\nL1 sw out 10u\nLp out o2 1f\nRt o2 0 1t\nC1 out 0 100u\n"
+                    "R1 out 0 10\n.model SWMOD SW(VT=0.5)\n.model DMOD D\n.tran 10n 1m\n.end\n")
+    with pytest.raises(NetlistError) as refused:
+        run_converter(str(path), {}, steady=True)
+    said = str(refused.value)
+    assert "node o2 reaches ground (with s1=open) only through RT (1e+12 ohm: 1e-12 S) beside LP" in said
+    assert "at or below 1e-12 of the network's scale (1 S)" in said and "open switches" not in said
