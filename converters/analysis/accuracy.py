@@ -49,6 +49,7 @@ import numpy.typing as npt
 
 from ..errors import ParameterError, ResourceError, SimulationError
 from ..methods.base import ErrorKind
+from ..trajectory import locate_pair_change, parabola_peak
 
 if TYPE_CHECKING:
     from ..methods.base import Method
@@ -200,30 +201,10 @@ def substep_events(tr: Trajectory, T: float, t0: float = 0.0) -> list[tuple[str,
         if exact:
             time_ = float(times[k])
         else:
-            time_ = _locate(t, u[:, pair], y[:, pair], config, j, kind) if j + 1 < t.size else float(t[j])
+            time_ = locate_pair_change(t, u[:, pair], y[:, pair], config, j, kind) if j + 1 < t.size else float(t[j])
         if 0.0 <= time_ - t0 < T * (1 - 1e-12):
             out.append((tr.pair_names[pair], kind, (time_ - t0) / T))
     return out
-
-
-def _locate(t: npt.NDArray[np.float64], u: npt.NDArray[np.float64], y: npt.NDArray[np.float64],
-            config: npt.NDArray[np.int_], j: int, kind: str) -> float:
-    """The instant in (t[j], t[j+1]] where the pair changed (``j``: the event's step, its last sample before
-    the change): the vanishing quantity (y before it is held, u before it is released) extrapolated to zero
-    from samples j-1, j (same configuration as the step); else the newly growing one (u after, y after)
-    back from samples j+1, j+2; else t[j+1]."""
-    a, b = t[j], t[j + 1]
-    before = y if kind == "held" else u
-    after = u if kind == "held" else y
-    # (a jump's two rows share their instant: no slope between them)
-    if j >= 1 and config[j - 1] == config[j] == config[j + 1] and before[j - 1] != before[j] and t[j] > t[j - 1]:
-        slope = (before[j] - before[j - 1]) / (t[j] - t[j - 1])
-        if slope < 0:
-            return float(min(max(a - before[j] / slope, a), b))
-    if j + 2 < t.size and config[j + 2] == config[j + 1] and after[j + 2] > after[j + 1] > 0 and t[j + 2] > t[j + 1]:
-        slope = (after[j + 2] - after[j + 1]) / (t[j + 2] - t[j + 1])
-        return float(min(max(b - after[j + 1] / slope, a), b))
-    return float(b)
 
 
 def mode_fractions(tr: Trajectory, T: float, events: Sequence[tuple[str, str, float]], edges: npt.ArrayLike,
@@ -259,20 +240,9 @@ def extremum(t: npt.NDArray[np.float64], v: npt.ArrayLike, config: npt.NDArray[n
     the edge) the value after it is the parabola through the next three samples at the edge."""
     w = sign * np.asarray(v, dtype=float)
     j = int(np.argmax(w))
-    best = max([w[j], *(sign * e for e in at_events), *_right_limits(t, w, config, edges)])
     # the vertex of a parabola through three samples of one configuration (one through the value before a jump had
     # read a DCM boost's ripple with ESR 12 % high: 0.328 V for 0.292)
-    if 0 < j < w.size - 1 and config is not None and config[j - 1] == config[j] == config[j + 1]:
-        t0, t1, t2 = t[j - 1], t[j], t[j + 1]
-        if t0 < t1 < t2:
-            a, b, c = w[j - 1], w[j], w[j + 1]
-            d01, d12 = (b - a) / (t1 - t0), (c - b) / (t2 - t1)
-            curvature = (d12 - d01) / (t2 - t0)
-            if curvature < 0:
-                # Newton form: p(s) = a + d01 (s - t0) + curvature (s - t0)(s - t1)
-                ts = 0.5 * (t0 + t1) - d01 / (2 * curvature)
-                if t0 <= ts <= t2:
-                    best = max(best, a + d01 * (ts - t0) + curvature * (ts - t0) * (ts - t1))
+    best = max([parabola_peak(t, w, config, j), *(sign * e for e in at_events), *_right_limits(t, w, config, edges)])
     return float(sign * best)
 
 

@@ -565,7 +565,9 @@ def _carrying(c, samples: Samples) -> np.ndarray:
     with np.errstate(divide="ignore"):
         conductance = np.where(forms, np.where(d > 0.0, 1.0 / np.where(d > 0.0, d, 1.0), np.inf), d)
     conductance = np.where(conductance > 0.0, conductance, np.inf)
-    driven = np.minimum(scale[:, None] * conductance, scale[:, None])
+    # (an infinite conductance drives the scale itself: 0 * inf at a point whose pairs and sources are all 0 had
+    # printed numpy's "invalid value encountered in multiply" to the user)
+    driven = np.minimum(scale[:, None] * np.where(np.isinf(conductance), 1.0, conductance), scale[:, None])
     own = np.abs(current).max(axis=1, initial=0.0)
     return current > CARRYING * np.maximum(driven, own[:, None])
 
