@@ -255,7 +255,7 @@ class Converter(Model):
         circuit = self.stepped(p) if after_step else p
         return LCSProblem(self.configurations(circuit), self.schedule(p), x0=x0, t_span=(t_start, t_end),
                           state_names=self.state_names, pair_names=self.pair_names,
-                          metadata={"converter": self.name, **p})
+                          metadata={"converter": self.name, **p}, pair_currents=self.pair_currents)
 
     # --- load and input steps (open loop) -------------------------------------------------------------------
 

@@ -171,7 +171,7 @@ class Circuit(Model):
         # the law in force at t_start: a run is split at step_times (converters.run does), as a built-in's at t_step
         return LCSProblem(c.configurations, c.law_at(t_start), x0=x0, t_span=(t_start, t_end),
                           state_names=c.state_names, pair_names=c.pair_names, metadata={"circuit": self.name, **p},
-                          inputs=inputs)
+                          inputs=inputs, pair_currents=tuple(tuple(bool(b) for b in row) for row in c.pair_currents))
 
     def step_times(self, p: dict) -> list[float]:
         """The instants where a switch driven by a source that does not repeat changes (a load step's switch)."""

@@ -168,6 +168,9 @@ class LCSProblem:
     metadata: dict = field(default_factory=dict, compare=False)
     #: Sinusoidal inputs (AC sources) on top of each configuration's constant E and F, or None.
     inputs: Sinusoids | None = None
+    #: Per configuration and pair, whether u is the device's current (else its voltage; the model's rule of which
+    #: side of a pair conducts), or None: what a run reports of a pair it holds at zero current and voltage.
+    pair_currents: tuple[tuple[bool, ...], ...] | None = field(default=None, compare=False)
 
     def __post_init__(self) -> None:
         configs = tuple(self.configurations)

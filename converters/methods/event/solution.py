@@ -19,8 +19,13 @@ if TYPE_CHECKING:
     from ...problems import LCSProblem
     from . import EventDriven
 
-#: One quadrature piece being gathered: its nodes' times and weights, x~ at the nodes, and the flow.
-_Part = tuple[FloatArray, FloatArray, FloatArray, Flow]
+#: One quadrature piece being gathered: its nodes' times and weights, x~ at the nodes, the flow, and the held flags
+#: its segment reports (:meth:`EventSolution.held_flags`).
+_Part = tuple[FloatArray, FloatArray, FloatArray, Flow, npt.NDArray[np.bool_]]
+
+#: A held pair whose current and voltage stay below this fraction of its segment's largest pair variable at the
+#: segment's start, middle and end carries nothing (:meth:`EventSolution.held_flags`).
+IDLE = 1e-12
 
 _BLOCK = 1024
 #: Gauss-Legendre pieces a measure reads at a time (8 nodes each): a one-state circuit's block peaks at ~30 MB.
@@ -55,6 +60,28 @@ class EventSolution(PiecewiseSolution):
         #: ((time, energy lost), ...) of the state's jumps (:meth:`._Machine.enter`)
         self.jumps = jumps
 
+    def held_flags(self, seg: Segment) -> npt.NDArray[np.bool_]:
+        """The held flags a segment reports: its flow's, except for a pair at its corner throughout the segment
+        (u = y = 0 at its start, middle and end: it carries nothing, whichever side the machine holds it on), which
+        reads as not conducting (held where u is the device's voltage, free where u is its current). A two-switch
+        forward's clamp diodes, free at zero current once the core has reset, had read "D3+D1+D2" where D2 alone
+        conducts. Computed once per segment."""
+        cache: dict[int, npt.NDArray[np.bool_]] = self.__dict__.setdefault("_held_flags", {})
+        key = id(seg)
+        if key not in cache:
+            flags = seg.flow.held_flags
+            currents = self.problem.pair_currents
+            if currents is not None and flags.size:
+                flow = seg.flow
+                states = np.array([seg.xt0, flow.advance(seg.xt0, 0.5 * (seg.t1 - seg.t0)), seg.xt1])
+                u, y = np.abs(states @ flow.u_rows.T), np.abs(states @ flow.y_rows.T)
+                scale = max(float(u.max(initial=0.0)), float(y.max(initial=0.0)))
+                idle = ((u <= IDLE * scale) & (y <= IDLE * scale)).all(axis=0)
+                if idle.any():
+                    flags = np.where(idle, ~np.asarray(currents[flow.config], dtype=bool), flags)
+            cache[key] = flags
+        return cache[key]
+
     def _segments_in(self, t0: float, t1: float) -> Iterator[tuple[Segment, float, float]]:
         for seg in self.segments:
             if seg.t1 > t0 and seg.t0 < t1:
@@ -76,7 +103,7 @@ class EventSolution(PiecewiseSolution):
         parts: list[_Part] = []                    # (t, w, x~ nodes, flow) of the block being gathered
         held_pieces, half, any_part = 0, 0.5 * (_GL_X + 1.0), False
         for seg, a, b in self._segments_in(t0, t1):
-            flow, length = seg.flow, b - a
+            flow, length, flags = seg.flow, b - a, self.held_flags(seg)
             if length <= 0.0:
                 continue
             # Whole pieces: their starts in batched products (a block's worth at a time), their nodes by the
@@ -89,7 +116,7 @@ class EventSolution(PiecewiseSolution):
                 starts = flow.sample_states(xt, m, pieces=True)                # (m + 1, n+1)
                 nodes = np.tensordot(starts[:m], flow.node_maps, axes=([1], [2])).reshape(-1, starts.shape[1])
                 times = (a + flow.piece * (done + np.arange(m))[:, None] + flow.piece * half[None, :]).ravel()
-                parts.append((times, np.tile(0.5 * flow.piece * _GL_W, m), nodes, flow))
+                parts.append((times, np.tile(0.5 * flow.piece * _GL_W, m), nodes, flow, flags))
                 xt, done, held_pieces = starts[m], done + m, held_pieces + m
                 if held_pieces >= pieces:
                     yield self._block(parts)
@@ -98,7 +125,7 @@ class EventSolution(PiecewiseSolution):
             if rest > 1e-15 * length:
                 offsets = rest * half
                 parts.append((a + full * flow.piece + offsets, 0.5 * rest * _GL_W,
-                              (offsets[:, None] ** _EXPONENTS[None, :]) @ flow.series(xt), flow))
+                              (offsets[:, None] ** _EXPONENTS[None, :]) @ flow.series(xt), flow, flags))
                 held_pieces += 1
         if parts:
             yield self._block(parts)
@@ -107,14 +134,14 @@ class EventSolution(PiecewiseSolution):
 
     @staticmethod
     def _block(parts: list[_Part]) -> tuple[Samples, FloatArray]:
-        xs = [nodes for _, _, nodes, _ in parts]
-        samples = Samples(np.concatenate([t for t, _, _, _ in parts]), np.vstack([x[:, :-1] for x in xs]),
-                          np.vstack([x @ f.u_rows.T for x, (_, _, _, f) in zip(xs, parts)]),
-                          np.vstack([x @ f.y_rows.T for x, (_, _, _, f) in zip(xs, parts)]),
-                          np.concatenate([np.full(x.shape[0], f.config) for x, (_, _, _, f) in zip(xs, parts)]),
-                          held=np.vstack([np.broadcast_to(f.held_flags, (x.shape[0], f.held_flags.size))
-                                          for x, (_, _, _, f) in zip(xs, parts)]))
-        return samples, np.concatenate([w for _, w, _, _ in parts])
+        xs = [nodes for _, _, nodes, _, _ in parts]
+        samples = Samples(np.concatenate([t for t, _, _, _, _ in parts]), np.vstack([x[:, :-1] for x in xs]),
+                          np.vstack([x @ f.u_rows.T for x, (_, _, _, f, _) in zip(xs, parts)]),
+                          np.vstack([x @ f.y_rows.T for x, (_, _, _, f, _) in zip(xs, parts)]),
+                          np.concatenate([np.full(x.shape[0], f.config) for x, (_, _, _, f, _) in zip(xs, parts)]),
+                          held=np.vstack([np.broadcast_to(flags, (x.shape[0], flags.size))
+                                          for x, (_, _, _, _, flags) in zip(xs, parts)]))
+        return samples, np.concatenate([w for _, w, _, _, _ in parts])
 
     def quadrature(self, t0: float | None = None, t1: float | None = None) -> tuple[Samples, FloatArray]:
         """Every Gauss-Legendre node over [t0, t1] at once (:meth:`quadrature_blocks`), after a check that they fit
@@ -142,7 +169,7 @@ class EventSolution(PiecewiseSolution):
             seg = self.segments[s]
             xt = seg.flow.advance(seg.xt0, times[i] - seg.t0)
             x[i], u[i], y[i] = xt[:n], seg.flow.u_rows @ xt, seg.flow.y_rows @ xt
-            config[i], held[i] = seg.flow.config, seg.flow.held_flags
+            config[i], held[i] = seg.flow.config, self.held_flags(seg)
         return Samples(times, x, u, y, config, held=held)
 
     def trajectory(self, output_step: float) -> Trajectory:
@@ -162,7 +189,7 @@ class EventSolution(PiecewiseSolution):
         y[at_end] = np.einsum("skn,sn->sk", np.array([seg.flow.y_rows for seg in segs]).reshape(-1, k, n + 1), ends)
         config[at_end] = [seg.flow.config for seg in segs]
         held = np.empty((t.size, k), dtype=bool)
-        held[at_end] = np.array([seg.flow.held_flags for seg in segs]).reshape(-1, k)
+        held[at_end] = np.array([self.held_flags(seg) for seg in segs]).reshape(-1, k)
         inside = ~at_end
         x[inside], u[inside], y[inside], config[inside], held[inside] = self._sample_sorted(t[inside], output_step)
         t, x, u, y, config, held = self._after_boundaries(t, x, u, y, config, held)
@@ -189,7 +216,7 @@ class EventSolution(PiecewiseSolution):
                 continue
             xt = seg.xt0
             rows.append((seg.t0, xt[:n], seg.flow.u_rows @ xt, seg.flow.y_rows @ xt, seg.flow.config,
-                         seg.flow.held_flags))
+                         self.held_flags(seg)))
         if not rows:
             return t, x, u, y, config, held
         at = np.searchsorted(t, np.array([r[0] for r in rows]), side="right")
@@ -245,7 +272,7 @@ class EventSolution(PiecewiseSolution):
             u[lo:hi] = states @ flow.u_rows.T
             y[lo:hi] = states @ flow.y_rows.T
             config[lo:hi] = flow.config
-            held[lo:hi] = flow.held_flags
+            held[lo:hi] = self.held_flags(seg)
         return x, u, y, config, held
 
 
