@@ -200,7 +200,8 @@ def test_each_loss_says_how_well_it_is_known_where_it_is_known_to_less_than_a_pe
     """A buck in deep DCM at 2 kHz: its diode conducts for one step of T/1000, so its drop's loss read 0.2973 mW
     where the event method's exact quadrature gives 0.2661 (11.7 % off) with no word; the summary's estimate is
     relative to the input power (1.3e-5), where 31 uW is nothing. Each loss now carries its own estimate in W
-    (Richardson at h and 2h), and the line prints it beside a loss it does not know to 1 %."""
+    (Richardson at h and 2h), and the line prints it beside a loss it does not know to 1 %; simulate at its defaults
+    then answers with the exact orbit, said so."""
     from converters.run import run_converter, run_summary
     from validation.cli import main
     params = {"f_sw": 2000, "Vf": 0.5, "Ron": 0.05, "rL": 0.02}
@@ -210,9 +211,15 @@ def test_each_loss_says_how_well_it_is_known_where_it_is_known_to_less_than_a_pe
         error = abs(value - exact[name])
         assert error <= power["loss_error_estimates_W"][name] <= 3.0 * error, name
     assert abs(power["losses_W"]["Vf"] / exact["Vf"] - 1.0) > 0.1
-    assert main(["simulate", "buck", *(a for k, v in params.items() for a in ("-p", f"{k}={v}")), "--steady"]) == 0
+    given = [a for k, v in params.items() for a in ("-p", f"{k}={v}")]
+    assert main(["simulate", "buck", *given, "--steady", "--theta", "0.5"]) == 0        # the default's stepper
     line = next(line for line in capsys.readouterr().out.splitlines() if line.startswith("power over"))
     assert line.endswith("(losses: rL 460.7 mW, Ron 1152 mW, Vf 0.2973 +- 0.039 mW)")
+    assert main(["simulate", "buck", *given, "--steady"]) == 0
+    out, err = capsys.readouterr()
+    line = next(line for line in out.splitlines() if line.startswith("power over"))
+    assert line.endswith("(losses: rL 460.8 mW, Ron 1152 mW, Vf 0.2661 mW)")
+    assert "the exact (event) method's orbit is given" in err
 
 
 @pytest.mark.parametrize("name,params", [
