@@ -119,6 +119,8 @@ class Compiled:
     #: Per configuration, the node potentials nothing but diodes ties to the rest of the circuit (:meth:`_Compiler.
     #: floating`): (what each signal does along them (S, m), what each diode's voltage does (k, m)), or None.
     floating: tuple[tuple[_Array, _Array] | None, ...] = ()
+    #: The power circuit's PULSE sources run as steps at the middle of their edges: ((title, longest edge in s), ...).
+    power_edges: tuple[tuple[str, float], ...] = ()
 
     def signal_rows(self, row: int) -> tuple[_Array, ...]:
         """Signal ``row``'s maps stacked over the configurations: (Sx (configs, n), Su, s0, Ssin, Sgate), built once
@@ -603,7 +605,9 @@ class _Compiler:
                         period=period if periodic else math.inf, x0=self.initial_state(), units=self.units(),
                         inputs=inputs, gates=self.gate_waveforms(), phases=tuple(zip(phase_times, laws[1:])),
                         invariants=self.invariants(state_names), notes=self.moved(state_names), energy=self.energy(),
-                        floating=tuple(floats))
+                        floating=tuple(floats),
+                        power_edges=tuple((s.title, max(cast(Pulse, s.waveform).tr, cast(Pulse, s.waveform).tf))
+                                          for s in power))
 
     @staticmethod
     def schedule(period: float, starts: list[float], index: list[int], sines: bool) -> Schedule:

@@ -215,8 +215,9 @@ class Circuit(Model):
         inductors and charge islands), where it has any."""
         compiled = self.compiled(p)
         held = {"invariants": [dict(i) for i in compiled.invariants]} if compiled.invariants else {}
-        if compiled.notes:
-            held["warnings"] = list(compiled.notes)
+        notes = list(compiled.notes) + self._edge_warnings(p)
+        if notes:
+            held["warnings"] = notes
         t1 = float(tr.t[-1])
         if self.periodic(p):
             out = super().summary(tr, p)
@@ -233,6 +234,28 @@ class Circuit(Model):
         if impulses:
             held["warnings"] = [*held.get("warnings", []), impulses]
         return {**out, **held}
+
+    #: A power PULSE's edge longer than this many of the circuit's fastest time constants is said: the mode settles
+    #: within the edge, so what it carries there follows the ramp, and the step at the edge's middle misses it.
+    EDGE_TIME_CONSTANTS = 1.0
+
+    def _edge_warnings(self, p: dict) -> list[str]:
+        """Why the power PULSEs' step semantics cannot be trusted here: an edge longer than the circuit's fastest
+        time constant (a 10 V square wave with 1 us edges through 10 ohm into 10 nF: the step drives 1 A through the
+        resistor, the ramp 0.1 A; the values the mode sets near an edge are a step's, up to edge / tau times a
+        ramp's, where no estimate sees it)."""
+        edges = self.compiled(p).power_edges
+        if not edges:
+            return []
+        rate = self.fastest_rate(p)
+        out = []
+        for title, edge in edges:
+            if edge * rate > self.EDGE_TIME_CONSTANTS:
+                out.append(f"{title}: its edges ({edge:.3g} s) are run as steps at their middle, and the circuit's "
+                           f"fastest time constant ({1.0 / rate:.3g} s) is shorter: the currents that mode carries "
+                           f"near an edge are a step's, up to {edge * rate:.2g} times the ramp's, which no estimate "
+                           "sees; give edges shorter than the time constant (or a resistance that slows the mode)")
+        return out
 
     def floating_mask(self, names: Sequence[str], samples: Samples, p: dict) -> np.ndarray:
         """Where each signal of ``names`` is not set by the circuit (bool, (points, names)): in a configuration with
