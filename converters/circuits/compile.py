@@ -1978,12 +1978,11 @@ class _Network:
                                 "(SPICE needs a path to ground too)")
         # a resistor at the nodes is a path: where it is there, its conductance is below what G's rank resolves
         # beside the network's largest (a 1 TOhm resistor to ground had been named among the open elements)
-        weak = [e for e in c.by_kind["R"] if e.value and set(e.nodes[:2]) & set(nodes)]
-        opened = [name for name in around if name not in {e.name.upper() for e in weak}]
+        weak = [(e.name.upper(), float(e.value)) for e in c.by_kind["R"] if e.value and set(e.nodes[:2]) & set(nodes)]
+        opened = [name for name in around if name not in {name for name, _ in weak}]
         if weak:
             scale = max(float(np.abs(self.G).max()), 1.0)           # as nullity() takes it
-            said = ", ".join(f"{e.name.upper()} ({float(e.value):.3g} ohm: {1.0 / float(e.value):.3g} S)"
-                             for e in weak)
+            said = ", ".join(f"{name} ({value:.3g} ohm: {1.0 / value:.3g} S)" for name, value in weak)
             return NetlistError(f"{c.path}: node{'s' if len(nodes) > 1 else ''} {', '.join(nodes)} reach"
                                 f"{'' if len(nodes) > 1 else 'es'} ground{where} only through {said}"
                                 + (f" beside {', '.join(opened)}" if opened else "")
