@@ -119,8 +119,9 @@ class Compiled:
     #: Per configuration, the node potentials nothing but diodes ties to the rest of the circuit (:meth:`_Compiler.
     #: floating`): (what each signal does along them (S, m), what each diode's voltage does (k, m)), or None.
     floating: tuple[tuple[_Array, _Array] | None, ...] = ()
-    #: The power circuit's PULSE sources run as steps at the middle of their edges: ((title, longest edge in s), ...).
-    power_edges: tuple[tuple[str, float], ...] = ()
+    #: The power circuit's PULSE sources, run as steps at the middle of their edges: ((title, period, ((the edge's
+    #: middle in [0, period), its width), ...)), ...).
+    power_edges: tuple[tuple[str, float, tuple[tuple[float, float], ...]], ...] = ()
 
     def signal_rows(self, row: int) -> tuple[_Array, ...]:
         """Signal ``row``'s maps stacked over the configurations: (Sx (configs, n), Su, s0, Ssin, Sgate), built once
@@ -606,7 +607,7 @@ class _Compiler:
                         inputs=inputs, gates=self.gate_waveforms(), phases=tuple(zip(phase_times, laws[1:])),
                         invariants=self.invariants(state_names), notes=self.moved(state_names), energy=self.energy(),
                         floating=tuple(floats),
-                        power_edges=tuple((s.title, max(cast(Pulse, s.waveform).tr, cast(Pulse, s.waveform).tf))
+                        power_edges=tuple((s.title, cast(Pulse, s.waveform).per, _edge_middles(cast(Pulse, s.waveform)))
                                           for s in power))
 
     @staticmethod
@@ -1615,6 +1616,12 @@ STEP_EDGE_FRACTION = 1e-3
 #: voltage doubler's 10 ns edges on a 2 % pulse of 10 us (5 % of its 200 ns) read its diode's peak current 3.3 % low
 #: and its source's rms 0.84 % high, every estimate ~0 (the steps are the same at h and 2h, and in the exact method).
 EDGE_SAID = 1e-2
+
+
+def _edge_middles(w: Pulse) -> tuple[tuple[float, float], ...]:
+    """A periodic PULSE's edges as (middle in [0, PER), width): where the power circuit steps between its levels."""
+    return tuple((math.fmod(w.td + start + 0.5 * width, w.per) % w.per, width)
+                 for start, width in ((0.0, w.tr), (w.tr + w.pw, w.tf)))
 
 
 def waveform_at(w: Waveform, t: _Array) -> _Array:

@@ -249,7 +249,8 @@ class Circuit(Model):
             return []
         rate = self.fastest_rate(p)
         out = []
-        for title, edge in edges:
+        for title, _, middles in edges:
+            edge = max(width for _, width in middles)
             if edge * rate > self.EDGE_TIME_CONSTANTS:
                 out.append(f"{title}: its edges ({edge:.3g} s) are run as steps at their middle, and the circuit's "
                            f"fastest time constant ({1.0 / rate:.3g} s) is shorter: the currents that mode carries "

@@ -8,6 +8,7 @@ each capacitor. The diode charges C2 to the wave's top; the 1e12 ohm bleeders le
 step, R1 C1 = 100 ns (10 ohm, 10 nF) read 16.665 V, and 1 fs (1 mohm, 1 pF) 1,363,648 V ("stable").
 """
 import json
+import math
 from pathlib import Path
 
 import numpy as np
@@ -701,3 +702,23 @@ def test_a_power_edge_longer_than_the_fastest_time_constant_is_said(tmp_path):
     path.write_text(STIFF.format(r="10", c="10n"))
     assert not any("fastest time constant" in w
                    for w in run_summary(run_converter(str(path), steady=True)).get("warnings", []))
+
+
+@pytest.mark.parametrize("method", ["lcp", "event"])
+def test_a_power_edges_share_of_a_signals_rms_is_in_its_estimate(method, tmp_path):
+    """A +-5 V square wave with 1 us edges at 1 kHz, run as steps at the edges' middle: its rms reads 5 V, where the
+    ramps give 5 (1 - 4/3 1e-3)^(1/2) = 4.996666 V (the closed form; a tester's exact flows with the ramps: 4.99667),
+    6.7e-4 off with an estimate of 1e-14 (both the step at h and 2h and the exact method run the steps alike). The
+    estimate now holds each signal's share of the edges, J^2 w / 6 of its mean square per edge of width w where it
+    jumps by J; signals that do not jump (the output) keep theirs."""
+    path = tmp_path / "edges.cir"
+    path.write_text(STIFF.format(r="10", c="1u").replace("PULSE(0 10 0 1n 1n 0.5m 1m)",
+                                                         "PULSE(-5 5 0 1u 1u {0.5m-1u} 1m)"))
+    summary = run_summary(run_converter(str(path), steady=True, method=method))
+    closed = 5.0 * math.sqrt(1.0 - 4.0 / 3.0 * 1e-3)
+    error = abs(summary["measurements"]["v(in)"]["rms"] - closed) / closed
+    assert error == pytest.approx(6.67e-4, rel=1e-2)
+    estimate = summary["accuracy"]["measurement_error_estimates"]["v(in)"]
+    assert error / 3 <= estimate <= 3 * error
+    assert summary["accuracy"]["edge_terms"]["v(in)"] == pytest.approx(error, rel=1e-2)
+    assert summary["accuracy"]["edge_terms"].get("vout", 0.0) < 1e-9
