@@ -862,9 +862,13 @@ class Trajectory:
                     sampled = {name: np.concatenate([values, np.asarray(self.labels.signal(name, limits), dtype=float)])
                                if name in own else values for name, values in sampled.items()}
         out: dict[str, dict[str, str | float]] = {}
+        exact = getattr(self.labels, "waveform_measures", None)
         for name, values in sampled.items():
             mean, rms, low, high = measures[name]
             low, high = min(low, float(values.min())), max(high, float(values.max()))
+            known = exact(name, a, b) if exact is not None and name not in self.measured else None
+            if known is not None:       # a source's waveform alone: its own corners, not the run's samples
+                mean, rms, low, high = known
             out[name] = {"unit": signal_unit(units, name), "mean": mean, "rms": rms, "min": low, "max": high,
                          "ripple": high - low}
         return out

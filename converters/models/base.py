@@ -45,6 +45,12 @@ class BoundLabels:
     def signal(self, name: str, samples: Samples) -> np.ndarray:
         return self.model.signal(name, samples, self.params)
 
+    def waveform_measures(self, name: str, t0: float, t1: float) -> tuple[float, float, float, float] | None:
+        """(mean, rms, min, max) over [t0, t1] of a signal that is a source's waveform alone, exactly; None for any
+        other (read on the run): the model's, where it has them."""
+        measures = getattr(self.model, "waveform_measures", None)
+        return None if measures is None else measures(name, self.params, t0, t1)
+
 
 @dataclass(frozen=True)
 class Labels(BoundLabels):

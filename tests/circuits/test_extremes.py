@@ -2,6 +2,7 @@
 (its quadrature nodes follow the flow's stiffest mode), the stepper's at a diode's event inside a step (located and
 extrapolated there) and at its first row (its pairs solved, not the start's zeros), so the check at h and 2h sees
 the extremum converge and states its error."""
+import math
 import warnings
 from dataclasses import replace
 
@@ -123,3 +124,18 @@ def test_a_point_whose_pairs_and_sources_are_all_zero_warns_nothing(tmp_path):
     with warnings.catch_warnings():
         warnings.simplefilter("error", RuntimeWarning)
         assert not _carrying(compiled, samples).any()
+
+
+@pytest.mark.parametrize("method", ["lcp", pytest.param("event", marks=pytest.mark.slow)])
+def test_a_gates_node_is_measured_on_its_waveform_not_on_the_runs_samples(method, tmp_path):
+    """The snubbed buck's gate, PULSE(0 1 0 10n 10n {D T - 10n} {T}): its mean is (PW + TR/2 + TF/2) / T = D and its
+    mean square (PW + TR/3 + TF/3) / T exactly. Its ramps' kinks fall inside the stepper's steps and the exact
+    method's quadrature pieces: a 10 kHz boost's gate had read 0.20025 for 0.2 (1.2e-3 off, no estimate)."""
+    path = tmp_path / "snub.cir"
+    path.write_text(SNUBBED_DCM_BUCK)
+    summary = run_summary(run_converter(str(path), steady=True, method=method))
+    gate = summary["measurements"]["v(g)"]
+    T, D, edge = 10e-6, 0.3, 10e-9
+    assert gate["mean"] == pytest.approx(D, rel=1e-12)
+    assert gate["rms"] == pytest.approx(math.sqrt((D * T - edge + 2 * edge / 3) / T), rel=1e-12)
+    assert (gate["min"], gate["max"]) == (0.0, 1.0)
