@@ -1128,7 +1128,21 @@ def default_check(model: Model, p: dict, method: Method, tr: Trajectory, reporte
         for name, term in edges.items():
             estimates[name] = max(float(estimates.get(name, 0.0)), term)
         out["edge_terms"] = edges
+    share = edge_share(model, p, T)
+    if share:           # a diode's turn-on or -off inside an edge moves by up to its width (a mode only the ramp has
+        # is not among the labels: a ladder's all-off instant, 2e-3 T under its edges, which the steps skip)
+        fractions = out.setdefault("mode_fraction_error_estimates", {})
+        for label in last_period(model, p, fine)["mode_fractions"]:
+            fractions[str(label)] = max(float(fractions.get(str(label), 0.0)), share)
     return out
+
+
+def edge_share(model: Model, p: dict, T: float) -> float:
+    """The power PULSEs' edges' total width over a period ``T``, in units of it (0 for a circuit without them): how
+    far the step at their middle can move a mode fraction."""
+    compiled = getattr(model, "compiled", None)
+    edges = compiled(p).power_edges if compiled is not None else ()
+    return sum(width * max(round(T / per), 1) for _, per, pairs in edges for _, width in pairs) / T
 
 
 def edge_terms(model: Model, p: dict, run: Trajectory, T: float) -> dict[str, float]:
