@@ -653,7 +653,7 @@ def test_accuracy_on_request_under_a_comparator_reads_its_crossings_inside_the_s
     assert [e["pair"] for e in accuracy["events"]] == ["comparator"]
 
 
-@pytest.mark.parametrize("steady", [True, False])
+@pytest.mark.parametrize("steady", [True, pytest.param(False, marks=pytest.mark.slow)])     # False: 2.7-3.0 s
 def test_the_default_summary_reads_a_comparators_duty_ratio_inside_the_step(steady):
     """simulate's mode fractions under a comparator were read on the stepper's grid: a whole number of its 1,000
     steps a period (a type III boost's 0.512000 printed for 0.512937), with exit 0 and no estimate. They are read

@@ -837,7 +837,8 @@ def test_full_bridge_load_current_fundamental_is_m_vdc_over_the_load_impedance(m
 
 # --- three-phase two-level inverter ----------------------------------------------------------------------------------
 
-@pytest.mark.parametrize("method", [pytest.param("event", marks=pytest.mark.slow), "lcp"])    # event: 2.6-3.3 s
+@pytest.mark.parametrize("method", [pytest.param("event", marks=pytest.mark.slow),    # event: 2.6-3.3 s
+                                    pytest.param("lcp", marks=pytest.mark.slow)])      # lcp: 2.4-2.5 s
 def test_three_phase_inverter_load_currents_are_the_phase_circuits_closed_form(method):
     """Six switches on three sine-triangle comparators, six antiparallel diodes, an LC filter and an RL load, on a
     split DC link whose midpoint is the star point (diodes across the link read as reverse-biased through the

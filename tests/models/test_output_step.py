@@ -20,7 +20,7 @@ SMC = {"Vin": 9, "L": "150u", "C": "220u", "R": 40, "Vref": 24, "band": 0.1}
 @pytest.mark.parametrize("name,control,params,span", [
     ("buck", "pwm", {}, {"periods": 500}),
     ("buck", "pwm", {"t_step": "3m", "R_step": 20}, {"periods": 500}),
-    ("boost", "smc", SMC, {"t_end": "6m"})])
+    pytest.param("boost", "smc", SMC, {"t_end": "6m"}, marks=pytest.mark.slow)])       # 3.6-4.0 s
 def test_a_chunked_thinned_run_reports_what_the_whole_run_does(monkeypatch, name, control, params, span):
     """Chunks of 20,000 steps (their boundaries on the run's grid, the state and the switch carried across), the
     rows before the summary's window thinned to 1 us: the summary's numbers are those of the run kept whole."""
@@ -67,6 +67,7 @@ def test_an_output_step_outside_the_run_is_refused(value, message):
         run_converter("buck", {}, output_step=value)
 
 
+@pytest.mark.slow                                                                       # 3.1-3.2 s
 def test_a_run_whose_steps_exceed_the_memory_limit_is_kept_at_an_output_spacing_that_fits(monkeypatch):
     """At a 1.5 GiB limit the sliding-mode boost's 24 ms (6 M steps of 4 ns, ~3.4 GiB kept whole) had been refused;
     it runs in chunks and keeps one sample per few steps before its window (the last 4 ms: 1 M steps). A limit that

@@ -50,6 +50,7 @@ def _steady(params: dict) -> dict:
     return run_summary(run_converter("buck", params, steady=True))
 
 
+@pytest.mark.slow                                                                       # 2.8-3.0 s
 def test_the_final_value_is_the_steady_state_after_the_step_not_the_runs_last_periods():
     """The default DCM buck, R 10 -> 20 ohm at 4 ms: vout settles at 8.364 V in about 1.75 ms. A run that ends 1 ms
     after the step is still at 8.20 V: it is reported as not settled, against the true final value (the run's last
