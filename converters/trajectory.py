@@ -66,13 +66,17 @@ EventColumns: TypeAlias = "Mapping[str, npt.NDArray[Any]] | pd.DataFrame"
 
 
 def parabola_peak(t: npt.NDArray[np.float64], w: npt.NDArray[np.float64], config: npt.NDArray[Any] | None,
-                  j: int) -> float:
+                  j: int, held: npt.NDArray[np.bool_] | None = None) -> float:
     """The largest of w around its sample j: the vertex of the parabola through samples j-1, j, j+1 where they are
     of one configuration, strictly ordered in time, rise then fall, and the vertex gains at most a quarter of the
     larger drop to a neighbour (as a parabola sampled around its peak does) - a sampled smooth peak is O(h^2) short
     of it, the vertex O(h^3); else w[j]. A kink inside one configuration (a gate's ramp leaving its level) is no
-    peak: a vertex through it had read a PULSE gate's 0 V as -2.1 mV."""
+    peak: a vertex through it had read a PULSE gate's 0 V as -2.1 mV. ``held``: the pairs' held flags per sample,
+    where known (an exact run's nodes): a diode's event changes them and not the configuration, and a vertex across
+    it had read a forward's output current 1.2e-3 below its minimum at the end of a commutation."""
     best = float(w[j])
+    if held is not None and 0 < j < w.size - 1 and not (held[j - 1] == held[j]).all() & (held[j] == held[j + 1]).all():
+        return best
     if 0 < j < w.size - 1 and config is not None and config[j - 1] == config[j] == config[j + 1]:
         t0, t1, t2 = t[j - 1], t[j], t[j + 1]
         if t0 < t1 < t2:
@@ -507,8 +511,10 @@ class Trajectory:
                 total[0] += float(weights @ values)
                 total[1] += float(weights @ (values * values))
                 if values.size:
-                    total[2] = min(total[2], -parabola_peak(nodes.t, -values, nodes.config, int(np.argmin(values))))
-                    total[3] = max(total[3], parabola_peak(nodes.t, values, nodes.config, int(np.argmax(values))))
+                    total[2] = min(total[2], -parabola_peak(nodes.t, -values, nodes.config, int(np.argmin(values)),
+                                                            nodes.held))
+                    total[3] = max(total[3], parabola_peak(nodes.t, values, nodes.config, int(np.argmax(values)),
+                                                           nodes.held))
         return totals
 
     def _measures(self, names: list[str], t0: float, t1: float) -> dict[str, tuple[float, float, float, float]]:
