@@ -93,7 +93,7 @@ def parabola_peak(t: npt.NDArray[np.float64], w: npt.NDArray[np.float64], config
 
 
 def locate_pair_change(t: npt.NDArray[np.float64], u: npt.NDArray[np.float64], y: npt.NDArray[np.float64],
-            config: npt.NDArray[np.int_], j: int, kind: str) -> float:
+                       config: npt.NDArray[np.int_], j: int, kind: str) -> float:
     """The instant in (t[j], t[j+1]] where the pair changed (``j``: the event's step, its last sample before
     the change): the vanishing quantity (y before it is held, u before it is released) extrapolated to zero
     from samples j-1, j (same configuration as the step); else the newly growing one (u after, y after)
