@@ -14,24 +14,11 @@ from converters.methods import EventDriven
 from converters.run import resolve_model, run_converter, run_summary
 from converters.simulate import simulate
 
+from .test_corpus import CORPUS, FLYBACK_RING
+
 NETLISTS = Path(__file__).resolve().parents[2] / "netlists" / "circuits"
 
-SNUBBED_DCM_BUCK = """Buck 24 V 100 kHz, 10 uF output, DCM at 200 ohm, RC snubber 1 ohm 220p across the switch
-.param T=10u D=0.3
-Vin in 0 DC 24
-Vg g 0 PULSE(0 1 0 10n 10n {D*T-10n} {T})
-S1 in sw g 0 SWMOD
-Rsn in sn 1
-Csn sn sw 220p
-D1 0 sw DMOD
-L1 sw out 10u
-C1 out 0 10u
-R1 out 0 200
-.model SWMOD SW(VT=0.5)
-.model DMOD D
-.tran 10n 10m
-.end
-"""
+SNUBBED_DCM_BUCK = CORPUS["switch-snubbed-dcm-buck"][0]
 
 SIN_BRIDGE = """Full-bridge rectifier 50 Hz 325 V, 0.2 ohm line, LC filter 5 mH / 470 uF, 200 ohm load
 Vs l n SIN(0 325 50)
@@ -47,23 +34,6 @@ C1 out 0 470u
 R1 out 0 200
 .model DMOD D
 .tran 20u 2
-.end
-"""
-
-RINGING_FLYBACK = """Flyback, no clamp: 0.2 uH leakage rings with the switch's 1 nF output capacitance (undamped)
-Vin in 0 DC 24
-Vg g 0 PULSE(0 1 0 10n 10n 2.99u 10u)
-Lp in pd 100u
-S1 pd 0 g 0 SWMOD
-Coss pd 0 1n
-Ls 0 sa 100u
-K1 Lp Ls 0.998999
-Do sa out DMOD
-C1 out 0 100u
-R1 out 0 100
-.model SWMOD SW(VT=0.5)
-.model DMOD D
-.tran 10n 10m
 .end
 """
 
@@ -119,7 +89,7 @@ def test_a_point_whose_pairs_and_sources_are_all_zero_warns_nothing(tmp_path):
     from converters.models.netlist import _carrying
     from converters.trajectory import Samples
     path = tmp_path / "ring.cir"
-    path.write_text(RINGING_FLYBACK)
+    path.write_text(FLYBACK_RING)
     compiled = resolve_model(str(path)).compiled({})
     assert not any(np.abs(c.F).any() for c in compiled.configurations)
     k, n = len(compiled.pair_names), len(compiled.state_names)
