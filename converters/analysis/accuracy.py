@@ -1198,7 +1198,8 @@ def second_resolution(model: Model, p: dict, method: Method, tr: Trajectory,
         T, step = model.period(p), getattr(method, "h", None)
         onset = _unresolved_onset(model, p, fine, remedy=False)
         brief = _unresolved_mode(last_period(model, p, tr), tr, T, step, False)
-        doubts += [(onset, onset + ONSET_REMEDY), (brief, brief + BRIEF_REMEDY)]
+        ramp = _unresolved_ramp(model, p, step)
+        doubts += [(onset, onset + ONSET_REMEDY), (brief, brief + BRIEF_REMEDY), (ramp, ramp + RAMP_REMEDY)]
     doubts = [doubt for doubt in doubts if doubt[0]]
     reference = _exact_reference(model, p, fine) if doubts and coarse is not None else None
     cache[id(method)] = ((doubts, reference), method)            # the method kept: its id
@@ -1497,6 +1498,35 @@ def _unresolved_mode(period: dict, tr: Trajectory, T: float, step: float | None,
     return cause + (BRIEF_REMEDY if remedy else "")
 
 
+def _unresolved_ramp(model: Model, p: dict, step: float | None) -> str:
+    """Why the stepper's estimate cannot be trusted where a power PULSE's edge, a ramp of the LCS, is shorter than a
+    step while the circuit's fastest mode follows it (its time constant below ten times the edge): the runs at h and
+    2h both cross the edge in one step, and what the mode carries along it is not resolved by either (100 ns edges
+    into 10 ohm and 1 nF at a 1 us step: the resistor's peak 0.0909 A where the ramp drives 0.1 A, the estimate
+    2.8e-4). Backward Euler's one step takes a mode of rate a through a ramp of width w quasi-statically, its current
+    C s a w / (1 + a w) beside the flow's C s (1 - e^(-a w)): off by 1 / (1 + a w), below 1e-3 past RAMP_QUASI_STATIC
+    (a 1 fs node behind 1 ns edges reads its 10 mA exactly). '' otherwise."""
+    compiled = getattr(model, "compiled", None)
+    ramps = compiled(p).ramped_edges if compiled is not None and step else ()
+    short = [(title, max(tr, tf)) for title, tr, tf in ramps if min(tr, tf) < step]
+    if not short:
+        return ""
+    rate = model.fastest_rate(p)
+    title, edge = min(short, key=lambda item: item[1])
+    if not RAMP_FOLLOWED < rate * edge <= RAMP_QUASI_STATIC:
+        return ""
+    return (f"{title}'s edges ({edge:.3g} s) are ramps shorter than the step ({step:.3g} s), which the circuit's "
+            f"fastest mode ({1.0 / rate:.3g} s) follows")
+
+
+#: A ramp shorter than a step is in doubt (:func:`_unresolved_ramp`) where the fastest mode's rate times the edge
+#: exceeds this: the mode then follows the ramp within it, where a slower one takes it as a step.
+RAMP_FOLLOWED = 0.1
+#: ... and at most this: a faster mode is quasi-static along the ramp, which the step then reads to 1 / (1 + a w).
+RAMP_QUASI_STATIC = 1e3
+#: What follows from :func:`_unresolved_ramp`'s cause, and what to do.
+RAMP_REMEDY = (": the runs at h and 2h both cross each edge in one step, so the estimate may be far too small; use "
+               "--method event (exact on the ramps), or a --h below the edges")
 #: What follows from :func:`_unresolved_mode`'s cause, and what to do.
 BRIEF_REMEDY = (": the step cannot resolve it, and the runs at h and 2h may both make a mode the circuit does not "
                 "have, so the estimate may be far too small; use --method event (exact at every event), or a --h that "

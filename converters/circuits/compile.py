@@ -29,7 +29,8 @@ combination of independent sources (a PULSE gate) is driven by a time schedule: 
 the hysteresis) located exactly on the piecewise-linear waveform; one whose control depends on the states is a
 state-driven law (a comparator). A gate that does not repeat (a PWL without r=, a PULSE without PER) makes
 phases: each of its switch's crossings is an instant where the run is split and the next phase's schedule takes
-over (a load step). A PULSE source in the power circuit switches between its two levels at the middle of its edges.
+over (a load step). A PULSE source in the power circuit follows its edges as ramps, a state of the LCS
+(:data:`EDGE_RAMPED`), or, where they are short beside its levels, switches between them at the edges' middle.
 """
 from __future__ import annotations
 
@@ -119,9 +120,11 @@ class Compiled:
     #: Per configuration, the node potentials nothing but diodes ties to the rest of the circuit (:meth:`_Compiler.
     #: floating`): (what each signal does along them (S, m), what each diode's voltage does (k, m)), or None.
     floating: tuple[tuple[_Array, _Array] | None, ...] = ()
-    #: The power circuit's PULSE sources, run as steps at the middle of their edges: ((title, period, ((the edge's
+    #: The power circuit's PULSE sources run as steps at the middle of their edges: ((title, period, ((the edge's
     #: middle in [0, period), its width), ...)), ...).
     power_edges: tuple[tuple[str, float, tuple[tuple[float, float], ...]], ...] = ()
+    #: The power circuit's PULSE sources whose edges are ramps of the LCS: ((title, TR, TF), ...).
+    ramped_edges: tuple[tuple[str, float, float], ...] = ()
 
     def signal_rows(self, row: int) -> tuple[_Array, ...]:
         """Signal ``row``'s maps stacked over the configurations: (Sx (configs, n), Su, s0, Ssin, Sgate), built once
@@ -194,7 +197,19 @@ def interruptible(function: Callable[..., _T], matrix: npt.NDArray[Any], *args: 
 
 def compile_netlist(netlist: Netlist) -> Compiled:
     """The LCS of ``netlist`` (its values already final: overrides applied by the reader)."""
-    return _Compiler(with_models(netlist)).run()
+    return _compiled(netlist)[1]
+
+
+def _compiled(netlist: Netlist) -> tuple[_Compiler, Compiled]:
+    """(the compiler, its LCS) of ``netlist``: compiled again with a power PULSE's edges as ramps where, run as
+    steps, an edge outlasts the circuit's fastest time constant (:meth:`_Compiler.slow_edges`)."""
+    compiler = _Compiler(with_models(netlist))
+    compiled = compiler.run()
+    slow = compiler.slow_edges(compiled)
+    if slow:
+        compiler = _Compiler(with_models(netlist), edged=slow)
+        compiled = compiler.run()
+    return compiler, compiled
 
 
 def compile_points(netlists: list[Netlist]) -> list[Compiled | None]:
@@ -210,8 +225,7 @@ def compile_points(netlists: list[Netlist]) -> list[Compiled | None]:
         groups.setdefault(_structure(netlist), []).append(i)
     for indices in groups.values():
         try:
-            first = _Compiler(with_models(netlists[indices[0]]))
-            out[indices[0]] = first.run()
+            first, out[indices[0]] = _compiled(netlists[indices[0]])
         except NetlistError:
             continue
         if len(indices) > 1 and first.batchable():
@@ -320,7 +334,7 @@ class _Compiler:
     #: the circuit has some (:meth:`_Network.solve_loops` sets it; read with getattr, unset without)
     loops: _Array
 
-    def __init__(self, netlist: Netlist):
+    def __init__(self, netlist: Netlist, edged: frozenset[str] = frozenset()):
         self.nl = netlist
         self.ramp_notes: list[str] = []             # comparators' ramps whose retrace is not instantaneous
         self.path = netlist.path
@@ -392,6 +406,11 @@ class _Compiler:
         self.solved: dict[_Here, tuple[_Network, tuple[str, ...]]] = {}
         #: PWL sources in the power circuit: ramps, each a state of the LCS (its value), its slope per phase
         self.ramps = [s for s in self.sources if isinstance(s.waveform, Pwl) and self.in_power_circuit(s)]
+        #: PULSEs in the power circuit whose edges are ramps of their own (:func:`_edged`, or named in ``edged``):
+        #: each a state of the LCS, its value, at its edges' slopes on them and held on its levels (:meth:`lcs`); the
+        #: others step between their levels at the middle of their edges
+        self.edged = [s for s in self.sources if isinstance(s.waveform, Pulse) and self.in_power_circuit(s)
+                      and (_edged(s.waveform) or s.name in edged)]
         #: SIN sources with a delay or damping: oscillators, each two states of the LCS (e^(-THETA t') sin and cos of
         #: 2 pi FREQ t' + PHASE, t' = t - TD: the damped rotation they follow), frozen before TD
         self.oscillators = [s for s in self.sources if isinstance(s.waveform, Sin) and (s.waveform.td or s.waveform.theta)]
@@ -403,6 +422,38 @@ class _Compiler:
                 raise self.error(o, f"{o.title}: its SIN delay TD and damping THETA must be >= 0; got TD = "
                                     f"{cast(Sin, o.waveform).td:g} s, THETA = {cast(Sin, o.waveform).theta:g} 1/s")
 
+    def check_steps(self, s: Element, w: Pulse) -> None:
+        """A power PULSE run as steps (an edge without a width beside one with it, or edges short beside its
+        levels: :func:`_edged`): refused where its edges take more than STEP_EDGE_FRACTION of its period, said
+        where more than EDGE_SAID of its shorter level."""
+        if max(w.tr, w.tf) > STEP_EDGE_FRACTION * w.per * (1.0 + 1e-9):     # (a file's T/1000 by rounding)
+            raise self.error(s, f"{s.title}: a PULSE in the power circuit with an edge of no width switches between "
+                                f"its levels at the middle of its edges, so its edges must take at most "
+                                f"{STEP_EDGE_FRACTION:g} of its period (PER = {w.per:.4g} s: TR, TF <= "
+                                f"{STEP_EDGE_FRACTION * w.per:.4g} s); got TR = {w.tr:.4g} s, TF = {w.tf:.4g} s (give "
+                                "both edges a width: they are then followed as ramps)")
+        level = min(w.pw, w.per - w.pw - w.tr - w.tf)           # the shorter of its two levels
+        edge = max(w.tr, w.tf)
+        if edge > EDGE_SAID * level:
+            self.ramp_notes.append(
+                f"{s.title}: its edges ({edge:.3g} s) are run as steps at their middle (one has no width), "
+                f"{edge / level:.2g} of its shorter level ({level:.3g} s): what its edges shape (its rms, a diode's "
+                "peak or conduction time) may be off by that order, which no estimate sees; give both a width")
+
+    def slow_edges(self, compiled: Compiled) -> frozenset[str]:
+        """The power PULSEs run as steps whose edges (both with a width) outlast the fastest time constant of
+        ``compiled``'s flows: the mode settles within the edge, so what it carries there follows the ramp (a 10 V
+        edge of 1 us into 10 ohm and 10 nF drives 0.1 A, its step at the middle 1 A), which no estimate of the
+        steps sees. Those are compiled edged (:func:`_compiled`)."""
+        stepped = [s for s in self.sources if isinstance(s.waveform, Pulse) and self.in_power_circuit(s)
+                   and s not in self.edged and min(s.waveform.tr, s.waveform.tf) > 0.0]
+        if not stepped:
+            return frozenset()
+        from ..methods.theta import fastest_rate
+        rate = fastest_rate(compiled.configurations)
+        return frozenset(s.name for s in stepped if max(cast(Pulse, s.waveform).tr, cast(Pulse, s.waveform).tf) * rate
+                         > EDGE_TIME_CONSTANTS)
+
     def error(self, element: Element, what: str) -> NetlistError:
         return NetlistError(f"{self.path}:{element.line}: {what}")
 
@@ -410,7 +461,8 @@ class _Compiler:
         """Whether :meth:`rerun` takes this circuit's other values: a schedule of PULSE or PWL gates (a comparator's
         law depends on the values), no ramp or delayed SIN (states of their own), no loop of capacitors or node
         held by its charge (:meth:`_Network.solve_loops`, :meth:`hold_islands`: solved one circuit at a time)."""
-        return hasattr(self, "built") and not (self.state_rows or self.ramps or self.oscillators or self.islands
+        return hasattr(self, "built") and not (self.state_rows or self.ramps or self.edged or self.oscillators
+                                               or self.islands
                                                or self.flux_loops or getattr(self, "loops", None) is not None
                                                or self.switch_loops)
 
@@ -536,19 +588,14 @@ class _Compiler:
             w = cast(Pulse, s.waveform)
             if not math.isfinite(w.per):
                 raise self.error(s, f"{s.title}: a single pulse in the power circuit: give it a period (PER)")
-            if max(w.tr, w.tf) > STEP_EDGE_FRACTION * w.per * (1.0 + 1e-9):     # (a file's T/1000 by rounding)
-                raise self.error(s, f"{s.title}: a PULSE in the power circuit switches between its levels at the "
-                                    f"middle of its edges, so its edges must take at most {STEP_EDGE_FRACTION:g} of "
-                                    f"its period (PER = {w.per:.4g} s: TR, TF <= {STEP_EDGE_FRACTION * w.per:.4g} s); "
-                                    f"got TR = {w.tr:.4g} s, TF = {w.tf:.4g} s (a ramp that repeats is not compiled: "
-                                    "for a smooth periodic source use SIN)")
-            level = min(w.pw, w.per - w.pw - w.tr - w.tf)           # the shorter of its two levels
-            edge = max(w.tr, w.tf)
-            if edge > EDGE_SAID * level:
-                self.ramp_notes.append(
-                    f"{s.title}: its edges ({edge:.3g} s) are run as steps at their middle, {edge / level:.2g} of its "
-                    f"shorter level ({level:.3g} s): what its edges shape (its rms, a diode's peak or conduction time) "
-                    "may be off by that order, which no estimate sees; shorter edges are exact")
+            if s not in self.edged:
+                self.check_steps(s, w)
+                continue
+            flat = w.pw + (w.per - w.tr - w.pw - w.tf)
+            if flat < EDGE_FLAT * w.per * (1.0 - 1e-9):
+                raise self.error(s, f"{s.title}: its levels hold for {flat / w.per:.3g} of its period (PW and PER - TR "
+                                    f"- PW - TF); its ramp is pinned on the periodic orbit by its levels, which must "
+                                    f"hold for at least {EDGE_FLAT:g} of it (for a smooth periodic source use SIN)")
         once = {name: d for name, d in drives.items() if d and any(_once(self.source(n).waveform) for n in d)}
         corners = ({t for r in self.ramps for t, _ in cast(Pwl, r.waveform).points if t > 0.0}
                    | {cast(Sin, o.waveform).td for o in self.oscillators if cast(Sin, o.waveform).td > 0.0})
@@ -597,7 +644,7 @@ class _Compiler:
             inputs = (np.array([2 * math.pi * w.freq for w in sines]), np.array([math.radians(w.phase) for w in sines]),
                       E_sin, F_sin)
         state_names = (tuple(f"v({c.name})" for c in self.capacitors) + tuple(f"i({l.name})" for l in self.inductors)
-                       + tuple(f"pwl({r.name})" for r in self.ramps)
+                       + tuple(f"pwl({r.name})" for r in self.ramps) + tuple(f"pulse({e.name})" for e in self.edged)
                        + tuple(f"{f}({o.name})" for o in self.oscillators for f in ("sin", "cos")))
         return Compiled(configurations=tuple(configs), law=schedule, state_names=state_names,
                         pair_names=tuple(d.name for d in self.diodes) or ("none",), pair_currents=tuple(pair_currents),
@@ -608,7 +655,9 @@ class _Compiler:
                         invariants=self.invariants(state_names), notes=self.moved(state_names), energy=self.energy(),
                         floating=tuple(floats),
                         power_edges=tuple((s.title, cast(Pulse, s.waveform).per, _edge_middles(cast(Pulse, s.waveform)))
-                                          for s in power))
+                                          for s in power if s not in self.edged),
+                        ramped_edges=tuple((e.title, cast(Pulse, e.waveform).tr, cast(Pulse, e.waveform).tf)
+                                           for e in self.edged))
 
     @staticmethod
     def schedule(period: float, starts: list[float], index: list[int], sines: bool) -> Schedule:
@@ -978,7 +1027,7 @@ class _Compiler:
             if spec[0] == "switch":
                 events.append(self.switch_events(name, spec[1], spec[2], spec[3], period))
             else:
-                events.append(self.level_events(spec[1], period))
+                events.append(self.level_events(spec[1], period, self.source(name) in self.edged))
         changes: tuple[int, Sequence[tuple[float, int]]] | Sequence[tuple[float, int]]   # an event, then its changes
         for changes in events:
             times.update(t for t, _ in changes[1])
@@ -1081,15 +1130,22 @@ class _Compiler:
                 raise self.error(switch, f"{switch.title}: its control never leaves the hysteresis band")
         return initial, [(max(t, 0.0), s) for t, s in inside]
 
-    def level_events(self, w: Pulse, period: float) -> tuple[int, list[tuple[float, int]]]:
+    def level_events(self, w: Pulse, period: float, edged: bool = False) -> tuple[int, list[tuple[float, int]]]:
         """(level at t = 0 on the periodic orbit, [(t in [0, T), level)]): a power PULSE holds v1 (level 0) or v2
-        (level 1), changing at the middle of its edges."""
+        (level 1), changing at the middle of its edges; an edged one (:attr:`edged`) rises (level RISING) and falls
+        (FALLING) between them over its edges."""
         per = w.per
         # an edge whose middle falls on the period's end (T/2 - e/2 + e + T/2 - e + e/2) is at 0, not at the
         # 1e-21 s that rounding leaves of it (a step of 1e-21 s at every period)
         snap: Callable[[float], float]
         snap = lambda t: 0.0 if min(t % per, per - t % per) <= 1e-12 * per else t % per      # noqa: E731
-        one = sorted([(snap(w.td + w.tr / 2), 1), (snap(w.td + w.tr + w.pw + w.tf / 2), 0)])
+        marks = [(w.td + w.tr / 2, 1), (w.td + w.tr + w.pw + w.tf / 2, 0)]
+        if edged:
+            marks = [(w.td, RISING), (w.td + w.tr, 1), (w.td + w.tr + w.pw, FALLING), (w.td + w.tr + w.pw + w.tf, 0)]
+            # a level that lasts nothing (a triangle's PW = 0) is no phase: the ramps meet
+            marks = [(t, level) for (t, level), (after, _) in zip(marks, marks[1:] + [(w.td + per, RISING)])
+                     if after - t > 1e-12 * per]
+        one = sorted((snap(t), level) for t, level in marks)
         initial = one[-1][1]                        # the level the period ends with holds through t = 0
         inside = [(t + m * per, level) for m in range(int(round(period / per))) for t, level in one]
         return initial, sorted(inside)
@@ -1138,11 +1194,18 @@ class _Compiler:
     def configuration(self, switch_state: dict[str, bool], levels: dict[str, int], slopes: tuple[float, ...] = (),
                       running: tuple[bool, ...] = ()) -> tuple[Configuration, list[str], _Maps, tuple[_Array, _Array]]:
         """(Configuration, port forms, signal maps, (E, F) of the SIN sources) of one configuration; ``slopes``: each
-        ramp's slope in it (V/s or A/s); ``running``: each oscillator past its delay."""
-        solution, forms = self.network(switch_state, levels)
-        config, signals, sinusoids = cast(_Lcs, self.lcs(solution, forms, switch_state, slopes, running))
+        ramp's slope in it (V/s or A/s); ``running``: each oscillator past its delay. An edged PULSE's level (its
+        phase: a level, RISING or FALLING) is its ramp's, not the network's, whose input it is not."""
+        solution, forms = self.network(switch_state, self.stepped(levels))
+        config, signals, sinusoids = cast(_Lcs, self.lcs(solution, forms, switch_state, slopes, running,
+                                                          tuple(levels.get(e.name, 0) for e in self.edged)))
         self.check_unique_ports(config, switch_state)
         return config, forms, signals, sinusoids
+
+    def stepped(self, levels: dict[str, int]) -> dict[str, int]:
+        """``levels`` as the network takes them: an edged PULSE's value is its ramp's state, whatever its phase."""
+        edged = {e.name for e in self.edged}
+        return {name: 0 if name in edged else level for name, level in levels.items()}
 
     def floating(self, switch_state: dict[str, bool], levels: dict[str, int]) -> tuple[_Array, _Array] | None:
         """The node potentials of this configuration that only its diodes tie to the rest of the circuit: shifts of
@@ -1155,7 +1218,7 @@ class _Compiler:
         inductor's current and is not one). Not for a batch's points, nor a network beyond LARGE_NETWORK."""
         if not self.diodes or self.lead:
             return None
-        network = _Network(self, switch_state, levels, [CURRENT] * len(self.diodes))
+        network = _Network(self, switch_state, self.stepped(levels), [CURRENT] * len(self.diodes))
         if network.size == 0 or network.size > LARGE_NETWORK or network.nullity() == 0:
             return None
         _, sv, vt = np.linalg.svd(network.G)          # the null space at :meth:`_Network.nullity`'s tolerance
@@ -1181,9 +1244,13 @@ class _Compiler:
         return (signals, ports) if signals.any() else None
 
     def lcs(self, solution: _Network, forms: Sequence[str], switch_state: dict[str, bool],
-            slopes: tuple[float, ...] = (), running: tuple[bool, ...] = ()) -> _Lcs | list[_Lcs]:
+            slopes: tuple[float, ...] = (), running: tuple[bool, ...] = (),
+            phases: tuple[int, ...] = ()) -> _Lcs | list[_Lcs]:
         """The configuration's LCS and signal maps from a solved network. A ramp (a PWL in the power circuit) is a
         state of its own, its value: its column of the network becomes a state's, and its slope its derivative. An
+        edged PULSE (:attr:`edged`) is one too, at its edge's slope in phase RISING or FALLING (``phases``) and held
+        on a level by r' = -gamma (r - level): zero on the waveform, and an r off it decays at gamma = LOOP_RATE / PER
+        (as a loop of capacitors is held), so the periodic orbit pins it (a ramp alone repeats from any r). An
         oscillator (a delayed or damped SIN) is two, its value VO + VA s: its column scaled by VA becomes s's, and
         (s, c)' = [[-THETA, w], [-w, -THETA]] (s, c) once running (w = 2 pi FREQ), 0 before."""
         n, k = self.n, self.k
@@ -1207,8 +1274,10 @@ class _Compiler:
             B[..., :, i], C[..., i, :], D[..., i, :], D[..., :, i], F[..., i] = 0.0, 0.0, 0.0, 0.0, 1.0
             D[..., i, i] = 1.0
         # a power PULSE's level is part of the configuration too (a rectifier of a square wave: two configurations)
+        phase_of = dict(zip((e.name for e in self.edged), phases))
         name = ",".join([f"{sw}={'on' if on else 'off'}" for sw, on in switch_state.items()]
-                        + [f"{src}={'v2' if level else 'v1'}" for src, level in solution.levels.items()]) or "circuit"
+                        + [f"{src}={('v1', 'v2', 'rise', 'fall')[phase_of.get(src, level)]}"
+                           for src, level in solution.levels.items()]) or "circuit"
         rows = solution.signal_rows(self.signal_names())
         columns, amplitudes = self.sinusoid_columns()
         E_sin, F_sin = dx[..., columns] * amplitudes, ports[..., columns] * amplitudes
@@ -1229,7 +1298,8 @@ class _Compiler:
                      tuple(m[p].copy() for m in signals), (E_sin[p].copy(), F_sin[p].copy()))
                     for p in range(self.lead[0])]
         config = Configuration(A=A, B=B, C=C, D=D, E=E, F=F, name=name)
-        extra: list[tuple[int | None, float]] = [(n + k + self.sources.index(x), 1.0) for x in self.ramps]
+        extra: list[tuple[int | None, float]] = [(n + k + self.sources.index(x), 1.0)
+                                                 for x in self.ramps + self.edged]
         for o in self.oscillators:
             extra += [(n + k + self.sources.index(o), cast(Sin, o.waveform).va), (None, 0.0)]
         if extra:
@@ -1239,8 +1309,15 @@ class _Compiler:
                                                     for c, w in extra])
             block, rates = np.zeros((r, r)), np.zeros(r)
             rates[:len(self.ramps)] = slopes
+            for i, (e, phase) in enumerate(zip(self.edged, phases), start=len(self.ramps)):
+                p = cast(Pulse, e.waveform)
+                if phase in (RISING, FALLING):
+                    rates[i] = (p.v2 - p.v1) / p.tr if phase == RISING else (p.v1 - p.v2) / p.tf
+                else:
+                    block[i, i] = -LOOP_RATE / p.per
+                    rates[i] = LOOP_RATE / p.per * (p.v2 if phase else p.v1)
             for j, (o, on) in enumerate(zip(self.oscillators, running)):
-                i, w, damping = (len(self.ramps) + 2 * j, 2 * math.pi * cast(Sin, o.waveform).freq,
+                i, w, damping = (len(self.ramps) + len(self.edged) + 2 * j, 2 * math.pi * cast(Sin, o.waveform).freq,
                                  cast(Sin, o.waveform).theta)
                 if on:
                     block[i:i + 2, i:i + 2] = [[-damping, w], [-w, -damping]]
@@ -1367,7 +1444,9 @@ class _Compiler:
         values: list[float | _Array] = []
         for s in self.sources:
             w = s.waveform
-            if isinstance(w, Pulse):
+            if isinstance(w, Pulse) and s in self.edged:
+                values.append(0.0)               # an edged PULSE's value is a state (:meth:`lcs`)
+            elif isinstance(w, Pulse):
                 values.append(w.v2 if levels.get(s.name, 0) else w.v1)
             elif isinstance(w, Pwl) and s in self.ramps:
                 values.append(0.0)               # a ramp's value is a state (:meth:`lcs`)
@@ -1475,8 +1554,7 @@ class _Compiler:
     def moved(self, state_names: tuple[str, ...]) -> tuple[str, ...]:
         """A warning where the file's initial conditions (IC=, .ic) contradict a loop of capacitors or a cutset of
         inductors, which the run's start is moved onto (:meth:`consistent`); and where a comparator's sawtooth leaves
-        its PULSE for more than RETRACE_SAID of its period (:meth:`state_law`), and where a power PULSE's edges, run as
-        steps, take more than EDGE_SAID of its shorter level."""
+        its PULSE for more than RETRACE_SAID of its period (:meth:`state_law`)."""
         return tuple(dict.fromkeys(self.ramp_notes)) + self._moved_start(state_names)
 
     def _moved_start(self, state_names: tuple[str, ...]) -> tuple[str, ...]:
@@ -1553,6 +1631,8 @@ class _Compiler:
         x += [(own[l.name] if own else l).ic or 0.0 for l in self.inductors]
         # a ramp holds its first value until its first time
         x += [cast(Pwl, r.waveform).points[0][1] for r in self.ramps]
+        # an edged PULSE where its periodic orbit is at t = 0 (the level its schedule starts with: :meth:`level_events`)
+        x += [float(waveform_at(w, np.array([w.per]))[0]) for w in (cast(Pulse, e.waveform) for e in self.edged)]
         for o in self.oscillators:                                  # VO + VA sin(PHASE) until TD (as ngspice's SIN)
             x += [math.sin(math.radians(cast(Sin, o.waveform).phase)),
                   math.cos(math.radians(cast(Sin, o.waveform).phase))]
@@ -1606,16 +1686,36 @@ def _crossings(corners: _Array, values: _Array, on: float, off: float, state: bo
     return changes
 
 
-#: A PULSE in the power circuit whose edges take at most this fraction of its period switches between its two levels
-#: at the middle of each edge (a square wave: the shipped Cockcroft-Walton ladder's T/1000 edges); a slower edge is
-#: refused: its ramp is no level of a configuration (a +-10 V triangle, its edges T/2, through a half-wave rectifier,
-#: read as a square wave, gave 5.0 V where the mean of its positive half is 2.5 V), and a ramp that repeats is a state
-#: a periodic steady state cannot pin (as a PWL with r=).
+#: A power PULSE run as steps whose edges take more than this fraction of its period is refused, more than EDGE_SAID of
+#: its shorter level said (:meth:`_Compiler.check_steps`): one edge without a width, the other with one (its ramp
+#: would have to jump).
 STEP_EDGE_FRACTION = 1e-3
-#: Past this fraction of a power PULSE's shorter level its edges, run as steps, are said to move what they shape: a
-#: voltage doubler's 10 ns edges on a 2 % pulse of 10 us (5 % of its 200 ns) read its diode's peak current 3.3 % low
-#: and its source's rms 0.84 % high, every estimate ~0 (the steps are the same at h and 2h, and in the exact method).
 EDGE_SAID = 1e-2
+#: A power PULSE whose edges both have a width and take more than this fraction of its shorter level is edged: its value
+#: is a state of the LCS that follows its ramps (:meth:`_Compiler.lcs`). Shorter edges step between its levels at their
+#: middle, which moves what they shape by about their share of the level (a voltage doubler's 10 ns edges on a 2 % pulse
+#: of 10 us, 5 % of its 200 ns, read as steps, put its diode's peak current 3.3 % low and its source's rms 0.84 % high,
+#: every estimate ~0; a +-10 V triangle through a half-wave rectifier read as a square wave gave twice its mean): below
+#: 1e-2 that is below the 1 % pcsuite promises of a measurement, each stepped edge's rms share is in the estimate
+#: (:func:`~converters.analysis.accuracy.edge_terms`) and its width in each mode fraction's (a three-stage ladder's 20
+#: ns edges on its 10 us levels, against exact flows of the ramps: every value within three times its estimate). The
+#: shipped bridge rectifier's 20 ps, resonant converter's T/10^4 and ladder's T/1000 edges step (the resonant
+#: converter's built-in model takes the file's two configurations).
+EDGE_RAMPED = 1e-2
+#: A power PULSE's edge longer than this many of the circuit's fastest time constants is edged too
+#: (:meth:`_Compiler.slow_edges`).
+EDGE_TIME_CONSTANTS = 1.0
+#: An edged PULSE's levels must hold for this fraction of its period: they pin its ramp on the periodic orbit, its
+#: offset decaying by e^(-LOOP_RATE x this) a period (a triangle without levels repeats from any offset: use SIN).
+EDGE_FLAT = 1e-2
+#: An edged PULSE's phases beside its levels 0 (V1) and 1 (V2) (:meth:`_Compiler.level_events`).
+RISING, FALLING = 2, 3
+
+
+def _edged(w: Pulse) -> bool:
+    """Whether a periodic power PULSE's edges are ramps of the LCS (:data:`EDGE_RAMPED`)."""
+    return (math.isfinite(w.per) and min(w.tr, w.tf) > 0.0
+            and max(w.tr, w.tf) > EDGE_RAMPED * max(min(w.pw, w.per - w.tr - w.pw - w.tf), 0.0))
 
 
 def _edge_middles(w: Pulse) -> tuple[tuple[float, float], ...]:

@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import numpy.typing as npt
 
-from ..circuits.compile import Compiled, compile_netlist, compile_points, waveform_at
+from ..circuits.compile import EDGE_TIME_CONSTANTS, Compiled, compile_netlist, compile_points, waveform_at
 from ..circuits.netlist import Netlist, NetlistError, Pulse, check_overrides, read_netlist, with_values
 from ..errors import ParameterError, SignalError
 from ..params import Param
@@ -235,15 +235,12 @@ class Circuit(Model):
             held["warnings"] = [*held.get("warnings", []), impulses]
         return {**out, **held}
 
-    #: A power PULSE's edge longer than this many of the circuit's fastest time constants is said: the mode settles
-    #: within the edge, so what it carries there follows the ramp, and the step at the edge's middle misses it.
-    EDGE_TIME_CONSTANTS = 1.0
-
     def _edge_warnings(self, p: dict) -> list[str]:
-        """Why the power PULSEs' step semantics cannot be trusted here: an edge longer than the circuit's fastest
-        time constant (a 10 V square wave with 1 us edges through 10 ohm into 10 nF: the step drives 1 A through the
-        resistor, the ramp 0.1 A; the values the mode sets near an edge are a step's, up to edge / tau times a
-        ramp's, where no estimate sees it)."""
+        """Why the power PULSEs' step semantics cannot be trusted here: an edge run as a step (its other edge has no
+        width, so it is no ramp of the LCS: :meth:`~converters.circuits.compile._Compiler.slow_edges`) longer than
+        the circuit's fastest time constant (a 10 V square wave with 1 us edges through 10 ohm into 10 nF: the step
+        drives 1 A through the resistor, the ramp 0.1 A; the values the mode sets near an edge are a step's, up to
+        edge / tau times a ramp's, where no estimate sees it)."""
         edges = self.compiled(p).power_edges
         if not edges:
             return []
@@ -251,11 +248,11 @@ class Circuit(Model):
         out = []
         for title, _, middles in edges:
             edge = max(width for _, width in middles)
-            if edge * rate > self.EDGE_TIME_CONSTANTS:
+            if edge * rate > EDGE_TIME_CONSTANTS:
                 out.append(f"{title}: its edges ({edge:.3g} s) are run as steps at their middle, and the circuit's "
                            f"fastest time constant ({1.0 / rate:.3g} s) is shorter: the currents that mode carries "
                            f"near an edge are a step's, up to {edge * rate:.2g} times the ramp's, which no estimate "
-                           "sees; give edges shorter than the time constant (or a resistance that slows the mode)")
+                           "sees; give both edges a width (they are then ramps), or a resistance that slows the mode")
         return out
 
     def floating_mask(self, names: Sequence[str], samples: Samples, p: dict) -> np.ndarray:

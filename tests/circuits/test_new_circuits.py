@@ -364,9 +364,12 @@ def test_the_shipped_cockcroft_walton_netlist_is_the_generators_four_stages():
     assert (NETLISTS / "cockcroft-walton.cir").read_text() == cockcroft_walton(4)
 
 
-def _cw(n, params, tmp_path):
+def _cw(n, params, tmp_path, edge="1e-3"):
+    """The n-stage ladder's orbit, its source's edges ``edge`` of its period (the generator's T/1000 by default)."""
     path = tmp_path / f"cw{n}.cir"
-    path.write_text(cockcroft_walton(n))
+    text = cockcroft_walton(n)
+    assert "e={1e-3/f}" in text
+    path.write_text(text.replace("e={1e-3/f}", f"e={{{edge}/f}}"))
     return orbit(Circuit.from_netlist(path), params, summary=False)
 
 
@@ -437,7 +440,9 @@ def test_cockcroft_walton_square_wave_doubler_droop(tmp_path, rs):
 
         vout = 2V - 17/16 I/(f C) - 7/8 RS I                   (up to exp(-T/(RS C)) and the load current's ripple)
 
-    (the classic sine-drive formula gives 1 I/(f C) for N = 1). Here c = 2e-4 V: the rest is second order.
+    (the classic sine-drive formula gives 1 I/(f C) for N = 1). Here c = 2e-4 V: the rest is second order. The
+    square wave's edges take 1e-6 T: the T/1000 of the generator outlast the transfer's RS C / 2 = 5 ns at 10 mohm, so
+    they are ramps (an all-off mode as the edge crosses the clamped levels) where this closed form has steps.
 
     For N >= 2 the droop is not a closed form here: after each edge the diodes stop one after another as the
     charge transfer ends (the order set by the ratios of their resistances), and the charge left where it stopped
@@ -445,7 +450,7 @@ def test_cockcroft_walton_square_wave_doubler_droop(tmp_path, rs):
     K_N = droop f C / I = 1.0625, 6.3891, 19.774, 45.006 for N = 1..4, against 1, 7, 22, 50 from the sine-drive
     formula 2N^3/3 + N^2/2 - N/6 and 17/16, 6.625, 20.69, 47.25 from transfers that end with every diode of a half
     at 0 V (2N^3/3 + N^2/4 + 7N/48)."""
-    p, tr, _ = _cw(1, {"R": "1meg", "RS": rs}, tmp_path)
+    p, tr, _ = _cw(1, {"R": "1meg", "RS": rs}, tmp_path, edge="1e-6")
     assert set(tr.modes(np.arange(tr.t.size))) == {"D1", "D2"}          # D1 the A half, D2 the whole B half
     T, C, V, RS = 1 / p["f"], p["c"], p["vpk"], p["rs"]
     vout = mean(tr, "vout", 0, T)
