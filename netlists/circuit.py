@@ -146,12 +146,12 @@ def circuit_netlist(circuit, p: dict, t_end: float, options: SpiceOptions | None
             control = f"wctl_{_name(e.name)}"   # stalled at the first diode it turned off (a hysteretic buck)
             lines += [f"H_{_name(e.name)} {control} 0 {_source(e.control[0])} 1",
                       f"S_{_name(e.name)} {n[0]} {n[1]} {control} 0 {_name(e.model)}"]
-    for state in compiled.state_names:    # a ramp's or an oscillator's states read on copies of their sources
-        kind, _, rest = state.partition("(")
-        if kind in ("pwl", "sin", "cos"):
+    for state in compiled.state_names:    # a ramp's, an edged PULSE's or an oscillator's states read on copies of
+        kind, _, rest = state.partition("(")     # their sources
+        if kind in ("pwl", "pulse", "sin", "cos"):
             e = next(e for e in netlist.elements if e.name == rest[:-1])
             w = (waveforms or {}).get(e.name, e.waveform)
-            if kind != "pwl":          # e^(-THETA t') sin (and cos: the phase 90 degrees on) of the damped rotation
+            if kind in ("sin", "cos"):     # e^(-THETA t') sin (and cos: the phase 90 degrees on) of the damped rotation
                 w = Sin(0.0, 1.0, w.freq, w.td, w.theta, w.phase + (90.0 if kind == "cos" else 0.0))
             copy = f"{kind}_{_name(e.name)}"
             lines.append(f"V{copy} {copy} 0 {_waveform(e.name, w)}")

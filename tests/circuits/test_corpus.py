@@ -381,3 +381,18 @@ def test_a_power_pulse_whose_edges_are_a_fair_part_of_its_level_is_followed_alon
         assert error <= 3 * summary["accuracy"]["measurement_error_estimates"]["i(d2)"]
     shipped = main(["simulate", str(NETLISTS / "cockcroft-walton.cir"), "--periods", "2", "--json"])
     assert shipped == 0 and "run as steps" not in capsys.readouterr().out      # its T/1000 edges are ramps too
+
+
+@pytest.mark.spice
+def test_compare_probes_an_edged_pulses_ramp_on_ngspice_as_a_pwls(tmp_path, capsys, ngspice):
+    """The narrow doubler's source is a ramp of the LCS, the state pulse(vs), which the netlist ngspice runs had no
+    probe for: compare stopped on "KeyError: 'pulse(vs)'". A copy of the source is probed as a PWL's is; compare
+    passes, pcsuite's vout within three times its estimate of the exact flows' 49.710494 V."""
+    path = tmp_path / "doubler.cir"
+    path.write_text(NARROW_DOUBLER)
+    code = main(["compare", str(path), "--json"])
+    result = json.loads(capsys.readouterr().out)
+    assert code == 0 and result["passed"]
+    metrics = result["metrics"]
+    error = abs(metrics["v(out)_mean_lcp"] / 49.710494 - 1.0)
+    assert error <= 1e-3 and error <= 3 * metrics["lcp_mean_error_estimate"]
