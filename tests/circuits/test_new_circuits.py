@@ -718,6 +718,28 @@ def test_two_switch_forward_resets_in_the_on_time_and_divides_the_reflected_volt
     assert fractions["D2"] == pytest.approx(1.0 - 2.0 * p["d"], rel=tol)
 
 
+def test_the_steppers_multipliers_on_the_forward_read_its_idle_rectifier_diode_as_the_run_does():
+    """Once the core has reset, the forward's rectifier diode D1 sits at zero current and voltage (its winding idle)
+    for the rest of the period. The stepper's Jacobian, its active set u > 0, had linearised it as conducting (its
+    port there a voltage source: v = 0 held), a short across the idle winding: a multiplier at k^2 = 0.9801. The
+    run itself, its start moved by 1e-4 A in i(lsec), returns that current to ~1e-6 of it: the multiplier is 0. The
+    multipliers are now the event method's and a tester's exact flows' (0.93260 +- 0.12895j, |.| = 0.94147, 0, 0),
+    D3 and D4, the same port twice, held once."""
+    from converters.simulate import simulate
+    circuit = Circuit.from_netlist(NETLISTS / "two-switch-forward.cir")
+    tr = run_converter(circuit, {}, steady=True, method="lcp", periods=1)
+    multipliers = np.array([complex(*m) for m in tr.metadata["orbit"]["multipliers"]])
+    exact = run_converter(circuit, {}, steady=True, method="event", periods=1)
+    expected = np.array([complex(*m) for m in exact.metadata["orbit"]["multipliers"]])
+    assert np.sort_complex(multipliers) == pytest.approx(np.sort_complex(expected), abs=1e-6)
+    assert np.abs(multipliers).max() == pytest.approx(0.94147, abs=1e-5)
+    p, T = circuit.resolve({}), circuit.period(circuit.resolve({}))
+    start = tr.x[0].copy()
+    start[tr.state_names.index("i(lsec)")] -= 1e-4
+    moved = simulate(circuit.problem(p, T, start), tr.algorithm).x[-1] - tr.x[-1]
+    assert abs(moved[tr.state_names.index("i(lsec)")]) < 1e-9          # 1e-4 A in: the run returns it to 0
+
+
 def test_two_switch_forward_compare_passes_against_ngspice(capsys, ngspice):
     """ngspice on the same file: mean (measured 1.4e-4 apart), ripple (5.9e-5) and the mode sequence, the leakage's
     commutation overlaps among them, agree."""
