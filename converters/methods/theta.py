@@ -697,8 +697,10 @@ def _twin_ports(config: Configuration) -> dict[int, tuple[int, ...]]:
     rows = np.hstack([config.C, config.D])
     scale = max(float(np.abs(columns).max(initial=0.0)), float(np.abs(rows).max(initial=0.0)), 1e-300)
     k = columns.shape[1]
-    same = lambda i, j: (np.abs(columns[:, i] - columns[:, j]).max() <= 1e-12 * scale      # noqa: E731
-                         and np.abs(rows[i] - rows[j]).max() <= 1e-12 * scale)
+
+    def same(i: int, j: int) -> bool:
+        return bool(np.abs(columns[:, i] - columns[:, j]).max() <= 1e-12 * scale
+                    and np.abs(rows[i] - rows[j]).max() <= 1e-12 * scale)
     return {i: tuple(j for j in range(k) if j != i and same(i, j)) for i in range(k)}
 
 
