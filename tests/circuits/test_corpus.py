@@ -387,7 +387,9 @@ def test_a_power_pulse_whose_edges_are_a_fair_part_of_its_level_is_followed_alon
 def test_compare_probes_an_edged_pulses_ramp_on_ngspice_as_a_pwls(tmp_path, capsys, ngspice):
     """The narrow doubler's source is a ramp of the LCS, the state pulse(vs), which the netlist ngspice runs had no
     probe for: compare stopped on "KeyError: 'pulse(vs)'". A copy of the source is probed as a PWL's is; compare
-    passes, pcsuite's vout within three times its estimate of the exact flows' 49.710494 V."""
+    passes, pcsuite's vout within three times its estimate of the exact flows' 49.710494 V, or within that value's
+    last digit (1e-8): pcsuite's side is simulate's default answer, the exact orbit where the step's check finds
+    a value off, as it does here."""
     path = tmp_path / "doubler.cir"
     path.write_text(NARROW_DOUBLER)
     code = main(["compare", str(path), "--json"])
@@ -395,4 +397,4 @@ def test_compare_probes_an_edged_pulses_ramp_on_ngspice_as_a_pwls(tmp_path, caps
     assert code == 0 and result["passed"]
     metrics = result["metrics"]
     error = abs(metrics["v(out)_mean_lcp"] / 49.710494 - 1.0)
-    assert error <= 1e-3 and error <= 3 * metrics["lcp_mean_error_estimate"]
+    assert error <= 1e-3 and error <= max(3 * metrics["lcp_mean_error_estimate"], 1e-8)

@@ -219,15 +219,23 @@ R1 out 0 10Meg
 @pytest.mark.spice
 def test_compare_does_not_pass_a_mean_that_ngspice_only_kept_from_pcsuites_orbit(tmp_path, capsys, ngspice):
     """A 1 MHz boost in deep DCM at 10 Mohm: the exact mean is the closed form Vin (1 + sqrt(1 + 4 D^2 / K)) / 2,
-    K = 2 L / (R T): 1063.163 V; pcsuite's stepper at its default step reads 1127.95 V (6.1 % high) and says so
-    (estimate 0.18). ngspice from its own start has not settled after 600 periods (a multiplier at 0.999998), runs
-    from pcsuite's orbit and keeps it: the means agreed to 5e-7 and the mean check passed. It fails now, saying
-    why."""
+    K = 2 L / (R T): 1063.163 V. ngspice from its own start has not settled after 600 periods (a multiplier at
+    0.999998), runs from pcsuite's orbit and keeps it. At the default, pcsuite's side is simulate --steady's answer:
+    its stepper reads 1127.95 V (6.1 % high) and says so (estimate 0.18), so the exact orbit is compared, the closed
+    form to 1e-9 (compare had compared the stepper's 1127.95 V). At a step given (--h, the default's T/1000), the
+    stepper's 1127.95 V is compared, and the means agreed to 5e-7 and passed: it fails, saying why."""
     path = tmp_path / "light-dcm-boost.cir"
     path.write_text(LIGHT_DCM_BOOST)
     D, L, R, T = 0.3, 10e-6, 10e6, 1e-6
     exact = 5.0 * (1 + math.sqrt(1 + 4 * D * D / (2 * L / (R * T)))) / 2
     code, out, err = run_cli(capsys, "compare", path, "--json")
+    result = json.loads(out)
+    m = result["metrics"]
+    assert abs(m["v(out)_mean_lcp"] / exact - 1) < 1e-9 and result["checks"]["mean_rel"] is True
+    assert result["notes"][0].startswith("pcsuite's side: the default step's values are off by more than the defaults "
+                                         "promise (its check at h and 2h: vout mean may be 1.8e-01 off")
+    assert result["notes"][0].endswith("the exact (event) method's orbit is given")
+    code, out, err = run_cli(capsys, "compare", path, "--h", "1n", "--json")
     result = json.loads(out)
     m = result["metrics"]
     assert abs(m["v(out)_mean_lcp"] / exact - 1) > 0.05 and m["v(out)_mean_rel_error"] < 1e-3

@@ -122,7 +122,9 @@ def run(args) -> int:
         summary = run_summary(tr)
         if args.steady and args.method is None and args.h is None and args.steady_tol is None \
                 and all(v is None for v in options.values()):
-            tr, summary = _exact_where_the_default_is_off(args, params, tr, summary)
+            from converters.run import default_answer
+            tr, summary = default_answer(args.converter, params, tr, summary, control=args.control,
+                                         periods=args.periods)
         if "lcs" in cls.domains:
             summary["setup_s"] = setup_s
     if args.steady or args.rtol is not None:
@@ -301,74 +303,6 @@ def _print(summary: dict, tr, args) -> None:
     for path in (args.out, args.plot):
         if path is not None:
             print(f"wrote {quoted(path)}")
-
-
-def _exact_where_the_default_is_off(args, params: dict, tr, summary: dict) -> tuple[Any, dict]:
-    """The default stepper's steady run, or the exact method's orbit where the run's own check found a value off by
-    more than the defaults promise (against the exact orbit, its second resolution where the step's estimate could
-    not be trusted, or at h and 2h) and the exact method takes the circuit: that orbit is the answer then, said so
-    in one warning. A DCM buck with 1 ohm and 220 pF across its switch: the stepper's 21.82 V stated 1.8e-2 off the
-    exact 22.21 V; a flyback's clamp diode and a ladder's diodes stated 1.6 to 3.9 % off (their estimates honest, the
-    values beyond what the defaults promise), each with exit 0. Where the exact method does not take the circuit (a
-    SIN source) the step is refined instead (:func:`_refined`); where it finds no orbit, the stepper's answer and its
-    warning stand."""
-    from converters.analysis.accuracy import exact_reference_of
-    from converters.analysis.periodic import exact_refusal
-    from converters.errors import SimulationError
-    from converters.run import STEADY_TOL, run_converter, run_summary
-    accuracy = summary.get("accuracy", {})
-    if "warning" not in accuracy:
-        return tr, summary
-    reference = exact_reference_of(tr)
-    if reference is None and exact_refusal(tr.labels.model, tr.metadata["params"]):
-        return _refined(args, params, tr, summary)
-    try:
-        exact = run_converter(args.converter, params, control=args.control, method="event", periods=args.periods,
-                              steady=True, x0=(tr if reference is None else reference).x[0], steady_tol=STEADY_TOL)
-    except (ParameterError, SimulationError, ResourceError):
-        return tr, summary
-    check = "its check at h and 2h" if reference is None else "its check against the exact orbit"
-    said = (f"the default step's values are off by more than the defaults promise ({check}: "
-            f"{accuracy['warning'].split('; use ')[0].split(': use ')[0]}): the exact (event) method's orbit is given")
-    out = run_summary(exact)
-    out["warnings"] = [said, *out.get("warnings", [])]
-    return exact, out
-
-
-#: The finer steps the default tries, as fractions of its own, where its check finds a value beyond its promise and
-#: the exact method does not take the circuit: each 4x the work, a first-order error 4x smaller.
-REFINEMENTS = (4, 16)
-
-
-def _refined(args, params: dict, tr, summary: dict) -> tuple[Any, dict]:
-    """The default stepper's steady run where its check at h and 2h found a value off by more than the defaults
-    promise and the exact method does not take the circuit (a SIN source): the run again at h/4, then h/16, until
-    its check finds every value within the promise; said in one warning, the finest run's own warnings after it
-    where it still does not (a Delon doubler on a 50 Hz line: its diodes' peak 1.3 % low at T/1000, stated; 0.33 %
-    at T/4000, within its estimate). A step the limits refuse keeps the last run's answer."""
-    from converters.errors import SimulationError
-    from converters.run import STEADY_TOL, run_converter, run_summary
-    h, T = float(summary["options"]["h"]), float(tr.labels.model.period(tr.metadata["params"]))
-    first = summary["accuracy"]["warning"].split("; use ")[0].split(": use ")[0]
-    best, out = tr, summary
-    for factor in REFINEMENTS:
-        try:
-            finer = run_converter(args.converter, params, control=args.control, periods=args.periods, steady=True,
-                                  h=h / factor, steady_tol=STEADY_TOL)
-        except (ParameterError, SimulationError, ResourceError):
-            break
-        best, out = finer, run_summary(finer)
-        if "warning" not in out.get("accuracy", {}):
-            break
-    if best is tr:
-        return tr, summary
-    step = float(out["options"]["h"])
-    still = "warning" in out.get("accuracy", {})
-    said = (f"the default step's values are off by more than the defaults promise (its check at h and 2h: {first}): "
-            f"the step is refined to h = {step:.3g} s ({T / step:.0f} a period)"
-            + (", where they still are" if still else ", where its check finds them within it"))
-    out["warnings"] = [said, *out.get("warnings", [])]
-    return best, out
 
 
 def _radius(rho: float) -> str:
