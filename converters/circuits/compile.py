@@ -1400,7 +1400,10 @@ class _Compiler:
                             and not self.diode_rs[d2.name])
                 same = (np.abs(a - b).max() <= 1e-12 * scale
                         and np.abs(config.D[i, j] - config.D[i, i]) <= 1e-12 * scale)
-                if same and not parallel and self.in_series(config, i, j):
+                if same and not parallel and config.same_columns(i, j):
+                    # the same port twice over (:meth:`Configuration.twin_ports`: a two-switch forward's clamp
+                    # diodes, one current, the winding's): the state is unique; blocked at zero current the node
+                    # between them floats (its voltage the split the solver picks; SPICE's is set by leakages)
                     continue
                 if parallel or same:
                     # joined through closed switches only in some configuration: name it (an interleaved boost's
@@ -1428,17 +1431,6 @@ class _Compiler:
         pinv = np.linalg.pinv(K)
         free = np.eye(size) - pinv @ K                      # the projector onto K's null space
         return C @ free, F + C @ (pinv @ b)
-
-    @staticmethod
-    def in_series(config: Configuration, i: int, j: int) -> bool:
-        """Ports i and j are the same port twice over: their rows (y) and their columns (what u does to x and to
-        every y) are equal, as two diodes in series through a winding (a two-switch forward's clamp: one current,
-        the winding's). The LCP's solution set then holds every split of u_i + u_j, and the state, which sees only
-        the sum, is unique: while they conduct (y = the winding's current > 0) u is too, and blocked at zero current
-        the node between them floats (its voltage is the split the solver picks; SPICE's is set by leakages)."""
-        columns = np.vstack([config.B, config.D])
-        scale = max(np.abs(columns[:, [i, j]]).max(), 1e-300)
-        return bool(np.abs(columns[:, i] - columns[:, j]).max() <= 1e-12 * scale)
 
     def source_values(self, levels: dict[str, int]) -> _Array:
         values: list[float | _Array] = []

@@ -626,7 +626,7 @@ class StepPlan:
         if not corner.any():
             return u
         marked = u.copy()
-        twins = {c: _twin_ports(self.problem.configurations[c]) for c in np.unique(config[corner.any(axis=1)])}
+        twins = {c: self.problem.configurations[c].twin_ports() for c in np.unique(config[corner.any(axis=1)])}
         for r in np.flatnonzero(corner.any(axis=1)):
             held = marked[r + 1] > 0.0
             for i in np.flatnonzero(corner[r]):
@@ -688,20 +688,6 @@ def _checked_start(problem: LCSProblem, x0: npt.ArrayLike) -> np.ndarray:
     if x_init.shape != (problem.n,) or not np.isfinite(x_init).all():
         raise ParameterError(f"x0 must be {problem.n} finite numbers; got {x0!r}")
     return x_init
-
-
-def _twin_ports(config: Configuration) -> dict[int, tuple[int, ...]]:
-    """{pair: the other pairs with the same port} of a configuration: equal columns of B and D and equal rows of C
-    and D (two diodes in series through a winding: one current, their ports the same twice)."""
-    columns = np.vstack([config.B, config.D])
-    rows = np.hstack([config.C, config.D])
-    scale = max(float(np.abs(columns).max(initial=0.0)), float(np.abs(rows).max(initial=0.0)), 1e-300)
-    k = columns.shape[1]
-
-    def same(i: int, j: int) -> bool:
-        return bool(np.abs(columns[:, i] - columns[:, j]).max() <= 1e-12 * scale
-                    and np.abs(rows[i] - rows[j]).max() <= 1e-12 * scale)
-    return {i: tuple(j for j in range(k) if j != i and same(i, j)) for i in range(k)}
 
 
 class StepPlanMap(PeriodMap):

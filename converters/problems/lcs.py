@@ -113,6 +113,26 @@ class Configuration:
     def k(self) -> int:
         return self.B.shape[1]
 
+    def same_columns(self, i: int, j: int) -> bool:
+        """Pairs i and j act alike (equal columns of B and D: what u does to x and to every y), to 1e-12 of the
+        larger: two diodes in series through a winding carry one current, the winding's."""
+        columns = np.vstack([self.B, self.D])[:, [i, j]]
+        scale = max(float(np.abs(columns).max()), 1e-300)
+        return bool(np.abs(columns[:, 0] - columns[:, 1]).max() <= 1e-12 * scale)
+
+    def twin_ports(self) -> dict[int, tuple[int, ...]]:
+        """{pair: the other pairs with the same port}: equal columns (:meth:`same_columns`) and equal rows of C and
+        D (what each y reads), to 1e-12 of the larger: the same port twice over (two diodes in series through a
+        winding). The LCP's solution set then holds every split of u_i + u_j, and the state, which sees only the
+        sum, is unique."""
+        rows = np.hstack([self.C, self.D])
+
+        def same(i: int, j: int) -> bool:
+            pair = rows[[i, j]]
+            scale = max(float(np.abs(pair).max()), 1e-300)
+            return self.same_columns(i, j) and bool(np.abs(pair[0] - pair[1]).max() <= 1e-12 * scale)
+        return {i: tuple(j for j in range(self.k) if j != i and same(i, j)) for i in range(self.k)}
+
 
 @dataclass(frozen=True)
 class Sinusoids:
