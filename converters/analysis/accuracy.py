@@ -1152,12 +1152,17 @@ def default_check(model: Model, p: dict, method: Method, tr: Trajectory, reporte
     return out
 
 
+def _power_edges(model: Model, p: dict) -> tuple[tuple[str, float, tuple[tuple[float, float], ...]], ...]:
+    """The compiled circuit's power PULSEs' edges stepped at their middle ((source, period, ((middle, width), ...)),
+    ...); () for a model without."""
+    compiled = getattr(model, "compiled", None)
+    return tuple(compiled(p).power_edges) if compiled is not None else ()
+
+
 def edge_share(model: Model, p: dict, T: float) -> float:
     """The power PULSEs' edges' total width over a period ``T``, in units of it (0 for a circuit without them): how
     far the step at their middle can move a mode fraction."""
-    compiled = getattr(model, "compiled", None)
-    edges = compiled(p).power_edges if compiled is not None else ()
-    return sum(width * max(round(T / per), 1) for _, per, pairs in edges for _, width in pairs) / T
+    return sum(width * max(round(T / per), 1) for _, per, pairs in _power_edges(model, p) for _, width in pairs) / T
 
 
 def edge_terms(model: Model, p: dict, run: Trajectory, T: float) -> dict[str, float]:
@@ -1167,8 +1172,7 @@ def edge_terms(model: Model, p: dict, run: Trajectory, T: float) -> dict[str, fl
     under the ramp than under the step, J^2 w / 6 per edge (its mean's first-order change cancels): a stiff node's
     source read rms 5 V where its 1 us edges give 4.99667 V, stated 1e-14. The jump is read across the edge's rows
     (a stepper's next row a step later: its drift over the step counted too)."""
-    compiled = getattr(model, "compiled", None)
-    edges = compiled(p).power_edges if compiled is not None else ()
+    edges = _power_edges(model, p)
     if not edges:
         return {}
     middles = [(middle + k * per, width) for _, per, pairs in edges for middle, width in pairs
