@@ -951,7 +951,8 @@ class _Compiler:
     def state_law(self, switch: Element, row: _Array) -> tuple[_Array, float, Ramp | None]:
         """The StateSwitching of a switch whose control voltage V = c.x + (sources) depends on the states: with
         s = VT - V the switch closes when s falls below -VH and opens when it rises above +VH (SW's thresholds VT
-        +- VH); a sawtooth PULSE in its control (TF and PW a thousandth of its period at most) is the law's ramp.
+        +- VH); a sawtooth PULSE in its control (its width, fall and rest RETRACE_TAKEN of its period at most) is the
+        law's ramp.
         Returns (function pieces: c, d, ramp) or raises naming what it cannot take."""
         from ..problems import Ramp
         n, k = self.n, self.k
@@ -971,12 +972,12 @@ class _Compiler:
                 # the whole period (a voltage-mode loop's gain 4.9 dB high, its mean 2.1 % off, its period doubling
                 # the sawtooth's)
                 if (ramp is not None or not math.isfinite(w.per) or not 0.0 < w.tr <= w.per
-                        or w.per - w.tr > 1e-3 * w.per * (1 + 1e-9) or w.tr + w.tf + w.pw > w.per * (1 + 1e-12)
+                        or w.per - w.tr > RETRACE_TAKEN * w.per * (1 + 1e-9) or w.tr + w.tf + w.pw > w.per * (1 + 1e-12)
                         or w.td >= w.per):
                     raise self.error(src, f"{src.title}: in {switch.title}'s control a PULSE must be one sawtooth "
                                           "ramp: PULSE(V1 V2 TD TR TF PW PER) rising over TR, with its width, its "
-                                          "fall and any rest at V1 (PER - TR) at most PER/1000, and TD under PER "
-                                          f"(got TR = {w.tr:.6g} s, PER = {w.per:.6g} s)")
+                                          f"fall and any rest at V1 (PER - TR) at most {RETRACE_TAKEN:g} PER, and TD "
+                                          f"under PER (got TR = {w.tr:.6g} s, PER = {w.per:.6g} s)")
                 # s = VT - V: the ramp enters as -a pulse, a sawtooth with the PULSE's own slope (V2 - V1) / TR,
                 # so a crossing as it rises is the PULSE's to rounding, reset at the middle of its fall (TD + TR + PW
                 # + TF / 2): a crossing as it falls, at TR + PW + TF (V2 - V) / (V2 - V1), moves by TF / 2 at most.
@@ -1740,6 +1741,13 @@ def waveform_at(w: Waveform, t: _Array) -> _Array:
     out[fall] = w.v2 + (w.v1 - w.v2) * (local[fall] - w.tr - w.pw) / w.tf if w.tf > 0 else w.v1
     return out
 
+
+#: The longest retrace (a comparator's PULSE's width, fall and rest at V1: PER - TR) taken as a sawtooth reset at the
+#: middle of its fall, as a fraction of the period: a switching as it falls moves by up to half of it, said with every
+#: run (:data:`RETRACE_SAID`). An engineer's 200 kHz type II loop on PULSE(0 1 0 {T-20n} 10n 10n {T}) (4e-3 of T)
+#: regulates to Vref - vc/A as ngspice does (its loop moves vc, not vout); a ramp resting for half its period is
+#: refused (its sawtooth would not be the PULSE: a loop gain 4.9 dB high).
+RETRACE_TAKEN = 1e-2
 
 #: A comparator's ramp whose sawtooth leaves its PULSE for more than this fraction of its period (past V2 for its
 #: width and half its fall, below V1 for its rest and half its fall: :meth:`_Compiler.state_law`) is said with every

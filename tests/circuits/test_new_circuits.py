@@ -836,6 +836,55 @@ def test_type2_loop_buck_compare_passes_against_ngspice(capsys, ngspice):
     assert result["passed"] and result["metrics"]["v(out)_mean_rel_error"] < 1e-4
 
 
+ENGINEERS_TYPE2 = """Buck 24V -> 3.3V, 200kHz, voltage-mode loop: type II compensator (E op-amp 1e5) + PWM comparator
+.param Vin=24 L=47u C=220u Resr=50m R=3.3 fs=200k Vref=3.3
+.param T={1/fs}
+Vin in 0 DC {Vin}
+S1 in sw vc ramp SWP
+D1 0 sw DP
+L1 sw out {L}
+C1 out ce {C}
+Re ce 0 {Resr}
+Rload out 0 {R}
+Ri out fb 10k
+Rz fb z 47k
+Cz z vc 2.2n
+Cp fb vc 33p
+Vref ref 0 DC {Vref}
+Eamp vc 0 ref fb 1e5
+Vramp ramp 0 PULSE(0 1 0 {T-20n} 10n 10n {T})
+.model SWP SW(VT=0)
+.model DP D
+.tran 20n 10m 0 20n UIC
+.end
+"""
+
+
+@pytest.mark.parametrize("method", ["event", "lcp"])
+def test_an_engineers_type2_loop_on_a_sawtooth_with_a_20ns_retrace_regulates_and_says_the_retraces_bound(method):
+    """An engineer's 200 kHz loop (issue: everyday circuits), its sawtooth PULSE(0 1 0 {T-20n} 10n 10n {T}) resetting
+    over 4e-3 of its period: refused where the retrace had to be within 1e-3 of it. Taken as the sawtooth reset at
+    the middle of its fall, said with the run: a switching as the ramp falls moves by up to TF / 2 = 1e-3 T. Here the
+    switch turns off on the rise, where vcon meets the literal PULSE (v(ramp)) exactly, and on at the reset, within
+    TF / 2 of where the literal PULSE falls through vcon (7.2e-4 T); the loop's integrator holds vout at
+    Vref - mean v(vc) / Aol, the duty ratio at vout / Vin (CCM)."""
+    model = Circuit.from_netlist("type2.cir", text=ENGINEERS_TYPE2)
+    notes = model.compiled(model.resolve({})).notes
+    assert len(notes) == 1 and "a switching as the ramp falls moves by up to 0.001 of the period" in notes[0]
+    p, tr, summary = orbit(model, method=method, tol=1e-10)
+    T, TR, PW, TF = 5e-6, 5e-6 - 20e-9, 10e-9, 10e-9
+    vc = summary["measurements"]["v(vc)"]["mean"]
+    assert summary["vout_mean"] == pytest.approx(3.3 - vc / 1e5, rel=1e-8)
+    assert summary["mode_fractions"]["S1"] == pytest.approx(summary["vout_mean"] / 24.0, rel=1e-6)
+    if method == "event":
+        modes, v, ramp = tr.modes(), np.asarray(tr.signal("v(vc)")), np.asarray(tr.signal("v(ramp)"))
+        (off,) = [i for i in range(1, tr.t.size) if modes[i - 1] == "S1" and modes[i] == "D1"]
+        (on,) = [i for i in range(1, tr.t.size) if modes[i - 1] == "D1" and modes[i] == "S1"]
+        assert v[off] == pytest.approx(ramp[off], abs=1e-9) and ramp[off] == pytest.approx(tr.t[off] / TR, abs=1e-9)
+        literal = TR + PW + (1.0 - v[on]) * TF                  # where the PULSE's fall meets vcon
+        assert 1e-4 * T < abs(tr.t[on] - literal) <= TF / 2
+
+
 # --- single-phase full bridge, unipolar sine-triangle PWM ------------------------------------------------------------
 
 def fundamental(tr, name: str, frequency: float, t0: float, t1: float) -> complex:
