@@ -146,17 +146,17 @@ def spice_steady(chunk, steady: bool, orbit, T: float, periods: int, window: int
     own start agrees: None where it needs no saying).
 
     ``chunk(x0)`` runs ngspice ``periods`` periods from ``x0`` (None: the circuit's own start) and returns its
-    trajectory; a run from rest (not ``steady``) is one chunk from ``orbit`` (the run's start); a periodic comparison
-    runs on from where each ended until its window's mean moves less
-    than SPICE_SETTLE (at most MAX_SPICE_PERIODS), or, once the slowest mode has decayed, until that move stops
-    falling ten times above SPICE_SETTLE (STALL_CHUNKS chunks without halving: ngspice's own solution moving
-    between periods, which the verdict then names). With ``spice_start`` 'own' ngspice goes from its own start, and
-    has settled only once the LCP orbit's slowest mode (spectral radius ``rho``) has decayed to 1e-3 over its run
-    too (the interleaved buck's phase currents balance at 0.99 a period while its mean of vout holds still), so
-    that a wrong orbit of pcsuite's is not handed to it (a capacitor behind a blocked diode kept 1.36 MV in both);
-    where it has not settled by then (a lightly damped circuit from rest), it runs again from the LCP's ``orbit``
-    and its own run must be approaching that one's mean (its last window closer than the window before), else the
-    comparison fails: ngspice's own steady state is elsewhere. 'orbit': from the LCP's orbit only."""
+    trajectory; a run from rest (not ``steady``) is one chunk from ``orbit`` (the run's start); a periodic
+    comparison runs on from where each ended until its window's mean moves less than SPICE_SETTLE (at most
+    MAX_SPICE_PERIODS), or, once the slowest mode has decayed, until that move stops falling ten times above
+    SPICE_SETTLE (STALL_CHUNKS chunks without halving, its mean going back and forth by at most STALL_MOST:
+    ngspice's own solution moving between periods, which the verdict then names). With ``spice_start`` 'own' ngspice
+    goes from its own start, and has settled only once the LCP orbit's slowest mode (spectral radius ``rho``) has
+    decayed to 1e-3 over its run too (the interleaved buck's phase currents balance at 0.99 a period while its mean
+    of vout holds still), so that a wrong orbit of pcsuite's is not handed to it (a capacitor behind a blocked diode
+    kept 1.36 MV in both); where it has not settled by then (a lightly damped circuit from rest), it runs again from
+    the LCP's ``orbit`` and its own run must be approaching that one's mean (its last window closer than the window
+    before), else the comparison fails: ngspice's own steady state is elsewhere. 'orbit': from the LCP's orbit only."""
     if spice_start not in ("own", "orbit"):
         raise ParameterError(f"spice_start must be 'own' or 'orbit'; got {spice_start!r}")
 
@@ -170,7 +170,15 @@ def spice_steady(chunk, steady: bool, orbit, T: float, periods: int, window: int
         # 1.8e-5..5.5e-5, then 8.6e-6 at its eighth)
         last = min(drifts[-STALL_CHUNKS:])
         return (len(drifts) >= STALL_CHUNKS + 1 and last > 0.5 * min(drifts[:-STALL_CHUNKS])
-                and last > 10.0 * SPICE_SETTLE)
+                and last > 10.0 * SPICE_SETTLE and max(drifts[-STALL_CHUNKS:]) <= STALL_MOST)
+
+    def trending(means):
+        # the window's mean moving one way chunk after chunk is a transient ngspice has not finished, whatever the
+        # orbit's slowest mode says (a type II loop's integrator winding down from saturation: vout 5.32 V where it
+        # settles at 3.3, 0.07 a chunk, after its small-signal mode, 0.954 a period, had decayed); ngspice's own
+        # motion between periods goes back and forth
+        steps = np.diff(means[-STALL_CHUNKS - 1:])
+        return steps.size == STALL_CHUNKS and bool(np.all(steps > 0) or np.all(steps < 0))
 
     def decayed(n):
         return rho is None or rho ** n <= 1e-3
@@ -198,7 +206,7 @@ def spice_steady(chunk, steady: bool, orbit, T: float, periods: int, window: int
                 if not steady or (drifts[-1] <= SPICE_SETTLE and (x0 is not None or decayed(n))) \
                         or n >= most:
                     return run, n, drifts[-1], means, False
-                if decayed(n) and stalled(drifts):
+                if decayed(n) and stalled(drifts) and not trending(means):
                     return run, n, drifts[-1], means, True
                 run = chunk(run.x[-1])
                 n = n + periods
@@ -255,6 +263,10 @@ MAX_SPICE_PERIODS = 600
 #: Chunks of ngspice periods without its drift halving, once the circuit's slowest mode has decayed, after which its
 #: run counts as settled as far as ngspice settles it (:func:`spice_steady`).
 STALL_CHUNKS = 3
+#: The largest drift a chunk (relative) that can be ngspice's own motion between periods: its stalls measured 1.8e-5
+#: to 1.5e-3 (a full bridge's); a type II loop's vout swinging 0.07 to 0.29 a chunk as its integrator winds down
+#: from saturation is a transient, not a stall.
+STALL_MOST = 1e-2
 
 
 def _period_ripple(tr, t0: float, T: float, window: int) -> float:

@@ -104,6 +104,32 @@ def test_ngspices_distance_from_its_orbit_run_is_relative_to_an_ac_outputs_size(
     assert independent
 
 
+@pytest.mark.parametrize("means, moved", [
+    (np.linspace(5.32, 3.4, 20), 0.03),          # one way, its drift 5.6e-3 to 8.8e-3 (below STALL_MOST) a chunk
+    (3.3 + 2.0 * np.cos(np.arange(20)) * 0.9 ** np.arange(20), 0.2)])     # back and forth, 0.04 to 0.2 a chunk
+def test_ngspice_still_winding_down_from_saturation_is_not_taken_for_its_own_motion(means, moved):
+    """An engineer's type II loop: from rest its integrator saturates, and ngspice's vout was still at 5.32 V (it
+    settles at 3.3) after 150 periods, moving 0.07 a chunk, when the orbit's small-signal mode (0.954 a period) had
+    decayed to 8e-4: three chunks that did not halve the drift read as ngspice's own motion between periods, its
+    window compared, and the comparison failed on ngspice's transient. A window mean moving one way chunk after
+    chunk, or by more than STALL_MOST a chunk, is a transient: ngspice runs its 600 periods, then from the orbit."""
+    from validation.compare import MAX_SPICE_PERIODS, spice_steady
+    T, periods, window = 5e-6, 30, 10
+    end = periods * T
+    own = iter(means)
+    calls = []
+
+    def chunk(x0):
+        calls.append(x0)
+        if x0 is not None and x0.shape == (1,) and x0[0] == 1.0:             # from the LCP's orbit: settled
+            return _AcRun(3.3, 3.3, end)
+        mean = next(own)
+        return _AcRun(mean, mean + moved, end)                 # its window before: ``moved`` V away
+    run, n, drift, notes, independent = spice_steady(chunk, True, np.ones(1), T, periods, window, "own", 0.954)
+    assert len(calls) == MAX_SPICE_PERIODS // periods + 1 and n == periods
+    assert independent and "approaching it" in notes[0]
+
+
 def test_ngspices_settling_shows_a_bar_on_a_terminal_and_nothing_in_a_pipe(monkeypatch, capsys):
     """compare's ngspice runs up to 600 periods from its own start and again from the orbit, minutes on a large
     circuit, had printed nothing until its verdict: a bar in periods on a terminal's stderr, nothing where stderr
