@@ -36,7 +36,7 @@ import pytest
 from converters.circuits.compile import compile_netlist
 from converters.circuits.netlist import NetlistError, read_netlist
 from converters.models import Circuit
-from converters.run import run_converter, run_summary
+from converters.run import make_method, run_converter, run_summary
 from netlists.generators import cockcroft_walton
 from validation.cli import main
 
@@ -457,6 +457,55 @@ def test_cockcroft_walton_square_wave_doubler_droop(tmp_path, rs):
     current = vout / p["r"]
     droop = 2 * V - vout
     assert droop == pytest.approx(17 / 16 * current * T / C + 7 / 8 * RS * current, rel=1e-4)
+
+
+DICKSON = """Dickson charge pump, 3 stages, 5V, 1MHz two-phase clock, 10k load
+.param Vin=5 fclk=1meg Cp=10n Co=100n Rl=10k
+.param T={1/fclk}
+Vin in 0 DC {Vin}
+Vphi1 phi1 0 PULSE(0 5 0 10n 10n {T/2-10n} {T})
+Vphi2 phi2 0 PULSE(5 0 0 10n 10n {T/2-10n} {T})
+D1 in n1 DD
+C1 n1 phi1 {Cp}
+D2 n1 n2 DD
+C2 n2 phi2 {Cp}
+D3 n2 n3 DD
+C3 n3 phi1 {Cp}
+D4 n3 out DD
+Cout out 0 {Co}
+Rload out 0 {Rl}
+.model DD D
+.tran 1n 2m 0 1n
+.end
+"""
+
+
+def test_the_event_method_takes_a_dickson_pump_whose_diodes_turn_on_together(tmp_path, capsys):
+    """An engineer's three-stage Dickson pump (issue: everyday circuits): as phi2's 10 ns edge rises, D1 and D3 turn
+    on at one instant. One saltation on the crossing row alone left D3's tie (v(n2) = v(n3)) off the new mode's
+    manifold: the period map's Jacobian summed v(c1) and v(c2) into v(c2), a multiplier at 1, and Newton stopped
+    ("resolved to ~2.35e+15"), where `simulate --steady` at its defaults then kept the stepper's answer, its diodes'
+    peaks 1.94 A where they carry C dphi/dt = 10 nF x 5 V / 10 ns = 5 A, only warned of. A saltation per pair: the
+    multipliers are the finite differences' of the exact map, and the default answers with the exact orbit."""
+    model = Circuit.from_netlist("dickson.cir", text=DICKSON)
+    p, tr, summary = orbit(model, tol=1e-10)
+    multipliers = np.sort(np.abs([complex(*z) for z in summary["orbit"]["multipliers"]]))[::-1]
+    method = make_method(model, p, "event")
+    x0, T, step = tr.x[0], model.period(p), 1e-6
+
+    def end(x):
+        return run_converter(model, p, method=method, t_end=T, x0=x).x[-1]
+    J = np.column_stack([(end(x0 + step * e) - end(x0 - step * e)) / (2 * step) for e in np.eye(x0.size)])
+    assert multipliers[:2] == pytest.approx(np.sort(np.abs(np.linalg.eigvals(J)))[::-1][:2], rel=1e-6)
+    assert multipliers[0] == pytest.approx(0.969445, abs=1e-6)
+    for diode in ("i(d1)", "i(d2)", "i(d3)"):
+        assert summary["measurements"][diode]["max"] == pytest.approx(10e-9 * 5.0 / 10e-9, rel=1e-9)
+    path = tmp_path / "dickson.cir"
+    path.write_text(DICKSON)
+    assert main(["simulate", str(path), "--steady", "--json"]) == 0
+    default = json.loads(capsys.readouterr().out)
+    assert default["method"] == "event" and default["warnings"][0].endswith("the exact (event) method's orbit is given")
+    assert default["measurements"]["i(d1)"]["max"] == pytest.approx(5.0, rel=1e-9)
 
 
 # --- bridge rectifier ---------------------------------------------------------------------------------------------

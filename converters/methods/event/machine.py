@@ -101,6 +101,15 @@ class _Run:
             self.jac[:] = jump @ self.jac
 
 
+def _off_manifold(flow: Flow, S: FloatArray) -> bool:
+    """Whether a saltation ``S`` maps perturbations off ``flow``'s state manifold (its held pairs' state constraints,
+    N^T C_J x + N^T F_J = 0), where every perturbed run is once it holds them: beyond 1e-9 of the rows' scale."""
+    rows = flow.constraint_rows[:, :-1]
+    if not rows.size:
+        return False
+    return bool(np.abs(rows @ S).max() > 1e-9 * max(float(np.abs(rows).max()), 1e-300))
+
+
 class _Machine:
     """The flows of one problem (built on demand, reused for every run from a new initial state)."""
 
@@ -669,13 +678,45 @@ class _Machine:
             f_after = new.field(xt_new)
             jump_jac = np.eye(n) if jump is None else jump
             denominator = grad @ f_before + dgdt
-            if denominator != 0.0:
-                run.jac[:] = (jump_jac + np.outer(f_after - jump_jac @ f_before, grad) / denominator) @ run.jac
-            else:
-                run.jac[:] = jump_jac @ run.jac
+            S = jump_jac + np.outer(f_after - jump_jac @ f_before, grad) / denominator if denominator != 0.0 \
+                else jump_jac
+            if jump is None and pair >= 0 and bin(flow.held ^ new.held).count("1") > 1 and _off_manifold(new, S):
+                S = self._saltations(run.config, flow, new, xt, pair)
+            run.jac[:] = S @ run.jac
         self._log_pairs(run, flow, new)
         run.flow, run.xt = new, xt_new
         return False
+
+    def _saltations(self, config: int, before: Flow, after: Flow, xt: FloatArray, pair: int) -> FloatArray:
+        """The saltation through several pairs held or freed at one instant: one per pair, in the order they crossed
+        (a pair a few nV past zero crossed that long before, at its rate), each from the flow with the pairs before
+        it changed to the flow with it changed too, on its own watched row; a pair whose watched quantity is not
+        falling through zero (rising again from a few nV below it, where a Newton iterate started it) has no instant
+        to shift and changes the flow alone. Taken where the crossing row's saltation alone maps perturbations off the
+        new flow's state manifold (:func:`_off_manifold`): a Dickson pump's two diodes, turning on together as their
+        phase's edge rises, had left the Jacobian a multiplier at 1 (its capacitors' voltages summed where the diode
+        ties them), and Newton stopped."""
+        n = self.problem.n
+        changed = before.held ^ after.held
+        flipped = [i for i in range(self.problem.k) if (changed >> i) & 1]
+        rows = before.watch_rows[flipped]
+        rates, values = rows[:, :n] @ before.field(xt), rows @ xt
+        # (earliest first: the time since each crossed, value / rate; the crossing row's 0; the others' first)
+        since = np.where(rates < 0.0, values / np.where(rates < 0.0, rates, 1.0), np.inf)
+        if pair in flipped:
+            since[flipped.index(pair)] = 0.0
+        order = [flipped[i] for i in np.argsort(-since, kind="stable")]
+        S, held, flow_a = np.eye(n), before.held, before
+        for i, j in enumerate(order):
+            held ^= 1 << j
+            flow_b = after if i == len(order) - 1 else self.flow(config, held)
+            f_a, f_b = flow_a.field(xt), flow_b.field(xt)
+            grad = flow_a.watch_rows[j, :n]
+            denominator = grad @ f_a
+            if denominator < 0.0 or (j == pair and denominator != 0.0):
+                S = (np.eye(n) + np.outer(f_b - f_a, grad) / denominator) @ S
+            flow_a = flow_b
+        return S
 
     def _crossed(self, watch: _Watch, xt: FloatArray, pair: int) -> int:
         """The pairs (bit mask) a crossing of ``pair`` flips: it and every pair whose watched quantity is already
