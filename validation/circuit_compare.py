@@ -1,4 +1,6 @@
-"""``pcsuite compare FILE.cir``: a netlist's LCS (the LCP time-stepper) against ngspice on the same file.
+"""``pcsuite compare FILE.cir``: a netlist's LCS (the LCP time-stepper) against ngspice on the same file. At the
+default step pcsuite's side is ``simulate --steady``'s answer (:func:`converters.run.default_answer`: the exact
+orbit where the step's own check finds a value off by more than the defaults promise, said in the first note).
 
 Both start on the stepper's periodic orbit (a periodic circuit; initial conditions in the netlist) or from the
 file's own initial state, run the same span, and are read over its last ``window`` periods (or the last tenth of
