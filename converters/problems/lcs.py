@@ -125,12 +125,13 @@ class Configuration:
         D (what each y reads), to 1e-12 of the larger: the same port twice over (two diodes in series through a
         winding). The LCP's solution set then holds every split of u_i + u_j, and the state, which sees only the
         sum, is unique."""
-        rows = np.hstack([self.C, self.D])
+        columns, rows = np.vstack([self.B, self.D]).T, np.hstack([self.C, self.D])   # (built once: k^2 pairs)
+
+        def alike(a: np.ndarray, b: np.ndarray) -> bool:
+            return bool(np.abs(a - b).max() <= 1e-12 * max(float(np.abs(a).max()), float(np.abs(b).max()), 1e-300))
 
         def same(i: int, j: int) -> bool:
-            pair = rows[[i, j]]
-            scale = max(float(np.abs(pair).max()), 1e-300)
-            return self.same_columns(i, j) and bool(np.abs(pair[0] - pair[1]).max() <= 1e-12 * scale)
+            return alike(columns[i], columns[j]) and alike(rows[i], rows[j])
         return {i: tuple(j for j in range(self.k) if j != i and same(i, j)) for i in range(self.k)}
 
 
